@@ -1,0 +1,18 @@
+"""Dynamics models: the interface, the Pinocchio-backed model and the closed-form 3-link model."""
+
+from .base import DynamicsModel
+from .loading import PAPER_ARM, default_task_frame, load_robot, paper_arm_urdf
+from .pinocchio_model import TASK_KINDS, PinocchioModel
+from .three_link import ThreeLinkParameters, ThreeLinkPlanarModel
+
+__all__ = [
+    "DynamicsModel",
+    "PAPER_ARM",
+    "PinocchioModel",
+    "TASK_KINDS",
+    "ThreeLinkParameters",
+    "ThreeLinkPlanarModel",
+    "default_task_frame",
+    "load_robot",
+    "paper_arm_urdf",
+]

@@ -1,0 +1,111 @@
+"""Load a robot from a URDF file, a URDF string or an example-robot-data name."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from ..exceptions import RobotLoadError
+from .pinocchio_model import PinocchioModel
+
+PAPER_ARM = "three_link_planar"
+"""Name of the paper's three-link arm, shipped in ``urdf/``."""
+
+_SHIPPED = {PAPER_ARM: "three_link_planar.urdf"}
+
+
+def urdf_dir() -> Path:
+    """Folder of the URDF files shipped with nnrobust."""
+    packaged = Path(__file__).resolve().parent.parent / "urdf"
+    if packaged.is_dir():
+        return packaged
+    return Path(__file__).resolve().parents[2] / "urdf"
+
+
+def paper_arm_urdf() -> Path:
+    """Path of the paper's three-link planar arm URDF."""
+    return urdf_dir() / _SHIPPED[PAPER_ARM]
+
+
+def _build_from_urdf(source: str) -> tuple[pin.Model, str]:
+    text = source.lstrip()
+    if text.startswith("<"):
+        try:
+            return pin.buildModelFromXML(source), "<urdf string>"
+        except (ValueError, RuntimeError) as err:
+            raise RobotLoadError("<urdf string>", f"invalid URDF: {err}") from err
+    if source in _SHIPPED:
+        path = urdf_dir() / _SHIPPED[source]
+    else:
+        path = Path(source)
+    if path.suffix.lower() == ".urdf" or path.exists():
+        if not path.is_file():
+            raise RobotLoadError(str(path), "no such file")
+        try:
+            return pin.buildModelFromUrdf(str(path)), str(path)
+        except (ValueError, RuntimeError) as err:
+            raise RobotLoadError(str(path), f"invalid URDF: {err}") from err
+    return _build_from_example_robot_data(source)
+
+
+def _build_from_example_robot_data(name: str) -> tuple[pin.Model, str]:
+    try:
+        import example_robot_data
+    except ImportError as err:  # pragma: no cover - a declared dependency
+        raise RobotLoadError(
+            name, "example-robot-data is not installed: pip install example-robot-data-loaders"
+        ) from err
+    try:
+        robot = example_robot_data.load(name)
+    except Exception as err:  # the loader raises bare exceptions of several kinds
+        raise RobotLoadError(
+            name,
+            "not a URDF file and not a robot shipped by example-robot-data "
+            f"({type(err).__name__}: {err}); pass a .urdf path or a robot name such as 'panda'",
+        ) from err
+    return robot.model, f"example-robot-data:{name}"
+
+
+def default_task_frame(model: pin.Model) -> str:
+    """The tip of the kinematic chain: the last body or operational frame of the last joint."""
+    last_joint = model.njoints - 1
+    candidates = [
+        f.name
+        for f in model.frames
+        if f.parentJoint == last_joint and f.type in (pin.FrameType.BODY, pin.FrameType.OP_FRAME)
+    ]
+    return candidates[-1] if candidates else model.names[last_joint]
+
+
+def load_robot(
+    source: str | Path,
+    task_frame: str | None = None,
+    task: str = "planar",
+    gravity: tuple[float, float, float] | None = None,
+    locked_joints: list[str] | None = None,
+) -> PinocchioModel:
+    """Load an arm as a :class:`PinocchioModel`.
+
+    Args:
+        source: a URDF path, a URDF XML string, ``"three_link_planar"`` (the paper's arm) or an
+            example-robot-data robot name such as ``"panda"``.
+        task_frame: frame whose position is the task; default: the tip of the chain.
+        task: ``"planar"`` (m = 2) or ``"position"`` (m = 3).
+        gravity: gravity vector [m/s^2]; default Pinocchio's (0, 0, -9.81).
+        locked_joints: joints fixed at their neutral value (e.g. gripper fingers).
+    """
+    model, name = _build_from_urdf(str(source))
+    if locked_joints:
+        missing = [j for j in locked_joints if not model.existJointName(j)]
+        if missing:
+            raise RobotLoadError(
+                name, f"cannot lock unknown joints {missing}; joints: {list(model.names)[1:]}"
+            )
+        ids = [model.getJointId(j) for j in locked_joints]
+        model = pin.buildReducedModel(model, ids, pin.neutral(model))
+    if gravity is not None:
+        model.gravity.linear = np.asarray(gravity, dtype=float)
+    frame = task_frame if task_frame is not None else default_task_frame(model)
+    return PinocchioModel(model, frame, task=task, name=name)

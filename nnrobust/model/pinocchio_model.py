@@ -1,0 +1,156 @@
+"""Pinocchio-backed dynamics and task kinematics for any URDF arm."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from ..exceptions import FrameNotFound, ModelMismatch
+
+TASK_KINDS = {"planar": 2, "position": 3}
+"""Task kinds and their dimension m: planar x-y position of the task frame, spatial position."""
+
+_LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+
+class PinocchioModel:
+    """Dynamics (RNEA, CRBA, ABA) and task kinematics of the frame ``task_frame``.
+
+    Args:
+        model: a Pinocchio model with one configuration coordinate per joint (nq == nv).
+        task_frame: name of the frame whose position is the task x.
+        task: ``"planar"`` (world x-y position, m = 2) or ``"position"`` (x-y-z, m = 3).
+        name: where the model came from (file or robot name), for messages.
+    """
+
+    def __init__(self, model: pin.Model, task_frame: str, task: str = "planar", name: str = ""):
+        if task not in TASK_KINDS:
+            raise ModelMismatch(
+                f"unknown task kind {task!r}; valid kinds: {', '.join(TASK_KINDS)}"
+            )
+        if model.nq != model.nv:
+            raise ModelMismatch(
+                f"{name or model.name}: nq = {model.nq} != nv = {model.nv}; joints with a "
+                "non-Euclidean configuration (continuous, free-flyer, spherical) are not supported"
+            )
+        if model.nv == 0:
+            raise ModelMismatch(f"{name or model.name}: the model has no movable joint")
+        if not model.existFrame(task_frame):
+            raise FrameNotFound(task_frame, [f.name for f in model.frames])
+        self.model = model
+        self.data = model.createData()
+        self.name = name or model.name
+        self.task = task
+        self.task_frame = task_frame
+        self.frame_id = model.getFrameId(task_frame)
+        self.nq = model.nq
+        self.m = TASK_KINDS[task]
+        self.joint_names = [model.names[i] for i in range(1, model.njoints)]
+        self._zero = np.zeros(self.nq)
+
+    # -- dynamics -------------------------------------------------------------------------
+    def mass(self, q: np.ndarray) -> np.ndarray:
+        """M(q) by CRBA (symmetrised: Pinocchio fills the upper triangle)."""
+        M = pin.crba(self.model, self.data, q)
+        return np.triu(M) + np.triu(M, 1).T
+
+    def bias(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """V_m(q, q') q' + G(q) by RNEA at zero acceleration."""
+        return pin.nonLinearEffects(self.model, self.data, q, v).copy()
+
+    def gravity(self, q: np.ndarray) -> np.ndarray:
+        """G(q)."""
+        return pin.computeGeneralizedGravity(self.model, self.data, q).copy()
+
+    def coriolis_matrix(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """V_m(q, q') built from Christoffel symbols, so that M' - 2 V_m is skew-symmetric."""
+        return pin.computeCoriolisMatrix(self.model, self.data, q, v).copy()
+
+    def inverse_dynamics(self, q: np.ndarray, v: np.ndarray, a: np.ndarray) -> np.ndarray:
+        """M a + V_m q' + G in one RNEA pass (no M is built)."""
+        return pin.rnea(self.model, self.data, q, v, a).copy()
+
+    def forward_dynamics(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """q'' by the articulated-body algorithm."""
+        return pin.aba(self.model, self.data, q, v, tau).copy()
+
+    def kinetic_energy(self, q: np.ndarray, v: np.ndarray) -> float:
+        """0.5 q'^T M q' [J]."""
+        return float(pin.computeKineticEnergy(self.model, self.data, q, v))
+
+    def potential_energy(self, q: np.ndarray) -> float:
+        """Gravitational potential energy [J], zero at the world origin."""
+        return float(pin.computePotentialEnergy(self.model, self.data, q))
+
+    # -- task kinematics ------------------------------------------------------------------
+    def task_position(self, q: np.ndarray) -> np.ndarray:
+        """x = f(q), eq. (1)."""
+        pin.forwardKinematics(self.model, self.data, q)
+        return pin.updateFramePlacement(self.model, self.data, self.frame_id).translation[
+            : self.m
+        ].copy()
+
+    def task_jacobian(self, q: np.ndarray) -> np.ndarray:
+        """J(q), eq. (2): the frame's linear Jacobian in the world-aligned frame."""
+        J = pin.computeFrameJacobian(self.model, self.data, q, self.frame_id, _LWA)
+        return J[: self.m].copy()
+
+    def task_jdot_v(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """J' q': the frame's classical acceleration at zero joint acceleration."""
+        return self.task_state(q, v)[2]
+
+    def task_state(self, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(x, J, J' q') from one kinematics pass; what the controller calls once per step."""
+        model, data, fid = self.model, self.data, self.frame_id
+        pin.forwardKinematics(model, data, q, v, self._zero)
+        pin.computeJointJacobians(model, data)
+        x = pin.updateFramePlacement(model, data, fid).translation[: self.m].copy()
+        J = pin.getFrameJacobian(model, data, fid, _LWA)[: self.m].copy()
+        jdot_v = pin.getFrameClassicalAcceleration(model, data, fid, _LWA).linear[: self.m].copy()
+        return x, J, jdot_v
+
+    def task_jacobian_derivative(self, q: np.ndarray) -> np.ndarray:
+        """H[:, :, k] = dJ/dq_k, from the Jacobian time variation at q' = e_k (exact)."""
+        n = self.nq
+        H = np.empty((self.m, n, n))
+        e = np.zeros(n)
+        for k in range(n):
+            e[k] = 1.0
+            pin.computeJointJacobiansTimeVariation(self.model, self.data, q, e)
+            pin.updateFramePlacement(self.model, self.data, self.frame_id)
+            dJ = pin.getFrameJacobianTimeVariation(self.model, self.data, self.frame_id, _LWA)
+            H[:, :, k] = dJ[: self.m]
+            e[k] = 0.0
+        return H
+
+    # -- limits ---------------------------------------------------------------------------
+    @property
+    def lower_limits(self) -> np.ndarray:
+        """Lower joint position limits [rad or m] from the URDF."""
+        return np.asarray(self.model.lowerPositionLimit).copy()
+
+    @property
+    def upper_limits(self) -> np.ndarray:
+        """Upper joint position limits [rad or m] from the URDF."""
+        return np.asarray(self.model.upperPositionLimit).copy()
+
+    @property
+    def effort_limits(self) -> np.ndarray:
+        """Joint effort limits [N m or N] from the URDF."""
+        return np.asarray(self.model.effortLimit).copy()
+
+    @property
+    def viscous_friction(self) -> np.ndarray:
+        """URDF <dynamics damping>: viscous friction coefficients [N m s/rad]."""
+        return np.asarray(self.model.damping).copy()
+
+    @property
+    def coulomb_friction(self) -> np.ndarray:
+        """URDF <dynamics friction>: Coulomb friction levels [N m]."""
+        return np.asarray(self.model.friction).copy()
+
+    def __repr__(self) -> str:
+        return (
+            f"PinocchioModel({self.name!r}, n={self.nq}, task={self.task!r}, "
+            f"frame={self.task_frame!r})"
+        )
