@@ -123,6 +123,13 @@ class PinocchioModel:
             e[k] = 0.0
         return H
 
+    def chain_points(self, q: np.ndarray) -> np.ndarray:
+        """World positions of the joint origins and of the task frame, (n + 1) x 3 [m]."""
+        pin.forwardKinematics(self.model, self.data, q)
+        frame = pin.updateFramePlacement(self.model, self.data, self.frame_id)
+        points = [self.data.oMi[j].translation for j in range(1, self.model.njoints)]
+        return np.array([*points, frame.translation])
+
     # -- limits ---------------------------------------------------------------------------
     @property
     def lower_limits(self) -> np.ndarray:

@@ -9,6 +9,7 @@ controller's nominal model of the paper's experiments.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -138,7 +139,7 @@ class ThreeLinkPlanarModel:
         """M(q) with M11 = b1 + 2 p1 c2 + 2 p2 c23 + 2 p3 c3, ... (docs/errata.md)."""
         b1, b2, b3 = self.params.beta
         p1, p2, p3 = self.params.p
-        c2, c3, c23 = np.cos(q[1]), np.cos(q[2]), np.cos(q[1] + q[2])
+        c2, c3, c23 = math.cos(q[1]), math.cos(q[2]), math.cos(q[1] + q[2])
         m11 = b1 + 2 * p1 * c2 + 2 * p2 * c23 + 2 * p3 * c3
         m12 = b2 + p1 * c2 + p2 * c23 + 2 * p3 * c3
         m13 = b3 + p2 * c23 + p3 * c3
@@ -148,9 +149,8 @@ class ThreeLinkPlanarModel:
 
     def coriolis_matrix(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """V_m(q, q') from Christoffel symbols (M' - 2 V_m skew-symmetric), docs/errata.md."""
-        _, p2, p3 = self.params.p
-        p1 = self.params.p[0]
-        s2, s3, s23 = np.sin(q[1]), np.sin(q[2]), np.sin(q[1] + q[2])
+        p1, p2, p3 = self.params.p
+        s2, s3, s23 = math.sin(q[1]), math.sin(q[2]), math.sin(q[1] + q[2])
         a = p1 * s2 + p2 * s23
         b = p2 * s23 + p3 * s3
         c = p3 * s3
@@ -213,8 +213,15 @@ class ThreeLinkPlanarModel:
         return -np.array([np.cos(theta), np.sin(theta)]) @ (lengths * w**2)
 
     def task_state(self, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(x, J, J' q')."""
-        return self.task_position(q), self.task_jacobian(q), self.task_jdot_v(q, v)
+        """(x, J, J' q') from one evaluation of the link angles theta_j."""
+        theta = np.cumsum(q)
+        c, s = np.cos(theta), np.sin(theta)
+        lengths = np.asarray(self.params.lengths)
+        x = np.array([lengths @ c, lengths @ s])
+        cols = lengths * np.array([-s, c])
+        J = np.cumsum(cols[:, ::-1], axis=1)[:, ::-1]
+        jdot_v = -np.array([c, s]) @ (lengths * np.cumsum(v) ** 2)
+        return x, J, jdot_v
 
     def task_jacobian_derivative(self, q: np.ndarray) -> np.ndarray:
         """H[:, i, k] = dJ_i/dq_k = -sum_{j >= max(i, k)} l_j (cos theta_j, sin theta_j)."""

@@ -1,0 +1,172 @@
+"""Command line: ``nnrobust run | presets | compare``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+from .exceptions import NNRobustError
+
+CONTROLLERS = ("nn", "no-u0", "pd")
+
+TABLE_COLUMNS = (
+    ("run", None),
+    ("status", None),
+    ("rms_error", 1e3),
+    ("rms_error_after_2s", 1e3),
+    ("max_error", 1e3),
+    ("rms_torque", 1.0),
+    ("torque_chatter", 1.0),
+    ("final_rho_hat", 1.0),
+)
+HEADERS = ("run", "status", "rms e [mm]", "rms e t>=2s [mm]", "max e [mm]", "rms tau [N m]",
+           "chatter [N m]", "rho-hat end")
+
+
+def format_table(rows: list[tuple[str, dict]]) -> str:
+    """A plain-text table of run metrics (errors in millimetres)."""
+    cells = [list(HEADERS)]
+    for name, metrics in rows:
+        row = []
+        for key, scale in TABLE_COLUMNS:
+            if key == "run":
+                row.append(name)
+            elif scale is None:
+                row.append(str(metrics.get(key, "")))
+            else:
+                value = metrics.get(key)
+                row.append("-" if value is None else f"{value * scale:.4g}")
+        cells.append(row)
+    widths = [max(len(r[i]) for r in cells) for i in range(len(HEADERS))]
+    lines = ["  ".join(c.rjust(w) if i else c.ljust(w) for i, (c, w) in enumerate(zip(r, widths)))
+             for r in cells]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    return "\n".join(lines)
+
+
+def _load_target(target: str):
+    from .config import load_config
+    from .presets import load_preset, preset_names
+
+    path = Path(target)
+    if path.suffix == ".toml" or path.exists():
+        return load_config(path)
+    if target in preset_names():
+        return load_preset(target)
+    raise NNRobustError(
+        f"{target!r} is neither a TOML file nor a preset; presets: {', '.join(preset_names())}"
+    )
+
+
+def cmd_run(args) -> int:
+    """Run a preset or an experiment file and write its run folder."""
+    from .experiment import run_experiment
+    from .results import write_run
+
+    config = _load_target(args.target)
+    changes: dict = {}
+    if args.controller:
+        changes["controller"] = {"kind": args.controller}
+    if args.duration is not None:
+        changes["simulation"] = {"duration": args.duration}
+    if changes:
+        config = config.replace(**changes)
+    out = Path(args.out or f"out/{config.name}-{config.controller.kind}")
+    if out.exists() and not args.overwrite:
+        raise NNRobustError(f"{out} exists; pass --overwrite to replace it")
+    if not args.quiet:
+        print(f"running {config.name} with controller {config.controller.kind!r} "
+              f"for {config.simulation.duration:g} s ...", file=sys.stderr)
+    result = run_experiment(config)
+    write_run(out, result, overwrite=args.overwrite, plots=not args.no_plots)
+    metrics = result.metrics()
+    if not args.quiet:
+        print(format_table([(str(out), metrics)]))
+        print(f"simulated {metrics['simulated_seconds']:.2f} s in {metrics['wall_seconds']:.2f} s "
+              f"wall; results in {out}/", file=sys.stderr)
+    if result.status != "completed":
+        print(f"run {result.status}: {result.message}", file=sys.stderr)
+        return 1
+    return 0
+
+
+def cmd_presets(args) -> int:
+    """List the shipped presets."""
+    from .presets import load_preset, preset_names
+
+    for name in preset_names():
+        print(f"{name:28s} {load_preset(name).description}")
+    return 0
+
+
+def cmd_compare(args) -> int:
+    """Table of metrics and overlaid plots for several run folders."""
+    from .results import Result
+
+    rows, results = [], {}
+    for folder in args.runs:
+        path = Path(folder)
+        metrics_file = path / "metrics.json"
+        if not metrics_file.is_file():
+            raise NNRobustError(f"{path}: not a run folder (no metrics.json)")
+        rows.append((path.name, json.loads(metrics_file.read_text())))
+        results[path.name] = Result.load(path)
+    print(format_table(rows))
+    if args.out:
+        from .plots import plot_comparison
+
+        written = plot_comparison(results, args.out)
+        print(f"comparison plot: {written[0]}", file=sys.stderr)
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``nnrobust`` command."""
+    parser = argparse.ArgumentParser(
+        prog="nnrobust",
+        description="Robust neural-network control of redundant manipulators: simulate the "
+        "paper's experiments or your own, and compare controllers.",
+    )
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    run = sub.add_parser("run", help="run a preset or an experiment file (TOML)",
+                         description="Simulate a preset or a TOML experiment file and write a run "
+                         "folder: config.toml, result.npz, metrics.json, plots/.")
+    run.add_argument("target", help="preset name (see 'nnrobust presets') or path to a .toml file")
+    run.add_argument("--out", help="run folder (default out/NAME-CONTROLLER)")
+    run.add_argument("--controller", choices=CONTROLLERS,
+                     help="override the controller: nn (eq. 9 + NN compensator), no-u0 "
+                     "(eq. 9 without u_0), pd (task-space PD + gravity compensation)")
+    run.add_argument("--duration", type=float, help="override the simulated time [s]")
+    run.add_argument("--overwrite", action="store_true", help="replace an existing run folder")
+    run.add_argument("--no-plots", action="store_true", help="skip the figures")
+    run.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    run.set_defaults(func=cmd_run)
+
+    presets = sub.add_parser("presets", help="list the shipped presets")
+    presets.set_defaults(func=cmd_presets)
+
+    compare = sub.add_parser("compare", help="compare run folders: metrics table and plots")
+    compare.add_argument("runs", nargs="+", help="run folders written by 'nnrobust run'")
+    compare.add_argument("--out", help="folder for the comparison figure (PNG and SVG)")
+    compare.set_defaults(func=cmd_compare)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point; returns the exit code (0 success, 1 failed run, 2 bad input)."""
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except NNRobustError as err:
+        print(f"nnrobust: error: {err}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("nnrobust: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

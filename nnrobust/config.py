@@ -1,0 +1,415 @@
+"""Experiment configuration: typed sections, validation with clear messages, TOML round trip."""
+
+from __future__ import annotations
+
+import dataclasses
+import difflib
+import math
+import tomllib
+import types
+import typing
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .exceptions import ConfigError
+
+
+@dataclass
+class RobotConfig:
+    """The true robot.
+
+    Attributes:
+        source: URDF path, ``three_link_planar`` (the paper's arm) or an example-robot-data name.
+        task_frame: frame whose position is the task x (default: tip of the chain).
+        task: ``planar`` (m = 2) or ``position`` (m = 3).
+        gravity: gravity vector [m/s^2] (default Pinocchio's (0, 0, -9.81)).
+        locked_joints: joints held fixed (e.g. gripper fingers).
+    """
+
+    source: str = "three_link_planar"
+    task_frame: str | None = None
+    task: str = "planar"
+    gravity: list[float] | None = None
+    locked_joints: list[str] = field(default_factory=list)
+
+
+@dataclass
+class NominalConfig:
+    """The controller's model M-hat, N-hat.
+
+    Attributes:
+        kind: ``closed-form`` (three-link closed form with beta and p below) or ``urdf`` (the true
+            robot's own Pinocchio model: a perfect rigid-body model).
+        beta: beta-hat [kg m^2] (closed form; default the true robot's).
+        p: p-hat [kg m^2] (closed form; default the true robot's).
+        viscous_friction: F_d-hat [N m s/rad] (default 0).
+        coulomb_friction: Coulomb friction in N-hat [N m] (default 0: Coulomb friction unmodelled).
+    """
+
+    kind: str = "closed-form"
+    beta: list[float] | None = None
+    p: list[float] | None = None
+    viscous_friction: list[float] | None = None
+    coulomb_friction: list[float] | None = None
+
+
+@dataclass
+class PlantConfig:
+    """Friction and disturbance of the true robot.
+
+    Attributes:
+        viscous_friction: F_d [N m s/rad] (default the URDF's <dynamics damping>).
+        coulomb_friction: [N m] (default the URDF's <dynamics friction>).
+        disturbance: ``paper`` (tau_d of Sect. 4), ``none`` or ``sinusoid`` (the three fields below).
+        disturbance_amplitude: n x K amplitudes [N m] (``sinusoid``).
+        disturbance_omega: K angular frequencies [rad/s] (``sinusoid``).
+        disturbance_phase: n x K phases [rad] (``sinusoid``; default 0).
+        disturbance_scale: factor applied to the disturbance.
+    """
+
+    viscous_friction: list[float] | None = None
+    coulomb_friction: list[float] | None = None
+    disturbance: str = "paper"
+    disturbance_amplitude: list[list[float]] | None = None
+    disturbance_omega: list[float] | None = None
+    disturbance_phase: list[list[float]] | None = None
+    disturbance_scale: float = 1.0
+
+
+@dataclass
+class TrajectoryConfig:
+    """x_d(t) = center + axis_a cos(omega t + phase) + axis_b sin(omega t + phase) [m], eq. (18)."""
+
+    center: list[float] = field(default_factory=lambda: [0.30, 0.40])
+    axis_a: list[float] = field(default_factory=lambda: [0.20, 0.0])
+    axis_b: list[float] = field(default_factory=lambda: [0.0, 0.10])
+    omega: float = 1.0
+    phase: float = 0.0
+
+
+@dataclass
+class ControllerConfig:
+    """Which control law and its gains.
+
+    Attributes:
+        kind: ``nn`` (eq. 9 with the NN compensator), ``no-u0`` (eq. 9 with u_0 = 0) or ``pd``.
+        Kp, Kv: diagonals of the task gains [1/s^2, 1/s]; Kv^2 > Kp is required by eq. (17).
+        k: self-motion gain of eq. (3) [1/s].
+        pinv_threshold: smallest singular value of J below which J+ is damped [m/rad].
+        pinv_max_damping: damping at a singularity [m/rad].
+        pd_Kp, pd_Kd: task stiffness [N/m] and damping [N s/m] of the PD baseline.
+        pd_null_damping: null-space joint damping of the PD baseline [N m s/rad].
+    """
+
+    kind: str = "nn"
+    Kp: list[float] = field(default_factory=lambda: [10.0, 10.0])
+    Kv: list[float] = field(default_factory=lambda: [4.0, 4.0])
+    k: float = 10.0
+    pinv_threshold: float = 0.02
+    pinv_max_damping: float = 0.02
+    pd_Kp: list[float] = field(default_factory=lambda: [400.0, 400.0])
+    pd_Kd: list[float] = field(default_factory=lambda: [40.0, 40.0])
+    pd_null_damping: float = 1.0
+
+
+@dataclass
+class NNConfig:
+    """The NN robust compensator, eqs. (15)-(17) (docs/controller.md).
+
+    Attributes:
+        law: ``corrected`` (u_0 = -rho^2 w / (rho |w| + eps)) or ``printed`` (-rho w / (...)).
+        F: adaptation gain.
+        gamma: decay rate of eps [1/s].
+        eps0: eps(0) > 0.
+        eps_min: eps floor (0 = the paper's vanishing boundary layer).
+        sigma: sigma-modification leakage (0 = the paper's law).
+        basis_input: ``joint`` (s = [q, q']) or ``error`` (s = [e, e']).
+        centers: Gaussian centres per input coordinate.
+        width: Gaussian width as a multiple of the centre spacing.
+        bias: include a constant unit.
+        velocity_range: q' centres span [-velocity_range, velocity_range] [rad/s]; q centres
+            span the joint limits.
+        error_range: e and e' centres span [-error_range[0], error_range[0]] [m] and
+            [-error_range[1], error_range[1]] [m/s].
+    """
+
+    law: str = "corrected"
+    F: float = 5.0
+    gamma: float = 1.0
+    eps0: float = 1.0
+    eps_min: float = 0.0
+    sigma: float = 0.0
+    basis_input: str = "joint"
+    centers: int = 5
+    width: float = 1.0
+    bias: bool = True
+    velocity_range: float = 3.0
+    error_range: list[float] = field(default_factory=lambda: [0.05, 0.5])
+
+
+@dataclass
+class SubtaskConfig:
+    """Self-motion criteria h_i with weights scaled so that sum w_i = C, eq. (4).
+
+    Attributes:
+        criteria: names (``paper``, ``half_det_manipulability``, ``manipulability``,
+            ``joint_smoothness``); empty for pure null-space damping.
+        weights: relative weights (default equal).
+        C: the constant of eq. (4).
+    """
+
+    criteria: list[str] = field(default_factory=lambda: ["paper"])
+    weights: list[float] | None = None
+    C: float = 1.0
+
+
+@dataclass
+class SimulationConfig:
+    """Time, integration and initial state.
+
+    Attributes:
+        duration: simulated time [s].
+        control_period: zero-order-hold period T [s].
+        substeps: integration steps per control period.
+        integrator: ``rk4`` or ``solve_ivp``.
+        q_seed: inverse-kinematics seed for q(0) [rad] (default: mid-range of the joint limits).
+        initial_task_offset: x(0) - x_d(0) [m] (default zero: start on the path).
+    """
+
+    duration: float = 20.0
+    control_period: float = 1e-3
+    substeps: int = 1
+    integrator: str = "rk4"
+    q_seed: list[float] | None = None
+    initial_task_offset: list[float] | None = None
+
+
+@dataclass
+class ExperimentConfig:
+    """A complete, reproducible experiment."""
+
+    name: str = "experiment"
+    description: str = ""
+    robot: RobotConfig = field(default_factory=RobotConfig)
+    nominal: NominalConfig = field(default_factory=NominalConfig)
+    plant: PlantConfig = field(default_factory=PlantConfig)
+    trajectory: TrajectoryConfig = field(default_factory=TrajectoryConfig)
+    controller: ControllerConfig = field(default_factory=ControllerConfig)
+    nn: NNConfig = field(default_factory=NNConfig)
+    subtasks: SubtaskConfig = field(default_factory=SubtaskConfig)
+    simulation: SimulationConfig = field(default_factory=SimulationConfig)
+
+    def to_dict(self) -> dict:
+        """Nested plain dict (None values dropped)."""
+        return _drop_none(dataclasses.asdict(self))
+
+    def to_toml(self) -> str:
+        """TOML text that :func:`load_config` reads back to an equal configuration."""
+        return dump_toml(self.to_dict())
+
+    def replace(self, **sections) -> ExperimentConfig:
+        """A copy with some fields changed: ``replace(controller={"kind": "pd"})``."""
+        data = self.to_dict()
+        for key, value in sections.items():
+            if isinstance(value, dict):
+                data.setdefault(key, {}).update(value)
+            else:
+                data[key] = value
+        return from_dict(data)
+
+
+# ---- validation --------------------------------------------------------------------------
+
+
+def _drop_none(obj):
+    if isinstance(obj, dict):
+        return {k: _drop_none(v) for k, v in obj.items() if v is not None}
+    return obj
+
+
+def _suggest(key: str, valid: list[str]) -> str:
+    close = difflib.get_close_matches(key, valid, n=1)
+    hint = f"; did you mean {close[0]!r}?" if close else ""
+    return f"unknown key{hint} Valid keys: {', '.join(valid)}"
+
+
+def _check_type(path: str, value, annotation):
+    origin = typing.get_origin(annotation)
+    args = typing.get_args(annotation)
+    if origin in (typing.Union, types.UnionType):
+        if value is None and type(None) in args:
+            return None
+        inner = [a for a in args if a is not type(None)]
+        return _check_type(path, value, inner[0])
+    if origin is list:
+        if not isinstance(value, list):
+            raise ConfigError(path, f"expected a list, got {type(value).__name__} {value!r}")
+        return [_check_type(f"{path}[{i}]", v, args[0]) for i, v in enumerate(value)]
+    if annotation is float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ConfigError(path, f"expected a number, got {type(value).__name__} {value!r}")
+        if not math.isfinite(value):
+            raise ConfigError(path, f"expected a finite number, got {value!r}")
+        return float(value)
+    if annotation is int:
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ConfigError(path, f"expected an integer, got {type(value).__name__} {value!r}")
+        return value
+    if annotation is bool:
+        if not isinstance(value, bool):
+            raise ConfigError(path, f"expected true or false, got {value!r}")
+        return value
+    if annotation is str:
+        if not isinstance(value, str):
+            raise ConfigError(path, f"expected a string, got {type(value).__name__} {value!r}")
+        return value
+    raise TypeError(f"unsupported annotation {annotation!r} at {path}")  # pragma: no cover
+
+
+def _section_from_dict(cls, data: dict, path: str):
+    if not isinstance(data, dict):
+        raise ConfigError(path, f"expected a table, got {type(data).__name__}")
+    hints = typing.get_type_hints(cls)
+    names = [f.name for f in dataclasses.fields(cls)]
+    values = {}
+    for key, value in data.items():
+        full = f"{path}.{key}" if path else key
+        if key not in names:
+            raise ConfigError(full, _suggest(key, names))
+        annotation = hints[key]
+        if dataclasses.is_dataclass(annotation):
+            values[key] = _section_from_dict(annotation, value, full)
+        else:
+            values[key] = _check_type(full, value, annotation)
+    return cls(**values)
+
+
+def from_dict(data: dict) -> ExperimentConfig:
+    """Build and validate a configuration from nested dicts (as read from TOML)."""
+    config = _section_from_dict(ExperimentConfig, data, "")
+    validate(config)
+    return config
+
+
+def load_config(path: str | Path) -> ExperimentConfig:
+    """Read and validate a TOML experiment file."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as err:
+        raise ConfigError(str(path), f"cannot read the file: {err.strerror or err}") from err
+    except UnicodeDecodeError as err:
+        raise ConfigError(str(path), "not a UTF-8 text file") from err
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise ConfigError(str(path), f"invalid TOML: {err}") from err
+    try:
+        return from_dict(data)
+    except ConfigError as err:
+        raise ConfigError(f"{path}: {err.key}", str(err).split(": ", 1)[1]) from err
+
+
+def _positive(path: str, values) -> None:
+    seq = values if isinstance(values, list) else [values]
+    if any(v <= 0 for v in seq):
+        raise ConfigError(path, f"must be positive, got {values}")
+
+
+def validate(config: ExperimentConfig) -> None:
+    """Check values that a type alone does not constrain (robot-independent checks)."""
+    c, nn, sim = config.controller, config.nn, config.simulation
+    choices = {
+        "robot.task": (config.robot.task, ("planar", "position")),
+        "nominal.kind": (config.nominal.kind, ("closed-form", "urdf")),
+        "plant.disturbance": (config.plant.disturbance, ("paper", "none", "sinusoid")),
+        "controller.kind": (c.kind, ("nn", "no-u0", "pd")),
+        "nn.law": (nn.law, ("corrected", "printed")),
+        "nn.basis_input": (nn.basis_input, ("joint", "error")),
+        "simulation.integrator": (sim.integrator, ("rk4", "solve_ivp")),
+    }
+    for path, (value, valid) in choices.items():
+        if value not in valid:
+            raise ConfigError(path, f"{value!r} is not one of {', '.join(valid)}")
+    m = len(config.trajectory.center)
+    for path, values in (
+        ("controller.Kp", c.Kp), ("controller.Kv", c.Kv),
+        ("controller.pd_Kp", c.pd_Kp), ("controller.pd_Kd", c.pd_Kd),
+        ("trajectory.axis_a", config.trajectory.axis_a),
+        ("trajectory.axis_b", config.trajectory.axis_b),
+    ):
+        if len(values) != m:
+            raise ConfigError(path, f"has {len(values)} entries, the task has m = {m} (trajectory.center)")
+    for path, values in (("controller.Kp", c.Kp), ("controller.Kv", c.Kv),
+                         ("controller.pd_Kp", c.pd_Kp), ("controller.pd_Kd", c.pd_Kd)):
+        _positive(path, values)
+    for kp, kv in zip(c.Kp, c.Kv):
+        if kv * kv <= kp:
+            raise ConfigError(
+                "controller.Kv",
+                f"Kv^2 = {kv * kv:g} must exceed Kp = {kp:g}: Q = diag(2 Kp^2, 2 Kv^2 - 2 Kp) of "
+                "eq. (17) must be positive definite for the Lyapunov function y^T P y to decrease",
+            )
+    if c.k < 0:
+        raise ConfigError("controller.k", f"must be >= 0, got {c.k}")
+    _positive("controller.pinv_threshold", c.pinv_threshold)
+    _positive("controller.pinv_max_damping", c.pinv_max_damping)
+    _positive("nn.F", nn.F)
+    _positive("nn.eps0", nn.eps0)
+    _positive("nn.centers", nn.centers)
+    _positive("nn.width", nn.width)
+    _positive("nn.velocity_range", nn.velocity_range)
+    _positive("nn.error_range", nn.error_range)
+    for path, value in (("nn.gamma", nn.gamma), ("nn.eps_min", nn.eps_min), ("nn.sigma", nn.sigma)):
+        if value < 0:
+            raise ConfigError(path, f"must be >= 0, got {value}")
+    if nn.eps_min >= nn.eps0:
+        raise ConfigError("nn.eps_min", f"the floor {nn.eps_min} must be below nn.eps0 = {nn.eps0}")
+    _positive("subtasks.C", config.subtasks.C)
+    if config.subtasks.weights is not None:
+        if len(config.subtasks.weights) != len(config.subtasks.criteria):
+            raise ConfigError(
+                "subtasks.weights",
+                f"{len(config.subtasks.weights)} weights for {len(config.subtasks.criteria)} criteria",
+            )
+        _positive("subtasks.weights", config.subtasks.weights)
+    _positive("simulation.duration", sim.duration)
+    _positive("simulation.control_period", sim.control_period)
+    _positive("simulation.substeps", sim.substeps)
+    if sim.duration < sim.control_period:
+        raise ConfigError("simulation.duration", "is shorter than one control period")
+    if config.plant.disturbance == "sinusoid" and (
+        config.plant.disturbance_amplitude is None or config.plant.disturbance_omega is None
+    ):
+        raise ConfigError(
+            "plant.disturbance_amplitude",
+            "disturbance = 'sinusoid' needs disturbance_amplitude (n x K) and disturbance_omega (K)",
+        )
+
+
+# ---- TOML output -------------------------------------------------------------------------
+
+
+def _toml_value(value) -> str:
+    if isinstance(value, bool):
+        return "true" if value else "false"
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        return repr(value)
+    if isinstance(value, str):
+        escaped = value.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n")
+        return f'"{escaped}"'
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    raise TypeError(f"cannot write {type(value).__name__} to TOML")
+
+
+def dump_toml(data: dict) -> str:
+    """TOML text of a dict whose values are scalars, lists or one level of sub-tables."""
+    lines = [f"{k} = {_toml_value(v)}" for k, v in data.items() if not isinstance(v, dict)]
+    for key, table in data.items():
+        if isinstance(table, dict):
+            lines += ["", f"[{key}]"]
+            lines += [f"{k} = {_toml_value(v)}" for k, v in table.items()]
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,21 @@
+"""Controllers: the task-space law of eq. (9), the NN compensator and baselines."""
+
+from .base import ControlOutput, Controller
+from .basis import AdditiveRBFBasis
+from .nn_compensator import NNCompensator, error_dynamics, lyapunov_P, lyapunov_Q
+from .pseudoinverse import DampedPseudoInverse, project_null_space
+from .task_space import TaskSpaceController, TaskSpacePD
+
+__all__ = [
+    "AdditiveRBFBasis",
+    "ControlOutput",
+    "Controller",
+    "DampedPseudoInverse",
+    "NNCompensator",
+    "TaskSpaceController",
+    "TaskSpacePD",
+    "error_dynamics",
+    "lyapunov_P",
+    "lyapunov_Q",
+    "project_null_space",
+]

@@ -1,0 +1,65 @@
+"""Basis functions phi(s) of the one-layer network that estimates the uncertainty bound."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class AdditiveRBFBasis:
+    """phi(s) = [1, exp(-(s_j - c_jk)^2 / (2 w_j^2)) for each input j and centre k].
+
+    Gaussian radial basis functions along each input coordinate, summed (an additive model):
+    the number of units grows linearly with the input size (1 + centres x dim(s)) instead of
+    exponentially as a full grid would, so the same basis serves a 3- or a 7-joint arm.
+    The constant unit lets rho-hat hold a state-independent bound. All phi_i are in (0, 1], so
+    rho-hat = Z^T phi >= 0 whenever Z >= 0, which the paper's adaptive law preserves.
+
+    Attributes:
+        low: lower end of each input range (centres span [low, high]).
+        high: upper end of each input range.
+        centers: number of centres per input.
+        width: Gaussian width as a multiple of the centre spacing.
+        bias: include the constant unit.
+    """
+
+    low: np.ndarray
+    high: np.ndarray
+    centers: int = 5
+    width: float = 1.0
+    bias: bool = True
+
+    def __post_init__(self):
+        low = np.asarray(self.low, dtype=float)
+        high = np.asarray(self.high, dtype=float)
+        if low.shape != high.shape or np.any(high <= low):
+            raise ValueError(f"basis: need low < high elementwise, got {low} and {high}")
+        if self.centers < 1 or self.width <= 0:
+            raise ValueError(f"basis: centers ({self.centers}) >= 1 and width ({self.width}) > 0")
+        object.__setattr__(self, "low", low)
+        object.__setattr__(self, "high", high)
+        grid = np.linspace(0.0, 1.0, self.centers) if self.centers > 1 else np.array([0.5])
+        self._set("_c", low[:, None] + (high - low)[:, None] * grid)
+        spacing = (high - low) / max(self.centers - 1, 1)
+        self._set("_inv2w2", 1.0 / (2.0 * (self.width * spacing) ** 2))
+
+    def _set(self, name: str, value: np.ndarray) -> None:
+        object.__setattr__(self, name, value)
+
+    @property
+    def input_size(self) -> int:
+        """dim(s)."""
+        return self.low.size
+
+    @property
+    def size(self) -> int:
+        """Number of units L, the length of phi and of Z."""
+        return int(self.bias) + self.centers * self.input_size
+
+    def __call__(self, s: np.ndarray) -> np.ndarray:
+        """phi(s), shape L."""
+        d = s[:, None] - self._c
+        rbf = np.exp(-(d * d) * self._inv2w2[:, None]).ravel()
+        return np.concatenate(([1.0], rbf)) if self.bias else rbf

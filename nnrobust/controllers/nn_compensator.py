@@ -1,0 +1,126 @@
+"""The adaptive neural-network robust compensator u_0, eqs. (15)-(17)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import solve_continuous_lyapunov
+
+from .basis import AdditiveRBFBasis
+
+U0_LAWS = ("corrected", "printed")
+"""u_0 = -rho^2 w / (rho |w| + eps) (corrected, default) or -rho w / (rho |w| + eps) (printed)."""
+
+BASIS_INPUTS = ("joint", "error")
+"""Network input s: joint state [q, q'] or task error y = [e, e']."""
+
+
+def error_dynamics(Kp: np.ndarray, Kv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A = [[0, I], [-Kp, -Kv]] and B = [0; I] of the error system y' = A y + B (u_0 + eta), eq. (13)."""
+    m = Kp.shape[0]
+    I, Z = np.eye(m), np.zeros((m, m))
+    A = np.block([[Z, I], [-Kp, -Kv]])
+    B = np.vstack([Z, I])
+    return A, B
+
+
+def lyapunov_Q(Kp: np.ndarray, Kv: np.ndarray) -> np.ndarray:
+    """Q = diag(2 Kp^2, 2 Kv^2 - 2 Kp), eq. (17); positive definite iff Kv^2 > Kp."""
+    Z = np.zeros_like(Kp)
+    return np.block([[2 * Kp @ Kp, Z], [Z, 2 * Kv @ Kv - 2 * Kp]])
+
+
+def lyapunov_P(Kp: np.ndarray, Kv: np.ndarray) -> np.ndarray:
+    """P solving A^T P + P A + Q = 0, eq. (16); equals [[2 Kp Kv, Kp], [Kp, Kv]] for diagonal gains."""
+    A, _ = error_dynamics(Kp, Kv)
+    return solve_continuous_lyapunov(A.T, -lyapunov_Q(Kp, Kv))
+
+
+@dataclass
+class NNCompensator:
+    """u_0 with rho-hat = Z^T phi(s), Z' = F (|w| phi(s) - sigma Z), eps' = -gamma (eps - eps_min).
+
+    With sigma = 0 and eps_min = 0 this is the paper's law exactly (eq. 15 and the adaptive law
+    after it); sigma > 0 is the sigma-modification (leakage) and eps_min > 0 an epsilon floor.
+    The state z = [Z (L entries), eps].
+
+    Attributes:
+        Kp, Kv: task gains (m x m, diagonal positive).
+        basis: phi(s).
+        basis_input: "joint" (s = [q, q']) or "error" (s = [e, e']).
+        F: adaptation gain (> 0) [scalar].
+        gamma: decay rate of eps [1/s].
+        eps0: eps(0) > 0.
+        eps_min: eps floor (>= 0).
+        sigma: leakage (>= 0).
+        law: "corrected" or "printed" (docs/errata.md).
+        Z0: initial weights (default 0).
+    """
+
+    Kp: np.ndarray
+    Kv: np.ndarray
+    basis: AdditiveRBFBasis
+    basis_input: str = "joint"
+    F: float = 20.0
+    gamma: float = 1.0
+    eps0: float = 1.0
+    eps_min: float = 0.0
+    sigma: float = 0.0
+    law: str = "corrected"
+    Z0: np.ndarray | None = None
+
+    def __post_init__(self):
+        if self.law not in U0_LAWS:
+            raise ValueError(f"nn.law: {self.law!r} is not one of {U0_LAWS}")
+        if self.basis_input not in BASIS_INPUTS:
+            raise ValueError(f"nn.basis_input: {self.basis_input!r} is not one of {BASIS_INPUTS}")
+        if self.F <= 0 or self.gamma < 0 or self.eps0 <= 0 or self.eps_min < 0 or self.sigma < 0:
+            raise ValueError(
+                "nn: need F > 0, gamma >= 0, eps0 > 0, eps_min >= 0, sigma >= 0; got "
+                f"F={self.F}, gamma={self.gamma}, eps0={self.eps0}, eps_min={self.eps_min}, "
+                f"sigma={self.sigma}"
+            )
+        self.P = lyapunov_P(self.Kp, self.Kv)
+        _, B = error_dynamics(self.Kp, self.Kv)
+        self.BtP = B.T @ self.P  # omega = B^T P y
+        self.L = self.basis.size
+
+    @property
+    def state_size(self) -> int:
+        """len(Z) + 1."""
+        return self.L + 1
+
+    def initial_state(self) -> np.ndarray:
+        """[Z0, eps0]."""
+        Z0 = np.zeros(self.L) if self.Z0 is None else np.asarray(self.Z0, dtype=float)
+        return np.concatenate([Z0, [self.eps0]])
+
+    def network_input(self, q: np.ndarray, v: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """s, the input of phi."""
+        return np.concatenate([q, v]) if self.basis_input == "joint" else y
+
+    def omega(self, y: np.ndarray) -> np.ndarray:
+        """omega = B^T P y (= Kp e + Kv e' for the paper's Q)."""
+        return self.BtP @ y
+
+    def u0(self, q: np.ndarray, v: np.ndarray, y: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, float]:
+        """u_0 of eq. (15) (corrected or printed form) and rho-hat."""
+        w = self.omega(y)
+        rho = float(z[: self.L] @ self.basis(self.network_input(q, v, y)))
+        eps = max(float(z[self.L]), 0.0)
+        denom = rho * np.linalg.norm(w) + eps
+        if denom <= 0.0:
+            return np.zeros_like(w), rho
+        gain = rho * rho if self.law == "corrected" else rho
+        return -gain * w / denom, rho
+
+    def state_derivative(
+        self, q: np.ndarray, v: np.ndarray, y: np.ndarray, z: np.ndarray
+    ) -> np.ndarray:
+        """[Z', eps'] = [F (|w| phi(s) - sigma Z), -gamma (eps - eps_min)]."""
+        Z = z[: self.L]
+        phi = self.basis(self.network_input(q, v, y))
+        dZ = self.F * (np.linalg.norm(self.omega(y)) * phi - self.sigma * Z)
+        deps = -self.gamma * (z[self.L] - self.eps_min)
+        return np.concatenate([dZ, [deps]])

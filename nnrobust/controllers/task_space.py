@@ -1,0 +1,138 @@
+"""The task-space control law with null-space subtasks, eq. (9)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..model.base import DynamicsModel
+from ..plant.friction import Friction
+from ..subtasks.base import Criterion
+from ..trajectories import EllipseTrajectory
+from .base import ControlOutput, Controller
+from .nn_compensator import NNCompensator
+from .pseudoinverse import DampedPseudoInverse, project_null_space
+
+
+class TaskSpaceController(Controller):
+    """tau = M-hat a + N-hat with a = J+ (x_d'' - J'q' - Kv e' - Kp e + u_0) + k (I - J+J)(grad h - q').
+
+    Eq. (9). M-hat a + N-hat is one call of the nominal model's inverse dynamics (one RNEA pass for
+    a Pinocchio model) plus the nominal friction; without a compensator (u_0 = 0) this is the
+    "no-u0" baseline.
+
+    Args:
+        nominal: the controller's model (M-hat, N-hat, kinematics).
+        trajectory: x_d(t).
+        Kp, Kv: task gains, m x m diagonal positive [1/s^2, 1/s].
+        k: self-motion gain of eq. (3).
+        criterion: h(q) (already weighted, eq. 4); None for pure null-space damping.
+        nominal_friction: F-hat(q') in N-hat.
+        compensator: the NN robust compensator; None for u_0 = 0.
+        pinv: the damped pseudo-inverse.
+    """
+
+    def __init__(
+        self,
+        nominal: DynamicsModel,
+        trajectory: EllipseTrajectory,
+        Kp: np.ndarray,
+        Kv: np.ndarray,
+        k: float,
+        criterion: Criterion | None = None,
+        nominal_friction: Friction | None = None,
+        compensator: NNCompensator | None = None,
+        pinv: DampedPseudoInverse | None = None,
+    ):
+        self.nominal = nominal
+        self.trajectory = trajectory
+        self.Kp = np.asarray(Kp, dtype=float)
+        self.Kv = np.asarray(Kv, dtype=float)
+        self.k = float(k)
+        self.criterion = criterion
+        self.nominal_friction = nominal_friction or Friction.none(nominal.nq)
+        self.compensator = compensator
+        self.pinv = pinv or DampedPseudoInverse()
+        self.state_size = compensator.state_size if compensator else 0
+        self.signal_names = ("rho_hat", "eps", "z_norm", "damping") if compensator else ("damping",)
+
+    def initial_state(self) -> np.ndarray:
+        """Compensator state [Z, eps], or nothing."""
+        return self.compensator.initial_state() if self.compensator else np.zeros(0)
+
+    def _error(self, t: float, x: np.ndarray, J: np.ndarray, v: np.ndarray):
+        xd, dxd, ddxd = self.trajectory(t)
+        return x - xd, J @ v - dxd, ddxd
+
+    def compute(self, t: float, q: np.ndarray, v: np.ndarray, z: np.ndarray) -> ControlOutput:
+        """Eq. (9)."""
+        x, J, jdot_v = self.nominal.task_state(q, v)
+        e, de, ddxd = self._error(t, x, J, v)
+        signals: dict[str, float] = {}
+        u0 = 0.0
+        if self.compensator is not None:
+            u0, rho = self.compensator.u0(q, v, np.concatenate([e, de]), z)
+            L = self.compensator.L
+            signals.update(rho_hat=rho, eps=float(z[L]), z_norm=float(np.linalg.norm(z[:L])))
+        inv, lam2 = self.pinv.factor(J)
+        J_pinv = J.T @ inv
+        signals["damping"] = lam2
+        task_acc = ddxd - jdot_v - self.Kv @ de - self.Kp @ e + u0
+        a = J_pinv @ task_acc
+        if self.k != 0.0:
+            grad = self.criterion.gradient(self.nominal, q) if self.criterion else 0.0
+            a = a + self.k * project_null_space(J, J_pinv, grad - v)
+        tau = self.nominal.inverse_dynamics(q, v, a) + self.nominal_friction.torque(v)
+        return ControlOutput(tau, signals)
+
+    def state_derivative(
+        self, t: float, q: np.ndarray, v: np.ndarray, z: np.ndarray
+    ) -> np.ndarray:
+        """Adaptive law of the compensator at the current (continuous-time) state."""
+        if self.compensator is None:
+            return np.zeros(0)
+        x, J, _ = self.nominal.task_state(q, v)
+        e, de, _ = self._error(t, x, J, v)
+        return self.compensator.state_derivative(q, v, np.concatenate([e, de]), z)
+
+
+class TaskSpacePD(Controller):
+    """PD with gravity compensation in task space: tau = J^T (-Kp e - Kd e') + G-hat - D (I - J+J) q'.
+
+    The baseline without a dynamic model beyond gravity; the null-space damping D keeps the
+    self-motion of a redundant arm from drifting.
+
+    Args:
+        nominal: the controller's model (G-hat and kinematics).
+        trajectory: x_d(t).
+        Kp: task stiffness, m x m [N/m].
+        Kd: task damping, m x m [N s/m].
+        null_damping: D [N m s/rad].
+    """
+
+    signal_names = ("damping",)
+
+    def __init__(
+        self,
+        nominal: DynamicsModel,
+        trajectory: EllipseTrajectory,
+        Kp: np.ndarray,
+        Kd: np.ndarray,
+        null_damping: float = 1.0,
+        pinv: DampedPseudoInverse | None = None,
+    ):
+        self.nominal = nominal
+        self.trajectory = trajectory
+        self.Kp = np.asarray(Kp, dtype=float)
+        self.Kd = np.asarray(Kd, dtype=float)
+        self.null_damping = float(null_damping)
+        self.pinv = pinv or DampedPseudoInverse()
+
+    def compute(self, t: float, q: np.ndarray, v: np.ndarray, z: np.ndarray) -> ControlOutput:
+        """Task-space PD plus G-hat(q) and null-space damping."""
+        x, J, _ = self.nominal.task_state(q, v)
+        xd, dxd, _ = self.trajectory(t)
+        e, de = x - xd, J @ v - dxd
+        inv, lam2 = self.pinv.factor(J)
+        tau = J.T @ (-self.Kp @ e - self.Kd @ de) + self.nominal.gravity(q)
+        tau -= self.null_damping * project_null_space(J, J.T @ inv, v)
+        return ControlOutput(tau, {"damping": lam2})

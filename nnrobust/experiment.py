@@ -1,0 +1,214 @@
+"""Build an experiment from its configuration and run it: ``run_experiment(config) -> Result``."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .config import ExperimentConfig
+from .controllers import (
+    AdditiveRBFBasis,
+    Controller,
+    DampedPseudoInverse,
+    NNCompensator,
+    TaskSpaceController,
+    TaskSpacePD,
+)
+from .exceptions import ConfigError
+from .ik import solve_position_ik
+from .model import (
+    DynamicsModel,
+    PinocchioModel,
+    ThreeLinkParameters,
+    ThreeLinkPlanarModel,
+    load_robot,
+)
+from .plant import Friction, Plant, SinusoidalDisturbance
+from .results import Result
+from .simulation import simulate
+from .subtasks import CRITERIA, Criterion, WeightedCriteria
+from .trajectories import EllipseTrajectory
+
+
+@dataclass
+class Setup:
+    """Everything a run needs, built from a configuration (inspectable before running)."""
+
+    config: ExperimentConfig
+    robot: PinocchioModel
+    plant: Plant
+    nominal: DynamicsModel
+    trajectory: EllipseTrajectory
+    criterion: Criterion | None
+    controller: Controller
+    q0: np.ndarray
+    v0: np.ndarray
+
+
+def _vector(path: str, values, n: int, default: np.ndarray) -> np.ndarray:
+    if values is None:
+        return default
+    arr = np.asarray(values, dtype=float)
+    if arr.shape != (n,):
+        raise ConfigError(path, f"has {arr.size} entries, the robot has {n} joints")
+    return arr
+
+
+def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
+    """True model, friction (URDF values unless overridden) and disturbance."""
+    n, pc = robot.nq, config.plant
+    friction = Friction(
+        _vector("plant.viscous_friction", pc.viscous_friction, n, robot.viscous_friction),
+        _vector("plant.coulomb_friction", pc.coulomb_friction, n, robot.coulomb_friction),
+    )
+    if pc.disturbance == "paper":
+        if n != 3:
+            raise ConfigError("plant.disturbance", f"'paper' is for 3 joints, the robot has {n}")
+        disturbance = SinusoidalDisturbance.paper()
+    elif pc.disturbance == "none":
+        disturbance = SinusoidalDisturbance.none(n)
+    else:
+        amplitude = np.asarray(pc.disturbance_amplitude, dtype=float)
+        omega = np.asarray(pc.disturbance_omega, dtype=float)
+        phase = np.zeros_like(amplitude) if pc.disturbance_phase is None else pc.disturbance_phase
+        try:
+            disturbance = SinusoidalDisturbance(amplitude, omega, phase)
+        except ValueError as err:
+            raise ConfigError("plant.disturbance_amplitude", str(err)) from err
+        if disturbance.n != n:
+            raise ConfigError("plant.disturbance_amplitude", f"has {disturbance.n} rows, need {n}")
+    if pc.disturbance_scale != 1.0:
+        disturbance = SinusoidalDisturbance(
+            disturbance.amplitude * pc.disturbance_scale, disturbance.omega, disturbance.phase
+        )
+    return Plant(robot, friction, disturbance)
+
+
+def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsModel:
+    """The controller's model: closed form with beta-hat, p-hat, or the robot's own model."""
+    nc = config.nominal
+    if nc.kind == "urdf":
+        return load_robot(
+            config.robot.source, robot.task_frame, robot.task,
+            gravity=tuple(robot.model.gravity.linear), locked_joints=config.robot.locked_joints,
+        )
+    if robot.task != "planar":
+        raise ConfigError("nominal.kind", "'closed-form' is the planar three-link model; use 'urdf'")
+    true = ThreeLinkParameters.from_pinocchio(robot.model, robot.task_frame)
+    beta = true.beta if nc.beta is None else tuple(_vector("nominal.beta", nc.beta, 3, None))
+    p = true.p if nc.p is None else tuple(_vector("nominal.p", nc.p, 3, None))
+    return ThreeLinkPlanarModel(
+        ThreeLinkParameters(beta, p, true.lengths, true.gamma, true.gravity),
+        joint_names=robot.joint_names,
+    )
+
+
+def build_criterion(config: ExperimentConfig) -> Criterion | None:
+    """Weighted sum of the named criteria, eq. (4), or None."""
+    sc = config.subtasks
+    if not sc.criteria:
+        return None
+    unknown = [c for c in sc.criteria if c not in CRITERIA]
+    if unknown:
+        raise ConfigError("subtasks.criteria", f"unknown {unknown}; valid: {', '.join(CRITERIA)}")
+    return WeightedCriteria([CRITERIA[c]() for c in sc.criteria], sc.weights, sc.C)
+
+
+def build_basis(config: ExperimentConfig, robot: PinocchioModel, m: int) -> AdditiveRBFBasis:
+    """phi(s) over [q, q'] (joint limits, +-velocity_range) or [e, e'] (+-error_range)."""
+    nn = config.nn
+    if nn.basis_input == "joint":
+        lo_q = np.maximum(robot.lower_limits, -np.pi)
+        hi_q = np.minimum(robot.upper_limits, np.pi)
+        v = np.full(robot.nq, nn.velocity_range)
+        low, high = np.concatenate([lo_q, -v]), np.concatenate([hi_q, v])
+    else:
+        r = np.concatenate([np.full(m, nn.error_range[0]), np.full(m, nn.error_range[1])])
+        low, high = -r, r
+    return AdditiveRBFBasis(low, high, nn.centers, nn.width, nn.bias)
+
+
+def build_controller(
+    config: ExperimentConfig, robot: PinocchioModel, nominal: DynamicsModel,
+    trajectory: EllipseTrajectory, criterion: Criterion | None,
+) -> Controller:
+    """The control law named by controller.kind."""
+    c, n = config.controller, robot.nq
+    pinv = DampedPseudoInverse(c.pinv_threshold, c.pinv_max_damping)
+    if c.kind == "pd":
+        return TaskSpacePD(nominal, trajectory, np.diag(c.pd_Kp), np.diag(c.pd_Kd),
+                           c.pd_null_damping, pinv)
+    Kp, Kv = np.diag(c.Kp), np.diag(c.Kv)
+    compensator = None
+    if c.kind == "nn":
+        nn = config.nn
+        compensator = NNCompensator(
+            Kp, Kv, build_basis(config, robot, trajectory.m), nn.basis_input, nn.F, nn.gamma,
+            nn.eps0, nn.eps_min, nn.sigma, nn.law,
+        )
+    nominal_friction = Friction(
+        _vector("nominal.viscous_friction", config.nominal.viscous_friction, n, np.zeros(n)),
+        _vector("nominal.coulomb_friction", config.nominal.coulomb_friction, n, np.zeros(n)),
+    )
+    return TaskSpaceController(nominal, trajectory, Kp, Kv, c.k, criterion, nominal_friction,
+                               compensator, pinv)
+
+
+def initial_state(
+    config: ExperimentConfig, robot: PinocchioModel, trajectory: EllipseTrajectory
+) -> tuple[np.ndarray, np.ndarray]:
+    """q(0) by IK of x_d(0) + offset from the seed; q'(0) = J+ x_d'(0) (no initial velocity error)."""
+    sim = config.simulation
+    lower, upper = robot.lower_limits, robot.upper_limits
+    mid = 0.5 * (np.maximum(lower, -np.pi) + np.minimum(upper, np.pi))
+    seed = _vector("simulation.q_seed", sim.q_seed, robot.nq, mid)
+    xd0, dxd0, _ = trajectory(0.0)
+    offset = np.zeros(trajectory.m) if sim.initial_task_offset is None else np.asarray(
+        sim.initial_task_offset, dtype=float)
+    if offset.shape != (trajectory.m,):
+        raise ConfigError("simulation.initial_task_offset", f"needs {trajectory.m} entries")
+    q0, residual = solve_position_ik(robot, xd0 + offset, seed, lower, upper)
+    if residual > 1e-6:
+        raise ConfigError(
+            "trajectory.center",
+            f"x_d(0) + offset = {np.round(xd0 + offset, 4).tolist()} m is out of reach from "
+            f"q_seed = {np.round(seed, 3).tolist()} (closest point {residual:.3g} m away)",
+        )
+    J = robot.task_jacobian(q0)
+    v0 = DampedPseudoInverse().matrix(J) @ dxd0
+    return q0, v0
+
+
+def build(config: ExperimentConfig) -> Setup:
+    """Load the robot and build plant, nominal model, controller and initial state."""
+    rc = config.robot
+    robot = load_robot(rc.source, rc.task_frame, rc.task,
+                       tuple(rc.gravity) if rc.gravity else None, rc.locked_joints or None)
+    tc = config.trajectory
+    if len(tc.center) != robot.m:
+        raise ConfigError("trajectory.center",
+                          f"has {len(tc.center)} entries, the {rc.task!r} task has m = {robot.m}")
+    if robot.m >= robot.nq:
+        raise ConfigError("robot.task", f"m = {robot.m} >= n = {robot.nq}: the arm is not redundant")
+    trajectory = EllipseTrajectory(tc.center, tc.axis_a, tc.axis_b, tc.omega, tc.phase)
+    plant = build_plant(config, robot)
+    nominal = build_nominal(config, robot)
+    criterion = build_criterion(config)
+    controller = build_controller(config, robot, nominal, trajectory, criterion)
+    q0, v0 = initial_state(config, robot, trajectory)
+    return Setup(config, robot, plant, nominal, trajectory, criterion, controller, q0, v0)
+
+
+def run_experiment(config: ExperimentConfig) -> Result:
+    """Build and simulate; the Result holds arrays, signals and the configuration."""
+    setup = build(config)
+    sim = config.simulation
+    start = time.perf_counter()
+    trace = simulate(
+        setup.plant, setup.controller, setup.q0, setup.v0, sim.duration,
+        sim.control_period, sim.substeps, sim.integrator,
+    )
+    wall = time.perf_counter() - start
+    return Result.from_trace(trace, setup.robot, setup.trajectory, setup.criterion, config, wall)

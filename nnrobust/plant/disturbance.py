@@ -1,0 +1,61 @@
+"""Bounded external disturbances tau_d(t) of eq. (7)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class SinusoidalDisturbance:
+    """tau_d,i(t) = sum_k A[i, k] sin(omega[k] t + phase[i, k]).
+
+    Attributes:
+        amplitude: A, n x K [N m].
+        omega: angular frequencies, K [rad/s].
+        phase: n x K [rad].
+    """
+
+    amplitude: np.ndarray
+    omega: np.ndarray
+    phase: np.ndarray
+
+    def __post_init__(self):
+        for name in ("amplitude", "omega", "phase"):
+            object.__setattr__(self, name, np.atleast_1d(np.asarray(getattr(self, name), float)))
+        if self.amplitude.ndim == 1:
+            object.__setattr__(self, "amplitude", self.amplitude[:, None])
+        if self.phase.shape != self.amplitude.shape or self.omega.shape != self.amplitude.shape[1:]:
+            raise ValueError(
+                f"disturbance: amplitude {self.amplitude.shape}, omega {self.omega.shape} and "
+                f"phase {self.phase.shape} must be n x K, K and n x K"
+            )
+
+    @classmethod
+    def paper(cls) -> SinusoidalDisturbance:
+        """tau_d = [4 cos 2t, sin t + cos 2t, 2 sin t]^T N m (Sect. 4, errata reading)."""
+        half_pi = np.pi / 2
+        return cls(
+            amplitude=[[0.0, 4.0], [1.0, 1.0], [2.0, 0.0]],
+            omega=[1.0, 2.0],
+            phase=[[0.0, half_pi], [0.0, half_pi], [0.0, 0.0]],
+        )
+
+    @classmethod
+    def none(cls, n: int) -> SinusoidalDisturbance:
+        """tau_d = 0 on n joints."""
+        return cls(np.zeros((n, 1)), np.zeros(1), np.zeros((n, 1)))
+
+    @property
+    def n(self) -> int:
+        """Number of joints."""
+        return self.amplitude.shape[0]
+
+    def bound(self) -> np.ndarray:
+        """Per-joint bound sum_k |A[i, k]| [N m]."""
+        return np.abs(self.amplitude).sum(axis=1)
+
+    def __call__(self, t: float) -> np.ndarray:
+        """tau_d(t) [N m]."""
+        return (self.amplitude * np.sin(self.omega * t + self.phase)).sum(axis=1)

@@ -1,0 +1,37 @@
+"""Joint friction F(q') of eq. (7): viscous plus Coulomb."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Friction:
+    """F(q') = F_d q' + F_c sgn(q'), the paper's Sect. 4 friction with F_c = 1 N m.
+
+    Attributes:
+        viscous: F_d, per joint [N m s/rad].
+        coulomb: F_c, per joint [N m]; sgn(0) = 0.
+    """
+
+    viscous: np.ndarray
+    coulomb: np.ndarray
+
+    def __post_init__(self):
+        object.__setattr__(self, "viscous", np.asarray(self.viscous, dtype=float))
+        object.__setattr__(self, "coulomb", np.asarray(self.coulomb, dtype=float))
+
+    @classmethod
+    def none(cls, n: int) -> Friction:
+        """No friction on n joints."""
+        return cls(np.zeros(n), np.zeros(n))
+
+    def torque(self, v: np.ndarray) -> np.ndarray:
+        """F(q') [N m]."""
+        return self.viscous * v + self.coulomb * np.sign(v)
+
+    def power(self, v: np.ndarray) -> float:
+        """q'^T F(q') >= 0 [W], the power friction dissipates."""
+        return float(v @ self.torque(v))

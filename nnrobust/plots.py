@@ -1,0 +1,142 @@
+"""The paper's figures for a run (Figs. 1-6) and comparison figures, as PNG and SVG."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from .results import Result  # noqa: E402
+
+FORMATS = ("png", "svg")
+
+
+def _save(fig, folder: Path, name: str) -> list[Path]:
+    paths = []
+    for fmt in FORMATS:
+        path = folder / f"{name}.{fmt}"
+        fig.savefig(path, dpi=120, bbox_inches="tight")
+        paths.append(path)
+    plt.close(fig)
+    return paths
+
+
+def _axis_labels(m: int) -> list[str]:
+    return ["x", "y", "z"][:m]
+
+
+def plot_path(result: Result, ax=None, label: str = "actual") -> None:
+    """Desired vs actual end-effector path in the first two task coordinates (Figs. 1, 4)."""
+    ax.plot(result.x_d[:, 0], result.x_d[:, 1], "k--", lw=1.5, label="desired $x_d$")
+    ax.plot(result.x[:, 0], result.x[:, 1], lw=1.0, label=label)
+    ax.plot(*result.x[0, :2], "o", ms=4, color="C0")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.legend(loc="best", fontsize=8)
+
+
+def plot_run(result: Result, folder: str | Path) -> list[Path]:
+    """Write the figure set of one run into ``folder``; returns the files written."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    t, written = result.t, []
+    labels = _axis_labels(result.x.shape[1])
+    joint_labels = result.joint_names or [f"q{i + 1}" for i in range(result.q.shape[1])]
+
+    fig, ax = plt.subplots(figsize=(5, 4.5))
+    plot_path(result, ax)
+    ax.set_title("End-effector path")
+    written += _save(fig, folder, "path")
+
+    fig, axes = plt.subplots(2, 1, figsize=(7, 5), sharex=True)
+    for i, lab in enumerate(labels):
+        axes[0].plot(t, result.e[:, i] * 1e3, lw=0.8, label=f"$e_{lab}$")
+    axes[0].set_ylabel("task error [mm]")
+    axes[0].legend(fontsize=8)
+    axes[1].semilogy(t, np.maximum(np.linalg.norm(result.e, axis=1), 1e-12), lw=0.8)
+    axes[1].set_ylabel("$\\|e\\|$ [m]")
+    axes[1].set_xlabel("t [s]")
+    fig.suptitle("Task-space tracking error")
+    written += _save(fig, folder, "errors")
+
+    fig, ax = plt.subplots(figsize=(7, 3.5))
+    for i, name in enumerate(joint_labels):
+        ax.plot(t, result.q[:, i], lw=0.9, label=name)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("joint angle [rad]")
+    ax.legend(fontsize=8)
+    ax.set_title("Joint angles")
+    written += _save(fig, folder, "joints")
+
+    fig, ax = plt.subplots(figsize=(7, 3.5))
+    for i, name in enumerate(joint_labels):
+        ax.plot(t, result.tau[:, i], lw=0.6, label=name)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel("torque [N m]")
+    ax.legend(fontsize=8)
+    ax.set_title("Joint torques (held over each control period)")
+    written += _save(fig, folder, "torques")
+
+    fig, axes = plt.subplots(2, 1, figsize=(7, 4.5), sharex=True)
+    axes[0].plot(t, result.signals["h"], lw=0.9)
+    axes[0].set_ylabel("h(q)")
+    axes[1].plot(t, result.signals["manipulability"], lw=0.9)
+    axes[1].set_ylabel("$\\sqrt{\\det JJ^T}$ [m$^2$]")
+    axes[1].set_xlabel("t [s]")
+    fig.suptitle("Subtask criterion and manipulability")
+    written += _save(fig, folder, "subtask")
+
+    if result.chain is not None:
+        fig, ax = plt.subplots(figsize=(5.5, 5))
+        ax.plot(result.x_d[:, 0], result.x_d[:, 1], "k--", lw=1, label="desired path")
+        instants = np.linspace(0, t.size - 1, 7).astype(int)
+        colors = plt.cm.viridis(np.linspace(0, 0.9, instants.size))
+        for k, color in zip(instants, colors):
+            pts = result.chain[k]
+            ax.plot(pts[:, 0], pts[:, 1], "-o", color=color, ms=3, lw=2, label=f"t = {t[k]:.1f} s")
+        ax.set_aspect("equal", adjustable="datalim")
+        ax.set_xlabel("x [m]")
+        ax.set_ylabel("y [m]")
+        ax.legend(fontsize=7, loc="best")
+        ax.set_title("Arm at several instants (x-y projection)")
+        written += _save(fig, folder, "snapshots")
+
+    if "rho_hat" in result.signals:
+        fig, axes = plt.subplots(2, 1, figsize=(7, 4.5), sharex=True)
+        axes[0].plot(t, result.signals["rho_hat"], lw=0.9)
+        axes[0].set_ylabel("$\\hat\\rho$ [m/s$^2$]")
+        axes[1].semilogy(t, np.maximum(result.signals["eps"], 1e-16), lw=0.9)
+        axes[1].set_ylabel("$\\varepsilon$")
+        axes[1].set_xlabel("t [s]")
+        fig.suptitle("NN bound estimate and boundary layer")
+        written += _save(fig, folder, "nn")
+    return written
+
+
+def plot_comparison(results: dict[str, Result], folder: str | Path) -> list[Path]:
+    """Overlay several runs: paths, error norms and torque norms."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
+    first = next(iter(results.values()))
+    axes[0].plot(first.x_d[:, 0], first.x_d[:, 1], "k--", lw=1.5, label="desired")
+    for name, res in results.items():
+        axes[0].plot(res.x[:, 0], res.x[:, 1], lw=0.9, label=name)
+        axes[1].semilogy(res.t, np.maximum(np.linalg.norm(res.e, axis=1), 1e-12), lw=0.8, label=name)
+        axes[2].plot(res.t, np.linalg.norm(res.tau, axis=1), lw=0.5, label=name)
+    axes[0].set_aspect("equal", adjustable="datalim")
+    axes[0].set_xlabel("x [m]")
+    axes[0].set_ylabel("y [m]")
+    axes[1].set_xlabel("t [s]")
+    axes[1].set_ylabel("$\\|e\\|$ [m]")
+    axes[2].set_xlabel("t [s]")
+    axes[2].set_ylabel("$\\|\\tau\\|$ [N m]")
+    for ax in axes:
+        ax.legend(fontsize=8)
+    written = _save(fig, folder, "comparison")
+    return written

@@ -1,0 +1,193 @@
+"""Results of a run: arrays, metrics, and the run folder written atomically."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from .exceptions import RunFolderExists
+
+METRIC_UNITS = {
+    "rms_error": "m",
+    "rms_error_after_2s": "m",
+    "max_error": "m",
+    "final_error": "m",
+    "rms_torque": "N m",
+    "max_torque": "N m",
+    "torque_chatter": "N m",
+    "min_manipulability": "m^2",
+    "final_rho_hat": "m/s^2",
+    "simulated_seconds": "s",
+    "wall_seconds": "s",
+    "realtime_factor": "-",
+}
+"""Units of the scalar metrics in metrics.json."""
+
+
+@dataclass
+class Result:
+    """A simulated run sampled once per control period T.
+
+    Attributes:
+        t: time [s], N.
+        q, dq: joint positions [rad], velocities [rad/s], N x n.
+        tau: joint torques held over [t_k, t_k + T) [N m], N x n.
+        x, x_d, e: actual and desired task position and e = x - x_d [m], N x m.
+        signals: per-sample scalars: ``h`` (criterion), ``manipulability`` (sqrt det J J^T) and
+            the controller's (``rho_hat`` [m/s^2], ``eps``, ``z_norm``, ``damping``).
+        status: ``completed``, ``diverged`` or ``interrupted``.
+        message: why the run stopped early.
+        config: the configuration that produced it (TOML text).
+        wall_seconds: wall-clock time of the simulation [s].
+        joint_names: names of the joints.
+        chain: world positions of the joint origins and the task frame, N x (n + 1) x 3 [m]
+            (for stick figures and the viewer).
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    dq: np.ndarray
+    tau: np.ndarray
+    x: np.ndarray
+    x_d: np.ndarray
+    e: np.ndarray
+    signals: dict[str, np.ndarray] = field(default_factory=dict)
+    status: str = "completed"
+    message: str = ""
+    config: str = ""
+    wall_seconds: float = float("nan")
+    joint_names: list[str] = field(default_factory=list)
+    chain: np.ndarray | None = None
+
+    @classmethod
+    def from_trace(cls, trace, robot, trajectory, criterion, config, wall_seconds: float) -> Result:
+        """Add task-space quantities (true kinematics) and the criterion to a simulation trace."""
+        N = trace.t.size
+        x = np.empty((N, robot.m))
+        h = np.full(N, np.nan)
+        manip = np.empty(N)
+        chain = np.empty((N, robot.nq + 1, 3))
+        for k in range(N):
+            chain[k] = robot.chain_points(trace.q[k])
+            x[k] = robot.task_position(trace.q[k])
+            J = robot.task_jacobian(trace.q[k])
+            manip[k] = np.sqrt(max(np.linalg.det(J @ J.T), 0.0))
+            if criterion is not None:
+                h[k] = criterion.value(robot, trace.q[k])
+        x_d = trajectory.position(trace.t)
+        signals = dict(trace.signals, h=h, manipulability=manip)
+        return cls(
+            trace.t, trace.q, trace.dq, trace.tau, x, x_d, x - x_d, signals, trace.status,
+            trace.message, config.to_toml() if config is not None else "", wall_seconds,
+            list(robot.joint_names), chain,
+        )
+
+    # -- metrics -----------------------------------------------------------------------------
+    def metrics(self) -> dict:
+        """Scalar summary; units in :data:`METRIC_UNITS`."""
+        err = np.linalg.norm(self.e, axis=1)
+        late = self.t >= 2.0
+        tau_norm2 = np.sum(self.tau**2, axis=1)
+        dtau = np.linalg.norm(np.diff(self.tau, axis=0), axis=1)
+
+        def rms(a):
+            return float(np.sqrt(np.mean(a))) if a.size else float("nan")
+
+        rho = self.signals.get("rho_hat")
+        simulated = float(self.t[-1] - self.t[0] + (self.t[1] - self.t[0])) if self.t.size > 1 else 0.0
+        out = {
+            "status": self.status,
+            "rms_error": rms(err**2),
+            "rms_error_after_2s": rms(err[late] ** 2),
+            "max_error": float(err.max()) if err.size else float("nan"),
+            "final_error": float(err[-1]) if err.size else float("nan"),
+            "rms_torque": rms(tau_norm2),
+            "rms_torque_per_joint": np.sqrt(np.mean(self.tau**2, axis=0)).tolist(),
+            "max_torque": float(np.abs(self.tau).max()) if self.tau.size else float("nan"),
+            "torque_chatter": rms(dtau**2),
+            "min_manipulability": float(np.min(self.signals["manipulability"])) if err.size else float("nan"),
+            "final_rho_hat": float(rho[-1]) if rho is not None and rho.size else None,
+            "simulated_seconds": simulated,
+            "wall_seconds": self.wall_seconds,
+            "realtime_factor": simulated / self.wall_seconds if self.wall_seconds > 0 else None,
+        }
+        if self.message:
+            out["message"] = self.message
+        return out
+
+    # -- files -------------------------------------------------------------------------------
+    def save_npz(self, path: str | Path) -> None:
+        """Arrays and signals in one .npz (signals prefixed ``signal_``)."""
+        arrays = {k: getattr(self, k) for k in ("t", "q", "dq", "tau", "x", "x_d", "e")}
+        arrays.update({f"signal_{k}": v for k, v in self.signals.items()})
+        arrays["joint_names"] = np.asarray(self.joint_names)
+        if self.chain is not None:
+            arrays["chain"] = self.chain
+        with open(path, "wb") as fh:
+            np.savez_compressed(fh, **arrays)
+
+    @classmethod
+    def load(cls, folder: str | Path) -> Result:
+        """Read a run folder written by :func:`write_run`."""
+        folder = Path(folder)
+        with np.load(folder / "result.npz") as data:
+            arrays = {k: data[k] for k in data.files}
+        metrics = json.loads((folder / "metrics.json").read_text())
+        config = (folder / "config.toml").read_text() if (folder / "config.toml").exists() else ""
+        signals = {k[len("signal_"):]: v for k, v in arrays.items() if k.startswith("signal_")}
+        return cls(
+            *(arrays[k] for k in ("t", "q", "dq", "tau", "x", "x_d", "e")), signals,
+            metrics.get("status", "completed"), metrics.get("message", ""), config,
+            metrics.get("wall_seconds", float("nan")), arrays["joint_names"].tolist(),
+            arrays.get("chain"),
+        )
+
+
+def _json_default(value):
+    if isinstance(value, (np.floating, np.integer)):
+        return value.item()
+    raise TypeError(f"cannot write {type(value).__name__} to JSON")
+
+
+def write_run(folder: str | Path, result: Result, overwrite: bool = False, plots: bool = True) -> Path:
+    """Write config.toml, result.npz, metrics.json and plots/ into ``folder`` atomically.
+
+    Everything is written to a hidden sibling folder first and renamed into place at the end, so
+    an interrupted or failed write never leaves a half-written folder under the final name, and
+    an existing run is replaced only when ``overwrite`` is true (and only once the new one is
+    complete).
+    """
+    folder = Path(folder)
+    if folder.exists() and not overwrite:
+        raise RunFolderExists(f"{folder} exists; pass --overwrite (overwrite=True) to replace it")
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    tmp = folder.parent / f".{folder.name}.partial-{os.getpid()}"
+    if tmp.exists():
+        shutil.rmtree(tmp)
+    try:
+        tmp.mkdir()
+        (tmp / "config.toml").write_text(result.config)
+        result.save_npz(tmp / "result.npz")
+        (tmp / "metrics.json").write_text(
+            json.dumps(result.metrics(), indent=2, default=_json_default) + "\n"
+        )
+        if plots and result.t.size > 1:
+            from .plots import plot_run  # matplotlib only when plotting
+
+            plot_run(result, tmp / "plots")
+        if folder.exists():
+            old = folder.parent / f".{folder.name}.old-{os.getpid()}"
+            os.replace(folder, old)
+            os.replace(tmp, folder)
+            shutil.rmtree(old)
+        else:
+            os.replace(tmp, folder)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return folder

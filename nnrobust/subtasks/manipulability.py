@@ -1,0 +1,65 @@
+"""Manipulability criteria: det(J J^T) and its square root (Yoshikawa)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..model.base import DynamicsModel
+from .base import Criterion
+
+
+def _adjugate(A: np.ndarray) -> np.ndarray:
+    """adj(A) = det(A) A^-1, by cofactors (valid for singular A)."""
+    m = A.shape[0]
+    if m == 1:
+        return np.ones((1, 1))
+    if m == 2:
+        return np.array([[A[1, 1], -A[0, 1]], [-A[1, 0], A[0, 0]]])
+    if m == 3:  # rows of adj(A)^T are cross products of the columns of A
+        a0, a1, a2 = A[:, 0], A[:, 1], A[:, 2]
+        return np.array([np.cross(a1, a2), np.cross(a2, a0), np.cross(a0, a1)])
+    cof = np.empty_like(A)
+    for i in range(m):
+        for j in range(m):
+            minor = np.delete(np.delete(A, i, axis=0), j, axis=1)
+            cof[i, j] = (-1) ** (i + j) * np.linalg.det(minor)
+    return cof.T
+
+
+def _det_and_gradient(model: DynamicsModel, q: np.ndarray) -> tuple[float, np.ndarray]:
+    """det(J J^T) and its gradient: d det(A)/dq_k = 2 tr(adj(A) H_k J^T), A = J J^T."""
+    J = model.task_jacobian(q)
+    H = model.task_jacobian_derivative(q)  # m x n x n, H[:, :, k] = dJ/dq_k
+    A = J @ J.T
+    adj = _adjugate(A)
+    grad = 2.0 * np.einsum("ij,jlk,il->k", adj, H, J)
+    return float(np.linalg.det(A)), grad
+
+
+class HalfDetManipulability(Criterion):
+    """h = 0.5 det(J J^T), the first term of the paper's eq. (19)."""
+
+    def value(self, model: DynamicsModel, q: np.ndarray) -> float:
+        """0.5 det(J J^T)."""
+        J = model.task_jacobian(q)
+        return 0.5 * float(np.linalg.det(J @ J.T))
+
+    def gradient(self, model: DynamicsModel, q: np.ndarray) -> np.ndarray:
+        """0.5 d det(J J^T)/dq."""
+        return 0.5 * _det_and_gradient(model, q)[1]
+
+
+class Manipulability(Criterion):
+    """h = sqrt(det(J J^T)), Yoshikawa's manipulability measure."""
+
+    def value(self, model: DynamicsModel, q: np.ndarray) -> float:
+        """sqrt(det(J J^T))."""
+        J = model.task_jacobian(q)
+        return float(np.sqrt(max(np.linalg.det(J @ J.T), 0.0)))
+
+    def gradient(self, model: DynamicsModel, q: np.ndarray) -> np.ndarray:
+        """d det / dq / (2 sqrt(det)); zero at a singularity, where it is not defined."""
+        det, grad = _det_and_gradient(model, q)
+        if det <= 1e-300:
+            return np.zeros_like(q)
+        return grad / (2.0 * np.sqrt(det))
