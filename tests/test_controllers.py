@@ -1,0 +1,117 @@
+import numpy as np
+import pytest
+
+from nnrobust.config import ExperimentConfig
+from nnrobust.controllers import (
+    AdditiveRBFBasis,
+    DampedPseudoInverse,
+    NNCompensator,
+    error_dynamics,
+    lyapunov_P,
+    lyapunov_Q,
+    project_null_space,
+)
+from nnrobust.experiment import build
+from nnrobust.simulation import simulate
+
+from .problems import paper_robot, random_states
+
+KP, KV = np.diag([10.0, 10.0]), np.diag([4.0, 4.0])
+
+
+def test_lyapunov_solution_is_the_closed_form():
+    """scipy's P solves A^T P + P A + Q = 0 and equals [[2 Kp Kv, Kp], [Kp, Kv]]."""
+    P = lyapunov_P(KP, KV)
+    A, _ = error_dynamics(KP, KV)
+    np.testing.assert_allclose(A.T @ P + P @ A + lyapunov_Q(KP, KV), 0, atol=1e-10)
+    np.testing.assert_allclose(P, np.block([[2 * KP @ KV, KP], [KP, KV]]), atol=1e-10)
+    assert np.all(np.linalg.eigvalsh(P) > 0)
+
+
+def test_omega_is_kp_e_plus_kv_edot():
+    """omega = B^T P y = Kp e + Kv e'."""
+    basis = AdditiveRBFBasis(-np.ones(6), np.ones(6))
+    comp = NNCompensator(KP, KV, basis)
+    e, de = np.array([0.1, -0.2]), np.array([0.3, 0.05])
+    np.testing.assert_allclose(comp.omega(np.concatenate([e, de])), KP @ e + KV @ de)
+
+
+def _compensator(law, rho):
+    basis = AdditiveRBFBasis(-np.ones(6), np.ones(6), centers=3)
+    comp = NNCompensator(KP, KV, basis, law=law)
+    z = np.zeros(comp.state_size)
+    z[0] = rho  # the bias unit: rho-hat = rho exactly
+    z[-1] = 1e-6  # eps
+    return comp, z
+
+
+def test_printed_u0_is_bounded_by_one_and_corrected_reaches_rho():
+    """Printed eq. (15) has |u_0| < 1 for any rho-hat; the corrected form has |u_0| -> rho-hat."""
+    y = np.array([0.1, 0.2, 0.3, -0.1])
+    q = v = np.zeros(3)
+    for rho in (0.5, 5.0, 50.0):
+        comp, z = _compensator("printed", rho)
+        u0, r = comp.u0(q, v, y, z)
+        assert r == pytest.approx(rho) and np.linalg.norm(u0) < 1.0
+        comp, z = _compensator("corrected", rho)
+        u0, _ = comp.u0(q, v, y, z)
+        assert np.linalg.norm(u0) == pytest.approx(rho, rel=1e-4)
+        # u_0 opposes omega
+        assert u0 @ comp.omega(y) < 0
+
+
+def test_adaptive_law_and_boundary_layer():
+    """Z' = F |w| phi(s) - F sigma Z and eps' = -gamma (eps - eps_min)."""
+    basis = AdditiveRBFBasis(-np.ones(6), np.ones(6), centers=3)
+    comp = NNCompensator(KP, KV, basis, F=2.0, gamma=3.0, eps_min=0.1, sigma=0.5)
+    y, q, v = np.array([0.1, 0.2, 0.3, -0.1]), np.full(3, 0.2), np.full(3, -0.1)
+    z = np.concatenate([np.full(comp.L, 0.7), [0.4]])
+    dz = comp.state_derivative(q, v, y, z)
+    phi = basis(np.concatenate([q, v]))
+    np.testing.assert_allclose(dz[:-1], 2.0 * (np.linalg.norm(comp.omega(y)) * phi - 0.5 * 0.7))
+    assert dz[-1] == pytest.approx(-3.0 * (0.4 - 0.1))
+
+
+def test_pseudoinverse_penrose_conditions_and_null_space():
+    """Eqs. (5)-(6) away from singularities; J (I - J+ J) z = 0 computed without n x n matrices."""
+    robot = paper_robot()
+    pinv = DampedPseudoInverse()
+    rng = np.random.default_rng(0)
+    for q, _, _ in random_states(3, 20, seed=8):
+        J = robot.task_jacobian(q)
+        if np.linalg.svd(J, compute_uv=False)[-1] < 0.05:
+            continue
+        Jp = pinv.matrix(J)
+        np.testing.assert_allclose(J @ Jp @ J, J, atol=1e-12)
+        np.testing.assert_allclose(Jp @ J @ Jp, Jp, atol=1e-12)
+        np.testing.assert_allclose((Jp @ J).T, Jp @ J, atol=1e-12)
+        z = rng.normal(size=3)
+        np.testing.assert_allclose(J @ project_null_space(J, Jp, z), 0, atol=1e-12)
+
+
+def test_pseudoinverse_stays_bounded_at_a_singularity():
+    """At a stretched arm J+ is damped and finite."""
+    robot = paper_robot()
+    J = robot.task_jacobian(np.zeros(3))
+    Jp = DampedPseudoInverse().matrix(J)
+    assert np.all(np.isfinite(Jp)) and np.abs(Jp).max() < 1e3
+
+
+def test_perfect_model_gives_the_linear_error_dynamics():
+    """With M-hat = M, N-hat = N and no disturbance, e obeys e'' + Kv e' + Kp e = 0 (eq. 13, eta = 0)."""
+    config = ExperimentConfig().replace(
+        nominal={"kind": "urdf"},
+        plant={"viscous_friction": [0.0] * 3, "coulomb_friction": [0.0] * 3, "disturbance": "none"},
+        controller={"kind": "no-u0"},
+        simulation={"q_seed": [0.2, 1.0, 1.0], "initial_task_offset": [0.02, -0.01], "duration": 3.0},
+    )
+    setup = build(config)
+    trace = simulate(setup.plant, setup.controller, setup.q0, setup.v0, 3.0)
+    e = np.array([setup.robot.task_position(q) for q in trace.q]) - setup.trajectory.position(trace.t)
+    # analytic solution for each axis: critically... roots of s^2 + 4 s + 10 (complex: -2 +- i sqrt 6)
+    wd = np.sqrt(6.0)
+    e0 = np.array([0.02, -0.01])
+    # e'(0) = J q'(0) - x_d'(0) = 0 since q'(0) = J+ x_d'(0)
+    analytic = np.exp(-2 * trace.t)[:, None] * (
+        np.cos(wd * trace.t)[:, None] + (2 / wd) * np.sin(wd * trace.t)[:, None]) * e0
+    assert np.abs(e - analytic).max() < 2e-4 * np.abs(e0).max() * 10

@@ -1,0 +1,112 @@
+import json
+
+import numpy as np
+import pytest
+
+from nnrobust.cli import main
+from nnrobust.config import ExperimentConfig, from_dict, load_config
+from nnrobust.exceptions import ConfigError, RunFolderExists
+from nnrobust.experiment import run_experiment
+from nnrobust.presets import load_preset, preset_names
+from nnrobust.results import Result, write_run
+
+
+@pytest.fixture(scope="module")
+def paper_runs():
+    """Cases (a) and (b), 20 s, NN controller and the no-u0 baseline."""
+    runs = {}
+    for preset in ("paper-line", "paper-ellipse"):
+        for kind in ("nn", "no-u0"):
+            config = load_preset(preset).replace(controller={"kind": kind})
+            runs[preset, kind] = run_experiment(config).metrics()
+    return runs
+
+
+@pytest.mark.parametrize("preset", ["paper-line", "paper-ellipse"])
+def test_nn_controller_beats_baseline_tenfold(paper_runs, preset):
+    """Acceptance: RMS task error over t >= 2 s at least 10x smaller with the NN compensator."""
+    nn, base = paper_runs[preset, "nn"], paper_runs[preset, "no-u0"]
+    assert nn["status"] == base["status"] == "completed"
+    assert np.isfinite(base["rms_error_after_2s"])
+    assert nn["rms_error_after_2s"] * 10 <= base["rms_error_after_2s"]
+    assert np.isfinite(nn["rms_torque"]) and nn["rms_torque"] > 0
+
+
+def test_every_preset_validates():
+    """All shipped presets load and round-trip through TOML."""
+    assert {"paper-line", "paper-ellipse", "paper-ellipse-vertical"} <= set(preset_names())
+    for name in preset_names():
+        config = load_preset(name)
+        assert from_dict(__import__("tomllib").loads(config.to_toml())) == config
+
+
+def test_config_errors_name_the_key(tmp_path):
+    """Unknown keys suggest the closest one; Kv^2 <= Kp is refused with the reason."""
+    with pytest.raises(ConfigError, match="did you mean 'duration'"):
+        from_dict({"simulation": {"duraton": 3.0}})
+    with pytest.raises(ConfigError, match="controller.Kv.*positive definite"):
+        from_dict({"controller": {"Kp": [10.0, 10.0], "Kv": [3.0, 3.0]}})
+    with pytest.raises(ConfigError, match="expected a number"):
+        from_dict({"nn": {"F": "fast"}})
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[simulation\nduration = 1")
+    with pytest.raises(ConfigError, match="bad.toml: invalid TOML"):
+        load_config(bad)
+
+
+def _short(config: ExperimentConfig, kind: str = "nn") -> ExperimentConfig:
+    return config.replace(controller={"kind": kind}, simulation={"duration": 0.3})
+
+
+def test_run_folder_contents_and_reload(tmp_path):
+    """A run folder holds config.toml, result.npz (per-period arrays), metrics.json and plots."""
+    result = run_experiment(_short(load_preset("paper-ellipse")))
+    folder = write_run(tmp_path / "run", result)
+    names = {p.name for p in folder.iterdir()}
+    assert {"config.toml", "result.npz", "metrics.json", "plots"} <= names
+    with np.load(folder / "result.npz") as data:
+        for key in ("t", "q", "dq", "tau", "x", "x_d"):
+            assert data[key].shape[0] == 300
+    metrics = json.loads((folder / "metrics.json").read_text())
+    for key in ("rms_error", "rms_error_after_2s", "max_error", "rms_torque"):
+        assert key in metrics
+    assert (folder / "plots" / "path.png").stat().st_size > 1000
+    again = Result.load(folder)
+    np.testing.assert_array_equal(again.q, result.q)
+    # the written configuration repeats the run exactly
+    repeat = run_experiment(load_config(folder / "config.toml"))
+    np.testing.assert_array_equal(repeat.tau, result.tau)
+
+
+def test_write_is_atomic_and_never_clobbers(tmp_path, monkeypatch):
+    """An existing run is kept unless overwrite; a failed write leaves the old run intact."""
+    result = run_experiment(_short(load_preset("paper-line"), "no-u0"))
+    folder = write_run(tmp_path / "run", result, plots=False)
+    before = (folder / "metrics.json").read_text()
+    with pytest.raises(RunFolderExists):
+        write_run(folder, result, plots=False)
+
+    def broken(*args, **kwargs):
+        raise OSError("disk full")
+
+    monkeypatch.setattr(Result, "save_npz", broken)
+    with pytest.raises(OSError):
+        write_run(folder, result, overwrite=True, plots=False)
+    assert (folder / "metrics.json").read_text() == before
+    assert [p.name for p in tmp_path.iterdir()] == ["run"]  # no partial folder left behind
+
+
+def test_cli_run_compare_and_errors(tmp_path, capsys):
+    """nnrobust run / compare / presets work; bad input gives exit code 2 and one message."""
+    out_nn, out_pd = tmp_path / "nn", tmp_path / "pd"
+    assert main(["run", "paper-ellipse", "--duration", "0.3", "--out", str(out_nn), "--quiet"]) == 0
+    assert main(["run", "paper-ellipse", "--controller", "pd", "--duration", "0.3",
+                 "--out", str(out_pd), "--quiet", "--no-plots"]) == 0
+    assert main(["compare", str(out_nn), str(out_pd), "--out", str(tmp_path / "cmp")]) == 0
+    table = capsys.readouterr().out
+    assert "nn" in table and "pd" in table and (tmp_path / "cmp" / "comparison.png").exists()
+    assert main(["presets"]) == 0
+    assert "paper-line" in capsys.readouterr().out
+    assert main(["run", "no-such-preset"]) == 2
+    assert main(["run", "paper-ellipse", "--duration", "0.3", "--out", str(out_nn)]) == 2
+    assert "exists" in capsys.readouterr().err
