@@ -38,7 +38,8 @@ def main() -> None:
     args = parser.parse_args()
     base = load_preset(args.preset)
     rows = []
-    header = f"{'variant':30s} {'rms e t>=2s [mm]':>17s} {'max e [mm]':>11s} {'rms tau [N m]':>14s} {'chatter [N m]':>14s} {'rho-hat end':>12s}"
+    header = (f"{'variant':30s} {'rms e t>=2s [mm]':>17s} {'max e [mm]':>11s} "
+              f"{'rms tau [N m]':>14s} {'chatter [N m]':>14s} {'rho-hat end':>12s}")
     print(header)
     print("-" * len(header))
     for name, changes in VARIANTS.items():

@@ -5,11 +5,12 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import math
-import tomllib
 import types
 import typing
 from dataclasses import dataclass, field
 from pathlib import Path
+
+import tomllib
 
 from .exceptions import ConfigError
 
@@ -24,6 +25,7 @@ class RobotConfig:
         task: ``planar`` (m = 2) or ``position`` (m = 3).
         gravity: gravity vector [m/s^2] (default Pinocchio's (0, 0, -9.81)).
         locked_joints: joints held fixed (e.g. gripper fingers).
+
     """
 
     source: str = "three_link_planar"
@@ -44,6 +46,7 @@ class NominalConfig:
         p: p-hat [kg m^2] (closed form; default the true robot's).
         viscous_friction: F_d-hat [N m s/rad] (default 0).
         coulomb_friction: Coulomb friction in N-hat [N m] (default 0: Coulomb friction unmodelled).
+
     """
 
     kind: str = "closed-form"
@@ -65,6 +68,7 @@ class PlantConfig:
         disturbance_omega: K angular frequencies [rad/s] (``sinusoid``).
         disturbance_phase: n x K phases [rad] (``sinusoid``; default 0).
         disturbance_scale: factor applied to the disturbance.
+
     """
 
     viscous_friction: list[float] | None = None
@@ -99,6 +103,7 @@ class ControllerConfig:
         pinv_max_damping: damping at a singularity [m/rad].
         pd_Kp, pd_Kd: task stiffness [N/m] and damping [N s/m] of the PD baseline.
         pd_null_damping: null-space joint damping of the PD baseline [N m s/rad].
+
     """
 
     kind: str = "nn"
@@ -131,6 +136,7 @@ class NNConfig:
             span the joint limits.
         error_range: e and e' centres span [-error_range[0], error_range[0]] [m] and
             [-error_range[1], error_range[1]] [m/s].
+
     """
 
     law: str = "corrected"
@@ -156,6 +162,7 @@ class SubtaskConfig:
             ``joint_smoothness``); empty for pure null-space damping.
         weights: relative weights (default equal).
         C: the constant of eq. (4).
+
     """
 
     criteria: list[str] = field(default_factory=lambda: ["paper"])
@@ -174,6 +181,7 @@ class SimulationConfig:
         integrator: ``rk4`` or ``solve_ivp``.
         q_seed: inverse-kinematics seed for q(0) [rad] (default: mid-range of the joint limits).
         initial_task_offset: x(0) - x_d(0) [m] (default zero: start on the path).
+
     """
 
     duration: float = 20.0

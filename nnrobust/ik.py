@@ -17,13 +17,14 @@ def solve_position_ik(
     tol: float = 1e-10,
     max_iter: int = 200,
 ) -> tuple[np.ndarray, float]:
-    """q with f(q) = target, reached from q_seed by damped Gauss-Newton steps J+ (target - f(q)).
+    """Q with f(q) = target, reached from q_seed by damped Gauss-Newton steps J+ (target - f(q)).
 
     Minimum-norm steps keep the solution near the seed. Joint limits, when given, clip each
     iterate.
 
     Returns:
         (q, residual) where residual = |f(q) - target| [m]; the caller decides what is too large.
+
     """
     pinv = DampedPseudoInverse(threshold=0.05, max_damping=0.05)
     q = np.array(q_seed, dtype=float)

@@ -47,6 +47,7 @@ class Result:
         joint_names: names of the joints.
         chain: world positions of the joint origins and the task frame, N x (n + 1) x 3 [m]
             (for stick figures and the viewer).
+
     """
 
     t: np.ndarray
@@ -110,7 +111,9 @@ class Result:
             "rms_torque_per_joint": np.sqrt(np.mean(self.tau**2, axis=0)).tolist(),
             "max_torque": float(np.abs(self.tau).max()) if self.tau.size else float("nan"),
             "torque_chatter": rms(dtau**2),
-            "min_manipulability": float(np.min(self.signals["manipulability"])) if err.size else float("nan"),
+            "min_manipulability": (
+                float(np.min(self.signals["manipulability"])) if err.size else float("nan")
+            ),
             "final_rho_hat": float(rho[-1]) if rho is not None and rho.size else None,
             "simulated_seconds": simulated,
             "wall_seconds": self.wall_seconds,

@@ -28,6 +28,7 @@ class Trace:
         signals: controller signals by name, each of shape N.
         status: "completed", "diverged" or "interrupted".
         message: why the run stopped early, or "".
+
     """
 
     t: np.ndarray
@@ -77,6 +78,7 @@ def simulate(
 
     Returns:
         The trace; a diverged or interrupted run returns what was computed, marked as such.
+
     """
     if integrator not in INTEGRATORS:
         raise ValueError(f"simulation.integrator: {integrator!r} is not one of {INTEGRATORS}")

@@ -20,6 +20,7 @@ class EllipseTrajectory:
         axis_b: b [m].
         omega: angular frequency [rad/s].
         phase: phase at t = 0 [rad].
+
     """
 
     center: np.ndarray

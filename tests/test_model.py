@@ -6,7 +6,13 @@ from nnrobust.exceptions import FrameNotFound, ModelMismatch, NNRobustError, Rob
 from nnrobust.model import DynamicsModel, ThreeLinkParameters, ThreeLinkPlanarModel, paper_arm_urdf
 
 from .paper_printed import printed_coriolis, printed_mass
-from .problems import VERTICAL_GRAVITY, closed_form_of, finite_difference, paper_robot, random_states
+from .problems import (
+    VERTICAL_GRAVITY,
+    closed_form_of,
+    finite_difference,
+    paper_robot,
+    random_states,
+)
 
 TOL = 1e-10
 

@@ -1,6 +1,6 @@
 """Controllers: the task-space law of eq. (9), the NN compensator and baselines."""
 
-from .base import ControlOutput, Controller
+from .base import Controller, ControlOutput
 from .basis import AdditiveRBFBasis
 from .nn_compensator import NNCompensator, error_dynamics, lyapunov_P, lyapunov_Q
 from .pseudoinverse import DampedPseudoInverse, project_null_space

@@ -15,6 +15,7 @@ class ControlOutput:
     Attributes:
         tau: joint torques [N m].
         signals: scalar signals to record (e.g. rho_hat, eps, damping).
+
     """
 
     tau: np.ndarray

@@ -23,6 +23,7 @@ class AdditiveRBFBasis:
         centers: number of centres per input.
         width: Gaussian width as a multiple of the centre spacing.
         bias: include the constant unit.
+
     """
 
     low: np.ndarray

@@ -56,6 +56,7 @@ class NNCompensator:
         sigma: leakage (>= 0).
         law: "corrected" or "printed" (docs/errata.md).
         Z0: initial weights (default 0).
+
     """
 
     Kp: np.ndarray
@@ -101,7 +102,7 @@ class NNCompensator:
         return np.concatenate([q, v]) if self.basis_input == "joint" else y
 
     def omega(self, y: np.ndarray) -> np.ndarray:
-        """omega = B^T P y (= Kp e + Kv e' for the paper's Q)."""
+        """Omega = B^T P y (= Kp e + Kv e' for the paper's Q)."""
         return self.BtP @ y
 
     def u0(self, q: np.ndarray, v: np.ndarray, y: np.ndarray, z: np.ndarray) -> tuple[np.ndarray, float]:

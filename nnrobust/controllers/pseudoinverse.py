@@ -18,6 +18,7 @@ class DampedPseudoInverse:
     Attributes:
         threshold: sigma_min below which damping starts [m/rad].
         max_damping: lambda at sigma_min = 0 [m/rad].
+
     """
 
     threshold: float = 0.02

@@ -8,7 +8,7 @@ from ..model.base import DynamicsModel
 from ..plant.friction import Friction
 from ..subtasks.base import Criterion
 from ..trajectories import EllipseTrajectory
-from .base import ControlOutput, Controller
+from .base import Controller, ControlOutput
 from .nn_compensator import NNCompensator
 from .pseudoinverse import DampedPseudoInverse, project_null_space
 
@@ -29,6 +29,7 @@ class TaskSpaceController(Controller):
         nominal_friction: F-hat(q') in N-hat.
         compensator: the NN robust compensator; None for u_0 = 0.
         pinv: the damped pseudo-inverse.
+
     """
 
     def __init__(
@@ -107,6 +108,7 @@ class TaskSpacePD(Controller):
         Kp: task stiffness, m x m [N/m].
         Kd: task damping, m x m [N s/m].
         null_damping: D [N m s/rad].
+
     """
 
     signal_names = ("damping",)

@@ -15,6 +15,7 @@ class DynamicsModel(Protocol):
         nq: number of joints n.
         m: task dimension m.
         joint_names: names of the n joints.
+
     """
 
     nq: int
@@ -38,7 +39,7 @@ class DynamicsModel(Protocol):
         ...
 
     def forward_dynamics(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
-        """q'' = M(q)^-1 (tau - V_m q' - G) [rad/s^2]."""
+        """Q'' = M(q)^-1 (tau - V_m q' - G) [rad/s^2]."""
         ...
 
     def task_position(self, q: np.ndarray) -> np.ndarray:

@@ -95,6 +95,7 @@ def load_robot(
         task: ``"planar"`` (m = 2) or ``"position"`` (m = 3).
         gravity: gravity vector [m/s^2]; default Pinocchio's (0, 0, -9.81).
         locked_joints: joints fixed at their neutral value (e.g. gripper fingers).
+
     """
     model, name = _build_from_urdf(str(source))
     if locked_joints:

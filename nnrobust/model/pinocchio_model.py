@@ -21,6 +21,7 @@ class PinocchioModel:
         task_frame: name of the frame whose position is the task x.
         task: ``"planar"`` (world x-y position, m = 2) or ``"position"`` (x-y-z, m = 3).
         name: where the model came from (file or robot name), for messages.
+
     """
 
     def __init__(self, model: pin.Model, task_frame: str, task: str = "planar", name: str = ""):
@@ -71,7 +72,7 @@ class PinocchioModel:
         return pin.rnea(self.model, self.data, q, v, a).copy()
 
     def forward_dynamics(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
-        """q'' by the articulated-body algorithm."""
+        """Q'' by the articulated-body algorithm."""
         return pin.aba(self.model, self.data, q, v, tau).copy()
 
     def kinetic_energy(self, q: np.ndarray, v: np.ndarray) -> float:
@@ -84,7 +85,7 @@ class PinocchioModel:
 
     # -- task kinematics ------------------------------------------------------------------
     def task_position(self, q: np.ndarray) -> np.ndarray:
-        """x = f(q), eq. (1)."""
+        """X = f(q), eq. (1)."""
         pin.forwardKinematics(self.model, self.data, q)
         return pin.updateFramePlacement(self.model, self.data, self.frame_id).translation[
             : self.m

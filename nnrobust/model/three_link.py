@@ -29,6 +29,7 @@ class ThreeLinkParameters:
         lengths: (l_1, l_2, l_3) [m], joint-to-joint and last joint to the task point.
         gamma: first mass moments (m1 lc1 + (m2 + m3) l1, m2 lc2 + m3 l2, m3 lc3) [kg m].
         gravity: in-plane gravity (g_x, g_y) [m/s^2]; (0, 0) for a horizontal plane.
+
     """
 
     beta: tuple[float, float, float]
@@ -65,7 +66,8 @@ class ThreeLinkParameters:
         gravity: tuple[float, float] = (0.0, 0.0),
     ) -> ThreeLinkParameters:
         """Parameters from link masses [kg], lengths [m], centre-of-mass distances lc_i [m] and
-        inertias about the centre of mass I_i [kg m^2]."""
+        inertias about the centre of mass I_i [kg m^2].
+        """
         m1, m2, m3 = masses
         l1, l2, _ = lengths
         c1, c2, c3 = com
@@ -84,6 +86,7 @@ class ThreeLinkParameters:
         Raises:
             ModelMismatch: the model is not three revolute z-axis joints in a chain with joint
                 offsets and centres of mass on the link x-axes.
+
         """
         if model.nq != 3 or model.njoints != 4:
             raise ModelMismatch(
@@ -179,7 +182,7 @@ class ThreeLinkPlanarModel:
         return self.mass(q) @ a + self.bias(q, v)
 
     def forward_dynamics(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
-        """q'' = M^-1 (tau - V_m q' - G)."""
+        """Q'' = M^-1 (tau - V_m q' - G)."""
         return np.linalg.solve(self.mass(q), tau - self.bias(q, v))
 
     def kinetic_energy(self, q: np.ndarray, v: np.ndarray) -> float:
@@ -193,7 +196,7 @@ class ThreeLinkPlanarModel:
         return float(-np.sum(np.asarray(self.params.gamma) * (gx * np.cos(theta) + gy * np.sin(theta))))
 
     def task_position(self, q: np.ndarray) -> np.ndarray:
-        """x = (sum l_j cos theta_j, sum l_j sin theta_j)."""
+        """X = (sum l_j cos theta_j, sum l_j sin theta_j)."""
         theta = np.cumsum(q)
         lengths = np.asarray(self.params.lengths)
         return np.array([lengths @ np.cos(theta), lengths @ np.sin(theta)])

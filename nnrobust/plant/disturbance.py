@@ -15,6 +15,7 @@ class SinusoidalDisturbance:
         amplitude: A, n x K [N m].
         omega: angular frequencies, K [rad/s].
         phase: n x K [rad].
+
     """
 
     amplitude: np.ndarray

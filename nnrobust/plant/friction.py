@@ -14,6 +14,7 @@ class Friction:
     Attributes:
         viscous: F_d, per joint [N m s/rad].
         coulomb: F_c, per joint [N m]; sgn(0) = 0.
+
     """
 
     viscous: np.ndarray

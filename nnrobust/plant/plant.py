@@ -19,6 +19,7 @@ class Plant:
         model: the true dynamics (normally Pinocchio, from the URDF).
         friction: the true friction F(q').
         disturbance: the external disturbance tau_d(t).
+
     """
 
     model: DynamicsModel
@@ -41,7 +42,7 @@ class Plant:
         return self.model.nq
 
     def acceleration(self, t: float, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
-        """q'' = M^-1 (tau - V_m q' - G - F(q') - tau_d(t)), by ABA for Pinocchio models."""
+        """Q'' = M^-1 (tau - V_m q' - G - F(q') - tau_d(t)), by ABA for Pinocchio models."""
         return self.model.forward_dynamics(
             q, v, tau - self.friction.torque(v) - self.disturbance(t)
         )

@@ -28,6 +28,7 @@ class WeightedCriteria(Criterion):
         criteria: the h_i.
         weights: positive relative weights w_i (scaled to sum to C).
         C: the constant of eq. (4).
+
     """
 
     def __init__(self, criteria: list[Criterion], weights: list[float] | None = None, C: float = 1.0):

@@ -49,5 +49,5 @@ class PaperCriterion(Criterion):
         return sum(term.value(model, q) for term in self._terms)
 
     def gradient(self, model: DynamicsModel, q: np.ndarray) -> np.ndarray:
-        """grad h(q) of eq. (19), analytic."""
+        """Grad h(q) of eq. (19), analytic."""
         return sum(term.gradient(model, q) for term in self._terms)

@@ -58,7 +58,7 @@ class Manipulability(Criterion):
         return float(np.sqrt(max(np.linalg.det(J @ J.T), 0.0)))
 
     def gradient(self, model: DynamicsModel, q: np.ndarray) -> np.ndarray:
-        """d det / dq / (2 sqrt(det)); zero at a singularity, where it is not defined."""
+        """D det / dq / (2 sqrt(det)); zero at a singularity, where it is not defined."""
         det, grad = _det_and_gradient(model, q)
         if det <= 1e-300:
             return np.zeros_like(q)
