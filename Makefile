@@ -21,7 +21,7 @@ $(VENV)/.installed-test: pyproject.toml $(VENV)/.installed
 run: $(VENV)/.installed
 	$(BIN)/nnrobust run paper-ellipse --controller nn --out $(OUT)/paper-ellipse-nn --overwrite
 	$(BIN)/nnrobust run paper-ellipse --controller no-u0 --out $(OUT)/paper-ellipse-no-u0 --overwrite
-	$(BIN)/nnrobust compare $(OUT)/paper-ellipse-nn $(OUT)/paper-ellipse-no-u0
+	$(BIN)/nnrobust compare $(OUT)/paper-ellipse-nn $(OUT)/paper-ellipse-no-u0 --out $(OUT)/paper-ellipse-compare
 
 test: $(VENV)/.installed-test
 	$(BIN)/ruff check nnrobust tests benchmarks

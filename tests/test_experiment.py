@@ -110,3 +110,11 @@ def test_cli_run_compare_and_errors(tmp_path, capsys):
     assert main(["run", "no-such-preset"]) == 2
     assert main(["run", "paper-ellipse", "--duration", "0.3", "--out", str(out_nn)]) == 2
     assert "exists" in capsys.readouterr().err
+
+
+def test_vertical_plane_preset_compensates_gravity():
+    """In the vertical plane the NN controller still tracks (gravity is in the nominal model)."""
+    config = load_preset("paper-ellipse-vertical").replace(simulation={"duration": 3.0})
+    metrics = run_experiment(config).metrics()
+    assert metrics["status"] == "completed"
+    assert metrics["rms_error_after_2s"] < 0.01
