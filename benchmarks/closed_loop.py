@@ -6,13 +6,11 @@
 from __future__ import annotations
 
 import argparse
-import json
-import os
 import time
-from pathlib import Path
 
 from nnrobust.experiment import build
 from nnrobust.presets import load_preset
+from nnrobust.results import write_json_atomic
 from nnrobust.simulation import simulate
 
 
@@ -37,11 +35,7 @@ def main() -> None:
                          "realtime_factor": args.duration / wall})
             print(f"{kind:10s} {nominal:14s} {wall / steps * 1e6:18.1f} {args.duration / wall:15.2f}")
     if args.json:
-        path = Path(args.json)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_suffix(".tmp")
-        tmp.write_text(json.dumps({"preset": "paper-ellipse", "rows": rows}, indent=2))
-        os.replace(tmp, path)
+        write_json_atomic(args.json, {"preset": "paper-ellipse", "rows": rows})
 
 
 if __name__ == "__main__":

@@ -6,15 +6,13 @@
 from __future__ import annotations
 
 import argparse
-import json
-import os
 import timeit
-from pathlib import Path
 
 import numpy as np
 
 from nnrobust import load_robot
 from nnrobust.model import ThreeLinkParameters, ThreeLinkPlanarModel
+from nnrobust.results import write_json_atomic
 
 
 def time_call(fn, number: int = 20000) -> float:
@@ -47,11 +45,7 @@ def main() -> None:
         rows.append({"quantity": name, "pinocchio_s": tp, "closed_form_s": tc})
         print(f"{name:30s} {tp * 1e6:15.2f} {tc * 1e6:17.2f} {tc / tp:7.2f}")
     if args.json:
-        path = Path(args.json)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_suffix(".tmp")
-        tmp.write_text(json.dumps({"robot": "three_link_planar", "rows": rows}, indent=2))
-        os.replace(tmp, path)
+        write_json_atomic(args.json, {"robot": "three_link_planar", "rows": rows})
 
 
 if __name__ == "__main__":

@@ -9,12 +9,10 @@ several settings, prints a table and writes JSON:
 from __future__ import annotations
 
 import argparse
-import json
-import os
-from pathlib import Path
 
 from nnrobust.experiment import run_experiment
 from nnrobust.presets import load_preset
+from nnrobust.results import write_json_atomic
 
 VARIANTS = {
     "no-u0 baseline": {"controller": {"kind": "no-u0"}},
@@ -52,11 +50,7 @@ def main() -> None:
         print(f"{name:30s} {m['rms_error_after_2s'] * 1e3:17.3f} {m['max_error'] * 1e3:11.2f} "
               f"{m['rms_torque']:14.2f} {m['torque_chatter']:14.2f} {rho:>12s}", flush=True)
     if args.json:
-        path = Path(args.json)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_suffix(".tmp")
-        tmp.write_text(json.dumps({"preset": args.preset, "rows": rows}, indent=2))
-        os.replace(tmp, path)
+        write_json_atomic(args.json, {"preset": args.preset, "rows": rows})
 
 
 if __name__ == "__main__":

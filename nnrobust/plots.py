@@ -64,23 +64,18 @@ def plot_run(result: Result, folder: str | Path) -> list[Path]:
     fig.suptitle("Task-space tracking error")
     written += _save(fig, folder, "errors")
 
-    fig, ax = plt.subplots(figsize=(7, 3.5))
-    for i, name in enumerate(joint_labels):
-        ax.plot(t, result.q[:, i], lw=0.9, label=name)
-    ax.set_xlabel("t [s]")
-    ax.set_ylabel("joint angle [rad]")
-    ax.legend(fontsize=8)
-    ax.set_title("Joint angles")
-    written += _save(fig, folder, "joints")
-
-    fig, ax = plt.subplots(figsize=(7, 3.5))
-    for i, name in enumerate(joint_labels):
-        ax.plot(t, result.tau[:, i], lw=0.6, label=name)
-    ax.set_xlabel("t [s]")
-    ax.set_ylabel("torque [N m]")
-    ax.legend(fontsize=8)
-    ax.set_title("Joint torques (held over each control period)")
-    written += _save(fig, folder, "torques")
+    for name, data, ylabel, title, lw in (
+        ("joints", result.q, "joint angle [rad]", "Joint angles", 0.9),
+        ("torques", result.tau, "torque [N m]", "Joint torques (held over each control period)", 0.6),
+    ):
+        fig, ax = plt.subplots(figsize=(7, 3.5))
+        for i, joint in enumerate(joint_labels):
+            ax.plot(t, data[:, i], lw=lw, label=joint)
+        ax.set_xlabel("t [s]")
+        ax.set_ylabel(ylabel)
+        ax.legend(fontsize=8)
+        ax.set_title(title)
+        written += _save(fig, folder, name)
 
     fig, axes = plt.subplots(2, 1, figsize=(7, 4.5), sharex=True)
     axes[0].plot(t, result.signals["h"], lw=0.9)

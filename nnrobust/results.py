@@ -151,6 +151,16 @@ class Result:
         )
 
 
+def write_json_atomic(path: str | Path, data) -> Path:
+    """Write JSON to ``path`` through a temporary file and a rename (never a half-written file)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_name(f".{path.name}.partial-{os.getpid()}")
+    tmp.write_text(json.dumps(data, indent=2, default=_json_default) + "\n")
+    os.replace(tmp, path)
+    return path
+
+
 def _json_default(value):
     if isinstance(value, (np.floating, np.integer)):
         return value.item()
