@@ -48,12 +48,14 @@ class PinocchioModel:
         self.m = TASK_KINDS[task]
         self.joint_names = [model.names[i] for i in range(1, model.njoints)]
         self._zero = np.zeros(self.nq)
+        self._lower = np.tril_indices(self.nq, -1)
 
     # -- dynamics -------------------------------------------------------------------------
     def mass(self, q: np.ndarray) -> np.ndarray:
-        """M(q) by CRBA (symmetrised: Pinocchio fills the upper triangle)."""
-        M = pin.crba(self.model, self.data, q)
-        return np.triu(M) + np.triu(M, 1).T
+        """M(q) by CRBA (lower triangle copied from the upper: older pin fills only that one)."""
+        M = pin.crba(self.model, self.data, q).copy()
+        M[self._lower] = M.T[self._lower]
+        return M
 
     def bias(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """V_m(q, q') q' + G(q) by RNEA at zero acceleration."""
