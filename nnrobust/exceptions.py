@@ -39,14 +39,5 @@ class ModelMismatch(NNRobustError):
     """A model cannot represent the requested robot (wrong structure or size)."""
 
 
-class SimulationDiverged(NNRobustError):
-    """The simulated state became non-finite or left its bounds."""
-
-    def __init__(self, time: float, cause: str):
-        self.time = time
-        self.cause = cause
-        super().__init__(f"simulation diverged at t = {time:.4f} s: {cause}")
-
-
 class RunFolderExists(NNRobustError):
     """The output folder of a run already exists and overwriting was not asked for."""
