@@ -89,11 +89,8 @@ def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
 def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsModel:
     """The controller's model: closed form with beta-hat, p-hat, or the robot's own model."""
     nc = config.nominal
-    if nc.kind == "urdf":
-        return load_robot(
-            config.robot.source, robot.task_frame, robot.task,
-            gravity=tuple(robot.model.gravity.linear), locked_joints=config.robot.locked_joints,
-        )
+    if nc.kind == "urdf":  # the same Pinocchio model (read-only), with its own Data
+        return PinocchioModel(robot.model, robot.task_frame, robot.task, robot.name)
     if robot.task != "planar":
         raise ConfigError("nominal.kind", "'closed-form' is the planar three-link model; use 'urdf'")
     true = ThreeLinkParameters.from_pinocchio(robot.model, robot.task_frame)

@@ -75,7 +75,7 @@ class Result:
         chain = np.empty((N, robot.nq + 1, 3))
         for k in range(N):
             chain[k] = robot.chain_points(trace.q[k])
-            x[k] = robot.task_position(trace.q[k])
+            x[k] = chain[k, -1, : robot.m]  # the last chain point is the task frame
             J = robot.task_jacobian(trace.q[k])
             manip[k] = np.sqrt(max(np.linalg.det(J @ J.T), 0.0))
             if criterion is not None:

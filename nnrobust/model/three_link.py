@@ -104,7 +104,7 @@ class ThreeLinkParameters:
         if tip.parentJoint != 3:
             raise ModelMismatch(f"task frame {task_frame!r} is not on the last link")
         offsets.append(tip.placement)
-        for placement in [*offsets, *(model.jointPlacements[j] for j in (1,))]:
+        for placement in [model.jointPlacements[1], *offsets]:
             if not np.allclose(placement.rotation, np.eye(3)) or abs(placement.translation[1]) > 1e-12:
                 raise ModelMismatch(
                     f"{model.name}: joint and task-frame offsets must lie on the link x-axes"
