@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from .exceptions import ConfigError
+from .model.tasks import TASK_KINDS
 
 
 @dataclass
@@ -19,11 +20,13 @@ class RobotConfig:
     """The true robot.
 
     Attributes:
-        source: URDF path, ``three_link_planar`` (the paper's arm) or an example-robot-data name.
-        task_frame: frame whose position is the task x (default: tip of the chain).
-        task: ``planar`` (m = 2) or ``position`` (m = 3).
+        source: URDF path, ``three_link_planar`` (the paper's arm), ``planar<N>`` (generated
+            N-link planar chain) or an example-robot-data name (``panda``, ``ur5``, ...).
+        task_frame: frame whose position (or pose) is the task x (default: tip of the chain).
+        task: ``planar`` (m = 2), ``position`` (m = 3) or ``pose`` (m = 6).
         gravity: gravity vector [m/s^2] (default Pinocchio's (0, 0, -9.81)).
-        locked_joints: joints held fixed (e.g. gripper fingers).
+        locked_joints: joints held fixed at their neutral value (default: the gripper joints of
+            the known arms, e.g. the Panda's fingers; ``[]`` locks nothing).
 
     """
 
@@ -31,7 +34,7 @@ class RobotConfig:
     task_frame: str | None = None
     task: str = "planar"
     gravity: list[float] | None = None
-    locked_joints: list[str] = field(default_factory=list)
+    locked_joints: list[str] | None = None
 
 
 @dataclass
@@ -81,13 +84,34 @@ class PlantConfig:
 
 @dataclass
 class TrajectoryConfig:
-    """x_d(t) = center + axis_a cos(omega t + phase) + axis_b sin(omega t + phase) [m], eq. (18)."""
+    """x_d(t) = center + axis_a cos(omega t + phase) + axis_b sin(omega t + phase) [m], eq. (18).
+
+    For a ``pose`` task the orientation is R_d(t) = exp(theta(t) u) R_0 with
+    theta(t) = rotation_amplitude sin(rotation_omega t + rotation_phase).
+
+    Attributes:
+        center, axis_a, axis_b: the path's centre and semi-axes (2 or 3 entries) [m].
+        omega: angular frequency along the path [rad/s].
+        phase: phase at t = 0 [rad].
+        orientation_rpy: R_0 as roll, pitch, yaw [rad] (pose; default: the task frame's
+            orientation at the position-only inverse-kinematics solution from q_seed).
+        rotation_axis: u, world axes (pose).
+        rotation_amplitude: rocking amplitude [rad] (pose).
+        rotation_omega: rocking angular frequency [rad/s] (pose).
+        rotation_phase: rocking phase at t = 0 [rad] (pose).
+
+    """
 
     center: list[float] = field(default_factory=lambda: [0.30, 0.40])
     axis_a: list[float] = field(default_factory=lambda: [0.20, 0.0])
     axis_b: list[float] = field(default_factory=lambda: [0.0, 0.10])
     omega: float = 1.0
     phase: float = 0.0
+    orientation_rpy: list[float] | None = None
+    rotation_axis: list[float] = field(default_factory=lambda: [0.0, 0.0, 1.0])
+    rotation_amplitude: float = 0.0
+    rotation_omega: float = 1.0
+    rotation_phase: float = 0.0
 
 
 @dataclass
@@ -179,7 +203,8 @@ class SimulationConfig:
         substeps: integration steps per control period.
         integrator: ``rk4`` or ``solve_ivp``.
         q_seed: inverse-kinematics seed for q(0) [rad] (default: mid-range of the joint limits).
-        initial_task_offset: x(0) - x_d(0) [m] (default zero: start on the path).
+        initial_task_offset: x(0) - x_d(0), m entries [m] (pose: position [m], then a rotation
+            vector [rad] applied in world axes); default zero: start on the path.
 
     """
 
@@ -327,7 +352,7 @@ def validate(config: ExperimentConfig) -> None:
     """Check values that a type alone does not constrain (robot-independent checks)."""
     c, nn, sim = config.controller, config.nn, config.simulation
     choices = {
-        "robot.task": (config.robot.task, ("planar", "position")),
+        "robot.task": (config.robot.task, tuple(TASK_KINDS)),
         "nominal.kind": (config.nominal.kind, ("closed-form", "urdf")),
         "plant.disturbance": (config.plant.disturbance, ("paper", "none", "sinusoid")),
         "controller.kind": (c.kind, ("nn", "no-u0", "pd")),
@@ -338,15 +363,27 @@ def validate(config: ExperimentConfig) -> None:
     for path, (value, valid) in choices.items():
         if value not in valid:
             raise ConfigError(path, f"{value!r} is not one of {', '.join(valid)}")
-    m = len(config.trajectory.center)
-    for path, values in (
-        ("controller.Kp", c.Kp), ("controller.Kv", c.Kv),
-        ("controller.pd_Kp", c.pd_Kp), ("controller.pd_Kd", c.pd_Kd),
-        ("trajectory.axis_a", config.trajectory.axis_a),
-        ("trajectory.axis_b", config.trajectory.axis_b),
-    ):
+    tc = config.trajectory
+    m_path = len(tc.center)
+    for path, values in (("trajectory.axis_a", tc.axis_a), ("trajectory.axis_b", tc.axis_b)):
+        if len(values) != m_path:
+            raise ConfigError(path, f"has {len(values)} entries, trajectory.center has {m_path}")
+    if config.robot.task == "pose":
+        m, where = 6, "the pose task has m = 6"
+        if m_path != 3:
+            raise ConfigError("trajectory.center", f"a pose task needs a 3-D path, got {m_path} entries")
+        for path, values in (("trajectory.orientation_rpy", tc.orientation_rpy),
+                             ("trajectory.rotation_axis", tc.rotation_axis)):
+            if values is not None and len(values) != 3:
+                raise ConfigError(path, f"needs 3 entries, got {len(values)}")
+        if not any(tc.rotation_axis):
+            raise ConfigError("trajectory.rotation_axis", "must be a non-zero vector")
+    else:
+        m, where = m_path, f"the task has m = {m_path} (trajectory.center)"
+    for path, values in (("controller.Kp", c.Kp), ("controller.Kv", c.Kv),
+                         ("controller.pd_Kp", c.pd_Kp), ("controller.pd_Kd", c.pd_Kd)):
         if len(values) != m:
-            raise ConfigError(path, f"has {len(values)} entries, the task has m = {m} (trajectory.center)")
+            raise ConfigError(path, f"has {len(values)} entries, {where}")
     for path, values in (("controller.Kp", c.Kp), ("controller.Kv", c.Kv),
                          ("controller.pd_Kp", c.pd_Kp), ("controller.pd_Kd", c.pd_Kd)):
         _positive(path, values)

@@ -6,6 +6,7 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+import pinocchio as pin
 
 from .config import ExperimentConfig
 from .controllers import (
@@ -17,7 +18,7 @@ from .controllers import (
     TaskSpacePD,
 )
 from .exceptions import ConfigError
-from .ik import solve_position_ik
+from .ik import solve_ik
 from .model import (
     DynamicsModel,
     PinocchioModel,
@@ -25,11 +26,12 @@ from .model import (
     ThreeLinkPlanarModel,
     load_robot,
 )
+from .model.tasks import pose_vector, split_pose
 from .plant import Friction, Plant, SinusoidalDisturbance
 from .results import Result
 from .simulation import simulate
 from .subtasks import CRITERIA, Criterion, WeightedCriteria
-from .trajectories import EllipseTrajectory
+from .trajectories import EllipseTrajectory, PoseTrajectory, Trajectory
 
 
 @dataclass
@@ -40,7 +42,7 @@ class Setup:
     robot: PinocchioModel
     plant: Plant
     nominal: DynamicsModel
-    trajectory: EllipseTrajectory
+    trajectory: Trajectory
     criterion: Criterion | None
     controller: Controller
     q0: np.ndarray
@@ -129,7 +131,7 @@ def build_basis(config: ExperimentConfig, robot: PinocchioModel, m: int) -> Addi
 
 def build_controller(
     config: ExperimentConfig, robot: PinocchioModel, nominal: DynamicsModel,
-    trajectory: EllipseTrajectory, criterion: Criterion | None,
+    trajectory: Trajectory, criterion: Criterion | None,
 ) -> Controller:
     """The control law named by controller.kind."""
     c, n = config.controller, robot.nq
@@ -153,26 +155,56 @@ def build_controller(
                                compensator, pinv)
 
 
+def _seed(config: ExperimentConfig, robot: PinocchioModel) -> np.ndarray:
+    lower, upper = robot.lower_limits, robot.upper_limits
+    mid = 0.5 * (np.maximum(lower, -np.pi) + np.minimum(upper, np.pi))
+    return _vector("simulation.q_seed", config.simulation.q_seed, robot.nq, mid)
+
+
+def _reach(robot: PinocchioModel, target: np.ndarray, seed: np.ndarray, what: str) -> np.ndarray:
+    q, residual = solve_ik(robot, target, seed, robot.lower_limits, robot.upper_limits)
+    if residual > 1e-6:
+        p = split_pose(target)[0] if robot.task == "pose" else target
+        raise ConfigError(
+            "trajectory.center",
+            f"{what} (position {np.round(p, 4).tolist()} m) is out of reach from q_seed = "
+            f"{np.round(seed, 3).tolist()} (task error {residual:.3g} left)",
+        )
+    return q
+
+
+def build_trajectory(config: ExperimentConfig, robot: PinocchioModel) -> Trajectory:
+    """The ellipse of eq. (18), with a rocking orientation for a pose task."""
+    tc = config.trajectory
+    path = EllipseTrajectory(tc.center, tc.axis_a, tc.axis_b, tc.omega, tc.phase)
+    if robot.task != "pose":
+        return path
+    if tc.orientation_rpy is not None:
+        R0 = pin.rpy.rpyToMatrix(*tc.orientation_rpy)
+    else:  # the orientation the arm has when its tip is at p_d(0)
+        position_task = PinocchioModel(robot.model, robot.task_frame, "position", robot.name)
+        q = _reach(position_task, path(0.0)[0], _seed(config, robot), "p_d(0)")
+        R0 = split_pose(robot.task_position(q))[1].copy()
+    return PoseTrajectory(path, R0, np.asarray(tc.rotation_axis, dtype=float),
+                          tc.rotation_amplitude, tc.rotation_omega, tc.rotation_phase)
+
+
 def initial_state(
-    config: ExperimentConfig, robot: PinocchioModel, trajectory: EllipseTrajectory
+    config: ExperimentConfig, robot: PinocchioModel, trajectory: Trajectory
 ) -> tuple[np.ndarray, np.ndarray]:
     """q(0) by IK of x_d(0) + offset from the seed; q'(0) = J+ x_d'(0) (no initial velocity error)."""
     sim = config.simulation
-    lower, upper = robot.lower_limits, robot.upper_limits
-    mid = 0.5 * (np.maximum(lower, -np.pi) + np.minimum(upper, np.pi))
-    seed = _vector("simulation.q_seed", sim.q_seed, robot.nq, mid)
     xd0, dxd0, _ = trajectory(0.0)
     offset = np.zeros(trajectory.m) if sim.initial_task_offset is None else np.asarray(
         sim.initial_task_offset, dtype=float)
     if offset.shape != (trajectory.m,):
         raise ConfigError("simulation.initial_task_offset", f"needs {trajectory.m} entries")
-    q0, residual = solve_position_ik(robot, xd0 + offset, seed, lower, upper)
-    if residual > 1e-6:
-        raise ConfigError(
-            "trajectory.center",
-            f"x_d(0) + offset = {np.round(xd0 + offset, 4).tolist()} m is out of reach from "
-            f"q_seed = {np.round(seed, 3).tolist()} (closest point {residual:.3g} m away)",
-        )
+    if robot.task == "pose":
+        p, R = split_pose(xd0)
+        target = pose_vector(p + offset[:3], pin.exp3(offset[3:]) @ R)
+    else:
+        target = xd0 + offset
+    q0 = _reach(robot, target, _seed(config, robot), "x_d(0) + offset")
     J = robot.task_jacobian(q0)
     v0 = DampedPseudoInverse().matrix(J) @ dxd0
     return q0, v0
@@ -182,14 +214,13 @@ def build(config: ExperimentConfig) -> Setup:
     """Load the robot and build plant, nominal model, controller and initial state."""
     rc = config.robot
     robot = load_robot(rc.source, rc.task_frame, rc.task,
-                       tuple(rc.gravity) if rc.gravity else None, rc.locked_joints or None)
-    tc = config.trajectory
-    if len(tc.center) != robot.m:
-        raise ConfigError("trajectory.center",
-                          f"has {len(tc.center)} entries, the {rc.task!r} task has m = {robot.m}")
+                       tuple(rc.gravity) if rc.gravity else None, rc.locked_joints)
+    if robot.task != "pose" and len(config.trajectory.center) != robot.m:
+        raise ConfigError("trajectory.center", f"has {len(config.trajectory.center)} entries, "
+                          f"the {rc.task!r} task has m = {robot.m}")
     if robot.m >= robot.nq:
         raise ConfigError("robot.task", f"m = {robot.m} >= n = {robot.nq}: the arm is not redundant")
-    trajectory = EllipseTrajectory(tc.center, tc.axis_a, tc.axis_b, tc.omega, tc.phase)
+    trajectory = build_trajectory(config, robot)
     plant = build_plant(config, robot)
     nominal = build_nominal(config, robot)
     criterion = build_criterion(config)

@@ -6,9 +6,10 @@ import numpy as np
 
 from .controllers.pseudoinverse import DampedPseudoInverse
 from .model.base import DynamicsModel
+from .model.tasks import task_error
 
 
-def solve_position_ik(
+def solve_ik(
     model: DynamicsModel,
     target: np.ndarray,
     q_seed: np.ndarray,
@@ -17,20 +18,22 @@ def solve_position_ik(
     tol: float = 1e-10,
     max_iter: int = 200,
 ) -> tuple[np.ndarray, float]:
-    """Q with f(q) = target, reached from q_seed by damped Gauss-Newton steps J+ (target - f(q)).
+    """Q with f(q) = target, reached from q_seed by damped Gauss-Newton steps -J+ e(f(q), target).
 
-    Minimum-norm steps keep the solution near the seed. Joint limits, when given, clip each
-    iterate.
+    Works for every task kind: e is the task error of :func:`nnrobust.model.tasks.task_error`
+    (for a pose, position and rotation-vector error). Minimum-norm steps keep the solution near
+    the seed. Joint limits, when given, clip each iterate.
 
     Returns:
-        (q, residual) where residual = |f(q) - target| [m]; the caller decides what is too large.
+        (q, residual) where residual = |e| [m, or m and rad for a pose]; the caller decides what
+        is too large.
 
     """
     pinv = DampedPseudoInverse(threshold=0.05, max_damping=0.05)
     q = np.array(q_seed, dtype=float)
     residual = np.inf
     for _ in range(max_iter):
-        err = np.asarray(target) - model.task_position(q)
+        err = -task_error(model.task, model.task_position(q), np.asarray(target))
         residual = float(np.linalg.norm(err))
         if residual < tol:
             break

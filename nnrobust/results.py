@@ -11,12 +11,16 @@ from pathlib import Path
 import numpy as np
 
 from .exceptions import RunFolderExists
+from .model.tasks import display_coordinates
 
 METRIC_UNITS = {
     "rms_error": "m",
     "rms_error_after_2s": "m",
     "max_error": "m",
     "final_error": "m",
+    "rms_orientation_error": "rad",
+    "rms_orientation_error_after_2s": "rad",
+    "max_orientation_error": "rad",
     "rms_torque": "N m",
     "max_torque": "N m",
     "torque_chatter": "N m",
@@ -37,7 +41,9 @@ class Result:
         t: time [s], N.
         q, dq: joint positions [rad], velocities [rad/s], N x n.
         tau: joint torques held over [t_k, t_k + T) [N m], N x n.
-        x, x_d, e: actual and desired task position and e = x - x_d [m], N x m.
+        x, x_d, e: actual and desired task coordinates and the task error, N x m: positions [m]
+            and e = x - x_d, or for a pose task [p, log3(R)] and e = [p - p_d, log3(R R_d^T)]
+            [m, rad].
         signals: per-sample scalars: ``h`` (criterion), ``manipulability`` (sqrt det J J^T) and
             the controller's (``rho_hat`` [m/s^2], ``eps``, ``z_norm``, ``damping``).
         status: ``completed``, ``diverged`` or ``interrupted``.
@@ -70,28 +76,42 @@ class Result:
         """Add task-space quantities (true kinematics) and the criterion to a simulation trace."""
         N = trace.t.size
         x = np.empty((N, robot.m))
+        e = np.empty((N, robot.m))
         h = np.full(N, np.nan)
         manip = np.empty(N)
         chain = np.empty((N, robot.nq + 1, 3))
+        pose = robot.task == "pose"
         for k in range(N):
             chain[k] = robot.chain_points(trace.q[k])
-            x[k] = chain[k, -1, : robot.m]  # the last chain point is the task frame
+            if pose:
+                coords = robot.task_position(trace.q[k])
+                e[k] = trajectory.error(coords, trajectory(trace.t[k])[0])
+                x[k] = display_coordinates("pose", coords)
+            else:
+                x[k] = chain[k, -1, : robot.m]  # the last chain point is the task frame
             J = robot.task_jacobian(trace.q[k])
             manip[k] = np.sqrt(max(np.linalg.det(J @ J.T), 0.0))
             if criterion is not None:
                 h[k] = criterion.value(robot, trace.q[k])
         x_d = trajectory.position(trace.t)
+        if not pose:
+            e = x - x_d
         signals = dict(trace.signals, h=h, manipulability=manip)
         return cls(
-            trace.t, trace.q, trace.dq, trace.tau, x, x_d, x - x_d, signals, trace.status,
+            trace.t, trace.q, trace.dq, trace.tau, x, x_d, e, signals, trace.status,
             trace.message, config.to_toml() if config is not None else "", wall_seconds,
             list(robot.joint_names), chain,
         )
 
     # -- metrics -----------------------------------------------------------------------------
     def metrics(self) -> dict:
-        """Scalar summary; units in :data:`METRIC_UNITS`."""
-        err = np.linalg.norm(self.e, axis=1)
+        """Scalar summary; units in :data:`METRIC_UNITS`.
+
+        The ``*_error`` metrics measure the position part of e; a pose task adds
+        ``*_orientation_error`` (norm of the rotation-vector error).
+        """
+        err = np.linalg.norm(self.e[:, :3], axis=1)  # position part
+        turn = np.linalg.norm(self.e[:, 3:], axis=1) if self.e.shape[1] == 6 else None
         late = self.t >= 2.0
         tau_norm2 = np.sum(self.tau**2, axis=1)
         dtau = np.linalg.norm(np.diff(self.tau, axis=0), axis=1)
@@ -119,6 +139,10 @@ class Result:
             "wall_seconds": self.wall_seconds,
             "realtime_factor": simulated / self.wall_seconds if self.wall_seconds > 0 else None,
         }
+        if turn is not None:
+            out["rms_orientation_error"] = rms(turn**2)
+            out["rms_orientation_error_after_2s"] = rms(turn[late] ** 2)
+            out["max_orientation_error"] = float(turn.max()) if turn.size else float("nan")
         if self.message:
             out["message"] = self.message
         return out

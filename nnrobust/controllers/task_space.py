@@ -7,7 +7,7 @@ import numpy as np
 from ..model.base import DynamicsModel
 from ..plant.friction import Friction
 from ..subtasks.base import Criterion
-from ..trajectories import EllipseTrajectory
+from ..trajectories import Trajectory
 from .base import Controller, ControlOutput
 from .nn_compensator import NNCompensator
 from .pseudoinverse import DampedPseudoInverse, project_null_space
@@ -35,7 +35,7 @@ class TaskSpaceController(Controller):
     def __init__(
         self,
         nominal: DynamicsModel,
-        trajectory: EllipseTrajectory,
+        trajectory: Trajectory,
         Kp: np.ndarray,
         Kv: np.ndarray,
         k: float,
@@ -62,7 +62,7 @@ class TaskSpaceController(Controller):
 
     def _error(self, t: float, x: np.ndarray, J: np.ndarray, v: np.ndarray):
         xd, dxd, ddxd = self.trajectory(t)
-        return x - xd, J @ v - dxd, ddxd
+        return self.trajectory.error(x, xd), J @ v - dxd, ddxd
 
     def compute(self, t: float, q: np.ndarray, v: np.ndarray, z: np.ndarray) -> ControlOutput:
         """Eq. (9)."""
@@ -116,7 +116,7 @@ class TaskSpacePD(Controller):
     def __init__(
         self,
         nominal: DynamicsModel,
-        trajectory: EllipseTrajectory,
+        trajectory: Trajectory,
         Kp: np.ndarray,
         Kd: np.ndarray,
         null_damping: float = 1.0,
@@ -133,7 +133,7 @@ class TaskSpacePD(Controller):
         """Task-space PD plus G-hat(q) and null-space damping."""
         x, J, _ = self.nominal.task_state(q, v)
         xd, dxd, _ = self.trajectory(t)
-        e, de = x - xd, J @ v - dxd
+        e, de = self.trajectory.error(x, xd), J @ v - dxd
         inv, lam2 = self.pinv.factor(J)
         tau = J.T @ (-self.Kp @ e - self.Kd @ de) + self.nominal.gravity(q)
         tau -= self.null_damping * project_null_space(J, J.T @ inv, v)

@@ -14,12 +14,14 @@ class DynamicsModel(Protocol):
     Attributes:
         nq: number of joints n.
         m: task dimension m.
+        task: task kind (``planar``, ``position`` or ``pose``; :mod:`nnrobust.model.tasks`).
         joint_names: names of the n joints.
 
     """
 
     nq: int
     m: int
+    task: str
     joint_names: list[str]
 
     def mass(self, q: np.ndarray) -> np.ndarray:
@@ -64,4 +66,16 @@ class DynamicsModel(Protocol):
 
     def potential_energy(self, q: np.ndarray) -> float:
         """Gravitational potential energy [J] (zero reference is model dependent)."""
+        ...
+
+    def task_state(self, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(x, J, J' q') from one kinematics pass."""
+        ...
+
+    def chain_points(self, q: np.ndarray) -> np.ndarray:
+        """World positions of the joint origins and of the task frame, (n + 1) x 3 [m]."""
+        ...
+
+    def chain_jacobians(self, q: np.ndarray) -> np.ndarray:
+        """Position Jacobians of the chain points, (n + 1) x 3 x n [m/rad]."""
         ...

@@ -9,11 +9,28 @@ import pinocchio as pin
 
 from ..exceptions import RobotLoadError
 from .pinocchio_model import PinocchioModel
+from .planar_chain import PLANAR_CHAIN_NAME, planar_chain_urdf
 
 PAPER_ARM = "three_link_planar"
 """Name of the paper's three-link arm, shipped in ``urdf/``."""
 
 _SHIPPED = {PAPER_ARM: "three_link_planar.urdf"}
+
+ARMS: dict[str, dict] = {
+    PAPER_ARM: {"description": "the paper's three-link planar arm (urdf/)"},
+    "planar7": {"description": "generated 7-link planar chain, 1 m reach (any planar<N> works)"},
+    "panda": {"description": "Franka Emika Panda, fingers locked",
+              "locked_joints": ["panda_finger_joint1", "panda_finger_joint2"]},
+    "ur3": {"description": "Universal Robots UR3"},
+    "ur5": {"description": "Universal Robots UR5"},
+    "ur10": {"description": "Universal Robots UR10"},
+    "xarm7": {"description": "UFACTORY xArm 7"},
+    "z1": {"description": "Unitree Z1, gripper locked", "locked_joints": ["jointGripper"]},
+}
+"""Arms known to load and simulate, with the joints locked by default (grippers).
+
+Any other example-robot-data robot name, URDF file or URDF string is tried as given.
+"""
 
 
 def urdf_dir() -> Path:
@@ -36,6 +53,12 @@ def _build_from_urdf(source: str) -> tuple[pin.Model, str]:
             return pin.buildModelFromXML(source), "<urdf string>"
         except (ValueError, RuntimeError) as err:
             raise RobotLoadError("<urdf string>", f"invalid URDF: {err}") from err
+    chain = PLANAR_CHAIN_NAME.match(source)
+    if chain:
+        n = int(chain.group(1))
+        if not 1 <= n <= 10_000:
+            raise RobotLoadError(source, "a generated planar chain has 1 to 10000 links")
+        return pin.buildModelFromXML(planar_chain_urdf(n)), source
     if source in _SHIPPED:
         path = urdf_dir() / _SHIPPED[source]
     else:
@@ -89,15 +112,20 @@ def load_robot(
     """Load an arm as a :class:`PinocchioModel`.
 
     Args:
-        source: a URDF path, a URDF XML string, ``"three_link_planar"`` (the paper's arm) or an
-            example-robot-data robot name such as ``"panda"``.
-        task_frame: frame whose position is the task; default: the tip of the chain.
-        task: ``"planar"`` (m = 2) or ``"position"`` (m = 3).
+        source: a URDF path, a URDF XML string, ``"three_link_planar"`` (the paper's arm),
+            ``"planar<N>"`` (a generated N-link planar chain) or an example-robot-data robot
+            name such as ``"panda"`` (:data:`ARMS` lists the arms known to work).
+        task_frame: frame whose position (or pose) is the task; default: the tip of the chain.
+        task: ``"planar"`` (m = 2), ``"position"`` (m = 3) or ``"pose"`` (m = 6).
         gravity: gravity vector [m/s^2]; default Pinocchio's (0, 0, -9.81).
-        locked_joints: joints fixed at their neutral value (e.g. gripper fingers).
+        locked_joints: joints fixed at their neutral value; default: the gripper joints of the
+            arms in :data:`ARMS` (pass ``[]`` to lock nothing).
 
     """
-    model, name = _build_from_urdf(str(source))
+    source = str(source)
+    model, name = _build_from_urdf(source)
+    if locked_joints is None:
+        locked_joints = ARMS.get(source, {}).get("locked_joints", [])
     if locked_joints:
         missing = [j for j in locked_joints if not model.existJointName(j)]
         if missing:

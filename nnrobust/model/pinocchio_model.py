@@ -6,9 +6,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import FrameNotFound, ModelMismatch
-
-TASK_KINDS = {"planar": 2, "position": 3}
-"""Task kinds and their dimension m: planar x-y position of the task frame, spatial position."""
+from .tasks import TASK_KINDS, pose_vector
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
@@ -18,8 +16,9 @@ class PinocchioModel:
 
     Args:
         model: a Pinocchio model with one configuration coordinate per joint (nq == nv).
-        task_frame: name of the frame whose position is the task x.
-        task: ``"planar"`` (world x-y position, m = 2) or ``"position"`` (x-y-z, m = 3).
+        task_frame: name of the frame whose position (or pose) is the task x.
+        task: ``"planar"`` (world x-y position, m = 2), ``"position"`` (x-y-z, m = 3) or
+            ``"pose"`` (position and orientation, m = 6; see :mod:`nnrobust.model.tasks`).
         name: where the model came from (file or robot name), for messages.
 
     """
@@ -86,20 +85,27 @@ class PinocchioModel:
         return float(pin.computePotentialEnergy(self.model, self.data, q))
 
     # -- task kinematics ------------------------------------------------------------------
+    def _coordinates(self, placement: pin.SE3) -> np.ndarray:
+        if self.task == "pose":
+            return pose_vector(placement.translation, placement.rotation)
+        return placement.translation[: self.m].copy()
+
     def task_position(self, q: np.ndarray) -> np.ndarray:
-        """X = f(q), eq. (1)."""
+        """X = f(q), eq. (1): the frame's position, or [p, R] (12 numbers) for a pose task."""
         pin.forwardKinematics(self.model, self.data, q)
-        return pin.updateFramePlacement(self.model, self.data, self.frame_id).translation[
-            : self.m
-        ].copy()
+        return self._coordinates(pin.updateFramePlacement(self.model, self.data, self.frame_id))
 
     def task_jacobian(self, q: np.ndarray) -> np.ndarray:
-        """J(q), eq. (2): the frame's linear Jacobian in the world-aligned frame."""
+        """J(q), eq. (2): the frame Jacobian in the world-aligned frame, first m rows.
+
+        Rows: linear velocity of the frame origin (x, y[, z]) then, for a pose task, the angular
+        velocity, all in world axes.
+        """
         J = pin.computeFrameJacobian(self.model, self.data, q, self.frame_id, _LWA)
         return J[: self.m].copy()
 
     def task_jdot_v(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """J' q': the frame's classical acceleration at zero joint acceleration."""
+        """J' q': the frame's classical acceleration at zero joint acceleration (linear, angular)."""
         return self.task_state(q, v)[2]
 
     def task_state(self, q: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -107,9 +113,9 @@ class PinocchioModel:
         model, data, fid = self.model, self.data, self.frame_id
         pin.forwardKinematics(model, data, q, v, self._zero)
         pin.computeJointJacobians(model, data)
-        x = pin.updateFramePlacement(model, data, fid).translation[: self.m].copy()
+        x = self._coordinates(pin.updateFramePlacement(model, data, fid))
         J = pin.getFrameJacobian(model, data, fid, _LWA)[: self.m].copy()
-        jdot_v = pin.getFrameClassicalAcceleration(model, data, fid, _LWA).linear[: self.m].copy()
+        jdot_v = pin.getFrameClassicalAcceleration(model, data, fid, _LWA).vector[: self.m].copy()
         return x, J, jdot_v
 
     def task_jacobian_derivative(self, q: np.ndarray) -> np.ndarray:
@@ -133,6 +139,17 @@ class PinocchioModel:
         points = [self.data.oMi[j].translation for j in range(1, self.model.njoints)]
         return np.array([*points, frame.translation])
 
+    def chain_jacobians(self, q: np.ndarray) -> np.ndarray:
+        """Position Jacobians of the chain points in world axes, (n + 1) x 3 x n [m/rad]."""
+        model, data = self.model, self.data
+        pin.computeJointJacobians(model, data, q)
+        pin.updateFramePlacement(model, data, self.frame_id)
+        out = np.empty((model.njoints, 3, self.nq))
+        for j in range(1, model.njoints):
+            out[j - 1] = pin.getJointJacobian(model, data, j, _LWA)[:3]
+        out[-1] = pin.getFrameJacobian(model, data, self.frame_id, _LWA)[:3]
+        return out
+
     # -- limits ---------------------------------------------------------------------------
     @property
     def lower_limits(self) -> np.ndarray:
@@ -143,6 +160,11 @@ class PinocchioModel:
     def upper_limits(self) -> np.ndarray:
         """Upper joint position limits [rad or m] from the URDF."""
         return np.asarray(self.model.upperPositionLimit).copy()
+
+    @property
+    def velocity_limits(self) -> np.ndarray:
+        """Joint velocity limits [rad/s or m/s] from the URDF."""
+        return np.asarray(self.model.velocityLimit).copy()
 
     @property
     def effort_limits(self) -> np.ndarray:

@@ -136,6 +136,7 @@ class ThreeLinkPlanarModel:
     params: ThreeLinkParameters
     nq: int = field(default=3, init=False)
     m: int = field(default=2, init=False)
+    task: str = field(default="planar", init=False)
     joint_names: list[str] = field(default_factory=lambda: ["joint1", "joint2", "joint3"])
 
     def mass(self, q: np.ndarray) -> np.ndarray:
@@ -234,3 +235,21 @@ class ThreeLinkPlanarModel:
         tail = np.cumsum(terms[:, ::-1], axis=1)[:, ::-1]  # tail[:, j] = sum_{l >= j}
         idx = np.maximum.outer(np.arange(3), np.arange(3))
         return tail[:, idx]
+
+    def chain_points(self, q: np.ndarray) -> np.ndarray:
+        """World positions of the joint origins and of the tip, 4 x 3 [m] (base at the origin)."""
+        theta = np.cumsum(q)
+        steps = np.asarray(self.params.lengths)[:, None] * np.array([np.cos(theta), np.sin(theta)]).T
+        points = np.zeros((4, 3))
+        points[1:, :2] = np.cumsum(steps, axis=0)
+        return points
+
+    def chain_jacobians(self, q: np.ndarray) -> np.ndarray:
+        """Jacobians of the chain points, 4 x 3 x 3: d p_j / d q_k = sum_{k <= i < j} l_i (-s_i, c_i)."""
+        theta = np.cumsum(q)
+        cols = np.asarray(self.params.lengths) * np.array([-np.sin(theta), np.cos(theta)])  # 2 x 3
+        out = np.zeros((4, 3, 3))
+        for j in range(1, 4):
+            for k in range(j):
+                out[j, :2, k] = cols[:, k:j].sum(axis=1)
+        return out
