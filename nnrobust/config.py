@@ -182,15 +182,24 @@ class SubtaskConfig:
 
     Attributes:
         criteria: names (``paper``, ``half_det_manipulability``, ``manipulability``,
-            ``joint_smoothness``); empty for pure null-space damping.
+            ``joint_limits``, ``joint_centering``, ``joint_smoothness``, ``obstacles``; see
+            docs/controller.md); empty for pure null-space damping.
         weights: relative weights (default equal).
         C: the constant of eq. (4).
+        smoothness_coefficients: c of ``joint_smoothness`` (default the paper's (0.5, -1, 1)).
+        obstacles: spheres [x, y, z, radius] [m] for ``obstacles``.
+        obstacle_influence: distance d_0 within which an obstacle repels a link [m].
+        link_radius: thickness of the links for ``obstacles`` [m].
 
     """
 
     criteria: list[str] = field(default_factory=lambda: ["paper"])
     weights: list[float] | None = None
     C: float = 1.0
+    smoothness_coefficients: list[float] | None = None
+    obstacles: list[list[float]] = field(default_factory=list)
+    obstacle_influence: float = 0.1
+    link_radius: float = 0.0
 
 
 @dataclass
@@ -410,6 +419,14 @@ def validate(config: ExperimentConfig) -> None:
     if nn.eps_min >= nn.eps0:
         raise ConfigError("nn.eps_min", f"the floor {nn.eps_min} must be below nn.eps0 = {nn.eps0}")
     _positive("subtasks.C", config.subtasks.C)
+    _positive("subtasks.obstacle_influence", config.subtasks.obstacle_influence)
+    if config.subtasks.link_radius < 0:
+        raise ConfigError("subtasks.link_radius", f"must be >= 0, got {config.subtasks.link_radius}")
+    for i, sphere in enumerate(config.subtasks.obstacles):
+        if len(sphere) != 4 or sphere[3] < 0:
+            raise ConfigError(f"subtasks.obstacles[{i}]", f"must be [x, y, z, radius >= 0], got {sphere}")
+    if "obstacles" in config.subtasks.criteria and not config.subtasks.obstacles:
+        raise ConfigError("subtasks.obstacles", "criterion 'obstacles' needs at least one sphere")
     if config.subtasks.weights is not None:
         if len(config.subtasks.weights) != len(config.subtasks.criteria):
             raise ConfigError(

@@ -30,7 +30,19 @@ from .model.tasks import pose_vector, split_pose
 from .plant import Friction, Plant, SinusoidalDisturbance
 from .results import Result
 from .simulation import simulate
-from .subtasks import CRITERIA, Criterion, WeightedCriteria
+from .subtasks import (
+    CRITERIA,
+    PAPER_SMOOTHNESS,
+    Criterion,
+    HalfDetManipulability,
+    JointCentering,
+    JointLimitAvoidance,
+    JointSmoothness,
+    Manipulability,
+    PaperCriterion,
+    SphereObstacles,
+    WeightedCriteria,
+)
 from .trajectories import EllipseTrajectory, PoseTrajectory, Trajectory
 
 
@@ -104,7 +116,31 @@ def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsMo
     )
 
 
-def build_criterion(config: ExperimentConfig) -> Criterion | None:
+def _make_criterion(name: str, config: ExperimentConfig, robot: PinocchioModel) -> Criterion:
+    sc = config.subtasks
+    if name == "paper":
+        if robot.nq != 3:
+            raise ConfigError("subtasks.criteria", f"'paper' (eq. 19) is for 3 joints, the robot has "
+                              f"{robot.nq}; use e.g. 'manipulability' and 'joint_centering'")
+        return PaperCriterion()
+    if name == "half_det_manipulability":
+        return HalfDetManipulability()
+    if name == "manipulability":
+        return Manipulability()
+    if name in ("joint_limits", "joint_centering"):
+        cls = JointLimitAvoidance if name == "joint_limits" else JointCentering
+        try:
+            return cls(robot.lower_limits, robot.upper_limits)
+        except ValueError as err:
+            raise ConfigError("subtasks.criteria", f"{name!r}: {err}") from err
+    if name == "joint_smoothness":
+        c = sc.smoothness_coefficients or list(PAPER_SMOOTHNESS)
+        return JointSmoothness(tuple(_vector("subtasks.smoothness_coefficients", c, robot.nq, None)))
+    obstacles = np.asarray(sc.obstacles, dtype=float)
+    return SphereObstacles(obstacles[:, :3], obstacles[:, 3], sc.obstacle_influence, sc.link_radius)
+
+
+def build_criterion(config: ExperimentConfig, robot: PinocchioModel) -> Criterion | None:
     """Weighted sum of the named criteria, eq. (4), or None."""
     sc = config.subtasks
     if not sc.criteria:
@@ -112,7 +148,8 @@ def build_criterion(config: ExperimentConfig) -> Criterion | None:
     unknown = [c for c in sc.criteria if c not in CRITERIA]
     if unknown:
         raise ConfigError("subtasks.criteria", f"unknown {unknown}; valid: {', '.join(CRITERIA)}")
-    return WeightedCriteria([CRITERIA[c]() for c in sc.criteria], sc.weights, sc.C)
+    criteria = [_make_criterion(name, config, robot) for name in sc.criteria]
+    return WeightedCriteria(criteria, sc.weights, sc.C)
 
 
 def build_basis(config: ExperimentConfig, robot: PinocchioModel, m: int) -> AdditiveRBFBasis:
@@ -223,7 +260,7 @@ def build(config: ExperimentConfig) -> Setup:
     trajectory = build_trajectory(config, robot)
     plant = build_plant(config, robot)
     nominal = build_nominal(config, robot)
-    criterion = build_criterion(config)
+    criterion = build_criterion(config, robot)
     controller = build_controller(config, robot, nominal, trajectory, criterion)
     q0, v0 = initial_state(config, robot, trajectory)
     return Setup(config, robot, plant, nominal, trajectory, criterion, controller, q0, v0)

@@ -48,6 +48,8 @@ class PinocchioModel:
         self.joint_names = [model.names[i] for i in range(1, model.njoints)]
         self._zero = np.zeros(self.nq)
         self._lower = np.tril_indices(self.nq, -1)
+        self._strict_lower = np.tril(np.ones((self.nq, self.nq)), -1)
+        self._rows = [0, 1] if task == "planar" else list(range(self.m))
 
     # -- dynamics -------------------------------------------------------------------------
     def mass(self, q: np.ndarray) -> np.ndarray:
@@ -119,18 +121,30 @@ class PinocchioModel:
         return x, J, jdot_v
 
     def task_jacobian_derivative(self, q: np.ndarray) -> np.ndarray:
-        """H[:, :, k] = dJ/dq_k, from the Jacobian time variation at q' = e_k (exact)."""
-        n = self.nq
-        H = np.empty((self.m, n, n))
-        e = np.zeros(n)
-        for k in range(n):
-            e[k] = 1.0
-            pin.computeJointJacobiansTimeVariation(self.model, self.data, q, e)
-            pin.updateFramePlacement(self.model, self.data, self.frame_id)
-            dJ = pin.getFrameJacobianTimeVariation(self.model, self.data, self.frame_id, _LWA)
-            H[:, :, k] = dJ[: self.m]
-            e[k] = 0.0
-        return H
+        """H[:, :, k] = dJ/dq_k, the kinematic Hessian, from one Jacobian pass.
+
+        In world coordinates the column S_i of joint i moves only with the joints k before it
+        (its ancestors in a chain): dS_i/dq_k = ad(S_k) S_i = (w_k x v_i + v_k x w_i, w_k x w_i)
+        for k < i, else 0. The world-aligned linear rows follow from J_lin = v + w x p with
+        dp/dq_k = J_lin[:, k]. (Pinocchio 4.1's getJointKinematicHessian did not match finite
+        differences for the Panda, so this evaluates the same formula from the world Jacobian.)
+        """
+        model, data, fid = self.model, self.data, self.frame_id
+        pin.computeJointJacobians(model, data, q)
+        p = pin.updateFramePlacement(model, data, fid).translation
+        Jw = pin.getFrameJacobian(model, data, fid, pin.WORLD)
+        V, W = Jw[:3].T, Jw[3:].T  # n x 3
+        # pairs[i, k] = ad(S_k) S_i, kept for k < i
+        dV = np.cross(W[None, :, :], V[:, None, :]) + np.cross(V[None, :, :], W[:, None, :])
+        dW = np.cross(W[None, :, :], W[:, None, :])
+        mask = self._strict_lower[:, :, None]
+        dV *= mask
+        dW *= mask
+        J_lin = V + np.cross(W, p)  # n x 3: world-aligned linear Jacobian, transposed
+        # d(v_i + w_i x p)/dq_k = dv_i + dw_i x p + w_i x J_lin[k]
+        dL = dV + np.cross(dW, p) + np.cross(W[:, None, :], J_lin[None, :, :])
+        H = np.concatenate([dL, dW], axis=2).transpose(2, 0, 1)  # 6 x n(i) x n(k)
+        return np.ascontiguousarray(H[self._rows])
 
     def chain_points(self, q: np.ndarray) -> np.ndarray:
         """World positions of the joint origins and of the task frame, (n + 1) x 3 [m]."""
