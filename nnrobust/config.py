@@ -43,9 +43,15 @@ class NominalConfig:
 
     Attributes:
         kind: ``closed-form`` (three-link closed form with beta and p below) or ``urdf`` (the true
-            robot's own Pinocchio model: a perfect rigid-body model).
+            robot's Pinocchio model, perfect unless perturbed by the fields below).
         beta: beta-hat [kg m^2] (closed form; default the true robot's).
         p: p-hat [kg m^2] (closed form; default the true robot's).
+        mass_scale: every body's mass times this (urdf).
+        inertia_scale: every body's rotational inertia times this (urdf).
+        relative_error: each body's mass and inertia also scaled by its own seeded random factor
+            in [1 - relative_error, 1 + relative_error] (urdf; < 1).
+        com_error: each centre of mass moved by a seeded random vector up to this long [m] (urdf).
+        seed: seed of the random perturbation.
         viscous_friction: F_d-hat [N m s/rad] (default 0).
         coulomb_friction: Coulomb friction in N-hat [N m] (default 0: Coulomb friction unmodelled).
 
@@ -54,6 +60,11 @@ class NominalConfig:
     kind: str = "closed-form"
     beta: list[float] | None = None
     p: list[float] | None = None
+    mass_scale: float = 1.0
+    inertia_scale: float = 1.0
+    relative_error: float = 0.0
+    com_error: float = 0.0
+    seed: int = 0
     viscous_friction: list[float] | None = None
     coulomb_friction: list[float] | None = None
 
@@ -63,9 +74,15 @@ class PlantConfig:
     """Friction and disturbance of the true robot.
 
     Attributes:
-        viscous_friction: F_d [N m s/rad] (default the URDF's <dynamics damping>).
-        coulomb_friction: [N m] (default the URDF's <dynamics friction>).
-        disturbance: ``paper`` (tau_d of Sect. 4), ``none`` or ``sinusoid`` (the three fields below).
+        friction: ``urdf`` (the URDF's <dynamics damping, friction>) or ``scaled`` (levels below
+            relative to each joint's torque scale, docs/robots.md).
+        viscous_level: ``scaled``: viscous torque at the joint's top speed / torque scale.
+        coulomb_level: ``scaled``: Coulomb friction / torque scale.
+        viscous_friction: F_d [N m s/rad]; overrides the ``friction`` choice when given.
+        coulomb_friction: [N m]; overrides the ``friction`` choice when given.
+        disturbance: ``paper`` (tau_d of Sect. 4), ``none``, ``scaled`` (two harmonics of peak
+            disturbance_level x torque scale per joint) or ``sinusoid`` (the fields below).
+        disturbance_level: ``scaled``: peak disturbance / torque scale.
         disturbance_amplitude: n x K amplitudes [N m] (``sinusoid``).
         disturbance_omega: K angular frequencies [rad/s] (``sinusoid``).
         disturbance_phase: n x K phases [rad] (``sinusoid``; default 0).
@@ -73,9 +90,13 @@ class PlantConfig:
 
     """
 
+    friction: str = "urdf"
+    viscous_level: float = 0.02
+    coulomb_level: float = 0.01
     viscous_friction: list[float] | None = None
     coulomb_friction: list[float] | None = None
     disturbance: str = "paper"
+    disturbance_level: float = 0.02
     disturbance_amplitude: list[list[float]] | None = None
     disturbance_omega: list[float] | None = None
     disturbance_phase: list[list[float]] | None = None
@@ -363,7 +384,8 @@ def validate(config: ExperimentConfig) -> None:
     choices = {
         "robot.task": (config.robot.task, tuple(TASK_KINDS)),
         "nominal.kind": (config.nominal.kind, ("closed-form", "urdf")),
-        "plant.disturbance": (config.plant.disturbance, ("paper", "none", "sinusoid")),
+        "plant.friction": (config.plant.friction, ("urdf", "scaled")),
+        "plant.disturbance": (config.plant.disturbance, ("paper", "none", "scaled", "sinusoid")),
         "controller.kind": (c.kind, ("nn", "no-u0", "pd")),
         "nn.law": (nn.law, ("corrected", "printed")),
         "nn.basis_input": (nn.basis_input, ("joint", "error")),
@@ -418,6 +440,23 @@ def validate(config: ExperimentConfig) -> None:
             raise ConfigError(path, f"must be >= 0, got {value}")
     if nn.eps_min >= nn.eps0:
         raise ConfigError("nn.eps_min", f"the floor {nn.eps_min} must be below nn.eps0 = {nn.eps0}")
+    nc, pc = config.nominal, config.plant
+    _positive("nominal.mass_scale", nc.mass_scale)
+    _positive("nominal.inertia_scale", nc.inertia_scale)
+    if not 0 <= nc.relative_error < 1:
+        raise ConfigError("nominal.relative_error", f"must be in [0, 1) so masses stay positive, got "
+                          f"{nc.relative_error}")
+    if nc.com_error < 0:
+        raise ConfigError("nominal.com_error", f"must be >= 0 [m], got {nc.com_error}")
+    perturbed = (nc.mass_scale, nc.inertia_scale, nc.relative_error, nc.com_error) != (1, 1, 0, 0)
+    if nc.kind == "closed-form" and perturbed:
+        raise ConfigError("nominal.kind", "mass_scale, inertia_scale, relative_error and com_error "
+                          "perturb the URDF model: set kind = 'urdf' (closed-form takes beta and p)")
+    for path, value in (("plant.viscous_level", pc.viscous_level),
+                        ("plant.coulomb_level", pc.coulomb_level),
+                        ("plant.disturbance_level", pc.disturbance_level)):
+        if value < 0:
+            raise ConfigError(path, f"must be >= 0, got {value}")
     _positive("subtasks.C", config.subtasks.C)
     _positive("subtasks.obstacle_influence", config.subtasks.obstacle_influence)
     if config.subtasks.link_radius < 0:

@@ -26,8 +26,9 @@ from .model import (
     ThreeLinkPlanarModel,
     load_robot,
 )
+from .model.perturbation import perturb_inertias
 from .model.tasks import pose_vector, split_pose
-from .plant import Friction, Plant, SinusoidalDisturbance
+from .plant import Friction, Plant, SinusoidalDisturbance, scaled_disturbance, scaled_friction
 from .results import Result
 from .simulation import simulate
 from .subtasks import (
@@ -71,13 +72,17 @@ def _vector(path: str, values, n: int, default: np.ndarray) -> np.ndarray:
 
 
 def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
-    """True model, friction (URDF values unless overridden) and disturbance."""
+    """True model, friction (URDF or scaled to the robot, unless given) and disturbance."""
     n, pc = robot.nq, config.plant
+    base = (scaled_friction(robot, pc.viscous_level, pc.coulomb_level) if pc.friction == "scaled"
+            else Friction(robot.viscous_friction, robot.coulomb_friction))
     friction = Friction(
-        _vector("plant.viscous_friction", pc.viscous_friction, n, robot.viscous_friction),
-        _vector("plant.coulomb_friction", pc.coulomb_friction, n, robot.coulomb_friction),
+        _vector("plant.viscous_friction", pc.viscous_friction, n, base.viscous),
+        _vector("plant.coulomb_friction", pc.coulomb_friction, n, base.coulomb),
     )
-    if pc.disturbance == "paper":
+    if pc.disturbance == "scaled":
+        disturbance = scaled_disturbance(robot, pc.disturbance_level)
+    elif pc.disturbance == "paper":
         if n != 3:
             raise ConfigError("plant.disturbance", f"'paper' is for 3 joints, the robot has {n}")
         disturbance = SinusoidalDisturbance.paper()
@@ -101,10 +106,15 @@ def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
 
 
 def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsModel:
-    """The controller's model: closed form with beta-hat, p-hat, or the robot's own model."""
+    """The controller's model: closed form with beta-hat, p-hat, or the robot's own (perturbed) model."""
     nc = config.nominal
-    if nc.kind == "urdf":  # the same Pinocchio model (read-only), with its own Data
-        return PinocchioModel(robot.model, robot.task_frame, robot.task, robot.name)
+    if nc.kind == "urdf":
+        if (nc.mass_scale, nc.inertia_scale, nc.relative_error, nc.com_error) == (1, 1, 0, 0):
+            model = robot.model  # the same Pinocchio model (read-only), with its own Data
+        else:
+            model = perturb_inertias(robot.model, nc.mass_scale, nc.inertia_scale,
+                                     nc.relative_error, nc.com_error, nc.seed)
+        return PinocchioModel(model, robot.task_frame, robot.task, robot.name)
     if robot.task != "planar":
         raise ConfigError("nominal.kind", "'closed-form' is the planar three-link model; use 'urdf'")
     true = ThreeLinkParameters.from_pinocchio(robot.model, robot.task_frame)

@@ -3,5 +3,7 @@
 from .disturbance import SinusoidalDisturbance
 from .friction import Friction
 from .plant import Plant
+from .scaling import scaled_disturbance, scaled_friction, torque_scale
 
-__all__ = ["Friction", "Plant", "SinusoidalDisturbance"]
+__all__ = ["Friction", "Plant", "SinusoidalDisturbance", "scaled_disturbance", "scaled_friction",
+           "torque_scale"]

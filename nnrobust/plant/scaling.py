@@ -1,0 +1,52 @@
+"""Friction and disturbance sized to the robot: levels relative to each joint's torque scale."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..model.pinocchio_model import PinocchioModel
+from .disturbance import SinusoidalDisturbance
+from .friction import Friction
+
+REFERENCE_ACCELERATION = 10.0
+"""[rad/s^2] for the torque scale of joints without an effort limit."""
+
+REFERENCE_SPEED = 3.0
+"""[rad/s] for the viscous friction of joints without a velocity limit."""
+
+GOLDEN_ANGLE = np.pi * (3 - np.sqrt(5))
+"""Phase step between joints of the scaled disturbance [rad] (no two joints in phase)."""
+
+
+def _usable(values: np.ndarray) -> np.ndarray:
+    return np.isfinite(values) & (values > 0) & (values < 1e6)
+
+
+def torque_scale(robot: PinocchioModel) -> np.ndarray:
+    """tau_ref per joint [N m]: the URDF effort limit where there is one, else
+    M_ii(q_mid) * 10 rad/s^2 + |G_i(q_mid)| at mid-range (the arm's own size).
+    """
+    effort = robot.effort_limits
+    mid = 0.5 * (np.maximum(robot.lower_limits, -np.pi) + np.minimum(robot.upper_limits, np.pi))
+    fallback = np.diag(robot.mass(mid)) * REFERENCE_ACCELERATION + np.abs(robot.gravity(mid))
+    return np.where(_usable(effort), effort, fallback)
+
+
+def scaled_friction(robot: PinocchioModel, viscous_level: float, coulomb_level: float) -> Friction:
+    """Coulomb = coulomb_level tau_ref; viscous = viscous_level tau_ref / v_max (v_max from the URDF,
+    else 3 rad/s): at top speed the viscous torque is viscous_level of the joint's torque scale.
+    """
+    tau = torque_scale(robot)
+    speed = robot.velocity_limits
+    speed = np.where(_usable(speed), speed, REFERENCE_SPEED)
+    return Friction(viscous_level * tau / speed, coulomb_level * tau)
+
+
+def scaled_disturbance(robot: PinocchioModel, level: float) -> SinusoidalDisturbance:
+    """tau_d,i(t) = level tau_ref,i (sin(t + phi_i) + sin(2 t + 2 phi_i)) / 2, phi_i = i x golden
+    angle: the paper's two harmonics (1 and 2 rad/s), peak at most level tau_ref on every joint.
+    """
+    tau = torque_scale(robot)
+    phi = GOLDEN_ANGLE * np.arange(robot.nq)
+    amplitude = 0.5 * level * np.column_stack([tau, tau])
+    return SinusoidalDisturbance(amplitude, np.array([1.0, 2.0]), np.column_stack([phi, 2 * phi]))

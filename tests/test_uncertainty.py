@@ -1,0 +1,101 @@
+"""Model uncertainty for any URDF: perturbed nominal models stay physical; friction and
+disturbance scale with the robot."""
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from nnrobust.config import ExperimentConfig
+from nnrobust.experiment import build_nominal, build_plant
+from nnrobust.model import PinocchioModel
+from nnrobust.model.perturbation import is_physical, perturb_inertias
+from nnrobust.plant import scaled_disturbance, scaled_friction, torque_scale
+
+from .arms import arm, random_configurations
+
+
+def _perturbed(robot, **kwargs):
+    return PinocchioModel(perturb_inertias(robot.model, **kwargs), robot.task_frame, robot.task)
+
+
+@pytest.mark.parametrize("name", ["panda", "ur5", "planar7"])
+def test_random_perturbation_is_physical_bounded_and_seeded(name):
+    robot = arm(name, "position" if name != "planar7" else "planar")
+    nominal = _perturbed(robot, relative_error=0.3, com_error=0.02, seed=3)
+    again = _perturbed(robot, relative_error=0.3, com_error=0.02, seed=3)
+    other = _perturbed(robot, relative_error=0.3, com_error=0.02, seed=4)
+    changed = 0
+    for j in range(1, robot.model.njoints):
+        true, wrong = robot.model.inertias[j], nominal.model.inertias[j]
+        assert is_physical(wrong)
+        assert 0.7 * true.mass - 1e-12 <= wrong.mass <= 1.3 * true.mass + 1e-12
+        assert np.linalg.norm(np.asarray(wrong.lever) - true.lever) <= 0.02 + 1e-12
+        assert wrong == again.model.inertias[j]
+        changed += wrong.mass != true.mass
+    assert changed == robot.model.njoints - 1
+    assert any(nominal.model.inertias[j] != other.model.inertias[j] for j in range(1, robot.model.njoints))
+    for q in random_configurations(robot, 10, seed=5):
+        M = nominal.mass(q)
+        assert np.all(np.linalg.eigvalsh(M) > 0)
+        assert not np.allclose(M, robot.mass(q))
+        np.testing.assert_allclose(nominal.task_position(q), robot.task_position(q), atol=1e-14)
+
+
+def test_uniform_scale_scales_the_dynamics_exactly():
+    """Mass and inertia about the centre of mass both x1.2: every spatial inertia, so M and G, x1.2."""
+    robot = arm("panda", "position")
+    heavier = _perturbed(robot, mass_scale=1.2, inertia_scale=1.2)
+    for q in random_configurations(robot, 5, seed=6):
+        np.testing.assert_allclose(heavier.mass(q), 1.2 * robot.mass(q), rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(heavier.gravity(q), 1.2 * robot.gravity(q), rtol=1e-12, atol=1e-12)
+
+
+def test_invalid_perturbations_are_refused():
+    model = arm("planar7", "planar").model
+    with pytest.raises(ValueError, match="relative_error"):
+        perturb_inertias(model, relative_error=1.0)
+    with pytest.raises(ValueError, match="must be positive"):
+        perturb_inertias(model, mass_scale=0.0)
+    assert not is_physical(pin.Inertia(1.0, np.zeros(3), np.diag([1.0, 1.0, 3.0])))  # 1 + 1 < 3
+    assert is_physical(pin.Inertia(1.0, np.zeros(3), np.diag([1.0, 2.0, 3.0])))
+
+
+def test_torque_scale_uses_effort_limits_or_the_arm_inertia():
+    robot = arm("panda", "position")
+    np.testing.assert_allclose(torque_scale(robot), [87, 87, 87, 87, 12, 12, 12])
+    model = pin.Model(robot.model)
+    model.effortLimit = np.zeros(robot.nq)
+    bare = PinocchioModel(model, robot.task_frame, robot.task)
+    mid = 0.5 * (np.maximum(robot.lower_limits, -np.pi) + np.minimum(robot.upper_limits, np.pi))
+    expected = 10.0 * np.diag(robot.mass(mid)) + np.abs(robot.gravity(mid))
+    np.testing.assert_allclose(torque_scale(bare), expected)
+
+
+def test_scaled_friction_and_disturbance_levels():
+    robot = arm("panda", "position")
+    tau = torque_scale(robot)
+    friction = scaled_friction(robot, viscous_level=0.02, coulomb_level=0.01)
+    np.testing.assert_allclose(friction.coulomb, 0.01 * tau)
+    np.testing.assert_allclose(friction.viscous * robot.velocity_limits, 0.02 * tau)
+    disturbance = scaled_disturbance(robot, level=0.05)
+    samples = np.array([disturbance(t) for t in np.linspace(0, 2 * np.pi, 2001)])
+    peak = np.abs(samples).max(axis=0)
+    assert np.all(peak <= 0.05 * tau + 1e-12) and np.all(peak > 0.6 * 0.05 * tau)
+    assert np.linalg.matrix_rank(samples[:, :4]) == 4  # joints are not in phase
+
+
+def test_configuration_builds_the_perturbed_nominal_and_scaled_plant():
+    robot = arm("panda", "position")
+    config = ExperimentConfig().replace(
+        robot={"source": "panda", "task": "position"},
+        nominal={"kind": "urdf", "relative_error": 0.2, "seed": 7},
+        plant={"friction": "scaled", "disturbance": "scaled", "coulomb_level": 0.02},
+        trajectory={"center": [0.4, 0.0, 0.5], "axis_a": [0.1, 0, 0], "axis_b": [0, 0.1, 0]},
+        controller={"Kp": [10.0] * 3, "Kv": [4.0] * 3, "pd_Kp": [1.0] * 3, "pd_Kd": [1.0] * 3},
+        subtasks={"criteria": ["joint_centering"]},
+    )
+    nominal = build_nominal(config, robot)
+    expected = perturb_inertias(robot.model, relative_error=0.2, seed=7)
+    assert all(nominal.model.inertias[j] == expected.inertias[j] for j in range(1, robot.model.njoints))
+    plant = build_plant(config, robot)
+    np.testing.assert_allclose(plant.friction.coulomb, 0.02 * torque_scale(robot))
