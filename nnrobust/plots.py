@@ -25,17 +25,25 @@ def _save(fig, folder: Path, name: str) -> list[Path]:
     return paths
 
 
-def _axis_labels(m: int) -> list[str]:
-    return ["x", "y", "z"][:m]
+AXES = ("x", "y", "z")
 
 
-def plot_path(result: Result, ax=None, label: str = "actual") -> None:
-    """Desired vs actual end-effector path in the first two task coordinates (Figs. 1, 4)."""
-    ax.plot(result.x_d[:, 0], result.x_d[:, 1], "k--", lw=1.5, label="desired $x_d$")
-    ax.plot(result.x[:, 0], result.x[:, 1], lw=1.0, label=label)
-    ax.plot(*result.x[0, :2], "o", ms=4, color="C0")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
+def _position_size(result: Result) -> int:
+    return min(result.x.shape[1], 3)
+
+
+def _position_error(result: Result) -> np.ndarray:
+    return np.linalg.norm(result.e[:, : _position_size(result)], axis=1)
+
+
+def plot_path(result: Result, ax=None, label: str = "actual", axes: tuple[int, int] = (0, 1)) -> None:
+    """Desired vs actual end-effector path projected on two world axes (Figs. 1, 4)."""
+    i, j = axes
+    ax.plot(result.x_d[:, i], result.x_d[:, j], "k--", lw=1.5, label="desired $x_d$")
+    ax.plot(result.x[:, i], result.x[:, j], lw=1.0, label=label)
+    ax.plot(result.x[0, i], result.x[0, j], "o", ms=4, color="C0")
+    ax.set_xlabel(f"{AXES[i]} [m]")
+    ax.set_ylabel(f"{AXES[j]} [m]")
     ax.set_aspect("equal", adjustable="datalim")
     ax.legend(loc="best", fontsize=8)
 
@@ -45,22 +53,39 @@ def plot_run(result: Result, folder: str | Path) -> list[Path]:
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     t, written = result.t, []
-    labels = _axis_labels(result.x.shape[1])
+    npos = _position_size(result)
+    pose = result.e.shape[1] == 6
     joint_labels = result.joint_names or [f"q{i + 1}" for i in range(result.q.shape[1])]
 
-    fig, ax = plt.subplots(figsize=(5, 4.5))
-    plot_path(result, ax)
-    ax.set_title("End-effector path")
+    if npos == 2:
+        fig, ax = plt.subplots(figsize=(5, 4.5))
+        plot_path(result, ax)
+    else:  # top and side views of a spatial path
+        fig, (top, side) = plt.subplots(1, 2, figsize=(10, 4.5))
+        plot_path(result, top, axes=(0, 1))
+        plot_path(result, side, axes=(0, 2))
+        top.set_title("top view")
+        side.set_title("side view")
+    fig.suptitle("End-effector path")
     written += _save(fig, folder, "path")
 
-    fig, axes = plt.subplots(2, 1, figsize=(7, 5), sharex=True)
-    for i, lab in enumerate(labels):
-        axes[0].plot(t, result.e[:, i] * 1e3, lw=0.8, label=f"$e_{lab}$")
-    axes[0].set_ylabel("task error [mm]")
+    fig, axes = plt.subplots(3 if pose else 2, 1, figsize=(7, 7 if pose else 5), sharex=True)
+    for i in range(npos):
+        axes[0].plot(t, result.e[:, i] * 1e3, lw=0.8, label=f"$e_{AXES[i]}$")
+    axes[0].set_ylabel("position error [mm]")
     axes[0].legend(fontsize=8)
-    axes[1].semilogy(t, np.maximum(np.linalg.norm(result.e, axis=1), 1e-12), lw=0.8)
-    axes[1].set_ylabel("$\\|e\\|$ [m]")
-    axes[1].set_xlabel("t [s]")
+    if pose:
+        for i in range(3):
+            axes[1].plot(t, result.e[:, 3 + i] * 1e3, lw=0.8, label=f"$e_{{\\theta {AXES[i]}}}$")
+        axes[1].set_ylabel("orientation error [mrad]")
+        axes[1].legend(fontsize=8)
+    axes[-1].semilogy(t, np.maximum(_position_error(result), 1e-12), lw=0.8, label="position [m]")
+    if pose:
+        axes[-1].semilogy(t, np.maximum(np.linalg.norm(result.e[:, 3:], axis=1), 1e-12), lw=0.8,
+                          label="orientation [rad]")
+        axes[-1].legend(fontsize=8)
+    axes[-1].set_ylabel("error norm [m]" if not pose else "error norm [m, rad]")
+    axes[-1].set_xlabel("t [s]")
     fig.suptitle("Task-space tracking error")
     written += _save(fig, folder, "errors")
 
@@ -81,7 +106,7 @@ def plot_run(result: Result, folder: str | Path) -> list[Path]:
     axes[0].plot(t, result.signals["h"], lw=0.9)
     axes[0].set_ylabel("h(q)")
     axes[1].plot(t, result.signals["manipulability"], lw=0.9)
-    axes[1].set_ylabel("$\\sqrt{\\det JJ^T}$ [m$^2$]")
+    axes[1].set_ylabel("$\\sqrt{\\det JJ^T}$ [m$^m$]")
     axes[1].set_xlabel("t [s]")
     fig.suptitle("Subtask criterion and manipulability")
     written += _save(fig, folder, "subtask")
@@ -122,13 +147,13 @@ def plot_comparison(results: dict[str, Result], folder: str | Path) -> list[Path
     axes[0].plot(first.x_d[:, 0], first.x_d[:, 1], "k--", lw=1.5, label="desired")
     for name, res in results.items():
         axes[0].plot(res.x[:, 0], res.x[:, 1], lw=0.9, label=name)
-        axes[1].semilogy(res.t, np.maximum(np.linalg.norm(res.e, axis=1), 1e-12), lw=0.8, label=name)
+        axes[1].semilogy(res.t, np.maximum(_position_error(res), 1e-12), lw=0.8, label=name)
         axes[2].plot(res.t, np.linalg.norm(res.tau, axis=1), lw=0.5, label=name)
     axes[0].set_aspect("equal", adjustable="datalim")
     axes[0].set_xlabel("x [m]")
     axes[0].set_ylabel("y [m]")
     axes[1].set_xlabel("t [s]")
-    axes[1].set_ylabel("$\\|e\\|$ [m]")
+    axes[1].set_ylabel("position error [m]")
     axes[2].set_xlabel("t [s]")
     axes[2].set_ylabel("$\\|\\tau\\|$ [N m]")
     for ax in axes:

@@ -24,7 +24,7 @@ METRIC_UNITS = {
     "rms_torque": "N m",
     "max_torque": "N m",
     "torque_chatter": "N m",
-    "min_manipulability": "m^2",
+    "min_manipulability": "m^m (m^2 planar, m^3 position; mixed for a pose)",
     "final_rho_hat": "m/s^2",
     "simulated_seconds": "s",
     "wall_seconds": "s",

@@ -99,3 +99,16 @@ def test_configuration_builds_the_perturbed_nominal_and_scaled_plant():
     assert all(nominal.model.inertias[j] == expected.inertias[j] for j in range(1, robot.model.njoints))
     plant = build_plant(config, robot)
     np.testing.assert_allclose(plant.friction.coulomb, 0.02 * torque_scale(robot))
+
+
+def test_stiff_viscous_friction_is_refused_before_the_run():
+    """On a 15-link chain 3 % viscous friction is a ~4e3 1/s mode: RK4 at 1 ms would diverge."""
+    from nnrobust.exceptions import ConfigError
+    from nnrobust.experiment import build
+    from nnrobust.presets import load_preset
+
+    config = load_preset("planar7-ellipse").replace(
+        robot={"source": "planar15"}, simulation={"q_seed": [0.9] + [-0.1] * 14})
+    with pytest.raises(ConfigError, match=r"simulation.substeps: .* set substeps >= 2"):
+        build(config)
+    build(config.replace(simulation={"substeps": 2}))

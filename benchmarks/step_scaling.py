@@ -1,0 +1,93 @@
+"""Cost of one closed-loop control step against the number of joints n (planar chains).
+
+    python benchmarks/step_scaling.py --json out/bench/step_scaling.json [--plot FILE.png]
+
+For n = 3, 7, 15, 30, 60, 120 the generated planar chain tracks the planar7-ellipse task (m = 2)
+with the full NN controller (joint-space basis, so the network grows with n), a perturbed URDF
+nominal model and the O(n) joint-centering subtask. The plant has no friction and no disturbance:
+on chains of 30 and more light links, per-joint Coulomb friction and disturbance torques excite
+modes with M^-1 eigenvalues up to 1e6 and the run diverges within 0.1 s at any control period
+(docs/robots.md); their cost per step is one O(n) vector expression either way. One control
+step is the controller's output plus one RK4 step of plant and adaptive law (four ABA calls and
+four adaptive-law evaluations). The exponent is the least-squares slope of log(step time)
+against log(n) for n >= 15.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from nnrobust.experiment import build
+from nnrobust.presets import load_preset
+from nnrobust.results import write_json_atomic
+from nnrobust.simulation import simulate
+
+SIZES = (3, 7, 15, 30, 60, 120)
+
+
+def step_seconds(n: int, steps: int, repeats: int) -> float:
+    """Best of ``repeats`` runs of ``steps`` control steps, per step [s]."""
+    seed = [0.9] + [-1.2 / (n - 1)] * (n - 1)
+    config = load_preset("planar7-ellipse").replace(
+        robot={"source": f"planar{n}"},
+        nn={"basis_input": "joint"},
+        plant={"friction": "urdf", "disturbance": "none"},  # see the module docstring
+        subtasks={"criteria": ["joint_centering"], "weights": [1.0]},
+        simulation={"q_seed": seed, "duration": steps * 1e-3},
+    )
+    setup = build(config)
+    best = np.inf
+    for _ in range(repeats):
+        start = time.perf_counter()
+        trace = simulate(setup.plant, setup.controller, setup.q0, setup.v0, steps * 1e-3)
+        best = min(best, (time.perf_counter() - start) / steps)
+        if trace.status != "completed":
+            raise RuntimeError(f"n = {n}: the run {trace.status}: {trace.message}")
+    return best
+
+
+def growth_exponent(sizes, seconds, smallest: int = 15) -> float:
+    """Slope of log(seconds) against log(n) over n >= smallest."""
+    sizes, seconds = np.asarray(sizes, float), np.asarray(seconds, float)
+    keep = sizes >= smallest
+    return float(np.polyfit(np.log(sizes[keep]), np.log(seconds[keep]), 1)[0])
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--json", help="write {n, step_seconds, exponent} to this file")
+    parser.add_argument("--plot", help="write a log-log plot to this PNG file")
+    parser.add_argument("--steps", type=int, default=300, help="control steps per timing (1 ms each)")
+    parser.add_argument("--repeats", type=int, default=3, help="timings per size; the best is kept")
+    args = parser.parse_args()
+    seconds = []
+    print(f"{'n':>5s} {'us / step':>10s} {'us / step / n':>14s}")
+    for n in SIZES:
+        seconds.append(step_seconds(n, args.steps, args.repeats))
+        print(f"{n:5d} {seconds[-1] * 1e6:10.1f} {seconds[-1] * 1e6 / n:14.2f}", flush=True)
+    exponent = growth_exponent(SIZES, seconds)
+    print(f"fitted exponent for n = 15..120: {exponent:.3f} (1 = linear)")
+    if args.json:
+        write_json_atomic(args.json, {"n": list(SIZES), "step_seconds": seconds, "exponent": exponent})
+    if args.plot:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots(figsize=(5, 3.6))
+        ax.loglog(SIZES, np.array(seconds) * 1e6, "o-", label="measured")
+        ref = np.array(SIZES, float)
+        ax.loglog(ref, seconds[2] * 1e6 * ref / SIZES[2], "k--", lw=0.8, label="slope 1 (O(n))")
+        ax.set_xlabel("joints n")
+        ax.set_ylabel("closed-loop step [us]")
+        ax.set_title(f"Cost per control step, fitted exponent {exponent:.2f}")
+        ax.legend(fontsize=8)
+        fig.savefig(args.plot, dpi=120, bbox_inches="tight")
+
+
+if __name__ == "__main__":
+    main()
