@@ -6,7 +6,7 @@ For n = 3, 7, 15, 30, 60, 120 the generated planar chain tracks the planar7-elli
 with the full NN controller (joint-space basis, so the network grows with n), a perturbed URDF
 nominal model and the O(n) joint-centering subtask. The plant has no friction and no disturbance:
 on chains of 30 and more light links, per-joint Coulomb friction and disturbance torques excite
-modes with M^-1 eigenvalues up to 1e6 and the run diverges within 0.1 s at any control period
+modes with M^-1 eigenvalues up to 1e6 and the run diverges within 0.25 s at any control period
 (docs/robots.md); their cost per step is one O(n) vector expression either way. One control
 step is the controller's output plus one RK4 step of plant and adaptive law (four ABA calls and
 four adaptive-law evaluations). The exponent is the least-squares slope of log(step time)

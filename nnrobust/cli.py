@@ -1,4 +1,4 @@
-"""Command line: ``nnrobust run | presets | compare``."""
+"""Command line: ``nnrobust run | presets | robots | compare``."""
 
 from __future__ import annotations
 
@@ -25,12 +25,20 @@ HEADERS = ("run", "status", "rms e [mm]", "rms e t>=2s [mm]", "max e [mm]", "rms
            "chatter [N m]", "rho-hat end")
 
 
+ORIENTATION_COLUMN = ("rms_orientation_error_after_2s", 1e3)
+ORIENTATION_HEADER = "rms rot t>=2s [mrad]"
+
+
 def format_table(rows: list[tuple[str, dict]]) -> str:
-    """A plain-text table of run metrics (errors in millimetres)."""
-    cells = [list(HEADERS)]
+    """A plain-text table of run metrics (position errors in mm; orientation in mrad for poses)."""
+    columns, headers = list(TABLE_COLUMNS), list(HEADERS)
+    if any(ORIENTATION_COLUMN[0] in metrics for _, metrics in rows):
+        columns.insert(4, ORIENTATION_COLUMN)
+        headers.insert(4, ORIENTATION_HEADER)
+    cells = [headers]
     for name, metrics in rows:
         row = []
-        for key, scale in TABLE_COLUMNS:
+        for key, scale in columns:
             if key == "run":
                 row.append(name)
             elif scale is None:
@@ -39,7 +47,7 @@ def format_table(rows: list[tuple[str, dict]]) -> str:
                 value = metrics.get(key)
                 row.append("-" if value is None else f"{value * scale:.4g}")
         cells.append(row)
-    widths = [max(len(r[i]) for r in cells) for i in range(len(HEADERS))]
+    widths = [max(len(r[i]) for r in cells) for i in range(len(headers))]
     lines = ["  ".join(c.rjust(w) if i else c.ljust(w) for i, (c, w) in enumerate(zip(r, widths)))
              for r in cells]
     lines.insert(1, "  ".join("-" * w for w in widths))
@@ -101,6 +109,24 @@ def cmd_presets(args) -> int:
     return 0
 
 
+def cmd_robots(args) -> int:
+    """List the arms known to work, with their joint count and default task frame."""
+    from .model import ARMS, load_robot
+
+    print(f"{'name':20s} {'n':>3s}  {'default task frame':22s} description")
+    failed = 0
+    for name, info in ARMS.items():
+        try:
+            robot = load_robot(name)
+        except NNRobustError as err:
+            failed += 1
+            print(f"{name:20s} {'-':>3s}  {'(does not load)':22s} {err}")
+            continue
+        print(f"{name:20s} {robot.nq:3d}  {robot.task_frame:22s} {info['description']}")
+    print("\nAlso: planar<N> for any N (generated chain), any example-robot-data name, a URDF file.")
+    return 1 if failed else 0
+
+
 def cmd_compare(args) -> int:
     """Table of metrics and overlaid plots for several run folders."""
     from .results import Result
@@ -147,6 +173,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     presets = sub.add_parser("presets", help="list the shipped presets")
     presets.set_defaults(func=cmd_presets)
+
+    robots = sub.add_parser("robots", help="list the arms known to work (n, default task frame)",
+                            description="Load every arm nnrobust knows (the paper's arm, a generated "
+                            "planar chain and example-robot-data arms) and print its joint count "
+                            "and default task frame.")
+    robots.set_defaults(func=cmd_robots)
 
     compare = sub.add_parser("compare", help="compare run folders: metrics table and plots")
     compare.add_argument("runs", nargs="+", help="run folders written by 'nnrobust run'")
