@@ -1,4 +1,4 @@
-"""Command line: ``nnrobust run | presets | robots | compare``."""
+"""Command line: ``nnrobust run | presets | robots | compare | view | bench``."""
 
 from __future__ import annotations
 
@@ -68,9 +68,34 @@ def _load_target(target: str):
     )
 
 
+def _live_view(args, config, setup):
+    """Start the viewer, draw the arm and the desired path; returns (viewer, scene, callback)."""
+    import numpy as np
+
+    from .viewer import RunScene, start_viewer
+
+    viewer = start_viewer(args.host, args.port)
+    scene = RunScene(viewer.vis, config)
+    times = np.linspace(0.0, config.simulation.duration, 400)
+    positions = setup.trajectory.position(times)[:, :3]
+    tip_z = setup.robot.chain_points(setup.q0)[-1, 2]
+    desired = np.column_stack([positions, np.full(len(times), tip_z)])[:, :3]
+    scene.draw_paths(desired)
+    scene.frame_camera(np.vstack([desired, setup.robot.chain_points(setup.q0)]))
+    print(f"live view: {viewer.web_url}", file=sys.stderr)
+
+    def show(t, q):
+        xd = setup.trajectory(t)[0][:3]
+        target = np.append(xd, tip_z)[:3]
+        scene.show(q, target)
+
+    return viewer, scene, show
+
+
 def cmd_run(args) -> int:
     """Run a preset or an experiment file and write its run folder."""
-    from .experiment import run_experiment
+    from .experiment import build, run_experiment
+    from .progress import ProgressBar
     from .results import write_run
 
     config = _load_target(args.target)
@@ -87,17 +112,99 @@ def cmd_run(args) -> int:
     if not args.quiet:
         print(f"running {config.name} with controller {config.controller.kind!r} "
               f"for {config.simulation.duration:g} s ...", file=sys.stderr)
-    result = run_experiment(config)
-    write_run(out, result, overwrite=args.overwrite, plots=not args.no_plots)
-    metrics = result.metrics()
-    if not args.quiet:
-        print(format_table([(str(out), metrics)]))
-        print(f"simulated {metrics['simulated_seconds']:.2f} s in {metrics['wall_seconds']:.2f} s "
-              f"wall; results in {out}/", file=sys.stderr)
+    setup = build(config)
+    bar = None if args.quiet else ProgressBar(config.simulation.duration)
+    viewer = show = None
+    if args.view:
+        viewer, scene, show = _live_view(args, config, setup)
+
+    def progress(t, q):
+        if bar is not None:
+            bar(t, q)
+        if show is not None:
+            show(t, q)
+
+    try:
+        result = run_experiment(config, progress, setup)
+        if bar is not None:
+            bar.finish(float(result.t[-1]) if result.t.size else 0.0)
+        write_run(out, result, overwrite=args.overwrite, plots=not args.no_plots,
+                  animation=not args.no_animation)
+        metrics = result.metrics()
+        if not args.quiet:
+            print(format_table([(str(out), metrics)]))
+            print(f"simulated {metrics['simulated_seconds']:.2f} s in {metrics['wall_seconds']:.2f} s "
+                  f"wall; results in {out}/", file=sys.stderr)
+        if viewer is not None:
+            from .viewer import draw_run
+
+            draw_run(viewer.vis, result, config)
+            _serve_until_interrupted(viewer)
+    finally:
+        if viewer is not None:
+            viewer.close()
     if result.status != "completed":
         print(f"run {result.status}: {result.message}", file=sys.stderr)
         return 1
     return 0
+
+
+def _serve_until_interrupted(viewer, seconds: float | None = None) -> None:
+    import time
+
+    print(f"viewer at {viewer.web_url} (127.0.0.1 only unless --host says otherwise); "
+          "Ctrl-C to stop", file=sys.stderr)
+    end = None if seconds is None else time.monotonic() + seconds
+    try:
+        while end is None or time.monotonic() < end:
+            time.sleep(0.2)
+    except KeyboardInterrupt:
+        pass
+
+
+def cmd_view(args) -> int:
+    """Replay a run folder in the meshcat viewer."""
+    import tomllib
+
+    from .config import from_dict
+    from .results import Result
+    from .viewer import draw_run, start_viewer
+
+    folder = Path(args.run)
+    if not (folder / "result.npz").is_file() or not (folder / "config.toml").is_file():
+        raise NNRobustError(f"{folder}: not a run folder (needs result.npz and config.toml)")
+    result = Result.load(folder)
+    config = from_dict(tomllib.loads(result.config))
+    with start_viewer(args.host, args.port) as viewer:
+        draw_run(viewer.vis, result, config)
+        if args.open:
+            import webbrowser
+
+            webbrowser.open(viewer.web_url, new=2)
+        _serve_until_interrupted(viewer, args.seconds)
+    return 0
+
+
+def cmd_bench(args) -> int:
+    """Run the benchmark scripts of benchmarks/ and write their JSON into a folder."""
+    import subprocess
+
+    root = Path(__file__).resolve().parent.parent / "benchmarks"
+    if not root.is_dir():
+        raise NNRobustError(f"{root} not found: 'bench' runs from a source checkout of nnrobust")
+    names = args.names or sorted(p.stem for p in root.glob("*.py"))
+    unknown = [n for n in names if not (root / f"{n}.py").is_file()]
+    if unknown:
+        raise NNRobustError(f"unknown benchmarks {unknown}; available: "
+                            f"{', '.join(sorted(p.stem for p in root.glob('*.py')))}")
+    out = Path(args.out)
+    code = 0
+    for name in names:
+        print(f"== {name}", flush=True)
+        done = subprocess.run([sys.executable, str(root / f"{name}.py"), "--json",
+                               str(out / f"{name}.json")], check=False)
+        code = code or done.returncode
+    return 1 if code else 0
 
 
 def cmd_presets(args) -> int:
@@ -159,7 +266,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     run = sub.add_parser("run", help="run a preset or an experiment file (TOML)",
                          description="Simulate a preset or a TOML experiment file and write a run "
-                         "folder: config.toml, result.npz, metrics.json, plots/.")
+                         "folder: config.toml, result.npz, metrics.json, plots/, animation.html.")
     run.add_argument("target", help="preset name (see 'nnrobust presets') or path to a .toml file")
     run.add_argument("--out", help="run folder (default out/NAME-CONTROLLER)")
     run.add_argument("--controller", choices=CONTROLLERS,
@@ -168,7 +275,14 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--duration", type=float, help="override the simulated time [s]")
     run.add_argument("--overwrite", action="store_true", help="replace an existing run folder")
     run.add_argument("--no-plots", action="store_true", help="skip the figures")
-    run.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    run.add_argument("--no-animation", action="store_true",
+                     help="skip animation.html (the 3-D replay; a few MB for meshed robots)")
+    run.add_argument("--quiet", action="store_true",
+                     help="print nothing but errors (no progress bar, no summary table)")
+    run.add_argument("--view", action="store_true",
+                     help="watch the arm live in meshcat while it runs, then replay the run until "
+                     "Ctrl-C")
+    _viewer_options(run)
     run.set_defaults(func=cmd_run)
 
     presets = sub.add_parser("presets", help="list the shipped presets")
@@ -184,7 +298,30 @@ def build_parser() -> argparse.ArgumentParser:
     compare.add_argument("runs", nargs="+", help="run folders written by 'nnrobust run'")
     compare.add_argument("--out", help="folder for the comparison figure (PNG and SVG)")
     compare.set_defaults(func=cmd_compare)
+
+    view = sub.add_parser("view", help="replay a run folder in the meshcat viewer (browser)",
+                          description="Serve the run's 3-D replay (arm from the URDF, desired path, "
+                          "end-effector trace) with meshcat and print the address to open. The "
+                          "run folder's animation.html is the same replay as a file.")
+    view.add_argument("run", help="run folder written by 'nnrobust run'")
+    view.add_argument("--open", action="store_true", help="open the page in the default browser")
+    view.add_argument("--seconds", type=float, help="stop after this many seconds (default: Ctrl-C)")
+    _viewer_options(view)
+    view.set_defaults(func=cmd_view)
+
+    bench = sub.add_parser("bench", help="run the benchmarks (source checkout)",
+                           description="Run the scripts in benchmarks/ (all, or those named) and "
+                           "write each one's JSON into --out; docs/benchmarks.md explains them.")
+    bench.add_argument("names", nargs="*", help="benchmark names, e.g. step_scaling (default: all)")
+    bench.add_argument("--out", default="out/bench", help="folder for the JSON files")
+    bench.set_defaults(func=cmd_bench)
     return parser
+
+
+def _viewer_options(parser) -> None:
+    parser.add_argument("--host", default="127.0.0.1",
+                        help="address the viewer listens on (default 127.0.0.1: this machine only)")
+    parser.add_argument("--port", type=int, help="viewer web port (default: first free from 7000)")
 
 
 def main(argv: list[str] | None = None) -> int:

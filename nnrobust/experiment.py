@@ -305,14 +305,16 @@ def build(config: ExperimentConfig) -> Setup:
     return Setup(config, robot, plant, nominal, trajectory, criterion, controller, q0, v0)
 
 
-def run_experiment(config: ExperimentConfig) -> Result:
-    """Build and simulate; the Result holds arrays, signals and the configuration."""
-    setup = build(config)
+def run_experiment(config: ExperimentConfig, progress=None, setup: Setup | None = None) -> Result:
+    """Build (unless ``setup`` is given) and simulate; the Result holds arrays, signals and the
+    configuration. ``progress(t, q)`` is called every 50 control steps.
+    """
+    setup = setup or build(config)
     sim = config.simulation
     start = time.perf_counter()
     trace = simulate(
         setup.plant, setup.controller, setup.q0, setup.v0, sim.duration,
-        sim.control_period, sim.substeps, sim.integrator,
+        sim.control_period, sim.substeps, sim.integrator, progress=progress,
     )
     wall = time.perf_counter() - start
     return Result.from_trace(trace, setup.robot, setup.trajectory, setup.criterion, config, wall)

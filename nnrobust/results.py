@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -191,8 +192,25 @@ def _json_default(value):
     raise TypeError(f"cannot write {type(value).__name__} to JSON")
 
 
-def write_run(folder: str | Path, result: Result, overwrite: bool = False, plots: bool = True) -> Path:
-    """Write config.toml, result.npz, metrics.json and plots/ into ``folder`` atomically.
+def _write_animation(path: Path, result: Result) -> None:
+    """animation.html, or a warning when the robot's visuals cannot be drawn."""
+    import tomllib
+
+    from .config import from_dict
+    from .exceptions import NNRobustError
+    from .viewer.scene import animation_html
+
+    try:
+        html = animation_html(result, from_dict(tomllib.loads(result.config)))
+    except NNRobustError as err:
+        warnings.warn(f"no animation.html: {err}", stacklevel=3)
+        return
+    path.write_text(html, encoding="utf-8")
+
+
+def write_run(folder: str | Path, result: Result, overwrite: bool = False, plots: bool = True,
+              animation: bool = True) -> Path:
+    """Write config.toml, result.npz, metrics.json, plots/ and animation.html atomically.
 
     Everything is written to a hidden sibling folder first and renamed into place at the end, so
     an interrupted or failed write never leaves a half-written folder under the final name, and
@@ -217,6 +235,8 @@ def write_run(folder: str | Path, result: Result, overwrite: bool = False, plots
             from .plots import plot_run  # matplotlib only when plotting
 
             plot_run(result, tmp / "plots")
+        if animation and result.config and result.chain is not None and result.t.size > 1:
+            _write_animation(tmp / "animation.html", result)
         if folder.exists():
             old = folder.parent / f".{folder.name}.old-{os.getpid()}"
             os.replace(folder, old)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -61,6 +62,8 @@ def simulate(
     rtol: float = 1e-10,
     atol: float = 1e-10,
     max_speed: float = 1e3,
+    progress: Callable[[float, np.ndarray], None] | None = None,
+    progress_every: int = 50,
 ) -> Trace:
     """Simulate plant and controller; the torque is held constant over each control period.
 
@@ -75,6 +78,8 @@ def simulate(
         substeps: integration steps per control period (RK4 step = T / substeps).
         integrator: "rk4" or "solve_ivp" (DOP853 with rtol, atol, restarted every period).
         max_speed: a joint speed above this [rad/s] counts as divergence.
+        progress: called as progress(t, q) every ``progress_every`` control steps (progress bar,
+            live viewer).
 
     Returns:
         The trace; a diverged or interrupted run returns what was computed, marked as such.
@@ -120,6 +125,8 @@ def simulate(
                 message = f"joint speed {np.max(np.abs(v)):.3g} rad/s > {max_speed:g} at t = {t:.4f} s"
                 done = k + 1
                 break
+            if progress is not None and k % progress_every == 0:
+                progress(t, q)
             if integrator == "rk4":
                 for i in range(substeps):
                     X = _rk4_step(f, t + i * h, X, h)

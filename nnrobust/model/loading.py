@@ -46,34 +46,38 @@ def paper_arm_urdf() -> Path:
     return urdf_dir() / _SHIPPED[PAPER_ARM]
 
 
-def _build_from_urdf(source: str) -> tuple[pin.Model, str]:
-    text = source.lstrip()
-    if text.startswith("<"):
-        try:
-            return pin.buildModelFromXML(source), "<urdf string>"
-        except (ValueError, RuntimeError) as err:
-            raise RobotLoadError("<urdf string>", f"invalid URDF: {err}") from err
+def _resolve(source: str) -> tuple[str, str]:
+    """What a source is: ("xml", text), ("file", path) or ("erd", robot name)."""
+    if source.lstrip().startswith("<"):
+        return "xml", source
     chain = PLANAR_CHAIN_NAME.match(source)
     if chain:
         n = int(chain.group(1))
         if not 1 <= n <= 10_000:
             raise RobotLoadError(source, "a generated planar chain has 1 to 10000 links")
-        return pin.buildModelFromXML(planar_chain_urdf(n)), source
-    if source in _SHIPPED:
-        path = urdf_dir() / _SHIPPED[source]
-    else:
-        path = Path(source)
+        return "xml", planar_chain_urdf(n)
+    path = urdf_dir() / _SHIPPED[source] if source in _SHIPPED else Path(source)
     if path.suffix.lower() == ".urdf" or path.exists():
         if not path.is_file():
             raise RobotLoadError(str(path), "no such file")
-        try:
-            return pin.buildModelFromUrdf(str(path)), str(path)
-        except (ValueError, RuntimeError) as err:
-            raise RobotLoadError(str(path), f"invalid URDF: {err}") from err
-    return _build_from_example_robot_data(source)
+        return "file", str(path)
+    return "erd", source
 
 
-def _build_from_example_robot_data(name: str) -> tuple[pin.Model, str]:
+def _build_from_urdf(source: str) -> tuple[pin.Model, str]:
+    kind, value = _resolve(source)
+    if kind == "erd":
+        robot = _example_robot_data(value)
+        return robot.model, f"example-robot-data:{value}"
+    name = value if kind == "file" else (source if PLANAR_CHAIN_NAME.match(source) else "<urdf string>")
+    try:
+        model = pin.buildModelFromUrdf(value) if kind == "file" else pin.buildModelFromXML(value)
+    except (ValueError, RuntimeError) as err:
+        raise RobotLoadError(name, f"invalid URDF: {err}") from err
+    return model, name
+
+
+def _example_robot_data(name: str):
     try:
         import example_robot_data
     except ImportError as err:  # pragma: no cover - a declared dependency
@@ -81,14 +85,55 @@ def _build_from_example_robot_data(name: str) -> tuple[pin.Model, str]:
             name, "example-robot-data is not installed: pip install example-robot-data-loaders"
         ) from err
     try:
-        robot = example_robot_data.load(name)
+        return example_robot_data.load(name)
     except Exception as err:  # the loader raises bare exceptions of several kinds
         raise RobotLoadError(
             name,
             "not a URDF file and not a robot shipped by example-robot-data "
             f"({type(err).__name__}: {err}); pass a .urdf path or a robot name such as 'panda'",
         ) from err
-    return robot.model, f"example-robot-data:{name}"
+
+
+def _locked_joint_ids(model: pin.Model, name: str, source: str, locked_joints) -> list[int]:
+    if locked_joints is None:
+        locked_joints = ARMS.get(source, {}).get("locked_joints", [])
+    missing = [j for j in locked_joints if not model.existJointName(j)]
+    if missing:
+        raise RobotLoadError(
+            name, f"cannot lock unknown joints {missing}; joints: {list(model.names)[1:]}"
+        )
+    return [model.getJointId(j) for j in locked_joints]
+
+
+def load_visual_model(
+    source: str | Path, locked_joints: list[str] | None = None
+) -> tuple[pin.Model, pin.GeometryModel]:
+    """The kinematic model and the visual geometry (meshes and primitives) of an arm, for viewers.
+
+    Same sources and joint locking as :func:`load_robot`. Mesh files are looked up next to the
+    URDF (``package://`` URIs resolve against its folder and its parents).
+    """
+    source = str(source)
+    kind, value = _resolve(source)
+    if kind == "erd":
+        robot = _example_robot_data(value)
+        model, visual, name = robot.model, robot.visual_model, f"example-robot-data:{value}"
+    else:
+        model, name = _build_from_urdf(source)
+        visual_type = pin.GeometryType.VISUAL
+        try:
+            if kind == "file":
+                folder = Path(value).resolve().parent
+                visual = pin.buildGeomFromUrdf(model, value, visual_type,
+                                               package_dirs=[str(p) for p in (folder, *folder.parents)])
+            else:
+                visual = pin.buildGeomFromUrdfString(model, value, visual_type)
+        except (ValueError, RuntimeError) as err:
+            raise RobotLoadError(name, f"cannot read the visual geometry: {err}") from err
+    ids = _locked_joint_ids(model, name, source, locked_joints)
+    if ids:
+        model, visual = pin.buildReducedModel(model, visual, ids, pin.neutral(model))
+    return model, visual
 
 
 def default_task_frame(model: pin.Model) -> str:
@@ -124,15 +169,8 @@ def load_robot(
     """
     source = str(source)
     model, name = _build_from_urdf(source)
-    if locked_joints is None:
-        locked_joints = ARMS.get(source, {}).get("locked_joints", [])
-    if locked_joints:
-        missing = [j for j in locked_joints if not model.existJointName(j)]
-        if missing:
-            raise RobotLoadError(
-                name, f"cannot lock unknown joints {missing}; joints: {list(model.names)[1:]}"
-            )
-        ids = [model.getJointId(j) for j in locked_joints]
+    ids = _locked_joint_ids(model, name, source, locked_joints)
+    if ids:
         model = pin.buildReducedModel(model, ids, pin.neutral(model))
     if gravity is not None:
         model.gravity.linear = np.asarray(gravity, dtype=float)

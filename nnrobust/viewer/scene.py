@@ -1,0 +1,191 @@
+"""A run drawn with meshcat: the arm's URDF visuals, the desired path, the end-effector trace and
+an animation in simulated time; recorded offline into a self-contained HTML file.
+"""
+
+from __future__ import annotations
+
+import os
+import warnings
+
+import meshcat
+import meshcat.geometry as mg
+import numpy as np
+import umsgpack
+from meshcat.animation import Animation
+from meshcat.servers.tree import SceneTree, find_node, walk
+from meshcat.servers.zmqserver import VIEWER_ROOT, create_command
+
+from ..config import ExperimentConfig
+from ..model.loading import load_visual_model
+from ..results import Result
+
+ROBOT_NODE = "robot"
+DESIRED_COLOR = 0x222222
+TRACE_COLOR = 0x1F77B4
+TARGET_COLOR = 0xD62728
+SEEK_SCRIPT = """
+function nnrobustSeek() {
+  var m = /t=([0-9.]+)/.exec(window.location.hash);
+  if (m) { viewer.animator.pause(); viewer.animator.seek(parseFloat(m[1])); }
+}
+nnrobustSeek();
+window.addEventListener("hashchange", nnrobustSeek);
+"""
+"""Open ``animation.html#t=2.5`` to show the arm paused at t = 2.5 s."""
+
+
+class SceneRecorder:
+    """A meshcat window that keeps the scene tree in memory instead of sending it to a server.
+
+    ``meshcat.Visualizer(window=SceneRecorder())`` accepts every drawing command; :meth:`html`
+    then writes what meshcat's own server would serve as static HTML, with no socket opened.
+    """
+
+    def __init__(self):
+        self.tree = SceneTree()
+
+    def send(self, command) -> None:
+        """Store one drawing command, as meshcat's server does."""
+        data = command.lower()
+        path = [p for p in data["path"].split("/") if p]
+        blob = umsgpack.packb(data)
+        kind = data["type"]
+        if kind == "delete":
+            if path:
+                parent = find_node(self.tree, path[:-1])
+                if path[-1] in parent:
+                    del parent[path[-1]]
+            else:
+                self.tree = SceneTree()
+            return
+        node = find_node(self.tree, path)
+        if kind == "set_transform":
+            node.transform = blob
+        elif kind == "set_object":
+            node.object, node.properties = blob, []
+        elif kind == "set_property":
+            node.properties.append(blob)
+        elif kind == "set_animation":
+            node.animation = blob
+
+    def html(self, title: str = "nnrobust") -> str:
+        """A self-contained page (viewer JavaScript and scene inline) that plays offline."""
+        commands = []
+        for node in walk(self.tree):
+            blobs = [node.object] if node.object is not None else []
+            blobs += node.properties
+            blobs += [b for b in (node.transform, node.animation) if b is not None]
+            commands += [create_command(b) for b in blobs]
+        with open(os.path.join(VIEWER_ROOT, "main.min.js"), encoding="utf-8") as fh:
+            viewer_js = fh.read()
+        return (
+            "<!DOCTYPE html>\n<html>\n<head><meta charset=utf-8><title>"
+            f"{_escape(title)}</title></head>\n<body style=\"margin: 0\">\n"
+            '<div id="meshcat-pane" style="width: 100vw; height: 100vh; overflow: hidden"></div>\n'
+            f"<script>{viewer_js}</script>\n<script>\n"
+            'var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));\n'
+            + "".join(commands) + SEEK_SCRIPT + "</script>\n</body>\n</html>\n"
+        )
+
+
+def _escape(text: str) -> str:
+    return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+
+
+def _line(points: np.ndarray, color: int) -> mg.Line:
+    return mg.Line(mg.PointsGeometry(np.ascontiguousarray(points.T, dtype=np.float32)),
+                   mg.LineBasicMaterial(color=color, linewidth=2))
+
+
+def tip_positions(result: Result) -> tuple[np.ndarray, np.ndarray]:
+    """World positions of the actual and desired task point, N x 3 each [m]."""
+    actual = result.chain[:, -1, :]
+    npos = min(result.x_d.shape[1], 3)
+    desired = np.empty_like(actual)
+    desired[:, :npos] = result.x_d[:, :npos]
+    if npos < 3:  # a planar task: the path lies in the plane of the tip
+        desired[:, npos:] = actual[:, npos:]
+    return actual, desired
+
+
+class RunScene:
+    """The meshcat drawing of one run: robot visuals from the URDF, paths and a tip marker.
+
+    Args:
+        vis: a meshcat Visualizer (live, or on a :class:`SceneRecorder`).
+        config: the run's configuration (which robot, which joints locked).
+
+    """
+
+    def __init__(self, vis: meshcat.Visualizer, config: ExperimentConfig):
+        from pinocchio.visualize import MeshcatVisualizer
+
+        rc = config.robot
+        model, visual = load_visual_model(rc.source, rc.locked_joints)
+        self.vis = vis
+        self.robot = MeshcatVisualizer(model, None, visual)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # unsupported geometry is skipped
+            self.robot.initViewer(viewer=vis)
+            self.robot.loadViewerModel(ROBOT_NODE)
+        vis["target"].set_object(mg.Sphere(0.012), mg.MeshLambertMaterial(color=TARGET_COLOR))
+
+    def show(self, q: np.ndarray, target: np.ndarray | None = None, viewer=None) -> None:
+        """Place the arm at q (and the target marker) in ``viewer`` (default the scene's own)."""
+        self.robot.viewer = viewer if viewer is not None else self.vis
+        try:
+            self.robot.display(np.asarray(q, dtype=float))
+            if target is not None:
+                self.robot.viewer["target"].set_transform(_translation(target))
+        finally:
+            self.robot.viewer = self.vis
+
+    def draw_paths(self, desired: np.ndarray, actual: np.ndarray | None = None) -> None:
+        """The desired path (dark) and the actual end-effector trace (blue), N x 3 each."""
+        self.vis["paths/desired"].set_object(_line(desired, DESIRED_COLOR))
+        if actual is not None and len(actual) > 1:
+            self.vis["paths/actual"].set_object(_line(actual, TRACE_COLOR))
+
+    def frame_camera(self, points: np.ndarray) -> None:
+        """Look at the world origin (the robot's base) from the front-right, a little above."""
+        size = max(float(np.abs(points).max()), 0.3)
+        eye = size * np.array([1.0, -1.0, 0.8])
+        # meshcat's camera node is y-up: world (x, y, z) -> (x, z, -y)
+        self.vis["/Cameras/default/rotated/<object>"].set_property(
+            "position", [float(eye[0]), float(eye[2]), float(-eye[1])])
+
+    def animate(self, result: Result, fps: float = 30.0) -> None:
+        """Arm and target over the run, one keyframe every 1/fps s of simulated time."""
+        _, desired = tip_positions(result)
+        times = np.arange(result.t[0], result.t[-1] + 1e-9, 1.0 / fps)
+        index = np.minimum(np.searchsorted(result.t, times), result.t.size - 1)
+        animation = Animation(default_framerate=fps)
+        for frame, k in enumerate(index):
+            with animation.at_frame(self.vis, frame) as keyframe:
+                self.show(result.q[k], desired[k], viewer=keyframe)
+        self.vis.set_animation(animation, play=True, repetitions=0)
+
+
+def _translation(p: np.ndarray) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, 3] = p
+    return T
+
+
+def draw_run(vis: meshcat.Visualizer, result: Result, config: ExperimentConfig,
+             fps: float = 30.0) -> RunScene:
+    """The whole run in ``vis``: robot, desired path, actual trace, animation."""
+    scene = RunScene(vis, config)
+    actual, desired = tip_positions(result)
+    scene.draw_paths(desired, actual)
+    scene.frame_camera(np.vstack([desired, result.chain.reshape(-1, 3)]))
+    scene.show(result.q[0], desired[0])
+    scene.animate(result, fps)
+    return scene
+
+
+def animation_html(result: Result, config: ExperimentConfig, fps: float = 30.0) -> str:
+    """A self-contained HTML animation of the run (plays offline; ``#t=SECONDS`` pauses there)."""
+    recorder = SceneRecorder()
+    draw_run(meshcat.Visualizer(window=recorder), result, config, fps)
+    return recorder.html(f"{config.name}: {config.controller.kind}")

@@ -1,0 +1,113 @@
+"""A meshcat server that listens on one address (127.0.0.1 by default), run as a subprocess.
+
+meshcat 0.3.2's own server binds its web server to every interface; here the tornado
+application listens on ``host`` only, and so does the ZeroMQ socket.
+
+    python -m nnrobust.viewer.server [--host 127.0.0.1] [--port 7000]
+"""
+
+from __future__ import annotations
+
+import argparse
+import queue
+import re
+import subprocess
+import sys
+import threading
+import time
+from dataclasses import dataclass
+
+from ..exceptions import NNRobustError
+
+LOOPBACK = "127.0.0.1"
+
+
+def _bridge_class():
+    from meshcat.servers.zmqserver import ZMQWebSocketBridge
+
+    class LoopbackBridge(ZMQWebSocketBridge):
+        """meshcat's bridge with the web server bound to ``host`` instead of all interfaces."""
+
+        def make_app(self):
+            app = super().make_app()
+            listen = app.listen
+            app.listen = lambda port, **kwargs: listen(port, address=self.host, **kwargs)
+            return app
+
+    return LoopbackBridge
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Serve the meshcat viewer on ``--host`` and print zmq_url=... and web_url=... lines."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--host", default=LOOPBACK, help="address to listen on (default 127.0.0.1)")
+    parser.add_argument("--port", type=int, help="web port (default: the first free from 7000)")
+    args = parser.parse_args(argv)
+    bridge = _bridge_class()(host=args.host, port=args.port)
+    print(f"zmq_url={bridge.zmq_url}", flush=True)
+    print(f"web_url={bridge.web_url}", flush=True)
+    try:
+        bridge.run()
+    except KeyboardInterrupt:
+        pass
+
+
+@dataclass
+class LiveViewer:
+    """A running viewer: the meshcat client, the server process and the page to open."""
+
+    vis: object
+    process: subprocess.Popen
+    web_url: str
+
+    def close(self) -> None:
+        """Stop the server."""
+        if self.process.poll() is None:
+            self.process.terminate()
+            try:
+                self.process.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait()
+
+    def __enter__(self) -> LiveViewer:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def start_viewer(host: str = LOOPBACK, port: int | None = None, timeout: float = 20.0) -> LiveViewer:
+    """Start the server subprocess and connect a meshcat client to it."""
+    import meshcat
+
+    cmd = [sys.executable, "-u", "-m", "nnrobust.viewer.server", "--host", host]
+    if port is not None:
+        cmd += ["--port", str(port)]
+    process = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               start_new_session=True)
+    lines: queue.Queue[str] = queue.Queue()
+    threading.Thread(target=lambda: [lines.put(x) for x in process.stdout] + [lines.put("")],
+                     daemon=True).start()
+    urls: dict[str, str] = {}
+    deadline = time.monotonic() + timeout
+    while len(urls) < 2:
+        try:
+            line = lines.get(timeout=max(0.0, deadline - time.monotonic()))
+        except queue.Empty:
+            line = None
+        if not line:
+            process.kill()
+            _, err = process.communicate()
+            last = (err.strip().splitlines() or ["exited"])[-1]
+            reason = f"no answer within {timeout:g} s" if line is None else last
+            raise NNRobustError(f"the meshcat viewer did not start on {host}: {reason}")
+        match = re.match(r"^(zmq_url|web_url)=(.*)$", line.strip())
+        if match:
+            urls[match.group(1)] = match.group(2)
+    vis = meshcat.Visualizer(zmq_url=urls["zmq_url"])
+    return LiveViewer(vis, process, urls["web_url"])
+
+
+if __name__ == "__main__":
+    main()
