@@ -59,11 +59,12 @@ def _short(config: ExperimentConfig, kind: str = "nn") -> ExperimentConfig:
 
 
 def test_run_folder_contents_and_reload(tmp_path):
-    """A run folder holds config.toml, result.npz (per-period arrays), metrics.json and plots."""
+    """A run folder holds config.toml, result.npz (per-period arrays), metrics.json, plots and
+    animation.html."""
     result = run_experiment(_short(load_preset("paper-ellipse")))
     folder = write_run(tmp_path / "run", result)
     names = {p.name for p in folder.iterdir()}
-    assert {"config.toml", "result.npz", "metrics.json", "plots"} <= names
+    assert names == {"config.toml", "result.npz", "metrics.json", "plots", "animation.html"}
     with np.load(folder / "result.npz") as data:
         for key in ("t", "q", "dq", "tau", "x", "x_d"):
             assert data[key].shape[0] == 300

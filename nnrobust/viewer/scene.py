@@ -4,16 +4,20 @@ an animation in simulated time; recorded offline into a self-contained HTML file
 
 from __future__ import annotations
 
+import base64
 import os
 import warnings
 
-import meshcat
+with warnings.catch_warnings():  # meshcat imports pyzmq's deprecated ioloop module
+    warnings.simplefilter("ignore", DeprecationWarning)
+    import meshcat
 import meshcat.geometry as mg
 import numpy as np
 import umsgpack
 from meshcat.animation import Animation
 from meshcat.servers.tree import SceneTree, find_node, walk
-from meshcat.servers.zmqserver import VIEWER_ROOT, create_command
+
+VIEWER_JS = os.path.join(os.path.dirname(meshcat.__file__), "viewer", "dist", "main.min.js")
 
 from ..config import ExperimentConfig
 from ..model.loading import load_visual_model
@@ -21,7 +25,7 @@ from ..results import Result
 
 ROBOT_NODE = "robot"
 DESIRED_COLOR = 0x222222
-TRACE_COLOR = 0x1F77B4
+TRACE_COLOR = 0x2CA02C
 TARGET_COLOR = 0xD62728
 SEEK_SCRIPT = """
 function nnrobustSeek() {
@@ -70,13 +74,16 @@ class SceneRecorder:
 
     def html(self, title: str = "nnrobust") -> str:
         """A self-contained page (viewer JavaScript and scene inline) that plays offline."""
-        commands = []
+        commands, animations = [], []
         for node in walk(self.tree):
             blobs = [node.object] if node.object is not None else []
             blobs += node.properties
-            blobs += [b for b in (node.transform, node.animation) if b is not None]
+            blobs += [node.transform] if node.transform is not None else []
             commands += [create_command(b) for b in blobs]
-        with open(os.path.join(VIEWER_ROOT, "main.min.js"), encoding="utf-8") as fh:
+            if node.animation is not None:  # after every object it animates exists
+                animations.append(create_command(node.animation))
+        commands += animations
+        with open(VIEWER_JS, encoding="utf-8") as fh:
             viewer_js = fh.read()
         return (
             "<!DOCTYPE html>\n<html>\n<head><meta charset=utf-8><title>"
@@ -84,8 +91,19 @@ class SceneRecorder:
             '<div id="meshcat-pane" style="width: 100vw; height: 100vh; overflow: hidden"></div>\n'
             f"<script>{viewer_js}</script>\n<script>\n"
             'var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));\n'
+            "function nnrobustApply(b64) {\n"
+            "  viewer.handle_command_bytearray(Uint8Array.from(atob(b64), c => c.charCodeAt(0)));\n"
+            "}\n"
             + "".join(commands) + SEEK_SCRIPT + "</script>\n</body>\n</html>\n"
         )
+
+
+def create_command(blob: bytes) -> str:
+    """JavaScript that applies one packed meshcat command synchronously, in document order
+    (meshcat's own static HTML uses fetch(), which applies the commands after the page's scripts).
+    """
+    encoded = base64.b64encode(blob).decode("ascii")
+    return f'nnrobustApply("{encoded}");\n'
 
 
 def _escape(text: str) -> str:
@@ -141,7 +159,7 @@ class RunScene:
             self.robot.viewer = self.vis
 
     def draw_paths(self, desired: np.ndarray, actual: np.ndarray | None = None) -> None:
-        """The desired path (dark) and the actual end-effector trace (blue), N x 3 each."""
+        """The desired path (dark) and the actual end-effector trace (green), N x 3 each."""
         self.vis["paths/desired"].set_object(_line(desired, DESIRED_COLOR))
         if actual is not None and len(actual) > 1:
             self.vis["paths/actual"].set_object(_line(actual, TRACE_COLOR))
@@ -163,7 +181,7 @@ class RunScene:
         for frame, k in enumerate(index):
             with animation.at_frame(self.vis, frame) as keyframe:
                 self.show(result.q[k], desired[k], viewer=keyframe)
-        self.vis.set_animation(animation, play=True, repetitions=0)
+        self.vis.set_animation(animation, play=True, repetitions=1_000_000)  # loops "forever"
 
 
 def _translation(p: np.ndarray) -> np.ndarray:

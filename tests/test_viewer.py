@@ -1,0 +1,180 @@
+"""The 3-D views of a run: the offline HTML animation, the loopback-only live viewer, and the
+animation rendered by headless Chromium (skipped only where Chromium cannot run)."""
+
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from nnrobust.cli import main
+from nnrobust.config import from_dict
+from nnrobust.experiment import run_experiment
+from nnrobust.presets import load_preset
+from nnrobust.results import Result, write_run
+
+CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                  "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                  "--hide-scrollbars", "--window-size=640,480", "--virtual-time-budget=2000"]
+
+
+@pytest.fixture(scope="module")
+def paper_run(tmp_path_factory):
+    """A 3 s run of the paper's arm, written with its animation."""
+    config = load_preset("paper-ellipse").replace(simulation={"duration": 3.0})
+    folder = tmp_path_factory.mktemp("runs") / "paper"
+    write_run(folder, run_experiment(config), plots=False)
+    return folder
+
+
+def test_animation_is_one_self_contained_file(paper_run):
+    html = (paper_run / "animation.html").read_text()
+    assert "new MeshCat.Viewer" in html and "handle_command" in html
+    assert "<script src" not in html and "<link" not in html  # nothing fetched from elsewhere
+    assert "nnrobustSeek" in html  # #t=SECONDS pauses the replay there
+    assert len(html) > 500_000  # the viewer's JavaScript is inline
+
+
+def test_animation_of_a_meshed_robot_embeds_its_meshes(tmp_path):
+    from nnrobust.viewer import animation_html
+
+    config = load_preset("panda-ellipse").replace(simulation={"duration": 0.1})
+    result = run_experiment(config)
+    html = animation_html(result, config)
+    assert "panda" in html and len(html) > 5_000_000  # the Panda's meshes travel in the file
+
+
+def _listening_addresses(pid: int) -> list[str]:
+    """Local addresses of the LISTEN TCP sockets of process pid (Linux /proc)."""
+    inodes = set()
+    for fd in Path(f"/proc/{pid}/fd").iterdir():
+        try:
+            target = os.readlink(fd)
+        except OSError:
+            continue
+        if target.startswith("socket:["):
+            inodes.add(target[8:-1])
+    addresses = []
+    for table, width in (("/proc/net/tcp", 8), ("/proc/net/tcp6", 32)):
+        for line in Path(table).read_text().splitlines()[1:]:
+            fields = line.split()
+            if fields[3] == "0A" and fields[9] in inodes:  # 0A = LISTEN
+                hex_ip, hex_port = fields[1].split(":")
+                if width == 8:
+                    ip = socket.inet_ntop(socket.AF_INET, bytes.fromhex(hex_ip)[::-1])
+                else:
+                    raw = bytes.fromhex(hex_ip)
+                    ip = socket.inet_ntop(socket.AF_INET6, b"".join(raw[i:i + 4][::-1] for i in range(0, 16, 4)))
+                addresses.append(f"{ip}:{int(hex_port, 16)}")
+    return addresses
+
+
+@pytest.mark.skipif(not Path("/proc/net/tcp").exists(), reason="needs Linux /proc to list sockets")
+def test_viewer_listens_on_loopback_only(paper_run):
+    from nnrobust.viewer import draw_run, start_viewer
+
+    result = Result.load(paper_run)
+    with start_viewer() as viewer:
+        draw_run(viewer.vis, result, from_dict(tomllib.loads(result.config)))
+        addresses = _listening_addresses(viewer.process.pid)
+        assert len(addresses) >= 2, addresses  # web server and ZeroMQ socket
+        assert all(a.startswith("127.0.0.1:") for a in addresses), addresses
+        assert viewer.web_url.startswith("http://127.0.0.1:")
+    assert viewer.process.poll() is not None  # stopped on exit
+
+
+def test_view_command_serves_a_run(paper_run, capsys):
+    assert main(["view", str(paper_run), "--seconds", "0.2"]) == 0
+    assert "http://127.0.0.1:" in capsys.readouterr().err
+    assert main(["view", str(paper_run.parent / "missing")]) == 2
+
+
+def _chromium() -> str | None:
+    for name in ("chromium", "chromium-browser", "google-chrome"):
+        path = shutil.which(name)
+        if path:
+            return path
+    return None
+
+
+def _screenshot(browser: str, page: Path, instant: float, out: Path, profile: Path) -> np.ndarray:
+    import matplotlib.image
+
+    cmd = [browser, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", f"--screenshot={out}",
+           f"{page.resolve().as_uri()}#t={instant}"]
+    done = subprocess.run(cmd, capture_output=True, timeout=120, check=False)
+    if not out.exists():
+        pytest.fail(f"Chromium wrote no screenshot (exit {done.returncode}): {done.stderr[-500:]!r}")
+    return matplotlib.image.imread(out)[:, :, :3]
+
+
+def test_browser_draws_the_arm_and_it_moves(paper_run, tmp_path):
+    """Headless Chromium renders animation.html at t = 0.5 s and t = 2.5 s, and the same scene
+    without the robot: the arm is where the pictures differ from that background, and it moved."""
+    browser = _chromium()
+    if browser is None:
+        pytest.skip("Chromium is not installed (make test installs Debian's chromium where it can)")
+    import meshcat
+
+    from nnrobust.viewer import SceneRecorder, draw_run
+
+    result = Result.load(paper_run)
+    recorder = SceneRecorder()
+    draw_run(meshcat.Visualizer(window=recorder), result, from_dict(tomllib.loads(result.config)))
+    meshcat.Visualizer(window=recorder)["robot"].delete()
+    background_page = tmp_path / "background.html"
+    background_page.write_text(recorder.html())
+    page = paper_run / "animation.html"
+    early = _screenshot(browser, page, 0.5, tmp_path / "early.png", tmp_path / "p1")
+    late = _screenshot(browser, page, 2.5, tmp_path / "late.png", tmp_path / "p2")
+    background = _screenshot(browser, background_page, 0.5, tmp_path / "bg.png", tmp_path / "p3")
+    arm_early = np.abs(early - background).sum(axis=2) > 0.1
+    arm_late = np.abs(late - background).sum(axis=2) > 0.1
+    moved = np.abs(early - late).sum(axis=2) > 0.1
+    assert arm_early.sum() > 500 and arm_late.sum() > 500  # the arm is drawn
+    assert moved.sum() > 200  # and it moved between the two instants
+    assert (moved & ~(arm_early | arm_late)).sum() < 0.05 * moved.sum()  # only the arm changed
+
+
+def test_progress_bar_reports_simulated_time_and_speed():
+    import io
+
+    from nnrobust.progress import ProgressBar
+
+    stream = io.StringIO()
+    bar = ProgressBar(4.0, stream=stream, delay=0.0)
+    for t in np.arange(0.0, 4.0, 0.05):
+        bar(t)
+    lines = stream.getvalue().splitlines()
+    assert len(lines) == 3  # a line per quarter on a non-terminal (25, 50, 75 %)
+    assert "1.00 / 4.00 s simulated" in lines[0] and "x real time" in lines[0]
+
+
+def test_cli_help_for_every_command(capsys):
+    for command in ("run", "presets", "robots", "compare", "view", "bench"):
+        with pytest.raises(SystemExit) as exit_info:
+            main([command, "--help"])
+        assert exit_info.value.code == 0
+        assert "usage: nnrobust" in capsys.readouterr().out
+    assert main(["bench", "no_such_benchmark"]) == 2
+
+
+def test_robots_command_lists_the_known_arms(capsys):
+    assert main(["robots"]) == 0
+    out = capsys.readouterr().out
+    for name, frame in (("panda", "panda_hand_tcp"), ("ur5", "tool0"), ("planar7", "tool")):
+        assert any(line.split()[:1] == [name] and frame in line for line in out.splitlines())
+
+
+def test_module_server_refuses_an_address_it_cannot_bind():
+    from nnrobust.exceptions import NNRobustError
+    from nnrobust.viewer import start_viewer
+
+    with pytest.raises(NNRobustError, match="did not start on 203.0.113.1"):
+        start_viewer(host="203.0.113.1", port=7999, timeout=30)
+    assert sys.executable  # the server ran under this interpreter
