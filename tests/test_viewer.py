@@ -68,8 +68,9 @@ def _listening_addresses(pid: int) -> list[str]:
                 if width == 8:
                     ip = socket.inet_ntop(socket.AF_INET, bytes.fromhex(hex_ip)[::-1])
                 else:
-                    raw = bytes.fromhex(hex_ip)
-                    ip = socket.inet_ntop(socket.AF_INET6, b"".join(raw[i:i + 4][::-1] for i in range(0, 16, 4)))
+                    raw = bytes.fromhex(hex_ip)  # four little-endian 32-bit words
+                    words = b"".join(raw[i:i + 4][::-1] for i in range(0, 16, 4))
+                    ip = socket.inet_ntop(socket.AF_INET6, words)
                 addresses.append(f"{ip}:{int(hex_port, 16)}")
     return addresses
 

@@ -8,20 +8,18 @@ import base64
 import os
 import warnings
 
-with warnings.catch_warnings():  # meshcat imports pyzmq's deprecated ioloop module
-    warnings.simplefilter("ignore", DeprecationWarning)
-    import meshcat
+import meshcat
 import meshcat.geometry as mg
 import numpy as np
 import umsgpack
 from meshcat.animation import Animation
 from meshcat.servers.tree import SceneTree, find_node, walk
 
-VIEWER_JS = os.path.join(os.path.dirname(meshcat.__file__), "viewer", "dist", "main.min.js")
-
 from ..config import ExperimentConfig
 from ..model.loading import load_visual_model
 from ..results import Result
+
+VIEWER_JS = os.path.join(os.path.dirname(meshcat.__file__), "viewer", "dist", "main.min.js")
 
 ROBOT_NODE = "robot"
 DESIRED_COLOR = 0x222222
