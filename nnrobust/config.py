@@ -141,23 +141,25 @@ class ControllerConfig:
 
     Attributes:
         kind: ``nn`` (eq. 9 with the NN compensator), ``no-u0`` (eq. 9 with u_0 = 0) or ``pd``.
-        Kp, Kv: diagonals of the task gains [1/s^2, 1/s]; Kv^2 > Kp is required by eq. (17).
+        Kp, Kv: diagonals of the task gains [1/s^2, 1/s], m entries or one for all;
+            Kv^2 > Kp is required by eq. (17).
         k: self-motion gain of eq. (3) [1/s].
         pinv_threshold: smallest singular value of J below which J+ is damped [m/rad].
         pinv_max_damping: damping at a singularity [m/rad].
-        pd_Kp, pd_Kd: task stiffness [N/m] and damping [N s/m] of the PD baseline.
+        pd_Kp, pd_Kd: task stiffness [N/m] and damping [N s/m] of the PD baseline (m entries or
+            one for all; N m/rad and N m s/rad for the orientation rows of a pose).
         pd_null_damping: null-space joint damping of the PD baseline [N m s/rad].
 
     """
 
     kind: str = "nn"
-    Kp: list[float] = field(default_factory=lambda: [10.0, 10.0])
-    Kv: list[float] = field(default_factory=lambda: [4.0, 4.0])
+    Kp: list[float] = field(default_factory=lambda: [10.0])
+    Kv: list[float] = field(default_factory=lambda: [4.0])
     k: float = 10.0
     pinv_threshold: float = 0.02
     pinv_max_damping: float = 0.02
-    pd_Kp: list[float] = field(default_factory=lambda: [400.0, 400.0])
-    pd_Kd: list[float] = field(default_factory=lambda: [40.0, 40.0])
+    pd_Kp: list[float] = field(default_factory=lambda: [400.0])
+    pd_Kd: list[float] = field(default_factory=lambda: [40.0])
     pd_null_damping: float = 1.0
 
 
@@ -411,10 +413,13 @@ def validate(config: ExperimentConfig) -> None:
             raise ConfigError("trajectory.rotation_axis", "must be a non-zero vector")
     else:
         m, where = m_path, f"the task has m = {m_path} (trajectory.center)"
-    for path, values in (("controller.Kp", c.Kp), ("controller.Kv", c.Kv),
-                         ("controller.pd_Kp", c.pd_Kp), ("controller.pd_Kd", c.pd_Kd)):
-        if len(values) != m:
-            raise ConfigError(path, f"has {len(values)} entries, {where}")
+    for name in ("Kp", "Kv", "pd_Kp", "pd_Kd"):
+        values = getattr(c, name)
+        if len(values) == 1:  # one value for every task coordinate
+            setattr(c, name, values * m)
+        elif len(values) != m:
+            raise ConfigError(f"controller.{name}", f"has {len(values)} entries, {where} "
+                              "(or give one value for all)")
     for path, values in (("controller.Kp", c.Kp), ("controller.Kv", c.Kv),
                          ("controller.pd_Kp", c.pd_Kp), ("controller.pd_Kd", c.pd_Kd)):
         _positive(path, values)
