@@ -179,3 +179,17 @@ def test_module_server_refuses_an_address_it_cannot_bind():
     with pytest.raises(NNRobustError, match="did not start on 203.0.113.1"):
         start_viewer(host="203.0.113.1", port=7999, timeout=30)
     assert sys.executable  # the server ran under this interpreter
+
+
+def test_run_with_live_view_streams_the_arm(tmp_path, monkeypatch, capsys):
+    """run --view starts the loopback viewer, runs, redraws the finished run, then serves it
+    (here stopped at once instead of waiting for Ctrl-C)."""
+    import nnrobust.cli as cli
+
+    served = []
+    monkeypatch.setattr(cli, "_serve_until_interrupted", lambda viewer, seconds=None: served.append(
+        viewer.process.poll() is None))
+    assert main(["run", "paper-ellipse", "--duration", "0.5", "--view", "--no-plots",
+                 "--out", str(tmp_path / "run")]) == 0
+    assert served == [True]  # the server was up when the run was shown
+    assert "live view: http://127.0.0.1:" in capsys.readouterr().err
