@@ -201,13 +201,13 @@ class NNConfig:
 
 @dataclass
 class SubtaskConfig:
-    """Self-motion criteria h_i with weights scaled so that sum w_i = C, eq. (4).
+    """Self-motion criteria h_i with weights w_i that sum to C, eq. (4).
 
     Attributes:
         criteria: names (``paper``, ``half_det_manipulability``, ``manipulability``,
             ``joint_limits``, ``joint_centering``, ``joint_smoothness``, ``obstacles``; see
             docs/controller.md); empty for pure null-space damping.
-        weights: relative weights (default equal).
+        weights: w_i, positive and summing to C (default: C / number of criteria each).
         C: the constant of eq. (4).
         smoothness_coefficients: c of ``joint_smoothness`` (default the paper's (0.5, -1, 1)).
         obstacles: spheres [x, y, z, radius] [m] for ``obstacles``.
@@ -478,6 +478,13 @@ def validate(config: ExperimentConfig) -> None:
                 f"{len(config.subtasks.weights)} weights for {len(config.subtasks.criteria)} criteria",
             )
         _positive("subtasks.weights", config.subtasks.weights)
+        total = sum(config.subtasks.weights)
+        if not math.isclose(total, config.subtasks.C, rel_tol=1e-9):
+            raise ConfigError(
+                "subtasks.weights",
+                f"sum to {total:g} but subtasks.C = {config.subtasks.C:g}; eq. (4) needs sum w_i = C "
+                "(or leave weights out for C / number of criteria each)",
+            )
     _positive("simulation.duration", sim.duration)
     _positive("simulation.control_period", sim.control_period)
     _positive("simulation.substeps", sim.substeps)

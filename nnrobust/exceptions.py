@@ -16,6 +16,32 @@ class RobotLoadError(NNRobustError):
         super().__init__(f"{source}: {reason}")
 
 
+class UrdfRefused(RobotLoadError):
+    """A URDF that is not read at all: too large, or with DTD/entity declarations."""
+
+
+class UrdfSyntaxError(RobotLoadError):
+    """A URDF that is not well-formed XML (line and column in the message)."""
+
+
+class UrdfStructureError(RobotLoadError):
+    """A URDF whose links and joints do not form one tree: dangling or duplicate names,
+    several roots, a link with two parents, no <robot> root.
+    """
+
+
+class KinematicCycle(UrdfStructureError):
+    """A URDF whose joints form a closed loop."""
+
+
+class InvalidInertia(RobotLoadError):
+    """A link with non-positive mass or an inertia that is not physical."""
+
+
+class UnsafePath(RobotLoadError):
+    """A mesh path that resolves outside the allowed folders."""
+
+
 class FrameNotFound(NNRobustError):
     """The requested task frame is not in the model."""
 

@@ -205,7 +205,14 @@ def build_controller(
 def _seed(config: ExperimentConfig, robot: PinocchioModel) -> np.ndarray:
     lower, upper = robot.lower_limits, robot.upper_limits
     mid = 0.5 * (np.maximum(lower, -np.pi) + np.minimum(upper, np.pi))
-    return _vector("simulation.q_seed", config.simulation.q_seed, robot.nq, mid)
+    seed = _vector("simulation.q_seed", config.simulation.q_seed, robot.nq, mid)
+    outside = np.flatnonzero((seed < lower) | (seed > upper))
+    if outside.size:
+        i = int(outside[0])
+        more = f" (and {outside.size - 1} more joints)" if outside.size > 1 else ""
+        raise ConfigError("simulation.q_seed", f"joint {robot.joint_names[i]!r} = {seed[i]:g} is "
+                          f"outside its limits [{lower[i]:g}, {upper[i]:g}]{more}")
+    return seed
 
 
 def _reach(robot: PinocchioModel, target: np.ndarray, seed: np.ndarray, what: str) -> np.ndarray:
@@ -261,6 +268,35 @@ RK4_STABLE_STEP = 2.5
 """h * lambda below which RK4 is stable for a real decaying mode (the exact limit is 2.785)."""
 
 
+WORKSPACE_SAMPLES = 48
+"""Instants at which check_workspace solves the inverse kinematics."""
+
+
+def check_workspace(config: ExperimentConfig, robot: PinocchioModel, trajectory: Trajectory,
+                    q0: np.ndarray, samples: int = WORKSPACE_SAMPLES) -> None:
+    """Refuse a trajectory the arm cannot reach within its joint limits, before the run.
+
+    Inverse kinematics at ``samples`` instants over the run (each from the previous solution);
+    the message names the worst instant and point.
+    """
+    times = np.linspace(0.0, config.simulation.duration, samples)
+    q, worst = q0, (0.0, 0.0, None)
+    for t in times:
+        target = trajectory(float(t))[0]
+        q, residual = solve_ik(robot, target, q, robot.lower_limits, robot.upper_limits)
+        if residual > worst[1]:
+            worst = (float(t), residual, target)
+    t, residual, target = worst
+    if residual > 1e-4:
+        p = split_pose(target)[0] if robot.task == "pose" else target
+        raise ConfigError(
+            "trajectory",
+            f"leaves the workspace: at t = {t:.3g} s the point {np.round(p, 4).tolist()} m is out of "
+            f"reach within the joint limits (task error {residual:.3g} left after inverse "
+            "kinematics); move trajectory.center or shrink axis_a / axis_b",
+        )
+
+
 def check_friction_stiffness(config: ExperimentConfig, plant: Plant, q0: np.ndarray) -> None:
     """Refuse an RK4 step that viscous friction makes unstable.
 
@@ -301,6 +337,7 @@ def build(config: ExperimentConfig) -> Setup:
     criterion = build_criterion(config, robot)
     controller = build_controller(config, robot, nominal, trajectory, criterion)
     q0, v0 = initial_state(config, robot, trajectory)
+    check_workspace(config, robot, trajectory, q0)
     check_friction_stiffness(config, plant, q0)
     return Setup(config, robot, plant, nominal, trajectory, criterion, controller, q0, v0)
 

@@ -7,9 +7,10 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..exceptions import RobotLoadError
+from ..exceptions import ModelMismatch, RobotLoadError
 from .pinocchio_model import PinocchioModel
 from .planar_chain import PLANAR_CHAIN_NAME, planar_chain_urdf
+from .urdf_check import check_urdf, mesh_roots, read_urdf_file
 
 PAPER_ARM = "three_link_planar"
 """Name of the paper's three-link arm, shipped in ``urdf/``."""
@@ -69,11 +70,17 @@ def _build_from_urdf(source: str) -> tuple[pin.Model, str]:
     if kind == "erd":
         robot = _example_robot_data(value)
         return robot.model, f"example-robot-data:{value}"
-    name = value if kind == "file" else (source if PLANAR_CHAIN_NAME.match(source) else "<urdf string>")
+    generated = PLANAR_CHAIN_NAME.match(source) is not None
+    name = value if kind == "file" else (source if generated else "<urdf string>")
+    text = read_urdf_file(value) if kind == "file" else value
+    if not generated:
+        check_urdf(text, name, Path(value).resolve().parent if kind == "file" else None)
     try:
-        model = pin.buildModelFromUrdf(value) if kind == "file" else pin.buildModelFromXML(value)
+        model = pin.buildModelFromXML(text)
     except (ValueError, RuntimeError) as err:
         raise RobotLoadError(name, f"invalid URDF: {err}") from err
+    if model.nq == 0 and model.njoints <= 1:
+        raise ModelMismatch(f"{name}: the URDF has no movable joint (only fixed joints)")
     return model, name
 
 
@@ -123,9 +130,9 @@ def load_visual_model(
         visual_type = pin.GeometryType.VISUAL
         try:
             if kind == "file":
-                folder = Path(value).resolve().parent
+                roots = mesh_roots(Path(value).parent)
                 visual = pin.buildGeomFromUrdf(model, value, visual_type,
-                                               package_dirs=[str(p) for p in (folder, *folder.parents)])
+                                               package_dirs=[str(p) for p in roots])
             else:
                 visual = pin.buildGeomFromUrdfString(model, value, visual_type)
         except (ValueError, RuntimeError) as err:
