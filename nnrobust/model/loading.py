@@ -94,10 +94,11 @@ def _example_robot_data(name: str):
     try:
         return example_robot_data.load(name)
     except Exception as err:  # the loader raises bare exceptions of several kinds
+        reason = str(err).split(". Possible values")[0]
         raise RobotLoadError(
             name,
-            "not a URDF file and not a robot shipped by example-robot-data "
-            f"({type(err).__name__}: {err}); pass a .urdf path or a robot name such as 'panda'",
+            f"not a URDF file, not planar<N>, and example-robot-data cannot load it ({reason}); "
+            f"arms known to work: {', '.join(ARMS)} (nnrobust robots)",
         ) from err
 
 

@@ -50,12 +50,13 @@ def read_urdf_file(path: str | Path) -> str:
 
 def _number_list(text: str | None, count: int, where: str, source: str) -> list[float]:
     values = (text or "").split()
+    expected = "a finite number" if count == 1 else f"{count} finite numbers"
     try:
         numbers = [float(v) for v in values]
     except ValueError as err:
-        raise UrdfStructureError(source, f"{where}: {text!r} is not {count} numbers") from err
+        raise UrdfStructureError(source, f"{where}: {text!r} is not {expected}") from err
     if len(numbers) != count or not all(math.isfinite(v) for v in numbers):
-        raise UrdfStructureError(source, f"{where}: {text!r} is not {count} finite numbers")
+        raise UrdfStructureError(source, f"{where}: {text!r} is not {expected}")
     return numbers
 
 
@@ -88,11 +89,13 @@ def _check_inertial(link: ET.Element, name: str, source: str) -> None:
 
 
 def mesh_roots(base: Path) -> list[Path]:
-    """Folders a URDF in ``base`` may take meshes from: its folder and the two above it (so that
-    ``package://<pkg>/meshes/...`` works for ``<pkg>/urdf/robot.urdf``).
+    """Folders a URDF in ``base`` may take meshes from: its own and the one above it.
+
+    ``package://<pkg>/meshes/x.stl`` then finds ``<pkg>/meshes/x.stl`` for
+    ``<pkg>/urdf/robot.urdf``. The filesystem root is never one of them.
     """
     base = base.resolve()
-    return [base, *list(base.parents)[:2]]
+    return [p for p in (base, base.parent) if p != Path(p.anchor)]
 
 
 def _resolve_mesh(uri: str, base: Path | None, roots: list[Path], source: str) -> Path | None:
