@@ -27,6 +27,8 @@ METRIC_UNITS = {
     "torque_chatter": "N m",
     "min_manipulability": "m^m (m^2 planar, m^3 position; mixed for a pose)",
     "final_rho_hat": "m/s^2",
+    "singular_fraction": "-",
+    "singular_episodes": "s",
     "simulated_seconds": "s",
     "wall_seconds": "s",
     "realtime_factor": "-",
@@ -46,7 +48,8 @@ class Result:
             and e = x - x_d, or for a pose task [p, log3(R)] and e = [p - p_d, log3(R R_d^T)]
             [m, rad].
         signals: per-sample scalars: ``h`` (criterion), ``manipulability`` (sqrt det J J^T) and
-            the controller's (``rho_hat`` [m/s^2], ``eps``, ``z_norm``, ``damping``).
+            the controller's (``rho_hat`` [m/s^2], ``eps``, ``z_norm``, and ``damping``: the lambda^2 of the
+            damped pseudo-inverse, > 0 during a near-singular episode).
         status: ``completed``, ``diverged`` or ``interrupted``.
         message: why the run stopped early.
         config: the configuration that produced it (TOML text).
@@ -121,6 +124,8 @@ class Result:
             return float(np.sqrt(np.mean(a))) if a.size else float("nan")
 
         rho = self.signals.get("rho_hat")
+        damping = self.signals.get("damping")
+        damped = np.asarray(damping) > 0 if damping is not None else np.zeros(0, dtype=bool)
         simulated = float(self.t[-1] - self.t[0] + (self.t[1] - self.t[0])) if self.t.size > 1 else 0.0
         out = {
             "status": self.status,
@@ -136,6 +141,8 @@ class Result:
                 float(np.min(self.signals["manipulability"])) if err.size else float("nan")
             ),
             "final_rho_hat": float(rho[-1]) if rho is not None and rho.size else None,
+            "singular_fraction": float(np.mean(damped)) if damped.size else 0.0,
+            "singular_episodes": singular_episodes(self.t, damped),
             "simulated_seconds": simulated,
             "wall_seconds": self.wall_seconds,
             "realtime_factor": simulated / self.wall_seconds if self.wall_seconds > 0 else None,
@@ -174,6 +181,20 @@ class Result:
             metrics.get("wall_seconds", float("nan")), arrays["joint_names"].tolist(),
             arrays.get("chain"),
         )
+
+
+MAX_EPISODES = 20
+"""Singular episodes listed in metrics.json (the count is always complete)."""
+
+
+def singular_episodes(t: np.ndarray, damped: np.ndarray) -> dict:
+    """Intervals [start, end] [s] during which J+ was damped (sigma_min(J) below the threshold)."""
+    if not damped.size or not damped.any():
+        return {"count": 0, "intervals": []}
+    edges = np.diff(np.concatenate([[0], damped.astype(int), [0]]))
+    starts, ends = np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1
+    intervals = [[float(t[a]), float(t[b])] for a, b in zip(starts, ends)]
+    return {"count": len(intervals), "intervals": intervals[:MAX_EPISODES]}
 
 
 def write_json_atomic(path: str | Path, data) -> Path:

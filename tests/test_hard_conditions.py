@@ -1,0 +1,67 @@
+"""Hard conditions during a run: divergence and Ctrl-C leave the partial result on disk, marked;
+near-singular episodes are recorded."""
+
+import json
+
+import numpy as np
+
+from nnrobust.cli import main
+from nnrobust.experiment import run_experiment
+from nnrobust.presets import load_preset
+from nnrobust.results import Result, singular_episodes
+
+
+def _experiment(tmp_path, **sections):
+    path = tmp_path / "experiment.toml"
+    path.write_text(load_preset("paper-ellipse").replace(**sections).to_toml())
+    return path
+
+
+def test_divergence_stops_the_run_and_keeps_the_partial_result(tmp_path, capsys):
+    """Kv T = 2 at the 1 ms zero-order hold is unstable: the run stops and says when and why."""
+    experiment = _experiment(tmp_path, controller={"Kp": [1e6], "Kv": [2e3]},
+                             simulation={"duration": 2.0})
+    out = tmp_path / "run"
+    assert main(["run", str(experiment), "--out", str(out), "--quiet", "--no-animation"]) == 1
+    assert "run diverged: joint speed" in capsys.readouterr().err
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["status"] == "diverged" and "at t = 0.0" in metrics["message"]
+    result = Result.load(out)
+    assert 10 < result.t.size < 2000 and np.all(np.isfinite(result.q))
+    assert (out / "plots" / "errors.png").exists()
+
+
+def test_ctrl_c_keeps_the_partial_result_marked_interrupted(tmp_path, monkeypatch, capsys):
+    import nnrobust.progress
+
+    def interrupt_at_half_a_second(self, t, q=None):
+        if t >= 0.5:
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(nnrobust.progress.ProgressBar, "__call__", interrupt_at_half_a_second)
+    experiment = _experiment(tmp_path, simulation={"duration": 5.0})
+    out = tmp_path / "run"
+    assert main(["run", str(experiment), "--out", str(out), "--no-plots", "--no-animation"]) == 1
+    assert "run interrupted: interrupted at t = 0.5" in capsys.readouterr().err
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["status"] == "interrupted"
+    assert Result.load(out).t[-1] < 0.5
+
+
+def test_near_singular_episodes_are_recorded():
+    """With the damping threshold at sigma_min = 0.36 m the ellipse crosses it: episodes listed."""
+    config = load_preset("paper-ellipse").replace(
+        controller={"pinv_threshold": 0.36, "pinv_max_damping": 0.05}, simulation={"duration": 6.0})
+    metrics = run_experiment(config).metrics()
+    episodes = metrics["singular_episodes"]
+    assert episodes["count"] >= 1 and 0 < metrics["singular_fraction"] < 1
+    for start, end in episodes["intervals"]:
+        assert 0 <= start <= end <= 6.0
+
+
+def test_singular_episode_intervals():
+    t = np.arange(10) * 0.1
+    damped = np.array([0, 1, 1, 0, 0, 1, 0, 0, 1, 1], dtype=bool)
+    assert singular_episodes(t, damped) == {
+        "count": 3, "intervals": [[0.1, 0.2], [0.5, 0.5], [0.8, 0.9]]}
+    assert singular_episodes(t, np.zeros(10, dtype=bool)) == {"count": 0, "intervals": []}
