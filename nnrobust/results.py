@@ -13,6 +13,7 @@ import numpy as np
 
 from .exceptions import RunFolderExists
 from .model.tasks import display_coordinates
+from .subtasks.manipulability import det
 
 METRIC_UNITS = {
     "rms_error": "m",
@@ -94,7 +95,7 @@ class Result:
             else:
                 x[k] = chain[k, -1, : robot.m]  # the last chain point is the task frame
             J = robot.task_jacobian(trace.q[k])
-            manip[k] = np.sqrt(max(np.linalg.det(J @ J.T), 0.0))
+            manip[k] = np.sqrt(max(det(J @ J.T), 0.0))
             if criterion is not None:
                 h[k] = criterion.value(robot, trace.q[k])
         x_d = trajectory.position(trace.t)

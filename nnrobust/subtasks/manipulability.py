@@ -26,6 +26,18 @@ def _adjugate(A: np.ndarray) -> np.ndarray:
     return cof.T
 
 
+def det(A: np.ndarray) -> float:
+    """The determinant, in closed form for m <= 3 (no LU: exact zero, no warning when singular)."""
+    m = A.shape[0]
+    if m == 1:
+        return float(A[0, 0])
+    if m == 2:
+        return float(A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0])
+    if m == 3:
+        return float(A[:, 0] @ np.cross(A[:, 1], A[:, 2]))
+    return float(np.linalg.det(A))
+
+
 def _det_and_gradient(model: DynamicsModel, q: np.ndarray) -> tuple[float, np.ndarray]:
     """det(J J^T) and its gradient: d det(A)/dq_k = 2 tr(adj(A) H_k J^T), A = J J^T."""
     J = model.task_jacobian(q)
@@ -33,7 +45,7 @@ def _det_and_gradient(model: DynamicsModel, q: np.ndarray) -> tuple[float, np.nd
     A = J @ J.T
     adj = _adjugate(A)
     grad = 2.0 * np.einsum("ij,jlk,il->k", adj, H, J)
-    return float(np.linalg.det(A)), grad
+    return det(A), grad
 
 
 class HalfDetManipulability(Criterion):
@@ -42,7 +54,7 @@ class HalfDetManipulability(Criterion):
     def value(self, model: DynamicsModel, q: np.ndarray) -> float:
         """0.5 det(J J^T)."""
         J = model.task_jacobian(q)
-        return 0.5 * float(np.linalg.det(J @ J.T))
+        return 0.5 * det(J @ J.T)
 
     def gradient(self, model: DynamicsModel, q: np.ndarray) -> np.ndarray:
         """0.5 d det(J J^T)/dq."""
@@ -55,7 +67,7 @@ class Manipulability(Criterion):
     def value(self, model: DynamicsModel, q: np.ndarray) -> float:
         """sqrt(det(J J^T))."""
         J = model.task_jacobian(q)
-        return float(np.sqrt(max(np.linalg.det(J @ J.T), 0.0)))
+        return float(np.sqrt(max(det(J @ J.T), 0.0)))
 
     def gradient(self, model: DynamicsModel, q: np.ndarray) -> np.ndarray:
         """D det / dq / (2 sqrt(det)); zero at a singularity, where it is not defined."""
