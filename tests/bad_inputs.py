@@ -64,21 +64,46 @@ def _file(folder: Path, name: str, text: str) -> Path:
     return path
 
 
-def _read_config(path: Path):
-    from nnrobust.config import load_config
+class ReadConfig:
+    """Read an experiment file (``path`` is what the command line would be given)."""
 
-    return lambda: load_config(path)
+    def __init__(self, path: Path):
+        self.path = path
+
+    def __call__(self):
+        from nnrobust.config import load_config
+
+        return load_config(self.path)
 
 
-def _toml(folder: Path, text: str):
-    return _read_config(_file(folder, "experiment.toml", text))
+class BuildExperiment:
+    """Build a preset with some sections changed (the file is ``self.toml()``)."""
+
+    def __init__(self, preset: str, sections: dict):
+        self.preset, self.sections = preset, sections
+
+    def toml(self) -> str:
+        from nnrobust.presets import load_preset
+
+        return load_preset(self.preset).replace(**self.sections).to_toml()
+
+    def __call__(self):
+        from nnrobust.experiment import build
+        from nnrobust.presets import load_preset
+
+        return build(load_preset(self.preset).replace(**self.sections))
 
 
-def _build(preset: str = "paper-ellipse", **sections):
-    from nnrobust.experiment import build
-    from nnrobust.presets import load_preset
+def _read_config(path: Path) -> ReadConfig:
+    return ReadConfig(path)
 
-    return lambda: build(load_preset(preset).replace(**sections))
+
+def _toml(folder: Path, text: str) -> ReadConfig:
+    return ReadConfig(_file(folder, "experiment.toml", text))
+
+
+def _build(preset: str = "paper-ellipse", **sections) -> BuildExperiment:
+    return BuildExperiment(preset, sections)
 
 
 def _huge(folder: Path) -> Path:

@@ -9,7 +9,7 @@ import pytest
 from nnrobust.cli import main
 from nnrobust.exceptions import NNRobustError
 
-from .bad_inputs import CASES, URDF_CASES, message_of, render_table
+from .bad_inputs import CASES, CONFIG_CASES, URDF_CASES, BuildExperiment, ReadConfig, message_of, render_table
 
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "bad-inputs.md"
 
@@ -64,6 +64,22 @@ def test_command_line_answers_a_bad_urdf_with_one_line(case, tmp_path, capsys, m
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2
     assert len(err) == 1 and err[0].startswith("nnrobust: error: "), err
+    assert not (tmp_path / "run").exists()
+
+
+@pytest.mark.parametrize("case", CONFIG_CASES, ids=[c.what for c in CONFIG_CASES])
+def test_command_line_answers_a_bad_experiment_with_one_line(case, tmp_path, capsys):
+    action = case.make(tmp_path)
+    if isinstance(action, BuildExperiment):
+        path = tmp_path / "experiment.toml"
+        path.write_text(action.toml())
+    else:
+        assert isinstance(action, ReadConfig)
+        path = action.path
+    code = main(["run", str(path), "--out", str(tmp_path / "run"), "--quiet"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2
+    assert len(err) == 1 and err[0].startswith("nnrobust: error: ") and case.fragment in err[0], err
     assert not (tmp_path / "run").exists()
 
 
