@@ -146,6 +146,7 @@ def _make_criterion(name: str, config: ExperimentConfig, robot: PinocchioModel) 
     if name == "joint_smoothness":
         c = sc.smoothness_coefficients or list(PAPER_SMOOTHNESS)
         return JointSmoothness(tuple(_vector("subtasks.smoothness_coefficients", c, robot.nq, None)))
+    assert name == "obstacles", name  # build_criterion checked the name against CRITERIA
     obstacles = np.asarray(sc.obstacles, dtype=float)
     return SphereObstacles(obstacles[:, :3], obstacles[:, 3], sc.obstacle_influence, sc.link_radius)
 
@@ -264,10 +265,6 @@ def initial_state(
     return q0, v0
 
 
-RK4_STABLE_STEP = 2.5
-"""h * lambda below which RK4 is stable for a real decaying mode (the exact limit is 2.785)."""
-
-
 WORKSPACE_SAMPLES = 48
 """Instants at which check_workspace solves the inverse kinematics."""
 
@@ -295,6 +292,10 @@ def check_workspace(config: ExperimentConfig, robot: PinocchioModel, trajectory:
             f"reach within the joint limits (task error {residual:.3g} left after inverse "
             "kinematics); move trajectory.center or shrink axis_a / axis_b",
         )
+
+
+RK4_STABLE_STEP = 2.5
+"""h * lambda below which RK4 is stable for a real decaying mode (the exact limit is 2.785)."""
 
 
 def check_friction_stiffness(config: ExperimentConfig, plant: Plant, q0: np.ndarray) -> None:
