@@ -233,6 +233,8 @@ class SimulationConfig:
         duration: simulated time [s].
         control_period: zero-order-hold period T [s].
         substeps: integration steps per control period.
+        integration_step: the RK4 step [s]; when given it sets substeps = control_period /
+            integration_step, which must be a whole number (a step never spans two periods).
         integrator: ``rk4`` or ``solve_ivp``.
         q_seed: inverse-kinematics seed for q(0) [rad] (default: mid-range of the joint limits).
         initial_task_offset: x(0) - x_d(0), m entries [m] (pose: position [m], then a rotation
@@ -243,6 +245,7 @@ class SimulationConfig:
     duration: float = 20.0
     control_period: float = 1e-3
     substeps: int = 1
+    integration_step: float | None = None
     integrator: str = "rk4"
     q_seed: list[float] | None = None
     initial_task_offset: list[float] | None = None
@@ -488,6 +491,22 @@ def validate(config: ExperimentConfig) -> None:
     _positive("simulation.duration", sim.duration)
     _positive("simulation.control_period", sim.control_period)
     _positive("simulation.substeps", sim.substeps)
+    if sim.integration_step is not None:
+        _positive("simulation.integration_step", sim.integration_step)
+        ratio = sim.control_period / sim.integration_step
+        if ratio < 1 - 1e-9:
+            raise ConfigError(
+                "simulation.integration_step",
+                f"{sim.integration_step:g} s is longer than the control period {sim.control_period:g} s; "
+                "the torque changes every control period, so a step may not span two",
+            )
+        if abs(ratio - round(ratio)) > 1e-6 * ratio:
+            raise ConfigError(
+                "simulation.integration_step",
+                f"the control period {sim.control_period:g} s is not a whole number of steps of "
+                f"{sim.integration_step:g} s (ratio {ratio:.6g})",
+            )
+        sim.substeps = int(round(ratio))
     if sim.duration < sim.control_period:
         raise ConfigError("simulation.duration", "is shorter than one control period")
     if config.plant.disturbance == "sinusoid" and (
