@@ -9,6 +9,8 @@ application listens on ``host`` only, and so does the ZeroMQ socket.
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
 import queue
 import re
 import subprocess
@@ -105,7 +107,8 @@ def start_viewer(host: str = LOOPBACK, port: int | None = None, timeout: float =
         match = re.match(r"^(zmq_url|web_url)=(.*)$", line.strip())
         if match:
             urls[match.group(1)] = match.group(2)
-    vis = meshcat.Visualizer(zmq_url=urls["zmq_url"])
+    with contextlib.redirect_stdout(io.StringIO()):  # meshcat prints its own "open this URL" line
+        vis = meshcat.Visualizer(zmq_url=urls["zmq_url"])
     return LiveViewer(vis, process, urls["web_url"])
 
 
