@@ -154,26 +154,12 @@ def check_urdf(text: str, source: str, base: Path | None = None,
     if root.tag != "robot":
         raise UrdfStructureError(source, f"the root element is <{root.tag}>, a URDF needs <robot>")
 
-    links: dict[str, ET.Element] = {}
-    for link in root.findall("link"):
-        name = link.get("name")
-        if not name:
-            raise UrdfStructureError(source, "a <link> has no name")
-        if name in links:
-            raise UrdfStructureError(source, f"two links are named {name!r}")
-        links[name] = link
+    links = _by_name(root, "link", source)
     if not links:
         raise UrdfStructureError(source, "no <link> at all")
 
     parent_of: dict[str, tuple[str, str]] = {}  # child link -> (parent link, joint)
-    joint_names: set[str] = set()
-    for joint in root.findall("joint"):
-        name = joint.get("name")
-        if not name:
-            raise UrdfStructureError(source, "a <joint> has no name")
-        if name in joint_names:
-            raise UrdfStructureError(source, f"two joints are named {name!r}")
-        joint_names.add(name)
+    for name, joint in _by_name(root, "joint", source).items():
         parent_el, child_el = joint.find("parent"), joint.find("child")
         if parent_el is None or child_el is None:
             raise UrdfStructureError(source, f"joint {name!r} needs <parent link=...> and <child link=...>")
@@ -213,6 +199,19 @@ def check_urdf(text: str, source: str, base: Path | None = None,
             where = "visual" if _inside(root, mesh, "visual") else "collision"
             warnings.warn(f"{source}: {where} mesh {uri!r} not found ({path}); the robot simulates, "
                           "the viewer leaves that part out", MissingMeshWarning, stacklevel=3)
+
+
+def _by_name(root: ET.Element, tag: str, source: str) -> dict[str, ET.Element]:
+    """The <link> or <joint> elements by name; every one named, no name twice."""
+    found: dict[str, ET.Element] = {}
+    for element in root.findall(tag):
+        name = element.get("name")
+        if not name:
+            raise UrdfStructureError(source, f"a <{tag}> has no name")
+        if name in found:
+            raise UrdfStructureError(source, f"two {tag}s are named {name!r}")
+        found[name] = element
+    return found
 
 
 def _inside(root: ET.Element, element: ET.Element, tag: str) -> bool:
