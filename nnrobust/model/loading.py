@@ -119,7 +119,7 @@ def load_visual_model(
     """The kinematic model and the visual geometry (meshes and primitives) of an arm, for viewers.
 
     Same sources and joint locking as :func:`load_robot`. Mesh files are looked up next to the
-    URDF (``package://`` URIs resolve against its folder and its parents).
+    URDF (``package://`` URIs resolve against its folder and the one above it).
     """
     source = str(source)
     kind, value = _resolve(source)
