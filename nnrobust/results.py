@@ -108,6 +108,14 @@ class Result:
             list(robot.joint_names), chain,
         )
 
+    def experiment(self):
+        """The :class:`~nnrobust.config.ExperimentConfig` that produced the run (from ``config``)."""
+        import tomllib
+
+        from .config import from_dict
+
+        return from_dict(tomllib.loads(self.config))
+
     # -- metrics -----------------------------------------------------------------------------
     def metrics(self) -> dict:
         """Scalar summary; units in :data:`METRIC_UNITS`.
@@ -216,14 +224,11 @@ def _json_default(value):
 
 def _write_animation(path: Path, result: Result) -> None:
     """animation.html, or a warning when the robot's visuals cannot be drawn."""
-    import tomllib
-
-    from .config import from_dict
     from .exceptions import NNRobustError
     from .viewer.scene import animation_html
 
     try:
-        html = animation_html(result, from_dict(tomllib.loads(result.config)))
+        html = animation_html(result, result.experiment())
     except NNRobustError as err:
         warnings.warn(f"no animation.html: {err}", stacklevel=3)
         return

@@ -6,14 +6,12 @@ import shutil
 import socket
 import subprocess
 import sys
-import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from nnrobust.cli import main
-from nnrobust.config import from_dict
 from nnrobust.experiment import run_experiment
 from nnrobust.presets import load_preset
 from nnrobust.results import Result, write_run
@@ -81,7 +79,7 @@ def test_viewer_listens_on_loopback_only(paper_run):
 
     result = Result.load(paper_run)
     with start_viewer() as viewer:
-        draw_run(viewer.vis, result, from_dict(tomllib.loads(result.config)))
+        draw_run(viewer.vis, result, result.experiment())
         addresses = _listening_addresses(viewer.process.pid)
         assert len(addresses) >= 2, addresses  # web server and ZeroMQ socket
         assert all(a.startswith("127.0.0.1:") for a in addresses), addresses
@@ -126,7 +124,7 @@ def test_browser_draws_the_arm_and_it_moves(paper_run, tmp_path):
 
     result = Result.load(paper_run)
     recorder = SceneRecorder()
-    draw_run(meshcat.Visualizer(window=recorder), result, from_dict(tomllib.loads(result.config)))
+    draw_run(meshcat.Visualizer(window=recorder), result, result.experiment())
     meshcat.Visualizer(window=recorder)["robot"].delete()
     background_page = tmp_path / "background.html"
     background_page.write_text(recorder.html())
