@@ -69,27 +69,26 @@ def _load_target(target: str):
 
 
 def _live_view(args, config, setup):
-    """Start the viewer, draw the arm and the desired path; returns (viewer, scene, callback)."""
+    """Start the viewer, draw the arm and the desired path; returns (viewer, callback)."""
     import numpy as np
 
     from .viewer import RunScene, start_viewer
+    from .viewer.scene import world_points
 
     viewer = start_viewer(args.host, args.port)
     scene = RunScene(viewer.vis, config)
+    chain = setup.robot.chain_points(setup.q0)
+    tip_z = chain[-1, 2]
     times = np.linspace(0.0, config.simulation.duration, 400)
-    positions = setup.trajectory.position(times)[:, :3]
-    tip_z = setup.robot.chain_points(setup.q0)[-1, 2]
-    desired = np.column_stack([positions, np.full(len(times), tip_z)])[:, :3]
+    desired = world_points(setup.trajectory.position(times), tip_z)
     scene.draw_paths(desired)
-    scene.frame_camera(np.vstack([desired, setup.robot.chain_points(setup.q0)]))
+    scene.frame_camera(np.vstack([desired, chain]))
     print(f"live view: {viewer.web_url}", file=sys.stderr)
 
     def show(t, q):
-        xd = setup.trajectory(t)[0][:3]
-        target = np.append(xd, tip_z)[:3]
-        scene.show(q, target)
+        scene.show(q, world_points(setup.trajectory(t)[0][:3], tip_z)[0])
 
-    return viewer, scene, show
+    return viewer, show
 
 
 def cmd_run(args) -> int:
@@ -116,7 +115,7 @@ def cmd_run(args) -> int:
     bar = None if args.quiet else ProgressBar(config.simulation.duration)
     viewer = show = None
     if args.view:
-        viewer, scene, show = _live_view(args, config, setup)
+        viewer, show = _live_view(args, config, setup)
 
     def progress(t, q):
         if bar is not None:
@@ -164,9 +163,6 @@ def _serve_until_interrupted(viewer, seconds: float | None = None) -> None:
 
 def cmd_view(args) -> int:
     """Replay a run folder in the meshcat viewer."""
-    import tomllib
-
-    from .config import from_dict
     from .results import Result
     from .viewer import draw_run, start_viewer
 
@@ -174,7 +170,7 @@ def cmd_view(args) -> int:
     if not (folder / "result.npz").is_file() or not (folder / "config.toml").is_file():
         raise NNRobustError(f"{folder}: not a run folder (needs result.npz and config.toml)")
     result = Result.load(folder)
-    config = from_dict(tomllib.loads(result.config))
+    config = result.experiment()
     with start_viewer(args.host, args.port) as viewer:
         draw_run(viewer.vis, result, config)
         if args.open:

@@ -113,15 +113,25 @@ def _line(points: np.ndarray, color: int) -> mg.Line:
                    mg.LineBasicMaterial(color=color, linewidth=2))
 
 
+def world_points(positions: np.ndarray, plane_z) -> np.ndarray:
+    """Task positions (N x m, or one m-vector) as world points N x 3 [m].
+
+    The first three coordinates are the position (for a pose, the rest is orientation); a planar
+    task's points are placed at height ``plane_z`` (a number or one per point).
+    """
+    positions = np.atleast_2d(positions)
+    npos = min(positions.shape[1], 3)
+    points = np.empty((positions.shape[0], 3))
+    points[:, :npos] = positions[:, :npos]
+    if npos < 3:
+        points[:, npos:] = np.reshape(plane_z, (-1, 1))
+    return points
+
+
 def tip_positions(result: Result) -> tuple[np.ndarray, np.ndarray]:
     """World positions of the actual and desired task point, N x 3 each [m]."""
     actual = result.chain[:, -1, :]
-    npos = min(result.x_d.shape[1], 3)
-    desired = np.empty_like(actual)
-    desired[:, :npos] = result.x_d[:, :npos]
-    if npos < 3:  # a planar task: the path lies in the plane of the tip
-        desired[:, npos:] = actual[:, npos:]
-    return actual, desired
+    return actual, world_points(result.x_d, actual[:, 2])
 
 
 class RunScene:
@@ -170,9 +180,8 @@ class RunScene:
         self.vis["/Cameras/default/rotated/<object>"].set_property(
             "position", [float(eye[0]), float(eye[2]), float(-eye[1])])
 
-    def animate(self, result: Result, fps: float = 30.0) -> None:
-        """Arm and target over the run, one keyframe every 1/fps s of simulated time."""
-        _, desired = tip_positions(result)
+    def animate(self, result: Result, desired: np.ndarray, fps: float = 30.0) -> None:
+        """Arm and target (``desired``, N x 3) over the run, a keyframe every 1/fps s simulated."""
         times = np.arange(result.t[0], result.t[-1] + 1e-9, 1.0 / fps)
         index = np.minimum(np.searchsorted(result.t, times), result.t.size - 1)
         animation = Animation(default_framerate=fps)
@@ -196,7 +205,7 @@ def draw_run(vis: meshcat.Visualizer, result: Result, config: ExperimentConfig,
     scene.draw_paths(desired, actual)
     scene.frame_camera(np.vstack([desired, result.chain.reshape(-1, 3)]))
     scene.show(result.q[0], desired[0])
-    scene.animate(result, fps)
+    scene.animate(result, desired, fps)
     return scene
 
 
