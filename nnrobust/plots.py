@@ -32,10 +32,6 @@ def _position_size(result: Result) -> int:
     return min(result.x.shape[1], 3)
 
 
-def _position_error(result: Result) -> np.ndarray:
-    return np.linalg.norm(result.e[:, : _position_size(result)], axis=1)
-
-
 def plot_path(result: Result, ax=None, label: str = "actual", axes: tuple[int, int] = (0, 1)) -> None:
     """Desired vs actual end-effector path projected on two world axes (Figs. 1, 4)."""
     i, j = axes
@@ -79,9 +75,9 @@ def plot_run(result: Result, folder: str | Path) -> list[Path]:
             axes[1].plot(t, result.e[:, 3 + i] * 1e3, lw=0.8, label=f"$e_{{\\theta {AXES[i]}}}$")
         axes[1].set_ylabel("orientation error [mrad]")
         axes[1].legend(fontsize=8)
-    axes[-1].semilogy(t, np.maximum(_position_error(result), 1e-12), lw=0.8, label="position [m]")
+    axes[-1].semilogy(t, np.maximum(result.position_error(), 1e-12), lw=0.8, label="position [m]")
     if pose:
-        axes[-1].semilogy(t, np.maximum(np.linalg.norm(result.e[:, 3:], axis=1), 1e-12), lw=0.8,
+        axes[-1].semilogy(t, np.maximum(result.orientation_error(), 1e-12), lw=0.8,
                           label="orientation [rad]")
         axes[-1].legend(fontsize=8)
     axes[-1].set_ylabel("error norm [m]" if not pose else "error norm [m, rad]")
@@ -147,7 +143,7 @@ def plot_comparison(results: dict[str, Result], folder: str | Path) -> list[Path
     axes[0].plot(first.x_d[:, 0], first.x_d[:, 1], "k--", lw=1.5, label="desired")
     for name, res in results.items():
         axes[0].plot(res.x[:, 0], res.x[:, 1], lw=0.9, label=name)
-        axes[1].semilogy(res.t, np.maximum(_position_error(res), 1e-12), lw=0.8, label=name)
+        axes[1].semilogy(res.t, np.maximum(res.position_error(), 1e-12), lw=0.8, label=name)
         axes[2].plot(res.t, np.linalg.norm(res.tau, axis=1), lw=0.5, label=name)
     axes[0].set_aspect("equal", adjustable="datalim")
     axes[0].set_xlabel("x [m]")

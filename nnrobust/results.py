@@ -116,6 +116,14 @@ class Result:
 
         return from_dict(tomllib.loads(self.config))
 
+    def position_error(self) -> np.ndarray:
+        """|position part of e| per sample [m] (the first two or three components)."""
+        return np.linalg.norm(self.e[:, :3], axis=1)
+
+    def orientation_error(self) -> np.ndarray | None:
+        """|rotation-vector part of e| per sample [rad] for a pose task, else None."""
+        return np.linalg.norm(self.e[:, 3:], axis=1) if self.e.shape[1] == 6 else None
+
     # -- metrics -----------------------------------------------------------------------------
     def metrics(self) -> dict:
         """Scalar summary; units in :data:`METRIC_UNITS`.
@@ -123,8 +131,8 @@ class Result:
         The ``*_error`` metrics measure the position part of e; a pose task adds
         ``*_orientation_error`` (norm of the rotation-vector error).
         """
-        err = np.linalg.norm(self.e[:, :3], axis=1)  # position part
-        turn = np.linalg.norm(self.e[:, 3:], axis=1) if self.e.shape[1] == 6 else None
+        err = self.position_error()
+        turn = self.orientation_error()
         late = self.t >= 2.0
         tau_norm2 = np.sum(self.tau**2, axis=1)
         dtau = np.linalg.norm(np.diff(self.tau, axis=0), axis=1)
