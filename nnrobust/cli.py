@@ -226,7 +226,7 @@ def cmd_robots(args) -> int:
             print(f"{name:20s} {'-':>3s}  {'(does not load)':22s} {err}")
             continue
         print(f"{name:20s} {robot.nq:3d}  {robot.task_frame:22s} {info['description']}")
-    print("\nAlso: planar<N> for any N (generated chain), any example-robot-data name, a URDF file.")
+    print("\nAlso: planar<N> for N up to 300 (generated chain), any example-robot-data name, a URDF file.")
     return 1 if failed else 0
 
 

@@ -142,3 +142,15 @@ def test_generated_chain_rejects_bad_parameters():
         planar_chain_urdf(3, masses=0.0)
     with pytest.raises(ValueError, match="n must be a positive integer"):
         planar_chain_urdf(0)
+
+
+def test_joint_count_is_bounded_by_pinocchio_memory():
+    """pin.Data grows as n^3; more than MAX_JOINTS joints is refused with the reason."""
+    from nnrobust import load_robot
+    from nnrobust.exceptions import ModelMismatch, RobotLoadError
+    from nnrobust.model.pinocchio_model import MAX_JOINTS
+
+    with pytest.raises(RobotLoadError, match="1 to 300 links"):
+        load_robot(f"planar{MAX_JOINTS + 1}")
+    with pytest.raises(ModelMismatch, match="at most 300 are supported"):
+        load_robot(planar_chain_urdf(MAX_JOINTS + 1))

@@ -8,7 +8,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import ModelMismatch, RobotLoadError
-from .pinocchio_model import PinocchioModel
+from .pinocchio_model import MAX_JOINTS, PinocchioModel
 from .planar_chain import PLANAR_CHAIN_NAME, planar_chain_urdf
 from .urdf_check import check_urdf, mesh_roots, read_urdf_file
 
@@ -19,7 +19,7 @@ _SHIPPED = {PAPER_ARM: "three_link_planar.urdf"}
 
 ARMS: dict[str, dict] = {
     PAPER_ARM: {"description": "the paper's three-link planar arm (urdf/)"},
-    "planar7": {"description": "generated 7-link planar chain, 1 m reach (any planar<N> works)"},
+    "planar7": {"description": "generated 7-link planar chain, 1 m reach (any planar<N>, N <= 300)"},
     "panda": {"description": "Franka Emika Panda, fingers locked",
               "locked_joints": ["panda_finger_joint1", "panda_finger_joint2"]},
     "ur3": {"description": "Universal Robots UR3"},
@@ -54,8 +54,8 @@ def _resolve(source: str) -> tuple[str, str]:
     chain = PLANAR_CHAIN_NAME.match(source)
     if chain:
         n = int(chain.group(1))
-        if not 1 <= n <= 10_000:
-            raise RobotLoadError(source, "a generated planar chain has 1 to 10000 links")
+        if not 1 <= n <= MAX_JOINTS:
+            raise RobotLoadError(source, f"a generated planar chain has 1 to {MAX_JOINTS} links")
         return "xml", planar_chain_urdf(n)
     path = urdf_dir() / _SHIPPED[source] if source in _SHIPPED else Path(source)
     if path.suffix.lower() == ".urdf" or path.exists():

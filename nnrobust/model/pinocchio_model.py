@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from functools import cached_property
+
 import numpy as np
 import pinocchio as pin
 
@@ -9,6 +11,9 @@ from ..exceptions import FrameNotFound, ModelMismatch
 from .tasks import TASK_KINDS, pose_vector
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+
+MAX_JOINTS = 300
+"""Most joints a model may have: pin.Data's memory grows as n^3 (1.8 GB at 300, 7.8 GB at 500)."""
 
 
 class PinocchioModel:
@@ -35,6 +40,11 @@ class PinocchioModel:
             )
         if model.nv == 0:
             raise ModelMismatch(f"{name or model.name}: the model has no movable joint")
+        if model.nv > MAX_JOINTS:
+            raise ModelMismatch(
+                f"{name or model.name}: {model.nv} joints; at most {MAX_JOINTS} are supported "
+                "(Pinocchio's Data holds n x n x n derivative tensors: 1.8 GB at n = 300)"
+            )
         if not model.existFrame(task_frame):
             raise FrameNotFound(task_frame, [f.name for f in model.frames])
         self.model = model
@@ -47,15 +57,19 @@ class PinocchioModel:
         self.m = TASK_KINDS[task]
         self.joint_names = [model.names[i] for i in range(1, model.njoints)]
         self._zero = np.zeros(self.nq)
-        self._lower = np.tril_indices(self.nq, -1)
-        self._strict_lower = np.tril(np.ones((self.nq, self.nq)), -1)
         self._rows = [0, 1] if task == "planar" else list(range(self.m))
+
+    @cached_property
+    def _lower_indices(self) -> tuple[np.ndarray, np.ndarray]:
+        """Indices below the diagonal of M, made on first use (n^2 of them)."""
+        return np.tril_indices(self.nq, -1)
 
     # -- dynamics -------------------------------------------------------------------------
     def mass(self, q: np.ndarray) -> np.ndarray:
         """M(q) by CRBA (lower triangle copied from the upper: older pin fills only that one)."""
         M = pin.crba(self.model, self.data, q).copy()
-        M[self._lower] = M.T[self._lower]
+        lower = self._lower_indices
+        M[lower] = M.T[lower]
         return M
 
     def bias(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -137,7 +151,7 @@ class PinocchioModel:
         # pairs[i, k] = ad(S_k) S_i, kept for k < i
         dV = np.cross(W[None, :, :], V[:, None, :]) + np.cross(V[None, :, :], W[:, None, :])
         dW = np.cross(W[None, :, :], W[:, None, :])
-        mask = self._strict_lower[:, :, None]
+        mask = np.tri(self.nq, k=-1)[:, :, None]
         dV *= mask
         dW *= mask
         J_lin = V + np.cross(W, p)  # n x 3: world-aligned linear Jacobian, transposed
