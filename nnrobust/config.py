@@ -68,6 +68,11 @@ class NominalConfig:
     viscous_friction: list[float] | None = None
     coulomb_friction: list[float] | None = None
 
+    @property
+    def perturbed(self) -> bool:
+        """Whether any inertial perturbation of the URDF model is asked for."""
+        return (self.mass_scale, self.inertia_scale, self.relative_error, self.com_error) != (1, 1, 0, 0)
+
 
 @dataclass
 class PlantConfig:
@@ -377,6 +382,11 @@ def load_config(path: str | Path) -> ExperimentConfig:
         raise ConfigError(f"{path}: {err.key}", str(err).split(": ", 1)[1]) from err
 
 
+def _non_negative(path: str, value: float) -> None:
+    if value < 0:
+        raise ConfigError(path, f"must be >= 0, got {value}")
+
+
 def _positive(path: str, values) -> None:
     seq = values if isinstance(values, list) else [values]
     if any(v <= 0 for v in seq):
@@ -433,8 +443,7 @@ def validate(config: ExperimentConfig) -> None:
                 f"Kv^2 = {kv * kv:g} must exceed Kp = {kp:g}: Q = diag(2 Kp^2, 2 Kv^2 - 2 Kp) of "
                 "eq. (17) must be positive definite for the Lyapunov function y^T P y to decrease",
             )
-    if c.k < 0:
-        raise ConfigError("controller.k", f"must be >= 0, got {c.k}")
+    _non_negative("controller.k", c.k)
     _positive("controller.pinv_threshold", c.pinv_threshold)
     _positive("controller.pinv_max_damping", c.pinv_max_damping)
     _positive("nn.F", nn.F)
@@ -444,8 +453,7 @@ def validate(config: ExperimentConfig) -> None:
     _positive("nn.velocity_range", nn.velocity_range)
     _positive("nn.error_range", nn.error_range)
     for path, value in (("nn.gamma", nn.gamma), ("nn.eps_min", nn.eps_min), ("nn.sigma", nn.sigma)):
-        if value < 0:
-            raise ConfigError(path, f"must be >= 0, got {value}")
+        _non_negative(path, value)
     if nn.eps_min >= nn.eps0:
         raise ConfigError("nn.eps_min", f"the floor {nn.eps_min} must be below nn.eps0 = {nn.eps0}")
     nc, pc = config.nominal, config.plant
@@ -456,19 +464,16 @@ def validate(config: ExperimentConfig) -> None:
                           f"{nc.relative_error}")
     if nc.com_error < 0:
         raise ConfigError("nominal.com_error", f"must be >= 0 [m], got {nc.com_error}")
-    perturbed = (nc.mass_scale, nc.inertia_scale, nc.relative_error, nc.com_error) != (1, 1, 0, 0)
-    if nc.kind == "closed-form" and perturbed:
+    if nc.kind == "closed-form" and nc.perturbed:
         raise ConfigError("nominal.kind", "mass_scale, inertia_scale, relative_error and com_error "
                           "perturb the URDF model: set kind = 'urdf' (closed-form takes beta and p)")
     for path, value in (("plant.viscous_level", pc.viscous_level),
                         ("plant.coulomb_level", pc.coulomb_level),
                         ("plant.disturbance_level", pc.disturbance_level)):
-        if value < 0:
-            raise ConfigError(path, f"must be >= 0, got {value}")
+        _non_negative(path, value)
     _positive("subtasks.C", config.subtasks.C)
     _positive("subtasks.obstacle_influence", config.subtasks.obstacle_influence)
-    if config.subtasks.link_radius < 0:
-        raise ConfigError("subtasks.link_radius", f"must be >= 0, got {config.subtasks.link_radius}")
+    _non_negative("subtasks.link_radius", config.subtasks.link_radius)
     for i, sphere in enumerate(config.subtasks.obstacles):
         if len(sphere) != 4 or sphere[3] < 0:
             raise ConfigError(f"subtasks.obstacles[{i}]", f"must be [x, y, z, radius >= 0], got {sphere}")

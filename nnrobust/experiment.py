@@ -109,11 +109,11 @@ def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsMo
     """The controller's model: closed form with beta-hat, p-hat, or the robot's own (perturbed) model."""
     nc = config.nominal
     if nc.kind == "urdf":
-        if (nc.mass_scale, nc.inertia_scale, nc.relative_error, nc.com_error) == (1, 1, 0, 0):
-            model = robot.model  # the same Pinocchio model (read-only), with its own Data
-        else:
+        if nc.perturbed:
             model = perturb_inertias(robot.model, nc.mass_scale, nc.inertia_scale,
                                      nc.relative_error, nc.com_error, nc.seed)
+        else:
+            model = robot.model  # the same Pinocchio model (read-only), with its own Data
         return PinocchioModel(model, robot.task_frame, robot.task, robot.name)
     if robot.task != "planar":
         raise ConfigError("nominal.kind", "'closed-form' is the planar three-link model; use 'urdf'")
