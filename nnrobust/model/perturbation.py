@@ -6,14 +6,25 @@ import numpy as np
 import pinocchio as pin
 
 
-def is_physical(inertia: pin.Inertia, tol: float = 0.0) -> bool:
-    """Mass > 0 and a rotational inertia about the centre of mass that is positive definite and
-    satisfies the triangle inequalities (I_a + I_b >= I_c for the principal moments).
+def rotational_inertia_problem(I: np.ndarray, rel_tol: float = 0.0) -> str | None:
+    """Why a 3 x 3 inertia about the centre of mass is not physical, or None when it is.
+
+    It must be positive definite and its principal moments must satisfy the triangle
+    inequality I1 + I2 >= I3 (within ``rel_tol`` of I3).
     """
-    if not inertia.mass > 0:
-        return False
-    moments = np.linalg.eigvalsh(np.asarray(inertia.inertia))
-    return bool(moments[0] > 0 and moments[0] + moments[1] >= moments[2] * (1 - tol) - tol)
+    moments = np.linalg.eigvalsh(np.asarray(I, dtype=float))
+    shown = np.round(moments, 9).tolist()
+    if moments[0] <= 0:
+        return f"the inertia is not positive definite (principal moments {shown} kg m^2)"
+    if moments[0] + moments[1] < moments[2] * (1 - rel_tol):
+        return (f"principal moments {shown} break the triangle inequality I1 + I2 >= I3 "
+                "(no rigid body has them)")
+    return None
+
+
+def is_physical(inertia: pin.Inertia) -> bool:
+    """Mass > 0 and a physical rotational inertia (:func:`rotational_inertia_problem`)."""
+    return bool(inertia.mass > 0) and rotational_inertia_problem(inertia.inertia) is None
 
 
 def perturb_inertias(

@@ -23,6 +23,7 @@ from ..exceptions import (
     UrdfStructureError,
     UrdfSyntaxError,
 )
+from .perturbation import rotational_inertia_problem
 
 MAX_URDF_BYTES = 20_000_000
 """Largest URDF read [bytes]; real arms are well under 1 MB."""
@@ -79,13 +80,9 @@ def _check_inertial(link: ET.Element, name: str, source: str) -> None:
     I = np.array([[values["ixx"], values["ixy"], values["ixz"]],
                   [values["ixy"], values["iyy"], values["iyz"]],
                   [values["ixz"], values["iyz"], values["izz"]]])
-    moments = np.linalg.eigvalsh(I)
-    if moments[0] <= 0:
-        raise InvalidInertia(source, f"link {name!r}: the inertia is not positive definite "
-                             f"(principal moments {np.round(moments, 9).tolist()} kg m^2)")
-    if moments[0] + moments[1] < moments[2] * (1 - 1e-9):
-        raise InvalidInertia(source, f"link {name!r}: principal moments {np.round(moments, 9).tolist()} "
-                             "break the triangle inequality I1 + I2 >= I3 (no rigid body has them)")
+    problem = rotational_inertia_problem(I, rel_tol=1e-9)
+    if problem:
+        raise InvalidInertia(source, f"link {name!r}: {problem}")
 
 
 def mesh_roots(base: Path) -> list[Path]:
