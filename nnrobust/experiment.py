@@ -167,8 +167,7 @@ def build_basis(config: ExperimentConfig, robot: PinocchioModel, m: int) -> Addi
     """phi(s) over [q, q'] (joint limits, +-velocity_range) or [e, e'] (+-error_range)."""
     nn = config.nn
     if nn.basis_input == "joint":
-        lo_q = np.maximum(robot.lower_limits, -np.pi)
-        hi_q = np.minimum(robot.upper_limits, np.pi)
+        lo_q, hi_q = robot.working_range
         v = np.full(robot.nq, nn.velocity_range)
         low, high = np.concatenate([lo_q, -v]), np.concatenate([hi_q, v])
     else:
@@ -205,8 +204,7 @@ def build_controller(
 
 def _seed(config: ExperimentConfig, robot: PinocchioModel) -> np.ndarray:
     lower, upper = robot.lower_limits, robot.upper_limits
-    mid = 0.5 * (np.maximum(lower, -np.pi) + np.minimum(upper, np.pi))
-    seed = _vector("simulation.q_seed", config.simulation.q_seed, robot.nq, mid)
+    seed = _vector("simulation.q_seed", config.simulation.q_seed, robot.nq, robot.mid_configuration)
     outside = np.flatnonzero((seed < lower) | (seed > upper))
     if outside.size:
         i = int(outside[0])

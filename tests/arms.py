@@ -22,6 +22,5 @@ def arm(name: str, task: str):
 def random_configurations(robot, count: int, seed: int = 0) -> list[np.ndarray]:
     """Seeded configurations inside the joint limits (clipped to +-pi)."""
     rng = np.random.default_rng(seed)
-    lo = np.maximum(robot.lower_limits, -np.pi)
-    hi = np.minimum(robot.upper_limits, np.pi)
-    return [rng.uniform(lo, hi) for _ in range(count)]
+    low, high = robot.working_range
+    return [rng.uniform(low, high) for _ in range(count)]

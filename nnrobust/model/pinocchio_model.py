@@ -180,6 +180,17 @@ class PinocchioModel:
 
     # -- limits ---------------------------------------------------------------------------
     @property
+    def working_range(self) -> tuple[np.ndarray, np.ndarray]:
+        """The joint limits clipped to [-pi, pi] (one turn for unbounded revolute joints)."""
+        return np.maximum(self.lower_limits, -np.pi), np.minimum(self.upper_limits, np.pi)
+
+    @property
+    def mid_configuration(self) -> np.ndarray:
+        """The middle of :attr:`working_range`: the default IK seed and reference posture."""
+        low, high = self.working_range
+        return 0.5 * (low + high)
+
+    @property
     def lower_limits(self) -> np.ndarray:
         """Lower joint position limits [rad or m] from the URDF."""
         return np.asarray(self.model.lowerPositionLimit).copy()

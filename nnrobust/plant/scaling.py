@@ -27,7 +27,7 @@ def torque_scale(robot: PinocchioModel) -> np.ndarray:
     M_ii(q_mid) * 10 rad/s^2 + |G_i(q_mid)| at mid-range (the arm's own size).
     """
     effort = robot.effort_limits
-    mid = 0.5 * (np.maximum(robot.lower_limits, -np.pi) + np.minimum(robot.upper_limits, np.pi))
+    mid = robot.mid_configuration
     fallback = np.diag(robot.mass(mid)) * REFERENCE_ACCELERATION + np.abs(robot.gravity(mid))
     return np.where(_usable(effort), effort, fallback)
 
