@@ -170,16 +170,7 @@ def check_urdf(text: str, source: str, base: Path | None = None,
                                      f"({parent_of[child][1]!r} and {name!r})")
         parent_of[child] = (parent, name)
 
-    for start in parent_of:  # follow parents: a link met twice closes a loop
-        seen, link = [start], start
-        while link in parent_of:
-            link = parent_of[link][0]
-            if link in seen:
-                loop = seen[seen.index(link):] + [link]
-                joints = [parent_of[x][1] for x in loop[:-1]]
-                raise KinematicCycle(source, f"the joints {joints} form a closed loop through links "
-                                     f"{loop}; Pinocchio models trees only")
-            seen.append(link)
+    _refuse_cycles(parent_of, source)
     roots_found = [name for name in links if name not in parent_of]
     if len(roots_found) != 1:
         raise UrdfStructureError(source, f"links {sorted(roots_found)} have no parent joint: the "
@@ -188,12 +179,13 @@ def check_urdf(text: str, source: str, base: Path | None = None,
     for name, link in links.items():
         _check_inertial(link, name, source)
 
+    visual_meshes = {id(m) for visual in root.iter("visual") for m in visual.iter("mesh")}
     allowed = roots if roots is not None else (mesh_roots(base) if base is not None else [])
     for mesh in root.iter("mesh"):
         uri = mesh.get("filename", "")
         path = _resolve_mesh(uri, base, allowed, source)
         if path is not None and not path.is_file():
-            where = "visual" if _inside(root, mesh, "visual") else "collision"
+            where = "visual" if id(mesh) in visual_meshes else "collision"
             warnings.warn(f"{source}: {where} mesh {uri!r} not found ({path}); the robot simulates, "
                           "the viewer leaves that part out", MissingMeshWarning, stacklevel=3)
 
@@ -211,8 +203,20 @@ def _by_name(root: ET.Element, tag: str, source: str) -> dict[str, ET.Element]:
     return found
 
 
-def _inside(root: ET.Element, element: ET.Element, tag: str) -> bool:
-    for candidate in root.iter(tag):
-        if any(e is element for e in candidate.iter()):
-            return True
-    return False
+def _refuse_cycles(parent_of: dict[str, tuple[str, str]], source: str) -> None:
+    """Follow parent links from every link once (O(links)); a link met twice on one walk closes
+    a loop.
+    """
+    done: set[str] = set()  # links whose walk ended at a root
+    for start in parent_of:
+        walk, on_walk, link = [], set(), start
+        while link in parent_of and link not in done:
+            if link in on_walk:
+                loop = walk[walk.index(link):] + [link]
+                joints = [parent_of[x][1] for x in loop[:-1]]
+                raise KinematicCycle(source, f"the joints {joints} form a closed loop through links "
+                                     f"{loop}; Pinocchio models trees only")
+            walk.append(link)
+            on_walk.add(link)
+            link = parent_of[link][0]
+        done.update(walk)
