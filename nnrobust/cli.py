@@ -7,9 +7,8 @@ import json
 import sys
 from pathlib import Path
 
+from .config import CONTROLLER_KINDS as CONTROLLERS
 from .exceptions import NNRobustError
-
-CONTROLLERS = ("nn", "no-u0", "pd")
 
 TABLE_COLUMNS = (
     ("run", None),
@@ -19,10 +18,11 @@ TABLE_COLUMNS = (
     ("max_error", 1e3),
     ("rms_torque", 1.0),
     ("torque_chatter", 1.0),
+    ("saturated_fraction", 100.0),
     ("final_rho_hat", 1.0),
 )
 HEADERS = ("run", "status", "rms e [mm]", "rms e t>=2s [mm]", "max e [mm]", "rms tau [N m]",
-           "chatter [N m]", "rho-hat end")
+           "chatter [N m]", "saturated [%]", "rho-hat end")
 
 
 ORIENTATION_COLUMN = ("rms_orientation_error_after_2s", 1e3)
@@ -130,6 +130,8 @@ def cmd_run(args) -> int:
         write_run(out, result, overwrite=args.overwrite, plots=not args.no_plots,
                   animation=not args.no_animation)
         metrics = result.metrics()
+        for warning in metrics["warnings"]:
+            print(f"warning: {warning}", file=sys.stderr)
         if not args.quiet:
             print(format_table([(str(out), metrics)]))
             print(f"simulated {metrics['simulated_seconds']:.2f} s in {metrics['wall_seconds']:.2f} s "
@@ -267,7 +269,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--out", help="run folder (default out/NAME-CONTROLLER)")
     run.add_argument("--controller", choices=CONTROLLERS,
                      help="override the controller: nn (eq. 9 + NN compensator), no-u0 "
-                     "(eq. 9 without u_0), pd (task-space PD + gravity compensation)")
+                     "(eq. 9 without u_0), computed-torque (eq. 9 with the true model and friction), "
+                     "sliding-mode (eq. 9 + fixed-gain boundary-layer sliding mode), pd (task-space "
+                     "PD + gravity compensation)")
     run.add_argument("--duration", type=float, help="override the simulated time [s]")
     run.add_argument("--overwrite", action="store_true", help="replace an existing run folder")
     run.add_argument("--no-plots", action="store_true", help="skip the figures")

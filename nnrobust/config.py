@@ -11,6 +11,7 @@ import typing
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from .controllers.nn_compensator import DEFAULTS as NN_DEFAULTS
 from .exceptions import ConfigError
 from .model.tasks import TASK_KINDS
 
@@ -92,6 +93,13 @@ class PlantConfig:
         disturbance_omega: K angular frequencies [rad/s] (``sinusoid``).
         disturbance_phase: n x K phases [rad] (``sinusoid``; default 0).
         disturbance_scale: factor applied to the disturbance.
+        torque_limits: ``urdf`` (the URDF's effort limits; joints without one are unlimited),
+            ``none`` (ideal actuators) or one value per joint [N m or N]; the commanded torque
+            is clipped to +-limit.
+        joint_stops: hard stops at the URDF's position limits (docs/plant.md).
+        joint_stop_stiffness: stop stiffness / the joint's torque scale [1/rad]: the stop
+            pushes back with the joint's full effort at 1/joint_stop_stiffness beyond the limit.
+        joint_stop_damping: Hunt-Crossley damping alpha of the stops [s/rad].
 
     """
 
@@ -106,6 +114,32 @@ class PlantConfig:
     disturbance_omega: list[float] | None = None
     disturbance_phase: list[list[float]] | None = None
     disturbance_scale: float = 1.0
+    torque_limits: str | list[float] = "urdf"
+    joint_stops: bool = True
+    joint_stop_stiffness: float = 100.0
+    joint_stop_damping: float = 1.0
+
+
+@dataclass
+class SensingConfig:
+    """What the controller measures, and when its torque arrives (docs/plant.md).
+
+    Attributes:
+        position_noise: standard deviation of the Gaussian noise on q, one value for all joints
+            or one per joint [rad or m].
+        velocity_noise: standard deviation of the noise on q' [rad/s or m/s] (one or n values).
+        encoder_resolution: q is rounded to multiples of this (one encoder count) [rad or m]
+            (one or n values; 0 = continuous).
+        delay: control periods between a measurement and the torque computed from it.
+        seed: seed of the noise.
+
+    """
+
+    position_noise: list[float] = field(default_factory=lambda: [0.0])
+    velocity_noise: list[float] = field(default_factory=lambda: [0.0])
+    encoder_resolution: list[float] = field(default_factory=lambda: [0.0])
+    delay: int = 0
+    seed: int = 0
 
 
 @dataclass
@@ -145,7 +179,10 @@ class ControllerConfig:
     """Which control law and its gains.
 
     Attributes:
-        kind: ``nn`` (eq. 9 with the NN compensator), ``no-u0`` (eq. 9 with u_0 = 0) or ``pd``.
+        kind: ``nn`` (eq. 9 with the NN compensator), ``no-u0`` (eq. 9 with u_0 = 0),
+            ``computed-torque`` (eq. 9 with u_0 = 0 and the true model and friction as nominal:
+            what perfect model knowledge buys), ``sliding-mode`` (eq. 9 with a fixed-gain
+            boundary-layer sliding-mode u_0) or ``pd``.
         Kp, Kv: diagonals of the task gains [1/s^2, 1/s], m entries or one for all;
             Kv^2 > Kp is required by eq. (17).
         k: self-motion gain of eq. (3) [1/s].
@@ -154,6 +191,8 @@ class ControllerConfig:
         pd_Kp, pd_Kd: task stiffness [N/m] and damping [N s/m] of the PD baseline (m entries or
             one for all; N m/rad and N m s/rad for the orientation rows of a pose).
         pd_null_damping: null-space joint damping of the PD baseline [N m s/rad].
+        sliding_gain: K of the sliding-mode u_0 [m/s^2].
+        sliding_boundary: boundary-layer width Phi of the sliding-mode u_0 [m/s^2].
 
     """
 
@@ -166,6 +205,12 @@ class ControllerConfig:
     pd_Kp: list[float] = field(default_factory=lambda: [400.0])
     pd_Kd: list[float] = field(default_factory=lambda: [40.0])
     pd_null_damping: float = 1.0
+    sliding_gain: float = 20.0
+    sliding_boundary: float = 0.5
+
+
+CONTROLLER_KINDS = ("nn", "no-u0", "computed-torque", "sliding-mode", "pd")
+"""Every value of ``controller.kind``."""
 
 
 @dataclass
@@ -178,7 +223,8 @@ class NNConfig:
         gamma: decay rate of eps [1/s].
         eps0: eps(0) > 0.
         eps_min: eps floor (0 = the paper's vanishing boundary layer).
-        sigma: sigma-modification leakage (0 = the paper's law).
+        sigma: sigma-modification leakage (0 = the paper's law; the default keeps a sampled
+            controller bounded, docs/controller.md).
         basis_input: ``joint`` (s = [q, q']) or ``error`` (s = [e, e']).
         centers: Gaussian centres per input coordinate.
         width: Gaussian width as a multiple of the centre spacing.
@@ -191,11 +237,11 @@ class NNConfig:
     """
 
     law: str = "corrected"
-    F: float = 5.0
-    gamma: float = 1.0
-    eps0: float = 1.0
-    eps_min: float = 0.0
-    sigma: float = 0.0
+    F: float = NN_DEFAULTS["F"]
+    gamma: float = NN_DEFAULTS["gamma"]
+    eps0: float = NN_DEFAULTS["eps0"]
+    eps_min: float = NN_DEFAULTS["eps_min"]
+    sigma: float = NN_DEFAULTS["sigma"]
     basis_input: str = "joint"
     centers: int = 5
     width: float = 1.0
@@ -265,6 +311,7 @@ class ExperimentConfig:
     robot: RobotConfig = field(default_factory=RobotConfig)
     nominal: NominalConfig = field(default_factory=NominalConfig)
     plant: PlantConfig = field(default_factory=PlantConfig)
+    sensing: SensingConfig = field(default_factory=SensingConfig)
     trajectory: TrajectoryConfig = field(default_factory=TrajectoryConfig)
     controller: ControllerConfig = field(default_factory=ControllerConfig)
     nn: NNConfig = field(default_factory=NNConfig)
@@ -305,6 +352,9 @@ def _suggest(key: str, valid: list[str]) -> str:
     return f"unknown key{hint} Valid keys: {', '.join(valid)}"
 
 
+_TYPE_WORDS = {str: "string", float: "number", int: "integer", bool: "boolean"}
+
+
 def _check_type(path: str, value, annotation):
     origin = typing.get_origin(annotation)
     args = typing.get_args(annotation)
@@ -312,7 +362,14 @@ def _check_type(path: str, value, annotation):
         if value is None and type(None) in args:
             return None
         inner = [a for a in args if a is not type(None)]
-        return _check_type(path, value, inner[0])
+        if len(inner) == 1:
+            return _check_type(path, value, inner[0])
+        for alternative in inner:  # e.g. str | list[float]: the first that takes the value
+            if (typing.get_origin(alternative) or alternative) is type(value):
+                return _check_type(path, value, alternative)
+        kinds = " or ".join("a list" if typing.get_origin(a) is list else f"a {_TYPE_WORDS[a]}"
+                            for a in inner)
+        raise ConfigError(path, f"expected {kinds}, got {type(value).__name__} {value!r}")
     if origin is list:
         if not isinstance(value, list):
             raise ConfigError(path, f"expected a list, got {type(value).__name__} {value!r}")
@@ -401,7 +458,7 @@ def validate(config: ExperimentConfig) -> None:
         "nominal.kind": (config.nominal.kind, ("closed-form", "urdf")),
         "plant.friction": (config.plant.friction, ("urdf", "scaled")),
         "plant.disturbance": (config.plant.disturbance, ("paper", "none", "scaled", "sinusoid")),
-        "controller.kind": (c.kind, ("nn", "no-u0", "pd")),
+        "controller.kind": (c.kind, CONTROLLER_KINDS),
         "nn.law": (nn.law, ("corrected", "printed")),
         "nn.basis_input": (nn.basis_input, ("joint", "error")),
         "simulation.integrator": (sim.integrator, ("rk4", "solve_ivp")),
@@ -454,8 +511,8 @@ def validate(config: ExperimentConfig) -> None:
     _positive("nn.error_range", nn.error_range)
     for path, value in (("nn.gamma", nn.gamma), ("nn.eps_min", nn.eps_min), ("nn.sigma", nn.sigma)):
         _non_negative(path, value)
-    if nn.eps_min >= nn.eps0:
-        raise ConfigError("nn.eps_min", f"the floor {nn.eps_min} must be below nn.eps0 = {nn.eps0}")
+    if nn.eps_min > nn.eps0:
+        raise ConfigError("nn.eps_min", f"the floor {nn.eps_min} must not exceed nn.eps0 = {nn.eps0}")
     nc, pc = config.nominal, config.plant
     _positive("nominal.mass_scale", nc.mass_scale)
     _positive("nominal.inertia_scale", nc.inertia_scale)
@@ -467,6 +524,28 @@ def validate(config: ExperimentConfig) -> None:
     if nc.kind == "closed-form" and nc.perturbed:
         raise ConfigError("nominal.kind", "mass_scale, inertia_scale, relative_error and com_error "
                           "perturb the URDF model: set kind = 'urdf' (closed-form takes beta and p)")
+    if isinstance(pc.torque_limits, str):
+        if pc.torque_limits not in ("urdf", "none"):
+            raise ConfigError("plant.torque_limits", f"{pc.torque_limits!r} is not one of urdf, none "
+                              "(or give one limit per joint [N m])")
+    else:
+        _positive("plant.torque_limits", pc.torque_limits)
+    _positive("plant.joint_stop_stiffness", pc.joint_stop_stiffness)
+    _non_negative("plant.joint_stop_damping", pc.joint_stop_damping)
+    se = config.sensing
+    for path, values in (("sensing.position_noise", se.position_noise),
+                         ("sensing.velocity_noise", se.velocity_noise),
+                         ("sensing.encoder_resolution", se.encoder_resolution)):
+        if not values or any(v < 0 for v in values):
+            raise ConfigError(path, f"needs one value for all joints or one per joint, each >= 0, got "
+                              f"{values}")
+    for path, seed in (("sensing.seed", se.seed), ("nominal.seed", config.nominal.seed)):
+        if not 0 <= seed < 2**63:
+            raise ConfigError(path, f"must be an integer in [0, 2^63), got {seed}")
+    if se.delay < 0:
+        raise ConfigError("sensing.delay", f"must be >= 0 control periods, got {se.delay}")
+    _positive("controller.sliding_gain", c.sliding_gain)
+    _positive("controller.sliding_boundary", c.sliding_boundary)
     for path, value in (("plant.viscous_level", pc.viscous_level),
                         ("plant.coulomb_level", pc.coulomb_level),
                         ("plant.disturbance_level", pc.disturbance_level)):

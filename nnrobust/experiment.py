@@ -14,6 +14,7 @@ from .controllers import (
     Controller,
     DampedPseudoInverse,
     NNCompensator,
+    SlidingModeCompensator,
     TaskSpaceController,
     TaskSpacePD,
 )
@@ -28,7 +29,16 @@ from .model import (
 )
 from .model.perturbation import perturb_inertias
 from .model.tasks import pose_vector, split_pose
-from .plant import Friction, Plant, SinusoidalDisturbance, scaled_disturbance, scaled_friction
+from .plant import (
+    Friction,
+    JointStops,
+    Plant,
+    Sensor,
+    SinusoidalDisturbance,
+    scaled_disturbance,
+    scaled_friction,
+    torque_scale,
+)
 from .results import Result
 from .simulation import simulate
 from .subtasks import (
@@ -71,8 +81,48 @@ def _vector(path: str, values, n: int, default: np.ndarray) -> np.ndarray:
     return arr
 
 
+def _per_joint(path: str, values: list[float], n: int) -> np.ndarray:
+    """One value for every joint, or one per joint."""
+    return np.full(n, float(values[0])) if len(values) == 1 else _vector(path, values, n, None)
+
+
+def _finite_limits(values: np.ndarray) -> np.ndarray:
+    """URDF limits with absent ones (not finite, or Pinocchio's huge placeholders) as inf."""
+    return np.where(np.isfinite(values) & (np.abs(values) < 1e6), values, np.sign(values) * np.inf)
+
+
+def build_torque_limits(config: ExperimentConfig, robot: PinocchioModel) -> np.ndarray | None:
+    """Effort limit per joint [N m or N] (inf where the URDF has none), or None (ideal actuators)."""
+    limits = config.plant.torque_limits
+    if limits == "none":
+        return None
+    if limits == "urdf":
+        effort = robot.effort_limits
+        return np.where(np.isfinite(effort) & (effort > 0) & (effort < 1e6), effort, np.inf)
+    return _vector("plant.torque_limits", limits, robot.nq, None)
+
+
+def build_stops(config: ExperimentConfig, robot: PinocchioModel) -> JointStops | None:
+    """Hard stops at the URDF's position limits, stiffness relative to each joint's torque scale."""
+    pc = config.plant
+    if not pc.joint_stops:
+        return None
+    lower, upper = _finite_limits(robot.lower_limits), _finite_limits(robot.upper_limits)
+    return JointStops(lower, upper, pc.joint_stop_stiffness * torque_scale(robot), pc.joint_stop_damping)
+
+
+def build_sensor(config: ExperimentConfig, n: int) -> Sensor:
+    """Noise and quantisation of the measurements, one value for all joints or one per joint."""
+    se = config.sensing
+    return Sensor(_per_joint("sensing.position_noise", se.position_noise, n),
+                  _per_joint("sensing.velocity_noise", se.velocity_noise, n),
+                  _per_joint("sensing.encoder_resolution", se.encoder_resolution, n), se.seed)
+
+
 def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
-    """True model, friction (URDF or scaled to the robot, unless given) and disturbance."""
+    """True model, friction (URDF or scaled to the robot, unless given), disturbance, actuator
+    limits, joint stops, sensors and delay.
+    """
     n, pc = robot.nq, config.plant
     base = (scaled_friction(robot, pc.viscous_level, pc.coulomb_level) if pc.friction == "scaled"
             else Friction(robot.viscous_friction, robot.coulomb_friction))
@@ -102,12 +152,17 @@ def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
         disturbance = SinusoidalDisturbance(
             disturbance.amplitude * pc.disturbance_scale, disturbance.omega, disturbance.phase
         )
-    return Plant(robot, friction, disturbance)
+    return Plant(robot, friction, disturbance, build_torque_limits(config, robot),
+                 build_stops(config, robot), build_sensor(config, n), config.sensing.delay)
 
 
 def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsModel:
-    """The controller's model: closed form with beta-hat, p-hat, or the robot's own (perturbed) model."""
+    """The controller's model: closed form with beta-hat, p-hat, or the robot's own (perturbed) model;
+    the true model itself for computed-torque control.
+    """
     nc = config.nominal
+    if config.controller.kind == "computed-torque":
+        return PinocchioModel(robot.model, robot.task_frame, robot.task, robot.name)
     if nc.kind == "urdf":
         if nc.perturbed:
             model = perturb_inertias(robot.model, nc.mass_scale, nc.inertia_scale,
@@ -178,9 +233,9 @@ def build_basis(config: ExperimentConfig, robot: PinocchioModel, m: int) -> Addi
 
 def build_controller(
     config: ExperimentConfig, robot: PinocchioModel, nominal: DynamicsModel,
-    trajectory: Trajectory, criterion: Criterion | None,
+    trajectory: Trajectory, criterion: Criterion | None, true_friction: Friction | None = None,
 ) -> Controller:
-    """The control law named by controller.kind."""
+    """The control law named by controller.kind (computed-torque takes ``true_friction`` as F-hat)."""
     c, n = config.controller, robot.nq
     pinv = DampedPseudoInverse(c.pinv_threshold, c.pinv_max_damping)
     if c.kind == "pd":
@@ -194,10 +249,17 @@ def build_controller(
             Kp, Kv, build_basis(config, robot, trajectory.m), nn.basis_input, nn.F, nn.gamma,
             nn.eps0, nn.eps_min, nn.sigma, nn.law,
         )
-    nominal_friction = Friction(
-        _vector("nominal.viscous_friction", config.nominal.viscous_friction, n, np.zeros(n)),
-        _vector("nominal.coulomb_friction", config.nominal.coulomb_friction, n, np.zeros(n)),
-    )
+    elif c.kind == "sliding-mode":
+        compensator = SlidingModeCompensator(Kp, Kv, c.sliding_gain, c.sliding_boundary)
+    if c.kind == "computed-torque":
+        if true_friction is None:
+            raise ValueError("computed-torque needs the true friction")
+        nominal_friction = true_friction
+    else:
+        nominal_friction = Friction(
+            _vector("nominal.viscous_friction", config.nominal.viscous_friction, n, np.zeros(n)),
+            _vector("nominal.coulomb_friction", config.nominal.coulomb_friction, n, np.zeros(n)),
+        )
     return TaskSpaceController(nominal, trajectory, Kp, Kv, c.k, criterion, nominal_friction,
                                compensator, pinv)
 
@@ -214,8 +276,15 @@ def _seed(config: ExperimentConfig, robot: PinocchioModel) -> np.ndarray:
     return seed
 
 
+IK_LIMIT_MARGIN = 0.02
+"""The initial configuration keeps this fraction of each joint's range inside its limits."""
+
+
 def _reach(robot: PinocchioModel, target: np.ndarray, seed: np.ndarray, what: str) -> np.ndarray:
-    q, residual = solve_ik(robot, target, seed, robot.lower_limits, robot.upper_limits)
+    lower, upper = _finite_limits(robot.lower_limits), _finite_limits(robot.upper_limits)
+    margin = np.where(np.isfinite(upper - lower), IK_LIMIT_MARGIN * (upper - lower), 0.0)
+    seed = np.clip(seed, lower + margin, upper - margin)
+    q, residual = solve_ik(robot, target, seed, robot.lower_limits + margin, robot.upper_limits - margin)
     if residual > 1e-6:
         p = split_pose(target)[0] if robot.task == "pose" else target
         raise ConfigError(
@@ -296,28 +365,46 @@ RK4_STABLE_STEP = 2.5
 """h * lambda below which RK4 is stable for a real decaying mode (the exact limit is 2.785)."""
 
 
-def check_friction_stiffness(config: ExperimentConfig, plant: Plant, q0: np.ndarray) -> None:
-    """Refuse an RK4 step that viscous friction makes unstable.
+def check_stiffness(config: ExperimentConfig, plant: Plant, q0: np.ndarray) -> None:
+    """Refuse an RK4 step that viscous friction or the joint stops make unstable.
 
     Viscous friction B on a joint that carries light outer links is a fast decaying mode of
     q'' = -M^-1 B q' + ...: its rate lambda = max eig(M(q0)^-1 B) grows quickly with the number
     of links (about 4e3 1/s for a 15-link chain with 3 % viscous level), and RK4 diverges when
-    h lambda > 2.785. Checked once, at q(0).
+    h lambda > 2.785. A joint stop of stiffness K_i oscillates at about sqrt(K_i (M^-1)_ii), and
+    RK4 is unstable for h omega > 2.83. Checked once, at q(0).
     """
     sim = config.simulation
-    if sim.integrator != "rk4" or not np.any(plant.friction.viscous):
+    if sim.integrator != "rk4":
         return
-    rates = np.linalg.eigvals(np.linalg.solve(plant.model.mass(q0), np.diag(plant.friction.viscous)))
-    fastest = float(np.max(rates.real))
     h = sim.control_period / sim.substeps
-    if h * fastest > RK4_STABLE_STEP:
-        needed = int(np.ceil(sim.control_period * fastest / RK4_STABLE_STEP))
-        raise ConfigError(
-            "simulation.substeps",
-            f"viscous friction makes the dynamics stiff (fastest friction mode {fastest:.3g} 1/s at "
-            f"q(0)); the RK4 step {h:.3g} s would diverge: set substeps >= {needed}, or lower "
-            "plant.viscous_level / plant.viscous_friction",
-        )
+    M_inv = np.linalg.inv(plant.model.mass(q0))
+    if np.any(plant.friction.viscous):
+        fastest = float(np.max(np.linalg.eigvals(M_inv @ np.diag(plant.friction.viscous)).real))
+        if h * fastest > RK4_STABLE_STEP:
+            raise ConfigError(
+                "simulation.substeps",
+                f"viscous friction makes the dynamics stiff (fastest friction mode {fastest:.3g} 1/s "
+                f"at q(0)); the RK4 step {h:.3g} s would diverge: set substeps >= "
+                f"{_substeps_needed(sim.control_period, fastest)}, or lower plant.viscous_level / "
+                "plant.viscous_friction",
+            )
+    if plant.stops is not None:
+        omega = np.sqrt(plant.stops.stiffness * np.diag(M_inv))
+        omega[~np.isfinite(plant.stops.upper - plant.stops.lower)] = 0.0
+        i = int(np.argmax(omega))
+        if h * omega[i] > RK4_STABLE_STEP:
+            raise ConfigError(
+                "plant.joint_stop_stiffness",
+                f"the stop of joint {plant.model.joint_names[i]!r} rings at {omega[i]:.3g} rad/s "
+                f"(light outer links); the RK4 step {h:.3g} s would diverge in contact: set "
+                f"simulation.substeps >= {_substeps_needed(sim.control_period, omega[i])}, or lower "
+                "plant.joint_stop_stiffness",
+            )
+
+
+def _substeps_needed(period: float, rate: float) -> int:
+    return int(np.ceil(period * rate / RK4_STABLE_STEP))
 
 
 def build(config: ExperimentConfig) -> Setup:
@@ -334,10 +421,10 @@ def build(config: ExperimentConfig) -> Setup:
     plant = build_plant(config, robot)
     nominal = build_nominal(config, robot)
     criterion = build_criterion(config, robot)
-    controller = build_controller(config, robot, nominal, trajectory, criterion)
+    controller = build_controller(config, robot, nominal, trajectory, criterion, plant.friction)
     q0, v0 = initial_state(config, robot, trajectory)
     check_workspace(config, robot, trajectory, q0)
-    check_friction_stiffness(config, plant, q0)
+    check_stiffness(config, plant, q0)
     return Setup(config, robot, plant, nominal, trajectory, criterion, controller, q0, v0)
 
 
@@ -353,4 +440,38 @@ def run_experiment(config: ExperimentConfig, progress=None, setup: Setup | None 
         sim.control_period, sim.substeps, sim.integrator, progress=progress,
     )
     wall = time.perf_counter() - start
-    return Result.from_trace(trace, setup.robot, setup.trajectory, setup.criterion, config, wall)
+    if trace.status == "diverged":
+        trace.message += "; " + likely_cause(setup, trace)
+    return Result.from_trace(trace, setup.robot, setup.trajectory, setup.criterion, config, wall,
+                             setup.plant.torque_limit)
+
+
+IMPLAUSIBLE_EFFORT = 100.0
+"""An effort limit above this times the torque the arm needs (M 10 rad/s^2 + |G|) is implausible."""
+
+
+def likely_cause(setup: Setup, trace) -> str:
+    """A guess at why a run diverged, from its last finite state (for the divergence message)."""
+    finite = np.flatnonzero(np.all(np.isfinite(trace.q), axis=1) & np.all(np.isfinite(trace.dq), axis=1))
+    q = trace.q[finite[-1]] if finite.size else setup.q0
+    robot, config, names = setup.robot, setup.config, setup.robot.joint_names
+    if setup.criterion is not None and config.controller.k > 0:
+        grad = config.controller.k * np.abs(setup.criterion.gradient(robot, q))
+        i = int(np.argmax(grad))
+        if grad[i] > 1e3:
+            return (f"likely cause: an exploding criterion gradient (k dh/dq = {grad[i]:.3g} on joint "
+                    f"{names[i]!r}); lower controller.k or check subtasks.criteria")
+    effort = robot.effort_limits
+    needed = np.diag(robot.mass(q)) * 10.0 + np.abs(robot.gravity(q))
+    ratio = np.where(np.isfinite(effort) & (effort < 1e6), effort / np.maximum(needed, 1e-9), 0.0)
+    i = int(np.argmax(ratio))
+    if ratio[i] > IMPLAUSIBLE_EFFORT and (config.plant.friction == "scaled"
+                                          or config.plant.disturbance == "scaled"):
+        return (f"likely cause: an implausible effort limit ({effort[i]:.3g} on joint {names[i]!r}, "
+                f"{ratio[i]:.0f}x what the arm needs), to which the scaled friction and disturbance "
+                "are sized; set plant.torque_limits or the URDF's effort")
+    if setup.plant.torque_limit is None:
+        peak = float(np.nanmax(np.abs(trace.tau_cmd))) if trace.tau_cmd.size else float("nan")
+        return (f"likely cause: the commanded torque grew without bound (peak {peak:.3g} N m) with no "
+                "actuator limits (plant.torque_limits = 'none')")
+    return "likely cause: the closed loop is unstable for these gains and this model error"

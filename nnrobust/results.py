@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import verdicts
 from .exceptions import RunFolderExists
 from .model.tasks import display_coordinates
 from .subtasks.manipulability import det
@@ -25,6 +26,16 @@ METRIC_UNITS = {
     "max_orientation_error": "rad",
     "rms_torque": "N m",
     "max_torque": "N m",
+    "max_torque_cmd": "N m",
+    "saturated_fraction": "-",
+    "max_torque_ratio": "-",
+    "max_joint_limit_violation": "rad (m for a prismatic joint)",
+    "rms_error_early": "m",
+    "rms_error_last_fifth": "m",
+    "rho_hat_peak_middle": "m/s^2",
+    "rho_hat_peak_last_fifth": "m/s^2",
+    "h_start": "criterion's unit",
+    "h_end": "criterion's unit",
     "torque_chatter": "N m",
     "min_manipulability": "m^m (m^2 planar, m^3 position; mixed for a pose)",
     "final_rho_hat": "m/s^2",
@@ -44,7 +55,8 @@ class Result:
     Attributes:
         t: time [s], N.
         q, dq: joint positions [rad], velocities [rad/s], N x n.
-        tau: joint torques held over [t_k, t_k + T) [N m], N x n.
+        tau: applied joint torques held over [t_k, t_k + T) [N m], N x n.
+        tau_cmd: commanded torques (tau is tau_cmd clipped to the effort limits) [N m], N x n.
         x, x_d, e: actual and desired task coordinates and the task error, N x m: positions [m]
             and e = x - x_d, or for a pose task [p, log3(R)] and e = [p - p_d, log3(R R_d^T)]
             [m, rad].
@@ -58,6 +70,9 @@ class Result:
         joint_names: names of the joints.
         chain: world positions of the joint origins and the task frame, N x (n + 1) x 3 [m]
             (for stick figures and the viewer).
+        torque_limit: effort limit per joint [N m] (inf: none), or None for ideal actuators.
+        lower_limit, upper_limit: joint position limits [rad or m], or None.
+        prismatic: whether each joint is prismatic (units m, m/s, N), or None (all revolute).
 
     """
 
@@ -75,9 +90,15 @@ class Result:
     wall_seconds: float = float("nan")
     joint_names: list[str] = field(default_factory=list)
     chain: np.ndarray | None = None
+    tau_cmd: np.ndarray | None = None
+    torque_limit: np.ndarray | None = None
+    lower_limit: np.ndarray | None = None
+    upper_limit: np.ndarray | None = None
+    prismatic: np.ndarray | None = None
 
     @classmethod
-    def from_trace(cls, trace, robot, trajectory, criterion, config, wall_seconds: float) -> Result:
+    def from_trace(cls, trace, robot, trajectory, criterion, config, wall_seconds: float,
+                   torque_limit: np.ndarray | None = None) -> Result:
         """Add task-space quantities (true kinematics) and the criterion to a simulation trace."""
         N = trace.t.size
         x = np.empty((N, robot.m))
@@ -105,7 +126,8 @@ class Result:
         return cls(
             trace.t, trace.q, trace.dq, trace.tau, x, x_d, e, signals, trace.status,
             trace.message, config.to_toml() if config is not None else "", wall_seconds,
-            list(robot.joint_names), chain,
+            list(robot.joint_names), chain, trace.tau_cmd, torque_limit, robot.lower_limits,
+            robot.upper_limits, robot.prismatic,
         )
 
     def experiment(self):
@@ -141,6 +163,13 @@ class Result:
             return float(np.sqrt(np.mean(a))) if a.size else float("nan")
 
         rho = self.signals.get("rho_hat")
+        tau_cmd = self.tau if self.tau_cmd is None else self.tau_cmd
+        saturated, torque_ratio = verdicts.saturation(tau_cmd, self.torque_limit)
+        violation, violating = (verdicts.joint_limit_violation(self.q, self.lower_limit, self.upper_limit)
+                                if self.lower_limit is not None else (0.0, -1))
+        runaway, rms_early, rms_late = verdicts.runaway(self.t, err)
+        growing, rho_middle, rho_late = verdicts.rho_growing(self.t, rho)
+        degraded, h_start, h_end = verdicts.subtask_loss(self.signals.get("h"))
         damping = self.signals.get("damping")
         damped = np.asarray(damping) > 0 if damping is not None else np.zeros(0, dtype=bool)
         simulated = float(self.t[-1] - self.t[0] + (self.t[1] - self.t[0])) if self.t.size > 1 else 0.0
@@ -153,11 +182,25 @@ class Result:
             "rms_torque": rms(tau_norm2),
             "rms_torque_per_joint": np.sqrt(np.mean(self.tau**2, axis=0)).tolist(),
             "max_torque": float(np.abs(self.tau).max()) if self.tau.size else float("nan"),
+            "max_torque_cmd": float(np.abs(tau_cmd).max()) if tau_cmd.size else float("nan"),
+            "saturated_fraction": saturated,
+            "max_torque_ratio": torque_ratio,
+            "max_joint_limit_violation": violation,
+            "joint_limit_joint": violating,
             "torque_chatter": rms(dtau**2),
             "min_manipulability": (
                 float(np.min(self.signals["manipulability"])) if err.size else float("nan")
             ),
             "final_rho_hat": float(rho[-1]) if rho is not None and rho.size else None,
+            "rho_hat_peak_middle": rho_middle if rho is not None else None,
+            "rho_hat_peak_last_fifth": rho_late if rho is not None else None,
+            "rho_hat_growing": growing,
+            "rms_error_early": rms_early,
+            "rms_error_last_fifth": rms_late,
+            "runaway": runaway,
+            "h_start": h_start,
+            "h_end": h_end,
+            "subtask_degraded": degraded,
             "singular_fraction": float(np.mean(damped)) if damped.size else 0.0,
             "singular_episodes": singular_episodes(self.t, damped),
             "simulated_seconds": simulated,
@@ -170,6 +213,9 @@ class Result:
             out["max_orientation_error"] = float(turn.max()) if turn.size else float("nan")
         if self.message:
             out["message"] = self.message
+        units = ["m/s" if p else "rad/s" for p in self.prismatic] if self.prismatic is not None else (
+            ["rad/s"] * self.q.shape[1])
+        out["warnings"] = verdicts.run_warnings(out, self.joint_names, units)
         return out
 
     # -- files -------------------------------------------------------------------------------
@@ -178,8 +224,9 @@ class Result:
         arrays = {k: getattr(self, k) for k in ("t", "q", "dq", "tau", "x", "x_d", "e")}
         arrays.update({f"signal_{k}": v for k, v in self.signals.items()})
         arrays["joint_names"] = np.asarray(self.joint_names)
-        if self.chain is not None:
-            arrays["chain"] = self.chain
+        for name in OPTIONAL_ARRAYS:
+            if getattr(self, name) is not None:
+                arrays[name] = getattr(self, name)
         with open(path, "wb") as fh:
             np.savez_compressed(fh, **arrays)
 
@@ -196,9 +243,12 @@ class Result:
             *(arrays[k] for k in ("t", "q", "dq", "tau", "x", "x_d", "e")), signals,
             metrics.get("status", "completed"), metrics.get("message", ""), config,
             metrics.get("wall_seconds", float("nan")), arrays["joint_names"].tolist(),
-            arrays.get("chain"),
+            **{name: arrays.get(name) for name in OPTIONAL_ARRAYS},
         )
 
+
+OPTIONAL_ARRAYS = ("chain", "tau_cmd", "torque_limit", "lower_limit", "upper_limit", "prismatic")
+"""Arrays of result.npz that older run folders or hand-made Results may lack."""
 
 MAX_EPISODES = 20
 """Singular episodes listed in metrics.json (the count is always complete)."""

@@ -1,7 +1,8 @@
-"""Closed-loop simulation: zero-order-hold control, RK4 or solve_ivp integration."""
+"""Closed-loop simulation: sampled control with a zero-order hold, RK4 or solve_ivp integration."""
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -19,13 +20,15 @@ INTEGRATORS = ("rk4", "solve_ivp")
 class Trace:
     """Raw arrays of a simulated run, sampled at the control instants t_k = k T.
 
-    tau[k] is the torque held over [t_k, t_k + T).
+    tau[k] is the torque applied over [t_k, t_k + T): the command tau_cmd[k] clipped to the effort
+    limits. tau_cmd[k] was computed from the measurement at t_(k-d) for a delay of d periods.
 
     Attributes:
         t: times [s], shape N.
-        q, dq: joint positions [rad] and velocities [rad/s], N x n.
-        tau: joint torques [N m], N x n.
-        z: controller state, N x len(z).
+        q, dq: true joint positions [rad] and velocities [rad/s], N x n.
+        tau: applied joint torques [N m], N x n.
+        tau_cmd: commanded joint torques [N m], N x n.
+        z: controller state at t_k, N x len(z).
         signals: controller signals by name, each of shape N.
         status: "completed", "diverged" or "interrupted".
         message: why the run stopped early, or "".
@@ -36,6 +39,7 @@ class Trace:
     q: np.ndarray
     dq: np.ndarray
     tau: np.ndarray
+    tau_cmd: np.ndarray
     z: np.ndarray
     signals: dict[str, np.ndarray] = field(default_factory=dict)
     status: str = "completed"
@@ -48,6 +52,21 @@ def _rk4_step(f, t: float, X: np.ndarray, h: float) -> np.ndarray:
     k3 = f(t + 0.5 * h, X + 0.5 * h * k2)
     k4 = f(t + h, X + h * k3)
     return X + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+
+
+def joint_units(model) -> list[str]:
+    """Velocity unit of each joint of the model: "m/s" for prismatic joints, else "rad/s"."""
+    prismatic = getattr(model, "prismatic", None)
+    return ["m/s" if p else "rad/s" for p in prismatic] if prismatic is not None else ["rad/s"] * model.nq
+
+
+def speed_message(model, v: np.ndarray, max_speed: float, t: float) -> str:
+    """Which joint ran away, how fast, in its own unit."""
+    i = int(np.argmax(np.abs(v)))
+    names = getattr(model, "joint_names", None) or [f"joint {j + 1}" for j in range(v.size)]
+    unit = joint_units(model)[i]
+    return (f"joint {names[i]!r} reached {v[i]:.3g} {unit} (limit for divergence {max_speed:g}) "
+            f"at t = {t:.4f} s")
 
 
 def simulate(
@@ -65,19 +84,22 @@ def simulate(
     progress: Callable[[float, np.ndarray], None] | None = None,
     progress_every: int = 50,
 ) -> Trace:
-    """Simulate plant and controller; the torque is held constant over each control period.
+    """Simulate plant and sampled controller.
 
-    The controller's internal state z is integrated together with (q, q') by the same method.
+    At each control instant t_k the controller reads the plant's sensor, returns a command and its
+    next state; the command reaches the actuators ``plant.delay`` periods later (before that the
+    first command is held), is clipped to the effort limits and held over the period while
+    (q, q') are integrated with the stops, friction and disturbance acting continuously.
 
     Args:
-        plant: the true robot.
+        plant: the true robot with its actuators and sensors.
         controller: the control law.
         q0, v0: initial joint positions [rad] and velocities [rad/s].
         duration: simulated time [s].
         control_period: T, the zero-order-hold period [s].
         substeps: integration steps per control period (RK4 step = T / substeps).
         integrator: "rk4" or "solve_ivp" (DOP853 with rtol, atol, restarted every period).
-        max_speed: a joint speed above this [rad/s] counts as divergence.
+        max_speed: a joint speed above this [rad/s or m/s] counts as divergence.
         progress: called as progress(t, q) every ``progress_every`` control steps (progress bar,
             live viewer).
 
@@ -89,44 +111,45 @@ def simulate(
         raise ValueError(f"simulation.integrator: {integrator!r} is not one of {INTEGRATORS}")
     n = plant.nq
     steps = int(round(duration / control_period))
-    z0 = controller.initial_state()
-    X = np.concatenate([np.asarray(q0, float), np.asarray(v0, float), z0])
-    nz = z0.size
+    z = controller.initial_state()
+    X = np.concatenate([np.asarray(q0, float), np.asarray(v0, float)])
     t_rec = np.arange(steps) * control_period
     q_rec = np.full((steps, n), np.nan)
     v_rec = np.full((steps, n), np.nan)
     tau_rec = np.full((steps, n), np.nan)
-    z_rec = np.full((steps, nz), np.nan)
+    cmd_rec = np.full((steps, n), np.nan)
+    z_rec = np.full((steps, z.size), np.nan)
     sig_rec = {name: np.full(steps, np.nan) for name in controller.signal_names}
+    commands: deque[np.ndarray] = deque(maxlen=plant.delay + 1)
     tau = np.zeros(n)
 
     def f(t: float, X: np.ndarray) -> np.ndarray:
-        q, v, z = X[:n], X[n : 2 * n], X[2 * n :]
-        return np.concatenate(
-            [v, plant.acceleration(t, q, v, tau), controller.state_derivative(t, q, v, z)]
-        )
+        return np.concatenate([X[n:], plant.acceleration(t, X[:n], X[n:], tau)])
 
     h = control_period / substeps
     status, message, done = "completed", "", steps
+    k, t = 0, 0.0
     try:
         for k in range(steps):
             t = t_rec[k]
-            q, v, z = X[:n], X[n : 2 * n], X[2 * n :]
-            out = controller.compute(t, q, v, z)
-            tau = out.tau
-            q_rec[k], v_rec[k], tau_rec[k], z_rec[k] = q, v, tau, z
+            q, v = X[:n], X[n:]
+            out = controller.compute(t, *plant.sensor.measure(q, v), z, control_period)
+            commands.append(out.tau)
+            tau_cmd = commands[0]  # computed d periods ago (the first command until then)
+            tau = plant.applied_torque(tau_cmd)
+            q_rec[k], v_rec[k], tau_rec[k], cmd_rec[k], z_rec[k] = q, v, tau, tau_cmd, z
             for name, value in out.signals.items():
                 sig_rec[name][k] = value
-            if not (np.all(np.isfinite(tau)) and np.all(np.isfinite(X))):
+            if not (np.all(np.isfinite(out.tau)) and np.all(np.isfinite(X))):
                 status, message, done = "diverged", f"non-finite state or torque at t = {t:.4f} s", k + 1
                 break
             if np.max(np.abs(v)) > max_speed:
-                status = "diverged"
-                message = f"joint speed {np.max(np.abs(v)):.3g} rad/s > {max_speed:g} at t = {t:.4f} s"
-                done = k + 1
+                status, message, done = "diverged", speed_message(plant.model, v, max_speed, t), k + 1
                 break
             if progress is not None and k % progress_every == 0:
                 progress(t, q)
+            if out.state is not None:
+                z = out.state
             if integrator == "rk4":
                 for i in range(substeps):
                     X = _rk4_step(f, t + i * h, X, h)
@@ -137,6 +160,6 @@ def simulate(
         status, message, done = "interrupted", f"interrupted at t = {t:.4f} s", k
     sl = slice(0, done)
     return Trace(
-        t_rec[sl], q_rec[sl], v_rec[sl], tau_rec[sl], z_rec[sl],
+        t_rec[sl], q_rec[sl], v_rec[sl], tau_rec[sl], cmd_rec[sl], z_rec[sl],
         {name: arr[sl] for name, arr in sig_rec.items()}, status, message,
     )

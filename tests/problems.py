@@ -45,10 +45,7 @@ class ConstantTorque:
     def initial_state(self):
         return np.zeros(0)
 
-    def compute(self, t, q, v, z):
+    def compute(self, t, q, v, z, period=0.0):
         from nnrobust.controllers import ControlOutput
 
         return ControlOutput(self.tau.copy(), {})
-
-    def state_derivative(self, t, q, v, z):
-        return np.zeros(0)

@@ -1,11 +1,14 @@
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from nnrobust.config import ExperimentConfig
 from nnrobust.controllers import (
     AdditiveRBFBasis,
     DampedPseudoInverse,
     NNCompensator,
+    SlidingModeCompensator,
     error_dynamics,
     lyapunov_P,
     lyapunov_Q,
@@ -115,3 +118,58 @@ def test_perfect_model_gives_the_linear_error_dynamics():
     analytic = np.exp(-2 * trace.t)[:, None] * (
         np.cos(wd * trace.t)[:, None] + (2 / wd) * np.sin(wd * trace.t)[:, None]) * e0
     assert np.abs(e - analytic).max() < 2e-4 * np.abs(e0).max() * 10
+
+
+def _held_rk4(comp, q, v, y, z, period, steps=2000):
+    """Fine RK4 of z' = state_derivative with (q, q', y) held: the oracle for advance()."""
+    h = period / steps
+    for _ in range(steps):
+        k1 = comp.state_derivative(q, v, y, z)
+        k2 = comp.state_derivative(q, v, y, z + 0.5 * h * k1)
+        k3 = comp.state_derivative(q, v, y, z + 0.5 * h * k2)
+        k4 = comp.state_derivative(q, v, y, z + h * k3)
+        z = z + (h / 6) * (k1 + 2 * k2 + 2 * k3 + k4)
+    return z
+
+
+@pytest.mark.parametrize("sigma", [0.0, 0.5])
+def test_sampled_adaptive_law_is_the_exact_solution_with_held_inputs(sigma):
+    """advance() over one period equals a fine integration of the continuous law, inputs held."""
+    basis = AdditiveRBFBasis(-np.ones(6), np.ones(6), centers=3)
+    comp = NNCompensator(KP, KV, basis, F=4.0, gamma=2.0, eps_min=0.1, sigma=sigma)
+    y, q, v = np.array([0.1, 0.2, 0.3, -0.1]), np.full(3, 0.2), np.full(3, -0.1)
+    z = np.concatenate([np.linspace(0.1, 2.0, comp.L), [0.6]])
+    for period in (1e-3, 0.25):
+        np.testing.assert_allclose(comp.advance(q, v, y, z, period), _held_rk4(comp, q, v, y, z, period),
+                                   rtol=1e-10, atol=1e-12)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(st.floats(-10, 10), min_size=2, max_size=2), st.lists(st.floats(-10, 10), min_size=2,
+       max_size=2), st.floats(0.0, 50.0), st.floats(1e-6, 5.0), st.floats(0.0, 1.0))
+def test_lyapunov_inequality_of_the_corrected_law(w, eta_dir, rho, eps, shrink):
+    """omega^T (u_0 + eta) <= eps whenever rho-hat >= |eta| (the step of the paper's Lyapunov
+    argument that makes V' <= -y^T Q y / 2 + eps); the printed law has no such bound."""
+    w = np.asarray(w)
+    comp, z = _compensator("corrected", rho)
+    z[-1] = eps
+    eta = np.asarray(eta_dir)
+    norm = np.linalg.norm(eta)
+    eta = eta / norm * rho * shrink if norm > 0 else eta  # |eta| <= rho
+    # choose y with omega(y) = w: e = 0, e' = Kv^-1 w
+    y = np.concatenate([np.zeros(2), np.linalg.solve(KV, w)])
+    np.testing.assert_allclose(comp.omega(y), w, atol=1e-12)
+    u0, _ = comp.u0(np.zeros(3), np.zeros(3), y, z)
+    assert w @ (u0 + eta) <= eps * (1 + 1e-9) + 1e-12
+
+
+def test_sliding_mode_term_is_a_saturated_unit_vector_law():
+    """|u_0| = K outside the boundary layer, K |w| / Phi inside, continuous, opposing w."""
+    comp = SlidingModeCompensator(KP, KV, gain=20.0, boundary=0.5)
+    for scale in (0.01, 0.2, 0.5, 3.0, 100.0):
+        w = scale * np.array([0.6, -0.8])
+        y = np.concatenate([np.zeros(2), np.linalg.solve(KV, w)])
+        u0, z, _ = comp.output(None, None, y, np.zeros(0), 1e-3)
+        assert np.linalg.norm(u0) == pytest.approx(20.0 * min(scale, 0.5) / 0.5)
+        np.testing.assert_allclose(u0 / np.linalg.norm(u0), -w / np.linalg.norm(w))
+        assert z.size == 0

@@ -18,17 +18,34 @@ def _experiment(tmp_path, **sections):
 
 
 def test_divergence_stops_the_run_and_keeps_the_partial_result(tmp_path, capsys):
-    """Kv T = 2 at the 1 ms zero-order hold is unstable: the run stops and says when and why."""
+    """Kv T = 2 at the 1 ms zero-order hold is unstable without actuator limits: the run stops and
+    says which joint ran away, how fast (rad/s), when, and the likely cause."""
     experiment = _experiment(tmp_path, controller={"Kp": [1e6], "Kv": [2e3]},
-                             simulation={"duration": 2.0})
+                             plant={"torque_limits": "none"}, simulation={"duration": 2.0})
     out = tmp_path / "run"
     assert main(["run", str(experiment), "--out", str(out), "--quiet", "--no-animation"]) == 1
-    assert "run diverged: joint speed" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "run diverged: joint 'joint" in err and "rad/s" in err
+    assert "likely cause: the commanded torque grew without bound" in err
     metrics = json.loads((out / "metrics.json").read_text())
     assert metrics["status"] == "diverged" and "at t = 0.0" in metrics["message"]
     result = Result.load(out)
     assert 10 < result.t.size < 2000 and np.all(np.isfinite(result.q))
     assert (out / "plots" / "errors.png").exists()
+
+
+def test_saturation_keeps_the_same_gains_bounded_and_says_so(tmp_path, capsys):
+    """The same unstable gains with the URDF's effort limits: the run completes, and its
+    warnings say the command saturated (peak ratio far above 1)."""
+    experiment = _experiment(tmp_path, controller={"Kp": [1e6], "Kv": [2e3]},
+                             simulation={"duration": 0.5})
+    out = tmp_path / "run"
+    assert main(["run", str(experiment), "--out", str(out), "--quiet", "--no-animation",
+                 "--no-plots"]) == 0
+    assert "warning: torque saturation" in capsys.readouterr().err
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["saturated_fraction"] > 0.5 and metrics["max_torque_ratio"] > 10
+    assert any(w.startswith("torque saturation") for w in metrics["warnings"])
 
 
 def test_ctrl_c_keeps_the_partial_result_marked_interrupted(tmp_path, monkeypatch, capsys):

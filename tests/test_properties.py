@@ -75,17 +75,27 @@ def test_energy_balance_with_friction(q0, v0):
 
 @pytest.mark.parametrize("preset", ["paper-ellipse", "panda-pose"])
 def test_controller_output_is_finite_for_any_finite_state(preset):
+    """The NN branch included: random adapted weights Z >= 0 (rho-hat up to 1e4) and eps, the
+    torque and the next state are finite, u_0 is active (the torque differs from u_0 = 0's), and
+    the next weights stay >= 0."""
     setup = build(load_preset(preset).replace(simulation={"duration": 1.0}))
     controller, n = setup.controller, setup.robot.nq
+    L = controller.compensator.L
 
     @SETTINGS
     @given(_angles(n), st.lists(st.floats(-50, 50), min_size=n, max_size=n).map(np.array),
-           st.floats(0, 100))
-    def check(q, v, t):
-        z = controller.initial_state()
-        tau = controller.compute(t, q, v, z).tau
-        assert tau.shape == (n,) and np.all(np.isfinite(tau))
-        assert np.all(np.isfinite(controller.state_derivative(t, q, v, z)))
+           st.floats(0, 100), st.lists(st.floats(0, 1e3), min_size=L, max_size=L).map(np.array),
+           st.floats(0, 2))
+    def check(q, v, t, Z, eps):
+        z = np.concatenate([Z, [eps]])
+        out = controller.compute(t, q, v, z, 1e-3)
+        assert out.tau.shape == (n,) and np.all(np.isfinite(out.tau))
+        assert np.all(np.isfinite(out.state)) and np.all(out.state[:L] >= 0)
+        rho = out.signals["rho_hat"]
+        assert np.isfinite(rho) and rho >= 0
+        if rho > 1.0 and eps > 0:
+            no_u0 = controller.compute(t, q, v, np.zeros_like(z), 1e-3).tau
+            assert not np.allclose(out.tau, no_u0)
 
     check()
 

@@ -67,8 +67,18 @@ def test_joint_criteria_values():
     q_mid = np.array([0.0, 2.0])
     assert JointLimitAvoidance(lower, upper).value(None, q_mid) == pytest.approx(-1.0)
     assert JointCentering(lower, upper).value(None, q_mid) == 0.0
-    near_limit = JointLimitAvoidance(lower, upper).gradient(None, np.array([0.999, 2.0]))
-    assert near_limit[0] < -1e3 and near_limit[1] == 0.0  # pushes back, hard
+    barrier = JointLimitAvoidance(lower, upper)
+    # inside the 5 % margin the barrier is linear: the push back is the barrier's slope at the knot
+    # q = 0.9, dh/dq = (u - l)^2 (u + l - 2 q) / (4 n ((u - q)(q - l))^2) = 4 (-1.8) / (8 (0.19)^2)
+    knot_slope = 4 * (-1.8) / (8 * 0.19**2)
+    for q1 in (0.95, 0.999, 1.0, 1.5):  # near, on and beyond the limit
+        grad = barrier.gradient(None, np.array([q1, 2.0]))
+        assert grad[0] == pytest.approx(knot_slope) and grad[1] == 0.0  # pushes back, bounded
+        assert np.isfinite(barrier.value(None, np.array([q1, 2.0])))
+    # the value continues linearly, so it keeps falling beyond the limit (C1 at the knot)
+    h = [barrier.value(None, np.array([q1, 2.0])) for q1 in (0.9, 1.0, 1.1)]
+    assert h[0] > h[1] > h[2] and h[1] - h[2] == pytest.approx(h[0] - h[1])
+    assert barrier.gradient(None, np.array([0.5, 2.0]))[0] < 0  # the barrier itself inside
     with pytest.raises(ValueError, match=r"joints \[1\] have no finite range"):
         JointCentering(lower, np.array([1.0, np.inf]))
 

@@ -1,9 +1,10 @@
-"""Controllers: the task-space law of eq. (9), the NN compensator and baselines."""
+"""Controllers: the task-space law of eq. (9), the NN compensator, sliding mode and baselines."""
 
 from .base import Controller, ControlOutput
 from .basis import AdditiveRBFBasis
 from .nn_compensator import NNCompensator, error_dynamics, lyapunov_P, lyapunov_Q
 from .pseudoinverse import DampedPseudoInverse, project_null_space
+from .sliding_mode import SlidingModeCompensator
 from .task_space import TaskSpaceController, TaskSpacePD
 
 __all__ = [
@@ -12,6 +13,7 @@ __all__ = [
     "Controller",
     "DampedPseudoInverse",
     "NNCompensator",
+    "SlidingModeCompensator",
     "TaskSpaceController",
     "TaskSpacePD",
     "error_dynamics",

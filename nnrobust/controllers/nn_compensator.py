@@ -15,6 +15,12 @@ U0_LAWS = ("corrected", "printed")
 BASIS_INPUTS = ("joint", "error")
 """Network input s: joint state [q, q'] or task error y = [e, e']."""
 
+DEFAULTS = {"F": 5.0, "gamma": 1.0, "eps0": 1.0, "eps_min": 1.0, "sigma": 0.05}
+"""The one set of defaults of :class:`NNCompensator` and of ``[nn]`` in an experiment file: the
+corrected eq. (15) with sigma-modification (rho-hat stays bounded) and a boundary layer that does
+not vanish (eps stays at eps0 = eps_min = 1, so the sampled loop does not chatter; docs/controller.md).
+``sigma = 0, eps_min = 0`` is the paper's law exactly."""
+
 
 def error_dynamics(Kp: np.ndarray, Kv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """A = [[0, I], [-Kp, -Kv]] and B = [0; I] of the error system y' = A y + B (u_0 + eta), eq. (13)."""
@@ -63,11 +69,11 @@ class NNCompensator:
     Kv: np.ndarray
     basis: AdditiveRBFBasis
     basis_input: str = "joint"
-    F: float = 20.0
-    gamma: float = 1.0
-    eps0: float = 1.0
-    eps_min: float = 0.0
-    sigma: float = 0.0
+    F: float = DEFAULTS["F"]
+    gamma: float = DEFAULTS["gamma"]
+    eps0: float = DEFAULTS["eps0"]
+    eps_min: float = DEFAULTS["eps_min"]
+    sigma: float = DEFAULTS["sigma"]
     law: str = "corrected"
     Z0: np.ndarray | None = None
 
@@ -76,9 +82,10 @@ class NNCompensator:
             raise ValueError(f"nn.law: {self.law!r} is not one of {U0_LAWS}")
         if self.basis_input not in BASIS_INPUTS:
             raise ValueError(f"nn.basis_input: {self.basis_input!r} is not one of {BASIS_INPUTS}")
-        if self.F <= 0 or self.gamma < 0 or self.eps0 <= 0 or self.eps_min < 0 or self.sigma < 0:
+        if (self.F <= 0 or self.gamma < 0 or self.eps0 <= 0 or not 0 <= self.eps_min <= self.eps0
+                or self.sigma < 0):
             raise ValueError(
-                "nn: need F > 0, gamma >= 0, eps0 > 0, eps_min >= 0, sigma >= 0; got "
+                "nn: need F > 0, gamma >= 0, eps0 > 0, 0 <= eps_min <= eps0, sigma >= 0; got "
                 f"F={self.F}, gamma={self.gamma}, eps0={self.eps0}, eps_min={self.eps_min}, "
                 f"sigma={self.sigma}"
             )
@@ -86,6 +93,8 @@ class NNCompensator:
         _, B = error_dynamics(self.Kp, self.Kv)
         self.BtP = B.T @ self.P  # omega = B^T P y
         self.L = self.basis.size
+
+    signal_names = ("rho_hat", "eps", "z_norm")
 
     @property
     def state_size(self) -> int:
@@ -125,3 +134,31 @@ class NNCompensator:
         dZ = self.F * (np.linalg.norm(self.omega(y)) * phi - self.sigma * Z)
         deps = -self.gamma * (z[self.L] - self.eps_min)
         return np.concatenate([dZ, [deps]])
+
+    def advance(
+        self, q: np.ndarray, v: np.ndarray, y: np.ndarray, z: np.ndarray, period: float
+    ) -> np.ndarray:
+        """z(t + T) for the adaptive law with its inputs held over the period T (exact solution).
+
+        A sampled controller knows (q, q', y) only at the sampling instants, so |w| and phi(s)
+        are constant over [t, t + T) and the law is linear in z:
+        Z(t + T) = Z e^(-F sigma T) + (|w| phi / sigma)(1 - e^(-F sigma T)) (Z + F T |w| phi
+        for sigma = 0) and eps(t + T) = eps_min + (eps - eps_min) e^(-gamma T).
+        """
+        if period <= 0.0:
+            return z
+        Z, eps = z[: self.L], z[self.L]
+        drive = np.linalg.norm(self.omega(y)) * self.basis(self.network_input(q, v, y))
+        if self.sigma > 0.0:
+            decay = np.exp(-self.F * self.sigma * period)
+            Z_next = Z * decay + (drive / self.sigma) * (1.0 - decay)
+        else:
+            Z_next = Z + self.F * period * drive
+        eps_next = self.eps_min + (eps - self.eps_min) * np.exp(-self.gamma * period)
+        return np.concatenate([Z_next, [eps_next]])
+
+    def output(self, q: np.ndarray, v: np.ndarray, y: np.ndarray, z: np.ndarray, period: float):
+        """(u_0, z after the period, signals) for the task-space law."""
+        u0, rho = self.u0(q, v, y, z)
+        signals = {"rho_hat": rho, "eps": float(z[self.L]), "z_norm": float(np.linalg.norm(z[: self.L]))}
+        return u0, self.advance(q, v, y, z, period), signals

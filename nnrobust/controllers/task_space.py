@@ -11,14 +11,19 @@ from ..trajectories import Trajectory
 from .base import Controller, ControlOutput
 from .nn_compensator import NNCompensator
 from .pseudoinverse import DampedPseudoInverse, project_null_space
+from .sliding_mode import SlidingModeCompensator
+
+RobustTerm = NNCompensator | SlidingModeCompensator
+"""A robust term u_0 of eq. (9): ``output(q, q', y, z, T) -> (u_0, z_next, signals)``."""
 
 
 class TaskSpaceController(Controller):
     """tau = M-hat a + N-hat with a = J+ (x_d'' - J'q' - Kv e' - Kp e + u_0) + k (I - J+J)(grad h - q').
 
     Eq. (9). M-hat a + N-hat is one call of the nominal model's inverse dynamics (one RNEA pass for
-    a Pinocchio model) plus the nominal friction; without a compensator (u_0 = 0) this is the
-    "no-u0" baseline.
+    a Pinocchio model) plus the nominal friction. u_0 comes from the NN compensator (eq. 15), a
+    sliding-mode term, or is zero: the "no-u0" baseline, which with the true model and friction
+    as nominal is computed-torque control.
 
     Args:
         nominal: the controller's model (M-hat, N-hat, kinematics).
@@ -27,7 +32,7 @@ class TaskSpaceController(Controller):
         k: self-motion gain of eq. (3).
         criterion: h(q) (already weighted, eq. 4); None for pure null-space damping.
         nominal_friction: F-hat(q') in N-hat.
-        compensator: the NN robust compensator; None for u_0 = 0.
+        compensator: the robust term (NN or sliding mode); None for u_0 = 0.
         pinv: the damped pseudo-inverse.
 
     """
@@ -41,7 +46,7 @@ class TaskSpaceController(Controller):
         k: float,
         criterion: Criterion | None = None,
         nominal_friction: Friction | None = None,
-        compensator: NNCompensator | None = None,
+        compensator: RobustTerm | None = None,
         pinv: DampedPseudoInverse | None = None,
     ):
         self.nominal = nominal
@@ -54,7 +59,7 @@ class TaskSpaceController(Controller):
         self.compensator = compensator
         self.pinv = pinv or DampedPseudoInverse()
         self.state_size = compensator.state_size if compensator else 0
-        self.signal_names = ("rho_hat", "eps", "z_norm", "damping") if compensator else ("damping",)
+        self.signal_names = (compensator.signal_names if compensator else ()) + ("damping",)
 
     def initial_state(self) -> np.ndarray:
         """Compensator state [Z, eps], or nothing."""
@@ -64,16 +69,15 @@ class TaskSpaceController(Controller):
         xd, dxd, ddxd = self.trajectory(t)
         return self.trajectory.error(x, xd), J @ v - dxd, ddxd
 
-    def compute(self, t: float, q: np.ndarray, v: np.ndarray, z: np.ndarray) -> ControlOutput:
-        """Eq. (9)."""
+    def compute(self, t: float, q: np.ndarray, v: np.ndarray, z: np.ndarray,
+                period: float = 0.0) -> ControlOutput:
+        """Eq. (9); the compensator's state is advanced over ``period``."""
         x, J, jdot_v = self.nominal.task_state(q, v)
         e, de, ddxd = self._error(t, x, J, v)
         signals: dict[str, float] = {}
-        u0 = 0.0
+        u0, z_next = 0.0, z
         if self.compensator is not None:
-            u0, rho = self.compensator.u0(q, v, np.concatenate([e, de]), z)
-            L = self.compensator.L
-            signals.update(rho_hat=rho, eps=float(z[L]), z_norm=float(np.linalg.norm(z[:L])))
+            u0, z_next, signals = self.compensator.output(q, v, np.concatenate([e, de]), z, period)
         inv, lam2 = self.pinv.factor(J)
         J_pinv = J.T @ inv
         signals["damping"] = lam2
@@ -83,17 +87,7 @@ class TaskSpaceController(Controller):
             grad = self.criterion.gradient(self.nominal, q) if self.criterion else 0.0
             a = a + self.k * project_null_space(J, J_pinv, grad - v)
         tau = self.nominal.inverse_dynamics(q, v, a) + self.nominal_friction.torque(v)
-        return ControlOutput(tau, signals)
-
-    def state_derivative(
-        self, t: float, q: np.ndarray, v: np.ndarray, z: np.ndarray
-    ) -> np.ndarray:
-        """Adaptive law of the compensator at the current (continuous-time) state."""
-        if self.compensator is None:
-            return np.zeros(0)
-        x, J, _ = self.nominal.task_state(q, v)
-        e, de, _ = self._error(t, x, J, v)
-        return self.compensator.state_derivative(q, v, np.concatenate([e, de]), z)
+        return ControlOutput(tau, signals, z_next)
 
 
 class TaskSpacePD(Controller):
@@ -129,7 +123,8 @@ class TaskSpacePD(Controller):
         self.null_damping = float(null_damping)
         self.pinv = pinv or DampedPseudoInverse()
 
-    def compute(self, t: float, q: np.ndarray, v: np.ndarray, z: np.ndarray) -> ControlOutput:
+    def compute(self, t: float, q: np.ndarray, v: np.ndarray, z: np.ndarray,
+                period: float = 0.0) -> ControlOutput:
         """Task-space PD plus G-hat(q) and null-space damping."""
         x, J, _ = self.nominal.task_state(q, v)
         xd, dxd, _ = self.trajectory(t)

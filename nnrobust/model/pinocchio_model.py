@@ -200,6 +200,12 @@ class PinocchioModel:
         """Upper joint position limits [rad or m] from the URDF."""
         return np.asarray(self.model.upperPositionLimit).copy()
 
+    @cached_property
+    def prismatic(self) -> np.ndarray:
+        """Whether each joint is prismatic (positions in m, efforts in N) rather than revolute."""
+        return np.array(["Prismatic" in j.shortname() or j.shortname()[-2:-1] == "P"
+                         for j in self.model.joints[1:]])
+
     @property
     def velocity_limits(self) -> np.ndarray:
         """Joint velocity limits [rad/s or m/s] from the URDF."""

@@ -1,9 +1,11 @@
-"""The simulated robot: true model, friction and disturbance."""
+"""The simulated robot: true model, friction, disturbance, actuator limits, stops and sensors."""
 
 from .disturbance import SinusoidalDisturbance
 from .friction import Friction
+from .limits import JointStops, saturate
 from .plant import Plant
 from .scaling import scaled_disturbance, scaled_friction, torque_scale
+from .sensing import Sensor
 
-__all__ = ["Friction", "Plant", "SinusoidalDisturbance", "scaled_disturbance", "scaled_friction",
-           "torque_scale"]
+__all__ = ["Friction", "JointStops", "Plant", "Sensor", "SinusoidalDisturbance", "saturate",
+           "scaled_disturbance", "scaled_friction", "torque_scale"]

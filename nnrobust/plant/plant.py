@@ -1,52 +1,90 @@
-"""The true robot: rigid-body dynamics, friction and disturbance, eq. (7)."""
+"""The true robot: rigid-body dynamics, friction, disturbance, actuator limits, stops and sensors."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..model.base import DynamicsModel
 from .disturbance import SinusoidalDisturbance
 from .friction import Friction
+from .limits import JointStops, saturate
+from .sensing import Sensor
 
 
 @dataclass
 class Plant:
-    """M(q) q'' + V_m q' + G + F(q') + tau_d(t) = tau, eq. (7).
+    """M(q) q'' + V_m q' + G + F(q') + tau_d(t) = sat(tau_cmd) + tau_stop(q, q'), eq. (7) made real.
+
+    The controller's command tau_cmd is clipped to the actuators' effort limits (``torque_limit``)
+    and reaches the arm ``delay`` control periods after the measurement it was computed from; the
+    hard joint-limit stops push back beyond the position limits; the controller sees the state
+    through ``sensor``.
 
     Attributes:
         model: the true dynamics (normally Pinocchio, from the URDF).
         friction: the true friction F(q').
         disturbance: the external disturbance tau_d(t).
+        torque_limit: effort limit per joint [N m or N] (inf: unlimited); None: ideal actuators.
+        stops: hard joint-limit stops; None: the arm passes through its limits.
+        sensor: what the controller measures (default exact).
+        delay: control periods between a measurement and the torque computed from it (>= 0).
 
     """
 
     model: DynamicsModel
     friction: Friction
     disturbance: SinusoidalDisturbance
+    torque_limit: np.ndarray | None = None
+    stops: JointStops | None = None
+    sensor: Sensor | None = field(default=None)
+    delay: int = 0
 
     def __post_init__(self):
         n = self.model.nq
-        for name, size in (
+        if self.sensor is None:
+            self.sensor = Sensor.ideal(n)
+        if self.torque_limit is not None:
+            self.torque_limit = np.asarray(self.torque_limit, dtype=float)
+        sizes = [
             ("friction.viscous", self.friction.viscous.size),
             ("friction.coulomb", self.friction.coulomb.size),
             ("disturbance", self.disturbance.n),
-        ):
+            ("sensor", self.sensor.position_noise.size),
+        ]
+        if self.torque_limit is not None:
+            sizes.append(("torque_limit", self.torque_limit.size))
+            if np.any(~(self.torque_limit > 0)):
+                raise ValueError(f"plant: torque limits must be > 0, got {self.torque_limit.tolist()}")
+        if self.stops is not None:
+            sizes.append(("stops", self.stops.stiffness.size))
+        for name, size in sizes:
             if size != n:
                 raise ValueError(f"plant: {name} has {size} entries, the robot has {n} joints")
+        if self.delay < 0:
+            raise ValueError(f"plant: delay must be >= 0 control periods, got {self.delay}")
 
     @property
     def nq(self) -> int:
         """Number of joints n."""
         return self.model.nq
 
+    def applied_torque(self, tau_cmd: np.ndarray) -> np.ndarray:
+        """The actuators' torque for the command: saturated at the effort limits [N m]."""
+        return saturate(tau_cmd, self.torque_limit)
+
     def acceleration(self, t: float, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
-        """Q'' = M^-1 (tau - V_m q' - G - F(q') - tau_d(t)), by ABA for Pinocchio models."""
-        return self.model.forward_dynamics(
-            q, v, tau - self.friction.torque(v) - self.disturbance(t)
-        )
+        """Q'' = M^-1 (tau + tau_stop - V_m q' - G - F(q') - tau_d(t)), by ABA for Pinocchio models.
+
+        ``tau`` is the applied (already saturated) actuator torque.
+        """
+        net = tau - self.friction.torque(v) - self.disturbance(t)
+        if self.stops is not None:
+            net = net + self.stops.torque(q, v)
+        return self.model.forward_dynamics(q, v, net)
 
     def energy(self, q: np.ndarray, v: np.ndarray) -> float:
-        """Kinetic plus potential energy [J]."""
-        return self.model.kinetic_energy(q, v) + self.model.potential_energy(q)
+        """Kinetic plus potential energy, including the stops' springs [J]."""
+        stored = self.stops.potential(q) if self.stops is not None else 0.0
+        return self.model.kinetic_energy(q, v) + self.model.potential_energy(q) + stored

@@ -23,31 +23,41 @@ def _finite_range(lower, upper) -> tuple[np.ndarray, np.ndarray]:
 
 
 class JointLimitAvoidance(Criterion):
-    """h = -(1/n) sum_i (u_i - l_i)^2 / (4 (u_i - q_i)(q_i - l_i)) (Zghal, Dubey and Euler 1990).
+    """h = -(1/n) sum_i b_i(q_i), b_i = (u_i - l_i)^2 / (4 (u_i - q_i)(q_i - l_i)) (Zghal, Dubey and
+    Euler 1990), continued linearly near and beyond the limits.
 
-    Equals -1 with every joint mid-range and tends to -infinity at a limit, so that the self-motion
-    q' = k grad h pushes hardest on the joints closest to their limits. Outside the range the
-    value and gradient are those at 1e-6 of the range inside it (finite, pointing back in).
+    b equals 1 with every joint mid-range and grows like a barrier towards a limit, so that the
+    self-motion q' = k grad h pushes hardest on the joints closest to their limits. Within
+    ``margin`` x range of a limit (and beyond it) b is continued by its tangent line at that
+    point: value and gradient stay finite and continuous, and the gradient keeps pointing back
+    into the range, so an arm that starts on a limit, or is pushed past it by a stop, gets a
+    bounded push (at most the barrier's slope at the margin) instead of a blow-up.
     """
+
+    margin: float = 0.05
+    """Fraction of the range at each end where the barrier turns linear."""
 
     def __init__(self, lower: np.ndarray, upper: np.ndarray):
         self.lower, self.upper = _finite_range(lower, upper)
         self.span = self.upper - self.lower
-        self._margin = 1e-6 * self.span
+        self._low_knot = self.lower + self.margin * self.span
+        self._high_knot = self.upper - self.margin * self.span
 
-    def _clip(self, q: np.ndarray) -> np.ndarray:
-        return np.clip(q, self.lower + self._margin, self.upper - self._margin)
+    def _barrier(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(b(q), b'(q)) per joint, with the linear continuation outside the knots."""
+        knot = np.clip(q, self._low_knot, self._high_knot)
+        s = (self.upper - knot) * (knot - self.lower)
+        b = self.span**2 / (4 * s)
+        db = -self.span**2 * (self.upper + self.lower - 2 * knot) / (4 * s**2)
+        return b + db * (q - knot), db
 
     def value(self, model: DynamicsModel, q: np.ndarray) -> float:
         """h(q) <= -1."""
-        q = self._clip(q)
-        return -float(np.mean(self.span**2 / (4 * (self.upper - q) * (q - self.lower))))
+        return -float(np.mean(self._barrier(q)[0]))
 
     def gradient(self, model: DynamicsModel, q: np.ndarray) -> np.ndarray:
-        """dh/dq_i = (u - l)^2 (u + l - 2 q) / (4 n ((u - q)(q - l))^2)."""
-        q = self._clip(q)
-        s = (self.upper - q) * (q - self.lower)
-        return self.span**2 * (self.upper + self.lower - 2 * q) / (4 * q.size * s**2)
+        """dh/dq_i = -b_i'(q_i) / n (= (u - l)^2 (u + l - 2 q) / (4 n ((u - q)(q - l))^2) inside)."""
+        return -self._barrier(q)[1] / q.size
 
 
 class JointCentering(Criterion):

@@ -1,0 +1,66 @@
+"""What a real arm cannot do: actuator torque saturation and hard joint-limit stops."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+def saturate(tau: np.ndarray, limit: np.ndarray | None) -> np.ndarray:
+    """The torque an actuator applies for the command ``tau``: clipped to [-limit, limit] [N m].
+
+    ``limit`` is None for ideal actuators; an entry may be inf for an unlimited joint.
+    """
+    return tau if limit is None else np.clip(tau, -limit, limit)
+
+
+@dataclass(frozen=True)
+class JointStops:
+    """Hard joint-limit stops: a stiff, dissipative contact outside [lower, upper].
+
+    Beyond a limit by the penetration delta > 0 (moving into the stop at delta' [rad/s]) the stop
+    pushes back with the Hunt-Crossley torque (Hunt and Crossley 1975)
+
+        tau_stop = max(0, K delta (1 + alpha delta')),
+
+    directed back into the range, and nothing inside it. The spring part K delta stores and
+    returns energy, the damping part K alpha delta delta'^2 >= 0 only dissipates, and the clamp at
+    zero only removes a pull, so a stop never adds energy to the arm (tests/test_plant.py). The
+    force is continuous at contact (zero at delta = 0), which keeps RK4 accurate. With
+    alpha v_in small the coefficient of restitution is about 1 - (2/3) alpha v_in.
+
+    Attributes:
+        lower, upper: the joint limits [rad or m]; +-inf for a joint without a stop.
+        stiffness: K per joint [N m/rad or N/m].
+        alpha: Hunt-Crossley damping [s/rad or s/m].
+
+    """
+
+    lower: np.ndarray
+    upper: np.ndarray
+    stiffness: np.ndarray
+    alpha: float = 1.0
+
+    def __post_init__(self):
+        for name in ("lower", "upper", "stiffness"):
+            object.__setattr__(self, name, np.asarray(getattr(self, name), dtype=float))
+
+    def penetration(self, q: np.ndarray) -> np.ndarray:
+        """Signed distance beyond the limits, per joint: > 0 above upper, < 0 below lower, else 0."""
+        return np.maximum(q - self.upper, 0.0) + np.minimum(q - self.lower, 0.0)
+
+    def torque(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """tau_stop(q, q') [N m], acting on the arm (add it to the actuator torque)."""
+        d = self.penetration(q)
+        if not d.any():
+            return np.zeros_like(q)
+        # with s = sign(d): delta = |d|, delta' = s q', push = -s K delta (1 + alpha delta')
+        s = np.sign(d)
+        magnitude = np.maximum(self.stiffness * np.abs(d) * (1.0 + self.alpha * s * v), 0.0)
+        return -s * magnitude
+
+    def potential(self, q: np.ndarray) -> float:
+        """Energy stored in the stops' springs, sum K delta^2 / 2 [J]."""
+        d = self.penetration(q)
+        return 0.5 * float(np.sum(self.stiffness * d * d))
