@@ -175,9 +175,30 @@ def test_pure_self_motion_improves_the_criterion(name, task, which):
     assert np.abs(e).max() < 2e-4
 
 
-def test_ik_solution_is_used_by_self_motion_tests():
-    """Guard: solve_ik keeps a reached pose reached (used to build fixed targets above)."""
-    robot = arm("panda", "pose")
-    q0 = random_configurations(robot, 1, seed=15)[0]
-    q, residual = solve_ik(robot, robot.task_position(q0), q0)
-    assert residual < 1e-12 and np.allclose(q, q0)
+@pytest.mark.parametrize("name, task", [("panda", "pose"), ("ur5", "position"), ("planar7", "planar")])
+def test_ik_reaches_a_reachable_target_from_another_seed(name, task):
+    """The target is the forward kinematics of one random configuration, the seed another one
+    0.3 rad away: IK reaches it (residual < 1e-10), within the limits, at a configuration whose
+    forward kinematics is the target (checked independently of the solver's own residual)."""
+    robot = arm(name, task)
+    q_true, = random_configurations(robot, 1, seed=15)
+    seed = np.clip(q_true + 0.3 * np.sign(np.sin(np.arange(robot.nq) + 1.0)),
+                   robot.lower_limits, robot.upper_limits)
+    target = robot.task_position(q_true)
+    q, residual = solve_ik(robot, target, seed, robot.lower_limits, robot.upper_limits)
+    assert residual < 1e-10
+    assert np.all(q >= robot.lower_limits) and np.all(q <= robot.upper_limits)
+    np.testing.assert_allclose(robot.task_position(q), target, atol=1e-9)
+    assert np.abs(q - seed).max() > 1e-3  # it moved: the seed was not the answer
+
+
+def test_initial_state_keeps_a_margin_inside_the_limits():
+    """A q_seed on a joint limit: the initial inverse kinematics starts 2 % of the range inside."""
+    from nnrobust.experiment import IK_LIMIT_MARGIN, build
+    from nnrobust.presets import load_preset
+
+    setup = build(load_preset("paper-ellipse").replace(simulation={"q_seed": [0.2, 2.8, 1.0],
+                                                                   "duration": 1.0}))
+    lower, upper = setup.robot.lower_limits, setup.robot.upper_limits
+    margin = IK_LIMIT_MARGIN * (upper - lower)
+    assert np.all(setup.q0 >= lower + margin - 1e-12) and np.all(setup.q0 <= upper - margin + 1e-12)

@@ -5,7 +5,6 @@ import os
 import shutil
 import socket
 import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -176,7 +175,20 @@ def test_module_server_refuses_an_address_it_cannot_bind():
 
     with pytest.raises(NNRobustError, match="did not start on 203.0.113.1"):
         start_viewer(host="203.0.113.1", port=7999, timeout=30)
-    assert sys.executable  # the server ran under this interpreter
+    assert _children_of(os.getpid()) == []  # the failed server process was not left behind
+
+
+def _children_of(pid: int) -> list[int]:
+    """Live child processes of pid, from /proc (zombies already reaped do not count)."""
+    children = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid and fields[0] != "Z":
+            children.append(int(stat.parent.name))
+    return children
 
 
 def test_run_with_live_view_streams_the_arm(tmp_path, monkeypatch, capsys):
