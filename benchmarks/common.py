@@ -10,7 +10,8 @@ from nnrobust.experiment import run_experiment
 from nnrobust.presets import load_preset
 
 ROW_METRICS = ("status", "rms_error_after_2s", "max_error", "rms_torque", "max_torque_cmd",
-               "torque_chatter", "saturated_fraction", "final_rho_hat", "h_start", "h_end", "warnings")
+               "torque_chatter", "saturated_fraction", "max_joint_limit_violation", "final_rho_hat",
+               "rms_error_early", "rms_error_last_fifth", "runaway", "h_start", "h_end", "warnings")
 """The metrics each benchmark row keeps."""
 
 

@@ -191,6 +191,9 @@ class ControllerConfig:
         pd_Kp, pd_Kd: task stiffness [N/m] and damping [N s/m] of the PD baseline (m entries or
             one for all; N m/rad and N m s/rad for the orientation rows of a pose).
         pd_null_damping: null-space joint damping of the PD baseline [N m s/rad].
+        coulomb_smoothing: v_s [rad/s]: the controller compensates Coulomb friction with
+            sat(q' / v_s) instead of sgn(q') (0, the default: the exact sgn of the sampled
+            velocity; see docs/plant.md for what that does near zero speed).
         sliding_gain: K of the sliding-mode u_0 [m/s^2].
         sliding_boundary: boundary-layer width Phi of the sliding-mode u_0 [m/s^2].
 
@@ -205,6 +208,7 @@ class ControllerConfig:
     pd_Kp: list[float] = field(default_factory=lambda: [400.0])
     pd_Kd: list[float] = field(default_factory=lambda: [40.0])
     pd_null_damping: float = 1.0
+    coulomb_smoothing: float = 0.0
     sliding_gain: float = 20.0
     sliding_boundary: float = 0.5
 
@@ -544,6 +548,7 @@ def validate(config: ExperimentConfig) -> None:
             raise ConfigError(path, f"must be an integer in [0, 2^63), got {seed}")
     if se.delay < 0:
         raise ConfigError("sensing.delay", f"must be >= 0 control periods, got {se.delay}")
+    _non_negative("controller.coulomb_smoothing", c.coulomb_smoothing)
     _positive("controller.sliding_gain", c.sliding_gain)
     _positive("controller.sliding_boundary", c.sliding_boundary)
     for path, value in (("plant.viscous_level", pc.viscous_level),

@@ -39,6 +39,7 @@ from .plant import (
     scaled_friction,
     torque_scale,
 )
+from .plant.scaling import usable
 from .results import Result
 from .simulation import simulate
 from .subtasks import (
@@ -98,7 +99,7 @@ def build_torque_limits(config: ExperimentConfig, robot: PinocchioModel) -> np.n
         return None
     if limits == "urdf":
         effort = robot.effort_limits
-        return np.where(np.isfinite(effort) & (effort > 0) & (effort < 1e6), effort, np.inf)
+        return np.where(usable(effort), effort, np.inf)
     return _vector("plant.torque_limits", limits, robot.nq, None)
 
 
@@ -254,11 +255,12 @@ def build_controller(
     if c.kind == "computed-torque":
         if true_friction is None:
             raise ValueError("computed-torque needs the true friction")
-        nominal_friction = true_friction
+        nominal_friction = Friction(true_friction.viscous, true_friction.coulomb, c.coulomb_smoothing)
     else:
         nominal_friction = Friction(
             _vector("nominal.viscous_friction", config.nominal.viscous_friction, n, np.zeros(n)),
             _vector("nominal.coulomb_friction", config.nominal.coulomb_friction, n, np.zeros(n)),
+            c.coulomb_smoothing,
         )
     return TaskSpaceController(nominal, trajectory, Kp, Kv, c.k, criterion, nominal_friction,
                                compensator, pinv)
@@ -463,7 +465,7 @@ def likely_cause(setup: Setup, trace) -> str:
                     f"{names[i]!r}); lower controller.k or check subtasks.criteria")
     effort = robot.effort_limits
     needed = np.diag(robot.mass(q)) * 10.0 + np.abs(robot.gravity(q))
-    ratio = np.where(np.isfinite(effort) & (effort < 1e6), effort / np.maximum(needed, 1e-9), 0.0)
+    ratio = np.where(usable(effort), effort / np.maximum(needed, 1e-9), 0.0)
     i = int(np.argmax(ratio))
     if ratio[i] > IMPLAUSIBLE_EFFORT and (config.plant.friction == "scaled"
                                           or config.plant.disturbance == "scaled"):

@@ -85,17 +85,32 @@ def plot_run(result: Result, folder: str | Path) -> list[Path]:
     fig.suptitle("Task-space tracking error")
     written += _save(fig, folder, "errors")
 
-    for name, data, ylabel, title, lw in (
-        ("joints", result.q, "joint angle [rad]", "Joint angles", 0.9),
-        ("torques", result.tau, "torque [N m]", "Joint torques (held over each control period)", 0.6),
+    for name, data, ylabel, title, lw, limits in (
+        ("joints", result.q, "joint angle [rad]", "Joint angles (dotted: position limits)", 0.9,
+         (result.lower_limit, result.upper_limit)),
+        ("torques", result.tau, "torque [N m]", "Applied joint torques (dotted: effort limits; "
+         "faint: commanded where it differs)", 0.6,
+         (None if result.torque_limit is None else -result.torque_limit, result.torque_limit)),
     ):
         fig, ax = plt.subplots(figsize=(7, 3.5))
         for i, joint in enumerate(joint_labels):
-            ax.plot(t, data[:, i], lw=lw, label=joint)
+            line, = ax.plot(t, data[:, i], lw=lw, label=joint)
+            commanded = result.tau_cmd if name == "torques" else None
+            if commanded is not None and np.any(commanded[:, i] != data[:, i]):
+                ax.plot(t, commanded[:, i], lw=0.4, alpha=0.35, color=line.get_color())
+            for bound in limits:
+                if bound is not None and np.isfinite(bound[i]) and abs(bound[i]) < 1e6:
+                    ax.axhline(bound[i], ls=":", lw=0.8, color=line.get_color())
+        if name == "torques" and result.tau_cmd is not None and result.torque_limit is not None:
+            # the applied range, and the limits that are near it; commands beyond them are clipped
+            peak = float(np.nanmax(np.abs(data))) if data.size else 1.0
+            near = result.torque_limit[result.torque_limit <= 3 * peak]
+            top = 1.15 * max(peak, float(near.max()) if near.size else 0.0, 1e-9)
+            ax.set_ylim(-top, top)
         ax.set_xlabel("t [s]")
         ax.set_ylabel(ylabel)
         ax.legend(fontsize=8)
-        ax.set_title(title)
+        ax.set_title(title, fontsize=10)
         written += _save(fig, folder, name)
 
     fig, axes = plt.subplots(2, 1, figsize=(7, 4.5), sharex=True)

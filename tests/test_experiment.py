@@ -6,7 +6,7 @@ import pytest
 from nnrobust.cli import main
 from nnrobust.config import ExperimentConfig, from_dict, load_config
 from nnrobust.exceptions import ConfigError, RunFolderExists
-from nnrobust.experiment import run_experiment
+from nnrobust.experiment import build, run_experiment
 from nnrobust.presets import load_preset, preset_names
 from nnrobust.results import Result, write_run
 
@@ -119,3 +119,32 @@ def test_vertical_plane_preset_compensates_gravity():
     metrics = run_experiment(config).metrics()
     assert metrics["status"] == "completed"
     assert metrics["rms_error_after_2s"] < 0.01
+
+
+def test_paper_nominal_is_the_closed_form_with_p_hat():
+    """Erratum 3: the paper's nominal model is the closed form with p-hat = (0.4, 0.1, 0.1), which
+    no URDF with the paper's lengths realises (point masses give p2 / p3 = l1 / l2)."""
+    from nnrobust.model import ThreeLinkPlanarModel
+
+    setup = build(load_preset("paper-ellipse").replace(simulation={"duration": 1.0}))
+    nominal = setup.nominal
+    assert isinstance(nominal, ThreeLinkPlanarModel)
+    assert tuple(nominal.params.p) == (0.4, 0.1, 0.1)
+    l1, l2 = nominal.params.lengths[:2]
+    assert abs(nominal.params.p[1] / nominal.params.p[2] - l1 / l2) > 0.1
+
+
+def test_initial_state_starts_on_the_path():
+    """Erratum 7: q(0) by inverse kinematics of x_d(0), q'(0) = J+ x_d'(0): zero task error and
+    zero task velocity error at t = 0."""
+    setup = build(load_preset("paper-line").replace(simulation={"duration": 1.0}))
+    xd, dxd, _ = setup.trajectory(0.0)
+    np.testing.assert_allclose(setup.robot.task_position(setup.q0), xd, atol=1e-9)
+    np.testing.assert_allclose(setup.robot.task_jacobian(setup.q0) @ setup.v0, dxd, atol=1e-9)
+
+
+def test_nominal_friction_holds_the_viscous_estimate_only():
+    """Erratum 10: N-hat has f-hat_d = (4, 1, 0.2) and no Coulomb term unless asked for."""
+    controller = build(load_preset("paper-ellipse").replace(simulation={"duration": 1.0})).controller
+    np.testing.assert_array_equal(controller.nominal_friction.viscous, [4.0, 1.0, 0.2])
+    np.testing.assert_array_equal(controller.nominal_friction.coulomb, [0.0, 0.0, 0.0])

@@ -11,14 +11,20 @@ import numpy as np
 class Friction:
     """F(q') = F_d q' + F_c sgn(q'), the paper's Sect. 4 friction with F_c = 1 N m.
 
+    A controller that compensates Coulomb friction from sampled velocities uses a smoothed sign,
+    sat(q' / v_s) (``smoothing`` = v_s > 0): with the exact sgn, a joint resting near zero speed
+    gets +-F_c held for whole control periods, a limit cycle of its own.
+
     Attributes:
         viscous: F_d, per joint [N m s/rad].
         coulomb: F_c, per joint [N m]; sgn(0) = 0.
+        smoothing: v_s [rad/s]: sgn is replaced by sat(q' / v_s) (0: exact sgn, the true plant).
 
     """
 
     viscous: np.ndarray
     coulomb: np.ndarray
+    smoothing: float = 0.0
 
     def __post_init__(self):
         object.__setattr__(self, "viscous", np.asarray(self.viscous, dtype=float))
@@ -31,7 +37,8 @@ class Friction:
 
     def torque(self, v: np.ndarray) -> np.ndarray:
         """F(q') [N m]."""
-        return self.viscous * v + self.coulomb * np.sign(v)
+        sign = np.sign(v) if self.smoothing <= 0 else np.clip(v / self.smoothing, -1.0, 1.0)
+        return self.viscous * v + self.coulomb * sign
 
     def power(self, v: np.ndarray) -> float:
         """q'^T F(q') >= 0 [W], the power friction dissipates."""

@@ -18,7 +18,8 @@ GOLDEN_ANGLE = np.pi * (3 - np.sqrt(5))
 """Phase step between joints of the scaled disturbance [rad] (no two joints in phase)."""
 
 
-def _usable(values: np.ndarray) -> np.ndarray:
+def usable(values: np.ndarray) -> np.ndarray:
+    """Which URDF limits are real: finite, positive and below Pinocchio's 'no limit' placeholders."""
     return np.isfinite(values) & (values > 0) & (values < 1e6)
 
 
@@ -29,7 +30,7 @@ def torque_scale(robot: PinocchioModel) -> np.ndarray:
     effort = robot.effort_limits
     mid = robot.mid_configuration
     fallback = np.diag(robot.mass(mid)) * REFERENCE_ACCELERATION + np.abs(robot.gravity(mid))
-    return np.where(_usable(effort), effort, fallback)
+    return np.where(usable(effort), effort, fallback)
 
 
 def scaled_friction(robot: PinocchioModel, viscous_level: float, coulomb_level: float) -> Friction:
@@ -38,7 +39,7 @@ def scaled_friction(robot: PinocchioModel, viscous_level: float, coulomb_level: 
     """
     tau = torque_scale(robot)
     speed = robot.velocity_limits
-    speed = np.where(_usable(speed), speed, REFERENCE_SPEED)
+    speed = np.where(usable(speed), speed, REFERENCE_SPEED)
     return Friction(viscous_level * tau / speed, coulomb_level * tau)
 
 

@@ -1,0 +1,50 @@
+"""The numbers in README.md and docs/ are those the current code produces.
+
+Tables are rendered from docs/data/*.json by benchmarks/docs_tables.py; here the rendered tables
+must match the documents, and one row of every data file is re-run and must match its data.
+"""
+
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+import common  # noqa: E402
+import docs_tables  # noqa: E402
+
+
+@pytest.mark.parametrize("document", docs_tables.DOCUMENTS)
+def test_tables_are_rendered_from_the_data(document):
+    text = (ROOT / document).read_text()
+    assert docs_tables.render(text) == text, f"run python benchmarks/docs_tables.py ({document})"
+
+
+def test_every_data_file_has_a_table():
+    text = "".join((ROOT / d).read_text() for d in docs_tables.DOCUMENTS)
+    for name, renderer in docs_tables.RENDERERS.items():
+        assert f"<!-- table: {name} -->" in text, name
+    assert {p.stem for p in docs_tables.DATA.glob("*.json")} == {
+        "paper_reproduction", "fair_comparison", "nn_options", "subtask"}
+
+
+def _quickest_row(rows):
+    """The first row of the shortest runs (every data file has 20 s rows)."""
+    def duration(row):
+        return row["changes"].get("simulation", {}).get("duration", 20.0)
+
+    return min(rows, key=duration)
+
+
+@pytest.mark.parametrize("name", ["paper_reproduction", "fair_comparison", "nn_options", "subtask"])
+def test_a_row_of_the_data_reproduces(name):
+    rows = json.loads((docs_tables.DATA / f"{name}.json").read_text())["rows"]
+    row = _quickest_row(rows)
+    job = {k: row[k] for k in ("preset", "changes")}
+    again = common.run_row(job)
+    for key in ("rms_error_after_2s", "rms_torque", "torque_chatter", "saturated_fraction"):
+        assert again[key] == pytest.approx(row[key], rel=1e-9, abs=1e-12), (name, key)
+    assert again["warnings"] == row["warnings"]
