@@ -19,7 +19,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 DATA = ROOT / "docs" / "data"
-DOCUMENTS = ("README.md", "docs/controller.md", "docs/plant.md", "docs/fair-comparison.md")
+DOCUMENTS = ("README.md", "docs/controller.md", "docs/plant.md", "docs/fair-comparison.md",
+             "docs/robots.md")
 TABLE = re.compile(r"(<!-- table: (?P<name>[\w-]+) -->\n)(?P<body>.*?)(<!-- /table -->)", re.S)
 TORQUE_BUDGET = 10.0
 """[N m] RMS torque within which the headline compares the controllers' best errors."""
@@ -119,7 +120,20 @@ def subtask() -> str:
     return "\n".join(lines) + "\n\nMade by `python benchmarks/subtask.py --json docs/data/subtask.json`.\n"
 
 
-RENDERERS = {"paper-reproduction": paper_reproduction, "fair-headline": fair_headline,
+def arm_presets() -> str:
+    rows = _data("arm_presets")["rows"]
+    lines = ["| preset | controller | RMS e, t ≥ 2 s [mm] | RMS rotation error [mrad] | RMS τ [N m] | "
+             "chatter [N m] | saturated [%] | warnings |", "|---|---|---:|---:|---:|---:|---:|---|"]
+    for r in rows:
+        rot = r["rms_orientation_error_after_2s"]
+        lines.append(f"| {r['preset']} | {r['controller']} | {_mm(r['rms_error_after_2s'])} | "
+                     f"{'–' if rot is None else f'{1e3 * rot:.3g}'} | {r['rms_torque']:.3g} | "
+                     f"{r['torque_chatter']:.3g} | {100 * r['saturated_fraction']:.1f} | {_warn(r)} |")
+    return "\n".join(lines) + ("\n\nMade by `python benchmarks/arm_presets.py "
+                               "--json docs/data/arm_presets.json`.\n")
+
+
+RENDERERS = {"arm-presets": arm_presets, "paper-reproduction": paper_reproduction, "fair-headline": fair_headline,
              "fair-pareto": fair_pareto, "nn-options": nn_options, "subtask": subtask}
 
 

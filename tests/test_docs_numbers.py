@@ -16,6 +16,8 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 import common  # noqa: E402
 import docs_tables  # noqa: E402
 
+DATA_FILES = ["paper_reproduction", "fair_comparison", "nn_options", "subtask", "arm_presets"]
+
 
 @pytest.mark.parametrize("document", docs_tables.DOCUMENTS)
 def test_tables_are_rendered_from_the_data(document):
@@ -27,19 +29,18 @@ def test_every_data_file_has_a_table():
     text = "".join((ROOT / d).read_text() for d in docs_tables.DOCUMENTS)
     for name, renderer in docs_tables.RENDERERS.items():
         assert f"<!-- table: {name} -->" in text, name
-    assert {p.stem for p in docs_tables.DATA.glob("*.json")} == {
-        "paper_reproduction", "fair_comparison", "nn_options", "subtask"}
+    assert {p.stem for p in docs_tables.DATA.glob("*.json")} == set(DATA_FILES)
 
 
 def _quickest_row(rows):
-    """The first row of the shortest runs (every data file has 20 s rows)."""
-    def duration(row):
-        return row["changes"].get("simulation", {}).get("duration", 20.0)
+    """The first row of the shortest runs (on the 3-link arm where there is a choice)."""
+    def cost(row):
+        return (row["changes"].get("simulation", {}).get("duration", 20.0), "panda" in row["preset"])
 
-    return min(rows, key=duration)
+    return min(rows, key=cost)
 
 
-@pytest.mark.parametrize("name", ["paper_reproduction", "fair_comparison", "nn_options", "subtask"])
+@pytest.mark.parametrize("name", DATA_FILES)
 def test_a_row_of_the_data_reproduces(name):
     rows = json.loads((docs_tables.DATA / f"{name}.json").read_text())["rows"]
     row = _quickest_row(rows)
