@@ -133,8 +133,9 @@ def arm_presets() -> str:
                                "--json docs/data/arm_presets.json`.\n")
 
 
-RENDERERS = {"arm-presets": arm_presets, "paper-reproduction": paper_reproduction, "fair-headline": fair_headline,
-             "fair-pareto": fair_pareto, "nn-options": nn_options, "subtask": subtask}
+RENDERERS = {"arm-presets": arm_presets, "paper-reproduction": paper_reproduction,
+             "fair-headline": fair_headline, "fair-pareto": fair_pareto, "nn-options": nn_options,
+             "subtask": subtask}
 
 
 def render(text: str) -> str:
