@@ -82,3 +82,38 @@ def test_singular_episode_intervals():
     assert singular_episodes(t, damped) == {
         "count": 3, "intervals": [[0.1, 0.2], [0.5, 0.5], [0.8, 0.9]]}
     assert singular_episodes(t, np.zeros(10, dtype=bool)) == {"count": 0, "intervals": []}
+
+
+def _fake_trace(q, n):
+    from types import SimpleNamespace
+
+    return SimpleNamespace(q=np.array([q]), dq=np.zeros((1, n)), tau_cmd=np.zeros((1, n)))
+
+
+def test_divergence_cause_names_an_exploding_criterion_gradient():
+    """k dh/dq above 1e3 on some joint at the last state: the message says so and names the joint."""
+    from nnrobust.experiment import build, likely_cause
+
+    config = load_preset("paper-ellipse").replace(
+        controller={"k": 1e4}, subtasks={"criteria": ["joint_limits"]}, simulation={"duration": 1.0})
+    setup = build(config)
+    q = setup.q0.copy()
+    q[1] = 2.79  # joint2 next to its +2.8 rad limit: the barrier's steepest part
+    message = likely_cause(setup, _fake_trace(q, 3))
+    assert "exploding criterion gradient" in message and "'joint2'" in message
+
+
+def test_divergence_cause_names_an_implausible_effort_limit(tmp_path):
+    """An effort limit of 50 kN m on the paper's arm, with friction and disturbance scaled to it."""
+    from nnrobust.experiment import build, likely_cause
+    from nnrobust.model import paper_arm_urdf
+
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(paper_arm_urdf().read_text().replace('effort="60"', 'effort="50000"'))
+    config = load_preset("paper-ellipse").replace(
+        robot={"source": str(urdf)},
+        plant={"friction": "scaled", "disturbance": "scaled", "joint_stops": False},
+        nominal={"kind": "urdf"}, simulation={"duration": 1.0})
+    setup = build(config)
+    message = likely_cause(setup, _fake_trace(setup.q0, 3))
+    assert "implausible effort limit (5e+04 on joint 'joint1'" in message
