@@ -39,3 +39,40 @@ def run_rows(jobs: list[dict], workers: int | None = None, echo=None) -> list[di
             if echo:
                 echo(row)
     return rows
+
+
+def parser(doc: str):
+    """The command line every grid benchmark shares: --json and --workers."""
+    import argparse
+
+    p = argparse.ArgumentParser(description=doc.splitlines()[0])
+    p.add_argument("--json", help="write the rows as JSON to this file")
+    p.add_argument("--workers", type=int, help="worker processes (default: one per core)")
+    return p
+
+
+def report(args, jobs: list[dict], columns: list[tuple[str, int, object]], **extra) -> list[dict]:
+    """Run the jobs, print one line per row as it arrives (``columns``: header, width, and a
+    function of the row giving the cell text), and write {**extra, "rows": rows} to --json."""
+    from nnrobust.results import write_json_atomic
+
+    print(" ".join(f"{h:>{w}s}" if i else f"{h:{w}s}" for i, (h, w, _) in enumerate(columns)))
+
+    def echo(row):
+        print(" ".join(f"{cell(row):>{w}s}" if i else f"{cell(row):{w}s}"
+                       for i, (_, w, cell) in enumerate(columns)), flush=True)
+
+    rows = run_rows(jobs, args.workers, echo)
+    if args.json:
+        write_json_atomic(args.json, {**extra, "rows": rows})
+    return rows
+
+
+def mm(key: str):
+    """Cell: a length metric in mm."""
+    return lambda r: "-" if r.get(key) is None else f"{1e3 * r[key]:.3f}"
+
+
+def number(key: str, fmt: str = ".2f", scale: float = 1.0):
+    """Cell: a metric with a format."""
+    return lambda r: "-" if r.get(key) is None else f"{scale * r[key]:{fmt}}"

@@ -39,16 +39,33 @@ def _warn(row: dict) -> str:
     return ", ".join(kinds) if kinds else "none"
 
 
+def _markdown(columns: list[tuple[str, str, object]], rows: list[dict], made_by: str = "") -> str:
+    """A Markdown table: ``columns`` are (header, "l" or "r", function of the row giving the cell)."""
+    lines = ["| " + " | ".join(h for h, _, _ in columns) + " |",
+             "|" + "|".join("---" if a == "l" else "---:" for _, a, _ in columns) + "|"]
+    lines += ["| " + " | ".join(cell(r) for _, _, cell in columns) + " |" for r in rows]
+    return "\n".join(lines) + (f"\n\nMade by `{made_by}`.\n" if made_by else "\n")
+
+
+def _g3(key: str, scale: float = 1.0):
+    return lambda r: "–" if r.get(key) is None else f"{scale * r[key]:.3g}"
+
+
+def _text(key: str):
+    return lambda r: str(r[key])
+
+
+ERROR = ("RMS error, t ≥ 2 s [mm]", "r", lambda r: _mm(r["rms_error_after_2s"]))
+TORQUE = ("RMS torque [N m]", "r", _g3("rms_torque"))
+CHATTER = ("chatter [N m]", "r", _g3("torque_chatter"))
+SATURATED = ("saturated steps [%]", "r", lambda r: f"{100 * r['saturated_fraction']:.1f}")
+WARNINGS = ("warnings", "l", _warn)
+
+
 def paper_reproduction() -> str:
-    rows = _data("paper_reproduction")["rows"]
-    lines = ["| case | controller | RMS error, t ≥ 2 s [mm] | RMS torque [N m] | chatter [N m] | "
-             "saturated steps [%] | warnings |", "|---|---|---:|---:|---:|---:|---|"]
-    for r in rows:
-        lines.append(f"| {r['case']} | {r['variant']} | {_mm(r['rms_error_after_2s'])} | "
-                     f"{r['rms_torque']:.3g} | {r['torque_chatter']:.3g} | "
-                     f"{100 * r['saturated_fraction']:.1f} | {_warn(r)} |")
-    return "\n".join(lines) + ("\n\nMade by `python benchmarks/paper_reproduction.py "
-                               "--json docs/data/paper_reproduction.json`.\n")
+    return _markdown([("case", "l", _text("case")), ("controller", "l", _text("variant")), ERROR, TORQUE,
+                      CHATTER, SATURATED, WARNINGS], _data("paper_reproduction")["rows"],
+                     "python benchmarks/paper_reproduction.py --json docs/data/paper_reproduction.json")
 
 
 def _best_within_budget(rows: list[dict]) -> dict[tuple, dict]:
@@ -66,71 +83,51 @@ def _best_within_budget(rows: list[dict]) -> dict[tuple, dict]:
 def fair_headline() -> str:
     rows = _data("fair_comparison")["rows"]
     best = _best_within_budget(rows)
-    cases = list(dict.fromkeys(r["case"] for r in rows))
-    sensings = list(dict.fromkeys(r["sensing"] for r in rows))
-    controllers = list(dict.fromkeys(r["controller"] for r in rows))
-    head = " | ".join(f"{c}, {s}" for c in cases for s in sensings)
-    lines = [f"| controller | {head} |", "|---|" + "---:|" * (len(cases) * len(sensings))]
-    for ctrl in controllers:
-        cells = []
-        for c in cases:
-            for s in sensings:
-                r = best.get((c, s, ctrl))
-                cells.append("–" if r is None else
-                             f"{_mm(r['rms_error_after_2s'])} mm ({r['rms_torque']:.2g} N m)")
-        lines.append(f"| {ctrl} | " + " | ".join(cells) + " |")
-    return ("\n".join(lines) + "\n\nBest RMS task error (t ≥ 2 s) of each controller over its gain grid "
-            f"among the settings with RMS torque ≤ {TORQUE_BUDGET:g} N m and at most 1 % saturated steps "
-            "(RMS torque in brackets); 20 s runs with the URDF's effort limits. Made by "
-            "`python benchmarks/fair_comparison.py --json docs/data/fair_comparison.json "
-            "--figure docs/img/fair_comparison.png`.\n")
+    panels = list(dict.fromkeys((r["case"], r["sensing"]) for r in rows))
+
+    def cell(case, sensing):
+        def text(ctrl):
+            r = best.get((case, sensing, ctrl["controller"]))
+            return "–" if r is None else f"{_mm(r['rms_error_after_2s'])} mm ({r['rms_torque']:.2g} N m)"
+        return text
+
+    controllers = [{"controller": c} for c in dict.fromkeys(r["controller"] for r in rows)]
+    columns = [("controller", "l", _text("controller"))] + [
+        (f"{case}, {sensing}", "r", cell(case, sensing)) for case, sensing in panels]
+    return _markdown(columns, controllers) + (
+        f"\nBest RMS task error (t ≥ 2 s) of each controller over its gain grid among the settings "
+        f"with RMS torque ≤ {TORQUE_BUDGET:g} N m and at most 1 % saturated steps (RMS torque in "
+        "brackets); 20 s runs with the URDF's effort limits. Made by "
+        "`python benchmarks/fair_comparison.py --json docs/data/fair_comparison.json "
+        "--figure docs/img/fair_comparison.png`.\n")
 
 
 def fair_pareto() -> str:
-    rows = _data("fair_comparison")["rows"]
-    lines = ["| case | sensing | controller | setting | RMS error [mm] | RMS torque [N m] | "
-             "chatter [N m] | saturated [%] |", "|---|---|---|---|---:|---:|---:|---:|"]
-    for r in rows:
-        if r.get("pareto"):
-            lines.append(f"| {r['case']} | {r['sensing']} | {r['controller']} | {r['setting']} | "
-                         f"{_mm(r['rms_error_after_2s'])} | {r['rms_torque']:.3g} | "
-                         f"{r['torque_chatter']:.3g} | {100 * r['saturated_fraction']:.1f} |")
-    return "\n".join(lines) + "\n"
+    rows = [r for r in _data("fair_comparison")["rows"] if r.get("pareto")]
+    return _markdown([("case", "l", _text("case")), ("sensing", "l", _text("sensing")),
+                      ("controller", "l", _text("controller")), ("setting", "l", _text("setting")),
+                      ERROR, TORQUE, CHATTER, SATURATED], rows)
 
 
 def nn_options() -> str:
-    rows = _data("nn_options")["rows"]
-    lines = ["| variant | RMS e, t ≥ 2 s [mm] | max e [mm] | RMS τ [N m] | chatter [N m] | "
-             "saturated [%] | ρ̂ at 20 s |", "|---|---:|---:|---:|---:|---:|---:|"]
-    for r in rows:
-        rho = "–" if r["final_rho_hat"] is None else f"{r['final_rho_hat']:.3g}"
-        lines.append(f"| {r['variant']} | {_mm(r['rms_error_after_2s'])} | {_mm(r['max_error'])} | "
-                     f"{r['rms_torque']:.3g} | {r['torque_chatter']:.3g} | "
-                     f"{100 * r['saturated_fraction']:.1f} | {rho} |")
-    return "\n".join(lines) + ("\n\nMade by `python benchmarks/nn_options.py "
-                               "--json docs/data/nn_options.json`.\n")
+    return _markdown([("variant", "l", _text("variant")), ERROR,
+                      ("max e [mm]", "r", lambda r: _mm(r["max_error"])), TORQUE, CHATTER, SATURATED,
+                      ("ρ̂ at 20 s", "r", _g3("final_rho_hat"))], _data("nn_options")["rows"],
+                     "python benchmarks/nn_options.py --json docs/data/nn_options.json")
 
 
 def subtask() -> str:
-    rows = _data("subtask")["rows"]
-    lines = ["| variant | h(0) | h(20 s) | RMS e, t ≥ 2 s [mm] | RMS τ [N m] |", "|---|---:|---:|---:|---:|"]
-    for r in rows:
-        lines.append(f"| {r['variant']} | {r['h_start']:.4f} | {r['h_end']:.4f} | "
-                     f"{_mm(r['rms_error_after_2s'])} | {r['rms_torque']:.3g} |")
-    return "\n".join(lines) + "\n\nMade by `python benchmarks/subtask.py --json docs/data/subtask.json`.\n"
+    return _markdown([("variant", "l", _text("variant")),
+                      ("h(0)", "r", lambda r: f"{r['h_start']:.4f}"),
+                      ("h(20 s)", "r", lambda r: f"{r['h_end']:.4f}"), ERROR, TORQUE],
+                     _data("subtask")["rows"], "python benchmarks/subtask.py --json docs/data/subtask.json")
 
 
 def arm_presets() -> str:
-    rows = _data("arm_presets")["rows"]
-    lines = ["| preset | controller | RMS e, t ≥ 2 s [mm] | RMS rotation error [mrad] | RMS τ [N m] | "
-             "chatter [N m] | saturated [%] | warnings |", "|---|---|---:|---:|---:|---:|---:|---|"]
-    for r in rows:
-        rot = r["rms_orientation_error_after_2s"]
-        lines.append(f"| {r['preset']} | {r['controller']} | {_mm(r['rms_error_after_2s'])} | "
-                     f"{'–' if rot is None else f'{1e3 * rot:.3g}'} | {r['rms_torque']:.3g} | "
-                     f"{r['torque_chatter']:.3g} | {100 * r['saturated_fraction']:.1f} | {_warn(r)} |")
-    return "\n".join(lines) + ("\n\nMade by `python benchmarks/arm_presets.py "
-                               "--json docs/data/arm_presets.json`.\n")
+    return _markdown([("preset", "l", _text("preset")), ("controller", "l", _text("controller")), ERROR,
+                      ("RMS rotation error [mrad]", "r", _g3("rms_orientation_error_after_2s", 1e3)),
+                      TORQUE, CHATTER, SATURATED, WARNINGS], _data("arm_presets")["rows"],
+                     "python benchmarks/arm_presets.py --json docs/data/arm_presets.json")
 
 
 RENDERERS = {"arm-presets": arm_presets, "paper-reproduction": paper_reproduction,

@@ -8,11 +8,7 @@ NN compensator under several settings, each one change from the defaults.
 
 from __future__ import annotations
 
-import argparse
-
-from common import run_rows
-
-from nnrobust.results import write_json_atomic
+from common import mm, number, parser, report
 
 VARIANTS = {
     "no-u0 baseline": {"controller": {"kind": "no-u0"}},
@@ -29,28 +25,20 @@ VARIANTS = {
 }
 
 
+COLUMNS = [("variant", 36, lambda r: r["variant"]), ("rms e t>=2s [mm]", 17, mm("rms_error_after_2s")),
+           ("max e [mm]", 11, mm("max_error")), ("rms tau [N m]", 14, number("rms_torque")),
+           ("chatter [N m]", 14, number("torque_chatter")),
+           ("sat %", 6, number("saturated_fraction", ".2f", 100)),
+           ("rho-hat end", 12, number("final_rho_hat", ".3g"))]
+
+
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--json", help="write the table as JSON to this file")
-    parser.add_argument("--preset", default="paper-ellipse")
-    parser.add_argument("--workers", type=int, help="worker processes (default: one per core)")
-    args = parser.parse_args()
-    header = (f"{'variant':36s} {'rms e t>=2s [mm]':>17s} {'max e [mm]':>11s} "
-              f"{'rms tau [N m]':>14s} {'chatter [N m]':>14s} {'sat %':>6s} {'rho-hat end':>12s}")
-    print(header)
-    print("-" * len(header))
-
-    def echo(r):
-        rho = "-" if r["final_rho_hat"] is None else f"{r['final_rho_hat']:.3g}"
-        print(f"{r['variant']:36s} {r['rms_error_after_2s'] * 1e3:17.3f} {r['max_error'] * 1e3:11.2f} "
-              f"{r['rms_torque']:14.2f} {r['torque_chatter']:14.2f} {100 * r['saturated_fraction']:6.2f} "
-              f"{rho:>12s}", flush=True)
-
+    p = parser(__doc__)
+    p.add_argument("--preset", default="paper-ellipse")
+    args = p.parse_args()
     jobs = [{"variant": name, "preset": args.preset, "changes": changes}
             for name, changes in VARIANTS.items()]
-    rows = run_rows(jobs, args.workers, echo)
-    if args.json:
-        write_json_atomic(args.json, {"preset": args.preset, "rows": rows})
+    report(args, jobs, COLUMNS, preset=args.preset)
 
 
 if __name__ == "__main__":

@@ -13,12 +13,9 @@ over t >= 2 s at an RMS torque <= 10 N m and stay bounded (last 20 s at most 2x 
 
 from __future__ import annotations
 
-import argparse
 import itertools
 
-from common import run_rows
-
-from nnrobust.results import write_json_atomic
+from common import mm, number, parser, report
 
 CASES = {"case (a) line": "paper-line", "case (b) ellipse": "paper-ellipse"}
 PAPER_LAW = {"nn": {"sigma": 0.0, "eps_min": 0.0}}
@@ -40,22 +37,14 @@ def jobs() -> list[dict]:
             for (case, preset), (name, changes) in itertools.product(CASES.items(), VARIANTS.items())]
 
 
+COLUMNS = [("case", 17, lambda r: r["case"]), ("variant", 44, lambda r: r["variant"]),
+           ("rms e [mm]", 10, mm("rms_error_after_2s")), ("rms tau", 8, number("rms_torque")),
+           ("chatter", 8, number("torque_chatter")), ("sat %", 6, number("saturated_fraction", ".2f", 100)),
+           ("warnings", 9, lambda r: str(len(r["warnings"])))]
+
+
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--json", help="write the rows as JSON to this file")
-    parser.add_argument("--workers", type=int, help="worker processes (default: one per core)")
-    args = parser.parse_args()
-    print(f"{'case':17s} {'variant':44s} {'rms e [mm]':>10s} {'rms tau':>8s} {'chatter':>8s} "
-          f"{'sat %':>6s} warnings")
-
-    def echo(r):
-        print(f"{r['case']:17s} {r['variant']:44s} {1e3 * r['rms_error_after_2s']:10.3f} "
-              f"{r['rms_torque']:8.2f} {r['torque_chatter']:8.2f} {100 * r['saturated_fraction']:6.2f} "
-              f"{len(r['warnings'])}", flush=True)
-
-    rows = run_rows(jobs(), args.workers, echo)
-    if args.json:
-        write_json_atomic(args.json, {"rows": rows})
+    report(parser(__doc__).parse_args(), jobs(), COLUMNS)
 
 
 if __name__ == "__main__":

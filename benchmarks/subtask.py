@@ -9,11 +9,7 @@ model error's null-space part disturbs the self-motion unopposed. The rows separ
 
 from __future__ import annotations
 
-import argparse
-
-from common import run_rows
-
-from nnrobust.results import write_json_atomic
+from common import mm, number, parser, report
 
 NO_FRICTION = {"viscous_friction": [0.0] * 3, "coulomb_friction": [0.0] * 3}
 
@@ -33,22 +29,15 @@ VARIANTS = {
 }
 
 
+COLUMNS = [("variant", 66, lambda r: r["variant"]), ("h(0)", 8, number("h_start", ".4f")),
+           ("h(20 s)", 8, number("h_end", ".4f")), ("rms e [mm]", 10, mm("rms_error_after_2s")),
+           ("rms tau", 8, number("rms_torque"))]
+
+
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--json", help="write the rows as JSON to this file")
-    parser.add_argument("--workers", type=int, help="worker processes (default: one per core)")
-    args = parser.parse_args()
-    print(f"{'variant':66s} {'h(0)':>8s} {'h(20 s)':>8s} {'rms e [mm]':>10s} {'rms tau':>8s}")
-
-    def echo(r):
-        print(f"{r['variant']:66s} {r['h_start']:8.4f} {r['h_end']:8.4f} "
-              f"{1e3 * r['rms_error_after_2s']:10.3f} {r['rms_torque']:8.2f}", flush=True)
-
     jobs = [{"variant": name, "preset": "paper-ellipse", "changes": changes}
             for name, changes in VARIANTS.items()]
-    rows = run_rows(jobs, args.workers, echo)
-    if args.json:
-        write_json_atomic(args.json, {"rows": rows})
+    report(parser(__doc__).parse_args(), jobs, COLUMNS)
 
 
 if __name__ == "__main__":
