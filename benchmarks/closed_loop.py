@@ -1,5 +1,5 @@
-"""Closed-loop cost per control step: the library's Python loop and the two floors it is measured
-against, a bare Python + Pinocchio loop and the same loop in C++ (the compiled extension).
+"""Closed-loop cost per control step: the library's Python and compiled loops and the two floors
+they are measured against, a bare Python + Pinocchio loop and the same loop in C++.
 
     python benchmarks/closed_loop.py --json out/bench/closed_loop.json [--duration 2]
 
@@ -66,6 +66,8 @@ def _contenders(preset: str, duration: float) -> dict:
            "floor, Python + pin": lambda: python_floor_loop(robot.model, robot.task_frame, setup.q0,
                                                             setup.v0, steps, dt)}
     if compiled.available():
+        if not compiled.twin_refusal(setup):
+            out["nnrobust, compiled loop"] = lambda: compiled.simulate_compiled(setup, duration)
         loaded = compiled.load_model(robot.model, robot.task_frame)
         out["floor, C++"] = lambda: compiled.floor_loop(loaded, setup.q0, setup.v0, steps, dt)
     return out, steps

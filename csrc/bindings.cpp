@@ -3,10 +3,35 @@
 #include <nanobind/nanobind.h>
 #include <nanobind/stl/string.h>
 
+#include <Python.h>
+
+#include "closed_loop.hpp"
 #include "model.hpp"
 
 namespace nb = nanobind;
 using nnrobust::LoadedModel;
+using nnrobust::LoopSpec;
+using nnrobust::LoopTrace;
+using nnrobust::ThreeLinkSpec;
+
+namespace {
+
+// Polled by the loop with the GIL released: a pending Ctrl-C or SIGTERM stops the run.
+bool python_signal_pending() {
+  nb::gil_scoped_acquire gil;
+  if (PyErr_CheckSignals() != 0) {
+    PyErr_Clear();
+    return true;
+  }
+  return false;
+}
+
+LoopTrace run(LoadedModel &plant, const LoopSpec &spec) {
+  nb::gil_scoped_release released;
+  return nnrobust::run_loop(plant, spec, &python_signal_pending);
+}
+
+}  // namespace
 
 NB_MODULE(_loop, m) {
   m.doc() = "The compiled closed loop of nnrobust (Pinocchio C++ API).";
@@ -17,6 +42,43 @@ NB_MODULE(_loop, m) {
       .def("bias", &LoadedModel::bias, nb::arg("q"), nb::arg("v"), "V_m(q, v) v + G(q) [N m].")
       .def("frame_jacobian", &LoadedModel::frame_jacobian, nb::arg("q"),
            "6 x n Jacobian of the task frame, world-aligned axes.");
+  nb::class_<ThreeLinkSpec>(m, "ThreeLinkSpec", "The closed-form nominal model's parameters.")
+      .def(nb::init<>())
+      .def_rw("beta", &ThreeLinkSpec::beta)
+      .def_rw("p", &ThreeLinkSpec::p)
+      .def_rw("lengths", &ThreeLinkSpec::lengths)
+      .def_rw("gamma", &ThreeLinkSpec::gamma)
+      .def_rw("gravity", &ThreeLinkSpec::gravity);
+  nb::class_<LoopSpec> spec(m, "LoopSpec", "Everything one compiled run needs (nnrobust/compiled.py).");
+  spec.def(nb::init<>());
+#define FIELD(name) spec.def_rw(#name, &LoopSpec::name)
+  FIELD(period); FIELD(substeps); FIELD(steps); FIELD(max_speed); FIELD(q0); FIELD(v0);
+  FIELD(viscous); FIELD(coulomb); FIELD(dist_amplitude); FIELD(dist_phase); FIELD(dist_omega);
+  FIELD(torque_limit); FIELD(stops); FIELD(stop_lower); FIELD(stop_upper); FIELD(stop_stiffness);
+  FIELD(stop_alpha); FIELD(position_noise); FIELD(velocity_noise); FIELD(resolution); FIELD(noise_q);
+  FIELD(noise_v); FIELD(delay); FIELD(nominal); FIELD(nominal_viscous); FIELD(nominal_coulomb);
+  FIELD(coulomb_smoothing); FIELD(center); FIELD(axis_a); FIELD(axis_b); FIELD(omega); FIELD(phase);
+  FIELD(Kp); FIELD(Kv); FIELD(k); FIELD(paper_criterion); FIELD(criterion_weight); FIELD(smoothness);
+  FIELD(pinv_threshold); FIELD(pinv_max_damping); FIELD(robust); FIELD(BtP); FIELD(sliding_gain);
+  FIELD(sliding_boundary); FIELD(basis_joint); FIELD(basis_bias); FIELD(law_corrected);
+  FIELD(basis_centers); FIELD(basis_inv2w2); FIELD(F); FIELD(gamma); FIELD(eps_min); FIELD(sigma); FIELD(z0);
+#undef FIELD
+  nb::class_<LoopTrace>(m, "LoopTrace", "The arrays of a compiled run (nnrobust.simulation.Trace).")
+      .def_ro("q", &LoopTrace::q)
+      .def_ro("dq", &LoopTrace::dq)
+      .def_ro("tau", &LoopTrace::tau)
+      .def_ro("tau_cmd", &LoopTrace::tau_cmd)
+      .def_ro("z", &LoopTrace::z)
+      .def_ro("rho_hat", &LoopTrace::rho_hat)
+      .def_ro("eps", &LoopTrace::eps)
+      .def_ro("z_norm", &LoopTrace::z_norm)
+      .def_ro("damping", &LoopTrace::damping)
+      .def_ro("done", &LoopTrace::done)
+      .def_ro("status", &LoopTrace::status)
+      .def_ro("divergence_index", &LoopTrace::divergence_index)
+      .def_ro("divergence_joint", &LoopTrace::divergence_joint);
+  m.def("run_loop", &run, nb::arg("plant"), nb::arg("spec"),
+        "Run the compiled closed loop (GIL released; Ctrl-C and SIGTERM stop it).");
   m.def("floor_loop", &nnrobust::floor_loop, nb::arg("model"), nb::arg("q0"), nb::arg("v0"),
         nb::arg("steps"), nb::arg("dt"), nb::call_guard<nb::gil_scoped_release>(),
         "The bare C++ loop (RNEA + frame kinematics + 4 ABA per step); returns the final [q, v].");

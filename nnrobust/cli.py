@@ -102,7 +102,11 @@ def cmd_run(args) -> int:
     if args.controller:
         changes["controller"] = {"kind": args.controller}
     if args.duration is not None:
-        changes["simulation"] = {"duration": args.duration}
+        changes.setdefault("simulation", {})["duration"] = args.duration
+    if args.backend:
+        changes.setdefault("simulation", {})["backend"] = args.backend
+    if args.view:  # the live view follows the run step by step: the Python loop
+        changes.setdefault("simulation", {})["backend"] = "python"
     if changes:
         config = config.replace(**changes)
     out = Path(args.out or f"out/{config.name}-{config.controller.kind}")
@@ -273,6 +277,9 @@ def build_parser() -> argparse.ArgumentParser:
                      "sliding-mode (eq. 9 + fixed-gain boundary-layer sliding mode), pd (task-space "
                      "PD + gravity compensation)")
     run.add_argument("--duration", type=float, help="override the simulated time [s]")
+    run.add_argument("--backend", choices=("auto", "compiled", "python"),
+                     help="simulation loop: compiled (C++), python (the reference) or auto (compiled "
+                     "when the experiment has a compiled twin; the default)")
     run.add_argument("--overwrite", action="store_true", help="replace an existing run folder")
     run.add_argument("--no-plots", action="store_true", help="skip the figures")
     run.add_argument("--no-animation", action="store_true",

@@ -55,3 +55,137 @@ def floor_loop(model, q0, v0, steps: int, dt: float):
     if module is None:
         raise NNRobustError(_REASON)
     return module.floor_loop(model, q0, v0, steps, dt)
+
+
+# ---- the compiled closed loop ---------------------------------------------------------------------
+
+
+def twin_refusal(setup) -> str:
+    """Why this experiment has no compiled twin ("" when it has one).
+
+    The compiled loop so far covers the paper's arm with the closed-form nominal model
+    (docs/compiled.md): the eq. (9) law with no u_0, the NN compensator or the sliding-mode term,
+    the paper's criterion, the ellipse of eq. (18), and the whole plant (friction, sinusoidal
+    disturbance, saturation, stops, sensor noise, quantisation, delay), integrated by RK4.
+    """
+    from .controllers import NNCompensator, SlidingModeCompensator, TaskSpaceController
+    from .model import ThreeLinkPlanarModel
+    from .subtasks import PaperCriterion, WeightedCriteria
+    from .trajectories import EllipseTrajectory
+
+    config, controller = setup.config, setup.controller
+    if not available():
+        return unavailable_reason()
+    checks = [
+        (config.simulation.integrator == "rk4", "the integrator is not rk4"),
+        (type(controller) is TaskSpaceController, f"controller.kind {config.controller.kind!r}"),
+        (isinstance(setup.nominal, ThreeLinkPlanarModel), "the nominal model is not the closed form"),
+        (type(setup.trajectory) is EllipseTrajectory, "the trajectory is not an ellipse"),
+        (setup.criterion is None or (isinstance(setup.criterion, WeightedCriteria)
+                                     and len(setup.criterion.criteria) == 1
+                                     and isinstance(setup.criterion.criteria[0], PaperCriterion)),
+         "a criterion other than 'paper'"),
+    ]
+    compensator = getattr(controller, "compensator", None)
+    checks.append((compensator is None or type(compensator) in (NNCompensator, SlidingModeCompensator),
+                   "a custom robust term"))
+    for ok, what in checks:
+        if not ok:
+            return f"{what} has no compiled twin yet"
+    return ""
+
+
+def loop_spec(setup, duration: float):
+    """The compiled loop's description of a built experiment (every array it needs)."""
+    import numpy as np
+
+    from .controllers import NNCompensator
+
+    def f(x):  # the C++ side takes contiguous float64 arrays
+        return np.ascontiguousarray(x, dtype=float)
+
+    module = _load()
+    sim, plant, controller = setup.config.simulation, setup.plant, setup.controller
+    n = plant.nq
+    steps = int(round(duration / sim.control_period))
+    s = module.LoopSpec()
+    s.period, s.substeps, s.steps, s.max_speed = sim.control_period, sim.substeps, steps, 1e3
+    s.q0, s.v0 = f(setup.q0), f(setup.v0)
+    s.viscous, s.coulomb = f(plant.friction.viscous), f(plant.friction.coulomb)
+    s.dist_amplitude, s.dist_phase = f(plant.disturbance.amplitude), f(plant.disturbance.phase)
+    s.dist_omega = f(plant.disturbance.omega)
+    s.torque_limit = f(np.zeros(0) if plant.torque_limit is None else plant.torque_limit)
+    if plant.stops is not None:
+        s.stops = True
+        s.stop_lower, s.stop_upper = f(plant.stops.lower), f(plant.stops.upper)
+        s.stop_stiffness, s.stop_alpha = f(plant.stops.stiffness), plant.stops.alpha
+    sensor = plant.sensor
+    s.position_noise, s.velocity_noise = f(sensor.position_noise), f(sensor.velocity_noise)
+    s.resolution = f(sensor.resolution)
+    if not sensor.is_ideal:  # the same draws, in the same order, as Sensor.measure at every step
+        draws = np.random.default_rng(sensor.seed).standard_normal((steps, 2, n))
+        s.noise_q, s.noise_v = f(draws[:, 0, :]), f(draws[:, 1, :])
+    s.delay = plant.delay
+    params = setup.nominal.params
+    spec = module.ThreeLinkSpec()
+    spec.beta, spec.p, spec.lengths = f(params.beta), f(params.p), f(params.lengths)
+    spec.gamma, spec.gravity = f(params.gamma), f(params.gravity)
+    s.nominal = spec
+    s.nominal_viscous = f(controller.nominal_friction.viscous)
+    s.nominal_coulomb = f(controller.nominal_friction.coulomb)
+    s.coulomb_smoothing = controller.nominal_friction.smoothing
+    trajectory = setup.trajectory
+    s.center, s.axis_a, s.axis_b = f(trajectory.center), f(trajectory.axis_a), f(trajectory.axis_b)
+    s.omega, s.phase = trajectory.omega, trajectory.phase
+    s.Kp, s.Kv, s.k = f(controller.Kp), f(controller.Kv), controller.k
+    if controller.criterion is not None:
+        s.paper_criterion = True
+        s.criterion_weight = float(controller.criterion.weights[0])
+        s.smoothness = f(controller.criterion.criteria[0]._terms[1].c)
+    else:
+        s.smoothness = np.zeros(3)
+    s.pinv_threshold, s.pinv_max_damping = controller.pinv.threshold, controller.pinv.max_damping
+    comp = controller.compensator
+    s.z0 = f(controller.initial_state())
+    if isinstance(comp, NNCompensator):
+        s.robust, s.BtP = "nn", f(comp.BtP)
+        s.basis_joint, s.basis_bias, s.law_corrected = (comp.basis_input == "joint", comp.basis.bias,
+                                                        comp.law == "corrected")
+        s.basis_centers, s.basis_inv2w2 = f(comp.basis._c), f(comp.basis._inv2w2)
+        s.F, s.gamma, s.eps_min, s.sigma = comp.F, comp.gamma, comp.eps_min, comp.sigma
+    elif comp is not None:
+        s.robust, s.BtP = "sliding", f(comp.BtP)
+        s.sliding_gain, s.sliding_boundary = comp.gain, comp.boundary
+    return s
+
+
+def simulate_compiled(setup, duration: float):
+    """Run a built experiment on the compiled loop; returns the same Trace as simulation.simulate."""
+    import numpy as np
+
+    from .simulation import Trace, speed_message
+
+    refusal = twin_refusal(setup)
+    if refusal:
+        raise NNRobustError(f"simulation.backend = 'compiled': {refusal}")
+    spec = loop_spec(setup, duration)
+    plant = load_model(setup.robot.model, setup.robot.task_frame)
+    out = _load().run_loop(plant, spec)
+    done, period = out.done, setup.config.simulation.control_period
+    t = np.arange(done) * period
+    signals = {"damping": np.asarray(out.damping)[:done]}
+    if spec.robust == "nn":
+        signals = {"rho_hat": np.asarray(out.rho_hat)[:done], "eps": np.asarray(out.eps)[:done],
+                   "z_norm": np.asarray(out.z_norm)[:done], **signals}
+    message = ""
+    if out.status == "diverged":
+        k = out.divergence_index
+        if out.divergence_joint < 0:
+            message = f"non-finite state or torque at t = {t[k]:.4f} s"
+        else:
+            message = speed_message(setup.plant.model, np.asarray(out.dq)[k], spec.max_speed, t[k])
+    elif out.status == "interrupted":
+        message = f"interrupted at t = {done * period:.4f} s"
+    z = np.asarray(out.z)[:done] if spec.z0.size else np.zeros((done, 0))
+    return Trace(t, np.asarray(out.q)[:done], np.asarray(out.dq)[:done], np.asarray(out.tau)[:done],
+                 np.asarray(out.tau_cmd)[:done], z, signals, out.status, message)

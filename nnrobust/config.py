@@ -291,6 +291,8 @@ class SimulationConfig:
         integration_step: the RK4 step [s]; when given it sets substeps = control_period /
             integration_step, which must be a whole number (a step never spans two periods).
         integrator: ``rk4`` or ``solve_ivp``.
+        backend: ``auto`` (the compiled loop when every component of the experiment has a
+            compiled twin, else the Python loop), ``compiled`` or ``python`` (docs/compiled.md).
         q_seed: inverse-kinematics seed for q(0) [rad] (default: mid-range of the joint limits).
         initial_task_offset: x(0) - x_d(0), m entries [m] (pose: position [m], then a rotation
             vector [rad] applied in world axes); default zero: start on the path.
@@ -302,6 +304,7 @@ class SimulationConfig:
     substeps: int = 1
     integration_step: float | None = None
     integrator: str = "rk4"
+    backend: str = "auto"
     q_seed: list[float] | None = None
     initial_task_offset: list[float] | None = None
 
@@ -466,6 +469,7 @@ def validate(config: ExperimentConfig) -> None:
         "nn.law": (nn.law, ("corrected", "printed")),
         "nn.basis_input": (nn.basis_input, ("joint", "error")),
         "simulation.integrator": (sim.integrator, ("rk4", "solve_ivp")),
+        "simulation.backend": (sim.backend, ("auto", "compiled", "python")),
     }
     for path, (value, valid) in choices.items():
         if value not in valid:

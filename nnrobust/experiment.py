@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -430,22 +431,50 @@ def build(config: ExperimentConfig) -> Setup:
     return Setup(config, robot, plant, nominal, trajectory, criterion, controller, q0, v0)
 
 
+def choose_backend(setup: Setup) -> str:
+    """``compiled`` or ``python`` for ``simulation.backend`` (auto: compiled when the experiment has
+    a compiled twin; one warning when the extension itself is missing).
+    """
+    from . import compiled
+
+    wanted = setup.config.simulation.backend
+    if wanted == "python":
+        return "python"
+    refusal = compiled.twin_refusal(setup)
+    if wanted == "compiled" and refusal:
+        raise ConfigError("simulation.backend", f"'compiled' cannot run this experiment: {refusal}")
+    if refusal and not compiled.available():
+        warnings.warn(f"running on the Python backend: {refusal}", stacklevel=3)
+    return "python" if refusal else "compiled"
+
+
 def run_experiment(config: ExperimentConfig, progress=None, setup: Setup | None = None) -> Result:
     """Build (unless ``setup`` is given) and simulate; the Result holds arrays, signals and the
-    configuration. ``progress(t, q)`` is called every 50 control steps.
+    configuration. ``progress(t, q)`` is called every 50 control steps (the compiled backend calls
+    it once, at the end). ``wall_seconds`` is the simulation loop's wall time alone.
     """
     setup = setup or build(config)
     sim = config.simulation
+    backend = choose_backend(setup)
     start = time.perf_counter()
-    trace = simulate(
-        setup.plant, setup.controller, setup.q0, setup.v0, sim.duration,
-        sim.control_period, sim.substeps, sim.integrator, progress=progress,
-    )
+    if backend == "compiled":
+        from .compiled import simulate_compiled
+
+        trace = simulate_compiled(setup, sim.duration)
+    else:
+        trace = simulate(
+            setup.plant, setup.controller, setup.q0, setup.v0, sim.duration,
+            sim.control_period, sim.substeps, sim.integrator, progress=progress,
+        )
     wall = time.perf_counter() - start
+    if backend == "compiled" and progress is not None and trace.t.size:
+        progress(float(trace.t[-1]), trace.q[-1])
     if trace.status == "diverged":
         trace.message += "; " + likely_cause(setup, trace)
-    return Result.from_trace(trace, setup.robot, setup.trajectory, setup.criterion, config, wall,
-                             setup.plant.torque_limit)
+    result = Result.from_trace(trace, setup.robot, setup.trajectory, setup.criterion, config, wall,
+                               setup.plant.torque_limit)
+    result.backend = backend
+    return result
 
 
 IMPLAUSIBLE_EFFORT = 100.0

@@ -73,6 +73,7 @@ class Result:
         torque_limit: effort limit per joint [N m] (inf: none), or None for ideal actuators.
         lower_limit, upper_limit: joint position limits [rad or m], or None.
         prismatic: whether each joint is prismatic (units m, m/s, N), or None (all revolute).
+        backend: which loop simulated it: ``python`` or ``compiled``.
 
     """
 
@@ -95,6 +96,7 @@ class Result:
     lower_limit: np.ndarray | None = None
     upper_limit: np.ndarray | None = None
     prismatic: np.ndarray | None = None
+    backend: str = "python"
 
     @classmethod
     def from_trace(cls, trace, robot, trajectory, criterion, config, wall_seconds: float,
@@ -205,6 +207,7 @@ class Result:
             "singular_episodes": singular_episodes(self.t, damped),
             "simulated_seconds": simulated,
             "wall_seconds": self.wall_seconds,
+            "backend": self.backend,
             "realtime_factor": simulated / self.wall_seconds if self.wall_seconds > 0 else None,
         }
         if turn is not None:
@@ -244,6 +247,7 @@ class Result:
             metrics.get("status", "completed"), metrics.get("message", ""), config,
             metrics.get("wall_seconds", float("nan")), arrays["joint_names"].tolist(),
             **{name: arrays.get(name) for name in OPTIONAL_ARRAYS},
+            backend=metrics.get("backend", "python"),
         )
 
 

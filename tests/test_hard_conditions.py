@@ -4,6 +4,7 @@ near-singular episodes are recorded."""
 import json
 
 import numpy as np
+import pytest
 
 from nnrobust.cli import main
 from nnrobust.experiment import run_experiment
@@ -56,13 +57,39 @@ def test_ctrl_c_keeps_the_partial_result_marked_interrupted(tmp_path, monkeypatc
             raise KeyboardInterrupt
 
     monkeypatch.setattr(nnrobust.progress.ProgressBar, "__call__", interrupt_at_half_a_second)
-    experiment = _experiment(tmp_path, simulation={"duration": 5.0})
+    experiment = _experiment(tmp_path, simulation={"duration": 5.0, "backend": "python"})
     out = tmp_path / "run"
     assert main(["run", str(experiment), "--out", str(out), "--no-plots", "--no-animation"]) == 1
     assert "run interrupted: interrupted at t = 0.5" in capsys.readouterr().err
     metrics = json.loads((out / "metrics.json").read_text())
     assert metrics["status"] == "interrupted"
     assert Result.load(out).t[-1] < 0.5
+
+
+def test_a_real_sigint_stops_a_compiled_run_and_keeps_its_result(tmp_path, capsys):
+    """The compiled loop polls for signals every 256 steps: SIGINT 0.2 s into a 300 s run stops it,
+    and the partial run is written, marked interrupted."""
+    import os
+    import signal
+    import threading
+
+    from nnrobust import compiled
+
+    if not compiled.available():
+        pytest.skip(compiled.unavailable_reason())
+    experiment = _experiment(tmp_path, simulation={"duration": 300.0, "backend": "compiled"})
+    out = tmp_path / "run"
+    timer = threading.Timer(0.2, os.kill, (os.getpid(), signal.SIGINT))
+    timer.start()
+    try:
+        code = main(["run", str(experiment), "--out", str(out), "--no-plots", "--no-animation", "--quiet"])
+    finally:
+        timer.cancel()
+    assert code == 1
+    assert "run interrupted: interrupted at t = " in capsys.readouterr().err
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["status"] == "interrupted" and metrics["backend"] == "compiled"
+    assert 0 < Result.load(out).t[-1] < 300.0
 
 
 def test_near_singular_episodes_are_recorded():

@@ -1,0 +1,304 @@
+#include "closed_loop.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <deque>
+#include <limits>
+
+#include <Eigen/Eigenvalues>
+#include <pinocchio/algorithm/aba.hpp>
+
+namespace nnrobust {
+namespace {
+
+using Eigen::Matrix2d;
+using Eigen::Matrix3d;
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+
+double sign(double x) { return (x > 0) - (x < 0); }
+
+// ---- the closed-form nominal model (nnrobust/model/three_link.py) ------------------------------
+struct ThreeLink {
+  const ThreeLinkSpec &s;
+
+  Matrix3d mass(const Vector3d &q) const {
+    const double c2 = std::cos(q[1]), c3 = std::cos(q[2]), c23 = std::cos(q[1] + q[2]);
+    const double m11 = s.beta[0] + 2 * s.p[0] * c2 + 2 * s.p[1] * c23 + 2 * s.p[2] * c3;
+    const double m12 = s.beta[1] + s.p[0] * c2 + s.p[1] * c23 + 2 * s.p[2] * c3;
+    const double m13 = s.beta[2] + s.p[1] * c23 + s.p[2] * c3;
+    const double m22 = s.beta[1] + 2 * s.p[2] * c3;
+    const double m23 = s.beta[2] + s.p[2] * c3;
+    Matrix3d M;
+    M << m11, m12, m13, m12, m22, m23, m13, m23, s.beta[2];
+    return M;
+  }
+
+  Vector3d bias(const Vector3d &q, const Vector3d &v) const {  // V_m(q, v) v + G(q)
+    const double s2 = std::sin(q[1]), s3 = std::sin(q[2]), s23 = std::sin(q[1] + q[2]);
+    const double a = s.p[0] * s2 + s.p[1] * s23, b = s.p[1] * s23 + s.p[2] * s3, c = s.p[2] * s3;
+    const double v1 = v[0], v2 = v[1], v3 = v[2];
+    Matrix3d V;
+    V << -a * v2 - b * v3, -a * (v1 + v2) - b * v3, -b * (v1 + v2 + v3),
+        a * v1 - c * v3, -c * v3, -c * (v1 + v2 + v3),
+        b * v1 + c * v2, c * (v1 + v2), 0.0;
+    Vector3d theta(q[0], q[0] + q[1], q[0] + q[1] + q[2]);
+    Vector3d dU;
+    for (int j = 0; j < 3; ++j)
+      dU[j] = s.gamma[j] * (s.gravity[0] * std::sin(theta[j]) - s.gravity[1] * std::cos(theta[j]));
+    Vector3d G(dU[0] + dU[1] + dU[2], dU[1] + dU[2], dU[2]);
+    return V * v + G;
+  }
+
+  // (x, J, J'q') of ThreeLinkPlanarModel.task_state
+  void task_state(const Vector3d &q, const Vector3d &v, Vector2d &x, Eigen::Matrix<double, 2, 3> &J,
+                  Vector2d &jdot_v) const {
+    Vector3d theta(q[0], q[0] + q[1], q[0] + q[1] + q[2]);
+    Vector3d w(v[0], v[0] + v[1], v[0] + v[1] + v[2]);
+    Vector3d c = theta.array().cos(), sn = theta.array().sin();
+    x << s.lengths.dot(c), s.lengths.dot(sn);
+    Eigen::Matrix<double, 2, 3> cols;
+    cols.row(0) = -(s.lengths.array() * sn.array()).matrix().transpose();
+    cols.row(1) = (s.lengths.array() * c.array()).matrix().transpose();
+    J.col(2) = cols.col(2);
+    J.col(1) = cols.col(2) + cols.col(1);
+    J.col(0) = J.col(1) + cols.col(0);
+    Vector3d lw2 = (s.lengths.array() * w.array().square()).matrix();
+    jdot_v << -c.dot(lw2), -sn.dot(lw2);
+  }
+
+  // H[:, i, k] = dJ_i/dq_k = tail[:, max(i, k)], tail[:, j] = -sum_{l >= j} l_l (cos, sin) theta_l
+  Eigen::Matrix<double, 2, 3> jacobian_tail(const Vector3d &q) const {
+    Vector3d theta(q[0], q[0] + q[1], q[0] + q[1] + q[2]);
+    Eigen::Matrix<double, 2, 3> terms, tail;
+    for (int j = 0; j < 3; ++j) terms.col(j) << -s.lengths[j] * std::cos(theta[j]), -s.lengths[j] * std::sin(theta[j]);
+    tail.col(2) = terms.col(2);
+    tail.col(1) = terms.col(2) + terms.col(1);
+    tail.col(0) = tail.col(1) + terms.col(0);
+    return tail;
+  }
+};
+
+// ---- the controller (nnrobust/controllers) ------------------------------------------------------
+struct Output {
+  Vector tau;
+  Vector z;
+  double rho_hat = NAN, eps = NAN, z_norm = NAN, damping = 0.0;
+};
+
+struct Controller {
+  const LoopSpec &s;
+  ThreeLink nominal;
+  int L = 0;
+
+  explicit Controller(const LoopSpec &spec) : s(spec), nominal{spec.nominal} {
+    L = static_cast<int>(spec.basis_bias) + static_cast<int>(spec.basis_centers.size());
+  }
+
+  // AdditiveRBFBasis.__call__: [1, exp(-(s_j - c_jk)^2 inv2w2_j) for j, k]
+  Vector basis(const Vector &in) const {
+    Vector phi(L);
+    int i = 0;
+    if (s.basis_bias) phi[i++] = 1.0;
+    for (int j = 0; j < s.basis_centers.rows(); ++j)
+      for (int c = 0; c < s.basis_centers.cols(); ++c) {
+        const double d = in[j] - s.basis_centers(j, c);
+        phi[i++] = std::exp(-(d * d) * s.basis_inv2w2[j]);
+      }
+    return phi;
+  }
+
+  // PaperCriterion.gradient (0.5 d det(J J^T)/dq - (c^T q) c), times its weight
+  Vector3d criterion_gradient(const Vector3d &q, const Eigen::Matrix<double, 2, 3> &J) const {
+    const Eigen::Matrix<double, 2, 3> tail = nominal.jacobian_tail(q);
+    const Matrix2d A = J * J.transpose();
+    Matrix2d adj;
+    adj << A(1, 1), -A(0, 1), -A(1, 0), A(0, 0);
+    Vector3d grad = Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      double sum = 0.0;  // einsum("ij,jlk,il->k", adj, H, J)
+      for (int i = 0; i < 2; ++i)
+        for (int j = 0; j < 2; ++j)
+          for (int l = 0; l < 3; ++l) sum += adj(i, j) * tail(j, std::max(l, k)) * J(i, l);
+      grad[k] = 0.5 * (2.0 * sum);
+    }
+    const Vector3d c = s.smoothness;
+    grad += -c.dot(q) * c;
+    return s.criterion_weight * grad;
+  }
+
+  Output compute(double t, const Vector3d &q, const Vector3d &v, const Vector &z) const {
+    Output out;
+    Vector2d x, jdot_v;
+    Eigen::Matrix<double, 2, 3> J;
+    nominal.task_state(q, v, x, J, jdot_v);
+    const double ph = s.omega * t + s.phase, cw = std::cos(ph), sw = std::sin(ph);
+    const Vector2d xd = s.center + s.axis_a * cw + s.axis_b * sw;
+    const Vector2d dxd = s.omega * (-s.axis_a * sw + s.axis_b * cw);
+    const Vector2d ddxd = -(s.omega * s.omega) * (s.axis_a * cw + s.axis_b * sw);
+    const Vector2d e = x - xd, de = J * v - dxd;
+    Eigen::Vector4d y;
+    y << e, de;
+    Vector2d u0 = Vector2d::Zero();
+    out.z = z;
+    if (s.robust == "nn") {
+      const Vector2d w = s.BtP * y;
+      Vector in(s.basis_joint ? 6 : 4);
+      if (s.basis_joint) in << q, v;
+      else in << y;
+      const Vector phi = basis(in);
+      const double rho = z.head(L).dot(phi);
+      const double eps = std::max(z[L], 0.0);
+      const double wn = w.norm(), denom = rho * wn + eps;
+      if (denom > 0.0) u0 = -(s.law_corrected ? rho * rho : rho) * w / denom;
+      out.rho_hat = rho;
+      out.eps = z[L];
+      out.z_norm = z.head(L).norm();
+      // NNCompensator.advance: exact solution over the period with (w, phi) held
+      const Vector drive = wn * phi;
+      if (s.sigma > 0.0) {
+        const double decay = std::exp(-s.F * s.sigma * s.period);
+        out.z.head(L) = z.head(L) * decay + (drive / s.sigma) * (1.0 - decay);
+      } else {
+        out.z.head(L) = z.head(L) + s.F * s.period * drive;
+      }
+      out.z[L] = s.eps_min + (z[L] - s.eps_min) * std::exp(-s.gamma * s.period);
+    } else if (s.robust == "sliding") {
+      const Vector2d w = s.BtP * y;
+      u0 = -s.sliding_gain * w / std::max(w.norm(), s.sliding_boundary);
+    }
+    // DampedPseudoInverse.factor
+    const Matrix2d JJt = J * J.transpose();
+    const double sigma_min_sq = std::max(Eigen::SelfAdjointEigenSolver<Matrix2d>(JJt, Eigen::EigenvaluesOnly).eigenvalues()[0], 0.0);
+    const double thr_sq = s.pinv_threshold * s.pinv_threshold;
+    const double lam2 = sigma_min_sq >= thr_sq ? 0.0
+                                               : s.pinv_max_damping * s.pinv_max_damping * (1.0 - sigma_min_sq / thr_sq);
+    const Matrix2d inv = (JJt + lam2 * Matrix2d::Identity()).inverse();
+    const Eigen::Matrix<double, 3, 2> J_pinv = J.transpose() * inv;
+    out.damping = lam2;
+    const Vector2d task_acc = ddxd - jdot_v - s.Kv * de - s.Kp * e + u0;
+    Vector3d a = J_pinv * task_acc;
+    if (s.k != 0.0) {
+      const Vector3d grad = s.paper_criterion ? criterion_gradient(q, J) : Vector3d::Zero();
+      const Vector3d zz = grad - v;
+      a += s.k * (zz - J_pinv * (J * zz));
+    }
+    Vector3d friction;
+    for (int i = 0; i < 3; ++i) {
+      const double sg = s.coulomb_smoothing <= 0 ? sign(v[i]) : std::clamp(v[i] / s.coulomb_smoothing, -1.0, 1.0);
+      friction[i] = s.nominal_viscous[i] * v[i] + s.nominal_coulomb[i] * sg;
+    }
+    out.tau = nominal.mass(q) * a + nominal.bias(q, v) + friction;
+    return out;
+  }
+};
+
+// ---- the plant (nnrobust/plant) ------------------------------------------------------------------
+struct Plant {
+  LoadedModel &m;
+  const LoopSpec &s;
+
+  Vector acceleration(double t, const Vector &q, const Vector &v, const Vector &tau) {
+    const int n = static_cast<int>(q.size());
+    Vector net = tau;
+    for (int i = 0; i < n; ++i) {
+      double d = 0.0;  // SinusoidalDisturbance.__call__
+      for (int c = 0; c < s.dist_omega.size(); ++c)
+        d += s.dist_amplitude(i, c) * std::sin(s.dist_omega[c] * t + s.dist_phase(i, c));
+      net[i] -= s.viscous[i] * v[i] + s.coulomb[i] * sign(v[i]) + d;
+      if (s.stops) {  // JointStops.torque
+        const double pen = std::max(q[i] - s.stop_upper[i], 0.0) + std::min(q[i] - s.stop_lower[i], 0.0);
+        if (pen != 0.0) {
+          const double sg = sign(pen);
+          const double mag = std::max(s.stop_stiffness[i] * std::abs(pen) * (1.0 + s.stop_alpha * sg * v[i]), 0.0);
+          net[i] += -sg * mag;
+        }
+      }
+    }
+    return pinocchio::aba(m.model, m.data, q, v, net);
+  }
+};
+
+}  // namespace
+
+LoopTrace run_loop(LoadedModel &model, const LoopSpec &s, bool (*interrupted)()) {
+  const int n = model.model.nv;
+  const long steps = s.steps;
+  LoopTrace tr;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  tr.q = Matrix::Constant(steps, n, nan);
+  tr.dq = tr.q;
+  tr.tau = tr.q;
+  tr.tau_cmd = tr.q;
+  tr.z = Matrix::Constant(steps, s.z0.size(), nan);
+  tr.rho_hat = Vector::Constant(steps, nan);
+  tr.eps = tr.rho_hat;
+  tr.z_norm = tr.rho_hat;
+  tr.damping = tr.rho_hat;
+  Controller controller(s);
+  Plant plant{model, s};
+  const bool noisy = s.noise_q.rows() > 0;
+  Vector q = s.q0, v = s.v0, z = s.z0, tau = Vector::Zero(n);
+  std::deque<Vector> commands;
+  const double h = s.period / s.substeps;
+  tr.done = steps;
+  for (long k = 0; k < steps; ++k) {
+    if (interrupted && k % 256 == 0 && k > 0 && interrupted()) {
+      tr.status = "interrupted";
+      tr.done = k;
+      break;
+    }
+    const double t = static_cast<double>(k) * s.period;
+    Vector3d qm = q, vm = v;  // Sensor.measure
+    if (noisy) {
+      for (int i = 0; i < n; ++i) {
+        qm[i] = q[i] + s.position_noise[i] * s.noise_q(k, i);
+        vm[i] = v[i] + s.velocity_noise[i] * s.noise_v(k, i);
+        const double r = s.resolution[i];
+        if (r > 0) qm[i] = std::nearbyint(qm[i] / r) * r;
+      }
+    }
+    const Output out = controller.compute(t, qm, vm, z);
+    commands.push_back(out.tau);
+    if (static_cast<int>(commands.size()) > s.delay + 1) commands.pop_front();
+    const Vector tau_cmd = commands.front();
+    tau = tau_cmd;
+    if (s.torque_limit.size()) tau = tau_cmd.cwiseMax(-s.torque_limit).cwiseMin(s.torque_limit);
+    tr.q.row(k) = q;
+    tr.dq.row(k) = v;
+    tr.tau.row(k) = tau;
+    tr.tau_cmd.row(k) = tau_cmd;
+    if (z.size()) tr.z.row(k) = z;
+    tr.rho_hat[k] = out.rho_hat;
+    tr.eps[k] = out.eps;
+    tr.z_norm[k] = out.z_norm;
+    tr.damping[k] = out.damping;
+    if (!out.tau.allFinite() || !q.allFinite() || !v.allFinite()) {
+      tr.status = "diverged";
+      tr.divergence_index = k;
+      tr.done = k + 1;
+      break;
+    }
+    Eigen::Index worst;
+    if (v.cwiseAbs().maxCoeff(&worst) > s.max_speed) {
+      tr.status = "diverged";
+      tr.divergence_index = k;
+      tr.divergence_joint = static_cast<int>(worst);
+      tr.done = k + 1;
+      break;
+    }
+    z = out.z;
+    for (int i = 0; i < s.substeps; ++i) {  // simulation._rk4_step with the torque held
+      const double ti = t + i * h;
+      const Vector k1q = v, k1v = plant.acceleration(ti, q, v, tau);
+      const Vector k2q = v + 0.5 * h * k1v, k2v = plant.acceleration(ti + 0.5 * h, q + 0.5 * h * k1q, k2q, tau);
+      const Vector k3q = v + 0.5 * h * k2v, k3v = plant.acceleration(ti + 0.5 * h, q + 0.5 * h * k2q, k3q, tau);
+      const Vector k4q = v + h * k3v, k4v = plant.acceleration(ti + h, q + h * k3q, k4q, tau);
+      q = q + (h / 6.0) * (k1q + 2.0 * k2q + 2.0 * k3q + k4q);
+      v = v + (h / 6.0) * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+    }
+  }
+  return tr;
+}
+
+}  // namespace nnrobust

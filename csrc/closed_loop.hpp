@@ -1,0 +1,74 @@
+// The compiled closed loop: the C++ twin of nnrobust.simulation.simulate for the components that
+// have a compiled twin (docs/compiled.md). Every formula mirrors its Python reference, named in
+// the comments; tests/test_compiled.py holds the two equal.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "model.hpp"
+
+namespace nnrobust {
+
+// nnrobust.model.three_link.ThreeLinkPlanarModel: the paper's closed-form nominal model.
+struct ThreeLinkSpec {
+  Eigen::Vector3d beta, p, lengths, gamma;
+  Eigen::Vector2d gravity = Eigen::Vector2d::Zero();
+};
+
+// Everything one run needs, filled in by nnrobust/compiled.py from a built experiment.
+struct LoopSpec {
+  // simulation
+  double period = 1e-3;
+  int substeps = 1;
+  long steps = 0;
+  double max_speed = 1e3;
+  Vector q0, v0;
+  // plant (nnrobust.plant): friction, sinusoidal disturbance, saturation, stops, sensor, delay
+  Vector viscous, coulomb;
+  Matrix dist_amplitude, dist_phase;  // n x K
+  Vector dist_omega;                  // K
+  Vector torque_limit;                // n (inf: none); empty: ideal actuators
+  bool stops = false;
+  Vector stop_lower, stop_upper, stop_stiffness;
+  double stop_alpha = 0.0;
+  Vector position_noise, velocity_noise, resolution;  // n (zeros: ideal)
+  Matrix noise_q, noise_v;                            // steps x n standard normal draws (or empty)
+  int delay = 0;
+  // nominal model and controller (nnrobust.controllers.task_space.TaskSpaceController)
+  ThreeLinkSpec nominal;
+  Vector nominal_viscous, nominal_coulomb;
+  double coulomb_smoothing = 0.0;
+  Eigen::Vector2d center, axis_a, axis_b;  // nnrobust.trajectories.EllipseTrajectory
+  double omega = 1.0, phase = 0.0;
+  Matrix Kp, Kv;
+  double k = 0.0;
+  bool paper_criterion = false;  // subtasks.PaperCriterion with weight criterion_weight
+  double criterion_weight = 1.0;
+  Vector smoothness;  // its JointSmoothness coefficients
+  double pinv_threshold = 0.02, pinv_max_damping = 0.02;
+  // robust term: "none", "nn" (NNCompensator) or "sliding" (SlidingModeCompensator)
+  std::string robust = "none";
+  Matrix BtP;  // m x 2m
+  double sliding_gain = 0.0, sliding_boundary = 1.0;
+  bool basis_joint = true, basis_bias = true, law_corrected = true;
+  Matrix basis_centers;  // dim(s) x K
+  Vector basis_inv2w2;   // dim(s)
+  double F = 1.0, gamma = 1.0, eps_min = 0.0, sigma = 0.0;
+  Vector z0;
+};
+
+// What simulate() returns (nnrobust.simulation.Trace).
+struct LoopTrace {
+  Matrix q, dq, tau, tau_cmd, z;
+  Vector rho_hat, eps, z_norm, damping;
+  long done = 0;
+  std::string status = "completed";
+  long divergence_index = -1;  // step at which it diverged
+  int divergence_joint = -1;   // joint that ran away (-1: non-finite state or torque)
+};
+
+// Runs the loop; `interrupted()` is polled every few hundred steps (Ctrl-C, SIGTERM).
+LoopTrace run_loop(LoadedModel &plant, const LoopSpec &spec, bool (*interrupted)());
+
+}  // namespace nnrobust
