@@ -173,3 +173,15 @@ def test_sliding_mode_term_is_a_saturated_unit_vector_law():
         assert np.linalg.norm(u0) == pytest.approx(20.0 * min(scale, 0.5) / 0.5)
         np.testing.assert_allclose(u0 / np.linalg.norm(u0), -w / np.linalg.norm(w))
         assert z.size == 0
+
+
+def test_one_set_of_nn_defaults_for_the_class_and_the_configuration():
+    """NNCompensator's constructor defaults are the [nn] defaults of an experiment file."""
+    import dataclasses
+
+    from nnrobust.config import NNConfig
+
+    config = NNConfig()
+    fields = {f.name: f.default for f in dataclasses.fields(NNCompensator)}
+    for name in ("F", "gamma", "eps0", "eps_min", "sigma", "law", "basis_input"):
+        assert fields[name] == getattr(config, name), name
