@@ -1,4 +1,4 @@
-"""Command line: ``nnrobust run | presets | robots | compare | view | bench``."""
+"""Command line: ``nnrobust run | sweep | presets | robots | compare | view | bench``."""
 
 from __future__ import annotations
 
@@ -109,6 +109,10 @@ def cmd_run(args) -> int:
         changes.setdefault("simulation", {})["backend"] = "python"
     if changes:
         config = config.replace(**changes)
+    if args.set:
+        from .config import apply_overrides, parse_override
+
+        config = apply_overrides(config, dict(parse_override(item) for item in args.set))
     out = Path(args.out or f"out/{config.name}-{config.controller.kind}")
     if out.exists() and not args.overwrite:
         raise NNRobustError(f"{out} exists; pass --overwrite to replace it")
@@ -184,6 +188,54 @@ def cmd_view(args) -> int:
 
             webbrowser.open(viewer.web_url, new=2)
         _serve_until_interrupted(viewer, args.seconds)
+    return 0
+
+
+def cmd_sweep(args) -> int:
+    """Run or resume a robustness sweep on dask.distributed."""
+    import time
+
+    from .sweep import load_sweep, read_results, run_sweep
+    from .sweep.summary import format_summary, summarize, write_summary
+
+    spec = load_sweep(args.sweep)
+    out = Path(args.out)
+
+    def progress(done, total):
+        if args.quiet:
+            return
+        if not started:  # the sweep validated and its cluster is up
+            started.append(time.monotonic())
+            where = args.scheduler or f"a local cluster of {args.workers or 'one worker per core'}"
+            print(f"sweep {spec.name}: {spec.size} samples x {len(spec.controllers)} controllers on "
+                  f"{where}; {done} of {total} rows already done", file=sys.stderr)
+        if len(started) == 1:
+            started.append(done)  # rows already there when the sweep started
+        elapsed = time.monotonic() - started[0]
+        rate = (done - started[1]) / elapsed if elapsed > 0 else 0.0
+        eta = f"{(total - done) / rate:.0f} s" if rate > 0 else "?"
+        filled = int(30 * done / max(total, 1))
+        print(f"\r[{'#' * filled}{' ' * (30 - filled)}] {done}/{total} rows, {rate:.2f}/s, ETA {eta}   ",
+              end="", file=sys.stderr, flush=True)
+
+    started: list[float] = []
+    try:
+        counts = run_sweep(spec, out, args.workers, args.scheduler, args.overwrite, progress)
+    except KeyboardInterrupt:
+        print(f"\nnrobust: sweep interrupted; the rows written so far are in {out}/results; run the same "
+              "command again to resume", file=sys.stderr)
+        return 130
+    if started:
+        print(file=sys.stderr)
+    summary = summarize(spec, read_results(out))
+    write_summary(out, summary)
+    if not args.quiet:
+        print(format_summary(summary))
+        for controller, entry in summary["controllers"].items():
+            if "worst" in entry:
+                print(f"worst {controller}: sample {entry['worst']['sample']}: {entry['worst']['command']}")
+        print(f"{counts['computed']} rows computed, {counts['skipped']} already there; results in "
+              f"{out}/results (pandas.read_parquet), summary in {out}/summary.json", file=sys.stderr)
     return 0
 
 
@@ -280,6 +332,9 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--backend", choices=("auto", "compiled", "python"),
                      help="simulation loop: compiled (C++), python (the reference) or auto (compiled "
                      "when the experiment has a compiled twin; the default)")
+    run.add_argument("--set", action="append", metavar="KEY=VALUE",
+                     help="set one key of the experiment (dotted, TOML value), e.g. --set nn.sigma=0.5 "
+                     "--set 'controller.Kp=[100.0]'; repeatable, checked like an experiment file")
     run.add_argument("--overwrite", action="store_true", help="replace an existing run folder")
     run.add_argument("--no-plots", action="store_true", help="skip the figures")
     run.add_argument("--no-animation", action="store_true",
@@ -315,6 +370,21 @@ def build_parser() -> argparse.ArgumentParser:
     view.add_argument("--seconds", type=float, help="stop after this many seconds (default: Ctrl-C)")
     _viewer_options(view)
     view.set_defaults(func=cmd_view)
+
+    sweep = sub.add_parser("sweep", help="run a robustness sweep (Monte Carlo over the uncertainty set)",
+                           description="Run one experiment over many samples of model error, friction, "
+                           "disturbance, gains or seeds with several controllers, on dask.distributed: "
+                           "a local cluster on 127.0.0.1 by default, or an existing scheduler. Re-running "
+                           "the same command into the same folder computes only the missing rows "
+                           "(docs/robustness.md).")
+    sweep.add_argument("sweep", help="sweep file (TOML)")
+    sweep.add_argument("--out", required=True, help="sweep folder (results/, sweep.toml, summary.json)")
+    sweep.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
+    sweep.add_argument("--scheduler", help="address of an existing dask scheduler, e.g. tcp://host:8786")
+    sweep.add_argument("--overwrite", action="store_true",
+                       help="replace the results of a different sweep in --out")
+    sweep.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    sweep.set_defaults(func=cmd_sweep)
 
     bench = sub.add_parser("bench", help="run the benchmarks (source checkout)",
                            description="Run the scripts in benchmarks/ (all, or those named) and "

@@ -637,3 +637,61 @@ def dump_toml(data: dict) -> str:
             lines += ["", f"[{key}]"]
             lines += [f"{k} = {_toml_value(v)}" for k, v in table.items()]
     return "\n".join(lines) + "\n"
+
+
+# ---- dotted overrides (``run --set``, sweep files) ------------------------------------------
+
+
+def _field_names(cls) -> list[str]:
+    return [f.name for f in dataclasses.fields(cls)]
+
+
+def check_dotted_key(key: str) -> None:
+    """Refuse a dotted key that names no field of the experiment schema (``section.field``, or a
+    top-level ``name`` / ``description``), with a suggestion.
+    """
+    parts = key.split(".")
+    top = _field_names(ExperimentConfig)
+    hints = typing.get_type_hints(ExperimentConfig)
+    if len(parts) == 1:
+        if parts[0] not in top or dataclasses.is_dataclass(hints.get(parts[0])):
+            raise ConfigError(key, "not a key of the experiment schema; use section.field, e.g. "
+                              "simulation.duration")
+        return
+    section, field_name = parts[0], ".".join(parts[1:])
+    if section not in top or not dataclasses.is_dataclass(hints[section]):
+        raise ConfigError(key, _suggest(section, [t for t in top if dataclasses.is_dataclass(hints[t])]))
+    names = _field_names(hints[section])
+    if len(parts) != 2 or field_name not in names:
+        raise ConfigError(key, _suggest(field_name, [f"{section}.{n}" for n in names]))
+
+
+def apply_overrides(config: ExperimentConfig, overrides: dict) -> ExperimentConfig:
+    """A copy of ``config`` with dotted keys set (``{"simulation.duration": 20.0}``), validated like
+    an experiment file.
+    """
+    data = config.to_dict()
+    for key, value in overrides.items():
+        check_dotted_key(key)
+        parts = key.split(".")
+        if len(parts) == 1:
+            data[parts[0]] = value
+        else:
+            data.setdefault(parts[0], {})[parts[1]] = value
+    return from_dict(data)
+
+
+def parse_override(text: str) -> tuple[str, object]:
+    """``key=value`` with a TOML value (``simulation.duration=20``, ``nn.sigma=0.5``,
+    ``controller.Kp=[100.0]``); a value that is not TOML is taken as a string.
+    """
+    key, sep, raw = text.partition("=")
+    key = key.strip()
+    if not sep or not key:
+        raise ConfigError("--set", f"{text!r} is not key=value (e.g. simulation.duration=20)")
+    try:
+        value = tomllib.loads(f"v = {raw.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw.strip()
+    check_dotted_key(key)
+    return key, value

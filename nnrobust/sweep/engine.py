@@ -1,0 +1,262 @@
+"""Running a sweep on dask.distributed: chunks of (sample, controller) rows on workers, metrics
+back to the client, one Parquet part per finished chunk, written atomically.
+
+Resuming is reading the parts: a row whose (sample, controller) is in a part is never run again.
+A worker killed mid-chunk costs that chunk only: dask runs it again on another worker, and the
+client writes a chunk's rows once, when its result arrives.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import os
+import shutil
+import signal
+import sys
+import time
+import uuid
+from contextlib import contextmanager
+from pathlib import Path
+
+from ..exceptions import NNRobustError
+from .spec import SweepSpec, base_config, draw, experiment
+
+RESULTS = "results"
+MARKER = "sweep.toml"
+CHUNK_SECONDS = 2.0
+"""Target compute per task: dask's scheduling costs a few ms per task, under 5 % of this."""
+
+
+def _require_engine():
+    try:
+        import distributed  # noqa: F401
+        import pyarrow  # noqa: F401
+    except ImportError as err:
+        raise NNRobustError(f"sweeps need dask.distributed and pyarrow ({err}); "
+                            "pip install 'nnrobust[sweep]'") from err
+
+
+# ---- on the workers ------------------------------------------------------------------------------
+
+SKIP_METRICS = ("rms_torque_per_joint", "singular_episodes", "message", "joint_limit_joint")
+
+
+def run_rows(jobs: list[tuple]) -> list[dict]:
+    """Run (sample id, controller, varied values, seed, experiment TOML) jobs; one metrics row each.
+
+    A run that cannot be built (the sample's trajectory leaves the workspace, say) is a row with
+    status ``refused`` and its message; a diverged run is a row with status ``diverged``.
+    """
+    import tomllib
+
+    from ..config import from_dict
+    from ..exceptions import NNRobustError as LibraryError
+    from ..experiment import run_experiment
+
+    rows = []
+    for sample_id, controller, values, seed, toml in jobs:
+        start = time.perf_counter()
+        row = {"sample": sample_id, "controller": controller, **values, "seed": seed}
+        try:
+            metrics = run_experiment(from_dict(tomllib.loads(toml))).metrics()
+        except LibraryError as err:
+            row.update(status="refused", message=str(err)[:500], warnings=[])
+        else:
+            row.update({k: v for k, v in metrics.items() if k not in SKIP_METRICS})
+            row["message"] = metrics.get("message", "")
+        row["task_seconds"] = time.perf_counter() - start
+        rows.append(row)
+    return rows
+
+
+# ---- on the client -------------------------------------------------------------------------------
+
+
+def _done_rows(folder: Path) -> set[tuple[int, str]]:
+    import pyarrow.parquet as pq
+
+    done = set()
+    for part in sorted((folder / RESULTS).glob("part-*.parquet")):
+        table = pq.read_table(part, columns=["sample", "controller"])
+        done.update(zip(table.column("sample").to_pylist(), table.column("controller").to_pylist()))
+    return done
+
+
+FLAGS = ("runaway", "rho_hat_growing", "subtask_degraded")
+TEXTS = ("status", "backend", "message")
+
+
+def schema(spec: SweepSpec):
+    """The columns of every part, the same in each: sample, controller, the varied keys (dotted
+    names), seed, status, warnings, every scalar metric of metrics.json, task_seconds.
+    """
+    import pyarrow as pa
+
+    from ..results import METRIC_UNITS
+
+    def varied_type(values):
+        if all(isinstance(v, bool) for v in values):
+            return pa.bool_()
+        if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
+            return pa.float64()
+        if all(isinstance(v, list) for v in values):
+            return pa.list_(pa.float64())
+        return pa.string()
+
+    fields = [("sample", pa.int64()), ("controller", pa.string())]
+    for key, value in spec.vary.items():
+        values = value if isinstance(value, list) else (
+            list(value.values())[0] if "choice" in value else [0.0])
+        fields.append((key, varied_type(values)))
+    fields += [("seed", pa.int64()), ("warnings", pa.list_(pa.string()))]
+    fields += [(name, pa.string()) for name in TEXTS] + [(name, pa.bool_()) for name in FLAGS]
+    fields += [(name, pa.float64()) for name in METRIC_UNITS if name != "singular_episodes"]
+    fields.append(("task_seconds", pa.float64()))
+    return pa.schema(fields)
+
+
+def _write_part(folder: Path, rows: list[dict], table_schema) -> Path:
+    """One Parquet part, written to a hidden file and renamed into place."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    columns = {name: [row.get(name) for row in rows] for name in table_schema.names}
+    table = pa.Table.from_pydict(columns, schema=table_schema)
+    path = folder / RESULTS / f"part-{uuid.uuid4().hex[:12]}.parquet"
+    tmp = path.with_name(f".{path.name}.partial")
+    pq.write_table(table, tmp)
+    os.replace(tmp, path)
+    return path
+
+
+def prepare_folder(spec: SweepSpec, folder: Path, overwrite: bool) -> None:
+    """Create DIR or accept it for resuming; refuse a changed sweep unless ``overwrite``."""
+    marker = folder / MARKER
+    if folder.exists() and not marker.is_file() and any(folder.iterdir()):
+        raise NNRobustError(f"{folder} exists and is not a sweep folder (no {MARKER}); choose another --out")
+    if marker.is_file() and marker.read_text() != spec.to_toml():
+        if not overwrite:
+            raise NNRobustError(f"{folder} holds a different sweep ({marker} differs); pass --overwrite "
+                                "to replace its results, or choose another --out")
+        shutil.rmtree(folder)
+    (folder / RESULTS).mkdir(parents=True, exist_ok=True)
+    tmp = marker.with_name(f".{MARKER}.partial")
+    tmp.write_text(spec.to_toml())
+    os.replace(tmp, marker)
+
+
+@contextmanager
+def _client(workers: int | None, scheduler: str | None):
+    """A client of an existing scheduler, or of a LocalCluster on 127.0.0.1 (dashboard off) with
+    one single-threaded worker process per core; closed on the way out, whatever happens.
+    """
+    from distributed import Client, LocalCluster
+
+    if scheduler:
+        client = Client(scheduler, timeout="20s")
+        try:
+            yield client
+        finally:
+            client.close()
+        return
+    cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
+                           processes=True, host="127.0.0.1", dashboard_address=None,
+                           silence_logs=logging.ERROR)
+    client = Client(cluster)
+    try:
+        yield client
+    finally:
+        client.close()
+        cluster.close()
+
+
+@contextmanager
+def _sigterm_as_interrupt():
+    """SIGTERM and SIGHUP stop a sweep like Ctrl-C: written parts stay, the cluster is closed."""
+    def handler(signum, frame):
+        raise KeyboardInterrupt
+
+    previous = {}
+    for sig in (signal.SIGTERM, signal.SIGHUP):
+        try:
+            previous[sig] = signal.signal(sig, handler)
+        except (ValueError, OSError):  # not the main thread
+            pass
+    try:
+        yield
+    finally:
+        for sig, old in previous.items():
+            signal.signal(sig, old)
+
+
+def plan(spec: SweepSpec) -> list[tuple]:
+    """Every (sample, controller) job, its experiment validated: a value the schema refuses is a
+    one-line error naming the key and the sample, before anything runs.
+    """
+    base = base_config(spec)
+    jobs = []
+    for sample_id in range(spec.size):
+        sample = draw(spec, sample_id)
+        for controller in spec.controllers:
+            config = experiment(spec, base, sample, controller)
+            jobs.append((sample_id, controller, sample.values, sample.seed, config.to_toml()))
+    return jobs
+
+
+def chunk_size(jobs: int, workers: int, seconds_per_job: float) -> int:
+    """Jobs per task: about CHUNK_SECONDS of compute, and at least 4 tasks per worker when there
+    is enough work (so a killed worker loses little and the load balances).
+    """
+    by_time = max(1, int(CHUNK_SECONDS / max(seconds_per_job, 1e-3)))
+    by_balance = max(1, math.ceil(jobs / (4 * max(workers, 1))))
+    return max(1, min(by_time, by_balance))
+
+
+def run_sweep(spec: SweepSpec, folder: str | Path, workers: int | None = None, scheduler: str | None = None,
+              overwrite: bool = False, progress=None, seconds_per_job: float = 0.5) -> dict:
+    """Run (or resume) a sweep into ``folder``; returns {"computed": rows, "skipped": rows, "parts": n}.
+
+    ``progress(done, total)`` is called as chunks finish.
+    """
+    _require_engine()
+    folder = Path(folder)
+    jobs = plan(spec)  # every experiment validated before anything is written or run
+    prepare_folder(spec, folder, overwrite)
+    done = _done_rows(folder)
+    jobs = [job for job in jobs if (job[0], job[1]) not in done]
+    total = spec.size * len(spec.controllers)
+    skipped = total - len(jobs)
+    if not jobs:
+        return {"computed": 0, "skipped": skipped, "parts": 0}
+    written = parts = 0
+    table_schema = schema(spec)
+    with _sigterm_as_interrupt(), _client(workers, scheduler) as client:
+        from distributed import as_completed
+
+        n_workers = max(len(client.scheduler_info().get("workers", {})), 1)
+        size = chunk_size(len(jobs), n_workers, seconds_per_job)
+        chunks = [jobs[i:i + size] for i in range(0, len(jobs), size)]
+        futures = [client.submit(run_rows, chunk, pure=False, retries=2) for chunk in chunks]
+        if progress:
+            progress(skipped, total)
+        for future in as_completed(futures):
+            rows = future.result()
+            _write_part(folder, rows, table_schema)
+            written += len(rows)
+            parts += 1
+            if progress:
+                progress(skipped + written, total)
+    return {"computed": written, "skipped": skipped, "parts": parts}
+
+
+def read_results(folder: str | Path):
+    """The sweep's rows as a pandas DataFrame (every part)."""
+    import pandas as pd
+
+    return pd.read_parquet(Path(folder) / RESULTS)
+
+
+def log(message: str) -> None:
+    """One line to stderr."""
+    print(message, file=sys.stderr, flush=True)

@@ -1,0 +1,268 @@
+"""Sweep files: one experiment over many samples of the uncertainty set (docs/robustness.md).
+
+A sweep file names a base experiment (a preset or an experiment file), the controllers every
+sample runs with (common random numbers), fixed overrides (``[set]``) and varied keys
+(``[vary]``): a list is a grid; a table draws ``samples`` values per grid point from a
+distribution. Everything is checked against the experiment schema before anything runs.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..config import CONTROLLER_KINDS, ExperimentConfig, apply_overrides, check_dotted_key, dump_toml
+from ..exceptions import ConfigError
+
+DISTRIBUTIONS = ("uniform", "normal", "loguniform", "choice")
+"""The tables a [vary] key may hold: {uniform = [a, b]}, {normal = [mu, sd]},
+{loguniform = [a, b]} (0 < a < b) or {choice = [...]}."""
+
+KEYS = ("name", "base", "controllers", "samples", "seed", "set", "vary", "description")
+MAX_ROWS = 1_000_000
+"""Samples x controllers above which a sweep is refused."""
+
+
+@dataclass
+class SweepSpec:
+    """A parsed, validated sweep file.
+
+    Attributes:
+        name: the sweep's name.
+        base: a preset name or an experiment file (relative paths from the sweep file's folder).
+        controllers: controller.kind values every sample runs with.
+        samples: random draws per grid point.
+        seed: seed of the draws (each sample's own seed derives from it and the sample id).
+        set: fixed overrides, dotted keys.
+        vary: varied keys: a list (grid) or {distribution = parameters}.
+        description: free text.
+
+    """
+
+    name: str
+    base: str
+    controllers: list[str]
+    samples: int = 1
+    seed: int = 0
+    set: dict = field(default_factory=dict)
+    vary: dict = field(default_factory=dict)
+    description: str = ""
+
+    @property
+    def grid_keys(self) -> list[str]:
+        """Varied keys given as lists (the grid)."""
+        return [k for k, v in self.vary.items() if isinstance(v, list)]
+
+    @property
+    def random_keys(self) -> list[str]:
+        """Varied keys drawn from a distribution."""
+        return [k for k, v in self.vary.items() if isinstance(v, dict)]
+
+    @property
+    def grid(self) -> list[tuple]:
+        """Every point of the grid the list-valued keys form (one empty point without a grid)."""
+        return list(itertools.product(*(self.vary[k] for k in self.grid_keys)))
+
+    @property
+    def size(self) -> int:
+        """Number of samples: draws x grid points."""
+        return self.samples * len(self.grid)
+
+    def to_toml(self) -> str:
+        """The resolved sweep file (what DIR/sweep.toml holds)."""
+        head = {"name": self.name, "description": self.description, "base": self.base,
+                "controllers": self.controllers, "samples": self.samples, "seed": self.seed}
+        lines = [dump_toml(head).rstrip("\n")]
+        for table in ("set", "vary"):
+            lines += ["", f"[{table}]"]
+            lines += [f'"{k}" = {_inline(v)}' for k, v in getattr(self, table).items()]
+        return "\n".join(lines) + "\n"
+
+    def digest(self) -> str:
+        """A hash of the resolved sweep (a changed sweep into an existing folder is refused)."""
+        return hashlib.sha256(self.to_toml().encode()).hexdigest()[:16]
+
+
+def _inline(value) -> str:
+    if isinstance(value, dict):
+        return "{" + ", ".join(f"{k} = {_inline(v)}" for k, v in value.items()) + "}"
+    if isinstance(value, list):
+        return "[" + ", ".join(_inline(v) for v in value) + "]"
+    return dump_toml({"v": value}).split(" = ", 1)[1].strip()
+
+
+@dataclass(frozen=True)
+class Sample:
+    """One point of the uncertainty set: its id, the varied values (dotted keys) and its seed."""
+
+    id: int
+    values: dict
+    seed: int
+
+
+def _number(path: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ConfigError(path, f"expected a finite number, got {value!r}")
+    return float(value)
+
+
+def _check_distribution(key: str, table: dict) -> None:
+    if len(table) != 1:
+        raise ConfigError(f"vary.{key}", f"needs exactly one of {', '.join(DISTRIBUTIONS)}, got "
+                          f"{sorted(table)}")
+    (kind, params), = table.items()
+    path = f"vary.{key}.{kind}"
+    if kind not in DISTRIBUTIONS:
+        raise ConfigError(path, f"unknown distribution; valid: {', '.join(DISTRIBUTIONS)}")
+    if not isinstance(params, list) or not params:
+        raise ConfigError(path, f"expected a list of parameters, got {params!r}")
+    if kind == "choice":
+        return
+    if len(params) != 2:
+        raise ConfigError(path, f"needs two numbers, got {params!r}")
+    a, b = (_number(path, p) for p in params)
+    if kind in ("uniform", "loguniform") and not a < b:
+        raise ConfigError(path, f"needs a < b, got [{a:g}, {b:g}]")
+    if kind == "loguniform" and a <= 0:
+        raise ConfigError(path, f"needs 0 < a, got {a:g}")
+    if kind == "normal" and b < 0:
+        raise ConfigError(path, f"needs a standard deviation >= 0, got {b:g}")
+
+
+def parse_sweep(data: dict, where: str = "sweep") -> SweepSpec:
+    """Validate a sweep table (as read from TOML); every error names its key."""
+    unknown = [k for k in data if k not in KEYS]
+    if unknown:
+        raise ConfigError(f"{where}: {unknown[0]}", f"unknown key; valid keys: {', '.join(KEYS)}")
+    for key in ("name", "base", "controllers"):
+        if key not in data:
+            raise ConfigError(f"{where}: {key}", "missing")
+    if not isinstance(data["name"], str) or not isinstance(data["base"], str):
+        raise ConfigError(f"{where}: name", "name and base must be strings")
+    controllers = data["controllers"]
+    if not isinstance(controllers, list) or not controllers or any(c not in CONTROLLER_KINDS
+                                                                   for c in controllers):
+        raise ConfigError(f"{where}: controllers", f"needs a list of {', '.join(CONTROLLER_KINDS)}, got "
+                          f"{controllers!r}")
+    if len(set(controllers)) != len(controllers):
+        raise ConfigError(f"{where}: controllers", f"lists a controller twice: {controllers}")
+    for key, low in (("samples", 1), ("seed", 0)):
+        value = data.get(key, low)
+        if isinstance(value, bool) or not isinstance(value, int) or not low <= value < 2**63:
+            raise ConfigError(f"{where}: {key}", f"expected an integer >= {low}, got {value!r}")
+    for table in ("set", "vary"):
+        if not isinstance(data.get(table, {}), dict):
+            raise ConfigError(f"{where}: {table}", "expected a table of dotted keys")
+    vary = data.get("vary", {})
+    for key, value in vary.items():
+        try:
+            check_dotted_key(key)
+        except ConfigError as err:
+            raise ConfigError(f"{where}: vary.{err.key}", str(err).split(": ", 1)[1]) from err
+        if key in data.get("set", {}):
+            raise ConfigError(f"{where}: vary.{key}", "is also in [set]")
+        if isinstance(value, dict):
+            _check_distribution(key, value)
+        elif not isinstance(value, list) or not value:
+            raise ConfigError(f"{where}: vary.{key}", "expected a non-empty list (grid) or a "
+                              f"distribution table, got {value!r}")
+    spec = SweepSpec(data["name"], data["base"], list(controllers), data.get("samples", 1),
+                     data.get("seed", 0), dict(data.get("set", {})), dict(vary),
+                     data.get("description", ""))
+    if spec.size * len(controllers) > MAX_ROWS:
+        raise ConfigError(f"{where}: samples", f"{spec.size} samples x {len(controllers)} controllers "
+                          f"exceed {MAX_ROWS} rows")
+    return spec
+
+
+def load_sweep(path: str | Path) -> SweepSpec:
+    """Read and validate a sweep file; a relative ``base`` file resolves from the file's folder."""
+    path = Path(path)
+    if not path.is_file():
+        raise ConfigError(str(path), "not a file")
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
+        raise ConfigError(str(path), f"invalid TOML: {err}") from err
+    spec = parse_sweep(data, str(path))
+    base = Path(spec.base)
+    if base.suffix == ".toml" and not base.is_absolute():
+        spec.base = str((path.parent / base).resolve())
+    return spec
+
+
+def base_config(spec: SweepSpec) -> ExperimentConfig:
+    """The base experiment with the fixed overrides of [set]."""
+    from ..config import load_config
+    from ..presets import load_preset, preset_names
+
+    if spec.base.endswith(".toml"):
+        config = load_config(spec.base)
+    elif spec.base in preset_names():
+        config = load_preset(spec.base)
+    else:
+        raise ConfigError("base", f"{spec.base!r} is neither an experiment file (.toml) nor a preset; "
+                          f"presets: {', '.join(preset_names())}")
+    try:
+        return apply_overrides(config, spec.set)
+    except ConfigError as err:
+        raise ConfigError(f"set: {err.key}", str(err).split(": ", 1)[1]) from err
+
+
+def sample_seed(seed: int, sample_id: int) -> int:
+    """The seed of one sample: independent of how samples are chunked or resumed."""
+    return int(np.random.default_rng([seed, sample_id]).integers(2**62))
+
+
+def draw(spec: SweepSpec, sample_id: int) -> Sample:
+    """Sample ``sample_id``: grid point ``id // samples``, draw ``id % samples``."""
+    point = spec.grid[sample_id // spec.samples]
+    values = dict(zip(spec.grid_keys, point))
+    seed = sample_seed(spec.seed, sample_id)
+    rng = np.random.default_rng(seed)
+    for key in spec.random_keys:
+        (kind, params), = spec.vary[key].items()
+        if kind == "uniform":
+            value = float(rng.uniform(*params))
+        elif kind == "normal":
+            value = float(rng.normal(*params))
+        elif kind == "loguniform":
+            value = float(np.exp(rng.uniform(np.log(params[0]), np.log(params[1]))))
+        else:
+            value = params[int(rng.integers(len(params)))]
+        values[key] = value
+    return Sample(sample_id, values, seed)
+
+
+SEEDED_KEYS = ("nominal.seed", "sensing.seed")
+"""Keys that take the sample's seed unless the sweep sets or varies them: each sample gets its own
+model error draw and sensor noise, the same for every controller (common random numbers)."""
+
+
+def experiment(spec: SweepSpec, base: ExperimentConfig, sample: Sample, controller: str) -> ExperimentConfig:
+    """The experiment of one (sample, controller) row, validated."""
+    overrides = {key: sample.seed % 2**31 for key in SEEDED_KEYS
+                 if key not in spec.set and key not in spec.vary}
+    overrides.update(sample.values)
+    overrides["controller.kind"] = controller
+    try:
+        return apply_overrides(base, overrides)
+    except ConfigError as err:
+        values = ", ".join(f"{k} = {v!r}" for k, v in sample.values.items())
+        raise ConfigError(f"vary: {err.key}", f"{str(err).split(': ', 1)[1]} (sample {sample.id}: "
+                          f"{values or 'no varied values'})") from err
+
+
+def rerun_command(spec: SweepSpec, sample: Sample, controller: str) -> str:
+    """The one-line command that reruns a sample as a normal run."""
+    sets = " ".join(f"--set '{k}={_inline(v)}'" for k, v in
+                    {**spec.set, **{key: sample.seed % 2**31 for key in SEEDED_KEYS
+                                    if key not in spec.set and key not in spec.vary},
+                     **sample.values}.items())
+    return f"nnrobust run {spec.base} --controller {controller} {sets}".rstrip()

@@ -1,0 +1,75 @@
+"""What a sweep found: per-controller statistics (DIR/summary.json) and the worst samples."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ..results import write_json_atomic
+from .spec import SweepSpec, draw, rerun_command
+
+STATISTICS = ("rms_error_after_2s", "rms_torque")
+
+
+def _stats(values: np.ndarray) -> dict:
+    values = values[np.isfinite(values)]
+    if not values.size:
+        return {"median": None, "p95": None, "max": None}
+    return {"median": float(np.median(values)), "p95": float(np.percentile(values, 95)),
+            "max": float(values.max())}
+
+
+def summarize(spec: SweepSpec, frame) -> dict:
+    """Per controller: rows, success rate (completed runs), the median, 95th percentile and
+    maximum of the RMS error (t >= 2 s) and RMS torque over completed runs, the mean saturated
+    fraction, how many rows carry warnings, and the worst sample with its rerun command.
+    """
+    out = {"sweep": spec.name, "samples": spec.size, "controllers": {}}
+    for controller in spec.controllers:
+        rows = frame[frame["controller"] == controller]
+        completed = rows[rows["status"] == "completed"]
+        entry = {"rows": int(len(rows)),
+                 "success_rate": float(len(completed) / len(rows)) if len(rows) else None,
+                 "saturated_fraction_mean": (float(completed["saturated_fraction"].mean())
+                                             if len(completed) else None),
+                 "rows_with_warnings": int(sum(len(w) > 0 for w in rows["warnings"]))}
+        for key in STATISTICS:
+            entry[key] = _stats(completed[key].to_numpy(dtype=float))
+        ranked = completed[np.isfinite(completed["rms_error_after_2s"].to_numpy(dtype=float))]
+        if len(ranked):
+            worst = ranked.loc[ranked["rms_error_after_2s"].idxmax()]
+            sample = draw(spec, int(worst["sample"]))
+            entry["worst"] = {"sample": int(worst["sample"]),
+                              "rms_error_after_2s": float(worst["rms_error_after_2s"]),
+                              "values": sample.values, "command": rerun_command(spec, sample, controller)}
+        out["controllers"][controller] = entry
+    return out
+
+
+def write_summary(folder: str | Path, summary: dict) -> Path:
+    """DIR/summary.json, atomically."""
+    return write_json_atomic(Path(folder) / "summary.json", summary)
+
+
+def format_summary(summary: dict) -> str:
+    """The closing table: one line per controller (errors in mm, torques in N m)."""
+    head = (f"{'controller':16s} {'rows':>6s} {'ok %':>6s} {'median e [mm]':>14s} {'p95 e [mm]':>11s} "
+            f"{'max e [mm]':>11s} {'median tau':>11s} {'p95 tau':>9s} {'sat %':>6s}")
+    lines = [head, "-" * len(head)]
+
+    def mm(v):
+        return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{1e3 * v:.3g}"
+
+    def nm(v):
+        return "-" if v is None else f"{v:.3g}"
+
+    for controller, e in summary["controllers"].items():
+        ok = "-" if e["success_rate"] is None else f"{100 * e['success_rate']:.0f}"
+        sat = "-" if e["saturated_fraction_mean"] is None else f"{100 * e['saturated_fraction_mean']:.2f}"
+        err, tau = e["rms_error_after_2s"], e["rms_torque"]
+        lines.append(f"{controller:16s} {e['rows']:6d} {ok:>6s} {mm(err['median']):>14s} "
+                     f"{mm(err['p95']):>11s} {mm(err['max']):>11s} {nm(tau['median']):>11s} "
+                     f"{nm(tau['p95']):>9s} {sat:>6s}")
+    return "\n".join(lines)

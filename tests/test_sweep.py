@@ -1,0 +1,200 @@
+"""Robustness sweeps on a real dask LocalCluster of 2 workers: every row exactly once, resume,
+a killed worker, bad sweep files, diverged samples as rows."""
+
+import os
+import signal
+import threading
+import time
+
+import numpy as np
+import pytest
+
+pytest.importorskip("distributed")
+pytest.importorskip("pyarrow")
+
+from nnrobust.cli import main  # noqa: E402
+from nnrobust.exceptions import ConfigError, NNRobustError  # noqa: E402
+from nnrobust.sweep import load_sweep, parse_sweep, read_results, run_sweep  # noqa: E402
+from nnrobust.sweep.engine import plan  # noqa: E402
+
+SWEEP = """
+name = "tiny"
+base = "paper-ellipse"
+controllers = ["nn", "no-u0"]
+samples = 3
+seed = 1
+[set]
+"simulation.duration" = {duration}
+[vary]
+"plant.disturbance_scale" = [0.5, 2.0]
+"nn.sigma" = {{uniform = [0.02, 0.2]}}
+"""
+
+
+def _sweep_file(tmp_path, duration=2.5, text=None):
+    path = tmp_path / "sweep.toml"
+    path.write_text(text if text is not None else SWEEP.format(duration=duration))
+    return path
+
+
+def _assert_complete(frame, samples, controllers):
+    pairs = list(zip(frame["sample"], frame["controller"]))
+    assert len(pairs) == len(set(pairs)) == samples * len(controllers)  # every row exactly once
+    assert set(pairs) == {(s, c) for s in range(samples) for c in controllers}
+
+
+def test_every_row_once_then_resume_computes_nothing(tmp_path):
+    spec = load_sweep(_sweep_file(tmp_path))
+    out = tmp_path / "out"
+    first = run_sweep(spec, out, workers=2)
+    frame = read_results(out)
+    _assert_complete(frame, 6, ["nn", "no-u0"])
+    assert first["computed"] == 12 and set(frame["status"]) == {"completed"}
+    # the varied values are columns, the same for both controllers of a sample (common random numbers)
+    by_sample = frame.groupby("sample")["nn.sigma"].nunique()
+    assert (by_sample == 1).all()
+    assert set(frame["plant.disturbance_scale"]) == {0.5, 2.0}
+    again = run_sweep(spec, out, workers=2)
+    assert again == {"computed": 0, "skipped": 12, "parts": 0}
+    _assert_complete(read_results(out), 6, ["nn", "no-u0"])
+
+
+def test_a_sample_reruns_as_a_normal_run(tmp_path, capsys):
+    """The rerun command of the summary reproduces the sample's row."""
+    from nnrobust.config import apply_overrides, parse_override
+    from nnrobust.experiment import run_experiment
+    from nnrobust.presets import load_preset
+    from nnrobust.sweep import draw, rerun_command
+
+    spec = load_sweep(_sweep_file(tmp_path))
+    run_sweep(spec, tmp_path / "out", workers=2)
+    frame = read_results(tmp_path / "out")
+    row = frame[(frame["sample"] == 4) & (frame["controller"] == "nn")].iloc[0]
+    command = rerun_command(spec, draw(spec, 4), "nn")
+    sets = [part.strip("'") for part in command.split("--set ")[1:]]
+    config = apply_overrides(load_preset("paper-ellipse").replace(controller={"kind": "nn"}),
+                             dict(parse_override(s.strip().strip("'")) for s in sets))
+    metrics = run_experiment(config).metrics()
+    assert metrics["rms_error_after_2s"] == pytest.approx(row["rms_error_after_2s"], rel=1e-12)
+
+
+def test_a_killed_worker_costs_only_its_chunk(tmp_path):
+    """kill -9 of a worker in mid-sweep: dask runs its chunk again, and the table is complete with
+    every row exactly once."""
+    from distributed import LocalCluster
+
+    spec = load_sweep(_sweep_file(tmp_path, duration=6.0))
+    out = tmp_path / "out"
+    cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                           dashboard_address=None)
+    try:
+        result = {}
+        thread = threading.Thread(target=lambda: result.update(
+            run_sweep(spec, out, scheduler=cluster.scheduler_address)))
+        thread.start()
+        deadline = time.monotonic() + 60
+        while not list((out / "results").glob("part-*.parquet")) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        victim = next(iter(cluster.workers.values()))
+        os.kill(victim.process.pid, signal.SIGKILL)
+        thread.join(timeout=240)
+        assert not thread.is_alive()
+    finally:
+        cluster.close()
+    assert result["computed"] == 12
+    _assert_complete(read_results(out), 6, ["nn", "no-u0"])
+
+
+def test_a_diverged_sample_is_a_row(tmp_path):
+    text = """
+name = "unstable"
+base = "paper-ellipse"
+controllers = ["nn"]
+[set]
+"simulation.duration" = 1.0
+"plant.torque_limits" = "none"
+[vary]
+"controller.Kv" = [[4.0], [2000.0]]
+"""
+    spec = load_sweep(_sweep_file(tmp_path, text=text))
+    run_sweep(spec, tmp_path / "out", workers=2)
+    frame = read_results(tmp_path / "out").sort_values("sample")
+    assert list(frame["status"]) == ["completed", "diverged"]
+    assert "rad/s" in frame["message"].iloc[1]
+
+
+def test_a_changed_sweep_is_refused_unless_overwrite(tmp_path):
+    spec = load_sweep(_sweep_file(tmp_path, duration=1.0))
+    out = tmp_path / "out"
+    run_sweep(spec, out, workers=2)
+    changed = load_sweep(_sweep_file(tmp_path, duration=1.5))
+    with pytest.raises(NNRobustError, match="holds a different sweep"):
+        run_sweep(changed, out, workers=2)
+    assert run_sweep(changed, out, workers=2, overwrite=True)["computed"] == 12
+    (tmp_path / "mine").mkdir()
+    (tmp_path / "mine" / "notes.txt").write_text("keep me")
+    with pytest.raises(NNRobustError, match="is not a sweep folder"):
+        run_sweep(changed, tmp_path / "mine", workers=2)
+    assert (tmp_path / "mine" / "notes.txt").read_text() == "keep me"
+
+
+BAD = [
+    ("unknown key", {"nmae": "x"}, "unknown key"),
+    ("missing base", {"name": "x", "controllers": ["nn"]}, "base: missing"),
+    ("unknown controller", {"controllers": ["nn", "lqr"]}, "controllers: needs a list of"),
+    ("unknown distribution", {"vary": {"nn.sigma": {"gamma": [1, 2]}}}, "unknown distribution"),
+    ("reversed uniform", {"vary": {"nn.sigma": {"uniform": [0.3, 0.1]}}}, "needs a < b"),
+    ("loguniform from zero", {"vary": {"nn.sigma": {"loguniform": [0.0, 1.0]}}}, "needs 0 < a"),
+    ("unknown dotted key", {"vary": {"nn.sigmaa": [0.1]}}, "did you mean 'nn.sigma'"),
+    ("empty grid", {"vary": {"nn.sigma": []}}, "expected a non-empty list"),
+    ("negative samples", {"samples": 0}, "samples: expected an integer >= 1"),
+]
+
+
+@pytest.mark.parametrize("label, change, message", BAD, ids=[b[0] for b in BAD])
+def test_bad_sweep_files_get_one_line_errors(label, change, message):
+    data = {"name": "x", "base": "paper-ellipse", "controllers": ["nn"], **change}
+    if label == "missing base":
+        data = change
+    with pytest.raises(ConfigError, match=message):
+        parse_sweep(data)
+
+
+def test_values_the_schema_refuses_are_caught_before_anything_runs(tmp_path, capsys):
+    """A grid value the experiment schema refuses: one line naming the key and the sample, exit 2,
+    and no folder is written."""
+    text = """
+name = "refused"
+base = "paper-ellipse"
+controllers = ["nn"]
+[vary]
+"nn.eps_min" = [0.5, -1.0]
+"""
+    path = _sweep_file(tmp_path, text=text)
+    spec = load_sweep(path)
+    with pytest.raises(ConfigError, match=r"vary: nn.eps_min: must be >= 0.*sample 1"):
+        plan(spec)
+    assert main(["sweep", str(path), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("nnrobust: error:")
+    assert not (tmp_path / "out").exists()
+
+
+def test_cli_sweep_writes_results_summary_and_rerun_commands(tmp_path, capsys):
+    path = _sweep_file(tmp_path, duration=2.5)
+    out = tmp_path / "out"
+    assert main(["sweep", str(path), "--out", str(out), "--workers", "2"]) == 0
+    printed = capsys.readouterr()
+    assert "worst nn: sample" in printed.out and "nnrobust run paper-ellipse --controller nn" in printed.out
+    import json
+
+    summary = json.loads((out / "summary.json").read_text())
+    assert set(summary["controllers"]) == {"nn", "no-u0"}
+    nn = summary["controllers"]["nn"]
+    assert nn["rows"] == 6 and nn["success_rate"] == 1.0
+    error = nn["rms_error_after_2s"]
+    assert error["median"] <= error["p95"] <= error["max"]
+    frame = read_results(out)
+    assert np.isclose(frame[frame["controller"] == "nn"]["rms_error_after_2s"].max(),
+                      nn["rms_error_after_2s"]["max"])
+    assert (out / "sweep.toml").read_text() == load_sweep(path).to_toml()
