@@ -4,12 +4,13 @@
 
 For n = 3, 7, 15, 30, 60, 120 the generated planar chain tracks the planar7-ellipse task (m = 2)
 with the full NN controller (joint-space basis, so the network grows with n), a perturbed URDF
-nominal model and the O(n) joint-centering subtask. The plant has no friction and no disturbance:
-on chains of 30 and more light links, per-joint Coulomb friction and disturbance torques excite
-modes with M^-1 eigenvalues up to 1e6 and the run diverges within 0.25 s at any control period
-(docs/robots.md); their cost per step is one O(n) vector expression either way. One control
-step is the controller's output plus one RK4 step of plant and adaptive law (four ABA calls and
-four adaptive-law evaluations). The exponent is the least-squares slope of log(step time)
+nominal model and the O(n) joint-centering subtask. The plant has no friction, no disturbance
+and no joint stops: on chains of 30 and more light links, per-joint Coulomb friction and
+disturbance torques excite modes with M^-1 eigenvalues up to 1e6 and the run diverges within
+0.25 s at any control period, and the stops of the light distal joints ring too fast for a 1 ms
+RK4 step (docs/robots.md, docs/plant.md); their cost per step is one O(n) vector expression either
+way. One control step is the controller's output (which advances the adaptive law once) plus one
+RK4 step of the plant (four ABA calls). The exponent is the least-squares slope of log(step time)
 against log(n) for n >= 15.
 """
 
@@ -34,7 +35,7 @@ def step_seconds(n: int, steps: int, repeats: int) -> float:
     config = load_preset("planar7-ellipse").replace(
         robot={"source": f"planar{n}"},
         nn={"basis_input": "joint"},
-        plant={"friction": "urdf", "disturbance": "none"},  # see the module docstring
+        plant={"friction": "urdf", "disturbance": "none", "joint_stops": False},  # module docstring
         subtasks={"criteria": ["joint_centering"], "weights": [1.0]},
         simulation={"q_seed": seed, "duration": steps * 1e-3},
     )
