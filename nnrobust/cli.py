@@ -196,7 +196,7 @@ def cmd_sweep(args) -> int:
     import time
 
     from .sweep import load_sweep, read_results, run_sweep
-    from .sweep.summary import format_summary, summarize, write_summary
+    from .sweep.summary import format_summary, keep_worst, plot_sweep, summarize, write_summary
 
     spec = load_sweep(args.sweep)
     out = Path(args.out)
@@ -227,8 +227,14 @@ def cmd_sweep(args) -> int:
         return 130
     if started:
         print(file=sys.stderr)
-    summary = summarize(spec, read_results(out))
+    frame = read_results(out)
+    summary = summarize(spec, frame)
     write_summary(out, summary)
+    plot_sweep(spec, frame, out)
+    if args.keep_worst:
+        kept = keep_worst(spec, frame, out, args.keep_worst)
+        if not args.quiet:
+            print(f"run folders of the worst samples: {', '.join(str(p) for p in kept)}", file=sys.stderr)
     if not args.quiet:
         print(format_summary(summary))
         for controller, entry in summary["controllers"].items():
@@ -383,6 +389,9 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--scheduler", help="address of an existing dask scheduler, e.g. tcp://host:8786")
     sweep.add_argument("--overwrite", action="store_true",
                        help="replace the results of a different sweep in --out")
+    sweep.add_argument("--keep-worst", type=int, default=0, metavar="K",
+                       help="write full run folders (with animation) of the K worst samples of each "
+                       "controller into DIR/worst/")
     sweep.add_argument("--quiet", action="store_true", help="print nothing but errors")
     sweep.set_defaults(func=cmd_sweep)
 

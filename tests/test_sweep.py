@@ -183,7 +183,7 @@ controllers = ["nn"]
 def test_cli_sweep_writes_results_summary_and_rerun_commands(tmp_path, capsys):
     path = _sweep_file(tmp_path, duration=2.5)
     out = tmp_path / "out"
-    assert main(["sweep", str(path), "--out", str(out), "--workers", "2"]) == 0
+    assert main(["sweep", str(path), "--out", str(out), "--workers", "2", "--keep-worst", "1"]) == 0
     printed = capsys.readouterr()
     assert "worst nn: sample" in printed.out and "nnrobust run paper-ellipse --controller nn" in printed.out
     import json
@@ -198,3 +198,12 @@ def test_cli_sweep_writes_results_summary_and_rerun_commands(tmp_path, capsys):
     assert np.isclose(frame[frame["controller"] == "nn"]["rms_error_after_2s"].max(),
                       nn["rms_error_after_2s"]["max"])
     assert (out / "sweep.toml").read_text() == load_sweep(path).to_toml()
+    plots = sorted(p.name for p in (out / "plots").glob("*.png"))
+    assert plots == ["error_cdf.png", "error_vs_nn_sigma.png", "error_vs_plant_disturbance_scale.png",
+                     "pareto.png"]
+    # --keep-worst 1: the worst nn sample as a full run folder, the same run as its row
+    worst = nn["worst"]
+    folder = out / "worst" / f"nn-sample-{worst['sample']}"
+    kept = json.loads((folder / "metrics.json").read_text())
+    assert kept["rms_error_after_2s"] == pytest.approx(worst["rms_error_after_2s"], rel=1e-12)
+    assert (folder / "animation.html").is_file() and (folder / "result.npz").is_file()

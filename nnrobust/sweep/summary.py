@@ -73,3 +73,91 @@ def format_summary(summary: dict) -> str:
                      f"{mm(err['p95']):>11s} {mm(err['max']):>11s} {nm(tau['median']):>11s} "
                      f"{nm(tau['p95']):>9s} {sat:>6s}")
     return "\n".join(lines)
+
+
+def plot_sweep(spec: SweepSpec, frame, folder: str | Path) -> list[Path]:
+    """DIR/plots: the error CDF per controller, the error against each varied key and the Pareto
+    picture of error against torque (completed runs; errors in mm over t >= 2 s).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    out = Path(folder) / "plots"
+    out.mkdir(parents=True, exist_ok=True)
+    done = frame[frame["status"] == "completed"]
+    written = []
+
+    def save(fig, name):
+        path = out / f"{name}.png"
+        fig.tight_layout()
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        written.append(path)
+
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for controller in spec.controllers:
+        errors = np.sort(done[done["controller"] == controller]["rms_error_after_2s"].to_numpy(dtype=float))
+        errors = errors[np.isfinite(errors)]
+        if errors.size:
+            ax.step(1e3 * errors, np.arange(1, errors.size + 1) / errors.size, where="post", label=controller)
+    ax.set_xscale("log")
+    ax.set_xlabel("RMS task error, t >= 2 s [mm]")
+    ax.set_ylabel("fraction of samples")
+    ax.set_title(f"{spec.name}: error distribution ({spec.size} samples)")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    save(fig, "error_cdf")
+
+    for key in spec.vary:
+        fig, ax = plt.subplots(figsize=(6, 4))
+        for controller in spec.controllers:
+            rows = done[done["controller"] == controller]
+            values = rows[key]
+            if values.dtype == object:  # lists (a gain vector) or strings: plot against their index
+                labels = sorted({str(v) for v in values})
+                values = [labels.index(str(v)) for v in values]
+            ax.scatter(values, 1e3 * rows["rms_error_after_2s"].to_numpy(dtype=float), s=10, alpha=0.6,
+                       label=controller)
+        ax.set_yscale("log")
+        ax.set_xlabel(key)
+        ax.set_ylabel("RMS task error, t >= 2 s [mm]")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+        save(fig, f"error_vs_{key.replace('.', '_')}")
+
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for controller in spec.controllers:
+        rows = done[done["controller"] == controller]
+        ax.scatter(rows["rms_torque"], 1e3 * rows["rms_error_after_2s"].to_numpy(dtype=float), s=10,
+                   alpha=0.6, label=controller)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("RMS torque [N m]")
+    ax.set_ylabel("RMS task error, t >= 2 s [mm]")
+    ax.set_title("error against torque, every sample")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    save(fig, "pareto")
+    return written
+
+
+def keep_worst(spec: SweepSpec, frame, folder: str | Path, count: int) -> list[Path]:
+    """Full run folders (arrays, metrics, plots, animation) of the ``count`` worst completed
+    samples of each controller, in DIR/worst/CONTROLLER-sample-ID, rerun on this machine.
+    """
+    from ..experiment import run_experiment
+    from ..results import write_run
+    from .spec import base_config, experiment
+
+    base = base_config(spec)
+    written = []
+    done = frame[(frame["status"] == "completed") & np.isfinite(frame["rms_error_after_2s"].astype(float))]
+    for controller in spec.controllers:
+        rows = done[done["controller"] == controller].nlargest(count, "rms_error_after_2s")
+        for sample_id in rows["sample"]:
+            config = experiment(spec, base, draw(spec, int(sample_id)), controller)
+            target = Path(folder) / "worst" / f"{controller}-sample-{int(sample_id)}"
+            written.append(write_run(target, run_experiment(config), overwrite=True))
+    return written
