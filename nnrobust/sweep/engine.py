@@ -42,11 +42,13 @@ def _require_engine():
 SKIP_METRICS = ("rms_torque_per_joint", "singular_episodes", "message", "joint_limit_joint")
 
 
-def run_rows(jobs: list[tuple]) -> list[dict]:
-    """Run (sample id, controller, varied values, seed, experiment TOML) jobs; one metrics row each.
+def run_rows(spec: SweepSpec, base_toml: str, jobs: list[tuple[int, str]]) -> list[dict]:
+    """Run (sample id, controller) jobs; one metrics row each.
 
-    A run that cannot be built (the sample's trajectory leaves the workspace, say) is a row with
-    status ``refused`` and its message; a diverged run is a row with status ``diverged``.
+    The worker rebuilds each experiment from the sweep and the base experiment's TOML (so a remote
+    worker needs no file of the client's). A run that cannot be built (the sample's trajectory
+    leaves the workspace, say) is a row with status ``refused`` and its message; a diverged run
+    is a row with status ``diverged``.
     """
     import tomllib
 
@@ -54,12 +56,14 @@ def run_rows(jobs: list[tuple]) -> list[dict]:
     from ..exceptions import NNRobustError as LibraryError
     from ..experiment import run_experiment
 
+    base = from_dict(tomllib.loads(base_toml))
     rows = []
-    for sample_id, controller, values, seed, toml in jobs:
+    for sample_id, controller in jobs:
         start = time.perf_counter()
-        row = {"sample": sample_id, "controller": controller, **values, "seed": seed}
+        sample = draw(spec, sample_id)
+        row = {"sample": sample_id, "controller": controller, **sample.values, "seed": sample.seed}
         try:
-            metrics = run_experiment(from_dict(tomllib.loads(toml))).metrics()
+            metrics = run_experiment(experiment(spec, base, sample, controller)).metrics()
         except LibraryError as err:
             row.update(status="refused", message=str(err)[:500], warnings=[])
         else:
@@ -190,18 +194,20 @@ def _sigterm_as_interrupt():
             signal.signal(sig, old)
 
 
-def plan(spec: SweepSpec) -> list[tuple]:
-    """Every (sample, controller) job, its experiment validated: a value the schema refuses is a
-    one-line error naming the key and the sample, before anything runs.
+def plan(spec: SweepSpec) -> tuple[str, list[tuple[int, str]]]:
+    """The base experiment's TOML and every (sample, controller) job, each experiment validated
+    first: a value the schema refuses is a one-line error naming the key and the sample, before
+    anything runs. Jobs are (id, controller) pairs, so the client's memory does not grow with the
+    experiments, which the workers rebuild.
     """
     base = base_config(spec)
     jobs = []
     for sample_id in range(spec.size):
         sample = draw(spec, sample_id)
         for controller in spec.controllers:
-            config = experiment(spec, base, sample, controller)
-            jobs.append((sample_id, controller, sample.values, sample.seed, config.to_toml()))
-    return jobs
+            experiment(spec, base, sample, controller)  # validates; not kept
+            jobs.append((sample_id, controller))
+    return base.to_toml(), jobs
 
 
 def chunk_size(jobs: int, workers: int, seconds_per_job: float) -> int:
@@ -221,10 +227,10 @@ def run_sweep(spec: SweepSpec, folder: str | Path, workers: int | None = None, s
     """
     _require_engine()
     folder = Path(folder)
-    jobs = plan(spec)  # every experiment validated before anything is written or run
+    base_toml, jobs = plan(spec)  # every experiment validated before anything is written or run
     prepare_folder(spec, folder, overwrite)
     done = _done_rows(folder)
-    jobs = [job for job in jobs if (job[0], job[1]) not in done]
+    jobs = [job for job in jobs if job not in done]
     total = spec.size * len(spec.controllers)
     skipped = total - len(jobs)
     if not jobs:
@@ -237,7 +243,10 @@ def run_sweep(spec: SweepSpec, folder: str | Path, workers: int | None = None, s
         n_workers = max(len(client.scheduler_info().get("workers", {})), 1)
         size = chunk_size(len(jobs), n_workers, seconds_per_job)
         chunks = [jobs[i:i + size] for i in range(0, len(jobs), size)]
-        futures = [client.submit(run_rows, chunk, pure=False, retries=2) for chunk in chunks]
+        spec_future = client.scatter(spec, broadcast=True)
+        base_future = client.scatter(base_toml, broadcast=True)
+        futures = [client.submit(run_rows, spec_future, base_future, chunk, pure=False, retries=2)
+                   for chunk in chunks]
         if progress:
             progress(skipped, total)
         for future in as_completed(futures):
