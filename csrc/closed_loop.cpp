@@ -7,6 +7,9 @@
 
 #include <Eigen/Eigenvalues>
 #include <pinocchio/algorithm/aba.hpp>
+#include <pinocchio/algorithm/frames.hpp>
+#include <pinocchio/algorithm/jacobian.hpp>
+#include <pinocchio/algorithm/kinematics.hpp>
 
 namespace nnrobust {
 namespace {
@@ -219,6 +222,28 @@ struct Plant {
   }
 };
 
+// Result.from_trace's per-sample quantities of the true robot at q: the chain points, the
+// manipulability sqrt(det(J J^T)) of the planar task and the weighted paper criterion.
+void record_kinematics(LoadedModel &m, const LoopSpec &s, const Vector &q, long k, LoopTrace &tr) {
+  auto &model = m.model;
+  auto &data = m.data;
+  pinocchio::forwardKinematics(model, data, q);
+  pinocchio::updateFramePlacement(model, data, m.frame);
+  const int joints = model.njoints - 1;
+  for (int j = 0; j < joints; ++j) tr.chain.block<1, 3>(k, 3 * j) = data.oMi[j + 1].translation().transpose();
+  tr.chain.block<1, 3>(k, 3 * joints) = data.oMf[m.frame].translation().transpose();
+  Matrix J6 = Matrix::Zero(6, model.nv);
+  pinocchio::computeFrameJacobian(model, data, q, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, J6);
+  const Matrix J = J6.topRows(2);
+  const Matrix2d A = J * J.transpose();
+  const double det = A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0);
+  tr.manipulability[k] = std::sqrt(std::max(det, 0.0));
+  if (s.paper_criterion) {
+    const double cq = s.smoothness.dot(q);
+    tr.h[k] = s.criterion_weight * (0.5 * det + (-0.5 * cq * cq));
+  }
+}
+
 }  // namespace
 
 LoopTrace run_loop(LoadedModel &model, const LoopSpec &s, bool (*interrupted)()) {
@@ -235,6 +260,9 @@ LoopTrace run_loop(LoadedModel &model, const LoopSpec &s, bool (*interrupted)())
   tr.eps = tr.rho_hat;
   tr.z_norm = tr.rho_hat;
   tr.damping = tr.rho_hat;
+  tr.chain = Matrix::Constant(steps, 3 * (model.model.njoints), nan);
+  tr.manipulability = tr.rho_hat;
+  tr.h = tr.rho_hat;
   Controller controller(s);
   Plant plant{model, s};
   const bool noisy = s.noise_q.rows() > 0;
@@ -273,6 +301,7 @@ LoopTrace run_loop(LoadedModel &model, const LoopSpec &s, bool (*interrupted)())
     tr.eps[k] = out.eps;
     tr.z_norm[k] = out.z_norm;
     tr.damping[k] = out.damping;
+    if (q.allFinite()) record_kinematics(model, s, q, k, tr);
     if (!out.tau.allFinite() || !q.allFinite() || !v.allFinite()) {
       tr.status = "diverged";
       tr.divergence_index = k;

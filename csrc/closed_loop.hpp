@@ -62,6 +62,10 @@ struct LoopSpec {
 struct LoopTrace {
   Matrix q, dq, tau, tau_cmd, z;
   Vector rho_hat, eps, z_norm, damping;
+  // what Result.from_trace records, from the true robot's kinematics (nnrobust/results.py)
+  Matrix chain;          // steps x 3(n + 1): joint origins, then the task frame, in world axes
+  Vector manipulability; // sqrt(det(J J^T)) of the planar task Jacobian
+  Vector h;              // the weighted paper criterion (NaN without one)
   long done = 0;
   std::string status = "completed";
   long divergence_index = -1;  // step at which it diverged

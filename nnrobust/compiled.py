@@ -187,5 +187,8 @@ def simulate_compiled(setup, duration: float):
     elif out.status == "interrupted":
         message = f"interrupted at t = {done * period:.4f} s"
     z = np.asarray(out.z)[:done] if spec.z0.size else np.zeros((done, 0))
+    n = setup.plant.nq
+    recorded = {"chain": np.asarray(out.chain)[:done].reshape(done, n + 1, 3),
+                "manipulability": np.asarray(out.manipulability)[:done], "h": np.asarray(out.h)[:done]}
     return Trace(t, np.asarray(out.q)[:done], np.asarray(out.dq)[:done], np.asarray(out.tau)[:done],
-                 np.asarray(out.tau_cmd)[:done], z, signals, out.status, message)
+                 np.asarray(out.tau_cmd)[:done], z, signals, out.status, message, recorded)

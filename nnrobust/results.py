@@ -101,8 +101,22 @@ class Result:
     @classmethod
     def from_trace(cls, trace, robot, trajectory, criterion, config, wall_seconds: float,
                    torque_limit: np.ndarray | None = None) -> Result:
-        """Add task-space quantities (true kinematics) and the criterion to a simulation trace."""
+        """Add task-space quantities (true kinematics) and the criterion to a simulation trace
+        (those the loop recorded already are taken as they are).
+        """
         N = trace.t.size
+        if trace.recorded is not None and robot.task != "pose":
+            chain = trace.recorded["chain"]
+            x = chain[:, -1, : robot.m]  # the last chain point is the task frame
+            signals = dict(trace.signals, h=trace.recorded["h"],
+                           manipulability=trace.recorded["manipulability"])
+            return cls(
+                trace.t, trace.q, trace.dq, trace.tau, x, trajectory.position(trace.t),
+                x - trajectory.position(trace.t), signals, trace.status, trace.message,
+                config.to_toml() if config is not None else "", wall_seconds, list(robot.joint_names),
+                chain, trace.tau_cmd, torque_limit, robot.lower_limits, robot.upper_limits,
+                robot.prismatic,
+            )
         x = np.empty((N, robot.m))
         e = np.empty((N, robot.m))
         h = np.full(N, np.nan)

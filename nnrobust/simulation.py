@@ -32,6 +32,8 @@ class Trace:
         signals: controller signals by name, each of shape N.
         status: "completed", "diverged" or "interrupted".
         message: why the run stopped early, or "".
+        recorded: per-sample quantities a loop already computed for the Result (the compiled
+            loop: ``chain`` N x (n + 1) x 3, ``manipulability`` and ``h``), or None.
 
     """
 
@@ -44,6 +46,7 @@ class Trace:
     signals: dict[str, np.ndarray] = field(default_factory=dict)
     status: str = "completed"
     message: str = ""
+    recorded: dict | None = None
 
 
 def _rk4_step(f, t: float, X: np.ndarray, h: float) -> np.ndarray:

@@ -182,3 +182,21 @@ def test_a_compiled_run_diverges_like_the_python_run():
     py, cc = _both_backends("paper-ellipse", 2.0, **changes)
     assert py.status == cc.status == "diverged"
     assert cc.t.size == py.t.size and cc.message == py.message
+
+
+@needs_extension
+@pytest.mark.parametrize("preset", ["paper-ellipse", "paper-line"])
+def test_a_compiled_result_equals_the_python_result(preset):
+    """What the compiled loop records for the Result (chain points, x, e, the criterion h and the
+    manipulability, from the true robot's kinematics) equals what Result.from_trace computes."""
+    from nnrobust.experiment import run_experiment
+    from nnrobust.presets import load_preset
+
+    config = load_preset(preset).replace(simulation={"duration": 0.5})
+    py = run_experiment(config.replace(simulation={"backend": "python"}))
+    cc = run_experiment(config.replace(simulation={"backend": "compiled"}))
+    for name in ("x", "x_d", "e", "chain"):
+        np.testing.assert_allclose(getattr(cc, name), getattr(py, name), rtol=0, atol=1e-9, err_msg=name)
+    for name in ("h", "manipulability"):
+        np.testing.assert_allclose(cc.signals[name], py.signals[name], rtol=0, atol=1e-9, err_msg=name)
+    assert cc.metrics()["min_manipulability"] == pytest.approx(py.metrics()["min_manipulability"], rel=1e-9)
