@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import itertools
 
-from common import mm, number, parser, report
+from _common import mm, number, parser, report
 
 PRESETS = ("panda-ellipse", "panda-pose", "ur5-ellipse", "planar7-ellipse")
 CONTROLLERS = ("nn", "no-u0", "sliding-mode", "computed-torque", "pd")

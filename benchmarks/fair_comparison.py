@@ -19,7 +19,7 @@ import itertools
 import json
 from pathlib import Path
 
-from common import run_rows
+from _common import run_rows
 
 from nnrobust.presets import load_preset
 from nnrobust.results import write_json_atomic

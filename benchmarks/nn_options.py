@@ -8,7 +8,7 @@ NN compensator under several settings, each one change from the defaults.
 
 from __future__ import annotations
 
-from common import mm, number, parser, report
+from _common import mm, number, parser, report
 
 VARIANTS = {
     "no-u0 baseline": {"controller": {"kind": "no-u0"}},

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import itertools
 
-from common import mm, number, parser, report
+from _common import mm, number, parser, report
 
 CASES = {"case (a) line": "paper-line", "case (b) ellipse": "paper-ellipse"}
 PAPER_LAW = {"nn": {"sigma": 0.0, "eps_min": 0.0}}

@@ -9,7 +9,7 @@ model error's null-space part disturbs the self-motion unopposed. The rows separ
 
 from __future__ import annotations
 
-from common import mm, number, parser, report
+from _common import mm, number, parser, report
 
 NO_FRICTION = {"viscous_friction": [0.0] * 3, "coulomb_friction": [0.0] * 3}
 

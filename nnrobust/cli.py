@@ -252,11 +252,11 @@ def cmd_bench(args) -> int:
     root = Path(__file__).resolve().parent.parent / "benchmarks"
     if not root.is_dir():
         raise NNRobustError(f"{root} not found: 'bench' runs from a source checkout of nnrobust")
-    names = args.names or sorted(p.stem for p in root.glob("*.py"))
-    unknown = [n for n in names if not (root / f"{n}.py").is_file()]
+    available = sorted(p.stem for p in root.glob("*.py") if not p.stem.startswith("_"))  # _: helpers
+    names = args.names or available
+    unknown = [n for n in names if n not in available]
     if unknown:
-        raise NNRobustError(f"unknown benchmarks {unknown}; available: "
-                            f"{', '.join(sorted(p.stem for p in root.glob('*.py')))}")
+        raise NNRobustError(f"unknown benchmarks {unknown}; available: {', '.join(available)}")
     out = Path(args.out)
     code = 0
     for name in names:

@@ -1,6 +1,6 @@
 """The numbers in README.md and docs/ are those the current code produces.
 
-Tables are rendered from docs/data/*.json by benchmarks/docs_tables.py; here the rendered tables
+Tables are rendered from docs/data/*.json by docs/render_tables.py; here the rendered tables
 must match the documents, and one row of every data file is re-run and must match its data.
 """
 
@@ -12,24 +12,25 @@ import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "benchmarks"))
+sys.path.insert(0, str(ROOT / "docs"))
 
-import common  # noqa: E402
-import docs_tables  # noqa: E402
+import _common  # noqa: E402
+import render_tables  # noqa: E402
 
 DATA_FILES = ["paper_reproduction", "fair_comparison", "nn_options", "subtask", "arm_presets"]
 
 
-@pytest.mark.parametrize("document", docs_tables.DOCUMENTS)
+@pytest.mark.parametrize("document", render_tables.DOCUMENTS)
 def test_tables_are_rendered_from_the_data(document):
     text = (ROOT / document).read_text()
-    assert docs_tables.render(text) == text, f"run python benchmarks/docs_tables.py ({document})"
+    assert render_tables.render(text) == text, f"run python docs/render_tables.py ({document})"
 
 
 def test_every_data_file_has_a_table():
-    text = "".join((ROOT / d).read_text() for d in docs_tables.DOCUMENTS)
-    for name, renderer in docs_tables.RENDERERS.items():
+    text = "".join((ROOT / d).read_text() for d in render_tables.DOCUMENTS)
+    for name, renderer in render_tables.RENDERERS.items():
         assert f"<!-- table: {name} -->" in text, name
-    assert {p.stem for p in docs_tables.DATA.glob("*.json")} == set(DATA_FILES)
+    assert {p.stem for p in render_tables.DATA.glob("*.json")} == set(DATA_FILES)
 
 
 def _quickest_row(rows):
@@ -42,10 +43,10 @@ def _quickest_row(rows):
 
 @pytest.mark.parametrize("name", DATA_FILES)
 def test_a_row_of_the_data_reproduces(name):
-    rows = json.loads((docs_tables.DATA / f"{name}.json").read_text())["rows"]
+    rows = json.loads((render_tables.DATA / f"{name}.json").read_text())["rows"]
     row = _quickest_row(rows)
     job = {k: row[k] for k in ("preset", "changes")}
-    again = common.run_row(job)
+    again = _common.run_row(job)
     for key in ("rms_error_after_2s", "rms_torque", "torque_chatter", "saturated_fraction"):
         assert again[key] == pytest.approx(row[key], rel=1e-9, abs=1e-12), (name, key)
     assert again["warnings"] == row["warnings"]

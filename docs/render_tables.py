@@ -1,7 +1,7 @@
 """Write the tables of README.md and docs/ from the benchmark results in docs/data/.
 
-    python benchmarks/docs_tables.py            # rewrite the tables in place
-    python benchmarks/docs_tables.py --check    # exit 1 if a table differs from its data
+    python docs/render_tables.py            # rewrite the tables in place
+    python docs/render_tables.py --check    # exit 1 if a table differs from its data
 
 Each table sits between ``<!-- table: NAME -->`` and ``<!-- /table -->`` in a Markdown file and
 is rendered from docs/data/*.json, which the benchmark scripts write (each table says which
@@ -160,7 +160,7 @@ def main() -> int:
             if not args.check:
                 path.write_text(new)
     if args.check and stale:
-        print(f"out of date: {', '.join(stale)}; run python benchmarks/docs_tables.py", file=sys.stderr)
+        print(f"out of date: {', '.join(stale)}; run python docs/render_tables.py", file=sys.stderr)
         return 1
     return 0
 
