@@ -105,37 +105,29 @@ class Result:
         (those the loop recorded already are taken as they are).
         """
         N = trace.t.size
-        if trace.recorded is not None and robot.task != "pose":
-            chain = trace.recorded["chain"]
-            x = chain[:, -1, : robot.m]  # the last chain point is the task frame
-            signals = dict(trace.signals, h=trace.recorded["h"],
-                           manipulability=trace.recorded["manipulability"])
-            return cls(
-                trace.t, trace.q, trace.dq, trace.tau, x, trajectory.position(trace.t),
-                x - trajectory.position(trace.t), signals, trace.status, trace.message,
-                config.to_toml() if config is not None else "", wall_seconds, list(robot.joint_names),
-                chain, trace.tau_cmd, torque_limit, robot.lower_limits, robot.upper_limits,
-                robot.prismatic,
-            )
-        x = np.empty((N, robot.m))
-        e = np.empty((N, robot.m))
-        h = np.full(N, np.nan)
-        manip = np.empty(N)
-        chain = np.empty((N, robot.nq + 1, 3))
         pose = robot.task == "pose"
-        for k in range(N):
-            chain[k] = robot.chain_points(trace.q[k])
-            if pose:
-                coords = robot.task_position(trace.q[k])
-                e[k] = trajectory.error(coords, trajectory(trace.t[k])[0])
-                x[k] = display_coordinates("pose", coords)
-            else:
-                x[k] = chain[k, -1, : robot.m]  # the last chain point is the task frame
-            J = robot.task_jacobian(trace.q[k])
-            manip[k] = np.sqrt(max(det(J @ J.T), 0.0))
-            if criterion is not None:
-                h[k] = criterion.value(robot, trace.q[k])
         x_d = trajectory.position(trace.t)
+        if trace.recorded is not None and not pose:
+            chain, h, manip = (trace.recorded[k] for k in ("chain", "h", "manipulability"))
+            x = chain[:, -1, : robot.m]  # the last chain point is the task frame
+        else:
+            x = np.empty((N, robot.m))
+            e = np.empty((N, robot.m))
+            h = np.full(N, np.nan)
+            manip = np.empty(N)
+            chain = np.empty((N, robot.nq + 1, 3))
+            for k in range(N):
+                chain[k] = robot.chain_points(trace.q[k])
+                if pose:
+                    coords = robot.task_position(trace.q[k])
+                    e[k] = trajectory.error(coords, trajectory(trace.t[k])[0])
+                    x[k] = display_coordinates("pose", coords)
+                else:
+                    x[k] = chain[k, -1, : robot.m]  # the last chain point is the task frame
+                J = robot.task_jacobian(trace.q[k])
+                manip[k] = np.sqrt(max(det(J @ J.T), 0.0))
+                if criterion is not None:
+                    h[k] = criterion.value(robot, trace.q[k])
         if not pose:
             e = x - x_d
         signals = dict(trace.signals, h=h, manipulability=manip)
