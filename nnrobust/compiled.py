@@ -28,6 +28,14 @@ def _load():
     return _MODULE
 
 
+def _module():
+    """The extension module, or one clear error saying why it is missing."""
+    module = _load()
+    if module is None:
+        raise NNRobustError(_REASON)
+    return module
+
+
 def available() -> bool:
     """Whether the compiled extension loaded."""
     return _load() is not None
@@ -43,18 +51,12 @@ def load_model(model: pin.Model, frame: str):
     """The C++ copy of a Pinocchio model (exactly this model: serialized with Pinocchio's own
     ``saveToString``), with ``frame`` as its task frame.
     """
-    module = _load()
-    if module is None:
-        raise NNRobustError(_REASON)
-    return module.LoadedModel(model.saveToString(), frame)
+    return _module().LoadedModel(model.saveToString(), frame)
 
 
 def floor_loop(model, q0, v0, steps: int, dt: float):
     """The bare C++ loop of benchmarks/closed_loop.py: final [q, v] after ``steps`` steps of ``dt``."""
-    module = _load()
-    if module is None:
-        raise NNRobustError(_REASON)
-    return module.floor_loop(model, q0, v0, steps, dt)
+    return _module().floor_loop(model, q0, v0, steps, dt)
 
 
 # ---- the compiled closed loop ---------------------------------------------------------------------
@@ -104,12 +106,14 @@ def loop_spec(setup, duration: float):
     def f(x):  # the C++ side takes contiguous float64 arrays
         return np.ascontiguousarray(x, dtype=float)
 
-    module = _load()
+    from .simulation import MAX_SPEED
+
+    module = _module()
     sim, plant, controller = setup.config.simulation, setup.plant, setup.controller
     n = plant.nq
     steps = int(round(duration / sim.control_period))
     s = module.LoopSpec()
-    s.period, s.substeps, s.steps, s.max_speed = sim.control_period, sim.substeps, steps, 1e3
+    s.period, s.substeps, s.steps, s.max_speed = sim.control_period, sim.substeps, steps, MAX_SPEED
     s.q0, s.v0 = f(setup.q0), f(setup.v0)
     s.viscous, s.coulomb = f(plant.friction.viscous), f(plant.friction.coulomb)
     s.dist_amplitude, s.dist_phase = f(plant.disturbance.amplitude), f(plant.disturbance.phase)
@@ -170,7 +174,7 @@ def simulate_compiled(setup, duration: float):
         raise NNRobustError(f"simulation.backend = 'compiled': {refusal}")
     spec = loop_spec(setup, duration)
     plant = load_model(setup.robot.model, setup.robot.task_frame)
-    out = _load().run_loop(plant, spec)
+    out = _module().run_loop(plant, spec)
     done, period = out.done, setup.config.simulation.control_period
     t = np.arange(done) * period
     signals = {"damping": np.asarray(out.damping)[:done]}

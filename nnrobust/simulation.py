@@ -15,6 +15,9 @@ from .plant.plant import Plant
 INTEGRATORS = ("rk4", "solve_ivp")
 """Fixed-step classical Runge-Kutta, or scipy's adaptive DOP853 per control period."""
 
+MAX_SPEED = 1e3
+"""A joint faster than this [rad/s or m/s] counts as divergence (both loops)."""
+
 
 @dataclass
 class Trace:
@@ -83,7 +86,7 @@ def simulate(
     integrator: str = "rk4",
     rtol: float = 1e-10,
     atol: float = 1e-10,
-    max_speed: float = 1e3,
+    max_speed: float = MAX_SPEED,
     progress: Callable[[float, np.ndarray], None] | None = None,
     progress_every: int = 50,
 ) -> Trace:
