@@ -40,7 +40,7 @@ from .plant import (
     scaled_friction,
     torque_scale,
 )
-from .plant.scaling import usable
+from .plant.scaling import torque_needed, usable
 from .results import Result
 from .simulation import simulate
 from .subtasks import (
@@ -493,7 +493,7 @@ def likely_cause(setup: Setup, trace) -> str:
             return (f"likely cause: an exploding criterion gradient (k dh/dq = {grad[i]:.3g} on joint "
                     f"{names[i]!r}); lower controller.k or check subtasks.criteria")
     effort = robot.effort_limits
-    needed = np.diag(robot.mass(q)) * 10.0 + np.abs(robot.gravity(q))
+    needed = torque_needed(robot, q)
     ratio = np.where(usable(effort), effort / np.maximum(needed, 1e-9), 0.0)
     i = int(np.argmax(ratio))
     if ratio[i] > IMPLAUSIBLE_EFFORT and (config.plant.friction == "scaled"

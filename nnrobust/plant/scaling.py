@@ -23,14 +23,17 @@ def usable(values: np.ndarray) -> np.ndarray:
     return np.isfinite(values) & (values > 0) & (values < 1e6)
 
 
+def torque_needed(robot: PinocchioModel, q: np.ndarray) -> np.ndarray:
+    """M_ii(q) * 10 rad/s^2 + |G_i(q)| [N m]: what each joint needs to move the arm at q."""
+    return np.diag(robot.mass(q)) * REFERENCE_ACCELERATION + np.abs(robot.gravity(q))
+
+
 def torque_scale(robot: PinocchioModel) -> np.ndarray:
     """tau_ref per joint [N m]: the URDF effort limit where there is one, else
     M_ii(q_mid) * 10 rad/s^2 + |G_i(q_mid)| at mid-range (the arm's own size).
     """
     effort = robot.effort_limits
-    mid = robot.mid_configuration
-    fallback = np.diag(robot.mass(mid)) * REFERENCE_ACCELERATION + np.abs(robot.gravity(mid))
-    return np.where(usable(effort), effort, fallback)
+    return np.where(usable(effort), effort, torque_needed(robot, robot.mid_configuration))
 
 
 def scaled_friction(robot: PinocchioModel, viscous_level: float, coulomb_level: float) -> Friction:
