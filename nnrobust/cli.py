@@ -9,6 +9,7 @@ from pathlib import Path
 
 from .config import CONTROLLER_KINDS as CONTROLLERS
 from .exceptions import NNRobustError
+from .sweep.spec import shipped_sweeps
 
 TABLE_COLUMNS = (
     ("run", None),
@@ -383,7 +384,8 @@ def build_parser() -> argparse.ArgumentParser:
                            "a local cluster on 127.0.0.1 by default, or an existing scheduler. Re-running "
                            "the same command into the same folder computes only the missing rows "
                            "(docs/robustness.md).")
-    sweep.add_argument("sweep", help="sweep file (TOML)")
+    sweep.add_argument("sweep", help="sweep file (TOML), or a shipped study: "
+                       f"{', '.join(shipped_sweeps())}")
     sweep.add_argument("--out", required=True, help="sweep folder (results/, sweep.toml, summary.json)")
     sweep.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
     sweep.add_argument("--scheduler", help="address of an existing dask scheduler, e.g. tcp://host:8786")

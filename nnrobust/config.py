@@ -49,8 +49,9 @@ class NominalConfig:
         p: p-hat [kg m^2] (closed form; default the true robot's).
         mass_scale: every body's mass times this (urdf).
         inertia_scale: every body's rotational inertia times this (urdf).
-        relative_error: each body's mass and inertia also scaled by its own seeded random factor
-            in [1 - relative_error, 1 + relative_error] (urdf; < 1).
+        relative_error: urdf: each body's mass and inertia also scaled by its own seeded random
+            factor in [1 - relative_error, 1 + relative_error]; closed-form: each of the six
+            beta-hat and p-hat entries scaled so (< 1).
         com_error: each centre of mass moved by a seeded random vector up to this long [m] (urdf).
         seed: seed of the random perturbation.
         viscous_friction: F_d-hat [N m s/rad] (default 0).
@@ -93,6 +94,8 @@ class PlantConfig:
         disturbance_omega: K angular frequencies [rad/s] (``sinusoid``).
         disturbance_phase: n x K phases [rad] (``sinusoid``; default 0).
         disturbance_scale: factor applied to the disturbance.
+        friction_scale: factor applied to the plant's viscous and Coulomb friction (after the
+            choice above; the controller's nominal friction is not scaled).
         torque_limits: ``urdf`` (the URDF's effort limits; joints without one are unlimited),
             ``none`` (ideal actuators) or one value per joint [N m or N]; the commanded torque
             is clipped to +-limit.
@@ -114,6 +117,7 @@ class PlantConfig:
     disturbance_omega: list[float] | None = None
     disturbance_phase: list[list[float]] | None = None
     disturbance_scale: float = 1.0
+    friction_scale: float = 1.0
     torque_limits: str | list[float] = "urdf"
     joint_stops: bool = True
     joint_stop_stiffness: float = 100.0
@@ -529,9 +533,11 @@ def validate(config: ExperimentConfig) -> None:
                           f"{nc.relative_error}")
     if nc.com_error < 0:
         raise ConfigError("nominal.com_error", f"must be >= 0 [m], got {nc.com_error}")
-    if nc.kind == "closed-form" and nc.perturbed:
-        raise ConfigError("nominal.kind", "mass_scale, inertia_scale, relative_error and com_error "
-                          "perturb the URDF model: set kind = 'urdf' (closed-form takes beta and p)")
+    if nc.kind == "closed-form" and (nc.mass_scale, nc.inertia_scale, nc.com_error) != (1, 1, 0):
+        raise ConfigError("nominal.kind", "mass_scale, inertia_scale and com_error perturb the URDF "
+                          "model: set kind = 'urdf' (closed-form takes beta, p and relative_error)")
+    _non_negative("plant.disturbance_scale", pc.disturbance_scale)
+    _non_negative("plant.friction_scale", pc.friction_scale)
     if isinstance(pc.torque_limits, str):
         if pc.torque_limits not in ("urdf", "none"):
             raise ConfigError("plant.torque_limits", f"{pc.torque_limits!r} is not one of urdf, none "

@@ -129,8 +129,8 @@ def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
     base = (scaled_friction(robot, pc.viscous_level, pc.coulomb_level) if pc.friction == "scaled"
             else Friction(robot.viscous_friction, robot.coulomb_friction))
     friction = Friction(
-        _vector("plant.viscous_friction", pc.viscous_friction, n, base.viscous),
-        _vector("plant.coulomb_friction", pc.coulomb_friction, n, base.coulomb),
+        pc.friction_scale * _vector("plant.viscous_friction", pc.viscous_friction, n, base.viscous),
+        pc.friction_scale * _vector("plant.coulomb_friction", pc.coulomb_friction, n, base.coulomb),
     )
     if pc.disturbance == "scaled":
         disturbance = scaled_disturbance(robot, pc.disturbance_level)
@@ -177,6 +177,9 @@ def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsMo
     true = ThreeLinkParameters.from_pinocchio(robot.model, robot.task_frame)
     beta = true.beta if nc.beta is None else tuple(_vector("nominal.beta", nc.beta, 3, None))
     p = true.p if nc.p is None else tuple(_vector("nominal.p", nc.p, 3, None))
+    if nc.relative_error:
+        factors = 1 + np.random.default_rng(nc.seed).uniform(-nc.relative_error, nc.relative_error, 6)
+        beta, p = tuple(np.multiply(beta, factors[:3])), tuple(np.multiply(p, factors[3:]))
     return ThreeLinkPlanarModel(
         ThreeLinkParameters(beta, p, true.lengths, true.gamma, true.gravity),
         joint_names=robot.joint_names,

@@ -6,6 +6,7 @@ import pinocchio as pin
 import pytest
 
 from nnrobust.config import ExperimentConfig
+from nnrobust.exceptions import ConfigError
 from nnrobust.experiment import build_nominal, build_plant
 from nnrobust.model import PinocchioModel
 from nnrobust.model.perturbation import is_physical, perturb_inertias
@@ -112,3 +113,43 @@ def test_stiff_viscous_friction_is_refused_before_the_run():
     with pytest.raises(ConfigError, match=r"simulation.substeps: .* set substeps >= 2"):
         build(config)
     build(config.replace(simulation={"substeps": 2}))
+
+
+def test_friction_scale_scales_the_plant_friction_only():
+    """plant.friction_scale multiplies the true plant's viscous and Coulomb friction; the
+    controller's nominal friction stays as configured."""
+    from nnrobust.config import apply_overrides
+    from nnrobust.experiment import build as build_experiment
+    from nnrobust.presets import load_preset
+
+    base = load_preset("paper-ellipse")
+    one = build_experiment(base)
+    scaled = build_experiment(apply_overrides(base, {"plant.friction_scale": 2.5}))
+    np.testing.assert_allclose(scaled.plant.friction.viscous, 2.5 * one.plant.friction.viscous, rtol=1e-15)
+    np.testing.assert_allclose(scaled.plant.friction.coulomb, 2.5 * one.plant.friction.coulomb, rtol=1e-15)
+    assert one.plant.friction.viscous.any()
+    np.testing.assert_array_equal(scaled.controller.nominal_friction.viscous,
+                                  one.controller.nominal_friction.viscous)
+
+
+def test_relative_error_of_the_closed_form_model():
+    """nominal.relative_error on the closed form: each of beta-hat, p-hat is off by its own seeded
+    factor within [1 - r, 1 + r]; the same seed gives the same model, another seed another one."""
+    from nnrobust.config import apply_overrides
+    from nnrobust.experiment import build as build_experiment
+    from nnrobust.presets import load_preset
+
+    base = load_preset("paper-ellipse")
+    exact = build_experiment(base).nominal.params
+
+    def params(seed, r=0.3):
+        setup = build_experiment(apply_overrides(base, {"nominal.relative_error": r, "nominal.seed": seed}))
+        return np.r_[setup.nominal.params.beta, setup.nominal.params.p]
+
+    reference = np.r_[exact.beta, exact.p]
+    ratio = params(4) / reference
+    assert np.all(np.abs(ratio - 1) <= 0.3) and np.all(ratio != 1)
+    np.testing.assert_array_equal(params(4), params(4))
+    assert not np.allclose(params(4), params(5))
+    with pytest.raises(ConfigError, match="nominal.kind.*mass_scale"):
+        apply_overrides(base, {"nominal.mass_scale": 1.1})

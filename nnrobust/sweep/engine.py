@@ -249,8 +249,11 @@ def run_sweep(spec: SweepSpec, folder: str | Path, workers: int | None = None, s
                    for chunk in chunks]
         if progress:
             progress(skipped, total)
-        for future in as_completed(futures):
+        pending = as_completed(futures)
+        del futures  # as_completed holds them until they finish; each is released once written
+        for future in pending:
             rows = future.result()
+            future.release()  # the worker may drop the chunk's rows
             _write_part(folder, rows, table_schema)
             written += len(rows)
             parts += 1

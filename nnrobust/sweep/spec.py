@@ -181,11 +181,24 @@ def parse_sweep(data: dict, where: str = "sweep") -> SweepSpec:
     return spec
 
 
+SWEEP_DIR = Path(__file__).resolve().parent.parent / "sweep_files"
+"""The shipped studies (``nnrobust sweep paper-robustness``)."""
+
+
+def shipped_sweeps() -> list[str]:
+    """Names of the shipped studies."""
+    return sorted(p.stem for p in SWEEP_DIR.glob("*.toml"))
+
+
 def load_sweep(path: str | Path) -> SweepSpec:
-    """Read and validate a sweep file; a relative ``base`` file resolves from the file's folder."""
+    """Read and validate a sweep file, or a shipped study by name; a relative ``base`` file
+    resolves from the file's folder.
+    """
     path = Path(path)
+    if not path.is_file() and str(path) in shipped_sweeps():
+        path = SWEEP_DIR / f"{path}.toml"
     if not path.is_file():
-        raise ConfigError(str(path), "not a file")
+        raise ConfigError(str(path), f"not a file nor a shipped study ({', '.join(shipped_sweeps())})")
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
