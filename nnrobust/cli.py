@@ -5,10 +5,13 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import warnings
 from pathlib import Path
 
 from .config import CONTROLLER_KINDS as CONTROLLERS
-from .exceptions import NNRobustError
+from .exceptions import NNRobustError, one_line
+from .run_folder import ExtrasInterrupted, check_out_folder, load_run, locked, write_run
+from .signals import signals_as_interrupt
 from .sweep.spec import shipped_sweeps
 
 TABLE_COLUMNS = (
@@ -94,10 +97,6 @@ def _live_view(args, config, setup):
 
 def cmd_run(args) -> int:
     """Run a preset or an experiment file and write its run folder."""
-    from .experiment import build, run_experiment
-    from .progress import ProgressBar
-    from .results import write_run
-
     config = _load_target(args.target)
     changes: dict = {}
     if args.controller:
@@ -114,9 +113,16 @@ def cmd_run(args) -> int:
         from .config import apply_overrides, parse_override
 
         config = apply_overrides(config, dict(parse_override(item) for item in args.set))
-    out = Path(args.out or f"out/{config.name}-{config.controller.kind}")
-    if out.exists() and not args.overwrite:
-        raise NNRobustError(f"{out} exists; pass --overwrite to replace it")
+    out = check_out_folder(args.out or f"out/{config.name}-{config.controller.kind}", args.overwrite)
+    with locked(out):
+        return _run_into(args, config, out)
+
+
+def _run_into(args, config, out: Path) -> int:
+    """Simulate and write the run folder (``out`` is checked and locked)."""
+    from .experiment import build, run_experiment
+    from .progress import ProgressBar
+
     if not args.quiet:
         print(f"running {config.name} with controller {config.controller.kind!r} "
               f"for {config.simulation.duration:g} s ...", file=sys.stderr)
@@ -136,15 +142,19 @@ def cmd_run(args) -> int:
         result = run_experiment(config, progress, setup)
         if bar is not None:
             bar.finish(float(result.t[-1]) if result.t.size else 0.0)
-        write_run(out, result, overwrite=args.overwrite, plots=not args.no_plots,
-                  animation=not args.no_animation)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            written = write_run(out, result, overwrite=args.overwrite, plots=not args.no_plots,
+                                animation=not args.no_animation)
+        for warning in caught:
+            print(f"warning: {one_line(str(warning.message))}", file=sys.stderr)
         metrics = result.metrics()
         for warning in metrics["warnings"]:
             print(f"warning: {warning}", file=sys.stderr)
         if not args.quiet:
-            print(format_table([(str(out), metrics)]))
+            print(format_table([(str(written), metrics)]))
             print(f"simulated {metrics['simulated_seconds']:.2f} s in {metrics['wall_seconds']:.2f} s "
-                  f"wall; results in {out}/", file=sys.stderr)
+                  f"wall; results in {written}/", file=sys.stderr)
         if viewer is not None:
             from .viewer import draw_run
 
@@ -154,7 +164,7 @@ def cmd_run(args) -> int:
         if viewer is not None:
             viewer.close()
     if result.status != "completed":
-        print(f"run {result.status}: {result.message}", file=sys.stderr)
+        print(f"run {result.status}: {one_line(result.message)}", file=sys.stderr)
         return 1
     return 0
 
@@ -174,13 +184,12 @@ def _serve_until_interrupted(viewer, seconds: float | None = None) -> None:
 
 def cmd_view(args) -> int:
     """Replay a run folder in the meshcat viewer."""
-    from .results import Result
     from .viewer import draw_run, start_viewer
 
     folder = Path(args.run)
-    if not (folder / "result.npz").is_file() or not (folder / "config.toml").is_file():
-        raise NNRobustError(f"{folder}: not a run folder (needs result.npz and config.toml)")
-    result = Result.load(folder)
+    if not (folder / "config.toml").is_file():
+        raise NNRobustError(f"{folder}: not a run folder (config.toml is missing)")
+    result = load_run(folder)
     config = result.experiment()
     with start_viewer(args.host, args.port) as viewer:
         draw_run(viewer.vis, result, config)
@@ -295,18 +304,28 @@ def cmd_robots(args) -> int:
     return 1 if failed else 0
 
 
+def run_labels(folders: list[str]) -> list[str]:
+    """A label per run folder: its name, or as many trailing path parts as make it unique
+    (x/run and y/run are x/run and y/run, never both "run").
+    """
+    if len({Path(f).resolve() for f in folders}) != len(folders):
+        raise NNRobustError("the same run folder is given twice")
+    parts = [Path(f).resolve().parts for f in folders]
+    depth = 1
+    while True:
+        labels = ["/".join(p[-depth:]) for p in parts]
+        if len(set(labels)) == len(labels):
+            return labels
+        depth += 1
+
+
 def cmd_compare(args) -> int:
     """Table of metrics and overlaid plots for several run folders."""
-    from .results import Result
-
     rows, results = [], {}
-    for folder in args.runs:
-        path = Path(folder)
-        metrics_file = path / "metrics.json"
-        if not metrics_file.is_file():
-            raise NNRobustError(f"{path}: not a run folder (no metrics.json)")
-        rows.append((path.name, json.loads(metrics_file.read_text())))
-        results[path.name] = Result.load(path)
+    for label, folder in zip(run_labels(args.runs), args.runs):
+        result = load_run(folder)  # checks that metrics.json holds a table
+        rows.append((label, json.loads((Path(folder) / "metrics.json").read_text())))
+        results[label] = result
     print(format_table(rows))
     if args.out:
         from .plots import plot_comparison
@@ -416,10 +435,14 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the exit code (0 success, 1 failed run, 2 bad input)."""
     args = build_parser().parse_args(argv)
     try:
-        return args.func(args)
+        with signals_as_interrupt():
+            return args.func(args)
     except NNRobustError as err:
-        print(f"nnrobust: error: {err}", file=sys.stderr)
+        print(f"nnrobust: error: {one_line(str(err))}", file=sys.stderr)
         return 2
+    except ExtrasInterrupted as err:
+        print(f"nnrobust: {err}", file=sys.stderr)
+        return 130
     except KeyboardInterrupt:
         print("nnrobust: interrupted", file=sys.stderr)
         return 130

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import math
+import re
 import tomllib
 import types
 import typing
@@ -300,6 +301,8 @@ class SimulationConfig:
         q_seed: inverse-kinematics seed for q(0) [rad] (default: mid-range of the joint limits).
         initial_task_offset: x(0) - x_d(0), m entries [m] (pose: position [m], then a rotation
             vector [rad] applied in world axes); default zero: start on the path.
+        memory_limit: the most memory the run's recorded arrays may take [GB]; a run estimated
+            above it is refused before it starts (docs/bad-inputs.md).
 
     """
 
@@ -311,6 +314,7 @@ class SimulationConfig:
     backend: str = "auto"
     q_seed: list[float] | None = None
     initial_task_offset: list[float] | None = None
+    memory_limit: float = 2.0
 
 
 @dataclass
@@ -388,12 +392,18 @@ def _check_type(path: str, value, annotation):
     if annotation is float:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ConfigError(path, f"expected a number, got {type(value).__name__} {value!r}")
+        if isinstance(value, int) and abs(value) >= 2**63:
+            raise ConfigError(path, f"expected a finite number of sensible size, got an integer of "
+                              f"{len(str(abs(value)))} digits")
         if not math.isfinite(value):
             raise ConfigError(path, f"expected a finite number, got {value!r}")
         return float(value)
     if annotation is int:
         if isinstance(value, bool) or not isinstance(value, int):
             raise ConfigError(path, f"expected an integer, got {type(value).__name__} {value!r}")
+        if abs(value) >= 2**63:
+            raise ConfigError(path, f"expected an integer in (-2^63, 2^63), got one of "
+                              f"{len(str(abs(value)))} digits")
         return value
     if annotation is bool:
         if not isinstance(value, bool):
@@ -431,19 +441,44 @@ def from_dict(data: dict) -> ExperimentConfig:
     return config
 
 
+MAX_TOML_BYTES = 1_000_000
+"""Largest experiment or sweep file read (an experiment file is a few kB)."""
+
+
+def read_text_file(path: str | Path, limit: int = MAX_TOML_BYTES, what: str = "file") -> str:
+    """The text of a regular file of at most ``limit`` bytes; a device, FIFO, folder, larger or
+    non-UTF-8 file is one clear error (never an endless read or a hang).
+    """
+    path = Path(path)
+    try:
+        if path.exists() and not path.is_file():
+            raise ConfigError(str(path), f"not a regular file; give a TOML {what}")
+        with open(path, "rb") as fh:
+            data = fh.read(limit + 1)
+    except OSError as err:
+        raise ConfigError(str(path), f"cannot read the file: {err.strerror or err}") from err
+    if len(data) > limit:
+        raise ConfigError(str(path), f"larger than the {limit // 1000} kB a {what} may have")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError as err:
+        raise ConfigError(str(path), "not a UTF-8 text file") from err
+
+
+def parse_toml(text: str, where: str) -> dict:
+    """tomllib.loads with one-line errors (also for tables nested too deep to parse)."""
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise ConfigError(where, f"invalid TOML: {err}") from err
+    except RecursionError as err:
+        raise ConfigError(where, "invalid TOML: nested too deeply") from err
+
+
 def load_config(path: str | Path) -> ExperimentConfig:
     """Read and validate a TOML experiment file."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as err:
-        raise ConfigError(str(path), f"cannot read the file: {err.strerror or err}") from err
-    except UnicodeDecodeError as err:
-        raise ConfigError(str(path), "not a UTF-8 text file") from err
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
-        raise ConfigError(str(path), f"invalid TOML: {err}") from err
+    data = parse_toml(read_text_file(path, what="experiment file"), str(path))
     try:
         return from_dict(data)
     except ConfigError as err:
@@ -461,9 +496,23 @@ def _positive(path: str, values) -> None:
         raise ConfigError(path, f"must be positive, got {values}")
 
 
+MAX_SUBSTEPS = 10_000
+MAX_STEPS = 1e9
+MAX_CENTERS = 1000
+"""Bounds that no sensible experiment reaches; the memory estimate (experiment.check_memory)
+refuses most oversized runs long before them."""
+
+NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9._+-]{0,99}")
+"""An experiment's name: it names the default run folder, out/<name>-<controller>."""
+
+
 def validate(config: ExperimentConfig) -> None:
     """Check values that a type alone does not constrain (robot-independent checks)."""
     c, nn, sim = config.controller, config.nn, config.simulation
+    if not NAME_PATTERN.fullmatch(config.name) or ".." in config.name:
+        raise ConfigError("name", f"{config.name!r} is not a valid name: 1 to 100 letters, digits, '.', '_', "
+                          "'+' or '-', starting with a letter or digit, without '..' (it names the run "
+                          "folder out/<name>-<controller>)")
     choices = {
         "robot.task": (config.robot.task, tuple(TASK_KINDS)),
         "nominal.kind": (config.nominal.kind, ("closed-form", "urdf")),
@@ -608,6 +657,16 @@ def validate(config: ExperimentConfig) -> None:
         sim.substeps = int(round(ratio))
     if sim.duration < sim.control_period:
         raise ConfigError("simulation.duration", "is shorter than one control period")
+    if sim.substeps > MAX_SUBSTEPS:
+        raise ConfigError("simulation.substeps", f"{sim.substeps} integration steps per control period; at "
+                          f"most {MAX_SUBSTEPS} (a shorter control_period does the same job)")
+    steps = sim.duration / sim.control_period
+    if steps > MAX_STEPS:
+        raise ConfigError("simulation.duration", f"{sim.duration:g} s at a control period of "
+                          f"{sim.control_period:g} s is {steps:.3g} steps; at most {MAX_STEPS:.0e}")
+    if nn.centers > MAX_CENTERS:
+        raise ConfigError("nn.centers", f"{nn.centers} centres per input; at most {MAX_CENTERS}")
+    _positive("simulation.memory_limit", sim.memory_limit)
     if config.plant.disturbance == "sinusoid" and (
         config.plant.disturbance_amplitude is None or config.plant.disturbance_omega is None
     ):
@@ -620,6 +679,22 @@ def validate(config: ExperimentConfig) -> None:
 # ---- TOML output -------------------------------------------------------------------------
 
 
+_TOML_ESCAPES = {"\\": "\\\\", '"': '\\"', "\n": "\\n", "\t": "\\t", "\r": "\\r"}
+
+
+def _toml_string(value: str) -> str:
+    """A TOML basic string: quotes, backslashes and every control character escaped."""
+    out = []
+    for c in value:
+        if c in _TOML_ESCAPES:
+            out.append(_TOML_ESCAPES[c])
+        elif ord(c) < 0x20 or ord(c) == 0x7F:
+            out.append(f"\\u{ord(c):04x}")
+        else:
+            out.append(c)
+    return '"' + "".join(out) + '"'
+
+
 def _toml_value(value) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
@@ -628,8 +703,7 @@ def _toml_value(value) -> str:
     if isinstance(value, float):
         return repr(value)
     if isinstance(value, str):
-        escaped = value.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n")
-        return f'"{escaped}"'
+        return _toml_string(value)
     if isinstance(value, (list, tuple)):
         return "[" + ", ".join(_toml_value(v) for v in value) + "]"
     raise TypeError(f"cannot write {type(value).__name__} to TOML")
@@ -699,5 +773,7 @@ def parse_override(text: str) -> tuple[str, object]:
         value = tomllib.loads(f"v = {raw.strip()}")["v"]
     except tomllib.TOMLDecodeError:
         value = raw.strip()
+    except RecursionError as err:
+        raise ConfigError(f"--set {key}", "the value is nested too deeply") from err
     check_dotted_key(key)
     return key, value

@@ -2,9 +2,26 @@
 
 from __future__ import annotations
 
+MAX_MESSAGE = 1000
+"""Characters of a message at most: longer ones keep their start and end, the middle elided."""
+
+
+def one_line(text: str, limit: int = MAX_MESSAGE) -> str:
+    r"""A message fit for one terminal line: control characters escaped (a newline shows as \n),
+    at most ``limit`` characters with the middle elided.
+    """
+    text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+    if len(text) > limit:
+        head, tail = limit - limit // 5 - 40, limit // 5
+        text = f"{text[:head]} ... [{len(text) - head - tail} characters elided] ... {text[-tail:]}"
+    return text
+
 
 class NNRobustError(Exception):
-    """Root of every error nnrobust raises on purpose."""
+    """Root of every error nnrobust raises on purpose; its text is one line of bounded length."""
+
+    def __str__(self) -> str:
+        return one_line(super().__str__())
 
 
 class RobotLoadError(NNRobustError):

@@ -423,6 +423,7 @@ def build(config: ExperimentConfig) -> Setup:
                           f"the {rc.task!r} task has m = {robot.m}")
     if robot.m >= robot.nq:
         raise ConfigError("robot.task", f"m = {robot.m} >= n = {robot.nq}: the arm is not redundant")
+    check_memory(config, robot.nq, robot.m)
     trajectory = build_trajectory(config, robot)
     plant = build_plant(config, robot)
     nominal = build_nominal(config, robot)
@@ -432,6 +433,31 @@ def build(config: ExperimentConfig) -> Setup:
     check_workspace(config, robot, trajectory, q0)
     check_stiffness(config, plant, q0)
     return Setup(config, robot, plant, nominal, trajectory, criterion, controller, q0, v0)
+
+
+def memory_estimate(config: ExperimentConfig, n: int, m: int) -> float:
+    """Bytes the run's recorded arrays take, times 3 for the copies made while the result is
+    assembled and written: per control step q, q', tau, tau_cmd (4n), the chain (3(n + 1)),
+    x, x_d, e (3 x 6 at most), the compensator state (1 + inputs x centres + 1), sensor draws
+    (2n) and a few signals, in float64.
+    """
+    sim, nn = config.simulation, config.nn
+    steps = sim.duration / sim.control_period
+    inputs = 2 * n if nn.basis_input == "joint" else 2 * m
+    per_step = 4 * n + 3 * (n + 1) + 18 + (2 + inputs * nn.centers) + 2 * n + 8
+    return 3 * 8 * steps * per_step
+
+
+def check_memory(config: ExperimentConfig, n: int, m: int) -> None:
+    """Refuse, before anything runs, a run whose arrays would not fit simulation.memory_limit."""
+    need = memory_estimate(config, n, m) / 1e9
+    limit = config.simulation.memory_limit
+    if need > limit:
+        sim = config.simulation
+        raise ConfigError("simulation.memory_limit",
+                          f"this run needs about {need:.3g} GB ({sim.duration:g} s at "
+                          f"{sim.control_period:g} s per step, {n} joints) and the limit is {limit:g} GB; "
+                          "shorten simulation.duration, lengthen control_period or raise memory_limit")
 
 
 def choose_backend(setup: Setup) -> str:

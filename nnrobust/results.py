@@ -4,15 +4,12 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from . import verdicts
-from .exceptions import RunFolderExists
 from .model.tasks import display_coordinates
 from .subtasks.manipulability import det
 
@@ -140,11 +137,9 @@ class Result:
 
     def experiment(self):
         """The :class:`~nnrobust.config.ExperimentConfig` that produced the run (from ``config``)."""
-        import tomllib
+        from .config import from_dict, parse_toml
 
-        from .config import from_dict
-
-        return from_dict(tomllib.loads(self.config))
+        return from_dict(parse_toml(self.config, "config.toml"))
 
     def position_error(self) -> np.ndarray:
         """|position part of e| per sample [m] (the first two or three components)."""
@@ -279,67 +274,13 @@ def write_json_atomic(path: str | Path, data) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.partial-{os.getpid()}")
-    tmp.write_text(json.dumps(data, indent=2, default=_json_default) + "\n")
+    tmp.write_text(json.dumps(data, indent=2, default=json_default) + "\n")
     os.replace(tmp, path)
     return path
 
 
-def _json_default(value):
+def json_default(value):
+    """JSON for numpy scalars (``json.dumps(..., default=json_default)``)."""
     if isinstance(value, (np.floating, np.integer)):
         return value.item()
     raise TypeError(f"cannot write {type(value).__name__} to JSON")
-
-
-def _write_animation(path: Path, result: Result) -> None:
-    """animation.html, or a warning when the robot's visuals cannot be drawn."""
-    from .exceptions import NNRobustError
-    from .viewer.scene import animation_html
-
-    try:
-        html = animation_html(result, result.experiment())
-    except NNRobustError as err:
-        warnings.warn(f"no animation.html: {err}", stacklevel=3)
-        return
-    path.write_text(html, encoding="utf-8")
-
-
-def write_run(folder: str | Path, result: Result, overwrite: bool = False, plots: bool = True,
-              animation: bool = True) -> Path:
-    """Write config.toml, result.npz, metrics.json, plots/ and animation.html atomically.
-
-    Everything is written to a hidden sibling folder first and renamed into place at the end, so
-    an interrupted or failed write never leaves a half-written folder under the final name, and
-    an existing run is replaced only when ``overwrite`` is true (and only once the new one is
-    complete).
-    """
-    folder = Path(folder)
-    if folder.exists() and not overwrite:
-        raise RunFolderExists(f"{folder} exists; pass --overwrite (overwrite=True) to replace it")
-    folder.parent.mkdir(parents=True, exist_ok=True)
-    tmp = folder.parent / f".{folder.name}.partial-{os.getpid()}"
-    if tmp.exists():
-        shutil.rmtree(tmp)
-    try:
-        tmp.mkdir()
-        (tmp / "config.toml").write_text(result.config)
-        result.save_npz(tmp / "result.npz")
-        (tmp / "metrics.json").write_text(
-            json.dumps(result.metrics(), indent=2, default=_json_default) + "\n"
-        )
-        if plots and result.t.size > 1:
-            from .plots import plot_run  # matplotlib only when plotting
-
-            plot_run(result, tmp / "plots")
-        if animation and result.config and result.chain is not None and result.t.size > 1:
-            _write_animation(tmp / "animation.html", result)
-        if folder.exists():
-            old = folder.parent / f".{folder.name}.old-{os.getpid()}"
-            os.replace(folder, old)
-            os.replace(tmp, folder)
-            shutil.rmtree(old)
-        else:
-            os.replace(tmp, folder)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-    return folder

@@ -8,7 +8,8 @@ from nnrobust.config import ExperimentConfig, from_dict, load_config
 from nnrobust.exceptions import ConfigError, RunFolderExists
 from nnrobust.experiment import build, run_experiment
 from nnrobust.presets import load_preset, preset_names
-from nnrobust.results import Result, write_run
+from nnrobust.results import Result
+from nnrobust.run_folder import RunFolderError, write_run
 
 
 @pytest.fixture(scope="module")
@@ -64,7 +65,9 @@ def test_run_folder_contents_and_reload(tmp_path):
     result = run_experiment(_short(load_preset("paper-ellipse")))
     folder = write_run(tmp_path / "run", result)
     names = {p.name for p in folder.iterdir()}
-    assert names == {"config.toml", "result.npz", "metrics.json", "plots", "animation.html"}
+    assert names == {"config.toml", "result.npz", "metrics.json", "plots", "animation.html", ".nnrobust-run"}
+    marker = json.loads((folder / ".nnrobust-run").read_text())
+    assert (marker["status"], marker["extras"]) == ("completed", "complete")
     with np.load(folder / "result.npz") as data:
         for key in ("t", "q", "dq", "tau", "x", "x_d"):
             assert data[key].shape[0] == 300
@@ -91,7 +94,7 @@ def test_write_is_atomic_and_never_clobbers(tmp_path, monkeypatch):
         raise OSError("disk full")
 
     monkeypatch.setattr(Result, "save_npz", broken)
-    with pytest.raises(OSError):
+    with pytest.raises(RunFolderError, match="disk full.*the previous run there is unchanged"):
         write_run(folder, result, overwrite=True, plots=False)
     assert (folder / "metrics.json").read_text() == before
     assert [p.name for p in tmp_path.iterdir()] == ["run"]  # no partial folder left behind

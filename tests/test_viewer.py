@@ -13,7 +13,8 @@ import pytest
 from nnrobust.cli import main
 from nnrobust.experiment import run_experiment
 from nnrobust.presets import load_preset
-from nnrobust.results import Result, write_run
+from nnrobust.results import Result
+from nnrobust.run_folder import write_run
 
 CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
                   "--disable-background-networking", "--disable-component-update", "--disable-sync",

@@ -12,7 +12,6 @@ import logging
 import math
 import os
 import shutil
-import signal
 import sys
 import time
 import uuid
@@ -20,6 +19,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from ..exceptions import NNRobustError
+from ..signals import signals_as_interrupt
 from .spec import SweepSpec, base_config, draw, experiment
 
 RESULTS = "results"
@@ -175,25 +175,6 @@ def _client(workers: int | None, scheduler: str | None):
         cluster.close()
 
 
-@contextmanager
-def _sigterm_as_interrupt():
-    """SIGTERM and SIGHUP stop a sweep like Ctrl-C: written parts stay, the cluster is closed."""
-    def handler(signum, frame):
-        raise KeyboardInterrupt
-
-    previous = {}
-    for sig in (signal.SIGTERM, signal.SIGHUP):
-        try:
-            previous[sig] = signal.signal(sig, handler)
-        except (ValueError, OSError):  # not the main thread
-            pass
-    try:
-        yield
-    finally:
-        for sig, old in previous.items():
-            signal.signal(sig, old)
-
-
 def plan(spec: SweepSpec) -> tuple[str, list[tuple[int, str]]]:
     """The base experiment's TOML and every (sample, controller) job, each experiment validated
     first: a value the schema refuses is a one-line error naming the key and the sample, before
@@ -237,7 +218,7 @@ def run_sweep(spec: SweepSpec, folder: str | Path, workers: int | None = None, s
         return {"computed": 0, "skipped": skipped, "parts": 0}
     written = parts = 0
     table_schema = schema(spec)
-    with _sigterm_as_interrupt(), _client(workers, scheduler) as client:
+    with signals_as_interrupt(), _client(workers, scheduler) as client:
         from distributed import as_completed
 
         n_workers = max(len(client.scheduler_info().get("workers", {})), 1)

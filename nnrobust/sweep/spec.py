@@ -11,13 +11,20 @@ from __future__ import annotations
 import hashlib
 import itertools
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from ..config import CONTROLLER_KINDS, ExperimentConfig, apply_overrides, check_dotted_key, dump_toml
+from ..config import (
+    CONTROLLER_KINDS,
+    ExperimentConfig,
+    apply_overrides,
+    check_dotted_key,
+    dump_toml,
+    parse_toml,
+    read_text_file,
+)
 from ..exceptions import ConfigError
 
 DISTRIBUTIONS = ("uniform", "normal", "loguniform", "choice")
@@ -195,14 +202,11 @@ def load_sweep(path: str | Path) -> SweepSpec:
     resolves from the file's folder.
     """
     path = Path(path)
-    if not path.is_file() and str(path) in shipped_sweeps():
+    if not path.exists() and str(path) in shipped_sweeps():
         path = SWEEP_DIR / f"{path}.toml"
-    if not path.is_file():
+    if not path.exists():
         raise ConfigError(str(path), f"not a file nor a shipped study ({', '.join(shipped_sweeps())})")
-    try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
-        raise ConfigError(str(path), f"invalid TOML: {err}") from err
+    data = parse_toml(read_text_file(path, what="sweep file"), str(path))
     spec = parse_sweep(data, str(path))
     base = Path(spec.base)
     if base.suffix == ".toml" and not base.is_absolute():

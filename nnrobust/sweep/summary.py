@@ -148,7 +148,7 @@ def keep_worst(spec: SweepSpec, frame, folder: str | Path, count: int) -> list[P
     samples of each controller, in DIR/worst/CONTROLLER-sample-ID, rerun on this machine.
     """
     from ..experiment import run_experiment
-    from ..results import write_run
+    from ..run_folder import write_run
     from .spec import base_config, experiment
 
     base = base_config(spec)

@@ -1,0 +1,299 @@
+"""Run folders: claimed before a run, written so that a good result is never lost, read back
+defensively (docs/bad-inputs.md, "Run folders").
+
+The rules:
+
+- A run folder holds a marker file, ``.nnrobust-run``; ``--overwrite`` replaces only folders
+  that have it (or that hold nothing but the files a run writes), never a folder of the user's.
+- The output folder is checked before the simulation starts (not a file, not a symbolic link,
+  not the working folder or one of its ancestors, a parent we can write) and locked for the
+  whole run, so two runs into the same folder cannot both write it.
+- The arrays, the metrics and the configuration are written first, to a hidden sibling folder
+  that is renamed into place; plots and the animation come after, each renamed into place when
+  complete. An interrupted or failed plot leaves a complete run whose marker says so.
+- A run that did not complete never replaces a completed one: it goes to ``<folder>.<status>``
+  instead, and the message says so.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import fcntl
+import json
+import os
+import shutil
+import tempfile
+import warnings
+import zipfile
+from pathlib import Path
+
+from .exceptions import NNRobustError, RunFolderExists
+from .signals import signals_deferred
+
+MARKER = ".nnrobust-run"
+"""The file that makes a folder a run folder (JSON: format, status, extras)."""
+
+RUN_FILES = frozenset({MARKER, "config.toml", "result.npz", "metrics.json", "plots", "animation.html"})
+"""Everything a run writes: a folder holding only these is a run folder even without the marker
+(run folders written before the marker existed)."""
+
+class RunFolderError(NNRobustError):
+    """The output folder cannot take a run: a file, a link, a folder of the user's, locked, or
+    not writable.
+    """
+
+
+def is_run_folder(folder: Path) -> bool:
+    """Whether ``folder`` is a run folder nnrobust wrote (marker, or only a run's files)."""
+    if not folder.is_dir() or folder.is_symlink():
+        return False
+    if (folder / MARKER).is_file():
+        return True
+    names = {p.name for p in folder.iterdir()}
+    return "result.npz" in names and names <= RUN_FILES
+
+
+def _status_of(folder: Path) -> str:
+    """The status recorded in a run folder ("" when unreadable)."""
+    for name, key in ((MARKER, "status"), ("metrics.json", "status")):
+        try:
+            return str(json.loads((folder / name).read_text())[key])
+        except (OSError, ValueError, KeyError, TypeError):
+            continue
+    return ""
+
+
+def check_out_folder(folder: str | Path, overwrite: bool) -> Path:
+    """Check, before anything is simulated, that ``folder`` can take a run; returns it.
+
+    Raises RunFolderExists (exists, no ``overwrite``) or RunFolderError (a file, a symbolic
+    link, the working folder or an ancestor of it, a non-empty folder that is not a run folder,
+    a parent that cannot be created or written).
+    """
+    folder = Path(folder)
+    if folder.name in ("", ".", ".."):
+        raise RunFolderError(f"{folder}: name the run folder itself (e.g. out/my-run), not '.' or '..'")
+    if folder.is_symlink():
+        raise RunFolderError(f"{folder} is a symbolic link; give the folder it points to, or another --out")
+    resolved = folder.resolve()
+    cwd = Path.cwd().resolve()
+    if resolved == cwd or resolved in cwd.parents or resolved == Path(resolved.anchor):
+        raise RunFolderError(f"{folder} is the working folder or one of its ancestors; choose a folder "
+                             "below it, e.g. out/my-run")
+    if folder.exists() and not folder.is_dir():
+        raise RunFolderError(f"{folder} exists and is not a folder; choose another --out")
+    if folder.is_dir() and any(folder.iterdir()):
+        if not overwrite:
+            raise RunFolderExists(f"{folder} exists; pass --overwrite (overwrite=True) to replace it")
+        if not is_run_folder(folder):
+            raise RunFolderError(f"{folder} is not a run folder (no {MARKER}); --overwrite replaces only "
+                                 "run folders nnrobust wrote. Choose another --out")
+    parent = folder.parent
+    try:
+        parent.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise RunFolderError(f"cannot create {parent}: {err.strerror or err}") from err
+    if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
+        raise RunFolderError(f"cannot write in {parent} (permission denied); choose another --out")
+    return folder
+
+
+@contextlib.contextmanager
+def locked(folder: str | Path):
+    """Hold an exclusive lock on ``folder`` (a hidden ``.<name>.lock`` beside it) for the block:
+    a second run into the same folder fails at once, naming the process that holds it.
+    """
+    folder = Path(folder)
+    lock = folder.parent / f".{folder.name}.lock"
+    try:
+        fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+    except OSError as err:
+        raise RunFolderError(f"cannot create {lock}: {err.strerror or err}") from err
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as err:
+            if err.errno not in (errno.EAGAIN, errno.EACCES):
+                raise
+            holder = os.pread(fd, 32, 0).decode(errors="replace").strip() or "?"
+            raise RunFolderError(f"another nnrobust run (pid {holder}) is writing {folder}; wait for it to "
+                                 "finish or choose another --out") from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, str(os.getpid()).encode(), 0)
+        try:
+            yield folder
+        finally:
+            with contextlib.suppress(OSError):
+                os.unlink(lock)
+    finally:
+        os.close(fd)
+
+
+def _write_marker(folder: Path, status: str, extras: str) -> None:
+    from . import __version__
+
+    tmp = folder / f"{MARKER}.partial"
+    record = {"format": 1, "nnrobust": __version__, "status": status, "extras": extras}
+    tmp.write_text(json.dumps(record) + "\n")
+    os.replace(tmp, folder / MARKER)
+
+
+def _write_core(tmp: Path, result, metrics: dict) -> None:
+    from .results import json_default
+
+    tmp.mkdir()
+    (tmp / "config.toml").write_text(result.config, encoding="utf-8")
+    result.save_npz(tmp / "result.npz")
+    (tmp / "metrics.json").write_text(json.dumps(metrics, indent=2, default=json_default) + "\n")
+    _write_marker(tmp, result.status, "pending")
+
+
+def _rescue_arrays(result, folder: Path) -> str:
+    """After a failed write: the arrays in the temporary folder, if they fit anywhere."""
+    try:
+        fd, path = tempfile.mkstemp(prefix=f"nnrobust-{folder.name[:40]}-", suffix=".npz")
+        os.close(fd)
+        result.save_npz(path)
+        return f"the new arrays are in {path}"
+    except OSError:
+        return "the new arrays could not be saved anywhere"
+
+
+def _place(tmp: Path, folder: Path) -> None:
+    """Move the written folder into place; an existing run folder is swapped out and deleted only
+    once the new one is there (signals held back between the two renames).
+    """
+    if folder.is_dir() and any(folder.iterdir()):
+        old = folder.parent / f".{folder.name}.old-{os.getpid()}"
+        with signals_deferred():  # never between the two renames
+            os.replace(folder, old)
+            try:
+                os.replace(tmp, folder)
+            except OSError:
+                os.replace(old, folder)
+                raise
+        shutil.rmtree(old, ignore_errors=True)
+    else:
+        os.replace(tmp, folder)  # onto nothing, or an empty folder
+
+
+def _write_extras(folder: Path, result, plots: bool, animation: bool) -> str:
+    """Plots and animation, each written beside its final name and renamed into place; returns
+    what the marker records: complete, interrupted or failed.
+    """
+    try:
+        if plots and result.t.size > 1:
+            from .plots import plot_run  # matplotlib only when plotting
+
+            tmp = folder / ".plots.partial"
+            shutil.rmtree(tmp, ignore_errors=True)
+            plot_run(result, tmp)
+            shutil.rmtree(folder / "plots", ignore_errors=True)
+            os.replace(tmp, folder / "plots")
+        if animation and result.config and result.chain is not None and result.t.size > 1:
+            html = _animation_html(result)
+            if html is not None:
+                tmp = folder / ".animation.html.partial"
+                tmp.write_text(html, encoding="utf-8")
+                os.replace(tmp, folder / "animation.html")
+    except KeyboardInterrupt:
+        _clean_partials(folder)
+        _write_marker(folder, result.status, "interrupted")
+        raise
+    except OSError as err:
+        _clean_partials(folder)
+        _write_marker(folder, result.status, "failed")
+        warnings.warn(f"{folder}: plots or animation not written ({err.strerror or err}); the arrays "
+                      "and metrics are saved", stacklevel=3)
+        return "failed"
+    return "complete"
+
+
+def _clean_partials(folder: Path) -> None:
+    for name in (".plots.partial", ".animation.html.partial"):
+        path = folder / name
+        if path.is_dir():
+            shutil.rmtree(path, ignore_errors=True)
+        elif path.exists():
+            path.unlink()
+
+
+def _animation_html(result) -> str | None:
+    """animation.html's text, or a warning when the robot's visuals cannot be drawn."""
+    from .viewer.scene import animation_html
+
+    try:
+        return animation_html(result, result.experiment())
+    except NNRobustError as err:
+        warnings.warn(f"no animation.html: {err}", stacklevel=4)
+        return None
+
+
+class ExtrasInterrupted(KeyboardInterrupt):
+    """Ctrl-C (or SIGTERM, SIGHUP) while plots or the animation were written: the run folder is
+    complete without them.
+    """
+
+    def __init__(self, folder: Path):
+        super().__init__(f"interrupted while writing plots; the arrays and metrics are saved in {folder}/")
+        self.folder = folder
+
+
+def write_run(folder: str | Path, result, overwrite: bool = False, plots: bool = True,
+              animation: bool = True) -> Path:
+    """Write a run folder: config.toml, result.npz, metrics.json and the marker first (atomically),
+    then plots/ and animation.html. Returns the folder written.
+
+    An existing run folder is replaced only when ``overwrite`` is true, only once the new arrays
+    and metrics are complete, and never by a run that did not complete when the old one did: that
+    run goes to ``<folder>.<status>`` (returned) instead. Ctrl-C during the plots raises
+    :class:`ExtrasInterrupted` after the folder is in place.
+    """
+    folder = check_out_folder(folder, overwrite)
+    if (result.status != "completed" and is_run_folder(folder) and _status_of(folder) == "completed"):
+        kept = folder
+        folder = check_out_folder(folder.with_name(f"{folder.name}.{result.status}"), True)
+        warnings.warn(f"{kept} holds a completed run and is kept; this {result.status} run is written to "
+                      f"{folder}", stacklevel=2)
+    tmp = folder.parent / f".{folder.name}.partial-{os.getpid()}"
+    shutil.rmtree(tmp, ignore_errors=True)
+    try:
+        with signals_deferred():  # a finished simulation is saved whole, then Ctrl-C is honoured
+            _write_core(tmp, result, result.metrics())
+            _place(tmp, folder)
+    except OSError as err:
+        shutil.rmtree(tmp, ignore_errors=True)
+        where = "the previous run there is unchanged" if folder.exists() else "nothing was written there"
+        raise RunFolderError(f"could not write {folder} ({err.strerror or err}); {where}; "
+                             f"{_rescue_arrays(result, folder)}") from err
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    try:
+        extras = _write_extras(folder, result, plots, animation)
+    except KeyboardInterrupt:
+        raise ExtrasInterrupted(folder) from None
+    _write_marker(folder, result.status, extras)
+    return folder
+
+
+def load_run(folder: str | Path):
+    """Read a run folder; a missing, truncated or garbled one is one clear error naming the file
+    (never unpickled: ``allow_pickle`` stays off).
+    """
+    from .results import Result
+
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise RunFolderError(f"{folder}: not a run folder (no such folder)")
+    for name in ("result.npz", "metrics.json"):
+        if not (folder / name).is_file():
+            raise RunFolderError(f"{folder}: not a run folder ({name} is missing)")
+    try:
+        return Result.load(folder)
+    except (OSError, ValueError, KeyError, EOFError, TypeError, AttributeError,
+            zipfile.BadZipFile) as err:
+        what = "metrics.json" if isinstance(err, json.JSONDecodeError) else "result.npz or metrics.json"
+        raise RunFolderError(f"{folder}: a damaged run folder ({what} cannot be read: "
+                             f"{type(err).__name__}: {err})") from err
