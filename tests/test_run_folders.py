@@ -1,0 +1,270 @@
+"""Run folders under hostile use: concurrent runs, --overwrite, interrupted and failed writes,
+corrupt folders, output paths that cannot work, signals. A good result is never lost."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from nnrobust.cli import main, run_labels
+from nnrobust.exceptions import ConfigError, NNRobustError, one_line
+from nnrobust.experiment import run_experiment
+from nnrobust.presets import load_preset
+from nnrobust.results import Result
+from nnrobust.run_folder import MARKER, ExtrasInterrupted, RunFolderError, locked, write_run
+
+QUICK = ["--duration", "0.3", "--no-plots", "--no-animation", "--quiet"]
+
+
+def _run(out, *extra, target="paper-ellipse"):
+    return main(["run", target, "--out", str(out), *QUICK, *extra])
+
+
+def _one_error_line(capsys) -> str:
+    err = [line for line in capsys.readouterr().err.splitlines() if line.strip()]
+    assert len(err) == 1 and err[0].startswith("nnrobust: error:"), err
+    return err[0]
+
+
+def _marker(folder: Path) -> dict:
+    return json.loads((folder / MARKER).read_text())
+
+
+def test_a_second_run_into_a_locked_folder_is_refused(tmp_path, capsys):
+    """Two runs with the same --out: the second is refused at once (the first holds the lock for
+    its whole run), instead of both finishing and one result silently replacing the other."""
+    out = tmp_path / "run"
+    with locked(out):
+        assert _run(out) == 2
+        assert "another nnrobust run (pid " in _one_error_line(capsys)
+        assert not out.exists()
+    assert _run(out) == 0 and _marker(out)["status"] == "completed"
+    assert [p.name for p in tmp_path.iterdir()] == ["run"]  # lock file gone
+
+
+def test_two_concurrent_processes_one_result(tmp_path):
+    """Two real processes started together: exactly one writes the folder, the other exits 2."""
+    out = tmp_path / "run"
+    cmd = [sys.executable, "-m", "nnrobust.cli", "run", "paper-ellipse", "--out", str(out), "--duration", "2",
+           "--no-plots", "--no-animation", "--quiet", "--backend", "python"]
+    procs = [subprocess.Popen(cmd, stderr=subprocess.PIPE, text=True) for _ in range(2)]
+    codes = sorted(p.wait(timeout=300) for p in procs)
+    assert codes == [0, 2]
+    assert Result.load(out).t.size == 2000
+
+
+def test_overwrite_replaces_only_run_folders(tmp_path, capsys):
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "notes.txt").write_text("keep me")
+    assert _run(mine, "--overwrite") == 2
+    assert "is not a run folder" in _one_error_line(capsys)
+    assert (mine / "notes.txt").read_text() == "keep me"
+    # a run folder is replaced, and a folder with only a run's files (no marker) counts as one
+    out = tmp_path / "run"
+    assert _run(out) == 0
+    (out / MARKER).unlink()
+    assert _run(out, "--overwrite") == 0 and (out / MARKER).is_file()
+
+
+def test_a_failed_run_never_replaces_a_completed_one(tmp_path, capsys):
+    out = tmp_path / "run"
+    assert _run(out) == 0
+    before = (out / "result.npz").read_bytes()
+    # torque limits off and a huge Kv: the run diverges
+    assert _run(out, "--overwrite", "--set", "plant.torque_limits='none'", "--set", "controller.Kv=[2000.0]",
+                "--set", "plant.joint_stops=false") == 1
+    assert (out / "result.npz").read_bytes() == before and _marker(out)["status"] == "completed"
+    beside = tmp_path / "run.diverged"
+    assert _marker(beside)["status"] == "diverged" and (beside / "result.npz").is_file()
+    assert "is kept; this diverged run is written to" in capsys.readouterr().err
+
+
+def test_ctrl_c_while_plotting_keeps_the_finished_simulation(tmp_path, monkeypatch):
+    result = run_experiment(load_preset("paper-line").replace(simulation={"duration": 0.3}))
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr("nnrobust.plots.plot_run", interrupted)
+    with pytest.raises(ExtrasInterrupted, match="arrays and metrics are saved"):
+        write_run(tmp_path / "run", result)
+    folder = tmp_path / "run"
+    assert _marker(folder) | {"nnrobust": None} == {"format": 1, "nnrobust": None, "status": "completed",
+                                                    "extras": "interrupted"}
+    np.testing.assert_array_equal(Result.load(folder).q, result.q)
+    assert sorted(p.name for p in folder.iterdir()) == [MARKER, "config.toml", "metrics.json", "result.npz"]
+
+
+def test_a_write_failure_keeps_the_previous_run_and_rescues_the_arrays(tmp_path, monkeypatch):
+    result = run_experiment(load_preset("paper-line").replace(simulation={"duration": 0.3}))
+    folder = write_run(tmp_path / "run", result, plots=False, animation=False)
+    before = (folder / "metrics.json").read_text()
+
+    def full(*args, **kwargs):
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr("nnrobust.run_folder._write_marker", full)
+    with pytest.raises(RunFolderError, match=r"No space left.*previous run there is unchanged.*arrays are in "
+                                             r"(\S+\.npz)") as caught:
+        write_run(folder, result, overwrite=True, plots=False, animation=False)
+    rescued = Path(str(caught.value).rsplit("arrays are in ", 1)[1])
+    with np.load(rescued) as data:
+        np.testing.assert_array_equal(data["q"], result.q)
+    rescued.unlink()
+    assert (folder / "metrics.json").read_text() == before
+    assert [p.name for p in tmp_path.iterdir()] == ["run"]
+
+
+@pytest.mark.parametrize("kind", ["file", "symlink", "dot", "parent of cwd", "parent is a file", "read-only"])
+def test_output_paths_that_cannot_work_are_refused_before_simulating(kind, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    if kind == "file":
+        out = tmp_path / "taken"
+        out.write_text("x")
+        expected = "is not a folder"
+    elif kind == "symlink":
+        (tmp_path / "real").mkdir()
+        out = tmp_path / "link"
+        out.symlink_to(tmp_path / "real")
+        expected = "symbolic link"
+    elif kind == "dot":
+        out, expected = Path("."), "not '.' or '..'"
+    elif kind == "parent of cwd":
+        (tmp_path / "deep").mkdir()
+        monkeypatch.chdir(tmp_path / "deep")
+        out, expected = tmp_path, "working folder or one of its ancestors"
+    elif kind == "parent is a file":
+        (tmp_path / "plain").write_text("x")
+        out, expected = tmp_path / "plain" / "run", "cannot create"
+    else:
+        if os.geteuid() == 0:  # root writes anywhere: let the permission check see what a user would
+            monkeypatch.setattr("nnrobust.run_folder.os.access", lambda path, mode: False)
+        locked_dir = tmp_path / "ro"
+        locked_dir.mkdir()
+        locked_dir.chmod(0o555)
+        out, expected = locked_dir / "run", "permission denied"
+    start = time.perf_counter()
+    assert main(["run", "paper-ellipse", "--out", str(out), "--overwrite", "--quiet"]) == 2
+    assert expected in _one_error_line(capsys)
+    assert time.perf_counter() - start < 5  # refused before a 20 s simulation
+
+
+def test_corrupt_run_folders_get_one_line(tmp_path, capsys):
+    good = tmp_path / "good"
+    assert _run(good) == 0
+    truncated = tmp_path / "truncated"
+    assert _run(truncated) == 0
+    data = (truncated / "result.npz").read_bytes()
+    (truncated / "result.npz").write_bytes(data[: len(data) // 2])
+    garbage = tmp_path / "garbage"
+    assert _run(garbage) == 0
+    (garbage / "metrics.json").write_text("{not json")
+    listed = tmp_path / "listed"
+    assert _run(listed) == 0
+    (listed / "metrics.json").write_text("[1, 2]")
+    pickled = tmp_path / "pickled"
+    assert _run(pickled) == 0
+    np.savez(pickled / "result.npz", t=np.array([object()], dtype=object))
+    capsys.readouterr()
+    for bad in (truncated, garbage, listed, pickled, tmp_path / "missing"):
+        assert main(["compare", str(good), str(bad)]) == 2
+        assert str(bad) in _one_error_line(capsys)
+        assert main(["view", str(bad), "--seconds", "0"]) == 2
+        _one_error_line(capsys)
+
+
+def test_compare_keeps_runs_whose_folders_share_a_name(tmp_path, capsys):
+    for parent, kind in (("x", "nn"), ("y", "no-u0")):
+        assert _run(tmp_path / parent / "run", "--controller", kind) == 0
+    assert run_labels([str(tmp_path / "x" / "run"), str(tmp_path / "y" / "run")]) == ["x/run", "y/run"]
+    assert main(["compare", str(tmp_path / "x" / "run"), str(tmp_path / "y" / "run")]) == 0
+    table = capsys.readouterr().out
+    assert "x/run" in table and "y/run" in table
+    with pytest.raises(NNRobustError, match="given twice"):
+        run_labels([str(tmp_path / "x" / "run"), str(tmp_path / "x" / "run")])
+
+
+@pytest.mark.parametrize("name, fragment", [("a\x1bb", "not a valid name"), ("../../escape", "not a valid name"),
+                                            ("a" * 200, "not a valid name"), ("", "not a valid name")])
+def test_names_that_would_break_a_run_folder(name, fragment, tmp_path):
+    with pytest.raises(ConfigError, match=fragment):
+        load_preset("paper-ellipse").replace(name=name)
+
+
+def test_descriptions_with_control_characters_round_trip(tmp_path):
+    from nnrobust.config import load_config
+
+    config = load_preset("paper-ellipse").replace(description='tab\there "quoted" \x1b[31m\x00 back\\slash\n')
+    path = tmp_path / "e.toml"
+    path.write_text(config.to_toml())
+    assert load_config(path).description == config.description
+
+
+def test_messages_are_one_bounded_line():
+    message = str(ConfigError("robot.source", "x" * 5_000_000 + "\nsecond line\x1b[2J"))
+    assert len(message) <= 1000 and "\n" not in message and "\x1b" not in message
+    assert "characters elided" in message and message.endswith("second line\\x1b[2J")
+    assert one_line("short") == "short"
+
+
+@pytest.mark.parametrize("kind", ["/dev/zero", "fifo", "huge", "deep", "bigint"])
+def test_experiment_files_are_read_bounded(kind, tmp_path, capsys):
+    if kind == "/dev/zero":
+        target = "/dev/zero"
+    elif kind == "fifo":
+        target = str(tmp_path / "pipe.toml")
+        os.mkfifo(target)
+    elif kind == "huge":
+        target = str(tmp_path / "huge.toml")
+        Path(target).write_text("# padding\n" * 200_000)
+    elif kind == "deep":
+        target = str(tmp_path / "deep.toml")
+        Path(target).write_text("x = " + "[" * 5000 + "]" * 5000 + "\n")
+    else:
+        target = str(tmp_path / "bigint.toml")
+        Path(target).write_text("[sensing]\nseed = " + "9" * 400 + "\n")
+    assert main(["run", target, "--out", str(tmp_path / "out"), "--quiet"]) == 2
+    line = _one_error_line(capsys)
+    assert {"/dev/zero": "not a regular file", "fifo": "not a regular file", "huge": "larger than the 1000 kB",
+            "deep": "nested too deeply", "bigint": "integer in (-2^63, 2^63)"}[kind] in line
+
+
+def test_runs_too_large_for_memory_are_refused_before_they_start(capsys, tmp_path):
+    assert _run(tmp_path / "big", "--set", "simulation.duration=100000.0") == 2
+    assert "simulation.memory_limit: this run needs about 211 GB" in _one_error_line(capsys)
+    assert _run(tmp_path / "ok", "--set", "simulation.memory_limit=0.0001") == 2
+    assert "raise memory_limit" in _one_error_line(capsys)
+    for key, value, fragment in (("simulation.substeps", "100000", "at most 10000"),
+                                 ("nn.centers", "100000", "at most 1000"),
+                                 ("simulation.control_period", "1e-12", "steps; at most")):
+        assert _run(tmp_path / "x", "--set", f"{key}={value}") == 2
+        assert fragment in _one_error_line(capsys)
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
+def test_a_signal_mid_run_leaves_a_partial_run_marked_as_such(sig, tmp_path):
+    """SIGINT, SIGTERM or SIGHUP during the simulation: exit 130 or 1 with the partial run in
+    place, marked interrupted; no hidden partial folder, no lock file, no process left."""
+    out = tmp_path / "run"
+    proc = subprocess.Popen([sys.executable, "-m", "nnrobust.cli", "run", "paper-ellipse", "--out", str(out),
+                             "--duration", "60", "--backend", "python", "--no-animation"],
+                            stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:  # wait until the simulation is under way
+        time.sleep(0.5)
+        if any(tmp_path.glob(".run.lock")):
+            time.sleep(2.0)
+            break
+    proc.send_signal(sig)
+    code = proc.wait(timeout=120)
+    assert code == 1, proc.stderr.read()
+    assert _marker(out)["status"] == "interrupted"
+    assert 0 < Result.load(out).t[-1] < 60
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
