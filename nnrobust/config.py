@@ -458,7 +458,8 @@ def read_text_file(path: str | Path, limit: int = MAX_TOML_BYTES, what: str = "f
     except OSError as err:
         raise ConfigError(str(path), f"cannot read the file: {err.strerror or err}") from err
     if len(data) > limit:
-        raise ConfigError(str(path), f"larger than the {limit // 1000} kB a {what} may have")
+        article = "an" if what[0] in "aeiou" else "a"
+        raise ConfigError(str(path), f"larger than {limit // 1000} kB, the most read for {article} {what}")
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError as err:

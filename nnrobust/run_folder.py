@@ -90,6 +90,9 @@ def check_out_folder(folder: str | Path, overwrite: bool) -> Path:
             raise RunFolderError(f"{folder} is not a run folder (no {MARKER}); --overwrite replaces only "
                                  "run folders nnrobust wrote. Choose another --out")
     parent = folder.parent
+    existing = next((p for p in (parent, *parent.parents) if p.exists()), None)
+    if existing is not None and not existing.is_dir():
+        raise RunFolderError(f"cannot create {folder}: {existing} is a file, not a folder")
     try:
         parent.mkdir(parents=True, exist_ok=True)
     except OSError as err:

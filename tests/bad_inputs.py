@@ -6,12 +6,14 @@ repository root), which writes docs/bad-inputs.md from the messages actually rai
 
 from __future__ import annotations
 
+import re
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
 from nnrobust import exceptions as ex
+from nnrobust.run_folder import RunFolderError
 
 ARM = """<?xml version="1.0"?>
 <robot name="arm">
@@ -251,9 +253,120 @@ CONFIG_CASES = [
          ex.ConfigError, "sensing.delay: must be >= 0 control periods"),
     Case("negative seed", lambda d: _toml(d, "[sensing]\nseed = -3\n"),
          ex.ConfigError, "sensing.seed: must be an integer in [0, 2^63)"),
+    Case("400-digit integer", lambda d: _toml(d, "[sensing]\nseed = " + "9" * 400 + "\n"),
+         ex.ConfigError, "sensing.seed: expected an integer in (-2^63, 2^63), got one of 400 digits"),
+    Case("400-digit integer for a number", lambda d: _toml(d, "[controller]\nk = " + "9" * 400 + "\n"),
+         ex.ConfigError, "controller.k: expected a finite number of sensible size"),
+    Case("TOML nested 5000 deep", lambda d: _toml(d, "x = " + "[" * 5000 + "]" * 5000 + "\n"),
+         ex.ConfigError, "invalid TOML: nested too deeply"),
+    Case("experiment file that is a device (/dev/zero)", lambda d: _read_config(Path("/dev/zero")),
+         ex.ConfigError, "/dev/zero: not a regular file"),
+    Case("experiment file that is a FIFO", lambda d: _read_config(_fifo(d)),
+         ex.ConfigError, "not a regular file"),
+    Case("experiment file over 1 MB", lambda d: _toml(d, "# padding\n" * 200_000),
+         ex.ConfigError, "larger than 1000 kB, the most read for an experiment file"),
+    Case("name with a control character", lambda d: _toml(d, 'name = "run\\u001b[2J"\n'),
+         ex.ConfigError, "name: 'run\\x1b[2J' is not a valid name"),
+    Case("name that climbs out of out/", lambda d: _toml(d, 'name = "../../escape"\n'),
+         ex.ConfigError, "name: '../../escape' is not a valid name"),
+    Case("closed-form nominal model with a URDF perturbation",
+         lambda d: _toml(d, "[nominal]\nkind = 'closed-form'\nmass_scale = 1.1\n"),
+         ex.ConfigError, "nominal.kind: mass_scale, inertia_scale and com_error perturb the URDF model"),
+    Case("negative friction scale", lambda d: _toml(d, "[plant]\nfriction_scale = -1.0\n"),
+         ex.ConfigError, "plant.friction_scale: must be >= 0"),
+    Case("substeps beyond any need", lambda d: _toml(d, "[simulation]\nsubsteps = 100000\n"),
+         ex.ConfigError, "simulation.substeps: 100000 integration steps per control period; at most 10000"),
+    Case("control rate of a terahertz", lambda d: _toml(d, "[simulation]\ncontrol_period = 1e-12\n"),
+         ex.ConfigError, "simulation.duration: 20 s at a control period of 1e-12 s is 2e+13 steps"),
+    Case("basis of a million centres", lambda d: _toml(d, "[nn]\ncenters = 1000000\n"),
+         ex.ConfigError, "nn.centers: 1000000 centres per input; at most 1000"),
+    Case("run that needs more memory than simulation.memory_limit",
+         lambda d: _build(simulation={"duration": 1e5}),
+         ex.ConfigError, "simulation.memory_limit: this run needs about 211 GB"),
 ]
 
-CASES = URDF_CASES + CONFIG_CASES
+
+def _fifo(folder: Path) -> Path:
+    import os
+
+    path = folder / "pipe.toml"
+    os.mkfifo(path)
+    return path
+
+
+def _check_out(folder: Path, overwrite: bool = False):
+    from nnrobust.run_folder import check_out_folder
+
+    return lambda: check_out_folder(folder, overwrite)
+
+
+def _user_folder(folder: Path) -> Path:
+    path = folder / "mine"
+    path.mkdir()
+    (path / "notes.txt").write_text("my notes")
+    return path
+
+
+def _symlink(folder: Path) -> Path:
+    (folder / "real").mkdir()
+    (folder / "link").symlink_to(folder / "real")
+    return folder / "link"
+
+
+def _locked_twice(folder: Path):
+    from nnrobust.run_folder import locked
+
+    def action():
+        with locked(folder / "run"), locked(folder / "run"):
+            pass
+
+    return action
+
+
+def _damaged_run(folder: Path, damage: str):
+    """A run folder written by a short run, then damaged; the action reads it back."""
+    import numpy as np
+
+    from nnrobust.experiment import run_experiment
+    from nnrobust.presets import load_preset
+    from nnrobust.run_folder import load_run, write_run
+
+    run = folder / damage
+    write_run(run, run_experiment(load_preset("paper-line").replace(simulation={"duration": 0.05})),
+              plots=False, animation=False)
+    if damage == "truncated":
+        data = (run / "result.npz").read_bytes()
+        (run / "result.npz").write_bytes(data[: len(data) // 2])
+    elif damage == "garbled":
+        (run / "metrics.json").write_text("{not json")
+    else:
+        np.savez(run / "result.npz", t=np.array([object()], dtype=object))
+    return lambda: load_run(run)
+
+
+RUN_FOLDER_CASES = [
+    Case("--out naming a file", lambda d: _check_out(_file(d, "taken", "x")),
+         RunFolderError, "taken exists and is not a folder"),
+    Case("--out naming a symbolic link", lambda d: _check_out(_symlink(d)),
+         RunFolderError, "link is a symbolic link"),
+    Case("--out .", lambda d: _check_out(Path(".")), RunFolderError, "not '.' or '..'"),
+    Case("--out inside a file", lambda d: _check_out(_file(d, "plain", "x") / "run"),
+         RunFolderError, "plain is a file, not a folder"),
+    Case("existing run folder without --overwrite", lambda d: _check_out(_file(d, "old", "x").parent),
+         ex.RunFolderExists, "exists; pass --overwrite"),
+    Case("--overwrite on a folder of the user's", lambda d: _check_out(_user_folder(d), True),
+         RunFolderError, "mine is not a run folder (no .nnrobust-run)"),
+    Case("a second run into a folder another run is writing", _locked_twice,
+         RunFolderError, "another nnrobust run (pid "),
+    Case("truncated result.npz", lambda d: _damaged_run(d, "truncated"),
+         RunFolderError, "a damaged run folder (result.npz or metrics.json cannot be read: BadZipFile"),
+    Case("garbled metrics.json", lambda d: _damaged_run(d, "garbled"),
+         RunFolderError, "a damaged run folder (metrics.json cannot be read"),
+    Case("object array in result.npz (would need unpickling)", lambda d: _damaged_run(d, "pickled"),
+         RunFolderError, "Object arrays cannot be loaded when allow_pickle=False"),
+]
+
+CASES = URDF_CASES + CONFIG_CASES + RUN_FOLDER_CASES
 
 
 def message_of(case: Case, folder: Path) -> str:
@@ -278,6 +391,27 @@ def render_table(folder: Path) -> str:
         "and one line. Regenerate this page with `python -m tests.bad_inputs` (repository root).",
         "Paths of the scratch folder the cases run in are shown as `<dir>` (its parent `<dir>/..`).",
         "",
+        "Rules that hold for every input:",
+        "",
+        "- **Messages** are one line of at most 1,000 characters: control characters are escaped and",
+        "  the middle of a longer message is elided.",
+        "- **Files are read bounded**: an experiment or sweep file must be a regular file of at most",
+        "  1 MB (a device or a FIFO is refused, never read), a URDF at most 20 MB.",
+        "- **Size**: before a run starts, the memory its recorded arrays need is estimated and a run",
+        "  above `simulation.memory_limit` (2 GB by default) is refused; `simulation.substeps` is at",
+        "  most 10,000, `nn.centers` at most 1,000, a run at most 10^9 control steps.",
+        "- **Run folders** (`nnrobust/run_folder.py`) carry a marker file, `.nnrobust-run`, with the",
+        "  run's status. `--overwrite` replaces only folders that have it (or that hold nothing but a",
+        "  run's files). The output folder is checked before the simulation and locked for the whole",
+        "  run, so a second run into it is refused at once. The arrays and metrics are saved first and",
+        "  renamed into place whole; plots and the animation follow, and Ctrl-C while they are written",
+        "  leaves the saved run with `extras = interrupted` in its marker. A run that did not complete",
+        "  never replaces a completed one: it is written beside it, to `<folder>.<status>`. If a write",
+        "  fails (a full disk), the previous run is untouched and the new arrays are saved to the",
+        "  temporary folder if they fit there; the message says where.",
+        "- **Signals**: SIGTERM and SIGHUP stop a run as Ctrl-C does; the partial run is written,",
+        "  marked `interrupted`, and no hidden folder, lock file or viewer process is left behind.",
+        "",
         "| input | exception | message |",
         "|---|---|---|",
     ]
@@ -286,7 +420,7 @@ def render_table(folder: Path) -> str:
         for path, name in ((folder.resolve(), "<dir>"), (folder, "<dir>"),
                            (folder.resolve().parent, "<dir>/..")):
             message = message.replace(str(path), name)
-        message = message.replace("|", "\\|").replace("\n", " ")
+        message = re.sub(r"pid \d+", "pid <pid>", message).replace("|", "\\|").replace("\n", " ")
         name = case.error.__name__ if case.error else "warning, loads"
         lines.append(f"| {case.what} | `{name}` | {message} |")
     return "\n".join(lines) + "\n"

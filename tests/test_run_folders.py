@@ -142,7 +142,7 @@ def test_output_paths_that_cannot_work_are_refused_before_simulating(kind, tmp_p
         out, expected = tmp_path, "working folder or one of its ancestors"
     elif kind == "parent is a file":
         (tmp_path / "plain").write_text("x")
-        out, expected = tmp_path / "plain" / "run", "cannot create"
+        out, expected = tmp_path / "plain" / "run", "plain is a file, not a folder"
     else:
         if os.geteuid() == 0:  # root writes anywhere: let the permission check see what a user would
             monkeypatch.setattr("nnrobust.run_folder.os.access", lambda path, mode: False)
@@ -191,10 +191,9 @@ def test_compare_keeps_runs_whose_folders_share_a_name(tmp_path, capsys):
         run_labels([str(tmp_path / "x" / "run"), str(tmp_path / "x" / "run")])
 
 
-@pytest.mark.parametrize("name, fragment", [("a\x1bb", "not a valid name"), ("../../escape", "not a valid name"),
-                                            ("a" * 200, "not a valid name"), ("", "not a valid name")])
-def test_names_that_would_break_a_run_folder(name, fragment, tmp_path):
-    with pytest.raises(ConfigError, match=fragment):
+@pytest.mark.parametrize("name", ["a\x1bb", "../../escape", "a" * 200, "", "a/b"])
+def test_names_that_would_break_a_run_folder(name, tmp_path):
+    with pytest.raises(ConfigError, match="not a valid name"):
         load_preset("paper-ellipse").replace(name=name)
 
 
@@ -232,7 +231,7 @@ def test_experiment_files_are_read_bounded(kind, tmp_path, capsys):
         Path(target).write_text("[sensing]\nseed = " + "9" * 400 + "\n")
     assert main(["run", target, "--out", str(tmp_path / "out"), "--quiet"]) == 2
     line = _one_error_line(capsys)
-    assert {"/dev/zero": "not a regular file", "fifo": "not a regular file", "huge": "larger than the 1000 kB",
+    assert {"/dev/zero": "not a regular file", "fifo": "not a regular file", "huge": "larger than 1000 kB",
             "deep": "nested too deeply", "bigint": "integer in (-2^63, 2^63)"}[kind] in line
 
 
