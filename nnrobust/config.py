@@ -514,6 +514,10 @@ def validate(config: ExperimentConfig) -> None:
         raise ConfigError("name", f"{config.name!r} is not a valid name: 1 to 100 letters, digits, '.', '_', "
                           "'+' or '-', starting with a letter or digit, without '..' (it names the run "
                           "folder out/<name>-<controller>)")
+    gravity = config.robot.gravity
+    if gravity is not None and (len(gravity) != 3 or math.hypot(*gravity) > 1e3):
+        raise ConfigError("robot.gravity", f"needs 3 entries (x, y, z) [m/s^2] of at most 1000 m/s^2 in all, "
+                          f"got {gravity}")
     choices = {
         "robot.task": (config.robot.task, tuple(TASK_KINDS)),
         "nominal.kind": (config.nominal.kind, ("closed-form", "urdf")),

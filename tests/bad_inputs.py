@@ -36,6 +36,21 @@ def arm(mass="1", ixx="0.001", visual="", extra="") -> str:
     return ARM.format(mass=mass, ixx=ixx, visual=visual, extra=extra)
 
 
+def _l2_inertia(attributes: str | None) -> str:
+    """The arm with link l2's <inertia> attributes replaced (None: l2 without <inertial>)."""
+    text = arm()
+    head, tail = text.rsplit('<inertial><origin xyz="0.15 0 0"/>', 1)
+    old = tail[:tail.index("</inertial>") + len("</inertial>")]
+    new = "" if attributes is None else (
+        f'<inertial><origin xyz="0.15 0 0"/><mass value="1"/><inertia {attributes}/></inertial>')
+    return head + tail.replace(old, new, 1)
+
+
+def _first_axis_then(element: str) -> str:
+    """The arm with an element added after joint j1's <axis>."""
+    return arm().replace('<axis xyz="0 0 1"/>', f'<axis xyz="0 0 1"/>{element}', 1)
+
+
 BILLION_LAUGHS = """<?xml version="1.0"?>
 <!DOCTYPE lolz [<!ENTITY lol "lol"><!ENTITY lol2 "&lol;&lol;&lol;&lol;&lol;&lol;&lol;&lol;">
 <!ENTITY lol3 "&lol2;&lol2;&lol2;&lol2;&lol2;&lol2;&lol2;&lol2;">]>
@@ -153,12 +168,50 @@ URDF_CASES = [
     Case("continuous joint (nq != nv)",
          lambda d: _load(arm().replace('name="j1" type="revolute"', 'name="j1" type="continuous"')),
          ex.ModelMismatch, "nq = 3 != nv = 2"),
-    Case("zero mass", lambda d: _load(arm(mass="0")), ex.InvalidInertia, "mass 0 kg must be positive"),
-    Case("negative mass", lambda d: _load(arm(mass="-2")), ex.InvalidInertia, "must be positive"),
+    Case("zero mass with a nonzero inertia", lambda d: _load(arm(mass="0")), ex.InvalidInertia,
+         "mass 0 kg with a nonzero inertia"),
+    Case("negative mass", lambda d: _load(arm(mass="-2")), ex.InvalidInertia, "must not be negative"),
     Case("inertia not positive definite", lambda d: _load(arm(ixx="-0.001")),
-         ex.InvalidInertia, "not positive definite"),
+         ex.InvalidInertia, "not positive semi-definite"),
     Case("inertia that breaks the triangle inequality", lambda d: _load(arm(ixx="0.05")),
          ex.InvalidInertia, "triangle inequality"),
+    Case("NaN in an inertial origin",
+         lambda d: _load(arm().replace('<origin xyz="0.15 0 0"/>', '<origin xyz="nan 0 0"/>')),
+         ex.UrdfStructureError, "link 'l2' <origin> xyz: 'nan 0 0' is not 3 finite numbers"),
+    Case("inertia with only ixx, iyy, izz (the parser would zero it)",
+         lambda d: _load(_l2_inertia('ixx="0.001" iyy="0.01" izz="0.01"')),
+         ex.InvalidInertia, "link 'l2': <inertia> needs all six of ixx, ixy, ixz, iyy, iyz, izz (missing "
+         "ixy, ixz, iyz"),
+    Case("mass of 1e308 kg", lambda d: _load(arm(mass="1e308")), ex.InvalidInertia,
+         "mass 1e+308 kg is beyond any robot link"),
+    Case("inertia of 1e300 kg m^2",
+         lambda d: _load(_l2_inertia('ixx="0.001" ixy="0" ixz="0" iyy="1e300" iyz="0" izz="1e300"')),
+         ex.InvalidInertia, "beyond any robot link (at most 100000 kg m^2)"),
+    Case("zero joint axis", lambda d: _load(arm().replace('<axis xyz="0 0 1"/>', '<axis xyz="0 0 0"/>', 1)),
+         ex.UrdfStructureError, "joint 'j1' <axis>: xyz = '0 0 0' is zero"),
+    Case("reversed joint limits",
+         lambda d: _load(arm().replace('<limit lower="-3" upper="3"', '<limit lower="2" upper="-2"', 1)),
+         ex.UrdfStructureError, "joint 'j1' <limit>: lower = 2 is above upper = -2"),
+    Case("NaN joint limit",
+         lambda d: _load(arm().replace('<limit lower="-3"', '<limit lower="nan"', 1)),
+         ex.UrdfStructureError, "joint 'j1' <limit> lower: 'nan' is not a finite number"),
+    Case("revolute joint without <limit>",
+         lambda d: _load(arm().replace('<limit lower="-3" upper="3" effort="10" velocity="3"/>', '', 1)),
+         ex.UrdfStructureError, "joint 'j1': a revolute joint needs <limit"),
+    Case("negative joint damping",
+         lambda d: _load(_first_axis_then('<dynamics damping="-1"/>')),
+         ex.UrdfStructureError, "joint 'j1' <dynamics> damping: -1 is outside [0, 1e+07]"),
+    Case("unknown joint type", lambda d: _load(arm().replace('type="revolute"', 'type="hinge"', 1)),
+         ex.UrdfStructureError, "joint 'j1': type 'hinge' is not one of revolute"),
+    Case("mimic joint (not locked)",
+         lambda d: _load(arm().replace('<axis xyz="0 0 1"/>', '<axis xyz="0 0 1"/><mimic joint="j1"/>', 2)
+                         .replace('<mimic joint="j1"/>', '', 1)),
+         ex.UrdfStructureError, "joint 'j2' mimics joint 'j1': nnrobust does not model mimic joints"),
+    Case("moving link with no mass after it",
+         lambda d: _load(_l2_inertia(None)), ex.InvalidInertia, "joint 'j2' moves no mass"),
+    Case("value the C++ parser refuses (its message made one line)",
+         lambda d: _load(_first_axis_then('<calibration rising="x"/>')),
+         ex.RobotLoadError, "the parser says: Error: rising value (x) is not a valid float"),
     Case("mass that is not a number", lambda d: _load(arm(mass="heavy")),
          ex.UrdfStructureError, "'heavy' is not a finite number"),
     Case("entity expansion ('billion laughs')", lambda d: _load(BILLION_LAUGHS),
@@ -253,6 +306,8 @@ CONFIG_CASES = [
          ex.ConfigError, "sensing.delay: must be >= 0 control periods"),
     Case("negative seed", lambda d: _toml(d, "[sensing]\nseed = -3\n"),
          ex.ConfigError, "sensing.seed: must be an integer in [0, 2^63)"),
+    Case("gravity with two entries", lambda d: _toml(d, "[robot]\ngravity = [0.0, -9.81]\n"),
+         ex.ConfigError, "robot.gravity: needs 3 entries"),
     Case("400-digit integer", lambda d: _toml(d, "[sensing]\nseed = " + "9" * 400 + "\n"),
          ex.ConfigError, "sensing.seed: expected an integer in (-2^63, 2^63), got one of 400 digits"),
     Case("400-digit integer for a number", lambda d: _toml(d, "[controller]\nk = " + "9" * 400 + "\n"),

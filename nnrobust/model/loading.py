@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import contextlib
+import os
+import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -65,7 +69,7 @@ def _resolve(source: str) -> tuple[str, str]:
     return "erd", source
 
 
-def _build_from_urdf(source: str) -> tuple[pin.Model, str]:
+def _build_from_urdf(source: str, locked: frozenset[str] = frozenset()) -> tuple[pin.Model, str]:
     kind, value = _resolve(source)
     if kind == "erd":
         robot = _example_robot_data(value)
@@ -74,14 +78,43 @@ def _build_from_urdf(source: str) -> tuple[pin.Model, str]:
     name = value if kind == "file" else (source if generated else "<urdf string>")
     text = read_urdf_file(value) if kind == "file" else value
     if not generated:
-        check_urdf(text, name, Path(value).resolve().parent if kind == "file" else None)
-    try:
-        model = pin.buildModelFromXML(text)
-    except (ValueError, RuntimeError) as err:
-        raise RobotLoadError(name, f"invalid URDF: {err}") from err
+        check_urdf(text, name, Path(value).resolve().parent if kind == "file" else None, locked=locked)
+    failure = None
+    with parser_messages() as said:
+        try:
+            model = pin.buildModelFromXML(text)
+        except (ValueError, RuntimeError) as err:
+            failure = err
+    if failure is not None:
+        raise RobotLoadError(name, f"invalid URDF: {_first_line(failure, said)}") from failure
     if model.nq == 0 and model.njoints <= 1:
         raise ModelMismatch(f"{name}: the URDF has no movable joint (only fixed joints)")
     return model, name
+
+
+@contextlib.contextmanager
+def parser_messages():
+    """Catch what the C++ URDF parser prints on the process's stderr (file descriptor 2), so that
+    it never reaches the terminal as noise; the block gets a list that holds the text afterwards.
+    """
+    said: list[str] = []
+    sys.stderr.flush()
+    saved = os.dup(2)
+    with tempfile.TemporaryFile() as sink:
+        os.dup2(sink.fileno(), 2)
+        try:
+            yield said
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            sink.seek(0)
+            said.append(sink.read(100_000).decode(errors="replace"))
+
+
+def _first_line(err: Exception, said: list[str]) -> str:
+    """The error, with the first line the parser printed when that says more."""
+    printed = [" ".join(line.split()) for line in "".join(said).splitlines() if line.strip()]
+    return f"{err} (the parser says: {printed[0]})" if printed else str(err)
 
 
 def _example_robot_data(name: str):
@@ -127,17 +160,22 @@ def load_visual_model(
         robot = _example_robot_data(value)
         model, visual, name = robot.model, robot.visual_model, f"example-robot-data:{value}"
     else:
-        model, name = _build_from_urdf(source)
+        model, name = _build_from_urdf(source, frozenset(locked_joints or ()))
         visual_type = pin.GeometryType.VISUAL
-        try:
-            if kind == "file":
-                roots = mesh_roots(Path(value).parent)
-                visual = pin.buildGeomFromUrdf(model, value, visual_type,
-                                               package_dirs=[str(p) for p in roots])
-            else:
-                visual = pin.buildGeomFromUrdfString(model, value, visual_type)
-        except (ValueError, RuntimeError) as err:
-            raise RobotLoadError(name, f"cannot read the visual geometry: {err}") from err
+        failure = None
+        with parser_messages() as said:
+            try:
+                if kind == "file":
+                    roots = mesh_roots(Path(value).parent)
+                    visual = pin.buildGeomFromUrdf(model, value, visual_type,
+                                                   package_dirs=[str(p) for p in roots])
+                else:
+                    visual = pin.buildGeomFromUrdfString(model, value, visual_type)
+            except (ValueError, RuntimeError) as err:
+                failure = err
+        if failure is not None:
+            raise RobotLoadError(name, f"cannot read the visual geometry: {_first_line(failure, said)}") \
+                from failure
     ids = _locked_joint_ids(model, name, source, locked_joints)
     if ids:
         model, visual = pin.buildReducedModel(model, visual, ids, pin.neutral(model))
@@ -176,7 +214,7 @@ def load_robot(
 
     """
     source = str(source)
-    model, name = _build_from_urdf(source)
+    model, name = _build_from_urdf(source, frozenset(locked_joints or ()))
     ids = _locked_joint_ids(model, name, source, locked_joints)
     if ids:
         model = pin.buildReducedModel(model, ids, pin.neutral(model))

@@ -6,16 +6,19 @@ import numpy as np
 import pinocchio as pin
 
 
-def rotational_inertia_problem(I: np.ndarray, rel_tol: float = 0.0) -> str | None:
+def rotational_inertia_problem(I: np.ndarray, rel_tol: float = 0.0, point_mass: bool = False) -> str | None:
     """Why a 3 x 3 inertia about the centre of mass is not physical, or None when it is.
 
-    It must be positive definite and its principal moments must satisfy the triangle
-    inequality I1 + I2 >= I3 (within ``rel_tol`` of I3).
+    It must be positive definite (semi-definite with ``point_mass``: a point or a thin rod,
+    within ``rel_tol`` of the largest moment) and its principal moments must satisfy the
+    triangle inequality I1 + I2 >= I3 (within ``rel_tol`` of I3).
     """
     moments = np.linalg.eigvalsh(np.asarray(I, dtype=float))
     shown = np.round(moments, 9).tolist()
-    if moments[0] <= 0:
-        return f"the inertia is not positive definite (principal moments {shown} kg m^2)"
+    floor = -(rel_tol * abs(moments[2]) + 1e-15) if point_mass else 0.0
+    if moments[0] < floor or (moments[0] == floor and not point_mass):
+        what = "positive semi-definite" if point_mass else "positive definite"
+        return f"the inertia is not {what} (principal moments {shown} kg m^2)"
     if moments[0] + moments[1] < moments[2] * (1 - rel_tol):
         return (f"principal moments {shown} break the triangle inequality I1 + I2 >= I3 "
                 "(no rigid body has them)")

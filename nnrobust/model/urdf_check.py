@@ -61,28 +61,145 @@ def _number_list(text: str | None, count: int, where: str, source: str) -> list[
     return numbers
 
 
-def _check_inertial(link: ET.Element, name: str, source: str) -> None:
+MAX_MASS = 1e5
+"""Heaviest link accepted [kg] (a large industrial arm's links weigh hundreds of kg)."""
+MAX_INERTIA = 1e5
+"""Largest principal moment of inertia accepted [kg m^2]."""
+MAX_LENGTH = 1e3
+"""Largest offset of an origin accepted [m]."""
+MAX_EFFORT = 1e7
+"""Largest effort limit accepted [N m or N]."""
+MAX_VELOCITY = 1e4
+"""Largest velocity limit accepted [rad/s or m/s]."""
+
+_INERTIA_KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
+_MOVING = ("revolute", "continuous", "prismatic")
+
+
+def _attribute(element: ET.Element, key: str, where: str, source: str, default: str | None = None,
+               count: int = 1, low: float = -math.inf, high: float = math.inf) -> list[float]:
+    """Numbers of one attribute, finite and within [low, high]; missing is an error unless a
+    default is given (what the URDF specification defaults it to).
+    """
+    text = element.get(key, default)
+    if text is None:
+        raise UrdfStructureError(source, f"{where}: the attribute {key!r} is missing")
+    numbers = _number_list(text, count, f"{where} {key}", source)
+    for value in numbers:
+        if not low <= value <= high:
+            raise UrdfStructureError(source, f"{where} {key}: {value:g} is outside [{low:g}, {high:g}]")
+    return numbers
+
+
+def _check_origin(element: ET.Element, where: str, source: str) -> None:
+    origin = element.find("origin")
+    if origin is not None:
+        _attribute(origin, "xyz", f"{where} <origin>", source, "0 0 0", 3, -MAX_LENGTH, MAX_LENGTH)
+        _attribute(origin, "rpy", f"{where} <origin>", source, "0 0 0", 3, -1e3, 1e3)
+
+
+def _check_inertial(link: ET.Element, name: str, source: str) -> float:
+    """Refuse an <inertial> the parser would change silently; returns the link's mass (0 without one)."""
     inertial = link.find("inertial")
     if inertial is None:
-        return
+        return 0.0
+    where = f"link {name!r}"
     mass_el = inertial.find("mass")
     inertia_el = inertial.find("inertia")
     if mass_el is None or inertia_el is None:
-        raise InvalidInertia(source, f"link {name!r}: <inertial> needs <mass> and <inertia>")
-    (mass,) = _number_list(mass_el.get("value"), 1, f"link {name!r} mass", source)
-    if mass <= 0:
-        raise InvalidInertia(source, f"link {name!r}: mass {mass:g} kg must be positive (remove "
-                             "<inertial> for a massless link)")
-    keys = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
-    values = {}
-    for key in keys:
-        (values[key],) = _number_list(inertia_el.get(key, "0"), 1, f"link {name!r} {key}", source)
+        raise InvalidInertia(source, f"{where}: <inertial> needs <mass> and <inertia>")
+    _check_origin(inertial, where, source)
+    (mass,) = _number_list(mass_el.get("value"), 1, f"{where} mass", source)
+    if mass < 0:
+        raise InvalidInertia(source, f"{where}: mass {mass:g} kg must not be negative")
+    if mass > MAX_MASS:
+        raise InvalidInertia(source, f"{where}: mass {mass:g} kg is beyond any robot link "
+                             f"(at most {MAX_MASS:g} kg)")
+    missing = [key for key in _INERTIA_KEYS if inertia_el.get(key) is None]
+    if missing:
+        raise InvalidInertia(source, f"{where}: <inertia> needs all six of {', '.join(_INERTIA_KEYS)} "
+                             f"(missing {', '.join(missing)}; write 0 for a zero product of inertia)")
+    values = {key: _number_list(inertia_el.get(key), 1, f"{where} {key}", source)[0] for key in _INERTIA_KEYS}
     I = np.array([[values["ixx"], values["ixy"], values["ixz"]],
                   [values["ixy"], values["iyy"], values["iyz"]],
                   [values["ixz"], values["iyz"], values["izz"]]])
-    problem = rotational_inertia_problem(I, rel_tol=1e-9)
+    if mass == 0:
+        if np.any(I != 0):
+            raise InvalidInertia(source, f"{where}: mass 0 kg with a nonzero inertia; a massless link has "
+                                 "zero inertia (or no <inertial>)")
+        return 0.0
+    problem = rotational_inertia_problem(I, rel_tol=1e-9, point_mass=True)
     if problem:
-        raise InvalidInertia(source, f"link {name!r}: {problem}")
+        raise InvalidInertia(source, f"{where}: {problem}")
+    if np.abs(I).max() > MAX_INERTIA:
+        raise InvalidInertia(source, f"{where}: an inertia of {np.abs(I).max():g} kg m^2 is beyond any robot "
+                             f"link (at most {MAX_INERTIA:g} kg m^2)")
+    return mass
+
+
+def _check_joint(joint: ET.Element, name: str, source: str, locked: frozenset[str]) -> None:
+    """Refuse joint values the parser would read wrongly or silently change."""
+    kind = joint.get("type")
+    where = f"joint {name!r}"
+    valid = ("revolute", "continuous", "prismatic", "fixed", "floating", "planar")
+    if kind not in valid:
+        raise UrdfStructureError(source, f"{where}: type {kind!r} is not one of {', '.join(valid)}")
+    _check_origin(joint, where, source)
+    if kind in _MOVING:
+        axis = joint.find("axis")
+        if axis is not None:
+            xyz = _attribute(axis, "xyz", f"{where} <axis>", source, "1 0 0", 3)
+            if math.hypot(*xyz) < 1e-9:
+                raise UrdfStructureError(source, f"{where} <axis>: xyz = {axis.get('xyz')!r} is zero; "
+                                         "an axis needs a direction")
+    limit = joint.find("limit")
+    if kind in ("revolute", "prismatic") and limit is None:
+        raise UrdfStructureError(source, f"{where}: a {kind} joint needs <limit lower upper effort velocity>")
+    if limit is not None and kind in _MOVING:
+        lower, upper = (_attribute(limit, key, f"{where} <limit>", source, "0")[0]
+                        for key in ("lower", "upper"))
+        if kind != "continuous" and lower > upper:
+            raise UrdfStructureError(source, f"{where} <limit>: lower = {lower:g} is above upper = {upper:g}")
+        _attribute(limit, "effort", f"{where} <limit>", source, None, 1, 0, MAX_EFFORT)
+        _attribute(limit, "velocity", f"{where} <limit>", source, None, 1, 0, MAX_VELOCITY)
+    dynamics = joint.find("dynamics")
+    if dynamics is not None:
+        for key in ("damping", "friction"):
+            _attribute(dynamics, key, f"{where} <dynamics>", source, "0", 1, 0, MAX_EFFORT)
+    mimic = joint.find("mimic")
+    if mimic is not None and name not in locked:
+        raise UrdfStructureError(source, f"{where} mimics joint {mimic.get('joint')!r}: nnrobust does not "
+                                 "model mimic joints (the parser would make it an independent joint); "
+                                 f"lock it with robot.locked_joints = [{name!r}] or remove <mimic>")
+
+
+def _check_origin_of_root(link: ET.Element, name: str, source: str) -> None:
+    """The root's <inertial> does not matter, but its numbers must still be numbers."""
+    inertial = link.find("inertial")
+    if inertial is not None:
+        _check_origin(inertial, f"link {name!r}", source)
+
+
+def _check_mass_moves(joints: dict[str, ET.Element], parent_of: dict[str, tuple[str, str]],
+                      masses: dict[str, float], source: str) -> None:
+    """Every moving joint must move some mass, or M(q) is singular (O(links))."""
+    below = dict(masses)  # link -> mass of its subtree
+    children: dict[str, list[str]] = {}
+    for child, (parent, _) in parent_of.items():
+        children.setdefault(parent, []).append(child)
+    order, stack = [], [name for name in masses if name not in parent_of]
+    while stack:
+        link = stack.pop()
+        order.append(link)
+        stack.extend(children.get(link, []))
+    for link in reversed(order):
+        if link in parent_of:
+            below[parent_of[link][0]] += below[link]
+    for child, (_, joint) in parent_of.items():
+        if joints[joint].get("type") in _MOVING and below[child] <= 0:
+            raise InvalidInertia(source, f"joint {joint!r} moves no mass (link {child!r} and the links after "
+                                 "it have no <inertial>): M(q) would be singular; give them masses or "
+                                 "make the joint fixed")
 
 
 def mesh_roots(base: Path) -> list[Path]:
@@ -124,7 +241,7 @@ def _resolve_mesh(uri: str, base: Path | None, roots: list[Path], source: str) -
 
 
 def check_urdf(text: str, source: str, base: Path | None = None,
-               roots: list[Path] | None = None) -> None:
+               roots: list[Path] | None = None, locked: frozenset[str] = frozenset()) -> None:
     """Refuse a URDF that Pinocchio would mis-read; warn about missing visual meshes.
 
     Args:
@@ -132,6 +249,7 @@ def check_urdf(text: str, source: str, base: Path | None = None,
         source: file name or ``<urdf string>``, for messages.
         base: folder of the URDF file (None for a string).
         roots: folders mesh paths may resolve into (default: :func:`mesh_roots` of ``base``).
+        locked: joints that will be locked (a mimic joint must be one of them).
 
     """
     if len(text) > MAX_URDF_BYTES:
@@ -156,7 +274,8 @@ def check_urdf(text: str, source: str, base: Path | None = None,
         raise UrdfStructureError(source, "no <link> at all")
 
     parent_of: dict[str, tuple[str, str]] = {}  # child link -> (parent link, joint)
-    for name, joint in _by_name(root, "joint", source).items():
+    joints = _by_name(root, "joint", source)
+    for name, joint in joints.items():
         parent_el, child_el = joint.find("parent"), joint.find("child")
         if parent_el is None or child_el is None:
             raise UrdfStructureError(source, f"joint {name!r} needs <parent link=...> and <child link=...>")
@@ -175,9 +294,14 @@ def check_urdf(text: str, source: str, base: Path | None = None,
     if len(roots_found) != 1:
         raise UrdfStructureError(source, f"links {sorted(roots_found)} have no parent joint: the "
                                  "links do not form one tree (every link but the root needs one)")
+    _check_origin_of_root(links[roots_found[0]], roots_found[0], source)
 
-    for name, link in links.items():
-        _check_inertial(link, name, source)
+    # the root link is welded to the world: its inertia never enters the dynamics
+    masses = {name: _check_inertial(link, name, source) if name in parent_of else 0.0
+              for name, link in links.items()}
+    for name, joint in joints.items():
+        _check_joint(joint, name, source, locked)
+    _check_mass_moves(joints, parent_of, masses, source)
 
     visual_meshes = {id(m) for visual in root.iter("visual") for m in visual.iter("mesh")}
     allowed = roots if roots is not None else (mesh_roots(base) if base is not None else [])
