@@ -221,6 +221,13 @@ URDF_CASES = [
          lambda d: _load(_file(d, "escape.urdf", arm(
              visual='<visual><geometry><mesh filename="package://../../../../etc/passwd"/></geometry></visual>'))),
          ex.UnsafePath, "outside the allowed folders"),
+    Case("URDF text with a mesh outside the working folder (read and embedded before)",
+         lambda d: _load(arm(visual='<visual><geometry><mesh filename="/etc/passwd"/></geometry></visual>')),
+         ex.UnsafePath, "mesh '/etc/passwd' resolves to /etc/passwd, outside the allowed folders"),
+    Case("URDF text with a file:// mesh outside the working folder",
+         lambda d: _load(arm(visual='<visual><geometry><mesh filename="file:///etc/hostname"/></geometry>'
+                                    '</visual>')),
+         ex.UnsafePath, "outside the allowed folders"),
     Case("mesh fetched over the network",
          lambda d: _load(_file(d, "http.urdf", arm(
              visual='<visual><geometry><mesh filename="http://example.com/l1.stl"/></geometry></visual>'))),

@@ -107,3 +107,74 @@ def test_a_long_chain_is_checked_in_linear_time():
     start = time.perf_counter()
     check_urdf(text, "<long chain>")
     assert time.perf_counter() - start < 10.0
+
+
+STL = """solid t
+facet normal 0 0 1
+outer loop
+vertex 0 0 0
+vertex 0.1 0 0
+vertex 0 0.1 0
+endloop
+endfacet
+endsolid t
+"""
+
+
+def _ros_workspace(root: Path, missing: bool = False) -> Path:
+    """ws/src/my_arm/{urdf/arm.urdf, meshes/l1.stl, meshes/l2.stl}: meshes as package://my_arm/..."""
+    from .bad_inputs import arm
+
+    pkg = root / "ws" / "src" / "my_arm"
+    (pkg / "urdf").mkdir(parents=True)
+    (pkg / "meshes").mkdir()
+    (pkg / "meshes" / "l1.stl").write_text(STL)
+    if not missing:
+        (pkg / "meshes" / "l2.stl").write_text(STL)
+    text = arm(visual='<visual><geometry><mesh filename="package://my_arm/meshes/l1.stl"/></geometry></visual>')
+    head, tail = text.rsplit("</inertial></link>", 1)  # link l2 gets the second mesh
+    text = (head + '</inertial><visual><geometry><mesh filename="package://my_arm/meshes/l2.stl"/></geometry>'
+            '</visual></link>' + tail)
+    assert text.count("package://") == 2
+    path = pkg / "urdf" / "arm.urdf"
+    path.write_text(text)
+    return path
+
+
+def _mesh_files(visual) -> list[str]:
+    return sorted(Path(g.meshPath).name for g in visual.geometryObjects if g.meshPath)
+
+
+def test_package_meshes_in_a_ros_workspace_resolve(tmp_path):
+    from nnrobust.model.loading import load_visual_model
+
+    _, visual = load_visual_model(_ros_workspace(tmp_path))
+    assert _mesh_files(visual) == ["l1.stl", "l2.stl"]
+
+
+def test_one_missing_mesh_costs_only_its_part(tmp_path):
+    from nnrobust.model.loading import load_visual_model
+
+    with pytest.warns(UserWarning, match="l2.stl' not found"):
+        _, visual = load_visual_model(_ros_workspace(tmp_path, missing=True))
+    assert _mesh_files(visual) == ["l1.stl"]
+
+
+def test_ros_package_path_and_text_urdfs_follow_the_mesh_rules(tmp_path, monkeypatch):
+    """A URDF copied elsewhere finds package:// meshes through ROS_PACKAGE_PATH; given as text, it
+    reads meshes below the working folder only."""
+    from nnrobust.model.loading import load_visual_model
+
+    original = _ros_workspace(tmp_path)
+    elsewhere = tmp_path / "elsewhere" / "arm.urdf"
+    elsewhere.parent.mkdir()
+    elsewhere.write_text(original.read_text())
+    monkeypatch.setenv("ROS_PACKAGE_PATH", str(tmp_path / "ws" / "src"))
+    assert _mesh_files(load_visual_model(elsewhere)[1]) == ["l1.stl", "l2.stl"]
+    monkeypatch.delenv("ROS_PACKAGE_PATH")
+    text = original.read_text().replace("package://my_arm/", "ws/src/my_arm/")
+    monkeypatch.chdir(tmp_path)
+    assert _mesh_files(load_visual_model(text)[1]) == ["l1.stl", "l2.stl"]
+    monkeypatch.chdir(tmp_path / "elsewhere")  # the same text elsewhere: the meshes are not below it
+    with pytest.warns(UserWarning, match="not found"):
+        assert _mesh_files(load_visual_model(text)[1]) == []

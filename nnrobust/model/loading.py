@@ -14,7 +14,7 @@ import pinocchio as pin
 from ..exceptions import ModelMismatch, RobotLoadError
 from .pinocchio_model import MAX_JOINTS, PinocchioModel
 from .planar_chain import PLANAR_CHAIN_NAME, planar_chain_urdf
-from .urdf_check import check_urdf, mesh_roots, read_urdf_file
+from .urdf_check import check_urdf, read_urdf_file, resolved_visuals
 
 PAPER_ARM = "three_link_planar"
 """Name of the paper's three-link arm, shipped in ``urdf/``."""
@@ -151,8 +151,10 @@ def load_visual_model(
 ) -> tuple[pin.Model, pin.GeometryModel]:
     """The kinematic model and the visual geometry (meshes and primitives) of an arm, for viewers.
 
-    Same sources and joint locking as :func:`load_robot`. Mesh files are looked up next to the
-    URDF (``package://`` URIs resolve against its folder and the one above it).
+    Same sources and joint locking as :func:`load_robot`. Mesh files are found by the mesh rules
+    of :func:`~nnrobust.model.urdf_check.mesh_roots` (next to a URDF file, in the working folder
+    for a URDF given as text, and in ROS_PACKAGE_PATH); a visual whose mesh is missing is left
+    out, the rest of the robot is drawn.
     """
     source = str(source)
     kind, value = _resolve(source)
@@ -161,16 +163,13 @@ def load_visual_model(
         model, visual, name = robot.model, robot.visual_model, f"example-robot-data:{value}"
     else:
         model, name = _build_from_urdf(source, frozenset(locked_joints or ()))
-        visual_type = pin.GeometryType.VISUAL
+        text = read_urdf_file(value) if kind == "file" else value
+        if not PLANAR_CHAIN_NAME.match(source):
+            text = resolved_visuals(text, name, Path(value).resolve().parent if kind == "file" else None)
         failure = None
         with parser_messages() as said:
             try:
-                if kind == "file":
-                    roots = mesh_roots(Path(value).parent)
-                    visual = pin.buildGeomFromUrdf(model, value, visual_type,
-                                                   package_dirs=[str(p) for p in roots])
-                else:
-                    visual = pin.buildGeomFromUrdfString(model, value, visual_type)
+                visual = pin.buildGeomFromUrdfString(model, text, pin.GeometryType.VISUAL)
             except (ValueError, RuntimeError) as err:
                 failure = err
         if failure is not None:

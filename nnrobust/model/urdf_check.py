@@ -202,14 +202,18 @@ def _check_mass_moves(joints: dict[str, ET.Element], parent_of: dict[str, tuple[
                                  "make the joint fixed")
 
 
-def mesh_roots(base: Path) -> list[Path]:
-    """Folders a URDF in ``base`` may take meshes from: its own and the one above it.
+def mesh_roots(base: Path | None) -> list[Path]:
+    """Folders a URDF may take meshes from (docs/robots.md, "Meshes").
 
-    ``package://<pkg>/meshes/x.stl`` then finds ``<pkg>/meshes/x.stl`` for
-    ``<pkg>/urdf/robot.urdf``. The filesystem root is never one of them.
+    A URDF file in ``base``: its own folder and the one above it, so that
+    ``package://<pkg>/meshes/x.stl`` finds ``<pkg>/meshes/x.stl`` for ``<pkg>/urdf/robot.urdf``.
+    A URDF given as text (``base`` None): the working folder. In both cases also every folder of
+    ``ROS_PACKAGE_PATH`` (``package://<pkg>/...`` is ``<folder>/<pkg>/...``). The filesystem root
+    is never one of them.
     """
-    base = base.resolve()
-    return [p for p in (base, base.parent) if p != Path(p.anchor)]
+    own = [Path.cwd().resolve()] if base is None else [Path(base).resolve(), Path(base).resolve().parent]
+    ros = [Path(p).resolve() for p in os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep) if p]
+    return [p for p in dict.fromkeys(own + ros) if p != Path(p.anchor)]
 
 
 def _resolve_mesh(uri: str, base: Path | None, roots: list[Path], source: str) -> Path | None:
@@ -225,9 +229,10 @@ def _resolve_mesh(uri: str, base: Path | None, roots: list[Path], source: str) -
     elif os.path.isabs(uri):
         candidates = [Path(uri)]
     else:
-        candidates = [base / uri] if base is not None else []
-    if not candidates or not roots:
-        return None  # a URDF string: nothing to resolve against
+        candidates = [(base if base is not None else Path.cwd()) / uri]
+    if not roots:
+        raise UnsafePath(source, f"mesh {uri!r}: no folder may be read (the working folder is the "
+                         "filesystem root)")
     allowed = [r.resolve() for r in roots]
     found = None
     for candidate in candidates:
@@ -304,7 +309,7 @@ def check_urdf(text: str, source: str, base: Path | None = None,
     _check_mass_moves(joints, parent_of, masses, source)
 
     visual_meshes = {id(m) for visual in root.iter("visual") for m in visual.iter("mesh")}
-    allowed = roots if roots is not None else (mesh_roots(base) if base is not None else [])
+    allowed = roots if roots is not None else mesh_roots(base)
     for mesh in root.iter("mesh"):
         uri = mesh.get("filename", "")
         path = _resolve_mesh(uri, base, allowed, source)
@@ -312,6 +317,24 @@ def check_urdf(text: str, source: str, base: Path | None = None,
             where = "visual" if id(mesh) in visual_meshes else "collision"
             warnings.warn(f"{source}: {where} mesh {uri!r} not found ({path}); the robot simulates, "
                           "the viewer leaves that part out", MissingMeshWarning, stacklevel=3)
+
+
+def resolved_visuals(text: str, source: str, base: Path | None = None) -> str:
+    """The URDF with every visual mesh's filename replaced by the file it resolves to under the
+    mesh rules (:func:`mesh_roots`), and every visual whose mesh is missing removed, so that the
+    geometry parser reads no other file and one missing mesh costs only its own part.
+    """
+    root = ET.fromstring(text)
+    roots = mesh_roots(base)
+    for link in root.iter("link"):
+        for visual in list(link.findall("visual")):
+            for mesh in visual.iter("mesh"):
+                path = _resolve_mesh(mesh.get("filename", ""), base, roots, source)
+                if path is None or not path.is_file():
+                    link.remove(visual)
+                    break
+                mesh.set("filename", str(path))
+    return ET.tostring(root, encoding="unicode")
 
 
 def _by_name(root: ET.Element, tag: str, source: str) -> dict[str, ET.Element]:
