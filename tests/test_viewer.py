@@ -175,9 +175,58 @@ def test_module_server_refuses_an_address_it_cannot_bind():
     from nnrobust.viewer import start_viewer
 
     before = set(_children_of(os.getpid()))  # e.g. multiprocessing's resource tracker, from other tests
-    with pytest.raises(NNRobustError, match="did not start on 203.0.113.1"):
+    with pytest.raises(NNRobustError, match="cannot listen on 203.0.113.1:7999: .*use an address of this"):
         start_viewer(host="203.0.113.1", port=7999, timeout=30)
-    assert set(_children_of(os.getpid())) <= before  # the failed server process was not left behind
+    assert set(_children_of(os.getpid())) <= before  # no server process was left behind
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--port", "0"], "--port 0: a TCP port is 1 to 65535"),
+    (["--port", "99999"], "--port 99999: a TCP port is 1 to 65535"),
+    (["--host", "no-such-host.invalid"], "--host 'no-such-host.invalid' is not an address"),
+])
+def test_view_refuses_bad_addresses_in_one_line(paper_run, capsys, args, message):
+    assert main(["view", str(paper_run), "--seconds", "0", *args]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0], err
+
+
+def test_command_port_stays_on_loopback_when_the_page_is_shared():
+    """--host 0.0.0.0 shares the web page; the unauthenticated ZeroMQ command port stays on 127.0.0.1."""
+    from nnrobust.viewer import start_viewer
+
+    with start_viewer(host="0.0.0.0") as viewer:
+        addresses = _listening_addresses(viewer.process.pid)
+        assert any(a.startswith("0.0.0.0:") for a in addresses), addresses  # the page
+        zmq = [a for a in addresses if not a.startswith("0.0.0.0:")]
+        assert zmq and all(a.startswith("127.0.0.1:") for a in zmq), addresses
+
+
+def test_the_server_does_not_outlive_a_killed_parent(tmp_path):
+    """kill -9 of the process that started the viewer: the server exits too (no orphan)."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    script = ("from nnrobust.viewer import start_viewer\n"
+              "v = start_viewer()\nprint(v.process.pid, flush=True)\nimport time\ntime.sleep(60)\n")
+    parent = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
+    server = int(parent.stdout.readline())
+    parent.send_signal(signal.SIGKILL)
+    parent.wait()
+    deadline = time.monotonic() + 10
+    while _running(server) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert not _running(server)
+
+
+def _running(pid: int) -> bool:
+    """Whether process pid exists and is not a zombie."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
 
 
 def _children_of(pid: int) -> list[int]:

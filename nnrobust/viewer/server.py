@@ -1,7 +1,10 @@
 """A meshcat server that listens on one address (127.0.0.1 by default), run as a subprocess.
 
 meshcat 0.3.2's own server binds its web server to every interface; here the tornado
-application listens on ``host`` only, and so does the ZeroMQ socket.
+application listens on ``host`` only, and the ZeroMQ command socket (which takes scene commands
+without authentication) on 127.0.0.1 always, whatever ``host`` is. Started by
+:func:`start_viewer`, the server exits when its parent does (it watches its stdin pipe), so a
+killed parent never leaves it running.
 
     python -m nnrobust.viewer.server [--host 127.0.0.1] [--port 7000]
 """
@@ -10,9 +13,12 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import errno
 import io
+import os
 import queue
 import re
+import socket
 import subprocess
 import sys
 import threading
@@ -36,7 +42,42 @@ def _bridge_class():
             app.listen = lambda port, **kwargs: listen(port, address=self.host, **kwargs)
             return app
 
+        def setup_zmq(self, url):
+            """The command socket on 127.0.0.1, never on ``host``."""
+            return super().setup_zmq(re.sub(r"//[^/]*:(\d+)$", r"//127.0.0.1:\1", url))
+
     return LoopbackBridge
+
+
+def check_listen_address(host: str, port: int | None) -> None:
+    """Refuse, with one clear line, an address the viewer cannot listen on."""
+    if port is not None and not 1 <= port <= 65535:
+        raise NNRobustError(f"--port {port}: a TCP port is 1 to 65535 (omit --port for the first free "
+                            "one from 7000)")
+    try:
+        infos = socket.getaddrinfo(host, port or 0, type=socket.SOCK_STREAM)
+    except (socket.gaierror, UnicodeError) as err:
+        raise NNRobustError(f"--host {host!r} is not an address or host name this machine knows ({err}); "
+                            "use 127.0.0.1 (this machine only) or 0.0.0.0 (every interface)") from None
+    family, _, _, _, address = infos[0]
+    with socket.socket(family, socket.SOCK_STREAM) as probe:
+        probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            probe.bind(address)
+        except OSError as err:
+            what = f"port {port} is in use" if err.errno == errno.EADDRINUSE else (err.strerror or str(err))
+            raise NNRobustError(f"the viewer cannot listen on {host}:{port or 'any port'}: {what}; "
+                                "use an address of this machine (127.0.0.1, or 0.0.0.0 for every "
+                                "interface) and a free port") from None
+
+
+def _exit_with_parent() -> None:
+    """Exit when stdin (a pipe from the parent) closes: the parent has ended, however it ended."""
+    def watch():
+        sys.stdin.buffer.read()
+        os._exit(0)
+
+    threading.Thread(target=watch, daemon=True).start()
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -44,7 +85,11 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--host", default=LOOPBACK, help="address to listen on (default 127.0.0.1)")
     parser.add_argument("--port", type=int, help="web port (default: the first free from 7000)")
+    parser.add_argument("--exit-with-parent", action="store_true",
+                        help="exit when stdin closes (how start_viewer runs it)")
     args = parser.parse_args(argv)
+    if args.exit_with_parent:
+        _exit_with_parent()
     bridge = _bridge_class()(host=args.host, port=args.port)
     print(f"zmq_url={bridge.zmq_url}", flush=True)
     print(f"web_url={bridge.web_url}", flush=True)
@@ -83,11 +128,12 @@ def start_viewer(host: str = LOOPBACK, port: int | None = None, timeout: float =
     """Start the server subprocess and connect a meshcat client to it."""
     import meshcat
 
-    cmd = [sys.executable, "-u", "-m", "nnrobust.viewer.server", "--host", host]
+    check_listen_address(host, port)
+    cmd = [sys.executable, "-u", "-m", "nnrobust.viewer.server", "--host", host, "--exit-with-parent"]
     if port is not None:
         cmd += ["--port", str(port)]
-    process = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                               start_new_session=True)
+    process = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               text=True, start_new_session=True)
     lines: queue.Queue[str] = queue.Queue()
     threading.Thread(target=lambda: [lines.put(x) for x in process.stdout] + [lines.put("")],
                      daemon=True).start()
