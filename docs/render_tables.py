@@ -20,7 +20,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 DATA = ROOT / "docs" / "data"
 DOCUMENTS = ("README.md", "docs/controller.md", "docs/plant.md", "docs/fair-comparison.md",
-             "docs/robots.md")
+             "docs/robots.md", "docs/robustness.md")
 TABLE = re.compile(r"(<!-- table: (?P<name>[\w-]+) -->\n)(?P<body>.*?)(<!-- /table -->)", re.S)
 TORQUE_BUDGET = 10.0
 """[N m] RMS torque within which the headline compares the controllers' best errors."""
@@ -130,7 +130,42 @@ def arm_presets() -> str:
                      "python benchmarks/arm_presets.py --json docs/data/arm_presets.json")
 
 
-RENDERERS = {"arm-presets": arm_presets, "paper-reproduction": paper_reproduction,
+def _study(name: str):
+    """A shipped study's summary (docs/data/<name>.json, DIR/summary.json of its sweep): per
+    controller the error and torque statistics, then the median error at each grid value."""
+    def render() -> str:
+        summary = _data(name.replace("-", "_"))
+        entries = [{"controller": c, **e} for c, e in summary["controllers"].items()]
+
+        def stat(key, which, scale=1e3):
+            return lambda e: "–" if e[key][which] is None else f"{scale * e[key][which]:.3g}"
+
+        table = _markdown([("controller", "l", _text("controller")), ("runs", "r", _text("rows")),
+                           ("completed", "r", lambda e: f"{100 * e['success_rate']:.0f} %"),
+                           ("median error [mm]", "r", stat("rms_error_after_2s", "median")),
+                           ("p95 [mm]", "r", stat("rms_error_after_2s", "p95")),
+                           ("max [mm]", "r", stat("rms_error_after_2s", "max")),
+                           ("median torque [N m]", "r", stat("rms_torque", "median", 1.0)),
+                           ("p95 [N m]", "r", stat("rms_torque", "p95", 1.0)),
+                           ("saturated steps [%]", "r",
+                            lambda e: f"{100 * e['saturated_fraction_mean']:.2g}"),
+                           ("runs with warnings", "r", _text("rows_with_warnings"))], entries)
+        for key, values in next(iter(summary["controllers"].values()))["by_grid"].items():
+            columns = [("controller", "l", _text("controller"))] + [
+                (f"{key} = {value}", "r",
+                 lambda e, k=key, v=value: "–" if e["by_grid"][k][v]["median"] is None else
+                 f"{1e3 * e['by_grid'][k][v]['median']:.3g} ({1e3 * e['by_grid'][k][v]['p95']:.3g})")
+                for value in values]
+            table += "\nMedian (95th percentile) RMS error, t ≥ 2 s [mm], at each value of the grid:\n\n"
+            table += _markdown(columns, entries)
+        return table + (f"\n{summary['samples']} samples; errors are RMS over t ≥ 2 s. Made by "
+                         f"`nnrobust sweep {name} --out out/{name}` (summary.json).\n")
+
+    return render
+
+
+RENDERERS = {"arm-presets": arm_presets, "paper-robustness": _study("paper-robustness"),
+             "panda-robustness": _study("panda-robustness"), "paper-reproduction": paper_reproduction,
              "fair-headline": fair_headline, "fair-pareto": fair_pareto, "nn-options": nn_options,
              "subtask": subtask}
 

@@ -8,11 +8,9 @@ import sys
 import warnings
 from pathlib import Path
 
-from .config import CONTROLLER_KINDS as CONTROLLERS
 from .exceptions import NNRobustError, one_line
 from .run_folder import ExtrasInterrupted, check_out_folder, load_run, locked, write_run
 from .signals import signals_as_interrupt
-from .sweep.spec import shipped_sweeps
 
 TABLE_COLUMNS = (
     ("run", None),
@@ -337,6 +335,9 @@ def cmd_compare(args) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``nnrobust`` command."""
+    from .config import CONTROLLER_KINDS as CONTROLLERS
+    from .sweep.spec import shipped_sweeps
+
     parser = argparse.ArgumentParser(
         prog="nnrobust",
         description="Robust neural-network control of redundant manipulators: simulate the "
@@ -433,9 +434,9 @@ def _viewer_options(parser) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the exit code (0 success, 1 failed run, 2 bad input)."""
-    args = build_parser().parse_args(argv)
     try:
-        with signals_as_interrupt():
+        with signals_as_interrupt():  # from the start: Ctrl-C while importing is a clean exit too
+            args = build_parser().parse_args(argv)
             return args.func(args)
     except NNRobustError as err:
         print(f"nnrobust: error: {one_line(str(err))}", file=sys.stderr)

@@ -19,7 +19,7 @@ from .controllers import (
     TaskSpaceController,
     TaskSpacePD,
 )
-from .exceptions import ConfigError
+from .exceptions import ConfigError, ModelMismatch
 from .ik import solve_ik
 from .model import (
     DynamicsModel,
@@ -371,6 +371,19 @@ RK4_STABLE_STEP = 2.5
 """h * lambda below which RK4 is stable for a real decaying mode (the exact limit is 2.785)."""
 
 
+def check_mass_matrix(robot: PinocchioModel, q0: np.ndarray) -> None:
+    """Refuse a robot whose M(q0) is singular: a joint that moves (almost) no inertia, e.g. a link
+    turning about its own axis, cannot be accelerated by any finite torque model.
+    """
+    M = robot.mass(q0)
+    eigenvalues, vectors = np.linalg.eigh(M) if np.all(np.isfinite(M)) else (np.array([np.nan]), None)
+    if vectors is None or not eigenvalues[0] > 1e-10 * max(eigenvalues[-1], 1e-300):
+        joint = robot.joint_names[int(np.argmax(np.abs(vectors[:, 0])))] if vectors is not None else "?"
+        raise ModelMismatch(f"{robot.name}: M(q) is singular at q(0) (smallest eigenvalue "
+                            f"{eigenvalues[0]:.3g}): joint {joint!r} moves (almost) no inertia; check its "
+                            "axis and the inertias of the links it moves")
+
+
 def check_stiffness(config: ExperimentConfig, plant: Plant, q0: np.ndarray) -> None:
     """Refuse an RK4 step that viscous friction or the joint stops make unstable.
 
@@ -431,6 +444,7 @@ def build(config: ExperimentConfig) -> Setup:
     controller = build_controller(config, robot, nominal, trajectory, criterion, plant.friction)
     q0, v0 = initial_state(config, robot, trajectory)
     check_workspace(config, robot, trajectory, q0)
+    check_mass_matrix(robot, q0)
     check_stiffness(config, plant, q0)
     return Setup(config, robot, plant, nominal, trajectory, criterion, controller, q0, v0)
 

@@ -18,6 +18,8 @@ import _common  # noqa: E402
 import render_tables  # noqa: E402
 
 DATA_FILES = ["paper_reproduction", "fair_comparison", "nn_options", "subtask", "arm_presets"]
+STUDIES = ["paper_robustness", "panda_robustness"]
+"""Summaries of the shipped sweeps (their summary.json)."""
 
 
 @pytest.mark.parametrize("document", render_tables.DOCUMENTS)
@@ -30,7 +32,25 @@ def test_every_data_file_has_a_table():
     text = "".join((ROOT / d).read_text() for d in render_tables.DOCUMENTS)
     for name, renderer in render_tables.RENDERERS.items():
         assert f"<!-- table: {name} -->" in text, name
-    assert {p.stem for p in render_tables.DATA.glob("*.json")} == set(DATA_FILES)
+    assert {p.stem for p in render_tables.DATA.glob("*.json")} == set(DATA_FILES + STUDIES)
+
+
+@pytest.mark.parametrize("name", STUDIES)
+def test_the_worst_sample_of_a_study_reproduces(name):
+    """The worst NN sample of a shipped study, rerun as a normal run, gives the error its summary
+    reports (and the summary is of the shipped sweep file as it is now)."""
+    from nnrobust.experiment import run_experiment
+    from nnrobust.sweep import draw, load_sweep
+    from nnrobust.sweep.spec import base_config, experiment
+
+    summary = json.loads((render_tables.DATA / f"{name}.json").read_text())
+    spec = load_sweep(name.replace("_", "-"))
+    assert summary["sweep"] == spec.name and summary["samples"] == spec.size
+    assert set(summary["controllers"]) == set(spec.controllers)
+    worst = summary["controllers"]["nn"]["worst"]
+    config = experiment(spec, base_config(spec), draw(spec, worst["sample"]), "nn")
+    again = run_experiment(config).metrics()
+    assert again["rms_error_after_2s"] == pytest.approx(worst["rms_error_after_2s"], rel=1e-9)
 
 
 def _quickest_row(rows):

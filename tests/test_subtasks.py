@@ -42,3 +42,57 @@ def test_weights_are_scaled_to_sum_to_C():
     assert w.weights == pytest.approx([1.5, 0.5])
     with pytest.raises(ValueError, match="weights"):
         WeightedCriteria([HalfDetManipulability()], [1.0, 2.0])
+
+
+PRISMATIC_ARM = """<robot name="rprr">
+  <link name="base"/>
+  <joint name="j1" type="revolute"><parent link="base"/><child link="l1"/><axis xyz="0 0 1"/>
+    <limit lower="-3" upper="3" effort="10" velocity="3"/></joint>
+  <link name="l1"><inertial><origin xyz="0 0 0.1"/><mass value="1"/>
+    <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+  <joint name="j2" type="prismatic"><parent link="l1"/><child link="l2"/><origin xyz="0 0 0.2" rpy="0.3 0 0"/>
+    <axis xyz="1 0 0"/><limit lower="-0.3" upper="0.3" effort="50" velocity="1"/></joint>
+  <link name="l2"><inertial><origin xyz="0.1 0 0"/><mass value="1"/>
+    <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+  <joint name="j3" type="revolute"><parent link="l2"/><child link="l3"/><origin xyz="0.3 0 0" rpy="0 0.4 0"/>
+    <axis xyz="0 1 0"/><limit lower="-3" upper="3" effort="10" velocity="3"/></joint>
+  <link name="l3"><inertial><origin xyz="0.1 0 0"/><mass value="1"/>
+    <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+  <joint name="j4" type="revolute"><parent link="l3"/><child link="l4"/><origin xyz="0.25 0 0"/>
+    <axis xyz="0.6 0 0.8"/><limit lower="-3" upper="3" effort="10" velocity="3"/></joint>
+  <link name="l4"><inertial><origin xyz="0.1 0 0"/><mass value="0.5"/>
+    <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.01" iyz="0" izz="0.01"/></inertial></link>
+  <joint name="tool_joint" type="fixed"><parent link="l4"/><child link="tool"/>
+    <origin xyz="0.2 0.05 0"/></joint>
+  <link name="tool"/>
+</robot>
+"""
+
+
+@pytest.mark.parametrize("source, task", [("panda", "position"), ("panda", "pose"), ("ur5", "position"),
+                                          ("planar12", "planar"), ("three_link_planar", "planar"),
+                                          (PRISMATIC_ARM, "position")],
+                         ids=["panda-position", "panda-pose", "ur5", "planar12", "paper-arm", "prismatic"])
+def test_linear_time_manipulability_gradient(source, task):
+    """PinocchioModel.det_jjt_gradient (O(n) prefix and suffix sums, docs/equations.md) equals
+    central finite differences of det(J J^T) and the kinematic-Hessian form."""
+    from nnrobust import load_robot
+    from nnrobust.subtasks.manipulability import det, hessian_det_gradient
+
+    robot = load_robot(source, task=task)
+    lower, upper = robot.working_range
+    rng = np.random.default_rng(3)
+
+    def value(q):
+        J = robot.task_jacobian(q)
+        return det(J @ J.T)
+
+    for _ in range(5):
+        q = rng.uniform(lower, upper)
+        d, grad = robot.det_jjt_gradient(q)
+        d_hessian, grad_hessian = hessian_det_gradient(robot, q)
+        assert d == pytest.approx(value(q), rel=1e-12)
+        np.testing.assert_allclose(grad, grad_hessian, rtol=1e-9, atol=1e-12 * np.abs(grad_hessian).max())
+        h = 1e-6
+        fd = np.array([(value(q + h * e) - value(q - h * e)) / (2 * h) for e in np.eye(robot.nq)])
+        np.testing.assert_allclose(grad, fd, rtol=1e-5, atol=1e-7 * np.abs(fd).max())

@@ -197,6 +197,10 @@ def test_cli_sweep_writes_results_summary_and_rerun_commands(tmp_path, capsys):
     frame = read_results(out)
     assert np.isclose(frame[frame["controller"] == "nn"]["rms_error_after_2s"].max(),
                       nn["rms_error_after_2s"]["max"])
+    by_scale = nn["by_grid"]["plant.disturbance_scale"]
+    assert set(by_scale) == {"0.5", "2.0"}
+    rows = frame[(frame["controller"] == "nn") & (frame["plant.disturbance_scale"] == 2.0)]
+    assert np.isclose(by_scale["2.0"]["median"], rows["rms_error_after_2s"].median())
     assert (out / "sweep.toml").read_text() == load_sweep(path).to_toml()
     plots = sorted(p.name for p in (out / "plots").glob("*.png"))
     assert plots == ["error_cdf.png", "error_vs_nn_sigma.png", "error_vs_plant_disturbance_scale.png",

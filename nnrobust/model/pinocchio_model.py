@@ -160,6 +160,33 @@ class PinocchioModel:
         H = np.concatenate([dL, dW], axis=2).transpose(2, 0, 1)  # 6 x n(i) x n(k)
         return np.ascontiguousarray(H[self._rows])
 
+    def det_jjt_gradient(self, q: np.ndarray) -> tuple[float, np.ndarray]:
+        """det(J J^T) and its gradient in O(n), without the kinematic Hessian (docs/equations.md,
+        "Manipulability gradient").
+
+        d det(A)/dq_k = 2 sum_l <w_l, dJ_l/dq_k> with A = J J^T and W = adj(A) J. In world-aligned
+        axes, with columns J_l = (u_l, w_l) (linear velocity of the frame origin, angular velocity)
+        of a serial chain, dJ_l/dq_k = (w_min(k,l) x u_max(k,l), w_k x w_l [k < l]), so
+        grad_k = 2 (<u_k, P_k> + <w_k, S_k>) with the prefix sum P_k = sum_{l<k} Wu_l x w_l and
+        the suffix sum S_k = sum_{l>=k} (u_l x Wu_l + w_l x Ww_l). Joints off the frame's branch
+        have zero columns and get zero.
+        """
+        from ..subtasks.manipulability import adjugate, det
+
+        J6 = pin.computeFrameJacobian(self.model, self.data, q, self.frame_id, _LWA)
+        J = J6[self._rows]
+        A = J @ J.T
+        W6 = np.zeros_like(J6)
+        W6[self._rows] = adjugate(A) @ J
+        u, w = J6[:3].T, J6[3:].T  # n x 3
+        Wu, Ww = W6[:3].T, W6[3:].T
+        before = np.cross(Wu, w)
+        prefix = np.cumsum(before, axis=0) - before
+        after = np.cross(u, Wu) + np.cross(w, Ww)
+        suffix = np.cumsum(after[::-1], axis=0)[::-1]
+        grad = 2.0 * (np.einsum("ij,ij->i", u, prefix) + np.einsum("ij,ij->i", w, suffix))
+        return det(A), grad
+
     def chain_points(self, q: np.ndarray) -> np.ndarray:
         """World positions of the joint origins and of the task frame, (n + 1) x 3 [m]."""
         pin.forwardKinematics(self.model, self.data, q)

@@ -50,7 +50,9 @@ def read_urdf_file(path: str | Path) -> str:
 
 
 def _number_list(text: str | None, count: int, where: str, source: str) -> list[float]:
-    values = (text or "").split()
+    if text is None:
+        raise UrdfStructureError(source, f"{where}: the attribute is missing")
+    values = text.split()
     expected = "a finite number" if count == 1 else f"{count} finite numbers"
     try:
         numbers = [float(v) for v in values]

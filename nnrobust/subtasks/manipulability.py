@@ -8,7 +8,7 @@ from ..model.base import DynamicsModel
 from .base import Criterion
 
 
-def _adjugate(A: np.ndarray) -> np.ndarray:
+def adjugate(A: np.ndarray) -> np.ndarray:
     """adj(A) = det(A) A^-1, by cofactors (valid for singular A)."""
     m = A.shape[0]
     if m == 1:
@@ -38,14 +38,22 @@ def det(A: np.ndarray) -> float:
     return float(np.linalg.det(A))
 
 
-def _det_and_gradient(model: DynamicsModel, q: np.ndarray) -> tuple[float, np.ndarray]:
-    """det(J J^T) and its gradient: d det(A)/dq_k = 2 tr(adj(A) H_k J^T), A = J J^T."""
+def hessian_det_gradient(model: DynamicsModel, q: np.ndarray) -> tuple[float, np.ndarray]:
+    """det(J J^T) and its gradient d/dq_k = 2 tr(adj(J J^T) (dJ/dq_k) J^T) from the kinematic
+    Hessian dJ/dq (O(m n^2)): the reference form, for models without a faster one.
+    """
     J = model.task_jacobian(q)
     H = model.task_jacobian_derivative(q)  # m x n x n, H[:, :, k] = dJ/dq_k
     A = J @ J.T
-    adj = _adjugate(A)
-    grad = 2.0 * np.einsum("ij,jlk,il->k", adj, H, J)
-    return det(A), grad
+    return det(A), 2.0 * np.einsum("ij,jlk,il->k", adjugate(A), H, J)
+
+
+def det_and_gradient(model: DynamicsModel, q: np.ndarray) -> tuple[float, np.ndarray]:
+    """det(J J^T) and its gradient: in O(n) where the model offers ``det_jjt_gradient``
+    (:class:`~nnrobust.model.PinocchioModel`), else :func:`hessian_det_gradient`.
+    """
+    fast = getattr(model, "det_jjt_gradient", None)
+    return fast(q) if fast is not None else hessian_det_gradient(model, q)
 
 
 class HalfDetManipulability(Criterion):
@@ -58,7 +66,7 @@ class HalfDetManipulability(Criterion):
 
     def gradient(self, model: DynamicsModel, q: np.ndarray) -> np.ndarray:
         """0.5 d det(J J^T)/dq."""
-        return 0.5 * _det_and_gradient(model, q)[1]
+        return 0.5 * det_and_gradient(model, q)[1]
 
 
 class Manipulability(Criterion):
@@ -71,7 +79,7 @@ class Manipulability(Criterion):
 
     def gradient(self, model: DynamicsModel, q: np.ndarray) -> np.ndarray:
         """D det / dq / (2 sqrt(det)); zero at a singularity, where it is not defined."""
-        det, grad = _det_and_gradient(model, q)
+        det, grad = det_and_gradient(model, q)
         if det <= 1e-300:
             return np.zeros_like(q)
         return grad / (2.0 * np.sqrt(det))

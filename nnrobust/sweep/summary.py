@@ -21,10 +21,16 @@ def _stats(values: np.ndarray) -> dict:
             "max": float(values.max())}
 
 
+def _equal(cell, value) -> bool:
+    """A results cell equals a grid value (list cells come back from Parquet as arrays)."""
+    return (np.asarray(cell).tolist() if isinstance(value, list) else cell) == value
+
+
 def summarize(spec: SweepSpec, frame) -> dict:
     """Per controller: rows, success rate (completed runs), the median, 95th percentile and
-    maximum of the RMS error (t >= 2 s) and RMS torque over completed runs, the mean saturated
-    fraction, how many rows carry warnings, and the worst sample with its rerun command.
+    maximum of the RMS error (t >= 2 s) and RMS torque over completed runs, the same error
+    statistics at each value of every grid key (``by_grid``), the mean saturated fraction, how
+    many rows carry warnings, and the worst sample with its rerun command.
     """
     out = {"sweep": spec.name, "samples": spec.size, "controllers": {}}
     for controller in spec.controllers:
@@ -37,6 +43,11 @@ def summarize(spec: SweepSpec, frame) -> dict:
                  "rows_with_warnings": int(sum(len(w) > 0 for w in rows["warnings"]))}
         for key in STATISTICS:
             entry[key] = _stats(completed[key].to_numpy(dtype=float))
+        entry["by_grid"] = {
+            key: {str(value): _stats(completed[completed[key].map(lambda v, w=value: _equal(v, w))]
+                                     ["rms_error_after_2s"].to_numpy(dtype=float))
+                  for value in spec.vary[key]}
+            for key in spec.grid_keys}
         ranked = completed[np.isfinite(completed["rms_error_after_2s"].to_numpy(dtype=float))]
         if len(ranked):
             worst = ranked.loc[ranked["rms_error_after_2s"].idxmax()]
