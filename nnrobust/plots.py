@@ -14,6 +14,42 @@ from .results import Result  # noqa: E402
 
 FORMATS = ("png", "svg")
 
+MAX_BUCKETS = 1500
+"""Time series longer than 2 x this are drawn as their min-max envelope over this many buckets:
+the same picture at figure resolution (every peak kept), at a fraction of the drawing and SVG
+cost. result.npz keeps every sample."""
+
+
+def envelope(t: np.ndarray, y: np.ndarray, buckets: int = MAX_BUCKETS) -> tuple[np.ndarray, np.ndarray]:
+    """The samples of y that a plot needs: per bucket of consecutive samples its minimum and its
+    maximum (in time order), plus the last sample.
+    """
+    n = y.size
+    if n <= 2 * buckets:
+        return t, y
+    size = n // buckets
+    blocks = y[: size * buckets].reshape(buckets, size)
+    offsets = np.arange(buckets) * size
+    tail = y[size * buckets:]  # fewer than ``buckets`` samples: one more bucket
+    keep = np.concatenate([blocks.argmin(axis=1) + offsets, blocks.argmax(axis=1) + offsets,
+                           size * buckets + np.array([tail.argmin(), tail.argmax()]) if tail.size else [],
+                           [n - 1]]).astype(int)
+    keep = np.unique(keep)
+    return t[keep], y[keep]
+
+
+MAX_PATH_POINTS = 4000
+"""Points of a drawn path at most (every k-th sample: a path of the arm is smooth)."""
+
+
+def _path_stride(x: np.ndarray) -> int:
+    return max(1, -(-len(x) // MAX_PATH_POINTS))
+
+
+def _series(draw, t: np.ndarray, y: np.ndarray, *args, **kwargs):
+    """``draw(t, y, ...)`` (ax.plot, ax.semilogy) on the envelope of a long series."""
+    return draw(*envelope(t, y), *args, **kwargs)
+
 
 def _save(fig, folder: Path, name: str) -> list[Path]:
     paths = []
@@ -35,8 +71,9 @@ def _position_size(result: Result) -> int:
 def plot_path(result: Result, ax=None, label: str = "actual", axes: tuple[int, int] = (0, 1)) -> None:
     """Desired vs actual end-effector path projected on two world axes (Figs. 1, 4)."""
     i, j = axes
-    ax.plot(result.x_d[:, i], result.x_d[:, j], "k--", lw=1.5, label="desired $x_d$")
-    ax.plot(result.x[:, i], result.x[:, j], lw=1.0, label=label)
+    every = _path_stride(result.x)
+    ax.plot(result.x_d[::every, i], result.x_d[::every, j], "k--", lw=1.5, label="desired $x_d$")
+    ax.plot(result.x[::every, i], result.x[::every, j], lw=1.0, label=label)
     ax.plot(result.x[0, i], result.x[0, j], "o", ms=4, color="C0")
     ax.set_xlabel(f"{AXES[i]} [m]")
     ax.set_ylabel(f"{AXES[j]} [m]")
@@ -67,18 +104,18 @@ def plot_run(result: Result, folder: str | Path) -> list[Path]:
 
     fig, axes = plt.subplots(3 if pose else 2, 1, figsize=(7, 7 if pose else 5), sharex=True)
     for i in range(npos):
-        axes[0].plot(t, result.e[:, i] * 1e3, lw=0.8, label=f"$e_{AXES[i]}$")
+        _series(axes[0].plot, t, result.e[:, i] * 1e3, lw=0.8, label=f"$e_{AXES[i]}$")
     axes[0].set_ylabel("position error [mm]")
     axes[0].legend(fontsize=8)
     if pose:
         for i in range(3):
-            axes[1].plot(t, result.e[:, 3 + i] * 1e3, lw=0.8, label=f"$e_{{\\theta {AXES[i]}}}$")
+            _series(axes[1].plot, t, result.e[:, 3 + i] * 1e3, lw=0.8, label=f"$e_{{\\theta {AXES[i]}}}$")
         axes[1].set_ylabel("orientation error [mrad]")
         axes[1].legend(fontsize=8)
-    axes[-1].semilogy(t, np.maximum(result.position_error(), 1e-12), lw=0.8, label="position [m]")
+    _series(axes[-1].semilogy, t, np.maximum(result.position_error(), 1e-12), lw=0.8, label="position [m]")
     if pose:
-        axes[-1].semilogy(t, np.maximum(result.orientation_error(), 1e-12), lw=0.8,
-                          label="orientation [rad]")
+        _series(axes[-1].semilogy, t, np.maximum(result.orientation_error(), 1e-12), lw=0.8,
+                label="orientation [rad]")
         axes[-1].legend(fontsize=8)
     axes[-1].set_ylabel("error norm [m]" if not pose else "error norm [m, rad]")
     axes[-1].set_xlabel("t [s]")
@@ -94,10 +131,10 @@ def plot_run(result: Result, folder: str | Path) -> list[Path]:
     ):
         fig, ax = plt.subplots(figsize=(7, 3.5))
         for i, joint in enumerate(joint_labels):
-            line, = ax.plot(t, data[:, i], lw=lw, label=joint)
+            line, = _series(ax.plot, t, data[:, i], lw=lw, label=joint)
             commanded = result.tau_cmd if name == "torques" else None
             if commanded is not None and np.any(commanded[:, i] != data[:, i]):
-                ax.plot(t, commanded[:, i], lw=0.4, alpha=0.35, color=line.get_color())
+                _series(ax.plot, t, commanded[:, i], lw=0.4, alpha=0.35, color=line.get_color())
             for bound in limits:
                 if bound is not None and np.isfinite(bound[i]) and abs(bound[i]) < 1e6:
                     ax.axhline(bound[i], ls=":", lw=0.8, color=line.get_color())
@@ -114,9 +151,9 @@ def plot_run(result: Result, folder: str | Path) -> list[Path]:
         written += _save(fig, folder, name)
 
     fig, axes = plt.subplots(2, 1, figsize=(7, 4.5), sharex=True)
-    axes[0].plot(t, result.signals["h"], lw=0.9)
+    _series(axes[0].plot, t, result.signals["h"], lw=0.9)
     axes[0].set_ylabel("h(q)")
-    axes[1].plot(t, result.signals["manipulability"], lw=0.9)
+    _series(axes[1].plot, t, result.signals["manipulability"], lw=0.9)
     axes[1].set_ylabel("$\\sqrt{\\det JJ^T}$ [m$^m$]")
     axes[1].set_xlabel("t [s]")
     fig.suptitle("Subtask criterion and manipulability")
@@ -139,9 +176,9 @@ def plot_run(result: Result, folder: str | Path) -> list[Path]:
 
     if "rho_hat" in result.signals:
         fig, axes = plt.subplots(2, 1, figsize=(7, 4.5), sharex=True)
-        axes[0].plot(t, result.signals["rho_hat"], lw=0.9)
+        _series(axes[0].plot, t, result.signals["rho_hat"], lw=0.9)
         axes[0].set_ylabel("$\\hat\\rho$ [m/s$^2$]")
-        axes[1].semilogy(t, np.maximum(result.signals["eps"], 1e-16), lw=0.9)
+        _series(axes[1].semilogy, t, np.maximum(result.signals["eps"], 1e-16), lw=0.9)
         axes[1].set_ylabel("$\\varepsilon$")
         axes[1].set_xlabel("t [s]")
         fig.suptitle("NN bound estimate and boundary layer")
@@ -158,8 +195,8 @@ def plot_comparison(results: dict[str, Result], folder: str | Path) -> list[Path
     axes[0].plot(first.x_d[:, 0], first.x_d[:, 1], "k--", lw=1.5, label="desired")
     for name, res in results.items():
         axes[0].plot(res.x[:, 0], res.x[:, 1], lw=0.9, label=name)
-        axes[1].semilogy(res.t, np.maximum(res.position_error(), 1e-12), lw=0.8, label=name)
-        axes[2].plot(res.t, np.linalg.norm(res.tau, axis=1), lw=0.5, label=name)
+        _series(axes[1].semilogy, res.t, np.maximum(res.position_error(), 1e-12), lw=0.8, label=name)
+        _series(axes[2].plot, res.t, np.linalg.norm(res.tau, axis=1), lw=0.5, label=name)
     axes[0].set_aspect("equal", adjustable="datalim")
     axes[0].set_xlabel("x [m]")
     axes[0].set_ylabel("y [m]")

@@ -151,3 +151,20 @@ def test_nominal_friction_holds_the_viscous_estimate_only():
     controller = build(load_preset("paper-ellipse").replace(simulation={"duration": 1.0})).controller
     np.testing.assert_array_equal(controller.nominal_friction.viscous, [4.0, 1.0, 0.2])
     np.testing.assert_array_equal(controller.nominal_friction.coulomb, [0.0, 0.0, 0.0])
+
+
+def test_plots_draw_the_envelope_of_long_series():
+    """A long series is drawn as its per-bucket minimum and maximum: every peak is kept, the
+    drawing holds a bounded number of points, and short series are drawn whole."""
+    from nnrobust.plots import MAX_BUCKETS, envelope
+
+    t = np.linspace(0.0, 10.0, 100_001)
+    y = np.sin(t) + (np.arange(t.size) % 997 == 0) * 5.0  # isolated spikes
+    t2, y2 = envelope(t, y)
+    assert len(y2) <= 2 * MAX_BUCKETS + 100
+    assert y2.max() == y.max() and y2.min() == y.min()
+    assert np.all(np.diff(t2) > 0) and t2[-1] == t[-1]
+    spikes = np.flatnonzero(y > 2)
+    assert set(t[spikes]) <= set(t2)  # every spike is drawn
+    short = np.arange(100.0)
+    assert envelope(short, short)[1] is short
