@@ -406,6 +406,23 @@ def _damaged_run(folder: Path, damage: str):
     return lambda: load_run(run)
 
 
+def _viewer(host: str = "127.0.0.1", port: int | None = None):
+    from nnrobust.viewer.server import check_listen_address
+
+    return lambda: check_listen_address(host, port)
+
+
+VIEWER_CASES = [
+    Case("viewer --port 0", lambda d: _viewer(port=0), ex.NNRobustError,
+         "--port 0: a TCP port is 1 to 65535"),
+    Case("viewer --port 99999", lambda d: _viewer(port=99999), ex.NNRobustError,
+         "--port 99999: a TCP port is 1 to 65535"),
+    Case("viewer --host that does not resolve", lambda d: _viewer("no-such-host.invalid"), ex.NNRobustError,
+         "--host 'no-such-host.invalid' is not an address or host name this machine can resolve"),
+    Case("viewer --host of another machine", lambda d: _viewer("203.0.113.1", 7999), ex.NNRobustError,
+         "the viewer cannot listen on 203.0.113.1:7999"),
+]
+
 RUN_FOLDER_CASES = [
     Case("--out naming a file", lambda d: _check_out(_file(d, "taken", "x")),
          RunFolderError, "taken exists and is not a folder"),
@@ -428,7 +445,7 @@ RUN_FOLDER_CASES = [
          RunFolderError, "Object arrays cannot be loaded when allow_pickle=False"),
 ]
 
-CASES = URDF_CASES + CONFIG_CASES + RUN_FOLDER_CASES
+CASES = URDF_CASES + CONFIG_CASES + RUN_FOLDER_CASES + VIEWER_CASES
 
 
 def message_of(case: Case, folder: Path) -> str:

@@ -56,8 +56,8 @@ def check_listen_address(host: str, port: int | None) -> None:
                             "one from 7000)")
     try:
         infos = socket.getaddrinfo(host, port or 0, type=socket.SOCK_STREAM)
-    except (socket.gaierror, UnicodeError) as err:
-        raise NNRobustError(f"--host {host!r} is not an address or host name this machine knows ({err}); "
+    except (socket.gaierror, UnicodeError):
+        raise NNRobustError(f"--host {host!r} is not an address or host name this machine can resolve; "
                             "use 127.0.0.1 (this machine only) or 0.0.0.0 (every interface)") from None
     family, _, _, _, address = infos[0]
     with socket.socket(family, socket.SOCK_STREAM) as probe:
