@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 import warnings
 from pathlib import Path
@@ -335,6 +336,7 @@ def cmd_compare(args) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``nnrobust`` command."""
+    from . import __version__
     from .config import CONTROLLER_KINDS as CONTROLLERS
     from .sweep.spec import shipped_sweeps
 
@@ -342,8 +344,10 @@ def build_parser() -> argparse.ArgumentParser:
         prog="nnrobust",
         description="Robust neural-network control of redundant manipulators: simulate the "
         "paper's experiments or your own, and compare controllers.",
+        epilog=EXIT_CODES, formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    sub = parser.add_subparsers(dest="command", required=True)
+    parser.add_argument("--version", action="version", version=f"nnrobust {__version__}")
+    sub = parser.add_subparsers(dest="command")
 
     run = sub.add_parser("run", help="run a preset or an experiment file (TOML)",
                          description="Simulate a preset or a TOML experiment file and write a run "
@@ -383,7 +387,11 @@ def build_parser() -> argparse.ArgumentParser:
                             "and default task frame.")
     robots.set_defaults(func=cmd_robots)
 
-    compare = sub.add_parser("compare", help="compare run folders: metrics table and plots")
+    compare = sub.add_parser("compare", help="compare run folders: metrics table and plots",
+                             description="Print the metrics of several run folders side by side "
+                             "(labelled by folder name, or by as much of the path as tells them "
+                             "apart) and, with --out, draw their paths, errors and torques in one "
+                             "figure.")
     compare.add_argument("runs", nargs="+", help="run folders written by 'nnrobust run'")
     compare.add_argument("--out", help="folder for the comparison figure (PNG and SVG)")
     compare.set_defaults(func=cmd_compare)
@@ -432,12 +440,27 @@ def _viewer_options(parser) -> None:
     parser.add_argument("--port", type=int, help="viewer web port (default: first free from 7000)")
 
 
+EXIT_CODES = """exit codes:
+  0    success
+  1    a run diverged or was interrupted (its partial result is written)
+  2    bad input: one line on stderr names the file, key or value
+  130  interrupted (Ctrl-C, SIGTERM, SIGHUP) outside a simulation"""
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Entry point; returns the exit code (0 success, 1 failed run, 2 bad input)."""
+    """Entry point; returns the exit code (0 success, 1 failed run, 2 bad input, 130 interrupted)."""
     try:
         with signals_as_interrupt():  # from the start: Ctrl-C while importing is a clean exit too
-            args = build_parser().parse_args(argv)
+            parser = build_parser()
+            args = parser.parse_args(argv)
+            if args.command is None:  # bare `nnrobust`: the help
+                parser.print_help()
+                return 0
             return args.func(args)
+    except BrokenPipeError:  # `nnrobust presets | head -1`: the reader left; say nothing
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 0
     except NNRobustError as err:
         print(f"nnrobust: error: {one_line(str(err))}", file=sys.stderr)
         return 2

@@ -254,3 +254,22 @@ def test_run_with_live_view_streams_the_arm(tmp_path, monkeypatch, capsys):
                  "--out", str(tmp_path / "run")]) == 0
     assert served == [True]  # the server was up when the run was shown
     assert "live view: http://127.0.0.1:" in capsys.readouterr().err
+
+
+def test_command_line_basics(capsys):
+    """--version, bare `nnrobust` prints the help with the exit codes, and a closed pipe (as with
+    `nnrobust presets | head -1`) ends the command quietly."""
+    import subprocess
+    import sys
+
+    from nnrobust import __version__
+
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--version"])
+    assert exit_info.value.code == 0 and capsys.readouterr().out.strip() == f"nnrobust {__version__}"
+    assert main([]) == 0
+    shown = capsys.readouterr().out
+    assert "usage: nnrobust" in shown and "exit codes:" in shown and "130" in shown
+    pipe = subprocess.run(f"{sys.executable} -m nnrobust.cli presets | head -1", shell=True,
+                          capture_output=True, text=True, timeout=120)
+    assert pipe.stdout.count("\n") == 1 and pipe.stderr == "", pipe.stderr
