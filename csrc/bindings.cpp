@@ -2,8 +2,11 @@
 #include <nanobind/eigen/dense.h>
 #include <nanobind/nanobind.h>
 #include <nanobind/stl/string.h>
+#include <nanobind/stl/vector.h>
 
 #include <Python.h>
+
+#include <stdexcept>
 
 #include "closed_loop.hpp"
 #include "model.hpp"
@@ -26,9 +29,11 @@ bool python_signal_pending() {
   return false;
 }
 
-LoopTrace run(LoadedModel &plant, const LoopSpec &spec) {
+LoopTrace run(LoadedModel &plant, const LoopSpec &spec, LoadedModel *nominal) {
+  if (spec.nominal_kind == "pinocchio" && nominal == nullptr)
+    throw std::invalid_argument("nominal_kind 'pinocchio' needs the nominal model");
   nb::gil_scoped_release released;
-  return nnrobust::run_loop(plant, spec, &python_signal_pending);
+  return nnrobust::run_loop(plant, nominal, spec, &python_signal_pending);
 }
 
 }  // namespace
@@ -56,9 +61,11 @@ NB_MODULE(_loop, m) {
   FIELD(viscous); FIELD(coulomb); FIELD(dist_amplitude); FIELD(dist_phase); FIELD(dist_omega);
   FIELD(torque_limit); FIELD(stops); FIELD(stop_lower); FIELD(stop_upper); FIELD(stop_stiffness);
   FIELD(stop_alpha); FIELD(position_noise); FIELD(velocity_noise); FIELD(resolution); FIELD(noise_q);
-  FIELD(noise_v); FIELD(delay); FIELD(nominal); FIELD(nominal_viscous); FIELD(nominal_coulomb);
-  FIELD(coulomb_smoothing); FIELD(center); FIELD(axis_a); FIELD(axis_b); FIELD(omega); FIELD(phase);
-  FIELD(Kp); FIELD(Kv); FIELD(k); FIELD(paper_criterion); FIELD(criterion_weight); FIELD(smoothness);
+  FIELD(noise_v); FIELD(delay); FIELD(nominal_kind); FIELD(nominal); FIELD(m); FIELD(nominal_viscous);
+  FIELD(nominal_coulomb); FIELD(coulomb_smoothing); FIELD(center); FIELD(axis_a); FIELD(axis_b);
+  FIELD(omega); FIELD(phase); FIELD(law); FIELD(Kp); FIELD(Kv); FIELD(k); FIELD(pd_Kp); FIELD(pd_Kd);
+  FIELD(null_damping); FIELD(criteria); FIELD(criterion_weights); FIELD(smoothness); FIELD(limit_lower);
+  FIELD(limit_upper); FIELD(limit_margin);
   FIELD(pinv_threshold); FIELD(pinv_max_damping); FIELD(robust); FIELD(BtP); FIELD(sliding_gain);
   FIELD(sliding_boundary); FIELD(basis_joint); FIELD(basis_bias); FIELD(law_corrected);
   FIELD(basis_centers); FIELD(basis_inv2w2); FIELD(F); FIELD(gamma); FIELD(eps_min); FIELD(sigma); FIELD(z0);
@@ -80,8 +87,9 @@ NB_MODULE(_loop, m) {
       .def_ro("status", &LoopTrace::status)
       .def_ro("divergence_index", &LoopTrace::divergence_index)
       .def_ro("divergence_joint", &LoopTrace::divergence_joint);
-  m.def("run_loop", &run, nb::arg("plant"), nb::arg("spec"),
-        "Run the compiled closed loop (GIL released; Ctrl-C and SIGTERM stop it).");
+  m.def("run_loop", &run, nb::arg("plant"), nb::arg("spec"), nb::arg("nominal").none() = nb::none(),
+        "Run the compiled closed loop (GIL released; Ctrl-C and SIGTERM stop it); `nominal` is the "
+        "controller's Pinocchio model when spec.nominal_kind is 'pinocchio'.");
   m.def("floor_loop", &nnrobust::floor_loop, nb::arg("model"), nb::arg("q0"), nb::arg("v0"),
         nb::arg("steps"), nb::arg("dt"), nb::call_guard<nb::gil_scoped_release>(),
         "The bare C++ loop (RNEA + frame kinematics + 4 ABA per step); returns the final [q, v].");

@@ -4,12 +4,14 @@
 #include <cmath>
 #include <deque>
 #include <limits>
+#include <memory>
 
 #include <Eigen/Eigenvalues>
 #include <pinocchio/algorithm/aba.hpp>
 #include <pinocchio/algorithm/frames.hpp>
 #include <pinocchio/algorithm/jacobian.hpp>
 #include <pinocchio/algorithm/kinematics.hpp>
+#include <pinocchio/algorithm/rnea.hpp>
 
 namespace nnrobust {
 namespace {
@@ -82,6 +84,208 @@ struct ThreeLink {
   }
 };
 
+// ---- the nominal models (nnrobust/model) ---------------------------------------------------------
+struct TaskState {
+  Vector x, jdot_v;
+  Matrix J;  // m x n
+};
+
+// sum_i s_i ... helpers shared by both nominal models
+double det_small(const Matrix &A) {  // manipulability.det: closed form for m <= 3
+  if (A.rows() == 1) return A(0, 0);
+  if (A.rows() == 2) return A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0);
+  const Vector3d a0 = A.col(0), a1 = A.col(1), a2 = A.col(2);
+  return a0.dot(a1.cross(a2));
+}
+
+Matrix adjugate_small(const Matrix &A) {  // manipulability.adjugate for m <= 3
+  Matrix adj(A.rows(), A.cols());
+  if (A.rows() == 1) {
+    adj(0, 0) = 1.0;
+  } else if (A.rows() == 2) {
+    adj << A(1, 1), -A(0, 1), -A(1, 0), A(0, 0);
+  } else {
+    const Vector3d a0 = A.col(0), a1 = A.col(1), a2 = A.col(2);
+    adj.row(0) = a1.cross(a2).transpose();
+    adj.row(1) = a2.cross(a0).transpose();
+    adj.row(2) = a0.cross(a1).transpose();
+  }
+  return adj;
+}
+
+struct Nominal {
+  virtual ~Nominal() = default;
+  virtual TaskState task_state(const Vector &q, const Vector &v) = 0;
+  virtual Vector inverse_dynamics(const Vector &q, const Vector &v, const Vector &a) = 0;  // M a + N
+  virtual Vector gravity(const Vector &q) = 0;
+  virtual Vector det_gradient(const Vector &q, const Matrix &J) = 0;  // d det(J J^T)/dq
+};
+
+struct ClosedFormNominal : Nominal {
+  ThreeLink model;
+  explicit ClosedFormNominal(const ThreeLinkSpec &s) : model{s} {}
+
+  TaskState task_state(const Vector &q, const Vector &v) override {
+    Vector2d x, jdot_v;
+    Eigen::Matrix<double, 2, 3> J;
+    model.task_state(q, v, x, J, jdot_v);
+    return {x, jdot_v, J};
+  }
+  Vector inverse_dynamics(const Vector &q, const Vector &v, const Vector &a) override {
+    return model.mass(q) * Vector3d(a) + model.bias(q, v);
+  }
+  Vector gravity(const Vector &q) override { return model.bias(q, Vector3d::Zero()); }
+  // einsum("ij,jlk,il->k", adj, H, J) x 2 with H[:, l, k] = tail[:, max(l, k)]
+  Vector det_gradient(const Vector &q, const Matrix &J) override {
+    const Eigen::Matrix<double, 2, 3> tail = model.jacobian_tail(q);
+    const Matrix adj = adjugate_small(J * J.transpose());
+    Vector grad = Vector::Zero(3);
+    for (int k = 0; k < 3; ++k) {
+      double sum = 0.0;
+      for (int i = 0; i < 2; ++i)
+        for (int j = 0; j < 2; ++j)
+          for (int l = 0; l < 3; ++l) sum += adj(i, j) * tail(j, std::max(l, k)) * J(i, l);
+      grad[k] = 2.0 * sum;
+    }
+    return grad;
+  }
+};
+
+// PinocchioModel: task_state, inverse_dynamics (RNEA), gravity, det_jjt_gradient (O(n))
+struct PinocchioNominal : Nominal {
+  LoadedModel &m;
+  int rows;
+  Matrix J6;
+  PinocchioNominal(LoadedModel &model, int task_rows) : m(model), rows(task_rows), J6(6, model.model.nv) {}
+
+  TaskState task_state(const Vector &q, const Vector &v) override {
+    pinocchio::forwardKinematics(m.model, m.data, q, v, Vector::Zero(m.model.nv));
+    pinocchio::computeJointJacobians(m.model, m.data);
+    const auto &placement = pinocchio::updateFramePlacement(m.model, m.data, m.frame);
+    J6.setZero();
+    pinocchio::getFrameJacobian(m.model, m.data, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, J6);
+    const auto acc = pinocchio::getFrameClassicalAcceleration(m.model, m.data, m.frame,
+                                                             pinocchio::LOCAL_WORLD_ALIGNED);
+    return {placement.translation().head(rows), acc.linear().head(rows), J6.topRows(rows)};
+  }
+  Vector inverse_dynamics(const Vector &q, const Vector &v, const Vector &a) override {
+    return pinocchio::rnea(m.model, m.data, q, v, a);
+  }
+  Vector gravity(const Vector &q) override { return pinocchio::computeGeneralizedGravity(m.model, m.data, q); }
+  // grad_k = 2 (<u_k, P_k> + <w_k, S_k>), docs/equations.md "Manipulability gradient"
+  Vector det_gradient(const Vector &q, const Matrix &) override {
+    J6.setZero();
+    pinocchio::computeFrameJacobian(m.model, m.data, q, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, J6);
+    const Matrix J = J6.topRows(rows);
+    Matrix W6 = Matrix::Zero(6, J6.cols());
+    W6.topRows(rows) = adjugate_small(J * J.transpose()) * J;
+    const int n = static_cast<int>(J6.cols());
+    Vector grad(n);
+    Vector3d prefix = Vector3d::Zero(), suffix = Vector3d::Zero();
+    std::vector<Vector3d> after(n);
+    for (int l = 0; l < n; ++l) {
+      const Vector3d u = J6.col(l).head<3>(), w = J6.col(l).tail<3>();
+      after[l] = u.cross(Vector3d(W6.col(l).head<3>())) + w.cross(Vector3d(W6.col(l).tail<3>()));
+    }
+    std::vector<Vector3d> suffixes(n);
+    for (int l = n - 1; l >= 0; --l) {
+      suffix += after[l];
+      suffixes[l] = suffix;
+    }
+    for (int k = 0; k < n; ++k) {
+      const Vector3d u = J6.col(k).head<3>(), w = J6.col(k).tail<3>();
+      grad[k] = 2.0 * (u.dot(prefix) + w.dot(suffixes[k]));
+      prefix += Vector3d(W6.col(k).head<3>()).cross(w);
+    }
+    return grad;
+  }
+};
+
+// ---- the criteria (nnrobust/subtasks) ------------------------------------------------------------
+struct Criteria {
+  const LoopSpec &s;
+
+  // JointLimitAvoidance._barrier: (b, b') with the linear continuation outside the knots
+  void barrier(const Vector &q, Vector &b, Vector &db) const {
+    const Vector span = s.limit_upper - s.limit_lower;
+    b.resize(q.size());
+    db.resize(q.size());
+    for (int i = 0; i < q.size(); ++i) {
+      const double lo = s.limit_lower[i] + s.limit_margin * span[i], hi = s.limit_upper[i] - s.limit_margin * span[i];
+      const double knot = std::clamp(q[i], lo, hi);
+      const double g = (s.limit_upper[i] - knot) * (knot - s.limit_lower[i]);
+      const double bi = span[i] * span[i] / (4 * g);
+      db[i] = -span[i] * span[i] * (s.limit_upper[i] + s.limit_lower[i] - 2 * knot) / (4 * g * g);
+      b[i] = bi + db[i] * (q[i] - knot);
+    }
+  }
+
+  // WeightedCriteria.gradient on the nominal model (J: its task Jacobian at q)
+  Vector gradient(Nominal &model, const Vector &q, const Matrix &J) const {
+    const int n = static_cast<int>(q.size());
+    Vector grad = Vector::Zero(n);
+    bool have_det = false;
+    double det = 0.0;
+    Vector ddet;
+    auto det_terms = [&]() {
+      if (!have_det) {
+        det = det_small(J * J.transpose());
+        ddet = model.det_gradient(q, J);
+        have_det = true;
+      }
+    };
+    for (size_t c = 0; c < s.criteria.size(); ++c) {
+      const std::string &kind = s.criteria[c];
+      Vector g;
+      if (kind == "paper" || kind == "half_det") {
+        det_terms();
+        g = 0.5 * ddet;
+        if (kind == "paper") g += -s.smoothness.dot(q) * s.smoothness;
+      } else if (kind == "manipulability") {
+        det_terms();
+        g = det <= 1e-300 ? Vector(Vector::Zero(n)) : Vector(ddet / (2.0 * std::sqrt(det)));
+      } else if (kind == "joint_limits") {
+        Vector b, db;
+        barrier(q, b, db);
+        g = -db / static_cast<double>(n);
+      } else {  // joint_centering
+        const Vector span = s.limit_upper - s.limit_lower, center = 0.5 * (s.limit_lower + s.limit_upper);
+        g = -(q - center).cwiseQuotient(span.cwiseProduct(span)) / static_cast<double>(n);
+      }
+      grad += s.criterion_weights[c] * g;
+    }
+    return grad;
+  }
+
+  // WeightedCriteria.value on the true robot (J: its task Jacobian at q)
+  double value(const Vector &q, const Matrix &J) const {
+    const int n = static_cast<int>(q.size());
+    const double det = det_small(J * J.transpose());
+    double h = 0.0;
+    for (size_t c = 0; c < s.criteria.size(); ++c) {
+      const std::string &kind = s.criteria[c];
+      double v;
+      if (kind == "paper") {
+        const double cq = s.smoothness.dot(q);
+        v = 0.5 * det + (-0.5 * cq * cq);
+      } else if (kind == "half_det") {
+        v = 0.5 * det;
+      } else if (kind == "manipulability") {
+        v = std::sqrt(std::max(det, 0.0));
+      } else if (kind == "joint_limits") {
+        Vector b, db;
+        barrier(q, b, db);
+        v = -b.mean();
+      } else {
+        const Vector span = s.limit_upper - s.limit_lower, center = 0.5 * (s.limit_lower + s.limit_upper);
+        v = -0.5 * (q - center).cwiseQuotient(span).squaredNorm() / static_cast<double>(n);
+      }
+      h += s.criterion_weights[c] * v;
+    }
+    return h;
+  }
+};
+
 // ---- the controller (nnrobust/controllers) ------------------------------------------------------
 struct Output {
   Vector tau;
@@ -91,10 +295,11 @@ struct Output {
 
 struct Controller {
   const LoopSpec &s;
-  ThreeLink nominal;
+  Nominal &nominal;
+  Criteria criteria;
   int L = 0;
 
-  explicit Controller(const LoopSpec &spec) : s(spec), nominal{spec.nominal} {
+  Controller(const LoopSpec &spec, Nominal &model) : s(spec), nominal(model), criteria{spec} {
     L = static_cast<int>(spec.basis_bias) + static_cast<int>(spec.basis_centers.size());
   }
 
@@ -111,44 +316,44 @@ struct Controller {
     return phi;
   }
 
-  // PaperCriterion.gradient (0.5 d det(J J^T)/dq - (c^T q) c), times its weight
-  Vector3d criterion_gradient(const Vector3d &q, const Eigen::Matrix<double, 2, 3> &J) const {
-    const Eigen::Matrix<double, 2, 3> tail = nominal.jacobian_tail(q);
-    const Matrix2d A = J * J.transpose();
-    Matrix2d adj;
-    adj << A(1, 1), -A(0, 1), -A(1, 0), A(0, 0);
-    Vector3d grad = Vector3d::Zero();
-    for (int k = 0; k < 3; ++k) {
-      double sum = 0.0;  // einsum("ij,jlk,il->k", adj, H, J)
-      for (int i = 0; i < 2; ++i)
-        for (int j = 0; j < 2; ++j)
-          for (int l = 0; l < 3; ++l) sum += adj(i, j) * tail(j, std::max(l, k)) * J(i, l);
-      grad[k] = 0.5 * (2.0 * sum);
-    }
-    const Vector3d c = s.smoothness;
-    grad += -c.dot(q) * c;
-    return s.criterion_weight * grad;
+  // DampedPseudoInverse.factor: ((J J^T + lambda^2 I)^-1, lambda^2)
+  Matrix pinv_factor(const Matrix &J, double &lam2) const {
+    const Matrix JJt = J * J.transpose();
+    const double sigma_min_sq =
+        std::max(Eigen::SelfAdjointEigenSolver<Matrix>(JJt, Eigen::EigenvaluesOnly).eigenvalues()[0], 0.0);
+    const double thr_sq = s.pinv_threshold * s.pinv_threshold;
+    lam2 = sigma_min_sq >= thr_sq ? 0.0 : s.pinv_max_damping * s.pinv_max_damping * (1.0 - sigma_min_sq / thr_sq);
+    return (JJt + lam2 * Matrix::Identity(J.rows(), J.rows())).inverse();
   }
 
-  Output compute(double t, const Vector3d &q, const Vector3d &v, const Vector &z) const {
+  Output compute(double t, const Vector &q, const Vector &v, const Vector &z) {
     Output out;
-    Vector2d x, jdot_v;
-    Eigen::Matrix<double, 2, 3> J;
-    nominal.task_state(q, v, x, J, jdot_v);
-    const double ph = s.omega * t + s.phase, cw = std::cos(ph), sw = std::sin(ph);
-    const Vector2d xd = s.center + s.axis_a * cw + s.axis_b * sw;
-    const Vector2d dxd = s.omega * (-s.axis_a * sw + s.axis_b * cw);
-    const Vector2d ddxd = -(s.omega * s.omega) * (s.axis_a * cw + s.axis_b * sw);
-    const Vector2d e = x - xd, de = J * v - dxd;
-    Eigen::Vector4d y;
-    y << e, de;
-    Vector2d u0 = Vector2d::Zero();
     out.z = z;
+    const TaskState ts = nominal.task_state(q, v);
+    const Matrix &J = ts.J;
+    const double ph = s.omega * t + s.phase, cw = std::cos(ph), sw = std::sin(ph);
+    const Vector xd = s.center + s.axis_a * cw + s.axis_b * sw;
+    const Vector dxd = s.omega * (-s.axis_a * sw + s.axis_b * cw);
+    const Vector ddxd = -(s.omega * s.omega) * (s.axis_a * cw + s.axis_b * sw);
+    const Vector e = ts.x - xd, de = J * v - dxd;
+    double lam2 = 0.0;
+    const Matrix inv = pinv_factor(J, lam2);
+    const Matrix J_pinv = J.transpose() * inv;
+    out.damping = lam2;
+    if (s.law == "pd") {  // TaskSpacePD.compute
+      Vector tau = J.transpose() * (-s.pd_Kp * e - s.pd_Kd * de) + nominal.gravity(q);
+      tau -= s.null_damping * (v - J_pinv * (J * v));
+      out.tau = tau;
+      return out;
+    }
+    Vector y(2 * e.size());
+    y << e, de;
+    Vector u0 = Vector::Zero(e.size());
     if (s.robust == "nn") {
-      const Vector2d w = s.BtP * y;
-      Vector in(s.basis_joint ? 6 : 4);
+      const Vector w = s.BtP * y;
+      Vector in(s.basis_joint ? 2 * q.size() : y.size());
       if (s.basis_joint) in << q, v;
-      else in << y;
+      else in = y;
       const Vector phi = basis(in);
       const double rho = z.head(L).dot(phi);
       const double eps = std::max(z[L], 0.0);
@@ -167,31 +372,22 @@ struct Controller {
       }
       out.z[L] = s.eps_min + (z[L] - s.eps_min) * std::exp(-s.gamma * s.period);
     } else if (s.robust == "sliding") {
-      const Vector2d w = s.BtP * y;
+      const Vector w = s.BtP * y;
       u0 = -s.sliding_gain * w / std::max(w.norm(), s.sliding_boundary);
     }
-    // DampedPseudoInverse.factor
-    const Matrix2d JJt = J * J.transpose();
-    const double sigma_min_sq = std::max(Eigen::SelfAdjointEigenSolver<Matrix2d>(JJt, Eigen::EigenvaluesOnly).eigenvalues()[0], 0.0);
-    const double thr_sq = s.pinv_threshold * s.pinv_threshold;
-    const double lam2 = sigma_min_sq >= thr_sq ? 0.0
-                                               : s.pinv_max_damping * s.pinv_max_damping * (1.0 - sigma_min_sq / thr_sq);
-    const Matrix2d inv = (JJt + lam2 * Matrix2d::Identity()).inverse();
-    const Eigen::Matrix<double, 3, 2> J_pinv = J.transpose() * inv;
-    out.damping = lam2;
-    const Vector2d task_acc = ddxd - jdot_v - s.Kv * de - s.Kp * e + u0;
-    Vector3d a = J_pinv * task_acc;
+    const Vector task_acc = ddxd - ts.jdot_v - s.Kv * de - s.Kp * e + u0;
+    Vector a = J_pinv * task_acc;
     if (s.k != 0.0) {
-      const Vector3d grad = s.paper_criterion ? criterion_gradient(q, J) : Vector3d::Zero();
-      const Vector3d zz = grad - v;
+      const Vector grad = s.criteria.empty() ? Vector(Vector::Zero(q.size())) : criteria.gradient(nominal, q, J);
+      const Vector zz = grad - v;
       a += s.k * (zz - J_pinv * (J * zz));
     }
-    Vector3d friction;
-    for (int i = 0; i < 3; ++i) {
+    Vector friction(q.size());
+    for (int i = 0; i < q.size(); ++i) {
       const double sg = s.coulomb_smoothing <= 0 ? sign(v[i]) : std::clamp(v[i] / s.coulomb_smoothing, -1.0, 1.0);
       friction[i] = s.nominal_viscous[i] * v[i] + s.nominal_coulomb[i] * sg;
     }
-    out.tau = nominal.mass(q) * a + nominal.bias(q, v) + friction;
+    out.tau = nominal.inverse_dynamics(q, v, a) + friction;
     return out;
   }
 };
@@ -223,8 +419,9 @@ struct Plant {
 };
 
 // Result.from_trace's per-sample quantities of the true robot at q: the chain points, the
-// manipulability sqrt(det(J J^T)) of the planar task and the weighted paper criterion.
-void record_kinematics(LoadedModel &m, const LoopSpec &s, const Vector &q, long k, LoopTrace &tr) {
+// manipulability sqrt(det(J J^T)) of the task Jacobian and the weighted criterion h.
+void record_kinematics(LoadedModel &m, const LoopSpec &s, const Criteria &criteria, const Vector &q, long k,
+                       LoopTrace &tr) {
   auto &model = m.model;
   auto &data = m.data;
   pinocchio::forwardKinematics(model, data, q);
@@ -234,19 +431,14 @@ void record_kinematics(LoadedModel &m, const LoopSpec &s, const Vector &q, long 
   tr.chain.block<1, 3>(k, 3 * joints) = data.oMf[m.frame].translation().transpose();
   Matrix J6 = Matrix::Zero(6, model.nv);
   pinocchio::computeFrameJacobian(model, data, q, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, J6);
-  const Matrix J = J6.topRows(2);
-  const Matrix2d A = J * J.transpose();
-  const double det = A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0);
-  tr.manipulability[k] = std::sqrt(std::max(det, 0.0));
-  if (s.paper_criterion) {
-    const double cq = s.smoothness.dot(q);
-    tr.h[k] = s.criterion_weight * (0.5 * det + (-0.5 * cq * cq));
-  }
+  const Matrix J = J6.topRows(s.m);
+  tr.manipulability[k] = std::sqrt(std::max(det_small(J * J.transpose()), 0.0));
+  if (!s.criteria.empty()) tr.h[k] = criteria.value(q, J);
 }
 
 }  // namespace
 
-LoopTrace run_loop(LoadedModel &model, const LoopSpec &s, bool (*interrupted)()) {
+LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpec &s, bool (*interrupted)()) {
   const int n = model.model.nv;
   const long steps = s.steps;
   LoopTrace tr;
@@ -263,7 +455,10 @@ LoopTrace run_loop(LoadedModel &model, const LoopSpec &s, bool (*interrupted)())
   tr.chain = Matrix::Constant(steps, 3 * (model.model.njoints), nan);
   tr.manipulability = tr.rho_hat;
   tr.h = tr.rho_hat;
-  Controller controller(s);
+  std::unique_ptr<Nominal> nominal;
+  if (s.nominal_kind == "pinocchio") nominal = std::make_unique<PinocchioNominal>(*nominal_model, s.m);
+  else nominal = std::make_unique<ClosedFormNominal>(s.nominal);
+  Controller controller(s, *nominal);
   Plant plant{model, s};
   const bool noisy = s.noise_q.rows() > 0;
   Vector q = s.q0, v = s.v0, z = s.z0, tau = Vector::Zero(n);
@@ -277,7 +472,7 @@ LoopTrace run_loop(LoadedModel &model, const LoopSpec &s, bool (*interrupted)())
       break;
     }
     const double t = static_cast<double>(k) * s.period;
-    Vector3d qm = q, vm = v;  // Sensor.measure
+    Vector qm = q, vm = v;  // Sensor.measure
     if (noisy) {
       for (int i = 0; i < n; ++i) {
         qm[i] = q[i] + s.position_noise[i] * s.noise_q(k, i);
@@ -301,7 +496,7 @@ LoopTrace run_loop(LoadedModel &model, const LoopSpec &s, bool (*interrupted)())
     tr.eps[k] = out.eps;
     tr.z_norm[k] = out.z_norm;
     tr.damping[k] = out.damping;
-    if (q.allFinite()) record_kinematics(model, s, q, k, tr);
+    if (q.allFinite()) record_kinematics(model, s, controller.criteria, q, k, tr);
     if (!out.tau.allFinite() || !q.allFinite() || !v.allFinite()) {
       tr.status = "diverged";
       tr.divergence_index = k;

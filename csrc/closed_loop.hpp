@@ -35,17 +35,27 @@ struct LoopSpec {
   Vector position_noise, velocity_noise, resolution;  // n (zeros: ideal)
   Matrix noise_q, noise_v;                            // steps x n standard normal draws (or empty)
   int delay = 0;
-  // nominal model and controller (nnrobust.controllers.task_space.TaskSpaceController)
+  // nominal model: "closed-form" (ThreeLinkSpec) or "pinocchio" (a second LoadedModel)
+  std::string nominal_kind = "closed-form";
   ThreeLinkSpec nominal;
+  int m = 2;  // task rows: 2 (planar: x, y) or 3 (position)
   Vector nominal_viscous, nominal_coulomb;
   double coulomb_smoothing = 0.0;
-  Eigen::Vector2d center, axis_a, axis_b;  // nnrobust.trajectories.EllipseTrajectory
+  Vector center, axis_a, axis_b;  // nnrobust.trajectories.EllipseTrajectory (m entries)
   double omega = 1.0, phase = 0.0;
+  // the law: "task-space" (TaskSpaceController, eq. 9) or "pd" (TaskSpacePD)
+  std::string law = "task-space";
   Matrix Kp, Kv;
   double k = 0.0;
-  bool paper_criterion = false;  // subtasks.PaperCriterion with weight criterion_weight
-  double criterion_weight = 1.0;
-  Vector smoothness;  // its JointSmoothness coefficients
+  Matrix pd_Kp, pd_Kd;
+  double null_damping = 0.0;
+  // criteria of WeightedCriteria (weights already scaled to sum to C): "paper", "half_det",
+  // "manipulability", "joint_limits", "joint_centering"
+  std::vector<std::string> criteria;
+  Vector criterion_weights;
+  Vector smoothness;                  // PaperCriterion's JointSmoothness coefficients
+  Vector limit_lower, limit_upper;    // joint criteria: the URDF's limits
+  double limit_margin = 0.05;         // JointLimitAvoidance.margin
   double pinv_threshold = 0.02, pinv_max_damping = 0.02;
   // robust term: "none", "nn" (NNCompensator) or "sliding" (SlidingModeCompensator)
   std::string robust = "none";
@@ -64,15 +74,16 @@ struct LoopTrace {
   Vector rho_hat, eps, z_norm, damping;
   // what Result.from_trace records, from the true robot's kinematics (nnrobust/results.py)
   Matrix chain;          // steps x 3(n + 1): joint origins, then the task frame, in world axes
-  Vector manipulability; // sqrt(det(J J^T)) of the planar task Jacobian
-  Vector h;              // the weighted paper criterion (NaN without one)
+  Vector manipulability; // sqrt(det(J J^T)) of the task Jacobian
+  Vector h;              // the weighted criterion (NaN without one)
   long done = 0;
   std::string status = "completed";
   long divergence_index = -1;  // step at which it diverged
   int divergence_joint = -1;   // joint that ran away (-1: non-finite state or torque)
 };
 
-// Runs the loop; `interrupted()` is polled every few hundred steps (Ctrl-C, SIGTERM).
-LoopTrace run_loop(LoadedModel &plant, const LoopSpec &spec, bool (*interrupted)());
+// Runs the loop; `nominal` is the controller's Pinocchio model (nominal_kind "pinocchio", else
+// unused); `interrupted()` is polled every few hundred steps (Ctrl-C, SIGTERM).
+LoopTrace run_loop(LoadedModel &plant, LoadedModel *nominal, const LoopSpec &spec, bool (*interrupted)());
 
 }  // namespace nnrobust

@@ -62,31 +62,40 @@ def floor_loop(model, q0, v0, steps: int, dt: float):
 # ---- the compiled closed loop ---------------------------------------------------------------------
 
 
+COMPILED_CRITERIA = {"PaperCriterion": "paper", "HalfDetManipulability": "half_det",
+                     "Manipulability": "manipulability", "JointLimitAvoidance": "joint_limits",
+                     "JointCentering": "joint_centering"}
+"""The criteria with a compiled twin, by class name."""
+
+
 def twin_refusal(setup) -> str:
     """Why this experiment has no compiled twin ("" when it has one).
 
-    The compiled loop so far covers the paper's arm with the closed-form nominal model
-    (docs/compiled.md): the eq. (9) law with no u_0, the NN compensator or the sliding-mode term,
-    the paper's criterion, the ellipse of eq. (18), and the whole plant (friction, sinusoidal
+    The compiled loop covers (docs/compiled.md): the eq. (9) law (no u_0, the NN compensator with
+    either basis, the sliding-mode term; computed torque) and the task-space PD; the closed-form
+    three-link nominal model or any Pinocchio nominal model (perturbed or exact); planar and
+    position tasks; the ellipse of eq. (18); the criteria paper, half_det_manipulability,
+    manipulability, joint_limits and joint_centering; and the whole plant (friction, sinusoidal
     disturbance, saturation, stops, sensor noise, quantisation, delay), integrated by RK4.
     """
-    from .controllers import NNCompensator, SlidingModeCompensator, TaskSpaceController
-    from .model import ThreeLinkPlanarModel
-    from .subtasks import PaperCriterion, WeightedCriteria
+    from .controllers import NNCompensator, SlidingModeCompensator, TaskSpaceController, TaskSpacePD
+    from .model import PinocchioModel, ThreeLinkPlanarModel
+    from .subtasks import WeightedCriteria
     from .trajectories import EllipseTrajectory
 
     config, controller = setup.config, setup.controller
     if not available():
         return unavailable_reason()
+    criterion = setup.criterion
     checks = [
         (config.simulation.integrator == "rk4", "the integrator is not rk4"),
-        (type(controller) is TaskSpaceController, f"controller.kind {config.controller.kind!r}"),
-        (isinstance(setup.nominal, ThreeLinkPlanarModel), "the nominal model is not the closed form"),
+        (type(controller) in (TaskSpaceController, TaskSpacePD),
+         f"controller.kind {config.controller.kind!r}"),
+        (setup.robot.task in ("planar", "position"), f"a {setup.robot.task!r} task"),
+        (isinstance(setup.nominal, (ThreeLinkPlanarModel, PinocchioModel)), "the nominal model"),
         (type(setup.trajectory) is EllipseTrajectory, "the trajectory is not an ellipse"),
-        (setup.criterion is None or (isinstance(setup.criterion, WeightedCriteria)
-                                     and len(setup.criterion.criteria) == 1
-                                     and isinstance(setup.criterion.criteria[0], PaperCriterion)),
-         "a criterion other than 'paper'"),
+        (criterion is None or (isinstance(criterion, WeightedCriteria) and all(
+            type(c).__name__ in COMPILED_CRITERIA for c in criterion.criteria)), "a criterion"),
     ]
     compensator = getattr(controller, "compensator", None)
     checks.append((compensator is None or type(compensator) in (NNCompensator, SlidingModeCompensator),
@@ -101,12 +110,13 @@ def loop_spec(setup, duration: float):
     """The compiled loop's description of a built experiment (every array it needs)."""
     import numpy as np
 
-    from .controllers import NNCompensator
+    from .controllers import NNCompensator, TaskSpacePD
+    from .model import PinocchioModel
+    from .simulation import MAX_SPEED
+    from .subtasks import JointCentering, JointLimitAvoidance, PaperCriterion
 
     def f(x):  # the C++ side takes contiguous float64 arrays
         return np.ascontiguousarray(x, dtype=float)
-
-    from .simulation import MAX_SPEED
 
     module = _module()
     sim, plant, controller = setup.config.simulation, setup.plant, setup.controller
@@ -130,25 +140,40 @@ def loop_spec(setup, duration: float):
         draws = np.random.default_rng(sensor.seed).standard_normal((steps, 2, n))
         s.noise_q, s.noise_v = f(draws[:, 0, :]), f(draws[:, 1, :])
     s.delay = plant.delay
-    params = setup.nominal.params
-    spec = module.ThreeLinkSpec()
-    spec.beta, spec.p, spec.lengths = f(params.beta), f(params.p), f(params.lengths)
-    spec.gamma, spec.gravity = f(params.gamma), f(params.gravity)
-    s.nominal = spec
-    s.nominal_viscous = f(controller.nominal_friction.viscous)
-    s.nominal_coulomb = f(controller.nominal_friction.coulomb)
-    s.coulomb_smoothing = controller.nominal_friction.smoothing
+    s.m = setup.robot.m
+    if isinstance(setup.nominal, PinocchioModel):
+        s.nominal_kind = "pinocchio"
+    else:
+        params = setup.nominal.params
+        spec = module.ThreeLinkSpec()
+        spec.beta, spec.p, spec.lengths = f(params.beta), f(params.p), f(params.lengths)
+        spec.gamma, spec.gravity = f(params.gamma), f(params.gravity)
+        s.nominal = spec
     trajectory = setup.trajectory
     s.center, s.axis_a, s.axis_b = f(trajectory.center), f(trajectory.axis_a), f(trajectory.axis_b)
     s.omega, s.phase = trajectory.omega, trajectory.phase
-    s.Kp, s.Kv, s.k = f(controller.Kp), f(controller.Kv), controller.k
-    if controller.criterion is not None:
-        s.paper_criterion = True
-        s.criterion_weight = float(controller.criterion.weights[0])
-        s.smoothness = f(controller.criterion.criteria[0]._terms[1].c)
-    else:
-        s.smoothness = np.zeros(3)
     s.pinv_threshold, s.pinv_max_damping = controller.pinv.threshold, controller.pinv.max_damping
+    s.nominal_viscous, s.nominal_coulomb = f(np.zeros(n)), f(np.zeros(n))
+    criterion = setup.criterion
+    if criterion is not None:
+        s.criteria = [COMPILED_CRITERIA[type(c).__name__] for c in criterion.criteria]
+        s.criterion_weights = f(criterion.weights)
+        for c in criterion.criteria:
+            if isinstance(c, PaperCriterion):
+                s.smoothness = f(c._terms[1].c)
+            if isinstance(c, (JointLimitAvoidance, JointCentering)):
+                s.limit_lower, s.limit_upper = f(setup.robot.lower_limits), f(setup.robot.upper_limits)
+            if isinstance(c, JointLimitAvoidance):
+                s.limit_margin = c.margin
+    if isinstance(controller, TaskSpacePD):
+        s.law = "pd"
+        s.pd_Kp, s.pd_Kd, s.null_damping = f(controller.Kp), f(controller.Kd), controller.null_damping
+        s.z0 = np.zeros(0)
+        return s
+    s.nominal_viscous = f(controller.nominal_friction.viscous)
+    s.nominal_coulomb = f(controller.nominal_friction.coulomb)
+    s.coulomb_smoothing = controller.nominal_friction.smoothing
+    s.Kp, s.Kv, s.k = f(controller.Kp), f(controller.Kv), controller.k
     comp = controller.compensator
     s.z0 = f(controller.initial_state())
     if isinstance(comp, NNCompensator):
@@ -174,7 +199,9 @@ def simulate_compiled(setup, duration: float):
         raise NNRobustError(f"simulation.backend = 'compiled': {refusal}")
     spec = loop_spec(setup, duration)
     plant = load_model(setup.robot.model, setup.robot.task_frame)
-    out = _module().run_loop(plant, spec)
+    nominal = (load_model(setup.nominal.model, setup.nominal.task_frame) if spec.nominal_kind == "pinocchio"
+               else None)
+    out = _module().run_loop(plant, spec, nominal)
     done, period = out.done, setup.config.simulation.control_period
     t = np.arange(done) * period
     signals = {"damping": np.asarray(out.damping)[:done]}

@@ -111,6 +111,10 @@ def test_without_the_extension_the_package_says_why(monkeypatch):
 
 PAPER_PRESETS = ["paper-ellipse", "paper-line", "paper-ellipse-noisy", "paper-ellipse-paper-law",
                  "paper-ellipse-vertical"]
+ARM_PRESETS = ["panda-ellipse", "ur5-ellipse", "planar7-ellipse"]
+"""Presets on Pinocchio nominal models (perturbed URDFs), position and planar tasks, the
+manipulability and joint-range criteria, the error-space NN basis."""
+KINDS = ["nn", "no-u0", "sliding-mode", "computed-torque", "pd"]
 
 
 def _both_backends(preset, duration, **changes):
@@ -128,12 +132,13 @@ def _both_backends(preset, duration, **changes):
 
 
 @needs_extension
-@pytest.mark.parametrize("kind", ["nn", "no-u0", "sliding-mode"])
-@pytest.mark.parametrize("preset", PAPER_PRESETS)
+@pytest.mark.parametrize("kind", KINDS)
+@pytest.mark.parametrize("preset", PAPER_PRESETS + ARM_PRESETS)
 def test_compiled_loop_equals_the_python_loop(preset, kind):
     """q, q', tau, tau_cmd, the controller state and every signal agree to 1e-8 over the first
-    0.5 s, for every paper preset (saturation, stops, noise, quantisation and delay included)."""
-    py, cc = _both_backends(preset, 0.5, controller={"kind": kind})
+    0.5 s (0.25 s on the real arms), for every preset with a compiled twin and every controller
+    (saturation, stops, noise, quantisation and delay included)."""
+    py, cc = _both_backends(preset, 0.5 if preset in PAPER_PRESETS else 0.25, controller={"kind": kind})
     assert cc.status == py.status == "completed"
     for name in ("t", "q", "dq", "tau", "tau_cmd", "z"):
         a, b = getattr(py, name), getattr(cc, name)
@@ -167,11 +172,13 @@ def test_auto_takes_the_compiled_loop_only_with_a_twin_for_every_component():
 
     paper = build(load_preset("paper-ellipse").replace(simulation={"duration": 1.0}))
     assert choose_backend(paper) == "compiled"
-    panda = build(load_preset("panda-ellipse").replace(simulation={"duration": 1.0}))
-    assert choose_backend(panda) == "python"
-    assert "no compiled twin" in compiled.twin_refusal(panda)
+    assert choose_backend(build(load_preset("panda-ellipse").replace(simulation={"duration": 1.0}))) == \
+        "compiled"
+    pose = build(load_preset("panda-pose").replace(simulation={"duration": 1.0}))
+    assert choose_backend(pose) == "python"
+    assert compiled.twin_refusal(pose) == "a 'pose' task has no compiled twin yet"
     with pytest.raises(NNRobustError, match="simulation.backend: 'compiled' cannot run this experiment"):
-        choose_backend(build(load_preset("panda-ellipse").replace(
+        choose_backend(build(load_preset("panda-pose").replace(
             simulation={"duration": 1.0, "backend": "compiled"})))
 
 
@@ -185,7 +192,7 @@ def test_a_compiled_run_diverges_like_the_python_run():
 
 
 @needs_extension
-@pytest.mark.parametrize("preset", ["paper-ellipse", "paper-line"])
+@pytest.mark.parametrize("preset", ["paper-ellipse", "paper-line", "panda-ellipse"])
 def test_a_compiled_result_equals_the_python_result(preset):
     """What the compiled loop records for the Result (chain points, x, e, the criterion h and the
     manipulability, from the true robot's kinematics) equals what Result.from_trace computes."""
