@@ -231,7 +231,7 @@ def cmd_sweep(args) -> int:
     try:
         counts = run_sweep(spec, out, args.workers, args.scheduler, args.overwrite, progress)
     except KeyboardInterrupt:
-        print(f"\nnrobust: sweep interrupted; the rows written so far are in {out}/results; run the same "
+        print(f"\nnnrobust: sweep interrupted; the rows written so far are in {out}/results; run the same "
               "command again to resume", file=sys.stderr)
         return 130
     if started:
