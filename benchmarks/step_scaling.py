@@ -12,8 +12,13 @@ disturbance torques excite modes with M^-1 eigenvalues up to 1e6 and the run div
 RK4 step (docs/robots.md, docs/plant.md); their cost per step is one O(n) vector expression either
 way. One control step is the controller's output (which advances the adaptive law once) plus one
 RK4 step of the plant (four ABA calls). The exponent is the least-squares slope of log(step time)
-against log(n) for n >= 15. The Python backend runs every size; the compiled loop has no twin
-for these experiments yet (docs/compiled.md).
+against log(n) for n >= 15, for the Python loop and the compiled loop, timed in turn at each size.
+The compiled loop is timed alone (run_loop); its set-up per run is not a step cost: it serializes
+the plant and nominal models through Pinocchio's text archive, which grows like n^2 because a
+Model stores each joint's supports and subtree (54 ms at n = 120).
+
+The self-motion gain is k = 2 here, not the preset's 10: with k = 10 the 300-link chain's
+self-motion diverges within 0.07 s at the 1 ms control period (n = 200 does not).
 """
 
 from __future__ import annotations
@@ -23,6 +28,7 @@ import time
 
 import numpy as np
 
+from nnrobust import compiled
 from nnrobust.experiment import build
 from nnrobust.presets import load_preset
 from nnrobust.results import write_json_atomic
@@ -31,21 +37,28 @@ from nnrobust.simulation import simulate
 SIZES = (3, 7, 15, 30, 60, 120, 300)
 
 
-def step_seconds(n: int, steps: int, repeats: int) -> float:
-    """Best of ``repeats`` runs of ``steps`` control steps, per step [s]."""
+def step_seconds(n: int, steps: int, repeats: int, backend: str = "python") -> float:
+    """Best of ``repeats`` runs of ``steps`` control steps on ``backend``, per step [s]."""
     seed = [0.9] + [-1.2 / (n - 1)] * (n - 1)
     config = load_preset("planar7-ellipse").replace(
         robot={"source": f"planar{n}"},
         nn={"basis_input": "joint"},
         plant={"friction": "urdf", "disturbance": "none", "joint_stops": False},  # module docstring
         subtasks={"criteria": ["manipulability", "joint_centering"], "weights": [0.5, 0.5]},
+        controller={"k": 2.0},  # module docstring
         simulation={"q_seed": seed, "duration": steps * 1e-3},
     )
     setup = build(config)
     best = np.inf
     for _ in range(repeats):
         start = time.perf_counter()
-        trace = simulate(setup.plant, setup.controller, setup.q0, setup.v0, steps * 1e-3)
+        if backend == "compiled":  # the loop alone (module docstring)
+            spec = compiled.loop_spec(setup, steps * 1e-3)
+            models = [compiled.load_model(m.model, m.task_frame) for m in (setup.robot, setup.nominal)]
+            start = time.perf_counter()
+            trace = compiled._module().run_loop(models[0], spec, models[1])
+        else:
+            trace = simulate(setup.plant, setup.controller, setup.q0, setup.v0, steps * 1e-3)
         best = min(best, (time.perf_counter() - start) / steps)
         if trace.status != "completed":
             raise RuntimeError(f"n = {n}: the run {trace.status}: {trace.message}")
@@ -66,15 +79,18 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=300, help="control steps per timing (1 ms each)")
     parser.add_argument("--repeats", type=int, default=3, help="timings per size; the best is kept")
     args = parser.parse_args()
-    seconds = []
-    print(f"{'n':>5s} {'us / step':>10s} {'us / step / n':>14s}")
+    backends = ["python"] + (["compiled"] if compiled.available() else [])
+    seconds: dict[str, list[float]] = {b: [] for b in backends}
+    print(f"{'n':>5s} " + " ".join(f"{b + ' us/step':>18s}" for b in backends))
     for n in SIZES:
-        seconds.append(step_seconds(n, args.steps, args.repeats))
-        print(f"{n:5d} {seconds[-1] * 1e6:10.1f} {seconds[-1] * 1e6 / n:14.2f}", flush=True)
-    exponent = growth_exponent(SIZES, seconds)
-    print(f"fitted exponent for n = {SIZES[2]}..{SIZES[-1]}: {exponent:.3f} (1 = linear)")
+        for backend in backends:
+            seconds[backend].append(step_seconds(n, args.steps, args.repeats, backend))
+        print(f"{n:5d} " + " ".join(f"{seconds[b][-1] * 1e6:18.1f}" for b in backends), flush=True)
+    exponents = {b: growth_exponent(SIZES, seconds[b]) for b in backends}
+    for backend, exponent in exponents.items():
+        print(f"{backend}: fitted exponent for n = {SIZES[2]}..{SIZES[-1]}: {exponent:.3f} (1 = linear)")
     if args.json:
-        write_json_atomic(args.json, {"n": list(SIZES), "step_seconds": seconds, "exponent": exponent})
+        write_json_atomic(args.json, {"n": list(SIZES), "step_seconds": seconds, "exponent": exponents})
     if args.plot:
         import matplotlib
 
@@ -82,12 +98,14 @@ def main() -> None:
         import matplotlib.pyplot as plt
 
         fig, ax = plt.subplots(figsize=(5, 3.6))
-        ax.loglog(SIZES, np.array(seconds) * 1e6, "o-", label="measured")
         ref = np.array(SIZES, float)
-        ax.loglog(ref, seconds[2] * 1e6 * ref / SIZES[2], "k--", lw=0.8, label="slope 1 (O(n))")
+        for backend in backends:
+            ax.loglog(SIZES, np.array(seconds[backend]) * 1e6, "o-",
+                      label=f"{backend} loop (exponent {exponents[backend]:.2f})")
+            ax.loglog(ref, seconds[backend][2] * 1e6 * ref / SIZES[2], "k--", lw=0.8)
         ax.set_xlabel("joints n")
         ax.set_ylabel("closed-loop step [us]")
-        ax.set_title(f"Cost per control step, fitted exponent {exponent:.2f}")
+        ax.set_title("Cost per control step (dashed: slope 1)")
         ax.legend(fontsize=8)
         fig.savefig(args.plot, dpi=120, bbox_inches="tight")
 

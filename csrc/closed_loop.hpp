@@ -10,6 +10,11 @@
 
 namespace nnrobust {
 
+// Row-major: a step reads or writes one contiguous row of each per-step array (a column-major
+// steps x n array would make every recorded value a cache miss, which dominated the step for
+// long chains).
+using Rows = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
 // nnrobust.model.three_link.ThreeLinkPlanarModel: the paper's closed-form nominal model.
 struct ThreeLinkSpec {
   Eigen::Vector3d beta, p, lengths, gamma;
@@ -33,7 +38,7 @@ struct LoopSpec {
   Vector stop_lower, stop_upper, stop_stiffness;
   double stop_alpha = 0.0;
   Vector position_noise, velocity_noise, resolution;  // n (zeros: ideal)
-  Matrix noise_q, noise_v;                            // steps x n standard normal draws (or empty)
+  Rows noise_q, noise_v;                              // steps x n standard normal draws (or empty)
   int delay = 0;
   // nominal model: "closed-form" (ThreeLinkSpec) or "pinocchio" (a second LoadedModel)
   std::string nominal_kind = "closed-form";
@@ -70,10 +75,10 @@ struct LoopSpec {
 
 // What simulate() returns (nnrobust.simulation.Trace).
 struct LoopTrace {
-  Matrix q, dq, tau, tau_cmd, z;
+  Rows q, dq, tau, tau_cmd, z;
   Vector rho_hat, eps, z_norm, damping;
   // what Result.from_trace records, from the true robot's kinematics (nnrobust/results.py)
-  Matrix chain;          // steps x 3(n + 1): joint origins, then the task frame, in world axes
+  Rows chain;            // steps x 3(n + 1): joint origins, then the task frame, in world axes
   Vector manipulability; // sqrt(det(J J^T)) of the task Jacobian
   Vector h;              // the weighted criterion (NaN without one)
   long done = 0;
