@@ -145,8 +145,9 @@ def _run_into(args, config, out: Path) -> int:
             warnings.simplefilter("always")
             written = write_run(out, result, overwrite=args.overwrite, plots=not args.no_plots,
                                 animation=not args.no_animation)
-        for warning in caught:
-            print(f"warning: {one_line(str(warning.message))}", file=sys.stderr)
+        for warning in caught:  # what writing the folder has to say (not libraries' deprecations)
+            if not issubclass(warning.category, DeprecationWarning):
+                print(f"warning: {one_line(str(warning.message))}", file=sys.stderr)
         metrics = result.metrics()
         for warning in metrics["warnings"]:
             print(f"warning: {warning}", file=sys.stderr)
