@@ -12,6 +12,7 @@
 #include <pinocchio/algorithm/jacobian.hpp>
 #include <pinocchio/algorithm/kinematics.hpp>
 #include <pinocchio/algorithm/rnea.hpp>
+#include <pinocchio/spatial/explog.hpp>
 
 namespace nnrobust {
 namespace {
@@ -86,14 +87,16 @@ struct ThreeLink {
 
 // ---- the nominal models (nnrobust/model) ---------------------------------------------------------
 struct TaskState {
-  Vector x, jdot_v;
-  Matrix J;  // m x n
+  Vector x, jdot_v;  // x: the frame's position (2 or 3 entries)
+  Matrix J;          // m x n
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();  // the frame's orientation (pose tasks)
 };
 
 // sum_i s_i ... helpers shared by both nominal models
-double det_small(const Matrix &A) {  // manipulability.det: closed form for m <= 3
+double det_small(const Matrix &A) {  // manipulability.det: closed form for m <= 3, else LU
   if (A.rows() == 1) return A(0, 0);
   if (A.rows() == 2) return A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0);
+  if (A.rows() > 3) return A.determinant();
   const Vector3d a0 = A.col(0), a1 = A.col(1), a2 = A.col(2);
   return a0.dot(a1.cross(a2));
 }
@@ -166,7 +169,9 @@ struct PinocchioNominal : Nominal {
     pinocchio::getFrameJacobian(m.model, m.data, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, J6);
     const auto acc = pinocchio::getFrameClassicalAcceleration(m.model, m.data, m.frame,
                                                              pinocchio::LOCAL_WORLD_ALIGNED);
-    return {placement.translation().head(rows), acc.linear().head(rows), J6.topRows(rows)};
+    TaskState ts{placement.translation().head(std::min(rows, 3)), acc.toVector().head(rows), J6.topRows(rows)};
+    ts.R = placement.rotation();
+    return ts;
   }
   Vector inverse_dynamics(const Vector &q, const Vector &v, const Vector &a) override {
     return pinocchio::rnea(m.model, m.data, q, v, a);
@@ -332,10 +337,28 @@ struct Controller {
     const TaskState ts = nominal.task_state(q, v);
     const Matrix &J = ts.J;
     const double ph = s.omega * t + s.phase, cw = std::cos(ph), sw = std::sin(ph);
-    const Vector xd = s.center + s.axis_a * cw + s.axis_b * sw;
-    const Vector dxd = s.omega * (-s.axis_a * sw + s.axis_b * cw);
-    const Vector ddxd = -(s.omega * s.omega) * (s.axis_a * cw + s.axis_b * sw);
-    const Vector e = ts.x - xd, de = J * v - dxd;
+    const Vector pd = s.center + s.axis_a * cw + s.axis_b * sw;
+    const Vector dpd = s.omega * (-s.axis_a * sw + s.axis_b * cw);
+    const Vector ddpd = -(s.omega * s.omega) * (s.axis_a * cw + s.axis_b * sw);
+    Vector e, dxd, ddxd;
+    if (s.pose) {  // PoseTrajectory.__call__ and tasks.task_error("pose")
+      const double arg = s.rotation_omega * t + s.rotation_phase;
+      const double theta = s.rotation_amplitude * std::sin(arg);
+      const double dtheta = s.rotation_amplitude * s.rotation_omega * std::cos(arg);
+      const double ddtheta = -s.rotation_amplitude * s.rotation_omega * s.rotation_omega * std::sin(arg);
+      const Eigen::Matrix3d Rd = pinocchio::exp3(Vector3d(theta * s.rotation_axis)) * s.rotation0;
+      e.resize(6);
+      dxd.resize(6);
+      ddxd.resize(6);
+      e << ts.x - pd, pinocchio::log3(Eigen::Matrix3d(ts.R * Rd.transpose()));
+      dxd << dpd, dtheta * s.rotation_axis;
+      ddxd << ddpd, ddtheta * s.rotation_axis;
+    } else {
+      e = ts.x - pd;
+      dxd = dpd;
+      ddxd = ddpd;
+    }
+    const Vector de = J * v - dxd;
     double lam2 = 0.0;
     const Matrix inv = pinv_factor(J, lam2);
     const Matrix J_pinv = J.transpose() * inv;

@@ -43,11 +43,16 @@ struct LoopSpec {
   // nominal model: "closed-form" (ThreeLinkSpec) or "pinocchio" (a second LoadedModel)
   std::string nominal_kind = "closed-form";
   ThreeLinkSpec nominal;
-  int m = 2;  // task rows: 2 (planar: x, y) or 3 (position)
+  int m = 2;  // task rows: 2 (planar: x, y), 3 (position) or 6 (pose: position, then rotation)
   Vector nominal_viscous, nominal_coulomb;
   double coulomb_smoothing = 0.0;
-  Vector center, axis_a, axis_b;  // nnrobust.trajectories.EllipseTrajectory (m entries)
+  Vector center, axis_a, axis_b;  // nnrobust.trajectories.EllipseTrajectory (2 or 3 entries)
   double omega = 1.0, phase = 0.0;
+  // a pose task (m = 6): PoseTrajectory's R_d(t) = exp3(theta(t) u) R_0, theta = A sin(w t + phi)
+  bool pose = false;
+  Eigen::Matrix3d rotation0 = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d rotation_axis = Eigen::Vector3d::UnitZ();
+  double rotation_amplitude = 0.0, rotation_omega = 1.0, rotation_phase = 0.0;
   // the law: "task-space" (TaskSpaceController, eq. 9) or "pd" (TaskSpacePD)
   std::string law = "task-space";
   Matrix Kp, Kv;

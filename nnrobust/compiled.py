@@ -66,6 +66,8 @@ COMPILED_CRITERIA = {"PaperCriterion": "paper", "HalfDetManipulability": "half_d
                      "Manipulability": "manipulability", "JointLimitAvoidance": "joint_limits",
                      "JointCentering": "joint_centering"}
 """The criteria with a compiled twin, by class name."""
+DET_CRITERIA = ("paper", "half_det", "manipulability")
+"""Criteria of det(J J^T): compiled for planar and position tasks (m <= 3)."""
 
 
 def twin_refusal(setup) -> str:
@@ -73,29 +75,33 @@ def twin_refusal(setup) -> str:
 
     The compiled loop covers (docs/compiled.md): the eq. (9) law (no u_0, the NN compensator with
     either basis, the sliding-mode term; computed torque) and the task-space PD; the closed-form
-    three-link nominal model or any Pinocchio nominal model (perturbed or exact); planar and
-    position tasks; the ellipse of eq. (18); the criteria paper, half_det_manipulability,
-    manipulability, joint_limits and joint_centering; and the whole plant (friction, sinusoidal
-    disturbance, saturation, stops, sensor noise, quantisation, delay), integrated by RK4.
+    three-link nominal model or any Pinocchio nominal model (perturbed or exact); planar,
+    position and pose tasks; the ellipse of eq. (18) and the pose trajectory; the criteria paper,
+    half_det_manipulability and manipulability (not on pose tasks), joint_limits and
+    joint_centering; and the whole plant (friction, sinusoidal disturbance, saturation, stops,
+    sensor noise, quantisation, delay), integrated by RK4.
     """
     from .controllers import NNCompensator, SlidingModeCompensator, TaskSpaceController, TaskSpacePD
     from .model import PinocchioModel, ThreeLinkPlanarModel
     from .subtasks import WeightedCriteria
-    from .trajectories import EllipseTrajectory
+    from .trajectories import EllipseTrajectory, PoseTrajectory
 
     config, controller = setup.config, setup.controller
     if not available():
         return unavailable_reason()
     criterion = setup.criterion
     checks = [
-        (config.simulation.integrator == "rk4", "the integrator is not rk4"),
+        (config.simulation.integrator == "rk4", f"the integrator {config.simulation.integrator!r}"),
         (type(controller) in (TaskSpaceController, TaskSpacePD),
          f"controller.kind {config.controller.kind!r}"),
-        (setup.robot.task in ("planar", "position"), f"a {setup.robot.task!r} task"),
+        (setup.robot.task in ("planar", "position", "pose"), f"a {setup.robot.task!r} task"),
         (isinstance(setup.nominal, (ThreeLinkPlanarModel, PinocchioModel)), "the nominal model"),
-        (type(setup.trajectory) is EllipseTrajectory, "the trajectory is not an ellipse"),
+        (type(setup.trajectory) in (EllipseTrajectory, PoseTrajectory), "the trajectory"),
         (criterion is None or (isinstance(criterion, WeightedCriteria) and all(
             type(c).__name__ in COMPILED_CRITERIA for c in criterion.criteria)), "a criterion"),
+        (criterion is None or setup.robot.task != "pose" or not any(
+            COMPILED_CRITERIA.get(type(c).__name__) in DET_CRITERIA for c in criterion.criteria),
+         "a manipulability criterion on a pose task"),
     ]
     compensator = getattr(controller, "compensator", None)
     checks.append((compensator is None or type(compensator) in (NNCompensator, SlidingModeCompensator),
@@ -150,6 +156,11 @@ def loop_spec(setup, duration: float):
         spec.gamma, spec.gravity = f(params.gamma), f(params.gravity)
         s.nominal = spec
     trajectory = setup.trajectory
+    if setup.robot.task == "pose":
+        s.pose, s.rotation0, s.rotation_axis = True, f(trajectory.rotation0), f(trajectory.axis)
+        s.rotation_amplitude, s.rotation_omega = trajectory.amplitude, trajectory.omega
+        s.rotation_phase = trajectory.phase
+        trajectory = trajectory.path
     s.center, s.axis_a, s.axis_b = f(trajectory.center), f(trajectory.axis_a), f(trajectory.axis_b)
     s.omega, s.phase = trajectory.omega, trajectory.phase
     s.pinv_threshold, s.pinv_max_damping = controller.pinv.threshold, controller.pinv.max_damping

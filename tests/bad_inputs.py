@@ -75,6 +75,21 @@ def _load(text_or_path, **kwargs):
     return lambda: load_robot(text_or_path, **kwargs)
 
 
+def _working_in(folder: Path, action):
+    """The action, run with ``folder`` as the working folder (the root of a text URDF's meshes)."""
+    import os
+
+    def run():
+        before = os.getcwd()
+        os.chdir(folder)
+        try:
+            return action()
+        finally:
+            os.chdir(before)
+
+    return run
+
+
 def _file(folder: Path, name: str, text: str) -> Path:
     path = folder / name
     path.write_text(text)
@@ -222,11 +237,12 @@ URDF_CASES = [
              visual='<visual><geometry><mesh filename="package://../../../../etc/passwd"/></geometry></visual>'))),
          ex.UnsafePath, "outside the allowed folders"),
     Case("URDF text with a mesh outside the working folder (read and embedded before)",
-         lambda d: _load(arm(visual='<visual><geometry><mesh filename="/etc/passwd"/></geometry></visual>')),
+         lambda d: _working_in(d, _load(arm(
+             visual='<visual><geometry><mesh filename="/etc/passwd"/></geometry></visual>'))),
          ex.UnsafePath, "mesh '/etc/passwd' resolves to /etc/passwd, outside the allowed folders"),
     Case("URDF text with a file:// mesh outside the working folder",
-         lambda d: _load(arm(visual='<visual><geometry><mesh filename="file:///etc/hostname"/></geometry>'
-                                    '</visual>')),
+         lambda d: _working_in(d, _load(arm(
+             visual='<visual><geometry><mesh filename="file:///etc/hostname"/></geometry></visual>'))),
          ex.UnsafePath, "outside the allowed folders"),
     Case("mesh fetched over the network",
          lambda d: _load(_file(d, "http.urdf", arm(

@@ -111,8 +111,8 @@ def test_without_the_extension_the_package_says_why(monkeypatch):
 
 PAPER_PRESETS = ["paper-ellipse", "paper-line", "paper-ellipse-noisy", "paper-ellipse-paper-law",
                  "paper-ellipse-vertical"]
-ARM_PRESETS = ["panda-ellipse", "ur5-ellipse", "planar7-ellipse"]
-"""Presets on Pinocchio nominal models (perturbed URDFs), position and planar tasks, the
+ARM_PRESETS = ["panda-ellipse", "panda-pose", "ur5-ellipse", "planar7-ellipse"]
+"""Presets on Pinocchio nominal models (perturbed URDFs), planar, position and pose tasks, the
 manipulability and joint-range criteria, the error-space NN basis."""
 KINDS = ["nn", "no-u0", "sliding-mode", "computed-torque", "pd"]
 
@@ -174,12 +174,12 @@ def test_auto_takes_the_compiled_loop_only_with_a_twin_for_every_component():
     assert choose_backend(paper) == "compiled"
     assert choose_backend(build(load_preset("panda-ellipse").replace(simulation={"duration": 1.0}))) == \
         "compiled"
-    pose = build(load_preset("panda-pose").replace(simulation={"duration": 1.0}))
-    assert choose_backend(pose) == "python"
-    assert compiled.twin_refusal(pose) == "a 'pose' task has no compiled twin yet"
+    stiff = build(load_preset("panda-pose").replace(simulation={"duration": 1.0, "integrator": "solve_ivp"}))
+    assert choose_backend(stiff) == "python"
+    assert compiled.twin_refusal(stiff) == "the integrator 'solve_ivp' has no compiled twin yet"
     with pytest.raises(NNRobustError, match="simulation.backend: 'compiled' cannot run this experiment"):
         choose_backend(build(load_preset("panda-pose").replace(
-            simulation={"duration": 1.0, "backend": "compiled"})))
+            simulation={"duration": 1.0, "backend": "compiled", "integrator": "solve_ivp"})))
 
 
 @needs_extension
@@ -192,7 +192,7 @@ def test_a_compiled_run_diverges_like_the_python_run():
 
 
 @needs_extension
-@pytest.mark.parametrize("preset", ["paper-ellipse", "paper-line", "panda-ellipse"])
+@pytest.mark.parametrize("preset", ["paper-ellipse", "paper-line", "panda-ellipse", "panda-pose"])
 def test_a_compiled_result_equals_the_python_result(preset):
     """What the compiled loop records for the Result (chain points, x, e, the criterion h and the
     manipulability, from the true robot's kinematics) equals what Result.from_trace computes."""
