@@ -11,7 +11,7 @@ from pathlib import Path
 
 from .exceptions import NNRobustError, one_line
 from .run_folder import ExtrasInterrupted, check_out_folder, load_run, locked, write_run
-from .signals import signals_as_interrupt
+from .signals import ignore_stop_signals, install_stop_handlers, signals_as_interrupt
 
 TABLE_COLUMNS = (
     ("run", None),
@@ -473,5 +473,15 @@ def main(argv: list[str] | None = None) -> int:
         return 130
 
 
+def run() -> None:
+    """The console entry point: exit with main's code. Ctrl-C, SIGTERM and SIGHUP interrupt the
+    command's work; one that arrives after the work is done is ignored (signals.py).
+    """
+    install_stop_handlers()
+    code = main()
+    ignore_stop_signals()  # also through the interpreter's teardown, which resets Python handlers
+    sys.exit(code)
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    run()

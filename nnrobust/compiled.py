@@ -208,6 +208,9 @@ def simulate_compiled(setup, duration: float):
     refusal = twin_refusal(setup)
     if refusal:
         raise NNRobustError(f"simulation.backend = 'compiled': {refusal}")
+    from .signals import check_interrupt, clear_interrupt
+
+    check_interrupt()
     spec = loop_spec(setup, duration)
     plant = load_model(setup.robot.model, setup.robot.task_frame)
     nominal = (load_model(setup.nominal.model, setup.nominal.task_frame) if spec.nominal_kind == "pinocchio"
@@ -228,6 +231,7 @@ def simulate_compiled(setup, duration: float):
             message = speed_message(setup.plant.model, np.asarray(out.dq)[k], spec.max_speed, t[k])
     elif out.status == "interrupted":
         message = f"interrupted at t = {done * period:.4f} s"
+        clear_interrupt()
     z = np.asarray(out.z)[:done] if spec.z0.size else np.zeros((done, 0))
     n = setup.plant.nq
     recorded = {"chain": np.asarray(out.chain)[:done].reshape(done, n + 1, 3),

@@ -1,34 +1,94 @@
-"""Signals: SIGTERM and SIGHUP stop work like Ctrl-C, and a few renames that must not be split
-hold all three back.
+"""Signals: SIGTERM and SIGHUP stop work like Ctrl-C, an interrupt is never lost, and a few
+renames that must not be split hold all three back.
 """
 
 from __future__ import annotations
 
 import contextlib
 import signal
+import sys
 
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+
+_pending = False
+_active = 0  # nesting depth of signals_as_interrupt blocks
+
+
+def interrupt_pending() -> bool:
+    """Whether a stop signal arrived that no one has handled yet (see :func:`check_interrupt`)."""
+    return _pending
+
+
+def check_interrupt() -> None:
+    """Raise KeyboardInterrupt if a stop signal arrived whose KeyboardInterrupt was lost.
+
+    Python runs a signal handler between bytecodes, wherever the main thread is. When that is a
+    garbage-collection callback (a weakref's, a __del__), the KeyboardInterrupt it raises is
+    "ignored" and the work would go on; long loops call this at each step so that it does not.
+    """
+    if _pending:
+        raise KeyboardInterrupt
+
+
+def clear_interrupt() -> None:
+    """The interrupt has been handled (a run was stopped and marked ``interrupted``)."""
+    global _pending
+    _pending = False
+_active = 0  # nesting depth of signals_as_interrupt blocks
+
+
+def _stop(signum, frame):
+    global _pending
+    _pending = True
+    if _active:  # outside a block the work is over (or not begun): remember, do not raise
+        raise KeyboardInterrupt
+
+
+def install_stop_handlers() -> None:
+    """Route Ctrl-C, SIGTERM and SIGHUP through this module for the rest of the process (the
+    command line's entry point): inside a :func:`signals_as_interrupt` block they interrupt,
+    outside it (before the command starts its work, after it has finished) they are only noted,
+    so that a signal in the last instants never turns a finished run into a traceback.
+    """
+    for sig in STOP_SIGNALS:
+        signal.signal(sig, _stop)
+
+
+def _unraisable(hook):
+    def quiet(unraisable):
+        if unraisable.exc_type is KeyboardInterrupt:  # remembered in _pending; no traceback
+            return
+        hook(unraisable)
+
+    return quiet
 
 
 @contextlib.contextmanager
 def signals_as_interrupt():
-    """SIGTERM and SIGHUP raise KeyboardInterrupt in the block, as Ctrl-C does: partial results
-    are kept, servers and clusters are closed on the way out (no orphan process).
+    """Ctrl-C, SIGTERM and SIGHUP raise KeyboardInterrupt in the block and are remembered until
+    handled: partial results are kept, servers and clusters are closed on the way out (no
+    orphan process), and an interrupt that lands in a garbage-collection callback is neither
+    printed as a traceback nor lost.
     """
-    def handler(signum, frame):
-        raise KeyboardInterrupt
-
+    global _active
     previous = {}
-    for sig in (signal.SIGTERM, signal.SIGHUP):
+    for sig in STOP_SIGNALS:
         try:
-            previous[sig] = signal.signal(sig, handler)
+            if signal.getsignal(sig) is not _stop:
+                previous[sig] = signal.signal(sig, _stop)
         except (ValueError, OSError):  # not the main thread
             pass
+    hook = sys.unraisablehook
+    sys.unraisablehook = _unraisable(hook)
+    _active += 1
     try:
         yield
     finally:
+        _active -= 1
+        sys.unraisablehook = hook
         for sig, old in previous.items():
             signal.signal(sig, old)
+        clear_interrupt()
 
 
 @contextlib.contextmanager
@@ -43,3 +103,13 @@ def signals_deferred():
         yield
     finally:
         signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+def ignore_stop_signals() -> None:
+    """Ignore Ctrl-C, SIGTERM and SIGHUP from now on: the command's work is done.
+
+    At its teardown the interpreter resets handlers written in Python to the default, which would
+    let a late signal kill the finished process; an ignored signal stays ignored.
+    """
+    for sig in STOP_SIGNALS:
+        signal.signal(sig, signal.SIG_IGN)

@@ -11,6 +11,7 @@ from scipy.integrate import solve_ivp
 
 from .controllers.base import Controller
 from .plant.plant import Plant
+from .signals import check_interrupt, clear_interrupt
 
 INTEGRATORS = ("rk4", "solve_ivp")
 """Fixed-step classical Runge-Kutta, or scipy's adaptive DOP853 per control period."""
@@ -137,6 +138,7 @@ def simulate(
     k, t = 0, 0.0
     try:
         for k in range(steps):
+            check_interrupt()  # an interrupt lost in a garbage-collection callback (signals.py)
             t = t_rec[k]
             q, v = X[:n], X[n:]
             out = controller.compute(t, *plant.sensor.measure(q, v), z, control_period)
@@ -164,6 +166,7 @@ def simulate(
                 X = sol.y[:, -1]
     except KeyboardInterrupt:
         status, message, done = "interrupted", f"interrupted at t = {t:.4f} s", k
+        clear_interrupt()
     sl = slice(0, done)
     return Trace(
         t_rec[sl], q_rec[sl], v_rec[sl], tau_rec[sl], cmd_rec[sl], z_rec[sl],
