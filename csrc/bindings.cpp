@@ -36,6 +36,21 @@ LoopTrace run(LoadedModel &plant, const LoopSpec &spec, LoadedModel *nominal) {
   return nnrobust::run_loop(plant, nominal, spec, &python_signal_pending);
 }
 
+// A batch: the models and specs stay owned by Python (kept alive by the call's arguments).
+std::vector<LoopTrace> batch(std::vector<LoadedModel *> plants, std::vector<LoadedModel *> nominals,
+                             std::vector<const LoopSpec *> specs, int threads) {
+  if (plants.size() != specs.size() || nominals.size() != specs.size())
+    throw std::invalid_argument("run_batch: plants, nominals and specs must have the same length");
+  std::vector<nnrobust::BatchItem> items;
+  for (size_t i = 0; i < specs.size(); ++i) {
+    if (specs[i]->nominal_kind == "pinocchio" && nominals[i] == nullptr)
+      throw std::invalid_argument("run_batch: a 'pinocchio' nominal_kind needs its nominal model");
+    items.push_back({plants[i], nominals[i], specs[i]});
+  }
+  nb::gil_scoped_release released;
+  return nnrobust::run_batch(items, threads, &python_signal_pending);
+}
+
 }  // namespace
 
 NB_MODULE(_loop, m) {
@@ -91,6 +106,9 @@ NB_MODULE(_loop, m) {
   m.def("run_loop", &run, nb::arg("plant"), nb::arg("spec"), nb::arg("nominal").none() = nb::none(),
         "Run the compiled closed loop (GIL released; Ctrl-C and SIGTERM stop it); `nominal` is the "
         "controller's Pinocchio model when spec.nominal_kind is 'pinocchio'.");
+  m.def("run_batch", &batch, nb::arg("plants"), nb::arg("nominals"), nb::arg("specs"), nb::arg("threads"),
+        "Run several loops on C++ threads with the GIL released (one model pair per run; None "
+        "nominals for the closed form); Ctrl-C and SIGTERM stop them all.");
   m.def("floor_loop", &nnrobust::floor_loop, nb::arg("model"), nb::arg("q0"), nb::arg("v0"),
         nb::arg("steps"), nb::arg("dt"), nb::call_guard<nb::gil_scoped_release>(),
         "The bare C++ loop (RNEA + frame kinematics + 4 ABA per step); returns the final [q, v].");

@@ -4,7 +4,10 @@
 #include <cmath>
 #include <deque>
 #include <limits>
+#include <atomic>
+#include <chrono>
 #include <memory>
+#include <thread>
 
 #include <Eigen/Eigenvalues>
 #include <pinocchio/algorithm/aba.hpp>
@@ -546,6 +549,34 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
     }
   }
   return tr;
+}
+
+namespace {
+std::atomic<bool> batch_stop{false};
+bool batch_stopped() { return batch_stop.load(); }
+}  // namespace
+
+std::vector<LoopTrace> run_batch(const std::vector<BatchItem> &items, int threads, bool (*interrupted)()) {
+  std::vector<LoopTrace> traces(items.size());
+  std::atomic<size_t> next{0};
+  std::atomic<int> running{0};
+  batch_stop = false;
+  const int count = std::max(1, std::min<int>(threads, static_cast<int>(items.size())));
+  std::vector<std::thread> pool;
+  running = count;
+  for (int w = 0; w < count; ++w)
+    pool.emplace_back([&]() {
+      for (size_t i = next++; i < items.size(); i = next++)
+        traces[i] = run_loop(*items[i].plant, items[i].nominal, *items[i].spec, &batch_stopped);
+      --running;
+    });
+  while (running.load() > 0) {  // the calling thread watches for Ctrl-C and SIGTERM
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    if (interrupted && !batch_stop.load() && interrupted()) batch_stop = true;
+  }
+  for (auto &t : pool) t.join();
+  batch_stop = false;
+  return traces;
 }
 
 }  // namespace nnrobust

@@ -96,4 +96,15 @@ struct LoopTrace {
 // unused); `interrupted()` is polled every few hundred steps (Ctrl-C, SIGTERM).
 LoopTrace run_loop(LoadedModel &plant, LoadedModel *nominal, const LoopSpec &spec, bool (*interrupted)());
 
+// One run of a batch: its own models (each LoadedModel has its own Pinocchio Data) and spec.
+struct BatchItem {
+  LoadedModel *plant;
+  LoadedModel *nominal;  // or nullptr
+  const LoopSpec *spec;
+};
+
+// Runs the items on `threads` threads (each takes the next item when it finishes one); the
+// caller's `interrupted()` is polled every 50 ms on the calling thread and stops every run.
+std::vector<LoopTrace> run_batch(const std::vector<BatchItem> &items, int threads, bool (*interrupted)());
+
 }  // namespace nnrobust

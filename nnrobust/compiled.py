@@ -199,23 +199,25 @@ def loop_spec(setup, duration: float):
     return s
 
 
-def simulate_compiled(setup, duration: float):
-    """Run a built experiment on the compiled loop; returns the same Trace as simulation.simulate."""
-    import numpy as np
-
-    from .simulation import Trace, speed_message
-
+def _prepared(setup, duration: float):
+    """(plant model, nominal model or None, spec) of a built experiment, refused without a twin."""
     refusal = twin_refusal(setup)
     if refusal:
         raise NNRobustError(f"simulation.backend = 'compiled': {refusal}")
-    from .signals import check_interrupt, clear_interrupt
-
-    check_interrupt()
     spec = loop_spec(setup, duration)
     plant = load_model(setup.robot.model, setup.robot.task_frame)
     nominal = (load_model(setup.nominal.model, setup.nominal.task_frame) if spec.nominal_kind == "pinocchio"
                else None)
-    out = _module().run_loop(plant, spec, nominal)
+    return plant, nominal, spec
+
+
+def _trace(setup, spec, out):
+    """The Trace of a finished compiled run (what simulation.simulate returns)."""
+    import numpy as np
+
+    from .signals import clear_interrupt
+    from .simulation import Trace, speed_message
+
     done, period = out.done, setup.config.simulation.control_period
     t = np.arange(done) * period
     signals = {"damping": np.asarray(out.damping)[:done]}
@@ -238,3 +240,32 @@ def simulate_compiled(setup, duration: float):
                 "manipulability": np.asarray(out.manipulability)[:done], "h": np.asarray(out.h)[:done]}
     return Trace(t, np.asarray(out.q)[:done], np.asarray(out.dq)[:done], np.asarray(out.tau)[:done],
                  np.asarray(out.tau_cmd)[:done], z, signals, out.status, message, recorded)
+
+
+def simulate_compiled(setup, duration: float):
+    """Run a built experiment on the compiled loop; returns the same Trace as simulation.simulate."""
+    from .signals import check_interrupt
+
+    check_interrupt()
+    plant, nominal, spec = _prepared(setup, duration)
+    return _trace(setup, spec, _module().run_loop(plant, spec, nominal))
+
+
+def simulate_batch(setups: list, durations: list[float] | None = None, threads: int | None = None) -> list:
+    """Run several built experiments on the compiled loop, on C++ threads with the GIL released
+    (default: one per core); returns their Traces in order. Each run has its own copy of its
+    models and records only its own arrays, whose size build() bounded (simulation.memory_limit).
+    Ctrl-C and SIGTERM stop every run; each keeps what it computed, marked ``interrupted``.
+    """
+    import os
+
+    from .signals import check_interrupt
+
+    check_interrupt()
+    durations = durations or [s.config.simulation.duration for s in setups]
+    if len(durations) != len(setups):
+        raise NNRobustError(f"simulate_batch: {len(setups)} experiments but {len(durations)} durations")
+    prepared = [_prepared(setup, duration) for setup, duration in zip(setups, durations)]
+    plants, nominals, specs = (list(column) for column in zip(*prepared)) if prepared else ([], [], [])
+    outs = _module().run_batch(plants, nominals, specs, threads or os.cpu_count() or 1)
+    return [_trace(setup, spec, out) for setup, spec, out in zip(setups, specs, outs)]
