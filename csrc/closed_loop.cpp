@@ -125,6 +125,8 @@ struct Nominal {
   virtual Vector inverse_dynamics(const Vector &q, const Vector &v, const Vector &a) = 0;  // M a + N
   virtual Vector gravity(const Vector &q) = 0;
   virtual Vector det_gradient(const Vector &q, const Matrix &J) = 0;  // d det(J J^T)/dq
+  // chain_points (rows: joint origins, then the task frame) and chain_jacobians (3 x n each)
+  virtual void chain(const Vector &q, Matrix &points, std::vector<Matrix> &jacobians) = 0;
 };
 
 struct ClosedFormNominal : Nominal {
@@ -154,6 +156,22 @@ struct ClosedFormNominal : Nominal {
       grad[k] = 2.0 * sum;
     }
     return grad;
+  }
+  // ThreeLinkPlanarModel.chain_points / chain_jacobians
+  void chain(const Vector &q, Matrix &points, std::vector<Matrix> &jacobians) override {
+    const Vector3d theta(q[0], q[0] + q[1], q[0] + q[1] + q[2]);
+    points = Matrix::Zero(4, 3);
+    jacobians.assign(4, Matrix::Zero(3, 3));
+    for (int j = 1; j < 4; ++j) {
+      points.row(j) = points.row(j - 1);
+      points(j, 0) += model.s.lengths[j - 1] * std::cos(theta[j - 1]);
+      points(j, 1) += model.s.lengths[j - 1] * std::sin(theta[j - 1]);
+      for (int k = 0; k < j; ++k)
+        for (int i = k; i < j; ++i) {
+          jacobians[j](0, k) += -model.s.lengths[i] * std::sin(theta[i]);
+          jacobians[j](1, k) += model.s.lengths[i] * std::cos(theta[i]);
+        }
+    }
   }
 };
 
@@ -207,7 +225,50 @@ struct PinocchioNominal : Nominal {
     }
     return grad;
   }
+  // PinocchioModel.chain_points / chain_jacobians
+  void chain(const Vector &q, Matrix &points, std::vector<Matrix> &jacobians) override {
+    const int joints = m.model.njoints - 1, n = m.model.nv;
+    pinocchio::computeJointJacobians(m.model, m.data, q);
+    pinocchio::updateFramePlacement(m.model, m.data, m.frame);
+    points.resize(joints + 1, 3);
+    jacobians.assign(joints + 1, Matrix::Zero(3, n));
+    Matrix J = Matrix::Zero(6, n);
+    for (int j = 1; j <= joints; ++j) {
+      points.row(j - 1) = m.data.oMi[j].translation().transpose();
+      J.setZero();
+      pinocchio::getJointJacobian(m.model, m.data, j, pinocchio::LOCAL_WORLD_ALIGNED, J);
+      jacobians[j - 1] = J.topRows(3);
+    }
+    points.row(joints) = m.data.oMf[m.frame].translation().transpose();
+    J.setZero();
+    pinocchio::getFrameJacobian(m.model, m.data, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, J);
+    jacobians[joints] = J.topRows(3);
+  }
 };
+
+// SphereObstacles._pairs for every (segment, obstacle): t, the unit normal and the clearance d
+struct ObstaclePair {
+  int segment;
+  double t, depth;
+  Vector3d normal;
+};
+
+std::vector<ObstaclePair> obstacle_pairs(const LoopSpec &s, const Matrix &points) {
+  std::vector<ObstaclePair> pairs;
+  for (int seg = 0; seg + 1 < points.rows(); ++seg) {
+    const Vector3d a = points.row(seg).transpose(), b = points.row(seg + 1).transpose(), ab = b - a;
+    const double length2 = std::max(ab.squaredNorm(), 1e-300);
+    for (int o = 0; o < s.obstacle_centers.rows(); ++o) {
+      const Vector3d c = s.obstacle_centers.row(o).transpose();
+      const double t = std::clamp((c - a).dot(ab) / length2, 0.0, 1.0);
+      const Vector3d gap = c - (a + t * ab);
+      const double dist = std::max(gap.norm(), 1e-12);
+      const double d = dist - s.obstacle_radii[o] - s.link_radius;
+      pairs.push_back({seg, t, std::max(0.0, s.obstacle_influence - d), gap / dist});
+    }
+  }
+  return pairs;
+}
 
 // ---- the criteria (nnrobust/subtasks) ------------------------------------------------------------
 struct Criteria {
@@ -256,6 +317,17 @@ struct Criteria {
         Vector b, db;
         barrier(q, b, db);
         g = -db / static_cast<double>(n);
+      } else if (kind == "joint_smoothness") {
+        g = -s.smoothing_coefficients.dot(q) * s.smoothing_coefficients;
+      } else if (kind == "obstacles") {  // sum over pairs of depth * (-n^T ((1 - t) J_a + t J_b))
+        Matrix points;
+        std::vector<Matrix> jacobians;
+        model.chain(q, points, jacobians);
+        g = Vector::Zero(n);
+        for (const ObstaclePair &p : obstacle_pairs(s, points))
+          if (p.depth > 0.0)
+            g += -(p.depth * (1 - p.t)) * (jacobians[p.segment].transpose() * p.normal) -
+                 (p.depth * p.t) * (jacobians[p.segment + 1].transpose() * p.normal);
       } else {  // joint_centering
         const Vector span = s.limit_upper - s.limit_lower, center = 0.5 * (s.limit_lower + s.limit_upper);
         g = -(q - center).cwiseQuotient(span.cwiseProduct(span)) / static_cast<double>(n);
@@ -265,8 +337,8 @@ struct Criteria {
     return grad;
   }
 
-  // WeightedCriteria.value on the true robot (J: its task Jacobian at q)
-  double value(const Vector &q, const Matrix &J) const {
+  // WeightedCriteria.value on the true robot (J: its task Jacobian at q, points: its chain)
+  double value(const Vector &q, const Matrix &J, const Matrix &points) const {
     const int n = static_cast<int>(q.size());
     const double det = det_small(J * J.transpose());
     double h = 0.0;
@@ -284,6 +356,13 @@ struct Criteria {
         Vector b, db;
         barrier(q, b, db);
         v = -b.mean();
+      } else if (kind == "joint_smoothness") {
+        const double cq = s.smoothing_coefficients.dot(q);
+        v = -0.5 * cq * cq;
+      } else if (kind == "obstacles") {
+        v = 0.0;
+        for (const ObstaclePair &p : obstacle_pairs(s, points)) v += p.depth * p.depth;
+        v *= -0.5;
       } else {
         const Vector span = s.limit_upper - s.limit_lower, center = 0.5 * (s.limit_lower + s.limit_upper);
         v = -0.5 * (q - center).cwiseQuotient(span).squaredNorm() / static_cast<double>(n);
@@ -459,7 +538,10 @@ void record_kinematics(LoadedModel &m, const LoopSpec &s, const Criteria &criter
   pinocchio::computeFrameJacobian(model, data, q, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, J6);
   const Matrix J = J6.topRows(s.m);
   tr.manipulability[k] = std::sqrt(std::max(det_small(J * J.transpose()), 0.0));
-  if (!s.criteria.empty()) tr.h[k] = criteria.value(q, J);
+  if (!s.criteria.empty()) {
+    const Matrix points = Eigen::Map<const Rows>(tr.chain.row(k).data(), joints + 1, 3);
+    tr.h[k] = criteria.value(q, J, points);
+  }
 }
 
 }  // namespace

@@ -60,12 +60,16 @@ struct LoopSpec {
   Matrix pd_Kp, pd_Kd;
   double null_damping = 0.0;
   // criteria of WeightedCriteria (weights already scaled to sum to C): "paper", "half_det",
-  // "manipulability", "joint_limits", "joint_centering"
+  // "manipulability", "joint_limits", "joint_centering", "joint_smoothness", "obstacles"
   std::vector<std::string> criteria;
   Vector criterion_weights;
   Vector smoothness;                  // PaperCriterion's JointSmoothness coefficients
   Vector limit_lower, limit_upper;    // joint criteria: the URDF's limits
   double limit_margin = 0.05;         // JointLimitAvoidance.margin
+  Vector smoothing_coefficients;      // JointSmoothness (the criterion "joint_smoothness")
+  Matrix obstacle_centers;            // SphereObstacles: K x 3 [m]
+  Vector obstacle_radii;              // K [m]
+  double obstacle_influence = 0.1, link_radius = 0.0;
   double pinv_threshold = 0.02, pinv_max_damping = 0.02;
   // robust term: "none", "nn" (NNCompensator) or "sliding" (SlidingModeCompensator)
   std::string robust = "none";

@@ -64,7 +64,8 @@ def floor_loop(model, q0, v0, steps: int, dt: float):
 
 COMPILED_CRITERIA = {"PaperCriterion": "paper", "HalfDetManipulability": "half_det",
                      "Manipulability": "manipulability", "JointLimitAvoidance": "joint_limits",
-                     "JointCentering": "joint_centering"}
+                     "JointCentering": "joint_centering", "JointSmoothness": "joint_smoothness",
+                     "SphereObstacles": "obstacles"}
 """The criteria with a compiled twin, by class name."""
 DET_CRITERIA = ("paper", "half_det", "manipulability")
 """Criteria of det(J J^T): compiled for planar and position tasks (m <= 3)."""
@@ -76,9 +77,9 @@ def twin_refusal(setup) -> str:
     The compiled loop covers (docs/compiled.md): the eq. (9) law (no u_0, the NN compensator with
     either basis, the sliding-mode term; computed torque) and the task-space PD; the closed-form
     three-link nominal model or any Pinocchio nominal model (perturbed or exact); planar,
-    position and pose tasks; the ellipse of eq. (18) and the pose trajectory; the criteria paper,
-    half_det_manipulability and manipulability (not on pose tasks), joint_limits and
-    joint_centering; and the whole plant (friction, sinusoidal disturbance, saturation, stops,
+    position and pose tasks; the ellipse of eq. (18) and the pose trajectory; every shipped
+    criterion (paper, half_det_manipulability and manipulability not on pose tasks); and the
+    whole plant (friction, sinusoidal disturbance, saturation, stops,
     sensor noise, quantisation, delay), integrated by RK4.
     """
     from .controllers import NNCompensator, SlidingModeCompensator, TaskSpaceController, TaskSpacePD
@@ -119,7 +120,13 @@ def loop_spec(setup, duration: float):
     from .controllers import NNCompensator, TaskSpacePD
     from .model import PinocchioModel
     from .simulation import MAX_SPEED
-    from .subtasks import JointCentering, JointLimitAvoidance, PaperCriterion
+    from .subtasks import (
+        JointCentering,
+        JointLimitAvoidance,
+        JointSmoothness,
+        PaperCriterion,
+        SphereObstacles,
+    )
 
     def f(x):  # the C++ side takes contiguous float64 arrays
         return np.ascontiguousarray(x, dtype=float)
@@ -176,6 +183,11 @@ def loop_spec(setup, duration: float):
                 s.limit_lower, s.limit_upper = f(setup.robot.lower_limits), f(setup.robot.upper_limits)
             if isinstance(c, JointLimitAvoidance):
                 s.limit_margin = c.margin
+            if isinstance(c, JointSmoothness):
+                s.smoothing_coefficients = f(c.c)
+            if isinstance(c, SphereObstacles):
+                s.obstacle_centers, s.obstacle_radii = f(c.centers), f(c.radii)
+                s.obstacle_influence, s.link_radius = c.influence, c.link_radius
     if isinstance(controller, TaskSpacePD):
         s.law = "pd"
         s.pd_Kp, s.pd_Kd, s.null_damping = f(controller.Kp), f(controller.Kd), controller.null_damping

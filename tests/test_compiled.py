@@ -251,3 +251,29 @@ def test_ctrl_c_stops_every_run_of_a_batch():
     assert [t.status for t in traces] == ["interrupted"] * 3
     assert all(t.t.size < 60_000 for t in traces)
     assert all("interrupted at t =" in t.message for t in traces)
+
+
+@needs_extension
+@pytest.mark.parametrize("preset", ["paper-ellipse", "planar7-ellipse"])
+def test_obstacle_and_smoothness_criteria_are_compiled(preset):
+    """The obstacle criterion (with an obstacle inside its influence along the run) and joint
+    smoothness, on the closed-form and on a Pinocchio nominal model: equal to Python to 1e-8,
+    and the recorded h equals Result.from_trace's."""
+    from nnrobust.experiment import build, run_experiment
+    from nnrobust.presets import load_preset
+
+    setup = build(load_preset(preset))
+    n, chain = setup.robot.nq, setup.robot.chain_points(setup.q0)
+    near = 0.5 * (chain[1] + chain[2]) + np.array([0.0, 0.08, 0.0])  # 8 cm off the second link
+    subtasks = {"criteria": ["obstacles", "joint_smoothness"], "weights": [0.7, 0.3],
+                "obstacles": [[*near, 0.03]], "obstacle_influence": 0.2, "link_radius": 0.01,
+                "smoothness_coefficients": [0.5, -1.0, 1.0] + [0.2] * (n - 3)}
+    py, cc = _both_backends(preset, 0.5, subtasks=subtasks)
+    for name in ("q", "dq", "tau", "z"):
+        np.testing.assert_allclose(getattr(cc, name), getattr(py, name), rtol=0, atol=1e-8, err_msg=name)
+    obstacles_only = dict(subtasks, criteria=["obstacles"], weights=[1.0])
+    config = load_preset(preset).replace(simulation={"duration": 0.3}, subtasks=obstacles_only)
+    h_py = run_experiment(config.replace(simulation={"backend": "python"})).signals["h"]
+    h_cc = run_experiment(config.replace(simulation={"backend": "compiled"})).signals["h"]
+    np.testing.assert_allclose(h_cc, h_py, rtol=0, atol=1e-10)
+    assert np.min(h_py) < 0  # the obstacle is within its influence: the criterion is not idle
