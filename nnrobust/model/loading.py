@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import functools
 import os
 import sys
 import tempfile
@@ -73,7 +74,7 @@ def _build_from_urdf(source: str, locked: frozenset[str] = frozenset()) -> tuple
     kind, value = _resolve(source)
     if kind == "erd":
         robot = _example_robot_data(value)
-        return robot.model, f"example-robot-data:{value}"
+        return pin.Model(robot.model), f"example-robot-data:{value}"  # a copy: the load is cached
     generated = PLANAR_CHAIN_NAME.match(source) is not None
     name = value if kind == "file" else (source if generated else "<urdf string>")
     text = read_urdf_file(value) if kind == "file" else value
@@ -117,7 +118,11 @@ def _first_line(err: Exception, said: list[str]) -> str:
     return f"{err} (the parser says: {printed[0]})" if printed else str(err)
 
 
+@functools.lru_cache(maxsize=8)
 def _example_robot_data(name: str):
+    """example_robot_data.load(name), once per process (it parses the URDF and every mesh: 0.5 s
+    for the Panda); callers take copies of its models.
+    """
     try:
         import example_robot_data
     except ImportError as err:  # pragma: no cover - a declared dependency
@@ -160,7 +165,8 @@ def load_visual_model(
     kind, value = _resolve(source)
     if kind == "erd":
         robot = _example_robot_data(value)
-        model, visual, name = robot.model, robot.visual_model, f"example-robot-data:{value}"
+        model, visual = pin.Model(robot.model), robot.visual_model.copy()  # copies: the load is cached
+        name = f"example-robot-data:{value}"
     else:
         model, name = _build_from_urdf(source, frozenset(locked_joints or ()))
         text = read_urdf_file(value) if kind == "file" else value
