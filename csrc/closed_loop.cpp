@@ -1,11 +1,11 @@
 #include "closed_loop.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <deque>
 #include <limits>
-#include <atomic>
-#include <chrono>
 #include <memory>
 #include <thread>
 
@@ -93,9 +93,10 @@ struct TaskState {
   Vector x, jdot_v;  // x: the frame's position (2 or 3 entries)
   Matrix J;          // m x n
   Eigen::Matrix3d R = Eigen::Matrix3d::Identity();  // the frame's orientation (pose tasks)
+  Matrix J6;         // the whole 6 x n frame Jacobian, world-aligned (Pinocchio models only)
 };
 
-// sum_i s_i ... helpers shared by both nominal models
+// det and adjugate of J J^T, shared by both nominal models and the recording
 double det_small(const Matrix &A) {  // manipulability.det: closed form for m <= 3, else LU
   if (A.rows() == 1) return A(0, 0);
   if (A.rows() == 2) return A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0);
@@ -124,7 +125,8 @@ struct Nominal {
   virtual TaskState task_state(const Vector &q, const Vector &v) = 0;
   virtual Vector inverse_dynamics(const Vector &q, const Vector &v, const Vector &a) = 0;  // M a + N
   virtual Vector gravity(const Vector &q) = 0;
-  virtual Vector det_gradient(const Vector &q, const Matrix &J) = 0;  // d det(J J^T)/dq
+  // d det(J J^T)/dq at the q of `ts` (the task state just computed)
+  virtual Vector det_gradient(const Vector &q, const TaskState &ts) = 0;
   // chain_points (rows: joint origins, then the task frame) and chain_jacobians (3 x n each)
   virtual void chain(const Vector &q, Matrix &points, std::vector<Matrix> &jacobians) = 0;
 };
@@ -144,7 +146,8 @@ struct ClosedFormNominal : Nominal {
   }
   Vector gravity(const Vector &q) override { return model.bias(q, Vector3d::Zero()); }
   // einsum("ij,jlk,il->k", adj, H, J) x 2 with H[:, l, k] = tail[:, max(l, k)]
-  Vector det_gradient(const Vector &q, const Matrix &J) override {
+  Vector det_gradient(const Vector &q, const TaskState &ts) override {
+    const Matrix &J = ts.J;
     const Eigen::Matrix<double, 2, 3> tail = model.jacobian_tail(q);
     const Matrix adj = adjugate_small(J * J.transpose());
     Vector grad = Vector::Zero(3);
@@ -179,18 +182,20 @@ struct ClosedFormNominal : Nominal {
 struct PinocchioNominal : Nominal {
   LoadedModel &m;
   int rows;
-  Matrix J6;
-  PinocchioNominal(LoadedModel &model, int task_rows) : m(model), rows(task_rows), J6(6, model.model.nv) {}
+  PinocchioNominal(LoadedModel &model, int task_rows) : m(model), rows(task_rows) {}
 
   TaskState task_state(const Vector &q, const Vector &v) override {
     pinocchio::forwardKinematics(m.model, m.data, q, v, Vector::Zero(m.model.nv));
     pinocchio::computeJointJacobians(m.model, m.data);
     const auto &placement = pinocchio::updateFramePlacement(m.model, m.data, m.frame);
-    J6.setZero();
-    pinocchio::getFrameJacobian(m.model, m.data, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, J6);
     const auto acc = pinocchio::getFrameClassicalAcceleration(m.model, m.data, m.frame,
                                                              pinocchio::LOCAL_WORLD_ALIGNED);
-    TaskState ts{placement.translation().head(std::min(rows, 3)), acc.toVector().head(rows), J6.topRows(rows)};
+    TaskState ts;
+    ts.J6 = Matrix::Zero(6, m.model.nv);
+    pinocchio::getFrameJacobian(m.model, m.data, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, ts.J6);
+    ts.x = placement.translation().head(std::min(rows, 3));
+    ts.jdot_v = acc.toVector().head(rows);
+    ts.J = ts.J6.topRows(rows);
     ts.R = placement.rotation();
     return ts;
   }
@@ -198,11 +203,11 @@ struct PinocchioNominal : Nominal {
     return pinocchio::rnea(m.model, m.data, q, v, a);
   }
   Vector gravity(const Vector &q) override { return pinocchio::computeGeneralizedGravity(m.model, m.data, q); }
-  // grad_k = 2 (<u_k, P_k> + <w_k, S_k>), docs/equations.md "Manipulability gradient"
-  Vector det_gradient(const Vector &q, const Matrix &) override {
-    J6.setZero();
-    pinocchio::computeFrameJacobian(m.model, m.data, q, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, J6);
-    const Matrix J = J6.topRows(rows);
+  // grad_k = 2 (<u_k, P_k> + <w_k, S_k>), docs/equations.md "Manipulability gradient", from the
+  // frame Jacobian the task state already holds (no second kinematics pass)
+  Vector det_gradient(const Vector &, const TaskState &ts) override {
+    const Matrix &J6 = ts.J6;
+    const Matrix &J = ts.J;
     Matrix W6 = Matrix::Zero(6, J6.cols());
     W6.topRows(rows) = adjugate_small(J * J.transpose()) * J;
     const int n = static_cast<int>(J6.cols());
@@ -289,8 +294,14 @@ struct Criteria {
     }
   }
 
-  // WeightedCriteria.gradient on the nominal model (J: its task Jacobian at q)
-  Vector gradient(Nominal &model, const Vector &q, const Matrix &J) const {
+  // JointCentering: (q - c) / (u - l), c the mid-range
+  Vector centered(const Vector &q) const {
+    return (q - 0.5 * (s.limit_lower + s.limit_upper)).cwiseQuotient(s.limit_upper - s.limit_lower);
+  }
+
+  // WeightedCriteria.gradient on the nominal model (ts: its task state at q)
+  Vector gradient(Nominal &model, const Vector &q, const TaskState &ts) const {
+    const Matrix &J = ts.J;
     const int n = static_cast<int>(q.size());
     Vector grad = Vector::Zero(n);
     bool have_det = false;
@@ -299,7 +310,7 @@ struct Criteria {
     auto det_terms = [&]() {
       if (!have_det) {
         det = det_small(J * J.transpose());
-        ddet = model.det_gradient(q, J);
+        ddet = model.det_gradient(q, ts);
         have_det = true;
       }
     };
@@ -328,9 +339,8 @@ struct Criteria {
           if (p.depth > 0.0)
             g += -(p.depth * (1 - p.t)) * (jacobians[p.segment].transpose() * p.normal) -
                  (p.depth * p.t) * (jacobians[p.segment + 1].transpose() * p.normal);
-      } else {  // joint_centering
-        const Vector span = s.limit_upper - s.limit_lower, center = 0.5 * (s.limit_lower + s.limit_upper);
-        g = -(q - center).cwiseQuotient(span.cwiseProduct(span)) / static_cast<double>(n);
+      } else {  // joint_centering: -(q - c) / (n (u - l)^2)
+        g = -centered(q).cwiseQuotient(s.limit_upper - s.limit_lower) / static_cast<double>(n);
       }
       grad += s.criterion_weights[c] * g;
     }
@@ -363,9 +373,8 @@ struct Criteria {
         v = 0.0;
         for (const ObstaclePair &p : obstacle_pairs(s, points)) v += p.depth * p.depth;
         v *= -0.5;
-      } else {
-        const Vector span = s.limit_upper - s.limit_lower, center = 0.5 * (s.limit_lower + s.limit_upper);
-        v = -0.5 * (q - center).cwiseQuotient(span).squaredNorm() / static_cast<double>(n);
+      } else {  // joint_centering: -(1/(2n)) sum ((q - c) / (u - l))^2
+        v = -0.5 * centered(q).squaredNorm() / static_cast<double>(n);
       }
       h += s.criterion_weights[c] * v;
     }
@@ -483,7 +492,7 @@ struct Controller {
     const Vector task_acc = ddxd - ts.jdot_v - s.Kv * de - s.Kp * e + u0;
     Vector a = J_pinv * task_acc;
     if (s.k != 0.0) {
-      const Vector grad = s.criteria.empty() ? Vector(Vector::Zero(q.size())) : criteria.gradient(nominal, q, J);
+      const Vector grad = s.criteria.empty() ? Vector(Vector::Zero(q.size())) : criteria.gradient(nominal, q, ts);
       const Vector zz = grad - v;
       a += s.k * (zz - J_pinv * (J * zz));
     }
@@ -529,13 +538,13 @@ void record_kinematics(LoadedModel &m, const LoopSpec &s, const Criteria &criter
                        LoopTrace &tr) {
   auto &model = m.model;
   auto &data = m.data;
-  pinocchio::forwardKinematics(model, data, q);
+  pinocchio::computeJointJacobians(model, data, q);  // one kinematics pass: placements and Jacobians
   pinocchio::updateFramePlacement(model, data, m.frame);
   const int joints = model.njoints - 1;
   for (int j = 0; j < joints; ++j) tr.chain.block<1, 3>(k, 3 * j) = data.oMi[j + 1].translation().transpose();
   tr.chain.block<1, 3>(k, 3 * joints) = data.oMf[m.frame].translation().transpose();
   Matrix J6 = Matrix::Zero(6, model.nv);
-  pinocchio::computeFrameJacobian(model, data, q, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, J6);
+  pinocchio::getFrameJacobian(model, data, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, J6);
   const Matrix J = J6.topRows(s.m);
   tr.manipulability[k] = std::sqrt(std::max(det_small(J * J.transpose()), 0.0));
   if (!s.criteria.empty()) {

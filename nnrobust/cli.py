@@ -463,7 +463,7 @@ def main(argv: list[str] | None = None) -> int:
         os.dup2(devnull, sys.stdout.fileno())
         return 0
     except NNRobustError as err:
-        print(f"nnrobust: error: {one_line(str(err))}", file=sys.stderr)
+        print(f"nnrobust: error: {err}", file=sys.stderr)  # one bounded line (NNRobustError.__str__)
         return 2
     except ExtrasInterrupted as err:
         print(f"nnrobust: {err}", file=sys.stderr)

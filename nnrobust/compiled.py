@@ -79,8 +79,8 @@ def twin_refusal(setup) -> str:
     three-link nominal model or any Pinocchio nominal model (perturbed or exact); planar,
     position and pose tasks; the ellipse of eq. (18) and the pose trajectory; every shipped
     criterion (paper, half_det_manipulability and manipulability not on pose tasks); and the
-    whole plant (friction, sinusoidal disturbance, saturation, stops,
-    sensor noise, quantisation, delay), integrated by RK4.
+    whole plant (friction, sinusoidal disturbance, saturation, stops, sensor noise,
+    quantisation, delay), integrated by RK4.
     """
     from .controllers import NNCompensator, SlidingModeCompensator, TaskSpaceController, TaskSpacePD
     from .model import PinocchioModel, ThreeLinkPlanarModel
@@ -121,6 +121,7 @@ def loop_spec(setup, duration: float):
     from .model import PinocchioModel
     from .simulation import MAX_SPEED
     from .subtasks import (
+        PAPER_SMOOTHNESS,
         JointCentering,
         JointLimitAvoidance,
         JointSmoothness,
@@ -178,7 +179,7 @@ def loop_spec(setup, duration: float):
         s.criterion_weights = f(criterion.weights)
         for c in criterion.criteria:
             if isinstance(c, PaperCriterion):
-                s.smoothness = f(c._terms[1].c)
+                s.smoothness = f(PAPER_SMOOTHNESS)
             if isinstance(c, (JointLimitAvoidance, JointCentering)):
                 s.limit_lower, s.limit_upper = f(setup.robot.lower_limits), f(setup.robot.upper_limits)
             if isinstance(c, JointLimitAvoidance):

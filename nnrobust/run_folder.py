@@ -38,6 +38,7 @@ RUN_FILES = frozenset({MARKER, "config.toml", "result.npz", "metrics.json", "plo
 """Everything a run writes: a folder holding only these is a run folder even without the marker
 (run folders written before the marker existed)."""
 
+
 class RunFolderError(NNRobustError):
     """The output folder cannot take a run: a file, a link, a folder of the user's, locked, or
     not writable.
@@ -165,17 +166,16 @@ def _rescue_arrays(result, folder: Path) -> str:
 
 def _place(tmp: Path, folder: Path) -> None:
     """Move the written folder into place; an existing run folder is swapped out and deleted only
-    once the new one is there (signals held back between the two renames).
+    once the new one is there (the caller holds signals back, so never between the two renames).
     """
     if folder.is_dir() and any(folder.iterdir()):
         old = folder.parent / f".{folder.name}.old-{os.getpid()}"
-        with signals_deferred():  # never between the two renames
-            os.replace(folder, old)
-            try:
-                os.replace(tmp, folder)
-            except OSError:
-                os.replace(old, folder)
-                raise
+        os.replace(folder, old)
+        try:
+            os.replace(tmp, folder)
+        except OSError:
+            os.replace(old, folder)
+            raise
         shutil.rmtree(old, ignore_errors=True)
     else:
         os.replace(tmp, folder)  # onto nothing, or an empty folder
@@ -183,7 +183,7 @@ def _place(tmp: Path, folder: Path) -> None:
 
 def _write_extras(folder: Path, result, plots: bool, animation: bool) -> str:
     """Plots and animation, each written beside its final name and renamed into place; returns
-    what the marker records: complete, interrupted or failed.
+    what the marker is to record, complete or failed (on Ctrl-C it records interrupted itself).
     """
     try:
         if plots and result.t.size > 1:
@@ -206,7 +206,6 @@ def _write_extras(folder: Path, result, plots: bool, animation: bool) -> str:
         raise
     except OSError as err:
         _clean_partials(folder)
-        _write_marker(folder, result.status, "failed")
         warnings.warn(f"{folder}: plots or animation not written ({err.strerror or err}); the arrays "
                       "and metrics are saved", stacklevel=3)
         return "failed"

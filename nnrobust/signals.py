@@ -14,11 +14,6 @@ _pending = False
 _active = 0  # nesting depth of signals_as_interrupt blocks
 
 
-def interrupt_pending() -> bool:
-    """Whether a stop signal arrived that no one has handled yet (see :func:`check_interrupt`)."""
-    return _pending
-
-
 def check_interrupt() -> None:
     """Raise KeyboardInterrupt if a stop signal arrived whose KeyboardInterrupt was lost.
 
@@ -34,7 +29,6 @@ def clear_interrupt() -> None:
     """The interrupt has been handled (a run was stopped and marked ``interrupted``)."""
     global _pending
     _pending = False
-_active = 0  # nesting depth of signals_as_interrupt blocks
 
 
 def _stop(signum, frame):

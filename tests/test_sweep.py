@@ -151,6 +151,23 @@ BAD = [
 ]
 
 
+def test_grid_points_follow_the_product_and_a_huge_grid_is_refused_at_once():
+    """Sample ids walk the grid in itertools.product order; a grid of 10^12 points is refused by
+    its size alone, without building it."""
+    import itertools
+
+    vary = {"nn.sigma": [0.1, 0.2, 0.3], "nn.F": [1.0, 2.0], "controller.k": [1.0, 2.0, 5.0, 7.0]}
+    spec = parse_sweep({"name": "g", "base": "paper-ellipse", "controllers": ["nn"], "samples": 2,
+                        "vary": vary})
+    points = list(itertools.product(*vary.values()))
+    assert [spec.grid_point(i) for i in range(len(points))] == points and spec.size == 2 * len(points)
+    huge = {f"nn.{k}": list(range(1, 1001)) for k in ("F", "gamma", "eps0", "centers")}
+    start = time.perf_counter()
+    with pytest.raises(ConfigError, match="1000000000000 samples x 1 controllers exceed 1000000 rows"):
+        parse_sweep({"name": "g", "base": "paper-ellipse", "controllers": ["nn"], "vary": huge})
+    assert time.perf_counter() - start < 1.0
+
+
 @pytest.mark.parametrize("label, change, message", BAD, ids=[b[0] for b in BAD])
 def test_bad_sweep_files_get_one_line_errors(label, change, message):
     data = {"name": "x", "base": "paper-ellipse", "controllers": ["nn"], **change}

@@ -80,14 +80,7 @@ def _build_from_urdf(source: str, locked: frozenset[str] = frozenset()) -> tuple
     text = read_urdf_file(value) if kind == "file" else value
     if not generated:
         check_urdf(text, name, Path(value).resolve().parent if kind == "file" else None, locked=locked)
-    failure = None
-    with parser_messages() as said:
-        try:
-            model = pin.buildModelFromXML(text)
-        except (ValueError, RuntimeError) as err:
-            failure = err
-    if failure is not None:
-        raise RobotLoadError(name, f"invalid URDF: {_first_line(failure, said)}") from failure
+    model = _parsed(name, "invalid URDF", lambda: pin.buildModelFromXML(text))
     if model.nq == 0 and model.njoints <= 1:
         raise ModelMismatch(f"{name}: the URDF has no movable joint (only fixed joints)")
     return model, name
@@ -112,10 +105,19 @@ def parser_messages():
             said.append(sink.read(100_000).decode(errors="replace"))
 
 
-def _first_line(err: Exception, said: list[str]) -> str:
-    """The error, with the first line the parser printed when that says more."""
+def _parsed(name: str, what: str, build):
+    """``build()`` (a call of Pinocchio's URDF parser) with what the parser prints caught; its
+    failure is one RobotLoadError, "``what``: the error (the parser says: its first line)".
+    """
+    failure = None
+    with parser_messages() as said:
+        try:
+            return build()
+        except (ValueError, RuntimeError) as err:
+            failure = err
     printed = [" ".join(line.split()) for line in "".join(said).splitlines() if line.strip()]
-    return f"{err} (the parser says: {printed[0]})" if printed else str(err)
+    detail = f"{failure} (the parser says: {printed[0]})" if printed else str(failure)
+    raise RobotLoadError(name, f"{what}: {detail}") from failure
 
 
 @functools.lru_cache(maxsize=8)
@@ -172,15 +174,8 @@ def load_visual_model(
         text = read_urdf_file(value) if kind == "file" else value
         if not PLANAR_CHAIN_NAME.match(source):
             text = resolved_visuals(text, name, Path(value).resolve().parent if kind == "file" else None)
-        failure = None
-        with parser_messages() as said:
-            try:
-                visual = pin.buildGeomFromUrdfString(model, text, pin.GeometryType.VISUAL)
-            except (ValueError, RuntimeError) as err:
-                failure = err
-        if failure is not None:
-            raise RobotLoadError(name, f"cannot read the visual geometry: {_first_line(failure, said)}") \
-                from failure
+        visual = _parsed(name, "cannot read the visual geometry",
+                         lambda: pin.buildGeomFromUrdfString(model, text, pin.GeometryType.VISUAL))
     ids = _locked_joint_ids(model, name, source, locked_joints)
     if ids:
         model, visual = pin.buildReducedModel(model, visual, ids, pin.neutral(model))

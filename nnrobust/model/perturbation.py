@@ -15,9 +15,11 @@ def rotational_inertia_problem(I: np.ndarray, rel_tol: float = 0.0, point_mass: 
     """
     moments = np.linalg.eigvalsh(np.asarray(I, dtype=float))
     shown = np.round(moments, 9).tolist()
-    floor = -(rel_tol * abs(moments[2]) + 1e-15) if point_mass else 0.0
-    if moments[0] < floor or (moments[0] == floor and not point_mass):
-        what = "positive semi-definite" if point_mass else "positive definite"
+    if point_mass:
+        positive, what = moments[0] >= -(rel_tol * abs(moments[2]) + 1e-15), "positive semi-definite"
+    else:
+        positive, what = moments[0] > 0, "positive definite"
+    if not positive:
         return f"the inertia is not {what} (principal moments {shown} kg m^2)"
     if moments[0] + moments[1] < moments[2] * (1 - rel_tol):
         return (f"principal moments {shown} break the triangle inequality I1 + I2 >= I3 "

@@ -9,7 +9,6 @@ distribution. Everything is checked against the experiment schema before anythin
 from __future__ import annotations
 
 import hashlib
-import itertools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -71,15 +70,20 @@ class SweepSpec:
         """Varied keys drawn from a distribution."""
         return [k for k, v in self.vary.items() if isinstance(v, dict)]
 
-    @property
-    def grid(self) -> list[tuple]:
-        """Every point of the grid the list-valued keys form (one empty point without a grid)."""
-        return list(itertools.product(*(self.vary[k] for k in self.grid_keys)))
+    def grid_point(self, index: int) -> tuple:
+        """Point ``index`` of the grid the list-valued keys form, in itertools.product order (the
+        last key varies fastest); the grid itself is never built, however large.
+        """
+        point = []
+        for key in reversed(self.grid_keys):
+            index, position = divmod(index, len(self.vary[key]))
+            point.append(self.vary[key][position])
+        return tuple(reversed(point))
 
     @property
     def size(self) -> int:
         """Number of samples: draws x grid points."""
-        return self.samples * len(self.grid)
+        return self.samples * math.prod(len(self.vary[k]) for k in self.grid_keys)
 
     def to_toml(self) -> str:
         """The resolved sweep file (what DIR/sweep.toml holds)."""
@@ -239,7 +243,7 @@ def sample_seed(seed: int, sample_id: int) -> int:
 
 def draw(spec: SweepSpec, sample_id: int) -> Sample:
     """Sample ``sample_id``: grid point ``id // samples``, draw ``id % samples``."""
-    point = spec.grid[sample_id // spec.samples]
+    point = spec.grid_point(sample_id // spec.samples)
     values = dict(zip(spec.grid_keys, point))
     seed = sample_seed(spec.seed, sample_id)
     rng = np.random.default_rng(seed)
