@@ -279,12 +279,18 @@ std::vector<ObstaclePair> obstacle_pairs(const LoopSpec &s, const Matrix &points
 struct Criteria {
   const LoopSpec &s;
 
-  // JointLimitAvoidance._barrier: (b, b') with the linear continuation outside the knots
+  // JointLimitAvoidance._barrier: (b, b') with the linear continuation outside the knots; a joint
+  // without limits (a continuous joint) has b = 1, b' = 0
   void barrier(const Vector &q, Vector &b, Vector &db) const {
     const Vector span = s.limit_upper - s.limit_lower;
     b.resize(q.size());
     db.resize(q.size());
     for (int i = 0; i < q.size(); ++i) {
+      if (!std::isfinite(span[i])) {
+        b[i] = 1.0;
+        db[i] = 0.0;
+        continue;
+      }
       const double lo = s.limit_lower[i] + s.limit_margin * span[i], hi = s.limit_upper[i] - s.limit_margin * span[i];
       const double knot = std::clamp(q[i], lo, hi);
       const double g = (s.limit_upper[i] - knot) * (knot - s.limit_lower[i]);
@@ -294,9 +300,14 @@ struct Criteria {
     }
   }
 
-  // JointCentering: (q - c) / (u - l), c the mid-range
+  // JointCentering: (q - c) / (u - l), c the mid-range; 0 for a joint without limits
   Vector centered(const Vector &q) const {
-    return (q - 0.5 * (s.limit_lower + s.limit_upper)).cwiseQuotient(s.limit_upper - s.limit_lower);
+    Vector c(q.size());
+    for (int i = 0; i < q.size(); ++i) {
+      const double span = s.limit_upper[i] - s.limit_lower[i];
+      c[i] = std::isfinite(span) ? (q[i] - 0.5 * (s.limit_lower[i] + s.limit_upper[i])) / span : 0.0;
+    }
+    return c;
   }
 
   // WeightedCriteria.gradient on the nominal model (ts: its task state at q)

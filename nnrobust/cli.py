@@ -287,21 +287,36 @@ def cmd_presets(args) -> int:
 
 
 def cmd_robots(args) -> int:
-    """List the arms known to work, with their joint count and default task frame."""
+    """List the arms known to work (or, with --all, every example-robot-data robot): joint
+    count, default chain and task frame.
+    """
     from .model import ARMS, load_robot
+    from .model.example_robots import robot_names
 
-    print(f"{'name':20s} {'n':>3s}  {'default task frame':22s} description")
+    names = robot_names() if args.all else list(ARMS)
+    print(f"{'name':26s} {'n':>3s}  {'default chain':44s} {'task frame':28s} note")
     failed = 0
-    for name, info in ARMS.items():
-        try:
-            robot = load_robot(name)
-        except NNRobustError as err:
-            failed += 1
-            print(f"{name:20s} {'-':>3s}  {'(does not load)':22s} {err}")
-            continue
-        print(f"{name:20s} {robot.nq:3d}  {robot.task_frame:22s} {info['description']}")
-    print("\nAlso: planar<N> for N up to 300 (generated chain), any example-robot-data name, a URDF file.")
-    return 1 if failed else 0
+    for name in names:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            try:
+                robot = load_robot(name)
+            except NNRobustError as err:
+                failed += 1
+                print(f"{name:26s} {'-':>3s}  {'refused: ' + str(err)}")
+                continue
+        joints = robot.joint_names
+        chain = joints[0] if len(joints) == 1 else f"{joints[0]} .. {joints[-1]}"
+        note = ARMS.get(name, {}).get("description", "")
+        if any("floating-base" in str(w.message) for w in caught):
+            note = "floating base fixed to the world"
+        print(f"{name:26s} {robot.nq:3d}  {chain:44s} {robot.task_frame:28s} {note}")
+    if args.all:
+        print(f"\n{len(names) - failed} of {len(names)} load.")
+    else:
+        print("\nAlso: planar<N> for N up to 300 (generated chain), any example-robot-data name "
+              "(nnrobust robots --all), a URDF file.")
+    return 1 if failed and not args.all else 0
 
 
 def run_labels(folders: list[str]) -> list[str]:
@@ -382,10 +397,13 @@ def build_parser() -> argparse.ArgumentParser:
     presets = sub.add_parser("presets", help="list the shipped presets")
     presets.set_defaults(func=cmd_presets)
 
-    robots = sub.add_parser("robots", help="list the arms known to work (n, default task frame)",
+    robots = sub.add_parser("robots", help="list the arms known to work (n, chain, task frame)",
                             description="Load every arm nnrobust knows (the paper's arm, a generated "
-                            "planar chain and example-robot-data arms) and print its joint count "
-                            "and default task frame.")
+                            "planar chain and example-robot-data arms) and print its joint count, "
+                            "default chain and task frame. With --all: every robot example-robot-data "
+                            "ships, loaded or refused with the reason (docs/robots.md).")
+    robots.add_argument("--all", action="store_true",
+                        help="every example-robot-data robot, not only the arms known to work")
     robots.set_defaults(func=cmd_robots)
 
     compare = sub.add_parser("compare", help="compare run folders: metrics table and plots",
@@ -448,6 +466,12 @@ EXIT_CODES = """exit codes:
   130  interrupted (Ctrl-C, SIGTERM, SIGHUP) outside a simulation"""
 
 
+def _warning_line(message, category, filename, lineno, file=None, line=None) -> None:
+    """A warning as one line, ``warning: ...`` (no file name, line number or source line)."""
+    if not issubclass(category, DeprecationWarning):
+        print(f"warning: {one_line(str(message))}", file=sys.stderr if file is None else file)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the exit code (0 success, 1 failed run, 2 bad input, 130 interrupted)."""
     try:
@@ -478,6 +502,7 @@ def run() -> None:
     command's work; one that arrives after the work is done is ignored (signals.py).
     """
     install_stop_handlers()
+    warnings.showwarning = _warning_line
     code = main()
     ignore_stop_signals()  # also through the interpreter's teardown, which resets Python handlers
     sys.exit(code)

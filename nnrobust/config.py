@@ -24,11 +24,14 @@ class RobotConfig:
     Attributes:
         source: URDF path, ``three_link_planar`` (the paper's arm), ``planar<N>`` (generated
             N-link planar chain) or an example-robot-data name (``panda``, ``ur5``, ...).
-        task_frame: frame whose position (or pose) is the task x (default: tip of the chain).
+        task_frame: frame whose position (or pose) is the task x (default: by the rule of
+            docs/robots.md, a tool, end-effector or hand frame at the end of the longest chain).
         task: ``planar`` (m = 2), ``position`` (m = 3) or ``pose`` (m = 6).
         gravity: gravity vector [m/s^2] (default Pinocchio's (0, 0, -9.81)).
-        locked_joints: joints held fixed at their neutral value (default: the gripper joints of
-            the known arms, e.g. the Panda's fingers; ``[]`` locks nothing).
+        locked_joints: joints held fixed at their neutral value (default: every joint off the
+            default chain, and grippers, fingers and mimic joints; ``[]`` locks nothing).
+        chain: ``[base frame, tip frame]``: the arm is the joints between them, every other
+            joint is locked; the tip is the default task frame.
 
     """
 
@@ -37,6 +40,7 @@ class RobotConfig:
     task: str = "planar"
     gravity: list[float] | None = None
     locked_joints: list[str] | None = None
+    chain: list[str] | None = None
 
 
 @dataclass
@@ -518,6 +522,8 @@ def validate(config: ExperimentConfig) -> None:
     if gravity is not None and (len(gravity) != 3 or math.hypot(*gravity) > 1e3):
         raise ConfigError("robot.gravity", f"needs 3 entries (x, y, z) [m/s^2] of at most 1000 m/s^2 in all, "
                           f"got {gravity}")
+    if config.robot.chain is not None and len(config.robot.chain) != 2:
+        raise ConfigError("robot.chain", f"needs 2 frame names, [base, tip], got {config.robot.chain}")
     choices = {
         "robot.task": (config.robot.task, tuple(TASK_KINDS)),
         "nominal.kind": (config.nominal.kind, ("closed-form", "urdf")),

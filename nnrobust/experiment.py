@@ -40,7 +40,7 @@ from .plant import (
     scaled_friction,
     torque_scale,
 )
-from .plant.scaling import torque_needed, usable
+from .plant.scaling import PLAUSIBLE_EFFORT_RATIO, implausible_efforts, usable
 from .results import Result
 from .simulation import simulate
 from .subtasks import (
@@ -90,7 +90,7 @@ def _per_joint(path: str, values: list[float], n: int) -> np.ndarray:
 
 def _finite_limits(values: np.ndarray) -> np.ndarray:
     """URDF limits with absent ones (not finite, or Pinocchio's huge placeholders) as inf."""
-    return np.where(np.isfinite(values) & (np.abs(values) < 1e6), values, np.sign(values) * np.inf)
+    return np.where(np.isfinite(values) & (np.abs(values) < 1e6), values, np.copysign(np.inf, values))
 
 
 def build_torque_limits(config: ExperimentConfig, robot: PinocchioModel) -> np.ndarray | None:
@@ -430,12 +430,17 @@ def build(config: ExperimentConfig) -> Setup:
     """Load the robot and build plant, nominal model, controller and initial state."""
     rc = config.robot
     robot = load_robot(rc.source, rc.task_frame, rc.task,
-                       tuple(rc.gravity) if rc.gravity else None, rc.locked_joints)
+                       tuple(rc.gravity) if rc.gravity else None, rc.locked_joints,
+                       tuple(rc.chain) if rc.chain else None)
     if robot.task != "pose" and len(config.trajectory.center) != robot.m:
         raise ConfigError("trajectory.center", f"has {len(config.trajectory.center)} entries, "
                           f"the {rc.task!r} task has m = {robot.m}")
-    if robot.m >= robot.nq:
-        raise ConfigError("robot.task", f"m = {robot.m} >= n = {robot.nq}: the arm is not redundant")
+    if robot.m > robot.nq:
+        raise ConfigError("robot.task", f"m = {robot.m} > n = {robot.nq}: the arm has fewer joints than the "
+                          "task has coordinates (choose a smaller task or a longer robot.chain)")
+    if robot.m == robot.nq:
+        warnings.warn(f"{robot.name}: not redundant (n = m = {robot.nq}): the null-space subtask has no room "
+                      "and eq. (9) is plain task-space control", stacklevel=2)
     check_memory(config, robot.nq, robot.m)
     trajectory = build_trajectory(config, robot)
     plant = build_plant(config, robot)
@@ -520,10 +525,6 @@ def run_experiment(config: ExperimentConfig, progress=None, setup: Setup | None 
     return result
 
 
-IMPLAUSIBLE_EFFORT = 100.0
-"""An effort limit above this times the torque the arm needs (M 10 rad/s^2 + |G|) is implausible."""
-
-
 def likely_cause(setup: Setup, trace) -> str:
     """A guess at why a run diverged, from its last finite state (for the divergence message)."""
     finite = np.flatnonzero(np.all(np.isfinite(trace.q), axis=1) & np.all(np.isfinite(trace.dq), axis=1))
@@ -535,15 +536,12 @@ def likely_cause(setup: Setup, trace) -> str:
         if grad[i] > 1e3:
             return (f"likely cause: an exploding criterion gradient (k dh/dq = {grad[i]:.3g} on joint "
                     f"{names[i]!r}); lower controller.k or check subtasks.criteria")
-    effort = robot.effort_limits
-    needed = torque_needed(robot, q)
-    ratio = np.where(usable(effort), effort / np.maximum(needed, 1e-9), 0.0)
-    i = int(np.argmax(ratio))
-    if ratio[i] > IMPLAUSIBLE_EFFORT and (config.plant.friction == "scaled"
-                                          or config.plant.disturbance == "scaled"):
-        return (f"likely cause: an implausible effort limit ({effort[i]:.3g} on joint {names[i]!r}, "
-                f"{ratio[i]:.0f}x what the arm needs), to which the scaled friction and disturbance "
-                "are sized; set plant.torque_limits or the URDF's effort")
+    effort, bad = robot.effort_limits, implausible_efforts(robot)
+    if np.any(bad) and setup.plant.torque_limit is not None:
+        i = int(np.flatnonzero(bad)[np.argmax(effort[bad])])
+        return (f"likely cause: an implausible effort limit ({effort[i]:.3g} on joint {names[i]!r}, over "
+                f"{PLAUSIBLE_EFFORT_RATIO:g}x what the arm needs), so torque saturation does not bound the "
+                "command; set plant.torque_limits or the URDF's effort")
     if setup.plant.torque_limit is None:
         peak = float(np.nanmax(np.abs(trace.tau_cmd))) if trace.tau_cmd.size else float("nan")
         return (f"likely cause: the commanded torque grew without bound (peak {peak:.3g} N m) with no "

@@ -52,10 +52,14 @@ def _series(draw, t: np.ndarray, y: np.ndarray, *args, **kwargs):
 
 
 def _save(fig, folder: Path, name: str) -> list[Path]:
+    """The figure in every format of :data:`FORMATS`, cropped to what it draws (the crop is
+    measured once: ``bbox_inches="tight"`` would lay the figure out twice per format).
+    """
     paths = []
+    crop = fig.get_tightbbox(fig.canvas.get_renderer()).padded(0.1)
     for fmt in FORMATS:
         path = folder / f"{name}.{fmt}"
-        fig.savefig(path, dpi=120, bbox_inches="tight")
+        fig.savefig(path, dpi=120, bbox_inches=crop)
         paths.append(path)
     plt.close(fig)
     return paths
@@ -64,11 +68,18 @@ def _save(fig, folder: Path, name: str) -> list[Path]:
 AXES = ("x", "y", "z")
 
 
+def legend_outside(ax, **kwargs):
+    """The legend to the right of the axes, off the data."""
+    return ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0,
+                     fontsize=kwargs.pop("fontsize", 8), **kwargs)
+
+
 def _position_size(result: Result) -> int:
     return min(result.x.shape[1], 3)
 
 
-def plot_path(result: Result, ax=None, label: str = "actual", axes: tuple[int, int] = (0, 1)) -> None:
+def plot_path(result: Result, ax=None, label: str = "actual", axes: tuple[int, int] = (0, 1),
+              legend: bool = True) -> None:
     """Desired vs actual end-effector path projected on two world axes (Figs. 1, 4)."""
     i, j = axes
     every = _path_stride(result.x)
@@ -78,78 +89,82 @@ def plot_path(result: Result, ax=None, label: str = "actual", axes: tuple[int, i
     ax.set_xlabel(f"{AXES[i]} [m]")
     ax.set_ylabel(f"{AXES[j]} [m]")
     ax.set_aspect("equal", adjustable="datalim")
-    ax.legend(loc="best", fontsize=8)
+    if legend:
+        legend_outside(ax)
 
 
-def plot_run(result: Result, folder: str | Path) -> list[Path]:
-    """Write the figure set of one run into ``folder``; returns the files written."""
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    t, written = result.t, []
-    npos = _position_size(result)
-    pose = result.e.shape[1] == 6
-    joint_labels = result.joint_names or [f"q{i + 1}" for i in range(result.q.shape[1])]
-
-    if npos == 2:
+def _path_figure(result: Result):
+    if _position_size(result) == 2:
         fig, ax = plt.subplots(figsize=(5, 4.5))
         plot_path(result, ax)
     else:  # top and side views of a spatial path
         fig, (top, side) = plt.subplots(1, 2, figsize=(10, 4.5))
-        plot_path(result, top, axes=(0, 1))
+        plot_path(result, top, axes=(0, 1), legend=False)
         plot_path(result, side, axes=(0, 2))
         top.set_title("top view")
         side.set_title("side view")
     fig.suptitle("End-effector path")
-    written += _save(fig, folder, "path")
+    return fig
 
+
+def _errors_figure(result: Result):
+    t, npos, pose = result.t, _position_size(result), result.e.shape[1] == 6
     fig, axes = plt.subplots(3 if pose else 2, 1, figsize=(7, 7 if pose else 5), sharex=True)
     for i in range(npos):
         _series(axes[0].plot, t, result.e[:, i] * 1e3, lw=0.8, label=f"$e_{AXES[i]}$")
     axes[0].set_ylabel("position error [mm]")
-    axes[0].legend(fontsize=8)
+    legend_outside(axes[0])
     if pose:
         for i in range(3):
             _series(axes[1].plot, t, result.e[:, 3 + i] * 1e3, lw=0.8, label=f"$e_{{\\theta {AXES[i]}}}$")
         axes[1].set_ylabel("orientation error [mrad]")
-        axes[1].legend(fontsize=8)
+        legend_outside(axes[1])
     _series(axes[-1].semilogy, t, np.maximum(result.position_error(), 1e-12), lw=0.8, label="position [m]")
     if pose:
         _series(axes[-1].semilogy, t, np.maximum(result.orientation_error(), 1e-12), lw=0.8,
                 label="orientation [rad]")
-        axes[-1].legend(fontsize=8)
+        legend_outside(axes[-1])
     axes[-1].set_ylabel("error norm [m]" if not pose else "error norm [m, rad]")
     axes[-1].set_xlabel("t [s]")
     fig.suptitle("Task-space tracking error")
-    written += _save(fig, folder, "errors")
+    return fig
 
-    for name, data, ylabel, title, lw, limits in (
-        ("joints", result.q, "joint angle [rad]", "Joint angles (dotted: position limits)", 0.9,
-         (result.lower_limit, result.upper_limit)),
-        ("torques", result.tau, "torque [N m]", "Applied joint torques (dotted: effort limits; "
-         "faint: commanded where it differs)", 0.6,
-         (None if result.torque_limit is None else -result.torque_limit, result.torque_limit)),
-    ):
-        fig, ax = plt.subplots(figsize=(7, 3.5))
-        for i, joint in enumerate(joint_labels):
-            line, = _series(ax.plot, t, data[:, i], lw=lw, label=joint)
-            commanded = result.tau_cmd if name == "torques" else None
-            if commanded is not None and np.any(commanded[:, i] != data[:, i]):
-                _series(ax.plot, t, commanded[:, i], lw=0.4, alpha=0.35, color=line.get_color())
-            for bound in limits:
-                if bound is not None and np.isfinite(bound[i]) and abs(bound[i]) < 1e6:
-                    ax.axhline(bound[i], ls=":", lw=0.8, color=line.get_color())
-        if name == "torques" and result.tau_cmd is not None and result.torque_limit is not None:
-            # the applied range, and the limits that are near it; commands beyond them are clipped
-            peak = float(np.nanmax(np.abs(data))) if data.size else 1.0
-            near = result.torque_limit[result.torque_limit <= 3 * peak]
-            top = 1.15 * max(peak, float(near.max()) if near.size else 0.0, 1e-9)
-            ax.set_ylim(-top, top)
-        ax.set_xlabel("t [s]")
-        ax.set_ylabel(ylabel)
-        ax.legend(fontsize=8)
-        ax.set_title(title, fontsize=10)
-        written += _save(fig, folder, name)
 
+def _joint_series_figure(result: Result, name: str):
+    """Joint angles or applied torques against time, with their limits dotted."""
+    t = result.t
+    joint_labels = result.joint_names or [f"q{i + 1}" for i in range(result.q.shape[1])]
+    if name == "joints":
+        data, ylabel, title, lw = result.q, "joint angle [rad]", "Joint angles (dotted: position limits)", 0.9
+        limits = (result.lower_limit, result.upper_limit)
+    else:
+        data, ylabel, lw = result.tau, "torque [N m]", 0.6
+        title = "Applied joint torques (dotted: effort limits; faint: commanded where it differs)"
+        limits = (None if result.torque_limit is None else -result.torque_limit, result.torque_limit)
+    fig, ax = plt.subplots(figsize=(7, 3.5))
+    for i, joint in enumerate(joint_labels):
+        line, = _series(ax.plot, t, data[:, i], lw=lw, label=joint)
+        commanded = result.tau_cmd if name == "torques" else None
+        if commanded is not None and np.any(commanded[:, i] != data[:, i]):
+            _series(ax.plot, t, commanded[:, i], lw=0.4, alpha=0.35, color=line.get_color())
+        for bound in limits:
+            if bound is not None and np.isfinite(bound[i]) and abs(bound[i]) < 1e6:
+                ax.axhline(bound[i], ls=":", lw=0.8, color=line.get_color())
+    if name == "torques" and result.tau_cmd is not None and result.torque_limit is not None:
+        # the applied range, and the limits that are near it; commands beyond them are clipped
+        peak = float(np.nanmax(np.abs(data))) if data.size else 1.0
+        near = result.torque_limit[result.torque_limit <= 3 * peak]
+        top = 1.15 * max(peak, float(near.max()) if near.size else 0.0, 1e-9)
+        ax.set_ylim(-top, top)
+    ax.set_xlabel("t [s]")
+    ax.set_ylabel(ylabel)
+    legend_outside(ax)
+    ax.set_title(title, fontsize=10)
+    return fig
+
+
+def _subtask_figure(result: Result):
+    t = result.t
     fig, axes = plt.subplots(2, 1, figsize=(7, 4.5), sharex=True)
     _series(axes[0].plot, t, result.signals["h"], lw=0.9)
     axes[0].set_ylabel("h(q)")
@@ -157,32 +172,65 @@ def plot_run(result: Result, folder: str | Path) -> list[Path]:
     axes[1].set_ylabel("$\\sqrt{\\det JJ^T}$ [m$^m$]")
     axes[1].set_xlabel("t [s]")
     fig.suptitle("Subtask criterion and manipulability")
-    written += _save(fig, folder, "subtask")
+    return fig
 
-    if result.chain is not None:
-        fig, ax = plt.subplots(figsize=(5.5, 5))
-        ax.plot(result.x_d[:, 0], result.x_d[:, 1], "k--", lw=1, label="desired path")
-        instants = np.linspace(0, t.size - 1, 7).astype(int)
-        colors = plt.cm.viridis(np.linspace(0, 0.9, instants.size))
-        for k, color in zip(instants, colors):
-            pts = result.chain[k]
-            ax.plot(pts[:, 0], pts[:, 1], "-o", color=color, ms=3, lw=2, label=f"t = {t[k]:.1f} s")
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.set_xlabel("x [m]")
-        ax.set_ylabel("y [m]")
-        ax.legend(fontsize=7, loc="best")
-        ax.set_title("Arm at several instants (x-y projection)")
-        written += _save(fig, folder, "snapshots")
 
-    if "rho_hat" in result.signals:
-        fig, axes = plt.subplots(2, 1, figsize=(7, 4.5), sharex=True)
-        _series(axes[0].plot, t, result.signals["rho_hat"], lw=0.9)
-        axes[0].set_ylabel("$\\hat\\rho$ [m/s$^2$]")
-        _series(axes[1].semilogy, t, np.maximum(result.signals["eps"], 1e-16), lw=0.9)
-        axes[1].set_ylabel("$\\varepsilon$")
-        axes[1].set_xlabel("t [s]")
-        fig.suptitle("NN bound estimate and boundary layer")
-        written += _save(fig, folder, "nn")
+def _snapshots_figure(result: Result):
+    if result.chain is None:
+        return None
+    t = result.t
+    fig, ax = plt.subplots(figsize=(5.5, 5))
+    ax.plot(result.x_d[:, 0], result.x_d[:, 1], "k--", lw=1, label="desired path")
+    instants = np.linspace(0, t.size - 1, 7).astype(int)
+    colors = plt.cm.viridis(np.linspace(0, 0.9, instants.size))
+    for k, color in zip(instants, colors):
+        pts = result.chain[k]
+        ax.plot(pts[:, 0], pts[:, 1], "-o", color=color, ms=3, lw=2, label=f"t = {t[k]:.1f} s")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x [m]")
+    ax.set_ylabel("y [m]")
+    legend_outside(ax, fontsize=7)
+    ax.set_title("Arm at several instants (x-y projection)")
+    return fig
+
+
+def _nn_figure(result: Result):
+    if "rho_hat" not in result.signals:
+        return None
+    t = result.t
+    fig, axes = plt.subplots(2, 1, figsize=(7, 4.5), sharex=True)
+    _series(axes[0].plot, t, result.signals["rho_hat"], lw=0.9)
+    axes[0].set_ylabel("$\\hat\\rho$ [m/s$^2$]")
+    _series(axes[1].semilogy, t, np.maximum(result.signals["eps"], 1e-16), lw=0.9)
+    axes[1].set_ylabel("$\\varepsilon$")
+    axes[1].set_xlabel("t [s]")
+    fig.suptitle("NN bound estimate and boundary layer")
+    return fig
+
+
+FIGURES = {
+    "path": _path_figure,
+    "errors": _errors_figure,
+    "joints": lambda result: _joint_series_figure(result, "joints"),
+    "torques": lambda result: _joint_series_figure(result, "torques"),
+    "subtask": _subtask_figure,
+    "snapshots": _snapshots_figure,
+    "nn": _nn_figure,
+}
+"""The figures of a run, by file name; a figure function returns None when the run lacks its data."""
+
+
+def plot_run(result: Result, folder: str | Path, names=None) -> list[Path]:
+    """Write the figure set of one run (or the figures ``names`` of :data:`FIGURES`) into
+    ``folder``; returns the files written.
+    """
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    written = []
+    for name in FIGURES if names is None else names:
+        fig = FIGURES[name](result)
+        if fig is not None:
+            written += _save(fig, folder, name)
     return written
 
 
@@ -204,7 +252,7 @@ def plot_comparison(results: dict[str, Result], folder: str | Path) -> list[Path
     axes[1].set_ylabel("position error [m]")
     axes[2].set_xlabel("t [s]")
     axes[2].set_ylabel("$\\|\\tau\\|$ [N m]")
-    for ax in axes:
-        ax.legend(fontsize=8)
+    handles, labels = axes[0].get_legend_handles_labels()  # one legend: the colours are the same
+    legend_outside(axes[2], handles=handles, labels=labels)
     written = _save(fig, folder, "comparison")
     return written

@@ -7,7 +7,6 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
 from .controllers.base import Controller
 from .plant.plant import Plant
@@ -162,6 +161,8 @@ def simulate(
                 for i in range(substeps):
                     X = _rk4_step(f, t + i * h, X, h)
             else:
+                from scipy.integrate import solve_ivp  # imported once, and only when chosen
+
                 sol = solve_ivp(f, (t, t + control_period), X, method="DOP853", rtol=rtol, atol=atol)
                 X = sol.y[:, -1]
     except KeyboardInterrupt:

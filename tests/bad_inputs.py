@@ -180,9 +180,9 @@ URDF_CASES = [
          lambda d: _load('<robot name="r"><link name="a"/><joint name="f" type="fixed">'
                          '<parent link="a"/><child link="b"/></joint><link name="b"/></robot>'),
          ex.ModelMismatch, "no movable joint"),
-    Case("continuous joint (nq != nv)",
-         lambda d: _load(arm().replace('name="j1" type="revolute"', 'name="j1" type="continuous"')),
-         ex.ModelMismatch, "nq = 3 != nv = 2"),
+    Case("planar joint (no single angle or length)",
+         lambda d: _load(arm().replace('name="j1" type="revolute"', 'name="j1" type="planar"')),
+         ex.ModelMismatch, "joints 'j1' (Planar) have no single angle or length"),
     Case("zero mass with a nonzero inertia", lambda d: _load(arm(mass="0")), ex.InvalidInertia,
          "mass 0 kg with a nonzero inertia"),
     Case("negative mass", lambda d: _load(arm(mass="-2")), ex.InvalidInertia, "must not be negative"),
@@ -218,9 +218,9 @@ URDF_CASES = [
          ex.UrdfStructureError, "joint 'j1' <dynamics> damping: -1 is outside [0, 1e+07]"),
     Case("unknown joint type", lambda d: _load(arm().replace('type="revolute"', 'type="hinge"', 1)),
          ex.UrdfStructureError, "joint 'j1': type 'hinge' is not one of revolute"),
-    Case("mimic joint (not locked)",
+    Case("mimic joint left out of the locked joints",
          lambda d: _load(arm().replace('<axis xyz="0 0 1"/>', '<axis xyz="0 0 1"/><mimic joint="j1"/>', 2)
-                         .replace('<mimic joint="j1"/>', '', 1)),
+                         .replace('<mimic joint="j1"/>', '', 1), locked_joints=[]),
          ex.UrdfStructureError, "joint 'j2' mimics joint 'j1': nnrobust does not model mimic joints"),
     Case("moving link with no mass after it",
          lambda d: _load(_l2_inertia(None)), ex.InvalidInertia, "joint 'j2' moves no mass"),
@@ -255,7 +255,7 @@ URDF_CASES = [
     Case("task frame that does not exist", lambda d: _load("three_link_planar", task_frame="gripper"),
          ex.FrameNotFound, "task frame 'gripper' not found; frames in the model: universe"),
     Case("robot name that example-robot-data does not ship", lambda d: _load("no_such_robot"),
-         ex.RobotLoadError, "example-robot-data cannot load it (Robot 'no_such_robot' not found)"),
+         ex.RobotLoadError, "not a URDF file, not planar<N>, and not a robot example-robot-data ships"),
 ]
 
 CONFIG_CASES = [

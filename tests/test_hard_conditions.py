@@ -135,7 +135,7 @@ def test_divergence_cause_names_an_exploding_criterion_gradient():
 
 
 def test_divergence_cause_names_an_implausible_effort_limit(tmp_path):
-    """An effort limit of 50 kN m on the paper's arm, with friction and disturbance scaled to it."""
+    """An effort limit of 50 kN m on the paper's arm: named in a warning, and the likely cause."""
     from nnrobust.experiment import build, likely_cause
     from nnrobust.model import paper_arm_urdf
 
@@ -145,6 +145,7 @@ def test_divergence_cause_names_an_implausible_effort_limit(tmp_path):
         robot={"source": str(urdf)},
         plant={"friction": "scaled", "disturbance": "scaled", "joint_stops": False},
         nominal={"kind": "urdf"}, simulation={"duration": 1.0})
-    setup = build(config)
+    with pytest.warns(UserWarning, match=r"effort limits of joints 'joint1' \(50000\)"):
+        setup = build(config)  # the scaled friction and disturbance do not take it at face value
     message = likely_cause(setup, _fake_trace(setup.q0, 3))
     assert "implausible effort limit (5e+04 on joint 'joint1'" in message

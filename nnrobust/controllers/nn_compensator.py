@@ -5,7 +5,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import solve_continuous_lyapunov
 
 from .basis import AdditiveRBFBasis
 
@@ -40,7 +39,18 @@ def lyapunov_Q(Kp: np.ndarray, Kv: np.ndarray) -> np.ndarray:
 def lyapunov_P(Kp: np.ndarray, Kv: np.ndarray) -> np.ndarray:
     """P solving A^T P + P A + Q = 0, eq. (16); equals [[2 Kp Kv, Kp], [Kp, Kv]] for diagonal gains."""
     A, _ = error_dynamics(Kp, Kv)
-    return solve_continuous_lyapunov(A.T, -lyapunov_Q(Kp, Kv))
+    return solve_lyapunov(A, lyapunov_Q(Kp, Kv))
+
+
+def solve_lyapunov(A: np.ndarray, Q: np.ndarray) -> np.ndarray:
+    """The P with A^T P + P A + Q = 0, by its Kronecker form (I (x) A^T + A^T (x) I) vec P = -vec Q
+    (column-major vec; unique when no two eigenvalues of A sum to zero, as for a Hurwitz A).
+    """
+    n = A.shape[0]
+    eye = np.eye(n)
+    kron = np.kron(eye, A.T) + np.kron(A.T, eye)
+    P = np.linalg.solve(kron, -Q.reshape(-1, order="F")).reshape(n, n, order="F")
+    return (P + P.T) / 2
 
 
 @dataclass

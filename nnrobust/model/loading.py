@@ -2,20 +2,27 @@
 
 from __future__ import annotations
 
+import collections
 import contextlib
-import functools
+import difflib
 import os
 import sys
 import tempfile
+import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
 from ..exceptions import ModelMismatch, RobotLoadError
+from .chains import chain_between, default_chain
+from .continuous_joints import with_revolute_continuous_joints
+from .example_robots import ExampleRobot, example_robot, is_example_robot, robot_names
+from .example_robots import visual_model as example_visual_model
 from .pinocchio_model import MAX_JOINTS, PinocchioModel
 from .planar_chain import PLANAR_CHAIN_NAME, planar_chain_urdf
-from .urdf_check import check_urdf, read_urdf_file, resolved_visuals
+from .urdf_check import check_urdf, mimic_joints, read_urdf_file, resolved_visuals
 
 PAPER_ARM = "three_link_planar"
 """Name of the paper's three-link arm, shipped in ``urdf/``."""
@@ -70,20 +77,63 @@ def _resolve(source: str) -> tuple[str, str]:
     return "erd", source
 
 
-def _build_from_urdf(source: str, locked: frozenset[str] = frozenset()) -> tuple[pin.Model, str]:
+@dataclass
+class _Built:
+    """A robot as parsed, before any joint is locked: continuous joints revolute, base fixed."""
+
+    model: pin.Model
+    name: str  # for messages: the file, "<urdf string>" or "example-robot-data:NAME"
+    text: str | None  # the URDF text (None for example-robot-data robots)
+    base: Path | None  # the URDF file's folder
+    example: ExampleRobot | None
+    mimic: frozenset[str]  # joints with <mimic>, locked unless the user lists the locked joints
+
+
+def unique_frame_names(model: pin.Model) -> pin.Model:
+    """``model`` with a link frame renamed ``<name>_link`` where a joint has its name (Pinocchio
+    cannot reduce a model whose frames share a name).
+    """
+    names = collections.Counter(f.name for f in model.frames)
+    for i, frame in enumerate(model.frames):
+        if names[frame.name] > 1 and frame.type == pin.FrameType.BODY:
+            renamed = pin.Frame(frame)
+            renamed.name = frame.name + "_link"
+            while names[renamed.name]:
+                renamed.name += "_"
+            names[renamed.name] += 1
+            model.frames[i] = renamed
+    return model
+
+
+def _build(source: str, locked_joints=None, chain=None) -> _Built:
+    """Parse a source. Mimic joints are locked, except where the user lists the locked joints
+    and no chain: then a mimic joint must be among them (the URDF check says so).
+    """
     kind, value = _resolve(source)
     if kind == "erd":
-        robot = _example_robot_data(value)
-        return pin.Model(robot.model), f"example-robot-data:{value}"  # a copy: the load is cached
+        if not is_example_robot(value):
+            close = difflib.get_close_matches(value, robot_names(), n=3)
+            hint = f"; did you mean {', '.join(close)}?" if close else ""
+            raise RobotLoadError(value, f"not a URDF file, not planar<N>, and not a robot example-robot-data "
+                                 f"ships{hint} (nnrobust robots --all lists them)")
+        example = example_robot(value)
+        model = unique_frame_names(with_revolute_continuous_joints(pin.Model(example.model)))  # a copy
+        if example.note:
+            warnings.warn(f"{value}: {example.note}", stacklevel=3)
+        return _Built(model, f"example-robot-data:{value}", None, None, example, frozenset())
     generated = PLANAR_CHAIN_NAME.match(source) is not None
     name = value if kind == "file" else (source if generated else "<urdf string>")
     text = read_urdf_file(value) if kind == "file" else value
+    base = Path(value).resolve().parent if kind == "file" else None
+    mimic = frozenset() if generated else mimic_joints(text)
     if not generated:
-        check_urdf(text, name, Path(value).resolve().parent if kind == "file" else None, locked=locked)
+        user = frozenset(locked_joints or ())
+        explicit = locked_joints is not None and chain is None
+        check_urdf(text, name, base, locked=user if explicit else user | mimic)
     model = _parsed(name, "invalid URDF", lambda: pin.buildModelFromXML(text))
     if model.nq == 0 and model.njoints <= 1:
         raise ModelMismatch(f"{name}: the URDF has no movable joint (only fixed joints)")
-    return model, name
+    return _Built(unique_frame_names(with_revolute_continuous_joints(model)), name, text, base, None, mimic)
 
 
 @contextlib.contextmanager
@@ -120,26 +170,43 @@ def _parsed(name: str, what: str, build):
     raise RobotLoadError(name, f"{what}: {detail}") from failure
 
 
-@functools.lru_cache(maxsize=8)
-def _example_robot_data(name: str):
-    """example_robot_data.load(name), once per process (it parses the URDF and every mesh: 0.5 s
-    for the Panda); callers take copies of its models.
+def _locks(built: _Built, source: str, locked_joints, chain) -> tuple[list[str], str]:
+    """The joints to lock and the default task frame (module :mod:`.chains`)."""
+    model = built.model
+    if chain is not None:
+        base, tip = chain
+        names = chain_between(model, base, tip) + list(locked_joints or [])
+        return sorted(set(names) | built.mimic, key=model.getJointId), tip
+    if locked_joints is None and "locked_joints" in ARMS.get(source, {}):
+        locked_joints = ARMS[source]["locked_joints"]
+    if locked_joints is not None:
+        missing = [j for j in locked_joints if not model.existJointName(j)]
+        if missing:
+            raise RobotLoadError(built.name, f"cannot lock unknown joints {missing}; joints: "
+                                 f"{list(model.names)[1:]}")
+        return list(locked_joints), ""
+    frame, names = default_chain(model)
+    return sorted(set(names) | built.mimic, key=model.getJointId), frame
+
+
+def _reduced(built: _Built, locked: list[str], visual: pin.GeometryModel | None = None):
+    """The model (and visual geometry) with ``locked`` held at their neutral value; a joint
+    that is still not one angle or one length is refused by name.
     """
-    try:
-        import example_robot_data
-    except ImportError as err:  # pragma: no cover - a declared dependency
-        raise RobotLoadError(
-            name, "example-robot-data is not installed: pip install example-robot-data-loaders"
-        ) from err
-    try:
-        return example_robot_data.load(name)
-    except Exception as err:  # the loader raises bare exceptions of several kinds
-        reason = str(err).split(". Possible values")[0]
-        raise RobotLoadError(
-            name,
-            f"not a URDF file, not planar<N>, and example-robot-data cannot load it ({reason}); "
-            f"arms known to work: {', '.join(ARMS)} (nnrobust robots)",
-        ) from err
+    ids = [built.model.getJointId(j) for j in locked]
+    model = built.model
+    if ids:
+        reduced = pin.buildReducedModel(model, visual, ids, pin.neutral(model)) if visual is not None else \
+            pin.buildReducedModel(model, ids, pin.neutral(model))
+        model, visual = reduced if visual is not None else (reduced, None)
+    odd = [f"{model.names[i]!r} ({model.joints[i].shortname().removeprefix('JointModel')})"
+           for i in range(1, model.njoints) if model.joints[i].nq != model.joints[i].nv]
+    if odd:
+        raise ModelMismatch(f"{built.name}: joints {', '.join(odd)} have no single angle or length; lock "
+                            "them (robot.locked_joints) or choose a chain without them (robot.chain)")
+    if model.nv == 0:
+        raise ModelMismatch(f"{built.name}: every joint is locked; nothing is left to move")
+    return model, visual
 
 
 def _locked_joint_ids(model: pin.Model, name: str, source: str, locked_joints) -> list[int]:
@@ -154,43 +221,34 @@ def _locked_joint_ids(model: pin.Model, name: str, source: str, locked_joints) -
 
 
 def load_visual_model(
-    source: str | Path, locked_joints: list[str] | None = None
+    source: str | Path, locked_joints: list[str] | None = None, chain: tuple[str, str] | None = None
 ) -> tuple[pin.Model, pin.GeometryModel]:
     """The kinematic model and the visual geometry (meshes and primitives) of an arm, for viewers.
 
-    Same sources and joint locking as :func:`load_robot`. Mesh files are found by the mesh rules
-    of :func:`~nnrobust.model.urdf_check.mesh_roots` (next to a URDF file, in the working folder
-    for a URDF given as text, and in ROS_PACKAGE_PATH); a visual whose mesh is missing is left
-    out, the rest of the robot is drawn.
+    Same sources, joint locking and chain as :func:`load_robot`. Mesh files are found by the mesh
+    rules of :func:`~nnrobust.model.urdf_check.mesh_roots` (next to a URDF file, in the working
+    folder for a URDF given as text, and in ROS_PACKAGE_PATH); a visual whose mesh is missing is
+    left out, the rest of the robot is drawn.
     """
     source = str(source)
-    kind, value = _resolve(source)
-    if kind == "erd":
-        robot = _example_robot_data(value)
-        model, visual = pin.Model(robot.model), robot.visual_model.copy()  # copies: the load is cached
-        name = f"example-robot-data:{value}"
+    built = _build(source, locked_joints, chain)
+    if built.example is not None:
+        visual = example_visual_model(built.example, built.model)
     else:
-        model, name = _build_from_urdf(source, frozenset(locked_joints or ()))
-        text = read_urdf_file(value) if kind == "file" else value
+        text = built.text
         if not PLANAR_CHAIN_NAME.match(source):
-            text = resolved_visuals(text, name, Path(value).resolve().parent if kind == "file" else None)
-        visual = _parsed(name, "cannot read the visual geometry",
-                         lambda: pin.buildGeomFromUrdfString(model, text, pin.GeometryType.VISUAL))
-    ids = _locked_joint_ids(model, name, source, locked_joints)
-    if ids:
-        model, visual = pin.buildReducedModel(model, visual, ids, pin.neutral(model))
-    return model, visual
+            text = resolved_visuals(text, built.name, built.base)
+        visual = _parsed(built.name, "cannot read the visual geometry",
+                         lambda: pin.buildGeomFromUrdfString(built.model, text, pin.GeometryType.VISUAL))
+    locked, _ = _locks(built, source, locked_joints, chain)
+    return _reduced(built, locked, visual)
 
 
 def default_task_frame(model: pin.Model) -> str:
-    """The tip of the kinematic chain: the last body or operational frame of the last joint."""
-    last_joint = model.njoints - 1
-    candidates = [
-        f.name
-        for f in model.frames
-        if f.parentJoint == last_joint and f.type in (pin.FrameType.BODY, pin.FrameType.OP_FRAME)
-    ]
-    return candidates[-1] if candidates else model.names[last_joint]
+    """The task frame the rule of :mod:`nnrobust.model.chains` picks (the tool frame at the end
+    of the longest chain, else the chain's tip).
+    """
+    return default_chain(model)[0]
 
 
 def load_robot(
@@ -199,26 +257,34 @@ def load_robot(
     task: str = "planar",
     gravity: tuple[float, float, float] | None = None,
     locked_joints: list[str] | None = None,
+    chain: tuple[str, str] | None = None,
 ) -> PinocchioModel:
     """Load an arm as a :class:`PinocchioModel`.
 
     Args:
         source: a URDF path, a URDF XML string, ``"three_link_planar"`` (the paper's arm),
             ``"planar<N>"`` (a generated N-link planar chain) or an example-robot-data robot
-            name such as ``"panda"`` (:data:`ARMS` lists the arms known to work).
-        task_frame: frame whose position (or pose) is the task; default: the tip of the chain.
+            name such as ``"panda"`` (``nnrobust robots --all`` lists them).
+        task_frame: frame whose position (or pose) is the task; default: the rule of
+            :mod:`nnrobust.model.chains` (a tool, end-effector or hand frame at the end of the
+            longest chain), or the tip of ``chain``.
         task: ``"planar"`` (m = 2), ``"position"`` (m = 3) or ``"pose"`` (m = 6).
         gravity: gravity vector [m/s^2]; default Pinocchio's (0, 0, -9.81).
-        locked_joints: joints fixed at their neutral value; default: the gripper joints of the
-            arms in :data:`ARMS` (pass ``[]`` to lock nothing).
+        locked_joints: joints held at their neutral value (zero angle or length); default: every
+            joint off the default chain, and gripper, finger and mimic joints
+            (``[]`` locks nothing).
+        chain: ``(base frame, tip frame)``: the arm is the joints between them, every other joint
+            is locked (and so are ``locked_joints``).
+
+    Continuous joints become revolute joints without limits (one angle each); a floating base
+    is fixed to the world (a warning says so).
 
     """
     source = str(source)
-    model, name = _build_from_urdf(source, frozenset(locked_joints or ()))
-    ids = _locked_joint_ids(model, name, source, locked_joints)
-    if ids:
-        model = pin.buildReducedModel(model, ids, pin.neutral(model))
+    built = _build(source, locked_joints, chain)
+    locked, frame = _locks(built, source, locked_joints, chain)
+    model, _ = _reduced(built, locked)
     if gravity is not None:
         model.gravity.linear = np.asarray(gravity, dtype=float)
-    frame = task_frame if task_frame is not None else default_task_frame(model)
-    return PinocchioModel(model, frame, task=task, name=name)
+    frame = task_frame or frame or default_task_frame(model)
+    return PinocchioModel(model, frame, task=task, name=built.name)

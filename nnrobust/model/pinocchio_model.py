@@ -16,6 +16,14 @@ MAX_JOINTS = 300
 """Most joints a model may have: pin.Data's memory grows as n^3 (1.8 GB at 300, 7.8 GB at 500)."""
 
 
+def frame_id(model: pin.Model, name: str) -> int:
+    """The id of frame ``name``: a body or operational frame when joints or links share the name."""
+    for kind in (pin.FrameType.BODY, pin.FrameType.OP_FRAME):
+        if model.existFrame(name, kind):
+            return model.getFrameId(name, kind)
+    return model.getFrameId(name)
+
+
 class PinocchioModel:
     """Dynamics (RNEA, CRBA, ABA) and task kinematics of the frame ``task_frame``.
 
@@ -52,7 +60,7 @@ class PinocchioModel:
         self.name = name or model.name
         self.task = task
         self.task_frame = task_frame
-        self.frame_id = model.getFrameId(task_frame)
+        self.frame_id = frame_id(model, task_frame)
         self.nq = model.nq
         self.m = TASK_KINDS[task]
         self.joint_names = [model.names[i] for i in range(1, model.njoints)]

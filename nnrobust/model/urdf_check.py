@@ -175,6 +175,16 @@ def _check_joint(joint: ET.Element, name: str, source: str, locked: frozenset[st
                                  f"lock it with robot.locked_joints = [{name!r}] or remove <mimic>")
 
 
+def mimic_joints(text: str) -> frozenset[str]:
+    """Names of the joints that carry a <mimic> (none when the text is not XML: the check says why)."""
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError:
+        return frozenset()
+    return frozenset(j.get("name") for j in root.iter("joint")
+                     if j.find("mimic") is not None and j.get("name"))
+
+
 def _check_origin_of_root(link: ET.Element, name: str, source: str) -> None:
     """The root's <inertial> does not matter, but its numbers must still be numbers."""
     inertial = link.find("inertial")

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
 
 from ..model.pinocchio_model import PinocchioModel
@@ -28,12 +30,51 @@ def torque_needed(robot: PinocchioModel, q: np.ndarray) -> np.ndarray:
     return np.diag(robot.mass(q)) * REFERENCE_ACCELERATION + np.abs(robot.gravity(q))
 
 
-def torque_scale(robot: PinocchioModel) -> np.ndarray:
-    """tau_ref per joint [N m]: the URDF effort limit where there is one, else
-    M_ii(q_mid) * 10 rad/s^2 + |G_i(q_mid)| at mid-range (the arm's own size).
+PLAUSIBLE_EFFORT_RATIO = 100.0
+"""An effort limit above this many times the largest torque the arm needs is a placeholder."""
+
+RANGE_SAMPLES = 32
+"""Seeded configurations over the working range at which the needed torque is evaluated."""
+
+
+def torque_needed_over_range(robot: PinocchioModel, samples: int = RANGE_SAMPLES) -> np.ndarray:
+    """Per joint, the largest :func:`torque_needed` at mid-range and at seeded configurations
+    over the joints' working range [N m].
+    """
+    low, high = robot.working_range
+    rng = np.random.default_rng(0)
+    needs = [torque_needed(robot, robot.mid_configuration)]
+    needs += [torque_needed(robot, rng.uniform(low, high)) for _ in range(samples)]
+    return np.max(needs, axis=0)
+
+
+def implausible_efforts(robot: PinocchioModel) -> np.ndarray:
+    """Which joints' effort limits exceed :data:`PLAUSIBLE_EFFORT_RATIO` times the largest torque
+    any joint of the arm needs over its range (URDF placeholders such as 1000 N m on a 2 kg
+    leg, or 50,000 N m on a robot's head).
     """
     effort = robot.effort_limits
-    return np.where(usable(effort), effort, torque_needed(robot, robot.mid_configuration))
+    if not np.any(usable(effort)):
+        return np.zeros(robot.nq, dtype=bool)
+    need = float(np.max(torque_needed_over_range(robot)))
+    return usable(effort) & (effort > PLAUSIBLE_EFFORT_RATIO * max(need, 1e-9))
+
+
+def torque_scale(robot: PinocchioModel) -> np.ndarray:
+    """tau_ref per joint [N m]: the URDF effort limit where there is a plausible one, else
+    M_ii(q_mid) * 10 rad/s^2 + |G_i(q_mid)| at mid-range (the arm's own size). An implausible
+    limit (:func:`implausible_efforts`) is named in a warning and not used.
+    """
+    effort = robot.effort_limits
+    bad = implausible_efforts(robot)
+    if np.any(bad):
+        need = float(np.max(torque_needed_over_range(robot)))
+        joints = ", ".join(f"{robot.joint_names[i]!r} ({effort[i]:g})" for i in np.flatnonzero(bad))
+        warnings.warn(f"{robot.name}: effort limits of joints {joints} [N m] are over "
+                      f"{PLAUSIBLE_EFFORT_RATIO:g}x the {need:.3g} N m the arm needs at most "
+                      "(M_ii 10 rad/s^2 + |G_i| over its range); the scaled friction and disturbance "
+                      "size those joints by their own need instead (docs/plant.md)", stacklevel=3)
+    return np.where(usable(effort) & ~bad, effort, torque_needed(robot, robot.mid_configuration))
 
 
 def scaled_friction(robot: PinocchioModel, viscous_level: float, coulomb_level: float) -> Friction:

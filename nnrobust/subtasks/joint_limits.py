@@ -8,18 +8,26 @@ from ..model.base import DynamicsModel
 from .base import Criterion
 
 
-def _finite_range(lower, upper) -> tuple[np.ndarray, np.ndarray]:
+def _finite_range(lower, upper) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(lower, upper, limited): a joint without limits (a continuous joint: -inf, inf) takes no
+    part; any other joint needs a finite, positive range.
+    """
     lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
     if lower.shape != upper.shape or lower.ndim != 1:
         raise ValueError(f"joint limits: lower {lower.shape} and upper {upper.shape} must be vectors "
                          "of the same length")
-    bad = ~(np.isfinite(lower) & np.isfinite(upper) & (upper - lower > 0)) | (upper - lower > 1e3)
+    unlimited = (lower == -np.inf) & (upper == np.inf)
+    finite = np.isfinite(lower) & np.isfinite(upper) & (upper - lower > 0) & (upper - lower <= 1e3)
+    bad = ~unlimited & ~finite
     if np.any(bad):
         raise ValueError(
             f"joint limits: joints {np.flatnonzero(bad).tolist()} have no finite range "
             f"(lower {lower[bad].tolist()}, upper {upper[bad].tolist()}); set <limit> in the URDF"
         )
-    return lower, upper
+    if np.all(unlimited):
+        raise ValueError("joint limits: no joint has limits (all are continuous); the criterion has "
+                         "nothing to do")
+    return np.where(unlimited, -1.0, lower), np.where(unlimited, 1.0, upper), ~unlimited
 
 
 class JointLimitAvoidance(Criterion):
@@ -31,14 +39,15 @@ class JointLimitAvoidance(Criterion):
     ``margin`` x range of a limit (and beyond it) b is continued by its tangent line at that
     point: value and gradient stay finite and continuous, and the gradient keeps pointing back
     into the range, so an arm that starts on a limit, or is pushed past it by a stop, gets a
-    bounded push (at most the barrier's slope at the margin) instead of a blow-up.
+    bounded push (at most the barrier's slope at the margin) instead of a blow-up. A joint
+    without limits (a continuous joint) has b_i = 1: it is never pushed.
     """
 
     margin: float = 0.05
     """Fraction of the range at each end where the barrier turns linear."""
 
     def __init__(self, lower: np.ndarray, upper: np.ndarray):
-        self.lower, self.upper = _finite_range(lower, upper)
+        self.lower, self.upper, self.limited = _finite_range(lower, upper)
         self.span = self.upper - self.lower
         self._low_knot = self.lower + self.margin * self.span
         self._high_knot = self.upper - self.margin * self.span
@@ -49,7 +58,7 @@ class JointLimitAvoidance(Criterion):
         s = (self.upper - knot) * (knot - self.lower)
         b = self.span**2 / (4 * s)
         db = -self.span**2 * (self.upper + self.lower - 2 * knot) / (4 * s**2)
-        return b + db * (q - knot), db
+        return np.where(self.limited, b + db * (q - knot), 1.0), np.where(self.limited, db, 0.0)
 
     def value(self, model: DynamicsModel, q: np.ndarray) -> float:
         """h(q) <= -1."""
@@ -64,9 +73,9 @@ class JointCentering(Criterion):
     """h = -(1/(2n)) sum_i ((q_i - c_i) / (u_i - l_i))^2 with c the mid-range (Liegeois 1977)."""
 
     def __init__(self, lower: np.ndarray, upper: np.ndarray):
-        lower, upper = _finite_range(lower, upper)
+        lower, upper, limited = _finite_range(lower, upper)
         self.center = 0.5 * (lower + upper)
-        self.span = upper - lower
+        self.span = np.where(limited, upper - lower, np.inf)  # a joint without limits: no term
 
     def value(self, model: DynamicsModel, q: np.ndarray) -> float:
         """h(q) <= 0, zero at mid-range."""

@@ -147,7 +147,7 @@ class RunScene:
         from pinocchio.visualize import MeshcatVisualizer
 
         rc = config.robot
-        model, visual = load_visual_model(rc.source, rc.locked_joints)
+        model, visual = load_visual_model(rc.source, rc.locked_joints, tuple(rc.chain) if rc.chain else None)
         self.vis = vis
         self.robot = MeshcatVisualizer(model, None, visual)
         with warnings.catch_warnings():

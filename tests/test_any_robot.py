@@ -1,0 +1,205 @@
+"""Any example-robot-data robot: continuous joints as revolute joints, floating bases fixed, the
+default chain rule, robot.chain, implausible effort limits, and the NN controller on robots the
+paper never saw (docs/robots.md)."""
+
+import warnings
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from nnrobust import load_robot
+from nnrobust.exceptions import NNRobustError, RobotLoadError
+from nnrobust.experiment import run_experiment
+from nnrobust.model.continuous_joints import (
+    angles_from_configuration,
+    configuration_from_angles,
+    continuous_joint_names,
+    with_revolute_continuous_joints,
+)
+from nnrobust.model.example_robots import example_robot, robot_names
+from nnrobust.plant.scaling import implausible_efforts, torque_scale
+from nnrobust.presets import load_preset
+
+
+def _quiet(call, *args, **kwargs):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return call(*args, **kwargs)
+
+
+@pytest.mark.parametrize("name", ["kinova", "tiago", "double_pendulum_continuous"])
+def test_continuous_joints_keep_the_dynamics_of_the_unbounded_joints(name):
+    """M, the bias forces and every frame's Jacobian and placement of the rebuilt model equal
+    Pinocchio's own (cos, sin) model at the same angles, on random states."""
+    original = example_robot(name).model
+    assert continuous_joint_names(original)
+    rebuilt = with_revolute_continuous_joints(original)
+    assert rebuilt.nq == rebuilt.nv == original.nv and rebuilt.nframes == original.nframes
+    d, e = original.createData(), rebuilt.createData()
+    rng = np.random.default_rng(1)
+    for _ in range(5):
+        angles = rng.uniform(-4, 4, rebuilt.nv)
+        v, a = rng.normal(size=rebuilt.nv), rng.normal(size=rebuilt.nv)
+        q = configuration_from_angles(original, angles)
+        np.testing.assert_allclose(np.triu(pin.crba(rebuilt, e, angles)), np.triu(pin.crba(original, d, q)),
+                                   atol=1e-12)
+        np.testing.assert_allclose(pin.rnea(rebuilt, e, angles, v, a), pin.rnea(original, d, q, v, a),
+                                   atol=1e-10)
+        pin.computeJointJacobians(original, d, q)
+        pin.computeJointJacobians(rebuilt, e, angles)
+        pin.updateFramePlacements(original, d)
+        pin.updateFramePlacements(rebuilt, e)
+        for fid in range(0, original.nframes, 7):
+            np.testing.assert_allclose(e.oMf[fid].homogeneous, d.oMf[fid].homogeneous, atol=1e-12)
+            lwa = pin.LOCAL_WORLD_ALIGNED
+            np.testing.assert_allclose(pin.getFrameJacobian(rebuilt, e, fid, lwa),
+                                       pin.getFrameJacobian(original, d, fid, lwa), atol=1e-12)
+        continuous = [original.joints[original.getJointId(j)].idx_v for j in continuous_joint_names(original)]
+        expected = angles.copy()
+        expected[continuous] = np.arctan2(np.sin(angles[continuous]), np.cos(angles[continuous]))
+        np.testing.assert_allclose(angles_from_configuration(original, q), expected, atol=1e-12)
+    for i in range(1, rebuilt.njoints):  # unlimited exactly where the joint is continuous
+        j = rebuilt.joints[i]
+        unbounded = rebuilt.names[i] in continuous_joint_names(original)
+        assert (rebuilt.lowerPositionLimit[j.idx_q] == -np.inf) == unbounded
+
+
+def test_a_continuous_joint_in_a_urdf_file_is_one_unlimited_angle():
+    from tests.bad_inputs import arm
+
+    robot = load_robot(arm().replace('name="j1" type="revolute"', 'name="j1" type="continuous"'))
+    assert robot.nq == 2 and robot.lower_limits[0] == -np.inf and robot.upper_limits[0] == np.inf
+    assert np.isfinite(robot.lower_limits[1])
+
+
+def test_every_shipped_robot_loads_or_is_refused_with_its_reason():
+    loaded, refused = [], {}
+    for name in robot_names():
+        try:
+            robot = _quiet(load_robot, name, task="position")
+        except NNRobustError as err:
+            refused[name] = str(err)
+            continue
+        assert robot.nq == robot.model.nv >= 1
+        loaded.append(name)
+    assert len(robot_names()) == 72 and len(loaded) >= 69, refused
+    # the three that cannot be arms here: two drones without a joint, and an SDF this Pinocchio cannot read
+    assert set(refused) <= {"hector", "iris", "cassie"}, refused
+    assert "no movable joint" in refused.get("hector", "no movable joint")
+    assert "SDF" in refused.get("cassie", "SDF")
+
+
+def test_a_floating_base_is_fixed_to_the_world_and_said_once():
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        leg = load_robot("solo12", task="position")
+    assert [str(w.message) for w in caught] == [
+        "solo12: a floating-base robot, simulated with its base fixed to the world"]
+    assert leg.nq == 3 and leg.task_frame == "HR_FOOT"
+    assert all(name.startswith("HR_") for name in leg.joint_names)
+
+
+@pytest.mark.parametrize("name, n, frame, first", [
+    ("panda", 7, "panda_hand_tcp", "panda_joint1"),  # fingers locked
+    ("talos_arm", 6, "wrist_left_ft_tool_link", "arm_left_2_joint"),  # gripper locked, not a finger link
+    ("baxter", 7, "right_hand_range_link", "right_s0"),  # one arm, not the whole robot
+    ("tiago", 8, "hand_tool_link", "torso_lift_joint"),  # wheels, head and hand locked
+    ("finger_edu", 3, "finger_tip_link", "finger_base_to_upper_joint"),  # a robot that is a finger
+])
+def test_the_default_chain_rule(name, n, frame, first):
+    robot = _quiet(load_robot, name, task="position")
+    assert (robot.nq, robot.task_frame, robot.joint_names[0]) == (n, frame, first)
+    if name != "finger_edu":
+        assert not any(w in j for j in robot.joint_names for w in ("finger", "gripper", "hand"))
+
+
+def test_robot_chain_picks_a_sub_chain():
+    left = load_robot("baxter", task="position", chain=("torso", "left_gripper"))
+    assert left.nq == 7 and left.task_frame == "left_gripper"
+    assert all(j.startswith("left_") for j in left.joint_names)
+    head = load_robot("baxter", task="planar", chain=("torso", "head"))
+    assert head.joint_names == ["head_pan"]
+    with pytest.raises(RobotLoadError, match="is not between the root and"):
+        load_robot("baxter", chain=("left_gripper", "right_gripper"))
+    with pytest.raises(RobotLoadError, match="tip frame 'nowhere' is not in the model"):
+        load_robot("baxter", chain=("torso", "nowhere"))
+
+
+def test_frames_that_share_a_joint_name_are_told_apart():
+    robot = _quiet(load_robot, "anymal_c", task="position")  # link RF_KFE and joint RF_KFE
+    assert robot.model.existFrame("RH_KFE_link") and robot.task_frame == "RH_FOOT"
+
+
+def test_implausible_effort_limits_are_named_and_not_used():
+    """Baxter's head claims 50,000 N m; the Panda's limits are real (none is flagged)."""
+    head = load_robot("baxter", task="planar", chain=("torso", "head"))
+    assert implausible_efforts(head).tolist() == [True]
+    with pytest.warns(UserWarning, match=r"joints 'head_pan' \(50000\).*over 100x"):
+        scale = torque_scale(head)
+    assert scale[0] < 10.0
+    panda = load_robot("panda", task="position")
+    assert not implausible_efforts(panda).any()
+    np.testing.assert_array_equal(torque_scale(panda), panda.effort_limits)
+
+
+def _well_conditioned(robot, samples=64):
+    """The most manipulable of seeded configurations inside the working range."""
+    rng = np.random.default_rng(0)
+    low, high = robot.working_range
+    candidates = [low + (high - low) * rng.uniform(0.2, 0.8, robot.nq) for _ in range(samples)]
+    return max(candidates, key=lambda q: np.linalg.det(robot.task_jacobian(q) @ robot.task_jacobian(q).T))
+
+
+def _late_rms(name: str, kind: str) -> float:
+    """RMS position error over 1 s <= t < 2 s of the Panda preset's controller ``kind`` (scaled
+    friction and disturbance, 20 % model error) on a 3-5 cm ellipse around a well-conditioned
+    configuration of ``name``'s default chain, position task."""
+    robot = _quiet(load_robot, name, task="position")
+    q = _well_conditioned(robot)
+    x = robot.task_position(q)
+    config = load_preset("panda-ellipse").replace(
+        name=f"{name}-ellipse", robot={"source": name, "task": "position"}, controller={"kind": kind},
+        trajectory={"center": [float(v) for v in x], "axis_a": [0.0, 0.03, 0.0], "axis_b": [0.02, 0.0, 0.02]},
+        simulation={"duration": 2.0, "q_seed": [float(v) for v in q], "substeps": 4})
+    result = _quiet(run_experiment, config)
+    assert result.status == "completed" and np.all(np.isfinite(result.q)), result.message
+    return float(np.sqrt(np.mean(result.position_error()[result.t >= 1.0] ** 2)))
+
+
+@pytest.mark.parametrize("name", ["kinova", "so101", "tiago", "solo12"])
+def test_nn_controller_tracks_on_robots_the_paper_never_saw(name):
+    """2 s of the NN controller: bounded, and at least 3x better than the same law without u_0."""
+    nn, baseline = _late_rms(name, "nn"), _late_rms(name, "no-u0")
+    assert nn < 0.02 and 3 * nn < baseline, (nn, baseline)
+
+
+def test_compiled_loop_equals_python_with_unlimited_joints_in_the_joint_criteria():
+    """Kinova's continuous joints take no part in joint_limits and joint_centering, in both loops."""
+    robot = load_robot("kinova", task="position")
+    q = _well_conditioned(robot)
+    x = robot.task_position(q)
+    config = load_preset("panda-ellipse").replace(
+        name="kinova-ellipse", robot={"source": "kinova", "task": "position"},
+        trajectory={"center": [float(v) for v in x], "axis_a": [0.0, 0.03, 0.0], "axis_b": [0.02, 0.0, 0.02]},
+        simulation={"duration": 0.5, "q_seed": [float(v) for v in q], "substeps": 4},
+        subtasks={"criteria": ["joint_centering", "joint_limits"], "weights": [0.5, 0.5]})
+    from tests.test_compiled import needs_extension
+
+    if needs_extension.args[0]:
+        pytest.skip(needs_extension.kwargs["reason"])
+    fast = _quiet(run_experiment, config.replace(simulation={"backend": "compiled"}))
+    slow = _quiet(run_experiment, config.replace(simulation={"backend": "python"}))
+    assert (fast.backend, slow.backend) == ("compiled", "python")
+    np.testing.assert_allclose(fast.q, slow.q, atol=1e-8)
+    np.testing.assert_allclose(fast.tau, slow.tau, atol=1e-8)
+    np.testing.assert_allclose(fast.signals["h"], slow.signals["h"], atol=1e-8)
+    assert np.all(np.isfinite(slow.signals["h"]))
+
+
+if __name__ == "__main__":  # the table of docs/robots.md: python -m tests.test_any_robot
+    print("| robot | n | NN | no-u0 |\n|---|---:|---:|---:|")
+    for robot_name in ("kinova", "so101", "tiago", "solo12"):
+        n = _quiet(load_robot, robot_name, task="position").nq
+        print(f"| {robot_name} | {n} | {_late_rms(robot_name, 'nn') * 1e3:.3g} mm | "
+              f"{_late_rms(robot_name, 'no-u0') * 1e3:.3g} mm |")
