@@ -342,9 +342,11 @@ def cmd_compare(args) -> int:
         rows.append((label, json.loads((Path(folder) / "metrics.json").read_text())))
         results[label] = result
     print(format_table(rows))
-    if args.out:
-        from .plots import plot_comparison
+    from .plots import comparison_warnings, plot_comparison
 
+    for warning in comparison_warnings(results):
+        print(f"warning: {one_line(warning)}", file=sys.stderr)
+    if args.out:
         written = plot_comparison(results, args.out)
         print(f"comparison plot: {written[0]}", file=sys.stderr)
     return 0

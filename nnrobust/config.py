@@ -5,10 +5,12 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import math
+import os
 import re
 import tomllib
 import types
 import typing
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -481,13 +483,70 @@ def parse_toml(text: str, where: str) -> dict:
 
 
 def load_config(path: str | Path) -> ExperimentConfig:
-    """Read and validate a TOML experiment file."""
+    """Read and validate a TOML experiment file. A relative URDF path in ``robot.source`` is read
+    from the file's folder; a run folder's config.toml that recorded its URDF's SHA-256
+    (:func:`provenance_header`) warns when that URDF has changed since.
+    """
     path = Path(path)
-    data = parse_toml(read_text_file(path, what="experiment file"), str(path))
+    text = read_text_file(path, what="experiment file")
+    data = parse_toml(text, str(path))
     try:
-        return from_dict(data)
+        config = from_dict(data)
     except ConfigError as err:
         raise ConfigError(f"{path}: {err.key}", str(err).split(": ", 1)[1]) from err
+    source = config.robot.source
+    if _is_relative_urdf_path(source):
+        resolved = (path.resolve().parent / source).resolve()
+        if not resolved.is_file():
+            raise ConfigError(f"{path}: robot.source", f"{source!r} is not a file in {path.resolve().parent} "
+                              "(a relative path in an experiment file is read from the file's folder)")
+        config.robot.source = str(resolved)
+    recorded = RECORDED_DIGEST.search(text)
+    if recorded:
+        from .model.loading import urdf_digest
+
+        try:
+            now = urdf_digest(config.robot.source)
+        except OSError:
+            now = ""
+        if now and now != recorded.group(1):
+            warnings.warn(f"{path}: the robot's URDF ({config.robot.source}) has changed since this run "
+                          f"was written (SHA-256 {recorded.group(1)[:12]}... then, {now[:12]}... now)",
+                          stacklevel=2)
+    return config
+
+
+RECORDED_DIGEST = re.compile(r"^# urdf sha256: ([0-9a-f]{64})$", re.MULTILINE)
+
+
+def _is_relative_urdf_path(source: str) -> bool:
+    """Whether robot.source names a URDF file by a relative path (not a robot name, not URDF text)."""
+    if source.lstrip().startswith("<") or Path(source).is_absolute():
+        return False
+    return source.lower().endswith(".urdf") or "/" in source or os.sep in source
+
+
+def provenance_header(config: ExperimentConfig) -> str:
+    """Comment lines for a run's config.toml: the versions that ran it and the SHA-256 of the
+    robot's URDF, so that a run can be repeated, and checked, from anywhere.
+    """
+    from importlib import metadata
+
+    from . import __version__
+    from .model.loading import urdf_digest
+
+    def version(package: str) -> str:
+        try:
+            return metadata.version(package)
+        except metadata.PackageNotFoundError:
+            return "?"
+
+    lines = [f"# written by nnrobust {__version__} (pin {version('pin')}, example-robot-data "
+             f"{version('example-robot-data')})"]
+    digest = urdf_digest(config.robot.source)
+    if digest:
+        lines.append(f"# urdf sha256: {digest}")
+    return "\n".join(lines) + "\n"
 
 
 def _non_negative(path: str, value: float) -> None:

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .config import ExperimentConfig
+from .config import ExperimentConfig, provenance_header
 from .controllers import (
     AdditiveRBFBasis,
     Controller,
@@ -522,6 +522,8 @@ def run_experiment(config: ExperimentConfig, progress=None, setup: Setup | None 
     result = Result.from_trace(trace, setup.robot, setup.trajectory, setup.criterion, config, wall,
                                setup.plant.torque_limit)
     result.backend = backend
+    if result.config:
+        result.config = provenance_header(config) + result.config
     return result
 
 

@@ -28,9 +28,22 @@ def available_cpus() -> int:
         return os.cpu_count() or 1
 
 
+WORKERS_VARIABLE = "NNROBUST_DRAW_WORKERS"
+"""Environment variable: how many processes draw a run folder's figures and animation."""
+
+
 def default_workers() -> int:
-    """Processes to draw with: the CPUs this process may use, at most :data:`MAX_WORKERS`."""
-    return max(1, min(MAX_WORKERS, available_cpus()))
+    """Processes to draw with: $NNROBUST_DRAW_WORKERS, else the CPUs this process may use, at
+    most :data:`MAX_WORKERS`.
+    """
+    value = os.environ.get(WORKERS_VARIABLE)
+    if value is None or not value.strip():
+        return max(1, min(MAX_WORKERS, available_cpus()))
+    if not value.strip().isdigit() or int(value) < 1:
+        from .exceptions import NNRobustError
+
+        raise NNRobustError(f"{WORKERS_VARIABLE}={value!r}: expected a whole number of processes, 1 or more")
+    return int(value)
 
 
 def share(weights: Sequence[float], workers: int) -> list[list[int]]:

@@ -10,6 +10,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from .exceptions import NNRobustError  # noqa: E402
 from .results import Result  # noqa: E402
 
 FORMATS = ("png", "svg")
@@ -78,6 +79,24 @@ def _position_size(result: Result) -> int:
     return min(result.x.shape[1], 3)
 
 
+def path_plane(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(centre, 2 x 3 in-plane directions) of the plane that best fits a 3-D path (its two
+    principal directions), each direction signed so that its largest component is positive.
+    """
+    points = np.asarray(points, dtype=float)
+    centre = points.mean(axis=0)
+    _, _, vt = np.linalg.svd(points - centre, full_matrices=False)
+    axes = vt[:2].copy()
+    for row in axes:
+        if row[np.argmax(np.abs(row))] < 0:
+            row *= -1
+    return centre, axes
+
+
+def _direction_label(name: str, axis: np.ndarray) -> str:
+    return f"{name} = ({axis[0]:+.2f}, {axis[1]:+.2f}, {axis[2]:+.2f}) [m]"
+
+
 def plot_path(result: Result, ax=None, label: str = "actual", axes: tuple[int, int] = (0, 1),
               legend: bool = True) -> None:
     """Desired vs actual end-effector path projected on two world axes (Figs. 1, 4)."""
@@ -85,9 +104,26 @@ def plot_path(result: Result, ax=None, label: str = "actual", axes: tuple[int, i
     every = _path_stride(result.x)
     ax.plot(result.x_d[::every, i], result.x_d[::every, j], "k--", lw=1.5, label="desired $x_d$")
     ax.plot(result.x[::every, i], result.x[::every, j], lw=1.0, label=label)
-    ax.plot(result.x[0, i], result.x[0, j], "o", ms=4, color="C0")
+    ax.plot(result.x[0, i], result.x[0, j], "o", ms=4, color="C0", label="start")
     ax.set_xlabel(f"{AXES[i]} [m]")
     ax.set_ylabel(f"{AXES[j]} [m]")
+    ax.set_aspect("equal", adjustable="datalim")
+    if legend:
+        legend_outside(ax)
+
+
+def plot_path_in_plane(result: Result, ax, label: str = "actual", legend: bool = True) -> None:
+    """Desired vs actual path projected on the desired path's own plane (:func:`path_plane`)."""
+    centre, (u, v) = path_plane(result.x_d[:, :3])
+    every = _path_stride(result.x)
+    for data, style, name in ((result.x_d, dict(ls="--", color="k", lw=1.5), "desired $x_d$"),
+                              (result.x, dict(lw=1.0, color="C0"), label)):
+        d = data[::every, :3] - centre
+        ax.plot(d @ u, d @ v, label=name, **style)
+    start = result.x[0, :3] - centre
+    ax.plot(start @ u, start @ v, "o", ms=4, color="C0", label="start")
+    ax.set_xlabel(_direction_label("along $u_1$", u))
+    ax.set_ylabel(_direction_label("along $u_2$", v))
     ax.set_aspect("equal", adjustable="datalim")
     if legend:
         legend_outside(ax)
@@ -97,14 +133,53 @@ def _path_figure(result: Result):
     if _position_size(result) == 2:
         fig, ax = plt.subplots(figsize=(5, 4.5))
         plot_path(result, ax)
-    else:  # top and side views of a spatial path
-        fig, (top, side) = plt.subplots(1, 2, figsize=(10, 4.5))
-        plot_path(result, top, axes=(0, 1), legend=False)
-        plot_path(result, side, axes=(0, 2))
-        top.set_title("top view")
-        side.set_title("side view")
+        fig.suptitle("End-effector path")
+        return fig
+    fig = plt.figure(figsize=(12, 5))  # a 3-D view, and the path's own plane
+    view = fig.add_subplot(1, 2, 1, projection="3d")
+    every = _path_stride(result.x)
+    view.plot(*result.x_d[::every, :3].T, "k--", lw=1.2)
+    view.plot(*result.x[::every, :3].T, lw=1.0, color="C0")
+    view.plot(*result.x[:1, :3].T, "o", ms=4, color="C0")
+    shown = [result.x_d[:, :3]]
+    if result.chain is not None:  # the arm at t = 0, for scale and place
+        view.plot(*result.chain[0].T, "-o", color="0.55", lw=2, ms=3)
+        shown.append(result.chain[0])
+    points = np.vstack(shown)
+    lows, highs = points.min(axis=0), points.max(axis=0)
+    half = max(float(np.max(highs - lows)) / 2, 1e-3) * 1.05
+    for setter, mid in zip((view.set_xlim, view.set_ylim, view.set_zlim), (lows + highs) / 2):
+        setter(mid - half, mid + half)  # equal scales on the three axes
+    _, (u, v) = path_plane(result.x_d[:, :3])
+    normal = np.cross(u, v)
+    normal *= np.sign(normal[2]) if normal[2] else 1.0
+    view.view_init(elev=float(np.degrees(np.arcsin(np.clip(normal[2], -1, 1)))) * 0.6 + 15,
+                   azim=float(np.degrees(np.arctan2(normal[1], normal[0]))) + 25)  # the path face-on, tilted
+    view.set_xlabel("x [m]")
+    view.set_ylabel("y [m]")
+    view.set_zlabel("z [m]")
+    view.set_title("3-D view (grey: the arm at t = 0)", fontsize=10)
+    plane = fig.add_subplot(1, 2, 2)
+    fig.subplots_adjust(wspace=0.35)
+    plot_path_in_plane(result, plane)
+    plane.set_title("in the path's plane", fontsize=10)
     fig.suptitle("End-effector path")
     return fig
+
+
+def log_floor(*series: np.ndarray) -> float:
+    """The bottom of a log axis for error norms: half the smallest error of the run's second half
+    (what the controller settles to), and no more than 6 decades under the largest error, so that
+    the exact zero at a start on the path does not stretch the axis to 1e-12.
+    """
+    values = np.concatenate([np.asarray(s, dtype=float) for s in series])
+    values = values[np.isfinite(values) & (values > 0)]
+    if values.size == 0:
+        return 1e-12
+    late = np.concatenate([np.asarray(s, dtype=float)[len(s) // 2:] for s in series])
+    late = late[np.isfinite(late) & (late > 0)]
+    floor = 0.5 * float(np.min(late)) if late.size else float(np.min(values))
+    return max(floor, float(np.max(values)) * 1e-6)
 
 
 def _errors_figure(result: Result):
@@ -119,37 +194,53 @@ def _errors_figure(result: Result):
             _series(axes[1].plot, t, result.e[:, 3 + i] * 1e3, lw=0.8, label=f"$e_{{\\theta {AXES[i]}}}$")
         axes[1].set_ylabel("orientation error [mrad]")
         legend_outside(axes[1])
-    _series(axes[-1].semilogy, t, np.maximum(result.position_error(), 1e-12), lw=0.8, label="position [m]")
+    norm = result.position_error()
+    floor = log_floor(norm, result.orientation_error()) if pose else log_floor(norm)
+    _series(axes[-1].semilogy, t, np.maximum(norm, floor), lw=0.8, label="position [m]")
     if pose:
-        _series(axes[-1].semilogy, t, np.maximum(result.orientation_error(), 1e-12), lw=0.8,
+        _series(axes[-1].semilogy, t, np.maximum(result.orientation_error(), floor), lw=0.8,
                 label="orientation [rad]")
         legend_outside(axes[-1])
+    axes[-1].set_ylim(bottom=floor)
     axes[-1].set_ylabel("error norm [m]" if not pose else "error norm [m, rad]")
     axes[-1].set_xlabel("t [s]")
     fig.suptitle("Task-space tracking error")
     return fig
 
 
+def _unit(result: Result, revolute: str, prismatic: str) -> list[str]:
+    """Per joint, the unit of its position (or force): ``prismatic`` for a prismatic joint."""
+    kinds = result.prismatic if result.prismatic is not None else np.zeros(result.q.shape[1], dtype=bool)
+    return [prismatic if p else revolute for p in kinds]
+
+
 def _joint_series_figure(result: Result, name: str):
-    """Joint angles or applied torques against time, with their limits dotted."""
+    """Joint positions or applied torques against time, with their limits dotted; prismatic
+    joints in m and N.
+    """
     t = result.t
     joint_labels = result.joint_names or [f"q{i + 1}" for i in range(result.q.shape[1])]
     if name == "joints":
-        data, ylabel, title, lw = result.q, "joint angle [rad]", "Joint angles (dotted: position limits)", 0.9
+        data, lw, units = result.q, 0.9, _unit(result, "rad", "m")
+        title = "Joint positions (dotted: position limits)"
         limits = (result.lower_limit, result.upper_limit)
     else:
-        data, ylabel, lw = result.tau, "torque [N m]", 0.6
+        data, lw, units = result.tau, 0.6, _unit(result, "N m", "N")
         title = "Applied joint torques (dotted: effort limits; faint: commanded where it differs)"
         limits = (None if result.torque_limit is None else -result.torque_limit, result.torque_limit)
+    quantity = "joint position" if name == "joints" else ("joint torque" if set(units) == {"N m"}
+                                                          else "joint torque or force")
+    ylabel = f"{quantity} [{' or '.join(sorted(set(units), key=units.index))}]"
     fig, ax = plt.subplots(figsize=(7, 3.5))
     for i, joint in enumerate(joint_labels):
-        line, = _series(ax.plot, t, data[:, i], lw=lw, label=joint)
+        label = joint if len(set(units)) == 1 else f"{joint} [{units[i]}]"
+        line, = _series(ax.plot, t, data[:, i], lw=lw, label=label)
         commanded = result.tau_cmd if name == "torques" else None
         if commanded is not None and np.any(commanded[:, i] != data[:, i]):
             _series(ax.plot, t, commanded[:, i], lw=0.4, alpha=0.35, color=line.get_color())
         for bound in limits:
             if bound is not None and np.isfinite(bound[i]) and abs(bound[i]) < 1e6:
-                ax.axhline(bound[i], ls=":", lw=0.8, color=line.get_color())
+                ax.axhline(bound[i], ls=":", lw=0.8, color=line.get_color(), gid=f"limit:{joint}")
     if name == "torques" and result.tau_cmd is not None and result.torque_limit is not None:
         # the applied range, and the limits that are near it; commands beyond them are clipped
         peak = float(np.nanmax(np.abs(data))) if data.size else 1.0
@@ -163,34 +254,65 @@ def _joint_series_figure(result: Result, name: str):
     return fig
 
 
+MANIPULABILITY_UNITS = {2: "m$^2$", 3: "m$^3$", 6: "m$^3$ rad$^3$"}
+"""Units of sqrt det(J J^T) by task size m."""
+
+
+def _criterion_name(result: Result) -> str:
+    """h(q) as the run configured it: its weighted criteria (eq. 4)."""
+    try:
+        sub = result.experiment().subtasks
+    except (NNRobustError, ValueError):  # a result without a readable configuration
+        return "h(q)"
+    if not sub.criteria:
+        return "no subtask criterion"
+    weights = sub.weights or [sub.C / len(sub.criteria)] * len(sub.criteria)
+    return "h(q) = " + " + ".join(f"{w:g} {c}" for w, c in zip(weights, sub.criteria))
+
+
 def _subtask_figure(result: Result):
     t = result.t
     fig, axes = plt.subplots(2, 1, figsize=(7, 4.5), sharex=True)
     _series(axes[0].plot, t, result.signals["h"], lw=0.9)
     axes[0].set_ylabel("h(q)")
+    axes[0].set_title(_criterion_name(result), fontsize=9)
     _series(axes[1].plot, t, result.signals["manipulability"], lw=0.9)
-    axes[1].set_ylabel("$\\sqrt{\\det JJ^T}$ [m$^m$]")
+    unit = MANIPULABILITY_UNITS.get(result.e.shape[1], "")
+    axes[1].set_ylabel(f"$\\sqrt{{\\det JJ^T}}$ [{unit}]")
     axes[1].set_xlabel("t [s]")
     fig.suptitle("Subtask criterion and manipulability")
     return fig
 
 
 def _snapshots_figure(result: Result):
+    """Stick figures at seven instants (Figs. 3, 6), in the x-y plane of a planar task, else in
+    the desired path's plane.
+    """
     if result.chain is None:
         return None
     t = result.t
     fig, ax = plt.subplots(figsize=(5.5, 5))
-    ax.plot(result.x_d[:, 0], result.x_d[:, 1], "k--", lw=1, label="desired path")
+    if _position_size(result) == 2:
+        centre, (u, v) = np.zeros(3), np.eye(3)[:2]
+        xlabel, ylabel, where = "x [m]", "y [m]", "x-y projection"
+        desired = result.x_d[:, :2]
+    else:
+        centre, (u, v) = path_plane(result.x_d[:, :3])
+        xlabel, ylabel, where = _direction_label("along $u_1$", u), _direction_label("along $u_2$", v), \
+            "projected on the path's plane"
+        d = result.x_d[:, :3] - centre
+        desired = np.column_stack([d @ u, d @ v])
+    ax.plot(desired[:, 0], desired[:, 1], "k--", lw=1, label="desired path")
     instants = np.linspace(0, t.size - 1, 7).astype(int)
     colors = plt.cm.viridis(np.linspace(0, 0.9, instants.size))
     for k, color in zip(instants, colors):
-        pts = result.chain[k]
-        ax.plot(pts[:, 0], pts[:, 1], "-o", color=color, ms=3, lw=2, label=f"t = {t[k]:.1f} s")
+        pts = result.chain[k] - centre
+        ax.plot(pts @ u, pts @ v, "-o", color=color, ms=3, lw=2, label=f"t = {t[k]:.1f} s")
     ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("x [m]")
-    ax.set_ylabel("y [m]")
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
     legend_outside(ax, fontsize=7)
-    ax.set_title("Arm at several instants (x-y projection)")
+    ax.set_title(f"Arm at several instants ({where})", fontsize=10)
     return fig
 
 
@@ -234,25 +356,66 @@ def plot_run(result: Result, folder: str | Path, names=None) -> list[Path]:
     return written
 
 
+def comparison_warnings(results: dict[str, Result]) -> list[str]:
+    """What makes runs hard to compare: a different robot, task or desired trajectory."""
+    configs = {}
+    for label, result in results.items():
+        try:
+            configs[label] = result.experiment()
+        except (NNRobustError, ValueError):
+            configs[label] = None
+    said = []
+    readable = {k: c for k, c in configs.items() if c is not None}
+    for what, get in (("robot", lambda c: (c.robot.source, c.robot.chain, c.robot.task_frame)),
+                      ("task", lambda c: c.robot.task),
+                      ("desired trajectory", lambda c: c.trajectory)):
+        values = {label: get(c) for label, c in readable.items()}
+        if len({repr(v) for v in values.values()}) > 1:
+            shown = "; ".join(f"{label}: {_short(v)}" for label, v in values.items())
+            said.append(f"the runs differ in their {what} ({shown})")
+    return said
+
+
+def _short(value) -> str:
+    if isinstance(value, tuple):
+        value = value[0]
+    if not isinstance(value, str) and hasattr(value, "axis_a"):  # a TrajectoryConfig
+        return f"centre {value.center}, axes {value.axis_a} {value.axis_b}, omega {value.omega:g}"
+    return str(value)[:80]
+
+
 def plot_comparison(results: dict[str, Result], folder: str | Path) -> list[Path]:
-    """Overlay several runs: paths, error norms and torque norms."""
+    """Overlay several runs: each run's desired (dashed) and actual path, in the x-y plane of a
+    planar task or in the first run's path plane, the error norms and the torque norms.
+    """
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
     first = next(iter(results.values()))
-    axes[0].plot(first.x_d[:, 0], first.x_d[:, 1], "k--", lw=1.5, label="desired")
-    for name, res in results.items():
-        axes[0].plot(res.x[:, 0], res.x[:, 1], lw=0.9, label=name)
-        _series(axes[1].semilogy, res.t, np.maximum(res.position_error(), 1e-12), lw=0.8, label=name)
-        _series(axes[2].plot, res.t, np.linalg.norm(res.tau, axis=1), lw=0.5, label=name)
+    spatial = _position_size(first) == 3
+    centre, (u, v) = path_plane(first.x_d[:, :3]) if spatial else (np.zeros(2), np.eye(2))
+    for i, (name, res) in enumerate(results.items()):
+        color = f"C{i % 10}"
+        every = _path_stride(res.x)
+        for data, style in ((res.x_d, dict(ls="--", lw=1.2)), (res.x, dict(lw=0.9))):
+            d = data[::every, :centre.size] - centre
+            axes[0].plot(d @ u[:centre.size], d @ v[:centre.size], color=color,
+                         label=name if style["lw"] < 1 else None, **style)
+        _series(axes[1].semilogy, res.t, np.maximum(res.position_error(), 1e-12), lw=0.8, color=color)
+        _series(axes[2].plot, res.t, np.linalg.norm(res.tau, axis=1), lw=0.5, color=color)
+    axes[1].set_ylim(bottom=log_floor(*(r.position_error() for r in results.values())))
     axes[0].set_aspect("equal", adjustable="datalim")
-    axes[0].set_xlabel("x [m]")
-    axes[0].set_ylabel("y [m]")
+    if spatial:
+        axes[0].set_xlabel(_direction_label("along $u_1$", u))
+        axes[0].set_ylabel(_direction_label("along $u_2$", v))
+        axes[0].set_title("paths (dashed: desired) in the first run's path plane", fontsize=9)
+    else:
+        axes[0].set_xlabel("x [m]")
+        axes[0].set_ylabel("y [m]")
+        axes[0].set_title("paths (dashed: desired)", fontsize=9)
     axes[1].set_xlabel("t [s]")
     axes[1].set_ylabel("position error [m]")
     axes[2].set_xlabel("t [s]")
     axes[2].set_ylabel("$\\|\\tau\\|$ [N m]")
-    handles, labels = axes[0].get_legend_handles_labels()  # one legend: the colours are the same
-    legend_outside(axes[2], handles=handles, labels=labels)
-    written = _save(fig, folder, "comparison")
-    return written
+    legend_outside(axes[2], handles=axes[0].get_lines()[1::2], labels=list(results))
+    return _save(fig, folder, "comparison")

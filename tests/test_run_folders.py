@@ -7,6 +7,7 @@ import signal
 import subprocess
 import sys
 import time
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -267,3 +268,43 @@ def test_a_signal_mid_run_leaves_a_partial_run_marked_as_such(sig, tmp_path):
     assert _marker(out)["status"] == "interrupted"
     assert 0 < Result.load(out).t[-1] < 60
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
+
+
+def test_a_relative_urdf_path_is_read_from_the_experiment_files_folder(tmp_path, monkeypatch):
+    from nnrobust.config import load_config
+    from nnrobust.model import paper_arm_urdf
+
+    folder = tmp_path / "experiments"
+    (folder / "robots").mkdir(parents=True)
+    (folder / "robots" / "arm.urdf").write_text(paper_arm_urdf().read_text())
+    (folder / "e.toml").write_text('name = "rel"\n[robot]\nsource = "robots/arm.urdf"\n')
+    monkeypatch.chdir(tmp_path)  # not the file's folder
+    config = load_config(folder / "e.toml")
+    assert config.robot.source == str((folder / "robots" / "arm.urdf").resolve())
+    (folder / "f.toml").write_text('name = "rel"\n[robot]\nsource = "arm.urdf"\n')
+    (tmp_path / "arm.urdf").write_text(paper_arm_urdf().read_text())  # next to the cwd: not read
+    with pytest.raises(ConfigError, match=r"'arm.urdf' is not a file in .*experiments \(a relative path"):
+        load_config(folder / "f.toml")
+
+
+def test_config_toml_records_versions_and_the_urdf_hash_and_notices_a_change(tmp_path):
+    import hashlib
+
+    from nnrobust import __version__
+    from nnrobust.config import load_config
+    from nnrobust.model import paper_arm_urdf
+
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(paper_arm_urdf().read_text())
+    config = load_preset("paper-line").replace(robot={"source": str(urdf)}, simulation={"duration": 0.2})
+    folder = write_run(tmp_path / "run", run_experiment(config), plots=False, animation=False)
+    text = (folder / "config.toml").read_text()
+    assert text.startswith(f"# written by nnrobust {__version__} (pin ")
+    assert f"# urdf sha256: {hashlib.sha256(urdf.read_bytes()).hexdigest()}\n" in text
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        again = load_config(folder / "config.toml")  # unchanged: no warning
+    assert again.robot.source == str(urdf)
+    urdf.write_text(urdf.read_text().replace('effort="60"', 'effort="61"'))
+    with pytest.warns(UserWarning, match="has changed since this run was written"):
+        load_config(folder / "config.toml")

@@ -47,6 +47,57 @@ def test_animation_of_a_meshed_robot_embeds_its_meshes(tmp_path):
     assert "panda" in html and len(html) > 5_000_000  # the Panda's meshes travel in the file
 
 
+@pytest.mark.parametrize("name", ["panda", "anymal_c", "talos_full", "kinova"])
+def test_visual_geometry_matches_pinocchios_own_parse(name):
+    """The viewer's geometry (meshes set aside, read by the viewer) places every visual where
+    Pinocchio's own parse of the URDF does, with the same mesh files, scales and colours."""
+    import warnings
+
+    import pinocchio as pin
+
+    from nnrobust.model.example_robots import example_robot
+    from nnrobust.model.loading import load_visual_model
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model, visual = load_visual_model(name, locked_joints=[])
+    robot = example_robot(name)
+    reference_model = pin.buildModelFromUrdf(str(robot.urdf))
+    reference = pin.buildGeomFromUrdf(reference_model, str(robot.urdf), pin.GeometryType.VISUAL,
+                                      package_dirs=list(robot.package_dirs))
+    assert visual.ngeoms == reference.ngeoms > 0
+    for ours, theirs in zip(visual.geometryObjects, reference.geometryObjects):
+        assert (ours.name, ours.parentJoint, ours.parentFrame) == (theirs.name, theirs.parentJoint,
+                                                                   theirs.parentFrame)
+        np.testing.assert_allclose(ours.placement.homogeneous, theirs.placement.homogeneous, atol=1e-12)
+        assert Path(ours.meshPath).resolve() == Path(theirs.meshPath).resolve() or not theirs.meshPath
+        np.testing.assert_allclose(ours.meshScale, theirs.meshScale)
+        np.testing.assert_allclose(ours.meshColor, theirs.meshColor)
+
+
+def test_the_camera_sees_the_whole_arm_and_path():
+    """Every chain point of a Panda run (and the meshes around them) lies inside the camera's
+    field of view: the camera aims at their middle, not at the base."""
+    from nnrobust.viewer.scene import CAMERA_FOV, camera_placement, tip_positions
+
+    result = run_experiment(load_preset("panda-ellipse").replace(simulation={"duration": 2.0}))
+    _, desired = tip_positions(result)
+    points = np.vstack([desired, result.chain.reshape(-1, 3)])
+    target, eye = camera_placement(points)
+    axis = (target - eye) / np.linalg.norm(target - eye)
+    rays = points - eye
+    angles = np.degrees(np.arccos(np.clip(rays @ axis / np.linalg.norm(rays, axis=1), -1, 1)))
+    assert angles.max() < CAMERA_FOV / 2 - 5  # room for the hand's mesh around its joint origins
+    assert target[2] > 0.3  # the middle of the arm, not its base at the origin
+
+
+def test_run_folders_name_every_figure_that_plots_draws():
+    from nnrobust import plots
+    from nnrobust.run_folder import FIGURE_NAMES
+
+    assert tuple(plots.FIGURES) == FIGURE_NAMES
+
+
 def _listening_addresses(pid: int) -> list[str]:
     """Local addresses of the LISTEN TCP sockets of process pid (Linux /proc)."""
     inodes = set()

@@ -119,18 +119,13 @@ def _loaded(name: str):
         raise RobotLoadError(f"example-robot-data:{name}", f"its loader fails ({err})") from err
 
 
-def visual_model(robot: ExampleRobot, model: pin.Model) -> pin.GeometryModel:
-    """The visual geometry of ``robot`` for ``model`` (the robot's model, its continuous joints
-    made revolute, nothing locked yet).
+def visual_model(robot: ExampleRobot) -> pin.GeometryModel:
+    """The visual geometry of a robot built by example-robot-data's own code (``robot.urdf`` is
+    None), for its model before any continuous joint is made revolute or any joint locked.
     """
-    from .loading import _parsed
-
-    if robot.urdf is not None:
-        return _parsed(f"example-robot-data:{robot.name}", "cannot read the visual geometry",
-                       lambda: pin.buildGeomFromUrdf(model, str(robot.urdf), pin.GeometryType.VISUAL,
-                                                     package_dirs=list(robot.package_dirs)))
     loaded = _loaded(robot.name)
     visual = loaded.visual_model.copy()
     if robot.floating_base:  # the joint ids shift by one with the free flyer locked
-        _, visual = pin.buildReducedModel(pin.Model(loaded.model), visual, [1], pin.neutral(loaded.model))
+        model = _symmetric_limits(pin.Model(loaded.model))
+        _, visual = pin.buildReducedModel(model, visual, [1], pin.neutral(model))
     return visual

@@ -5,6 +5,7 @@ from __future__ import annotations
 import collections
 import contextlib
 import difflib
+import hashlib
 import os
 import sys
 import tempfile
@@ -12,6 +13,7 @@ import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
+import coal
 import numpy as np
 import pinocchio as pin
 
@@ -22,7 +24,13 @@ from .example_robots import ExampleRobot, example_robot, is_example_robot, robot
 from .example_robots import visual_model as example_visual_model
 from .pinocchio_model import MAX_JOINTS, PinocchioModel
 from .planar_chain import PLANAR_CHAIN_NAME, planar_chain_urdf
-from .urdf_check import check_urdf, mimic_joints, read_urdf_file, resolved_visuals
+from .urdf_check import (
+    check_urdf,
+    mimic_joints,
+    read_urdf_file,
+    resolved_visuals,
+    visual_meshes_set_aside,
+)
 
 PAPER_ARM = "three_link_planar"
 """Name of the paper's three-link arm, shipped in ``urdf/``."""
@@ -87,13 +95,15 @@ class _Built:
     base: Path | None  # the URDF file's folder
     example: ExampleRobot | None
     mimic: frozenset[str]  # joints with <mimic>, locked unless the user lists the locked joints
+    renamed: dict[int, str]  # link frames renamed by unique_frame_names: {frame id: URDF name}
 
 
-def unique_frame_names(model: pin.Model) -> pin.Model:
-    """``model`` with a link frame renamed ``<name>_link`` where a joint has its name (Pinocchio
-    cannot reduce a model whose frames share a name).
+def unique_frame_names(model: pin.Model) -> dict[int, str]:
+    """Rename, in ``model``, a link frame ``<name>_link`` where a joint has its name (Pinocchio
+    cannot reduce a model whose frames share a name); returns {frame id: its old name}.
     """
     names = collections.Counter(f.name for f in model.frames)
+    old = {}
     for i, frame in enumerate(model.frames):
         if names[frame.name] > 1 and frame.type == pin.FrameType.BODY:
             renamed = pin.Frame(frame)
@@ -101,8 +111,9 @@ def unique_frame_names(model: pin.Model) -> pin.Model:
             while names[renamed.name]:
                 renamed.name += "_"
             names[renamed.name] += 1
+            old[i] = frame.name
             model.frames[i] = renamed
-    return model
+    return old
 
 
 def _build(source: str, locked_joints=None, chain=None) -> _Built:
@@ -117,10 +128,11 @@ def _build(source: str, locked_joints=None, chain=None) -> _Built:
             raise RobotLoadError(value, f"not a URDF file, not planar<N>, and not a robot example-robot-data "
                                  f"ships{hint} (nnrobust robots --all lists them)")
         example = example_robot(value)
-        model = unique_frame_names(with_revolute_continuous_joints(pin.Model(example.model)))  # a copy
+        model = with_revolute_continuous_joints(pin.Model(example.model))  # a copy: the load is cached
         if example.note:
             warnings.warn(f"{value}: {example.note}", stacklevel=3)
-        return _Built(model, f"example-robot-data:{value}", None, None, example, frozenset())
+        return _Built(model, f"example-robot-data:{value}", None, None, example, frozenset(),
+                      unique_frame_names(model))
     generated = PLANAR_CHAIN_NAME.match(source) is not None
     name = value if kind == "file" else (source if generated else "<urdf string>")
     text = read_urdf_file(value) if kind == "file" else value
@@ -133,7 +145,8 @@ def _build(source: str, locked_joints=None, chain=None) -> _Built:
     model = _parsed(name, "invalid URDF", lambda: pin.buildModelFromXML(text))
     if model.nq == 0 and model.njoints <= 1:
         raise ModelMismatch(f"{name}: the URDF has no movable joint (only fixed joints)")
-    return _Built(unique_frame_names(with_revolute_continuous_joints(model)), name, text, base, None, mimic)
+    model = with_revolute_continuous_joints(model)
+    return _Built(model, name, text, base, None, mimic, unique_frame_names(model))
 
 
 @contextlib.contextmanager
@@ -232,16 +245,57 @@ def load_visual_model(
     """
     source = str(source)
     built = _build(source, locked_joints, chain)
-    if built.example is not None:
-        visual = example_visual_model(built.example, built.model)
-    else:
-        text = built.text
-        if not PLANAR_CHAIN_NAME.match(source):
-            text = resolved_visuals(text, built.name, built.base)
-        visual = _parsed(built.name, "cannot read the visual geometry",
-                         lambda: pin.buildGeomFromUrdfString(built.model, text, pin.GeometryType.VISUAL))
     locked, _ = _locks(built, source, locked_joints, chain)
-    return _reduced(built, locked, visual)
+    return _reduced(built, locked, _visual_geometry(built, source))
+
+
+def _visual_geometry(built: _Built, source: str) -> pin.GeometryModel:
+    """The visual geometry of a parsed robot. Mesh files are left for the viewer to read: the
+    parser sees each mesh as a point (it would otherwise build a collision structure of every
+    mesh, unused by a viewer), and the objects get the files back afterwards.
+    """
+    example = built.example
+    if example is not None and example.urdf is None:  # built by example-robot-data's own code
+        return example_visual_model(example)
+    if example is not None:
+        text, base = read_urdf_file(example.urdf), example.urdf.parent
+        roots = [Path(d) for d in example.package_dirs]
+    else:
+        text, base, roots = built.text, built.base, None
+    if not PLANAR_CHAIN_NAME.match(source):
+        text = resolved_visuals(text, built.name, base, roots)
+    text, meshes = visual_meshes_set_aside(text)
+    model = pin.Model(built.model)
+    for fid, name in built.renamed.items():  # the parser finds links by their URDF names
+        frame = pin.Frame(model.frames[fid])
+        frame.name = name
+        model.frames[fid] = frame
+    visual = _parsed(built.name, "cannot read the visual geometry",
+                     lambda: pin.buildGeomFromUrdfString(model, text, pin.GeometryType.VISUAL))
+    for obj in visual.geometryObjects:
+        if obj.name in meshes:
+            path, scale = meshes[obj.name]
+            obj.geometry = coal.BVHModelOBBRSS()  # a mesh, read from meshPath by the viewer
+            obj.meshPath = path
+            obj.meshScale = np.asarray(scale, dtype=float)
+    return visual
+
+
+def urdf_digest(source: str) -> str:
+    """SHA-256 of the URDF text a source reads (a file, the text itself, a shipped or generated
+    arm, an example-robot-data robot's file); "" for a robot built by example-robot-data's code.
+    """
+    kind, value = _resolve(str(source))
+    if kind == "erd":
+        robot = example_robot(value) if is_example_robot(value) else None
+        if robot is None or robot.urdf is None:
+            return ""
+        data = robot.urdf.read_bytes()
+    elif kind == "file":
+        data = Path(value).read_bytes()
+    else:
+        data = value.encode("utf-8")
+    return hashlib.sha256(data).hexdigest()
 
 
 def default_task_frame(model: pin.Model) -> str:

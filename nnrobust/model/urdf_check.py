@@ -231,7 +231,7 @@ def mesh_roots(base: Path | None) -> list[Path]:
 def _resolve_mesh(uri: str, base: Path | None, roots: list[Path], source: str) -> Path | None:
     """The file a mesh URI names (maybe missing), or None when it cannot be located at all."""
     if uri.startswith("package://"):
-        relative = uri[len("package://"):]
+        relative = uri[len("package://"):].lstrip("/")  # package:///pkg/... as Pinocchio reads it
         tail = relative.split("/", 1)[1] if "/" in relative else relative
         candidates = [root / rel for root in roots for rel in (relative, tail)]
     elif uri.startswith("file://"):
@@ -331,13 +331,14 @@ def check_urdf(text: str, source: str, base: Path | None = None,
                           "the viewer leaves that part out", MissingMeshWarning, stacklevel=3)
 
 
-def resolved_visuals(text: str, source: str, base: Path | None = None) -> str:
+def resolved_visuals(text: str, source: str, base: Path | None = None,
+                     roots: list[Path] | None = None) -> str:
     """The URDF with every visual mesh's filename replaced by the file it resolves to under the
-    mesh rules (:func:`mesh_roots`), and every visual whose mesh is missing removed, so that the
-    geometry parser reads no other file and one missing mesh costs only its own part.
+    mesh rules (:func:`mesh_roots`, or ``roots``), and every visual whose mesh is missing removed,
+    so that the geometry parser reads no other file and one missing mesh costs only its own part.
     """
     root = ET.fromstring(text)
-    roots = mesh_roots(base)
+    roots = mesh_roots(base) if roots is None else roots
     for link in root.iter("link"):
         for visual in list(link.findall("visual")):
             for mesh in visual.iter("mesh"):
@@ -347,6 +348,27 @@ def resolved_visuals(text: str, source: str, base: Path | None = None) -> str:
                     break
                 mesh.set("filename", str(path))
     return ET.tostring(root, encoding="unicode")
+
+
+def visual_meshes_set_aside(text: str) -> tuple[str, dict[str, tuple[str, list[float]]]]:
+    """The URDF with every visual mesh replaced by a point (a sphere of radius 0), and the meshes:
+    {geometry object name: (file, scale)}, named as Pinocchio's parser names visuals
+    (``<link>_<index of the visual in the link>``). A viewer reads mesh files itself; parsing
+    them into collision structures (about 0.5 s for the Panda) is then skipped.
+    """
+    root = ET.fromstring(text)
+    meshes = {}
+    for link in root.iter("link"):
+        for index, visual in enumerate(link.findall("visual")):
+            geometry = visual.find("geometry")
+            mesh = None if geometry is None else geometry.find("mesh")
+            if mesh is None:
+                continue
+            scale = [float(v) for v in mesh.get("scale", "1 1 1").split()]
+            meshes[f"{link.get('name')}_{index}"] = (mesh.get("filename", ""), scale)
+            geometry.remove(mesh)
+            ET.SubElement(geometry, "sphere", radius="0")
+    return ET.tostring(root, encoding="unicode"), meshes
 
 
 def _by_name(root: ET.Element, tag: str, source: str) -> dict[str, ET.Element]:

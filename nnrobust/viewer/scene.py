@@ -36,6 +36,24 @@ window.addEventListener("hashchange", nnrobustSeek);
 """Open ``animation.html#t=2.5`` to show the arm paused at t = 2.5 s."""
 
 
+def meshcat_visualizer_class():
+    """Pinocchio's MeshcatVisualizer, imported without trimesh: ``pinocchio.visualize`` also loads
+    its viser viewer, which imports trimesh (about 1 s, for a viewer nnrobust does not use) and
+    turns itself off when that import fails.
+    """
+    import sys
+
+    block = "trimesh" not in sys.modules
+    if block:
+        sys.modules["trimesh"] = None  # "import trimesh" raises ImportError
+    try:
+        from pinocchio.visualize import MeshcatVisualizer
+    finally:
+        if block and sys.modules.get("trimesh", 0) is None:
+            del sys.modules["trimesh"]
+    return MeshcatVisualizer
+
+
 class SceneRecorder:
     """A meshcat window that keeps the scene tree in memory instead of sending it to a server.
 
@@ -144,7 +162,7 @@ class RunScene:
     """
 
     def __init__(self, vis: meshcat.Visualizer, config: ExperimentConfig):
-        from pinocchio.visualize import MeshcatVisualizer
+        MeshcatVisualizer = meshcat_visualizer_class()  # noqa: N806 - a class
 
         rc = config.robot
         model, visual = load_visual_model(rc.source, rc.locked_joints, tuple(rc.chain) if rc.chain else None)
@@ -173,12 +191,14 @@ class RunScene:
             self.vis["paths/actual"].set_object(_line(actual, TRACE_COLOR))
 
     def frame_camera(self, points: np.ndarray) -> None:
-        """Look at the world origin (the robot's base) from the front-right, a little above."""
-        size = max(float(np.abs(points).max()), 0.3)
-        eye = size * np.array([1.0, -1.0, 0.8])
-        # meshcat's camera node is y-up: world (x, y, z) -> (x, z, -y)
+        """Aim the camera at the middle of ``points`` (the arm over the run and the paths) from the
+        front-right, a little above, far enough that all of them are in view.
+        """
+        target, eye = camera_placement(points)
+        self.vis["/Cameras/default"].set_transform(_translation(target))  # the orbit centre
+        offset = eye - target  # meshcat's camera node is y-up: world (x, y, z) -> (x, z, -y)
         self.vis["/Cameras/default/rotated/<object>"].set_property(
-            "position", [float(eye[0]), float(eye[2]), float(-eye[1])])
+            "position", [float(offset[0]), float(offset[2]), float(-offset[1])])
 
     def animate(self, result: Result, desired: np.ndarray, fps: float = 30.0) -> None:
         """Arm and target (``desired``, N x 3) over the run, a keyframe every 1/fps s simulated."""
@@ -189,6 +209,26 @@ class RunScene:
             with animation.at_frame(self.vis, frame) as keyframe:
                 self.show(result.q[k], desired[k], viewer=keyframe)
         self.vis.set_animation(animation, play=True, repetitions=1_000_000)  # loops "forever"
+
+
+CAMERA_FOV = 75.0
+"""meshcat's vertical field of view [deg]."""
+
+CAMERA_DIRECTION = np.array([1.0, -1.0, 0.8]) / np.linalg.norm([1.0, -1.0, 0.8])
+"""From the target towards the eye: front-right, a little above."""
+
+
+def camera_placement(points: np.ndarray, margin: float = 0.15) -> tuple[np.ndarray, np.ndarray]:
+    """(target, eye) [m] for a camera that sees every point: the target is the middle of their
+    bounding box, and the eye is far enough along :data:`CAMERA_DIRECTION` that their bounding
+    sphere, grown by ``margin`` for the links' meshes around the joint origins, fits the vertical
+    field of view.
+    """
+    points = np.asarray(points, dtype=float).reshape(-1, 3)
+    target = (points.min(axis=0) + points.max(axis=0)) / 2
+    radius = max(float(np.max(np.linalg.norm(points - target, axis=1))) + margin, 0.3)
+    distance = radius / np.sin(np.radians(CAMERA_FOV / 2))
+    return target, target + distance * CAMERA_DIRECTION
 
 
 def _translation(p: np.ndarray) -> np.ndarray:

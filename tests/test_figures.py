@@ -1,0 +1,123 @@
+"""The figures, read back from the matplotlib objects: what each axis shows, its labels, limits
+and limit lines (nnrobust/plots.py)."""
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+from nnrobust import plots  # noqa: E402
+from nnrobust.experiment import run_experiment  # noqa: E402
+from nnrobust.presets import load_preset  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def panda():
+    return run_experiment(load_preset("panda-ellipse").replace(simulation={"duration": 6.3}))  # one lap
+
+
+@pytest.fixture(scope="module")
+def paper():
+    return run_experiment(load_preset("paper-ellipse").replace(simulation={"duration": 1.0}))
+
+
+def _figure(name, result):
+    fig = plots.FIGURES[name](result)
+    fig.canvas.draw()
+    return fig
+
+
+def test_a_spatial_path_is_shown_in_3d_and_in_its_own_plane(panda):
+    """panda-ellipse's path has orthogonal semi-axes |a| = 0.15 m and |b| = 0.112 m: in the
+    path's plane the desired path spans 2|a| and 2|b| (it showed as a line in a fixed x-z view)."""
+    fig = _figure("path", panda)
+    view, plane = fig.axes[:2]
+    assert view.name == "3d" and plane.name == "rectilinear"
+    assert plane.get_xlabel().startswith("along $u_1$") and plane.get_ylabel().startswith("along $u_2$")
+    desired = plane.get_lines()[0]
+    x, y = desired.get_xdata(), desired.get_ydata()
+    assert np.ptp(x) == pytest.approx(0.30, rel=0.01)
+    assert np.ptp(y) == pytest.approx(2 * np.hypot(0.05, 0.10), rel=0.01)
+    plt.close(fig)
+
+
+def test_path_plane_is_the_plane_of_the_path():
+    t = np.linspace(0, 2 * np.pi, 200)[:, None]
+    a, b = np.array([0.0, 0.15, 0.0]), np.array([0.05, 0.0, 0.10])
+    points = np.array([0.45, 0.0, 0.45]) + a * np.cos(t) + b * np.sin(t)
+    centre, (u, v) = plots.path_plane(points)
+    normal = np.cross(a, b) / np.linalg.norm(np.cross(a, b))
+    assert abs(u @ normal) < 1e-12 and abs(v @ normal) < 1e-12 and abs(u @ v) < 1e-12
+    np.testing.assert_allclose(centre, [0.45, 0.0, 0.45], atol=1e-3)
+
+
+def test_snapshots_of_a_spatial_run_lie_in_the_path_plane(panda):
+    fig = _figure("snapshots", panda)
+    ax = fig.axes[0]
+    assert "path's plane" in ax.get_title() and ax.get_xlabel().startswith("along $u_1$")
+    assert len(ax.get_lines()) == 8  # the desired path and seven instants
+    plt.close(fig)
+
+
+def test_the_error_axis_starts_near_the_smallest_meaningful_error(paper):
+    fig = _figure("errors", paper)
+    norm_axis = fig.axes[-1]
+    bottom = norm_axis.get_ylim()[0]
+    late = paper.position_error()[paper.t >= 0.5]
+    assert bottom >= 1e-6 * paper.position_error().max() > 1e-12
+    assert bottom <= late.min()  # every settled error is on the axis
+    assert norm_axis.get_yscale() == "log"
+    plt.close(fig)
+
+
+def test_joint_and_torque_figures_draw_every_limit_and_keep_legends_off_the_data(paper):
+    for name, limits in (("joints", (paper.lower_limit, paper.upper_limit)),
+                         ("torques", (paper.torque_limit,))):
+        fig = _figure(name, paper)
+        ax = fig.axes[0]
+        lines = [line for line in ax.get_lines() if (line.get_gid() or "").startswith("limit:")]
+        expected = sorted(float(v) for bound in limits for v in np.asarray(bound) if np.isfinite(v))
+        if name == "torques":
+            expected = sorted(expected + [-v for v in expected])
+        assert sorted(float(line.get_ydata()[0]) for line in lines) == pytest.approx(expected)
+        unit = "rad" if name == "joints" else "N m"
+        assert ax.get_ylabel().endswith(f"[{unit}]")
+        legend = ax.get_legend().get_window_extent()
+        assert legend.x0 >= ax.get_window_extent().x1  # outside, right of the axes
+        plt.close(fig)
+
+
+def test_prismatic_joints_are_labelled_in_metres_and_newtons(paper):
+    import dataclasses
+
+    mixed = dataclasses.replace(paper, prismatic=np.array([False, True, False]))
+    for name, label, unit in (("joints", "joint position [rad or m]", "[m]"),
+                              ("torques", "joint torque or force [N m or N]", "[N]")):
+        fig = _figure(name, mixed)
+        ax = fig.axes[0]
+        assert ax.get_ylabel() == label
+        assert [t.get_text() for t in ax.get_legend().get_texts()][1].endswith(unit)
+        plt.close(fig)
+
+
+def test_subtask_figure_names_the_criterion_and_its_units(panda, paper):
+    fig = _figure("subtask", panda)
+    assert fig.axes[0].get_title() == "h(q) = 0.5 manipulability + 0.5 joint_limits"
+    assert fig.axes[1].get_ylabel().endswith("[m$^3$]")
+    plt.close(fig)
+    fig = _figure("subtask", paper)
+    assert fig.axes[0].get_title() == "h(q) = 1 paper" and fig.axes[1].get_ylabel().endswith("[m$^2$]")
+    plt.close(fig)
+
+
+def test_compare_warns_when_runs_differ_and_draws_each_desired_path(panda, paper, tmp_path):
+    other = run_experiment(load_preset("panda-ellipse").replace(
+        simulation={"duration": 0.5}, trajectory={"omega": 0.5}, controller={"kind": "no-u0"}))
+    said = plots.comparison_warnings({"a": panda, "b": other})
+    assert said == [said[0]] and "desired trajectory" in said[0] and "omega 0.5" in said[0]
+    assert any("robot" in s for s in plots.comparison_warnings({"panda": panda, "paper": paper}))
+    assert plots.comparison_warnings({"a": panda, "b": panda}) == []
+    written = plots.plot_comparison({"a": panda, "b": other}, tmp_path)
+    assert [p.suffix for p in written] == [".png", ".svg"]
