@@ -78,6 +78,7 @@ NB_MODULE(_loop, m) {
   FIELD(stop_alpha); FIELD(position_noise); FIELD(velocity_noise); FIELD(resolution); FIELD(noise_q);
   FIELD(noise_v); FIELD(delay); FIELD(nominal_kind); FIELD(nominal); FIELD(m); FIELD(nominal_viscous);
   FIELD(nominal_coulomb); FIELD(coulomb_smoothing); FIELD(center); FIELD(axis_a); FIELD(axis_b);
+  FIELD(path_kind); FIELD(path_breaks); FIELD(path_coefficients);
   FIELD(omega); FIELD(phase); FIELD(pose); FIELD(rotation0); FIELD(rotation_axis);
   FIELD(rotation_amplitude); FIELD(rotation_omega); FIELD(rotation_phase); FIELD(law); FIELD(Kp); FIELD(Kv); FIELD(k); FIELD(pd_Kp); FIELD(pd_Kd);
   FIELD(null_damping); FIELD(criteria); FIELD(criterion_weights); FIELD(smoothness); FIELD(limit_lower);

@@ -433,15 +433,50 @@ struct Controller {
     return (JJt + lam2 * Matrix::Identity(J.rows(), J.rows())).inverse();
   }
 
+  // the position path at t: EllipseTrajectory or PiecewisePolynomialPath.__call__ (Horner's rule)
+  void path(double t, Vector &pd, Vector &dpd, Vector &ddpd) const {
+    if (s.path_kind != "piecewise") {
+      const double ph = s.omega * t + s.phase, cw = std::cos(ph), sw = std::sin(ph);
+      pd = s.center + s.axis_a * cw + s.axis_b * sw;
+      dpd = s.omega * (-s.axis_a * sw + s.axis_b * cw);
+      ddpd = -(s.omega * s.omega) * (s.axis_a * cw + s.axis_b * sw);
+      return;
+    }
+    const Vector &b = s.path_breaks;
+    const int pieces = static_cast<int>(b.size()) - 1, order = static_cast<int>(s.path_coefficients.rows()) / pieces;
+    int p = 0;
+    double h = 0.0;
+    bool moving = false;
+    if (t >= b[pieces]) {
+      p = pieces - 1;
+      h = b[pieces] - b[p];
+    } else if (t > b[0]) {
+      p = static_cast<int>(std::upper_bound(b.data(), b.data() + b.size(), t) - b.data()) - 1;
+      h = t - b[p];
+      moving = true;
+    }
+    const int m = static_cast<int>(s.path_coefficients.cols());
+    pd = s.path_coefficients.row(p * order + order - 1).transpose();
+    dpd = Vector::Zero(m);
+    ddpd = Vector::Zero(m);
+    for (int j = order - 2; j >= 0; --j) {
+      ddpd = ddpd * h + 2 * dpd;
+      dpd = dpd * h + pd;
+      pd = pd * h + s.path_coefficients.row(p * order + j).transpose();
+    }
+    if (!moving) {
+      dpd.setZero();
+      ddpd.setZero();
+    }
+  }
+
   Output compute(double t, const Vector &q, const Vector &v, const Vector &z) {
     Output out;
     out.z = z;
     const TaskState ts = nominal.task_state(q, v);
     const Matrix &J = ts.J;
-    const double ph = s.omega * t + s.phase, cw = std::cos(ph), sw = std::sin(ph);
-    const Vector pd = s.center + s.axis_a * cw + s.axis_b * sw;
-    const Vector dpd = s.omega * (-s.axis_a * sw + s.axis_b * cw);
-    const Vector ddpd = -(s.omega * s.omega) * (s.axis_a * cw + s.axis_b * sw);
+    Vector pd, dpd, ddpd;
+    path(t, pd, dpd, ddpd);
     Vector e, dxd, ddxd;
     if (s.pose) {  // PoseTrajectory.__call__ and tasks.task_error("pose")
       const double arg = s.rotation_omega * t + s.rotation_phase;

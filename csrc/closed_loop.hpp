@@ -48,6 +48,11 @@ struct LoopSpec {
   double coulomb_smoothing = 0.0;
   Vector center, axis_a, axis_b;  // nnrobust.trajectories.EllipseTrajectory (2 or 3 entries)
   double omega = 1.0, phase = 0.0;
+  // or PiecewisePolynomialPath ("piecewise"): breaks b_0..b_P; row p (degree + 1) + j of the
+  // coefficients (P (degree + 1) x m) multiplies (t - b_p)^j
+  std::string path_kind = "ellipse";
+  Vector path_breaks;
+  Matrix path_coefficients;
   // a pose task (m = 6): PoseTrajectory's R_d(t) = exp3(theta(t) u) R_0, theta = A sin(w t + phi)
   bool pose = false;
   Eigen::Matrix3d rotation0 = Eigen::Matrix3d::Identity();

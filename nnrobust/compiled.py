@@ -77,7 +77,8 @@ def twin_refusal(setup) -> str:
     The compiled loop covers (docs/compiled.md): the eq. (9) law (no u_0, the NN compensator with
     either basis, the sliding-mode term; computed torque) and the task-space PD; the closed-form
     three-link nominal model or any Pinocchio nominal model (perturbed or exact); planar,
-    position and pose tasks; the ellipse of eq. (18) and the pose trajectory; every shipped
+    position and pose tasks; the ellipse of eq. (18), the point-to-point and waypoint paths and
+    the pose trajectory over any of them; every shipped
     criterion (paper, half_det_manipulability and manipulability not on pose tasks); and the
     whole plant (friction, sinusoidal disturbance, saturation, stops, sensor noise,
     quantisation, delay), integrated by RK4.
@@ -85,7 +86,7 @@ def twin_refusal(setup) -> str:
     from .controllers import NNCompensator, SlidingModeCompensator, TaskSpaceController, TaskSpacePD
     from .model import PinocchioModel, ThreeLinkPlanarModel
     from .subtasks import WeightedCriteria
-    from .trajectories import EllipseTrajectory, PoseTrajectory
+    from .trajectories import EllipseTrajectory, PiecewisePolynomialPath, PoseTrajectory
 
     config, controller = setup.config, setup.controller
     if not available():
@@ -97,7 +98,10 @@ def twin_refusal(setup) -> str:
          f"controller.kind {config.controller.kind!r}"),
         (setup.robot.task in ("planar", "position", "pose"), f"a {setup.robot.task!r} task"),
         (isinstance(setup.nominal, (ThreeLinkPlanarModel, PinocchioModel)), "the nominal model"),
-        (type(setup.trajectory) in (EllipseTrajectory, PoseTrajectory), "the trajectory"),
+        (type(setup.trajectory) in (EllipseTrajectory, PiecewisePolynomialPath, PoseTrajectory)
+         and type(getattr(setup.trajectory, "path", setup.trajectory)) in (EllipseTrajectory,
+                                                                          PiecewisePolynomialPath),
+         "the trajectory"),
         (criterion is None or (isinstance(criterion, WeightedCriteria) and all(
             type(c).__name__ in COMPILED_CRITERIA for c in criterion.criteria)), "a criterion"),
         (criterion is None or setup.robot.task != "pose" or not any(
@@ -128,6 +132,7 @@ def loop_spec(setup, duration: float):
         PaperCriterion,
         SphereObstacles,
     )
+    from .trajectories import PiecewisePolynomialPath
 
     def f(x):  # the C++ side takes contiguous float64 arrays
         return np.ascontiguousarray(x, dtype=float)
@@ -169,8 +174,13 @@ def loop_spec(setup, duration: float):
         s.rotation_amplitude, s.rotation_omega = trajectory.amplitude, trajectory.omega
         s.rotation_phase = trajectory.phase
         trajectory = trajectory.path
-    s.center, s.axis_a, s.axis_b = f(trajectory.center), f(trajectory.axis_a), f(trajectory.axis_b)
-    s.omega, s.phase = trajectory.omega, trajectory.phase
+    if isinstance(trajectory, PiecewisePolynomialPath):
+        pieces, order, m = trajectory.coefficients.shape
+        s.path_kind, s.path_breaks = "piecewise", f(trajectory.breaks)
+        s.path_coefficients = f(trajectory.coefficients.reshape(pieces * order, m))
+    else:
+        s.center, s.axis_a, s.axis_b = f(trajectory.center), f(trajectory.axis_a), f(trajectory.axis_b)
+        s.omega, s.phase = trajectory.omega, trajectory.phase
     s.pinv_threshold, s.pinv_max_damping = controller.pinv.threshold, controller.pinv.max_damping
     s.nominal_viscous, s.nominal_coulomb = f(np.zeros(n)), f(np.zeros(n))
     criterion = setup.criterion

@@ -155,15 +155,30 @@ class SensingConfig:
 
 @dataclass
 class TrajectoryConfig:
-    """x_d(t) = center + axis_a cos(omega t + phase) + axis_b sin(omega t + phase) [m], eq. (18).
+    """The desired path x_d(t) [m], of one of three kinds.
+
+    - ``ellipse`` (eq. 18): x_d(t) = center + axis_a cos(omega t + phase) + axis_b sin(omega t +
+      phase); a zero axis_b gives the paper's line;
+    - ``point_to_point``: from ``start`` to ``goal`` along a straight line in ``move_time``
+      seconds, with the quintic time law (at rest at both ends), then held;
+    - ``waypoints``: a cubic spline through ``waypoints`` at ``waypoint_times``, at rest at both
+      ends, then held.
 
     For a ``pose`` task the orientation is R_d(t) = exp(theta(t) u) R_0 with
-    theta(t) = rotation_amplitude sin(rotation_omega t + rotation_phase).
+    theta(t) = rotation_amplitude sin(rotation_omega t + rotation_phase) (held at R_0 when the
+    amplitude is 0).
 
     Attributes:
-        center, axis_a, axis_b: the path's centre and semi-axes (2 or 3 entries) [m].
-        omega: angular frequency along the path [rad/s].
+        kind: ``ellipse``, ``point_to_point`` or ``waypoints``.
+        center, axis_a, axis_b: the ellipse's centre and semi-axes (2 or 3 entries) [m].
+        omega: angular frequency along the ellipse [rad/s].
         phase: phase at t = 0 [rad].
+        start: where a point-to-point move starts (default: where the task frame is at
+            ``simulation.q_seed``) [m].
+        goal: where it ends [m].
+        move_time: how long it takes [s].
+        waypoints: the points a spline passes through, 2 or 3 entries each [m].
+        waypoint_times: when it passes through each, strictly increasing from 0 [s].
         orientation_rpy: R_0 as roll, pitch, yaw [rad] (pose; default: the task frame's
             orientation at the position-only inverse-kinematics solution from q_seed).
         rotation_axis: u, world axes (pose).
@@ -173,16 +188,73 @@ class TrajectoryConfig:
 
     """
 
+    kind: str = "ellipse"
     center: list[float] = field(default_factory=lambda: [0.30, 0.40])
     axis_a: list[float] = field(default_factory=lambda: [0.20, 0.0])
     axis_b: list[float] = field(default_factory=lambda: [0.0, 0.10])
     omega: float = 1.0
     phase: float = 0.0
+    start: list[float] | None = None
+    goal: list[float] | None = None
+    move_time: float = 2.0
+    waypoints: list[list[float]] | None = None
+    waypoint_times: list[float] | None = None
     orientation_rpy: list[float] | None = None
     rotation_axis: list[float] = field(default_factory=lambda: [0.0, 0.0, 1.0])
     rotation_amplitude: float = 0.0
     rotation_omega: float = 1.0
     rotation_phase: float = 0.0
+
+    @property
+    def dimension(self) -> int:
+        """Entries of a path point: 2 (planar) or 3."""
+        if self.kind == "point_to_point" and self.goal is not None:
+            return len(self.goal)
+        if self.kind == "waypoints" and self.waypoints:
+            return len(self.waypoints[0])
+        return len(self.center)
+
+
+TRAJECTORY_KINDS = ("ellipse", "point_to_point", "waypoints")
+
+MAX_WAYPOINTS = 10_000
+
+
+def _check_path(tc: TrajectoryConfig) -> int:
+    """Check the path's own keys; returns its dimension."""
+    if tc.kind == "ellipse":
+        m_path = len(tc.center)
+        for path, values in (("trajectory.axis_a", tc.axis_a), ("trajectory.axis_b", tc.axis_b)):
+            if len(values) != m_path:
+                raise ConfigError(path, f"has {len(values)} entries, trajectory.center has {m_path}")
+        return m_path
+    if tc.kind == "point_to_point":
+        if tc.goal is None:
+            raise ConfigError("trajectory.goal", "a point_to_point move needs its goal, e.g. "
+                              "goal = [0.5, 0.1, 0.4]")
+        if tc.start is not None and len(tc.start) != len(tc.goal):
+            raise ConfigError("trajectory.start", f"has {len(tc.start)} entries, trajectory.goal has "
+                              f"{len(tc.goal)}")
+        if not tc.move_time > 0:
+            raise ConfigError("trajectory.move_time", f"must be positive, got {tc.move_time}")
+        return len(tc.goal)
+    points, times = tc.waypoints, tc.waypoint_times
+    if not points or len(points) < 2:
+        raise ConfigError("trajectory.waypoints", "a waypoint path needs at least 2 points, e.g. "
+                          "waypoints = [[0.4, 0.0, 0.5], [0.4, 0.2, 0.5]]")
+    if len(points) > MAX_WAYPOINTS:
+        raise ConfigError("trajectory.waypoints", f"{len(points)} points; at most {MAX_WAYPOINTS}")
+    sizes = {len(p) for p in points}
+    if len(sizes) != 1:
+        raise ConfigError("trajectory.waypoints", f"every point needs as many entries; got sizes "
+                          f"{sorted(sizes)}")
+    if times is None or len(times) != len(points):
+        raise ConfigError("trajectory.waypoint_times", f"needs one time per waypoint ({len(points)}), got "
+                          f"{None if times is None else len(times)}")
+    if times[0] < 0 or any(b <= a for a, b in zip(times, times[1:])):
+        raise ConfigError("trajectory.waypoint_times", f"must start at 0 or later and increase strictly, "
+                          f"got {times}")
+    return len(points[0])
 
 
 @dataclass
@@ -570,6 +642,11 @@ NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9._+-]{0,99}")
 """An experiment's name: it names the default run folder, out/<name>-<controller>."""
 
 
+def path_key(tc: TrajectoryConfig) -> str:
+    """The key that places the path: center, goal or waypoints."""
+    return {"ellipse": "center", "point_to_point": "goal", "waypoints": "waypoints"}.get(tc.kind, "center")
+
+
 def validate(config: ExperimentConfig) -> None:
     """Check values that a type alone does not constrain (robot-independent checks)."""
     c, nn, sim = config.controller, config.nn, config.simulation
@@ -593,19 +670,21 @@ def validate(config: ExperimentConfig) -> None:
         "nn.basis_input": (nn.basis_input, ("joint", "error")),
         "simulation.integrator": (sim.integrator, ("rk4", "solve_ivp")),
         "simulation.backend": (sim.backend, ("auto", "compiled", "python")),
+        "trajectory.kind": (config.trajectory.kind, TRAJECTORY_KINDS),
     }
     for path, (value, valid) in choices.items():
         if value not in valid:
             raise ConfigError(path, f"{value!r} is not one of {', '.join(valid)}")
     tc = config.trajectory
-    m_path = len(tc.center)
-    for path, values in (("trajectory.axis_a", tc.axis_a), ("trajectory.axis_b", tc.axis_b)):
-        if len(values) != m_path:
-            raise ConfigError(path, f"has {len(values)} entries, trajectory.center has {m_path}")
+    m_path = _check_path(tc)
+    if m_path not in (2, 3):
+        raise ConfigError(f"trajectory.{path_key(tc)}", "path points have 2 (x, y) or 3 (x, y, z) "
+                          f"entries, got {m_path}")
     if config.robot.task == "pose":
         m, where = 6, "the pose task has m = 6"
         if m_path != 3:
-            raise ConfigError("trajectory.center", f"a pose task needs a 3-D path, got {m_path} entries")
+            raise ConfigError(f"trajectory.{path_key(tc)}", f"a pose task needs a 3-D path, got {m_path} "
+                              "entries")
         for path, values in (("trajectory.orientation_rpy", tc.orientation_rpy),
                              ("trajectory.rotation_axis", tc.rotation_axis)):
             if values is not None and len(values) != 3:
@@ -613,7 +692,7 @@ def validate(config: ExperimentConfig) -> None:
         if not any(tc.rotation_axis):
             raise ConfigError("trajectory.rotation_axis", "must be a non-zero vector")
     else:
-        m, where = m_path, f"the task has m = {m_path} (trajectory.center)"
+        m, where = m_path, f"the task has m = {m_path} (trajectory.{path_key(tc)})"
     for name in ("Kp", "Kv", "pd_Kp", "pd_Kd"):
         values = getattr(c, name)
         if len(values) == 1:  # one value for every task coordinate

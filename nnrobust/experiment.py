@@ -9,7 +9,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .config import ExperimentConfig, provenance_header
+from .config import ExperimentConfig, path_key, provenance_header
 from .controllers import (
     AdditiveRBFBasis,
     Controller,
@@ -56,7 +56,14 @@ from .subtasks import (
     SphereObstacles,
     WeightedCriteria,
 )
-from .trajectories import EllipseTrajectory, PoseTrajectory, Trajectory
+from .trajectories import (
+    EllipseTrajectory,
+    PoseTrajectory,
+    PositionPath,
+    Trajectory,
+    quintic_point_to_point,
+    spline_through,
+)
 
 
 @dataclass
@@ -286,7 +293,7 @@ IK_LIMIT_MARGIN = 0.02
 """The initial configuration keeps this fraction of each joint's range inside its limits."""
 
 
-def _reach(robot: PinocchioModel, target: np.ndarray, seed: np.ndarray, what: str) -> np.ndarray:
+def _reach(robot: PinocchioModel, target: np.ndarray, seed: np.ndarray, what: str, key: str) -> np.ndarray:
     lower, upper = _finite_limits(robot.lower_limits), _finite_limits(robot.upper_limits)
     margin = np.where(np.isfinite(upper - lower), IK_LIMIT_MARGIN * (upper - lower), 0.0)
     seed = np.clip(seed, lower + margin, upper - margin)
@@ -294,24 +301,41 @@ def _reach(robot: PinocchioModel, target: np.ndarray, seed: np.ndarray, what: st
     if residual > 1e-6:
         p = split_pose(target)[0] if robot.task == "pose" else target
         raise ConfigError(
-            "trajectory.center",
+            key,
             f"{what} (position {np.round(p, 4).tolist()} m) is out of reach from q_seed = "
             f"{np.round(seed, 3).tolist()} (task error {residual:.3g} left)",
         )
     return q
 
 
-def build_trajectory(config: ExperimentConfig, robot: PinocchioModel) -> Trajectory:
-    """The ellipse of eq. (18), with a rocking orientation for a pose task."""
+def build_path(config: ExperimentConfig, robot: PinocchioModel) -> PositionPath:
+    """The position path of ``trajectory.kind``: the ellipse of eq. (18), a quintic point-to-point
+    move (from the task frame's position at q_seed unless ``start`` is given) or a waypoint spline.
+    """
     tc = config.trajectory
-    path = EllipseTrajectory(tc.center, tc.axis_a, tc.axis_b, tc.omega, tc.phase)
+    if tc.kind == "point_to_point":
+        start = tc.start
+        if start is None:
+            p = robot.task_position(_seed(config, robot))
+            start = (split_pose(p)[0] if robot.task == "pose" else p)[: len(tc.goal)]
+        return quintic_point_to_point(start, tc.goal, tc.move_time)
+    if tc.kind == "waypoints":
+        return spline_through(tc.waypoints, tc.waypoint_times)
+    return EllipseTrajectory(tc.center, tc.axis_a, tc.axis_b, tc.omega, tc.phase)
+
+
+def build_trajectory(config: ExperimentConfig, robot: PinocchioModel) -> Trajectory:
+    """The position path (:func:`build_path`), with a rocking or held orientation for a pose task."""
+    tc = config.trajectory
+    path = build_path(config, robot)
     if robot.task != "pose":
         return path
     if tc.orientation_rpy is not None:
         R0 = pin.rpy.rpyToMatrix(*tc.orientation_rpy)
     else:  # the orientation the arm has when its tip is at p_d(0)
         position_task = PinocchioModel(robot.model, robot.task_frame, "position", robot.name)
-        q = _reach(position_task, path(0.0)[0], _seed(config, robot), "p_d(0)")
+        q = _reach(position_task, path(0.0)[0], _seed(config, robot), "p_d(0)",
+                   f"trajectory.{path_key(tc)}")
         R0 = split_pose(robot.task_position(q))[1].copy()
     return PoseTrajectory(path, R0, np.asarray(tc.rotation_axis, dtype=float),
                           tc.rotation_amplitude, tc.rotation_omega, tc.rotation_phase)
@@ -332,7 +356,8 @@ def initial_state(
         target = pose_vector(p + offset[:3], pin.exp3(offset[3:]) @ R)
     else:
         target = xd0 + offset
-    q0 = _reach(robot, target, _seed(config, robot), "x_d(0) + offset")
+    q0 = _reach(robot, target, _seed(config, robot), "x_d(0) + offset",
+                f"trajectory.{path_key(config.trajectory)}")
     J = robot.task_jacobian(q0)
     v0 = DampedPseudoInverse().matrix(J) @ dxd0
     return q0, v0
@@ -363,7 +388,7 @@ def check_workspace(config: ExperimentConfig, robot: PinocchioModel, trajectory:
             "trajectory",
             f"leaves the workspace: at t = {t:.3g} s the point {np.round(p, 4).tolist()} m is out of "
             f"reach within the joint limits (task error {residual:.3g} left after inverse "
-            "kinematics); move trajectory.center or shrink axis_a / axis_b",
+            "kinematics); move the path (trajectory.center and axes, goal or waypoints)",
         )
 
 
@@ -432,9 +457,9 @@ def build(config: ExperimentConfig) -> Setup:
     robot = load_robot(rc.source, rc.task_frame, rc.task,
                        tuple(rc.gravity) if rc.gravity else None, rc.locked_joints,
                        tuple(rc.chain) if rc.chain else None)
-    if robot.task != "pose" and len(config.trajectory.center) != robot.m:
-        raise ConfigError("trajectory.center", f"has {len(config.trajectory.center)} entries, "
-                          f"the {rc.task!r} task has m = {robot.m}")
+    if robot.task != "pose" and config.trajectory.dimension != robot.m:
+        raise ConfigError(f"trajectory.{path_key(config.trajectory)}", f"has {config.trajectory.dimension} "
+                          f"entries per point, the {rc.task!r} task has m = {robot.m}")
     if robot.m > robot.nq:
         raise ConfigError("robot.task", f"m = {robot.m} > n = {robot.nq}: the arm has fewer joints than the "
                           "task has coordinates (choose a smaller task or a longer robot.chain)")

@@ -183,26 +183,25 @@ def log_floor(*series: np.ndarray) -> float:
 
 
 def _errors_figure(result: Result):
+    """The error's components and its norm (log axis), in mm, and for a pose task the same for the
+    orientation in mrad: one unit per axis.
+    """
     t, npos, pose = result.t, _position_size(result), result.e.shape[1] == 6
-    fig, axes = plt.subplots(3 if pose else 2, 1, figsize=(7, 7 if pose else 5), sharex=True)
-    for i in range(npos):
-        _series(axes[0].plot, t, result.e[:, i] * 1e3, lw=0.8, label=f"$e_{AXES[i]}$")
-    axes[0].set_ylabel("position error [mm]")
-    legend_outside(axes[0])
+    parts = [("position", "mm", result.e[:, :npos], result.position_error(), AXES)]
     if pose:
-        for i in range(3):
-            _series(axes[1].plot, t, result.e[:, 3 + i] * 1e3, lw=0.8, label=f"$e_{{\\theta {AXES[i]}}}$")
-        axes[1].set_ylabel("orientation error [mrad]")
-        legend_outside(axes[1])
-    norm = result.position_error()
-    floor = log_floor(norm, result.orientation_error()) if pose else log_floor(norm)
-    _series(axes[-1].semilogy, t, np.maximum(norm, floor), lw=0.8, label="position [m]")
-    if pose:
-        _series(axes[-1].semilogy, t, np.maximum(result.orientation_error(), floor), lw=0.8,
-                label="orientation [rad]")
-        legend_outside(axes[-1])
-    axes[-1].set_ylim(bottom=floor)
-    axes[-1].set_ylabel("error norm [m]" if not pose else "error norm [m, rad]")
+        parts.append(("orientation", "mrad", result.e[:, 3:6], result.orientation_error(),
+                      tuple(f"\\theta {a}" for a in AXES)))
+    fig, axes = plt.subplots(2 * len(parts), 1, figsize=(7, 3.2 * len(parts) + 1.8), sharex=True)
+    for k, (what, unit, components, norm, names) in enumerate(parts):
+        top, bottom = axes[2 * k], axes[2 * k + 1]
+        for i in range(components.shape[1]):
+            _series(top.plot, t, components[:, i] * 1e3, lw=0.8, label=f"$e_{{{names[i]}}}$")
+        top.set_ylabel(f"{what} error [{unit}]")
+        legend_outside(top)
+        floor = log_floor(norm * 1e3)
+        _series(bottom.semilogy, t, np.maximum(norm * 1e3, floor), lw=0.8)
+        bottom.set_ylim(bottom=floor)
+        bottom.set_ylabel(f"|{what} error| [{unit}]")
     axes[-1].set_xlabel("t [s]")
     fig.suptitle("Task-space tracking error")
     return fig

@@ -66,16 +66,116 @@ class EllipseTrajectory:
 
 
 @dataclass(frozen=True)
-class PoseTrajectory:
-    """A 6-D pose path: the position follows an ellipse, the orientation rocks about a fixed axis.
+class PiecewisePolynomialPath:
+    """x_d(t) = sum_j c[p, j] (t - b_p)^j for b_p <= t < b_{p+1}, held at its end values (with zero
+    velocity and acceleration) before b_0 and after b_P. The form of both the quintic
+    point-to-point motion and the waypoint spline, evaluated the same way by the compiled loop.
 
-    p_d(t) = path(t) (eq. 18 in 3-D) and R_d(t) = exp(theta(t) [u]x) R_0 with
+    Attributes:
+        breaks: b_0 < ... < b_P [s].
+        coefficients: c, P x (degree + 1) x m: c[p, j] multiplies (t - b_p)^j [m / s^j].
+
+    """
+
+    breaks: np.ndarray
+    coefficients: np.ndarray
+
+    def __post_init__(self):
+        b = np.asarray(self.breaks, dtype=float)
+        c = np.asarray(self.coefficients, dtype=float)
+        if b.ndim != 1 or b.size < 2 or np.any(np.diff(b) <= 0) or not np.all(np.isfinite(b)):
+            raise ValueError(f"trajectory: the break times must increase strictly, got {b.tolist()}")
+        if c.ndim != 3 or c.shape[0] != b.size - 1 or not np.all(np.isfinite(c)):
+            raise ValueError(f"trajectory: coefficients of shape {c.shape} for {b.size - 1} pieces")
+        object.__setattr__(self, "breaks", b)
+        object.__setattr__(self, "coefficients", c)
+
+    @property
+    def m(self) -> int:
+        """Task dimension."""
+        return self.coefficients.shape[2]
+
+    def _piece(self, t: float) -> tuple[int, float, bool]:
+        """(piece, local time t - b_p, inside [b_0, b_P])."""
+        b = self.breaks
+        if t <= b[0]:
+            return 0, 0.0, False
+        if t >= b[-1]:
+            last = b.size - 2
+            return last, b[-1] - b[last], False
+        p = int(np.searchsorted(b, t, side="right")) - 1
+        return p, t - b[p], True
+
+    def __call__(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(x_d, x_d', x_d'') at time t (Horner's rule, as in the compiled loop)."""
+        p, h, moving = self._piece(float(t))
+        c = self.coefficients[p]
+        x, dx, ddx = c[-1].copy(), np.zeros(self.m), np.zeros(self.m)
+        for j in range(c.shape[0] - 2, -1, -1):
+            ddx = ddx * h + 2 * dx
+            dx = dx * h + x
+            x = x * h + c[j]
+        if not moving:
+            dx[:], ddx[:] = 0.0, 0.0
+        return x, dx, ddx
+
+    def position(self, t: np.ndarray) -> np.ndarray:
+        """x_d at each time of an array, shape len(t) x m [m]."""
+        return np.array([self(tk)[0] for tk in np.asarray(t, dtype=float)]).reshape(-1, self.m)
+
+    def error(self, x: np.ndarray, x_d: np.ndarray) -> np.ndarray:
+        """E = x - x_d [m]."""
+        return x - x_d
+
+
+def quintic_point_to_point(start, goal, duration: float) -> PiecewisePolynomialPath:
+    """From ``start`` to ``goal`` in ``duration`` [s] along the straight line, with the quintic time
+    law s(tau) = 10 tau^3 - 15 tau^4 + 6 tau^5, tau = t / T: zero velocity and acceleration at
+    both ends, peak speed 1.875 |goal - start| / T at T / 2.
+    """
+    start, goal = np.asarray(start, dtype=float), np.asarray(goal, dtype=float)
+    if start.shape != goal.shape or start.ndim != 1:
+        raise ValueError(f"trajectory: start {start.shape} and goal {goal.shape} must be vectors of one size")
+    if not duration > 0:
+        raise ValueError(f"trajectory: the move time must be positive, got {duration}")
+    delta, T = goal - start, float(duration)
+    c = np.zeros((1, 6, start.size))
+    c[0, 0], c[0, 3], c[0, 4], c[0, 5] = start, 10 * delta / T**3, -15 * delta / T**4, 6 * delta / T**5
+    return PiecewisePolynomialPath(np.array([0.0, T]), c)
+
+
+def spline_through(points, times) -> PiecewisePolynomialPath:
+    """The cubic spline through ``points`` (k x m) at ``times`` (k, increasing), at rest at both
+    ends (clamped: zero velocity), twice continuously differentiable in between. Its
+    acceleration is not zero at the ends, so it steps there.
+    """
+    from scipy.interpolate import CubicSpline
+
+    points, times = np.asarray(points, dtype=float), np.asarray(times, dtype=float)
+    if points.ndim != 2 or points.shape[0] != times.size or times.size < 2:
+        raise ValueError(f"trajectory: {points.shape[0] if points.ndim == 2 else '?'} waypoints for "
+                         f"{times.size} times; give at least 2 of each, as many of one as of the other")
+    spline = CubicSpline(times, points, bc_type="clamped")
+    coefficients = np.transpose(spline.c[::-1], (1, 0, 2))  # scipy: c[k] multiplies (t - b)^(3 - k)
+    return PiecewisePolynomialPath(times, coefficients)
+
+
+PositionPath = EllipseTrajectory | PiecewisePolynomialPath
+"""A position path x_d(t), m = 2 or 3."""
+
+
+@dataclass(frozen=True)
+class PoseTrajectory:
+    """A 6-D pose path: the position follows a path, the orientation rocks about a fixed axis.
+
+    p_d(t) = path(t) (the ellipse of eq. 18 in 3-D, a point-to-point move or a waypoint spline)
+    and R_d(t) = exp(theta(t) [u]x) R_0 with
     theta(t) = amplitude sin(omega t + phase), so that the world-frame angular velocity is
     w_d = theta' u and its rate w_d' = theta'' u. Task coordinates are [p, R row by row]
     (:mod:`nnrobust.model.tasks`); velocities and accelerations are [p', w] and [p'', w'].
 
     Attributes:
-        path: the position ellipse (m = 3).
+        path: the position path (m = 3).
         rotation0: R_0, 3 x 3.
         axis: rotation axis u (normalised here).
         amplitude: rocking amplitude [rad].
@@ -84,7 +184,7 @@ class PoseTrajectory:
 
     """
 
-    path: EllipseTrajectory
+    path: PositionPath
     rotation0: np.ndarray
     axis: np.ndarray
     amplitude: float = 0.0
@@ -134,5 +234,5 @@ class PoseTrajectory:
         return task_error("pose", x, x_d)
 
 
-Trajectory = EllipseTrajectory | PoseTrajectory
+Trajectory = EllipseTrajectory | PiecewisePolynomialPath | PoseTrajectory
 """Any desired task trajectory."""

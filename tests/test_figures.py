@@ -65,10 +65,19 @@ def test_the_error_axis_starts_near_the_smallest_meaningful_error(paper):
     fig = _figure("errors", paper)
     norm_axis = fig.axes[-1]
     bottom = norm_axis.get_ylim()[0]
-    late = paper.position_error()[paper.t >= 0.5]
-    assert bottom >= 1e-6 * paper.position_error().max() > 1e-12
+    late = paper.position_error()[paper.t >= 0.5] * 1e3  # mm
+    assert bottom >= 1e-6 * paper.position_error().max() * 1e3 > 1e-9
     assert bottom <= late.min()  # every settled error is on the axis
-    assert norm_axis.get_yscale() == "log"
+    assert norm_axis.get_yscale() == "log" and norm_axis.get_ylabel() == "|position error| [mm]"
+    plt.close(fig)
+
+
+def test_a_pose_run_shows_each_error_in_its_own_unit():
+    pose = run_experiment(load_preset("panda-pose").replace(simulation={"duration": 0.5}))
+    fig = _figure("errors", pose)
+    labels = [ax.get_ylabel() for ax in fig.axes[:4]]
+    assert labels == ["position error [mm]", "|position error| [mm]", "orientation error [mrad]",
+                      "|orientation error| [mrad]"]
     plt.close(fig)
 
 
