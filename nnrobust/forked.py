@@ -3,8 +3,9 @@
 Writing a run folder's figures and animation is pure Python and matplotlib, so threads do not
 help; forked children do, sharing the finished result without copying or pickling it. Each
 child ignores Ctrl-C and SIGHUP (the parent decides), dies with its parent, sends back its
-warnings and its error, and leaves by ``os._exit``. Where ``fork`` is missing (or one CPU is
-available) the work runs here, in order.
+warnings and its error, and leaves by ``os._exit``. Where ``fork`` is missing, one CPU is
+available, or another Python thread runs (forking it could copy a held lock), the work runs
+here, in order.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ import os
 import pickle
 import signal
 import sys
+import threading
 import traceback
 import warnings
 from collections.abc import Callable, Sequence
@@ -69,7 +71,9 @@ def run_jobs(jobs: Sequence[Callable[[], None]], weights: Sequence[float] | None
     """
     weights = [1.0] * len(jobs) if weights is None else list(weights)
     workers = min(default_workers() if workers is None else workers, len(jobs))
-    if workers <= 1 or not hasattr(os, "fork"):
+    # a fork copies only this thread: a lock another Python thread holds (a dask client's event
+    # loop, a logging handler) would stay locked in the child forever, so then work here
+    if workers <= 1 or not hasattr(os, "fork") or threading.active_count() > 1:
         for job in jobs:
             job()
         return

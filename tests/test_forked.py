@@ -81,3 +81,19 @@ def test_children_ignore_ctrl_c_the_parent_decides(tmp_path):
 def test_one_worker_runs_everything_here(tmp_path):
     run_jobs([lambda: (tmp_path / "a").write_text(str(os.getpid()))], workers=1)
     assert (tmp_path / "a").read_text() == str(os.getpid())
+
+
+def test_with_another_thread_running_the_work_stays_in_this_process(tmp_path):
+    """A fork copies only the calling thread; with a second Python thread alive (a dask client's
+    event loop) the jobs run here instead."""
+    import threading
+
+    stop = threading.Event()
+    other = threading.Thread(target=stop.wait)
+    other.start()
+    try:
+        run_jobs([lambda i=i: (tmp_path / f"{i}").write_text(str(os.getpid())) for i in range(3)], workers=2)
+    finally:
+        stop.set()
+        other.join()
+    assert {(tmp_path / f"{i}").read_text() for i in range(3)} == {str(os.getpid())}
