@@ -8,6 +8,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+import matplotlib.ticker  # noqa: E402
 import numpy as np  # noqa: E402
 
 from .exceptions import NNRobustError  # noqa: E402
@@ -125,6 +126,7 @@ def plot_path_in_plane(result: Result, ax, label: str = "actual", legend: bool =
     ax.set_xlabel(_direction_label("along $u_1$", u))
     ax.set_ylabel(_direction_label("along $u_2$", v))
     ax.set_aspect("equal", adjustable="datalim")
+    ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(6))  # no crowded labels on a narrow axis
     if legend:
         legend_outside(ax)
 

@@ -14,7 +14,7 @@ README = Path(__file__).resolve().parents[1] / "README.md"
 
 def test_readme_panda_experiment_runs_and_repeats(tmp_path, capsys):
     blocks = re.findall(r"```toml\n(.*?)```", README.read_text(), flags=re.S)
-    assert len(blocks) == 1
+    assert len(blocks) == 2
     experiment = tmp_path / "my-panda.toml"
     experiment.write_text(blocks[0])
     out, again = tmp_path / "out" / "my-panda", tmp_path / "out" / "my-panda-again"
@@ -25,6 +25,18 @@ def test_readme_panda_experiment_runs_and_repeats(tmp_path, capsys):
                  "--no-animation"]) == 0
     np.testing.assert_array_equal(Result.load(out).tau, Result.load(again).tau)
     assert main(["compare", str(out), str(again)]) == 0
+
+
+def test_readme_tiago_experiment_tracks_its_waypoints(tmp_path, capsys):
+    import json
+
+    block = re.findall(r"```toml\n(.*?)```", README.read_text(), flags=re.S)[1]
+    experiment = tmp_path / "my-tiago.toml"
+    experiment.write_text(block)
+    out = tmp_path / "out" / "my-tiago"
+    assert main(["run", str(experiment), "--out", str(out), "--quiet", "--no-plots", "--no-animation"]) == 0
+    metrics = json.loads((out / "metrics.json").read_text())
+    assert metrics["status"] == "completed" and metrics["rms_error_after_2s"] < 1e-3  # "about 0.5 mm"
 
 
 def test_readme_python_blocks_run_as_written(tmp_path, monkeypatch):
