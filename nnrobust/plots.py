@@ -255,28 +255,41 @@ def _joint_series_figure(result: Result, name: str):
     return fig
 
 
-MANIPULABILITY_UNITS = {2: "m$^2$", 3: "m$^3$", 6: "m$^3$ rad$^3$"}
-"""Units of sqrt det(J J^T) by task size m."""
+MANIPULABILITY_UNITS = {2: "m$^2$", 3: "m$^3$", 6: "m$^3$"}
+"""Units of sqrt det(J J^T) by task size m, for revolute joints (a pose's angular rows are
+dimensionless: rad per rad)."""
 
 
-def _criterion_name(result: Result) -> str:
-    """h(q) as the run configured it: its weighted criteria (eq. 4)."""
+def criterion_units(name: str, m: int) -> str:
+    """The unit of one criterion h_i for a task of size m (the joint criteria are ratios)."""
+    manipulability = MANIPULABILITY_UNITS.get(m, "mixed")
+    squared = {2: "m$^4$", 3: "m$^6$", 6: "m$^6$"}.get(m, "mixed")
+    return {"manipulability": manipulability, "half_det_manipulability": squared,
+            "joint_limits": "1", "joint_centering": "1", "joint_smoothness": "rad$^2$",
+            "obstacles": "m$^2$", "paper": "mixed"}.get(name, "mixed")
+
+
+def _criterion_name(result: Result) -> tuple[str, str]:
+    """(h(q) as the run configured it, its weighted criteria of eq. 4; its unit)."""
     try:
         sub = result.experiment().subtasks
     except (NNRobustError, ValueError):  # a result without a readable configuration
-        return "h(q)"
+        return "h(q)", "?"
     if not sub.criteria:
-        return "no subtask criterion"
+        return "no subtask criterion", "-"
     weights = sub.weights or [sub.C / len(sub.criteria)] * len(sub.criteria)
-    return "h(q) = " + " + ".join(f"{w:g} {c}" for w, c in zip(weights, sub.criteria))
+    units = {criterion_units(c, result.e.shape[1]) for c in sub.criteria}
+    unit = units.pop() if len(units) == 1 else "mixed"
+    return "h(q) = " + " + ".join(f"{w:g} {c}" for w, c in zip(weights, sub.criteria)), unit
 
 
 def _subtask_figure(result: Result):
     t = result.t
     fig, axes = plt.subplots(2, 1, figsize=(7, 4.5), sharex=True)
     _series(axes[0].plot, t, result.signals["h"], lw=0.9)
-    axes[0].set_ylabel("h(q)")
-    axes[0].set_title(_criterion_name(result), fontsize=9)
+    name, unit = _criterion_name(result)
+    axes[0].set_ylabel(f"h(q) [{unit}]")
+    axes[0].set_title(name, fontsize=9)
     _series(axes[1].plot, t, result.signals["manipulability"], lw=0.9)
     unit = MANIPULABILITY_UNITS.get(result.e.shape[1], "")
     axes[1].set_ylabel(f"$\\sqrt{{\\det JJ^T}}$ [{unit}]")

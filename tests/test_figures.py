@@ -114,10 +114,15 @@ def test_prismatic_joints_are_labelled_in_metres_and_newtons(paper):
 def test_subtask_figure_names_the_criterion_and_its_units(panda, paper):
     fig = _figure("subtask", panda)
     assert fig.axes[0].get_title() == "h(q) = 0.5 manipulability + 0.5 joint_limits"
+    assert fig.axes[0].get_ylabel() == "h(q) [mixed]"  # m^3 and a ratio
     assert fig.axes[1].get_ylabel().endswith("[m$^3$]")
     plt.close(fig)
     fig = _figure("subtask", paper)
     assert fig.axes[0].get_title() == "h(q) = 1 paper" and fig.axes[1].get_ylabel().endswith("[m$^2$]")
+    plt.close(fig)
+    limits_only = run_experiment(load_preset("panda-pose").replace(simulation={"duration": 0.2}))
+    fig = _figure("subtask", limits_only)
+    assert fig.axes[0].get_ylabel() == "h(q) [1]" and fig.axes[0].get_title() == "h(q) = 1 joint_limits"
     plt.close(fig)
 
 
