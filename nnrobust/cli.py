@@ -310,7 +310,7 @@ def cmd_robots(args) -> int:
         note = ARMS.get(name, {}).get("description", "")
         if any("floating-base" in str(w.message) for w in caught):
             note = "floating base fixed to the world"
-        print(f"{name:26s} {robot.nq:3d}  {chain:44s} {robot.task_frame:28s} {note}")
+        print(f"{name:26s} {robot.nq:3d}  {chain:44s} {robot.task_frame:28s} {note}".rstrip())
     if args.all:
         print(f"\n{len(names) - failed} of {len(names)} load.")
     else:

@@ -197,6 +197,20 @@ def test_compiled_loop_equals_python_with_unlimited_joints_in_the_joint_criteria
     assert np.all(np.isfinite(slow.signals["h"]))
 
 
+def test_docs_list_every_robot_as_the_command_prints_it(capsys):
+    """docs/robots.md holds the output of `nnrobust robots --all`."""
+    import re
+    from pathlib import Path
+
+    from nnrobust.cli import main
+
+    assert main(["robots", "--all"]) == 0
+    printed = capsys.readouterr().out
+    docs = (Path(__file__).resolve().parents[1] / "docs" / "robots.md").read_text()
+    block = re.search(r"<!-- robots-all -->\n```text\n(.*?)```\n<!-- /robots-all -->", docs, re.S)
+    assert block and block.group(1) == printed, "run: nnrobust robots --all, and paste it into docs/robots.md"
+
+
 if __name__ == "__main__":  # the table of docs/robots.md: python -m tests.test_any_robot
     print("| robot | n | NN | no-u0 |\n|---|---:|---:|---:|")
     for robot_name in ("kinova", "so101", "tiago", "solo12"):
