@@ -116,9 +116,10 @@ def unique_frame_names(model: pin.Model) -> dict[int, str]:
     return old
 
 
-def _build(source: str, locked_joints=None, chain=None) -> _Built:
+def _build(source: str, locked_joints=None, chain=None, say_notes: bool = True) -> _Built:
     """Parse a source. Mimic joints are locked, except where the user lists the locked joints
-    and no chain: then a mimic joint must be among them (the URDF check says so).
+    and no chain: then a mimic joint must be among them (the URDF check says so). A floating base
+    is said in a warning (``say_notes``: the viewer loads the robot a second time, quietly).
     """
     kind, value = _resolve(source)
     if kind == "erd":
@@ -129,7 +130,7 @@ def _build(source: str, locked_joints=None, chain=None) -> _Built:
                                  f"ships{hint} (nnrobust robots --all lists them)")
         example = example_robot(value)
         model = with_revolute_continuous_joints(pin.Model(example.model))  # a copy: the load is cached
-        if example.note:
+        if example.note and say_notes:
             warnings.warn(f"{value}: {example.note}", stacklevel=3)
         return _Built(model, f"example-robot-data:{value}", None, None, example, frozenset(),
                       unique_frame_names(model))
@@ -244,7 +245,7 @@ def load_visual_model(
     left out, the rest of the robot is drawn.
     """
     source = str(source)
-    built = _build(source, locked_joints, chain)
+    built = _build(source, locked_joints, chain, say_notes=False)
     locked, _ = _locks(built, source, locked_joints, chain)
     return _reduced(built, locked, _visual_geometry(built, source))
 
