@@ -169,6 +169,25 @@ def _path_figure(result: Result):
     return fig
 
 
+def _plain_label(value: float, _position=None, mantissas=(1,)) -> str:
+    """``value`` as a plain number (0.2, 5, 40) when its leading digit is one of ``mantissas``."""
+    if value <= 0:
+        return ""
+    leading = round(value / 10 ** np.floor(np.log10(value)))
+    return f"{value:g}" if leading in mantissas else ""
+
+
+def readable_log_ticks(ax) -> None:
+    """On a log y axis that spans less than three decades: plain-number labels at 1, 2 and 5
+    times the powers of ten (0.2, 0.5, 1, 2, 5, 10), not 2x10^-1.
+    """
+    low, high = ax.get_ylim()
+    if low > 0 and high / low < 1e3:
+        ax.yaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(_plain_label))
+        ax.yaxis.set_minor_formatter(matplotlib.ticker.FuncFormatter(
+            lambda value, position: _plain_label(value, position, (2, 5))))
+
+
 def log_floor(*series: np.ndarray) -> float:
     """The bottom of a log axis for error norms: half the smallest error of the run's second half
     (what the controller settles to), and no more than 6 decades under the largest error, so that
@@ -193,7 +212,8 @@ def _errors_figure(result: Result):
     if pose:
         parts.append(("orientation", "mrad", result.e[:, 3:6], result.orientation_error(),
                       tuple(f"\\theta {a}" for a in AXES)))
-    fig, axes = plt.subplots(2 * len(parts), 1, figsize=(7, 3.2 * len(parts) + 1.8), sharex=True)
+    fig, axes = plt.subplots(2 * len(parts), 1, figsize=(7, 3.6 * len(parts) + 1.6), sharex=True)
+    fig.subplots_adjust(hspace=0.3)
     for k, (what, unit, components, norm, names) in enumerate(parts):
         top, bottom = axes[2 * k], axes[2 * k + 1]
         for i in range(components.shape[1]):
@@ -203,6 +223,7 @@ def _errors_figure(result: Result):
         floor = log_floor(norm * 1e3)
         _series(bottom.semilogy, t, np.maximum(norm * 1e3, floor), lw=0.8)
         bottom.set_ylim(bottom=floor)
+        readable_log_ticks(bottom)
         bottom.set_ylabel(f"|{what} error| [{unit}]")
     axes[-1].set_xlabel("t [s]")
     fig.suptitle("Task-space tracking error")

@@ -78,6 +78,11 @@ def test_a_pose_run_shows_each_error_in_its_own_unit():
     labels = [ax.get_ylabel() for ax in fig.axes[:4]]
     assert labels == ["position error [mm]", "|position error| [mm]", "orientation error [mrad]",
                       "|orientation error| [mrad]"]
+    for log_axis in (fig.axes[1], fig.axes[3]):  # plain numbers at 1, 2, 5 x 10^k, not 2x10^0
+        shown = [t.get_text() for t in log_axis.get_yticklabels(which="both") if t.get_text()]
+        assert shown and all(text.replace(".", "").isdigit() for text in shown), shown
+        mantissas = {round(float(text) / 10 ** np.floor(np.log10(float(text))), 6) for text in shown}
+        assert mantissas <= {1.0, 2.0, 5.0}
     plt.close(fig)
 
 
