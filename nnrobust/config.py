@@ -220,14 +220,14 @@ TRAJECTORY_KINDS = ("ellipse", "point_to_point", "waypoints")
 MAX_WAYPOINTS = 10_000
 
 
-def _check_path(tc: TrajectoryConfig) -> int:
-    """Check the path's own keys; returns its dimension."""
+def _check_path(tc: TrajectoryConfig) -> None:
+    """Check the path's own keys."""
     if tc.kind == "ellipse":
         m_path = len(tc.center)
         for path, values in (("trajectory.axis_a", tc.axis_a), ("trajectory.axis_b", tc.axis_b)):
             if len(values) != m_path:
                 raise ConfigError(path, f"has {len(values)} entries, trajectory.center has {m_path}")
-        return m_path
+        return
     if tc.kind == "point_to_point":
         if tc.goal is None:
             raise ConfigError("trajectory.goal", "a point_to_point move needs its goal, e.g. "
@@ -237,7 +237,7 @@ def _check_path(tc: TrajectoryConfig) -> int:
                               f"{len(tc.goal)}")
         if not tc.move_time > 0:
             raise ConfigError("trajectory.move_time", f"must be positive, got {tc.move_time}")
-        return len(tc.goal)
+        return
     points, times = tc.waypoints, tc.waypoint_times
     if not points or len(points) < 2:
         raise ConfigError("trajectory.waypoints", "a waypoint path needs at least 2 points, e.g. "
@@ -254,7 +254,6 @@ def _check_path(tc: TrajectoryConfig) -> int:
     if times[0] < 0 or any(b <= a for a, b in zip(times, times[1:])):
         raise ConfigError("trajectory.waypoint_times", f"must start at 0 or later and increase strictly, "
                           f"got {times}")
-    return len(points[0])
 
 
 @dataclass
@@ -676,7 +675,8 @@ def validate(config: ExperimentConfig) -> None:
         if value not in valid:
             raise ConfigError(path, f"{value!r} is not one of {', '.join(valid)}")
     tc = config.trajectory
-    m_path = _check_path(tc)
+    _check_path(tc)
+    m_path = tc.dimension
     if m_path not in (2, 3):
         raise ConfigError(f"trajectory.{path_key(tc)}", "path points have 2 (x, y) or 3 (x, y, z) "
                           f"entries, got {m_path}")

@@ -455,8 +455,7 @@ def build(config: ExperimentConfig) -> Setup:
     """Load the robot and build plant, nominal model, controller and initial state."""
     rc = config.robot
     robot = load_robot(rc.source, rc.task_frame, rc.task,
-                       tuple(rc.gravity) if rc.gravity else None, rc.locked_joints,
-                       tuple(rc.chain) if rc.chain else None)
+                       tuple(rc.gravity) if rc.gravity else None, rc.locked_joints, rc.chain)
     if robot.task != "pose" and config.trajectory.dimension != robot.m:
         raise ConfigError(f"trajectory.{path_key(config.trajectory)}", f"has {config.trajectory.dimension} "
                           f"entries per point, the {rc.task!r} task has m = {robot.m}")

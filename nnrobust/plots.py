@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import matplotlib
@@ -98,6 +99,42 @@ def _direction_label(name: str, axis: np.ndarray) -> str:
     return f"{name} = ({axis[0]:+.2f}, {axis[1]:+.2f}, {axis[2]:+.2f}) [m]"
 
 
+@dataclass(frozen=True)
+class DrawingPlane:
+    """Where points are drawn in 2-D: the x-y plane of a planar task, or a spatial path's own
+    plane (:func:`path_plane`).
+    """
+
+    centre: np.ndarray
+    axes: np.ndarray  # 2 x d, d = 2 (x-y) or 3 (a spatial path's plane)
+
+    @classmethod
+    def of(cls, result: Result) -> DrawingPlane:
+        """The plane a run is drawn in."""
+        if _position_size(result) == 2:
+            return cls(np.zeros(2), np.eye(2))
+        return cls(*path_plane(result.x_d[:, :3]))
+
+    @property
+    def spatial(self) -> bool:
+        """Whether this is a spatial path's plane (not the x-y plane)."""
+        return self.centre.size == 3
+
+    def project(self, points: np.ndarray) -> np.ndarray:
+        """In-plane coordinates of points (... x 2 or 3, extra entries ignored), ... x 2 [m]."""
+        d = self.centre.size
+        return (np.asarray(points, dtype=float)[..., :d] - self.centre) @ self.axes.T
+
+    def label(self, ax) -> None:
+        """Name the in-plane directions on ``ax``'s axes."""
+        if self.spatial:
+            ax.set_xlabel(_direction_label("along $u_1$", self.axes[0]))
+            ax.set_ylabel(_direction_label("along $u_2$", self.axes[1]))
+        else:
+            ax.set_xlabel("x [m]")
+            ax.set_ylabel("y [m]")
+
+
 def plot_path(result: Result, ax=None, label: str = "actual", axes: tuple[int, int] = (0, 1),
               legend: bool = True) -> None:
     """Desired vs actual end-effector path projected on two world axes (Figs. 1, 4)."""
@@ -113,18 +150,16 @@ def plot_path(result: Result, ax=None, label: str = "actual", axes: tuple[int, i
         legend_outside(ax)
 
 
-def plot_path_in_plane(result: Result, ax, label: str = "actual", legend: bool = True) -> None:
+def plot_path_in_plane(result: Result, ax, label: str = "actual", legend: bool = True,
+                       plane: DrawingPlane | None = None) -> None:
     """Desired vs actual path projected on the desired path's own plane (:func:`path_plane`)."""
-    centre, (u, v) = path_plane(result.x_d[:, :3])
+    plane = plane or DrawingPlane.of(result)
     every = _path_stride(result.x)
     for data, style, name in ((result.x_d, dict(ls="--", color="k", lw=1.5), "desired $x_d$"),
                               (result.x, dict(lw=1.0, color="C0"), label)):
-        d = data[::every, :3] - centre
-        ax.plot(d @ u, d @ v, label=name, **style)
-    start = result.x[0, :3] - centre
-    ax.plot(start @ u, start @ v, "o", ms=4, color="C0", label="start")
-    ax.set_xlabel(_direction_label("along $u_1$", u))
-    ax.set_ylabel(_direction_label("along $u_2$", v))
+        ax.plot(*plane.project(data[::every]).T, label=name, **style)
+    ax.plot(*plane.project(result.x[0]), "o", ms=4, color="C0", label="start")
+    plane.label(ax)
     ax.set_aspect("equal", adjustable="datalim")
     ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(6))  # no crowded labels on a narrow axis
     if legend:
@@ -152,8 +187,8 @@ def _path_figure(result: Result):
     half = max(float(np.max(highs - lows)) / 2, 1e-3) * 1.05
     for setter, mid in zip((view.set_xlim, view.set_ylim, view.set_zlim), (lows + highs) / 2):
         setter(mid - half, mid + half)  # equal scales on the three axes
-    _, (u, v) = path_plane(result.x_d[:, :3])
-    normal = np.cross(u, v)
+    plane = DrawingPlane.of(result)
+    normal = np.cross(*plane.axes)
     normal *= np.sign(normal[2]) if normal[2] else 1.0
     view.view_init(elev=float(np.degrees(np.arcsin(np.clip(normal[2], -1, 1)))) * 0.6 + 15,
                    azim=float(np.degrees(np.arctan2(normal[1], normal[0]))) + 25)  # the path face-on, tilted
@@ -161,10 +196,10 @@ def _path_figure(result: Result):
     view.set_ylabel("y [m]")
     view.set_zlabel("z [m]")
     view.set_title("3-D view (grey: the arm at t = 0)", fontsize=10)
-    plane = fig.add_subplot(1, 2, 2)
+    in_plane = fig.add_subplot(1, 2, 2)
     fig.subplots_adjust(wspace=0.35)
-    plot_path_in_plane(result, plane)
-    plane.set_title("in the path's plane", fontsize=10)
+    plot_path_in_plane(result, in_plane, plane=plane)
+    in_plane.set_title("in the path's plane", fontsize=10)
     fig.suptitle("End-effector path")
     return fig
 
@@ -327,25 +362,15 @@ def _snapshots_figure(result: Result):
         return None
     t = result.t
     fig, ax = plt.subplots(figsize=(5.5, 5))
-    if _position_size(result) == 2:
-        centre, (u, v) = np.zeros(3), np.eye(3)[:2]
-        xlabel, ylabel, where = "x [m]", "y [m]", "x-y projection"
-        desired = result.x_d[:, :2]
-    else:
-        centre, (u, v) = path_plane(result.x_d[:, :3])
-        xlabel, ylabel, where = _direction_label("along $u_1$", u), _direction_label("along $u_2$", v), \
-            "projected on the path's plane"
-        d = result.x_d[:, :3] - centre
-        desired = np.column_stack([d @ u, d @ v])
-    ax.plot(desired[:, 0], desired[:, 1], "k--", lw=1, label="desired path")
+    plane = DrawingPlane.of(result)
+    where = "projected on the path's plane" if plane.spatial else "x-y projection"
+    ax.plot(*plane.project(result.x_d).T, "k--", lw=1, label="desired path")
     instants = np.linspace(0, t.size - 1, 7).astype(int)
     colors = plt.cm.viridis(np.linspace(0, 0.9, instants.size))
     for k, color in zip(instants, colors):
-        pts = result.chain[k] - centre
-        ax.plot(pts @ u, pts @ v, "-o", color=color, ms=3, lw=2, label=f"t = {t[k]:.1f} s")
+        ax.plot(*plane.project(result.chain[k]).T, "-o", color=color, ms=3, lw=2, label=f"t = {t[k]:.1f} s")
     ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel(xlabel)
-    ax.set_ylabel(ylabel)
+    plane.label(ax)
     legend_outside(ax, fontsize=7)
     ax.set_title(f"Arm at several instants ({where})", fontsize=10)
     return fig
@@ -426,28 +451,20 @@ def plot_comparison(results: dict[str, Result], folder: str | Path) -> list[Path
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
-    first = next(iter(results.values()))
-    spatial = _position_size(first) == 3
-    centre, (u, v) = path_plane(first.x_d[:, :3]) if spatial else (np.zeros(2), np.eye(2))
+    plane = DrawingPlane.of(next(iter(results.values())))
     for i, (name, res) in enumerate(results.items()):
         color = f"C{i % 10}"
         every = _path_stride(res.x)
         for data, style in ((res.x_d, dict(ls="--", lw=1.2)), (res.x, dict(lw=0.9))):
-            d = data[::every, :centre.size] - centre
-            axes[0].plot(d @ u[:centre.size], d @ v[:centre.size], color=color,
+            axes[0].plot(*plane.project(data[::every]).T, color=color,
                          label=name if style["lw"] < 1 else None, **style)
         _series(axes[1].semilogy, res.t, np.maximum(res.position_error(), 1e-12), lw=0.8, color=color)
         _series(axes[2].plot, res.t, np.linalg.norm(res.tau, axis=1), lw=0.5, color=color)
     axes[1].set_ylim(bottom=log_floor(*(r.position_error() for r in results.values())))
     axes[0].set_aspect("equal", adjustable="datalim")
-    if spatial:
-        axes[0].set_xlabel(_direction_label("along $u_1$", u))
-        axes[0].set_ylabel(_direction_label("along $u_2$", v))
-        axes[0].set_title("paths (dashed: desired) in the first run's path plane", fontsize=9)
-    else:
-        axes[0].set_xlabel("x [m]")
-        axes[0].set_ylabel("y [m]")
-        axes[0].set_title("paths (dashed: desired)", fontsize=9)
+    plane.label(axes[0])
+    axes[0].set_title("paths (dashed: desired)" + (" in the first run's path plane" if plane.spatial else ""),
+                      fontsize=9)
     axes[1].set_xlabel("t [s]")
     axes[1].set_ylabel("position error [m]")
     axes[2].set_xlabel("t [s]")

@@ -124,6 +124,8 @@ def test_robot_chain_picks_a_sub_chain():
         load_robot("baxter", chain=("left_gripper", "right_gripper"))
     with pytest.raises(RobotLoadError, match="tip frame 'nowhere' is not in the model"):
         load_robot("baxter", chain=("torso", "nowhere"))
+    with pytest.raises(RobotLoadError, match=r"cannot lock unknown joints \['nope'\]"):
+        load_robot("baxter", chain=("torso", "left_gripper"), locked_joints=["nope"])
 
 
 def test_frames_that_share_a_joint_name_are_told_apart():

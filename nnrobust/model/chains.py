@@ -10,7 +10,7 @@ The rule (docs/robots.md, "The default chain"):
 2. The arm joints are the moving joints from the root to that frame, except gripper and finger
    joints (names with finger, gripper, thumb, knuckle, jaw or hand), unless the robot is a
    hand or a finger and has no other joints. Every other joint (other arms,
-   legs, a head, wheels, fingers) is locked at the robot's reference posture.
+   legs, a head, wheels, fingers) is locked at its neutral value.
 
 ``robot.chain = ["base_link", "tool0"]`` picks the joints between two frames instead.
 """
@@ -22,6 +22,7 @@ import re
 import pinocchio as pin
 
 from ..exceptions import RobotLoadError
+from .pinocchio_model import frame_id
 
 TIP_PREFERENCE = (
     ("tcp", re.compile(r"tcp")),
@@ -86,7 +87,7 @@ def _frame_id(model: pin.Model, name: str, role: str) -> int:
         names = sorted({f.name for f in model.frames if f.type in _frame_types()})
         raise RobotLoadError(model.name, f"robot.chain: {role} frame {name!r} is not in the model; body "
                              f"frames: {', '.join(names[:60])}{' ...' if len(names) > 60 else ''}")
-    return model.getFrameId(name)
+    return frame_id(model, name)
 
 
 def chain_between(model: pin.Model, base: str, tip: str) -> list[str]:

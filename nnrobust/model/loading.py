@@ -10,6 +10,7 @@ import os
 import sys
 import tempfile
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -187,6 +188,10 @@ def _parsed(name: str, what: str, build):
 def _locks(built: _Built, source: str, locked_joints, chain) -> tuple[list[str], str]:
     """The joints to lock and the default task frame (module :mod:`.chains`)."""
     model = built.model
+    missing = [j for j in locked_joints or () if not model.existJointName(j)]
+    if missing:
+        raise RobotLoadError(built.name, f"cannot lock unknown joints {missing}; joints: "
+                             f"{list(model.names)[1:]}")
     if chain is not None:
         base, tip = chain
         names = chain_between(model, base, tip) + list(locked_joints or [])
@@ -194,10 +199,6 @@ def _locks(built: _Built, source: str, locked_joints, chain) -> tuple[list[str],
     if locked_joints is None and "locked_joints" in ARMS.get(source, {}):
         locked_joints = ARMS[source]["locked_joints"]
     if locked_joints is not None:
-        missing = [j for j in locked_joints if not model.existJointName(j)]
-        if missing:
-            raise RobotLoadError(built.name, f"cannot lock unknown joints {missing}; joints: "
-                                 f"{list(model.names)[1:]}")
         return list(locked_joints), ""
     frame, names = default_chain(model)
     return sorted(set(names) | built.mimic, key=model.getJointId), frame
@@ -235,7 +236,7 @@ def _locked_joint_ids(model: pin.Model, name: str, source: str, locked_joints) -
 
 
 def load_visual_model(
-    source: str | Path, locked_joints: list[str] | None = None, chain: tuple[str, str] | None = None
+    source: str | Path, locked_joints: list[str] | None = None, chain: Sequence[str] | None = None
 ) -> tuple[pin.Model, pin.GeometryModel]:
     """The kinematic model and the visual geometry (meshes and primitives) of an arm, for viewers.
 
@@ -312,7 +313,7 @@ def load_robot(
     task: str = "planar",
     gravity: tuple[float, float, float] | None = None,
     locked_joints: list[str] | None = None,
-    chain: tuple[str, str] | None = None,
+    chain: Sequence[str] | None = None,
 ) -> PinocchioModel:
     """Load an arm as a :class:`PinocchioModel`.
 

@@ -48,16 +48,21 @@ def torque_needed_over_range(robot: PinocchioModel, samples: int = RANGE_SAMPLES
     return np.max(needs, axis=0)
 
 
+def _largest_need(robot: PinocchioModel) -> float:
+    """The largest torque any joint needs over the range (0 when no effort limit is to be judged)."""
+    return float(np.max(torque_needed_over_range(robot))) if np.any(usable(robot.effort_limits)) else 0.0
+
+
+def _beyond(effort: np.ndarray, need: float) -> np.ndarray:
+    return usable(effort) & (effort > PLAUSIBLE_EFFORT_RATIO * max(need, 1e-9))
+
+
 def implausible_efforts(robot: PinocchioModel) -> np.ndarray:
     """Which joints' effort limits exceed :data:`PLAUSIBLE_EFFORT_RATIO` times the largest torque
     any joint of the arm needs over its range (URDF placeholders such as 1000 N m on a 2 kg
     leg, or 50,000 N m on a robot's head).
     """
-    effort = robot.effort_limits
-    if not np.any(usable(effort)):
-        return np.zeros(robot.nq, dtype=bool)
-    need = float(np.max(torque_needed_over_range(robot)))
-    return usable(effort) & (effort > PLAUSIBLE_EFFORT_RATIO * max(need, 1e-9))
+    return _beyond(robot.effort_limits, _largest_need(robot))
 
 
 def torque_scale(robot: PinocchioModel) -> np.ndarray:
@@ -65,10 +70,9 @@ def torque_scale(robot: PinocchioModel) -> np.ndarray:
     M_ii(q_mid) * 10 rad/s^2 + |G_i(q_mid)| at mid-range (the arm's own size). An implausible
     limit (:func:`implausible_efforts`) is named in a warning and not used.
     """
-    effort = robot.effort_limits
-    bad = implausible_efforts(robot)
+    effort, need = robot.effort_limits, _largest_need(robot)
+    bad = _beyond(effort, need)
     if np.any(bad):
-        need = float(np.max(torque_needed_over_range(robot)))
         joints = ", ".join(f"{robot.joint_names[i]!r} ({effort[i]:g})" for i in np.flatnonzero(bad))
         warnings.warn(f"{robot.name}: effort limits of joints {joints} [N m] are over "
                       f"{PLAUSIBLE_EFFORT_RATIO:g}x the {need:.3g} N m the arm needs at most "

@@ -165,7 +165,7 @@ class RunScene:
         MeshcatVisualizer = meshcat_visualizer_class()  # noqa: N806 - a class
 
         rc = config.robot
-        model, visual = load_visual_model(rc.source, rc.locked_joints, tuple(rc.chain) if rc.chain else None)
+        model, visual = load_visual_model(rc.source, rc.locked_joints, rc.chain)
         self.vis = vis
         self.robot = MeshcatVisualizer(model, None, visual)
         with warnings.catch_warnings():
