@@ -10,7 +10,7 @@ import warnings
 from pathlib import Path
 
 from .exceptions import NNRobustError, one_line
-from .run_folder import ExtrasInterrupted, check_out_folder, load_run, locked, write_run
+from .run_folder import Drawing, ExtrasInterrupted, check_out_folder, load_run, locked, write_run
 from .signals import ignore_stop_signals, install_stop_handlers, signals_as_interrupt
 
 TABLE_COLUMNS = (
@@ -119,12 +119,18 @@ def cmd_run(args) -> int:
 
 def _run_into(args, config, out: Path) -> int:
     """Simulate and write the run folder (``out`` is checked and locked)."""
-    from .experiment import build, run_experiment
-    from .progress import ProgressBar
-
     if not args.quiet:
         print(f"running {config.name} with controller {config.controller.kind!r} "
               f"for {config.simulation.duration:g} s ...", file=sys.stderr)
+    # the figures' process is forked now, so that it imports matplotlib while the run simulates
+    with Drawing(plots=not args.no_plots, animation=not args.no_animation) as drawing:
+        return _simulate_and_write(args, config, out, drawing)
+
+
+def _simulate_and_write(args, config, out: Path, drawing: Drawing) -> int:
+    from .experiment import build, run_experiment
+    from .progress import ProgressBar
+
     setup = build(config)
     bar = None if args.quiet else ProgressBar(config.simulation.duration)
     viewer = show = None
@@ -143,8 +149,7 @@ def _run_into(args, config, out: Path) -> int:
             bar.finish(float(result.t[-1]) if result.t.size else 0.0)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            written = write_run(out, result, overwrite=args.overwrite, plots=not args.no_plots,
-                                animation=not args.no_animation)
+            written = write_run(out, result, overwrite=args.overwrite, drawing=drawing)
         for warning in caught:  # what writing the folder has to say (not libraries' deprecations)
             if not issubclass(warning.category, DeprecationWarning):
                 print(f"warning: {one_line(str(warning.message))}", file=sys.stderr)

@@ -1,11 +1,18 @@
-"""Run independent pieces of work (figures, the animation) in forked processes at once.
+"""Jobs run by processes forked before their input exists.
 
-Writing a run folder's figures and animation is pure Python and matplotlib, so threads do not
-help; forked children do, sharing the finished result without copying or pickling it. Each
-child ignores Ctrl-C and SIGHUP (the parent decides), dies with its parent, sends back its
-warnings and its error, and leaves by ``os._exit``. Where ``fork`` is missing, one CPU is
-available, or another Python thread runs (forking it could copy a held lock), the work runs
-here, in order.
+Drawing a run folder's figures is pure Python and matplotlib, so threads do not help, and
+importing matplotlib alone takes about half a second. :class:`ForkedJobs` therefore forks its
+first worker at once: that process imports what the jobs need (``prepare``) while this one
+computes their input. :meth:`ForkedJobs.run` then sends it a small message (a run folder's path);
+the first worker loads the input from it, forks the other workers (which inherit its imports and
+the input, with nothing copied or pickled), shares the jobs with them by weight, and reports
+back, while this process does other work (``meanwhile``).
+
+Every forked worker ignores Ctrl-C and SIGHUP (this process decides), dies with its parent
+(``PR_SET_PDEATHSIG``), sends back its warnings and its first error, and leaves by
+``os._exit``. On SIGTERM the first worker kills and reaps the others before it leaves, so that
+stopping it leaves no process behind. Where ``fork`` is missing, one worker is asked for, or
+another Python thread runs (forking it could copy a held lock), everything runs here, in order.
 """
 
 from __future__ import annotations
@@ -15,11 +22,16 @@ import pickle
 import signal
 import sys
 import threading
+import time
 import traceback
 import warnings
 from collections.abc import Callable, Sequence
+from typing import Any
 
 MAX_WORKERS = 4
+
+STOP_TIMEOUT = 5.0
+"""Seconds a first worker has to stop its siblings on SIGTERM before it is killed."""
 
 
 def available_cpus() -> int:
@@ -31,7 +43,7 @@ def available_cpus() -> int:
 
 
 WORKERS_VARIABLE = "NNROBUST_DRAW_WORKERS"
-"""Environment variable: how many processes draw a run folder's figures and animation."""
+"""Environment variable: how many processes draw a run folder's figures."""
 
 
 def default_workers() -> int:
@@ -48,10 +60,16 @@ def default_workers() -> int:
     return int(value)
 
 
-def share(weights: Sequence[float], workers: int) -> list[list[int]]:
-    """Job indices per worker, heaviest job first onto the least loaded worker (worker 0 is
-    this process).
+def can_fork() -> bool:
+    """Whether forking is safe here: ``fork`` exists and no other Python thread runs (a fork copies
+    only this thread, so a lock another one holds, a dask client's event loop or a logging
+    handler, would stay locked in the child forever).
     """
+    return hasattr(os, "fork") and threading.active_count() == 1
+
+
+def share(weights: Sequence[float], workers: int) -> list[list[int]]:
+    """Job indices per worker, heaviest job first onto the least loaded worker."""
     loads, groups = [0.0] * workers, [[] for _ in range(workers)]
     for i in sorted(range(len(weights)), key=lambda i: -weights[i]):
         w = loads.index(min(loads))
@@ -60,58 +78,154 @@ def share(weights: Sequence[float], workers: int) -> list[list[int]]:
     return [sorted(g) for g in groups if g]
 
 
-def run_jobs(jobs: Sequence[Callable[[], None]], weights: Sequence[float] | None = None,
-             workers: int | None = None) -> None:
-    """Call every job, spread over ``workers`` processes (default :func:`default_workers`).
+class ForkedJobs:
+    """``jobs`` (each called with one input) run by ``workers`` processes (default
+    :func:`default_workers`), the first of them forked now to call ``prepare``.
 
-    Warnings a child raises are raised again here; the first error of a child is raised here
-    once all have ended (an ``OSError`` as an ``OSError``, Ctrl-C as ``KeyboardInterrupt``,
-    anything else as a ``RuntimeError`` holding the child's traceback). On Ctrl-C or SIGTERM
-    here the children are killed and reaped before the interrupt goes on.
+    ``load`` turns the message given to :meth:`run` into the jobs' input, in the first worker
+    (default: the message itself). Use as a context manager: leaving it without :meth:`run`
+    (an error, Ctrl-C, nothing to draw) stops the first worker.
     """
-    weights = [1.0] * len(jobs) if weights is None else list(weights)
-    workers = min(default_workers() if workers is None else workers, len(jobs))
-    # a fork copies only this thread: a lock another Python thread holds (a dask client's event
-    # loop, a logging handler) would stay locked in the child forever, so then work here
-    if workers <= 1 or not hasattr(os, "fork") or threading.active_count() > 1:
-        for job in jobs:
-            job()
-        return
-    groups = share(weights, workers)
-    children: list[tuple[int, int]] = []  # (pid, read end of its pipe)
-    sys.stdout.flush()
-    sys.stderr.flush()
-    try:
-        for group in groups[1:]:
-            read, write = os.pipe()
-            pid = os.fork()
-            if pid == 0:  # pragma: no cover - the child; measured through its effects
-                os.close(read)
-                _child([jobs[i] for i in group], write)
-            os.close(write)
-            children.append((pid, read))
-        for i in groups[0]:
-            jobs[i]()
-        reports = []
-        while children:
-            reports.append(_collect(*children[0]))
-            children.pop(0)
-    except BaseException:
-        for pid, read in children:
-            _kill(pid, read)
-        raise
-    for warned in (w for report in reports for w in report["warnings"]):
-        warnings.warn(warned[0], warned[1], stacklevel=2)
-    for report in reports:
+
+    def __init__(self, jobs: Sequence[Callable[[Any], None]], weights: Sequence[float] | None = None,
+                 workers: int | None = None, prepare: Callable[[], None] | None = None,
+                 load: Callable[[Any], Any] | None = None):
+        self._jobs = list(jobs)
+        self._weights = [1.0] * len(self._jobs) if weights is None else list(weights)
+        workers = default_workers() if workers is None else workers
+        self._workers = max(1, min(workers, len(self._jobs)))
+        self._prepare = prepare or (lambda: None)
+        self._load = load or (lambda message: message)
+        self._first = None  # (pid, write end of its message pipe, read end of its report pipe)
+        if self._workers > 1 and can_fork():
+            self._first = self._fork_first()
+
+    @property
+    def forked(self) -> bool:
+        """Whether the jobs run in forked processes (else :meth:`run` runs them here)."""
+        return self._first is not None
+
+    def _fork_first(self):
+        message_read, message_write = os.pipe()
+        report_read, report_write = os.pipe()
+        sys.stdout.flush()
+        sys.stderr.flush()
+        parent = os.getpid()
+        pid = os.fork()
+        if pid == 0:  # pragma: no cover - the first worker; measured through its effects
+            os.close(message_write)
+            os.close(report_read)
+            _worker(lambda: _first_worker(self, message_read), report_write, parent)
+        os.close(message_read)
+        os.close(report_write)
+        return pid, message_write, report_read
+
+    def run(self, message: Any, meanwhile: Callable[[], None] | None = None) -> None:
+        """Run the jobs on ``load(message)`` (a small, picklable message), and ``meanwhile`` here.
+
+        Warnings of the workers are raised again here; their first error is raised here once all
+        have ended (an ``OSError`` as an ``OSError``, Ctrl-C as ``KeyboardInterrupt``, anything
+        else as a ``RuntimeError`` holding the worker's traceback). Ctrl-C or SIGTERM here stops
+        the workers (none is left behind) before the interrupt goes on.
+        """
+        if self._first is None:
+            self._prepare()
+            data = self._load(message)
+            for job in self._jobs:
+                job(data)
+            if meanwhile is not None:
+                meanwhile()
+            return
+        pid, message_write, report_read = self._first
+        try:
+            try:
+                _write_all(message_write, pickle.dumps(message))
+            except BrokenPipeError:  # the worker has ended: its report says why
+                pass
+            os.close(message_write)
+            self._first = (pid, None, report_read)
+            if meanwhile is not None:
+                meanwhile()
+            report = _collect(pid, report_read)
+            self._first = None
+        except BaseException:
+            self.close()
+            raise
+        for warned in report["warnings"]:
+            warnings.warn(warned[0], warned[1], stacklevel=2)
         _raise(report)
 
+    def close(self) -> None:
+        """Stop the workers if they still run (their jobs are not wanted); idempotent."""
+        if self._first is None:
+            return
+        pid, message_write, report_read = self._first
+        self._first = None
+        for fd in (message_write, report_read):
+            if fd is not None:
+                _close(fd)
+        _stop(pid)
 
-def _child(jobs, write: int) -> None:  # pragma: no cover - runs in the forked child
-    """Run ``jobs`` in the forked child, report through ``write`` and leave."""
+    def __enter__(self) -> ForkedJobs:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def _first_worker(jobs: ForkedJobs, message_read: int) -> list[dict]:  # pragma: no cover - forked
+    """The first worker's work: prepare, wait for the message, fork the others, run its share and
+    return the others' reports.
+    """
+    siblings: list[tuple[int, int]] = []  # (pid, read end of its report pipe)
+
+    def stop(signum, frame):
+        for pid, read in siblings:
+            _kill(pid, read)
+        os._exit(128 + signum)
+
+    signal.signal(signal.SIGTERM, stop)
+    jobs._prepare()
+    blob = _read_all(message_read)
+    _close(message_read)
+    if not blob:  # closed without a message: the jobs are not wanted
+        os._exit(0)
+    data = jobs._load(pickle.loads(blob))
+    groups = share(jobs._weights, jobs._workers)
+    if not can_fork():
+        groups = [sorted(i for g in groups for i in g)]
+    me = os.getpid()
+    for group in groups[1:]:
+        read, write = os.pipe()
+        pid = os.fork()
+        if pid == 0:
+            os.close(read)
+            _worker(lambda group=group: _run_group(jobs, group, data), write, me)
+        os.close(write)
+        siblings.append((pid, read))
+    _run_group(jobs, groups[0], data)
+    reports = []
+    while siblings:
+        reports.append(_collect(*siblings[0]))
+        siblings.pop(0)
+    return reports
+
+
+def _run_group(jobs: ForkedJobs, group: list[int], data) -> list[dict]:  # pragma: no cover - forked
+    for i in group:
+        jobs._jobs[i](data)
+    return []
+
+
+def _worker(work: Callable[[], list[dict]], write: int, parent: int) -> None:  # pragma: no cover
+    """Run ``work`` in a forked worker, report through ``write`` (its own warnings and error, merged
+    with the reports ``work`` returns) and leave.
+    """
     code = 0
     report = {"warnings": [], "error": None}
+    others: list[dict] = []
     try:
-        _die_with_parent()
+        _die_with_parent(parent)
         signal.signal(signal.SIGINT, signal.SIG_IGN)
         signal.signal(signal.SIGHUP, signal.SIG_IGN)
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
@@ -119,18 +233,41 @@ def _child(jobs, write: int) -> None:  # pragma: no cover - runs in the forked c
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             try:
-                for job in jobs:
-                    job()
+                others = work()
             finally:
                 report["warnings"] = [(str(w.message), _category(w.category)) for w in caught]
     except BaseException as err:  # everything goes back to the parent
         code = 1
         report["error"] = _error_record(err)
+    for other in others:
+        report["warnings"] += other["warnings"]
+        if report["error"] is None:
+            report["error"] = other["error"]
     try:
         with os.fdopen(write, "wb") as pipe:
             pickle.dump(report, pipe)
     finally:
         os._exit(code)
+
+
+def _write_all(fd: int, data: bytes) -> None:
+    view = memoryview(data)
+    while view:
+        view = view[os.write(fd, view):]
+
+
+def _read_all(fd: int) -> bytes:
+    chunks = []
+    while chunk := os.read(fd, 1 << 16):
+        chunks.append(chunk)
+    return b"".join(chunks)
+
+
+def _close(fd: int) -> None:
+    try:
+        os.close(fd)
+    except OSError:  # closed by an interrupted read
+        pass
 
 
 def _category(category):
@@ -146,8 +283,8 @@ def _error_record(err: BaseException) -> dict:
     return {"kind": "error", "text": "".join(traceback.format_exception(err)).strip()}
 
 
-def _die_with_parent() -> None:  # pragma: no cover - runs in the forked child
-    """Linux: the kernel kills this child when the parent dies (even by SIGKILL)."""
+def _die_with_parent(parent: int) -> None:  # pragma: no cover - runs in a forked worker
+    """Linux: the kernel kills this worker when its parent dies (even by SIGKILL)."""
     if not sys.platform.startswith("linux"):
         return
     try:
@@ -158,7 +295,7 @@ def _die_with_parent() -> None:  # pragma: no cover - runs in the forked child
         libc.prctl(pr_set_pdeathsig, signal.SIGKILL, 0, 0, 0)
     except (OSError, AttributeError):
         return
-    if os.getppid() == 1:  # the parent died before prctl took effect
+    if os.getppid() != parent:  # the parent died before prctl took effect
         os._exit(1)
 
 
@@ -168,7 +305,7 @@ def _collect(pid: int, read: int) -> dict:
     _, status = os.waitpid(pid, 0)
     try:
         return pickle.loads(data)
-    except (pickle.UnpicklingError, EOFError, ValueError):  # the child died without reporting
+    except (pickle.UnpicklingError, EOFError, ValueError):  # the worker died without reporting
         code = os.waitstatus_to_exitcode(status)
         what = f"killed by signal {-code}" if code < 0 else f"exit code {code}"
         return {"warnings": [], "error": {"kind": "error", "text": f"a drawing process ended ({what})"}}
@@ -180,9 +317,21 @@ def _kill(pid: int, read: int) -> None:
         os.waitpid(pid, 0)
     except (ProcessLookupError, ChildProcessError):
         pass
+    _close(read)
+
+
+def _stop(pid: int) -> None:
+    """SIGTERM to a first worker (it kills and reaps its siblings), then SIGKILL if it lingers; reaped."""
     try:
-        os.close(read)
-    except OSError:  # closed by an interrupted read
+        os.kill(pid, signal.SIGTERM)
+        deadline = time.monotonic() + STOP_TIMEOUT
+        while os.waitpid(pid, os.WNOHANG) == (0, 0):
+            if time.monotonic() > deadline:
+                os.kill(pid, signal.SIGKILL)
+                os.waitpid(pid, 0)
+                return
+            time.sleep(0.005)
+    except (ProcessLookupError, ChildProcessError):
         pass
 
 

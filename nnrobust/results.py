@@ -224,7 +224,10 @@ class Result:
 
     # -- files -------------------------------------------------------------------------------
     def save_npz(self, path: str | Path) -> None:
-        """Arrays and signals in one .npz (signals prefixed ``signal_``)."""
+        """Arrays and signals in one .npz (signals prefixed ``signal_``), uncompressed: zlib saves
+        about a fifth (10 s of the Panda: 4.2 MB instead of 5.4 MB) and takes as long as the
+        simulation itself (0.18 s).
+        """
         arrays = {k: getattr(self, k) for k in ("t", "q", "dq", "tau", "x", "x_d", "e")}
         arrays.update({f"signal_{k}": v for k, v in self.signals.items()})
         arrays["joint_names"] = np.asarray(self.joint_names)
@@ -232,7 +235,7 @@ class Result:
             if getattr(self, name) is not None:
                 arrays[name] = getattr(self, name)
         with open(path, "wb") as fh:
-            np.savez_compressed(fh, **arrays)
+            np.savez(fh, **arrays)
 
     @classmethod
     def load(cls, folder: str | Path) -> Result:

@@ -30,7 +30,7 @@ import zipfile
 from pathlib import Path
 
 from .exceptions import NNRobustError, RunFolderExists
-from .forked import run_jobs
+from .forked import ForkedJobs
 from .signals import signals_deferred
 
 MARKER = ".nnrobust-run"
@@ -186,63 +186,102 @@ def _place(tmp: Path, folder: Path) -> None:
 FIGURE_NAMES = ("path", "errors", "joints", "torques", "subtask", "snapshots", "nn")
 """The figures of a run (nnrobust.plots.FIGURES, named here so that matplotlib is not imported)."""
 
+FIGURE_WEIGHTS = {"path": 2.0, "errors": 1.1, "joints": 1.1, "torques": 0.8, "subtask": 0.9,
+                  "snapshots": 1.0, "nn": 1.2}
+"""Relative cost of drawing each figure (measured on the Panda's run: the 3-D path costs most)."""
 
-def _draw_figure(result, folder: Path, name: str) -> None:
+PLOTS_PARTIAL, ANIMATION_PARTIAL = ".plots.partial", ".animation.html.partial"
+
+
+def _import_plots() -> None:
+    from . import plots  # noqa: F401 - matplotlib, imported ahead of the figures
+
+
+def _figure_input(folder: str) -> tuple:
+    """What a figure is drawn from: the run as written in ``folder``, and where figures go."""
+    from .results import Result
+
+    return Result.load(folder), Path(folder) / PLOTS_PARTIAL
+
+
+def _draw_figure(data: tuple, name: str) -> None:
     from . import plots
 
-    plots.plot_run(result, folder, [name])
+    result, plots_tmp = data
+    plots.plot_run(result, plots_tmp, [name])
 
 
-ANIMATION_WEIGHT = 3.0
-"""The animation's cost in figures (measured on the Panda: 0.8 s, with its imports, against about
-0.25 s per figure)."""
+class Drawing:
+    """The figures and the animation of a run folder.
 
-
-def _write_extras(folder: Path, result, plots: bool, animation: bool) -> str:
-    """Plots and animation, drawn at once in forked processes (:mod:`nnrobust.forked`), each
-    written beside its final name and renamed into place; returns what the marker is to record,
-    complete or failed (on Ctrl-C it records interrupted itself).
+    The figures are drawn by forked processes (:class:`nnrobust.forked.ForkedJobs`) from the
+    run as written in the folder (``plots.plot_run(load_run(folder), ...)`` draws the same); the
+    first of those processes is forked when the Drawing is made, so that, made before the
+    simulation as the command line does, it imports matplotlib while the simulation runs. This
+    process writes the animation meanwhile. A context manager: leaving it stops the drawing
+    processes if :meth:`write` did not run.
     """
-    plots = plots and result.t.size > 1
-    animation = animation and result.config and result.chain is not None and result.t.size > 1
-    jobs, weights = [], []
-    plots_tmp, html_tmp = folder / ".plots.partial", folder / ".animation.html.partial"
-    if plots:
-        for name in FIGURE_NAMES:  # matplotlib is imported by the processes that draw
-            jobs.append(functools.partial(_draw_figure, result, plots_tmp, name))
-            weights.append(1.0)
-    if animation:
+
+    def __init__(self, plots: bool = True, animation: bool = True):
+        self.plots, self.animation = plots, animation
+        self._figures = ForkedJobs([functools.partial(_draw_figure, name=name) for name in FIGURE_NAMES],
+                                   [FIGURE_WEIGHTS[name] for name in FIGURE_NAMES],
+                                   prepare=_import_plots, load=_figure_input) if plots else None
+
+    def close(self) -> None:
+        """Stop the drawing processes (if :meth:`write` did not run)."""
+        if self._figures is not None:
+            self._figures.close()
+
+    def __enter__(self) -> Drawing:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def write(self, folder: Path, result) -> str:
+        """Plots and animation of ``result`` into ``folder`` (its arrays and metrics written), each
+        written beside its final name and renamed into place; returns what the marker is to
+        record, complete or failed (on Ctrl-C it records interrupted itself).
+        """
+        plots = self.plots and result.t.size > 1
+        animation = self.animation and result.config and result.chain is not None and result.t.size > 1
+        if not plots:
+            self.close()
+        plots_tmp, html_tmp = folder / PLOTS_PARTIAL, folder / ANIMATION_PARTIAL
+
         def write_animation():
             html = _animation_html(result)
             if html is not None:
                 html_tmp.write_text(html, encoding="utf-8")
 
-        jobs.append(write_animation)
-        weights.append(ANIMATION_WEIGHT)
-    try:
-        if plots:
-            shutil.rmtree(plots_tmp, ignore_errors=True)
-            plots_tmp.mkdir()
-        run_jobs(jobs, weights)
-        if plots:
-            shutil.rmtree(folder / "plots", ignore_errors=True)
-            os.replace(plots_tmp, folder / "plots")
-        if html_tmp.exists():
-            os.replace(html_tmp, folder / "animation.html")
-    except KeyboardInterrupt:
-        _clean_partials(folder)
-        _write_marker(folder, result.status, "interrupted")
-        raise
-    except OSError as err:
-        _clean_partials(folder)
-        warnings.warn(f"{folder}: plots or animation not written ({err.strerror or err}); the arrays "
-                      "and metrics are saved", stacklevel=3)
-        return "failed"
-    return "complete"
+        try:
+            if plots:
+                shutil.rmtree(plots_tmp, ignore_errors=True)
+                plots_tmp.mkdir()
+                self._figures.run(str(folder), meanwhile=write_animation if animation else None)
+                shutil.rmtree(folder / "plots", ignore_errors=True)
+                os.replace(plots_tmp, folder / "plots")
+            elif animation:
+                write_animation()
+            if html_tmp.exists():
+                os.replace(html_tmp, folder / "animation.html")
+        except KeyboardInterrupt:
+            _clean_partials(folder)
+            _write_marker(folder, result.status, "interrupted")
+            raise
+        except OSError as err:
+            _clean_partials(folder)
+            warnings.warn(f"{folder}: plots or animation not written ({err.strerror or err}); the arrays "
+                          "and metrics are saved", stacklevel=3)
+            return "failed"
+        finally:
+            self.close()
+        return "complete"
 
 
 def _clean_partials(folder: Path) -> None:
-    for name in (".plots.partial", ".animation.html.partial"):
+    for name in (PLOTS_PARTIAL, ANIMATION_PARTIAL):
         path = folder / name
         if path.is_dir():
             shutil.rmtree(path, ignore_errors=True)
@@ -272,9 +311,11 @@ class ExtrasInterrupted(KeyboardInterrupt):
 
 
 def write_run(folder: str | Path, result, overwrite: bool = False, plots: bool = True,
-              animation: bool = True) -> Path:
+              animation: bool = True, drawing: Drawing | None = None) -> Path:
     """Write a run folder: config.toml, result.npz, metrics.json and the marker first (atomically),
-    then plots/ and animation.html. Returns the folder written.
+    then plots/ and animation.html (by ``drawing``, made before the simulation, whose own plots
+    and animation settings then apply; else by a :class:`Drawing` made now). Returns the folder
+    written.
 
     An existing run folder is replaced only when ``overwrite`` is true, only once the new arrays
     and metrics are complete, and never by a run that did not complete when the old one did: that
@@ -302,7 +343,8 @@ def write_run(folder: str | Path, result, overwrite: bool = False, plots: bool =
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     try:
-        extras = _write_extras(folder, result, plots, animation)
+        with drawing or Drawing(plots, animation) as draw:
+            extras = draw.write(folder, result)
     except KeyboardInterrupt:
         raise ExtrasInterrupted(folder) from None
     _write_marker(folder, result.status, extras)

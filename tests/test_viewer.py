@@ -47,6 +47,41 @@ def test_animation_of_a_meshed_robot_embeds_its_meshes(tmp_path):
     assert "panda" in html and len(html) > 5_000_000  # the Panda's meshes travel in the file
 
 
+def test_animation_tracks_equal_meshcats_own_keyframes():
+    """The poses of every node, recorded for all keyframes at once and sent as typed arrays, are
+    the keyframes meshcat's own Animation records one by one (its quaternion comes from the
+    scaled matrix by an eigen-decomposition), to float32 precision, on the Panda's meshes."""
+    import meshcat
+    from meshcat.animation import Animation
+
+    from nnrobust.viewer.scene import PoseRecorder, RunScene, SceneRecorder, tip_positions
+
+    config = load_preset("panda-ellipse").replace(simulation={"duration": 0.5})
+    result = run_experiment(config)
+    vis = meshcat.Visualizer(window=SceneRecorder())
+    scene = RunScene(vis, config)
+    _, desired = tip_positions(result)
+    index = np.arange(0, result.t.size, 33)
+    reference, poses = Animation(default_framerate=30), PoseRecorder()
+    for frame, k in enumerate(index):
+        with reference.at_frame(vis, frame) as keyframe:
+            scene.show(result.q[k], desired[k], viewer=keyframe)
+        scene.show(result.q[k], desired[k], viewer=poses)
+    expected = {entry["path"]: entry["clip"] for entry in reference.lower()}
+    ours = poses.animation(vis, 30).lower()
+    assert sorted(entry["path"] for entry in ours) == sorted(expected) and len(ours) > 10
+    for entry in ours:
+        for track, theirs in zip(entry["clip"]["tracks"], expected[entry["path"]]["tracks"]):
+            assert (track["name"], track["type"]) == (theirs["name"], theirs["type"])
+            times = np.frombuffer(track["times"].data, dtype=np.float32)
+            np.testing.assert_array_equal(times, [key["time"] for key in theirs["keys"]])
+            values = np.frombuffer(track["values"].data, dtype=np.float32).reshape(times.size, -1)
+            wanted = np.array([key["value"] for key in theirs["keys"]])
+            if track["name"] == ".quaternion":  # q and -q are the same rotation
+                wanted *= np.sign(np.sum(values * wanted, axis=1, keepdims=True))
+            np.testing.assert_allclose(values, wanted, atol=1e-6)
+
+
 @pytest.mark.parametrize("name", ["panda", "anymal_c", "talos_full", "kinova"])
 def test_visual_geometry_matches_pinocchios_own_parse(name):
     """The viewer's geometry (meshes set aside, read by the viewer) places every visual where

@@ -11,8 +11,8 @@ import warnings
 import meshcat
 import meshcat.geometry as mg
 import numpy as np
+import pinocchio as pin
 import umsgpack
-from meshcat.animation import Animation
 from meshcat.servers.tree import SceneTree, find_node, walk
 
 from ..config import ExperimentConfig
@@ -204,11 +204,70 @@ class RunScene:
         """Arm and target (``desired``, N x 3) over the run, a keyframe every 1/fps s simulated."""
         times = np.arange(result.t[0], result.t[-1] + 1e-9, 1.0 / fps)
         index = np.minimum(np.searchsorted(result.t, times), result.t.size - 1)
-        animation = Animation(default_framerate=fps)
-        for frame, k in enumerate(index):
-            with animation.at_frame(self.vis, frame) as keyframe:
-                self.show(result.q[k], desired[k], viewer=keyframe)
-        self.vis.set_animation(animation, play=True, repetitions=1_000_000)  # loops "forever"
+        poses = PoseRecorder()
+        for k in index:
+            self.show(result.q[k], desired[k], viewer=poses)
+        self.vis.set_animation(poses.animation(self.vis, fps), play=True, repetitions=1_000_000)  # "forever"
+
+
+class PoseRecorder:
+    """Stands in for a meshcat viewer while the arm is placed at every keyframe: it keeps each
+    node's position and orientation, which :meth:`animation` sends as one track per node and
+    property (times and values as typed arrays, not a dictionary per keyframe).
+    """
+
+    def __init__(self):
+        self.poses: dict[str, tuple[list, list]] = {}
+
+    def __getitem__(self, name: str) -> _NodePoses:
+        return _NodePoses(self.poses.setdefault(name, ([], [])))
+
+    def animation(self, vis: meshcat.Visualizer, fps: float) -> KeyframeAnimation:
+        """The recorded poses as an animation of the nodes of ``vis``, one keyframe per 1/fps s."""
+        return KeyframeAnimation({vis[name].path.lower(): (np.array(p), np.array(q))
+                                  for name, (p, q) in self.poses.items()}, fps)
+
+
+class _NodePoses:
+    __slots__ = ("positions", "quaternions")
+
+    def __init__(self, lists):
+        self.positions, self.quaternions = lists
+
+    def set_transform(self, matrix: np.ndarray) -> None:
+        """Keep the position and rotation of a homogeneous matrix; a mesh's scale (Pinocchio puts
+        it in the matrix) is divided out as three.js does, so the scale set on the node stays.
+        """
+        rotation = matrix[:3, :3] / np.linalg.norm(matrix[:3, :3], axis=0)
+        if np.linalg.det(rotation) < 0:  # a mirrored mesh: three.js flips its first axis
+            rotation[:, 0] = -rotation[:, 0]
+        self.positions.append(matrix[:3, 3])
+        self.quaternions.append(pin.Quaternion(rotation).coeffs())  # x, y, z, w: three.js's order
+
+
+class KeyframeAnimation:
+    """meshcat's ``set_animation`` payload for tracks given whole: node path -> (F x 3 positions,
+    F x 4 quaternions x, y, z, w), keyframe k at k / fps seconds.
+    """
+
+    def __init__(self, tracks: dict[str, tuple[np.ndarray, np.ndarray]], fps: float):
+        self.tracks, self.fps = tracks, fps
+
+    def lower(self) -> list[dict]:
+        """The payload as meshcat's ``Animation.lower`` gives it, each track's keys as typed arrays."""
+        def track(name, kind, values):
+            return {"name": name, "type": kind, "times": _float32(np.arange(len(values))),
+                    "values": _float32(values)}
+
+        return [{"path": path, "clip": {"fps": self.fps, "name": "default",
+                                        "tracks": [track(".position", "vector3", positions),
+                                                   track(".quaternion", "quaternion", quaternions)]}}
+                for path, (positions, quaternions) in self.tracks.items()]
+
+
+def _float32(values: np.ndarray) -> umsgpack.Ext:
+    """A Float32Array for meshcat's viewer (its MessagePack extension 0x17)."""
+    return umsgpack.Ext(0x17, np.ascontiguousarray(values, dtype=np.float32).tobytes())
 
 
 CAMERA_FOV = 75.0
