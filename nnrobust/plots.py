@@ -54,18 +54,82 @@ def _series(draw, t: np.ndarray, y: np.ndarray, *args, **kwargs):
     return draw(*envelope(t, y), *args, **kwargs)
 
 
+DPI = 120
+"""Resolution of the PNG figures [dots per inch]."""
+
+PAD = 0.1
+"""White margin around what a figure draws [in]."""
+
+ROOM = (0.6, 0.6, 3.0, 0.6)
+"""Room drawn around a figure before it is cropped [in]: left, bottom, right (where the legends
+sit, outside the axes), top."""
+
+
 def _save(fig, folder: Path, name: str) -> list[Path]:
-    """The figure in every format of :data:`FORMATS`, cropped to what it draws (the crop is
-    measured once: ``bbox_inches="tight"`` would lay the figure out twice per format).
+    """The figure in every format of :data:`FORMATS`, cropped to what it draws plus :data:`PAD`.
+
+    The crop is found on the raster: the figure is drawn once at :data:`DPI` with :data:`ROOM`
+    around it, and the box of its non-background pixels is both the PNG (cut from that drawing)
+    and the page of the other formats. Only where the drawing reaches an edge of its room (a
+    legend taller than the figure) is the crop measured by matplotlib's layout instead, which
+    costs a layout of every text.
     """
+    from matplotlib.transforms import Bbox
+
+    width, height = fig.get_size_inches()
+    left, bottom, right, top = ROOM
+    room = Bbox.from_extents(-left, -bottom, width + right, height + top)
+    raster = _draw_raster(fig, room)
+    ink = None if raster is None else _ink_box(raster)
+    if ink is not None:
+        (r0, r1), (c0, c1) = ink  # pixel rows from the top, columns from the left
+        crop = Bbox.from_extents(room.x0 + c0 / DPI, room.y1 - r1 / DPI,
+                                 room.x0 + c1 / DPI, room.y1 - r0 / DPI)
+    else:
+        crop = fig.get_tightbbox(fig.canvas.get_renderer()).padded(PAD)
     paths = []
-    crop = fig.get_tightbbox(fig.canvas.get_renderer()).padded(0.1)
     for fmt in FORMATS:
         path = folder / f"{name}.{fmt}"
-        fig.savefig(path, dpi=120, bbox_inches=crop)
+        if fmt == "png" and ink is not None:
+            from PIL import Image
+
+            Image.fromarray(raster[r0:r1, c0:c1, :3]).save(path, dpi=(DPI, DPI))
+        else:
+            fig.savefig(path, dpi=DPI, bbox_inches=crop)
         paths.append(path)
     plt.close(fig)
     return paths
+
+
+def _draw_raster(fig, room) -> np.ndarray | None:
+    """The figure drawn over ``room`` [in] at :data:`DPI`: rows x columns x RGBA (None if the
+    buffer's size is not the room's).
+    """
+    import io
+
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="rgba", dpi=DPI, bbox_inches=room)
+    data = np.frombuffer(buffer.getbuffer(), dtype=np.uint8)
+    for columns in {int(room.width * DPI), round(room.width * DPI)}:
+        for rows in {int(room.height * DPI), round(room.height * DPI)}:
+            if rows * columns * 4 == data.size:
+                return data.reshape(rows, columns, 4)
+    return None
+
+
+def _ink_box(raster: np.ndarray) -> tuple[tuple[int, int], tuple[int, int]] | None:
+    """((first row, end row), (first column, end column)) of what differs from the background
+    (the corner pixel), grown by :data:`PAD`; None when nothing is drawn or the drawing reaches
+    an edge (it may go on beyond it).
+    """
+    ink = np.any(raster != raster[0, 0], axis=2)
+    rows, columns = np.flatnonzero(ink.any(axis=1)), np.flatnonzero(ink.any(axis=0))
+    if rows.size == 0 or rows[0] == 0 or columns[0] == 0 or rows[-1] == ink.shape[0] - 1 or (
+            columns[-1] == ink.shape[1] - 1):
+        return None
+    pad = int(round(PAD * DPI))
+    return ((max(rows[0] - pad, 0), min(rows[-1] + 1 + pad, ink.shape[0])),
+            (max(columns[0] - pad, 0), min(columns[-1] + 1 + pad, ink.shape[1])))
 
 
 AXES = ("x", "y", "z")
@@ -194,7 +258,8 @@ def _path_figure(result: Result):
                    azim=float(np.degrees(np.arctan2(normal[1], normal[0]))) + 25)  # the path face-on, tilted
     view.set_xlabel("x [m]")
     view.set_ylabel("y [m]")
-    view.set_zlabel("z [m]")
+    view.zaxis.set_rotate_label(False)  # mplot3d would turn it upside down at some view angles
+    view.set_zlabel("z [m]", rotation=90)
     view.set_title("3-D view (grey: the arm at t = 0)", fontsize=10)
     in_plane = fig.add_subplot(1, 2, 2)
     fig.subplots_adjust(wspace=0.35)

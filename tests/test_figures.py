@@ -35,6 +35,7 @@ def test_a_spatial_path_is_shown_in_3d_and_in_its_own_plane(panda):
     fig = _figure("path", panda)
     view, plane = fig.axes[:2]
     assert view.name == "3d" and plane.name == "rectilinear"
+    assert view.zaxis.label.get_rotation() == 90  # upright, not turned over by the view angle
     assert plane.get_xlabel().startswith("along $u_1$") and plane.get_ylabel().startswith("along $u_2$")
     desired = plane.get_lines()[0]
     x, y = desired.get_xdata(), desired.get_ydata()
@@ -140,3 +141,48 @@ def test_compare_warns_when_runs_differ_and_draws_each_desired_path(panda, paper
     assert plots.comparison_warnings({"a": panda, "b": panda}) == []
     written = plots.plot_comparison({"a": panda, "b": other}, tmp_path)
     assert [p.suffix for p in written] == [".png", ".svg"]
+
+
+def _svg_size_pt(path) -> tuple[float, float]:
+    import re
+
+    head = path.read_text()[:2000]
+    width, height = re.search(r'<svg[^>]*width="([0-9.]+)pt" height="([0-9.]+)pt"', head).groups()
+    return float(width), float(height)
+
+
+@pytest.mark.parametrize("name", ["errors", "joints", "path"])
+def test_saved_figures_are_cropped_to_what_they_draw(panda, tmp_path, name):
+    """PNG and SVG cover what matplotlib's own tight layout measures (the legends outside the axes
+    included) to within a few pixels, with a white margin all round, and both have one size."""
+    from PIL import Image
+
+    fig = plots.FIGURES[name](panda)
+    tight = fig.get_tightbbox(fig.canvas.get_renderer()).padded(plots.PAD)
+    png, svg = plots._save(fig, tmp_path, name)
+    image = np.asarray(Image.open(png).convert("RGB"))
+    rows, columns = image.shape[:2]
+    assert abs(columns - tight.width * plots.DPI) < 12 and abs(rows - tight.height * plots.DPI) < 12
+    margin = int(plots.PAD * plots.DPI) - 1
+    for border in (image[:margin], image[-margin:], image[:, :margin], image[:, -margin:]):
+        assert np.all(border == 255)
+    width_pt, height_pt = _svg_size_pt(svg)
+    assert width_pt == pytest.approx(columns / plots.DPI * 72, abs=1) and (
+        height_pt == pytest.approx(rows / plots.DPI * 72, abs=1))
+
+
+def test_a_figure_larger_than_its_room_is_cropped_by_its_layout(tmp_path):
+    """A legend that runs off the room drawn around the figure: the crop falls back on matplotlib's
+    layout and the whole legend is in the picture."""
+    from PIL import Image
+
+    fig, ax = plt.subplots(figsize=(4, 2))
+    for i in range(40):
+        ax.plot([0, 1], [i, i], label=f"line {i}")
+    legend = plots.legend_outside(ax)
+    tight = fig.get_tightbbox(fig.canvas.get_renderer()).padded(plots.PAD)
+    assert legend.get_window_extent().height / fig.dpi > 2 + plots.ROOM[1]  # beyond the room
+    png, svg = plots._save(fig, tmp_path, "tall")
+    rows = np.asarray(Image.open(png)).shape[0]
+    assert rows == pytest.approx(tight.height * plots.DPI, abs=2)
+    assert _svg_size_pt(svg)[1] == pytest.approx(tight.height * 72, abs=1)
