@@ -115,7 +115,7 @@ class ForkedJobs:
         if pid == 0:  # pragma: no cover - the first worker; measured through its effects
             os.close(message_write)
             os.close(report_read)
-            _worker(lambda: _first_worker(self, message_read), report_write, parent)
+            _worker(lambda: _first_worker(self, message_read, report_write), report_write, parent)
         os.close(message_read)
         os.close(report_write)
         return pid, message_write, report_read
@@ -173,9 +173,9 @@ class ForkedJobs:
         self.close()
 
 
-def _first_worker(jobs: ForkedJobs, message_read: int) -> list[dict]:  # pragma: no cover - forked
+def _first_worker(jobs: ForkedJobs, message_read: int, report_write: int) -> list[dict]:  # pragma: no cover
     """The first worker's work: prepare, wait for the message, fork the others, run its share and
-    return the others' reports.
+    return the others' reports (``report_write``: its own report pipe, which the others close).
     """
     siblings: list[tuple[int, int]] = []  # (pid, read end of its report pipe)
 
@@ -200,6 +200,7 @@ def _first_worker(jobs: ForkedJobs, message_read: int) -> list[dict]:  # pragma:
         pid = os.fork()
         if pid == 0:
             os.close(read)
+            os.close(report_write)
             _worker(lambda group=group: _run_group(jobs, group, data), write, me)
         os.close(write)
         siblings.append((pid, read))
