@@ -17,6 +17,7 @@ another Python thread runs (forking it could copy a held lock), everything runs 
 
 from __future__ import annotations
 
+import contextlib
 import os
 import pickle
 import signal
@@ -27,6 +28,8 @@ import traceback
 import warnings
 from collections.abc import Callable, Sequence
 from typing import Any
+
+from .signals import STOP_SIGNALS
 
 MAX_WORKERS = 4
 
@@ -98,27 +101,28 @@ class ForkedJobs:
         self._load = load or (lambda message: message)
         self._first = None  # (pid, write end of its message pipe, read end of its report pipe)
         if self._workers > 1 and can_fork():
-            self._first = self._fork_first()
+            self._fork_first()
 
     @property
     def forked(self) -> bool:
         """Whether the jobs run in forked processes (else :meth:`run` runs them here)."""
         return self._first is not None
 
-    def _fork_first(self):
+    def _fork_first(self) -> None:
         message_read, message_write = os.pipe()
         report_read, report_write = os.pipe()
-        sys.stdout.flush()
-        sys.stderr.flush()
-        parent = os.getpid()
-        pid = os.fork()
-        if pid == 0:  # pragma: no cover - the first worker; measured through its effects
+
+        def first_worker():  # pragma: no cover - forked; measured through its effects
             os.close(message_write)
             os.close(report_read)
             _worker(lambda: _first_worker(self, message_read, report_write), report_write, parent)
-        os.close(message_read)
-        os.close(report_write)
-        return pid, message_write, report_read
+
+        parent = os.getpid()
+        with _stop_signals_blocked():  # until the worker is on record here, and has its own handlers
+            pid = _fork(first_worker)
+            os.close(message_read)
+            os.close(report_write)
+            self._first = (pid, message_write, report_read)
 
     def run(self, message: Any, meanwhile: Callable[[], None] | None = None) -> None:
         """Run the jobs on ``load(message)`` (a small, picklable message), and ``meanwhile`` here.
@@ -197,13 +201,15 @@ def _first_worker(jobs: ForkedJobs, message_read: int, report_write: int) -> lis
     me = os.getpid()
     for group in groups[1:]:
         read, write = os.pipe()
-        pid = os.fork()
-        if pid == 0:
+
+        def sibling(group=group, read=read, write=write):
             os.close(read)
             os.close(report_write)
-            _worker(lambda group=group: _run_group(jobs, group, data), write, me)
-        os.close(write)
-        siblings.append((pid, read))
+            _worker(lambda: _run_group(jobs, group, data), write, me)
+
+        with _stop_signals_blocked():
+            siblings.append((_fork(sibling), read))
+            os.close(write)
     _run_group(jobs, groups[0], data)
     reports = []
     while siblings:
@@ -216,6 +222,34 @@ def _run_group(jobs: ForkedJobs, group: list[int], data) -> list[dict]:  # pragm
     for i in group:
         jobs._jobs[i](data)
     return []
+
+
+@contextlib.contextmanager
+def _stop_signals_blocked():
+    """Hold Ctrl-C, SIGTERM and SIGHUP back in the block. Forked in it, a worker starts with them
+    held back (and none pending), so that none can reach the Python handlers it inherits, which
+    would raise in the caller's code, before :func:`_worker` has set its own.
+    """
+    old = signal.pthread_sigmask(signal.SIG_BLOCK, STOP_SIGNALS)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, old)
+
+
+def _fork(child: Callable[[], None]) -> int:
+    """Fork; the child runs ``child`` and leaves by ``os._exit``, never returning to the caller's
+    code (which would go on as a copy of this process). Returns the child's pid.
+    """
+    sys.stdout.flush()
+    sys.stderr.flush()
+    pid = os.fork()
+    if pid == 0:  # pragma: no cover - the child
+        try:
+            child()
+        finally:
+            os._exit(1)
+    return pid
 
 
 def _worker(work: Callable[[], list[dict]], write: int, parent: int) -> None:  # pragma: no cover

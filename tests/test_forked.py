@@ -187,3 +187,36 @@ def test_with_another_thread_running_the_work_stays_in_this_process(tmp_path):
         stop.set()
         other.join()
     assert {(tmp_path / f"{i}").read_text() for i in range(3)} == {str(os.getpid())}
+
+
+def test_a_signal_at_the_fork_is_neither_lost_nor_sends_a_worker_back_into_the_callers_code(tmp_path):
+    """With a Python SIGTERM handler that raises (as the command line installs), the workers are
+    stopped right after the fork. The worker must not take the handler it inherits: raised in a
+    fork hook, its KeyboardInterrupt was swallowed and the worker lived on until killed after
+    STOP_TIMEOUT; raised a moment later, it went on as a copy of this process (it once ran the
+    rest of a test session)."""
+    from nnrobust.forked import STOP_TIMEOUT
+
+    me, escaped = os.getpid(), tmp_path / "escaped"
+
+    def interrupt(signum, frame):
+        raise KeyboardInterrupt
+
+    old = signal.signal(signal.SIGTERM, interrupt)
+    took = []
+    try:
+        for _ in range(20):
+            started = time.monotonic()
+            try:
+                with ForkedJobs([lambda data: None] * 2, workers=2, prepare=lambda: time.sleep(30)):
+                    pass  # left at once: the first worker is stopped right after its fork
+            except KeyboardInterrupt:
+                pass
+            if os.getpid() != me:  # a worker that came back here: say so and leave
+                escaped.write_text(str(os.getpid()))
+                os._exit(0)
+            took.append(time.monotonic() - started)
+    finally:
+        signal.signal(signal.SIGTERM, old)
+    assert not escaped.exists()
+    assert max(took) < STOP_TIMEOUT / 2, took  # each worker ended at once on SIGTERM
