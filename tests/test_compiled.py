@@ -242,12 +242,16 @@ def test_ctrl_c_stops_every_run_of_a_batch():
     from nnrobust.presets import load_preset
 
     setups = [build(load_preset("panda-ellipse").replace(simulation={"duration": 60.0})) for _ in range(3)]
+    # Python's own Ctrl-C handler, whatever this process inherited: started in the background by a
+    # non-interactive shell, it inherits SIGINT ignored, and Python leaves it so
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     timer = threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT))
     timer.start()
     try:
         traces = compiled.simulate_batch(setups, threads=2)
     finally:
         timer.cancel()
+        signal.signal(signal.SIGINT, previous)
     assert [t.status for t in traces] == ["interrupted"] * 3
     assert all(t.t.size < 60_000 for t in traces)
     assert all("interrupted at t =" in t.message for t in traces)
