@@ -1,4 +1,4 @@
-"""Command line: ``nnrobust run | sweep | presets | robots | compare | view | bench``."""
+"""Command line: ``nnrobust run | plot | sweep | presets | robots | compare | view | bench``."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import warnings
 from pathlib import Path
 
 from .exceptions import NNRobustError, one_line
-from .run_folder import Drawing, ExtrasInterrupted, check_out_folder, load_run, locked, write_run
+from .run_folder import Drawing, ExtrasInterrupted, check_out_folder, load_run, locked, redraw_run, write_run
 from .signals import ignore_stop_signals, install_stop_handlers, signals_as_interrupt
 
 TABLE_COLUMNS = (
@@ -185,6 +185,18 @@ def _serve_until_interrupted(viewer, seconds: float | None = None) -> None:
             time.sleep(0.2)
     except KeyboardInterrupt:
         pass
+
+
+def cmd_plot(args) -> int:
+    """Draw the figures and animation of run folders again (run_folder.redraw_run)."""
+    code = 0
+    for folder in args.runs:
+        extras = redraw_run(folder, plots=not args.no_plots, animation=not args.no_animation)
+        if extras != "complete":  # the reason was said as a warning
+            code = 1
+        else:
+            print(f"drew {Path(folder)}/", file=sys.stderr)
+    return code
 
 
 def cmd_view(args) -> int:
@@ -401,6 +413,16 @@ def build_parser() -> argparse.ArgumentParser:
     _viewer_options(run)
     run.set_defaults(func=cmd_run)
 
+    plot = sub.add_parser("plot", help="draw the figures and animation of run folders again",
+                          description="Draw plots/ and animation.html of run folders from their "
+                          "result.npz, as 'nnrobust run' draws them: after a drawing that was "
+                          "interrupted or skipped (--no-plots, --no-animation), or to redraw after an "
+                          "upgrade. The arrays and metrics are not touched.")
+    plot.add_argument("runs", nargs="+", help="run folders written by 'nnrobust run'")
+    plot.add_argument("--no-plots", action="store_true", help="leave plots/ as it is")
+    plot.add_argument("--no-animation", action="store_true", help="leave animation.html as it is")
+    plot.set_defaults(func=cmd_plot)
+
     presets = sub.add_parser("presets", help="list the shipped presets")
     presets.set_defaults(func=cmd_presets)
 
@@ -468,7 +490,8 @@ def _viewer_options(parser) -> None:
 
 EXIT_CODES = """exit codes:
   0    success
-  1    a run diverged or was interrupted (its partial result is written)
+  1    a run diverged or was interrupted (its partial result is written), or its
+       figures could not be written
   2    bad input: one line on stderr names the file, key or value
   130  interrupted (Ctrl-C, SIGTERM, SIGHUP) outside a simulation"""
 

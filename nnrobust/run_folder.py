@@ -215,7 +215,7 @@ class Drawing:
     """The figures and the animation of a run folder.
 
     The figures are drawn by forked processes (:class:`nnrobust.forked.ForkedJobs`) from the
-    run as written in the folder (``plots.plot_run(load_run(folder), ...)`` draws the same); the
+    run as written in the folder (so ``nnrobust plot`` draws the same from the folder later); the
     first of those processes is forked when the Drawing is made, so that, made before the
     simulation as the command line does, it imports matplotlib while the simulation runs. This
     process writes the animation meanwhile. A context manager: leaving it stops the drawing
@@ -306,7 +306,8 @@ class ExtrasInterrupted(KeyboardInterrupt):
     """
 
     def __init__(self, folder: Path):
-        super().__init__(f"interrupted while writing plots; the arrays and metrics are saved in {folder}/")
+        super().__init__(f"interrupted while writing plots; the arrays and metrics are saved in {folder}/ "
+                         f"('nnrobust plot {folder}' draws the plots)")
         self.folder = folder
 
 
@@ -349,6 +350,28 @@ def write_run(folder: str | Path, result, overwrite: bool = False, plots: bool =
         raise ExtrasInterrupted(folder) from None
     _write_marker(folder, result.status, extras)
     return folder
+
+
+def redraw_run(folder: str | Path, plots: bool = True, animation: bool = True) -> str:
+    """Draw the figures and the animation of a run folder again from its result.npz, as
+    :func:`write_run` drew them (after a drawing that was interrupted, failed or skipped); the
+    arrays and metrics are not touched. Returns what the marker now records, complete or failed;
+    Ctrl-C raises :class:`ExtrasInterrupted` with the folder marked as after any interrupted
+    drawing.
+    """
+    folder = Path(folder)
+    result = load_run(folder)
+    if not is_run_folder(folder):
+        raise RunFolderError(f"{folder} is not a run folder (no {MARKER}); only folders nnrobust wrote are "
+                             "drawn into")
+    with locked(folder):
+        try:
+            with Drawing(plots, animation) as draw:
+                extras = draw.write(folder, result)
+        except KeyboardInterrupt:
+            raise ExtrasInterrupted(folder) from None
+        _write_marker(folder, result.status, extras)
+    return extras
 
 
 def load_run(folder: str | Path):

@@ -3,6 +3,7 @@ corrupt folders, output paths that cannot work, signals. A good result is never 
 
 import json
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -101,6 +102,52 @@ def test_ctrl_c_while_plotting_keeps_the_finished_simulation(tmp_path, monkeypat
                                                     "extras": "interrupted"}
     np.testing.assert_array_equal(Result.load(folder).q, result.q)
     assert sorted(p.name for p in folder.iterdir()) == [MARKER, "config.toml", "metrics.json", "result.npz"]
+
+
+def test_plot_draws_again_the_figures_a_run_drew(tmp_path, capsys):
+    """nnrobust plot on a run folder whose plots/ and animation.html are gone: the same PNG files,
+    pixel for pixel, and the animation back; the arrays untouched."""
+    folder = tmp_path / "run"
+    assert main(["run", "paper-line", "--out", str(folder), "--duration", "0.5", "--quiet"]) == 0
+    drawn = {p.name: p.read_bytes() for p in (folder / "plots").glob("*.png")}
+    arrays = (folder / "result.npz").read_bytes()
+    shutil.rmtree(folder / "plots")
+    (folder / "animation.html").unlink()
+    assert main(["plot", str(folder)]) == 0
+    assert {p.name: p.read_bytes() for p in (folder / "plots").glob("*.png")} == drawn and len(drawn) == 7
+    assert (folder / "animation.html").stat().st_size > 500_000
+    assert (folder / "result.npz").read_bytes() == arrays and _marker(folder)["extras"] == "complete"
+
+
+def test_plot_finishes_a_run_whose_drawing_was_interrupted(tmp_path, monkeypatch, capsys):
+    result = run_experiment(load_preset("paper-line").replace(simulation={"duration": 0.3}))
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    with monkeypatch.context() as patched:
+        patched.setattr("nnrobust.plots.plot_run", interrupted)
+        with pytest.raises(ExtrasInterrupted, match="'nnrobust plot .*' draws the plots"):
+            write_run(tmp_path / "run", result)
+    folder = tmp_path / "run"
+    assert _marker(folder)["extras"] == "interrupted" and not (folder / "plots").exists()
+    assert main(["plot", str(folder)]) == 0
+    assert _marker(folder)["extras"] == "complete"
+    assert len(list((folder / "plots").iterdir())) == 14 and (folder / "animation.html").is_file()
+
+
+def test_plot_draws_only_into_run_folders(tmp_path, capsys):
+    """A folder of the user's that holds a run's files among its own: refused, left as it was."""
+    folder = tmp_path / "mine"
+    write_run(folder, run_experiment(load_preset("paper-line").replace(simulation={"duration": 0.1})),
+              plots=False, animation=False)
+    (folder / MARKER).unlink()
+    (folder / "notes.txt").write_text("mine")
+    before = sorted(p.name for p in folder.iterdir())
+    assert main(["plot", str(folder)]) == 2
+    assert "is not a run folder" in _one_error_line(capsys)
+    assert sorted(p.name for p in folder.iterdir()) == before
+    assert main(["plot", str(tmp_path / "missing")]) == 2
+    assert "no such folder" in _one_error_line(capsys)
 
 
 def test_a_write_failure_keeps_the_previous_run_and_rescues_the_arrays(tmp_path, monkeypatch):

@@ -241,7 +241,7 @@ def test_progress_bar_reports_simulated_time_and_speed():
 
 
 def test_cli_help_for_every_command(capsys):
-    for command in ("run", "presets", "robots", "compare", "view", "bench"):
+    for command in ("run", "plot", "presets", "robots", "compare", "view", "bench"):
         with pytest.raises(SystemExit) as exit_info:
             main([command, "--help"])
         assert exit_info.value.code == 0
