@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import functools
 import time
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -111,13 +113,17 @@ def build_torque_limits(config: ExperimentConfig, robot: PinocchioModel) -> np.n
     return _vector("plant.torque_limits", limits, robot.nq, None)
 
 
-def build_stops(config: ExperimentConfig, robot: PinocchioModel) -> JointStops | None:
-    """Hard stops at the URDF's position limits, stiffness relative to each joint's torque scale."""
+def build_stops(config: ExperimentConfig, robot: PinocchioModel,
+                tau_ref: Callable[[], np.ndarray] | None = None) -> JointStops | None:
+    """Hard stops at the URDF's position limits, stiffness relative to each joint's torque scale
+    (``tau_ref()``, default :func:`torque_scale`).
+    """
     pc = config.plant
     if not pc.joint_stops:
         return None
     lower, upper = _finite_limits(robot.lower_limits), _finite_limits(robot.upper_limits)
-    return JointStops(lower, upper, pc.joint_stop_stiffness * torque_scale(robot), pc.joint_stop_damping)
+    scale = torque_scale(robot) if tau_ref is None else tau_ref()
+    return JointStops(lower, upper, pc.joint_stop_stiffness * scale, pc.joint_stop_damping)
 
 
 def build_sensor(config: ExperimentConfig, n: int) -> Sensor:
@@ -133,14 +139,15 @@ def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
     limits, joint stops, sensors and delay.
     """
     n, pc = robot.nq, config.plant
-    base = (scaled_friction(robot, pc.viscous_level, pc.coulomb_level) if pc.friction == "scaled"
+    tau_ref = functools.cache(lambda: torque_scale(robot))  # once (with its warning), if asked for
+    base = (scaled_friction(robot, pc.viscous_level, pc.coulomb_level, tau_ref()) if pc.friction == "scaled"
             else Friction(robot.viscous_friction, robot.coulomb_friction))
     friction = Friction(
         pc.friction_scale * _vector("plant.viscous_friction", pc.viscous_friction, n, base.viscous),
         pc.friction_scale * _vector("plant.coulomb_friction", pc.coulomb_friction, n, base.coulomb),
     )
     if pc.disturbance == "scaled":
-        disturbance = scaled_disturbance(robot, pc.disturbance_level)
+        disturbance = scaled_disturbance(robot, pc.disturbance_level, tau_ref())
     elif pc.disturbance == "paper":
         if n != 3:
             raise ConfigError("plant.disturbance", f"'paper' is for 3 joints, the robot has {n}")
@@ -162,7 +169,7 @@ def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
             disturbance.amplitude * pc.disturbance_scale, disturbance.omega, disturbance.phase
         )
     return Plant(robot, friction, disturbance, build_torque_limits(config, robot),
-                 build_stops(config, robot), build_sensor(config, n), config.sensing.delay)
+                 build_stops(config, robot, tau_ref), build_sensor(config, n), config.sensing.delay)
 
 
 def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsModel:

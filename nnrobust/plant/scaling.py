@@ -81,21 +81,25 @@ def torque_scale(robot: PinocchioModel) -> np.ndarray:
     return np.where(usable(effort) & ~bad, effort, torque_needed(robot, robot.mid_configuration))
 
 
-def scaled_friction(robot: PinocchioModel, viscous_level: float, coulomb_level: float) -> Friction:
+def scaled_friction(robot: PinocchioModel, viscous_level: float, coulomb_level: float,
+                    tau_ref: np.ndarray | None = None) -> Friction:
     """Coulomb = coulomb_level tau_ref; viscous = viscous_level tau_ref / v_max (v_max from the URDF,
-    else 3 rad/s): at top speed the viscous torque is viscous_level of the joint's torque scale.
+    else 3 rad/s): at top speed the viscous torque is viscous_level of the joint's torque scale
+    (``tau_ref``, default :func:`torque_scale`).
     """
-    tau = torque_scale(robot)
+    tau = torque_scale(robot) if tau_ref is None else tau_ref
     speed = robot.velocity_limits
     speed = np.where(usable(speed), speed, REFERENCE_SPEED)
     return Friction(viscous_level * tau / speed, coulomb_level * tau)
 
 
-def scaled_disturbance(robot: PinocchioModel, level: float) -> SinusoidalDisturbance:
+def scaled_disturbance(robot: PinocchioModel, level: float,
+                       tau_ref: np.ndarray | None = None) -> SinusoidalDisturbance:
     """tau_d,i(t) = level tau_ref,i (sin(t + phi_i) + sin(2 t + 2 phi_i)) / 2, phi_i = i x golden
-    angle: the paper's two harmonics (1 and 2 rad/s), peak at most level tau_ref on every joint.
+    angle: the paper's two harmonics (1 and 2 rad/s), peak at most level tau_ref on every joint
+    (``tau_ref``, default :func:`torque_scale`).
     """
-    tau = torque_scale(robot)
+    tau = torque_scale(robot) if tau_ref is None else tau_ref
     phi = GOLDEN_ANGLE * np.arange(robot.nq)
     amplitude = 0.5 * level * np.column_stack([tau, tau])
     return SinusoidalDisturbance(amplitude, np.array([1.0, 2.0]), np.column_stack([phi, 2 * phi]))
