@@ -199,24 +199,11 @@ class DrawingPlane:
             ax.set_ylabel("y [m]")
 
 
-def plot_path(result: Result, ax=None, label: str = "actual", axes: tuple[int, int] = (0, 1),
-              legend: bool = True) -> None:
-    """Desired vs actual end-effector path projected on two world axes (Figs. 1, 4)."""
-    i, j = axes
-    every = _path_stride(result.x)
-    ax.plot(result.x_d[::every, i], result.x_d[::every, j], "k--", lw=1.5, label="desired $x_d$")
-    ax.plot(result.x[::every, i], result.x[::every, j], lw=1.0, label=label)
-    ax.plot(result.x[0, i], result.x[0, j], "o", ms=4, color="C0", label="start")
-    ax.set_xlabel(f"{AXES[i]} [m]")
-    ax.set_ylabel(f"{AXES[j]} [m]")
-    ax.set_aspect("equal", adjustable="datalim")
-    if legend:
-        legend_outside(ax)
-
-
 def plot_path_in_plane(result: Result, ax, label: str = "actual", legend: bool = True,
                        plane: DrawingPlane | None = None) -> None:
-    """Desired vs actual path projected on the desired path's own plane (:func:`path_plane`)."""
+    """Desired vs actual end-effector path (Figs. 1, 4) in the x-y plane of a planar task, else
+    projected on the desired path's own plane (:func:`path_plane`).
+    """
     plane = plane or DrawingPlane.of(result)
     every = _path_stride(result.x)
     for data, style, name in ((result.x_d, dict(ls="--", color="k", lw=1.5), "desired $x_d$"),
@@ -225,7 +212,6 @@ def plot_path_in_plane(result: Result, ax, label: str = "actual", legend: bool =
     ax.plot(*plane.project(result.x[0]), "o", ms=4, color="C0", label="start")
     plane.label(ax)
     ax.set_aspect("equal", adjustable="datalim")
-    ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(6))  # no crowded labels on a narrow axis
     if legend:
         legend_outside(ax)
 
@@ -233,7 +219,7 @@ def plot_path_in_plane(result: Result, ax, label: str = "actual", legend: bool =
 def _path_figure(result: Result):
     if _position_size(result) == 2:
         fig, ax = plt.subplots(figsize=(5, 4.5))
-        plot_path(result, ax)
+        plot_path_in_plane(result, ax)
         fig.suptitle("End-effector path")
         return fig
     fig = plt.figure(figsize=(12, 5))  # a 3-D view, and the path's own plane
@@ -264,6 +250,7 @@ def _path_figure(result: Result):
     in_plane = fig.add_subplot(1, 2, 2)
     fig.subplots_adjust(wspace=0.35)
     plot_path_in_plane(result, in_plane, plane=plane)
+    in_plane.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(6))  # not crowded beside the 3-D view
     in_plane.set_title("in the path's plane", fontsize=10)
     fig.suptitle("End-effector path")
     return fig
