@@ -151,8 +151,7 @@ def _simulate_and_write(args, config, out: Path, drawing: Drawing) -> int:
             warnings.simplefilter("always")
             written = write_run(out, result, overwrite=args.overwrite, drawing=drawing)
         for warning in caught:  # what writing the folder has to say (not libraries' deprecations)
-            if not issubclass(warning.category, DeprecationWarning):
-                print(f"warning: {one_line(str(warning.message))}", file=sys.stderr)
+            _warning_line(warning.message, warning.category, warning.filename, warning.lineno)
         metrics = result.metrics()
         for warning in metrics["warnings"]:
             print(f"warning: {warning}", file=sys.stderr)

@@ -275,8 +275,6 @@ class Drawing:
             warnings.warn(f"{folder}: plots or animation not written ({err.strerror or err}); the arrays "
                           "and metrics are saved", stacklevel=3)
             return "failed"
-        finally:
-            self.close()
         return "complete"
 
 

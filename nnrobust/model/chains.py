@@ -22,7 +22,7 @@ import re
 import pinocchio as pin
 
 from ..exceptions import RobotLoadError
-from .pinocchio_model import frame_id
+from .pinocchio_model import LINK_FRAME_TYPES, frame_id
 
 TIP_PREFERENCE = (
     ("tcp", re.compile(r"tcp")),
@@ -37,10 +37,6 @@ TIP_PREFERENCE = (
 
 HAND_JOINT = re.compile(r"finger|gripper|thumb|knuckle|jaw|hand", re.IGNORECASE)
 """Joint names of grippers and fingers: never arm joints by default."""
-
-
-def _frame_types() -> tuple:
-    return (pin.FrameType.BODY, pin.FrameType.OP_FRAME)
 
 
 def _path_joints(model: pin.Model, frame_id: int) -> list[int]:
@@ -64,7 +60,7 @@ def default_chain(model: pin.Model) -> tuple[str, list[str]]:
     """(task frame, joints to lock) by the rule of this module's docstring."""
     best, best_key = None, None
     for fid, frame in enumerate(model.frames):
-        if frame.type not in _frame_types() or frame.parentJoint == 0:
+        if frame.type not in LINK_FRAME_TYPES or frame.parentJoint == 0:
             continue
         rank = _preference(frame.name)
         path = _path_joints(model, fid)
@@ -84,7 +80,7 @@ def default_chain(model: pin.Model) -> tuple[str, list[str]]:
 
 def _frame_id(model: pin.Model, name: str, role: str) -> int:
     if not model.existFrame(name):
-        names = sorted({f.name for f in model.frames if f.type in _frame_types()})
+        names = sorted({f.name for f in model.frames if f.type in LINK_FRAME_TYPES})
         raise RobotLoadError(model.name, f"robot.chain: {role} frame {name!r} is not in the model; body "
                              f"frames: {', '.join(names[:60])}{' ...' if len(names) > 60 else ''}")
     return frame_id(model, name)

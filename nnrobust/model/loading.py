@@ -210,10 +210,10 @@ def _reduced(built: _Built, locked: list[str], visual: pin.GeometryModel | None 
     """
     ids = [built.model.getJointId(j) for j in locked]
     model = built.model
-    if ids:
-        reduced = pin.buildReducedModel(model, visual, ids, pin.neutral(model)) if visual is not None else \
-            pin.buildReducedModel(model, ids, pin.neutral(model))
-        model, visual = reduced if visual is not None else (reduced, None)
+    if ids and visual is None:
+        model = pin.buildReducedModel(model, ids, pin.neutral(model))
+    elif ids:
+        model, visual = pin.buildReducedModel(model, visual, ids, pin.neutral(model))
     odd = [f"{model.names[i]!r} ({model.joints[i].shortname().removeprefix('JointModel')})"
            for i in range(1, model.njoints) if model.joints[i].nq != model.joints[i].nv]
     if odd:
@@ -222,17 +222,6 @@ def _reduced(built: _Built, locked: list[str], visual: pin.GeometryModel | None 
     if model.nv == 0:
         raise ModelMismatch(f"{built.name}: every joint is locked; nothing is left to move")
     return model, visual
-
-
-def _locked_joint_ids(model: pin.Model, name: str, source: str, locked_joints) -> list[int]:
-    if locked_joints is None:
-        locked_joints = ARMS.get(source, {}).get("locked_joints", [])
-    missing = [j for j in locked_joints if not model.existJointName(j)]
-    if missing:
-        raise RobotLoadError(
-            name, f"cannot lock unknown joints {missing}; joints: {list(model.names)[1:]}"
-        )
-    return [model.getJointId(j) for j in locked_joints]
 
 
 def load_visual_model(

@@ -16,9 +16,13 @@ MAX_JOINTS = 300
 """Most joints a model may have: pin.Data's memory grows as n^3 (1.8 GB at 300, 7.8 GB at 500)."""
 
 
+LINK_FRAME_TYPES = (pin.FrameType.BODY, pin.FrameType.OP_FRAME)
+"""Frames that a task frame or a chain end may be: links and operational frames."""
+
+
 def frame_id(model: pin.Model, name: str) -> int:
     """The id of frame ``name``: a body or operational frame when joints or links share the name."""
-    for kind in (pin.FrameType.BODY, pin.FrameType.OP_FRAME):
+    for kind in LINK_FRAME_TYPES:
         if model.existFrame(name, kind):
             return model.getFrameId(name, kind)
     return model.getFrameId(name)
