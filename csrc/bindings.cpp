@@ -73,7 +73,7 @@ NB_MODULE(_loop, m) {
   spec.def(nb::init<>());
 #define FIELD(name) spec.def_rw(#name, &LoopSpec::name)
   FIELD(period); FIELD(substeps); FIELD(steps); FIELD(max_speed); FIELD(q0); FIELD(v0);
-  FIELD(viscous); FIELD(coulomb); FIELD(dist_amplitude); FIELD(dist_phase); FIELD(dist_omega);
+  FIELD(viscous); FIELD(coulomb); FIELD(static_friction); FIELD(dist_amplitude); FIELD(dist_phase); FIELD(dist_omega);
   FIELD(torque_limit); FIELD(stops); FIELD(stop_lower); FIELD(stop_upper); FIELD(stop_stiffness);
   FIELD(stop_alpha); FIELD(position_noise); FIELD(velocity_noise); FIELD(resolution); FIELD(noise_q);
   FIELD(noise_v); FIELD(delay); FIELD(nominal_kind); FIELD(nominal); FIELD(m); FIELD(nominal_viscous);
@@ -104,7 +104,9 @@ NB_MODULE(_loop, m) {
       .def_ro("done", &LoopTrace::done)
       .def_ro("status", &LoopTrace::status)
       .def_ro("divergence_index", &LoopTrace::divergence_index)
-      .def_ro("divergence_joint", &LoopTrace::divergence_joint);
+      .def_ro("divergence_joint", &LoopTrace::divergence_joint)
+      .def_ro("friction_events", &LoopTrace::friction_events)
+      .def_ro("unresolved_events", &LoopTrace::unresolved_events);
   m.def("run_loop", &run, nb::arg("plant"), nb::arg("spec"), nb::arg("nominal").none() = nb::none(),
         "Run the compiled closed loop (GIL released; Ctrl-C and SIGTERM stop it); `nominal` is the "
         "controller's Pinocchio model when spec.nominal_kind is 'pinocchio'.");

@@ -1,4 +1,5 @@
 #include "closed_loop.hpp"
+#include "stick_slip.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -24,8 +25,6 @@ using Eigen::Matrix2d;
 using Eigen::Matrix3d;
 using Eigen::Vector2d;
 using Eigen::Vector3d;
-
-double sign(double x) { return (x > 0) - (x < 0); }
 
 // ---- the closed-form nominal model (nnrobust/model/three_link.py) ------------------------------
 struct ThreeLink {
@@ -552,32 +551,6 @@ struct Controller {
   }
 };
 
-// ---- the plant (nnrobust/plant) ------------------------------------------------------------------
-struct Plant {
-  LoadedModel &m;
-  const LoopSpec &s;
-
-  Vector acceleration(double t, const Vector &q, const Vector &v, const Vector &tau) {
-    const int n = static_cast<int>(q.size());
-    Vector net = tau;
-    for (int i = 0; i < n; ++i) {
-      double d = 0.0;  // SinusoidalDisturbance.__call__
-      for (int c = 0; c < s.dist_omega.size(); ++c)
-        d += s.dist_amplitude(i, c) * std::sin(s.dist_omega[c] * t + s.dist_phase(i, c));
-      net[i] -= s.viscous[i] * v[i] + s.coulomb[i] * sign(v[i]) + d;
-      if (s.stops) {  // JointStops.torque
-        const double pen = std::max(q[i] - s.stop_upper[i], 0.0) + std::min(q[i] - s.stop_lower[i], 0.0);
-        if (pen != 0.0) {
-          const double sg = sign(pen);
-          const double mag = std::max(s.stop_stiffness[i] * std::abs(pen) * (1.0 + s.stop_alpha * sg * v[i]), 0.0);
-          net[i] += -sg * mag;
-        }
-      }
-    }
-    return pinocchio::aba(m.model, m.data, q, v, net);
-  }
-};
-
 // Result.from_trace's per-sample quantities of the true robot at q: the chain points, the
 // manipulability sqrt(det(J J^T)) of the task Jacobian and the weighted criterion h.
 void record_kinematics(LoadedModel &m, const LoopSpec &s, const Criteria &criteria, const Vector &q, long k,
@@ -623,6 +596,8 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
   else nominal = std::make_unique<ClosedFormNominal>(s.nominal);
   Controller controller(s, *nominal);
   Plant plant{model, s};
+  std::unique_ptr<StickSlipIntegrator> stick_slip;
+  if (plant.any_sticky()) stick_slip = std::make_unique<StickSlipIntegrator>(plant, s.v0);
   const bool noisy = s.noise_q.rows() > 0;
   Vector q = s.q0, v = s.v0, z = s.z0, tau = Vector::Zero(n);
   std::deque<Vector> commands;
@@ -675,6 +650,10 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
       break;
     }
     z = out.z;
+    if (stick_slip) {  // simulation.simulate with the plant's stick-slip integrator
+      for (int i = 0; i < s.substeps; ++i) stick_slip->advance(t + i * h, q, v, tau, h);
+      continue;
+    }
     for (int i = 0; i < s.substeps; ++i) {  // simulation._rk4_step with the torque held
       const double ti = t + i * h;
       const Vector k1q = v, k1v = plant.acceleration(ti, q, v, tau);
@@ -684,6 +663,10 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
       q = q + (h / 6.0) * (k1q + 2.0 * k2q + 2.0 * k3q + k4q);
       v = v + (h / 6.0) * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
     }
+  }
+  if (stick_slip) {
+    tr.friction_events = stick_slip->events_count();
+    tr.unresolved_events = stick_slip->unresolved();
   }
   return tr;
 }

@@ -30,7 +30,7 @@ struct LoopSpec {
   double max_speed = 1e3;
   Vector q0, v0;
   // plant (nnrobust.plant): friction, sinusoidal disturbance, saturation, stops, sensor, delay
-  Vector viscous, coulomb;
+  Vector viscous, coulomb, static_friction;  // static_friction: F_s (> 0: stick-slip joints)
   Matrix dist_amplitude, dist_phase;  // n x K
   Vector dist_omega;                  // K
   Vector torque_limit;                // n (inf: none); empty: ideal actuators
@@ -99,6 +99,7 @@ struct LoopTrace {
   std::string status = "completed";
   long divergence_index = -1;  // step at which it diverged
   int divergence_joint = -1;   // joint that ran away (-1: non-finite state or torque)
+  long friction_events = 0, unresolved_events = 0;  // StickSlipIntegrator's counts
 };
 
 // Runs the loop; `nominal` is the controller's Pinocchio model (nominal_kind "pinocchio", else

@@ -97,6 +97,7 @@ def twin_refusal(setup) -> str:
         (type(controller) in (TaskSpaceController, TaskSpacePD),
          f"controller.kind {config.controller.kind!r}"),
         (setup.robot.task in ("planar", "position", "pose"), f"a {setup.robot.task!r} task"),
+        (setup.plant.friction.smoothing <= 0, "a smoothed plant friction"),
         (isinstance(setup.nominal, (ThreeLinkPlanarModel, PinocchioModel)), "the nominal model"),
         (type(setup.trajectory) in (EllipseTrajectory, PiecewisePolynomialPath, PoseTrajectory)
          and type(getattr(setup.trajectory, "path", setup.trajectory)) in (EllipseTrajectory,
@@ -145,6 +146,7 @@ def loop_spec(setup, duration: float):
     s.period, s.substeps, s.steps, s.max_speed = sim.control_period, sim.substeps, steps, MAX_SPEED
     s.q0, s.v0 = f(setup.q0), f(setup.v0)
     s.viscous, s.coulomb = f(plant.friction.viscous), f(plant.friction.coulomb)
+    s.static_friction = f(np.where(plant.sticky, plant.friction.static, 0.0))
     s.dist_amplitude, s.dist_phase = f(plant.disturbance.amplitude), f(plant.disturbance.phase)
     s.dist_omega = f(plant.disturbance.omega)
     s.torque_limit = f(np.zeros(0) if plant.torque_limit is None else plant.torque_limit)
@@ -262,7 +264,8 @@ def _trace(setup, spec, out):
     recorded = {"chain": np.asarray(out.chain)[:done].reshape(done, n + 1, 3),
                 "manipulability": np.asarray(out.manipulability)[:done], "h": np.asarray(out.h)[:done]}
     return Trace(t, np.asarray(out.q)[:done], np.asarray(out.dq)[:done], np.asarray(out.tau)[:done],
-                 np.asarray(out.tau_cmd)[:done], z, signals, out.status, message, recorded)
+                 np.asarray(out.tau_cmd)[:done], z, signals, out.status, message, recorded,
+                 out.friction_events, out.unresolved_events)
 
 
 def simulate_compiled(setup, duration: float):

@@ -103,6 +103,8 @@ class PlantConfig:
         disturbance_scale: factor applied to the disturbance.
         friction_scale: factor applied to the plant's viscous and Coulomb friction (after the
             choice above; the controller's nominal friction is not scaled).
+        stiction: static friction level F_s / Coulomb level F_c (>= 1; 1: the plain Coulomb
+            law): a joint at rest stays held until it needs more than F_s (docs/plant.md).
         torque_limits: ``urdf`` (the URDF's effort limits; joints without one are unlimited),
             ``none`` (ideal actuators) or one value per joint [N m or N]; the commanded torque
             is clipped to +-limit.
@@ -125,6 +127,7 @@ class PlantConfig:
     disturbance_phase: list[list[float]] | None = None
     disturbance_scale: float = 1.0
     friction_scale: float = 1.0
+    stiction: float = 1.0
     torque_limits: str | list[float] = "urdf"
     joint_stops: bool = True
     joint_stop_stiffness: float = 100.0
@@ -736,6 +739,9 @@ def validate(config: ExperimentConfig) -> None:
                           "model: set kind = 'urdf' (closed-form takes beta, p and relative_error)")
     _non_negative("plant.disturbance_scale", pc.disturbance_scale)
     _non_negative("plant.friction_scale", pc.friction_scale)
+    if not 1 <= pc.stiction < 1e6:
+        raise ConfigError("plant.stiction", f"the static / Coulomb friction ratio must be in [1, 1e6), got "
+                          f"{pc.stiction}")
     if isinstance(pc.torque_limits, str):
         if pc.torque_limits not in ("urdf", "none"):
             raise ConfigError("plant.torque_limits", f"{pc.torque_limits!r} is not one of urdf, none "

@@ -142,9 +142,10 @@ def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
     tau_ref = functools.cache(lambda: torque_scale(robot))  # once (with its warning), if asked for
     base = (scaled_friction(robot, pc.viscous_level, pc.coulomb_level, tau_ref()) if pc.friction == "scaled"
             else Friction(robot.viscous_friction, robot.coulomb_friction))
+    coulomb = pc.friction_scale * _vector("plant.coulomb_friction", pc.coulomb_friction, n, base.coulomb)
     friction = Friction(
         pc.friction_scale * _vector("plant.viscous_friction", pc.viscous_friction, n, base.viscous),
-        pc.friction_scale * _vector("plant.coulomb_friction", pc.coulomb_friction, n, base.coulomb),
+        coulomb, static=pc.stiction * coulomb,
     )
     if pc.disturbance == "scaled":
         disturbance = scaled_disturbance(robot, pc.disturbance_level, tau_ref())

@@ -10,6 +10,7 @@ import numpy as np
 
 from .controllers.base import Controller
 from .plant.plant import Plant
+from .plant.stick_slip import StickSlipIntegrator, rk4_flow
 from .signals import check_interrupt, clear_interrupt
 
 INTEGRATORS = ("rk4", "solve_ivp")
@@ -37,6 +38,8 @@ class Trace:
         message: why the run stopped early, or "".
         recorded: per-sample quantities a loop already computed for the Result (the compiled
             loop: ``chain`` N x (n + 1) x 3, ``manipulability`` and ``h``), or None.
+        friction_events: stick-slip events located (:mod:`nnrobust.plant.stick_slip`).
+        unresolved_events: integration steps with more events than it resolves.
 
     """
 
@@ -50,6 +53,8 @@ class Trace:
     status: str = "completed"
     message: str = ""
     recorded: dict | None = None
+    friction_events: int = 0
+    unresolved_events: int = 0
 
 
 def _rk4_step(f, t: float, X: np.ndarray, h: float) -> np.ndarray:
@@ -58,6 +63,22 @@ def _rk4_step(f, t: float, X: np.ndarray, h: float) -> np.ndarray:
     k3 = f(t + 0.5 * h, X + 0.5 * h * k2)
     k4 = f(t + h, X + h * k3)
     return X + (h / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+
+
+def _ivp_flow(plant: Plant, tau: np.ndarray, rtol: float, atol: float):
+    """DOP853 over the span with the friction modes held (the smooth pieces of stick-slip)."""
+    from scipy.integrate import solve_ivp  # imported only when chosen
+
+    n = plant.nq
+
+    def flow(t, q, v, mode, span):
+        def f(s, X):
+            return np.concatenate([X[n:], plant.constrained_acceleration(s, X[:n], X[n:], tau, mode)[0]])
+
+        sol = solve_ivp(f, (t, t + span), np.concatenate([q, v]), method="DOP853", rtol=rtol, atol=atol)
+        return sol.y[:n, -1], sol.y[n:, -1]
+
+    return flow
 
 
 def joint_units(model) -> list[str]:
@@ -95,7 +116,9 @@ def simulate(
     At each control instant t_k the controller reads the plant's sensor, returns a command and its
     next state; the command reaches the actuators ``plant.delay`` periods later (before that the
     first command is held), is clipped to the effort limits and held over the period while
-    (q, q') are integrated with the stops, friction and disturbance acting continuously.
+    (q, q') are integrated with the stops, friction and disturbance acting continuously. Joints
+    with dry friction are integrated as stick-slip, their events located inside the step
+    (:mod:`nnrobust.plant.stick_slip`).
 
     Args:
         plant: the true robot with its actuators and sensors.
@@ -133,6 +156,7 @@ def simulate(
         return np.concatenate([X[n:], plant.acceleration(t, X[:n], X[n:], tau)])
 
     h = control_period / substeps
+    stick_slip = StickSlipIntegrator(plant, np.asarray(v0, float)) if plant.sticky.any() else None
     status, message, done = "completed", "", steps
     k, t = 0, 0.0
     try:
@@ -157,7 +181,16 @@ def simulate(
                 progress(t, q)
             if out.state is not None:
                 z = out.state
-            if integrator == "rk4":
+            if stick_slip is not None:
+                q, v = X[:n], X[n:]
+                if integrator == "rk4":
+                    flow = rk4_flow(plant, tau)
+                    for i in range(substeps):
+                        q, v = stick_slip.advance(flow, t + i * h, q, v, tau, h)
+                else:
+                    q, v = stick_slip.advance(_ivp_flow(plant, tau, rtol, atol), t, q, v, tau, control_period)
+                X = np.concatenate([q, v])
+            elif integrator == "rk4":
                 for i in range(substeps):
                     X = _rk4_step(f, t + i * h, X, h)
             else:
@@ -172,4 +205,6 @@ def simulate(
     return Trace(
         t_rec[sl], q_rec[sl], v_rec[sl], tau_rec[sl], cmd_rec[sl], z_rec[sl],
         {name: arr[sl] for name, arr in sig_rec.items()}, status, message,
+        friction_events=stick_slip.events if stick_slip else 0,
+        unresolved_events=stick_slip.unresolved if stick_slip else 0,
     )

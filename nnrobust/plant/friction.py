@@ -11,6 +11,10 @@ import numpy as np
 class Friction:
     """F(q') = F_d q' + F_c sgn(q'), the paper's Sect. 4 friction with F_c = 1 N m.
 
+    At q' = 0 the dry part is set-valued: a joint at rest is held by any torque up to the static
+    level F_s >= F_c (stiction; F_s = F_c by default). The plant integrates it as stick-slip
+    (:mod:`nnrobust.plant.stick_slip`); :meth:`torque` is the slipping law with sgn(0) = 0.
+
     A controller that compensates Coulomb friction from sampled velocities uses a smoothed sign,
     sat(q' / v_s) (``smoothing`` = v_s > 0): with the exact sgn, a joint resting near zero speed
     gets +-F_c held for whole control periods, a limit cycle of its own.
@@ -19,16 +23,23 @@ class Friction:
         viscous: F_d, per joint [N m s/rad].
         coulomb: F_c, per joint [N m]; sgn(0) = 0.
         smoothing: v_s [rad/s]: sgn is replaced by sat(q' / v_s) (0: exact sgn, the true plant).
+        static: F_s, the most a joint at rest is held by, per joint [N m] (None: F_c).
 
     """
 
     viscous: np.ndarray
     coulomb: np.ndarray
     smoothing: float = 0.0
+    static: np.ndarray | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "viscous", np.asarray(self.viscous, dtype=float))
         object.__setattr__(self, "coulomb", np.asarray(self.coulomb, dtype=float))
+        static = self.coulomb if self.static is None else np.asarray(self.static, dtype=float)
+        if static.shape != self.coulomb.shape or np.any(~(static >= self.coulomb)):
+            raise ValueError(f"friction: the static level F_s {static.tolist()} must be >= the Coulomb "
+                             f"level F_c {self.coulomb.tolist()}, joint by joint")
+        object.__setattr__(self, "static", static)
 
     @classmethod
     def none(cls, n: int) -> Friction:

@@ -40,6 +40,8 @@ class Plant:
     stops: JointStops | None = None
     sensor: Sensor | None = field(default=None)
     delay: int = 0
+    sticky: np.ndarray = field(init=False, repr=False)
+    """Joints with dry friction that holds them at rest (F_s > 0): integrated as stick-slip."""
 
     def __post_init__(self):
         n = self.model.nq
@@ -64,6 +66,7 @@ class Plant:
                 raise ValueError(f"plant: {name} has {size} entries, the robot has {n} joints")
         if self.delay < 0:
             raise ValueError(f"plant: delay must be >= 0 control periods, got {self.delay}")
+        self.sticky = (self.friction.static > 0) & (self.friction.smoothing <= 0)
 
     @property
     def nq(self) -> int:
@@ -83,6 +86,39 @@ class Plant:
         if self.stops is not None:
             net = net + self.stops.torque(q, v)
         return self.model.forward_dynamics(q, v, net)
+
+    def net_torque(self, t: float, q: np.ndarray, v: np.ndarray, tau: np.ndarray, mode: np.ndarray,
+                   ) -> np.ndarray:
+        """The torque on the arm but its own dynamics, tau + tau_stop - tau_d - F [N m].
+
+        A sticky joint's dry friction is F_c mode_i (0 where it is held).
+        """
+        fr = self.friction
+        friction = np.where(self.sticky, fr.viscous * v + fr.coulomb * mode, fr.torque(v))
+        net = tau - friction - self.disturbance(t)
+        if self.stops is not None:
+            net = net + self.stops.torque(q, v)
+        return net
+
+    def constrained_acceleration(self, t: float, q: np.ndarray, v: np.ndarray, tau: np.ndarray,
+                                 mode: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(q'', f_held) with the friction modes held (:mod:`nnrobust.plant.stick_slip`).
+
+        A sticky joint slips with F_c mode_i (mode +-1) or is held (mode 0: q''_i = 0); f_held is
+        the friction torque holding the held joints, in joint order [N m]. Without held joints
+        q'' comes from ABA; with them, M_RR q''_R = r_R and f_S = r_S - M_SR q''_R.
+        """
+        held = self.sticky & (mode == 0)
+        net = self.net_torque(t, q, v, tau, mode)
+        if not held.any():
+            return self.model.forward_dynamics(q, v, net), np.zeros(0)
+        M = self.model.mass(q)
+        r = net - self.model.bias(q, v)
+        free = ~held
+        a = np.zeros_like(r)
+        if free.any():
+            a[free] = np.linalg.solve(M[np.ix_(free, free)], r[free])
+        return a, r[held] - M[held] @ a
 
     def energy(self, q: np.ndarray, v: np.ndarray) -> float:
         """Kinetic plus potential energy, including the stops' springs [J]."""

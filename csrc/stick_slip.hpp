@@ -1,0 +1,257 @@
+// Stick-slip integration of the plant: the twin of nnrobust/plant/stick_slip.py, step for step
+// (the same events, the same Illinois location, the same active-set choice of modes).
+#pragma once
+
+#include <limits>
+#include <vector>
+
+#include "plant.hpp"
+
+namespace nnrobust {
+
+constexpr double kEventTolerance = 1e-12;  // stick_slip.EVENT_TOLERANCE [s]
+constexpr int kMaxEvents = 64;             // stick_slip.MAX_EVENTS
+constexpr int kMaxLocateIterations = 60;   // stick_slip.MAX_LOCATE_ITERATIONS
+
+class StickSlipIntegrator {
+ public:
+  StickSlipIntegrator(Plant &plant, const Vector &v0) : plant_(plant), mode(v0.size()) {
+    for (int i = 0; i < v0.size(); ++i) mode[i] = (plant.sticky(i) && v0[i] == 0.0) ? 0 : (v0[i] < 0 ? -1 : 1);
+  }
+
+  // StickSlipIntegrator.advance with rk4_flow: (q, v) at t + h under the torque tau
+  void advance(double t, Vector &q, Vector &v, const Vector &tau, double h) {
+    const int n = static_cast<int>(q.size());
+    bool rest = false;
+    for (int i = 0; i < n; ++i) rest = rest || (plant_.sticky(i) && v[i] == 0.0);
+    if (rest) mode = settle(t, q, v, tau, mode);
+    const double end = t + h;
+    for (int round = 0; round <= kMaxEvents; ++round) {
+      const Modes held_mode = mode;
+      std::vector<int> slipping, held;
+      for (int i = 0; i < n; ++i)
+        if (plant_.sticky(i)) (held_mode[i] != 0 ? slipping : held).push_back(i);
+      const double span = end - t;
+      Vector q1, v1;
+      flow(t, q, v, tau, held_mode, span, q1, v1);
+      const Vector g_end = events(end, q1, v1, tau, held_mode, slipping, held);
+      std::vector<int> triggered;
+      for (int i = 0; i < g_end.size(); ++i)
+        if (g_end[i] <= 0.0) triggered.push_back(i);
+      if (triggered.empty()) {
+        q = q1;
+        v = v1;
+        return;
+      }
+      const Vector g_start = events(t, q, v, tau, held_mode, slipping, held);
+      double first = span;
+      int which = -1;
+      for (int i : triggered) {
+        auto g = [&](double s_) {
+          Vector qs, vs;
+          flow(t, q, v, tau, held_mode, s_, qs, vs);
+          return events(t + s_, qs, vs, tau, held_mode, slipping, held)[i];
+        };
+        const double s_i = g_start[i] > 0 ? locate(g, 0.0, std::max(g_start[i], 0.0), span, g_end[i]) : 0.0;
+        if (s_i < first || which < 0) {
+          first = s_i;
+          which = i;
+        }
+      }
+      if (first >= span) {
+        q = q1;
+        v = v1;
+      } else if (first > 0.0) {
+        Vector qf, vf;
+        flow(t, q, v, tau, held_mode, first, qf, vf);
+        q = qf;
+        v = vf;
+      }
+      t = t + first;
+      const int n_slip = static_cast<int>(slipping.size());
+      if (which < n_slip) v[slipping[which]] = 0.0;
+      ++events_;
+      mode = settle(t, q, v, tau, held_mode);
+      if (which >= n_slip) {  // a held joint breaks away toward its holding torque
+        const int joint = held[which - n_slip];
+        if (mode[joint] == 0) {
+          Vector hold;
+          plant_.constrained_acceleration(t, q, v, tau, held_mode, hold);
+          mode[joint] = hold[which - n_slip] > 0 ? 1 : -1;
+        }
+      }
+      if (first >= span) return;
+    }
+    ++unresolved_;
+  }
+
+  long events_count() const { return events_; }
+  long unresolved() const { return unresolved_; }
+
+ private:
+  Plant &plant_;
+
+ public:
+  Modes mode;
+
+ private:
+  long events_ = 0, unresolved_ = 0;
+
+  // stick_slip.rk4_flow
+  void flow(double t, const Vector &q, const Vector &v, const Vector &tau, const Modes &md, double h, Vector &q_out,
+            Vector &v_out) {
+    Vector hold;
+    const Vector a1 = plant_.constrained_acceleration(t, q, v, tau, md, hold);
+    const Vector v2 = v + 0.5 * h * a1;
+    const Vector a2 = plant_.constrained_acceleration(t + 0.5 * h, q + 0.5 * h * v, v2, tau, md, hold);
+    const Vector v3 = v + 0.5 * h * a2;
+    const Vector a3 = plant_.constrained_acceleration(t + 0.5 * h, q + 0.5 * h * v2, v3, tau, md, hold);
+    const Vector v4 = v + h * a3;
+    const Vector a4 = plant_.constrained_acceleration(t + h, q + h * v3, v4, tau, md, hold);
+    q_out = q + (h / 6.0) * (v + 2.0 * v2 + 2.0 * v3 + v4);
+    v_out = v + (h / 6.0) * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
+  }
+
+  // stick_slip._events: mode_i v_i of the slipping joints, then 1 - |f_i| / F_s,i of the held
+  Vector events(double t, const Vector &q, const Vector &v, const Vector &tau, const Modes &md,
+                const std::vector<int> &slipping, const std::vector<int> &held) {
+    const int ns = static_cast<int>(slipping.size()), nh = static_cast<int>(held.size());
+    Vector g(ns + nh);
+    for (int i = 0; i < ns; ++i) g[i] = md[slipping[i]] * v[slipping[i]];
+    if (nh == 0) return g;
+    Vector hold;
+    plant_.constrained_acceleration(t, q, v, tau, md, hold);
+    for (int i = 0; i < nh; ++i) g[ns + i] = 1.0 - std::abs(hold[i]) / plant_.s.static_friction[held[i]];
+    return g;
+  }
+
+  // stick_slip.settle
+  Modes settle(double t, const Vector &q, const Vector &v, const Vector &tau, Modes md) {
+    const int n = static_cast<int>(q.size());
+    std::vector<int> rest;
+    for (int i = 0; i < n; ++i)
+      if (plant_.sticky(i) && v[i] == 0.0) rest.push_back(i);
+    if (rest.empty()) return md;
+    for (int i : rest) md[i] = 0;
+    const Matrix M = plant_.mass(q);
+    pinocchio::nonLinearEffects(plant_.m.model, plant_.m.data, q, v);
+    const Vector r = plant_.net_torque(t, q, v, tau, md) - plant_.m.data.nle;
+    const Eigen::PartialPivLU<Matrix> lu(M);
+    const Matrix Minv = lu.inverse();
+    const Vector Minv_r = lu.solve(r);
+    const int k = static_cast<int>(rest.size());
+    Matrix W(k, k);
+    Vector c(k), stat(k), coul(k);
+    for (int i = 0; i < k; ++i) {
+      c[i] = Minv_r[rest[i]];
+      stat[i] = plant_.s.static_friction[rest[i]];
+      coul[i] = plant_.s.coulomb[rest[i]];
+      for (int j = 0; j < k; ++j) W(i, j) = Minv(rest[i], rest[j]);
+    }
+    Vector f;
+    Eigen::VectorXi side;
+    box_qp(W, c, stat, f, side);
+    std::vector<bool> slides(k);
+    for (int i = 0; i < k; ++i) slides[i] = side[i] != 0;
+    auto stiction = [&]() {
+      for (int i = 0; i < k; ++i)
+        if (slides[i] && stat[i] > coul[i]) return true;
+      return false;
+    };
+    while (stiction()) {
+      Vector bound(k);
+      for (int i = 0; i < k; ++i) bound[i] = slides[i] ? coul[i] : std::numeric_limits<double>::infinity();
+      box_qp(W, c, bound, f, side);
+      bool broke = false;
+      for (int i = 0; i < k; ++i)
+        if (!slides[i] && std::abs(f[i]) > stat[i]) slides[i] = broke = true;
+      if (!broke) break;
+    }
+    const Vector a = c - W * f;
+    for (int i = 0; i < k; ++i) md[rest[i]] = (side[i] != 0 && side[i] * a[i] > 0) ? side[i] : 0;
+    return md;
+  }
+
+ public:
+  // stick_slip.box_qp: min 1/2 f'W f - c'f subject to |f_i| <= bound_i, by a primal active set
+  static void box_qp(const Matrix &W, const Vector &c, const Vector &bound, Vector &f, Eigen::VectorXi &side) {
+    const int k = static_cast<int>(c.size());
+    f = Vector::Zero(k);
+    side = Eigen::VectorXi::Zero(k);
+    for (int it = 0; it < 4 * k + 8; ++it) {
+      std::vector<int> fr, bd;
+      for (int i = 0; i < k; ++i) (side[i] == 0 ? fr : bd).push_back(i);
+      Vector target = f;
+      if (!fr.empty()) {
+        const int nf = static_cast<int>(fr.size());
+        Matrix Wff(nf, nf);
+        Vector rhs(nf);
+        for (int i = 0; i < nf; ++i) {
+          double sum = 0.0;
+          for (int j : bd) sum += W(fr[i], j) * f[j];
+          rhs[i] = c[fr[i]] - sum;
+          for (int j = 0; j < nf; ++j) Wff(i, j) = W(fr[i], fr[j]);
+        }
+        const Vector x = Wff.partialPivLu().solve(rhs);
+        for (int i = 0; i < nf; ++i) target[fr[i]] = x[i];
+      }
+      const Vector d = target - f;
+      double step = 1.0;
+      int blocking = -1;
+      for (int i : fr) {
+        if (d[i] != 0.0) {
+          const double room = ((d[i] > 0 ? bound[i] : -bound[i]) - f[i]) / d[i];
+          if (room < step) {
+            step = room;
+            blocking = i;
+          }
+        }
+      }
+      f = f + step * d;
+      if (blocking >= 0) {
+        side[blocking] = d[blocking] > 0 ? 1 : -1;
+        f[blocking] = side[blocking] * bound[blocking];
+        continue;
+      }
+      const Vector a = c - W * f;
+      int worst = -1;
+      double worst_value = -std::numeric_limits<double>::infinity();
+      for (int i = 0; i < k; ++i) {
+        const double wrong = side[i] != 0 ? -side[i] * a[i] : -std::numeric_limits<double>::infinity();
+        if (wrong > worst_value) {
+          worst_value = wrong;
+          worst = i;
+        }
+      }
+      if (!(worst_value > 0.0)) break;
+      side[worst] = 0;
+    }
+  }
+
+ private:
+  // stick_slip._locate (Illinois)
+  template <class G>
+  static double locate(G &&g, double lo, double g_lo, double hi, double g_hi) {
+    int side = 0;
+    for (int it = 0; it < kMaxLocateIterations; ++it) {
+      if (hi - lo <= kEventTolerance || g_hi >= -1e-12) break;
+      double s_ = hi - g_hi * (hi - lo) / (g_hi - g_lo);
+      if (!(lo < s_ && s_ < hi)) s_ = 0.5 * (lo + hi);
+      const double gs = g(s_);
+      if (gs <= 0.0) {
+        hi = s_;
+        g_hi = gs;
+        if (side == -1) g_lo *= 0.5;
+        side = -1;
+      } else {
+        lo = s_;
+        g_lo = gs;
+        if (side == 1) g_hi *= 0.5;
+        side = 1;
+      }
+    }
+    return hi;
+  }
+};
+
+}  // namespace nnrobust
