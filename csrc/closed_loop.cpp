@@ -651,7 +651,7 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
     }
     z = out.z;
     if (stick_slip) {  // simulation.simulate with the plant's stick-slip integrator
-      for (int i = 0; i < s.substeps; ++i) stick_slip->advance(t + i * h, q, v, tau, h);
+      for (int i = 0; i < s.substeps; ++i) stick_slip->advance(t + i * h, q, v, tau, h, i == 0);
       continue;
     }
     for (int i = 0; i < s.substeps; ++i) {  // simulation._rk4_step with the torque held

@@ -4,6 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <vector>
+
+#include <Eigen/Cholesky>
 
 #include <pinocchio/algorithm/aba.hpp>
 #include <pinocchio/algorithm/crba.hpp>
@@ -21,6 +25,8 @@ struct Plant {
   LoadedModel &m;
   const LoopSpec &s;
 
+  Plant(LoadedModel &model, const LoopSpec &spec) : m(model), s(spec) {}
+
   // Friction.static > 0: the joint is integrated as stick-slip (Plant.sticky)
   bool sticky(int i) const { return s.static_friction.size() && s.static_friction[i] > 0; }
   bool any_sticky() const {
@@ -29,11 +35,20 @@ struct Plant {
     return false;
   }
 
-  double disturbance(int i, double t) const {  // SinusoidalDisturbance.__call__
-    double d = 0.0;
-    for (int c = 0; c < s.dist_omega.size(); ++c)
-      d += s.dist_amplitude(i, c) * std::sin(s.dist_omega[c] * t + s.dist_phase(i, c));
-    return d;
+  // SinusoidalDisturbance.__call__, kept for the last time asked (RK4 asks twice at t + h / 2,
+  // and a step's end is the next step's start)
+  double disturbance(int i, double t) {
+    if (t != dist_t_ || dist_.size() != s.dist_amplitude.rows()) {
+      dist_.resize(s.dist_amplitude.rows());
+      for (int j = 0; j < dist_.size(); ++j) {
+        double d = 0.0;
+        for (int c = 0; c < s.dist_omega.size(); ++c)
+          d += s.dist_amplitude(j, c) * std::sin(s.dist_omega[c] * t + s.dist_phase(j, c));
+        dist_[j] = d;
+      }
+      dist_t_ = t;
+    }
+    return dist_[i];
   }
 
   double stop_torque(int i, double q, double v) const {  // JointStops.torque
@@ -56,24 +71,38 @@ struct Plant {
   }
 
   // Plant.net_torque: tau + tau_stop - tau_d - F, the sticky joints' dry friction F_c mode_i
-  Vector net_torque(double t, const Vector &q, const Vector &v, const Vector &tau, const Modes &mode) const {
+  const Vector &net_torque(double t, const Vector &q, const Vector &v, const Vector &tau, const Modes &mode) {
     const int n = static_cast<int>(q.size());
-    Vector net(n);
+    net_.resize(n);
     for (int i = 0; i < n; ++i) {
       const double friction = sticky(i) ? s.viscous[i] * v[i] + s.coulomb[i] * mode[i]
                                         : s.viscous[i] * v[i] + s.coulomb[i] * sign(v[i]);
-      net[i] = tau[i] - friction - disturbance(i, t);
-      net[i] += stop_torque(i, q[i], v[i]);
+      net_[i] = tau[i] - friction - disturbance(i, t);
+      net_[i] += stop_torque(i, q[i], v[i]);
     }
-    return net;
+    return net_;
   }
 
-  // M(q) with both triangles (PinocchioModel.mass)
-  Matrix mass(const Vector &q) {
-    pinocchio::crba(m.model, m.data, q);
-    Matrix M = m.data.M;
-    M.triangularView<Eigen::StrictlyLower>() = M.transpose();
-    return M;
+  // M(q) with both triangles (PinocchioModel.mass); kept for the last q, since a step's end, the
+  // next command's choice of modes and its first RK4 stage all ask at the same state
+  const Matrix &mass(const Vector &q) {
+    if (q_mass_.size() != q.size() || q_mass_ != q) {
+      pinocchio::crba(m.model, m.data, q);
+      M_ = m.data.M;
+      M_.triangularView<Eigen::StrictlyLower>() = M_.transpose();
+      q_mass_ = q;
+    }
+    return M_;
+  }
+
+  // V_m(q, v) v + G(q) (PinocchioModel.bias), kept for the last (q, v) likewise
+  const Vector &bias(const Vector &q, const Vector &v) {
+    if (q_bias_.size() != q.size() || q_bias_ != q || v_bias_ != v) {
+      bias_ = pinocchio::nonLinearEffects(m.model, m.data, q, v);
+      q_bias_ = q;
+      v_bias_ = v;
+    }
+    return bias_;
   }
 
   // Plant.constrained_acceleration: q'' with the held joints' q''_i = 0, and `hold`, the
@@ -81,33 +110,43 @@ struct Plant {
   Vector constrained_acceleration(double t, const Vector &q, const Vector &v, const Vector &tau, const Modes &mode,
                                   Vector &hold) {
     const int n = static_cast<int>(q.size());
-    const Vector net = net_torque(t, q, v, tau, mode);
-    int held = 0;
-    for (int i = 0; i < n; ++i) held += sticky(i) && mode[i] == 0;
-    if (held == 0) {
+    net_torque(t, q, v, tau, mode);
+    free_.clear();
+    held_.clear();
+    for (int i = 0; i < n; ++i) (sticky(i) && mode[i] == 0 ? held_ : free_).push_back(i);
+    if (held_.empty()) {
       hold.resize(0);
-      return pinocchio::aba(m.model, m.data, q, v, net);
+      return pinocchio::aba(m.model, m.data, q, v, net_);
     }
-    const Matrix M = mass(q);
-    const Vector r = net - pinocchio::nonLinearEffects(m.model, m.data, q, v);
-    std::vector<int> free_idx, held_idx;
-    for (int i = 0; i < n; ++i) (sticky(i) && mode[i] == 0 ? held_idx : free_idx).push_back(i);
+    mass(q);
+    r_ = net_ - bias(q, v);
     Vector a = Vector::Zero(n);
-    const int nf = static_cast<int>(free_idx.size());
+    const int nf = static_cast<int>(free_.size());
     if (nf) {
-      Matrix Mff(nf, nf);
-      Vector rf(nf);
+      Mff_.resize(nf, nf);
+      rf_.resize(nf);
       for (int i = 0; i < nf; ++i) {
-        rf[i] = r[free_idx[i]];
-        for (int j = 0; j < nf; ++j) Mff(i, j) = M(free_idx[i], free_idx[j]);
+        rf_[i] = r_[free_[i]];
+        for (int j = 0; j < nf; ++j) Mff_(i, j) = M_(free_[i], free_[j]);
       }
-      const Vector af = Mff.partialPivLu().solve(rf);
-      for (int i = 0; i < nf; ++i) a[free_idx[i]] = af[i];
+      llt_.compute(Mff_);
+      rf_ = llt_.solve(rf_);
+      for (int i = 0; i < nf; ++i) a[free_[i]] = rf_[i];
     }
-    hold.resize(held);
-    for (int i = 0; i < held; ++i) hold[i] = r[held_idx[i]] - M.row(held_idx[i]).dot(a);
+    const int nh = static_cast<int>(held_.size());
+    hold.resize(nh);
+    for (int i = 0; i < nh; ++i) hold[i] = r_[held_[i]] - M_.row(held_[i]).dot(a);
     return a;
   }
+
+ private:
+  // workspaces: sized once, so a step allocates nothing here
+  Vector net_, r_, rf_, dist_;
+  double dist_t_ = std::numeric_limits<double>::quiet_NaN();
+  Matrix M_, Mff_;
+  Vector q_mass_, q_bias_, v_bias_, bias_;
+  Eigen::LLT<Matrix> llt_;
+  std::vector<int> free_, held_;
 };
 
 }  // namespace nnrobust

@@ -20,11 +20,11 @@ class StickSlipIntegrator {
   }
 
   // StickSlipIntegrator.advance with rk4_flow: (q, v) at t + h under the torque tau
-  void advance(double t, Vector &q, Vector &v, const Vector &tau, double h) {
+  void advance(double t, Vector &q, Vector &v, const Vector &tau, double h, bool new_command) {
     const int n = static_cast<int>(q.size());
     bool rest = false;
     for (int i = 0; i < n; ++i) rest = rest || (plant_.sticky(i) && v[i] == 0.0);
-    if (rest) mode = settle(t, q, v, tau, mode);
+    if (new_command && rest) mode = settle(t, q, v, tau, mode);
     const double end = t + h;
     for (int round = 0; round <= kMaxEvents; ++round) {
       const Modes held_mode = mode;
@@ -134,8 +134,7 @@ class StickSlipIntegrator {
     if (rest.empty()) return md;
     for (int i : rest) md[i] = 0;
     const Matrix M = plant_.mass(q);
-    pinocchio::nonLinearEffects(plant_.m.model, plant_.m.data, q, v);
-    const Vector r = plant_.net_torque(t, q, v, tau, md) - plant_.m.data.nle;
+    const Vector r = plant_.net_torque(t, q, v, tau, md) - plant_.bias(q, v);
     const Eigen::PartialPivLU<Matrix> lu(M);
     const Matrix Minv = lu.inverse();
     const Vector Minv_r = lu.solve(r);

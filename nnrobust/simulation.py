@@ -186,7 +186,7 @@ def simulate(
                 if integrator == "rk4":
                     flow = rk4_flow(plant, tau)
                     for i in range(substeps):
-                        q, v = stick_slip.advance(flow, t + i * h, q, v, tau, h)
+                        q, v = stick_slip.advance(flow, t + i * h, q, v, tau, h, new_command=i == 0)
                 else:
                     q, v = stick_slip.advance(_ivp_flow(plant, tau, rtol, atol), t, q, v, tau, control_period)
                 X = np.concatenate([q, v])

@@ -185,11 +185,15 @@ class StickSlipIntegrator:
         self.unresolved = 0
 
     def advance(self, flow: Flow, t: float, q: np.ndarray, v: np.ndarray, tau: np.ndarray, h: float,
-                ) -> tuple[np.ndarray, np.ndarray]:
-        """(q, v) at t + h from (q, v) at t under the torque tau, switching modes at events."""
+                new_command: bool = True) -> tuple[np.ndarray, np.ndarray]:
+        """(q, v) at t + h from (q, v) at t under the torque tau, switching modes at events.
+
+        ``new_command``: tau changed since the last call, so the joints at rest choose again
+        (within a command, the events keep the modes consistent).
+        """
         plant = self.plant
         sticky = plant.sticky
-        if (sticky & (v == 0.0)).any():  # a new command may hold or release the joints at rest
+        if new_command and (sticky & (v == 0.0)).any():
             self.mode = settle(plant, t, q, v, tau, self.mode)
         end = t + h
         for _ in range(MAX_EVENTS + 1):
