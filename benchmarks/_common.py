@@ -23,18 +23,19 @@ def run_row(job: dict) -> dict:
     return {**job, **{k: metrics.get(k) for k in ROW_METRICS}}  # orientation: pose tasks only
 
 
-def run_rows(jobs: list[dict], workers: int | None = None, echo=None) -> list[dict]:
-    """Every job's row, in order, on ``workers`` processes (default: the machine's cores)."""
+def run_rows(jobs: list[dict], workers: int | None = None, echo=None, runner=run_row) -> list[dict]:
+    """Every job's row, in order, on ``workers`` processes (default: the machine's cores);
+    ``runner`` turns a job into its row (a module-level function, so workers can import it)."""
     workers = workers or os.cpu_count() or 1
     rows = []
     if workers == 1:
         for job in jobs:
-            rows.append(run_row(job))
+            rows.append(runner(job))
             if echo:
                 echo(rows[-1])
         return rows
     with ProcessPoolExecutor(workers) as pool:
-        for row in pool.map(run_row, jobs):
+        for row in pool.map(runner, jobs):
             rows.append(row)
             if echo:
                 echo(row)

@@ -52,11 +52,16 @@ class StickSlipIntegrator {
           flow(t, q, v, tau, held_mode, s_, qs, vs);
           return events(t + s_, qs, vs, tau, held_mode, slipping, held)[i];
         };
-        const double s_i = g_start[i] > 0 ? locate(g, 0.0, std::max(g_start[i], 0.0), span, g_end[i]) : 0.0;
-        if (s_i < first || which < 0) {
+        const double s_i = event_time(g, g_start[i], span, g_end[i]);
+        if (s_i >= 0.0 && (s_i < first || which < 0)) {
           first = s_i;
           which = i;
         }
+      }
+      if (which < 0) {  // only events the step cannot resolve: a joint that barely moves
+        q = q1;
+        v = v1;
+        return;
       }
       if (first >= span) {
         q = q1;
@@ -228,6 +233,18 @@ class StickSlipIntegrator {
   }
 
  private:
+  // stick_slip._event_time (-1: None)
+  template <class G>
+  static double event_time(G &&g, double g_start, double span, double g_end) {
+    if (g_start > 0) return locate(g, 0.0, g_start, span, g_end);
+    if (g_start < 0) return 0.0;
+    for (double s_ = 0.5 * span; s_ > kEventTolerance; s_ *= 0.5) {
+      const double gs = g(s_);
+      if (gs > 0) return locate(g, s_, gs, span, g_end);
+    }
+    return -1.0;
+  }
+
   // stick_slip._locate (Illinois)
   template <class G>
   static double locate(G &&g, double lo, double g_lo, double hi, double g_hi) {

@@ -41,6 +41,8 @@ METRIC_UNITS = {
     "simulated_seconds": "s",
     "wall_seconds": "s",
     "realtime_factor": "-",
+    "friction_events": "count",
+    "unresolved_events": "count",
 }
 """Units of the scalar metrics in metrics.json."""
 
@@ -71,6 +73,8 @@ class Result:
         lower_limit, upper_limit: joint position limits [rad or m], or None.
         prismatic: whether each joint is prismatic (units m, m/s, N), or None (all revolute).
         backend: which loop simulated it: ``python`` or ``compiled``.
+        friction_events: stick-slip events the plant located (docs/plant.md).
+        unresolved_events: plant steps with more events than it resolves (a warning).
 
     """
 
@@ -94,6 +98,8 @@ class Result:
     upper_limit: np.ndarray | None = None
     prismatic: np.ndarray | None = None
     backend: str = "python"
+    friction_events: int = 0
+    unresolved_events: int = 0
 
     @classmethod
     def from_trace(cls, trace, robot, trajectory, criterion, config, wall_seconds: float,
@@ -132,7 +138,8 @@ class Result:
             trace.t, trace.q, trace.dq, trace.tau, x, x_d, e, signals, trace.status,
             trace.message, config.to_toml() if config is not None else "", wall_seconds,
             list(robot.joint_names), chain, trace.tau_cmd, torque_limit, robot.lower_limits,
-            robot.upper_limits, robot.prismatic,
+            robot.upper_limits, robot.prismatic, friction_events=trace.friction_events,
+            unresolved_events=trace.unresolved_events,
         )
 
     def experiment(self):
@@ -209,6 +216,8 @@ class Result:
             "simulated_seconds": simulated,
             "wall_seconds": self.wall_seconds,
             "backend": self.backend,
+            "friction_events": self.friction_events,
+            "unresolved_events": self.unresolved_events,
             "realtime_factor": simulated / self.wall_seconds if self.wall_seconds > 0 else None,
         }
         if turn is not None:
@@ -251,7 +260,8 @@ class Result:
             metrics.get("status", "completed"), metrics.get("message", ""), config,
             metrics.get("wall_seconds", float("nan")), arrays["joint_names"].tolist(),
             **{name: arrays.get(name) for name in OPTIONAL_ARRAYS},
-            backend=metrics.get("backend", "python"),
+            backend=metrics.get("backend", "python"), friction_events=metrics.get("friction_events", 0),
+            unresolved_events=metrics.get("unresolved_events", 0),
         )
 
 

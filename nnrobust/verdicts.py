@@ -99,6 +99,9 @@ def run_warnings(metrics: dict, joint_names: list[str], units: list[str]) -> lis
     if metrics.get("runaway"):
         out.append(f"runaway: RMS error {1e3 * metrics['rms_error_last_fifth']:.3g} mm over the last "
                    f"fifth against {1e3 * metrics['rms_error_early']:.3g} mm over [2 s, 40 %]")
+    if metrics.get("unresolved_events"):
+        out.append(f"plant not converged: {metrics['unresolved_events']} plant steps held more stick-slip "
+                   "events than the integrator resolves (docs/plant.md); set simulation.substeps higher")
     if metrics.get("subtask_degraded"):
         out.append(f"subtask degraded: h fell from {metrics['h_start']:.3g} to {metrics['h_end']:.3g} "
                    "(model error acts in the null space too, docs/controller.md)")

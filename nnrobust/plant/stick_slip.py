@@ -166,6 +166,27 @@ def _locate(g: Callable[[float], float], lo: float, g_lo: float, hi: float, g_hi
     return hi
 
 
+def _event_time(g: Callable[[float], float], g_start: float, span: float, g_end: float) -> float | None:
+    """When in (0, span] an event function that ends at g_end <= 0 reaches zero.
+
+    From g_start > 0 the root is located; from g_start < 0 the mode is already wrong (s = 0). A
+    joint just released starts at g = 0 and moves the way its mode says: its event is the next
+    zero, bracketed from the first of span / 2, span / 4, ... where g > 0; if there is none down
+    to EVENT_TOLERANCE the joint barely moved and the event is left to the next step (None).
+    """
+    if g_start > 0:
+        return _locate(g, 0.0, g_start, span, g_end)
+    if g_start < 0:
+        return 0.0
+    s = 0.5 * span
+    while s > EVENT_TOLERANCE:
+        gs = g(s)
+        if gs > 0:
+            return _locate(g, s, gs, span, g_end)
+        s *= 0.5
+    return None
+
+
 class StickSlipIntegrator:
     """Advances the plant over one control period with the torque held, events located.
 
@@ -213,9 +234,11 @@ class StickSlipIntegrator:
                     qs, vs = flow(t, q, v, mode, s)
                     return _events(plant, t + s, qs, vs, tau, mode, slipping, held)[i]
 
-                s_i = _locate(g, 0.0, max(g_start[i], 0.0), span, g_end[i]) if g_start[i] > 0 else 0.0
-                if s_i < first or which < 0:
+                s_i = _event_time(g, g_start[i], span, g_end[i])
+                if s_i is not None and (s_i < first or which < 0):
                     first, which = s_i, int(i)
+            if which < 0:  # only events the step cannot resolve: a joint that barely moves
+                return q1, v1
             if first >= span:
                 q, v = q1, v1
             elif first > 0.0:
