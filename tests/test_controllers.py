@@ -161,6 +161,22 @@ def test_sampled_adaptive_law_is_the_exact_solution_with_held_inputs(sigma):
                                    rtol=1e-10, atol=1e-12)
 
 
+def test_sigma_modification_forgets_at_rate_F_sigma_and_settles_at_the_drive_over_sigma():
+    """Analytic solutions of Z' = F (|w| phi - sigma Z): with w = 0 the weights decay as
+    e^(-F sigma t); with a held drive they settle at |w| phi / sigma (not the law's own
+    derivative: these fail if the leakage is dropped from advance())."""
+    basis = AdditiveRBFBasis(-np.ones(6), np.ones(6), centers=3)
+    comp = NNCompensator(KP, KV, basis, F=4.0, gamma=2.0, eps_min=0.1, sigma=0.5)
+    q, v = np.full(3, 0.2), np.full(3, -0.1)
+    z = np.concatenate([np.linspace(0.1, 2.0, comp.L), [0.6]])
+    rest = comp.advance(q, v, np.zeros(4), z, 0.3)
+    np.testing.assert_allclose(rest[:comp.L], z[:comp.L] * np.exp(-4.0 * 0.5 * 0.3), rtol=1e-13)
+    y = np.array([0.1, 0.2, 0.3, -0.1])
+    drive = np.linalg.norm(comp.omega(y)) * comp.basis(comp.network_input(q, v, y))
+    settled = comp.advance(q, v, y, z, 50.0)
+    np.testing.assert_allclose(settled[:comp.L], drive / 0.5, rtol=1e-12)
+
+
 @settings(max_examples=200, deadline=None)
 @given(st.lists(st.floats(-10, 10), min_size=2, max_size=2), st.lists(st.floats(-10, 10), min_size=2,
        max_size=2), st.floats(0.0, 50.0), st.floats(1e-6, 5.0), st.floats(0.0, 1.0))

@@ -147,6 +147,18 @@ def test_encoder_quantisation_rounds_to_whole_counts():
     assert np.abs(q_m - trace.q).max() <= res / 2 + 1e-12
 
 
+def test_noise_comes_before_the_encoder_so_measurements_stay_on_its_grid():
+    """q_m = Q(q + n_q): with noise larger than a count, every measurement is still a whole number
+    of counts, and the noise shows (rounding first and adding noise after leaves the grid)."""
+    res = 2 * np.pi / 4096
+    plant = _free_plant(sensor=Sensor(np.full(3, 5 * res), np.zeros(3), np.full(3, res), seed=2))
+    rec = Recorder()
+    trace = simulate(plant, rec, np.array([0.5, 0.3, -0.2]), np.zeros(3), 0.3)
+    q_m = np.array([m[0] for m in rec.measured])
+    np.testing.assert_allclose(q_m / res, np.round(q_m / res), atol=1e-9)
+    assert np.abs(q_m - trace.q).max() > 3 * res
+
+
 def test_stiff_stops_are_refused_with_the_substeps_needed():
     """A stop too stiff for the RK4 step gets a clear error before the run."""
     from nnrobust.exceptions import ConfigError

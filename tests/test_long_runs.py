@@ -68,3 +68,31 @@ def test_sigma_modification_bounds_Z_by_omega_over_sigma():
     assert 0 < np.linalg.norm(result.signals["z_norm"], np.inf)
     Z = np.array([z for z in result.signals["z_norm"]])
     assert np.all(Z <= np.sqrt(comp.L) * bound)
+    # each weight is a running average of its drive |w| phi_i / sigma: below its largest value
+    # so far (without the leakage the weights integrate the drive and pass it within seconds)
+    weights = _trace(setup).z[:, : comp.L]
+    drive = np.array([np.linalg.norm(comp.omega(y)) * comp.basis(comp.network_input(q, v, y))
+                      for q, v, y in zip(result.q, result.dq, _errors(result, setup))])
+    ceiling = np.maximum.accumulate(np.maximum(drive / comp.sigma, weights[0]), axis=0)
+    assert np.all(weights <= ceiling * (1 + 1e-6) + 1e-12)
+
+
+def _trace(setup):
+    """The run's raw trace (with the controller state z_k), on the backend run_experiment uses."""
+    from nnrobust.experiment import choose_backend
+    from nnrobust.simulation import simulate
+
+    sim = setup.config.simulation
+    if choose_backend(setup) == "compiled":
+        from nnrobust.compiled import simulate_compiled
+
+        return simulate_compiled(setup, sim.duration)
+    return simulate(setup.plant, setup.controller, setup.q0, setup.v0, sim.duration, sim.control_period)
+
+def _errors(result, setup):
+    """y_k = [e, e'] as the controller saw it (ideal sensing), from the recorded states."""
+    robot, trajectory = setup.robot, setup.trajectory
+    out = []
+    for t, q, v, e in zip(result.t, result.q, result.dq, result.e):
+        out.append(np.concatenate([e, robot.task_jacobian(q) @ v - trajectory(t)[1]]))
+    return out

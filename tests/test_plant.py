@@ -47,10 +47,12 @@ def test_friction_only_dissipates_energy():
     assert E[-1] < 0.01 * E[0]  # and it does dissipate
 
 
-def test_energy_balance_with_torque_and_disturbance():
-    """E(T) - E(0) equals the integral of q'^T (tau - F(q') - tau_d) (power balance)."""
+@pytest.mark.parametrize("coulomb", [0.0, 1.0], ids=["viscous", "viscous and coulomb"])
+def test_energy_balance_with_torque_and_disturbance(coulomb):
+    """E(T) - E(0) equals the integral of q'^T (tau - F(q') - tau_d) (power balance); with Coulomb
+    friction the joints slide and stick (a held joint does no work)."""
     robot = paper_robot()
-    plant = Plant(robot, Friction(robot.viscous_friction, np.zeros(3)), SinusoidalDisturbance.paper())
+    plant = Plant(robot, Friction(robot.viscous_friction, np.full(3, coulomb)), SinusoidalDisturbance.paper())
     tau = np.array([2.0, -1.0, 0.5])
     trace = simulate(plant, ConstantTorque(tau), Q0, V0, 2.0, control_period=1e-4)
     E = energies(plant, trace)
@@ -58,6 +60,24 @@ def test_energy_balance_with_torque_and_disturbance():
                       for t, v in zip(trace.t, trace.dq)])
     work = np.sum(0.5 * (power[1:] + power[:-1])) * 1e-4  # trapezoid
     assert E[-1] - E[0] == pytest.approx(work, rel=1e-4, abs=1e-6)
+    assert (trace.friction_events > 0) == (coulomb > 0)
+
+
+def test_while_every_joint_slides_the_plant_is_the_sgn_law():
+    """With no joint held, the stick-slip right-hand side is eq. (7) with F = F_d q' + F_c sgn(q'),
+    computed independently here from M and N."""
+    robot = paper_robot()
+    coulomb = np.array([1.0, 0.7, 0.4])
+    plant = Plant(robot, Friction(robot.viscous_friction, coulomb), SinusoidalDisturbance.paper())
+    rng = np.random.default_rng(1)
+    for _ in range(10):
+        q, v, tau = rng.uniform(-2, 2, 3), rng.uniform(-2, 2, 3), rng.uniform(-5, 5, 3)
+        friction = robot.viscous_friction * v + coulomb * np.sign(v)
+        expected = np.linalg.solve(robot.mass(q), tau - friction - plant.disturbance(0.7) - robot.bias(q, v))
+        np.testing.assert_allclose(plant.acceleration(0.7, q, v, tau), expected, rtol=1e-9, atol=1e-9)
+        a, hold = plant.constrained_acceleration(0.7, q, v, tau, np.sign(v).astype(int))
+        np.testing.assert_allclose(a, expected, rtol=1e-9, atol=1e-9)
+        assert hold.size == 0
 
 
 def test_paper_disturbance_is_the_errata_reading():
