@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 OUT ?= out
 
-.PHONY: run test lint bench clean
+.PHONY: run test lint bench docs-data mutations clean
 
 $(BIN)/activate:
 	$(PYTHON) -m venv $(VENV)
@@ -57,6 +57,27 @@ test: $(VENV)/.installed-test $(VENV)/.browser
 
 bench: $(VENV)/.installed
 	$(BIN)/nnrobust bench --out $(OUT)/bench
+
+# Every number in README.md and docs/: regenerate each data file (about 30 minutes on 2 cores),
+# then rewrite the tables from them (tests/test_docs_numbers.py checks both).
+DATA := docs/data
+docs-data: $(VENV)/.installed-test
+	$(BIN)/python benchmarks/paper_reproduction.py --json $(DATA)/paper_reproduction.json
+	$(BIN)/python benchmarks/friction_compensation.py --json $(DATA)/friction_compensation.json
+	$(BIN)/python benchmarks/nn_options.py --json $(DATA)/nn_options.json
+	$(BIN)/python benchmarks/subtask.py --json $(DATA)/subtask.json
+	$(BIN)/python benchmarks/arm_presets.py --json $(DATA)/arm_presets.json
+	$(BIN)/python benchmarks/fair_comparison.py --json $(DATA)/fair_comparison.json --figure docs/img/fair_comparison.png
+	$(BIN)/python benchmarks/plant_convergence.py --json $(DATA)/plant_convergence.json
+	for study in paper-robustness panda-robustness; do \
+	  $(BIN)/nnrobust sweep $$study --out $(OUT)/$$study --overwrite --keep-worst 1 && \
+	  cp $(OUT)/$$study/summary.json $(DATA)/$$(echo $$study | tr - _).json || exit 1; \
+	done
+	$(BIN)/python docs/render_tables.py
+
+# The test suite must catch each of benchmarks/mutations.py's broken lines (about 3 minutes).
+mutations: $(VENV)/.installed-test
+	$(BIN)/python benchmarks/mutations.py
 
 clean:
 	rm -rf $(VENV) $(OUT) build *.egg-info

@@ -130,6 +130,49 @@ def arm_presets() -> str:
                      "python benchmarks/arm_presets.py --json docs/data/arm_presets.json")
 
 
+def plant_convergence() -> str:
+    data = _data("plant_convergence")
+
+    def delta(key):
+        return lambda r: "–" if r["both_diverged"] else f"{100 * r[f'{key}_relative_difference']:.2f}"
+
+    def verdict(r):
+        if r["both_diverged"]:
+            return "diverges at both steps"
+        label = "converged" if r["converged"] else "**not converged**"
+        return label + (" (chaotic: within the probes' spread)" if r["chaotic"] and r["converged"] else
+                        " (chaotic)" if r["chaotic"] else "")
+
+    table = _markdown([("preset", "l", _text("preset")), ("controller", "l", _text("controller")),
+                       ("RMS error [mm]", "r", lambda r: _mm(r["rms_error_after_2s"])),
+                       ("Δ error [%]", "r", delta("rms_error_after_2s")), TORQUE,
+                       ("Δ torque [%]", "r", delta("rms_torque")), CHATTER,
+                       ("Δ chatter [%]", "r", delta("torque_chatter")),
+                       ("stick-slip events", "r", _text("friction_events")), ("verdict", "l", verdict)],
+                      data["rows"])
+    converged = sum(r["converged"] for r in data["rows"])
+    return table + (f"\nΔ: the default step (one RK4 step per 1 ms period) against {data['fine']} steps per "
+                    f"period; tolerances 2 % (error, torque) and 10 % (chatter). {converged} of "
+                    f"{len(data['rows'])} runs converged. Made by `python benchmarks/plant_convergence.py "
+                    "--json docs/data/plant_convergence.json`.\n")
+
+
+def friction_compensation() -> str:
+    def spread(key, scale=1.0):
+        def cell(r):
+            low, mid, high = (scale * r[k] for k in (f"{key}_min", key, f"{key}_max"))
+            same = f"{low:.3g}" == f"{high:.3g}"
+            return f"{mid:.3g}" if same else f"{mid:.3g} ({low:.3g}–{high:.3g})"
+        return cell
+
+    return _markdown([("variant", "l", _text("variant")),
+                      ("RMS error, t ≥ 2 s [mm]", "r", spread("rms_error_after_2s", 1e3)),
+                      ("RMS torque [N m]", "r", spread("rms_torque")),
+                      ("chatter [N m]", "r", spread("torque_chatter"))],
+                     _data("friction_compensation")["rows"],
+                     "python benchmarks/friction_compensation.py --json docs/data/friction_compensation.json")
+
+
 def _study(name: str):
     """A shipped study's summary (docs/data/<name>.json, DIR/summary.json of its sweep): per
     controller the error and torque statistics, then the median error at each grid value."""
@@ -167,7 +210,8 @@ def _study(name: str):
 RENDERERS = {"arm-presets": arm_presets, "paper-robustness": _study("paper-robustness"),
              "panda-robustness": _study("panda-robustness"), "paper-reproduction": paper_reproduction,
              "fair-headline": fair_headline, "fair-pareto": fair_pareto, "nn-options": nn_options,
-             "subtask": subtask}
+             "subtask": subtask, "plant-convergence": plant_convergence,
+             "friction-compensation": friction_compensation}
 
 
 def render(text: str) -> str:

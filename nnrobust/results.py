@@ -41,6 +41,8 @@ METRIC_UNITS = {
     "simulated_seconds": "s",
     "wall_seconds": "s",
     "realtime_factor": "-",
+    "max_joint_speed": "rad/s (m/s for a prismatic joint)",
+    "plant_step": "s",
     "friction_events": "count",
     "unresolved_events": "count",
 }
@@ -73,6 +75,7 @@ class Result:
         lower_limit, upper_limit: joint position limits [rad or m], or None.
         prismatic: whether each joint is prismatic (units m, m/s, N), or None (all revolute).
         backend: which loop simulated it: ``python`` or ``compiled``.
+        plant_step: the plant's integration step [s] (control period / substeps), or NaN.
         friction_events: stick-slip events the plant located (docs/plant.md).
         unresolved_events: plant steps with more events than it resolves (a warning).
 
@@ -98,6 +101,7 @@ class Result:
     upper_limit: np.ndarray | None = None
     prismatic: np.ndarray | None = None
     backend: str = "python"
+    plant_step: float = float("nan")
     friction_events: int = 0
     unresolved_events: int = 0
 
@@ -138,7 +142,10 @@ class Result:
             trace.t, trace.q, trace.dq, trace.tau, x, x_d, e, signals, trace.status,
             trace.message, config.to_toml() if config is not None else "", wall_seconds,
             list(robot.joint_names), chain, trace.tau_cmd, torque_limit, robot.lower_limits,
-            robot.upper_limits, robot.prismatic, friction_events=trace.friction_events,
+            robot.upper_limits, robot.prismatic,
+            plant_step=(config.simulation.control_period / config.simulation.substeps
+                        if config is not None else float("nan")),
+            friction_events=trace.friction_events,
             unresolved_events=trace.unresolved_events,
         )
 
@@ -216,6 +223,9 @@ class Result:
             "simulated_seconds": simulated,
             "wall_seconds": self.wall_seconds,
             "backend": self.backend,
+            "max_joint_speed": float(np.abs(self.dq).max()) if self.dq.size else float("nan"),
+            "joint_speed_joint": int(np.argmax(np.abs(self.dq).max(axis=0))) if self.dq.size else -1,
+            "plant_step": self.plant_step,
             "friction_events": self.friction_events,
             "unresolved_events": self.unresolved_events,
             "realtime_factor": simulated / self.wall_seconds if self.wall_seconds > 0 else None,
@@ -260,7 +270,8 @@ class Result:
             metrics.get("status", "completed"), metrics.get("message", ""), config,
             metrics.get("wall_seconds", float("nan")), arrays["joint_names"].tolist(),
             **{name: arrays.get(name) for name in OPTIONAL_ARRAYS},
-            backend=metrics.get("backend", "python"), friction_events=metrics.get("friction_events", 0),
+            backend=metrics.get("backend", "python"), plant_step=metrics.get("plant_step", float("nan")),
+            friction_events=metrics.get("friction_events", 0),
             unresolved_events=metrics.get("unresolved_events", 0),
         )
 
