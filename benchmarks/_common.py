@@ -23,6 +23,41 @@ def run_row(job: dict) -> dict:
     return {**job, **{k: metrics.get(k) for k in ROW_METRICS}}  # orientation: pose tasks only
 
 
+PROBE = 1e-6
+"""Relative change of the plant's disturbance (or friction, without one) in the probe runs."""
+
+CHAOS = 0.01
+"""A row whose probes move a metric by more than this fraction is chaotic: a spread, not a number."""
+
+PROBED_METRICS = ("rms_error_after_2s", "rms_torque", "torque_chatter", "saturated_fraction")
+
+
+def run_probed_row(job: dict) -> dict:
+    """run_row, plus the same run with the plant's disturbance (or friction, if it has no
+    disturbance) scaled by 1 +- PROBE: each metric's ``_min`` and ``_max`` over the three, and
+    ``chaotic`` when one moves by more than CHAOS. The row's own values are the unprobed run's
+    (what a rerun of its job gives)."""
+    row = run_row(job)
+    config = load_preset(job["preset"]).replace(**job["changes"])
+    key = "disturbance_scale" if config.plant.disturbance != "none" else "friction_scale"
+    scale = getattr(config.plant, key)
+    probes = [row]
+    for sign in (1, -1):
+        changes = {**job["changes"], "plant": {**job["changes"].get("plant", {}),
+                                               key: scale * (1 + sign * PROBE)}}
+        probes.append(run_row({**job, "changes": changes}))
+    row["chaotic"] = False
+    for name in PROBED_METRICS:
+        values = [p[name] for p in probes if p[name] is not None]
+        if not values:
+            continue
+        row[f"{name}_min"], row[f"{name}_max"] = min(values), max(values)
+        scale_ = max(abs(row[name]), 1e-12)
+        if name != "saturated_fraction" and (max(values) - min(values)) > CHAOS * scale_:
+            row["chaotic"] = True
+    return row
+
+
 def run_rows(jobs: list[dict], workers: int | None = None, echo=None, runner=run_row) -> list[dict]:
     """Every job's row, in order, on ``workers`` processes (default: the machine's cores);
     ``runner`` turns a job into its row (a module-level function, so workers can import it)."""
@@ -52,9 +87,11 @@ def parser(doc: str):
     return p
 
 
-def report(args, jobs: list[dict], columns: list[tuple[str, int, object]], **extra) -> list[dict]:
-    """Run the jobs, print one line per row as it arrives (``columns``: header, width, and a
-    function of the row giving the cell text), and write {**extra, "rows": rows} to --json."""
+def report(args, jobs: list[dict], columns: list[tuple[str, int, object]], runner=run_probed_row,
+           **extra) -> list[dict]:
+    """Run the jobs (each with its chaos probes), print one line per row as it arrives
+    (``columns``: header, width, and a function of the row giving the cell text), and write
+    {**extra, "rows": rows} to --json."""
     from nnrobust.results import write_json_atomic
 
     print(" ".join(f"{h:>{w}s}" if i else f"{h:{w}s}" for i, (h, w, _) in enumerate(columns)))
@@ -63,7 +100,7 @@ def report(args, jobs: list[dict], columns: list[tuple[str, int, object]], **ext
         print(" ".join(f"{cell(row):>{w}s}" if i else f"{cell(row):{w}s}"
                        for i, (_, w, cell) in enumerate(columns)), flush=True)
 
-    rows = run_rows(jobs, args.workers, echo)
+    rows = run_rows(jobs, args.workers, echo, runner)
     if args.json:
         write_json_atomic(args.json, {**extra, "rows": rows})
     return rows

@@ -44,7 +44,8 @@ def _markdown(columns: list[tuple[str, str, object]], rows: list[dict], made_by:
     lines = ["| " + " | ".join(h for h, _, _ in columns) + " |",
              "|" + "|".join("---" if a == "l" else "---:" for _, a, _ in columns) + "|"]
     lines += ["| " + " | ".join(cell(r) for _, _, cell in columns) + " |" for r in rows]
-    return "\n".join(lines) + (f"\n\nMade by `{made_by}`.\n" if made_by else "\n")
+    note = f"\n\n{CHAOS_NOTE}" if any(r.get("chaotic") for r in rows) else ""
+    return "\n".join(lines) + note + (f"\n\nMade by `{made_by}`.\n" if made_by else "\n")
 
 
 def _g3(key: str, scale: float = 1.0):
@@ -55,9 +56,24 @@ def _text(key: str):
     return lambda r: str(r[key])
 
 
-ERROR = ("RMS error, t ≥ 2 s [mm]", "r", lambda r: _mm(r["rms_error_after_2s"]))
-TORQUE = ("RMS torque [N m]", "r", _g3("rms_torque"))
-CHATTER = ("chatter [N m]", "r", _g3("torque_chatter"))
+def _probed(key: str, scale: float = 1.0):
+    """A metric's cell: 3 significant digits, or for a chaotic row its range over the chaos probes
+    (benchmarks/_common.py: the disturbance scaled by 1 +- 1e-6) marked †."""
+    def cell(r):
+        if r.get(key) is None:
+            return "–"
+        if r.get("chaotic") and f"{key}_min" in r:
+            return f"{scale * r[f'{key}_min']:.2g}–{scale * r[f'{key}_max']:.2g} †"
+        return f"{scale * r[key]:.3g}"
+    return cell
+
+
+CHAOS_NOTE = ("† chaotic: scaling the disturbance by 1 ± 1e-6 moves this run's metrics by more than 1 %; "
+              "the range is over the three runs, and no digit beyond it means anything.")
+
+ERROR = ("RMS error, t ≥ 2 s [mm]", "r", _probed("rms_error_after_2s", 1e3))
+TORQUE = ("RMS torque [N m]", "r", _probed("rms_torque"))
+CHATTER = ("chatter [N m]", "r", _probed("torque_chatter"))
 SATURATED = ("saturated steps [%]", "r", lambda r: f"{100 * r['saturated_fraction']:.1f}")
 WARNINGS = ("warnings", "l", _warn)
 

@@ -271,6 +271,70 @@ def cmd_sweep(args) -> int:
     return 0
 
 
+def format_tuning(summary: dict) -> str:
+    """Each controller's best setting under the constraints: errors on the training and the
+    held-out samples, torque, chatter, and the bounds it sits on.
+    """
+    lines = [f"{'controller':14s} {'train e [mm]':>12s} {'held-out e [mm]':>15s} {'rms tau':>8s} "
+             f"{'chatter':>8s}  setting"]
+    for name, entry in summary["controllers"].items():
+        best = entry["best"]
+        if best is None:
+            lines.append(f"{name:14s} {entry['note']}")
+            continue
+        held_out = best["validation"].get("rms_error_after_2s")
+        settings = ", ".join(f"{k} = {v[0] if isinstance(v, list) else v:.4g}"
+                             for k, v in best["params"].items())
+        lines.append(f"{name:14s} {1e3 * best['train']['rms_error_after_2s']:12.4g} "
+                     f"{'-' if held_out is None else f'{1e3 * held_out:.4g}':>15s} "
+                     f"{best['train']['rms_torque']:8.3f} {best['train']['torque_chatter']:8.4f}  {settings}")
+        for b in best["at_bound"]:
+            lines.append(f"{'':14s} at the {b['side']} bound of {b['param']} ({b['bound']:.4g})"
+                         + (f": {b['physical']}" if b["physical"] else ""))
+    return "\n".join(lines)
+
+
+def cmd_tune(args) -> int:
+    """Tune every controller by one optimiser at one budget; validate on held-out samples."""
+    import math
+    import time
+
+    from .tune import TuneSpec, run_tune
+
+    spec = TuneSpec(args.target, [c.strip() for c in args.controllers.split(",") if c.strip()], args.budget,
+                    args.train_samples, args.validation,
+                    math.inf if args.max_rms_torque is None else args.max_rms_torque,
+                    1.0 if args.max_saturated is None else args.max_saturated, args.seed)
+    started: list[float] = []
+
+    def progress(done, total):
+        if args.quiet:
+            return
+        if not started:
+            started.append(time.monotonic())
+            print(f"tune {args.target}: {', '.join(spec.controllers)}, {spec.budget} simulations each "
+                  f"({spec.trials} settings x {spec.train_samples} samples); {done} of {total} already done",
+                  file=sys.stderr)
+        filled = int(30 * done / max(total, 1))
+        print(f"\r[{'#' * filled}{' ' * (30 - filled)}] {done}/{total} simulations, "
+              f"{time.monotonic() - started[0]:.0f} s   ", end="", file=sys.stderr, flush=True)
+
+    out = Path(args.out)
+    try:
+        summary = run_tune(spec, out, args.workers, args.scheduler, args.overwrite, progress)
+    except KeyboardInterrupt:
+        print(f"\nnnrobust: tuning interrupted; the settings tried so far are in {out}/trials; run the same "
+              "command again to resume", file=sys.stderr)
+        return 130
+    if started:
+        print(file=sys.stderr)
+    if not args.quiet:
+        print(format_tuning(summary))
+        print(f"summary in {out}/summary.json, settings in {out}/trials (pandas.read_parquet), Pareto fronts "
+              f"in {out}/pareto.png", file=sys.stderr)
+    return 0
+
+
 def cmd_bench(args) -> int:
     """Run the benchmark scripts of benchmarks/ and write their JSON into a folder."""
     import subprocess
@@ -471,6 +535,33 @@ def build_parser() -> argparse.ArgumentParser:
                        "controller into DIR/worst/")
     sweep.add_argument("--quiet", action="store_true", help="print nothing but errors")
     sweep.set_defaults(func=cmd_sweep)
+
+    tune = sub.add_parser("tune", help="tune controllers at an equal budget of simulations",
+                          description="Tune each controller with the same optimiser (Optuna's TPE, "
+                          "multi-objective: RMS error after 2 s, RMS torque, chatter) over a search space "
+                          "derived from the arm, at the same budget of simulations, on the same samples, "
+                          "under the same constraints; then check each best setting on held-out samples. "
+                          "Re-running the same command into the same folder resumes (docs/tuning.md).")
+    tune.add_argument("target", help="a preset, an experiment file, or a sweep file whose [vary] "
+                      "distributions are the uncertainty the settings are tuned over")
+    tune.add_argument("--controllers", required=True, help="comma-separated controller kinds, e.g. "
+                      "nn,no-u0,pd,sliding-mode")
+    tune.add_argument("--budget", type=int, required=True, help="simulations per controller (training)")
+    tune.add_argument("--out", required=True,
+                      help="tuning folder (tune.toml, trials/, summary.json, pareto.png)")
+    tune.add_argument("--max-rms-torque", type=float, metavar="X", help="constraint: RMS torque <= X [N m]")
+    tune.add_argument("--max-saturated", type=float, metavar="F",
+                      help="constraint: at most this fraction of steps saturated (0 to 1)")
+    tune.add_argument("--train-samples", type=int, default=1, metavar="S",
+                      help="samples (noise seeds, uncertainty draws) each setting runs on (default 1)")
+    tune.add_argument("--validation", type=int, default=4, metavar="K",
+                      help="held-out samples each best setting is checked on (default 4)")
+    tune.add_argument("--seed", type=int, default=0, help="seed of the optimiser and the samples")
+    tune.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
+    tune.add_argument("--scheduler", help="address of an existing dask scheduler, e.g. tcp://host:8786")
+    tune.add_argument("--overwrite", action="store_true", help="replace a different tuning in --out")
+    tune.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    tune.set_defaults(func=cmd_tune)
 
     bench = sub.add_parser("bench", help="run the benchmarks (source checkout)",
                            description="Run the scripts in benchmarks/ (all, or those named) and "

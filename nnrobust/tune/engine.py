@@ -1,0 +1,473 @@
+"""``nnrobust tune``: every controller tuned by the same optimiser, at the same budget, on the same
+samples, under the same constraints; validated on samples the search never saw (docs/tuning.md).
+
+The optimiser is Optuna's TPE sampler, minimising the RMS error after 2 s under constraints (RMS
+torque, saturated fraction, no runaway, no stop hit, a completed run): the best setting under the
+constraints is what is compared. RMS torque and chatter are recorded for every setting, and each
+controller's Pareto front (error, torque, chatter) is drawn from all the settings it tried (a
+multi-objective search spread its budget along the low-gain end of that front and, at 120
+simulations, left the NN at 22 mm where a hand search found 0.13 mm). It asks for a batch of
+settings per controller; their simulations run on the sweep's Dask cluster
+(one task per setting and training sample) and are told back. Every finished trial is appended
+to DIR/trials as a Parquet part, so an interrupted tuning resumes from what it wrote: the studies
+are rebuilt from the rows. After half and three quarters of the budget, a best setting on a
+bound of its space widens that bound a decade (unless it is physical); the rows already run stay
+in the widened space's history.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import uuid
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..exceptions import ConfigError, NNRobustError
+from ..signals import signals_as_interrupt
+from .space import TUNABLE, SearchSpace, arm_scales, search_space
+
+OBJECTIVES = ("rms_error_after_2s", "rms_torque", "torque_chatter")
+"""What every setting is recorded with (the Pareto front's axes, all minimised): [m], [N m], [N m].
+The search minimises the first under the constraints."""
+
+CONSTRAINTS = ("rms_torque_over_limit", "saturated_over_limit", "runaway", "joint_limit_violation",
+               "completed")
+"""Each setting's constraints, met when <= 0 (the order of :func:`judge`'s list)."""
+
+FAILED = (1.0, 1e4, 1e4)
+"""Objective values of a setting whose run failed (diverged, refused): worse than any real one."""
+
+MARKER = "tune.toml"
+TRIALS = "trials"
+CHECKPOINTS = (0.5, 0.75)
+GAIN_SHARE = 0.3
+"""Share of a robust law's budget spent on its gains with u_0 = 0 (see _Controller)."""
+"""Fractions of the budget after which a best setting on a bound widens its space."""
+
+
+@dataclass
+class TuneSpec:
+    """What a tuning is: target, controllers, budget, samples, constraints, seed.
+
+    Attributes:
+        target: a preset, an experiment file or a sweep file (its [vary] is the uncertainty set).
+        controllers: controller kinds to tune.
+        budget: simulations per controller (the training runs; validation is extra).
+        train_samples: samples each setting is simulated on (common random numbers).
+        validation: held-out samples the best setting is checked on.
+        max_rms_torque: [N m] constraint (inf: none).
+        max_saturated: constraint on the fraction of saturated steps (1: none).
+        seed: seed of the optimiser and of the samples.
+
+    """
+
+    target: str
+    controllers: list[str]
+    budget: int
+    train_samples: int = 1
+    validation: int = 4
+    max_rms_torque: float = math.inf
+    max_saturated: float = 1.0
+    seed: int = 0
+
+    def __post_init__(self):
+        checks = [("--budget", self.budget >= 2 and self.budget <= 100_000, "an integer in [2, 100000]"),
+                  ("--train-samples", 1 <= self.train_samples <= 1000, "an integer in [1, 1000]"),
+                  ("--validation", 0 <= self.validation <= 1000, "an integer in [0, 1000]"),
+                  ("--max-rms-torque", self.max_rms_torque > 0, "> 0 [N m]"),
+                  ("--max-saturated", 0 <= self.max_saturated <= 1, "in [0, 1]"),
+                  ("--seed", 0 <= self.seed < 2**31, "an integer in [0, 2^31)")]
+        for flag, ok, valid in checks:
+            if not ok:
+                raise ConfigError(flag, f"must be {valid}")
+        if self.budget < self.train_samples:
+            raise ConfigError("--budget", f"{self.budget} simulations cannot run one setting on "
+                              f"{self.train_samples} training samples")
+        unknown = [c for c in self.controllers if c not in TUNABLE]
+        if unknown or not self.controllers or len(set(self.controllers)) != len(self.controllers):
+            raise ConfigError("--controllers", f"needs distinct names among {', '.join(TUNABLE)}; got "
+                              f"{', '.join(self.controllers) or 'none'}")
+
+    @property
+    def trials(self) -> int:
+        """Settings per controller: the budget over the training samples."""
+        return self.budget // self.train_samples
+
+    def to_toml(self) -> str:
+        """The resolved tuning (DIR/tune.toml)."""
+        from ..config import dump_toml
+
+        return dump_toml({"target": self.target, "controllers": self.controllers, "budget": self.budget,
+                          "train_samples": self.train_samples, "validation": self.validation,
+                          "max_rms_torque": self.max_rms_torque if math.isfinite(self.max_rms_torque)
+                          else "inf", "max_saturated": self.max_saturated, "seed": self.seed})
+
+
+def sweep_of(spec: TuneSpec):
+    """The uncertainty set as a sweep: the target's [vary] draws (or only seeds), no grid."""
+    from ..sweep.spec import SweepSpec, load_sweep
+
+    path = Path(spec.target)
+    is_sweep = False
+    if path.suffix == ".toml" and path.is_file():
+        from ..config import parse_toml, read_text_file
+
+        data = parse_toml(read_text_file(path, what="tuning target"), str(path))
+        is_sweep = "base" in data and "controllers" in data
+    else:
+        from ..sweep.spec import shipped_sweeps
+
+        is_sweep = spec.target in shipped_sweeps()
+    size = spec.train_samples + spec.validation
+    if is_sweep:
+        sweep = load_sweep(spec.target)
+        if sweep.grid_keys:
+            raise ConfigError("vary", f"tuning draws its samples from [vary] distributions; the grid keys "
+                              f"{', '.join(sweep.grid_keys)} are lists (make them a distribution or "
+                              "set them in [set])")
+        sweep.samples, sweep.seed, sweep.controllers = size, spec.seed, list(spec.controllers)
+        return sweep
+    base = str(path.resolve()) if path.suffix == ".toml" else spec.target
+    return SweepSpec(name=path.stem if path.suffix == ".toml" else spec.target, base=base,
+                     controllers=list(spec.controllers), samples=size, seed=spec.seed)
+
+
+# ---- on the workers ------------------------------------------------------------------------------
+
+def evaluate(sweep, base_toml: str, controller: str, overrides: dict, sample_id: int) -> dict:
+    """One simulation of a setting on one sample: its metrics (or the reason it failed)."""
+    import tomllib
+
+    from ..config import apply_overrides, from_dict
+    from ..experiment import run_experiment
+    from ..sweep.spec import draw, experiment
+
+    base = from_dict(tomllib.loads(base_toml))
+    try:
+        config = apply_overrides(experiment(sweep, base, draw(sweep, sample_id), controller), overrides)
+        metrics = run_experiment(config).metrics()
+    except NNRobustError as err:
+        return {"status": "refused", "message": str(err)[:300]}
+    keep = (*OBJECTIVES, "status", "saturated_fraction", "runaway", "max_joint_limit_violation")
+    return {k: metrics.get(k) for k in keep}
+
+
+# ---- on the client -------------------------------------------------------------------------------
+
+def judge(spec: TuneSpec, runs: list[dict]) -> tuple[tuple[float, ...], list[float], dict]:
+    """(objectives, constraints <= 0 when met, the mean metrics) of one setting's runs."""
+    completed = all(r.get("status") == "completed" for r in runs)
+    if not completed:
+        return FAILED, [1.0] * len(CONSTRAINTS), {"status": "failed"}
+    mean = {k: float(np.mean([r[k] for r in runs])) for k in OBJECTIVES}
+    mean["saturated_fraction"] = float(max(r["saturated_fraction"] for r in runs))
+    mean["max_joint_limit_violation"] = float(max(r["max_joint_limit_violation"] for r in runs))
+    mean["runaway"] = bool(any(r["runaway"] for r in runs))
+    mean["status"] = "completed"
+    torque = mean["rms_torque"] - spec.max_rms_torque if math.isfinite(spec.max_rms_torque) else -1.0
+    constraints = [torque, mean["saturated_fraction"] - spec.max_saturated,
+                   1.0 if mean["runaway"] else -1.0, mean["max_joint_limit_violation"], -1.0]
+    return tuple(mean[k] for k in OBJECTIVES), constraints, mean
+
+
+def _read_trials(folder: Path) -> list[dict]:
+    import pandas as pd
+
+    parts = sorted((folder / TRIALS).glob("part-*.parquet"))
+    if not parts:
+        return []
+    frame = pd.concat([pd.read_parquet(p) for p in parts], ignore_index=True)
+    rows = [json.loads(r) for r in frame["row"]]
+    return sorted(rows, key=lambda r: (r["controller"], r["trial"]))
+
+
+def _write_trials(folder: Path, rows: list[dict]) -> None:
+    """One Parquet part (written to a hidden file and renamed into place): flat columns for
+    pandas, and the whole row as JSON for resuming.
+    """
+    import pandas as pd
+
+    flat = []
+    for r in rows:
+        item = {"controller": r["controller"], "trial": r["trial"], "feasible": r["feasible"],
+                **{f"search.{k}": v for k, v in r["search"].items()},
+                **{f"train.{k}": v for k, v in r["train"].items() if not isinstance(v, (list, dict))},
+                "row": json.dumps(r)}
+        flat.append(item)
+    path = folder / TRIALS / f"part-{uuid.uuid4().hex[:12]}.parquet"
+    tmp = path.with_name(f".{path.name}.partial")
+    pd.DataFrame(flat).to_parquet(tmp, index=False)
+    os.replace(tmp, path)
+
+
+def prepare_folder(spec: TuneSpec, folder: Path, overwrite: bool) -> None:
+    """Create DIR or accept it for resuming; a different tuning is refused unless ``overwrite``,
+    which replaces only what a tuning wrote.
+    """
+    marker = folder / MARKER
+    if folder.exists() and not marker.is_file() and any(folder.iterdir()):
+        raise NNRobustError(f"{folder} exists and is not a tuning folder (no {MARKER}); choose another --out")
+    if marker.is_file() and marker.read_text() != spec.to_toml():
+        if not overwrite:
+            raise NNRobustError(f"{folder} holds a different tuning ({marker} differs); pass --overwrite "
+                                "to replace it, or choose another --out")
+        shutil.rmtree(folder / TRIALS, ignore_errors=True)
+        for name in ("summary.json", "pareto.png", "pareto.svg"):
+            (folder / name).unlink(missing_ok=True)
+    (folder / TRIALS).mkdir(parents=True, exist_ok=True)
+    tmp = marker.with_name(f".{MARKER}.partial")
+    tmp.write_text(spec.to_toml())
+    os.replace(tmp, marker)
+
+
+class _Controller:
+    """One controller's search: its space, its history, what to ask next.
+
+    A law with a robust term (NN, sliding mode) is eq. (9) with u_0 added, and with u_0 off it is
+    the no-u0 law. Such a controller spends the first GAIN_SHARE of its own budget on its gains
+    with u_0 = 0 (phase ``gains``), then searches every knob (phase ``all``) from its best gains
+    with the robust term at its weakest: a random robust term at high gains chatters past the
+    torque limit, and a search started there learns to avoid the only gains where the law can
+    win. Its best setting is chosen among the phase ``all`` runs, which use the law itself.
+    """
+
+    def __init__(self, spec: TuneSpec, name: str, space: SearchSpace, index: int):
+        self.spec, self.name, self.space = spec, name, space
+        self.gain_trials = int(GAIN_SHARE * spec.trials) if space.robust else 0
+        self.rows: list[dict] = []
+        self.sampler_seed = spec.seed + index
+        self.study = self._study()
+
+    @property
+    def phase(self) -> str:
+        return "gains" if len(self.rows) < self.gain_trials else "all"
+
+    def law(self, phase: str) -> str:
+        """The controller kind the runs of a phase use."""
+        return "no-u0" if phase == "gains" else self.name
+
+    def _distributions(self, phase: str):
+        import optuna
+
+        params = self.space.gains if phase == "gains" else self.space.params
+        return {p.name: optuna.distributions.FloatDistribution(p.low, p.high, log=True) for p in params}
+
+    def _study(self):
+        import warnings
+
+        import optuna
+
+        optuna.logging.set_verbosity(optuna.logging.WARNING)
+        warnings.filterwarnings("ignore", category=optuna.exceptions.ExperimentalWarning)
+        phase = self.phase
+        sampler = optuna.samplers.TPESampler(seed=self.sampler_seed + 7919 * len(self.rows),
+                                             multivariate=True, constant_liar=True,
+                                             n_startup_trials=min(10, max(2, self.spec.trials // 5)))
+        study = optuna.create_study(direction="minimize", sampler=sampler)
+        history = [r for r in self.rows if r["phase"] == phase]
+        for row in history:
+            study.add_trial(optuna.trial.create_trial(
+                params=row["search"], distributions=self._distributions(phase), value=row["objectives"][0],
+                constraints=dict(zip(CONSTRAINTS, row["constraints"]))))
+        if phase == "all" and self.gain_trials and not history:
+            gains = self.best("gains")
+            if gains is not None:
+                study.enqueue_trial({**gains["search"], **self.space.weakest()})
+        return study
+
+    @property
+    def remaining(self) -> int:
+        return self.spec.trials - len(self.rows)
+
+    def best(self, phase: str = "all") -> dict | None:
+        """The feasible setting of a phase with the least training error."""
+        feasible = [r for r in self.rows if r["feasible"] and r["phase"] == phase]
+        return min(feasible, key=lambda r: r["train"]["rms_error_after_2s"]) if feasible else None
+
+    def record(self, row: dict) -> None:
+        """Add a finished trial; at a checkpoint, widen the space where the best sits on a bound."""
+        before = self.phase
+        self.rows.append(row)
+        done = len(self.rows)
+        if self.phase != before:
+            self.study = self._study()
+        if any(done == max(1, int(f * self.spec.trials)) for f in CHECKPOINTS):
+            best = self.best()
+            if best is not None:
+                wider = self.space.widened(best["search"])
+                if wider != self.space:
+                    self.space = wider
+                    self.study = self._study()
+
+    def ask(self, count: int) -> list[tuple[object, dict, str]]:
+        """Up to ``count`` new settings of the current phase: (Optuna trial, values, phase)."""
+        phase = self.phase
+        left = (self.gain_trials - len(self.rows)) if phase == "gains" else self.remaining
+        out = []
+        for _ in range(min(count, left)):
+            trial = self.study.ask(self._distributions(phase))
+            out.append((trial, dict(trial.params), phase))
+        return out
+
+
+def run_tune(spec: TuneSpec, folder: str | Path, workers: int | None = None, scheduler: str | None = None,
+             overwrite: bool = False, progress=None) -> dict:
+    """Run (or resume) a tuning into ``folder``; returns the summary (also DIR/summary.json).
+
+    ``progress(done, total)`` is called as settings finish (done and total count simulations).
+    """
+    from ..sweep.engine import _client, _require_engine
+    from ..sweep.spec import base_config, draw, experiment
+
+    _require_engine()
+    try:
+        import optuna  # noqa: F401
+    except ImportError as err:
+        raise NNRobustError(f"tuning needs Optuna ({err}); pip install 'nnrobust[tune]'") from err
+    folder = Path(folder)
+    sweep = sweep_of(spec)
+    base = base_config(sweep)
+    from ..experiment import build
+
+    controllers = {}
+    for index, name in enumerate(spec.controllers):  # every experiment validated before anything runs
+        for sample_id in range(sweep.samples):
+            experiment(sweep, base, draw(sweep, sample_id), name)
+        scales = arm_scales(build(experiment(sweep, base, draw(sweep, 0), name)))
+        controllers[name] = _Controller(spec, name, search_space(name, scales), index)
+    prepare_folder(spec, folder, overwrite)
+    for row in _read_trials(folder):  # resume: replay the history, widening as it did
+        if row["controller"] in controllers:
+            controllers[row["controller"]].record(row)
+    for c in controllers.values():
+        c.study = c._study()
+    base_toml = base.to_toml()
+    train = list(range(spec.train_samples))
+    total = spec.trials * len(controllers) * spec.train_samples
+    with signals_as_interrupt(), _client(workers, scheduler) as client:
+        n_workers = max(len(client.scheduler_info().get("workers", {})), 1)
+        sweep_future = client.scatter(sweep, broadcast=True)
+        batch = max(1, math.ceil(n_workers / spec.train_samples))
+
+        def done_count():
+            return sum(len(c.rows) for c in controllers.values()) * spec.train_samples
+
+        if progress:
+            progress(done_count(), total)
+        while any(c.remaining > 0 for c in controllers.values()):
+            asked = [(c, *item) for c in controllers.values() for item in c.ask(batch)]
+            futures = [[client.submit(evaluate, sweep_future, base_toml, c.law(phase),
+                                      c.space.overrides(values), s, pure=False, retries=1) for s in train]
+                       for c, _, values, phase in asked]
+            finished = []
+            for (c, trial, values, phase), runs in zip(asked, futures):
+                results = [f.result() for f in runs]
+                objectives, constraints, mean = judge(spec, results)
+                for key, value in zip(CONSTRAINTS, constraints):
+                    trial.set_constraint(key, value)
+                c.study.tell(trial, objectives[0])
+                finished.append((c, {"controller": c.name, "phase": phase, "law": c.law(phase),
+                                     "search": values,
+                                     "params": c.space.overrides(values),
+                                     "objectives": list(objectives), "constraints": constraints,
+                                     "feasible": all(v <= 0 for v in constraints), "train": mean,
+                                     "runs": results}))
+            for c, row in finished:  # after every tell: recording may widen a space (a new study)
+                row["trial"] = len(c.rows)
+                c.record(row)
+            _write_trials(folder, [row for _, row in finished])
+            if progress:
+                progress(done_count(), total)
+        summary = _summary(spec, sweep, controllers, client, sweep_future, base_toml)
+    _write_json(folder / "summary.json", summary)
+    plot_pareto(summary, folder)
+    return summary
+
+
+def _pareto(rows: list[dict]) -> list[dict]:
+    """The feasible settings no other feasible setting beats in every objective."""
+    feasible = [r for r in rows if r["feasible"]]
+    out = []
+    for r in feasible:
+        a = np.asarray(r["objectives"])
+        dominated = any(np.all(np.asarray(o["objectives"]) <= a) and np.any(np.asarray(o["objectives"]) < a)
+                        for o in feasible)
+        if not dominated:
+            out.append(r)
+    return sorted(out, key=lambda r: r["objectives"][0])
+
+
+def _summary(spec, sweep, controllers, client, sweep_future, base_toml) -> dict:
+    from ..sweep.spec import draw
+
+    held_out = list(range(spec.train_samples, spec.train_samples + spec.validation))
+    out = {"target": spec.target, "budget": spec.budget, "trials": spec.trials, "seed": spec.seed,
+           "objectives": list(OBJECTIVES),
+           "constraints": {"max_rms_torque": spec.max_rms_torque if math.isfinite(spec.max_rms_torque)
+                           else None, "max_saturated": spec.max_saturated, "runaway": False,
+                           "max_joint_limit_violation": 0.0},
+           "train_samples": [{"sample": i, "seed": draw(sweep, i).seed, **draw(sweep, i).values}
+                             for i in range(spec.train_samples)],
+           "validation_samples": [{"sample": i, "seed": draw(sweep, i).seed, **draw(sweep, i).values}
+                                  for i in held_out],
+           "controllers": {}}
+    for name, c in controllers.items():
+        best = c.best()
+        entry: dict = {"simulations": len(c.rows) * spec.train_samples, "space": c.space.to_dict(),
+                       "pareto": [{"params": r["params"], "search": r["search"], "train": r["train"]}
+                                  for r in _pareto([r for r in c.rows if r["phase"] == "all"])],
+                       "gain_phase_simulations": c.gain_trials * spec.train_samples}
+        if best is None:
+            entry["best"] = None
+            entry["note"] = "no setting met the constraints"
+        else:
+            runs = [client.submit(evaluate, sweep_future, base_toml, name, best["params"], s, pure=False)
+                    for s in held_out]
+            validation = judge(spec, [f.result() for f in runs])[2] if held_out else {}
+            entry["best"] = {"params": best["params"], "search": best["search"], "train": best["train"],
+                             "validation": validation, "at_bound": c.space.at_bound(best["search"])}
+        out["controllers"][name] = entry
+    return out
+
+
+def _write_json(path: Path, data: dict) -> None:
+    tmp = path.with_name(f".{path.name}.partial")
+    tmp.write_text(json.dumps(data, indent=1, default=float) + "\n")
+    os.replace(tmp, path)
+
+
+def plot_pareto(summary: dict, folder: Path) -> None:
+    """DIR/pareto.png and .svg: every controller's Pareto front, RMS error against RMS torque."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    for name, entry in summary["controllers"].items():
+        points = sorted((p["train"]["rms_torque"], 1e3 * p["train"]["rms_error_after_2s"])
+                        for p in entry["pareto"])
+        if points:
+            ax.plot(*zip(*points), "o-", ms=4, label=name)
+        if entry["best"]:
+            ax.plot(entry["best"]["train"]["rms_torque"], 1e3 * entry["best"]["train"]["rms_error_after_2s"],
+                    "k*", ms=10)
+    limit = summary["constraints"]["max_rms_torque"]
+    if limit:
+        ax.axvline(limit, color="0.5", ls=":", label=f"RMS torque limit {limit:g} N m")
+    ax.set_yscale("log")
+    ax.set_xlabel("RMS torque [N m]")
+    ax.set_ylabel("RMS error, t ≥ 2 s [mm]")
+    ax.set_title(f"Pareto fronts at {summary['budget']} simulations each (★ best under the constraints)")
+    ax.legend(fontsize=8)
+    ax.grid(True, which="both", alpha=0.3)
+    for ext in ("png", "svg"):
+        tmp = folder / f".pareto.partial.{ext}"
+        fig.savefig(tmp, dpi=120, bbox_inches="tight")
+        os.replace(tmp, folder / f"pareto.{ext}")
+    plt.close(fig)

@@ -1,0 +1,174 @@
+"""Search spaces for tuning, derived from the arm: every knob of each controller, log-scaled.
+
+Gains are searched as a closed-loop bandwidth w [rad/s] and a damping ratio z, the same two
+coordinates for every controller, so no law gets a wider reach than another:
+
+- eq. (9) laws: K_p = w^2, K_v = 2 z w (eq. 17's K_v^2 > K_p is z > 1/2);
+- the task-space PD: K_p = lambda w^2, K_d = 2 z lambda w, with lambda the task-space inertia
+  (J M^-1 J^T)^-1 at q(0) (geometric mean of its eigenvalues) [kg].
+
+w spans from one oscillation per run to the sampling limit w (1/2 + d) T = 1 (period T, delay d
+periods: the phase lag of the zero-order hold and the delay reaches a radian there); the
+self-motion gain k, a first-order velocity loop, stops at k T = 1. The robust terms' levels
+scale with the arm's task acceleration a = max_i (tau_i / M_ii) |J|: the largest acceleration
+its actuators give the tool [m/s^2]. A bound that is physical (sampling, eq. 17) is never
+widened; the others are, when a best setting sits on them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+TUNABLE = ("nn", "no-u0", "computed-torque", "sliding-mode", "pd")
+"""Controllers with a search space."""
+
+EDGE = 0.03
+"""A value within this fraction of its log range from a bound is "at the bound"."""
+
+
+@dataclass(frozen=True)
+class Param:
+    """One search coordinate: log-uniform on [low, high].
+
+    Attributes:
+        name: the coordinate's name (``bandwidth``, ``damping_ratio`` or a dotted config key).
+        low, high: its bounds.
+        unit: its unit.
+        low_reason, high_reason: why a bound is physical (never widened), or "".
+        weak: for a robust term's knob, the end (``low`` or ``high``) at which the term does least;
+            "" for the gains.
+
+    """
+
+    name: str
+    low: float
+    high: float
+    unit: str
+    low_reason: str = ""
+    high_reason: str = ""
+    weak: str = ""
+
+    def position(self, value: float) -> float:
+        """Where value sits in [low, high], 0 to 1 on the log scale."""
+        return (math.log(value) - math.log(self.low)) / (math.log(self.high) - math.log(self.low))
+
+
+@dataclass(frozen=True)
+class SearchSpace:
+    """A controller's search coordinates and how they become experiment overrides."""
+
+    controller: str
+    params: tuple[Param, ...]
+    task_inertia: float = 1.0  # lambda [kg] (the PD's gains)
+
+    def param(self, name: str) -> Param:
+        """The coordinate called ``name``."""
+        return next(p for p in self.params if p.name == name)
+
+    @property
+    def gains(self) -> tuple[Param, ...]:
+        """The coordinates of the law without its robust term (eq. 9 with u_0 = 0, or the PD)."""
+        return tuple(p for p in self.params if not p.weak)
+
+    @property
+    def robust(self) -> tuple[Param, ...]:
+        """The robust term's coordinates (none for no-u0, computed torque and the PD)."""
+        return tuple(p for p in self.params if p.weak)
+
+    def weakest(self) -> dict[str, float]:
+        """The robust term's knobs where it does least (u_0 about 0)."""
+        return {p.name: p.low if p.weak == "low" else p.high for p in self.robust}
+
+    def overrides(self, values: dict[str, float]) -> dict:
+        """Dotted-key overrides of the experiment for the coordinates' values."""
+        w, z = values["bandwidth"], values["damping_ratio"]
+        out = {k: v for k, v in values.items() if "." in k}
+        if self.controller == "pd":
+            lam = self.task_inertia
+            out.update({"controller.pd_Kp": [lam * w * w], "controller.pd_Kd": [2 * z * lam * w]})
+        else:
+            out.update({"controller.Kp": [w * w], "controller.Kv": [2 * z * w]})
+        if "nn.eps_min" in out:  # the boundary layer is held at its floor (eps0 = eps_min)
+            out["nn.eps0"] = out["nn.eps_min"]
+        return out
+
+    def at_bound(self, values: dict[str, float]) -> list[dict]:
+        """The coordinates whose value sits on a bound: name, side and why it may be physical."""
+        out = []
+        for p in self.params:
+            pos = p.position(values[p.name])
+            if pos < EDGE:
+                out.append({"param": p.name, "side": "low", "bound": p.low, "physical": p.low_reason})
+            elif pos > 1 - EDGE:
+                out.append({"param": p.name, "side": "high", "bound": p.high, "physical": p.high_reason})
+        return out
+
+    def widened(self, values: dict[str, float]) -> SearchSpace:
+        """The space with every non-physical bound that ``values`` sits on moved out a decade."""
+        params = []
+        for p in self.params:
+            pos = p.position(values[p.name])
+            if pos < EDGE and not p.low_reason:
+                p = replace(p, low=p.low / 10)
+            elif pos > 1 - EDGE and not p.high_reason:
+                p = replace(p, high=p.high * 10)
+            params.append(p)
+        return replace(self, params=tuple(params))
+
+    def to_dict(self) -> dict:
+        """JSON-ready description of the space."""
+        return {p.name: {"low": p.low, "high": p.high, "unit": p.unit, "low_reason": p.low_reason,
+                         "high_reason": p.high_reason} for p in self.params}
+
+
+def arm_scales(setup) -> dict[str, float]:
+    """The arm's scales the spaces derive from (a built experiment's robot, q(0), period)."""
+    from ..plant.scaling import torque_scale
+
+    robot, q0, config = setup.robot, setup.q0, setup.config
+    sim = config.simulation
+    M = robot.mass(q0)
+    J = robot.task_jacobian(q0)[: min(robot.m, 3)]
+    Lam_inv = J @ np.linalg.solve(M, J.T)
+    eig = np.clip(np.linalg.eigvalsh(Lam_inv), 1e-12, None)
+    task_inertia = float(np.exp(np.mean(np.log(1.0 / eig))))
+    limit = setup.plant.torque_limit
+    tau = np.asarray(limit, float) if limit is not None else np.full(robot.nq, np.inf)
+    tau = np.where(np.isfinite(tau) & (tau > 0), tau, torque_scale(robot))
+    acceleration = float(np.max(tau / np.diag(M)) * np.linalg.norm(J, 2))
+    delay = config.sensing.delay
+    return {"period": sim.control_period, "delay": delay, "duration": sim.duration,
+            "task_inertia": task_inertia, "task_acceleration": acceleration,
+            "joint_inertia": float(np.mean(np.diag(M)))}
+
+
+def search_space(controller: str, scales: dict[str, float]) -> SearchSpace:
+    """The search space of a controller on an arm (see the module docstring)."""
+    if controller not in TUNABLE:
+        raise ValueError(f"tune: no search space for controller {controller!r}; tunable: "
+                         f"{', '.join(TUNABLE)}")
+    T, d = scales["period"], scales["delay"]
+    w_high = 1.0 / ((0.5 + d) * T)
+    w_low = 2 * math.pi / scales["duration"]
+    a = scales["task_acceleration"]
+    sampling = f"sampling: w (1/2 + delay) T = 1, {w_high:.4g} rad/s"
+    params = [Param("bandwidth", w_low, w_high, "rad/s", high_reason=sampling)]
+    if controller == "pd":
+        params.append(Param("damping_ratio", 0.2, 5.0, "-"))
+        m = scales["joint_inertia"]
+        params.append(Param("controller.pd_null_damping", m * w_low, m * w_high, "N m s/rad"))
+    else:
+        params.append(Param("damping_ratio", 0.51, 5.0, "-", low_reason="eq. (17): K_v^2 > K_p"))
+        params.append(Param("controller.k", 0.1, 1.0 / T, "1/s", high_reason=f"sampling: k T <= 1, "
+                            f"{1.0 / T:.4g} 1/s"))
+    if controller == "nn":
+        params += [Param("nn.F", 1e-2, 1e3, "-", weak="low"),
+                   Param("nn.sigma", 1e-4, 10.0, "1/s", weak="high"),
+                   Param("nn.eps_min", 1e-5 * a, a, "m/s^2", weak="high")]
+    elif controller == "sliding-mode":
+        params += [Param("controller.sliding_gain", 1e-3 * a, 10 * a, "m/s^2", weak="low"),
+                   Param("controller.sliding_boundary", 1e-5 * a, a, "m/s^2", weak="high")]
+    return SearchSpace(controller, tuple(params), scales["task_inertia"])

@@ -1,0 +1,182 @@
+import json
+import math
+
+import numpy as np
+import pytest
+
+from nnrobust.cli import main
+from nnrobust.exceptions import ConfigError, NNRobustError
+from nnrobust.experiment import build
+from nnrobust.presets import load_preset
+from nnrobust.tune import TuneSpec, arm_scales, run_tune, search_space
+from nnrobust.tune.engine import CONSTRAINTS, judge, sweep_of
+
+pytest.importorskip("optuna")
+pytest.importorskip("distributed")
+
+
+@pytest.fixture(scope="module")
+def scales():
+    return arm_scales(build(load_preset("paper-ellipse-noisy")))
+
+
+def test_the_spaces_come_from_the_arm_and_share_their_gain_coordinates(scales):
+    """Every controller searches the same bandwidth range, capped where the hold and the delay
+    cost a radian of phase; the PD's gains carry the task-space inertia, eq. (9)'s do not."""
+    T, d = 1e-3, 1  # paper-ellipse-noisy: 1 ms, one period of delay
+    assert scales["period"] == T and scales["delay"] == d
+    spaces = {c: search_space(c, scales) for c in ("nn", "no-u0", "pd", "sliding-mode")}
+    for space in spaces.values():
+        w = space.param("bandwidth")
+        assert w.high == pytest.approx(1 / ((0.5 + d) * T)) and w.high_reason
+        assert w.low == pytest.approx(2 * math.pi / 20.0)
+    assert spaces["nn"].param("damping_ratio").low > 0.5  # eq. (17): Kv^2 > Kp
+    values = {"bandwidth": 100.0, "damping_ratio": 0.8}
+    eq9 = search_space("no-u0", scales).overrides({**values, "controller.k": 5.0})
+    assert eq9["controller.Kp"] == [1e4] and eq9["controller.Kv"] == [160.0]
+    assert eq9["controller.Kv"][0] ** 2 > eq9["controller.Kp"][0]
+    pd_ = spaces["pd"].overrides({**values, "controller.pd_null_damping": 1.0})
+    lam = scales["task_inertia"]
+    assert pd_["controller.pd_Kp"] == [pytest.approx(lam * 1e4)]
+    assert pd_["controller.pd_Kd"] == [pytest.approx(2 * 0.8 * lam * 100.0)]
+    assert {p.name for p in spaces["nn"].params} >= {"nn.F", "nn.sigma", "nn.eps_min", "controller.k"}
+    assert {p.name for p in spaces["sliding-mode"].params} >= {"controller.sliding_gain",
+                                                               "controller.sliding_boundary"}
+
+
+def test_the_task_inertia_is_that_of_the_arm(scales):
+    """lambda is the geometric mean of the eigenvalues of (J M^-1 J^T)^-1 at q(0)."""
+    setup = build(load_preset("paper-ellipse-noisy"))
+    J, M = setup.robot.task_jacobian(setup.q0), setup.robot.mass(setup.q0)
+    eig = np.linalg.eigvalsh(np.linalg.inv(J @ np.linalg.solve(M, J.T)))
+    assert scales["task_inertia"] == pytest.approx(np.sqrt(eig.prod()), rel=1e-9)
+
+
+def test_a_best_setting_on_a_bound_widens_it_unless_the_bound_is_physical(scales):
+    space = search_space("nn", scales)
+    w, sigma = space.param("bandwidth"), space.param("nn.sigma")
+    values = {p.name: math.sqrt(p.low * p.high) for p in space.params}
+    values.update({"bandwidth": w.high, "nn.sigma": sigma.high})
+    edges = {(b["param"], b["side"]) for b in space.at_bound(values)}
+    assert edges == {("bandwidth", "high"), ("nn.sigma", "high")}
+    wider = space.widened(values)
+    assert wider.param("bandwidth").high == w.high  # sampling: physical
+    assert wider.param("nn.sigma").high == pytest.approx(10 * sigma.high)
+    assert space.widened({p.name: math.sqrt(p.low * p.high) for p in space.params}) == space
+
+
+def test_the_constraints_judge_a_setting_on_all_its_samples():
+    spec = TuneSpec("paper-ellipse", ["pd"], 10, max_rms_torque=5.0, max_saturated=0.01)
+    good = {"status": "completed", "rms_error_after_2s": 1e-3, "rms_torque": 4.0, "torque_chatter": 0.1,
+            "saturated_fraction": 0.0, "runaway": False, "max_joint_limit_violation": 0.0}
+    objectives, constraints, mean = judge(spec, [good, {**good, "rms_torque": 5.5}])
+    assert objectives[1] == pytest.approx(4.75) and all(c <= 0 for c in constraints)
+    _, constraints, _ = judge(spec, [good, {**good, "rms_torque": 7.0}])
+    assert constraints[CONSTRAINTS.index("rms_torque_over_limit")] > 0
+    _, constraints, _ = judge(spec, [good, {**good, "max_joint_limit_violation": 0.01}])
+    assert constraints[CONSTRAINTS.index("joint_limit_violation")] > 0
+    objectives, constraints, _ = judge(spec, [good, {"status": "diverged"}])
+    assert all(c > 0 for c in constraints) and objectives[0] >= 1.0
+
+
+@pytest.mark.parametrize("kwargs, flag", [
+    ({"budget": 0}, "--budget"), ({"budget": 10**9}, "--budget"), ({"controllers": ["lqr"]}, "--controllers"),
+    ({"controllers": ["pd", "pd"]}, "--controllers"), ({"controllers": []}, "--controllers"),
+    ({"max_rms_torque": float("nan")}, "--max-rms-torque"), ({"max_saturated": 2.0}, "--max-saturated"),
+    ({"budget": 3, "train_samples": 4}, "--budget"),
+])
+def test_bad_tunings_are_refused_with_the_flag_named(kwargs, flag):
+    args = {"target": "paper-ellipse", "controllers": ["pd"], "budget": 10, **kwargs}
+    with pytest.raises(ConfigError, match=flag):
+        TuneSpec(**args)
+
+
+def test_a_sweep_with_a_grid_is_refused_and_its_distributions_are_the_samples(tmp_path):
+    grid = tmp_path / "grid.toml"
+    grid.write_text('name = "g"\nbase = "paper-ellipse"\ncontrollers = ["pd"]\n[vary]\n'
+                    '"plant.friction_scale" = [0.5, 2.0]\n')
+    with pytest.raises(ConfigError, match="grid"):
+        sweep_of(TuneSpec(str(grid), ["pd"], 10))
+    drawn = tmp_path / "drawn.toml"
+    drawn.write_text('name = "d"\nbase = "paper-ellipse"\ncontrollers = ["pd"]\n[vary]\n'
+                     '"plant.friction_scale" = {loguniform = [0.5, 2.0]}\n')
+    sweep = sweep_of(TuneSpec(str(drawn), ["pd", "nn"], 10, train_samples=2, validation=3))
+    assert sweep.samples == 5 and sweep.controllers == ["pd", "nn"]
+
+
+@pytest.fixture(scope="module")
+def short_experiment(tmp_path_factory):
+    path = tmp_path_factory.mktemp("tune") / "short.toml"
+    config = load_preset("paper-ellipse-noisy").replace(simulation={"duration": 2.5})
+    path.write_text(config.to_toml())
+    return path
+
+
+@pytest.fixture(scope="module")
+def tuned(short_experiment, tmp_path_factory):
+    out = tmp_path_factory.mktemp("tune") / "out"
+    spec = TuneSpec(str(short_experiment), ["no-u0", "pd"], 8, train_samples=2, validation=2,
+                    max_rms_torque=10.0, max_saturated=0.01, seed=3)
+    return spec, out, run_tune(spec, out, workers=2)
+
+
+def test_every_controller_gets_the_same_budget_samples_and_constraints(tuned):
+    import pandas as pd
+
+    spec, out, summary = tuned
+    on_disk = json.loads((out / "summary.json").read_text())
+    assert on_disk == json.loads(json.dumps(summary, default=float))
+    assert [s["sample"] for s in summary["train_samples"]] == [0, 1]
+    assert [s["sample"] for s in summary["validation_samples"]] == [2, 3]  # never searched on
+    seeds = {s["seed"] for s in summary["train_samples"]} | {s["seed"] for s in summary["validation_samples"]}
+    assert len(seeds) == 4
+    trials = pd.read_parquet(out / "trials")
+    for name, entry in summary["controllers"].items():
+        assert entry["simulations"] == spec.budget
+        assert (trials["controller"] == name).sum() == spec.trials
+        best = entry["best"]
+        assert best is not None and best["train"]["rms_torque"] <= 10.0
+        assert set(best["validation"]) >= {"rms_error_after_2s", "rms_torque", "torque_chatter"}
+        assert best["train"]["rms_error_after_2s"] == min(
+            json.loads(r)["train"]["rms_error_after_2s"] for r, f in zip(trials["row"], trials["feasible"])
+            if f and json.loads(r)["controller"] == name)
+        assert all(p["train"]["rms_torque"] <= 10.0 for p in entry["pareto"])
+    assert (out / "pareto.png").stat().st_size > 10_000
+
+
+def test_a_best_setting_reruns_to_its_training_metrics(tuned):
+    """The summary's params are the overrides the runs used: rerunning sample 0 gives its row."""
+    from nnrobust.config import apply_overrides
+    from nnrobust.experiment import run_experiment
+    from nnrobust.sweep.spec import base_config, draw, experiment
+
+    spec, out, summary = tuned
+    sweep = sweep_of(spec)
+    best = summary["controllers"]["pd"]["best"]
+    runs = []
+    for sample in (0, 1):
+        sample_config = experiment(sweep, base_config(sweep), draw(sweep, sample), "pd")
+        config = apply_overrides(sample_config, best["params"])
+        runs.append(run_experiment(config).metrics()["rms_error_after_2s"])
+    assert np.mean(runs) == pytest.approx(best["train"]["rms_error_after_2s"], rel=1e-9)
+
+
+def test_the_same_command_resumes_and_a_different_one_is_refused(tuned, short_experiment):
+    spec, out, summary = tuned
+    again = run_tune(spec, out, workers=1)
+    assert again["controllers"]["pd"]["best"]["params"] == summary["controllers"]["pd"]["best"]["params"]
+    import pandas as pd
+
+    assert len(pd.read_parquet(out / "trials")) == 2 * spec.trials  # nothing ran twice
+    other = TuneSpec(str(short_experiment), ["no-u0", "pd"], 10, train_samples=2, validation=2, seed=3)
+    with pytest.raises(NNRobustError, match="different tuning"):
+        run_tune(other, out, workers=1)
+
+
+def test_tune_refuses_a_folder_it_did_not_write(tmp_path, short_experiment):
+    (tmp_path / "notes.md").write_text("mine")
+    code = main(["tune", str(short_experiment), "--controllers", "pd", "--budget", "4", "--out",
+                 str(tmp_path), "--quiet"])
+    assert code == 2 and (tmp_path / "notes.md").read_text() == "mine"
+    assert main(["tune", "paper-ellipse", "--controllers", "lqr", "--budget", "4", "--out",
+                 str(tmp_path / "x")]) == 2
