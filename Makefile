@@ -58,7 +58,7 @@ test: $(VENV)/.installed-test $(VENV)/.browser
 bench: $(VENV)/.installed
 	$(BIN)/nnrobust bench --out $(OUT)/bench
 
-# Every number in README.md and docs/: regenerate each data file (about 30 minutes on 2 cores),
+# Every number in README.md and docs/: regenerate each data file (about an hour on 2 cores),
 # then rewrite the tables from them (tests/test_docs_numbers.py checks both).
 DATA := docs/data
 docs-data: $(VENV)/.installed-test
@@ -67,7 +67,7 @@ docs-data: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/nn_options.py --json $(DATA)/nn_options.json
 	$(BIN)/python benchmarks/subtask.py --json $(DATA)/subtask.json
 	$(BIN)/python benchmarks/arm_presets.py --json $(DATA)/arm_presets.json
-	$(BIN)/python benchmarks/fair_comparison.py --json $(DATA)/fair_comparison.json --figure docs/img/fair_comparison.png
+	$(BIN)/python benchmarks/tuned_comparison.py --json $(DATA)/tuned_comparison.json --figure docs/img/tuned_comparison.png
 	$(BIN)/python benchmarks/plant_convergence.py --json $(DATA)/plant_convergence.json
 	for study in paper-robustness panda-robustness; do \
 	  $(BIN)/nnrobust sweep $$study --out $(OUT)/$$study --overwrite --keep-worst 1 && \

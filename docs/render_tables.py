@@ -22,8 +22,6 @@ DATA = ROOT / "docs" / "data"
 DOCUMENTS = ("README.md", "docs/controller.md", "docs/plant.md", "docs/fair-comparison.md",
              "docs/robots.md", "docs/robustness.md")
 TABLE = re.compile(r"(<!-- table: (?P<name>[\w-]+) -->\n)(?P<body>.*?)(<!-- /table -->)", re.S)
-TORQUE_BUDGET = 10.0
-"""[N m] RMS torque within which the headline compares the controllers' best errors."""
 
 
 def _data(name: str) -> dict:
@@ -82,47 +80,6 @@ def paper_reproduction() -> str:
     return _markdown([("case", "l", _text("case")), ("controller", "l", _text("variant")), ERROR, TORQUE,
                       CHATTER, SATURATED, WARNINGS], _data("paper_reproduction")["rows"],
                      "python benchmarks/paper_reproduction.py --json docs/data/paper_reproduction.json")
-
-
-def _best_within_budget(rows: list[dict]) -> dict[tuple, dict]:
-    best: dict[tuple, dict] = {}
-    for r in rows:
-        over = r["rms_torque"] > TORQUE_BUDGET or r["saturated_fraction"] > 0.01
-        if r["status"] != "completed" or over:
-            continue
-        key = (r["case"], r["sensing"], r["controller"])
-        if key not in best or r["rms_error_after_2s"] < best[key]["rms_error_after_2s"]:
-            best[key] = r
-    return best
-
-
-def fair_headline() -> str:
-    rows = _data("fair_comparison")["rows"]
-    best = _best_within_budget(rows)
-    panels = list(dict.fromkeys((r["case"], r["sensing"]) for r in rows))
-
-    def cell(case, sensing):
-        def text(ctrl):
-            r = best.get((case, sensing, ctrl["controller"]))
-            return "–" if r is None else f"{_mm(r['rms_error_after_2s'])} mm ({r['rms_torque']:.2g} N m)"
-        return text
-
-    controllers = [{"controller": c} for c in dict.fromkeys(r["controller"] for r in rows)]
-    columns = [("controller", "l", _text("controller"))] + [
-        (f"{case}, {sensing}", "r", cell(case, sensing)) for case, sensing in panels]
-    return _markdown(columns, controllers) + (
-        f"\nBest RMS task error (t ≥ 2 s) of each controller over its gain grid among the settings "
-        f"with RMS torque ≤ {TORQUE_BUDGET:g} N m and at most 1 % saturated steps (RMS torque in "
-        "brackets); 20 s runs with the URDF's effort limits. Made by "
-        "`python benchmarks/fair_comparison.py --json docs/data/fair_comparison.json "
-        "--figure docs/img/fair_comparison.png`.\n")
-
-
-def fair_pareto() -> str:
-    rows = [r for r in _data("fair_comparison")["rows"] if r.get("pareto")]
-    return _markdown([("case", "l", _text("case")), ("sensing", "l", _text("sensing")),
-                      ("controller", "l", _text("controller")), ("setting", "l", _text("setting")),
-                      ERROR, TORQUE, CHATTER, SATURATED], rows)
 
 
 def nn_options() -> str:
@@ -189,6 +146,60 @@ def friction_compensation() -> str:
                      "python benchmarks/friction_compensation.py --json docs/data/friction_compensation.json")
 
 
+TUNED_COMMAND = ("python benchmarks/tuned_comparison.py --json docs/data/tuned_comparison.json "
+                 "--figure docs/img/tuned_comparison.png")
+
+
+def _tuned_cell(best: dict | None) -> str:
+    if best is None:
+        return "no setting met the constraints"
+    held = best["validation"].get("rms_error_after_2s", best["train"]["rms_error_after_2s"])
+    return f"{1e3 * held:.3g} mm ({best['train']['rms_torque']:.2g} N m)"
+
+
+def tuned_headline() -> str:
+    data = _data("tuned_comparison")
+    panels = [(c["case"], c["sensing"]) for c in data["cases"]]
+    columns = [("controller", "l", _text("controller"))] + [
+        (f"{case}, {sensing}", "r", lambda r, i=i: _tuned_cell(r["best"][i])) for i, (case, sensing) in
+        enumerate(panels)]
+    rows = [{"controller": name, "best": [c["summary"]["controllers"][name]["best"] for c in data["cases"]]}
+            for name in data["controllers"]]
+    limits = sorted({c["summary"]["constraints"]["max_rms_torque"] for c in data["cases"]})
+    return _markdown(columns, rows) + (
+        f"\nHeld-out RMS task error (t ≥ 2 s) of each controller's best setting under the constraints (RMS "
+        f"torque in brackets), after `nnrobust tune` gave every controller {data['budget']} simulations "
+        f"per case: RMS torque ≤ {' or '.join(f'{v:g}' for v in limits)} N m (the paper's arm or the "
+        "Panda), at most 1 % saturated steps, no runaway, no stop hit. Made by "
+        f"`{TUNED_COMMAND}`.\n")
+
+
+def tuned_settings() -> str:
+    data = _data("tuned_comparison")
+    rows = []
+    for case in data["cases"]:
+        for name, entry in case["summary"]["controllers"].items():
+            best = entry["best"]
+            if best is None:
+                rows.append({"case": f"{case['case']}, {case['sensing']}", "controller": name, "setting": "–",
+                             "train": "–", "held": "–", "torque": "–", "chatter": "–", "bounds": "–"})
+                continue
+            setting = ", ".join(f"{k.split('.')[-1]} {v[0] if isinstance(v, list) else v:.3g}"
+                                for k, v in best["params"].items() if k != "nn.eps0")
+            bounds = "; ".join(f"{b['param']} {b['side']}" + (" (physical)" if b["physical"] else "")
+                               for b in best["at_bound"]) or "interior"
+            rows.append({"case": f"{case['case']}, {case['sensing']}", "controller": name, "setting": setting,
+                         "train": _mm(best["train"]["rms_error_after_2s"]),
+                         "held": _mm(best["validation"].get("rms_error_after_2s")),
+                         "torque": f"{best['train']['rms_torque']:.3g}",
+                         "chatter": f"{best['train']['torque_chatter']:.3g}", "bounds": bounds})
+    return _markdown([("case", "l", _text("case")), ("controller", "l", _text("controller")),
+                      ("best setting", "l", _text("setting")), ("train error [mm]", "r", _text("train")),
+                      ("held-out error [mm]", "r", _text("held")), ("RMS torque [N m]", "r", _text("torque")),
+                      ("chatter [N m]", "r", _text("chatter")), ("on a bound", "l", _text("bounds"))],
+                     rows, TUNED_COMMAND)
+
+
 def _study(name: str):
     """A shipped study's summary (docs/data/<name>.json, DIR/summary.json of its sweep): per
     controller the error and torque statistics, then the median error at each grid value."""
@@ -225,9 +236,10 @@ def _study(name: str):
 
 RENDERERS = {"arm-presets": arm_presets, "paper-robustness": _study("paper-robustness"),
              "panda-robustness": _study("panda-robustness"), "paper-reproduction": paper_reproduction,
-             "fair-headline": fair_headline, "fair-pareto": fair_pareto, "nn-options": nn_options,
+             "nn-options": nn_options,
              "subtask": subtask, "plant-convergence": plant_convergence,
-             "friction-compensation": friction_compensation}
+             "friction-compensation": friction_compensation, "tuned-headline": tuned_headline,
+             "tuned-settings": tuned_settings}
 
 
 def render(text: str) -> str:

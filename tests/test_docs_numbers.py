@@ -17,9 +17,12 @@ sys.path.insert(0, str(ROOT / "docs"))
 import _common  # noqa: E402
 import render_tables  # noqa: E402
 
-DATA_FILES = ["paper_reproduction", "fair_comparison", "nn_options", "subtask", "arm_presets"]
+DATA_FILES = ["paper_reproduction", "nn_options", "subtask", "arm_presets"]
+"""Rows of benchmarks/_common.py jobs (preset and changes)."""
 STUDIES = ["paper_robustness", "panda_robustness"]
 """Summaries of the shipped sweeps (their summary.json)."""
+OTHERS = ["friction_compensation", "plant_convergence", "tuned_comparison"]
+"""Data files with a re-run test of their own below."""
 
 
 @pytest.mark.parametrize("document", render_tables.DOCUMENTS)
@@ -32,7 +35,7 @@ def test_every_data_file_has_a_table():
     text = "".join((ROOT / d).read_text() for d in render_tables.DOCUMENTS)
     for name, renderer in render_tables.RENDERERS.items():
         assert f"<!-- table: {name} -->" in text, name
-    assert {p.stem for p in render_tables.DATA.glob("*.json")} == set(DATA_FILES + STUDIES)
+    assert {p.stem for p in render_tables.DATA.glob("*.json")} == set(DATA_FILES + STUDIES + OTHERS)
 
 
 @pytest.mark.parametrize("name", STUDIES)
@@ -70,3 +73,87 @@ def test_a_row_of_the_data_reproduces(name):
     for key in ("rms_error_after_2s", "rms_torque", "torque_chatter", "saturated_fraction"):
         assert again[key] == pytest.approx(row[key], rel=1e-9, abs=1e-12), (name, key)
     assert again["warnings"] == row["warnings"]
+
+
+def _rerun(job: dict) -> dict:
+    from nnrobust.experiment import run_experiment
+    from nnrobust.presets import load_preset
+
+    return run_experiment(load_preset(job["preset"]).replace(**job["changes"])).metrics()
+
+
+def test_a_run_of_the_friction_compensation_data_reproduces():
+    runs = json.loads((render_tables.DATA / "friction_compensation.json").read_text())["runs"]
+    run = runs[0]
+    again = _rerun(run)
+    for key in ("rms_error_after_2s", "rms_torque", "torque_chatter"):
+        assert again[key] == pytest.approx(run[key], rel=1e-9), key
+
+
+def test_a_run_of_the_plant_convergence_data_reproduces():
+    """The default-step run of paper-ellipse with the NN, and the table's claim that it converged."""
+    data = json.loads((render_tables.DATA / "plant_convergence.json").read_text())
+    run = next(r for r in data["runs"] if r["preset"] == "paper-ellipse" and r["controller"] == "nn"
+               and r["run"] == "default")
+    again = _rerun(run)
+    for key in ("rms_error_after_2s", "rms_torque", "torque_chatter", "friction_events"):
+        assert again[key] == pytest.approx(run[key], rel=1e-9), key
+    row = next(r for r in data["rows"] if r["preset"] == "paper-ellipse" and r["controller"] == "nn")
+    assert row["converged"] and not row["chaotic"]
+
+
+def test_a_best_setting_of_the_tuned_comparison_reproduces():
+    """The PD's best setting on case (b), ideal sensing, rerun on its training sample."""
+    from nnrobust.config import apply_overrides
+    from nnrobust.experiment import run_experiment
+    from nnrobust.sweep.spec import base_config, draw, experiment
+    from nnrobust.tune import TuneSpec
+    from nnrobust.tune.engine import sweep_of
+
+    data = json.loads((render_tables.DATA / "tuned_comparison.json").read_text())
+    case = next(c for c in data["cases"] if c["case"] == "case (b) ellipse" and c["sensing"] == "ideal")
+    summary = case["summary"]
+    spec = TuneSpec(summary["target"], data["controllers"], summary["budget"], len(summary["train_samples"]),
+                    len(summary["validation_samples"]), seed=summary["seed"])
+    sweep = sweep_of(spec)
+    best = summary["controllers"]["pd"]["best"]
+    config = apply_overrides(experiment(sweep, base_config(sweep), draw(sweep, 0), "pd"), best["params"])
+    again = run_experiment(config).metrics()
+    for key in ("rms_error_after_2s", "rms_torque", "torque_chatter"):
+        assert again[key] == pytest.approx(best["train"][key], rel=1e-9), key
+
+
+def _at(data, path):
+    for key in path:
+        data = data[key]
+    return data
+
+
+def _tuned(case, sensing, controller, *path):
+    """A path into tuned_comparison.json's summary of one case and controller."""
+    def get(data):
+        entry = next(c for c in data["cases"] if c["case"] == case and c["sensing"] == sensing)
+        return _at(entry["summary"]["controllers"][controller], path)
+    return get
+
+
+QUOTED = [
+    # document, the sentence's pattern (one number captured), data file, where the number is, scale
+    ("docs/plant.md", r"measures 3\.73 N m and 0\.93 N m at every\s+step", None, None, None),
+]
+"""Figures quoted in prose, each checked against its data file (within 2 % at the printed digits)."""
+
+
+def test_every_quoted_figure_matches_its_data():
+    import re
+
+    for document, pattern, name, where, scale in QUOTED_FIGURES:
+        text = (ROOT / document).read_text()
+        match = re.search(pattern, text)
+        assert match, f"{document}: no text matches {pattern!r}"
+        if name is None:
+            continue
+        data = json.loads((render_tables.DATA / f"{name}.json").read_text())
+        value = where(data) if callable(where) else _at(data, where)
+        quoted = float(match.group(1))
+        assert quoted == pytest.approx(scale * value, rel=0.02, abs=1e-12), (document, pattern, scale * value)
