@@ -275,8 +275,7 @@ class _Controller:
                 params=row["search"], distributions=self._distributions(phase), value=row["objectives"][0],
                 constraints=dict(zip(CONSTRAINTS, row["constraints"]))))
         if phase == "all" and self.gain_trials and not history:
-            gains = self.best("gains")
-            if gains is not None:
+            for gains in self.starts():
                 study.enqueue_trial({**gains["search"], **self.space.weakest()})
         return study
 
@@ -288,6 +287,22 @@ class _Controller:
         """The feasible setting of a phase with the least training error."""
         feasible = [r for r in self.rows if r["feasible"] and r["phase"] == phase]
         return min(feasible, key=lambda r: r["train"]["rms_error_after_2s"]) if feasible else None
+
+    def starts(self) -> list[dict]:
+        """The gain settings the full search starts from: the best of the gain phase, and the best
+        with a tenth and a quarter of the torque limit to spare (a robust term adds torque, and
+        the best gains often sit on the limit).
+        """
+        feasible = sorted((r for r in self.rows if r["feasible"] and r["phase"] == "gains"),
+                          key=lambda r: r["train"]["rms_error_after_2s"])
+        limit = self.spec.max_rms_torque
+        out: list[dict] = []
+        for share in (1.0, 0.9, 0.75):
+            pick = next((r for r in feasible
+                         if not math.isfinite(limit) or r["train"]["rms_torque"] <= share * limit), None)
+            if pick is not None and pick not in out:
+                out.append(pick)
+        return out
 
     def record(self, row: dict) -> None:
         """Add a finished trial; at a checkpoint, widen the space where the best sits on a bound."""
