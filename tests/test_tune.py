@@ -180,3 +180,30 @@ def test_tune_refuses_a_folder_it_did_not_write(tmp_path, short_experiment):
     assert code == 2 and (tmp_path / "notes.md").read_text() == "mine"
     assert main(["tune", "paper-ellipse", "--controllers", "lqr", "--budget", "4", "--out",
                  str(tmp_path / "x")]) == 2
+
+
+def test_a_robust_law_tunes_its_gains_first_then_starts_from_them_with_the_term_at_its_weakest(
+        short_experiment, tmp_path):
+    """Sliding mode: the first 30 % of its budget run the no-u0 law (u_0 off) over the gains alone;
+    the full search then starts from the best gains with K at its low and Phi at its high bound,
+    and its best is chosen among runs of the law itself."""
+    import pandas as pd
+
+    spec = TuneSpec(str(short_experiment), ["sliding-mode"], 10, validation=0, max_rms_torque=10.0, seed=1)
+    summary = run_tune(spec, tmp_path / "out", workers=1)
+    rows = sorted((json.loads(r) for r in pd.read_parquet(tmp_path / "out" / "trials")["row"]),
+                  key=lambda r: r["trial"])
+    gains = [r for r in rows if r["phase"] == "gains"]
+    assert [r["trial"] for r in gains] == [0, 1, 2] and all(r["law"] == "no-u0" for r in gains)
+    assert all(set(r["search"]) == {"bandwidth", "damping_ratio", "controller.k"} for r in gains)
+    first = rows[3]
+    space = search_space("sliding-mode", arm_scales(build(load_preset("paper-ellipse-noisy"))))
+    best_gains = min((r for r in gains if r["feasible"]), key=lambda r: r["train"]["rms_error_after_2s"])
+    assert first["law"] == "sliding-mode"
+    assert {k: first["search"][k] for k in best_gains["search"]} == best_gains["search"]
+    weakest = space.weakest()
+    assert first["search"]["controller.sliding_gain"] == pytest.approx(weakest["controller.sliding_gain"])
+    assert first["search"]["controller.sliding_boundary"] == pytest.approx(
+        weakest["controller.sliding_boundary"])
+    entry = summary["controllers"]["sliding-mode"]
+    assert "controller.sliding_gain" in entry["best"]["params"] and entry["simulations"] == 10
