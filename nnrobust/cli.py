@@ -217,6 +217,22 @@ def cmd_view(args) -> int:
     return 0
 
 
+def _bar(done: int, total: int, text: str) -> None:
+    """One progress line on stderr, redrawn in place."""
+    filled = int(30 * done / max(total, 1))
+    print(f"\r[{'#' * filled}{' ' * (30 - filled)}] {done}/{total} {text}   ", end="", file=sys.stderr,
+          flush=True)
+
+
+def _resumable(work, kept: str):
+    """work()'s result, or None after Ctrl-C with one line saying what was kept and how to resume."""
+    try:
+        return work()
+    except KeyboardInterrupt:
+        print(f"\nnnrobust: {kept}; run the same command again to resume", file=sys.stderr)
+        return None
+
+
 def cmd_sweep(args) -> int:
     """Run or resume a robustness sweep on dask.distributed."""
     import time
@@ -240,16 +256,12 @@ def cmd_sweep(args) -> int:
         elapsed = time.monotonic() - started[0]
         rate = (done - started[1]) / elapsed if elapsed > 0 else 0.0
         eta = f"{(total - done) / rate:.0f} s" if rate > 0 else "?"
-        filled = int(30 * done / max(total, 1))
-        print(f"\r[{'#' * filled}{' ' * (30 - filled)}] {done}/{total} rows, {rate:.2f}/s, ETA {eta}   ",
-              end="", file=sys.stderr, flush=True)
+        _bar(done, total, f"rows, {rate:.2f}/s, ETA {eta}")
 
     started: list[float] = []
-    try:
-        counts = run_sweep(spec, out, args.workers, args.scheduler, args.overwrite, progress)
-    except KeyboardInterrupt:
-        print(f"\nnnrobust: sweep interrupted; the rows written so far are in {out}/results; run the same "
-              "command again to resume", file=sys.stderr)
+    counts = _resumable(lambda: run_sweep(spec, out, args.workers, args.scheduler, args.overwrite, progress),
+                        f"sweep interrupted; the rows written so far are in {out}/results")
+    if counts is None:
         return 130
     if started:
         print(file=sys.stderr)
@@ -315,16 +327,12 @@ def cmd_tune(args) -> int:
             print(f"tune {args.target}: {', '.join(spec.controllers)}, {spec.budget} simulations each "
                   f"({spec.trials} settings x {spec.train_samples} samples); {done} of {total} already done",
                   file=sys.stderr)
-        filled = int(30 * done / max(total, 1))
-        print(f"\r[{'#' * filled}{' ' * (30 - filled)}] {done}/{total} simulations, "
-              f"{time.monotonic() - started[0]:.0f} s   ", end="", file=sys.stderr, flush=True)
+        _bar(done, total, f"simulations, {time.monotonic() - started[0]:.0f} s")
 
     out = Path(args.out)
-    try:
-        summary = run_tune(spec, out, args.workers, args.scheduler, args.overwrite, progress)
-    except KeyboardInterrupt:
-        print(f"\nnnrobust: tuning interrupted; the settings tried so far are in {out}/trials; run the same "
-              "command again to resume", file=sys.stderr)
+    summary = _resumable(lambda: run_tune(spec, out, args.workers, args.scheduler, args.overwrite, progress),
+                         f"tuning interrupted; the settings tried so far are in {out}/trials")
+    if summary is None:
         return 130
     if started:
         print(file=sys.stderr)
