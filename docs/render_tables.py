@@ -61,7 +61,7 @@ def _probed(key: str, scale: float = 1.0):
         if r.get(key) is None:
             return "–"
         if r.get("chaotic") and f"{key}_min" in r:
-            return f"{scale * r[f'{key}_min']:.2g}–{scale * r[f'{key}_max']:.2g} †"
+            return f"{scale * r[f'{key}_min']:.3g}–{scale * r[f'{key}_max']:.3g} †"
         return f"{scale * r[key]:.3g}"
     return cell
 

@@ -129,21 +129,36 @@ def _at(data, path):
     return data
 
 
-def _tuned(case, sensing, controller, *path):
-    """A path into tuned_comparison.json's summary of one case and controller."""
-    def get(data):
-        entry = next(c for c in data["cases"] if c["case"] == case and c["sensing"] == sensing)
-        return _at(entry["summary"]["controllers"][controller], path)
-    return get
-
-
-PAPER, PANDA = "paper_robustness", "panda_robustness"
+PAPER, PANDA, TUNED = "paper_robustness", "panda_robustness", "tuned_comparison"
 
 
 def _study(controller, statistic):
     return ["controllers", controller, "rms_error_after_2s", statistic]
 
 
+def _held(case, controller, sensing="noisy"):
+    """The held-out RMS error of a controller's best setting in tuned_comparison.json."""
+    def get(data):
+        entry = next(c for c in data["cases"] if c["case"] == case and c["sensing"] == sensing)
+        return entry["summary"]["controllers"][controller]["best"]["validation"]["rms_error_after_2s"]
+    return get
+
+
+def _row(case, variant):
+    """A paper_reproduction.json row's RMS error."""
+    return lambda data: next(r["rms_error_after_2s"] for r in data["rows"]
+                             if r["case"] == case and r["variant"] == variant)
+
+
+def _ratio(preset):
+    """no-u0's RMS error over the NN's on a real-arm preset (arm_presets.json)."""
+    def get(data):
+        error = {r["controller"]: r["rms_error_after_2s"] for r in data["rows"] if r["preset"] == preset}
+        return error["no-u0"] / error["nn"]
+    return get
+
+
+CASE_A, CASE_B, PANDA_ARM = "case (a) line", "case (b) ellipse", "Panda ellipse"
 QUOTED_FIGURES: list[tuple] = [
     # document, a pattern capturing one number, data file, where the number is (keys, or a function of
     # the data), scale from the data's unit to the printed one
@@ -152,15 +167,36 @@ QUOTED_FIGURES: list[tuple] = [
     ("README.md", r"and its worst ([\d.]+) mm; the default", PAPER, _study("nn", "max"), 1e3),
     ("README.md", r"sliding-mode term has ([\d.]+) / ", PAPER, _study("sliding-mode", "median"), 1e3),
     ("README.md", r"term has [\d.]+ / ([\d.]+) / ", PAPER, _study("sliding-mode", "p95"), 1e3),
-    ("README.md", r"term has [\d.]+ / [\d.]+ / ([\d.]+) mm", PAPER, _study("sliding-mode", "max"),
-     1e3),
+    ("README.md", r"term has [\d.]+ / [\d.]+ / ([\d.]+) mm", PAPER, _study("sliding-mode", "max"), 1e3),
     ("README.md", r"no-u₀ ([\d.]+) mm", PAPER, _study("no-u0", "median"), 1e3),
     ("README.md", r"exact model ([\d.]+) mm", PAPER, _study("computed-torque", "median"), 1e3),
     ("README.md", r"the best median \(([\d.]+) mm\)", PANDA, _study("nn", "median"), 1e3),
     ("README.md", r"reach up to ([\d.]+) mm", PANDA, _study("nn", "max"), 1e3),
     ("README.md", r"stays below ([\d.]+) mm everywhere", PANDA, _study("sliding-mode", "max"), 1e3),
+    ("README.md", r"baseline 19–(\d+)× on them", "arm_presets", _ratio("panda-ellipse"), 1.0),
+    ("README.md", r"baseline (\d+)–\d+× on them", "arm_presets", _ratio("planar7-ellipse"), 1.0),
+    ("README.md", r"Its best is\s+([\d.]+) mm on all three", TUNED, _held(CASE_B, "nn"), 1e3),
+    ("README.md", r"without u₀ reaches ([\d.]+)–", TUNED, _held(CASE_B, "no-u0"), 1e3),
+    ("README.md", r"without u₀ reaches [\d.]+–([\d.]+) mm", TUNED, _held(CASE_A, "no-u0"), 1e3),
+    ("README.md", r"and\s+([\d.]+) mm on the Panda. The PD", TUNED, _held(PANDA_ARM, "no-u0"), 1e3),
+    ("README.md", r"The PD reaches ([\d.]+)–", TUNED, _held(CASE_B, "pd"), 1e3),
+    ("README.md", r"The PD reaches [\d.]+–[\d.]+ mm and ([\d.]+) mm", TUNED, _held(PANDA_ARM, "pd"), 1e3),
+    ("README.md", r"case \(a\) only \(([\d.]+) against", TUNED, _held(CASE_A, "nn", "ideal"),
+     1e3),
+    ("README.md", r"error 54× \(([\d.]+) against", "paper_reproduction", _row(CASE_B, "NN, defaults"), 1e3),
+    ("README.md", r"error 54× \([\d.]+ against (\d+) mm", "paper_reproduction",
+     _row(CASE_B, "no-u0 baseline"), 1e3),
+    ("docs/fair-comparison.md", r"best on case \(a\): ([\d.]+) mm", TUNED, _held(CASE_A, "nn", "ideal"),
+     1e3),
+    ("docs/fair-comparison.md", r"close to no-u0 on the Panda \(([\d.]+) mm\)", TUNED,
+     _held(PANDA_ARM, "sliding-mode"), 1e3),
+    ("docs/fair-comparison.md", r"arm it ends worse: ([\d.]+) and", TUNED, _held(CASE_A, "sliding-mode"),
+     1e3),
+    ("docs/fair-comparison.md", r"it ends worse: [\d.]+ and ([\d.]+) mm", TUNED, _held(CASE_B, "sliding-mode"),
+     1e3),
 ]
-"""Figures quoted in prose, each checked against its data file (within 2 %: the printed digits)."""
+"""Figures quoted in prose, each checked against its data file (within half a unit of the last
+printed digit, or 2 %)."""
 
 
 def test_every_quoted_figure_matches_its_data():
