@@ -20,6 +20,7 @@ from pathlib import Path
 
 from nnrobust.results import write_json_atomic
 from nnrobust.tune import TuneSpec, run_tune
+from nnrobust.tune.engine import error_torque_front
 
 HERE = Path(__file__).resolve().parent
 CONTROLLERS = ["nn", "no-u0", "pd", "sliding-mode"]
@@ -59,7 +60,13 @@ def main() -> None:
     parser.add_argument("--budget", type=int, default=120, help="simulations per controller and case")
     parser.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
     parser.add_argument("--out", default="out/tuned", help="folder of the tunings (resumable)")
+    parser.add_argument("--replot", action="store_true", help="only draw --figure from --json's data")
     args = parser.parse_args()
+    if args.replot:
+        import json
+
+        plot(json.loads(Path(args.json).read_text())["cases"], args.figure)
+        return
     cases = []
     for case, sensing, target, torque in CASES:
         path = HERE.parent / target if target.endswith(".toml") else target
@@ -97,8 +104,7 @@ def plot(cases: list[dict], path: str) -> None:
     for ax, case in zip(axes.flat, cases):
         summary = case["summary"]
         for name, entry in summary["controllers"].items():
-            points = sorted((p["train"]["rms_torque"], 1e3 * p["train"]["rms_error_after_2s"])
-                            for p in entry["pareto"])
+            points = error_torque_front(entry["pareto"])
             if points:
                 ax.plot(*zip(*points), "o-", ms=3, color=colors[name], label=name)
             if entry["best"]:

@@ -76,7 +76,7 @@ class Result:
         prismatic: whether each joint is prismatic (units m, m/s, N), or None (all revolute).
         backend: which loop simulated it: ``python`` or ``compiled``.
         plant_step: the plant's integration step [s] (control period / substeps), or NaN.
-        friction_events: stick-slip events the plant located (docs/plant.md).
+        friction_events: stick-slip events the plant located inside its steps (docs/plant.md).
         unresolved_events: plant steps with more events than it resolves (a warning).
 
     """

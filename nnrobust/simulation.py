@@ -38,7 +38,8 @@ class Trace:
         message: why the run stopped early, or "".
         recorded: per-sample quantities a loop already computed for the Result (the compiled
             loop: ``chain`` N x (n + 1) x 3, ``manipulability`` and ``h``), or None.
-        friction_events: stick-slip events located (:mod:`nnrobust.plant.stick_slip`).
+        friction_events: stick-slip events located inside plant steps (:mod:`nnrobust.plant.stick_slip`;
+            mode changes when a new command arrives are not counted).
         unresolved_events: integration steps with more events than it resolves.
 
     """

@@ -192,8 +192,8 @@ QUOTED_FIGURES: list[tuple] = [
      _held(PANDA_ARM, "sliding-mode"), 1e3),
     ("docs/fair-comparison.md", r"arm it ends worse: ([\d.]+) and", TUNED, _held(CASE_A, "sliding-mode"),
      1e3),
-    ("docs/fair-comparison.md", r"it ends worse: [\d.]+ and ([\d.]+) mm", TUNED, _held(CASE_B, "sliding-mode"),
-     1e3),
+    ("docs/fair-comparison.md", r"it ends worse: [\d.]+ and ([\d.]+) mm", TUNED,
+     _held(CASE_B, "sliding-mode"), 1e3),
 ]
 """Figures quoted in prose, each checked against its data file (within half a unit of the last
 printed digit, or 2 %)."""

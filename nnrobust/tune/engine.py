@@ -404,6 +404,18 @@ def run_tune(spec: TuneSpec, folder: str | Path, workers: int | None = None, sch
     return summary
 
 
+def error_torque_front(pareto: list[dict]) -> list[tuple[float, float]]:
+    """(RMS torque [N m], RMS error [mm]) of the settings no other beats in both, by torque: the
+    2-D front the figures draw (a subset of the 3-D front in the summary).
+    """
+    points = sorted((p["train"]["rms_torque"], 1e3 * p["train"]["rms_error_after_2s"]) for p in pareto)
+    front: list[tuple[float, float]] = []
+    for torque, error in points:
+        if not front or error < front[-1][1]:
+            front.append((torque, error))
+    return front
+
+
 def _pareto(rows: list[dict]) -> list[dict]:
     """The feasible settings no other feasible setting beats in every objective."""
     feasible = [r for r in rows if r["feasible"]]
@@ -465,8 +477,7 @@ def plot_pareto(summary: dict, folder: Path) -> None:
 
     fig, ax = plt.subplots(figsize=(7, 4.5))
     for name, entry in summary["controllers"].items():
-        points = sorted((p["train"]["rms_torque"], 1e3 * p["train"]["rms_error_after_2s"])
-                        for p in entry["pareto"])
+        points = error_torque_front(entry["pareto"])
         if points:
             ax.plot(*zip(*points), "o-", ms=4, label=name)
         if entry["best"]:
