@@ -546,10 +546,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     tune = sub.add_parser("tune", help="tune controllers at an equal budget of simulations",
                           description="Tune each controller with the same optimiser (Optuna's TPE, "
-                          "multi-objective: RMS error after 2 s, RMS torque, chatter) over a search space "
-                          "derived from the arm, at the same budget of simulations, on the same samples, "
-                          "under the same constraints; then check each best setting on held-out samples. "
-                          "Re-running the same command into the same folder resumes (docs/tuning.md).")
+                          "minimising the RMS error after 2 s under the constraints; torque and chatter are "
+                          "recorded for the Pareto fronts) over a search space derived from the arm, at the "
+                          "same budget of simulations, on the same samples, under the same constraints; "
+                          "then check each best setting on held-out samples. Re-running the same command "
+                          "into the same folder resumes (docs/tuning.md).")
     tune.add_argument("target", help="a preset, an experiment file, or a sweep file whose [vary] "
                       "distributions are the uncertainty the settings are tuned over")
     tune.add_argument("--controllers", required=True, help="comma-separated controller kinds, e.g. "
