@@ -352,6 +352,8 @@ CONFIG_CASES = [
          ex.ConfigError, "nominal.kind: mass_scale, inertia_scale and com_error perturb the URDF model"),
     Case("negative friction scale", lambda d: _toml(d, "[plant]\nfriction_scale = -1.0\n"),
          ex.ConfigError, "plant.friction_scale: must be >= 0"),
+    Case("static friction below the Coulomb level", lambda d: _toml(d, "[plant]\nstiction = 0.5\n"),
+         ex.ConfigError, "plant.stiction: the static / Coulomb friction ratio must be in [1, 1e6)"),
     Case("substeps beyond any need", lambda d: _toml(d, "[simulation]\nsubsteps = 100000\n"),
          ex.ConfigError, "simulation.substeps: 100000 integration steps per control period; at most 10000"),
     Case("control rate of a terahertz", lambda d: _toml(d, "[simulation]\ncontrol_period = 1e-12\n"),
@@ -461,7 +463,62 @@ RUN_FOLDER_CASES = [
          RunFolderError, "Object arrays cannot be loaded when allow_pickle=False"),
 ]
 
-CASES = URDF_CASES + CONFIG_CASES + RUN_FOLDER_CASES + VIEWER_CASES
+def _tune(folder: Path, *args: str, **kwargs):
+    """nnrobust tune's checks, as the command line calls them (nothing runs: each is refused first)."""
+    def run():
+        from nnrobust.tune import TuneSpec, run_tune
+
+        return run_tune(TuneSpec(*args, **kwargs), folder / "tuning", workers=1)
+
+    return run
+
+
+def _tune_into(folder: Path, make) -> Callable[[], object]:
+    """A tuning into a folder ``make`` prepares."""
+    def run():
+        from nnrobust.tune import TuneSpec, run_tune
+
+        return run_tune(TuneSpec("paper-ellipse", ["pd"], 4), make(folder), workers=1)
+
+    return run
+
+
+def _grid_sweep(folder: Path) -> str:
+    return str(_file(folder, "grid.toml", 'name = "g"\nbase = "paper-ellipse"\ncontrollers = ["pd"]\n'
+                     '[vary]\n"plant.friction_scale" = [0.5, 2.0]\n'))
+
+
+def _user_folder_for_tune(folder: Path) -> Path:
+    (folder / "my-study").mkdir(exist_ok=True)
+    (folder / "my-study" / "notes.md").write_text("mine")
+    return folder / "my-study"
+
+
+TUNE_CASES = [
+    Case("tune: a budget of 0", lambda d: _tune(d, "paper-ellipse", ["pd"], 0), ex.ConfigError,
+         "--budget: must be an integer in [2, 100000]"),
+    Case("tune: a budget of 10^9", lambda d: _tune(d, "paper-ellipse", ["pd"], 10**9), ex.ConfigError,
+         "--budget: must be an integer in [2, 100000]"),
+    Case("tune: an unknown controller", lambda d: _tune(d, "paper-ellipse", ["lqr"], 10), ex.ConfigError,
+         "--controllers: needs distinct names among nn, no-u0, computed-torque, sliding-mode, pd"),
+    Case("tune: a controller named twice", lambda d: _tune(d, "paper-ellipse", ["pd", "pd"], 10),
+         ex.ConfigError, "--controllers: needs distinct names"),
+    Case("tune: a NaN torque limit",
+         lambda d: _tune(d, "paper-ellipse", ["pd"], 10, max_rms_torque=float("nan")),
+         ex.ConfigError, "--max-rms-torque: must be > 0 [N m]"),
+    Case("tune: a saturated fraction above 1",
+         lambda d: _tune(d, "paper-ellipse", ["pd"], 10, max_saturated=2.0),
+         ex.ConfigError, "--max-saturated: must be in [0, 1]"),
+    Case("tune: fewer simulations than training samples",
+         lambda d: _tune(d, "paper-ellipse", ["pd"], 3, train_samples=4), ex.ConfigError,
+         "--budget: 3 simulations cannot run one setting on 4 training samples"),
+    Case("tune: a sweep file with a grid", lambda d: _tune(d, _grid_sweep(d), ["pd"], 10), ex.ConfigError,
+         "tuning draws its samples from [vary] distributions"),
+    Case("tune: --out a folder of the user's", lambda d: _tune_into(d, _user_folder_for_tune),
+         ex.NNRobustError, "my-study exists and is not a tuning folder (no tune.toml); choose another --out"),
+]
+
+CASES = URDF_CASES + CONFIG_CASES + RUN_FOLDER_CASES + VIEWER_CASES + TUNE_CASES
 
 
 def message_of(case: Case, folder: Path) -> str:

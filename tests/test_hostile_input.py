@@ -83,6 +83,20 @@ def test_command_line_answers_a_bad_experiment_with_one_line(case, tmp_path, cap
     assert not (tmp_path / "run").exists()
 
 
+@pytest.mark.parametrize("argv, flag", [
+    (["--budget", "0"], "--budget"), (["--budget", "1000000000"], "--budget"),
+    (["--budget", "10", "--max-rms-torque", "nan"], "--max-rms-torque"),
+    (["--budget", "10", "--max-saturated", "2"], "--max-saturated"),
+])
+def test_command_line_answers_a_bad_tuning_with_one_line(argv, flag, tmp_path, capsys):
+    from nnrobust.cli import main
+
+    code = main(["tune", "paper-ellipse", "--controllers", "pd", "--out", str(tmp_path / "t"), *argv])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2 and len(err) == 1 and err[0].startswith("nnrobust: error:") and flag in err[0]
+    assert not (tmp_path / "t").exists()
+
+
 def test_docs_table_is_up_to_date(tmp_path):
     assert DOCS.read_text() == render_table(tmp_path), "run: python -m tests.bad_inputs"
 
