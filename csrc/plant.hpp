@@ -59,15 +59,11 @@ struct Plant {
     return -sg * std::max(s.stop_stiffness[i] * std::abs(pen) * (1.0 + s.stop_alpha * sg * v), 0.0);
   }
 
-  // Plant.acceleration: the slipping law with sgn(0) = 0
+  // Plant.acceleration: the slipping law with sgn(0) = 0, net_torque with every mode sgn(v_i)
   Vector acceleration(double t, const Vector &q, const Vector &v, const Vector &tau) {
-    const int n = static_cast<int>(q.size());
-    Vector net = tau;
-    for (int i = 0; i < n; ++i) {
-      net[i] -= s.viscous[i] * v[i] + s.coulomb[i] * sign(v[i]) + disturbance(i, t);
-      net[i] += stop_torque(i, q[i], v[i]);
-    }
-    return pinocchio::aba(m.model, m.data, q, v, net);
+    signs_.resize(v.size());
+    for (int i = 0; i < v.size(); ++i) signs_[i] = static_cast<int>(sign(v[i]));
+    return pinocchio::aba(m.model, m.data, q, v, net_torque(t, q, v, tau, signs_));
   }
 
   // Plant.net_torque: tau + tau_stop - tau_d - F, the sticky joints' dry friction F_c mode_i
@@ -147,6 +143,7 @@ struct Plant {
   Vector q_mass_, q_bias_, v_bias_, bias_;
   Eigen::LLT<Matrix> llt_;
   std::vector<int> free_, held_;
+  Modes signs_;
 };
 
 }  // namespace nnrobust

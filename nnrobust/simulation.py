@@ -182,8 +182,7 @@ def simulate(
                 progress(t, q)
             if out.state is not None:
                 z = out.state
-            if stick_slip is not None:
-                q, v = X[:n], X[n:]
+            if stick_slip is not None:  # q, v: the views of X sliced at the top of the step
                 if integrator == "rk4":
                     flow = rk4_flow(plant, tau)
                     for i in range(substeps):

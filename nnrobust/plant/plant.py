@@ -80,12 +80,10 @@ class Plant:
     def acceleration(self, t: float, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """Q'' = M^-1 (tau + tau_stop - V_m q' - G - F(q') - tau_d(t)), by ABA for Pinocchio models.
 
-        ``tau`` is the applied (already saturated) actuator torque.
+        ``tau`` is the applied (already saturated) actuator torque. This is the slipping law with
+        sgn(0) = 0: :meth:`net_torque` with every joint's mode sgn(q'_i).
         """
-        net = tau - self.friction.torque(v) - self.disturbance(t)
-        if self.stops is not None:
-            net = net + self.stops.torque(q, v)
-        return self.model.forward_dynamics(q, v, net)
+        return self.model.forward_dynamics(q, v, self.net_torque(t, q, v, tau, np.sign(v).astype(int)))
 
     def net_torque(self, t: float, q: np.ndarray, v: np.ndarray, tau: np.ndarray, mode: np.ndarray,
                    ) -> np.ndarray:
