@@ -175,7 +175,7 @@ QUOTED_FIGURES: list[tuple] = [
     ("README.md", r"stays below ([\d.]+) mm everywhere", PANDA, _study("sliding-mode", "max"), 1e3),
     ("README.md", r"baseline 19–(\d+)× on them", "arm_presets", _ratio("panda-ellipse"), 1.0),
     ("README.md", r"baseline (\d+)–\d+× on them", "arm_presets", _ratio("planar7-ellipse"), 1.0),
-    ("README.md", r"Its best is\s+([\d.]+) mm on all three", TUNED, _held(CASE_B, "nn"), 1e3),
+    ("README.md", r"Its best is\s+([\d.]+) mm on all\s+three", TUNED, _held(CASE_B, "nn"), 1e3),
     ("README.md", r"without u₀ reaches ([\d.]+)–", TUNED, _held(CASE_B, "no-u0"), 1e3),
     ("README.md", r"without u₀ reaches [\d.]+–([\d.]+) mm", TUNED, _held(CASE_A, "no-u0"), 1e3),
     ("README.md", r"and\s+([\d.]+) mm on the Panda. The PD", TUNED, _held(PANDA_ARM, "no-u0"), 1e3),
