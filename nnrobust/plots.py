@@ -25,28 +25,36 @@ cost. result.npz keeps every sample."""
 
 def envelope(t: np.ndarray, y: np.ndarray, buckets: int = MAX_BUCKETS) -> tuple[np.ndarray, np.ndarray]:
     """The samples of y that a plot needs: per bucket of consecutive samples its minimum and its
-    maximum (in time order), plus the last sample.
+    maximum (in time order), plus the first and the last sample.
+
+    The n samples are cut into ``buckets`` buckets whose sizes differ by at most one (as
+    ``np.array_split`` cuts them), so the end of a run is drawn as finely as its start.
     """
     n = y.size
     if n <= 2 * buckets:
         return t, y
-    size = n // buckets
-    blocks = y[: size * buckets].reshape(buckets, size)
-    offsets = np.arange(buckets) * size
-    tail = y[size * buckets:]  # fewer than ``buckets`` samples: one more bucket
-    keep = np.concatenate([blocks.argmin(axis=1) + offsets, blocks.argmax(axis=1) + offsets,
-                           size * buckets + np.array([tail.argmin(), tail.argmax()]) if tail.size else [],
-                           [n - 1]]).astype(int)
-    keep = np.unique(keep)
-    return t[keep], y[keep]
+    size, longer = divmod(n, buckets)  # the first ``longer`` buckets hold size + 1 samples
+    keep = [np.array([0, n - 1])]
+    for start, count, length in ((0, longer, size + 1), (longer * (size + 1), buckets - longer, size)):
+        if count:
+            blocks = y[start: start + count * length].reshape(count, length)
+            offsets = start + np.arange(count) * length
+            keep += [blocks.argmin(axis=1) + offsets, blocks.argmax(axis=1) + offsets]
+    index = np.unique(np.concatenate(keep))
+    return t[index], y[index]
 
 
 MAX_PATH_POINTS = 4000
 """Points of a drawn path at most (every k-th sample: a path of the arm is smooth)."""
 
 
-def _path_stride(x: np.ndarray) -> int:
-    return max(1, -(-len(x) // MAX_PATH_POINTS))
+def _path(x: np.ndarray) -> np.ndarray:
+    """Every k-th sample of a path, and its last one: at most about :data:`MAX_PATH_POINTS`."""
+    every = max(1, -(-len(x) // MAX_PATH_POINTS))
+    index = np.arange(0, len(x), every)
+    if len(x) and index[-1] != len(x) - 1:
+        index = np.append(index, len(x) - 1)
+    return x[index]
 
 
 def _series(draw, t: np.ndarray, y: np.ndarray, *args, **kwargs):
@@ -205,10 +213,9 @@ def plot_path_in_plane(result: Result, ax, label: str = "actual", legend: bool =
     projected on the desired path's own plane (:func:`path_plane`).
     """
     plane = plane or DrawingPlane.of(result)
-    every = _path_stride(result.x)
     for data, style, name in ((result.x_d, dict(ls="--", color="k", lw=1.5), "desired $x_d$"),
                               (result.x, dict(lw=1.0, color="C0"), label)):
-        ax.plot(*plane.project(data[::every]).T, label=name, **style)
+        ax.plot(*plane.project(_path(data)).T, label=name, **style)
     ax.plot(*plane.project(result.x[0]), "o", ms=4, color="C0", label="start")
     plane.label(ax)
     ax.set_aspect("equal", adjustable="datalim")
@@ -224,9 +231,8 @@ def _path_figure(result: Result):
         return fig
     fig = plt.figure(figsize=(12, 5))  # a 3-D view, and the path's own plane
     view = fig.add_subplot(1, 2, 1, projection="3d")
-    every = _path_stride(result.x)
-    view.plot(*result.x_d[::every, :3].T, "k--", lw=1.2)
-    view.plot(*result.x[::every, :3].T, lw=1.0, color="C0")
+    view.plot(*_path(result.x_d[:, :3]).T, "k--", lw=1.2)
+    view.plot(*_path(result.x[:, :3]).T, lw=1.0, color="C0")
     view.plot(*result.x[:1, :3].T, "o", ms=4, color="C0")
     shown = [result.x_d[:, :3]]
     if result.chain is not None:  # the arm at t = 0, for scale and place
@@ -341,26 +347,38 @@ def _joint_series_figure(result: Result, name: str):
                                                           else "joint torque or force")
     ylabel = f"{quantity} [{' or '.join(sorted(set(units), key=units.index))}]"
     fig, ax = plt.subplots(figsize=(7, 3.5))
-    for i, joint in enumerate(joint_labels):
-        label = joint if len(set(units)) == 1 else f"{joint} [{units[i]}]"
-        line, = _series(ax.plot, t, data[:, i], lw=lw, label=label)
-        commanded = result.tau_cmd if name == "torques" else None
-        if commanded is not None and np.any(commanded[:, i] != data[:, i]):
-            _series(ax.plot, t, commanded[:, i], lw=0.4, alpha=0.35, color=line.get_color())
-        for bound in limits:
-            if bound is not None and np.isfinite(bound[i]) and abs(bound[i]) < 1e6:
-                ax.axhline(bound[i], ls=":", lw=0.8, color=line.get_color(), gid=f"limit:{joint}")
+    top = None
     if name == "torques" and result.tau_cmd is not None and result.torque_limit is not None:
         # the applied range, and the limits that are near it; commands beyond them are clipped
         peak = float(np.nanmax(np.abs(data))) if data.size else 1.0
         near = result.torque_limit[result.torque_limit <= 3 * peak]
         top = 1.15 * max(peak, float(near.max()) if near.size else 0.0, 1e-9)
+    for i, joint in enumerate(joint_labels):
+        label = joint if len(set(units)) == 1 else f"{joint} [{units[i]}]"
+        bounds = [b[i] for b in limits if b is not None and np.isfinite(b[i]) and abs(b[i]) < 1e6]
+        if bounds:  # each joint's legend entry names its own limits, drawn or off the axis
+            shown = [b for b in bounds if top is None or abs(b) <= top]
+            label += f" ({_limit_text(bounds)}{'' if len(shown) == len(bounds) else ', off the axis'})"
+        line, = _series(ax.plot, t, data[:, i], lw=lw, label=label)
+        commanded = result.tau_cmd if name == "torques" else None
+        if commanded is not None and np.any(commanded[:, i] != data[:, i]):
+            _series(ax.plot, t, commanded[:, i], lw=0.4, alpha=0.35, color=line.get_color())
+        for bound in bounds:
+            ax.axhline(bound, ls=":", lw=0.8, color=line.get_color(), gid=f"limit:{joint}")
+    if top is not None:
         ax.set_ylim(-top, top)
     ax.set_xlabel("t [s]")
     ax.set_ylabel(ylabel)
     legend_outside(ax)
     ax.set_title(title, fontsize=10)
     return fig
+
+
+def _limit_text(bounds: list[float]) -> str:
+    """'±87' for symmetric limits, else '-2.9 to 2.9'."""
+    if len(bounds) == 2 and bounds[0] == -bounds[1]:
+        return f"±{abs(bounds[1]):.3g}"
+    return " to ".join(f"{b:.3g}" for b in sorted(bounds))
 
 
 MANIPULABILITY_UNITS = {2: "m$^2$", 3: "m$^3$", 6: "m$^3$"}
@@ -374,7 +392,18 @@ def criterion_units(name: str, m: int) -> str:
     squared = {2: "m$^4$", 3: "m$^6$", 6: "m$^6$"}.get(m, "mixed")
     return {"manipulability": manipulability, "half_det_manipulability": squared,
             "joint_limits": "1", "joint_centering": "1", "joint_smoothness": "rad$^2$",
-            "obstacles": "m$^2$", "paper": "mixed"}.get(name, "mixed")
+            "obstacles": "m$^2$", "paper": "m$^4$ + rad$^2$"}.get(name, "mixed")
+
+
+def _criterion_formula(name: str) -> str:
+    """A criterion as a formula for a title: its description in :data:`CRITERIA`."""
+    from .subtasks import CRITERIA
+
+    text = CRITERIA.get(name, name)
+    if text.startswith("eq. ("):  # "eq. (19): formula (three joints)" -> "formula, eq. (19)"
+        label, _, text = text.partition(": ")
+        text = text.removesuffix(" (three joints)") + ", " + label
+    return text
 
 
 def _criterion_name(result: Result) -> tuple[str, str]:
@@ -386,9 +415,12 @@ def _criterion_name(result: Result) -> tuple[str, str]:
     if not sub.criteria:
         return "no subtask criterion", "-"
     weights = sub.weights or [sub.C / len(sub.criteria)] * len(sub.criteria)
-    units = {criterion_units(c, result.e.shape[1]) for c in sub.criteria}
-    unit = units.pop() if len(units) == 1 else "mixed"
-    return "h(q) = " + " + ".join(f"{w:g} {c}" for w, c in zip(weights, sub.criteria)), unit
+    units = [criterion_units(c, result.e.shape[1]) for c in sub.criteria]
+    unit = " + ".join(dict.fromkeys(units))  # a weighted sum of terms of different units
+    terms = [(c if w == 1 else f"{w:g} {c}") if c != "paper" else
+             (_criterion_formula(c) if w == 1 else f"{w:g} [{_criterion_formula(c)}]")
+             for w, c in zip(weights, sub.criteria)]
+    return "h(q) = " + " + ".join(terms), unit
 
 
 def _subtask_figure(result: Result):
@@ -506,19 +538,21 @@ def plot_comparison(results: dict[str, Result], folder: str | Path) -> list[Path
     plane = DrawingPlane.of(next(iter(results.values())))
     for i, (name, res) in enumerate(results.items()):
         color = f"C{i % 10}"
-        every = _path_stride(res.x)
         for data, style in ((res.x_d, dict(ls="--", lw=1.2)), (res.x, dict(lw=0.9))):
-            axes[0].plot(*plane.project(data[::every]).T, color=color,
+            axes[0].plot(*plane.project(_path(data)).T, color=color,
                          label=name if style["lw"] < 1 else None, **style)
-        _series(axes[1].semilogy, res.t, np.maximum(res.position_error(), 1e-12), lw=0.8, color=color)
+        _series(axes[1].semilogy, res.t, np.maximum(1e3 * res.position_error(), 1e-9), lw=0.8, color=color)
         _series(axes[2].plot, res.t, np.linalg.norm(res.tau, axis=1), lw=0.5, color=color)
-    axes[1].set_ylim(bottom=log_floor(*(r.position_error() for r in results.values())))
+    axes[1].set_ylim(bottom=log_floor(*(1e3 * r.position_error() for r in results.values())))
+    readable_log_ticks(axes[1])
     axes[0].set_aspect("equal", adjustable="datalim")
+    for axis in (axes[0].xaxis, axes[0].yaxis):  # a narrow panel: few ticks, so that labels do not touch
+        axis.set_major_locator(matplotlib.ticker.MaxNLocator(4))
     plane.label(axes[0])
     axes[0].set_title("paths (dashed: desired)" + (" in the first run's path plane" if plane.spatial else ""),
                       fontsize=9)
     axes[1].set_xlabel("t [s]")
-    axes[1].set_ylabel("position error [m]")
+    axes[1].set_ylabel("|position error| [mm]")
     axes[2].set_xlabel("t [s]")
     axes[2].set_ylabel("$\\|\\tau\\|$ [N m]")
     legend_outside(axes[2], handles=axes[0].get_lines()[1::2], labels=list(results))

@@ -104,6 +104,50 @@ def test_joint_and_torque_figures_draw_every_limit_and_keep_legends_off_the_data
         plt.close(fig)
 
 
+def test_each_joints_legend_names_its_own_effort_limit_and_says_when_it_is_off_the_axis(panda):
+    """Panda: joints 1-4 are limited to 87 N m, 5-7 to 12 N m; a 12 N m line drawn beside joint 4's
+    25 N m must not read as joint 4's limit, and a limit beyond the axis is said, not hidden."""
+    fig = _figure("torques", panda)
+    ax = fig.axes[0]
+    top = ax.get_ylim()[1]
+    texts = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert len(texts) == 7
+    for text, limit in zip(texts, panda.torque_limit):
+        assert f"±{limit:.3g}" in text
+        assert ("off the axis" in text) == (limit > top), (text, top)
+    plt.close(fig)
+
+
+def test_compare_draws_errors_in_mm_with_ticks_that_do_not_touch(panda, paper, tmp_path):
+    other = run_experiment(load_preset("paper-ellipse").replace(simulation={"duration": 1.0},
+                                                                controller={"kind": "no-u0"}))
+    captured = {}
+    original = plots._save
+
+    def keep(fig, folder, stem):  # read the figure as drawn, before it is saved and closed
+        fig.canvas.draw()
+        path = fig.axes[0]
+        frame = path.get_window_extent()
+        captured["ticks"] = [(label.get_text(), label.get_window_extent()) for label in path.get_xticklabels()
+                             if label.get_text() and frame.x0 - 1 <= label.get_window_extent().x0
+                             and label.get_window_extent().x1 <= frame.x1 + 1]
+        captured["error"] = fig.axes[1]
+        return original(fig, folder, stem)
+
+    plots._save = keep
+    try:
+        plots.plot_comparison({"nn": paper, "no-u0": other}, tmp_path)
+    finally:
+        plots._save = original
+    error = captured["error"]
+    assert error.get_ylabel() == "|position error| [mm]"
+    drawn = np.concatenate([line.get_ydata() for line in error.get_lines()])
+    assert drawn.max() == pytest.approx(1e3 * max(paper.position_error().max(), other.position_error().max()))
+    ticks = captured["ticks"]
+    assert len(ticks) >= 2
+    assert all(a.x1 < b.x0 for (_, a), (_, b) in zip(ticks, ticks[1:])), [text for text, _ in ticks]
+
+
 def test_prismatic_joints_are_labelled_in_metres_and_newtons(paper):
     import dataclasses
 
@@ -113,22 +157,24 @@ def test_prismatic_joints_are_labelled_in_metres_and_newtons(paper):
         fig = _figure(name, mixed)
         ax = fig.axes[0]
         assert ax.get_ylabel() == label
-        assert [t.get_text() for t in ax.get_legend().get_texts()][1].endswith(unit)
+        assert f" {unit}" in [t.get_text() for t in ax.get_legend().get_texts()][1]
         plt.close(fig)
 
 
 def test_subtask_figure_names_the_criterion_and_its_units(panda, paper):
     fig = _figure("subtask", panda)
     assert fig.axes[0].get_title() == "h(q) = 0.5 manipulability + 0.5 joint_limits"
-    assert fig.axes[0].get_ylabel() == "h(q) [mixed]"  # m^3 and a ratio
+    assert fig.axes[0].get_ylabel() == "h(q) [m$^3$ + 1]"  # m^3 and a ratio
     assert fig.axes[1].get_ylabel().endswith("[m$^3$]")
     plt.close(fig)
     fig = _figure("subtask", paper)
-    assert fig.axes[0].get_title() == "h(q) = 1 paper" and fig.axes[1].get_ylabel().endswith("[m$^2$]")
+    assert fig.axes[0].get_title() == "h(q) = 0.5 det(J J^T) - 0.5 (0.5 q1 - q2 + q3)^2, eq. (19)"
+    assert fig.axes[0].get_ylabel() == "h(q) [m$^4$ + rad$^2$]"
+    assert fig.axes[1].get_ylabel().endswith("[m$^2$]")
     plt.close(fig)
     limits_only = run_experiment(load_preset("panda-pose").replace(simulation={"duration": 0.2}))
     fig = _figure("subtask", limits_only)
-    assert fig.axes[0].get_ylabel() == "h(q) [1]" and fig.axes[0].get_title() == "h(q) = 1 joint_limits"
+    assert fig.axes[0].get_ylabel() == "h(q) [1]" and fig.axes[0].get_title() == "h(q) = joint_limits"
     plt.close(fig)
 
 
