@@ -11,13 +11,41 @@ import importlib
 __version__ = "0.1.0"
 
 _EXPORTS = {
+    # the workflow: load, configure, build, run, write, plot
+    "load_robot": ".model",
+    "load_preset": ".presets",
+    "preset_names": ".presets",
+    "load_config": ".config",
+    "ExperimentConfig": ".config",
+    "apply_overrides": ".config",
+    "build": ".experiment",
+    "Setup": ".experiment",
+    "run_experiment": ".experiment",
+    "Result": ".results",
+    "write_run": ".run_folder",
+    "load_run": ".run_folder",
+    "plot_run": ".plots",
+    "plot_comparison": ".plots",
+    # many runs: sweeps and tuning (the sweep and tune extras)
+    "load_sweep": ".sweep",
+    "run_sweep": ".sweep",
+    "read_results": ".sweep",
+    "TuneSpec": ".tune",
+    "run_tune": ".tune",
+    # the contract of a controller of your own (docs/extending.md)
+    "Controller": ".controllers",
+    "ControlOutput": ".controllers",
+    "ControllerContext": ".controllers",
+    # models
     "DynamicsModel": ".model",
-    "NNRobustError": ".exceptions",
     "PinocchioModel": ".model",
     "ThreeLinkParameters": ".model",
     "ThreeLinkPlanarModel": ".model",
-    "load_robot": ".model",
     "paper_arm_urdf": ".model",
+    # errors
+    "NNRobustError": ".exceptions",
+    "ConfigError": ".exceptions",
+    "ControllerError": ".exceptions",
 }
 
 __all__ = sorted(_EXPORTS)

@@ -94,12 +94,35 @@ def _live_view(args, config, setup):
     return viewer, show
 
 
+def _controller_choice(text: str) -> str:
+    """--controller: a built-in kind, or a custom class (``file.py:Class``, ``package.module:Class``)."""
+    from .config import CLASS_PATTERN, CONTROLLER_KINDS
+
+    if text in CONTROLLER_KINDS or CLASS_PATTERN.fullmatch(text):
+        return text
+    raise argparse.ArgumentTypeError(f"{text!r} is not one of {', '.join(CONTROLLER_KINDS)} nor a class as "
+                                     "file.py:Class or package.module:Class")
+
+
+def controller_change(choice: str) -> dict:
+    """The controller section's change for --controller: a kind, or a custom class (a file path
+    from the working folder).
+    """
+    from .config import CONTROLLER_KINDS
+    from .controllers.custom import class_file
+
+    if choice in CONTROLLER_KINDS:
+        return {"kind": choice, "class": None, "params": None}
+    path, name = class_file(choice), choice.rpartition(":")[2]
+    return {"kind": "custom", "class": f"{path.resolve()}:{name}" if path is not None else choice}
+
+
 def cmd_run(args) -> int:
     """Run a preset or an experiment file and write its run folder."""
     config = _load_target(args.target)
     changes: dict = {}
     if args.controller:
-        changes["controller"] = {"kind": args.controller}
+        changes["controller"] = controller_change(args.controller)
     if args.duration is not None:
         changes.setdefault("simulation", {})["duration"] = args.duration
     if args.backend:
@@ -112,15 +135,19 @@ def cmd_run(args) -> int:
         from .config import apply_overrides, parse_override
 
         config = apply_overrides(config, dict(parse_override(item) for item in args.set))
-    out = check_out_folder(args.out or f"out/{config.name}-{config.controller.kind}", args.overwrite)
+    from .config import controller_label
+
+    out = check_out_folder(args.out or f"out/{config.name}-{controller_label(config)}", args.overwrite)
     with locked(out):
         return _run_into(args, config, out)
 
 
 def _run_into(args, config, out: Path) -> int:
     """Simulate and write the run folder (``out`` is checked and locked)."""
+    from .config import controller_label
+
     if not args.quiet:
-        print(f"running {config.name} with controller {config.controller.kind!r} "
+        print(f"running {config.name} with controller {controller_label(config)!r} "
               f"for {config.simulation.duration:g} s ...", file=sys.stderr)
     # the figures' process is forked now, so that it imports matplotlib while the run simulates
     with Drawing(plots=not args.no_plots, animation=not args.no_animation) as drawing:
@@ -460,11 +487,13 @@ def build_parser() -> argparse.ArgumentParser:
                          "folder: config.toml, result.npz, metrics.json, plots/, animation.html.")
     run.add_argument("target", help="preset name (see 'nnrobust presets') or path to a .toml file")
     run.add_argument("--out", help="run folder (default out/NAME-CONTROLLER)")
-    run.add_argument("--controller", choices=CONTROLLERS,
+    run.add_argument("--controller", type=_controller_choice,
+                     metavar="{" + ",".join(CONTROLLERS) + ",FILE.py:CLASS}",
                      help="override the controller: nn (eq. 9 + NN compensator), no-u0 "
                      "(eq. 9 without u_0), computed-torque (eq. 9 with the true model and friction), "
                      "sliding-mode (eq. 9 + fixed-gain boundary-layer sliding mode), pd (task-space "
-                     "PD + gravity compensation)")
+                     "PD + gravity compensation), or your own class as file.py:Class or package.module:Class "
+                     "(its parameters from --set controller.params.NAME=VALUE; docs/extending.md)")
     run.add_argument("--duration", type=float, help="override the simulated time [s]")
     run.add_argument("--backend", choices=("auto", "compiled", "python"),
                      help="simulation loop: compiled (C++), python (the reference) or auto (compiled "

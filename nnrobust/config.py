@@ -281,6 +281,11 @@ class ControllerConfig:
             velocity; see docs/plant.md for what that does near zero speed).
         sliding_gain: K of the sliding-mode u_0 [m/s^2].
         sliding_boundary: boundary-layer width Phi of the sliding-mode u_0 [m/s^2].
+        class_: for ``kind = "custom"``, the controller class (TOML key ``class``):
+            ``"file.py:Class"`` (a path relative to the experiment file) or ``"package.module:Class"``,
+            a subclass of :class:`nnrobust.Controller` (docs/extending.md).
+        params: for ``kind = "custom"``, the keyword arguments of the class's constructor (TOML
+            table ``[controller.params]``).
 
     """
 
@@ -296,10 +301,18 @@ class ControllerConfig:
     coulomb_smoothing: float = 0.0
     sliding_gain: float = 20.0
     sliding_boundary: float = 0.5
+    class_: str | None = None
+    params: dict | None = None
 
 
 CONTROLLER_KINDS = ("nn", "no-u0", "computed-torque", "sliding-mode", "pd")
-"""Every value of ``controller.kind``."""
+"""The built-in values of ``controller.kind``; ``custom`` names a user's class (``controller.class``)."""
+
+EQ9_KINDS = ("nn", "no-u0", "computed-torque", "sliding-mode")
+"""The kinds that are the task-space law of eq. (9), whose Kp and Kv eq. (17) constrains."""
+
+KEY_ALIASES = {"class": "class_"}
+"""TOML keys that are Python keywords, and the field each is stored in."""
 
 
 @dataclass
@@ -414,8 +427,8 @@ class ExperimentConfig:
     simulation: SimulationConfig = field(default_factory=SimulationConfig)
 
     def to_dict(self) -> dict:
-        """Nested plain dict (None values dropped)."""
-        return _drop_none(dataclasses.asdict(self))
+        """Nested plain dict (None values dropped), with the TOML spelling of every key."""
+        return _drop_none(_toml_keys(dataclasses.asdict(self)))
 
     def to_toml(self) -> str:
         """TOML text that :func:`load_config` reads back to an equal configuration."""
@@ -433,6 +446,13 @@ class ExperimentConfig:
 
 
 # ---- validation --------------------------------------------------------------------------
+
+
+def _toml_keys(data: dict) -> dict:
+    """``class_`` -> ``class`` in every section (:data:`KEY_ALIASES`)."""
+    fields = {v: k for k, v in KEY_ALIASES.items()}
+    return {key: ({fields.get(k, k): v for k, v in value.items()} if isinstance(value, dict) else value)
+            for key, value in data.items()}
 
 
 def _drop_none(obj):
@@ -489,6 +509,14 @@ def _check_type(path: str, value, annotation):
         if not isinstance(value, bool):
             raise ConfigError(path, f"expected true or false, got {value!r}")
         return value
+    if annotation is dict:  # free keyword arguments (controller.params): names checked, values kept
+        if not isinstance(value, dict):
+            raise ConfigError(path, f"expected a table, got {type(value).__name__} {value!r}")
+        for key in value:
+            if not key.isidentifier():
+                raise ConfigError(f"{path}.{key}", "is not a valid Python identifier (a keyword "
+                                  "argument name)")
+        return dict(value)
     if annotation is str:
         if not isinstance(value, str):
             raise ConfigError(path, f"expected a string, got {type(value).__name__} {value!r}")
@@ -502,10 +530,12 @@ def _section_from_dict(cls, data: dict, path: str):
     hints = typing.get_type_hints(cls)
     names = [f.name for f in dataclasses.fields(cls)]
     values = {}
+    shown = [next((a for a, f in KEY_ALIASES.items() if f == n), n) for n in names]
     for key, value in data.items():
         full = f"{path}.{key}" if path else key
+        key = KEY_ALIASES.get(key, key)
         if key not in names:
-            raise ConfigError(full, _suggest(key, names))
+            raise ConfigError(full, _suggest(key, shown))
         annotation = hints[key]
         if dataclasses.is_dataclass(annotation):
             values[key] = _section_from_dict(annotation, value, full)
@@ -563,34 +593,107 @@ def load_config(path: str | Path) -> ExperimentConfig:
     """
     path = Path(path)
     text = read_text_file(path, what="experiment file")
-    data = parse_toml(text, str(path))
+    data = _file_data(path, text)
     try:
         config = from_dict(data)
     except ConfigError as err:
         raise ConfigError(f"{path}: {err.key}", str(err).split(": ", 1)[1]) from err
-    source = config.robot.source
-    if _is_relative_urdf_path(source):
-        resolved = (path.resolve().parent / source).resolve()
-        if not resolved.is_file():
-            raise ConfigError(f"{path}: robot.source", f"{source!r} is not a file in {path.resolve().parent} "
-                              "(a relative path in an experiment file is read from the file's folder)")
-        config.robot.source = str(resolved)
-    recorded = RECORDED_DIGEST.search(text)
-    if recorded:
-        from .model.loading import urdf_digest
+    from .model.loading import urdf_digest
 
+    for what, pattern, source, digest in (
+        ("robot's URDF", RECORDED_DIGEST, config.robot.source, urdf_digest),
+        ("controller file", RECORDED_CONTROLLER, controller_file(config), _controller_digest),
+    ):
+        recorded = pattern.search(text)
+        if not recorded or not source:
+            continue
         try:
-            now = urdf_digest(config.robot.source)
+            now = digest(source)
         except OSError:
             now = ""
         if now and now != recorded.group(1):
-            warnings.warn(f"{path}: the robot's URDF ({config.robot.source}) has changed since this run "
-                          f"was written (SHA-256 {recorded.group(1)[:12]}... then, {now[:12]}... now)",
-                          stacklevel=2)
+            warnings.warn(f"{path}: the {what} ({source}) has changed since this run was written "
+                          f"(SHA-256 {recorded.group(1)[:12]}... then, {now[:12]}... now)", stacklevel=2)
     return config
 
 
 RECORDED_DIGEST = re.compile(r"^# urdf sha256: ([0-9a-f]{64})$", re.MULTILINE)
+RECORDED_CONTROLLER = re.compile(r"^# controller sha256: ([0-9a-f]{64})$", re.MULTILINE)
+
+MAX_BASE_DEPTH = 8
+"""Experiment files that start from one another (``base = "file.toml"``), at most this deep."""
+
+
+def _file_data(path: Path, text: str, depth: int = 0) -> dict:
+    """An experiment file's table with its relative paths (robot.source, controller.class) made
+    absolute from the file's folder, merged over its ``base`` (a preset name or an experiment
+    file): the file's keys win, section by section.
+    """
+    data = parse_toml(text, str(path))
+    folder = path.resolve().parent
+    robot, controller = data.get("robot"), data.get("controller")
+    if (isinstance(robot, dict) and isinstance(robot.get("source"), str)
+            and _is_relative_urdf_path(robot["source"])):
+        resolved = (folder / robot["source"]).resolve()
+        if not resolved.is_file():
+            raise ConfigError(f"{path}: robot.source", f"{robot['source']!r} is not a file in {folder} (a "
+                              "relative path in an experiment file is read from the file's folder)")
+        robot["source"] = str(resolved)
+    if isinstance(controller, dict) and isinstance(controller.get("class"), str):
+        from .controllers.custom import class_file
+
+        where, name = class_file(controller["class"]), controller["class"].rpartition(":")[2]
+        if where is not None and not where.is_absolute():
+            controller["class"] = f"{(folder / where).resolve()}:{name}"
+    if "base" not in data:
+        return data
+    base = data.pop("base")
+    if not isinstance(base, str):
+        raise ConfigError(f"{path}: base", f"expected a preset name or an experiment file, got {base!r}")
+    if depth >= MAX_BASE_DEPTH:
+        raise ConfigError(f"{path}: base", "experiment files start from one another more than "
+                          f"{MAX_BASE_DEPTH} "
+                          "deep (a cycle?)")
+    if base.endswith(".toml"):
+        base_path = (folder / base).resolve()
+        if not base_path.is_file():
+            raise ConfigError(f"{path}: base", f"{base!r} is not a file in {folder}")
+    else:
+        from .presets import preset_path
+
+        try:
+            base_path = preset_path(base)
+        except ConfigError as err:
+            raise ConfigError(f"{path}: base", str(err).split(": ", 1)[1]) from err
+    merged = _file_data(base_path, read_text_file(base_path, what="experiment file"), depth + 1)
+    for key, value in data.items():
+        if isinstance(value, dict) and isinstance(merged.get(key), dict):
+            merged[key] = {**merged[key], **value}
+        else:
+            merged[key] = value
+    return merged
+
+
+def controller_file(config: ExperimentConfig) -> str:
+    """The file of a custom controller's class, or "" (a module path, or a built-in law)."""
+    from .controllers.custom import class_file
+
+    spec = config.controller.class_
+    path = class_file(spec) if config.controller.kind == "custom" and spec else None
+    return str(path) if path else ""
+
+
+def _controller_digest(source: str) -> str:
+    from .controllers.custom import file_digest
+
+    return file_digest(source)
+
+
+def controller_label(config: ExperimentConfig) -> str:
+    """The controller as runs and folders name it: its kind, or a custom law's class name."""
+    if config.controller.kind == "custom" and config.controller.class_:
+        return config.controller.class_.rpartition(":")[2]
+    return config.controller.kind
 
 
 def _is_relative_urdf_path(source: str) -> bool:
@@ -620,6 +723,9 @@ def provenance_header(config: ExperimentConfig) -> str:
     digest = urdf_digest(config.robot.source)
     if digest:
         lines.append(f"# urdf sha256: {digest}")
+    source = controller_file(config)
+    if source and Path(source).is_file():
+        lines.append(f"# controller sha256: {_controller_digest(source)}")
     return "\n".join(lines) + "\n"
 
 
@@ -649,6 +755,26 @@ def path_key(tc: TrajectoryConfig) -> str:
     return {"ellipse": "center", "point_to_point": "goal", "waypoints": "waypoints"}.get(tc.kind, "center")
 
 
+CLASS_PATTERN = re.compile(r"(?P<where>[^:]+):(?P<name>[A-Za-z_][A-Za-z0-9_]*)")
+"""``controller.class``: ``file.py:Class`` or ``package.module:Class``."""
+
+
+def _check_custom(c: ControllerConfig) -> None:
+    """``class`` and ``params`` belong to ``kind = "custom"``, which needs a class."""
+    if c.kind != "custom":
+        for key, value in (("class", c.class_), ("params", c.params)):
+            if value is not None:
+                raise ConfigError(f"controller.{key}", f"is read only with kind = 'custom' (kind is "
+                                  f"{c.kind!r})")
+        return
+    if c.class_ is None:
+        raise ConfigError("controller.class", "kind = 'custom' needs the class: \"my_laws.py:MyLaw\" (a file "
+                          "relative to the experiment file) or \"package.module:MyLaw\"")
+    if not CLASS_PATTERN.fullmatch(c.class_):
+        raise ConfigError("controller.class", f"{c.class_!r} is not \"file.py:Class\" nor "
+                          "\"package.module:Class\"")
+
+
 def validate(config: ExperimentConfig) -> None:
     """Check values that a type alone does not constrain (robot-independent checks)."""
     c, nn, sim = config.controller, config.nn, config.simulation
@@ -667,7 +793,7 @@ def validate(config: ExperimentConfig) -> None:
         "nominal.kind": (config.nominal.kind, ("closed-form", "urdf")),
         "plant.friction": (config.plant.friction, ("urdf", "scaled")),
         "plant.disturbance": (config.plant.disturbance, ("paper", "none", "scaled", "sinusoid")),
-        "controller.kind": (c.kind, CONTROLLER_KINDS),
+        "controller.kind": (c.kind, (*CONTROLLER_KINDS, "custom")),
         "nn.law": (nn.law, ("corrected", "printed")),
         "nn.basis_input": (nn.basis_input, ("joint", "error")),
         "simulation.integrator": (sim.integrator, ("rk4", "solve_ivp")),
@@ -706,7 +832,8 @@ def validate(config: ExperimentConfig) -> None:
     for path, values in (("controller.Kp", c.Kp), ("controller.Kv", c.Kv),
                          ("controller.pd_Kp", c.pd_Kp), ("controller.pd_Kd", c.pd_Kd)):
         _positive(path, values)
-    for kp, kv in zip(c.Kp, c.Kv):
+    _check_custom(c)
+    for kp, kv in zip(c.Kp, c.Kv) if c.kind in EQ9_KINDS else ():  # pd and custom laws do not use them
         if kv * kv <= kp:
             raise ConfigError(
                 "controller.Kv",
@@ -850,6 +977,10 @@ def _toml_string(value: str) -> str:
     return '"' + "".join(out) + '"'
 
 
+def _toml_key(key: str) -> str:
+    return key if re.fullmatch(r"[A-Za-z0-9_-]+", key) else _toml_string(key)
+
+
 def _toml_value(value) -> str:
     if isinstance(value, bool):
         return "true" if value else "false"
@@ -861,6 +992,8 @@ def _toml_value(value) -> str:
         return _toml_string(value)
     if isinstance(value, (list, tuple)):
         return "[" + ", ".join(_toml_value(v) for v in value) + "]"
+    if isinstance(value, dict):  # an inline table (controller.params)
+        return "{" + ", ".join(f"{_toml_key(k)} = {_toml_value(v)}" for k, v in value.items()) + "}"
     raise TypeError(f"cannot write {type(value).__name__} to TOML")
 
 
@@ -896,7 +1029,11 @@ def check_dotted_key(key: str) -> None:
     section, field_name = parts[0], ".".join(parts[1:])
     if section not in top or not dataclasses.is_dataclass(hints[section]):
         raise ConfigError(key, _suggest(section, [t for t in top if dataclasses.is_dataclass(hints[t])]))
-    names = _field_names(hints[section])
+    names = [next((a for a, f in KEY_ALIASES.items() if f == n), n) for n in _field_names(hints[section])]
+    if len(parts) == 3 and section == "controller" and parts[1] == "params":  # one keyword argument
+        if not parts[2].isidentifier():
+            raise ConfigError(key, f"{parts[2]!r} is not a valid Python identifier (a keyword argument name)")
+        return
     if len(parts) != 2 or field_name not in names:
         raise ConfigError(key, _suggest(field_name, [f"{section}.{n}" for n in names]))
 
@@ -911,6 +1048,9 @@ def apply_overrides(config: ExperimentConfig, overrides: dict) -> ExperimentConf
         parts = key.split(".")
         if len(parts) == 1:
             data[parts[0]] = value
+        elif len(parts) == 3:  # controller.params.NAME
+            section = data.setdefault(parts[0], {})
+            section[parts[1]] = {**(section.get(parts[1]) or {}), parts[2]: value}
         else:
             data.setdefault(parts[0], {})[parts[1]] = value
     return from_dict(data)

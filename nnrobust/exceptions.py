@@ -84,3 +84,9 @@ class ModelMismatch(NNRobustError):
 
 class RunFolderExists(NNRobustError):
     """The output folder of a run already exists and overwriting was not asked for."""
+
+
+class ControllerError(NNRobustError):
+    """A controller broke the contract of :class:`nnrobust.Controller` while running: a torque of the
+    wrong shape, a signal it did not declare, a state of the wrong size, or an exception of its own.
+    """

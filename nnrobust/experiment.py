@@ -15,12 +15,14 @@ from .config import ExperimentConfig, path_key, provenance_header
 from .controllers import (
     AdditiveRBFBasis,
     Controller,
+    ControllerContext,
     DampedPseudoInverse,
     NNCompensator,
     SlidingModeCompensator,
     TaskSpaceController,
     TaskSpacePD,
 )
+from .controllers.custom import build_custom
 from .exceptions import ConfigError, ModelMismatch
 from .ik import solve_ik
 from .model import (
@@ -251,12 +253,40 @@ def build_basis(config: ExperimentConfig, robot: PinocchioModel, m: int) -> Addi
     return AdditiveRBFBasis(low, high, nn.centers, nn.width, nn.bias)
 
 
+def build_nominal_friction(config: ExperimentConfig, n: int) -> Friction:
+    """F-hat as the nominal section declares it, compensated with controller.coulomb_smoothing."""
+    return Friction(_vector("nominal.viscous_friction", config.nominal.viscous_friction, n, np.zeros(n)),
+                    _vector("nominal.coulomb_friction", config.nominal.coulomb_friction, n, np.zeros(n)),
+                    config.controller.coulomb_smoothing)
+
+
+def build_context(config: ExperimentConfig, robot: PinocchioModel, nominal: DynamicsModel,
+                  trajectory: Trajectory, criterion: Criterion | None, plant: Plant,
+                  q0: np.ndarray) -> ControllerContext:
+    """What a controller is built from (:class:`ControllerContext`): never the true plant's model."""
+    c = config.controller
+    return ControllerContext(
+        nominal=nominal, trajectory=trajectory, criterion=criterion, period=config.simulation.control_period,
+        torque_limits=None if plant.torque_limit is None else plant.torque_limit.copy(), q0=q0.copy(),
+        lower_limits=robot.lower_limits.copy(), upper_limits=robot.upper_limits.copy(),
+        nominal_friction=build_nominal_friction(config, robot.nq), null_space_gain=c.k,
+        pseudo_inverse=DampedPseudoInverse(c.pinv_threshold, c.pinv_max_damping),
+    )
+
+
 def build_controller(
     config: ExperimentConfig, robot: PinocchioModel, nominal: DynamicsModel,
     trajectory: Trajectory, criterion: Criterion | None, true_friction: Friction | None = None,
+    context: ControllerContext | None = None,
 ) -> Controller:
-    """The control law named by controller.kind (computed-torque takes ``true_friction`` as F-hat)."""
-    c, n = config.controller, robot.nq
+    """The control law named by controller.kind (computed-torque takes ``true_friction`` as F-hat;
+    a custom law is built from ``context``).
+    """
+    c = config.controller
+    if c.kind == "custom":
+        if context is None:
+            raise ValueError("a custom controller is built from a ControllerContext")
+        return build_custom(c.class_, c.params, context)
     pinv = DampedPseudoInverse(c.pinv_threshold, c.pinv_max_damping)
     if c.kind == "pd":
         return TaskSpacePD(nominal, trajectory, np.diag(c.pd_Kp), np.diag(c.pd_Kd),
@@ -276,11 +306,7 @@ def build_controller(
             raise ValueError("computed-torque needs the true friction")
         nominal_friction = Friction(true_friction.viscous, true_friction.coulomb, c.coulomb_smoothing)
     else:
-        nominal_friction = Friction(
-            _vector("nominal.viscous_friction", config.nominal.viscous_friction, n, np.zeros(n)),
-            _vector("nominal.coulomb_friction", config.nominal.coulomb_friction, n, np.zeros(n)),
-            c.coulomb_smoothing,
-        )
+        nominal_friction = build_nominal_friction(config, robot.nq)
     return TaskSpaceController(nominal, trajectory, Kp, Kv, c.k, criterion, nominal_friction,
                                compensator, pinv)
 
@@ -478,8 +504,9 @@ def build(config: ExperimentConfig) -> Setup:
     plant = build_plant(config, robot)
     nominal = build_nominal(config, robot)
     criterion = build_criterion(config, robot)
-    controller = build_controller(config, robot, nominal, trajectory, criterion, plant.friction)
     q0, v0 = initial_state(config, robot, trajectory)
+    context = build_context(config, robot, nominal, trajectory, criterion, plant, q0)
+    controller = build_controller(config, robot, nominal, trajectory, criterion, plant.friction, context)
     check_workspace(config, robot, trajectory, q0)
     check_mass_matrix(robot, q0)
     check_stiffness(config, plant, q0)

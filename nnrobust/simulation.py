@@ -9,6 +9,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .controllers.base import Controller
+from .controllers.custom import check_output, failed, undeclared
+from .exceptions import NNRobustError
 from .plant.plant import Plant
 from .plant.stick_slip import StickSlipIntegrator, rk4_flow
 from .signals import check_interrupt, clear_interrupt
@@ -156,6 +158,7 @@ def simulate(
     def f(t: float, X: np.ndarray) -> np.ndarray:
         return np.concatenate([X[n:], plant.acceleration(t, X[:n], X[n:], tau)])
 
+    user_code = not type(controller).__module__.startswith("nnrobust.")
     h = control_period / substeps
     stick_slip = StickSlipIntegrator(plant, np.asarray(v0, float)) if plant.sticky.any() else None
     status, message, done = "completed", "", steps
@@ -165,13 +168,26 @@ def simulate(
             check_interrupt()  # an interrupt lost in a garbage-collection callback (signals.py)
             t = t_rec[k]
             q, v = X[:n], X[n:]
-            out = controller.compute(t, *plant.sensor.measure(q, v), z, control_period)
+            try:
+                out = controller.compute(t, *plant.sensor.measure(q, v), z, control_period)
+            except (KeyboardInterrupt, NNRobustError):
+                raise
+            except Exception as err:
+                if user_code:
+                    raise failed(controller, err, t) from err
+                raise
+            if k == 0:
+                check_output(controller, out, n, z.size, t)
             commands.append(out.tau)
             tau_cmd = commands[0]  # computed d periods ago (the first command until then)
             tau = plant.applied_torque(tau_cmd)
             q_rec[k], v_rec[k], tau_rec[k], cmd_rec[k], z_rec[k] = q, v, tau, tau_cmd, z
-            for name, value in out.signals.items():
-                sig_rec[name][k] = value
+            try:
+                for name, value in out.signals.items():
+                    sig_rec[name][k] = value
+            except KeyError:
+                undeclared(controller, out.signals)
+                raise
             if not (np.all(np.isfinite(out.tau)) and np.all(np.isfinite(X))):
                 status, message, done = "diverged", f"non-finite state or torque at t = {t:.4f} s", k + 1
                 break

@@ -518,7 +518,61 @@ TUNE_CASES = [
          ex.NNRobustError, "my-study exists and is not a tuning folder (no tune.toml); choose another --out"),
 ]
 
-CASES = URDF_CASES + CONFIG_CASES + RUN_FOLDER_CASES + VIEWER_CASES + TUNE_CASES
+LAWS = Path(__file__).parent / "controllers" / "eq9_again.py"
+
+
+def _custom(folder: Path, cls: str, params: str = "") -> ReadConfig:
+    """An experiment file with a custom controller from a copy of tests/controllers/eq9_again.py."""
+    (folder / "laws.py").write_text(LAWS.read_text())
+    return _toml(folder, f'base = "paper-ellipse"\n[controller]\nkind = "custom"\nclass = "laws.py:{cls}"\n'
+                         f'{params}\n[simulation]\nduration = 0.1\n')
+
+
+class RunExperiment(ReadConfig):
+    """Read an experiment file and run it."""
+
+    def __call__(self):
+        from nnrobust.experiment import run_experiment
+
+        return run_experiment(super().__call__())
+
+
+def _custom_run(folder: Path, cls: str, params: str = "") -> RunExperiment:
+    return RunExperiment(_custom(folder, cls, params).path)
+
+
+CUSTOM_CASES = [
+    Case("custom: no class", lambda d: _toml(d, 'base = "paper-ellipse"\n[controller]\nkind = "custom"\n'),
+         ex.ConfigError, "controller.class: kind = 'custom' needs the class"),
+    Case("custom: class with a built-in kind",
+         lambda d: _toml(d, 'base = "paper-ellipse"\n[controller]\nclass = "laws.py:Eq9"\n'),
+         ex.ConfigError, "controller.class: is read only with kind = 'custom' (kind is 'nn')"),
+    Case("custom: a file that is not there", lambda d: RunExperiment(_toml(
+        d, 'base = "paper-ellipse"\n[controller]\nkind = "custom"\nclass = "nope.py:Eq9"\n').path),
+        ex.ConfigError, "nope.py' is not a file"),
+    Case("custom: a class not in the file", lambda d: _custom_run(d, "Eq"), ex.ConfigError,
+         "has no 'Eq'; did you mean 'Eq9'?"),
+    Case("custom: not a Controller", lambda d: _custom_run(d, "NotAController"), ex.ConfigError,
+         "is not a subclass of nnrobust.Controller"),
+    Case("custom: compute not implemented", lambda d: _custom_run(d, "Abstract"), ex.ConfigError,
+         "does not implement compute"),
+    Case("custom: an unknown parameter",
+         lambda d: _custom_run(d, "Eq9", "[controller.params]\nKp = 1.0\nKvv = 2.0"),
+         ex.ConfigError, "controller.params.Kvv: Eq9 takes no such parameter; did you mean 'Kv'?"),
+    Case("custom: a missing parameter", lambda d: _custom_run(d, "Eq9", "[controller.params]\nKp = 1.0"),
+         ex.ConfigError, "controller.params: Eq9 needs Kv"),
+    Case("custom: the constructor refuses a value",
+         lambda d: _custom_run(d, "NeedsGain", "[controller.params]\ngain = -1.0"), ex.ConfigError,
+         "NeedsGain(context, **params) raised ValueError: gain must be >= 0, got -1.0 (laws.py, line"),
+    Case("custom: an undeclared signal", lambda d: _custom_run(d, "Undeclared"), ex.ControllerError,
+         "returned signal 'surprise', which is not in its signal_names"),
+    Case("custom: a torque of the wrong size", lambda d: _custom_run(d, "WrongShape"), ex.ControllerError,
+         "returned a torque of shape (4,) at t = 0 s; the arm has 3 joints"),
+    Case("custom: an exception in compute", lambda d: _custom_run(d, "Raises"), ex.ControllerError,
+         "Raises.compute raised at t = 0.011 s: IndexError: list index out of range (laws.py, line"),
+]
+
+CASES = URDF_CASES + CONFIG_CASES + RUN_FOLDER_CASES + VIEWER_CASES + TUNE_CASES + CUSTOM_CASES
 
 
 def message_of(case: Case, folder: Path) -> str:

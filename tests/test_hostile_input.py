@@ -9,7 +9,16 @@ import pytest
 from nnrobust.cli import main
 from nnrobust.exceptions import NNRobustError
 
-from .bad_inputs import CASES, CONFIG_CASES, URDF_CASES, BuildExperiment, ReadConfig, message_of, render_table
+from .bad_inputs import (
+    CASES,
+    CONFIG_CASES,
+    CUSTOM_CASES,
+    URDF_CASES,
+    BuildExperiment,
+    ReadConfig,
+    message_of,
+    render_table,
+)
 
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "bad-inputs.md"
 
@@ -67,7 +76,8 @@ def test_command_line_answers_a_bad_urdf_with_one_line(case, tmp_path, capsys, m
     assert not (tmp_path / "run").exists()
 
 
-@pytest.mark.parametrize("case", CONFIG_CASES, ids=[c.what for c in CONFIG_CASES])
+@pytest.mark.parametrize("case", CONFIG_CASES + CUSTOM_CASES,
+                         ids=[c.what for c in CONFIG_CASES + CUSTOM_CASES])
 def test_command_line_answers_a_bad_experiment_with_one_line(case, tmp_path, capsys):
     action = case.make(tmp_path)
     if isinstance(action, BuildExperiment):

@@ -70,10 +70,13 @@ def test_a_sample_reruns_as_a_normal_run(tmp_path, capsys):
     run_sweep(spec, tmp_path / "out", workers=2)
     frame = read_results(tmp_path / "out")
     row = frame[(frame["sample"] == 4) & (frame["controller"] == "nn")].iloc[0]
-    command = rerun_command(spec, draw(spec, 4), "nn")
-    sets = [part.strip("'") for part in command.split("--set ")[1:]]
+    import shlex
+
+    words = shlex.split(rerun_command(spec, draw(spec, 4), "nn"))
+    assert words[:5] == ["nnrobust", "run", "paper-ellipse", "--controller", "nn"]
+    sets = [words[i + 1] for i, word in enumerate(words) if word == "--set"]
     config = apply_overrides(load_preset("paper-ellipse").replace(controller={"kind": "nn"}),
-                             dict(parse_override(s.strip().strip("'")) for s in sets))
+                             dict(parse_override(s) for s in sets))
     metrics = run_experiment(config).metrics()
     assert metrics["rms_error_after_2s"] == pytest.approx(row["rms_error_after_2s"], rel=1e-12)
 
@@ -141,13 +144,24 @@ def test_a_changed_sweep_is_refused_unless_overwrite(tmp_path):
 BAD = [
     ("unknown key", {"nmae": "x"}, "unknown key"),
     ("missing base", {"name": "x", "controllers": ["nn"]}, "base: missing"),
-    ("unknown controller", {"controllers": ["nn", "lqr"]}, "controllers: needs a list of"),
+    ("unknown controller", {"controllers": ["nn", "lqr"]}, "controllers\\[1\\]: .lqr. is not one of nn"),
     ("unknown distribution", {"vary": {"nn.sigma": {"gamma": [1, 2]}}}, "unknown distribution"),
     ("reversed uniform", {"vary": {"nn.sigma": {"uniform": [0.3, 0.1]}}}, "needs a < b"),
     ("loguniform from zero", {"vary": {"nn.sigma": {"loguniform": [0.0, 1.0]}}}, "needs 0 < a"),
     ("unknown dotted key", {"vary": {"nn.sigmaa": [0.1]}}, "did you mean 'nn.sigma'"),
     ("empty grid", {"vary": {"nn.sigma": []}}, "expected a non-empty list"),
     ("negative samples", {"samples": 0}, "samples: expected an integer >= 1"),
+    ("custom entry without class", {"controllers": [{"name": "mine"}]},
+     "controllers\\[0\\]: a custom entry is"),
+    ("custom entry named like a kind", {"controllers": [{"name": "nn", "class": "a.py:B"}]},
+     "controllers\\[0\\].name: 'nn' must be .* not a built-in kind"),
+    ("custom entry twice",
+     {"controllers": [{"name": "a", "class": "a.py:B"}, {"name": "a", "class": "a.py:C"}]},
+     "lists a controller twice"),
+    ("controller kind in set", {"set": {"controller.kind": "pd"}},
+     "set.controller.kind: the controllers list"),
+    ("controller params in vary", {"vary": {"controller.params.Kp": [1.0]}},
+     "vary.controller.params.Kp: the controllers list"),
 ]
 
 
@@ -228,6 +242,48 @@ def test_cli_sweep_writes_results_summary_and_rerun_commands(tmp_path, capsys):
     kept = json.loads((folder / "metrics.json").read_text())
     assert kept["rms_error_after_2s"] == pytest.approx(worst["rms_error_after_2s"], rel=1e-12)
     assert (folder / "animation.html").is_file() and (folder / "result.npz").is_file()
+
+
+def test_a_custom_controller_joins_a_sweep_as_a_table_entry(tmp_path, monkeypatch):
+    """A controllers entry {name, class, params}: its class file is read from the sweep file's
+    folder, the Dask workers import it, its rows are named by the entry, and the printed command
+    reruns a row exactly. The entry is eq. (9) written again, so its rows equal no-u0's."""
+    import json
+    import shlex
+    import shutil
+    from pathlib import Path
+
+    shutil.copy(Path(__file__).parent / "controllers" / "eq9_again.py", tmp_path / "laws.py")
+    path = _sweep_file(tmp_path, text="""
+name = "mine"
+base = "paper-ellipse"
+controllers = ["no-u0", {name = "eq9", class = "laws.py:Eq9", params = {Kp = 10.0, Kv = 4.0}}]
+samples = 2
+[set]
+"simulation.duration" = 2.2
+[vary]
+"plant.disturbance_scale" = {uniform = [0.5, 2.0]}
+""")
+    out = tmp_path / "out"
+    monkeypatch.chdir(tmp_path / "..")
+    assert main(["sweep", str(path), "--out", str(out), "--workers", "2"]) == 0
+    frame = read_results(out).sort_values(["controller", "sample"])
+    mine, builtin = frame[frame["controller"] == "eq9"], frame[frame["controller"] == "no-u0"]
+    assert list(mine["status"]) == ["completed"] * 2
+    np.testing.assert_allclose(mine["rms_error_after_2s"].to_numpy(),
+                               builtin["rms_error_after_2s"].to_numpy(), rtol=1e-6)
+    summary = json.loads((out / "summary.json").read_text())
+    assert set(summary["controllers"]) == {"no-u0", "eq9"}
+    command = summary["controllers"]["eq9"]["worst"]["command"]
+    words = shlex.split(command)
+    assert words[3:5] == ["--controller", f"{(tmp_path / 'laws.py').resolve()}:Eq9"]
+    assert "controller.params.Kp=10.0" in words
+    quiet = ["--quiet", "--no-plots", "--no-animation"]
+    assert main([*words[1:], "--out", str(tmp_path / "again"), *quiet]) == 0
+    again = json.loads((tmp_path / "again" / "metrics.json").read_text())
+    worst = summary["controllers"]["eq9"]["worst"]
+    assert again["rms_error_after_2s"] == pytest.approx(worst["rms_error_after_2s"], rel=1e-12)
+    assert 'params = {Kp = 10.0, Kv = 4.0}' in (out / "sweep.toml").read_text()
 
 
 @pytest.mark.parametrize("name", ["paper-robustness", "panda-robustness"])

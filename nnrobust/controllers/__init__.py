@@ -1,6 +1,6 @@
 """Controllers: the task-space law of eq. (9), the NN compensator, sliding mode and baselines."""
 
-from .base import Controller, ControlOutput
+from .base import Controller, ControllerContext, ControlOutput
 from .basis import AdditiveRBFBasis
 from .nn_compensator import NNCompensator, error_dynamics, lyapunov_P, lyapunov_Q
 from .pseudoinverse import DampedPseudoInverse, project_null_space
@@ -11,6 +11,7 @@ __all__ = [
     "AdditiveRBFBasis",
     "ControlOutput",
     "Controller",
+    "ControllerContext",
     "DampedPseudoInverse",
     "NNCompensator",
     "SlidingModeCompensator",

@@ -16,6 +16,8 @@ class DynamicsModel(Protocol):
         m: task dimension m.
         task: task kind (``planar``, ``position`` or ``pose``; :mod:`nnrobust.model.tasks`).
         joint_names: names of the n joints.
+        pinocchio_model: the ``pin.Model`` behind a Pinocchio-backed model (for Pinocchio's own
+            algorithms: regressors, derivatives), None for the closed-form arm.
 
     """
 
@@ -23,6 +25,7 @@ class DynamicsModel(Protocol):
     m: int
     task: str
     joint_names: list[str]
+    pinocchio_model: object | None
 
     def mass(self, q: np.ndarray) -> np.ndarray:
         """Joint-space inertia matrix M(q), n x n [kg m^2]."""

@@ -71,6 +71,11 @@ class PinocchioModel:
         self._zero = np.zeros(self.nq)
         self._rows = [0, 1] if task == "planar" else list(range(self.m))
 
+    @property
+    def pinocchio_model(self) -> pin.Model:
+        """The ``pin.Model`` (read it; its :attr:`data` is this model's workspace)."""
+        return self.model
+
     @cached_property
     def _lower_indices(self) -> tuple[np.ndarray, np.ndarray]:
         """Indices below the diagonal of M, made on first use (n^2 of them)."""

@@ -138,6 +138,8 @@ class ThreeLinkPlanarModel:
     m: int = field(default=2, init=False)
     task: str = field(default="planar", init=False)
     joint_names: list[str] = field(default_factory=lambda: ["joint1", "joint2", "joint3"])
+    pinocchio_model: None = field(default=None, init=False)
+    """No Pinocchio model: the closed form is its own (:class:`DynamicsModel`)."""
 
     def mass(self, q: np.ndarray) -> np.ndarray:
         """M(q) with M11 = b1 + 2 p1 c2 + 2 p2 c23 + 2 p3 c3, ... (docs/errata.md)."""

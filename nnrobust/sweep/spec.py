@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -42,7 +43,10 @@ class SweepSpec:
     Attributes:
         name: the sweep's name.
         base: a preset name or an experiment file (relative paths from the sweep file's folder).
-        controllers: controller.kind values every sample runs with.
+        controllers: the names of the controllers every sample runs with: built-in kinds, and
+            the names of custom entries.
+        custom: per custom entry's name, its ``{"class": ..., "params": {...}}`` (a controllers
+            entry ``{name = ..., class = "file.py:Class", params = {...}}``).
         samples: random draws per grid point.
         seed: seed of the draws (each sample's own seed derives from it and the sample id).
         set: fixed overrides, dotted keys.
@@ -59,6 +63,7 @@ class SweepSpec:
     set: dict = field(default_factory=dict)
     vary: dict = field(default_factory=dict)
     description: str = ""
+    custom: dict = field(default_factory=dict)
 
     @property
     def grid_keys(self) -> list[str]:
@@ -87,8 +92,9 @@ class SweepSpec:
 
     def to_toml(self) -> str:
         """The resolved sweep file (what DIR/sweep.toml holds)."""
+        entries = [{"name": c, **self.custom[c]} if c in self.custom else c for c in self.controllers]
         head = {"name": self.name, "description": self.description, "base": self.base,
-                "controllers": self.controllers, "samples": self.samples, "seed": self.seed}
+                "controllers": entries, "samples": self.samples, "seed": self.seed}
         lines = [dump_toml(head).rstrip("\n")]
         for table in ("set", "vary"):
             lines += ["", f"[{table}]"]
@@ -146,6 +152,48 @@ def _check_distribution(key: str, table: dict) -> None:
         raise ConfigError(path, f"needs a standard deviation >= 0, got {b:g}")
 
 
+CUSTOM_KEYS = ("name", "class", "params")
+"""The keys of a custom controllers entry."""
+
+
+def _controllers(entries, where: str) -> tuple[list[str], dict]:
+    """(names, custom entries by name) of a sweep's controllers list: built-in kinds and tables
+    ``{name = "slotine", class = "laws.py:SlotineLi", params = {...}}``.
+    """
+    key = f"{where}: controllers"
+    if not isinstance(entries, list) or not entries:
+        raise ConfigError(key, f"needs a list of {', '.join(CONTROLLER_KINDS)} or tables "
+                          "{name = ..., class = \"file.py:Class\", params = {...}}, "
+                          f"got {entries!r}")
+    names, custom = [], {}
+    for i, entry in enumerate(entries):
+        if isinstance(entry, dict):
+            unknown = [k for k in entry if k not in CUSTOM_KEYS]
+            if unknown or not isinstance(entry.get("name"), str) or not isinstance(entry.get("class"), str):
+                raise ConfigError(f"{key}[{i}]", "a custom entry is {name = \"...\", class = "
+                                  "\"file.py:Class\", "
+                                  f"params = {{...}}}} (params optional), got {entry!r}")
+            if not NAME.fullmatch(entry["name"]) or entry["name"] in CONTROLLER_KINDS:
+                raise ConfigError(f"{key}[{i}].name", f"{entry['name']!r} must be 1-40 letters, digits, "
+                                  "'_' or '-' "
+                                  "and not a built-in kind")
+            custom[entry["name"]] = {"class": entry["class"], "params": dict(entry.get("params") or {})}
+            names.append(entry["name"])
+        elif entry in CONTROLLER_KINDS:
+            names.append(entry)
+        else:
+            raise ConfigError(f"{key}[{i}]", f"{entry!r} is not one of {', '.join(CONTROLLER_KINDS)} nor "
+                              "a table "
+                              "{name = ..., class = \"file.py:Class\", params = {...}}")
+    if len(set(names)) != len(names):
+        raise ConfigError(key, f"lists a controller twice: {names}")
+    return names, custom
+
+
+NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]{0,39}")
+"""A custom controller's name in a sweep: it names rows, columns and folders."""
+
+
 def parse_sweep(data: dict, where: str = "sweep") -> SweepSpec:
     """Validate a sweep table (as read from TOML); every error names its key."""
     unknown = [k for k in data if k not in KEYS]
@@ -156,13 +204,14 @@ def parse_sweep(data: dict, where: str = "sweep") -> SweepSpec:
             raise ConfigError(f"{where}: {key}", "missing")
     if not isinstance(data["name"], str) or not isinstance(data["base"], str):
         raise ConfigError(f"{where}: name", "name and base must be strings")
-    controllers = data["controllers"]
-    if not isinstance(controllers, list) or not controllers or any(c not in CONTROLLER_KINDS
-                                                                   for c in controllers):
-        raise ConfigError(f"{where}: controllers", f"needs a list of {', '.join(CONTROLLER_KINDS)}, got "
-                          f"{controllers!r}")
-    if len(set(controllers)) != len(controllers):
-        raise ConfigError(f"{where}: controllers", f"lists a controller twice: {controllers}")
+    controllers, custom = _controllers(data["controllers"], where)
+    for table in ("set", "vary"):
+        chosen = [k for k in data.get(table, {}) if isinstance(k, str) and k.split(".")[:2] in (
+            ["controller", "kind"], ["controller", "class"], ["controller", "params"])]
+        if chosen:
+            raise ConfigError(f"{where}: {table}.{chosen[0]}", "the controllers list chooses each row's "
+                              "controller; give a custom law's parameters in its entry: {name = ..., class = "
+                              "..., params = {...}}")
     for key, low in (("samples", 1), ("seed", 0)):
         value = data.get(key, low)
         if isinstance(value, bool) or not isinstance(value, int) or not low <= value < 2**63:
@@ -185,7 +234,7 @@ def parse_sweep(data: dict, where: str = "sweep") -> SweepSpec:
                               f"distribution table, got {value!r}")
     spec = SweepSpec(data["name"], data["base"], list(controllers), data.get("samples", 1),
                      data.get("seed", 0), dict(data.get("set", {})), dict(vary),
-                     data.get("description", ""))
+                     data.get("description", ""), custom)
     if spec.size * len(controllers) > MAX_ROWS:
         raise ConfigError(f"{where}: samples", f"{spec.size} samples x {len(controllers)} controllers "
                           f"exceed {MAX_ROWS} rows")
@@ -215,6 +264,12 @@ def load_sweep(path: str | Path) -> SweepSpec:
     base = Path(spec.base)
     if base.suffix == ".toml" and not base.is_absolute():
         spec.base = str((path.parent / base).resolve())
+    from ..controllers.custom import class_file
+
+    for entry in spec.custom.values():  # a controller file is read from the sweep file's folder
+        where, name = class_file(entry["class"]), entry["class"].rpartition(":")[2]
+        if where is not None and not where.is_absolute():
+            entry["class"] = f"{(path.parent / where).resolve()}:{name}"
     return spec
 
 
@@ -271,7 +326,7 @@ def experiment(spec: SweepSpec, base: ExperimentConfig, sample: Sample, controll
     overrides = {key: sample.seed % 2**31 for key in SEEDED_KEYS
                  if key not in spec.set and key not in spec.vary}
     overrides.update(sample.values)
-    overrides["controller.kind"] = controller
+    overrides.update(controller_overrides(spec, controller))
     try:
         return apply_overrides(base, overrides)
     except ConfigError as err:
@@ -280,10 +335,25 @@ def experiment(spec: SweepSpec, base: ExperimentConfig, sample: Sample, controll
                           f"{values or 'no varied values'})") from err
 
 
+def controller_overrides(spec: SweepSpec, controller: str) -> dict:
+    """The dotted keys that choose a row's controller: a built-in kind, or a custom class and params."""
+    if controller not in spec.custom:
+        return {"controller.kind": controller}
+    entry = spec.custom[controller]
+    return {"controller.kind": "custom", "controller.class": entry["class"],
+            "controller.params": entry["params"] or None}
+
+
 def rerun_command(spec: SweepSpec, sample: Sample, controller: str) -> str:
-    """The one-line command that reruns a sample as a normal run."""
-    sets = " ".join(f"--set '{k}={_inline(v)}'" for k, v in
-                    {**spec.set, **{key: sample.seed % 2**31 for key in SEEDED_KEYS
-                                    if key not in spec.set and key not in spec.vary},
-                     **sample.values}.items())
-    return f"nnrobust run {spec.base} --controller {controller} {sets}".rstrip()
+    """The one-line command that reruns a sample as a normal run, every argument shell-quoted."""
+    import shlex
+
+    values = {**spec.set, **{key: sample.seed % 2**31 for key in SEEDED_KEYS
+                             if key not in spec.set and key not in spec.vary}, **sample.values}
+    if controller in spec.custom:
+        values.update({f"controller.params.{k}": v for k, v in spec.custom[controller]["params"].items()})
+    chosen = spec.custom[controller]["class"] if controller in spec.custom else controller
+    words = ["nnrobust", "run", spec.base, "--controller", chosen]
+    for key, value in values.items():
+        words += ["--set", f"{key}={_inline(value)}"]
+    return shlex.join(words)

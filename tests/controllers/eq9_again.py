@@ -1,0 +1,79 @@
+"""Eq. (9) with u_0 = 0, written from docs/extending.md alone (numpy and the context, no nnrobust
+internals): the built-in no-u0 law must be reproduced by it. Also the broken controllers that
+the contract's checks must refuse, one class each.
+"""
+
+import numpy as np
+
+from nnrobust import Controller, ControlOutput
+
+
+class Eq9(Controller):
+    """a = J+ (x_d'' - J'q' - Kv e' - Kp e) + k (I - J+J)(grad h - q'); tau = M-hat a + N-hat."""
+
+    signal_names = ("pinv_damping_free",)
+
+    def __init__(self, context, Kp, Kv):
+        self.ctx = context
+        self.Kp = np.diag(np.broadcast_to(np.asarray(Kp, float), (context.m,)))
+        self.Kv = np.diag(np.broadcast_to(np.asarray(Kv, float), (context.m,)))
+
+    def compute(self, t, q, v, z, period=0.0):
+        ctx = self.ctx
+        x, J, jdot_v = ctx.nominal.task_state(q, v)
+        xd, dxd, ddxd = ctx.trajectory(t)
+        e, de = ctx.trajectory.error(x, xd), J @ v - dxd
+        J_pinv = ctx.pseudo_inverse.matrix(J)
+        a = J_pinv @ (ddxd - jdot_v - self.Kv @ de - self.Kp @ e)
+        grad = ctx.criterion.gradient(ctx.nominal, q) if ctx.criterion is not None else 0.0
+        a += ctx.null_space_gain * (np.eye(ctx.n) - J_pinv @ J) @ (grad - v)
+        tau = ctx.nominal.inverse_dynamics(q, v, a) + ctx.nominal_friction.torque(v)
+        return ControlOutput(tau, {"pinv_damping_free": 1.0})
+
+
+class Counter(Controller):
+    """A stateful law: z counts control periods in seconds; tau = 0."""
+
+    state_size = 1
+    signal_names = ("elapsed",)
+
+    def __init__(self, context):
+        self.n = context.n
+
+    def compute(self, t, q, v, z, period=0.0):
+        return ControlOutput(np.zeros(self.n), {"elapsed": float(z[0])}, z + period)
+
+
+class Undeclared(Counter):
+    def compute(self, t, q, v, z, period=0.0):
+        return ControlOutput(np.zeros(self.n), {"elapsed": 0.0, "surprise": 1.0}, z)
+
+
+class WrongShape(Counter):
+    def compute(self, t, q, v, z, period=0.0):
+        return ControlOutput(np.zeros(self.n + 1), {}, z)
+
+
+class Raises(Counter):
+    def compute(self, t, q, v, z, period=0.0):
+        if t > 0.01:
+            return ControlOutput(np.zeros(self.n), {}, [][0])
+        return ControlOutput(np.zeros(self.n), {}, z)
+
+
+class NeedsGain(Controller):
+    def __init__(self, context, gain, *, limit=1.0):
+        if gain < 0:
+            raise ValueError(f"gain must be >= 0, got {gain}")
+        self.n = context.n
+
+    def compute(self, t, q, v, z, period=0.0):
+        return ControlOutput(np.zeros(self.n))
+
+
+class Abstract(Controller):
+    pass
+
+
+class NotAController:
+    pass

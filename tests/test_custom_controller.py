@@ -1,0 +1,175 @@
+"""A controller of one's own (docs/extending.md): built from the experiment file as
+``Class(context, **params)``, checked against the contract, recorded, and re-run exactly.
+
+The reference is the built-in no-u0 law: ``tests/controllers/eq9_again.py`` writes eq. (9)
+again from the context alone, and the two runs must agree.
+"""
+
+import shutil
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import nnrobust
+from nnrobust.cli import main
+from nnrobust.config import load_config
+from nnrobust.exceptions import ConfigError, ControllerError
+from nnrobust.experiment import build, run_experiment
+from nnrobust.presets import load_preset
+
+LAWS = Path(__file__).parent / "controllers" / "eq9_again.py"
+
+
+def _experiment(folder: Path, cls: str, params: str = "", extra: str = "") -> Path:
+    """An experiment file beside a copy of the controller file, starting from a preset."""
+    shutil.copy(LAWS, folder / "laws.py")
+    path = folder / "experiment.toml"
+    path.write_text(f'base = "paper-ellipse"\nname = "mine"\n\n[controller]\nkind = "custom"\n'
+                    f'class = "laws.py:{cls}"\n{params}\n[simulation]\nduration = 0.5\n{extra}')
+    return path
+
+
+def test_the_context_is_enough_to_write_eq9_again(tmp_path):
+    """The contract's context carries everything eq. (9) needs: an independent re-implementation
+    tracks the built-in no-u0 law to 1e-9 rad over 0.5 s of the paper's case (b)."""
+    config = load_config(_experiment(tmp_path, "Eq9", "[controller.params]\nKp = 10.0\nKv = 4.0\n"))
+    mine = run_experiment(config)
+    builtin = run_experiment(load_preset("paper-ellipse").replace(simulation={"duration": 0.5},
+                                                                  controller={"kind": "no-u0"}))
+    assert mine.status == builtin.status == "completed"
+    assert mine.backend == "python"
+    np.testing.assert_allclose(mine.q, builtin.q, atol=1e-9, rtol=0)
+    assert np.all(mine.signals["pinv_damping_free"] == 1.0)
+
+
+def test_the_context_holds_the_nominal_model_never_the_true_one(tmp_path):
+    setup = build(load_config(_experiment(tmp_path, "Eq9", "[controller.params]\nKp = 10.0\nKv = 4.0\n")))
+    ctx = setup.controller.ctx
+    assert ctx.nominal is setup.nominal and ctx.nominal is not setup.plant.model
+    assert ctx.nominal.pinocchio_model is None  # the closed-form arm of the paper
+    q = setup.q0
+    assert not np.allclose(ctx.nominal.mass(q), setup.plant.model.mass(q))  # case (b) has model error
+    assert ctx.period == setup.config.simulation.control_period and (ctx.n, ctx.m) == (3, 2)
+    np.testing.assert_array_equal(ctx.torque_limits, setup.plant.torque_limit)
+    np.testing.assert_array_equal(ctx.q0, setup.q0)
+    panda = build(load_preset("panda-ellipse").replace(
+        simulation={"duration": 0.1}, controller={"kind": "custom", "class": f"{LAWS}:Counter"}))
+    assert panda.controller.n == 7
+    import pinocchio as pin
+
+    assert isinstance(build(load_preset("panda-ellipse").replace(simulation={"duration": 0.1}))
+                      .nominal.pinocchio_model, pin.Model)
+
+
+def test_a_run_records_its_class_and_reruns_bit_for_bit_from_elsewhere(tmp_path, monkeypatch):
+    experiment = _experiment(tmp_path, "Counter")
+    run = tmp_path / "run"
+    assert main(["run", str(experiment), "--out", str(run), "--quiet", "--no-plots", "--no-animation"]) == 0
+    text = (run / "config.toml").read_text()
+    assert f'class = "{(tmp_path / "laws.py").resolve()}:Counter"' in text
+    assert "# controller sha256: " in text
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    quiet = ["--quiet", "--no-plots", "--no-animation"]
+    assert main(["run", str(run / "config.toml"), "--out", "again", *quiet]) == 0
+    first, again = np.load(run / "result.npz"), np.load(elsewhere / "again" / "result.npz")
+    for key in first.files:
+        if first[key].dtype.kind == "f":
+            np.testing.assert_array_equal(first[key], again[key], err_msg=key)
+    elapsed = first["signal_elapsed"]  # z, as the law reports it: advanced by one period per step
+    np.testing.assert_allclose(elapsed, first["t"], rtol=0, atol=1e-12)
+    with open(tmp_path / "laws.py", "a") as fh:
+        fh.write("\n# edited\n")
+    with pytest.warns(UserWarning, match="controller file .* has changed"):
+        load_config(run / "config.toml")
+
+
+def test_run_takes_a_class_on_the_command_line_with_its_params(tmp_path, monkeypatch):
+    shutil.copy(LAWS, tmp_path / "laws.py")
+    monkeypatch.chdir(tmp_path)
+    assert main(["run", "paper-ellipse", "--controller", "laws.py:Eq9", "--set", "controller.params.Kp=10.0",
+                 "--set", "controller.params.Kv=4.0", "--duration", "0.2", "--quiet", "--no-plots",
+                 "--no-animation"]) == 0
+    config = load_config(tmp_path / "out" / "paper-ellipse-Eq9" / "config.toml")
+    assert config.controller.params == {"Kp": 10.0, "Kv": 4.0}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        back = config.replace(controller={"kind": "nn", "class": None, "params": None})
+    assert back.controller.class_ is None
+
+
+@pytest.mark.parametrize("cls, params, key, words", [
+    ("Nope", "", "controller.class", "has no 'Nope'"),
+    ("Eq", "", "controller.class", "did you mean 'Eq9'"),
+    ("NotAController", "", "controller.class", "not a subclass of nnrobust.Controller"),
+    ("Abstract", "", "controller.class", "does not implement compute"),
+    ("Eq9", "[controller.params]\nKp = 1.0\nKvv = 2.0\n", "controller.params.Kvv", "did you mean 'Kv'"),
+    ("Eq9", "[controller.params]\nKp = 1.0\n", "controller.params", "Eq9 needs Kv"),
+    ("NeedsGain", "[controller.params]\ngain = -1.0\n", "controller.params",
+     "ValueError: gain must be >= 0, got -1.0 (laws.py, line"),
+])
+def test_a_bad_class_or_bad_params_is_one_error_naming_the_key(tmp_path, cls, params, key, words):
+    config = load_config(_experiment(tmp_path, cls, params).parent / "experiment.toml")
+    with pytest.raises(ConfigError) as err:
+        build(config)
+    assert err.value.key == key and words in str(err.value), str(err.value)
+
+
+@pytest.mark.parametrize("cls, words", [
+    ("Undeclared", "returned signal 'surprise', which is not in its signal_names ('elapsed',); declare it"),
+    ("WrongShape", "returned a torque of shape (4,) at t = 0 s; the arm has 3 joints"),
+    ("Raises", "Raises.compute raised at t = 0.011 s: IndexError: list index out of range (laws.py, line"),
+])
+def test_a_controller_that_breaks_the_contract_while_running_is_named(tmp_path, cls, words):
+    config = load_config(_experiment(tmp_path, cls))
+    with pytest.raises(ControllerError) as err:
+        run_experiment(config)
+    assert words in str(err.value), str(err.value)
+
+
+def test_class_and_params_belong_to_custom_and_custom_needs_a_class():
+    config = load_preset("paper-ellipse")
+    with pytest.raises(ConfigError, match="controller.class: is read only with kind = 'custom'"):
+        config.replace(controller={"class": "laws.py:Eq9"})
+    with pytest.raises(ConfigError, match="controller.class: kind = 'custom' needs the class"):
+        config.replace(controller={"kind": "custom"})
+    with pytest.raises(ConfigError, match="is not \"file.py:Class\""):
+        config.replace(controller={"kind": "custom", "class": "laws.py"})
+    with pytest.raises(ConfigError, match="controller.params.2x: .* not a valid Python identifier"):
+        config.replace(controller={"kind": "custom", "class": "a.py:B", "params": {"2x": 1}})
+    with pytest.raises(ConfigError, match="no module 'no_such_package_here'"):
+        build(config.replace(controller={"kind": "custom", "class": "no_such_package_here:Law"}))
+
+
+def test_the_pd_and_custom_laws_are_not_held_to_eq17(tmp_path):
+    """Kv^2 > Kp constrains eq. (9)'s gains only; the PD baseline and custom laws do not use them."""
+    config = load_preset("paper-ellipse")
+    assert config.replace(controller={"kind": "pd", "Kp": [100.0]}).controller.Kp == [100.0, 100.0]
+    with pytest.raises(ConfigError, match="Kv\\^2 = 16 must exceed Kp = 100"):
+        config.replace(controller={"kind": "no-u0", "Kp": [100.0]})
+
+
+def test_an_experiment_file_starts_from_a_preset_or_another_file(tmp_path):
+    (tmp_path / "a.toml").write_text('base = "panda-ellipse"\nname = "a"\n[simulation]\nduration = 1.5\n')
+    (tmp_path / "b.toml").write_text('base = "a.toml"\n[controller]\nkind = "pd"\n')
+    b = load_config(tmp_path / "b.toml")
+    panda = load_preset("panda-ellipse")
+    assert (b.name, b.simulation.duration, b.controller.kind) == ("a", 1.5, "pd")
+    assert b.robot == panda.robot and b.trajectory == panda.trajectory
+    assert b.simulation.control_period == panda.simulation.control_period
+    (tmp_path / "c.toml").write_text('base = "c.toml"\n')
+    with pytest.raises(ConfigError, match="more than 8 deep"):
+        load_config(tmp_path / "c.toml")
+    (tmp_path / "d.toml").write_text('base = "nope"\n')
+    with pytest.raises(ConfigError, match="d.toml: base: unknown preset 'nope'"):
+        load_config(tmp_path / "d.toml")
+
+
+def test_the_front_door_exposes_the_workflow():
+    for name in ("load_robot", "load_preset", "ExperimentConfig", "build", "run_experiment", "Result",
+                 "write_run", "plot_run", "run_sweep", "run_tune", "Controller", "ControlOutput",
+                 "ControllerContext"):
+        assert name in nnrobust.__all__ and getattr(nnrobust, name) is not None
