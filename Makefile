@@ -52,7 +52,7 @@ $(VENV)/.browser: $(BIN)/activate
 REQUIRE_COMPILED := $(if $(shell command -v c++ 2>/dev/null),1,0)
 
 test: $(VENV)/.installed-test $(VENV)/.browser
-	$(BIN)/ruff check nnrobust tests benchmarks docs
+	$(BIN)/ruff check nnrobust tests benchmarks docs examples
 	NNROBUST_REQUIRE_COMPILED=$(REQUIRE_COMPILED) $(BIN)/python -m pytest -q
 
 bench: $(VENV)/.installed

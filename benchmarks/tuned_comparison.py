@@ -39,6 +39,7 @@ CASES = [
 def _samples_differ(target: str) -> bool:
     """Whether a tuning's samples are different experiments: sensor noise, or a model error drawn
     from each sample's seed."""
+    from nnrobust.config import nominal_kind
     from nnrobust.sweep.spec import base_config
     from nnrobust.tune import TuneSpec
     from nnrobust.tune.engine import sweep_of
@@ -46,7 +47,7 @@ def _samples_differ(target: str) -> bool:
     config = base_config(sweep_of(TuneSpec(target, ["pd"], 2)))
     sensing, nominal = config.sensing, config.nominal
     noisy = any(sensing.position_noise) or any(sensing.velocity_noise)
-    return bool(noisy or (nominal.kind == "urdf" and nominal.perturbed))
+    return bool(noisy or (nominal_kind(config) == "urdf" and nominal.perturbed))
 
 
 def _slug(case: str, sensing: str) -> str:

@@ -50,8 +50,9 @@ class NominalConfig:
     """The controller's model M-hat, N-hat.
 
     Attributes:
-        kind: ``closed-form`` (three-link closed form with beta and p below) or ``urdf`` (the true
-            robot's Pinocchio model, perfect unless perturbed by the fields below).
+        kind: ``closed-form`` (three-link closed form with beta and p below), ``urdf`` (the true
+            robot's Pinocchio model, perfect unless perturbed by the fields below) or ``auto``
+            (the default: closed-form on the paper's arm, urdf on any other; :func:`nominal_kind`).
         beta: beta-hat [kg m^2] (closed form; default the true robot's).
         p: p-hat [kg m^2] (closed form; default the true robot's).
         mass_scale: every body's mass times this (urdf).
@@ -66,7 +67,7 @@ class NominalConfig:
 
     """
 
-    kind: str = "closed-form"
+    kind: str = "auto"
     beta: list[float] | None = None
     p: list[float] | None = None
     mass_scale: float = 1.0
@@ -95,7 +96,9 @@ class PlantConfig:
         viscous_friction: F_d [N m s/rad]; overrides the ``friction`` choice when given.
         coulomb_friction: [N m]; overrides the ``friction`` choice when given.
         disturbance: ``paper`` (tau_d of Sect. 4), ``none``, ``scaled`` (two harmonics of peak
-            disturbance_level x torque scale per joint) or ``sinusoid`` (the fields below).
+            disturbance_level x torque scale per joint), ``sinusoid`` (the fields below) or
+            ``auto`` (the default: ``paper`` on the paper's arm, ``three_link_planar``, else
+            ``scaled``).
         disturbance_level: ``scaled``: peak disturbance / torque scale.
         disturbance_amplitude: n x K amplitudes [N m] (``sinusoid``).
         disturbance_omega: K angular frequencies [rad/s] (``sinusoid``).
@@ -120,7 +123,7 @@ class PlantConfig:
     coulomb_level: float = 0.01
     viscous_friction: list[float] | None = None
     coulomb_friction: list[float] | None = None
-    disturbance: str = "paper"
+    disturbance: str = "auto"
     disturbance_level: float = 0.02
     disturbance_amplitude: list[list[float]] | None = None
     disturbance_omega: list[float] | None = None
@@ -359,7 +362,8 @@ class SubtaskConfig:
     Attributes:
         criteria: names (``paper``, ``half_det_manipulability``, ``manipulability``,
             ``joint_limits``, ``joint_centering``, ``joint_smoothness``, ``obstacles``; see
-            docs/controller.md); empty for pure null-space damping.
+            docs/controller.md); empty for pure null-space damping; not given: the paper's on a
+            three-joint planar arm, else manipulability and joint_limits (:func:`default_criteria`).
         weights: w_i, positive and summing to C (default: C / number of criteria each).
         C: the constant of eq. (4).
         smoothness_coefficients: c of ``joint_smoothness`` (default the paper's (0.5, -1, 1)).
@@ -369,7 +373,7 @@ class SubtaskConfig:
 
     """
 
-    criteria: list[str] = field(default_factory=lambda: ["paper"])
+    criteria: list[str] | None = None
     weights: list[float] | None = None
     C: float = 1.0
     smoothness_coefficients: list[float] | None = None
@@ -740,6 +744,27 @@ def _positive(path: str, values) -> None:
         raise ConfigError(path, f"must be positive, got {values}")
 
 
+def nominal_kind(config: ExperimentConfig) -> str:
+    """``nominal.kind`` resolved: ``auto`` is the closed form on the paper's arm
+    (``three_link_planar``, planar task), the URDF model on every other arm.
+    """
+    kind = config.nominal.kind
+    if kind == "auto":
+        paper = config.robot.source == "three_link_planar" and config.robot.task == "planar"
+        return "closed-form" if paper else "urdf"
+    return kind
+
+
+def default_criteria(n: int, task: str) -> list[str]:
+    """``subtasks.criteria`` when it is not given: the paper's eq. (19) on a three-joint planar
+    arm, else manipulability and joint-limit avoidance (joint limits alone on a pose task, where
+    the manipulability of a 6 x n Jacobian mixes metres and radians).
+    """
+    if n == 3 and task == "planar":
+        return ["paper"]
+    return ["joint_limits"] if task == "pose" else ["manipulability", "joint_limits"]
+
+
 MAX_SUBSTEPS = 10_000
 MAX_STEPS = 1e9
 MAX_CENTERS = 1000
@@ -790,9 +815,9 @@ def validate(config: ExperimentConfig) -> None:
         raise ConfigError("robot.chain", f"needs 2 frame names, [base, tip], got {config.robot.chain}")
     choices = {
         "robot.task": (config.robot.task, tuple(TASK_KINDS)),
-        "nominal.kind": (config.nominal.kind, ("closed-form", "urdf")),
+        "nominal.kind": (config.nominal.kind, ("auto", "closed-form", "urdf")),
         "plant.friction": (config.plant.friction, ("urdf", "scaled")),
-        "plant.disturbance": (config.plant.disturbance, ("paper", "none", "scaled", "sinusoid")),
+        "plant.disturbance": (config.plant.disturbance, ("auto", "paper", "none", "scaled", "sinusoid")),
         "controller.kind": (c.kind, (*CONTROLLER_KINDS, "custom")),
         "nn.law": (nn.law, ("corrected", "printed")),
         "nn.basis_input": (nn.basis_input, ("joint", "error")),
@@ -861,7 +886,7 @@ def validate(config: ExperimentConfig) -> None:
                           f"{nc.relative_error}")
     if nc.com_error < 0:
         raise ConfigError("nominal.com_error", f"must be >= 0 [m], got {nc.com_error}")
-    if nc.kind == "closed-form" and (nc.mass_scale, nc.inertia_scale, nc.com_error) != (1, 1, 0):
+    if nominal_kind(config) == "closed-form" and (nc.mass_scale, nc.inertia_scale, nc.com_error) != (1, 1, 0):
         raise ConfigError("nominal.kind", "mass_scale, inertia_scale and com_error perturb the URDF "
                           "model: set kind = 'urdf' (closed-form takes beta, p and relative_error)")
     _non_negative("plant.disturbance_scale", pc.disturbance_scale)
@@ -902,7 +927,9 @@ def validate(config: ExperimentConfig) -> None:
     for i, sphere in enumerate(config.subtasks.obstacles):
         if len(sphere) != 4 or sphere[3] < 0:
             raise ConfigError(f"subtasks.obstacles[{i}]", f"must be [x, y, z, radius >= 0], got {sphere}")
-    if "obstacles" in config.subtasks.criteria and not config.subtasks.obstacles:
+    if config.subtasks.weights is not None and config.subtasks.criteria is None:
+        raise ConfigError("subtasks.weights", "weigh criteria that are named: set subtasks.criteria too")
+    if "obstacles" in (config.subtasks.criteria or []) and not config.subtasks.obstacles:
         raise ConfigError("subtasks.obstacles", "criterion 'obstacles' needs at least one sphere")
     if config.subtasks.weights is not None:
         if len(config.subtasks.weights) != len(config.subtasks.criteria):

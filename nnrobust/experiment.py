@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from .config import ExperimentConfig, path_key, provenance_header
+from .config import ExperimentConfig, default_criteria, nominal_kind, path_key, provenance_header
 from .controllers import (
     AdditiveRBFBasis,
     Controller,
@@ -149,13 +149,16 @@ def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
         pc.friction_scale * _vector("plant.viscous_friction", pc.viscous_friction, n, base.viscous),
         coulomb, static=pc.stiction * coulomb,
     )
-    if pc.disturbance == "scaled":
+    kind = pc.disturbance
+    if kind == "auto":  # the paper's tau_d belongs to the paper's arm
+        kind = "paper" if config.robot.source == "three_link_planar" else "scaled"
+    if kind == "scaled":
         disturbance = scaled_disturbance(robot, pc.disturbance_level, tau_ref())
-    elif pc.disturbance == "paper":
+    elif kind == "paper":
         if n != 3:
             raise ConfigError("plant.disturbance", f"'paper' is for 3 joints, the robot has {n}")
         disturbance = SinusoidalDisturbance.paper()
-    elif pc.disturbance == "none":
+    elif kind == "none":
         disturbance = SinusoidalDisturbance.none(n)
     else:
         amplitude = np.asarray(pc.disturbance_amplitude, dtype=float)
@@ -182,7 +185,7 @@ def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsMo
     nc = config.nominal
     if config.controller.kind == "computed-torque":
         return PinocchioModel(robot.model, robot.task_frame, robot.task, robot.name)
-    if nc.kind == "urdf":
+    if nominal_kind(config) == "urdf":
         if nc.perturbed:
             model = perturb_inertias(robot.model, nc.mass_scale, nc.inertia_scale,
                                      nc.relative_error, nc.com_error, nc.seed)
@@ -231,12 +234,13 @@ def _make_criterion(name: str, config: ExperimentConfig, robot: PinocchioModel) 
 def build_criterion(config: ExperimentConfig, robot: PinocchioModel) -> Criterion | None:
     """Weighted sum of the named criteria, eq. (4), or None."""
     sc = config.subtasks
-    if not sc.criteria:
+    names = default_criteria(robot.nq, robot.task) if sc.criteria is None else sc.criteria
+    if not names:
         return None
-    unknown = [c for c in sc.criteria if c not in CRITERIA]
+    unknown = [c for c in names if c not in CRITERIA]
     if unknown:
         raise ConfigError("subtasks.criteria", f"unknown {unknown}; valid: {', '.join(CRITERIA)}")
-    criteria = [_make_criterion(name, config, robot) for name in sc.criteria]
+    criteria = [_make_criterion(name, config, robot) for name in names]
     return WeightedCriteria(criteria, sc.weights, sc.C)
 
 

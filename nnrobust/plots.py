@@ -412,14 +412,19 @@ def _criterion_name(result: Result) -> tuple[str, str]:
         sub = result.experiment().subtasks
     except (NNRobustError, ValueError):  # a result without a readable configuration
         return "h(q)", "?"
-    if not sub.criteria:
+    from .config import default_criteria
+
+    m = result.e.shape[1]
+    names = sub.criteria if sub.criteria is not None else default_criteria(
+        result.q.shape[1], {2: "planar", 6: "pose"}.get(m, "position"))
+    if not names:
         return "no subtask criterion", "-"
-    weights = sub.weights or [sub.C / len(sub.criteria)] * len(sub.criteria)
-    units = [criterion_units(c, result.e.shape[1]) for c in sub.criteria]
+    weights = sub.weights or [sub.C / len(names)] * len(names)
+    units = [criterion_units(c, m) for c in names]
     unit = " + ".join(dict.fromkeys(units))  # a weighted sum of terms of different units
     terms = [(c if w == 1 else f"{w:g} {c}") if c != "paper" else
              (_criterion_formula(c) if w == 1 else f"{w:g} [{_criterion_formula(c)}]")
-             for w, c in zip(weights, sub.criteria)]
+             for w, c in zip(weights, names)]
     return "h(q) = " + " + ".join(terms), unit
 
 

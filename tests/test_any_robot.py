@@ -219,3 +219,33 @@ if __name__ == "__main__":  # the table of docs/robots.md: python -m tests.test_
         n = _quiet(load_robot, robot_name, task="position").nq
         print(f"| {robot_name} | {n} | {_late_rms(robot_name, 'nn') * 1e3:.3g} mm | "
               f"{_late_rms(robot_name, 'no-u0') * 1e3:.3g} mm |")
+
+
+@pytest.mark.parametrize("controller", ["nn", "pd"])
+def test_a_minimal_experiment_file_runs_on_any_arm(tmp_path, controller):
+    """Robot, task and trajectory only: the defaults adapt (the paper's criterion and disturbance
+    only on the paper's arm), and the run completes bounded."""
+    from nnrobust.config import load_config
+    from nnrobust.experiment import build, run_experiment
+
+    path = tmp_path / "minimal.toml"
+    path.write_text('[robot]\nsource = "panda"\ntask = "position"\n[trajectory]\ncenter = [0.45, 0.0, 0.45]\n'
+                    'axis_a = [0.1, 0.0, 0.0]\naxis_b = [0.0, 0.1, 0.0]\n[simulation]\nduration = 2.5\n'
+                    f'[controller]\nkind = "{controller}"\n')
+    config = load_config(path)
+    setup = build(config)
+    assert [type(c).__name__ for c in setup.criterion.criteria] == ["Manipulability", "JointLimitAvoidance"]
+    peak = setup.plant.disturbance.amplitude.sum(axis=1)
+    assert peak.shape == (7,) and np.all(peak > 0)  # scaled to the arm, not the paper's 3 joints
+    result = run_experiment(config, setup=setup)
+    assert result.status == "completed" and result.metrics()["rms_error_after_2s"] < 0.05
+
+
+def test_the_paper_arm_keeps_the_papers_defaults():
+    from nnrobust.config import ExperimentConfig
+    from nnrobust.experiment import build
+    from nnrobust.plant import SinusoidalDisturbance
+
+    setup = build(ExperimentConfig().replace(simulation={"duration": 1.0}))
+    assert [type(c).__name__ for c in setup.criterion.criteria] == ["PaperCriterion"]
+    np.testing.assert_array_equal(setup.plant.disturbance.amplitude, SinusoidalDisturbance.paper().amplitude)
