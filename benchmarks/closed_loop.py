@@ -1,5 +1,7 @@
 """Closed-loop cost per control step: the library's Python and compiled loops and the two floors
-they are measured against, a bare Python + Pinocchio loop and the same loop in C++.
+they are measured against, a bare Python + Pinocchio loop and the same loop in C++; and a custom
+Python controller (examples/custom_controller.py's TaskPD) on the Python and the hybrid loop, its
+compute timed alone, and the hybrid loop replaying its commands: the loop's own cost.
 
     python benchmarks/closed_loop.py --json out/bench/closed_loop.json [--duration 2]
 
@@ -13,17 +15,21 @@ from __future__ import annotations
 
 import argparse
 import time
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
-from nnrobust import compiled
+from nnrobust import Controller, ControlOutput, compiled
 from nnrobust.experiment import build
 from nnrobust.presets import load_preset
 from nnrobust.results import write_json_atomic
 from nnrobust.simulation import simulate
 
 PRESETS = ("paper-ellipse", "panda-ellipse")
+
+CUSTOM = Path(__file__).resolve().parents[1] / "examples" / "custom_controller.py"
+"""The light custom controller of the hybrid rows: examples/custom_controller.py's TaskPD."""
 
 
 def python_floor_loop(model, frame, q, v, steps, dt):
@@ -70,7 +76,43 @@ def _contenders(preset: str, duration: float) -> dict:
             out["nnrobust, compiled loop"] = lambda: compiled.simulate_compiled(setup, duration)
         loaded = compiled.load_model(robot.model, robot.task_frame)
         out["floor, C++"] = lambda: compiled.floor_loop(loaded, setup.q0, setup.v0, steps, dt)
+    custom = build(config.replace(controller={"kind": "custom", "class": f"{CUSTOM}:TaskPD"}))
+    out["TaskPD, Python loop"] = lambda: simulate(custom.plant, custom.controller, custom.q0, custom.v0,
+                                                  duration, dt)
+    if compiled.available():
+        out["TaskPD, hybrid loop"] = lambda: compiled.simulate_hybrid(custom, duration)
+        trace = compiled.simulate_hybrid(custom, duration)  # the run its compute is timed on, and replayed
+        out["TaskPD, compute alone"] = lambda: _compute_alone(custom.controller, trace, dt)
+        replayed = build(config.replace(controller={"kind": "custom", "class": f"{CUSTOM}:TaskPD"}))
+
+        def hybrid_replayed():
+            replayed.controller = Replay(trace)
+            compiled.simulate_hybrid(replayed, duration)
+
+        out["hybrid loop, law replayed"] = hybrid_replayed
     return out, steps
+
+
+def _compute_alone(controller, trace, period: float) -> None:
+    """The controller's own time: its compute at every state of a run, with no loop around it."""
+    for t, q, v in zip(trace.t, trace.q, trace.dq):
+        controller.compute(t, q, v, np.zeros(0), period)
+
+
+class Replay(Controller):
+    """A law that costs nothing: the recorded commands of a run, handed back in order; the hybrid
+    loop around it is the same run, so its time is the loop's own cost beyond the controller's.
+    """
+
+    signal_names = ("effort",)
+
+    def __init__(self, trace):
+        self.outputs, self.k = [ControlOutput(tau, {"effort": 0.0}) for tau in trace.tau_cmd], 0
+
+    def compute(self, t, q, v, z, period=0.0):
+        """The k-th recorded command."""
+        self.k += 1
+        return self.outputs[self.k - 1]
 
 
 def main() -> None:

@@ -6,7 +6,9 @@
 
 #include <Python.h>
 
+#include <exception>
 #include <stdexcept>
+#include <string>
 
 #include "closed_loop.hpp"
 #include "model.hpp"
@@ -34,6 +36,38 @@ LoopTrace run(LoadedModel &plant, const LoopSpec &spec, LoadedModel *nominal) {
     throw std::invalid_argument("nominal_kind 'pinocchio' needs the nominal model");
   nb::gil_scoped_release released;
   return nnrobust::run_loop(plant, nominal, spec, &python_signal_pending);
+}
+
+// The hybrid loop: the compiled plant calling a Python control law once per period, the GIL held
+// for the whole run (the law runs in this thread). law(t, q, v, z) -> (tau, z_next), or None to
+// stop the run as interrupted; an exception it raises stops the run and is raised again here.
+LoopTrace hybrid(LoadedModel &plant, const LoopSpec &spec, nb::callable law) {
+  const Eigen::Index n = plant.model.nv, nz = spec.z0.size();
+  std::exception_ptr failure;
+  const nnrobust::ExternalLaw external = [&](double t, const nnrobust::Vector &q, const nnrobust::Vector &v,
+                                             const nnrobust::Vector &z, nnrobust::Vector &tau,
+                                             nnrobust::Vector &z_next) -> bool {
+    try {
+      nb::object result = law(t, q, v, z);
+      if (result.is_none()) return false;  // interrupted (Ctrl-C, SIGTERM inside the law)
+      nb::tuple out = nb::cast<nb::tuple>(result);
+      if (out.size() != 2) throw std::invalid_argument("the hybrid law must return (tau, z_next)");
+      tau = nb::cast<nnrobust::Vector>(out[0]);
+      z_next = nb::cast<nnrobust::Vector>(out[1]);
+      if (tau.size() != n || z_next.size() != nz)
+        throw std::length_error("the hybrid law returned a torque of " + std::to_string(tau.size()) +
+                                " entries (needs " + std::to_string(n) + ") or a state of " +
+                                std::to_string(z_next.size()) + " (needs " + std::to_string(nz) + ")");
+      return true;
+    } catch (...) {
+      failure = std::current_exception();
+      return false;
+    }
+  };
+  LoopTrace trace = nnrobust::run_loop(plant, nullptr, spec, &python_signal_pending, &external);
+  if (failure) std::rethrow_exception(failure);
+  if (trace.status == "failed") trace.status = "interrupted";
+  return trace;
 }
 
 // A batch: the models and specs stay owned by Python (kept alive by the call's arguments).
@@ -110,6 +144,9 @@ NB_MODULE(_loop, m) {
   m.def("run_loop", &run, nb::arg("plant"), nb::arg("spec"), nb::arg("nominal").none() = nb::none(),
         "Run the compiled closed loop (GIL released; Ctrl-C and SIGTERM stop it); `nominal` is the "
         "controller's Pinocchio model when spec.nominal_kind is 'pinocchio'.");
+  m.def("run_hybrid", &hybrid, nb::arg("plant"), nb::arg("spec"), nb::arg("law"),
+        "Run the compiled plant with a Python control law law(t, q, v, z) -> (tau, z_next), called once "
+        "per control period (the GIL held); an exception of the law stops the run and is raised.");
   m.def("run_batch", &batch, nb::arg("plants"), nb::arg("nominals"), nb::arg("specs"), nb::arg("threads"),
         "Run several loops on C++ threads with the GIL released (one model pair per run; None "
         "nominals for the closed form); Ctrl-C and SIGTERM stop them all.");

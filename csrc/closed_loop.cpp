@@ -574,7 +574,8 @@ void record_kinematics(LoadedModel &m, const LoopSpec &s, const Criteria &criter
 
 }  // namespace
 
-LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpec &s, bool (*interrupted)()) {
+LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpec &s, bool (*interrupted)(),
+                   const ExternalLaw *external) {
   const int n = model.model.nv;
   const long steps = s.steps;
   LoopTrace tr;
@@ -619,7 +620,17 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
         if (r > 0) qm[i] = std::nearbyint(qm[i] / r) * r;
       }
     }
-    const Output out = controller.compute(t, qm, vm, z);
+    Output out;
+    if (external) {
+      out.z = z;
+      if (!(*external)(t, qm, vm, z, out.tau, out.z)) {
+        tr.status = "failed";
+        tr.done = k;
+        break;
+      }
+    } else {
+      out = controller.compute(t, qm, vm, z);
+    }
     commands.push_back(out.tau);
     if (static_cast<int>(commands.size()) > s.delay + 1) commands.pop_front();
     const Vector tau_cmd = commands.front();

@@ -3,6 +3,7 @@
 // the comments; tests/test_compiled.py holds the two equal.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -102,9 +103,18 @@ struct LoopTrace {
   long friction_events = 0, unresolved_events = 0;  // StickSlipIntegrator's counts
 };
 
+// A control law without a compiled twin (the hybrid loop: a Python controller's compute), called
+// once per control period with the measured (q, q') and the state z; it fills tau (n entries)
+// and z_next (z's size) and returns false to stop the run (the caller keeps the error).
+using ExternalLaw = std::function<bool(double t, const Vector &q, const Vector &v, const Vector &z, Vector &tau,
+                                       Vector &z_next)>;
+
 // Runs the loop; `nominal` is the controller's Pinocchio model (nominal_kind "pinocchio", else
-// unused); `interrupted()` is polled every few hundred steps (Ctrl-C, SIGTERM).
-LoopTrace run_loop(LoadedModel &plant, LoadedModel *nominal, const LoopSpec &spec, bool (*interrupted)());
+// unused); `interrupted()` is polled every few hundred steps (Ctrl-C, SIGTERM). With `external`,
+// that law replaces the compiled controller (spec.law "external") and the run ends with status
+// "failed" where it returns false.
+LoopTrace run_loop(LoadedModel &plant, LoadedModel *nominal, const LoopSpec &spec, bool (*interrupted)(),
+                   const ExternalLaw *external = nullptr);
 
 // One run of a batch: its own models (each LoadedModel has its own Pinocchio Data) and spec.
 struct BatchItem {

@@ -495,9 +495,10 @@ def build_parser() -> argparse.ArgumentParser:
                      "PD + gravity compensation), or your own class as file.py:Class or package.module:Class "
                      "(its parameters from --set controller.params.NAME=VALUE; docs/extending.md)")
     run.add_argument("--duration", type=float, help="override the simulated time [s]")
-    run.add_argument("--backend", choices=("auto", "compiled", "python"),
-                     help="simulation loop: compiled (C++), python (the reference) or auto (compiled "
-                     "when the experiment has a compiled twin; the default)")
+    run.add_argument("--backend", choices=("auto", "compiled", "hybrid", "python"),
+                     help="simulation loop: compiled (C++), hybrid (the compiled plant calling a Python "
+                     "controller once per period), python (the reference) or auto (compiled when the "
+                     "experiment has a compiled twin, hybrid for a custom controller; the default)")
     run.add_argument("--set", action="append", metavar="KEY=VALUE",
                      help="set one key of the experiment (dotted, TOML value), e.g. --set nn.sigma=0.5 "
                      "--set 'controller.Kp=[100.0]'; repeatable, checked like an experiment file")

@@ -85,29 +85,22 @@ def twin_refusal(setup) -> str:
     """
     from .controllers import NNCompensator, SlidingModeCompensator, TaskSpaceController, TaskSpacePD
     from .model import PinocchioModel, ThreeLinkPlanarModel
-    from .subtasks import WeightedCriteria
     from .trajectories import EllipseTrajectory, PiecewisePolynomialPath, PoseTrajectory
 
     config, controller = setup.config, setup.controller
-    if not available():
-        return unavailable_reason()
-    criterion = setup.criterion
+    refusal = _plant_refusal(setup)
+    if refusal:
+        return refusal
+    if is_custom(controller):
+        return f"a custom controller ({type(controller).__name__}) runs in Python: --backend hybrid or python"
     checks = [
-        (config.simulation.integrator == "rk4", f"the integrator {config.simulation.integrator!r}"),
         (type(controller) in (TaskSpaceController, TaskSpacePD),
          f"controller.kind {config.controller.kind!r}"),
-        (setup.robot.task in ("planar", "position", "pose"), f"a {setup.robot.task!r} task"),
-        (setup.plant.friction.smoothing <= 0, "a smoothed plant friction"),
         (isinstance(setup.nominal, (ThreeLinkPlanarModel, PinocchioModel)), "the nominal model"),
         (type(setup.trajectory) in (EllipseTrajectory, PiecewisePolynomialPath, PoseTrajectory)
          and type(getattr(setup.trajectory, "path", setup.trajectory)) in (EllipseTrajectory,
                                                                           PiecewisePolynomialPath),
          "the trajectory"),
-        (criterion is None or (isinstance(criterion, WeightedCriteria) and all(
-            type(c).__name__ in COMPILED_CRITERIA for c in criterion.criteria)), "a criterion"),
-        (criterion is None or setup.robot.task != "pose" or not any(
-            COMPILED_CRITERIA.get(type(c).__name__) in DET_CRITERIA for c in criterion.criteria),
-         "a manipulability criterion on a pose task"),
     ]
     compensator = getattr(controller, "compensator", None)
     checks.append((compensator is None or type(compensator) in (NNCompensator, SlidingModeCompensator),
@@ -118,13 +111,45 @@ def twin_refusal(setup) -> str:
     return ""
 
 
-def loop_spec(setup, duration: float):
-    """The compiled loop's description of a built experiment (every array it needs)."""
-    import numpy as np
+def is_custom(controller) -> bool:
+    """Whether a controller is a user's class (not one of nnrobust's own laws)."""
+    return not type(controller).__module__.startswith("nnrobust.")
 
-    from .controllers import NNCompensator, TaskSpacePD
-    from .model import PinocchioModel
-    from .simulation import MAX_SPEED
+
+def _plant_refusal(setup) -> str:
+    """Why the compiled plant cannot simulate this experiment ("" when it can): the part of
+    :func:`twin_refusal` that the hybrid loop needs too (plant, integrator, task, criterion).
+    """
+    from .subtasks import WeightedCriteria
+
+    if not available():
+        return unavailable_reason()
+    config, criterion = setup.config, setup.criterion
+    checks = [
+        (config.simulation.integrator == "rk4", f"the integrator {config.simulation.integrator!r}"),
+        (setup.robot.task in ("planar", "position", "pose"), f"a {setup.robot.task!r} task"),
+        (setup.plant.friction.smoothing <= 0, "a smoothed plant friction"),
+        (criterion is None or (isinstance(criterion, WeightedCriteria) and all(
+            type(c).__name__ in COMPILED_CRITERIA for c in criterion.criteria)), "a criterion"),
+        (criterion is None or setup.robot.task != "pose" or not any(
+            COMPILED_CRITERIA.get(type(c).__name__) in DET_CRITERIA for c in criterion.criteria),
+         "a manipulability criterion on a pose task"),
+    ]
+    for ok, what in checks:
+        if not ok:
+            return f"{what} has no compiled twin yet"
+    return ""
+
+
+def hybrid_refusal(setup) -> str:
+    """Why the hybrid loop (compiled plant, Python controller) cannot run this experiment ("" when
+    it can).
+    """
+    return _plant_refusal(setup)
+
+
+def _criterion_spec(s, setup, f) -> None:
+    """The weighted criterion of the experiment into the spec (h is recorded on the true robot)."""
     from .subtasks import (
         PAPER_SMOOTHNESS,
         JointCentering,
@@ -133,6 +158,33 @@ def loop_spec(setup, duration: float):
         PaperCriterion,
         SphereObstacles,
     )
+
+    criterion = setup.criterion
+    if criterion is None:
+        return
+    s.criteria = [COMPILED_CRITERIA[type(c).__name__] for c in criterion.criteria]
+    s.criterion_weights = f(criterion.weights)
+    for c in criterion.criteria:
+        if isinstance(c, PaperCriterion):
+            s.smoothness = f(PAPER_SMOOTHNESS)
+        if isinstance(c, (JointLimitAvoidance, JointCentering)):
+            s.limit_lower, s.limit_upper = f(setup.robot.lower_limits), f(setup.robot.upper_limits)
+        if isinstance(c, JointLimitAvoidance):
+            s.limit_margin = c.margin
+        if isinstance(c, JointSmoothness):
+            s.smoothing_coefficients = f(c.c)
+        if isinstance(c, SphereObstacles):
+            s.obstacle_centers, s.obstacle_radii = f(c.centers), f(c.radii)
+            s.obstacle_influence, s.link_radius = c.influence, c.link_radius
+
+
+def loop_spec(setup, duration: float):
+    """The compiled loop's description of a built experiment (every array it needs)."""
+    import numpy as np
+
+    from .controllers import NNCompensator, TaskSpacePD
+    from .model import PinocchioModel
+    from .simulation import MAX_SPEED
     from .trajectories import PiecewisePolynomialPath
 
     def f(x):  # the C++ side takes contiguous float64 arrays
@@ -162,6 +214,11 @@ def loop_spec(setup, duration: float):
         s.noise_q, s.noise_v = f(draws[:, 0, :]), f(draws[:, 1, :])
     s.delay = plant.delay
     s.m = setup.robot.m
+    _criterion_spec(s, setup, f)
+    if is_custom(controller):  # the hybrid loop: the law is Python's, only its state size matters here
+        s.law = "external"
+        s.z0 = f(controller.initial_state())
+        return s
     if isinstance(setup.nominal, PinocchioModel):
         s.nominal_kind = "pinocchio"
     else:
@@ -185,22 +242,6 @@ def loop_spec(setup, duration: float):
         s.omega, s.phase = trajectory.omega, trajectory.phase
     s.pinv_threshold, s.pinv_max_damping = controller.pinv.threshold, controller.pinv.max_damping
     s.nominal_viscous, s.nominal_coulomb = f(np.zeros(n)), f(np.zeros(n))
-    criterion = setup.criterion
-    if criterion is not None:
-        s.criteria = [COMPILED_CRITERIA[type(c).__name__] for c in criterion.criteria]
-        s.criterion_weights = f(criterion.weights)
-        for c in criterion.criteria:
-            if isinstance(c, PaperCriterion):
-                s.smoothness = f(PAPER_SMOOTHNESS)
-            if isinstance(c, (JointLimitAvoidance, JointCentering)):
-                s.limit_lower, s.limit_upper = f(setup.robot.lower_limits), f(setup.robot.upper_limits)
-            if isinstance(c, JointLimitAvoidance):
-                s.limit_margin = c.margin
-            if isinstance(c, JointSmoothness):
-                s.smoothing_coefficients = f(c.c)
-            if isinstance(c, SphereObstacles):
-                s.obstacle_centers, s.obstacle_radii = f(c.centers), f(c.radii)
-                s.obstacle_influence, s.link_radius = c.influence, c.link_radius
     if isinstance(controller, TaskSpacePD):
         s.law = "pd"
         s.pd_Kp, s.pd_Kd, s.null_damping = f(controller.Kp), f(controller.Kd), controller.null_damping
@@ -275,6 +316,62 @@ def simulate_compiled(setup, duration: float):
     check_interrupt()
     plant, nominal, spec = _prepared(setup, duration)
     return _trace(setup, spec, _module().run_loop(plant, spec, nominal))
+
+
+class _HybridLaw:
+    """A Python controller as the hybrid loop calls it: law(t, q, v, z) -> (tau, z_next), with its
+    signals recorded here and the contract checked as simulation.simulate checks it.
+    """
+
+    def __init__(self, controller, steps: int, n: int, period: float):
+        import numpy as np
+
+        from .controllers import custom
+
+        self.controller, self.n, self.period, self.k = controller, n, period, 0
+        self.signals = {name: np.full(steps, np.nan) for name in controller.signal_names}
+        self._custom, self._asarray = custom, np.asarray
+
+    def __call__(self, t, q, v, z):
+        """(tau, z_next) at t, or None when the run is interrupted."""
+        controller, k = self.controller, self.k
+        try:
+            out = controller.compute(t, q, v, z, self.period)
+        except KeyboardInterrupt:  # Ctrl-C, SIGTERM: the run stops, marked interrupted, and keeps its steps
+            return None
+        except Exception as err:
+            if isinstance(err, NNRobustError):
+                raise
+            raise self._custom.failed(controller, err, t) from err
+        if k == 0:
+            self._custom.check_output(controller, out, self.n, z.size, t)
+        signals = self.signals
+        try:
+            for name, value in out.signals.items():
+                signals[name][k] = value
+        except KeyError:
+            self._custom.undeclared(controller, out.signals)
+            raise
+        self.k = k + 1
+        return out.tau, z if out.state is None else out.state
+
+
+def simulate_hybrid(setup, duration: float):
+    """Run a built experiment whose controller is Python's on the compiled plant (the hybrid
+    loop): the same Trace as simulation.simulate, the controller called once per period.
+    """
+    from .signals import check_interrupt
+
+    check_interrupt()
+    refusal = hybrid_refusal(setup)
+    if refusal:
+        raise NNRobustError(f"simulation.backend = 'hybrid': {refusal}")
+    spec = loop_spec(setup, duration)
+    plant = load_model(setup.robot.model, setup.robot.task_frame)
+    law = _HybridLaw(setup.controller, spec.steps, setup.plant.nq, spec.period)
+    trace = _trace(setup, spec, _module().run_hybrid(plant, spec, law))
+    trace.signals = {name: values[:trace.t.size] for name, values in law.signals.items()}
+    return trace
 
 
 def simulate_batch(setups: list, durations: list[float] | None = None, threads: int | None = None) -> list:

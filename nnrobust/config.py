@@ -394,7 +394,9 @@ class SimulationConfig:
             integration_step, which must be a whole number (a step never spans two periods).
         integrator: ``rk4`` or ``solve_ivp``.
         backend: ``auto`` (the compiled loop when every component of the experiment has a
-            compiled twin, else the Python loop), ``compiled`` or ``python`` (docs/compiled.md).
+            compiled twin; the hybrid loop for a custom controller; else the Python loop),
+            ``compiled``, ``hybrid`` (the compiled plant calling the Python controller once per
+            control period) or ``python`` (docs/compiled.md).
         q_seed: inverse-kinematics seed for q(0) [rad] (default: mid-range of the joint limits).
         initial_task_offset: x(0) - x_d(0), m entries [m] (pose: position [m], then a rotation
             vector [rad] applied in world axes); default zero: start on the path.
@@ -822,7 +824,7 @@ def validate(config: ExperimentConfig) -> None:
         "nn.law": (nn.law, ("corrected", "printed")),
         "nn.basis_input": (nn.basis_input, ("joint", "error")),
         "simulation.integrator": (sim.integrator, ("rk4", "solve_ivp")),
-        "simulation.backend": (sim.backend, ("auto", "compiled", "python")),
+        "simulation.backend": (sim.backend, ("auto", "compiled", "hybrid", "python")),
         "trajectory.kind": (config.trajectory.kind, TRAJECTORY_KINDS),
     }
     for path, (value, valid) in choices.items():

@@ -543,20 +543,31 @@ def check_memory(config: ExperimentConfig, n: int, m: int) -> None:
 
 
 def choose_backend(setup: Setup) -> str:
-    """``compiled`` or ``python`` for ``simulation.backend`` (auto: compiled when the experiment has
-    a compiled twin; one warning when the extension itself is missing).
+    """``compiled``, ``hybrid`` or ``python`` for ``simulation.backend``. ``auto`` takes the
+    compiled loop where the experiment has a compiled twin, the hybrid loop (compiled plant, the
+    Python controller once per period) for a custom controller, else the Python loop; one warning
+    when the extension itself is missing.
     """
     from . import compiled
 
     wanted = setup.config.simulation.backend
     if wanted == "python":
         return "python"
+    if wanted == "hybrid":
+        refusal = compiled.hybrid_refusal(setup)
+        if refusal:
+            raise ConfigError("simulation.backend", f"'hybrid' cannot run this experiment: {refusal}")
+        return "hybrid"
     refusal = compiled.twin_refusal(setup)
     if wanted == "compiled" and refusal:
         raise ConfigError("simulation.backend", f"'compiled' cannot run this experiment: {refusal}")
-    if refusal and not compiled.available():
+    if not refusal:
+        return "compiled"
+    if compiled.is_custom(setup.controller) and not compiled.hybrid_refusal(setup):
+        return "hybrid"
+    if not compiled.available():
         warnings.warn(f"running on the Python backend: {refusal}", stacklevel=3)
-    return "python" if refusal else "compiled"
+    return "python"
 
 
 def run_experiment(config: ExperimentConfig, progress=None, setup: Setup | None = None) -> Result:
@@ -572,13 +583,17 @@ def run_experiment(config: ExperimentConfig, progress=None, setup: Setup | None 
         from .compiled import simulate_compiled
 
         trace = simulate_compiled(setup, sim.duration)
+    elif backend == "hybrid":
+        from .compiled import simulate_hybrid
+
+        trace = simulate_hybrid(setup, sim.duration)
     else:
         trace = simulate(
             setup.plant, setup.controller, setup.q0, setup.v0, sim.duration,
             sim.control_period, sim.substeps, sim.integrator, progress=progress,
         )
     wall = time.perf_counter() - start
-    if backend == "compiled" and progress is not None and trace.t.size:
+    if backend != "python" and progress is not None and trace.t.size:
         progress(float(trace.t[-1]), trace.q[-1])
     if trace.status == "diverged":
         trace.message += "; " + likely_cause(setup, trace)

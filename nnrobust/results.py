@@ -74,7 +74,7 @@ class Result:
         torque_limit: effort limit per joint [N m] (inf: none), or None for ideal actuators.
         lower_limit, upper_limit: joint position limits [rad or m], or None.
         prismatic: whether each joint is prismatic (units m, m/s, N), or None (all revolute).
-        backend: which loop simulated it: ``python`` or ``compiled``.
+        backend: which loop simulated it: ``python``, ``compiled`` or ``hybrid``.
         plant_step: the plant's integration step [s] (control period / substeps), or NaN.
         friction_events: stick-slip events the plant located inside its steps (docs/plant.md).
         unresolved_events: plant steps with more events than it resolves (a warning).

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import nnrobust
+from nnrobust import compiled
 from nnrobust.cli import main
 from nnrobust.config import load_config
 from nnrobust.exceptions import ConfigError, ControllerError
@@ -22,12 +23,12 @@ from nnrobust.presets import load_preset
 LAWS = Path(__file__).parent / "controllers" / "eq9_again.py"
 
 
-def _experiment(folder: Path, cls: str, params: str = "", extra: str = "") -> Path:
+def _experiment(folder: Path, cls: str, params: str = "", extra: str = "", duration: float = 0.5) -> Path:
     """An experiment file beside a copy of the controller file, starting from a preset."""
     shutil.copy(LAWS, folder / "laws.py")
     path = folder / "experiment.toml"
     path.write_text(f'base = "paper-ellipse"\nname = "mine"\n\n[controller]\nkind = "custom"\n'
-                    f'class = "laws.py:{cls}"\n{params}\n[simulation]\nduration = 0.5\n{extra}')
+                    f'class = "laws.py:{cls}"\n{params}\n[simulation]\nduration = {duration}\n{extra}')
     return path
 
 
@@ -39,7 +40,7 @@ def test_the_context_is_enough_to_write_eq9_again(tmp_path):
     builtin = run_experiment(load_preset("paper-ellipse").replace(simulation={"duration": 0.5},
                                                                   controller={"kind": "no-u0"}))
     assert mine.status == builtin.status == "completed"
-    assert mine.backend == "python"
+    assert mine.backend == ("hybrid" if compiled.available() else "python")
     np.testing.assert_allclose(mine.q, builtin.q, atol=1e-9, rtol=0)
     assert np.all(mine.signals["pinv_damping_free"] == 1.0)
 
@@ -173,3 +174,68 @@ def test_the_front_door_exposes_the_workflow():
                  "write_run", "plot_run", "run_sweep", "run_tune", "Controller", "ControlOutput",
                  "ControllerContext"):
         assert name in nnrobust.__all__ and getattr(nnrobust, name) is not None
+
+
+needs_extension = pytest.mark.skipif(not compiled.available(), reason=compiled.unavailable_reason())
+
+
+@needs_extension
+@pytest.mark.parametrize("preset", ["paper-ellipse-noisy", "panda-ellipse"])
+def test_the_hybrid_loop_is_the_python_loop_with_a_compiled_plant(preset):
+    """The compiled plant calling the Python controller once per period: the same run as the
+    Python loop to 1e-9 (sensor noise, delay, stick-slip friction, stops and a Pinocchio or
+    closed-form nominal model included), the controller's signals and state recorded, and auto
+    picks it for a custom controller."""
+    base = load_preset(preset).replace(simulation={"duration": 2.5})
+    c = base.controller
+    config = base.replace(controller={"kind": "custom", "class": f"{LAWS}:Eq9",
+                                      "params": {"Kp": c.Kp, "Kv": c.Kv}})
+    hybrid = run_experiment(config)
+    python = run_experiment(config.replace(simulation={"backend": "python"}))
+    assert (hybrid.backend, python.backend) == ("hybrid", "python")
+    assert hybrid.metrics()["backend"] == "hybrid"
+    np.testing.assert_allclose(hybrid.q, python.q, atol=1e-9, rtol=0)
+    np.testing.assert_allclose(hybrid.tau, python.tau, atol=1e-9, rtol=0)
+    np.testing.assert_array_equal(hybrid.signals["pinv_damping_free"], python.signals["pinv_damping_free"])
+    np.testing.assert_allclose(hybrid.signals["h"], python.signals["h"], atol=1e-9)
+    counting = config.replace(controller={"class": f"{LAWS}:Counter", "params": None})
+    z = run_experiment(counting).signals["elapsed"]
+    np.testing.assert_allclose(z, np.arange(z.size) * 1e-3, atol=1e-12)
+
+
+@needs_extension
+@pytest.mark.parametrize("cls, words", [
+    ("Undeclared", "returned signal 'surprise', which is not in its signal_names"),
+    ("WrongShape", "returned a torque of shape (4,) at t = 0 s; the arm has 3 joints"),
+    ("Raises", "Raises.compute raised at t = 0.011 s: IndexError: list index out of range (laws.py, line"),
+])
+def test_the_hybrid_loop_names_a_broken_contract_as_the_python_loop_does(tmp_path, cls, words):
+    config = load_config(_experiment(tmp_path, cls, extra='backend = "hybrid"\n'))
+    with pytest.raises(ControllerError) as err:
+        run_experiment(config)
+    assert words in str(err.value), str(err.value)
+
+
+@needs_extension
+def test_a_signal_inside_the_hybrid_loop_keeps_the_steps_so_far(tmp_path):
+    """Ctrl-C while the Python controller runs: the run stops, marked interrupted, with its steps."""
+    import signal
+
+    from nnrobust.signals import signals_as_interrupt
+
+    config = load_config(_experiment(tmp_path, "Counter", extra='backend = "hybrid"\n', duration=5.0))
+    setup = build(config)
+    calls = [0]
+    compute = setup.controller.compute
+
+    def interrupting(t, q, v, z, period=0.0):
+        calls[0] += 1
+        if calls[0] == 700:
+            signal.raise_signal(signal.SIGINT)
+        return compute(t, q, v, z, period)
+
+    setup.controller.compute = interrupting
+    with signals_as_interrupt():
+        result = run_experiment(config, setup=setup)
+    assert result.status == "interrupted" and 600 <= result.t.size <= 800
+    assert np.isfinite(result.q).all()

@@ -19,8 +19,10 @@ def _run(script: str, *args: str) -> str:
 
 
 def test_every_example_is_tested():
-    tested = {"custom_controller.py", "custom_robot.py", "sweep.py", "read_results.py", "tuning.py"}
-    assert {p.name for p in EXAMPLES.glob("*.py")} == tested
+    tested = {"custom_controller.py", "custom_robot.py", "sweep.py", "read_results.py", "tuning.py",
+              "slotine_li.toml", "controllers/slotine_li.py"}
+    assert {str(p.relative_to(EXAMPLES)) for p in EXAMPLES.rglob("*.py")} | {
+        p.name for p in EXAMPLES.glob("*.toml")} == tested
 
 
 def test_custom_controller_runs_beside_the_nn(tmp_path):
@@ -41,6 +43,44 @@ def test_custom_robot_then_sweep_then_pandas(tmp_path):
 
 
 @pytest.mark.filterwarnings("ignore")
+def test_slotine_li_regressor_is_m_qddr_plus_christoffel_c_qdr_plus_g():
+    """examples/controllers/slotine_li.py, written by someone else from docs/extending.md: its
+    exact regressor Y(q, q', q'_r, q''_r) theta is M q''_r + C(q, q') q'_r + g with Pinocchio's
+    own Coriolis matrix (the one with M' - 2C skew), on the Panda at random states."""
+    import numpy as np
+    import pinocchio as pin
+
+    from nnrobust.config import load_config
+    from nnrobust.experiment import build
+
+    with pytest.warns(UserWarning, match="T\\*lambda_max"):  # its explicit wrist gain is near the limit
+        setup = build(load_config(EXAMPLES / "slotine_li.toml").replace(simulation={"duration": 0.1}))
+    law, model = setup.controller, setup.nominal.pinocchio_model
+    data, rng = model.createData(), np.random.default_rng(0)
+    theta = law.initial_state()
+    for _ in range(5):
+        q = pin.randomConfiguration(model)
+        v, v_r, a_r = (rng.normal(size=model.nv) for _ in range(3))
+        upper = pin.crba(model, data, q).copy()  # the upper triangle of M
+        M = np.triu(upper) + np.triu(upper, 1).T
+        C = pin.computeCoriolisMatrix(model, data, q, v)
+        expected = M @ a_r + C @ v_r + pin.computeGeneralizedGravity(model, data, q)
+        np.testing.assert_allclose(law.regressor_matrix(q, v, v_r, a_r) @ theta, expected, atol=1e-9)
+
+
+def test_slotine_li_runs_from_its_experiment_file(tmp_path):
+    import json
+
+    from nnrobust.cli import main
+
+    run = tmp_path / "run"
+    assert main(["run", str(EXAMPLES / "slotine_li.toml"), "--duration", "2.5", "--out", str(run), "--quiet",
+                 "--no-plots", "--no-animation"]) == 0
+    metrics = json.loads((run / "metrics.json").read_text())
+    assert metrics["status"] == "completed" and metrics["rms_error_after_2s"] < 1e-3
+    assert metrics["backend"] in ("hybrid", "python")
+
+
 def test_tuning_reports_each_best_setting(tmp_path):
     out = _run("tuning.py", "--budget", "4", "--out", str(tmp_path / "tune"))
     assert "pd: train" in out and "no-u0: train" in out
