@@ -22,6 +22,9 @@ class TaskPD(nnrobust.Controller):
     """
 
     signal_names = ("effort",)
+    search_space = {  # what `nnrobust tune` searches, log-uniformly (bounds it finds the best on are widened)
+        "Kp": (10.0, 1e5, "1/s^2"), "Kd": (1.0, 1e3, "1/s"), "damping": (0.1, 100.0, "1/s"),
+    }
 
     def __init__(self, context, Kp=400.0, Kd=40.0, damping=5.0):
         self.ctx, self.Kp, self.Kd, self.damping = context, Kp, Kd, damping

@@ -2,13 +2,17 @@
 controller the same number of simulations on the same samples, under the same constraints, then
 checks each best setting on held-out samples (docs/tuning.md).
 
-    python examples/tuning.py [--budget N] [--controllers pd,no-u0] [--out DIR]
+    python examples/tuning.py [--budget N] [--controllers pd,no-u0,FILE.py:CLASS] [--out DIR]
+
+The default tunes the PD and no-u0 baselines and custom_controller.py's TaskPD, whose class
+declares the space it is searched in (``search_space``).
 
 A fair verdict needs a budget large enough that each best setting is interior to its search
 space; the summary says, per controller, whether it hit a bound of the space.
 """
 
 import argparse
+from pathlib import Path
 
 import nnrobust
 
@@ -17,7 +21,9 @@ def main() -> None:
     """Parse the arguments and run the example."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--budget", type=int, default=60, help="simulations per controller")
-    parser.add_argument("--controllers", default="pd,no-u0")
+    here = Path(__file__).resolve().parent
+    parser.add_argument("--controllers", default=f"pd,no-u0,{here / 'custom_controller.py'}:TaskPD",
+                        help="shipped kinds and custom classes (file.py:Class, with a search_space)")
     parser.add_argument("--target", default="paper-line", help="a preset or a sweep file")
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--out", default="out/examples/tuning")

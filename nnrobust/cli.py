@@ -584,7 +584,8 @@ def build_parser() -> argparse.ArgumentParser:
     tune.add_argument("target", help="a preset, an experiment file, or a sweep file whose [vary] "
                       "distributions are the uncertainty the settings are tuned over")
     tune.add_argument("--controllers", required=True, help="comma-separated controller kinds, e.g. "
-                      "nn,no-u0,pd,sliding-mode")
+                      "nn,no-u0,pd,sliding-mode; a custom class as file.py:Class (it declares its "
+                      "search_space); or the names of a sweep file's custom entries")
     tune.add_argument("--budget", type=int, required=True, help="simulations per controller (training)")
     tune.add_argument("--out", required=True,
                       help="tuning folder (tune.toml, trials/, summary.json, pareto.png)")

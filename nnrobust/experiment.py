@@ -83,6 +83,7 @@ class Setup:
     controller: Controller
     q0: np.ndarray
     v0: np.ndarray
+    controller_context: ControllerContext | None = None
 
 
 def _vector(path: str, values, n: int, default: np.ndarray) -> np.ndarray:
@@ -514,7 +515,7 @@ def build(config: ExperimentConfig) -> Setup:
     check_workspace(config, robot, trajectory, q0)
     check_mass_matrix(robot, q0)
     check_stiffness(config, plant, q0)
-    return Setup(config, robot, plant, nominal, trajectory, criterion, controller, q0, v0)
+    return Setup(config, robot, plant, nominal, trajectory, criterion, controller, q0, v0, context)
 
 
 def memory_estimate(config: ExperimentConfig, n: int, m: int) -> float:

@@ -242,6 +242,46 @@ class Result:
         return out
 
     # -- files -------------------------------------------------------------------------------
+    def summary_rows(self) -> list[tuple[str, str]]:
+        """(quantity, value) of the headline metrics, errors in mm: what a notebook shows."""
+        m = self.metrics()
+        rows = [("status", str(m["status"])), ("backend", self.backend),
+                ("simulated", f"{self.t[-1] + (self.t[1] - self.t[0] if self.t.size > 1 else 0):.3g} s"
+                 if self.t.size else "0 s")]
+        for key, label, scale, unit in (("rms_error", "RMS error", 1e3, "mm"),
+                                        ("rms_error_after_2s", "RMS error, t >= 2 s", 1e3, "mm"),
+                                        ("max_error", "max error", 1e3, "mm"),
+                                        ("rms_torque", "RMS torque", 1.0, "N m"),
+                                        ("torque_chatter", "chatter", 1.0, "N m"),
+                                        ("saturated_fraction", "saturated steps", 100.0, "%")):
+            value = m.get(key)
+            if value is not None:
+                rows.append((label, f"{scale * value:.4g} {unit}"))
+        rows += [("warning", w) for w in m.get("warnings", [])]
+        return rows
+
+    def _repr_html_(self) -> str:
+        """Jupyter: the summary table and the path and error figures, inline."""
+        import base64
+        import html
+        import io
+
+        table = "".join(f"<tr><td>{html.escape(k)}</td><td>{html.escape(v)}</td></tr>"
+                        for k, v in self.summary_rows())
+        images = []
+        from . import plots
+
+        for name in ("path", "errors"):
+            fig = plots.FIGURES[name](self)
+            if fig is None:
+                continue
+            buffer = io.BytesIO()
+            fig.savefig(buffer, format="png", dpi=80, bbox_inches="tight")
+            plots.plt.close(fig)
+            images.append(f'<img src="data:image/png;base64,{base64.b64encode(buffer.getvalue()).decode()}" '
+                          f'alt="{name}" style="max-width:48%">')
+        return f"<table>{table}</table><div>{''.join(images)}</div>"
+
     def save_npz(self, path: str | Path) -> None:
         """Arrays and signals in one .npz (signals prefixed ``signal_``), uncompressed: zlib saves
         about a fifth (10 s of the Panda: 4.2 MB instead of 5.4 MB) and takes as long as the

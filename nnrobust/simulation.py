@@ -143,6 +143,7 @@ def simulate(
         raise ValueError(f"simulation.integrator: {integrator!r} is not one of {INTEGRATORS}")
     n = plant.nq
     steps = int(round(duration / control_period))
+    plant.sensor.reset()  # every draw from the seed, at the start of each run (as the compiled loop)
     z = controller.initial_state()
     X = np.concatenate([np.asarray(q0, float), np.asarray(v0, float)])
     t_rec = np.arange(steps) * control_period

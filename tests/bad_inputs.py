@@ -500,7 +500,11 @@ TUNE_CASES = [
     Case("tune: a budget of 10^9", lambda d: _tune(d, "paper-ellipse", ["pd"], 10**9), ex.ConfigError,
          "--budget: must be an integer in [2, 100000]"),
     Case("tune: an unknown controller", lambda d: _tune(d, "paper-ellipse", ["lqr"], 10), ex.ConfigError,
-         "--controllers: needs distinct names among nn, no-u0, computed-torque, sliding-mode, pd"),
+         "--controllers: 'lqr' is not one of nn, no-u0, computed-torque, sliding-mode, pd, a class as "
+         "file.py:Class, nor a custom entry of the sweep file (it has none)"),
+    Case("tune: a class without a search space",
+         lambda d: _tune(d, "paper-ellipse", [f"{LAWS}:Counter"], 10), ex.ConfigError,
+         "--controllers Counter: Counter declares no search space"),
     Case("tune: a controller named twice", lambda d: _tune(d, "paper-ellipse", ["pd", "pd"], 10),
          ex.ConfigError, "--controllers: needs distinct names"),
     Case("tune: a NaN torque limit",

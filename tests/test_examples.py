@@ -83,5 +83,5 @@ def test_slotine_li_runs_from_its_experiment_file(tmp_path):
 
 def test_tuning_reports_each_best_setting(tmp_path):
     out = _run("tuning.py", "--budget", "4", "--out", str(tmp_path / "tune"))
-    assert "pd: train" in out and "no-u0: train" in out
+    assert "pd: train" in out and "no-u0: train" in out and "TaskPD: train" in out
     assert (tmp_path / "tune" / "summary.json").is_file()

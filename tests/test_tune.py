@@ -88,7 +88,7 @@ def test_the_constraints_judge_a_setting_on_all_its_samples():
 def test_bad_tunings_are_refused_with_the_flag_named(kwargs, flag):
     args = {"target": "paper-ellipse", "controllers": ["pd"], "budget": 10, **kwargs}
     with pytest.raises(ConfigError, match=flag):
-        TuneSpec(**args)
+        sweep_of(TuneSpec(**args))  # the controllers are resolved against the target
 
 
 def test_a_sweep_with_a_grid_is_refused_and_its_distributions_are_the_samples(tmp_path):
@@ -207,3 +207,29 @@ def test_a_robust_law_tunes_its_gains_first_then_starts_from_them_with_the_term_
         weakest["controller.sliding_boundary"])
     entry = summary["controllers"]["sliding-mode"]
     assert "controller.sliding_gain" in entry["best"]["params"] and entry["simulations"] == 10
+
+
+def test_a_custom_class_is_tuned_in_the_space_it_declares(short_experiment, tmp_path):
+    """--controllers takes file.py:Class: its declared search_space is searched at the same budget
+    and samples as a shipped law, and its best setting reruns to its training metrics."""
+    from pathlib import Path
+
+    from nnrobust.config import apply_overrides
+    from nnrobust.experiment import run_experiment
+    from nnrobust.sweep.spec import base_config, draw, experiment
+
+    laws = Path(__file__).parent / "controllers" / "eq9_again.py"
+    spec = TuneSpec(str(short_experiment), ["no-u0", f"{laws}:Eq9"], 12, train_samples=2, validation=1,
+                    seed=5)
+    summary = run_tune(spec, tmp_path / "out", workers=2)
+    assert set(summary["controllers"]) == {"no-u0", "Eq9"}
+    entry = summary["controllers"]["Eq9"]
+    assert set(entry["space"]) == {"controller.params.Kp", "controller.params.Kv"}
+    assert entry["simulations"] == summary["controllers"]["no-u0"]["simulations"]
+    best = entry["best"]
+    assert best is not None, entry
+    assert set(best["params"]) == {"controller.params.Kp", "controller.params.Kv"}
+    sweep = sweep_of(spec)
+    runs = [run_experiment(apply_overrides(experiment(sweep, base_config(sweep), draw(sweep, s), "Eq9"),
+                                           best["params"])).metrics()["rms_error_after_2s"] for s in (0, 1)]
+    assert np.mean(runs) == pytest.approx(best["train"]["rms_error_after_2s"], rel=1e-9)

@@ -37,6 +37,10 @@ class Sensor:
             setattr(self, name, value)
         self._rng = np.random.default_rng(self.seed)
 
+    def reset(self) -> None:
+        """Draw again from the seed: every run of one Sensor sees the same noise."""
+        self._rng = np.random.default_rng(self.seed)
+
     @classmethod
     def ideal(cls, n: int) -> Sensor:
         """Exact measurements of n joints."""

@@ -27,9 +27,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ..config import CLASS_PATTERN
 from ..exceptions import ConfigError, NNRobustError
 from ..signals import signals_as_interrupt
-from .space import TUNABLE, SearchSpace, arm_scales, search_space
+from .space import TUNABLE, SearchSpace, arm_scales, custom_space, search_space
 
 OBJECTIVES = ("rms_error_after_2s", "rms_torque", "torque_chatter")
 """What every setting is recorded with (the Pareto front's axes, all minimised): [m], [N m], [N m].
@@ -88,9 +89,9 @@ class TuneSpec:
         if self.budget < self.train_samples:
             raise ConfigError("--budget", f"{self.budget} simulations cannot run one setting on "
                               f"{self.train_samples} training samples")
-        unknown = [c for c in self.controllers if c not in TUNABLE]
-        if unknown or not self.controllers or len(set(self.controllers)) != len(self.controllers):
-            raise ConfigError("--controllers", f"needs distinct names among {', '.join(TUNABLE)}; got "
+        if not self.controllers or len(set(self.controllers)) != len(self.controllers):
+            raise ConfigError("--controllers", f"needs distinct names among {', '.join(TUNABLE)}, custom "
+                              "classes as file.py:Class, or the custom entries of a sweep file; got "
                               f"{', '.join(self.controllers) or 'none'}")
 
     @property
@@ -130,11 +131,40 @@ def sweep_of(spec: TuneSpec):
             raise ConfigError("vary", f"tuning draws its samples from [vary] distributions; the grid keys "
                               f"{', '.join(sweep.grid_keys)} are lists (make them a distribution or "
                               "set them in [set])")
-        sweep.samples, sweep.seed, sweep.controllers = size, spec.seed, list(spec.controllers)
-        return sweep
-    base = str(path.resolve()) if path.suffix == ".toml" else spec.target
-    return SweepSpec(name=path.stem if path.suffix == ".toml" else spec.target, base=base,
-                     controllers=list(spec.controllers), samples=size, seed=spec.seed)
+        sweep.samples, sweep.seed = size, spec.seed
+    else:
+        base = str(path.resolve()) if path.suffix == ".toml" else spec.target
+        sweep = SweepSpec(name=path.stem if path.suffix == ".toml" else spec.target, base=base,
+                          controllers=[], samples=size, seed=spec.seed)
+    return _with_controllers(sweep, spec.controllers)
+
+
+def _with_controllers(sweep, names: list[str]):
+    """The sweep with the tuning's controllers: built-in kinds, the sweep file's custom entries by
+    name, and classes given as file.py:Class (named by the class, the file read from the working
+    folder).
+    """
+    from ..controllers.custom import class_file
+
+    custom, controllers = {}, []
+    for name in names:
+        if name in TUNABLE:
+            controllers.append(name)
+        elif name in sweep.custom:
+            custom[name] = sweep.custom[name]
+            controllers.append(name)
+        elif CLASS_PATTERN.fullmatch(name):
+            path, cls = class_file(name), name.rpartition(":")[2]
+            custom[cls] = {"class": f"{path.resolve()}:{cls}" if path is not None else name, "params": {}}
+            controllers.append(cls)
+        else:
+            raise ConfigError("--controllers", f"{name!r} is not one of {', '.join(TUNABLE)}, a class as "
+                              f"file.py:Class, nor a custom entry of the sweep file "
+                              f"({', '.join(sweep.custom) or 'it has none'})")
+    if len(set(controllers)) != len(controllers):
+        raise ConfigError("--controllers", f"names a controller twice: {', '.join(controllers)}")
+    sweep.controllers, sweep.custom = controllers, custom
+    return sweep
 
 
 # ---- on the workers ------------------------------------------------------------------------------
@@ -347,14 +377,22 @@ def run_tune(spec: TuneSpec, folder: str | Path, workers: int | None = None, sch
     folder = Path(folder)
     sweep = sweep_of(spec)
     base = base_config(sweep)
+    from ..config import apply_overrides
+    from ..controllers.custom import load_class
     from ..experiment import build
 
     controllers = {}
-    for index, name in enumerate(spec.controllers):  # every experiment validated before anything runs
+    for index, name in enumerate(sweep.controllers):  # every experiment validated before anything runs
         for sample_id in range(sweep.samples):
             experiment(sweep, base, draw(sweep, sample_id), name)
-        scales = arm_scales(build(experiment(sweep, base, draw(sweep, 0), name)))
-        controllers[name] = _Controller(spec, name, search_space(name, scales), index)
+        first = experiment(sweep, base, draw(sweep, 0), name)
+        if name in sweep.custom:  # its declared space; built once at the space's centre
+            space = custom_space(name, load_class(sweep.custom[name]["class"]))
+            build(apply_overrides(first, space.overrides({p.name: math.sqrt(p.low * p.high)
+                                                          for p in space.params})))
+        else:
+            space = search_space(name, arm_scales(build(first)))
+        controllers[name] = _Controller(spec, name, space, index)
     prepare_folder(spec, folder, overwrite)
     for row in _read_trials(folder):  # resume: replay the history, widening as it did
         if row["controller"] in controllers:

@@ -63,6 +63,7 @@ class SearchSpace:
     controller: str
     params: tuple[Param, ...]
     task_inertia: float = 1.0  # lambda [kg] (the PD's gains)
+    custom: bool = False  # a user's class: every coordinate is a controller.params key
 
     def param(self, name: str) -> Param:
         """The coordinate called ``name``."""
@@ -84,8 +85,10 @@ class SearchSpace:
 
     def overrides(self, values: dict[str, float]) -> dict:
         """Dotted-key overrides of the experiment for the coordinates' values."""
-        w, z = values["bandwidth"], values["damping_ratio"]
         out = {k: v for k, v in values.items() if "." in k}
+        if self.custom:
+            return out
+        w, z = values["bandwidth"], values["damping_ratio"]
         if self.controller == "pd":
             lam = self.task_inertia
             out.update({"controller.pd_Kp": [lam * w * w], "controller.pd_Kd": [2 * z * lam * w]})
@@ -172,3 +175,29 @@ def search_space(controller: str, scales: dict[str, float]) -> SearchSpace:
         params += [Param("controller.sliding_gain", 1e-3 * a, 10 * a, "m/s^2", weak="low"),
                    Param("controller.sliding_boundary", 1e-5 * a, a, "m/s^2", weak="high")]
     return SearchSpace(controller, tuple(params), scales["task_inertia"])
+
+
+def custom_space(name: str, cls: type) -> SearchSpace:
+    """The search space a custom controller class declares: ``search_space``, a dict of
+    constructor parameter -> (low, high) or (low, high, unit), each searched log-uniformly and
+    widened like the shipped laws' bounds when a best setting sits on one.
+    """
+    from ..exceptions import ConfigError
+
+    declared = getattr(cls, "search_space", None)
+    key = f"--controllers {name}"
+    if not isinstance(declared, dict) or not declared:
+        raise ConfigError(key, f"{cls.__name__} declares no search space: give the class a search_space = "
+                          "{'param': (low, high, 'unit'), ...} of its constructor's parameters "
+                          "(docs/extending.md)")
+    params = []
+    for param, bounds in declared.items():
+        ok = (isinstance(bounds, (tuple, list)) and len(bounds) in (2, 3)
+              and all(isinstance(b, (int, float)) and not isinstance(b, bool) for b in bounds[:2])
+              and 0 < bounds[0] < bounds[1] < math.inf)
+        if not isinstance(param, str) or not param.isidentifier() or not ok:
+            raise ConfigError(key, f"{cls.__name__}.search_space[{param!r}] = {bounds!r}: needs a parameter "
+                              "name and (low, high[, unit]) with 0 < low < high (searched on a log scale)")
+        unit = str(bounds[2]) if len(bounds) == 3 else "-"
+        params.append(Param(f"controller.params.{param}", float(bounds[0]), float(bounds[1]), unit))
+    return SearchSpace(name, tuple(params), custom=True)

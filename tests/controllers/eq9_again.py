@@ -12,6 +12,7 @@ class Eq9(Controller):
     """a = J+ (x_d'' - J'q' - Kv e' - Kp e) + k (I - J+J)(grad h - q'); tau = M-hat a + N-hat."""
 
     signal_names = ("pinv_damping_free",)
+    search_space = {"Kp": (1.0, 1e5, "1/s^2"), "Kv": (1.0, 1e3, "1/s")}  # what nnrobust tune searches
 
     def __init__(self, context, Kp, Kv):
         self.ctx = context
