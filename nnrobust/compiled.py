@@ -195,7 +195,7 @@ def loop_spec(setup, duration: float):
     n = plant.nq
     steps = int(round(duration / sim.control_period))
     s = module.LoopSpec()
-    s.period, s.substeps, s.steps, s.max_speed = sim.control_period, sim.substeps, steps, MAX_SPEED
+    s.period, s.substeps, s.steps, s.max_speed = sim.control_period, setup.substeps, steps, MAX_SPEED
     s.q0, s.v0 = f(setup.q0), f(setup.v0)
     s.viscous, s.coulomb = f(plant.friction.viscous), f(plant.friction.coulomb)
     s.static_friction = f(np.where(plant.sticky, plant.friction.static, 0.0))
@@ -257,7 +257,7 @@ def loop_spec(setup, duration: float):
         s.robust, s.BtP = "nn", f(comp.BtP)
         s.basis_joint, s.basis_bias, s.law_corrected = (comp.basis_input == "joint", comp.basis.bias,
                                                         comp.law == "corrected")
-        s.basis_centers, s.basis_inv2w2 = f(comp.basis._c), f(comp.basis._inv2w2)
+        s.basis_centers, s.basis_inv2w2 = f(comp.basis.grid), f(comp.basis.inverse_two_width_sq)
         s.F, s.gamma, s.eps_min, s.sigma = comp.F, comp.gamma, comp.eps_min, comp.sigma
     elif comp is not None:
         s.robust, s.BtP = "sliding", f(comp.BtP)

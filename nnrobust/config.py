@@ -389,7 +389,9 @@ class SimulationConfig:
     Attributes:
         duration: simulated time [s].
         control_period: zero-order-hold period T [s].
-        substeps: integration steps per control period.
+        substeps: integration steps per control period; unset, the fewest that keep the plant
+            stable, after the joint stops are sized to the step (experiment.plant_step; one
+            step where nothing needs more, said in a warning where something does).
         integration_step: the RK4 step [s]; when given it sets substeps = control_period /
             integration_step, which must be a whole number (a step never spans two periods).
         integrator: ``rk4`` or ``solve_ivp``.
@@ -407,7 +409,7 @@ class SimulationConfig:
 
     duration: float = 20.0
     control_period: float = 1e-3
-    substeps: int = 1
+    substeps: int | None = None
     integration_step: float | None = None
     integrator: str = "rk4"
     backend: str = "auto"
@@ -876,8 +878,8 @@ def validate(config: ExperimentConfig) -> None:
     _positive("nn.width", nn.width)
     _positive("nn.velocity_range", nn.velocity_range)
     _positive("nn.error_range", nn.error_range)
-    for path, value in (("nn.gamma", nn.gamma), ("nn.eps_min", nn.eps_min), ("nn.sigma", nn.sigma)):
-        _non_negative(path, value)
+    for key, number in (("nn.gamma", nn.gamma), ("nn.eps_min", nn.eps_min), ("nn.sigma", nn.sigma)):
+        _non_negative(key, number)
     if nn.eps_min > nn.eps0:
         raise ConfigError("nn.eps_min", f"the floor {nn.eps_min} must not exceed nn.eps0 = {nn.eps0}")
     nc, pc = config.nominal, config.plant
@@ -919,10 +921,10 @@ def validate(config: ExperimentConfig) -> None:
     _non_negative("controller.coulomb_smoothing", c.coulomb_smoothing)
     _positive("controller.sliding_gain", c.sliding_gain)
     _positive("controller.sliding_boundary", c.sliding_boundary)
-    for path, value in (("plant.viscous_level", pc.viscous_level),
+    for key, number in (("plant.viscous_level", pc.viscous_level),
                         ("plant.coulomb_level", pc.coulomb_level),
                         ("plant.disturbance_level", pc.disturbance_level)):
-        _non_negative(path, value)
+        _non_negative(key, number)
     _positive("subtasks.C", config.subtasks.C)
     _positive("subtasks.obstacle_influence", config.subtasks.obstacle_influence)
     _non_negative("subtasks.link_radius", config.subtasks.link_radius)
@@ -934,11 +936,10 @@ def validate(config: ExperimentConfig) -> None:
     if "obstacles" in (config.subtasks.criteria or []) and not config.subtasks.obstacles:
         raise ConfigError("subtasks.obstacles", "criterion 'obstacles' needs at least one sphere")
     if config.subtasks.weights is not None:
-        if len(config.subtasks.weights) != len(config.subtasks.criteria):
-            raise ConfigError(
-                "subtasks.weights",
-                f"{len(config.subtasks.weights)} weights for {len(config.subtasks.criteria)} criteria",
-            )
+        named = config.subtasks.criteria or []
+        if len(config.subtasks.weights) != len(named):
+            raise ConfigError("subtasks.weights",
+                              f"{len(config.subtasks.weights)} weights for {len(named)} criteria")
         _positive("subtasks.weights", config.subtasks.weights)
         total = sum(config.subtasks.weights)
         if not math.isclose(total, config.subtasks.C, rel_tol=1e-9):
@@ -949,7 +950,8 @@ def validate(config: ExperimentConfig) -> None:
             )
     _positive("simulation.duration", sim.duration)
     _positive("simulation.control_period", sim.control_period)
-    _positive("simulation.substeps", sim.substeps)
+    if sim.substeps is not None:
+        _positive("simulation.substeps", sim.substeps)
     if sim.integration_step is not None:
         _positive("simulation.integration_step", sim.integration_step)
         ratio = sim.control_period / sim.integration_step
@@ -968,7 +970,7 @@ def validate(config: ExperimentConfig) -> None:
         sim.substeps = int(round(ratio))
     if sim.duration < sim.control_period:
         raise ConfigError("simulation.duration", "is shorter than one control period")
-    if sim.substeps > MAX_SUBSTEPS:
+    if sim.substeps is not None and sim.substeps > MAX_SUBSTEPS:
         raise ConfigError("simulation.substeps", f"{sim.substeps} integration steps per control period; at "
                           f"most {MAX_SUBSTEPS} (a shorter control_period does the same job)")
     steps = sim.duration / sim.control_period

@@ -6,7 +6,7 @@ import functools
 import time
 import warnings
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pinocchio as pin
@@ -84,10 +84,15 @@ class Setup:
     q0: np.ndarray
     v0: np.ndarray
     controller_context: ControllerContext | None = None
+    substeps: int = 1
+    """Plant steps per control period: simulation.substeps, or chosen (:func:`plant_step`)."""
 
 
-def _vector(path: str, values, n: int, default: np.ndarray) -> np.ndarray:
+def _vector(path: str, values, n: int, default: np.ndarray | None = None) -> np.ndarray:
+    """``values`` as n floats (``default`` when they are not given)."""
     if values is None:
+        if default is None:
+            raise ConfigError(path, f"needs {n} values")
         return default
     arr = np.asarray(values, dtype=float)
     if arr.shape != (n,):
@@ -97,7 +102,7 @@ def _vector(path: str, values, n: int, default: np.ndarray) -> np.ndarray:
 
 def _per_joint(path: str, values: list[float], n: int) -> np.ndarray:
     """One value for every joint, or one per joint."""
-    return np.full(n, float(values[0])) if len(values) == 1 else _vector(path, values, n, None)
+    return np.full(n, float(values[0])) if len(values) == 1 else _vector(path, values, n)
 
 
 def _finite_limits(values: np.ndarray) -> np.ndarray:
@@ -113,7 +118,7 @@ def build_torque_limits(config: ExperimentConfig, robot: PinocchioModel) -> np.n
     if limits == "urdf":
         effort = robot.effort_limits
         return np.where(usable(effort), effort, np.inf)
-    return _vector("plant.torque_limits", limits, robot.nq, None)
+    return _vector("plant.torque_limits", limits, robot.nq)
 
 
 def build_stops(config: ExperimentConfig, robot: PinocchioModel,
@@ -164,7 +169,8 @@ def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
     else:
         amplitude = np.asarray(pc.disturbance_amplitude, dtype=float)
         omega = np.asarray(pc.disturbance_omega, dtype=float)
-        phase = np.zeros_like(amplitude) if pc.disturbance_phase is None else pc.disturbance_phase
+        phase = (np.zeros_like(amplitude) if pc.disturbance_phase is None
+                 else np.asarray(pc.disturbance_phase, dtype=float))
         try:
             disturbance = SinusoidalDisturbance(amplitude, omega, phase)
         except ValueError as err:
@@ -196,8 +202,8 @@ def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsMo
     if robot.task != "planar":
         raise ConfigError("nominal.kind", "'closed-form' is the planar three-link model; use 'urdf'")
     true = ThreeLinkParameters.from_pinocchio(robot.model, robot.task_frame)
-    beta = true.beta if nc.beta is None else tuple(_vector("nominal.beta", nc.beta, 3, None))
-    p = true.p if nc.p is None else tuple(_vector("nominal.p", nc.p, 3, None))
+    beta = true.beta if nc.beta is None else tuple(_vector("nominal.beta", nc.beta, 3))
+    p = true.p if nc.p is None else tuple(_vector("nominal.p", nc.p, 3))
     if nc.relative_error:
         factors = 1 + np.random.default_rng(nc.seed).uniform(-nc.relative_error, nc.relative_error, 6)
         beta, p = tuple(np.multiply(beta, factors[:3])), tuple(np.multiply(p, factors[3:]))
@@ -226,7 +232,7 @@ def _make_criterion(name: str, config: ExperimentConfig, robot: PinocchioModel) 
             raise ConfigError("subtasks.criteria", f"{name!r}: {err}") from err
     if name == "joint_smoothness":
         c = sc.smoothness_coefficients or list(PAPER_SMOOTHNESS)
-        return JointSmoothness(tuple(_vector("subtasks.smoothness_coefficients", c, robot.nq, None)))
+        return JointSmoothness(tuple(_vector("subtasks.smoothness_coefficients", c, robot.nq)))
     assert name == "obstacles", name  # build_criterion checked the name against CRITERIA
     obstacles = np.asarray(sc.obstacles, dtype=float)
     return SphereObstacles(obstacles[:, :3], obstacles[:, 3], sc.obstacle_influence, sc.link_radius)
@@ -291,13 +297,13 @@ def build_controller(
     if c.kind == "custom":
         if context is None:
             raise ValueError("a custom controller is built from a ControllerContext")
-        return build_custom(c.class_, c.params, context)
+        return build_custom(c.class_ or "", c.params, context)
     pinv = DampedPseudoInverse(c.pinv_threshold, c.pinv_max_damping)
     if c.kind == "pd":
         return TaskSpacePD(nominal, trajectory, np.diag(c.pd_Kp), np.diag(c.pd_Kd),
                            c.pd_null_damping, pinv)
     Kp, Kv = np.diag(c.Kp), np.diag(c.Kv)
-    compensator = None
+    compensator: NNCompensator | SlidingModeCompensator | None = None
     if c.kind == "nn":
         nn = config.nn
         compensator = NNCompensator(
@@ -353,14 +359,17 @@ def build_path(config: ExperimentConfig, robot: PinocchioModel) -> PositionPath:
     """
     tc = config.trajectory
     if tc.kind == "point_to_point":
-        start = tc.start
-        if start is None:
+        goal = tc.goal or []
+        if tc.start is None:
             p = robot.task_position(_seed(config, robot))
-            start = (split_pose(p)[0] if robot.task == "pose" else p)[: len(tc.goal)]
-        return quintic_point_to_point(start, tc.goal, tc.move_time)
+            start = (split_pose(p)[0] if robot.task == "pose" else p)[: len(goal)]
+        else:
+            start = np.asarray(tc.start, dtype=float)
+        return quintic_point_to_point(start, goal, tc.move_time)
     if tc.kind == "waypoints":
         return spline_through(tc.waypoints, tc.waypoint_times)
-    return EllipseTrajectory(tc.center, tc.axis_a, tc.axis_b, tc.omega, tc.phase)
+    return EllipseTrajectory(np.asarray(tc.center, float), np.asarray(tc.axis_a, float),
+                             np.asarray(tc.axis_b, float), tc.omega, tc.phase)
 
 
 def build_trajectory(config: ExperimentConfig, robot: PinocchioModel) -> Trajectory:
@@ -414,7 +423,7 @@ def check_workspace(config: ExperimentConfig, robot: PinocchioModel, trajectory:
     the message names the worst instant and point.
     """
     times = np.linspace(0.0, config.simulation.duration, samples)
-    q, worst = q0, (0.0, 0.0, None)
+    q, worst = q0, (0.0, 0.0, np.zeros(0))
     for t in times:
         target = trajectory(float(t))[0]
         q, residual = solve_ik(robot, target, q, robot.lower_limits, robot.upper_limits)
@@ -448,7 +457,66 @@ def check_mass_matrix(robot: PinocchioModel, q0: np.ndarray) -> None:
                             "axis and the inertias of the links it moves")
 
 
-def check_stiffness(config: ExperimentConfig, plant: Plant, q0: np.ndarray) -> None:
+STOP_STEP = 1.0
+"""h omega of a joint stop sized to the plant step: RK4 is stable up to 2.83, accurate below 1."""
+
+MAX_STOP_YIELD = 0.05
+"""Most a softened stop may yield at the joint's torque scale [rad or m] (the default stiffness
+yields 0.01)."""
+
+
+def plant_step(config: ExperimentConfig, plant: Plant, q0: np.ndarray) -> int:
+    """Plant steps per control period: ``simulation.substeps`` as given (refused if unstable,
+    :func:`check_stiffness`), or, when it is not given, chosen so that the plant converges.
+
+    Unset, the stops are first sized from each joint's effective inertia m_i = 1/(M(q0)^-1)_ii: a
+    stop that would make RK4 diverge at the 1-step default (h omega > 2.5) is softened to
+    K_i = m_i / h^2 (h omega = 1), if it then still holds the joint's torque scale within
+    :data:`MAX_STOP_YIELD`. What that cannot settle (a
+    stop of a light link with a large effort, fast viscous friction) sets the substeps. Each is
+    said in one warning.
+    """
+    sim = config.simulation
+    if sim.substeps is not None or sim.integrator != "rk4":
+        check_stiffness(config, plant, q0, sim.substeps or 1)
+        return sim.substeps or 1
+    T, names = sim.control_period, plant.model.joint_names
+    M_inv = np.linalg.inv(plant.model.mass(q0))
+    needed, reasons = 1, []
+    stops = plant.stops
+    if stops is not None:
+        bounded = np.isfinite(stops.upper - stops.lower)
+        omega = np.where(bounded, np.sqrt(stops.stiffness * np.diag(M_inv)), 0.0)
+        sized = np.minimum(stops.stiffness, (STOP_STEP / T) ** 2 / np.diag(M_inv))
+        yield_at_scale = stops.stiffness / (sized * config.plant.joint_stop_stiffness)
+        soften = bounded & (omega * T > RK4_STABLE_STEP) & (yield_at_scale <= MAX_STOP_YIELD)
+        if soften.any():
+            stops = replace(stops, stiffness=np.where(soften, sized, stops.stiffness))
+            plant.stops = stops
+            joints = ", ".join(f"{names[i]!r} ({yield_at_scale[i]:.2g} rad)" for i in np.flatnonzero(soften))
+            warnings.warn(f"joint stops sized to the plant step: the stops of {joints} are softened to their "
+                          f"effective inertia / h^2 (they ring at 1/h = {1 / T:g} rad/s, and yield so much "
+                          "at the joint's torque scale; set simulation.substeps to keep them stiff; "
+                          "docs/plant.md)", stacklevel=3)
+            omega = np.where(bounded, np.sqrt(stops.stiffness * np.diag(M_inv)), 0.0)
+        i = int(np.argmax(omega))
+        if T * omega[i] > RK4_STABLE_STEP:
+            needed = _substeps_needed(T, omega[i])
+            reasons.append(f"the stop of joint {names[i]!r} rings at {omega[i]:.3g} rad/s (a light link with "
+                           "a large effort)")
+    if np.any(plant.friction.viscous):
+        fastest = float(np.max(np.linalg.eigvals(M_inv @ np.diag(plant.friction.viscous)).real))
+        if T * fastest > RK4_STABLE_STEP:
+            needed = max(needed, _substeps_needed(T, fastest))
+            reasons.append(f"viscous friction has a mode of {fastest:.3g} 1/s (light outer links)")
+    if needed > 1:
+        warnings.warn(f"simulation.substeps = {needed} chosen (plant step {T / needed:.3g} s): "
+                      f"{'; '.join(reasons)}; RK4 would diverge at {T:g} s. Set simulation.substeps to "
+                      "choose", stacklevel=3)
+    return needed
+
+
+def check_stiffness(config: ExperimentConfig, plant: Plant, q0: np.ndarray, substeps: int) -> None:
     """Refuse an RK4 step that viscous friction or the joint stops make unstable.
 
     Viscous friction B on a joint that carries light outer links is a fast decaying mode of
@@ -460,7 +528,7 @@ def check_stiffness(config: ExperimentConfig, plant: Plant, q0: np.ndarray) -> N
     sim = config.simulation
     if sim.integrator != "rk4":
         return
-    h = sim.control_period / sim.substeps
+    h = sim.control_period / substeps
     M_inv = np.linalg.inv(plant.model.mass(q0))
     if np.any(plant.friction.viscous):
         fastest = float(np.max(np.linalg.eigvals(M_inv @ np.diag(plant.friction.viscous)).real))
@@ -510,12 +578,12 @@ def build(config: ExperimentConfig) -> Setup:
     nominal = build_nominal(config, robot)
     criterion = build_criterion(config, robot)
     q0, v0 = initial_state(config, robot, trajectory)
+    check_mass_matrix(robot, q0)
+    substeps = plant_step(config, plant, q0)
     context = build_context(config, robot, nominal, trajectory, criterion, plant, q0)
     controller = build_controller(config, robot, nominal, trajectory, criterion, plant.friction, context)
     check_workspace(config, robot, trajectory, q0)
-    check_mass_matrix(robot, q0)
-    check_stiffness(config, plant, q0)
-    return Setup(config, robot, plant, nominal, trajectory, criterion, controller, q0, v0, context)
+    return Setup(config, robot, plant, nominal, trajectory, criterion, controller, q0, v0, context, substeps)
 
 
 def memory_estimate(config: ExperimentConfig, n: int, m: int) -> float:
@@ -577,7 +645,7 @@ def run_experiment(config: ExperimentConfig, progress=None, setup: Setup | None 
     it once, at the end). ``wall_seconds`` is the simulation loop's wall time alone.
     """
     setup = setup or build(config)
-    sim = config.simulation
+    sim = setup.config.simulation
     backend = choose_backend(setup)
     start = time.perf_counter()
     if backend == "compiled":
@@ -591,7 +659,7 @@ def run_experiment(config: ExperimentConfig, progress=None, setup: Setup | None 
     else:
         trace = simulate(
             setup.plant, setup.controller, setup.q0, setup.v0, sim.duration,
-            sim.control_period, sim.substeps, sim.integrator, progress=progress,
+            sim.control_period, setup.substeps, sim.integrator, progress=progress,
         )
     wall = time.perf_counter() - start
     if backend != "python" and progress is not None and trace.t.size:
@@ -599,7 +667,7 @@ def run_experiment(config: ExperimentConfig, progress=None, setup: Setup | None 
     if trace.status == "diverged":
         trace.message += "; " + likely_cause(setup, trace)
     result = Result.from_trace(trace, setup.robot, setup.trajectory, setup.criterion, config, wall,
-                               setup.plant.torque_limit)
+                               setup.plant.torque_limit, setup.substeps)
     result.backend = backend
     if result.config:
         result.config = provenance_header(config) + result.config

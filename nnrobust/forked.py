@@ -73,7 +73,7 @@ def can_fork() -> bool:
 
 def share(weights: Sequence[float], workers: int) -> list[list[int]]:
     """Job indices per worker, heaviest job first onto the least loaded worker."""
-    loads, groups = [0.0] * workers, [[] for _ in range(workers)]
+    loads, groups = [0.0] * workers, [[] for _ in range(workers)]  # type: list[float], list[list[int]]
     for i in sorted(range(len(weights)), key=lambda i: -weights[i]):
         w = loads.index(min(loads))
         groups[w].append(i)
@@ -99,7 +99,8 @@ class ForkedJobs:
         self._workers = max(1, min(workers, len(self._jobs)))
         self._prepare = prepare or (lambda: None)
         self._load = load or (lambda message: message)
-        self._first = None  # (pid, write end of its message pipe, read end of its report pipe)
+        # (pid, the write end of its message pipe, the read end of its report pipe)
+        self._first: tuple[int, int | None, int] | None = None
         if self._workers > 1 and can_fork():
             self._fork_first()
 
@@ -142,11 +143,12 @@ class ForkedJobs:
             return
         pid, message_write, report_read = self._first
         try:
-            try:
-                _write_all(message_write, pickle.dumps(message))
-            except BrokenPipeError:  # the worker has ended: its report says why
-                pass
-            os.close(message_write)
+            if message_write is not None:  # None: the message went before an interrupted run ended
+                try:
+                    _write_all(message_write, pickle.dumps(message))
+                except BrokenPipeError:  # the worker has ended: its report says why
+                    pass
+                os.close(message_write)
             self._first = (pid, None, report_read)
             if meanwhile is not None:
                 meanwhile()
@@ -257,7 +259,7 @@ def _worker(work: Callable[[], list[dict]], write: int, parent: int) -> None:  #
     with the reports ``work`` returns) and leave.
     """
     code = 0
-    report = {"warnings": [], "error": None}
+    report: dict[str, Any] = {"warnings": [], "error": None}
     others: list[dict] = []
     try:
         _die_with_parent(parent)

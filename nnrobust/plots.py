@@ -98,7 +98,7 @@ def _save(fig, folder: Path, name: str) -> list[Path]:
     paths = []
     for fmt in FORMATS:
         path = folder / f"{name}.{fmt}"
-        if fmt == "png" and ink is not None:
+        if fmt == "png" and ink is not None and raster is not None:
             from PIL import Image
 
             Image.fromarray(raster[r0:r1, c0:c1, :3]).save(path, dpi=(DPI, DPI))
@@ -301,9 +301,11 @@ def _errors_figure(result: Result):
     orientation in mrad: one unit per axis.
     """
     t, npos, pose = result.t, _position_size(result), result.e.shape[1] == 6
-    parts = [("position", "mm", result.e[:, :npos], result.position_error(), AXES)]
-    if pose:
-        parts.append(("orientation", "mrad", result.e[:, 3:6], result.orientation_error(),
+    parts: list[tuple[str, str, np.ndarray, np.ndarray, tuple[str, ...]]] = [
+        ("position", "mm", result.e[:, :npos], result.position_error(), AXES)]
+    orientation = result.orientation_error()
+    if pose and orientation is not None:
+        parts.append(("orientation", "mrad", result.e[:, 3:6], orientation,
                       tuple(f"\\theta {a}" for a in AXES)))
     fig, axes = plt.subplots(2 * len(parts), 1, figsize=(7, 3.6 * len(parts) + 1.6), sharex=True)
     fig.subplots_adjust(hspace=0.3)
@@ -543,9 +545,9 @@ def plot_comparison(results: dict[str, Result], folder: str | Path) -> list[Path
     plane = DrawingPlane.of(next(iter(results.values())))
     for i, (name, res) in enumerate(results.items()):
         color = f"C{i % 10}"
-        for data, style in ((res.x_d, dict(ls="--", lw=1.2)), (res.x, dict(lw=0.9))):
+        for data, style in ((res.x_d, {"ls": "--", "lw": 1.2}), (res.x, {"lw": 0.9})):
             axes[0].plot(*plane.project(_path(data)).T, color=color,
-                         label=name if style["lw"] < 1 else None, **style)
+                         label=name if data is res.x else None, **style)
         _series(axes[1].semilogy, res.t, np.maximum(1e3 * res.position_error(), 1e-9), lw=0.8, color=color)
         _series(axes[2].plot, res.t, np.linalg.norm(res.tau, axis=1), lw=0.5, color=color)
     axes[1].set_ylim(bottom=log_floor(*(1e3 * r.position_error() for r in results.values())))

@@ -59,8 +59,8 @@ class Result:
         tau: applied joint torques held over [t_k, t_k + T) [N m], N x n.
         tau_cmd: commanded torques (tau is tau_cmd clipped to the effort limits) [N m], N x n.
         x, x_d, e: actual and desired task coordinates and the task error, N x m: positions [m]
-            and e = x - x_d, or for a pose task [p, log3(R)] and e = [p - p_d, log3(R R_d^T)]
-            [m, rad].
+            and e = x - x_d, or for a pose task ``[p, log3(R)]`` and ``e = [p - p_d, log3(R R_d^T)]``
+            (m, then rad).
         signals: per-sample scalars: ``h`` (criterion), ``manipulability`` (sqrt det J J^T) and
             the controller's (``rho_hat`` [m/s^2], ``eps``, ``z_norm``, and ``damping``: the lambda^2 of the
             damped pseudo-inverse, > 0 during a near-singular episode).
@@ -107,7 +107,7 @@ class Result:
 
     @classmethod
     def from_trace(cls, trace, robot, trajectory, criterion, config, wall_seconds: float,
-                   torque_limit: np.ndarray | None = None) -> Result:
+                   torque_limit: np.ndarray | None = None, substeps: int = 1) -> Result:
         """Add task-space quantities (true kinematics) and the criterion to a simulation trace
         (those the loop recorded already are taken as they are).
         """
@@ -143,8 +143,7 @@ class Result:
             trace.message, config.to_toml() if config is not None else "", wall_seconds,
             list(robot.joint_names), chain, trace.tau_cmd, torque_limit, robot.lower_limits,
             robot.upper_limits, robot.prismatic,
-            plant_step=(config.simulation.control_period / config.simulation.substeps
-                        if config is not None else float("nan")),
+            plant_step=(config.simulation.control_period / substeps if config is not None else float("nan")),
             friction_events=trace.friction_events,
             unresolved_events=trace.unresolved_events,
         )
@@ -182,8 +181,9 @@ class Result:
         rho = self.signals.get("rho_hat")
         tau_cmd = self.tau if self.tau_cmd is None else self.tau_cmd
         saturated, torque_ratio = verdicts.saturation(tau_cmd, self.torque_limit)
-        violation, violating = (verdicts.joint_limit_violation(self.q, self.lower_limit, self.upper_limit)
-                                if self.lower_limit is not None else (0.0, -1))
+        lower, upper = self.lower_limit, self.upper_limit
+        violation, violating = (verdicts.joint_limit_violation(self.q, lower, upper)
+                                if lower is not None and upper is not None else (0.0, -1))
         runaway, rms_early, rms_late = verdicts.runaway(self.t, err)
         growing, rho_middle, rho_late = verdicts.rho_growing(self.t, rho)
         degraded, h_start, h_end = verdicts.subtask_loss(self.signals.get("h"))
@@ -305,11 +305,15 @@ class Result:
         metrics = json.loads((folder / "metrics.json").read_text())
         config = (folder / "config.toml").read_text() if (folder / "config.toml").exists() else ""
         signals = {k[len("signal_"):]: v for k, v in arrays.items() if k.startswith("signal_")}
+        optional = {name: arrays.get(name) for name in OPTIONAL_ARRAYS}
         return cls(
-            *(arrays[k] for k in ("t", "q", "dq", "tau", "x", "x_d", "e")), signals,
-            metrics.get("status", "completed"), metrics.get("message", ""), config,
-            metrics.get("wall_seconds", float("nan")), arrays["joint_names"].tolist(),
-            **{name: arrays.get(name) for name in OPTIONAL_ARRAYS},
+            t=arrays["t"], q=arrays["q"], dq=arrays["dq"], tau=arrays["tau"], x=arrays["x"],
+            x_d=arrays["x_d"], e=arrays["e"], signals=signals, status=metrics.get("status", "completed"),
+            message=metrics.get("message", ""), config=config,
+            wall_seconds=metrics.get("wall_seconds", float("nan")),
+            joint_names=arrays["joint_names"].tolist(), chain=optional["chain"], tau_cmd=optional["tau_cmd"],
+            torque_limit=optional["torque_limit"], lower_limit=optional["lower_limit"],
+            upper_limit=optional["upper_limit"], prismatic=optional["prismatic"],
             backend=metrics.get("backend", "python"), plant_step=metrics.get("plant_step", float("nan")),
             friction_events=metrics.get("friction_events", 0),
             unresolved_events=metrics.get("unresolved_events", 0),

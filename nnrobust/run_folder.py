@@ -256,7 +256,7 @@ class Drawing:
                 html_tmp.write_text(html, encoding="utf-8")
 
         try:
-            if plots:
+            if plots and self._figures is not None:
                 shutil.rmtree(plots_tmp, ignore_errors=True)
                 plots_tmp.mkdir()
                 self._figures.run(str(folder), meanwhile=write_animation if animation else None)

@@ -143,7 +143,9 @@ def simulate(
         raise ValueError(f"simulation.integrator: {integrator!r} is not one of {INTEGRATORS}")
     n = plant.nq
     steps = int(round(duration / control_period))
-    plant.sensor.reset()  # every draw from the seed, at the start of each run (as the compiled loop)
+    sensor = plant.sensor
+    assert sensor is not None  # Plant sets an ideal one when none is given
+    sensor.reset()  # every draw from the seed, at the start of each run (as the compiled loop)
     z = controller.initial_state()
     X = np.concatenate([np.asarray(q0, float), np.asarray(v0, float)])
     t_rec = np.arange(steps) * control_period
@@ -170,7 +172,8 @@ def simulate(
             t = t_rec[k]
             q, v = X[:n], X[n:]
             try:
-                out = controller.compute(t, *plant.sensor.measure(q, v), z, control_period)
+                q_m, v_m = sensor.measure(q, v)
+                out = controller.compute(t, q_m, v_m, z, control_period)
             except (KeyboardInterrupt, NNRobustError):
                 raise
             except Exception as err:

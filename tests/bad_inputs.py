@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Callable
 
 from nnrobust import exceptions as ex
+from nnrobust.model.urdf_check import InertiaAssumptionWarning
 from nnrobust.run_folder import RunFolderError
 
 ARM = """<?xml version="1.0"?>
@@ -29,6 +30,17 @@ ARM = """<?xml version="1.0"?>
   {extra}
 </robot>
 """
+
+
+FLANGE = ('<joint name="flange_joint" type="fixed"><parent link="l2"/><child link="flange"/>'
+          '<origin xyz="0.3 0 0"/></joint><link name="flange"><inertial><mass value="0"/>'
+          '<inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>')
+"""A flange frame with mass 0 and an inertia of 0.1 kg m^2, as pybullet's Panda has."""
+
+CAD_PRODUCTS = ('ixx="0.0053694" ixy="0.0014185" ixz="-0.00092094" iyy="0.0032423" iyz="-0.00169178" '
+                'izz="0.00501731"')
+"""pybullet's xarm6 link3: 13 % past the triangle inequality as written, physical with the
+products' sign flipped."""
 
 
 def arm(mass="1", ixx="0.001", visual="", extra="") -> str:
@@ -183,13 +195,32 @@ URDF_CASES = [
     Case("planar joint (no single angle or length)",
          lambda d: _load(arm().replace('name="j1" type="revolute"', 'name="j1" type="planar"')),
          ex.ModelMismatch, "joints 'j1' (Planar) have no single angle or length"),
-    Case("zero mass with a nonzero inertia", lambda d: _load(arm(mass="0")), ex.InvalidInertia,
-         "mass 0 kg with a nonzero inertia"),
+    Case("the last link massless (its inertia is dropped: then nothing moves)",
+         lambda d: _load(arm(mass="0")), ex.InvalidInertia, "joint 'j2' moves no mass"),
+    Case("a massless frame link with an inertia (an exporter's convention)",
+         lambda d: _load(arm(extra=FLANGE)), None,
+         "massless link flange read with no inertia (a rotational inertia without mass is no body",
+         warns=InertiaAssumptionWarning),
+    Case("products of inertia in the CAD sign convention",
+         lambda d: _load(_l2_inertia(CAD_PRODUCTS)), None,
+         "products of inertia read with the opposite sign (+integral of x y dm, the CAD convention; "
+         "URDF's ixy is -integral of x y dm): as written, link l2 break",
+         warns=InertiaAssumptionWarning),
+    Case("a triangle inequality broken by rounding (0.5 %)",
+         lambda d: _load(arm(ixx="0.0201")), None,
+         "link l2 break the triangle inequality by at most 1 % (rounding), taken as given",
+         warns=InertiaAssumptionWarning),
     Case("negative mass", lambda d: _load(arm(mass="-2")), ex.InvalidInertia, "must not be negative"),
     Case("inertia not positive definite", lambda d: _load(arm(ixx="-0.001")),
          ex.InvalidInertia, "not positive semi-definite"),
     Case("inertia that breaks the triangle inequality", lambda d: _load(arm(ixx="0.05")),
-         ex.InvalidInertia, "triangle inequality"),
+         ex.InvalidInertia, "1 link with impossible inertial data: 'l2': principal moments "
+         "[0.01, 0.01, 0.05] break the triangle inequality I1 + I2 >= I3 by 60 % of I3"),
+    Case("two impossible links, named at once",
+         lambda d: _load(arm(ixx="0.05").replace('ixx="0.001" ixy="0" ixz="0" iyy="0.01"',
+                                                 'ixx="-0.001" ixy="0" ixz="0" iyy="0.01"')),
+         ex.InvalidInertia, "2 links with impossible inertial data: 'l1': the inertia is not positive "
+         "semi-definite"),
     Case("NaN in an inertial origin",
          lambda d: _load(arm().replace('<origin xyz="0.15 0 0"/>', '<origin xyz="nan 0 0"/>')),
          ex.UrdfStructureError, "link 'l2' <origin> xyz: 'nan 0 0' is not 3 finite numbers"),
@@ -307,13 +338,21 @@ CONFIG_CASES = [
                                                        plant={"disturbance": "none"},
                                                        nominal={"kind": "urdf"}),
          ex.ConfigError, "'paper' (eq. 19) is for 3 joints"),
-    Case("viscous friction too stiff for the RK4 step",
+    Case("viscous friction too stiff for the RK4 step (substeps = 1 set)",
+         lambda d: _build("planar7-ellipse", robot={"source": "planar15"},
+                          simulation={"q_seed": [0.9] + [-0.1] * 14, "substeps": 1}),
+         ex.ConfigError, "simulation.substeps: viscous friction makes the dynamics stiff"),
+    Case("viscous friction too stiff for the RK4 step (substeps unset: chosen)",
          lambda d: _build("planar7-ellipse", robot={"source": "planar15"},
                           simulation={"q_seed": [0.9] + [-0.1] * 14}),
-         ex.ConfigError, "simulation.substeps: viscous friction makes the dynamics stiff"),
-    Case("joint stops too stiff for the RK4 step",
-         lambda d: _build(plant={"joint_stop_stiffness": 1e6}),
+         None, "simulation.substeps = 2 chosen (plant step 0.0005 s)",
+         warns=UserWarning),
+    Case("joint stops too stiff for the RK4 step (substeps = 1 set)",
+         lambda d: _build(plant={"joint_stop_stiffness": 1e6}, simulation={"substeps": 1}),
          ex.ConfigError, "plant.joint_stop_stiffness: the stop of joint"),
+    Case("joint stops too stiff for the RK4 step (substeps unset: the stops are sized)",
+         lambda d: _build(plant={"joint_stop_stiffness": 1e6}), None,
+         "joint stops sized to the plant step: the stops of 'joint1'", warns=UserWarning),
     Case("unknown torque-limit choice", lambda d: _toml(d, "[plant]\ntorque_limits = 'max'\n"),
          ex.ConfigError, "plant.torque_limits: 'max' is not one of urdf, none"),
     Case("torque limit of the wrong type", lambda d: _toml(d, "[plant]\ntorque_limits = 60\n"),

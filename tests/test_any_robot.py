@@ -3,6 +3,7 @@ default chain rule, robot.chain, implausible effort limits, and the NN controlle
 paper never saw (docs/robots.md)."""
 
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
@@ -249,3 +250,80 @@ def test_the_paper_arm_keeps_the_papers_defaults():
     setup = build(ExperimentConfig().replace(simulation={"duration": 1.0}))
     assert [type(c).__name__ for c in setup.criterion.criteria] == ["PaperCriterion"]
     np.testing.assert_array_equal(setup.plant.disturbance.amplitude, SinusoidalDisturbance.paper().amplitude)
+
+
+def _mass_matrix(text: str, q) -> np.ndarray:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return load_robot(text).mass(np.asarray(q, float))
+
+
+def test_exports_conventions_are_read_as_such_and_the_dynamics_follow():
+    """A massless frame link's inertia is dropped, and a file whose products of inertia are in the
+    CAD sign convention is read with that sign: M(q) equals that of the URDF written so by hand
+    (the independent reference), and the assumption is said in one warning."""
+    from nnrobust.model.urdf_check import InertiaAssumptionWarning
+    from tests.bad_inputs import CAD_PRODUCTS, FLANGE, _l2_inertia, arm
+
+    q = [0.3, -0.7]
+    with pytest.warns(InertiaAssumptionWarning, match="massless link flange read with no inertia") as said:
+        robot = load_robot(arm(extra=FLANGE))
+    assert len(said) == 1
+    by_hand = arm(extra=FLANGE.replace('ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"',
+                                       'ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"'))
+    np.testing.assert_allclose(robot.mass(np.array(q)), _mass_matrix(by_hand, q), rtol=0, atol=1e-15)
+    as_written = _pinocchio_mass(arm(extra=FLANGE), q)  # Pinocchio alone adds the flange's 0.1 kg m^2
+    assert as_written[1, 1] > robot.mass(np.array(q))[1, 1] + 0.09
+
+    with pytest.warns(InertiaAssumptionWarning, match="opposite sign"):
+        robot = load_robot(_l2_inertia(CAD_PRODUCTS))
+    flipped = CAD_PRODUCTS.replace('ixy="0.0014185"', 'ixy="-0.0014185"').replace(
+        'ixz="-0.00092094"', 'ixz="0.00092094"').replace('iyz="-0.00169178"', 'iyz="0.00169178"')
+    np.testing.assert_allclose(robot.mass(np.array(q)), _mass_matrix(_l2_inertia(flipped), q), rtol=0,
+                               atol=1e-15)
+
+
+def _pinocchio_mass(text: str, q) -> np.ndarray:
+    model = pin.buildModelFromXML(text)
+    data = model.createData()
+    M = pin.crba(model, data, np.asarray(q, float))
+    return np.triu(M) + np.triu(M, 1).T
+
+
+def test_the_pybullet_arms_load_unmodified(tmp_path):
+    """The URDFs of pybullet_data 3.2.7 (kept in tests/data/pybullet without their meshes) load
+    with one warning each where they follow an exporter's convention."""
+    from nnrobust.model.urdf_check import InertiaAssumptionWarning
+
+    data = Path(__file__).parent / "data" / "pybullet"
+    expected = {"kuka_iiwa/model.urdf": None, "franka_panda/panda.urdf": "massless links panda_link8, "
+                "panda_grasptarget", "xarm/xarm6_robot.urdf": "opposite sign"}
+    for name, said in expected.items():
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            robot = load_robot(str(data / name), task="position")
+        assumptions = [str(w.message) for w in caught if issubclass(w.category, InertiaAssumptionWarning)]
+        assert (said in assumptions[0]) if said else not assumptions, (name, assumptions)
+        assert robot.nq in (6, 7) and np.all(np.linalg.eigvalsh(robot.mass(robot.mid_configuration)) > 0)
+
+
+@pytest.mark.parametrize("arm", ["kuka_iiwa/model.urdf", "franka_panda/panda.urdf", "xarm/xarm6_robot.urdf"])
+@pytest.mark.parametrize("controller", ["nn", "pd"])
+def test_the_pybullet_arms_track_a_circle_with_the_defaults(arm, controller, tmp_path):
+    """Issue 22's acceptance: each arm, unmodified, runs a position-task circle with nn and pd at
+    the default settings, bounded (the substeps, where its light wrist needs them, chosen and said)."""
+    from nnrobust.config import load_config
+    from nnrobust.experiment import run_experiment
+
+    path = tmp_path / "circle.toml"
+    source = Path(__file__).parent / "data" / "pybullet" / arm
+    path.write_text(f'[robot]\nsource = "{source}"\ntask = "position"\n[trajectory]\n'
+                    'center = [0.45, 0.0, 0.5]\naxis_a = [0.1, 0.0, 0.0]\naxis_b = [0.0, 0.1, 0.0]\n'
+                    '[simulation]\nduration = 3.0\n'
+                    f'[controller]\nkind = "{controller}"\n')
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        result = run_experiment(load_config(path))
+    metrics = result.metrics()
+    assert metrics["status"] == "completed" and not metrics["runaway"], metrics["warnings"]
+    assert metrics["max_error"] < 0.1 and np.all(np.isfinite(result.q))

@@ -126,7 +126,7 @@ def _both_backends(preset, duration, **changes):
     setup = build(config)
     assert compiled.twin_refusal(setup) == ""
     reference = simulate(setup.plant, setup.controller, setup.q0, setup.v0, duration,
-                         config.simulation.control_period, config.simulation.substeps)
+                         config.simulation.control_period, setup.substeps)
     setup = build(config)  # fresh sensor noise generator and controller state
     return reference, compiled.simulate_compiled(setup, duration)
 

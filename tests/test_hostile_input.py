@@ -1,6 +1,7 @@
 """Hostile input: each bad URDF or experiment file gets its own error class and a clear message,
 the command line answers with exit code 2 and one line, and docs/bad-inputs.md is up to date."""
 
+import re
 import warnings
 from pathlib import Path
 
@@ -27,7 +28,7 @@ DOCS = Path(__file__).resolve().parents[1] / "docs" / "bad-inputs.md"
 def test_bad_input_gets_its_error_and_message(case, tmp_path):
     action = case.make(tmp_path)
     if case.error is None:
-        with pytest.warns(case.warns, match=case.fragment):
+        with pytest.warns(case.warns, match=re.escape(case.fragment)):
             action()
         return
     with warnings.catch_warnings():
@@ -76,8 +77,10 @@ def test_command_line_answers_a_bad_urdf_with_one_line(case, tmp_path, capsys, m
     assert not (tmp_path / "run").exists()
 
 
-@pytest.mark.parametrize("case", CONFIG_CASES + CUSTOM_CASES,
-                         ids=[c.what for c in CONFIG_CASES + CUSTOM_CASES])
+REFUSED = [c for c in CONFIG_CASES + CUSTOM_CASES if c.error is not None]
+
+
+@pytest.mark.parametrize("case", REFUSED, ids=[c.what for c in REFUSED])
 def test_command_line_answers_a_bad_experiment_with_one_line(case, tmp_path, capsys):
     action = case.make(tmp_path)
     if isinstance(action, BuildExperiment):

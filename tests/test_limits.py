@@ -162,9 +162,17 @@ def test_noise_comes_before_the_encoder_so_measurements_stay_on_its_grid():
 
 
 def test_stiff_stops_are_refused_with_the_substeps_needed():
-    """A stop too stiff for the RK4 step gets a clear error before the run."""
+    """A stop too stiff for an RK4 step set explicitly gets a clear error before the run; with the
+    substeps unset, each such stop is sized to the step from its joint's effective inertia,
+    h omega = 1, and said (the yield at the torque scale is tiny here: 1e6 / rad was asked)."""
     from nnrobust.exceptions import ConfigError
 
     config = load_preset("paper-ellipse").replace(plant={"joint_stop_stiffness": 1e6})
     with pytest.raises(ConfigError, match="joint_stop_stiffness.*substeps >="):
-        build(config)
+        build(config.replace(simulation={"substeps": 1}))
+    with pytest.warns(UserWarning, match="stops of 'joint1' .* are softened to their effective inertia"):
+        setup = build(config)
+    M_inv = np.linalg.inv(setup.robot.mass(setup.q0))
+    omega = np.sqrt(setup.plant.stops.stiffness * np.diag(M_inv))
+    np.testing.assert_allclose(omega * config.simulation.control_period, 1.0, rtol=1e-12)
+    assert setup.substeps == 1

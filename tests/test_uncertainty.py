@@ -102,17 +102,20 @@ def test_configuration_builds_the_perturbed_nominal_and_scaled_plant():
     np.testing.assert_allclose(plant.friction.coulomb, 0.02 * torque_scale(robot))
 
 
-def test_stiff_viscous_friction_is_refused_before_the_run():
-    """On a 15-link chain 3 % viscous friction is a ~4e3 1/s mode: RK4 at 1 ms would diverge."""
+def test_stiff_viscous_friction_sets_the_substeps_or_is_refused_before_the_run():
+    """On a 15-link chain 3 % viscous friction is a ~4e3 1/s mode: RK4 at 1 ms would diverge. With
+    simulation.substeps unset, 2 are chosen and said; set to 1, the run is refused."""
     from nnrobust.exceptions import ConfigError
     from nnrobust.experiment import build
     from nnrobust.presets import load_preset
 
     config = load_preset("planar7-ellipse").replace(
         robot={"source": "planar15"}, simulation={"q_seed": [0.9] + [-0.1] * 14})
+    with pytest.warns(UserWarning, match=r"substeps = 2 chosen \(plant step 0.0005 s\): .*viscous friction"):
+        assert build(config).substeps == 2
     with pytest.raises(ConfigError, match=r"simulation.substeps: .* set substeps >= 2"):
-        build(config)
-    build(config.replace(simulation={"substeps": 2}))
+        build(config.replace(simulation={"substeps": 1}))
+    assert build(config.replace(simulation={"substeps": 3})).substeps == 3
 
 
 def test_friction_scale_scales_the_plant_friction_only():

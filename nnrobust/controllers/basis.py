@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -23,6 +23,8 @@ class AdditiveRBFBasis:
         centers: number of centres per input.
         width: Gaussian width as a multiple of the centre spacing.
         bias: include the constant unit.
+        grid: the centres c_jk, dim(s) x centres (derived).
+        inverse_two_width_sq: 1 / (2 w_j^2) per input (derived).
 
     """
 
@@ -31,6 +33,8 @@ class AdditiveRBFBasis:
     centers: int = 5
     width: float = 1.0
     bias: bool = True
+    grid: np.ndarray = field(init=False, repr=False, compare=False)
+    inverse_two_width_sq: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
         low = np.asarray(self.low, dtype=float)
@@ -41,13 +45,10 @@ class AdditiveRBFBasis:
             raise ValueError(f"basis: centers ({self.centers}) >= 1 and width ({self.width}) > 0")
         object.__setattr__(self, "low", low)
         object.__setattr__(self, "high", high)
-        grid = np.linspace(0.0, 1.0, self.centers) if self.centers > 1 else np.array([0.5])
-        self._set("_c", low[:, None] + (high - low)[:, None] * grid)
+        unit = np.linspace(0.0, 1.0, self.centers) if self.centers > 1 else np.array([0.5])
+        object.__setattr__(self, "grid", low[:, None] + (high - low)[:, None] * unit)
         spacing = (high - low) / max(self.centers - 1, 1)
-        self._set("_inv2w2", 1.0 / (2.0 * (self.width * spacing) ** 2))
-
-    def _set(self, name: str, value: np.ndarray) -> None:
-        object.__setattr__(self, name, value)
+        object.__setattr__(self, "inverse_two_width_sq", 1.0 / (2.0 * (self.width * spacing) ** 2))
 
     @property
     def input_size(self) -> int:
@@ -61,6 +62,6 @@ class AdditiveRBFBasis:
 
     def __call__(self, s: np.ndarray) -> np.ndarray:
         """phi(s), shape L."""
-        d = s[:, None] - self._c
-        rbf = np.exp(-(d * d) * self._inv2w2[:, None]).ravel()
+        d = s[:, None] - self.grid
+        rbf = np.exp(-(d * d) * self.inverse_two_width_sq[:, None]).ravel()
         return np.concatenate(([1.0], rbf)) if self.bias else rbf

@@ -25,7 +25,10 @@ class DynamicsModel(Protocol):
     m: int
     task: str
     joint_names: list[str]
-    pinocchio_model: object | None
+
+    @property
+    def pinocchio_model(self) -> object | None:
+        """The ``pin.Model`` behind the model, or None."""
 
     def mass(self, q: np.ndarray) -> np.ndarray:
         """Joint-space inertia matrix M(q), n x n [kg m^2]."""

@@ -143,7 +143,7 @@ def _build(source: str, locked_joints=None, chain=None, say_notes: bool = True) 
     if not generated:
         user = frozenset(locked_joints or ())
         explicit = locked_joints is not None and chain is None
-        check_urdf(text, name, base, locked=user if explicit else user | mimic)
+        text = check_urdf(text, name, base, locked=user if explicit else user | mimic)
     model = _parsed(name, "invalid URDF", lambda: pin.buildModelFromXML(text))
     if model.nq == 0 and model.njoints <= 1:
         raise ModelMismatch(f"{name}: the URDF has no movable joint (only fixed joints)")
@@ -246,13 +246,15 @@ def _visual_geometry(built: _Built, source: str) -> pin.GeometryModel:
     mesh, unused by a viewer), and the objects get the files back afterwards.
     """
     example = built.example
-    if example is not None and example.urdf is None:  # built by example-robot-data's own code
-        return example_visual_model(example)
+    roots: list[Path] | None = None
+    base: Path | None
     if example is not None:
+        if example.urdf is None:  # built by example-robot-data's own code
+            return example_visual_model(example)
         text, base = read_urdf_file(example.urdf), example.urdf.parent
         roots = [Path(d) for d in example.package_dirs]
     else:
-        text, base, roots = built.text, built.base, None
+        text, base = built.text or "", built.base
     if not PLANAR_CHAIN_NAME.match(source):
         text = resolved_visuals(text, built.name, base, roots)
     text, meshes = visual_meshes_set_aside(text)
@@ -300,7 +302,7 @@ def load_robot(
     source: str | Path,
     task_frame: str | None = None,
     task: str = "planar",
-    gravity: tuple[float, float, float] | None = None,
+    gravity: tuple[float, ...] | None = None,
     locked_joints: list[str] | None = None,
     chain: Sequence[str] | None = None,
 ) -> PinocchioModel:

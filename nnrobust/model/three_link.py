@@ -32,11 +32,11 @@ class ThreeLinkParameters:
 
     """
 
-    beta: tuple[float, float, float]
-    p: tuple[float, float, float]
-    lengths: tuple[float, float, float]
-    gamma: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    gravity: tuple[float, float] = (0.0, 0.0)
+    beta: tuple[float, ...]
+    p: tuple[float, ...]
+    lengths: tuple[float, ...]
+    gamma: tuple[float, ...] = (0.0, 0.0, 0.0)
+    gravity: tuple[float, ...] = (0.0, 0.0)
 
     @classmethod
     def paper(cls) -> ThreeLinkParameters:
@@ -59,11 +59,11 @@ class ThreeLinkParameters:
     @classmethod
     def from_links(
         cls,
-        masses: tuple[float, float, float],
-        lengths: tuple[float, float, float],
-        com: tuple[float, float, float],
-        inertia_zz: tuple[float, float, float],
-        gravity: tuple[float, float] = (0.0, 0.0),
+        masses: tuple[float, ...],
+        lengths: tuple[float, ...],
+        com: tuple[float, ...],
+        inertia_zz: tuple[float, ...],
+        gravity: tuple[float, ...] = (0.0, 0.0),
     ) -> ThreeLinkParameters:
         """Parameters from link masses [kg], lengths [m], centre-of-mass distances lc_i [m] and
         inertias about the centre of mass I_i [kg m^2].

@@ -23,7 +23,6 @@ from ..exceptions import (
     UrdfStructureError,
     UrdfSyntaxError,
 )
-from .perturbation import rotational_inertia_problem
 
 MAX_URDF_BYTES = 20_000_000
 """Largest URDF read [bytes]; real arms are well under 1 MB."""
@@ -100,11 +99,23 @@ def _check_origin(element: ET.Element, where: str, source: str) -> None:
         _attribute(origin, "rpy", f"{where} <origin>", source, "0 0 0", 3, -1e3, 1e3)
 
 
-def _check_inertial(link: ET.Element, name: str, source: str) -> float:
-    """Refuse an <inertial> the parser would change silently; returns the link's mass (0 without one)."""
+TRIANGLE_TOLERANCE = 0.01
+"""Relative violation of the triangle inequality I1 + I2 >= I3 accepted as rounding: an inertia
+written to 3 significant digits has each principal moment off by up to 0.5 %, so I1 + I2 - I3 off
+by up to 1 % of I3. A thin plate sits exactly on the inequality, so real links reach it."""
+
+
+class InertiaAssumptionWarning(UserWarning):
+    """A URDF's inertial data was read with an assumption (a convention of exporters, rounding)."""
+
+
+def _read_inertial(link: ET.Element, name: str, source: str) -> tuple[float, np.ndarray | None]:
+    """(mass, inertia about the centre of mass) of a link's <inertial>, refusing what no reading
+    makes usable: missing entries, a negative or absurd mass or inertia ((0, None) without one).
+    """
     inertial = link.find("inertial")
     if inertial is None:
-        return 0.0
+        return 0.0, None
     where = f"link {name!r}"
     mass_el = inertial.find("mass")
     inertia_el = inertial.find("inertia")
@@ -125,18 +136,112 @@ def _check_inertial(link: ET.Element, name: str, source: str) -> float:
     I = np.array([[values["ixx"], values["ixy"], values["ixz"]],
                   [values["ixy"], values["iyy"], values["iyz"]],
                   [values["ixz"], values["iyz"], values["izz"]]])
-    if mass == 0:
-        if np.any(I != 0):
-            raise InvalidInertia(source, f"{where}: mass 0 kg with a nonzero inertia; a massless link has "
-                                 "zero inertia (or no <inertial>)")
-        return 0.0
-    problem = rotational_inertia_problem(I, rel_tol=1e-9, point_mass=True)
-    if problem:
-        raise InvalidInertia(source, f"{where}: {problem}")
     if np.abs(I).max() > MAX_INERTIA:
         raise InvalidInertia(source, f"{where}: an inertia of {np.abs(I).max():g} kg m^2 is beyond any robot "
                              f"link (at most {MAX_INERTIA:g} kg m^2)")
-    return mass
+    return mass, I
+
+
+def _triangle_excess(I: np.ndarray) -> float:
+    """(I3 - I1 - I2) / I3 of the principal moments: > 0 where the triangle inequality breaks."""
+    moments = np.linalg.eigvalsh(I)
+    return float((moments[2] - moments[0] - moments[1]) / moments[2]) if moments[2] > 0 else 0.0
+
+
+def _opposite_products(I: np.ndarray) -> np.ndarray:
+    """The inertia with its products of inertia of the opposite sign (+integral of x y dm, the
+    CAD convention, where URDF's ixy is -integral of x y dm).
+    """
+    return np.where(np.eye(3, dtype=bool), I, -I)
+
+
+def _check_inertias(links: dict[str, ET.Element], parent_of: dict[str, tuple[str, str]],
+                    source: str) -> tuple[dict[str, float], list[str], bool]:
+    """Every moving link's mass and inertia, told into three kinds (docs/robots.md, "Inertial
+    data"): impossible (refused, every such link named at once), conventions of real exports
+    (read as such, with one warning) and data as given.
+
+    - A massless link with an inertia (a frame link such as a flange) is read with no inertia: a
+      rotational inertia without mass is no body.
+    - When some link breaks the triangle inequality as written but every link keeps it with the
+      products of inertia of the opposite sign, the file is read with that sign (its exporter
+      wrote +integral of x y dm): an exporter uses one convention for all its links.
+    - A triangle inequality broken by at most :data:`TRIANGLE_TOLERANCE` is rounding.
+
+    Returns (mass per link, massless links whose inertia is dropped, whether the products are
+    read with the opposite sign).
+    """
+    masses: dict[str, float] = {}
+    bodies: dict[str, np.ndarray] = {}
+    massless: list[str] = []
+    impossible: list[str] = []
+    for name, link in links.items():
+        if name not in parent_of:  # the root is welded to the world: its inertia never enters the dynamics
+            masses[name] = 0.0
+            continue
+        mass, I = _read_inertial(link, name, source)
+        masses[name] = mass
+        if I is None:
+            continue
+        if mass == 0:
+            if np.any(I != 0):
+                massless.append(name)
+            continue
+        moments = np.linalg.eigvalsh(I)
+        if not moments[0] >= -(1e-9 * abs(moments[2]) + 1e-15):
+            impossible.append(f"{name!r}: the inertia is not positive semi-definite (principal moments "
+                              f"{np.round(moments, 9).tolist()} kg m^2)")
+            continue
+        bodies[name] = I
+    broken = [name for name, I in bodies.items() if _triangle_excess(I) > 1e-9]
+    flipped = bool(broken) and all(_triangle_excess(_opposite_products(I)) <= 1e-9 for I in bodies.values())
+    rounded: list[str] = []
+    for name in broken if not flipped else []:
+        excess = _triangle_excess(bodies[name])
+        if excess <= TRIANGLE_TOLERANCE:
+            rounded.append(name)
+        else:
+            moments = np.round(np.linalg.eigvalsh(bodies[name]), 9).tolist()
+            impossible.append(f"{name!r}: principal moments {moments} break the triangle inequality "
+                              f"I1 + I2 >= I3 by {100 * excess:.3g} % of I3 (no rigid body has them; "
+                              f"{100 * TRIANGLE_TOLERANCE:g} % is taken as rounding)")
+    if impossible:
+        raise InvalidInertia(source, f"{len(impossible)} link{'s' if len(impossible) > 1 else ''} with "
+                             f"impossible inertial data: {'; '.join(impossible)}")
+    assumed = []
+    if massless:
+        assumed.append(f"massless link{'s' if len(massless) > 1 else ''} {', '.join(massless)} read with no "
+                       "inertia (a rotational inertia without mass is no body: a frame link)")
+    if flipped:
+        assumed.append(f"products of inertia read with the opposite sign (+integral of x y dm, the CAD "
+                       f"convention; URDF's ixy is -integral of x y dm): as written, link"
+                       f"{'s' if len(broken) > 1 else ''} {', '.join(broken)} break the triangle inequality, "
+                       "read so every link keeps it")
+    if rounded:
+        assumed.append(f"link{'s' if len(rounded) > 1 else ''} {', '.join(rounded)} break the triangle "
+                       f"inequality by at most {100 * TRIANGLE_TOLERANCE:g} % (rounding), taken as given")
+    if assumed:
+        warnings.warn(f"{source}: inertial data read with assumptions: {'; '.join(assumed)}",
+                      InertiaAssumptionWarning, stacklevel=4)
+    return masses, massless, flipped
+
+
+def _repaired(root: ET.Element, massless: list[str], flipped: bool) -> str | None:
+    """The URDF text with the assumptions of :func:`_check_inertias` written in, or None."""
+    if not massless and not flipped:
+        return None
+    for link in root.iter("link"):
+        inertia = link.find("inertial/inertia")
+        if inertia is None:
+            continue
+        if link.get("name") in massless:
+            for key in _INERTIA_KEYS:
+                inertia.set(key, "0")
+        elif flipped:
+            for key in ("ixy", "ixz", "iyz"):
+                value = float(inertia.get(key, "0"))
+                inertia.set(key, repr(-value) if value else "0")
+    return ET.tostring(root, encoding="unicode")
 
 
 def _check_joint(joint: ET.Element, name: str, source: str, locked: frozenset[str]) -> None:
@@ -181,7 +286,7 @@ def mimic_joints(text: str) -> frozenset[str]:
         root = ET.fromstring(text)
     except ET.ParseError:
         return frozenset()
-    return frozenset(j.get("name") for j in root.iter("joint")
+    return frozenset(j.get("name", "") for j in root.iter("joint")
                      if j.find("mimic") is not None and j.get("name"))
 
 
@@ -258,8 +363,10 @@ def _resolve_mesh(uri: str, base: Path | None, roots: list[Path], source: str) -
 
 
 def check_urdf(text: str, source: str, base: Path | None = None,
-               roots: list[Path] | None = None, locked: frozenset[str] = frozenset()) -> None:
-    """Refuse a URDF that Pinocchio would mis-read; warn about missing visual meshes.
+               roots: list[Path] | None = None, locked: frozenset[str] = frozenset()) -> str:
+    """Refuse a URDF that Pinocchio would mis-read; warn about missing visual meshes; return the
+    text to parse: the URDF itself, or with the inertial assumptions of real exports written in
+    (:func:`_check_inertias`, said in one warning).
 
     Args:
         text: the URDF XML.
@@ -296,7 +403,7 @@ def check_urdf(text: str, source: str, base: Path | None = None,
         parent_el, child_el = joint.find("parent"), joint.find("child")
         if parent_el is None or child_el is None:
             raise UrdfStructureError(source, f"joint {name!r} needs <parent link=...> and <child link=...>")
-        parent, child = parent_el.get("link"), child_el.get("link")
+        parent, child = parent_el.get("link", ""), child_el.get("link", "")
         for role, link in (("parent", parent), ("child", child)):
             if link not in links:
                 raise UrdfStructureError(source, f"joint {name!r}: {role} link {link!r} is not defined "
@@ -313,9 +420,7 @@ def check_urdf(text: str, source: str, base: Path | None = None,
                                  "links do not form one tree (every link but the root needs one)")
     _check_origin_of_root(links[roots_found[0]], roots_found[0], source)
 
-    # the root link is welded to the world: its inertia never enters the dynamics
-    masses = {name: _check_inertial(link, name, source) if name in parent_of else 0.0
-              for name, link in links.items()}
+    masses, massless, flipped = _check_inertias(links, parent_of, source)
     for name, joint in joints.items():
         _check_joint(joint, name, source, locked)
     _check_mass_moves(joints, parent_of, masses, source)
@@ -329,6 +434,7 @@ def check_urdf(text: str, source: str, base: Path | None = None,
             where = "visual" if id(mesh) in visual_meshes else "collision"
             warnings.warn(f"{source}: {where} mesh {uri!r} not found ({path}); the robot simulates, "
                           "the viewer leaves that part out", MissingMeshWarning, stacklevel=3)
+    return _repaired(root, massless, flipped) or text
 
 
 def resolved_visuals(text: str, source: str, base: Path | None = None,
@@ -362,7 +468,7 @@ def visual_meshes_set_aside(text: str) -> tuple[str, dict[str, tuple[str, list[f
         for index, visual in enumerate(link.findall("visual")):
             geometry = visual.find("geometry")
             mesh = None if geometry is None else geometry.find("mesh")
-            if mesh is None:
+            if geometry is None or mesh is None:
                 continue
             scale = [float(v) for v in mesh.get("scale", "1 1 1").split()]
             meshes[f"{link.get('name')}_{index}"] = (mesh.get("filename", ""), scale)
@@ -390,7 +496,9 @@ def _refuse_cycles(parent_of: dict[str, tuple[str, str]], source: str) -> None:
     """
     done: set[str] = set()  # links whose walk ended at a root
     for start in parent_of:
-        walk, on_walk, link = [], set(), start
+        walk: list[str] = []
+        on_walk: set[str] = set()
+        link = start
         while link in parent_of and link not in done:
             if link in on_walk:
                 loop = walk[walk.index(link):] + [link]

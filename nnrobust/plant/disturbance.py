@@ -38,9 +38,9 @@ class SinusoidalDisturbance:
         """tau_d = [4 cos 2t, sin t + cos 2t, 2 sin t]^T N m (Sect. 4, errata reading)."""
         half_pi = np.pi / 2
         return cls(
-            amplitude=[[0.0, 4.0], [1.0, 1.0], [2.0, 0.0]],
-            omega=[1.0, 2.0],
-            phase=[[0.0, half_pi], [0.0, half_pi], [0.0, 0.0]],
+            amplitude=np.array([[0.0, 4.0], [1.0, 1.0], [2.0, 0.0]]),
+            omega=np.array([1.0, 2.0]),
+            phase=np.array([[0.0, half_pi], [0.0, half_pi], [0.0, 0.0]]),
         )
 
     @classmethod

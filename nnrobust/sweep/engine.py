@@ -80,7 +80,7 @@ def run_rows(spec: SweepSpec, base_toml: str, jobs: list[tuple[int, str]]) -> li
 def _done_rows(folder: Path) -> set[tuple[int, str]]:
     import pyarrow.parquet as pq
 
-    done = set()
+    done: set[tuple[int, str]] = set()
     for part in sorted((folder / RESULTS).glob("part-*.parquet")):
         table = pq.read_table(part, columns=["sample", "controller"])
         done.update(zip(table.column("sample").to_pylist(), table.column("controller").to_pylist()))

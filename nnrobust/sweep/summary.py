@@ -32,11 +32,11 @@ def summarize(spec: SweepSpec, frame) -> dict:
     statistics at each value of every grid key (``by_grid``), the mean saturated fraction, how
     many rows carry warnings, and the worst sample with its rerun command.
     """
-    out = {"sweep": spec.name, "samples": spec.size, "controllers": {}}
+    out: dict = {"sweep": spec.name, "samples": spec.size, "controllers": {}}
     for controller in spec.controllers:
         rows = frame[frame["controller"] == controller]
         completed = rows[rows["status"] == "completed"]
-        entry = {"rows": int(len(rows)),
+        entry: dict[str, object] = {"rows": int(len(rows)),
                  "success_rate": float(len(completed) / len(rows)) if len(rows) else None,
                  "saturated_fraction_mean": (float(completed["saturated_fraction"].mean())
                                              if len(completed) else None),

@@ -24,6 +24,7 @@ import shutil
 import uuid
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -31,6 +32,9 @@ from ..config import CLASS_PATTERN
 from ..exceptions import ConfigError, NNRobustError
 from ..signals import signals_as_interrupt
 from .space import TUNABLE, SearchSpace, arm_scales, custom_space, search_space
+
+if TYPE_CHECKING:
+    import optuna
 
 OBJECTIVES = ("rms_error_after_2s", "rms_torque", "torque_chatter")
 """What every setting is recorded with (the Pareto front's axes, all minimised): [m], [N m], [N m].
@@ -194,15 +198,15 @@ def judge(spec: TuneSpec, runs: list[dict]) -> tuple[tuple[float, ...], list[flo
     completed = all(r.get("status") == "completed" for r in runs)
     if not completed:
         return FAILED, [1.0] * len(CONSTRAINTS), {"status": "failed"}
-    mean = {k: float(np.mean([r[k] for r in runs])) for k in OBJECTIVES}
-    mean["saturated_fraction"] = float(max(r["saturated_fraction"] for r in runs))
-    mean["max_joint_limit_violation"] = float(max(r["max_joint_limit_violation"] for r in runs))
-    mean["runaway"] = bool(any(r["runaway"] for r in runs))
-    mean["status"] = "completed"
-    torque = mean["rms_torque"] - spec.max_rms_torque if math.isfinite(spec.max_rms_torque) else -1.0
-    constraints = [torque, mean["saturated_fraction"] - spec.max_saturated,
-                   1.0 if mean["runaway"] else -1.0, mean["max_joint_limit_violation"], -1.0]
-    return tuple(mean[k] for k in OBJECTIVES), constraints, mean
+    numbers = {k: float(np.mean([r[k] for r in runs])) for k in OBJECTIVES}
+    saturated = float(max(r["saturated_fraction"] for r in runs))
+    violation = float(max(r["max_joint_limit_violation"] for r in runs))
+    runaway = bool(any(r["runaway"] for r in runs))
+    mean = {**numbers, "saturated_fraction": saturated, "max_joint_limit_violation": violation,
+            "runaway": runaway, "status": "completed"}
+    torque = numbers["rms_torque"] - spec.max_rms_torque if math.isfinite(spec.max_rms_torque) else -1.0
+    constraints = [torque, saturated - spec.max_saturated, 1.0 if runaway else -1.0, violation, -1.0]
+    return tuple(numbers[k] for k in OBJECTIVES), constraints, mean
 
 
 def _read_trials(folder: Path) -> list[dict]:
@@ -349,7 +353,7 @@ class _Controller:
                     self.space = wider
                     self.study = self._study()
 
-    def ask(self, count: int) -> list[tuple[object, dict, str]]:
+    def ask(self, count: int) -> list[tuple[optuna.trial.Trial, dict, str]]:
         """Up to ``count`` new settings of the current phase: (Optuna trial, values, phase)."""
         phase = self.phase
         left = (self.gain_trials - len(self.rows)) if phase == "gains" else self.remaining

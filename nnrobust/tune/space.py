@@ -85,7 +85,7 @@ class SearchSpace:
 
     def overrides(self, values: dict[str, float]) -> dict:
         """Dotted-key overrides of the experiment for the coordinates' values."""
-        out = {k: v for k, v in values.items() if "." in k}
+        out: dict[str, object] = {k: v for k, v in values.items() if "." in k}
         if self.custom:
             return out
         w, z = values["bandwidth"], values["damping_ratio"]

@@ -16,6 +16,7 @@ import umsgpack
 from meshcat.servers.tree import SceneTree, find_node, walk
 
 from ..config import ExperimentConfig
+from ..exceptions import NNRobustError
 from ..model.loading import load_visual_model
 from ..results import Result
 
@@ -148,8 +149,16 @@ def world_points(positions: np.ndarray, plane_z) -> np.ndarray:
 
 def tip_positions(result: Result) -> tuple[np.ndarray, np.ndarray]:
     """World positions of the actual and desired task point, N x 3 each [m]."""
-    actual = result.chain[:, -1, :]
+    chain = _chain(result)
+    actual = chain[:, -1, :]
     return actual, world_points(result.x_d, actual[:, 2])
+
+
+def _chain(result: Result) -> np.ndarray:
+    """The run's recorded joint origins and task point, N x (n + 1) x 3 [m]."""
+    if result.chain is None:
+        raise NNRobustError("this run has no recorded chain (result.npz lacks 'chain'); run it again")
+    return result.chain
 
 
 class RunScene:
@@ -302,7 +311,7 @@ def draw_run(vis: meshcat.Visualizer, result: Result, config: ExperimentConfig,
     scene = RunScene(vis, config)
     actual, desired = tip_positions(result)
     scene.draw_paths(desired, actual)
-    scene.frame_camera(np.vstack([desired, result.chain.reshape(-1, 3)]))
+    scene.frame_camera(np.vstack([desired, _chain(result).reshape(-1, 3)]))
     scene.show(result.q[0], desired[0])
     scene.animate(result, desired, fps)
     return scene

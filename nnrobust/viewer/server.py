@@ -135,8 +135,12 @@ def start_viewer(host: str = LOOPBACK, port: int | None = None, timeout: float =
     process = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                text=True, start_new_session=True)
     lines: queue.Queue[str] = queue.Queue()
-    threading.Thread(target=lambda: [lines.put(x) for x in process.stdout] + [lines.put("")],
-                     daemon=True).start()
+    def read(stream) -> None:  # meshcat's lines, then "" at its end
+        for line in stream:
+            lines.put(line)
+        lines.put("")
+
+    threading.Thread(target=read, args=(process.stdout,), daemon=True).start()
     urls: dict[str, str] = {}
     deadline = time.monotonic() + timeout
     while len(urls) < 2:
