@@ -18,6 +18,7 @@ from pathlib import Path
 
 from nnrobust.results import write_json_atomic
 from nnrobust.sweep import parse_sweep, read_results, run_sweep
+from nnrobust.sweep.engine import LOOPBACK_HTTP
 
 
 def measure(workers: int, samples: int) -> dict:
@@ -28,7 +29,7 @@ def measure(workers: int, samples: int) -> dict:
                         "vary": {"plant.disturbance_scale": {"uniform": [0.5, 2.0]}}})
     folder = Path(tempfile.mkdtemp(prefix="nnrobust-sweep-"))
     cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
-                           dashboard_address=None)
+                           dashboard_address=LOOPBACK_HTTP)
     try:
         start = time.perf_counter()
         run_sweep(spec, folder / "out", scheduler=cluster.scheduler_address)

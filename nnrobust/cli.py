@@ -177,12 +177,12 @@ def _simulate_and_write(args, config, out: Path, drawing: Drawing) -> int:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             written = write_run(out, result, overwrite=args.overwrite, drawing=drawing)
-        for warning in caught:  # what writing the folder has to say (not libraries' deprecations)
+        for warning in caught:  # where the folder went, when not where asked (said even with --quiet)
             _warning_line(warning.message, warning.category, warning.filename, warning.lineno)
         metrics = result.metrics()
-        for warning in metrics["warnings"]:
-            print(f"warning: {warning}", file=sys.stderr)
-        if not args.quiet:
+        if not args.quiet:  # "print nothing but errors": the verdicts stay in metrics.json
+            for verdict in metrics["warnings"]:
+                print(f"warning: {verdict}", file=sys.stderr)
             print(format_table([(str(written), metrics)]))
             print(f"simulated {metrics['simulated_seconds']:.2f} s in {metrics['wall_seconds']:.2f} s "
                   f"wall; results in {written}/", file=sys.stderr)
@@ -638,6 +638,8 @@ def main(argv: list[str] | None = None) -> int:
         with signals_as_interrupt():  # from the start: Ctrl-C while importing is a clean exit too
             parser = build_parser()
             args = parser.parse_args(argv)
+            if getattr(args, "quiet", False):  # "print nothing but errors": no warning lines either
+                warnings.simplefilter("ignore")
             if args.command is None:  # bare `nnrobust`: the help
                 parser.print_help()
                 return 0

@@ -469,9 +469,13 @@ def _drop_none(obj):
     return obj
 
 
-def _suggest(key: str, valid: list[str]) -> str:
-    close = difflib.get_close_matches(key, valid, n=1)
-    hint = f"; did you mean {close[0]!r}?" if close else ""
+def _suggest(key: str, valid: list[str], prefix: str = "") -> str:
+    """'unknown key; did you mean X?' and the valid keys (``prefix`` + each name; the names alone
+    are compared, so that a shared prefix does not make every key look close).
+    """
+    close = [prefix + c for c in difflib.get_close_matches(key, valid, n=1)]
+    valid = [prefix + v for v in valid]
+    hint = f"; did you mean {close[0]!r}?" if close else "."
     return f"unknown key{hint} Valid keys: {', '.join(valid)}"
 
 
@@ -1066,7 +1070,7 @@ def check_dotted_key(key: str) -> None:
             raise ConfigError(key, f"{parts[2]!r} is not a valid Python identifier (a keyword argument name)")
         return
     if len(parts) != 2 or field_name not in names:
-        raise ConfigError(key, _suggest(field_name, [f"{section}.{n}" for n in names]))
+        raise ConfigError(key, _suggest(field_name, names, prefix=f"{section}."))
 
 
 def apply_overrides(config: ExperimentConfig, overrides: dict) -> ExperimentConfig:

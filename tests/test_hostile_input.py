@@ -205,3 +205,27 @@ def test_ros_package_path_and_text_urdfs_follow_the_mesh_rules(tmp_path, monkeyp
     monkeypatch.chdir(tmp_path / "elsewhere")  # the same text elsewhere: the meshes are not below it
     with pytest.warns(UserWarning, match="not found"):
         assert _mesh_files(load_visual_model(text)[1]) == []
+
+
+def test_a_mistyped_set_key_gets_the_suggestion_a_file_gets(capsys):
+    assert main(["run", "paper-ellipse", "--set", "controller.Kpp=[10.0]"]) == 2
+    err = capsys.readouterr().err
+    assert "controller.Kpp: unknown key; did you mean 'controller.Kp'? Valid keys: controller.kind" in err
+    assert main(["run", "paper-ellipse", "--set", "controller.zzz=1"]) == 2
+    assert "controller.zzz: unknown key. Valid keys:" in capsys.readouterr().err
+
+
+def test_quiet_prints_no_warning(tmp_path, capsys):
+    """--quiet is "print nothing but errors": the xarm6 URDF's inertia warning is not printed (the
+    run's own warnings stay in metrics.json)."""
+    source = Path(__file__).parent / "data" / "pybullet" / "xarm" / "xarm6_robot.urdf"
+    path = tmp_path / "x.toml"
+    path.write_text(f'[robot]\nsource = "{source}"\ntask = "position"\n[trajectory]\n'
+                    'center = [0.45, 0.0, 0.5]\naxis_a = [0.1, 0.0, 0.0]\naxis_b = [0.0, 0.1, 0.0]\n'
+                    '[simulation]\nduration = 0.2\n')
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert main(["run", str(path), "--out", str(tmp_path / "run"), "--quiet", "--no-plots",
+                     "--no-animation"]) == 0
+    assert not [w for w in caught if "inertial data" in str(w.message)]
+    assert capsys.readouterr().err == ""

@@ -15,7 +15,7 @@ pytest.importorskip("pyarrow")
 from nnrobust.cli import main  # noqa: E402
 from nnrobust.exceptions import ConfigError, NNRobustError  # noqa: E402
 from nnrobust.sweep import load_sweep, parse_sweep, read_results, run_sweep  # noqa: E402
-from nnrobust.sweep.engine import plan  # noqa: E402
+from nnrobust.sweep.engine import LOOPBACK_HTTP, plan  # noqa: E402
 
 SWEEP = """
 name = "tiny"
@@ -89,7 +89,7 @@ def test_a_killed_worker_costs_only_its_chunk(tmp_path):
     spec = load_sweep(_sweep_file(tmp_path, duration=6.0))
     out = tmp_path / "out"
     cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                           dashboard_address=None)
+                           dashboard_address=LOOPBACK_HTTP)
     try:
         result = {}
         thread = threading.Thread(target=lambda: result.update(
@@ -322,7 +322,7 @@ def test_client_memory_does_not_grow_with_samples(tmp_path):
             tracemalloc.stop()
 
     cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                           dashboard_address=None)
+                           dashboard_address=LOOPBACK_HTTP)
     try:
         peak(20)  # warm up: imports, connections
         small, large = peak(40), peak(400)
@@ -331,3 +331,16 @@ def test_client_memory_does_not_grow_with_samples(tmp_path):
     row = read_results(tmp_path / "out-400").iloc[0].to_dict()
     row_bytes = sys.getsizeof(row) + sum(sys.getsizeof(k) + sys.getsizeof(v) for k, v in row.items())
     assert (large - small) / 360 < row_bytes, (small, large, row_bytes)
+
+
+def test_a_local_cluster_listens_on_loopback_only():
+    """Every socket the local cluster's scheduler listens on (its RPC and the HTTP server dask
+    starts even without a dashboard) is on 127.0.0.1, and none takes the dashboard's port 8787."""
+    from nnrobust.sweep.engine import _client
+
+    with _client(1, None) as client:
+        scheduler = client.cluster.scheduler
+        sockets = [s.getsockname() for s in scheduler.http_server._sockets.values()]
+        sockets += [(host, port) for host, port in [scheduler.address.removeprefix("tcp://").rsplit(":", 1)]]
+    assert sockets and all(host == "127.0.0.1" for host, _ in sockets), sockets
+    assert all(int(port) != 8787 for _, port in sockets)

@@ -150,10 +150,17 @@ def prepare_folder(spec: SweepSpec, folder: Path, overwrite: bool) -> None:
     os.replace(tmp, marker)
 
 
+LOOPBACK_HTTP = "127.0.0.1:0"
+"""Where a local cluster's scheduler serves HTTP: dask starts that server even when asked for no
+dashboard (dask/distributed#7207, #8136), on port 8787 of the cluster's host; here on a free
+loopback port, so that it neither takes 8787 nor listens beyond this machine."""
+
+
 @contextmanager
 def _client(workers: int | None, scheduler: str | None):
-    """A client of an existing scheduler, or of a LocalCluster on 127.0.0.1 (dashboard off) with
-    one single-threaded worker process per core; closed on the way out, whatever happens.
+    """A client of an existing scheduler, or of a LocalCluster on 127.0.0.1 (its HTTP server on a
+    free loopback port) with one single-threaded worker process per core; closed on the way out,
+    whatever happens.
     """
     from distributed import Client, LocalCluster
 
@@ -165,7 +172,7 @@ def _client(workers: int | None, scheduler: str | None):
             client.close()
         return
     cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
-                           processes=True, host="127.0.0.1", dashboard_address=None,
+                           processes=True, host="127.0.0.1", dashboard_address=LOOPBACK_HTTP,
                            silence_logs=logging.ERROR)
     client = Client(cluster)
     try:
