@@ -269,6 +269,7 @@ def cmd_sweep(args) -> int:
 
     spec = load_sweep(args.sweep)
     out = Path(args.out)
+    properties, claim = _sweep_claim(args, spec)
 
     def progress(done, total):
         if args.quiet:
@@ -294,6 +295,13 @@ def cmd_sweep(args) -> int:
         print(file=sys.stderr)
     frame = read_results(out)
     summary = summarize(spec, frame)
+    certified = {}
+    if properties and claim:
+        from .properties import certify
+
+        certified = certify(spec, frame, properties, *claim)
+        for controller, entry in certified.items():
+            summary["controllers"][controller].update(entry)
     write_summary(out, summary)
     plot_sweep(spec, frame, out)
     if args.keep_worst:
@@ -302,12 +310,43 @@ def cmd_sweep(args) -> int:
             print(f"run folders of the worst samples: {', '.join(str(p) for p in kept)}", file=sys.stderr)
     if not args.quiet:
         print(format_summary(summary))
+        if certified:
+            from .properties import format_certificates
+
+            print("\n".join(format_certificates(certified)))
         for controller, entry in summary["controllers"].items():
             if "worst" in entry:
                 print(f"worst {controller}: sample {entry['worst']['sample']}: {entry['worst']['command']}")
         print(f"{counts['computed']} rows computed, {counts['skipped']} already there; results in "
               f"{out}/results (pandas.read_parquet), summary in {out}/summary.json", file=sys.stderr)
     return 0
+
+
+def _sweep_claim(args, spec) -> tuple[list, tuple[float, float] | None]:
+    """(the properties of --require, (epsilon, beta) or None), the sweep's size checked against
+    the claim before anything runs.
+    """
+    from .exceptions import ConfigError
+    from .properties import check_claim, run_properties, samples_needed
+
+    properties = run_properties(args.require)
+    if (args.epsilon is None) != (args.beta is None):
+        raise ConfigError("--epsilon", "give --epsilon and --beta together (the claim and its confidence)")
+    if args.epsilon is None:
+        if properties:
+            raise ConfigError("--require", "needs --epsilon and --beta: the claim P(fail) <= EPSILON with "
+                              "confidence 1 - BETA that the sweep certifies")
+        return properties, None
+    if not properties:
+        raise ConfigError("--epsilon", "certifies the properties of --require; give at least one")
+    check_claim(args.epsilon, args.beta, args.failures)
+    needed = samples_needed(args.epsilon, args.beta, args.failures)
+    if spec.samples < needed and not args.allow_small:
+        cell = " per grid point" if spec.grid_keys else ""
+        raise ConfigError("samples", f"P(fail) <= {args.epsilon:g} with confidence {1 - args.beta:g} needs "
+                          f"N >= {needed} samples{cell} with at most {args.failures} failures; the sweep "
+                          f"draws {spec.samples}: raise samples, or --allow-small to report the bound anyway")
+    return properties, (args.epsilon, args.beta)
 
 
 def format_tuning(summary: dict) -> str:
@@ -572,6 +611,16 @@ def build_parser() -> argparse.ArgumentParser:
                        help="write full run folders (with animation) of the K worst samples of each "
                        "controller into DIR/worst/")
     sweep.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    sweep.add_argument("--require", action="append", metavar="EXPR", default=[],
+                       help="a property every run should have, METRIC OP VALUE (repeatable), e.g. "
+                       "'rms_error_after_2s<=0.05', 'runaway==false'; with --epsilon and --beta, "
+                       "summary.json gets a certificate per controller (docs/robustness.md)")
+    sweep.add_argument("--epsilon", type=float, help="claim P(a property fails) <= EPSILON ...")
+    sweep.add_argument("--beta", type=float, help="... with confidence 1 - BETA (one-sided Clopper-Pearson)")
+    sweep.add_argument("--failures", type=int, default=0, metavar="K",
+                       help="plan the sample size for up to K failures (default 0)")
+    sweep.add_argument("--allow-small", action="store_true",
+                       help="run a sweep too small to prove the claim, and report its bound anyway")
     sweep.set_defaults(func=cmd_sweep)
 
     tune = sub.add_parser("tune", help="tune controllers at an equal budget of simulations",

@@ -615,7 +615,43 @@ CUSTOM_CASES = [
          "Raises.compute raised at t = 0.011 s: IndexError: list index out of range (laws.py, line"),
 ]
 
-CASES = URDF_CASES + CONFIG_CASES + RUN_FOLDER_CASES + VIEWER_CASES + TUNE_CASES + CUSTOM_CASES
+def _require(*texts: str):
+    def check():
+        from nnrobust.properties import run_properties
+
+        return run_properties(list(texts))
+
+    return check
+
+
+def _claim(epsilon, beta, failures=0):
+    def check():
+        from nnrobust.properties import samples_needed
+
+        return samples_needed(epsilon, beta, failures)
+
+    return check
+
+
+PROPERTY_CASES = [
+    Case("--require: not an expression", lambda d: _require("rms_error < 0.05 mm"), ex.ConfigError,
+         "is not METRIC OP VALUE with OP one of <= >= == != < >"),
+    Case("--require: an unknown metric", lambda d: _require("rms_eror_after_2s<=0.05"), ex.ConfigError,
+         "no metric 'rms_eror_after_2s'; did you mean 'rms_error_after_2s'?"),
+    Case("--require: a NaN bound", lambda d: _require("rms_error<=nan"), ex.ConfigError,
+         "the bound must be a finite number, got nan"),
+    Case("--require: a flag compared by size", lambda d: _require("runaway<=1"), ex.ConfigError,
+         "runaway is true or false: compare it with == or != to true or false"),
+    Case("--epsilon of 0", lambda d: _claim(0.0, 0.05), ex.ConfigError,
+         "--epsilon: must be a probability in (0, 1)"),
+    Case("--beta of 1", lambda d: _claim(0.05, 1.0), ex.ConfigError,
+         "--beta: must be a probability in (0, 1)"),
+    Case("--failures of 10^9", lambda d: _claim(0.05, 0.05, 10**9), ex.ConfigError,
+         "--failures: must be an integer in [0, 10000]"),
+]
+
+CASES = (URDF_CASES + CONFIG_CASES + RUN_FOLDER_CASES + VIEWER_CASES + TUNE_CASES + CUSTOM_CASES
+         + PROPERTY_CASES)
 
 
 def message_of(case: Case, folder: Path) -> str:

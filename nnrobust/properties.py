@@ -1,0 +1,216 @@
+"""Properties a run must have (``--require EXPR``), their signed margins, and the statistical
+statements a sweep makes about them: Clopper–Pearson bounds on the failure probability and
+Wilks bounds on quantiles (docs/robustness.md, "Certificates").
+
+A property is ``METRIC OP VALUE`` over a metric of metrics.json: ``rms_error_after_2s<=0.05``,
+``max_torque_ratio<=1``, ``runaway==false``. Each run gives it a margin, positive when the
+property holds:
+
+- ``m <= v`` (or ``<``): (v - m) / s, ``m >= v`` (or ``>``): (m - v) / s, with the scale
+  s = |v|, or 1 where v = 0 (the margin is then in the metric's unit);
+- ``m == v`` and ``m != v``: +1 when it holds, -1 when it does not (a flag has no distance);
+- a run that did not complete, or a metric that is NaN, fails every property: margin -inf.
+
+A strict inequality that holds with equality has margin 0 and fails (``<`` and ``>`` need a
+margin > 0; ``<=`` and ``>=`` hold at 0).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+
+from .exceptions import ConfigError
+
+OPERATORS = ("<=", ">=", "==", "!=", "<", ">")
+PATTERN = re.compile(r"^\s*([A-Za-z_][A-Za-z0-9_]*)\s*(<=|>=|==|!=|<|>)\s*(\S+)\s*$")
+
+
+@dataclass(frozen=True)
+class Property:
+    """``metric op value``: what a run must satisfy."""
+
+    metric: str
+    op: str
+    value: float | bool
+
+    @property
+    def text(self) -> str:
+        """The property as written."""
+        value = str(self.value).lower() if isinstance(self.value, bool) else f"{self.value:g}"
+        return f"{self.metric}{self.op}{value}"
+
+    def margin(self, metrics: dict) -> float:
+        """The signed, normalised margin of one run's metrics (positive: the property holds)."""
+        if metrics.get("status", "completed") != "completed":
+            return -math.inf
+        m = metrics.get(self.metric)
+        if m is None or (isinstance(m, float) and math.isnan(m)):
+            return -math.inf
+        if self.op in ("==", "!="):
+            equal = (bool(m) == self.value) if isinstance(self.value, bool) else (float(m) == self.value)
+            return 1.0 if equal == (self.op == "==") else -1.0
+        value = float(self.value)
+        scale = abs(value) or 1.0
+        return ((value - float(m)) if self.op in ("<=", "<") else (float(m) - value)) / scale
+
+    def holds(self, metrics: dict) -> bool:
+        """Whether one run satisfies the property."""
+        margin = self.margin(metrics)
+        return margin > 0 if self.op in ("<", ">") else margin >= 0
+
+
+def parse(text: str, metrics: list[str] | tuple[str, ...], flags: tuple[str, ...] = ()) -> Property:
+    """``--require EXPR`` as a Property; one-line errors name what is wrong and what is valid."""
+    import difflib
+
+    key = f"--require {text!r}"
+    match = PATTERN.match(text)
+    if not match:
+        raise ConfigError(key, f"is not METRIC OP VALUE with OP one of {' '.join(OPERATORS)}, e.g. "
+                          "rms_error_after_2s<=0.05 or runaway==false")
+    metric, op, raw = match.groups()
+    if metric not in metrics and metric not in flags:
+        close = difflib.get_close_matches(metric, [*metrics, *flags], n=1)
+        hint = f"; did you mean {close[0]!r}?" if close else "."
+        raise ConfigError(key, f"no metric {metric!r}{hint} Metrics: {', '.join([*metrics, *flags])}")
+    if metric in flags:
+        if raw.lower() not in ("true", "false") or op not in ("==", "!="):
+            raise ConfigError(key, f"{metric} is true or false: compare it with == or != to true or false")
+        return Property(metric, op, raw.lower() == "true")
+    try:
+        value = float(raw)
+    except ValueError as err:
+        raise ConfigError(key, f"{raw!r} is not a number") from err
+    if not math.isfinite(value):
+        raise ConfigError(key, f"the bound must be a finite number, got {raw}")
+    return Property(metric, op, value)
+
+
+def run_properties(texts: list[str]) -> list[Property]:
+    """The properties of ``--require`` over the metrics a run records (metrics.json)."""
+    from .results import METRIC_UNITS
+    from .sweep.engine import FLAGS
+
+    numeric = tuple(m for m in METRIC_UNITS if m != "singular_episodes")
+    properties = [parse(t, numeric, FLAGS) for t in texts]
+    if len({p.text for p in properties}) != len(properties):
+        raise ConfigError("--require", "names a property twice")
+    return properties
+
+
+# ---- certificates -------------------------------------------------------------------------------
+
+
+def samples_needed(epsilon: float, beta: float, failures: int = 0) -> int:
+    """The fewest samples N from which ``failures`` failures prove P(fail) <= epsilon with
+    confidence 1 - beta: the smallest N with BinomCDF(failures; N, epsilon) <= beta (for no
+    failure, N >= ln(1/beta) / ln(1/(1 - epsilon)): 59 for epsilon = beta = 5 %).
+    """
+    from scipy.stats import binom
+
+    check_claim(epsilon, beta, failures)
+    n = max(failures + 1, math.ceil(math.log(beta) / math.log(1 - epsilon)))
+    while binom.cdf(failures, n, epsilon) > beta:
+        n += 1
+    return n
+
+
+def check_claim(epsilon: float, beta: float, failures: int = 0) -> None:
+    """One-line errors for a claim no sample size can make."""
+    for flag, value in (("--epsilon", epsilon), ("--beta", beta)):
+        if not (isinstance(value, (int, float)) and 0 < value < 1):
+            raise ConfigError(flag, f"must be a probability in (0, 1), got {value}")
+    if not (isinstance(failures, int) and 0 <= failures <= 10_000):
+        raise ConfigError("--failures", f"must be an integer in [0, 10000], got {failures}")
+
+
+def clopper_pearson_upper(failures: int, samples: int, beta: float) -> float:
+    """One-sided (1 - beta) Clopper–Pearson upper bound on a failure probability from
+    ``failures`` in ``samples`` independent samples: Beta^-1(1 - beta; k + 1, N - k) (1 at k = N).
+    """
+    from scipy.stats import beta as beta_distribution
+
+    if failures >= samples:
+        return 1.0
+    return float(beta_distribution.ppf(1 - beta, failures + 1, samples - failures))
+
+
+def certificate(prop: Property, margins: list[float], epsilon: float, beta: float) -> dict:
+    """The statement N samples make about a property (their margins, one per sample)."""
+    n = len(margins)
+    failures = sum(1 for m in margins if not (m > 0 if prop.op in ("<", ">") else m >= 0))
+    upper = clopper_pearson_upper(failures, n, beta) if n else 1.0
+    return {"property": prop.text, "N": n, "k": failures, "epsilon": epsilon, "beta": beta,
+            "p_upper": upper, "holds": bool(n and upper <= epsilon),
+            "method": "one-sided Clopper-Pearson (exact binomial) bound on P(fail) over the sweep's "
+                      "distribution; the samples are independent draws of it"}
+
+
+def wilks_upper(values: list[float], quantile: float, beta: float) -> float | None:
+    """Wilks' distribution-free bound: the smallest order statistic x_(r) with
+    P(x_(r) >= the ``quantile``-quantile) >= 1 - beta, i.e. the least r with
+    BinomCDF(r - 1; N, quantile) >= 1 - beta; None when N samples are too few.
+    """
+    from scipy.stats import binom
+
+    ordered = sorted(v for v in values if not math.isnan(v))
+    n = len(ordered)
+    for r in range(1, n + 1):
+        if binom.cdf(r - 1, n, quantile) >= 1 - beta:
+            return ordered[r - 1]
+    return None
+
+
+def certify(spec, frame, properties: list[Property], epsilon: float, beta: float) -> dict[str, dict]:
+    """Per controller: a certificate per property and grid cell, and Wilks' bound on each
+    property's metric at the 1 - epsilon quantile with confidence 1 - beta. A row that did not
+    complete (diverged, refused) fails every property.
+    """
+    import hashlib
+
+    out: dict[str, dict] = {}
+    described = repr(sorted((k, repr(v)) for k, v in spec.vary.items())) + repr(sorted(spec.set.items()))
+    distribution = hashlib.sha256(described.encode()).hexdigest()
+    for controller in spec.controllers:
+        rows = frame[frame["controller"] == controller]
+        cells = [((), rows)] if not spec.grid_keys else [
+            (key, group) for key, group in rows.groupby(spec.grid_keys, sort=True, dropna=False)]
+        certificates, bounds = [], []
+        for cell, group in cells:
+            records = group.to_dict("records")
+            where = dict(zip(spec.grid_keys, cell if isinstance(cell, tuple) else (cell,)))
+            for prop in properties:
+                entry = certificate(prop, [prop.margin(r) for r in records], epsilon, beta)
+                entry.update(distribution=distribution, **({"grid": where} if where else {}))
+                certificates.append(entry)
+                if prop.op in ("<=", "<", ">=", ">"):
+                    values = [float(r[prop.metric]) if r.get("status") == "completed" else math.inf
+                              for r in records]
+                    low = prop.op in (">=", ">")
+                    bound = wilks_upper([-v for v in values] if low else values, 1 - epsilon, beta)
+                    bounds.append({"metric": prop.metric, "quantile": 1 - epsilon, "confidence": 1 - beta,
+                                   "bound": None if bound is None else (-bound if low else bound),
+                                   "side": "lower" if low else "upper", "N": len(records),
+                                   **({"grid": where} if where else {})})
+        out[controller] = {"certificates": certificates, "quantile_bounds": bounds}
+    return out
+
+
+def format_certificates(certified: dict[str, dict]) -> list[str]:
+    """One line per certificate: the claim, N, k, the bound and whether it holds."""
+    lines = []
+    for controller, entry in certified.items():
+        for c in entry["certificates"]:
+            where = "".join(f" {k}={v}" for k, v in c.get("grid", {}).items())
+            verdict = "holds" if c["holds"] else "not shown"
+            lines.append(f"{controller}{where}: P({c['property']} fails) <= {c['p_upper']:.3g} with "
+                         f"confidence {1 - c['beta']:g} (N = {c['N']}, k = {c['k']}); P(fail) <= "
+                         f"{c['epsilon']:g}: {verdict}")
+        for b in entry["quantile_bounds"]:
+            if b["bound"] is not None:
+                side = "<=" if b["side"] == "upper" else ">="
+                lines.append(f"{controller}: with confidence {b['confidence']:g}, {100 * b['quantile']:g} % "
+                             f"of plants give {b['metric']} {side} {b['bound']:.4g} (Wilks, N = {b['N']})")
+    return lines

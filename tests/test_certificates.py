@@ -1,0 +1,110 @@
+"""Properties (--require), their margins, and the statements a sweep makes about them: the exact
+binomial (Clopper-Pearson) bound and Wilks' quantile bound, against closed forms and scipy."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+from scipy.stats import beta as beta_distribution
+from scipy.stats import binom
+
+from nnrobust.exceptions import ConfigError
+from nnrobust.properties import (
+    clopper_pearson_upper,
+    run_properties,
+    samples_needed,
+    wilks_upper,
+)
+
+
+def test_the_sample_sizes_are_the_exact_binomial_ones():
+    """No failure: N >= ln(1/beta) / ln(1/(1 - epsilon)), 59 at 5 % / 5 %; k failures: the least N
+    with BinomCDF(k; N, epsilon) <= beta (checked one below)."""
+    assert samples_needed(0.05, 0.05) == 59 == math.ceil(math.log(1 / 0.05) / math.log(1 / 0.95))
+    for eps, b, k in [(0.05, 0.05, 1), (0.01, 0.05, 0), (0.1, 0.01, 3), (0.05, 0.1, 2)]:
+        n = samples_needed(eps, b, k)
+        assert binom.cdf(k, n, eps) <= b < binom.cdf(k, n - 1, eps)
+    assert samples_needed(0.05, 0.05, 1) == 93
+
+
+def test_the_clopper_pearson_bound_is_the_beta_quantile():
+    """k = 0 has the closed form 1 - beta^(1/N); k > 0 is Beta^-1(1 - beta; k + 1, N - k), and the
+    bound makes the observed k (or fewer) exactly beta-likely."""
+    assert clopper_pearson_upper(0, 59, 0.05) == pytest.approx(1 - 0.05 ** (1 / 59), rel=1e-12)
+    for k, n in [(1, 93), (3, 40), (10, 200)]:
+        p = clopper_pearson_upper(k, n, 0.05)
+        assert p == pytest.approx(beta_distribution.ppf(0.95, k + 1, n - k), rel=1e-12)
+        assert binom.cdf(k, n, p) == pytest.approx(0.05, rel=1e-6)
+    assert clopper_pearson_upper(5, 5, 0.05) == 1.0
+
+
+def test_wilks_bound_is_the_order_statistic_that_covers_the_quantile():
+    """With N = 59 the 95 % quantile is bounded with 95 % confidence by the largest sample; with
+    more samples by a lower order statistic; too few samples bound nothing."""
+    values = list(np.random.default_rng(0).normal(size=59))
+    assert wilks_upper(values, 0.95, 0.05) == max(values)
+    values = list(np.random.default_rng(1).normal(size=500))
+    bound = wilks_upper(values, 0.95, 0.05)
+    r = sorted(values).index(bound) + 1
+    assert binom.cdf(r - 1, 500, 0.95) >= 0.95 > binom.cdf(r - 2, 500, 0.95)
+    assert wilks_upper(values[:20], 0.95, 0.05) is None
+
+
+def test_margins_are_signed_and_normalised():
+    error, = run_properties(["rms_error_after_2s<=0.05"])
+    assert error.margin({"status": "completed", "rms_error_after_2s": 0.04}) == pytest.approx(0.2)
+    assert error.margin({"status": "completed", "rms_error_after_2s": 0.06}) == pytest.approx(-0.2)
+    assert error.margin({"status": "diverged", "rms_error_after_2s": 0.01}) == -math.inf
+    assert error.margin({"status": "completed", "rms_error_after_2s": float("nan")}) == -math.inf
+    runaway, = run_properties(["runaway==false"])
+    assert runaway.margin({"status": "completed", "runaway": False}) == 1.0
+    assert runaway.margin({"status": "completed", "runaway": True}) == -1.0
+    strict, = run_properties(["max_torque_ratio<1"])
+    assert not strict.holds({"status": "completed", "max_torque_ratio": 1.0})
+    assert run_properties(["max_torque_ratio<=1"])[0].holds({"status": "completed", "max_torque_ratio": 1.0})
+
+
+@pytest.mark.parametrize("texts, words", [
+    (["rms_error<0.05 mm"], "is not METRIC OP VALUE"),
+    (["rms_eror_after_2s<=0.05"], "no metric 'rms_eror_after_2s'; did you mean 'rms_error_after_2s'?"),
+    (["rms_error<=nan"], "the bound must be a finite number"),
+    (["rms_error<=fast"], "'fast' is not a number"),
+    (["runaway<=1"], "runaway is true or false: compare it with == or !="),
+    (["rms_error<=1", "rms_error<=1"], "names a property twice"),
+])
+def test_bad_properties_get_one_line_errors(texts, words):
+    with pytest.raises(ConfigError, match=".*") as err:
+        run_properties(texts)
+    assert words in str(err.value) and "\n" not in str(err.value)
+
+
+def test_a_sweep_certifies_each_controller_from_its_rows(tmp_path, capsys):
+    """--require with --epsilon/--beta: N and k are the rows', p_upper scipy's exact bound; a sweep
+    too small for the claim is refused before anything runs unless --allow-small."""
+    pytest.importorskip("distributed")
+    from nnrobust.cli import main
+    from nnrobust.sweep import read_results
+
+    sweep = tmp_path / "s.toml"
+    sweep.write_text('name = "c"\nbase = "paper-ellipse"\ncontrollers = ["nn", "no-u0"]\nsamples = 6\n'
+                     'seed = 2\n[set]\n"simulation.duration" = 2.2\n[vary]\n'
+                     '"plant.disturbance_scale" = {uniform = [0.0, 3.0]}\n')
+    claim = ["--require", "rms_error_after_2s<=0.02", "--epsilon", "0.05", "--beta", "0.05"]
+    assert main(["sweep", str(sweep), "--out", str(tmp_path / "out"), *claim]) == 2
+    err = capsys.readouterr().err
+    assert "needs N >= 59 samples with at most 0 failures; the sweep draws 6" in err
+    assert not (tmp_path / "out").exists()
+    assert main(["sweep", str(sweep), "--out", str(tmp_path / "out"), "--workers", "2", "--allow-small",
+                 *claim]) == 0
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    frame = read_results(tmp_path / "out")
+    for controller in ("nn", "no-u0"):
+        rows = frame[frame["controller"] == controller]
+        failures = int(((rows["status"] != "completed") | ~(rows["rms_error_after_2s"] <= 0.02)).sum())
+        certificate, = summary["controllers"][controller]["certificates"]
+        assert (certificate["N"], certificate["k"]) == (6, failures)
+        expected = 1.0 if failures == 6 else beta_distribution.ppf(0.95, failures + 1, 6 - failures)
+        assert certificate["p_upper"] == pytest.approx(expected, rel=1e-12)
+        assert certificate["holds"] is False  # six samples prove nothing at 5 %
+    assert "P(rms_error_after_2s<=0.02 fails) <=" in capsys.readouterr().out
