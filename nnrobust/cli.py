@@ -349,6 +349,43 @@ def _sweep_claim(args, spec) -> tuple[list, tuple[float, float] | None]:
     return properties, (args.epsilon, args.beta)
 
 
+def cmd_falsify(args) -> int:
+    """Search each controller's worst plant in the sweep file's box, at one budget."""
+    import time
+
+    from .falsify import FalsifySpec, run_falsify
+
+    spec = FalsifySpec(args.sweep, [c.strip() for c in args.controllers.split(",") if c.strip()],
+                       args.require, args.budget, args.seed)
+    started: list[float] = []
+
+    def progress(done, total):
+        if args.quiet:
+            return
+        if not started:
+            started.append(time.monotonic())
+        _bar(done, total, f"simulations, {time.monotonic() - started[0]:.0f} s")
+
+    out = Path(args.out)
+    summary = _resumable(
+        lambda: run_falsify(spec, out, args.workers, args.scheduler, args.overwrite, progress),
+        f"search interrupted; the plants simulated so far are in {out}/history")
+    if summary is None:
+        return 130
+    if started:
+        print(file=sys.stderr)
+    if not args.quiet:
+        for name, entry in summary["controllers"].items():
+            worst, baseline = entry["worst"], entry["random_baseline"]
+            verdict = "FALSIFIED" if entry["falsified"] else "not falsified"
+            print(f"{name}: {verdict} in {entry['simulations']} simulations; least margin "
+                  f"{worst['margin']:.4g} (random search: {baseline['worst']['margin']:.4g}); worst plant: "
+                  f"{worst['command']}")
+        print(f"summary in {out}/summary.json, history in {out}/history, {out}/falsification.csv",
+              file=sys.stderr)
+    return 0
+
+
 def format_tuning(summary: dict) -> str:
     """Each controller's best setting under the constraints: errors on the training and the
     held-out samples, torque, chatter, and the bounds it sits on.
@@ -622,6 +659,30 @@ def build_parser() -> argparse.ArgumentParser:
     sweep.add_argument("--allow-small", action="store_true",
                        help="run a sweep too small to prove the claim, and report its bound anyway")
     sweep.set_defaults(func=cmd_sweep)
+
+    falsify = sub.add_parser("falsify", help="search the worst plant of an uncertainty box",
+                             description="Search the sweep file's [vary] box (uniform and loguniform ranges) "
+                             "for the plant on which each controller most violates the --require properties: "
+                             "a Sobol start, then CMA-ES with restarts, at one budget of simulations per "
+                             "controller on dask.distributed, with uniform random search at the same budget "
+                             "as the baseline. Re-running the same command into the same folder resumes "
+                             "(docs/falsification.md).")
+    falsify.add_argument("sweep", help="sweep file (TOML) or shipped study whose [vary] ranges are the box")
+    falsify.add_argument("--controllers", required=True, help="comma-separated controller kinds, custom "
+                         "classes as file.py:Class, or the sweep file's custom entries")
+    falsify.add_argument("--require", action="append", required=True, metavar="EXPR",
+                         help="a property to falsify, METRIC OP VALUE (repeatable), e.g. "
+                         "'rms_error_after_2s<=0.05'")
+    falsify.add_argument("--budget", type=int, required=True, help="simulations per controller (and as many "
+                         "for its random baseline)")
+    falsify.add_argument("--seed", type=int, default=0, help="seed of the search (default 0)")
+    falsify.add_argument("--out", required=True, help="folder (falsify.toml, history/, summary.json, "
+                         "falsification.csv, convergence.png)")
+    falsify.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
+    falsify.add_argument("--scheduler", help="address of an existing dask scheduler")
+    falsify.add_argument("--overwrite", action="store_true", help="replace a different search in --out")
+    falsify.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    falsify.set_defaults(func=cmd_falsify)
 
     tune = sub.add_parser("tune", help="tune controllers at an equal budget of simulations",
                           description="Tune each controller with the same optimiser (Optuna's TPE, "

@@ -1,0 +1,468 @@
+"""Searching for the worst admissible plant: ``nnrobust falsify`` (docs/falsification.md).
+
+The uncertainty set is the sweep file's ``[vary]`` box: each ``uniform`` or ``loguniform`` key is
+a coordinate (searched on the log scale for ``loguniform``). A point of the box is one plant; the
+controller's run on it gives each property (``--require``) a signed margin
+(:mod:`nnrobust.properties`), and the search minimises the least of them: a negative margin
+falsifies the property. Every point runs with the same seed, so a point is one plant, the
+objective is deterministic, and the printed command reruns it bit for bit.
+
+The search, per controller, at one budget of simulations on a Dask cluster:
+
+1. a scrambled Sobol sequence over the box (a quarter of the budget, a power of two);
+2. CMA-ES (the ``cma`` package) from the best point found, in batches the size of the worker
+   pool, restarted with a doubled population (IPOP) when it converges, until the budget is spent;
+3. as the reported baseline, the same budget of uniform random points.
+
+The history is written as Parquet parts as it grows; running the same command into the same
+folder reuses every point already simulated (the search is deterministic given its seed), so
+Ctrl-C keeps what was found and a rerun resumes.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import time
+import uuid
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .exceptions import ConfigError, NNRobustError
+from .properties import Property
+from .signals import signals_as_interrupt
+
+MARKER = "falsify.toml"
+HISTORY = "history"
+MAX_BUDGET = 100_000
+FLOOR = -1e6
+"""The objective of a run that did not complete (margin -inf): below every finite margin."""
+
+
+@dataclass(frozen=True)
+class Box:
+    """The searched coordinates: dotted keys, their bounds, and which are searched on a log scale."""
+
+    keys: tuple[str, ...]
+    low: np.ndarray
+    high: np.ndarray
+    log: np.ndarray
+
+    def values(self, u: np.ndarray) -> dict[str, float]:
+        """The plant at u in [0, 1]^d (geometric interpolation on the log-scaled keys)."""
+        u = np.clip(np.asarray(u, dtype=float), 0.0, 1.0)
+        out = {}
+        for key, lo, hi, log, x in zip(self.keys, self.low, self.high, self.log, u):
+            out[key] = float(lo * (hi / lo) ** x if log else lo + x * (hi - lo))
+        return out
+
+
+def box_of(spec) -> Box:
+    """The box of a sweep's ``[vary]`` ranges; grids and other distributions are refused."""
+    keys, low, high, log = [], [], [], []
+    for key, value in spec.vary.items():
+        if isinstance(value, list):
+            raise ConfigError(
+                f"vary.{key}",
+                "falsify searches ranges: make this grid a uniform or loguniform range, or set it in [set]",
+            )
+        ((kind, params),) = value.items()
+        if kind not in ("uniform", "loguniform"):
+            raise ConfigError(
+                f"vary.{key}",
+                f"falsify searches uniform and loguniform ranges, not {kind}: "
+                "give its range, or set it in [set]",
+            )
+        keys.append(key)
+        low.append(float(params[0]))
+        high.append(float(params[1]))
+        log.append(kind == "loguniform")
+    if not keys:
+        raise ConfigError(
+            "vary",
+            "the sweep file varies nothing: falsify needs a box of uniform or loguniform ranges to search",
+        )
+    return Box(tuple(keys), np.array(low), np.array(high), np.array(log))
+
+
+@dataclass
+class FalsifySpec:
+    """What to search: the sweep (box and base), the controllers, the properties, the budget."""
+
+    target: str
+    controllers: list[str]
+    require: list[str]
+    budget: int
+    seed: int = 0
+
+    def __post_init__(self):
+        if (
+            isinstance(self.budget, bool)
+            or not isinstance(self.budget, int)
+            or not 4 <= self.budget <= MAX_BUDGET
+        ):
+            raise ConfigError("--budget", f"must be an integer in [4, {MAX_BUDGET}], got {self.budget!r}")
+        if not 0 <= self.seed < 2**31:
+            raise ConfigError("--seed", f"must be an integer in [0, 2^31), got {self.seed}")
+        if not self.require:
+            raise ConfigError(
+                "--require", "falsify needs at least one property to falsify, e.g. 'rms_error_after_2s<=0.05'"
+            )
+
+    def to_toml(self) -> str:
+        """The resolved search (DIR/falsify.toml): a different one is refused in the same folder."""
+        from .config import dump_toml
+
+        return dump_toml(
+            {
+                "target": self.target,
+                "controllers": self.controllers,
+                "require": self.require,
+                "budget": self.budget,
+                "seed": self.seed,
+            }
+        )
+
+
+def _objective(margins: dict[str, float]) -> float:
+    least = min(margins.values())
+    return max(least, FLOOR) if math.isfinite(least) else FLOOR
+
+
+def evaluate(sweep, base_toml: str, controller: str, values: dict, properties: list[Property]) -> dict:
+    """One run at one point of the box (on a worker): its margins and the metrics they read."""
+    import tomllib
+
+    from .config import from_dict
+    from .experiment import run_experiment
+    from .sweep.spec import Sample, experiment, sample_seed
+
+    base = from_dict(tomllib.loads(base_toml))
+    sample = Sample(-1, values, sample_seed(sweep.seed, 0))
+    try:
+        metrics = run_experiment(experiment(sweep, base, sample, controller)).metrics()
+    except NNRobustError as err:
+        metrics = {"status": "refused", "message": str(err)[:300]}
+    keep = {p.metric for p in properties} | {"status", "rms_error_after_2s", "rms_torque"}
+    margins = {p.text: p.margin(metrics) for p in properties}
+    return {
+        "metrics": {k: metrics.get(k) for k in sorted(keep)},
+        "margins": margins,
+        "objective": _objective(margins),
+    }
+
+
+class _Search:
+    """One controller's search (Sobol, then CMA-ES with IPOP restarts) or its random baseline,
+    asking batches and told the results; deterministic given the seed, so a resumed search asks
+    the same points again and takes their results from the history.
+    """
+
+    def __init__(self, dims: int, budget: int, seed: int, random: bool):
+        self.dims, self.budget, self.seed, self.random = dims, budget, seed, random
+        self.asked = 0
+        self.best: tuple[float, np.ndarray] | None = None
+        self.rng = np.random.default_rng(seed)
+        self.es: Any = None  # a cma.CMAEvolutionStrategy once the Sobol start is spent
+        self._pending: list[np.ndarray] = []
+        self.popsize = max(4 + int(3 * math.log(dims)), 4)
+        self.restarts = 0
+        if random:
+            self.start: list[np.ndarray] = []
+        else:
+            from scipy.stats import qmc
+
+            m = max(1, int(math.log2(max(2, budget // 4))))
+            self.start = list(qmc.Sobol(dims, scramble=True, seed=seed).random_base2(m))
+
+    @property
+    def remaining(self) -> int:
+        return self.budget - self.asked
+
+    def ask(self, count: int) -> list[tuple[str, np.ndarray]]:
+        """Points (phase, u) to simulate next: up to ``count`` random or Sobol points, or CMA-ES's
+        whole population (it learns only from a whole one); never past the budget.
+        """
+        if self.random:
+            points = [("random", self.rng.random(self.dims)) for _ in range(min(count, self.remaining))]
+        elif self.start:
+            points = [
+                ("sobol", self.start.pop(0)) for _ in range(min(count, len(self.start), self.remaining))
+            ]
+        else:
+            points = [("cma", u) for u in self._ask_cma()]
+        self.asked += len(points)
+        return points
+
+    def _ask_cma(self) -> list[np.ndarray]:
+        import cma
+
+        if self.es is None or self.es.stop():
+            if self.es is not None:  # converged: restart with a doubled population (IPOP)
+                self.restarts += 1
+                self.popsize *= 2
+            x0 = self.best[1] if self.best is not None and self.restarts == 0 else self.rng.random(self.dims)
+            self.es = cma.CMAEvolutionStrategy(
+                list(x0),
+                0.3,
+                {
+                    "bounds": [0, 1],
+                    "popsize": self.popsize,
+                    "verbose": -9,
+                    "seed": self.seed + 1 + self.restarts,
+                },
+            )
+        self._pending = [np.clip(np.asarray(x), 0, 1) for x in self.es.ask()][: self.remaining]
+        return self._pending
+
+    def tell(self, points: list[tuple[str, np.ndarray]], objectives: list[float]) -> None:
+        """Results of the last batch, in its order."""
+        for (_, u), f in zip(points, objectives):
+            if self.best is None or f < self.best[0]:
+                self.best = (f, np.asarray(u))
+        cma_points = [(u, f) for (phase, u), f in zip(points, objectives) if phase == "cma"]
+        if cma_points and self.es is not None:
+            us, fs = zip(*cma_points)
+            if len(us) == self.es.popsize:
+                self.es.tell(list(us), list(fs))
+            else:  # the budget cut the population short: the search ends here
+                self.es = None
+
+
+def _history(folder: Path) -> dict[tuple[str, str, int], dict]:
+    """The rows simulated so far, by (controller, search, index)."""
+    import pandas as pd
+
+    parts = sorted((folder / HISTORY).glob("part-*.parquet"))
+    if not parts:
+        return {}
+    frame = pd.concat([pd.read_parquet(p) for p in parts], ignore_index=True)
+    rows = [json.loads(r) for r in frame["row"]]
+    return {(r["controller"], r["search"], r["index"]): r for r in rows}
+
+
+def _write_history(folder: Path, rows: list[dict]) -> None:
+    import pandas as pd
+
+    flat = [
+        {
+            "controller": r["controller"],
+            "search": r["search"],
+            "index": r["index"],
+            "phase": r["phase"],
+            "objective": r["objective"],
+            **{f"value.{k}": v for k, v in r["values"].items()},
+            "row": json.dumps(r),
+        }
+        for r in rows
+    ]
+    path = folder / HISTORY / f"part-{uuid.uuid4().hex[:12]}.parquet"
+    tmp = path.with_name(f".{path.name}.partial")
+    pd.DataFrame(flat).to_parquet(tmp, index=False)
+    os.replace(tmp, path)
+
+
+def prepare_folder(spec: FalsifySpec, folder: Path, overwrite: bool) -> None:
+    """Create DIR or accept it for resuming; a different search is refused unless ``overwrite``,
+    which replaces only what a search wrote.
+    """
+    marker = folder / MARKER
+    if folder.exists() and not marker.is_file() and any(folder.iterdir()):
+        raise NNRobustError(
+            f"{folder} exists and is not a falsification folder (no {MARKER}); choose another --out"
+        )
+    if marker.is_file() and marker.read_text() != spec.to_toml():
+        if not overwrite:
+            raise NNRobustError(
+                f"{folder} holds a different search ({marker} differs); pass --overwrite to "
+                "replace it, or choose another --out"
+            )
+        shutil.rmtree(folder / HISTORY, ignore_errors=True)
+        for name in ("summary.json", "falsification.csv", "convergence.png", "convergence.svg"):
+            (folder / name).unlink(missing_ok=True)
+    (folder / HISTORY).mkdir(parents=True, exist_ok=True)
+    tmp = marker.with_name(f".{MARKER}.partial")
+    tmp.write_text(spec.to_toml())
+    os.replace(tmp, marker)
+
+
+def run_falsify(
+    spec: FalsifySpec,
+    folder: str | Path,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    overwrite: bool = False,
+    progress=None,
+) -> dict:
+    """Search each controller's worst plant and its random baseline; returns the summary (also
+    DIR/summary.json, DIR/falsification.csv and DIR/convergence.png).
+    """
+    from .properties import run_properties
+    from .sweep.engine import _client, _require_engine
+    from .sweep.spec import Sample, base_config, experiment, load_sweep, rerun_command, sample_seed
+    from .tune.engine import _with_controllers
+
+    _require_engine()
+    try:
+        import cma  # noqa: F401
+    except ImportError as err:
+        raise NNRobustError(
+            f"falsify needs the cma package ({err}); pip install 'nnrobust[falsify]'"
+        ) from err
+    properties = run_properties(spec.require)
+    sweep = _with_controllers(load_sweep(spec.target), spec.controllers)
+    box = box_of(sweep)
+    base = base_config(sweep)
+    for name in sweep.controllers:  # every controller's experiment validated before anything runs
+        for corner in (np.zeros(len(box.keys)), np.ones(len(box.keys))):
+            experiment(sweep, base, Sample(-1, box.values(corner), sample_seed(sweep.seed, 0)), name)
+    folder = Path(folder)
+    prepare_folder(spec, folder, overwrite)
+    done = _history(folder)
+    base_toml = base.to_toml()
+    searches = {
+        (name, kind): _Search(
+            len(box.keys),
+            spec.budget,
+            spec.seed + 7919 * i + (1 if kind == "random" else 0),
+            kind == "random",
+        )
+        for i, name in enumerate(sweep.controllers)
+        for kind in ("falsifier", "random")
+    }
+    rows: dict[tuple[str, str], list[dict]] = {key: [] for key in searches}
+    total = len(searches) * spec.budget
+    started = time.monotonic()
+    with signals_as_interrupt(), _client(workers, scheduler) as client:
+        n_workers = max(len(client.scheduler_info().get("workers", {})), 1)
+        sweep_future = client.scatter(sweep, broadcast=True)
+        while any(s.remaining > 0 for s in searches.values()):
+            asked = {key: search.ask(n_workers) for key, search in searches.items() if search.remaining > 0}
+            futures = {}
+            for key, points in asked.items():
+                for offset, (_, u) in enumerate(points):
+                    index = len(rows[key]) + offset
+                    cached = done.get((*key, index))
+                    if cached is None or not np.allclose(cached["u"], u, atol=1e-12):
+                        futures[(key, index)] = client.submit(
+                            evaluate,
+                            sweep_future,
+                            base_toml,
+                            key[0],
+                            box.values(u),
+                            properties,
+                            pure=False,
+                            retries=1,
+                        )
+            new = []
+            for key, points in asked.items():
+                for phase, u in points:
+                    index = len(rows[key])
+                    if (key, index) in futures:
+                        row = {
+                            "controller": key[0],
+                            "search": key[1],
+                            "index": index,
+                            "phase": phase,
+                            "u": [float(x) for x in u],
+                            "values": box.values(u),
+                            **futures[(key, index)].result(),
+                        }
+                        new.append(row)
+                    else:
+                        row = done[(*key, index)]
+                    rows[key].append(row)
+                searches[key].tell(points, [r["objective"] for r in rows[key][-len(points) :]])
+            if new:
+                _write_history(folder, new)
+            if progress:
+                progress(sum(len(r) for r in rows.values()), total)
+    seconds = time.monotonic() - started
+    summary = _summary(spec, sweep, box, properties, rows, seconds, rerun_command, Sample, sample_seed)
+    from .results import write_json_atomic
+
+    write_json_atomic(folder / "summary.json", summary)
+    _write_csv(folder, summary)
+    plot_convergence(rows, folder)
+    return summary
+
+
+def _summary(spec, sweep, box, properties, rows, seconds, rerun_command, Sample, sample_seed) -> dict:
+    out = {
+        "target": spec.target,
+        "budget": spec.budget,
+        "seed": spec.seed,
+        "properties": [p.text for p in properties],
+        "box": {
+            k: {"low": float(lo), "high": float(hi), "log": bool(g)}
+            for k, lo, hi, g in zip(box.keys, box.low, box.high, box.log)
+        },
+        "seconds": seconds,
+        "controllers": {},
+    }
+    for name in sweep.controllers:
+        entry = {}
+        for kind in ("falsifier", "random"):
+            history = rows[(name, kind)]
+            worst = min(history, key=lambda r: r["objective"])
+            least = min(worst["margins"].values())
+            sample = Sample(-1, worst["values"], sample_seed(sweep.seed, 0))
+            entry[kind] = {
+                "falsified": bool(least < 0 or any(not p.holds({**worst["metrics"]}) for p in properties)),
+                "simulations": len(history),
+                "first_violation": next((i + 1 for i, r in enumerate(history) if r["objective"] < 0), None),
+                "worst": {
+                    "values": worst["values"],
+                    "metrics": worst["metrics"],
+                    "margins": worst["margins"],
+                    "margin": least,
+                    "command": rerun_command(sweep, sample, name),
+                },
+            }
+        out["controllers"][name] = {**entry.pop("falsifier"), "random_baseline": entry["random"]}
+    return out
+
+
+def _write_csv(folder: Path, summary: dict) -> None:
+    """DIR/falsification.csv in the ARCH-COMP falsification format: one row per controller and
+    property (system, property, falsified, simulations, time, robustness).
+    """
+    lines = ["system,property,falsified,simulations,time,robustness"]
+    for name, entry in summary["controllers"].items():
+        for prop, margin in entry["worst"]["margins"].items():
+            lines.append(
+                f'{name},"{prop}",{"yes" if margin < 0 else "no"},{entry["simulations"]},'
+                f"{summary['seconds']:.1f},{margin:.6g}"
+            )
+    tmp = folder / ".falsification.csv.partial"
+    tmp.write_text("\n".join(lines) + "\n")
+    os.replace(tmp, folder / "falsification.csv")
+
+
+def plot_convergence(rows: dict, folder: Path) -> None:
+    """DIR/convergence.png and .svg: the least margin found against simulations, per controller,
+    for the falsifier and its random baseline.
+    """
+    from .plots import _save, legend_outside, plt
+
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for i, (name, kind) in enumerate(sorted(rows)):
+        objective = np.minimum.accumulate([r["objective"] for r in rows[(name, kind)]])
+        ax.plot(
+            np.arange(1, objective.size + 1),
+            objective,
+            color=f"C{sorted({n for n, _ in rows}).index(name)}",
+            ls="-" if kind == "falsifier" else ":",
+            label=f"{name} ({kind})",
+        )
+    ax.axhline(0.0, color="k", lw=0.8)
+    ax.set_xlabel("simulations")
+    ax.set_ylabel("least margin found (< 0: falsified)")
+    ax.set_yscale("symlog", linthresh=0.01)
+    legend_outside(ax)
+    _save(fig, folder, "convergence")

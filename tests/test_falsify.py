@@ -1,0 +1,84 @@
+"""nnrobust falsify: the box of a sweep's ranges, the search at one budget with its random
+baseline, a worst plant that reruns bit for bit, and a search that resumes."""
+
+import json
+
+import numpy as np
+import pytest
+
+pytest.importorskip("cma")
+pytest.importorskip("distributed")
+
+from nnrobust.cli import main  # noqa: E402
+from nnrobust.exceptions import ConfigError  # noqa: E402
+from nnrobust.falsify import FalsifySpec, box_of, run_falsify  # noqa: E402
+from nnrobust.sweep import parse_sweep  # noqa: E402
+
+SWEEP = """name = "fz"
+base = "paper-ellipse"
+controllers = ["nn"]
+seed = 4
+[set]
+"simulation.duration" = 3.0
+[vary]
+"plant.disturbance_scale" = {uniform = [0.0, 4.0]}
+"plant.friction_scale" = {loguniform = [0.5, 2.0]}
+"""
+
+
+def test_the_box_is_the_sweeps_ranges():
+    spec = parse_sweep({"name": "b", "base": "paper-ellipse", "controllers": ["nn"],
+                        "vary": {"plant.disturbance_scale": {"uniform": [0.0, 4.0]},
+                                 "plant.friction_scale": {"loguniform": [0.5, 2.0]}}})
+    box = box_of(spec)
+    assert box.values(np.array([0.5, 0.5])) == pytest.approx({"plant.disturbance_scale": 2.0,
+                                                             "plant.friction_scale": 1.0})  # log midpoint
+    assert box.values(np.array([1.0, 0.0])) == pytest.approx({"plant.disturbance_scale": 4.0,
+                                                             "plant.friction_scale": 0.5})
+    for vary, words in (({"nn.sigma": [0.1, 0.2]}, "falsify searches ranges"),
+                        ({"nn.sigma": {"normal": [0.1, 0.02]}}, "not normal"), ({}, "varies nothing")):
+        with pytest.raises(ConfigError, match=words):
+            box_of(parse_sweep({"name": "b", "base": "paper-ellipse", "controllers": ["nn"], "vary": vary}))
+
+
+@pytest.mark.parametrize("kwargs, flag", [({"budget": 0}, "--budget"), ({"budget": 10**9}, "--budget"),
+                                          ({"require": []}, "--require"), ({"seed": -1}, "--seed")])
+def test_bad_searches_are_refused_with_the_flag_named(kwargs, flag):
+    args = {"target": "x.toml", "controllers": ["nn"], "require": ["rms_error<=1"], "budget": 10, **kwargs}
+    with pytest.raises(ConfigError, match=flag):
+        FalsifySpec(**args)
+
+
+def test_a_search_finds_the_worst_plant_reruns_it_and_resumes(tmp_path, capsys):
+    """The error grows with the disturbance: the worst plant found is near the top of its range;
+    every controller and its random baseline spend the budget exactly; the printed command
+    reproduces the worst plant's metrics bit for bit; the same command again simulates nothing."""
+    sweep = tmp_path / "fz.toml"
+    sweep.write_text(SWEEP)
+    spec = FalsifySpec(str(sweep), ["nn"], ["rms_error<=0.02"], 16, seed=1)
+    out = tmp_path / "out"
+    summary = run_falsify(spec, out, workers=2)
+    entry = summary["controllers"]["nn"]
+    assert entry["simulations"] == entry["random_baseline"]["simulations"] == 16
+    worst = entry["worst"]
+    assert worst["values"]["plant.disturbance_scale"] > 3.0
+    assert worst["values"]["plant.friction_scale"] < 1.0
+    assert entry["falsified"] == (worst["margin"] < 0)
+    assert worst["margin"] == pytest.approx((0.02 - worst["metrics"]["rms_error"]) / 0.02, rel=1e-12)
+    import shlex
+
+    words = shlex.split(worst["command"])
+    quiet = ["--quiet", "--no-plots", "--no-animation"]
+    assert main([*words[1:], "--out", str(tmp_path / "again"), *quiet]) == 0
+    again = json.loads((tmp_path / "again" / "metrics.json").read_text())
+    assert again["rms_error"] == worst["metrics"]["rms_error"]
+    csv = (out / "falsification.csv").read_text().splitlines()
+    assert csv[0] == "system,property,falsified,simulations,time,robustness" and len(csv) == 2
+    assert (out / "convergence.png").is_file()
+    parts = sorted((out / "history").glob("part-*.parquet"))
+    resumed = run_falsify(spec, out, workers=2)
+    assert sorted((out / "history").glob("part-*.parquet")) == parts  # nothing simulated again
+    assert resumed["controllers"]["nn"]["worst"] == worst
+    other = FalsifySpec(str(sweep), ["nn"], ["rms_error<=0.03"], 16, seed=1)
+    with pytest.raises(Exception, match="holds a different search"):
+        run_falsify(other, out, workers=2)
