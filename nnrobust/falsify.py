@@ -1,7 +1,8 @@
 """Searching for the worst admissible plant: ``nnrobust falsify`` (docs/falsification.md).
 
 The uncertainty set is the sweep file's ``[vary]`` box: each ``uniform`` or ``loguniform`` key is
-a coordinate (searched on the log scale for ``loguniform``). A point of the box is one plant; the
+a coordinate (searched on the log scale for ``loguniform``); a grid of numbers is searched over
+the range it spans, which contains every grid point. A point of the box is one plant; the
 controller's run on it gives each property (``--require``) a signed margin
 (:mod:`nnrobust.properties`), and the search minimises the least of them: a negative margin
 falsifies the property. Every point runs with the same seed, so a point is one plant, the
@@ -66,11 +67,15 @@ def box_of(spec) -> Box:
     """The box of a sweep's ``[vary]`` ranges; grids and other distributions are refused."""
     keys, low, high, log = [], [], [], []
     for key, value in spec.vary.items():
-        if isinstance(value, list):
-            raise ConfigError(
-                f"vary.{key}",
-                "falsify searches ranges: make this grid a uniform or loguniform range, or set it in [set]",
-            )
+        if isinstance(value, list):  # a grid of numbers: the range it spans
+            numbers = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in value)
+            if not numbers or min(value) == max(value):
+                raise ConfigError(
+                    f"vary.{key}",
+                    "falsify searches ranges: a grid of two or more numbers is searched over the range it "
+                    "spans; make this one a uniform or loguniform range, or set it in [set]",
+                )
+            value = {"uniform": [min(value), max(value)]}
         ((kind, params),) = value.items()
         if kind not in ("uniform", "loguniform"):
             raise ConfigError(

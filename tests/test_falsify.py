@@ -35,7 +35,10 @@ def test_the_box_is_the_sweeps_ranges():
                                                              "plant.friction_scale": 1.0})  # log midpoint
     assert box.values(np.array([1.0, 0.0])) == pytest.approx({"plant.disturbance_scale": 4.0,
                                                              "plant.friction_scale": 0.5})
-    for vary, words in (({"nn.sigma": [0.1, 0.2]}, "falsify searches ranges"),
+    grid = box_of(parse_sweep({"name": "b", "base": "paper-ellipse", "controllers": ["nn"],
+                               "vary": {"plant.disturbance_scale": [0.5, 1.0, 2.0]}}))
+    assert (grid.low.tolist(), grid.high.tolist()) == ([0.5], [2.0])  # the range the grid spans
+    for vary, words in (({"controller.k": ["a", "b"]}, "falsify searches ranges"),
                         ({"nn.sigma": {"normal": [0.1, 0.02]}}, "not normal"), ({}, "varies nothing")):
         with pytest.raises(ConfigError, match=words):
             box_of(parse_sweep({"name": "b", "base": "paper-ellipse", "controllers": ["nn"], "vary": vary}))
