@@ -226,8 +226,40 @@ TRAJECTORY_KINDS = ("ellipse", "point_to_point", "waypoints")
 MAX_WAYPOINTS = 10_000
 
 
+MAX_PATH_EXTENT = 1e3
+"""Largest coordinate of a path point or axis [m] (an arm's workspace is metres)."""
+
+MAX_PATH_RATE = 1e4
+"""Largest angular frequency of a path or of its rocking [rad/s]."""
+
+MIN_MOVE_TIME = 1e-3
+"""Shortest point-to-point move or waypoint interval [s]: a quintic over less than a millisecond
+asks for more than any actuator gives, and below about 1e-60 s its coefficients overflow."""
+
+
+def _check_extents(tc: TrajectoryConfig) -> None:
+    """Path points and axes within :data:`MAX_PATH_EXTENT`, rates within :data:`MAX_PATH_RATE`."""
+    vectors = {"center": tc.center, "axis_a": tc.axis_a, "axis_b": tc.axis_b, "start": tc.start,
+               "goal": tc.goal}
+    for name, values in vectors.items():
+        if values is not None and any(abs(v) > MAX_PATH_EXTENT for v in values):
+            raise ConfigError(f"trajectory.{name}", f"{values} has a coordinate beyond {MAX_PATH_EXTENT:g} m")
+    for i, point in enumerate(tc.waypoints or []):
+        if any(abs(v) > MAX_PATH_EXTENT for v in point):
+            raise ConfigError(f"trajectory.waypoints[{i}]",
+                              f"{point} has a coordinate beyond {MAX_PATH_EXTENT:g} m")
+    for name in ("omega", "rotation_omega"):
+        if abs(getattr(tc, name)) > MAX_PATH_RATE:
+            raise ConfigError(f"trajectory.{name}",
+                              f"{getattr(tc, name):g} rad/s is beyond {MAX_PATH_RATE:g} rad/s")
+    if abs(tc.rotation_amplitude) > math.pi:
+        raise ConfigError("trajectory.rotation_amplitude",
+                          f"{tc.rotation_amplitude:g} rad is more than half a turn; at most pi")
+
+
 def _check_path(tc: TrajectoryConfig) -> None:
     """Check the path's own keys."""
+    _check_extents(tc)
     if tc.kind == "ellipse":
         m_path = len(tc.center)
         for path, values in (("trajectory.axis_a", tc.axis_a), ("trajectory.axis_b", tc.axis_b)):
@@ -241,8 +273,9 @@ def _check_path(tc: TrajectoryConfig) -> None:
         if tc.start is not None and len(tc.start) != len(tc.goal):
             raise ConfigError("trajectory.start", f"has {len(tc.start)} entries, trajectory.goal has "
                               f"{len(tc.goal)}")
-        if not tc.move_time > 0:
-            raise ConfigError("trajectory.move_time", f"must be positive, got {tc.move_time}")
+        if not tc.move_time >= MIN_MOVE_TIME:
+            raise ConfigError("trajectory.move_time",
+                              f"must be at least {MIN_MOVE_TIME:g} s, got {tc.move_time}")
         return
     points, times = tc.waypoints, tc.waypoint_times
     if not points or len(points) < 2:
@@ -257,9 +290,9 @@ def _check_path(tc: TrajectoryConfig) -> None:
     if times is None or len(times) != len(points):
         raise ConfigError("trajectory.waypoint_times", f"needs one time per waypoint ({len(points)}), got "
                           f"{None if times is None else len(times)}")
-    if times[0] < 0 or any(b <= a for a, b in zip(times, times[1:])):
-        raise ConfigError("trajectory.waypoint_times", f"must start at 0 or later and increase strictly, "
-                          f"got {times}")
+    if times[0] < 0 or any(b - a < MIN_MOVE_TIME for a, b in zip(times, times[1:])):
+        raise ConfigError("trajectory.waypoint_times", f"must start at 0 or later and increase by at least "
+                          f"{MIN_MOVE_TIME:g} s from one point to the next, got {times}")
 
 
 @dataclass

@@ -25,7 +25,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import shutil
 import time
 import uuid
 from dataclasses import dataclass
@@ -274,26 +273,15 @@ def _write_history(folder: Path, rows: list[dict]) -> None:
 
 def prepare_folder(spec: FalsifySpec, folder: Path, overwrite: bool) -> None:
     """Create DIR or accept it for resuming; a different search is refused unless ``overwrite``,
-    which replaces only what a search wrote.
+    which replaces only what a search wrote (:mod:`nnrobust.study_folder`).
     """
-    marker = folder / MARKER
-    if folder.exists() and not marker.is_file() and any(folder.iterdir()):
-        raise NNRobustError(
-            f"{folder} exists and is not a falsification folder (no {MARKER}); choose another --out"
-        )
-    if marker.is_file() and marker.read_text() != spec.to_toml():
-        if not overwrite:
-            raise NNRobustError(
-                f"{folder} holds a different search ({marker} differs); pass --overwrite to "
-                "replace it, or choose another --out"
-            )
-        shutil.rmtree(folder / HISTORY, ignore_errors=True)
-        for name in ("summary.json", "falsification.csv", "convergence.png", "convergence.svg"):
-            (folder / name).unlink(missing_ok=True)
-    (folder / HISTORY).mkdir(parents=True, exist_ok=True)
-    tmp = marker.with_name(f".{MARKER}.partial")
-    tmp.write_text(spec.to_toml())
-    os.replace(tmp, marker)
+    from .study_folder import prepare, write_new
+
+    outputs = (HISTORY, MARKER, "summary.json", "falsification.csv", "convergence.png", "convergence.svg")
+    prepare(folder, "falsify", spec.to_toml(), outputs, overwrite, "search")
+    (folder / HISTORY).mkdir(exist_ok=True)
+    write_new(folder / f".{MARKER}.partial", spec.to_toml())
+    os.replace(folder / f".{MARKER}.partial", folder / MARKER)
 
 
 def run_falsify(
@@ -305,8 +293,16 @@ def run_falsify(
     progress=None,
 ) -> dict:
     """Search each controller's worst plant and its random baseline; returns the summary (also
-    DIR/summary.json, DIR/falsification.csv and DIR/convergence.png).
+    DIR/summary.json, DIR/falsification.csv and DIR/convergence.png). The folder is locked for
+    the search.
     """
+    from .study_folder import held
+
+    with held(Path(folder)):
+        return _run_falsify(spec, Path(folder), workers, scheduler, overwrite, progress)
+
+
+def _run_falsify(spec: FalsifySpec, folder: Path, workers, scheduler, overwrite: bool, progress) -> dict:
     from .properties import run_properties
     from .sweep.engine import _client, _require_engine
     from .sweep.spec import Sample, base_config, experiment, load_sweep, rerun_command, sample_seed

@@ -289,7 +289,27 @@ URDF_CASES = [
          ex.RobotLoadError, "not a URDF file, not planar<N>, and not a robot example-robot-data ships"),
 ]
 
+PAPER = 'base = "paper-ellipse"\n'
+"""An experiment file's first line: start from the paper's case (b)."""
+
 CONFIG_CASES = [
+    Case("a point-to-point move of 1e-300 s",
+         lambda d: _toml(d, f"{PAPER}[trajectory]\nkind = 'point_to_point'\ngoal = [0.3, 0.4]\n"
+                            "move_time = 1e-300\n"),
+         ex.ConfigError, "trajectory.move_time: must be at least 0.001 s, got 1e-300"),
+    Case("waypoint times 1e-300 s apart",
+         lambda d: _toml(d, f"{PAPER}[trajectory]\nkind = 'waypoints'\nwaypoints = [[0.3, 0.4], [0.3, 0.5]]\n"
+                            "waypoint_times = [0.0, 1e-300]\n"),
+         ex.ConfigError, "trajectory.waypoint_times: must start at 0 or later and increase by at least "
+         "0.001 s"),
+    Case("a goal at 1e308 m",
+         lambda d: _toml(d, f"{PAPER}[trajectory]\nkind = 'point_to_point'\ngoal = [1e308, 0.4]\n"),
+         ex.ConfigError, "trajectory.goal: [1e+308, 0.4] has a coordinate beyond 1000 m"),
+    Case("an ellipse at omega = 1e300 rad/s", lambda d: _toml(d, f"{PAPER}[trajectory]\nomega = 1e300\n"),
+         ex.ConfigError, "trajectory.omega: 1e+300 rad/s is beyond 10000 rad/s"),
+    Case("a rocking amplitude of 1e300 rad",
+         lambda d: _toml(d, f"{PAPER}[trajectory]\nrotation_amplitude = 1e300\n"),
+         ex.ConfigError, "trajectory.rotation_amplitude: 1e+300 rad is more than half a turn"),
     Case("experiment file that does not exist", lambda d: _read_config(d / "missing.toml"),
          ex.ConfigError, "cannot read the file"),
     Case("invalid TOML", lambda d: _toml(d, "[controller\nKp = 1"), ex.ConfigError, "invalid TOML"),
@@ -558,7 +578,8 @@ TUNE_CASES = [
     Case("tune: a sweep file with a grid", lambda d: _tune(d, _grid_sweep(d), ["pd"], 10), ex.ConfigError,
          "tuning draws its samples from [vary] distributions"),
     Case("tune: --out a folder of the user's", lambda d: _tune_into(d, _user_folder_for_tune),
-         ex.NNRobustError, "my-study exists and is not a tuning folder (no tune.toml); choose another --out"),
+         ex.NNRobustError, "my-study exists and is not a tuning folder (no .nnrobust-tune); choose another "
+         "--out"),
 ]
 
 LAWS = Path(__file__).parent / "controllers" / "eq9_again.py"
@@ -695,6 +716,13 @@ def render_table(folder: Path) -> str:
         "  beside it, to `<folder>.<status>`. If a write fails (a full disk), the previous run is",
         "  untouched and the new arrays are saved to the temporary folder if they fit there; the",
         "  message says where.",
+        "- **Study folders** of `sweep`, `tune` and `falsify` (`nnrobust/study_folder.py`) carry a hidden",
+        "  marker, `.nnrobust-sweep` (`-tune`, `-falsify`), with the resolved study: a user's own",
+        "  `sweep.toml` never makes a folder one. They are locked while a command writes them (two",
+        "  sweeps into one folder: the second is refused at once, never a row twice). `--overwrite`",
+        "  removes only what the command wrote (results/, plots/, worst/, summary.json, ...), never",
+        "  the folder or a file of the user's, and the working folder or its ancestors are refused as",
+        "  `--out`. A sample that raises inside a sweep is a row with status `error`; the sweep goes on.",
         "- **Signals**: SIGTERM and SIGHUP stop a run as Ctrl-C does; the partial run is written,",
         "  marked `interrupted`, and no hidden folder, lock file or viewer process is left behind.",
         "",

@@ -41,7 +41,7 @@ def test_saturation_keeps_the_same_gains_bounded_and_says_so(tmp_path, capsys):
     experiment = _experiment(tmp_path, controller={"Kp": [1e6], "Kv": [2e3]},
                              simulation={"duration": 0.5})
     out = tmp_path / "run"
-    assert main(["run", str(experiment), "--out", str(out), "--quiet", "--no-animation",
+    assert main(["run", str(experiment), "--out", str(out), "--no-animation",
                  "--no-plots"]) == 0
     assert "warning: torque saturation" in capsys.readouterr().err
     metrics = json.loads((out / "metrics.json").read_text())

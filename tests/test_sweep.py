@@ -141,6 +141,46 @@ def test_a_changed_sweep_is_refused_unless_overwrite(tmp_path):
     assert (tmp_path / "mine" / "notes.txt").read_text() == "keep me"
 
 
+def test_overwrite_replaces_only_what_the_sweep_wrote(tmp_path, monkeypatch, capsys):
+    """Issue 22 item 10: a folder holding the user's own sweep.toml is not a sweep folder, and
+    --overwrite never removes it nor a file the sweep did not write; the working folder and its
+    ancestors are refused as --out."""
+    project = tmp_path / "project"
+    project.mkdir()
+    (project / "thesis.tex").write_text("years of work")
+    path = project / "sweep.toml"
+    path.write_text(SWEEP.format(duration=1.0))
+    monkeypatch.chdir(project)
+    for out in (".", str(project), str(tmp_path)):
+        assert main(["sweep", "sweep.toml", "--out", out, "--overwrite", "--workers", "1"]) == 2
+        assert "is the working folder or one of its ancestors" in capsys.readouterr().err
+    study = project / "study"
+    study.mkdir()
+    (study / "sweep.toml").write_text(path.read_text())
+    (study / "notes.md").write_text("mine")
+    assert main(["sweep", "sweep.toml", "--out", "study", "--overwrite", "--workers", "1"]) == 2
+    assert "is not a sweep folder (no .nnrobust-sweep)" in capsys.readouterr().err
+    assert (study / "notes.md").read_text() == "mine" and (project / "thesis.tex").is_file()
+    out = project / "out"
+    assert main(["sweep", "sweep.toml", "--out", "out", "--workers", "2", "--quiet"]) == 0
+    (out / "notes.md").write_text("my notes on this sweep")
+    path.write_text(SWEEP.format(duration=1.5))
+    assert main(["sweep", "sweep.toml", "--out", "out", "--workers", "2", "--quiet", "--overwrite"]) == 0
+    assert (out / "notes.md").read_text() == "my notes on this sweep"
+    assert "1.5" in (out / "sweep.toml").read_text() and (project / "thesis.tex").is_file()
+
+
+def test_two_sweeps_into_one_folder_never_write_a_row_twice(tmp_path):
+    """Issue 22 item 12: the sweep folder is locked; a second sweep into it is refused at once."""
+    from nnrobust.run_folder import locked
+
+    spec = load_sweep(_sweep_file(tmp_path, duration=1.0))
+    out = tmp_path / "out"
+    with locked(out):  # as a running sweep holds it
+        with pytest.raises(NNRobustError, match="is writing"):
+            run_sweep(spec, out, workers=1)
+
+
 BAD = [
     ("unknown key", {"nmae": "x"}, "unknown key"),
     ("missing base", {"name": "x", "controllers": ["nn"]}, "base: missing"),
@@ -344,3 +384,26 @@ def test_a_local_cluster_listens_on_loopback_only():
         sockets += [(host, port) for host, port in [scheduler.address.removeprefix("tcp://").rsplit(":", 1)]]
     assert sockets and all(host == "127.0.0.1" for host, _ in sockets), sockets
     assert all(int(port) != 8787 for _, port in sockets)
+
+
+def test_a_sample_that_raises_is_a_row_and_the_sweep_goes_on(monkeypatch):
+    """A defect that raises inside one run (not a refusal) is that row's status ``error`` with
+    its type and message; the other rows run."""
+    import nnrobust.experiment
+    from nnrobust.sweep.engine import run_rows
+    from nnrobust.sweep.spec import base_config
+
+    spec = parse_sweep({"name": "e", "base": "paper-ellipse", "controllers": ["nn"], "samples": 2,
+                        "set": {"simulation.duration": 0.2}})
+    real, calls = nnrobust.experiment.run_experiment, []
+
+    def flaky(config, *args, **kwargs):
+        calls.append(1)
+        if len(calls) == 1:
+            raise ZeroDivisionError("a defect")
+        return real(config, *args, **kwargs)
+
+    monkeypatch.setattr(nnrobust.experiment, "run_experiment", flaky)
+    rows = run_rows(spec, base_config(spec).to_toml(), [(0, "nn"), (1, "nn")])
+    assert [r["status"] for r in rows] == ["error", "completed"]
+    assert rows[0]["message"] == "ZeroDivisionError: a defect"

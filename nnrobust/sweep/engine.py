@@ -11,7 +11,6 @@ from __future__ import annotations
 import logging
 import math
 import os
-import shutil
 import sys
 import time
 import uuid
@@ -48,7 +47,8 @@ def run_rows(spec: SweepSpec, base_toml: str, jobs: list[tuple[int, str]]) -> li
     The worker rebuilds each experiment from the sweep and the base experiment's TOML (so a remote
     worker needs no file of the client's). A run that cannot be built (the sample's trajectory
     leaves the workspace, say) is a row with status ``refused`` and its message; a diverged run
-    is a row with status ``diverged``.
+    is a row with status ``diverged``; an unexpected exception (a defect) a row with status
+    ``error``, its type and message, so that one sample never aborts a sweep.
     """
     import tomllib
 
@@ -66,6 +66,8 @@ def run_rows(spec: SweepSpec, base_toml: str, jobs: list[tuple[int, str]]) -> li
             metrics = run_experiment(experiment(spec, base, sample, controller)).metrics()
         except LibraryError as err:
             row.update(status="refused", message=str(err)[:500], warnings=[])
+        except Exception as err:  # a defect, not the sample's fault: the row says so, the sweep goes on
+            row.update(status="error", message=f"{type(err).__name__}: {err}"[:500], warnings=[])
         else:
             row.update({k: v for k, v in metrics.items() if k not in SKIP_METRICS})
             row["message"] = metrics.get("message", "")
@@ -134,20 +136,21 @@ def _write_part(folder: Path, rows: list[dict], table_schema) -> Path:
     return path
 
 
+OUTPUTS = (RESULTS, MARKER, "summary.json", "plots", "worst")
+"""What a sweep writes in its folder: all --overwrite ever removes."""
+
+
 def prepare_folder(spec: SweepSpec, folder: Path, overwrite: bool) -> None:
-    """Create DIR or accept it for resuming; refuse a changed sweep unless ``overwrite``."""
-    marker = folder / MARKER
-    if folder.exists() and not marker.is_file() and any(folder.iterdir()):
-        raise NNRobustError(f"{folder} exists and is not a sweep folder (no {MARKER}); choose another --out")
-    if marker.is_file() and marker.read_text() != spec.to_toml():
-        if not overwrite:
-            raise NNRobustError(f"{folder} holds a different sweep ({marker} differs); pass --overwrite "
-                                "to replace its results, or choose another --out")
-        shutil.rmtree(folder)
-    (folder / RESULTS).mkdir(parents=True, exist_ok=True)
-    tmp = marker.with_name(f".{MARKER}.partial")
-    tmp.write_text(spec.to_toml())
-    os.replace(tmp, marker)
+    """Create DIR or accept it for resuming; refuse a changed sweep unless ``overwrite``, which
+    replaces only what a sweep wrote (:mod:`nnrobust.study_folder`). DIR/sweep.toml is the
+    resolved sweep, for the reader.
+    """
+    from ..study_folder import prepare, write_new
+
+    prepare(folder, "sweep", spec.to_toml(), OUTPUTS, overwrite, "sweep")
+    (folder / RESULTS).mkdir(exist_ok=True)
+    write_new(folder / f".{MARKER}.partial", spec.to_toml())
+    os.replace(folder / f".{MARKER}.partial", folder / MARKER)
 
 
 LOOPBACK_HTTP = "127.0.0.1:0"
@@ -216,6 +219,15 @@ def run_sweep(spec: SweepSpec, folder: str | Path, workers: int | None = None, s
     _require_engine()
     folder = Path(folder)
     base_toml, jobs = plan(spec)  # every experiment validated before anything is written or run
+    from ..study_folder import held
+
+    with held(folder):  # one sweep at a time into a folder: never a row twice
+        return _run_sweep(spec, folder, base_toml, jobs, workers, scheduler, overwrite, progress,
+                          seconds_per_job)
+
+
+def _run_sweep(spec: SweepSpec, folder: Path, base_toml: str, jobs: list, workers, scheduler, overwrite: bool,
+               progress, seconds_per_job: float) -> dict:
     prepare_folder(spec, folder, overwrite)
     done = _done_rows(folder)
     jobs = [job for job in jobs if job not in done]

@@ -100,6 +100,18 @@ def plot_sweep(spec: SweepSpec, frame, folder: str | Path) -> list[Path]:
     done = frame[frame["status"] == "completed"]
     written = []
 
+    def log_scale(ax, axis: str, values, empty: str = "no completed run lasted past 2 s") -> None:
+        """A log axis where the data has a positive value to show; else linear, and said."""
+        values = np.asarray(values, dtype=float)
+        if np.any(np.isfinite(values) & (values > 0)):
+            getattr(ax, f"set_{axis}scale")("log")
+        else:
+            ax.text(0.5, 0.5, empty, transform=ax.transAxes, ha="center", va="center", color="0.4")
+
+    def legend(ax) -> None:
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=8)
+
     def save(fig, name):
         path = out / f"{name}.png"
         fig.tight_layout()
@@ -113,12 +125,12 @@ def plot_sweep(spec: SweepSpec, frame, folder: str | Path) -> list[Path]:
         errors = errors[np.isfinite(errors)]
         if errors.size:
             ax.step(1e3 * errors, np.arange(1, errors.size + 1) / errors.size, where="post", label=controller)
-    ax.set_xscale("log")
     ax.set_xlabel("RMS task error, t >= 2 s [mm]")
+    log_scale(ax, "x", done["rms_error_after_2s"])
     ax.set_ylabel("fraction of samples")
     ax.set_title(f"{spec.name}: error distribution ({spec.size} samples)")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
+    legend(ax)
     save(fig, "error_cdf")
 
     for key in spec.vary:
@@ -131,25 +143,28 @@ def plot_sweep(spec: SweepSpec, frame, folder: str | Path) -> list[Path]:
                 values = [labels.index(str(v)) for v in values]
             ax.scatter(values, 1e3 * rows["rms_error_after_2s"].to_numpy(dtype=float), s=10, alpha=0.6,
                        label=controller)
-        ax.set_yscale("log")
+        log_scale(ax, "y", done["rms_error_after_2s"])
         ax.set_xlabel(key)
         ax.set_ylabel("RMS task error, t >= 2 s [mm]")
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=8)
+        legend(ax)
         save(fig, f"error_vs_{key.replace('.', '_')}")
 
     fig, ax = plt.subplots(figsize=(6, 4))
+    torque = done["rms_torque"].to_numpy(dtype=float)
+    error = done["rms_error_after_2s"].to_numpy(dtype=float)
+    both = np.isfinite(torque) & (torque > 0) & np.isfinite(error) & (error > 0)
     for controller in spec.controllers:
-        rows = done[done["controller"] == controller]
-        ax.scatter(rows["rms_torque"], 1e3 * rows["rms_error_after_2s"].to_numpy(dtype=float), s=10,
-                   alpha=0.6, label=controller)
-    ax.set_xscale("log")
-    ax.set_yscale("log")
+        mine = both & (done["controller"] == controller).to_numpy()
+        if mine.any():
+            ax.scatter(torque[mine], 1e3 * error[mine], s=10, alpha=0.6, label=controller)
+    log_scale(ax, "x", torque[both], "no completed run lasted past 2 s")
+    log_scale(ax, "y", error[both])
     ax.set_xlabel("RMS torque [N m]")
     ax.set_ylabel("RMS task error, t >= 2 s [mm]")
     ax.set_title("error against torque, every sample")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
+    legend(ax)
     save(fig, "pareto")
     return written
 

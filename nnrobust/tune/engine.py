@@ -20,7 +20,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import shutil
 import uuid
 from dataclasses import dataclass
 from pathlib import Path
@@ -241,22 +240,16 @@ def _write_trials(folder: Path, rows: list[dict]) -> None:
 
 def prepare_folder(spec: TuneSpec, folder: Path, overwrite: bool) -> None:
     """Create DIR or accept it for resuming; a different tuning is refused unless ``overwrite``,
-    which replaces only what a tuning wrote.
+    which replaces only what a tuning wrote (:mod:`nnrobust.study_folder`). DIR/tune.toml is the
+    resolved tuning, for the reader.
     """
-    marker = folder / MARKER
-    if folder.exists() and not marker.is_file() and any(folder.iterdir()):
-        raise NNRobustError(f"{folder} exists and is not a tuning folder (no {MARKER}); choose another --out")
-    if marker.is_file() and marker.read_text() != spec.to_toml():
-        if not overwrite:
-            raise NNRobustError(f"{folder} holds a different tuning ({marker} differs); pass --overwrite "
-                                "to replace it, or choose another --out")
-        shutil.rmtree(folder / TRIALS, ignore_errors=True)
-        for name in ("summary.json", "pareto.png", "pareto.svg"):
-            (folder / name).unlink(missing_ok=True)
-    (folder / TRIALS).mkdir(parents=True, exist_ok=True)
-    tmp = marker.with_name(f".{MARKER}.partial")
-    tmp.write_text(spec.to_toml())
-    os.replace(tmp, marker)
+    from ..study_folder import prepare, write_new
+
+    prepare(folder, "tune", spec.to_toml(), (TRIALS, MARKER, "summary.json", "pareto.png", "pareto.svg"),
+            overwrite, "tuning")
+    (folder / TRIALS).mkdir(exist_ok=True)
+    write_new(folder / f".{MARKER}.partial", spec.to_toml())
+    os.replace(folder / f".{MARKER}.partial", folder / MARKER)
 
 
 class _Controller:
@@ -369,7 +362,16 @@ def run_tune(spec: TuneSpec, folder: str | Path, workers: int | None = None, sch
     """Run (or resume) a tuning into ``folder``; returns the summary (also DIR/summary.json).
 
     ``progress(done, total)`` is called as settings finish (done and total count simulations).
+    The folder is locked for the run.
     """
+    from ..study_folder import held
+
+    with held(Path(folder)):
+        return _run_tune(spec, Path(folder), workers, scheduler, overwrite, progress)
+
+
+def _run_tune(spec: TuneSpec, folder: Path, workers: int | None, scheduler: str | None, overwrite: bool,
+              progress) -> dict:
     from ..sweep.engine import _client, _require_engine
     from ..sweep.spec import base_config, draw, experiment
 
