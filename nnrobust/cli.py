@@ -349,22 +349,34 @@ def _sweep_claim(args, spec) -> tuple[list, tuple[float, float] | None]:
     return properties, (args.epsilon, args.beta)
 
 
-def cmd_falsify(args) -> int:
-    """Search each controller's worst plant in the sweep file's box, at one budget."""
+def _simulations_bar(quiet: bool, first_line):
+    """(progress(done, total), started): a bar of simulations, after one line ``first_line(done,
+    total)`` says what runs; ``started`` holds the start time once it has.
+    """
     import time
 
+    started: list[float] = []
+
+    def progress(done, total):
+        if quiet:
+            return
+        if not started:
+            started.append(time.monotonic())
+            print(first_line(done, total), file=sys.stderr)
+        _bar(done, total, f"simulations, {time.monotonic() - started[0]:.0f} s")
+
+    return progress, started
+
+
+def cmd_falsify(args) -> int:
+    """Search each controller's worst plant in the sweep file's box, at one budget."""
     from .falsify import FalsifySpec, run_falsify
 
     spec = FalsifySpec(args.sweep, [c.strip() for c in args.controllers.split(",") if c.strip()],
                        args.require, args.budget, args.seed)
-    started: list[float] = []
-
-    def progress(done, total):
-        if args.quiet:
-            return
-        if not started:
-            started.append(time.monotonic())
-        _bar(done, total, f"simulations, {time.monotonic() - started[0]:.0f} s")
+    progress, started = _simulations_bar(args.quiet, lambda done, total: (
+        f"falsify {args.sweep}: {', '.join(spec.controllers)}, {spec.budget} simulations each and as many "
+        f"for random search; {done} of {total} already done"))
 
     out = Path(args.out)
     summary = _resumable(
@@ -412,7 +424,6 @@ def format_tuning(summary: dict) -> str:
 def cmd_tune(args) -> int:
     """Tune every controller by one optimiser at one budget; validate on held-out samples."""
     import math
-    import time
 
     from .tune import TuneSpec, run_tune
 
@@ -420,17 +431,9 @@ def cmd_tune(args) -> int:
                     args.train_samples, args.validation,
                     math.inf if args.max_rms_torque is None else args.max_rms_torque,
                     1.0 if args.max_saturated is None else args.max_saturated, args.seed)
-    started: list[float] = []
-
-    def progress(done, total):
-        if args.quiet:
-            return
-        if not started:
-            started.append(time.monotonic())
-            print(f"tune {args.target}: {', '.join(spec.controllers)}, {spec.budget} simulations each "
-                  f"({spec.trials} settings x {spec.train_samples} samples); {done} of {total} already done",
-                  file=sys.stderr)
-        _bar(done, total, f"simulations, {time.monotonic() - started[0]:.0f} s")
+    progress, started = _simulations_bar(args.quiet, lambda done, total: (
+        f"tune {args.target}: {', '.join(spec.controllers)}, {spec.budget} simulations each ({spec.trials} "
+        f"settings x {spec.train_samples} samples); {done} of {total} already done"))
 
     out = Path(args.out)
     summary = _resumable(lambda: run_tune(spec, out, args.workers, args.scheduler, args.overwrite, progress),

@@ -671,8 +671,43 @@ PROPERTY_CASES = [
          "--failures: must be an integer in [0, 10000]"),
 ]
 
+def _falsify(**changes):
+    def check():
+        from nnrobust.falsify import FalsifySpec
+
+        return FalsifySpec(**{"target": "s.toml", "controllers": ["nn"], "require": ["rms_error<=0.05"],
+                              "budget": 100, **changes})
+
+    return check
+
+
+def _box(folder: Path, vary: str):
+    def check():
+        from nnrobust.falsify import box_of
+        from nnrobust.sweep import load_sweep
+
+        return box_of(load_sweep(_file(folder, "s.toml", f'name = "s"\nbase = "paper-ellipse"\n'
+                                                          f'controllers = ["nn"]\n[vary]\n{vary}')))
+
+    return check
+
+
+FALSIFY_CASES = [
+    Case("falsify: a budget of 0", lambda d: _falsify(budget=0), ex.ConfigError,
+         "--budget: must be an integer in [4, 100000], got 0"),
+    Case("falsify: a budget of 10^9", lambda d: _falsify(budget=10**9), ex.ConfigError,
+         "--budget: must be an integer in [4, 100000]"),
+    Case("falsify: no property", lambda d: _falsify(require=[]), ex.ConfigError,
+         "--require: falsify needs at least one property to falsify"),
+    Case("falsify: an empty box", lambda d: _box(d, ""), ex.ConfigError,
+         "vary: the sweep file varies nothing: falsify needs a box of uniform or loguniform ranges"),
+    Case("falsify: a normal distribution (no box)",
+         lambda d: _box(d, '"nn.sigma" = {normal = [0.1, 0.02]}\n'), ex.ConfigError,
+         "vary.nn.sigma: falsify searches uniform and loguniform ranges, not normal"),
+]
+
 CASES = (URDF_CASES + CONFIG_CASES + RUN_FOLDER_CASES + VIEWER_CASES + TUNE_CASES + CUSTOM_CASES
-         + PROPERTY_CASES)
+         + PROPERTY_CASES + FALSIFY_CASES)
 
 
 def message_of(case: Case, folder: Path) -> str:
