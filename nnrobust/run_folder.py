@@ -199,9 +199,7 @@ def _import_plots() -> None:
 
 def _figure_input(folder: str) -> tuple:
     """What a figure is drawn from: the run as written in ``folder``, and where figures go."""
-    from .results import Result
-
-    return Result.load(folder), Path(folder) / PLOTS_PARTIAL
+    return load_run(folder), Path(folder) / PLOTS_PARTIAL
 
 
 def _draw_figure(data: tuple, name: str) -> None:
@@ -372,22 +370,106 @@ def redraw_run(folder: str | Path, plots: bool = True, animation: bool = True) -
     return extras
 
 
+MAX_RESULT_BYTES = 4e9
+"""Most a received result.npz may expand to (a 4 MB zip bomb would otherwise ask for gigabytes)."""
+
+MAX_SMALL_FILE = 10_000_000
+"""Most bytes of a run folder's metrics.json or config.toml (a few kB when nnrobust writes them)."""
+
+
+def _regular(path: Path, folder: Path) -> None:
+    """A run folder's file must be a regular file (a FIFO would hang the reader, /dev/zero never end)."""
+    if path.is_symlink() or not path.is_file():
+        kind = "a symbolic link" if path.is_symlink() else "not a regular file"
+        raise RunFolderError(f"{folder}: {path.name} is {kind}; a run folder holds regular files")
+
+
+def check_run_folder(folder: Path) -> None:
+    """Validate a run folder received from anywhere, before anything reads it: regular files of
+    bounded size, a result.npz that expands to at most :data:`MAX_RESULT_BYTES`, metrics.json a
+    table whose numbers are numbers.
+    """
+    if not folder.is_dir():
+        raise RunFolderError(f"{folder}: not a run folder (no such folder)")
+    for name in ("result.npz", "metrics.json"):
+        if not (folder / name).exists() and not (folder / name).is_symlink():
+            raise RunFolderError(f"{folder}: not a run folder ({name} is missing)")
+        _regular(folder / name, folder)
+    if (folder / "config.toml").exists() or (folder / "config.toml").is_symlink():
+        _regular(folder / "config.toml", folder)
+    for name in ("metrics.json", "config.toml"):
+        path = folder / name
+        if path.exists() and path.stat().st_size > MAX_SMALL_FILE:
+            raise RunFolderError(f"{folder}: {name} has {path.stat().st_size / 1e6:.0f} MB; a run's has a "
+                                 "few kB")
+    try:
+        with zipfile.ZipFile(folder / "result.npz") as archive:
+            expanded = sum(info.file_size for info in archive.infolist())
+    except (zipfile.BadZipFile, OSError) as err:
+        raise RunFolderError(f"{folder}: a damaged run folder (result.npz is not an .npz archive: "
+                             f"{err})") from err
+    if expanded > MAX_RESULT_BYTES:
+        raise RunFolderError(f"{folder}: result.npz would expand to {expanded / 1e9:.3g} GB; at most "
+                             f"{MAX_RESULT_BYTES / 1e9:g} GB is read")
+    try:
+        metrics = json.loads((folder / "metrics.json").read_text())
+    except RecursionError as err:
+        raise RunFolderError(f"{folder}: a damaged run folder (metrics.json is nested too deeply)") from err
+    except (ValueError, OSError) as err:
+        raise RunFolderError(f"{folder}: a damaged run folder (metrics.json cannot be read: {err})") from err
+    if not isinstance(metrics, dict):
+        raise RunFolderError(f"{folder}: a damaged run folder (metrics.json is not a table)")
+    from .results import METRIC_UNITS
+
+    for key in METRIC_UNITS:
+        value = metrics.get(key)
+        if value is not None and key != "singular_episodes" and (
+                isinstance(value, bool) or not isinstance(value, (int, float))):
+            raise RunFolderError(f"{folder}: a damaged run folder (metrics.json: {key} is "
+                                 f"{type(value).__name__} {str(value)[:40]!r}, not a number)")
+
+
+def _check_shapes(result, folder: Path) -> None:
+    """The arrays of a loaded run agree: t is 1-D with N samples, q, dq, tau N x n, x, x_d, e N x m,
+    the chain N x (n + 1) x 3, every signal N long.
+    """
+    n_t = result.t.shape[0] if result.t.ndim == 1 else -1
+    if n_t < 1:
+        raise RunFolderError(f"{folder}: a damaged run folder (result.npz: t has shape {result.t.shape}, "
+                             "not N samples)")
+    joints = result.q.shape[1] if result.q.ndim == 2 else -1
+    expected: dict[str, tuple[int, ...]] = {"q": (n_t, joints), "dq": (n_t, joints), "tau": (n_t, joints)}
+    m = result.e.shape[1] if result.e.ndim == 2 else -1
+    width = result.x.shape[-1] if result.x.ndim == 2 else -1
+    expected.update({"x": (n_t, width), "x_d": (n_t, m), "e": (n_t, m)})
+    if result.chain is not None:
+        expected["chain"] = (n_t, joints + 1, 3)
+    for name, shape in expected.items():
+        array = getattr(result, name)
+        if joints < 1 or m < 1 or array.shape != shape:
+            raise RunFolderError(f"{folder}: a damaged run folder (result.npz: {name} has shape "
+                                 f"{array.shape}, expected {shape} for {n_t} samples)")
+    for name, values in result.signals.items():
+        if values.shape != (n_t,):
+            raise RunFolderError(f"{folder}: a damaged run folder (result.npz: signal {name!r} has shape "
+                                 f"{values.shape}, expected ({n_t},))")
+
+
 def load_run(folder: str | Path):
-    """Read a run folder; a missing, truncated or garbled one is one clear error naming the file
-    (never unpickled: ``allow_pickle`` stays off).
+    """Read a run folder received from anywhere; a missing, hostile, truncated or garbled one is
+    one clear error naming the file (:func:`check_run_folder` first; never unpickled:
+    ``allow_pickle`` stays off).
     """
     from .results import Result
 
     folder = Path(folder)
-    if not folder.is_dir():
-        raise RunFolderError(f"{folder}: not a run folder (no such folder)")
-    for name in ("result.npz", "metrics.json"):
-        if not (folder / name).is_file():
-            raise RunFolderError(f"{folder}: not a run folder ({name} is missing)")
+    check_run_folder(folder)
     try:
-        return Result.load(folder)
-    except (OSError, ValueError, KeyError, EOFError, TypeError, AttributeError,
+        result = Result.load(folder)
+    except (OSError, ValueError, KeyError, EOFError, TypeError, AttributeError, IndexError,
             zipfile.BadZipFile) as err:
         what = "metrics.json" if isinstance(err, json.JSONDecodeError) else "result.npz or metrics.json"
         raise RunFolderError(f"{folder}: a damaged run folder ({what} cannot be read: "
                              f"{type(err).__name__}: {err})") from err
+    _check_shapes(result, folder)
+    return result

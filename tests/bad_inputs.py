@@ -6,6 +6,8 @@ repository root), which writes docs/bad-inputs.md from the messages actually rai
 
 from __future__ import annotations
 
+import json
+import os
 import re
 import warnings
 from dataclasses import dataclass
@@ -478,6 +480,31 @@ def _damaged_run(folder: Path, damage: str):
         (run / "result.npz").write_bytes(data[: len(data) // 2])
     elif damage == "garbled":
         (run / "metrics.json").write_text("{not json")
+    elif damage == "fifo":
+        (run / "config.toml").unlink()
+        os.mkfifo(run / "config.toml")
+    elif damage == "zero":
+        (run / "metrics.json").unlink()
+        (run / "metrics.json").symlink_to("/dev/zero")
+    elif damage == "bomb":  # a member whose central directory says it expands to 4.29 GB
+        import zipfile
+
+        with zipfile.ZipFile(run / "result.npz", "w", zipfile.ZIP_DEFLATED) as archive:
+            archive.writestr("t.npy", bytes(1 << 16))
+        data = bytearray((run / "result.npz").read_bytes())
+        entry = data.rindex(b"PK\x01\x02")  # the central directory record; its size field at +24
+        data[entry + 24: entry + 28] = (0xFFFFFFF0).to_bytes(4, "little")
+        (run / "result.npz").write_bytes(bytes(data))
+    elif damage == "shape":
+        arrays = dict(np.load(run / "result.npz"))
+        arrays["q"] = arrays["q"][:-1]
+        np.savez(run / "result.npz", **arrays)
+    elif damage == "deep":
+        (run / "metrics.json").write_text("[" * 200_000 + "]" * 200_000)
+    elif damage == "string":
+        metrics = json.loads((run / "metrics.json").read_text())
+        metrics["rms_error"] = "small"
+        (run / "metrics.json").write_text(json.dumps(metrics))
     else:
         np.savez(run / "result.npz", t=np.array([object()], dtype=object))
     return lambda: load_run(run)
@@ -515,11 +542,23 @@ RUN_FOLDER_CASES = [
     Case("a second run into a folder another run is writing", _locked_twice,
          RunFolderError, "another nnrobust run (pid "),
     Case("truncated result.npz", lambda d: _damaged_run(d, "truncated"),
-         RunFolderError, "a damaged run folder (result.npz or metrics.json cannot be read: BadZipFile"),
+         RunFolderError, "a damaged run folder (result.npz is not an .npz archive: File is not a zip file)"),
     Case("garbled metrics.json", lambda d: _damaged_run(d, "garbled"),
          RunFolderError, "a damaged run folder (metrics.json cannot be read"),
     Case("object array in result.npz (would need unpickling)", lambda d: _damaged_run(d, "pickled"),
          RunFolderError, "Object arrays cannot be loaded when allow_pickle=False"),
+    Case("a received run whose config.toml is a FIFO", lambda d: _damaged_run(d, "fifo"),
+         RunFolderError, "config.toml is not a regular file; a run folder holds regular files"),
+    Case("a received run whose metrics.json links to /dev/zero", lambda d: _damaged_run(d, "zero"),
+         RunFolderError, "metrics.json is a symbolic link; a run folder holds regular files"),
+    Case("a zip bomb as result.npz (a few kB said to expand to 4.29 GB)", lambda d: _damaged_run(d, "bomb"),
+         RunFolderError, "result.npz would expand to 4.29 GB; at most 4 GB is read"),
+    Case("q shorter than t", lambda d: _damaged_run(d, "shape"),
+         RunFolderError, "a damaged run folder (result.npz: q has shape"),
+    Case("metrics.json nested 200,000 deep", lambda d: _damaged_run(d, "deep"),
+         RunFolderError, "metrics.json is nested too deeply"),
+    Case("a string where metrics.json holds a number", lambda d: _damaged_run(d, "string"),
+         RunFolderError, "metrics.json: rms_error is str 'small', not a number"),
 ]
 
 def _tune(folder: Path, *args: str, **kwargs):
