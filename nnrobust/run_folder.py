@@ -113,7 +113,9 @@ def locked(folder: str | Path):
     folder = Path(folder)
     lock = folder.parent / f".{folder.name}.lock"
     try:
-        fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+        if lock.is_symlink():  # not a lock nnrobust made: never truncate what it points to
+            lock.unlink()
+        fd = os.open(lock, os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0), 0o644)
     except OSError as err:
         raise RunFolderError(f"cannot create {lock}: {err.strerror or err}") from err
     try:
@@ -138,10 +140,11 @@ def locked(folder: str | Path):
 
 def _write_marker(folder: Path, status: str, extras: str) -> None:
     from . import __version__
+    from .study_folder import write_new
 
     tmp = folder / f"{MARKER}.partial"
     record = {"format": 1, "nnrobust": __version__, "status": status, "extras": extras}
-    tmp.write_text(json.dumps(record) + "\n")
+    write_new(tmp, json.dumps(record) + "\n")  # never through a link planted at that name
     os.replace(tmp, folder / MARKER)
 
 
@@ -251,11 +254,13 @@ class Drawing:
         def write_animation():
             html = _animation_html(result)
             if html is not None:
-                html_tmp.write_text(html, encoding="utf-8")
+                write_new(html_tmp, html)
+
+        from .study_folder import write_new
 
         try:
             if plots and self._figures is not None:
-                shutil.rmtree(plots_tmp, ignore_errors=True)
+                _clean_partials(folder)
                 plots_tmp.mkdir()
                 self._figures.run(str(folder), meanwhile=write_animation if animation else None)
                 shutil.rmtree(folder / "plots", ignore_errors=True)
@@ -279,10 +284,10 @@ class Drawing:
 def _clean_partials(folder: Path) -> None:
     for name in (PLOTS_PARTIAL, ANIMATION_PARTIAL):
         path = folder / name
-        if path.is_dir():
+        if path.is_symlink() or (path.exists() and not path.is_dir()):
+            path.unlink()  # a link is removed, never followed
+        elif path.is_dir():
             shutil.rmtree(path, ignore_errors=True)
-        elif path.exists():
-            path.unlink()
 
 
 def _animation_html(result) -> str | None:

@@ -355,3 +355,24 @@ def test_config_toml_records_versions_and_the_urdf_hash_and_notices_a_change(tmp
     urdf.write_text(urdf.read_text().replace('effort="60"', 'effort="61"'))
     with pytest.warns(UserWarning, match="has changed since this run was written"):
         load_config(folder / "config.toml")
+
+
+def test_planted_links_are_never_written_through(tmp_path):
+    """Issue 22 item 11: symbolic links planted at the names a run writes before renaming (the
+    marker's and the animation's partial files) or at its lock beside the folder are removed,
+    never followed: their targets keep their content."""
+    out = tmp_path / "run"
+    assert _run(out, "--no-plots", "--no-animation") == 0
+    victims = {name: tmp_path / f"victim-{i}" for i, name in enumerate(
+        (".nnrobust-run.partial", ".animation.html.partial"))}
+    for name, victim in victims.items():
+        victim.write_text("precious")
+        (out / name).symlink_to(victim)
+    lock_victim = tmp_path / "victim-lock"
+    lock_victim.write_text("precious")
+    (tmp_path / ".run.lock").symlink_to(lock_victim)
+    assert main(["plot", str(out)]) == 0
+    assert (out / "animation.html").is_file() and (out / "animation.html").stat().st_size > 10_000
+    assert _run(out, "--overwrite", "--no-plots", "--no-animation") == 0
+    for victim in [*victims.values(), lock_victim]:
+        assert victim.read_text() == "precious", victim
