@@ -559,7 +559,13 @@ def _substeps_needed(period: float, rate: float) -> int:
 
 
 def build(config: ExperimentConfig) -> Setup:
-    """Load the robot and build plant, nominal model, controller and initial state."""
+    """Load the robot and build plant, nominal model, controller and initial state.
+
+    The configuration is checked again first, as an experiment file is: a configuration changed
+    after it was loaded (``config.controller.kind = "lqr"``, a negative gain, a NaN duration)
+    is refused with the key named, never run as something else.
+    """
+    config = checked(config)
     rc = config.robot
     robot = load_robot(rc.source, rc.task_frame, rc.task,
                        tuple(rc.gravity) if rc.gravity else None, rc.locked_joints, rc.chain)
@@ -584,6 +590,21 @@ def build(config: ExperimentConfig) -> Setup:
     controller = build_controller(config, robot, nominal, trajectory, criterion, plant.friction, context)
     check_workspace(config, robot, trajectory, q0)
     return Setup(config, robot, plant, nominal, trajectory, criterion, controller, q0, v0, context, substeps)
+
+
+def checked(config: ExperimentConfig) -> ExperimentConfig:
+    """A validated copy of a configuration (types and values, as :func:`config.from_dict` checks
+    an experiment file's).
+    """
+    from .config import from_dict
+
+    if not isinstance(config, ExperimentConfig):
+        raise ConfigError("config", f"expected an ExperimentConfig, got {type(config).__name__}")
+    try:
+        data = config.to_dict()
+    except (TypeError, ValueError, RecursionError) as err:
+        raise ConfigError("config", f"cannot be read as a configuration: {err}") from err
+    return from_dict(data)
 
 
 def memory_estimate(config: ExperimentConfig, n: int, m: int) -> float:

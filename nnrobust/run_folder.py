@@ -324,6 +324,11 @@ def write_run(folder: str | Path, result, overwrite: bool = False, plots: bool =
     run goes to ``<folder>.<status>`` (returned) instead. Ctrl-C during the plots raises
     :class:`ExtrasInterrupted` after the folder is in place.
     """
+    from .results import Result
+
+    if not isinstance(result, Result):
+        raise RunFolderError(f"write_run needs a Result (what run_experiment returns), got "
+                             f"{type(result).__name__}")
     folder = check_out_folder(folder, overwrite)
     if (result.status != "completed" and is_run_folder(folder) and _status_of(folder) == "completed"):
         kept = folder

@@ -693,6 +693,39 @@ def _claim(epsilon, beta, failures=0):
     return check
 
 
+def _mutated(change):
+    def run():
+        from nnrobust.experiment import build
+        from nnrobust.presets import load_preset
+
+        config = load_preset("paper-ellipse")
+        change(config)
+        return build(config)
+
+    return run
+
+
+API_CASES = [
+    Case("Python API: controller.kind changed to 'lqr' after loading",
+         lambda d: _mutated(lambda c: setattr(c.controller, "kind", "lqr")), ex.ConfigError,
+         "controller.kind: 'lqr' is not one of nn, no-u0"),
+    Case("Python API: a negative Kp set after loading",
+         lambda d: _mutated(lambda c: setattr(c.controller, "Kp", [-1.0, -1.0])), ex.ConfigError,
+         "controller.Kp: must be positive, got [-1.0, -1.0]"),
+    Case("Python API: duration = nan set after loading",
+         lambda d: _mutated(lambda c: setattr(c.simulation, "duration", float("nan"))), ex.ConfigError,
+         "simulation.duration: expected a finite number, got nan"),
+    Case("Python API: control_period = 0 set after loading",
+         lambda d: _mutated(lambda c: setattr(c.simulation, "control_period", 0.0)), ex.ConfigError,
+         "simulation.control_period: must be positive, got 0.0"),
+    Case("Python API: substeps = 0 set after loading",
+         lambda d: _mutated(lambda c: setattr(c.simulation, "substeps", 0)), ex.ConfigError,
+         "simulation.substeps: must be positive, got 0"),
+    Case("Python API: write_run given something else than a Result",
+         lambda d: (lambda: __import__("nnrobust").write_run(d / "run", 3)), RunFolderError,
+         "write_run needs a Result (what run_experiment returns), got int"),
+]
+
 PROPERTY_CASES = [
     Case("--require: not an expression", lambda d: _require("rms_error < 0.05 mm"), ex.ConfigError,
          "is not METRIC OP VALUE with OP one of <= >= == != < >"),
@@ -746,7 +779,7 @@ FALSIFY_CASES = [
 ]
 
 CASES = (URDF_CASES + CONFIG_CASES + RUN_FOLDER_CASES + VIEWER_CASES + TUNE_CASES + CUSTOM_CASES
-         + PROPERTY_CASES + FALSIFY_CASES)
+         + PROPERTY_CASES + FALSIFY_CASES + API_CASES)
 
 
 def message_of(case: Case, folder: Path) -> str:
