@@ -841,6 +841,36 @@ def _check_custom(c: ControllerConfig) -> None:
                           "\"package.module:Class\"")
 
 
+MAX_GAIN = 1e12
+"""Largest gain or adaptation rate accepted: beyond it a 1 ms sampled loop is numerically
+meaningless, and the two loops' rounding would tell different stories."""
+
+RANGE_LIMITS = (1e-9, 1e9)
+"""Accepted span of the NN basis ranges (velocity_range, error_range): a Gaussian of width 1e-300
+underflows to 0/0 in one loop and not the other."""
+
+
+def _within_range(config: ExperimentConfig) -> None:
+    """Values both loops compute the same way: gains up to :data:`MAX_GAIN`, basis ranges within
+    :data:`RANGE_LIMITS`; beyond, a refusal rather than two different runs.
+    """
+    c, nn = config.controller, config.nn
+    for key, values in (("controller.Kp", c.Kp), ("controller.Kv", c.Kv), ("controller.pd_Kp", c.pd_Kp),
+                        ("controller.pd_Kd", c.pd_Kd), ("controller.k", [c.k]),
+                        ("controller.sliding_gain", [c.sliding_gain]),
+                        ("controller.sliding_boundary", [c.sliding_boundary]), ("nn.F", [nn.F]),
+                        ("nn.gamma", [nn.gamma]), ("nn.sigma", [nn.sigma]), ("nn.eps0", [nn.eps0])):
+        if any(abs(v) > MAX_GAIN for v in values):
+            shown = values if len(values) > 1 else values[0]
+            raise ConfigError(key, f"{shown} is beyond {MAX_GAIN:g}; no sampled loop at a realistic period "
+                              "uses such a value")
+    low, high = RANGE_LIMITS
+    for key, values in (("nn.error_range", nn.error_range), ("nn.velocity_range", [nn.velocity_range])):
+        if any(not low <= v <= high for v in values):
+            shown = values if len(values) > 1 else values[0]
+            raise ConfigError(key, f"{shown} is outside [{low:g}, {high:g}]")
+
+
 def validate(config: ExperimentConfig) -> None:
     """Check values that a type alone does not constrain (robot-independent checks)."""
     c, nn, sim = config.controller, config.nn, config.simulation
@@ -915,6 +945,7 @@ def validate(config: ExperimentConfig) -> None:
     _positive("nn.width", nn.width)
     _positive("nn.velocity_range", nn.velocity_range)
     _positive("nn.error_range", nn.error_range)
+    _within_range(config)
     for key, number in (("nn.gamma", nn.gamma), ("nn.eps_min", nn.eps_min), ("nn.sigma", nn.sigma)):
         _non_negative(key, number)
     if nn.eps_min > nn.eps0:

@@ -706,6 +706,12 @@ def _mutated(change):
 
 
 API_CASES = [
+    Case("nn.error_range of 1e-300 (the loops would disagree)",
+         lambda d: _toml(d, f"{PAPER}[nn]\nbasis_input = 'error'\nerror_range = [1e-300, 1e-300]\n"),
+         ex.ConfigError, "nn.error_range: [1e-300, 1e-300] is outside [1e-09, 1e+09]"),
+    Case("gains of 1e300 (the loops would disagree)",
+         lambda d: _toml(d, f"{PAPER}[controller]\nKp = [1e300]\nKv = [1e300]\n"),
+         ex.ConfigError, "controller.Kp: [1e+300, 1e+300] is beyond 1e+12"),
     Case("Python API: controller.kind changed to 'lqr' after loading",
          lambda d: _mutated(lambda c: setattr(c.controller, "kind", "lqr")), ex.ConfigError,
          "controller.kind: 'lqr' is not one of nn, no-u0"),
