@@ -705,6 +705,36 @@ def _mutated(change):
     return run
 
 
+def _scheduler(address: str):
+    def check():
+        from nnrobust.sweep.engine import check_scheduler
+
+        return check_scheduler(address)
+
+    return check
+
+
+def _workers(count: int):
+    def check():
+        from nnrobust.sweep.engine import _client
+
+        with _client(count, None):
+            pass
+
+    return check
+
+
+SCHEDULER_CASES = [
+    Case("--scheduler 'not a url'", lambda d: _scheduler("not a url"), ex.NNRobustError,
+         "--scheduler 'not a url': not a dask scheduler's address; give tcp://HOST:PORT"),
+    Case("--scheduler with TLS", lambda d: _scheduler("tls://127.0.0.1:8786"), ex.NNRobustError,
+         "tls:// is not supported (a TLS cluster needs dask's security settings"),
+    Case("--scheduler at a refused port", lambda d: _scheduler("tcp://127.0.0.1:1"), ex.NNRobustError,
+         "--scheduler tcp://127.0.0.1:1: cannot connect (Connection refused)"),
+    Case("--workers -1", lambda d: _workers(-1), ex.NNRobustError,
+         "--workers -1: give 1 to 1024 local worker"),
+]
+
 API_CASES = [
     Case("nn.error_range of 1e-300 (the loops would disagree)",
          lambda d: _toml(d, f"{PAPER}[nn]\nbasis_input = 'error'\nerror_range = [1e-300, 1e-300]\n"),
@@ -785,7 +815,7 @@ FALSIFY_CASES = [
 ]
 
 CASES = (URDF_CASES + CONFIG_CASES + RUN_FOLDER_CASES + VIEWER_CASES + TUNE_CASES + CUSTOM_CASES
-         + PROPERTY_CASES + FALSIFY_CASES + API_CASES)
+         + PROPERTY_CASES + FALSIFY_CASES + API_CASES + SCHEDULER_CASES)
 
 
 def message_of(case: Case, folder: Path) -> str:

@@ -407,3 +407,41 @@ def test_a_sample_that_raises_is_a_row_and_the_sweep_goes_on(monkeypatch):
     rows = run_rows(spec, base_config(spec).to_toml(), [(0, "nn"), (1, "nn")])
     assert [r["status"] for r in rows] == ["error", "completed"]
     assert rows[0]["message"] == "ZeroDivisionError: a defect"
+
+
+def test_a_scheduler_address_that_is_not_a_scheduler_is_one_error_within_seconds(monkeypatch):
+    """Issue 22 item 17: a silent port and a server of another protocol (an immediate reply whose
+    first 8 bytes dask would read as an exabyte length) are refused before dask connects; a real
+    scheduler passes."""
+    import socket
+    import threading
+
+    from nnrobust.sweep import engine
+
+    monkeypatch.setattr(engine, "PROBE_SECONDS", 0.5)
+
+    def server(reply: bytes) -> int:
+        sock = socket.socket()
+        sock.bind(("127.0.0.1", 0))
+        sock.listen()
+
+        def serve():
+            conn, _ = sock.accept()
+            if reply:
+                conn.sendall(reply)
+            time.sleep(2)
+            conn.close()
+            sock.close()
+
+        threading.Thread(target=serve, daemon=True).start()
+        return sock.getsockname()[1]
+
+    start = time.perf_counter()
+    with pytest.raises(NNRobustError, match="no dask handshake within 0.5 s"):
+        engine.check_scheduler(f"127.0.0.1:{server(b'')}")
+    with pytest.raises(NNRobustError, match="does not speak dask's protocol"):
+        engine.check_scheduler(f"tcp://127.0.0.1:{server(b'HTTP/1.1 400 Bad Request')}")
+    assert time.perf_counter() - start < 3
+    with engine._client(1, None) as client:
+        address = client.cluster.scheduler_address
+        assert engine.check_scheduler(address) == address

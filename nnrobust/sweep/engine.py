@@ -159,6 +159,64 @@ dashboard (dask/distributed#7207, #8136), on port 8787 of the cluster's host; he
 loopback port, so that it neither takes 8787 nor listens beyond this machine."""
 
 
+MAX_WORKERS = 1024
+"""Most local worker processes (--workers)."""
+
+PROBE_SECONDS = 5.0
+"""How long a scheduler has to accept the connection and send its handshake."""
+
+MAX_HANDSHAKE = 1 << 20
+"""Most bytes a scheduler's first message may announce: a dask handshake is a few hundred; a
+server of another protocol announces anything (its first 8 bytes read as a length)."""
+
+
+def check_scheduler(address: str) -> str:
+    """``tcp://HOST:PORT`` of a reachable dask scheduler, checked before dask connects: the address
+    parsed, the port open within :data:`PROBE_SECONDS`, and the peer's first message framed as a
+    dask handshake of at most :data:`MAX_HANDSHAKE` bytes. A web server, a silent or refusing port,
+    or another protocol is one clear error, never a hang or a huge allocation.
+    """
+    import socket
+    import struct
+    from urllib.parse import urlsplit
+
+    text = address if "://" in address else f"tcp://{address}"
+    parts = urlsplit(text)
+    try:
+        port = parts.port
+    except ValueError:
+        port = None
+    if parts.scheme != "tcp" or not parts.hostname or port is None or not 0 < port < 65536 or parts.path:
+        hint = "" if parts.scheme in ("tcp", "") else f"; {parts.scheme}:// is not supported"
+        if parts.scheme == "tls":
+            hint += " (a TLS cluster needs dask's security settings: connect from Python, distributed.Client)"
+        raise NNRobustError(f"--scheduler {address!r}: not a dask scheduler's address; give tcp://HOST:PORT, "
+                            f"e.g. tcp://127.0.0.1:8786{hint}")
+    where = f"--scheduler {address}"
+    try:
+        with socket.create_connection((parts.hostname, port), timeout=PROBE_SECONDS) as sock:
+            sock.settimeout(PROBE_SECONDS)
+            head = b""
+            while len(head) < 8:
+                chunk = sock.recv(8 - len(head))
+                if not chunk:
+                    raise NNRobustError(f"{where}: the peer closed the connection without a dask handshake; "
+                                        "is it a dask scheduler?")
+                head += chunk
+    except TimeoutError as err:
+        raise NNRobustError(f"{where}: no dask handshake within {PROBE_SECONDS:g} s (a silent port, or a "
+                            "server of another protocol such as a web server); give a dask scheduler's "
+                            "address") from err
+    except OSError as err:
+        raise NNRobustError(f"{where}: cannot connect ({err.strerror or err}); is a dask scheduler running "
+                            "there?") from err
+    (announced,) = struct.unpack("<Q", head)
+    if not 0 < announced <= MAX_HANDSHAKE:
+        raise NNRobustError(f"{where}: the peer does not speak dask's protocol (its first message announces "
+                            f"{announced} bytes); give a dask scheduler's address")
+    return f"tcp://{parts.hostname}:{port}"
+
+
 @contextmanager
 def _client(workers: int | None, scheduler: str | None):
     """A client of an existing scheduler, or of a LocalCluster on 127.0.0.1 (its HTTP server on a
@@ -168,12 +226,14 @@ def _client(workers: int | None, scheduler: str | None):
     from distributed import Client, LocalCluster
 
     if scheduler:
-        client = Client(scheduler, timeout="20s")
+        client = Client(check_scheduler(scheduler), timeout="20s")
         try:
             yield client
         finally:
             client.close()
         return
+    if workers is not None and not (isinstance(workers, int) and 1 <= workers <= MAX_WORKERS):
+        raise NNRobustError(f"--workers {workers}: give 1 to {MAX_WORKERS} local worker processes")
     cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
                            processes=True, host="127.0.0.1", dashboard_address=LOOPBACK_HTTP,
                            silence_logs=logging.ERROR)
