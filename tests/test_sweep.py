@@ -445,3 +445,24 @@ def test_a_scheduler_address_that_is_not_a_scheduler_is_one_error_within_seconds
     with engine._client(1, None) as client:
         address = client.cluster.scheduler_address
         assert engine.check_scheduler(address) == address
+
+
+def test_grids_of_mixed_types_and_seeds_beyond_2_53_are_stored_exactly(tmp_path):
+    """Issue 22 item 13: a grid mixing a name and a list, and seeds beyond 2^53, used to crash
+    pyarrow on the first part; runs shorter than 2 s used to crash the plots."""
+    path = _sweep_file(tmp_path, text="""
+name = "mix"
+base = "paper-ellipse"
+controllers = ["pd"]
+[set]
+"simulation.duration" = 0.3
+[vary]
+"plant.torque_limits" = ["urdf", [60.0, 40.0, 20.0]]
+"sensing.seed" = [9007199254740993, 3]
+""")
+    assert main(["sweep", str(path), "--out", str(tmp_path / "out"), "--workers", "1", "--quiet"]) == 0
+    frame = read_results(tmp_path / "out")
+    assert set(frame["sensing.seed"]) == {9007199254740993, 3}  # exact: a float64 column would round it
+    assert set(frame["plant.torque_limits"]) == {"urdf", "[60.0, 40.0, 20.0]"}
+    assert set(frame["status"]) == {"completed"}
+    assert (tmp_path / "out" / "plots" / "error_vs_plant_torque_limits.png").is_file()

@@ -102,13 +102,17 @@ def schema(spec: SweepSpec):
     from ..results import METRIC_UNITS
 
     def varied_type(values):
+        numbers = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values)
         if all(isinstance(v, bool) for v in values):
             return pa.bool_()
-        if all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in values):
+        if numbers and all(isinstance(v, int) for v in values):
+            return pa.int64()  # seeds: exact beyond 2^53, where a float64 column would round them
+        if numbers:
             return pa.float64()
-        if all(isinstance(v, list) for v in values):
+        if all(isinstance(v, list) and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)
+               for v in values):
             return pa.list_(pa.float64())
-        return pa.string()
+        return pa.string()  # strings, or a mix of types: each value as its TOML text
 
     fields = [("sample", pa.int64()), ("controller", pa.string())]
     for key, value in spec.vary.items():
@@ -122,12 +126,22 @@ def schema(spec: SweepSpec):
     return pa.schema(fields)
 
 
+def _toml_text(value) -> str:
+    from ..config import dump_toml
+
+    return dump_toml({"v": value}).split(" = ", 1)[1].strip()
+
+
 def _write_part(folder: Path, rows: list[dict], table_schema) -> Path:
     """One Parquet part, written to a hidden file and renamed into place."""
     import pyarrow as pa
     import pyarrow.parquet as pq
 
     columns = {name: [row.get(name) for row in rows] for name in table_schema.names}
+    for field in table_schema:  # a varied value of another type than its column's: its TOML text
+        if field.type == pa.string():
+            columns[field.name] = [v if v is None or isinstance(v, str) else _toml_text(v)
+                                   for v in columns[field.name]]
     table = pa.Table.from_pydict(columns, schema=table_schema)
     path = folder / RESULTS / f"part-{uuid.uuid4().hex[:12]}.parquet"
     tmp = path.with_name(f".{path.name}.partial")

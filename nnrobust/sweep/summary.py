@@ -94,6 +94,7 @@ def plot_sweep(spec: SweepSpec, frame, folder: str | Path) -> list[Path]:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    import pandas as pd
 
     out = Path(folder) / "plots"
     out.mkdir(parents=True, exist_ok=True)
@@ -138,11 +139,17 @@ def plot_sweep(spec: SweepSpec, frame, folder: str | Path) -> list[Path]:
         for controller in spec.controllers:
             rows = done[done["controller"] == controller]
             values = rows[key]
-            if values.dtype == object:  # lists (a gain vector) or strings: plot against their index
-                labels = sorted({str(v) for v in values})
+            labels = None
+            if not pd.api.types.is_numeric_dtype(values):  # lists, strings, mixed: plot against their index
+                labels = sorted({str(v) for v in done[key]})
                 values = [labels.index(str(v)) for v in values]
-            ax.scatter(values, 1e3 * rows["rms_error_after_2s"].to_numpy(dtype=float), s=10, alpha=0.6,
-                       label=controller)
+            error = 1e3 * rows["rms_error_after_2s"].to_numpy(dtype=float)
+            shown = np.isfinite(error)
+            if shown.any():
+                ax.scatter(np.asarray(values, dtype=float)[shown], error[shown], s=10, alpha=0.6,
+                           label=controller)
+            if labels is not None:
+                ax.set_xticks(range(len(labels)), [label[:20] for label in labels], fontsize=7)
         log_scale(ax, "y", done["rms_error_after_2s"])
         ax.set_xlabel(key)
         ax.set_ylabel("RMS task error, t >= 2 s [mm]")
