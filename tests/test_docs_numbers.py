@@ -136,6 +136,11 @@ def _study(controller, statistic):
     return ["controllers", controller, "rms_error_after_2s", statistic]
 
 
+def _grid(controller, point, statistic):
+    """A statistic of one grid point (plant.disturbance_scale) of a shipped study's summary."""
+    return ["controllers", controller, "by_grid", "plant.disturbance_scale", point, statistic]
+
+
 def _held(case, controller, sensing="noisy"):
     """The held-out RMS error of a controller's best setting in tuned_comparison.json."""
     def get(data):
@@ -194,6 +199,22 @@ QUOTED_FIGURES: list[tuple] = [
      1e3),
     ("docs/fair-comparison.md", r"it ends worse: [\d.]+ and ([\d.]+) mm", TUNED,
      _held(CASE_B, "sliding-mode"), 1e3),
+    ("docs/controller.md", r"smoothness: ([\d.]+) mm against", "paper_reproduction",
+     _row(CASE_B, "NN, defaults"), 1e3),
+    ("docs/controller.md", r"paper's law's (\d+) mm, but", "paper_reproduction",
+     _row(CASE_B, "NN, paper's law, ideal actuators"), 1e3),
+    ("docs/controller.md", r"tracks to ([\d.]+) mm at", "paper_reproduction",
+     _row(CASE_B, "NN, tuned (Kp 400, Kv 40, sigma 0.5), 120 s"), 1e3),
+    ("docs/robustness.md", r"median error grows from (\d+) mm to", PAPER, _grid("nn", "0.5", "median"), 1e3),
+    ("docs/robustness.md", r"median error grows from \d+ mm to (\d+) mm", PAPER, _grid("nn", "2.0", "median"),
+     1e3),
+    ("docs/robustness.md", r"friction × 0.52\) reaches (\d+) mm", PAPER, _study("nn", "max"), 1e3),
+    ("docs/robustness.md", r"p95 (\d+) mm at twice the", PAPER, _grid("sliding-mode", "2.0", "p95"), 1e3),
+    ("docs/robustness.md", r"disturbance, against (\d+) mm", PAPER, _grid("nn", "2.0", "p95"), 1e3),
+    ("docs/robustness.md", r"has the best median\*\* \(([\d.]+) mm\)", PANDA, _study("nn", "median"), 1e3),
+    ("docs/robustness.md", r"has a median of ([\d.]+) mm", PANDA, _study("sliding-mode", "median"), 1e3),
+    ("docs/robustness.md", r"and a maximum of ([\d.]+) mm over all", PANDA, _study("sliding-mode", "max"),
+     1e3),
 ]
 """Figures quoted in prose, each checked against its data file (within half a unit of the last
 printed digit, or 2 %)."""
