@@ -62,6 +62,11 @@ class NominalConfig:
             beta-hat and p-hat entries scaled so (< 1).
         com_error: each centre of mass moved by a seeded random vector up to this long [m] (urdf).
         seed: seed of the random perturbation.
+        factors: one multiplicative factor per perturbed inertial parameter, applied after the
+            perturbations above, so that a model error has a direction a search can move along
+            (docs/falsification.md): closed-form, 6 factors on (beta_1, beta_2, beta_3, p_1,
+            p_2, p_3); urdf, 2 per body with mass, the masses first, then the rotational inertias.
+            A single entry is set as ``nominal.factors[i]``; the others are then 1.
         viscous_friction: F_d-hat [N m s/rad] (default 0).
         coulomb_friction: Coulomb friction in N-hat [N m] (default 0: Coulomb friction unmodelled).
 
@@ -75,13 +80,15 @@ class NominalConfig:
     relative_error: float = 0.0
     com_error: float = 0.0
     seed: int = 0
+    factors: list[float] | None = None
     viscous_friction: list[float] | None = None
     coulomb_friction: list[float] | None = None
 
     @property
     def perturbed(self) -> bool:
         """Whether any inertial perturbation of the URDF model is asked for."""
-        return (self.mass_scale, self.inertia_scale, self.relative_error, self.com_error) != (1, 1, 0, 0)
+        scales = (self.mass_scale, self.inertia_scale, self.relative_error, self.com_error) != (1, 1, 0, 0)
+        return scales or self.factors is not None
 
 
 @dataclass
@@ -871,6 +878,16 @@ def _within_range(config: ExperimentConfig) -> None:
             raise ConfigError(key, f"{shown} is outside [{low:g}, {high:g}]")
 
 
+MAX_FACTOR = 100.0
+"""Largest factor on a nominal inertial parameter (``nominal.factors``)."""
+
+INDEXED = re.compile(r"^([a-z_]+)\.([A-Za-z_]+)\[(\d{1,4})\]$")
+"""``section.field[i]``: one entry of a list-valued key (``nominal.factors[2]``)."""
+
+FILLED_LISTS = {("nominal", "factors"): 1.0}
+"""List keys whose entries not given are known (a factor not given is 1): set entry by entry."""
+
+
 def validate(config: ExperimentConfig) -> None:
     """Check values that a type alone does not constrain (robot-independent checks)."""
     c, nn, sim = config.controller, config.nn, config.simulation
@@ -958,6 +975,8 @@ def validate(config: ExperimentConfig) -> None:
                           f"{nc.relative_error}")
     if nc.com_error < 0:
         raise ConfigError("nominal.com_error", f"must be >= 0 [m], got {nc.com_error}")
+    if nc.factors is not None and any(not 0 < f <= MAX_FACTOR for f in nc.factors):
+        raise ConfigError("nominal.factors", f"each factor must be in (0, {MAX_FACTOR:g}], got {nc.factors}")
     if nominal_kind(config) == "closed-form" and (nc.mass_scale, nc.inertia_scale, nc.com_error) != (1, 1, 0):
         raise ConfigError("nominal.kind", "mass_scale, inertia_scale and com_error perturb the URDF "
                           "model: set kind = 'urdf' (closed-form takes beta, p and relative_error)")
@@ -1115,8 +1134,17 @@ def _field_names(cls) -> list[str]:
 
 def check_dotted_key(key: str) -> None:
     """Refuse a dotted key that names no field of the experiment schema (``section.field``, or a
-    top-level ``name`` / ``description``), with a suggestion.
+    top-level ``name`` / ``description``, or ``section.field[i]`` of a list field), with a
+    suggestion.
     """
+    indexed = INDEXED.match(key)
+    if indexed:
+        section, field_name, _ = indexed.groups()
+        check_dotted_key(f"{section}.{field_name}")
+        annotation = typing.get_type_hints(typing.get_type_hints(ExperimentConfig)[section])[field_name]
+        if "list" not in str(annotation):
+            raise ConfigError(key, f"{section}.{field_name} is not a list; index only list keys")
+        return
     parts = key.split(".")
     top = _field_names(ExperimentConfig)
     hints = typing.get_type_hints(ExperimentConfig)
@@ -1145,7 +1173,11 @@ def apply_overrides(config: ExperimentConfig, overrides: dict) -> ExperimentConf
     for key, value in overrides.items():
         check_dotted_key(key)
         parts = key.split(".")
-        if len(parts) == 1:
+        indexed = INDEXED.match(key)
+        if indexed:
+            section, field_name, index = indexed.groups()
+            _set_entry(data.setdefault(section, {}), section, field_name, int(index), value)
+        elif len(parts) == 1:
             data[parts[0]] = value
         elif len(parts) == 3:  # controller.params.NAME
             section = data.setdefault(parts[0], {})
@@ -1153,6 +1185,25 @@ def apply_overrides(config: ExperimentConfig, overrides: dict) -> ExperimentConf
         else:
             data.setdefault(parts[0], {})[parts[1]] = value
     return from_dict(data)
+
+
+def _set_entry(table: dict, section: str, field_name: str, index: int, value) -> None:
+    """``section.field[index] = value`` in a section's table: a list key given in full, or one
+    whose missing entries are known (:data:`FILLED_LISTS`).
+    """
+    current = table.get(field_name)
+    fill = FILLED_LISTS.get((section, field_name))
+    if current is None and fill is None:
+        raise ConfigError(f"{section}.{field_name}[{index}]", f"{section}.{field_name} is not set: give the "
+                          "whole list first (in [set]), then vary its entries")
+    entries = list(current) if current is not None else []
+    if index >= len(entries):
+        if fill is None:
+            raise ConfigError(f"{section}.{field_name}[{index}]",
+                              f"{section}.{field_name} has {len(entries)} entries")
+        entries += [fill] * (index + 1 - len(entries))
+    entries[index] = value
+    table[field_name] = entries
 
 
 def parse_override(text: str) -> tuple[str, object]:

@@ -196,6 +196,8 @@ def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsMo
         if nc.perturbed:
             model = perturb_inertias(robot.model, nc.mass_scale, nc.inertia_scale,
                                      nc.relative_error, nc.com_error, nc.seed)
+            if nc.factors is not None:
+                model = _with_factors(model, nc.factors)
         else:
             model = robot.model  # the same Pinocchio model (read-only), with its own Data
         return PinocchioModel(model, robot.task_frame, robot.task, robot.name)
@@ -207,10 +209,35 @@ def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsMo
     if nc.relative_error:
         factors = 1 + np.random.default_rng(nc.seed).uniform(-nc.relative_error, nc.relative_error, 6)
         beta, p = tuple(np.multiply(beta, factors[:3])), tuple(np.multiply(p, factors[3:]))
+    if nc.factors is not None:
+        factors = _padded(nc.factors, 6, "the closed-form model has 6 parameters (beta_1..3, p_1..3)")
+        beta, p = tuple(np.multiply(beta, factors[:3])), tuple(np.multiply(p, factors[3:]))
     return ThreeLinkPlanarModel(
         ThreeLinkParameters(beta, p, true.lengths, true.gamma, true.gravity),
         joint_names=robot.joint_names,
     )
+
+
+def _padded(factors: list[float], size: int, what: str) -> list[float]:
+    """``nominal.factors`` with the entries not given as 1; more than the model has is refused."""
+    if len(factors) > size:
+        raise ConfigError("nominal.factors", f"{what}; got {len(factors)} factors")
+    return list(factors) + [1.0] * (size - len(factors))
+
+
+def _with_factors(model: pin.Model, factors: list[float]) -> pin.Model:
+    """The model with each body's mass and rotational inertia (about its centre of mass) times its
+    factor of ``nominal.factors``: the masses first, then the inertias, bodies with mass in order.
+    """
+    bodies = [j for j in range(1, model.njoints) if model.inertias[j].mass > 0]
+    factors = _padded(factors, 2 * len(bodies), f"the URDF model has {len(bodies)} bodies with mass: "
+                      f"{2 * len(bodies)} factors, masses then inertias")
+    out = pin.Model(model)
+    for i, j in enumerate(bodies):
+        body = model.inertias[j]
+        out.inertias[j] = pin.Inertia(body.mass * factors[i], np.asarray(body.lever),
+                                      np.asarray(body.inertia) * factors[len(bodies) + i])
+    return out
 
 
 def _make_criterion(name: str, config: ExperimentConfig, robot: PinocchioModel) -> Criterion:

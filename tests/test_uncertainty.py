@@ -1,6 +1,8 @@
 """Model uncertainty for any URDF: perturbed nominal models stay physical; friction and
 disturbance scale with the robot."""
 
+import re
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -156,3 +158,33 @@ def test_relative_error_of_the_closed_form_model():
     assert not np.allclose(params(4), params(5))
     with pytest.raises(ConfigError, match="nominal.kind.*mass_scale"):
         apply_overrides(base, {"nominal.mass_scale": 1.1})
+
+
+def test_model_error_as_factors_a_search_can_move_along():
+    """nominal.factors: one factor per inertial parameter, set entry by entry (the others 1):
+    closed form on (beta, p), URDF on each body's mass then its rotational inertia."""
+    from nnrobust.config import apply_overrides
+    from nnrobust.exceptions import ConfigError
+    from nnrobust.experiment import build
+    from nnrobust.presets import load_preset
+
+    paper = load_preset("paper-ellipse")
+    exact = build(paper).nominal.params
+    scaled = build(apply_overrides(paper, {"nominal.factors[4]": 1.3, "nominal.factors[0]": 0.8}))
+    scaled = scaled.nominal.params
+    np.testing.assert_allclose(scaled.p, np.multiply(exact.p, [1.0, 1.3, 1.0]), rtol=1e-15)
+    np.testing.assert_allclose(scaled.beta, np.multiply(exact.beta, [0.8, 1.0, 1.0]), rtol=1e-15)
+    panda = load_preset("panda-ellipse")
+    base = build(panda).nominal.model
+    changed = build(apply_overrides(panda, {"nominal.factors[0]": 2.0, "nominal.factors[13]": 0.5}))
+    changed = changed.nominal.model
+    assert changed.inertias[1].mass == pytest.approx(2 * base.inertias[1].mass, rel=1e-15)
+    np.testing.assert_allclose(changed.inertias[7].inertia, 0.5 * base.inertias[7].inertia, rtol=1e-15)
+    assert changed.inertias[2].mass == base.inertias[2].mass
+    for overrides, words in (({"nominal.seed[0]": 1}, "not a list"),
+                             ({"controller.Kp[5]": 1.0}, "has 2 entries"),
+                             ({"nominal.factors[1]": -1.0}, "must be in (0, 100]")):
+        with pytest.raises(ConfigError, match=re.escape(words)):
+            apply_overrides(paper, overrides)
+    with pytest.raises(ConfigError, match="the closed-form model has 6 parameters"):
+        build(apply_overrides(paper, {"nominal.factors[6]": 1.1}))
