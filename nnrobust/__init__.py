@@ -30,6 +30,8 @@ _EXPORTS = {
     "read_results": ".sweep",
     "TuneSpec": ".tune",
     "run_tune": ".tune",
+    "FalsifySpec": ".falsify",
+    "run_falsify": ".falsify",
     # the contract of a controller of your own (docs/extending.md)
     "Controller": ".controllers",
     "ControlOutput": ".controllers",
