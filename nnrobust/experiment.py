@@ -207,11 +207,11 @@ def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsMo
     beta = true.beta if nc.beta is None else tuple(_vector("nominal.beta", nc.beta, 3))
     p = true.p if nc.p is None else tuple(_vector("nominal.p", nc.p, 3))
     if nc.relative_error:
-        factors = 1 + np.random.default_rng(nc.seed).uniform(-nc.relative_error, nc.relative_error, 6)
-        beta, p = tuple(np.multiply(beta, factors[:3])), tuple(np.multiply(p, factors[3:]))
+        drawn = 1 + np.random.default_rng(nc.seed).uniform(-nc.relative_error, nc.relative_error, 6)
+        beta, p = tuple(np.multiply(beta, drawn[:3])), tuple(np.multiply(p, drawn[3:]))
     if nc.factors is not None:
-        factors = _padded(nc.factors, 6, "the closed-form model has 6 parameters (beta_1..3, p_1..3)")
-        beta, p = tuple(np.multiply(beta, factors[:3])), tuple(np.multiply(p, factors[3:]))
+        given = _padded(nc.factors, 6, "the closed-form model has 6 parameters (beta_1..3, p_1..3)")
+        beta, p = tuple(np.multiply(beta, given[:3])), tuple(np.multiply(p, given[3:]))
     return ThreeLinkPlanarModel(
         ThreeLinkParameters(beta, p, true.lengths, true.gamma, true.gravity),
         joint_names=robot.joint_names,
