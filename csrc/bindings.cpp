@@ -110,7 +110,8 @@ NB_MODULE(_loop, m) {
   FIELD(viscous); FIELD(coulomb); FIELD(static_friction); FIELD(dist_amplitude); FIELD(dist_phase); FIELD(dist_omega);
   FIELD(torque_limit); FIELD(stops); FIELD(stop_lower); FIELD(stop_upper); FIELD(stop_stiffness);
   FIELD(stop_alpha); FIELD(position_noise); FIELD(velocity_noise); FIELD(resolution); FIELD(noise_q);
-  FIELD(noise_v); FIELD(delay); FIELD(nominal_kind); FIELD(nominal); FIELD(m); FIELD(nominal_viscous);
+  FIELD(noise_v); FIELD(delay); FIELD(mj_step); FIELD(mj_model); FIELD(mj_data); FIELD(mj_qpos); FIELD(mj_qvel);
+  FIELD(mj_ctrl); FIELD(mj_qfrc_applied); FIELD(mj_qpos_index); FIELD(mj_dof_index); FIELD(nominal_kind); FIELD(nominal); FIELD(m); FIELD(nominal_viscous);
   FIELD(nominal_coulomb); FIELD(coulomb_smoothing); FIELD(center); FIELD(axis_a); FIELD(axis_b);
   FIELD(path_kind); FIELD(path_breaks); FIELD(path_coefficients);
   FIELD(omega); FIELD(phase); FIELD(pose); FIELD(rotation0); FIELD(rotation_axis);

@@ -598,7 +598,7 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
   Controller controller(s, *nominal);
   Plant plant{model, s};
   std::unique_ptr<StickSlipIntegrator> stick_slip;
-  if (plant.any_sticky()) stick_slip = std::make_unique<StickSlipIntegrator>(plant, s.v0);
+  if (plant.any_sticky() && !s.mj_step) stick_slip = std::make_unique<StickSlipIntegrator>(plant, s.v0);
   const bool noisy = s.noise_q.rows() > 0;
   Vector q = s.q0, v = s.v0, z = s.z0, tau = Vector::Zero(n);
   std::deque<Vector> commands;
@@ -661,6 +661,25 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
       break;
     }
     z = out.z;
+    if (s.mj_step) {  // MujocoPlant.advance: MuJoCo's steps with tau held, -tau_d at each mid-step
+      using Step = void (*)(const void *, void *);
+      const auto step = reinterpret_cast<Step>(s.mj_step);
+      auto *ctrl = reinterpret_cast<double *>(s.mj_ctrl);
+      auto *applied = reinterpret_cast<double *>(s.mj_qfrc_applied);
+      const auto *qpos = reinterpret_cast<const double *>(s.mj_qpos);
+      const auto *qvel = reinterpret_cast<const double *>(s.mj_qvel);
+      for (int i = 0; i < n; ++i) ctrl[i] = tau[i];
+      for (int j = 0; j < s.substeps; ++j) {
+        const double mid = t + (j + 0.5) * h;
+        for (int i = 0; i < n; ++i) applied[s.mj_dof_index[i]] = -plant.disturbance(i, mid);
+        step(reinterpret_cast<const void *>(s.mj_model), reinterpret_cast<void *>(s.mj_data));
+      }
+      for (int i = 0; i < n; ++i) {
+        q[i] = qpos[s.mj_qpos_index[i]];
+        v[i] = qvel[s.mj_dof_index[i]];
+      }
+      continue;
+    }
     if (stick_slip) {  // simulation.simulate with the plant's stick-slip integrator
       for (int i = 0; i < s.substeps; ++i) stick_slip->advance(t + i * h, q, v, tau, h, i == 0);
       continue;

@@ -3,6 +3,7 @@
 // the comments; tests/test_compiled.py holds the two equal.
 #pragma once
 
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -41,6 +42,14 @@ struct LoopSpec {
   Vector position_noise, velocity_noise, resolution;  // n (zeros: ideal)
   Rows noise_q, noise_v;                              // steps x n standard normal draws (or empty)
   int delay = 0;
+  // plant.engine = "mujoco" (nnrobust/plant/mujoco_engine.py, MujocoPlant.advance): MuJoCo steps the
+  // plant. The addresses of its mj_step, mjModel and mjData and of qpos, qvel, ctrl and qfrc_applied
+  // inside the data (the caller keeps them alive for the run, and resets the state to q0, v0);
+  // joint i sits at qpos[mj_qpos_index[i]], qvel[mj_dof_index[i]] and ctrl[i]. No MuJoCo header is
+  // needed: mj_step(const mjModel*, mjData*) is the only call.
+  std::uintptr_t mj_step = 0, mj_model = 0, mj_data = 0;
+  std::uintptr_t mj_qpos = 0, mj_qvel = 0, mj_ctrl = 0, mj_qfrc_applied = 0;
+  std::vector<int> mj_qpos_index, mj_dof_index;
   // nominal model: "closed-form" (ThreeLinkSpec) or "pinocchio" (a second LoadedModel)
   std::string nominal_kind = "closed-form";
   ThreeLinkSpec nominal;

@@ -213,6 +213,14 @@ def loop_spec(setup, duration: float):
         draws = np.random.default_rng(sensor.seed).standard_normal((steps, 2, n))
         s.noise_q, s.noise_v = f(draws[:, 0, :]), f(draws[:, 1, :])
     s.delay = plant.delay
+    if plant.engine is not None:  # MuJoCo steps the plant, from (q0, v0)
+        plant.engine.reset(setup.q0, setup.v0)
+        where = plant.engine.addresses()
+        s.mj_step, s.mj_model, s.mj_data = where["step"], where["model"], where["data"]
+        s.mj_qpos, s.mj_qvel, s.mj_ctrl = where["qpos"], where["qvel"], where["ctrl"]
+        s.mj_qfrc_applied = where["qfrc_applied"]
+        s.mj_qpos_index = [int(i) for i in plant.engine.qpos_index]
+        s.mj_dof_index = [int(i) for i in plant.engine.dof_index]
     s.m = setup.robot.m
     _criterion_spec(s, setup, f)
     if is_custom(controller):  # the hybrid loop: the law is Python's, only its state size matters here
@@ -271,7 +279,7 @@ def _prepared(setup, duration: float):
     if refusal:
         raise NNRobustError(f"simulation.backend = 'compiled': {refusal}")
     spec = loop_spec(setup, duration)
-    plant = load_model(setup.robot.model, setup.robot.task_frame)
+    plant = load_model(setup.plant.model.pinocchio_model, setup.robot.task_frame)
     nominal = (load_model(setup.nominal.model, setup.nominal.task_frame) if spec.nominal_kind == "pinocchio"
                else None)
     return plant, nominal, spec
@@ -367,7 +375,7 @@ def simulate_hybrid(setup, duration: float):
     if refusal:
         raise NNRobustError(f"simulation.backend = 'hybrid': {refusal}")
     spec = loop_spec(setup, duration)
-    plant = load_model(setup.robot.model, setup.robot.task_frame)
+    plant = load_model(setup.plant.model.pinocchio_model, setup.robot.task_frame)
     law = _HybridLaw(setup.controller, spec.steps, setup.plant.nq, spec.period)
     trace = _trace(setup, spec, _module().run_hybrid(plant, spec, law))
     trace.signals = {name: values[:trace.t.size] for name, values in law.signals.items()}

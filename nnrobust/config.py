@@ -17,6 +17,7 @@ from pathlib import Path
 from .controllers.nn_compensator import DEFAULTS as NN_DEFAULTS
 from .exceptions import ConfigError
 from .model.tasks import TASK_KINDS
+from .plant.mujoco_engine import ENGINES, MUJOCO_INTEGRATORS
 
 
 @dataclass
@@ -122,6 +123,14 @@ class PlantConfig:
         joint_stop_stiffness: stop stiffness / the joint's torque scale [1/rad]: the stop
             pushes back with the joint's full effort at 1/joint_stop_stiffness beyond the limit.
         joint_stop_damping: Hunt-Crossley damping alpha of the stops [s/rad].
+        armature: rotor inertia added to the diagonal of M, one value for all joints or one per
+            joint [kg m^2 or kg] (none: 0); the true plant's alone, on either engine (a
+            nominal model from the URDF does not know it).
+        engine: the true plant's physics: ``pinocchio`` (this package's plant, docs/plant.md) or
+            ``mujoco`` (MuJoCo built from the same URDF and audited against Pinocchio;
+            docs/engines.md; needs ``pip install 'nnrobust[mujoco]'``).
+        mujoco_integrator: MuJoCo's integrator: ``implicitfast`` (MuJoCo's recommendation:
+            damping implicit), ``rk4``, ``euler`` or ``implicit``.
 
     """
 
@@ -142,6 +151,9 @@ class PlantConfig:
     joint_stops: bool = True
     joint_stop_stiffness: float = 100.0
     joint_stop_damping: float = 1.0
+    armature: list[float] | None = None
+    engine: str = "pinocchio"
+    mujoco_integrator: str = "implicitfast"
 
 
 @dataclass
@@ -906,6 +918,8 @@ def validate(config: ExperimentConfig) -> None:
         "nominal.kind": (config.nominal.kind, ("auto", "closed-form", "urdf")),
         "plant.friction": (config.plant.friction, ("urdf", "scaled")),
         "plant.disturbance": (config.plant.disturbance, ("auto", "paper", "none", "scaled", "sinusoid")),
+        "plant.engine": (config.plant.engine, ENGINES),
+        "plant.mujoco_integrator": (config.plant.mujoco_integrator, MUJOCO_INTEGRATORS),
         "controller.kind": (c.kind, (*CONTROLLER_KINDS, "custom")),
         "nn.law": (nn.law, ("corrected", "printed")),
         "nn.basis_input": (nn.basis_input, ("joint", "error")),
@@ -993,6 +1007,12 @@ def validate(config: ExperimentConfig) -> None:
         _positive("plant.torque_limits", pc.torque_limits)
     _positive("plant.joint_stop_stiffness", pc.joint_stop_stiffness)
     _non_negative("plant.joint_stop_damping", pc.joint_stop_damping)
+    if pc.armature is not None and (not pc.armature or any(not 0 <= a < 1e6 for a in pc.armature)):
+        raise ConfigError("plant.armature", f"needs one value for all joints or one per joint, each in "
+                          f"[0, 1e6) [kg m^2 or kg], got {pc.armature}")
+    if pc.engine == "mujoco" and sim.integrator != "rk4":
+        raise ConfigError("simulation.integrator", f"{sim.integrator!r} integrates the pinocchio engine; "
+                          "MuJoCo has its own (plant.mujoco_integrator)")
     se = config.sensing
     for path, values in (("sensing.position_noise", se.position_noise),
                          ("sensing.velocity_noise", se.velocity_noise),

@@ -181,8 +181,31 @@ def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
         disturbance = SinusoidalDisturbance(
             disturbance.amplitude * pc.disturbance_scale, disturbance.omega, disturbance.phase
         )
-    return Plant(robot, friction, disturbance, build_torque_limits(config, robot),
+    return Plant(true_model(config, robot), friction, disturbance, build_torque_limits(config, robot),
                  build_stops(config, robot, tau_ref), build_sensor(config, n), config.sensing.delay)
+
+
+def true_model(config: ExperimentConfig, robot: PinocchioModel) -> PinocchioModel:
+    """The true robot's dynamics: the robot, with ``plant.armature`` on the diagonal of M (a copy)."""
+    if config.plant.armature is None:
+        return robot
+    model = pin.Model(robot.model)
+    model.armature = _vector("plant.armature", config.plant.armature, robot.nq)
+    true = PinocchioModel(model, robot.task_frame, robot.task, robot.name)
+    true.urdf_text = robot.urdf_text
+    return true
+
+
+def build_engine(config: ExperimentConfig, plant: Plant, substeps: int) -> None:
+    """Give the plant MuJoCo as its engine (``plant.engine = "mujoco"``), built and audited."""
+    if config.plant.engine != "mujoco":
+        return
+    from .plant.mujoco_engine import build_mujoco_plant
+
+    pc, true = config.plant, plant.model
+    assert isinstance(true, PinocchioModel)  # build_plant's true_model
+    plant.engine = build_mujoco_plant(true, plant, config.simulation.control_period, substeps,
+                                      pc.mujoco_integrator, true.model.armature, pc.stiction)
 
 
 def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsModel:
@@ -190,8 +213,9 @@ def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsMo
     the true model itself for computed-torque control.
     """
     nc = config.nominal
-    if config.controller.kind == "computed-torque":
-        return PinocchioModel(robot.model, robot.task_frame, robot.task, robot.name)
+    if config.controller.kind == "computed-torque":  # the true model, armature included
+        exact = true_model(config, robot)
+        return PinocchioModel(exact.model, robot.task_frame, robot.task, robot.name)
     if nominal_kind(config) == "urdf":
         if nc.perturbed:
             model = perturb_inertias(robot.model, nc.mass_scale, nc.inertia_scale,
@@ -613,6 +637,7 @@ def build(config: ExperimentConfig) -> Setup:
     q0, v0 = initial_state(config, robot, trajectory)
     check_mass_matrix(robot, q0)
     substeps = plant_step(config, plant, q0)
+    build_engine(config, plant, substeps)
     context = build_context(config, robot, nominal, trajectory, criterion, plant, q0)
     controller = build_controller(config, robot, nominal, trajectory, criterion, plant.friction, context)
     check_workspace(config, robot, trajectory, q0)
@@ -717,6 +742,13 @@ def run_experiment(config: ExperimentConfig, progress=None, setup: Setup | None 
     result = Result.from_trace(trace, setup.robot, setup.trajectory, setup.criterion, config, wall,
                                setup.plant.torque_limit, setup.substeps)
     result.backend = backend
+    engine = setup.plant.engine
+    if engine is not None:
+        from .plant.mujoco_engine import AUDIT_STATES, AUDIT_TOLERANCE, mujoco_version
+
+        result.plant_engine = "mujoco"
+        result.engine_audit = {"version": mujoco_version(), "integrator": engine.integrator,
+                               "states": AUDIT_STATES, "tolerance": AUDIT_TOLERANCE, **engine.audit}
     if result.config:
         result.config = provenance_header(config) + result.config
     return result

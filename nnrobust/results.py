@@ -78,6 +78,10 @@ class Result:
         plant_step: the plant's integration step [s] (control period / substeps), or NaN.
         friction_events: stick-slip events the plant located inside its steps (docs/plant.md).
         unresolved_events: plant steps with more events than it resolves (a warning).
+        plant_engine: the true plant's physics engine, ``pinocchio`` or ``mujoco``
+            (docs/engines.md).
+        engine_audit: for MuJoCo, its version and the worst relative differences of M, the bias
+            and gravity from Pinocchio's at the audit's random states; None for Pinocchio.
 
     """
 
@@ -104,6 +108,8 @@ class Result:
     plant_step: float = float("nan")
     friction_events: int = 0
     unresolved_events: int = 0
+    plant_engine: str = "pinocchio"
+    engine_audit: dict | None = None
 
     @classmethod
     def from_trace(cls, trace, robot, trajectory, criterion, config, wall_seconds: float,
@@ -229,6 +235,8 @@ class Result:
             "friction_events": self.friction_events,
             "unresolved_events": self.unresolved_events,
             "realtime_factor": simulated / self.wall_seconds if self.wall_seconds > 0 else None,
+            "plant_engine": self.plant_engine,
+            "engine_audit": self.engine_audit,
         }
         if turn is not None:
             out["rms_orientation_error"] = rms(turn**2)
@@ -245,7 +253,7 @@ class Result:
     def summary_rows(self) -> list[tuple[str, str]]:
         """(quantity, value) of the headline metrics, errors in mm: what a notebook shows."""
         m = self.metrics()
-        rows = [("status", str(m["status"])), ("backend", self.backend),
+        rows = [("status", str(m["status"])), ("backend", self.backend), ("plant engine", self.plant_engine),
                 ("simulated", f"{self.t[-1] + (self.t[1] - self.t[0] if self.t.size > 1 else 0):.3g} s"
                  if self.t.size else "0 s")]
         for key, label, scale, unit in (("rms_error", "RMS error", 1e3, "mm"),
@@ -317,6 +325,7 @@ class Result:
             backend=metrics.get("backend", "python"), plant_step=metrics.get("plant_step", float("nan")),
             friction_events=metrics.get("friction_events", 0),
             unresolved_events=metrics.get("unresolved_events", 0),
+            plant_engine=metrics.get("plant_engine", "pinocchio"), engine_audit=metrics.get("engine_audit"),
         )
 
 

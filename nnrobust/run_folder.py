@@ -437,6 +437,13 @@ def check_run_folder(folder: Path) -> None:
                 isinstance(value, bool) or not isinstance(value, (int, float))):
             raise RunFolderError(f"{folder}: a damaged run folder (metrics.json: {key} is "
                                  f"{type(value).__name__} {str(value)[:40]!r}, not a number)")
+    from .plant.mujoco_engine import ENGINES
+
+    engine, audit = metrics.get("plant_engine", "pinocchio"), metrics.get("engine_audit")
+    if engine not in ENGINES or not (audit is None or isinstance(audit, dict)):
+        raise RunFolderError(f"{folder}: a damaged run folder (metrics.json: plant_engine "
+                             f"{str(engine)[:40]!r} is not one of {', '.join(ENGINES)}, or engine_audit "
+                             "is not a table)")
 
 
 def _check_shapes(result, folder: Path) -> None:

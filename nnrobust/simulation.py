@@ -163,7 +163,11 @@ def simulate(
 
     user_code = not type(controller).__module__.startswith("nnrobust.")
     h = control_period / substeps
-    stick_slip = StickSlipIntegrator(plant, np.asarray(v0, float)) if plant.sticky.any() else None
+    engine = plant.engine
+    if engine is not None:  # MuJoCo integrates the plant (nnrobust.plant.mujoco_engine)
+        engine.reset(np.asarray(q0, float), np.asarray(v0, float))
+    stick_slip = (StickSlipIntegrator(plant, np.asarray(v0, float)) if plant.sticky.any() and engine is None
+                  else None)
     status, message, done = "completed", "", steps
     k, t = 0, 0.0
     try:
@@ -202,7 +206,9 @@ def simulate(
                 progress(t, q)
             if out.state is not None:
                 z = out.state
-            if stick_slip is not None:  # q, v: the views of X sliced at the top of the step
+            if engine is not None:
+                X = np.concatenate(engine.advance(t, tau, control_period))
+            elif stick_slip is not None:  # q, v: the views of X sliced at the top of the step
                 if integrator == "rk4":
                     flow = rk4_flow(plant, tau)
                     for i in range(substeps):

@@ -334,4 +334,7 @@ def load_robot(
     if gravity is not None:
         model.gravity.linear = np.asarray(gravity, dtype=float)
     frame = task_frame or frame or default_task_frame(model)
-    return PinocchioModel(model, frame, task=task, name=built.name)
+    robot = PinocchioModel(model, frame, task=task, name=built.name)
+    robot.urdf_text = built.text if built.example is None else (
+        read_urdf_file(built.example.urdf) if built.example.urdf is not None else None)
+    return robot

@@ -62,6 +62,8 @@ class PinocchioModel:
         self.model = model
         self.data = model.createData()
         self.name = name or model.name
+        self.urdf_text: str | None = None
+        """The URDF text Pinocchio parsed (for a second engine); None when code built the model."""
         self.task = task
         self.task_frame = task_frame
         self.frame_id = frame_id(model, task_frame)

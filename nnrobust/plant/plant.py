@@ -10,6 +10,7 @@ from ..model.base import DynamicsModel
 from .disturbance import SinusoidalDisturbance
 from .friction import Friction
 from .limits import JointStops, saturate
+from .mujoco_engine import MujocoPlant
 from .sensing import Sensor
 
 
@@ -30,6 +31,7 @@ class Plant:
         stops: hard joint-limit stops; None: the arm passes through its limits.
         sensor: what the controller measures (default exact).
         delay: control periods between a measurement and the torque computed from it (>= 0).
+        engine: MuJoCo, when it integrates the plant (built by the experiment).
 
     """
 
@@ -40,6 +42,9 @@ class Plant:
     stops: JointStops | None = None
     sensor: Sensor | None = field(default=None)
     delay: int = 0
+    engine: MujocoPlant | None = field(default=None, repr=False)
+    """A second engine that integrates the plant instead (``plant.engine = "mujoco"``,
+    :mod:`nnrobust.plant.mujoco_engine`); None: this class's dynamics, integrated by the loop."""
     sticky: np.ndarray = field(init=False, repr=False)
     """Joints with dry friction that holds them at rest (F_s > 0): integrated as stick-slip."""
 
