@@ -1,7 +1,9 @@
 """Closed-loop cost per control step: the library's Python and compiled loops and the two floors
 they are measured against, a bare Python + Pinocchio loop and the same loop in C++; and a custom
 Python controller (examples/custom_controller.py's TaskPD) on the Python and the hybrid loop, its
-compute timed alone, and the hybrid loop replaying its commands: the loop's own cost.
+compute timed alone, and the hybrid loop replaying its commands: the loop's own cost; and the
+library's loops with MuJoCo as the plant (plant.engine = "mujoco"; the compiled loop calls
+MuJoCo's mj_step itself).
 
     python benchmarks/closed_loop.py --json out/bench/closed_loop.json [--duration 2]
 
@@ -71,11 +73,17 @@ def _contenders(preset: str, duration: float) -> dict:
                                                      duration, dt),
            "floor, Python + pin": lambda: python_floor_loop(robot.model, robot.task_frame, setup.q0,
                                                             setup.v0, steps, dt)}
+    mujoco = _mujoco_setup(config)
     if compiled.available():
         if not compiled.twin_refusal(setup):
             out["nnrobust, compiled loop"] = lambda: compiled.simulate_compiled(setup, duration)
+        if mujoco is not None:
+            out["nnrobust, compiled, MuJoCo"] = lambda: compiled.simulate_compiled(mujoco, duration)
         loaded = compiled.load_model(robot.model, robot.task_frame)
         out["floor, C++"] = lambda: compiled.floor_loop(loaded, setup.q0, setup.v0, steps, dt)
+    if mujoco is not None:
+        out["nnrobust, Python, MuJoCo"] = lambda: simulate(mujoco.plant, mujoco.controller, mujoco.q0,
+                                                          mujoco.v0, duration, dt)
     custom = build(config.replace(controller={"kind": "custom", "class": f"{CUSTOM}:TaskPD"}))
     out["TaskPD, Python loop"] = lambda: simulate(custom.plant, custom.controller, custom.q0, custom.v0,
                                                   duration, dt)
@@ -91,6 +99,16 @@ def _contenders(preset: str, duration: float) -> dict:
 
         out["hybrid loop, law replayed"] = hybrid_replayed
     return out, steps
+
+
+def _mujoco_setup(config):
+    """The experiment with MuJoCo as the plant (plant.engine = "mujoco"), or None without MuJoCo."""
+    try:
+        import mujoco  # noqa: F401
+    except ImportError:
+        print("(no MuJoCo contender: pip install 'nnrobust[mujoco]')")
+        return None
+    return build(config.replace(plant={"engine": "mujoco"}))
 
 
 def _compute_alone(controller, trace, period: float) -> None:

@@ -38,6 +38,9 @@ def format_table(rows: list[tuple[str, dict]]) -> str:
     if any(ORIENTATION_COLUMN[0] in metrics for _, metrics in rows):
         columns.insert(4, ORIENTATION_COLUMN)
         headers.insert(4, ORIENTATION_HEADER)
+    if any(metrics.get("plant_engine", "pinocchio") != "pinocchio" for _, metrics in rows):
+        columns.insert(2, ("plant_engine", None))
+        headers.insert(2, "engine")
     cells = [headers]
     for name, metrics in rows:
         row = []
@@ -45,7 +48,7 @@ def format_table(rows: list[tuple[str, dict]]) -> str:
             if key == "run":
                 row.append(name)
             elif scale is None:
-                row.append(str(metrics.get(key, "")))
+                row.append(str(metrics.get(key, "pinocchio" if key == "plant_engine" else "")))
             else:
                 value = metrics.get(key)
                 row.append("-" if value is None else f"{value * scale:.4g}")
@@ -537,6 +540,18 @@ def cmd_compare(args) -> int:
         results[label] = result
     print(format_table(rows))
     from .plots import comparison_warnings, plot_comparison
+    from .properties import run_properties
+    from .run_deltas import delta_table, verdict_changes
+
+    properties = run_properties(args.require or [])
+    if len(rows) > 1:
+        print(f"\nchanges from {rows[0][0]}:")
+        print(delta_table(rows))
+        changed = verdict_changes(rows, properties)
+        print("\nverdicts that change:" if changed else "\nno verdict changes"
+              + (f" ({', '.join(p.text for p in properties)} and the warnings)" if properties else ""))
+        for line in changed:
+            print(f"  {line}")
 
     for warning in comparison_warnings(results):
         print(f"warning: {one_line(warning)}", file=sys.stderr)
@@ -618,10 +633,15 @@ def build_parser() -> argparse.ArgumentParser:
     compare = sub.add_parser("compare", help="compare run folders: metrics table and plots",
                              description="Print the metrics of several run folders side by side "
                              "(labelled by folder name, or by as much of the path as tells them "
-                             "apart) and, with --out, draw their paths, errors and torques in one "
-                             "figure.")
+                             "apart), each metric's change from the first run, and the verdicts "
+                             "(status, warnings, --require properties) that differ; with --out, draw "
+                             "their paths, errors and torques in one figure. The same experiment run "
+                             "with --set plant.engine=mujoco gives the sim-to-sim gap (docs/engines.md).")
     compare.add_argument("runs", nargs="+", help="run folders written by 'nnrobust run'")
     compare.add_argument("--out", help="folder for the comparison figure (PNG and SVG)")
+    compare.add_argument("--require", action="append", metavar="EXPR",
+                         help="a property each run is checked against, METRIC OP VALUE (e.g. "
+                         "'rms_error_after_2s<=0.05'); repeatable; shown where runs disagree")
     compare.set_defaults(func=cmd_compare)
 
     view = sub.add_parser("view", help="replay a run folder in the meshcat viewer (browser)",

@@ -129,8 +129,10 @@ class PlantConfig:
         engine: the true plant's physics: ``pinocchio`` (this package's plant, docs/plant.md) or
             ``mujoco`` (MuJoCo built from the same URDF and audited against Pinocchio;
             docs/engines.md; needs ``pip install 'nnrobust[mujoco]'``).
-        mujoco_integrator: MuJoCo's integrator: ``implicitfast`` (MuJoCo's recommendation:
-            damping implicit), ``rk4``, ``euler`` or ``implicit``.
+        mujoco_integrator: MuJoCo's integrator: ``rk4`` (the default: fourth order, converged at
+            the plant step as this package's RK4 is), ``implicitfast`` (MuJoCo's own advice,
+            damping implicit), ``euler`` or ``implicit`` (first order: at a 1 ms step they break
+            laws tuned to the sampling limit; docs/engines.md).
 
     """
 
@@ -153,7 +155,7 @@ class PlantConfig:
     joint_stop_damping: float = 1.0
     armature: list[float] | None = None
     engine: str = "pinocchio"
-    mujoco_integrator: str = "implicitfast"
+    mujoco_integrator: str = "rk4"
 
 
 @dataclass

@@ -218,3 +218,46 @@ def test_without_mujoco_one_line_names_the_extra(monkeypatch):
     with pytest.raises(ConfigError) as err:
         build(config)
     assert "pip install 'nnrobust[mujoco]'" in str(err.value) and "\n" not in str(err.value)
+
+
+def test_compare_shows_the_sim_to_sim_gap_and_the_verdicts_that_flip(tmp_path, capsys):
+    """nnrobust compare of one experiment on both engines: the engine column, every metric's
+    change from the first run, and a --require property that holds on one engine only."""
+    from nnrobust.cli import main
+
+    folders = []
+    for engine in ("pinocchio", "mujoco"):
+        config = load_preset("paper-ellipse")
+        config.simulation.duration, config.plant.engine = 4.0, engine
+        write_run(tmp_path / engine, run_experiment(config), plots=False)
+        folders.append(str(tmp_path / engine))
+    metrics = [load_run(f).metrics() for f in folders]
+    low, high = sorted(m["rms_error_after_2s"] for m in metrics)
+    bound = (low + high) / 2  # between the two: holds on one engine, fails on the other
+    assert main(["compare", *folders, "--require", f"rms_error_after_2s<={bound!r}"]) == 0
+    out = capsys.readouterr().out
+    assert "engine" in out.splitlines()[0] and "mujoco" in out
+    gap = metrics[1]["rms_error_after_2s"] - metrics[0]["rms_error_after_2s"]
+    line = next(line for line in out.splitlines() if line.startswith("RMS error t>=2s"))
+    assert f"{1e3 * gap:+.3g}" in line
+    holds = {
+        e: "holds" if m["rms_error_after_2s"] <= bound else "fails"
+        for e, m in zip(("pinocchio", "mujoco"), metrics)
+    }
+    assert f"rms_error_after_2s<={bound:g}: pinocchio: {holds['pinocchio']}; mujoco: {holds['mujoco']}" in out
+    assert holds["pinocchio"] != holds["mujoco"]
+
+
+def test_a_custom_controller_on_mujoco_same_on_the_hybrid_and_python_loops():
+    """The hybrid loop (compiled plant stepping, Python law) steps MuJoCo too: the same run."""
+    custom = Path(__file__).resolve().parents[1] / "examples" / "custom_controller.py"
+    runs = {}
+    for backend in ("hybrid", "python"):
+        config = load_preset("paper-ellipse").replace(
+            controller={"kind": "custom", "class": f"{custom}:TaskPD"},
+            plant={"engine": "mujoco"},
+            simulation={"duration": 1.0, "backend": backend},
+        )
+        runs[backend] = run_experiment(config)
+    assert runs["hybrid"].backend == "hybrid" and runs["hybrid"].plant_engine == "mujoco"
+    np.testing.assert_allclose(runs["hybrid"].q, runs["python"].q, rtol=0, atol=1e-9)

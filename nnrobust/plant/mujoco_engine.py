@@ -9,9 +9,10 @@ completed through MjSpec with what the importer does not make:
 - the joints that Pinocchio's model locks deleted (held at zero, as ``robot.locked_joints``);
 - viscous friction as joint ``damping`` and Coulomb friction as ``frictionloss`` (MuJoCo's soft
   dry-friction constraint, not sgn(q'): a joint held below its level creeps), with the stiffest
-  time constant MuJoCo advises (:data:`FRICTION_TIME_CONSTANT_STEPS`);
+  time constant MuJoCo advises at a 1 ms step (:data:`CONSTRAINT_TIME_CONSTANT`);
 - the joint limits as MuJoCo limit constraints when ``plant.joint_stops`` is on (a soft
-  constraint with time constant 1/omega of the stop's ring frequency, at least two steps);
+  constraint with time constant 1/omega of the stop's ring frequency, at least
+  :data:`CONSTRAINT_TIME_CONSTANT`);
 - ``plant.armature`` on the diagonal of M (Pinocchio's true model gets the same);
 - the timestep equal to the plant step, the integrator ``plant.mujoco_integrator``, Pinocchio's
   gravity, and no contacts.
@@ -38,13 +39,22 @@ from ..exceptions import ConfigError, ModelMismatch, RobotLoadError
 ENGINES = ("pinocchio", "mujoco")
 """The true plant's physics engines (``plant.engine``)."""
 
-MUJOCO_INTEGRATORS = ("implicitfast", "rk4", "euler", "implicit")
-"""MuJoCo's integrators (``plant.mujoco_integrator``); implicitfast is MuJoCo's recommendation."""
+MUJOCO_INTEGRATORS = ("rk4", "implicitfast", "euler", "implicit")
+"""MuJoCo's integrators (``plant.mujoco_integrator``). RK4, the default, is fourth order like this
+package's plant and converged at its step; the others are first order (implicitfast is MuJoCo's
+own advice) and at 1 ms they break laws tuned to the sampling limit (docs/engines.md)."""
 
-FRICTION_TIME_CONSTANT_STEPS = 2.0
-"""Time constant of the frictionloss constraint in plant steps: the stiffest that MuJoCo advises
-(at least two steps). Its default, 0.02 s, lets a joint held below its Coulomb level creep ten
-times faster (docs/engines.md)."""
+CONSTRAINT_TIME_CONSTANT = 2e-3
+"""Time constant [s] of MuJoCo's frictionloss and limit constraints, at least (and at least two
+plant steps, MuJoCo's stability advice). Fixed, so that a finer step converges to the same
+model. MuJoCo's default, 0.02 s, lets a joint held below its Coulomb level creep ten times
+faster (docs/engines.md)."""
+
+
+def constraint_time_constant(h: float) -> float:
+    """The constraints' time constant at the plant step ``h`` [s]."""
+    return max(CONSTRAINT_TIME_CONSTANT, 2.0 * h)
+
 
 AUDIT_TOLERANCE = 1e-8
 """Largest relative difference of M, bias or gravity between the engines that a run accepts."""
@@ -176,7 +186,7 @@ def build_mujoco_plant(
     plant,
     period: float,
     substeps: int,
-    integrator: str = "implicitfast",
+    integrator: str = "rk4",
     armature: np.ndarray | None = None,
     stiction: float = 1.0,
 ) -> MujocoPlant:
@@ -218,7 +228,7 @@ def build_mujoco_plant(
         joint = joints[jname]
         joint.damping = [float(plant.friction.viscous[i]), 0.0, 0.0]  # a, b, c of a v + b v|v| + c v^3
         joint.frictionloss = float(plant.friction.coulomb[i])
-        joint.solref_friction = [FRICTION_TIME_CONSTANT_STEPS * h, 1.0]
+        joint.solref_friction = [constraint_time_constant(h), 1.0]
         joint.armature = float(arm[i])
         joint.stiffness = [0.0, 0.0, 0.0]
         stops = plant.stops
@@ -227,7 +237,7 @@ def build_mujoco_plant(
         if bounded:
             joint.range = [float(stops.lower[i]), float(stops.upper[i])]
             omega = np.sqrt(stops.stiffness[i] * M_inv[i, i])
-            joint.solref_limit = [max(1.0 / omega, 2.0 * h), 1.0]
+            joint.solref_limit = [max(1.0 / omega, constraint_time_constant(h)), 1.0]
         motor = spec.add_actuator(name=f"motor_{jname}", target=jname, trntype=mujoco.mjtTrn.mjTRN_JOINT)
         motor.gainprm[0] = 1.0
         limit = np.inf if plant.torque_limit is None else float(plant.torque_limit[i])
