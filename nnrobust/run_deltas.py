@@ -6,6 +6,7 @@ the sim-to-sim gap (docs/engines.md).
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 from .properties import Property
 
@@ -25,7 +26,7 @@ DELTA_METRICS = (
 """(metric, label with unit, scale) of the delta table."""
 
 
-def verdicts(metrics: dict, properties: list[Property] = ()) -> dict[str, str]:
+def verdicts(metrics: dict, properties: Sequence[Property] = ()) -> dict[str, str]:
     """A run's verdicts: its status, each kind of warning (``yes``), each ``--require``
     property (``holds`` / ``fails``).
     """
@@ -68,7 +69,7 @@ def delta_table(rows: list[tuple[str, dict]]) -> str:
     return "\n".join(lines)
 
 
-def verdict_changes(rows: list[tuple[str, dict]], properties: list[Property] = ()) -> list[str]:
+def verdict_changes(rows: list[tuple[str, dict]], properties: Sequence[Property] = ()) -> list[str]:
     """One line per verdict that is not the same in every run: ``what: run a: x; run b: y``."""
     each = [(label, verdicts(metrics, properties)) for label, metrics in rows]
     keys = list(dict.fromkeys(k for _, v in each for k in v))
