@@ -20,7 +20,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 DATA = ROOT / "docs" / "data"
 DOCUMENTS = ("README.md", "docs/controller.md", "docs/plant.md", "docs/fair-comparison.md",
-             "docs/robots.md", "docs/robustness.md")
+             "docs/robots.md", "docs/robustness.md", "docs/engines.md")
 TABLE = re.compile(r"(<!-- table: (?P<name>[\w-]+) -->\n)(?P<body>.*?)(<!-- /table -->)", re.S)
 
 
@@ -234,7 +234,52 @@ def _study(name: str):
     return render
 
 
-RENDERERS = {"arm-presets": arm_presets, "paper-robustness": _study("paper-robustness"),
+def _gap_cell(variant: str):
+    """A variant's RMS error t >= 2 s [mm] and, for MuJoCo, its change from Pinocchio's in %."""
+    def cell(r):
+        value, reference = r[variant].get("rms_error_after_2s"), r["pinocchio"].get("rms_error_after_2s")
+        if value is None:
+            return r[variant].get("status", "–")
+        text = f"{1e3 * value:.3g}"
+        if variant != "pinocchio" and reference:
+            text += f" ({100 * (value - reference) / reference:+.1f} %)"
+        return text + ("" if r[variant].get("status") == "completed" else f" {r[variant]['status']}")
+    return cell
+
+
+def _flips(variant: str):
+    """The verdicts that differ between Pinocchio's run and the variant's."""
+    def cell(r):
+        pin, other = r["verdicts"]["pinocchio"], r["verdicts"][variant]
+        keys = dict.fromkeys([*pin, *other])
+        flips = [f"{k}: {pin.get(k, 'no')} → {other.get(k, 'no')}" for k in keys
+                 if pin.get(k, "no") != other.get(k, "no")]
+        return "; ".join(flips) or "none"
+    return cell
+
+
+GAP_COLUMNS = [("Pinocchio [mm]", "r", _gap_cell("pinocchio")),
+               ("MuJoCo RK4", "r", _gap_cell("mujoco")), ("RK4, 4× steps", "r", _gap_cell("mujoco_fine")),
+               ("implicitfast", "r", _gap_cell("implicitfast")),
+               ("implicitfast, 4× steps", "r", _gap_cell("implicitfast_fine")),
+               ("verdicts that change (RK4)", "l", _flips("mujoco")),
+               ("(implicitfast)", "l", _flips("implicitfast"))]
+GAP_COMMAND = "python benchmarks/engine_gap.py --json docs/data/engine_gap.json"
+
+
+def engine_gap_presets() -> str:
+    columns = [("preset", "l", _text("preset")), ("controller", "l", _text("controller")), *GAP_COLUMNS]
+    return _markdown(columns, _data("engine_gap")["presets"], GAP_COMMAND)
+
+
+def engine_gap_tuned() -> str:
+    columns = [("case", "l", lambda r: f"{r['case']}, {r['sensing']}"),
+               ("controller", "l", _text("controller")), ("sample", "r", _text("sample")), *GAP_COLUMNS]
+    return _markdown(columns, _data("engine_gap")["tuned"], GAP_COMMAND)
+
+
+RENDERERS = {"engine-gap-presets": engine_gap_presets, "engine-gap-tuned": engine_gap_tuned,
+             "arm-presets": arm_presets, "paper-robustness": _study("paper-robustness"),
              "panda-robustness": _study("panda-robustness"), "paper-reproduction": paper_reproduction,
              "nn-options": nn_options,
              "subtask": subtask, "plant-convergence": plant_convergence,

@@ -8,6 +8,7 @@ import json
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -21,7 +22,8 @@ DATA_FILES = ["paper_reproduction", "nn_options", "subtask", "arm_presets"]
 """Rows of benchmarks/_common.py jobs (preset and changes)."""
 STUDIES = ["paper_robustness", "panda_robustness"]
 """Summaries of the shipped sweeps (their summary.json)."""
-OTHERS = ["friction_compensation", "plant_convergence", "tuned_comparison", "falsify_paper_factors"]
+OTHERS = ["friction_compensation", "plant_convergence", "tuned_comparison", "falsify_paper_factors",
+          "engine_gap"]
 """Data files with a re-run test of their own below."""
 
 
@@ -173,7 +175,35 @@ def _ratio(preset):
     return get
 
 
+def _error(row, variant):
+    return row[variant]["rms_error_after_2s"]
+
+
+def _gaps(part, controller=None, exclude=(), variant="mujoco", reference="pinocchio"):
+    """|error on ``variant`` / error on ``reference`` - 1| in % for each row of engine_gap.json."""
+    def get(data):
+        return [100 * abs(_error(r, variant) / _error(r, reference) - 1) for r in data[part]
+                if controller in (None, r["controller"]) and r.get("preset") not in exclude]
+    return get
+
+
+def _gap_stat(stat, *args, **kwargs):
+    return lambda data: float(stat(_gaps(*args, **kwargs)(data)))
+
+
+def _gap_error(preset, controller, variant):
+    return lambda data: next(_error(r, variant) for r in data["presets"]
+                             if r["preset"] == preset and r["controller"] == controller)
+
+
+def _failing(variant, factor=2.0):
+    """Tuned rows whose error on ``variant`` is over ``factor`` times Pinocchio's."""
+    return lambda data: sum(_error(r, variant) > factor * _error(r, "pinocchio") for r in data["tuned"])
+
+
 CASE_A, CASE_B, PANDA_ARM = "case (a) line", "case (b) ellipse", "Panda ellipse"
+GAP = "engine_gap"
+PRINTED = ("paper-ellipse-paper-law",)
 FALSIFIED = "falsify_paper_factors"
 
 QUOTED_FIGURES: list[tuple] = [
@@ -241,6 +271,28 @@ QUOTED_FIGURES: list[tuple] = [
     ("docs/robustness.md", r"has a median of ([\d.]+) mm", PANDA, _study("sliding-mode", "median"), 1e3),
     ("docs/robustness.md", r"and a maximum of ([\d.]+) mm over all", PANDA, _study("sliding-mode", "max"),
      1e3),
+    ("docs/engines.md", r"ends within ([\d.]+) % of its Pinocchio", GAP, _gap_stat(max, "tuned"), 1.0),
+    ("README.md", r"every tuned setting above ends within ([\d.]+) % of its", GAP, _gap_stat(max, "tuned"),
+     1.0),
+    ("docs/engines.md", r"samples. The\s+median change is ([\d.]+) %", GAP, _gap_stat(np.median, "tuned"),
+     1.0),
+    ("docs/engines.md", r"its 4× run differs by at most ([\d.]+) %", GAP,
+     _gap_stat(max, "tuned", variant="mujoco_fine", reference="mujoco"), 1.0),
+    ("docs/engines.md", r"agree as well\.\*\* The median change is ([\d.]+) %", GAP,
+     _gap_stat(np.median, "presets"), 1.0),
+    ("docs/engines.md", r"compensator is within ([\d.]+) % on every preset", GAP,
+     _gap_stat(max, "presets", "nn", exclude=PRINTED), 1.0),
+    ("docs/engines.md", r"has\s+not converged \(([\d.]+) % between steps\)", GAP,
+     lambda data: 100 * abs(_gap_error(PRINTED[0], "nn", "mujoco_fine")(data)
+                            / _gap_error(PRINTED[0], "nn", "mujoco")(data) - 1), 1.0),
+    ("docs/engines.md", r"paper-ellipse has (\d+) mm of", GAP,
+     _gap_error("paper-ellipse", "no-u0", "pinocchio"), 1e3),
+    ("docs/engines.md", r"error on Pinocchio and (\d+) mm on MuJoCo", GAP,
+     _gap_error("paper-ellipse", "no-u0", "mujoco"), 1e3),
+    ("docs/engines.md", r"It completes on MuJoCo, at (\d+) mm", GAP,
+     _gap_error(PRINTED[0], "no-u0", "mujoco"), 1e3),
+    ("docs/engines.md", r"at the 1 ms step, (\d+) of the 24", GAP, _failing("implicitfast"), 1.0),
+    ("docs/engines.md", r"With 4× as many steps, (\d+) of those 24", GAP, _failing("implicitfast_fine"), 1.0),
 ]
 """Figures quoted in prose, each checked against its data file (within half a unit of the last
 printed digit, or 2 %)."""
@@ -301,3 +353,35 @@ def test_the_nn_worst_plant_fails_on_the_python_loop_too():
     metrics = run_experiment(config.replace(simulation={"backend": "python"})).metrics()
     assert metrics["rms_error_after_2s"] > 0.05
     assert metrics["rms_error_after_2s"] * 1e3 == pytest.approx(95, abs=5)  # the figure the docs quote
+
+
+def test_a_row_of_the_engine_gap_reproduces():
+    """paper-ellipse with the NN on both engines reruns to docs/data/engine_gap.json's figures."""
+    pytest.importorskip("mujoco")
+    from nnrobust.experiment import run_experiment
+    from nnrobust.presets import load_preset
+
+    data = json.loads((render_tables.DATA / "engine_gap.json").read_text())
+    row = next(r for r in data["presets"] if r["preset"] == "paper-ellipse" and r["controller"] == "nn")
+    for engine in ("pinocchio", "mujoco"):
+        config = load_preset("paper-ellipse").replace(controller={"kind": "nn"}, plant={"engine": engine})
+        again = run_experiment(config).metrics()
+        for key in ("rms_error_after_2s", "rms_torque", "torque_chatter", "saturated_fraction"):
+            assert again[key] == pytest.approx(row[engine][key], rel=1e-9, abs=1e-12), (engine, key)
+        assert again["warnings"] == row[engine]["warnings"]
+
+
+def test_the_engine_gap_claims_of_the_docs_hold_in_its_data():
+    """docs/engines.md and the README: on MuJoCo with RK4 the tuned controllers rank as on
+    Pinocchio in every case; with implicitfast at the plant step they do not."""
+    data = json.loads((render_tables.DATA / "engine_gap.json").read_text())
+
+    def ranking(variant):
+        by_case = {}
+        for r in data["tuned"]:
+            by_case.setdefault((r["case"], r["sensing"]), {}).setdefault(r["controller"], []).append(
+                _error(r, variant))
+        return {case: sorted(c, key=lambda name: np.mean(c[name])) for case, c in by_case.items()}
+
+    assert len(ranking("pinocchio")) == 6 and ranking("mujoco") == ranking("pinocchio")
+    assert ranking("implicitfast") != ranking("pinocchio")
