@@ -1,7 +1,10 @@
 """The 3-D views of a run: the offline HTML animation, the loopback-only live viewer, and the
 animation rendered by headless Chromium (skipped only where Chromium cannot run)."""
 
+import html
+import json
 import os
+import re
 import shutil
 import socket
 import subprocess
@@ -11,7 +14,9 @@ import numpy as np
 import pytest
 
 from nnrobust.cli import main
+from nnrobust.config import ExperimentConfig
 from nnrobust.experiment import run_experiment
+from nnrobust.model import paper_arm_urdf
 from nnrobust.presets import load_preset
 from nnrobust.results import Result
 from nnrobust.run_folder import write_run
@@ -224,6 +229,70 @@ def test_browser_draws_the_arm_and_it_moves(paper_run, tmp_path):
     assert arm_early.sum() > 500 and arm_late.sum() > 500  # the arm is drawn
     assert moved.sum() > 200  # and it moved between the two instants
     assert (moved & ~(arm_early | arm_late)).sum() < 0.05 * moved.sum()  # only the arm changed
+
+
+CONSOLE_HOOK = """<script>
+window.nnrobustErrors = [];
+(function () {
+  var error = console.error;
+  console.error = function () {
+    window.nnrobustErrors.push(Array.prototype.join.call(arguments, " "));
+    error.apply(console, arguments);
+  };
+  window.addEventListener("error", function (e) { window.nnrobustErrors.push("uncaught: " + e.message); });
+  setTimeout(function () {
+    var out = document.createElement("pre");
+    out.id = "nnrobust-errors";
+    out.textContent = JSON.stringify(window.nnrobustErrors);
+    document.body.appendChild(out);
+  }, 1500);
+})();
+</script>"""
+"""Collects console.error calls and uncaught exceptions, and writes them into the page."""
+
+
+def console_errors(browser: str, page: Path, tmp_path: Path) -> list[str]:
+    """What a page sends to console.error or throws, loaded in headless Chromium (its DOM dumped
+    after 2 s of virtual time)."""
+    hooked = tmp_path / f"hooked-{page.name}"
+    hooked.write_text(page.read_text().replace("<head>", "<head>" + CONSOLE_HOOK, 1))
+    cmd = [browser, *CHROMIUM_FLAGS, f"--user-data-dir={tmp_path / 'console-profile'}", "--dump-dom",
+           hooked.resolve().as_uri()]
+    done = subprocess.run(cmd, capture_output=True, timeout=120, check=False, text=True)
+    found = re.search(r'<pre id="nnrobust-errors">(.*?)</pre>', done.stdout, re.S)
+    if not found:
+        pytest.fail(f"the page did not load in Chromium (exit {done.returncode}): {done.stderr[-500:]!r}")
+    return json.loads(html.unescape(found.group(1)))
+
+
+MIXED_OBJ = "\n".join(
+    ["o box"] + [f"v {x} {y} {z}" for x in (0, 0.1) for y in (0, 0.05) for z in (0, 0.3)]
+    + ["vt 0 0", "vt 1 0", "vt 1 1", "vn 1 0 0"]
+    + ["f 1/1/1 2/2/1 4/3/1", "f 5/1/1 7/2/1 8/3/1", "f 1//1 5//1 6//1", "f 3//1 4//1 8//1"]) + "\n"
+"""An OBJ whose faces mix texture coordinates with none, as exporters write partly textured parts."""
+
+
+def test_the_browser_reports_no_error_for_a_run_or_a_mixed_obj_mesh(paper_run, tmp_path):
+    """The animation loads without a console error: the paper's arm, and an arm whose link is an
+    OBJ with mixed faces (which meshcat's browser side cannot merge unless they are made alike)."""
+    browser = _chromium()
+    if browser is None:
+        pytest.skip("Chromium is not installed (make test installs Debian's chromium where it can)")
+    from nnrobust.viewer.scene import uniform_obj
+
+    assert console_errors(browser, paper_run / "animation.html", tmp_path) == []
+    (tmp_path / "meshes").mkdir()
+    (tmp_path / "meshes" / "box.obj").write_text(MIXED_OBJ)
+    urdf = paper_arm_urdf().read_text().replace('<geometry><box size="0.40 0.04 0.03"/></geometry>',
+                                                '<geometry><mesh filename="meshes/box.obj"/></geometry>', 1)
+    (tmp_path / "arm.urdf").write_text(urdf)
+    config = ExperimentConfig().replace(robot={"source": str(tmp_path / "arm.urdf")},
+                                        simulation={"duration": 0.5})
+    write_run(tmp_path / "run", run_experiment(config))
+    assert console_errors(browser, tmp_path / "run" / "animation.html", tmp_path) == []
+    uniform = uniform_obj(MIXED_OBJ)
+    assert "f 1//1 2//1 4//1" in uniform and "f 1//1 5//1 6//1" in uniform  # texture dropped everywhere
+    assert uniform_obj(uniform) == uniform
 
 
 def test_progress_bar_reports_simulated_time_and_speed():

@@ -52,7 +52,48 @@ def meshcat_visualizer_class():
     finally:
         if block and sys.modules.get("trimesh", 0) is None:
             del sys.modules["trimesh"]
-    return MeshcatVisualizer
+
+    class UniformObjVisualizer(MeshcatVisualizer):
+        """Pinocchio's visualizer, with OBJ meshes sent as :func:`uniform_obj` makes them."""
+
+        def loadMeshFromFile(self, geometry_object):
+            """An OBJ file with the same vertex attributes on every face; other formats as Pinocchio
+            loads them.
+            """
+            path = geometry_object.meshPath
+            if path and os.path.splitext(path)[1].lower() == ".obj":
+                with open(path, encoding="utf-8", errors="replace") as fh:
+                    return mg.MeshGeometry(uniform_obj(fh.read()), "obj")
+            return super().loadMeshFromFile(geometry_object)
+
+    return UniformObjVisualizer
+
+
+def uniform_obj(text: str) -> str:
+    """The OBJ text with every face's vertices written alike: texture coordinates (``v/vt``) and
+    normals (``v//vn``) kept only where every face has them.
+
+    Exporters mix faces with and without them when only some faces are textured; meshcat's
+    browser side merges the file's parts into one geometry and fails on parts whose attributes
+    differ ("mergeBufferGeometries() failed", then a TypeError that leaves the arm half drawn).
+    """
+    lines = text.splitlines()
+    faces = [line.split()[1:] for line in lines if line.startswith("f ")]
+    refs = [corner.split("/") for face in faces for corner in face]
+    textured = all(len(r) > 1 and r[1] for r in refs)
+    normals = all(len(r) > 2 and r[2] for r in refs)
+    if textured and normals or not refs or all(len(r) == 1 for r in refs):
+        return text  # already uniform
+
+    def corner(ref: list[str]) -> str:
+        parts = ref + ["", ""]
+        if textured:
+            return f"{parts[0]}/{parts[1]}/{parts[2]}" if normals else f"{parts[0]}/{parts[1]}"
+        return f"{parts[0]}//{parts[2]}" if normals else parts[0]
+
+    out = [("f " + " ".join(corner(c.split("/")) for c in line.split()[1:]))
+           if line.startswith("f ") else line for line in lines]
+    return "\n".join(out) + "\n"
 
 
 class SceneRecorder:
