@@ -398,6 +398,12 @@ def cmd_falsify(args) -> int:
                   f"{worst['command']}")
         print(f"summary in {out}/summary.json, history in {out}/history, {out}/falsification.csv",
               file=sys.stderr)
+    if args.keep_worst:
+        from .falsify import keep_worst
+
+        for folder in keep_worst(spec, summary, out):
+            if not args.quiet:
+                print(f"worst plant kept: {folder}/ (nnrobust view {folder})", file=sys.stderr)
     return 0
 
 
@@ -704,6 +710,9 @@ def build_parser() -> argparse.ArgumentParser:
     falsify.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
     falsify.add_argument("--scheduler", help="address of an existing dask scheduler")
     falsify.add_argument("--overwrite", action="store_true", help="replace a different search in --out")
+    falsify.add_argument("--keep-worst", action="store_true",
+                         help="rerun each controller's worst plant into OUT/worst/CONTROLLER as a full run "
+                         "folder (arrays, metrics, plots, animation)")
     falsify.add_argument("--quiet", action="store_true", help="print nothing but errors")
     falsify.set_defaults(func=cmd_falsify)
 

@@ -277,7 +277,8 @@ def prepare_folder(spec: FalsifySpec, folder: Path, overwrite: bool) -> None:
     """
     from .study_folder import prepare, write_new
 
-    outputs = (HISTORY, MARKER, "summary.json", "falsification.csv", "convergence.png", "convergence.svg")
+    outputs = (HISTORY, MARKER, "summary.json", "falsification.csv", "convergence.png", "convergence.svg",
+               WORST)
     prepare(folder, "falsify", spec.to_toml(), outputs, overwrite, "search")
     (folder / HISTORY).mkdir(exist_ok=True)
     write_new(folder / f".{MARKER}.partial", spec.to_toml())
@@ -427,6 +428,29 @@ def _summary(spec, sweep, box, properties, rows, seconds, rerun_command, Sample,
             }
         out["controllers"][name] = {**entry.pop("falsifier"), "random_baseline": entry["random"]}
     return out
+
+
+WORST = "worst"
+"""Sub-folder of the worst plants' run folders (``--keep-worst``)."""
+
+
+def keep_worst(spec: FalsifySpec, summary: dict, folder: str | Path) -> list[Path]:
+    """Each controller's worst plant, rerun on this machine as a full run folder (arrays, metrics,
+    plots, animation) in DIR/worst/CONTROLLER: the run its printed command makes.
+    """
+    from .experiment import run_experiment
+    from .run_folder import write_run
+    from .sweep.spec import Sample, base_config, experiment, load_sweep, sample_seed
+    from .tune.engine import _with_controllers
+
+    sweep = _with_controllers(load_sweep(spec.target), spec.controllers)
+    base = base_config(sweep)
+    written = []
+    for name, entry in summary["controllers"].items():
+        sample = Sample(-1, entry["worst"]["values"], sample_seed(sweep.seed, 0))
+        config = experiment(sweep, base, sample, name)
+        written.append(write_run(Path(folder) / WORST / name, run_experiment(config), overwrite=True))
+    return written
 
 
 def _write_csv(folder: Path, summary: dict) -> None:

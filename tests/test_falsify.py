@@ -82,6 +82,14 @@ def test_a_search_finds_the_worst_plant_reruns_it_and_resumes(tmp_path, capsys):
     resumed = run_falsify(spec, out, workers=2)
     assert sorted((out / "history").glob("part-*.parquet")) == parts  # nothing simulated again
     assert resumed["controllers"]["nn"]["worst"] == worst
+    from nnrobust.falsify import keep_worst
+
+    kept = keep_worst(spec, summary, out)  # --keep-worst: the worst plant as a full run folder
+    assert kept == [out / "worst" / "nn"] and (out / "worst" / "nn" / "animation.html").is_file()
+    kept_metrics = json.loads((out / "worst" / "nn" / "metrics.json").read_text())
+    assert kept_metrics["rms_error"] == worst["metrics"]["rms_error"]
     other = FalsifySpec(str(sweep), ["nn"], ["rms_error<=0.03"], 16, seed=1)
     with pytest.raises(Exception, match="holds a different search"):
         run_falsify(other, out, workers=2)
+    run_falsify(other, out, workers=2, overwrite=True)  # the search's own outputs replaced, worst/ too
+    assert not (out / "worst").exists()
