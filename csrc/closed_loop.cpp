@@ -11,12 +11,9 @@
 #include <thread>
 
 #include <Eigen/Eigenvalues>
-#include <pinocchio/algorithm/aba.hpp>
-#include <pinocchio/algorithm/frames.hpp>
-#include <pinocchio/algorithm/jacobian.hpp>
-#include <pinocchio/algorithm/kinematics.hpp>
-#include <pinocchio/algorithm/rnea.hpp>
 #include <pinocchio/spatial/explog.hpp>
+
+#include "pin_calls.hpp"
 
 namespace nnrobust {
 namespace {
@@ -184,14 +181,14 @@ struct PinocchioNominal : Nominal {
   PinocchioNominal(LoadedModel &model, int task_rows) : m(model), rows(task_rows) {}
 
   TaskState task_state(const Vector &q, const Vector &v) override {
-    pinocchio::forwardKinematics(m.model, m.data, q, v, Vector::Zero(m.model.nv));
-    pinocchio::computeJointJacobians(m.model, m.data);
-    const auto &placement = pinocchio::updateFramePlacement(m.model, m.data, m.frame);
-    const auto acc = pinocchio::getFrameClassicalAcceleration(m.model, m.data, m.frame,
-                                                             pinocchio::LOCAL_WORLD_ALIGNED);
+    pin::forwardKinematics(m.model, m.data, q, v, Vector::Zero(m.model.nv));
+    pin::computeJointJacobians(m.model, m.data);
+    const auto &placement = pin::updateFramePlacement(m.model, m.data, m.frame);
+    const auto acc = pin::getFrameClassicalAcceleration(m.model, m.data, m.frame, pinocchio::LOCAL_WORLD_ALIGNED);
     TaskState ts;
-    ts.J6 = Matrix::Zero(6, m.model.nv);
-    pinocchio::getFrameJacobian(m.model, m.data, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, ts.J6);
+    pin::Matrix6x J6 = pin::Matrix6x::Zero(6, m.model.nv);
+    pin::getFrameJacobian(m.model, m.data, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, J6);
+    ts.J6 = J6;
     ts.x = placement.translation().head(std::min(rows, 3));
     ts.jdot_v = acc.toVector().head(rows);
     ts.J = ts.J6.topRows(rows);
@@ -199,9 +196,9 @@ struct PinocchioNominal : Nominal {
     return ts;
   }
   Vector inverse_dynamics(const Vector &q, const Vector &v, const Vector &a) override {
-    return pinocchio::rnea(m.model, m.data, q, v, a);
+    return pin::rnea(m.model, m.data, q, v, a);
   }
-  Vector gravity(const Vector &q) override { return pinocchio::computeGeneralizedGravity(m.model, m.data, q); }
+  Vector gravity(const Vector &q) override { return pin::computeGeneralizedGravity(m.model, m.data, q); }
   // grad_k = 2 (<u_k, P_k> + <w_k, S_k>), docs/equations.md "Manipulability gradient", from the
   // frame Jacobian the task state already holds (no second kinematics pass)
   Vector det_gradient(const Vector &, const TaskState &ts) override {
@@ -232,20 +229,20 @@ struct PinocchioNominal : Nominal {
   // PinocchioModel.chain_points / chain_jacobians
   void chain(const Vector &q, Matrix &points, std::vector<Matrix> &jacobians) override {
     const int joints = m.model.njoints - 1, n = m.model.nv;
-    pinocchio::computeJointJacobians(m.model, m.data, q);
-    pinocchio::updateFramePlacement(m.model, m.data, m.frame);
+    pin::computeJointJacobians(m.model, m.data, q);
+    pin::updateFramePlacement(m.model, m.data, m.frame);
     points.resize(joints + 1, 3);
     jacobians.assign(joints + 1, Matrix::Zero(3, n));
-    Matrix J = Matrix::Zero(6, n);
+    pin::Matrix6x J = pin::Matrix6x::Zero(6, n);
     for (int j = 1; j <= joints; ++j) {
       points.row(j - 1) = m.data.oMi[j].translation().transpose();
       J.setZero();
-      pinocchio::getJointJacobian(m.model, m.data, j, pinocchio::LOCAL_WORLD_ALIGNED, J);
+      pin::getJointJacobian(m.model, m.data, j, pinocchio::LOCAL_WORLD_ALIGNED, J);
       jacobians[j - 1] = J.topRows(3);
     }
     points.row(joints) = m.data.oMf[m.frame].translation().transpose();
     J.setZero();
-    pinocchio::getFrameJacobian(m.model, m.data, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, J);
+    pin::getFrameJacobian(m.model, m.data, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, J);
     jacobians[joints] = J.topRows(3);
   }
 };
@@ -557,13 +554,13 @@ void record_kinematics(LoadedModel &m, const LoopSpec &s, const Criteria &criter
                        LoopTrace &tr) {
   auto &model = m.model;
   auto &data = m.data;
-  pinocchio::computeJointJacobians(model, data, q);  // one kinematics pass: placements and Jacobians
-  pinocchio::updateFramePlacement(model, data, m.frame);
+  pin::computeJointJacobians(model, data, q);  // one kinematics pass: placements and Jacobians
+  pin::updateFramePlacement(model, data, m.frame);
   const int joints = model.njoints - 1;
   for (int j = 0; j < joints; ++j) tr.chain.block<1, 3>(k, 3 * j) = data.oMi[j + 1].translation().transpose();
   tr.chain.block<1, 3>(k, 3 * joints) = data.oMf[m.frame].translation().transpose();
-  Matrix J6 = Matrix::Zero(6, model.nv);
-  pinocchio::getFrameJacobian(model, data, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, J6);
+  pin::Matrix6x J6 = pin::Matrix6x::Zero(6, model.nv);
+  pin::getFrameJacobian(model, data, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, J6);
   const Matrix J = J6.topRows(s.m);
   tr.manipulability[k] = std::sqrt(std::max(det_small(J * J.transpose()), 0.0));
   if (!s.criteria.empty()) {

@@ -1,13 +1,8 @@
 // The bare C++ closed loop that the compiled backend is measured against: per 1 ms control step,
 // one RNEA (the controller's M-hat a + N-hat), one frame-kinematics pass (x, J, J'q') and four ABA
 // calls (RK4 of the plant, torque held). It controls nothing useful; it is the cost floor of a step.
-#include <pinocchio/algorithm/aba.hpp>
-#include <pinocchio/algorithm/frames.hpp>
-#include <pinocchio/algorithm/jacobian.hpp>
-#include <pinocchio/algorithm/kinematics.hpp>
-#include <pinocchio/algorithm/rnea.hpp>
-
 #include "model.hpp"
+#include "pin_calls.hpp"
 
 namespace nnrobust {
 
@@ -15,21 +10,21 @@ namespace nnrobust {
 Vector floor_loop(LoadedModel &m, const Vector &q0, const Vector &v0, long steps, double dt) {
   const int n = m.model.nv;
   Vector q = q0, v = v0, a = Vector::Zero(n), tau(n);
-  Matrix J = Matrix::Zero(6, n);
+  pin::Matrix6x J = pin::Matrix6x::Zero(6, n);
   auto &model = m.model;
   auto &data = m.data;
   auto acc = [&](const Vector &qs, const Vector &vs) -> Vector {
-    return pinocchio::aba(model, data, qs, vs, tau);
+    return pin::aba(model, data, qs, vs, tau);
   };
   for (long k = 0; k < steps; ++k) {
-    pinocchio::forwardKinematics(model, data, q, v, a);
-    pinocchio::updateFramePlacement(model, data, m.frame);
-    pinocchio::computeJointJacobians(model, data);
-    pinocchio::getFrameJacobian(model, data, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, J);
+    pin::forwardKinematics(model, data, q, v, a);
+    pin::updateFramePlacement(model, data, m.frame);
+    pin::computeJointJacobians(model, data);
+    pin::getFrameJacobian(model, data, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, J);
     const Eigen::Vector3d jdot_v =
-        pinocchio::getFrameClassicalAcceleration(model, data, m.frame, pinocchio::LOCAL_WORLD_ALIGNED).linear();
+        pin::getFrameClassicalAcceleration(model, data, m.frame, pinocchio::LOCAL_WORLD_ALIGNED).linear();
     a = -0.01 * (J.topRows<3>().transpose() * jdot_v) - v;  // a cheap stand-in for the law
-    tau = pinocchio::rnea(model, data, q, v, a);
+    tau = pin::rnea(model, data, q, v, a);
     // RK4 of (q, v)' = (v, ABA(q, v, tau)) with tau held
     const Vector k1q = v, k1v = acc(q, v);
     const Vector k2q = v + 0.5 * dt * k1v, k2v = acc(q + 0.5 * dt * k1q, k2q);

@@ -2,10 +2,9 @@
 
 #include <stdexcept>
 
-#include <pinocchio/algorithm/crba.hpp>
-#include <pinocchio/algorithm/frames.hpp>
-#include <pinocchio/algorithm/rnea.hpp>
 #include <pinocchio/serialization/model.hpp>
+
+#include "pin_calls.hpp"
 
 namespace nnrobust {
 
@@ -17,18 +16,18 @@ LoadedModel::LoadedModel(const std::string &serialized, const std::string &frame
 }
 
 Matrix LoadedModel::mass(const Vector &q) {
-  pinocchio::crba(model, data, q);
+  pin::crba(model, data, q);
   data.M.triangularView<Eigen::StrictlyLower>() = data.M.transpose().triangularView<Eigen::StrictlyLower>();
   return data.M;
 }
 
 Vector LoadedModel::bias(const Vector &q, const Vector &v) {
-  return pinocchio::rnea(model, data, q, v, Vector::Zero(model.nv));
+  return pin::rnea(model, data, q, v, Vector::Zero(model.nv));
 }
 
 Matrix LoadedModel::frame_jacobian(const Vector &q) {
-  Matrix J = Matrix::Zero(6, model.nv);
-  pinocchio::computeFrameJacobian(model, data, q, frame, pinocchio::LOCAL_WORLD_ALIGNED, J);
+  pin::Matrix6x J = pin::Matrix6x::Zero(6, model.nv);
+  pin::computeFrameJacobian(model, data, q, frame, pinocchio::LOCAL_WORLD_ALIGNED, J);
   return J;
 }
 

@@ -9,9 +9,7 @@
 
 #include <Eigen/Cholesky>
 
-#include <pinocchio/algorithm/aba.hpp>
-#include <pinocchio/algorithm/crba.hpp>
-#include <pinocchio/algorithm/rnea.hpp>
+#include "pin_calls.hpp"
 
 #include "closed_loop.hpp"
 
@@ -63,7 +61,7 @@ struct Plant {
   Vector acceleration(double t, const Vector &q, const Vector &v, const Vector &tau) {
     signs_.resize(v.size());
     for (int i = 0; i < v.size(); ++i) signs_[i] = static_cast<int>(sign(v[i]));
-    return pinocchio::aba(m.model, m.data, q, v, net_torque(t, q, v, tau, signs_));
+    return pin::aba(m.model, m.data, q, v, net_torque(t, q, v, tau, signs_));
   }
 
   // Plant.net_torque: tau + tau_stop - tau_d - F, the sticky joints' dry friction F_c mode_i
@@ -83,7 +81,7 @@ struct Plant {
   // next command's choice of modes and its first RK4 stage all ask at the same state
   const Matrix &mass(const Vector &q) {
     if (q_mass_.size() != q.size() || q_mass_ != q) {
-      pinocchio::crba(m.model, m.data, q);
+      pin::crba(m.model, m.data, q);
       M_ = m.data.M;
       M_.triangularView<Eigen::StrictlyLower>() = M_.transpose();
       q_mass_ = q;
@@ -94,7 +92,7 @@ struct Plant {
   // V_m(q, v) v + G(q) (PinocchioModel.bias), kept for the last (q, v) likewise
   const Vector &bias(const Vector &q, const Vector &v) {
     if (q_bias_.size() != q.size() || q_bias_ != q || v_bias_ != v) {
-      bias_ = pinocchio::nonLinearEffects(m.model, m.data, q, v);
+      bias_ = pin::nonLinearEffects(m.model, m.data, q, v);
       q_bias_ = q;
       v_bias_ = v;
     }
@@ -112,7 +110,7 @@ struct Plant {
     for (int i = 0; i < n; ++i) (sticky(i) && mode[i] == 0 ? held_ : free_).push_back(i);
     if (held_.empty()) {
       hold.resize(0);
-      return pinocchio::aba(m.model, m.data, q, v, net_);
+      return pin::aba(m.model, m.data, q, v, net_);
     }
     mass(q);
     r_ = net_ - bias(q, v);
