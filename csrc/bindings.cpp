@@ -106,7 +106,8 @@ NB_MODULE(_loop, m) {
   nb::class_<LoopSpec> spec(m, "LoopSpec", "Everything one compiled run needs (nnrobust/compiled.py).");
   spec.def(nb::init<>());
 #define FIELD(name) spec.def_rw(#name, &LoopSpec::name)
-  FIELD(period); FIELD(substeps); FIELD(steps); FIELD(max_speed); FIELD(q0); FIELD(v0);
+  FIELD(period); FIELD(substeps); FIELD(max_step_rotation); FIELD(max_period_substeps);
+  FIELD(steps); FIELD(max_speed); FIELD(q0); FIELD(v0);
   FIELD(viscous); FIELD(coulomb); FIELD(static_friction); FIELD(dist_amplitude); FIELD(dist_phase); FIELD(dist_omega);
   FIELD(torque_limit); FIELD(stops); FIELD(stop_lower); FIELD(stop_upper); FIELD(stop_stiffness);
   FIELD(stop_alpha); FIELD(position_noise); FIELD(velocity_noise); FIELD(resolution); FIELD(noise_q);
@@ -141,7 +142,8 @@ NB_MODULE(_loop, m) {
       .def_ro("divergence_index", &LoopTrace::divergence_index)
       .def_ro("divergence_joint", &LoopTrace::divergence_joint)
       .def_ro("friction_events", &LoopTrace::friction_events)
-      .def_ro("unresolved_events", &LoopTrace::unresolved_events);
+      .def_ro("unresolved_events", &LoopTrace::unresolved_events)
+      .def_ro("refined_periods", &LoopTrace::refined_periods);
   m.def("run_loop", &run, nb::arg("plant"), nb::arg("spec"), nb::arg("nominal").none() = nb::none(),
         "Run the compiled closed loop (GIL released; Ctrl-C and SIGTERM stop it); `nominal` is the "
         "controller's Pinocchio model when spec.nominal_kind is 'pinocchio'.");

@@ -569,6 +569,12 @@ void record_kinematics(LoadedModel &m, const LoopSpec &s, const Criteria &criter
   }
 }
 
+// simulation.period_substeps: the plant steps of one control period, cut for the fastest joint.
+int period_substeps(const LoopSpec &s, double speed) {
+  const double needed = std::ceil(s.period * speed / s.max_step_rotation);
+  return needed <= s.substeps ? s.substeps : static_cast<int>(std::min<double>(needed, s.max_period_substeps));
+}
+
 }  // namespace
 
 LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpec &s, bool (*interrupted)(),
@@ -599,7 +605,6 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
   const bool noisy = s.noise_q.rows() > 0;
   Vector q = s.q0, v = s.v0, z = s.z0, tau = Vector::Zero(n);
   std::deque<Vector> commands;
-  const double h = s.period / s.substeps;
   tr.done = steps;
   for (long k = 0; k < steps; ++k) {
     if (interrupted && k % 256 == 0 && k > 0 && interrupted()) {
@@ -659,6 +664,7 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
     }
     z = out.z;
     if (s.mj_step) {  // MujocoPlant.advance: MuJoCo's steps with tau held, -tau_d at each mid-step
+      const double h = s.period / s.substeps;
       using Step = void (*)(const void *, void *);
       const auto step = reinterpret_cast<Step>(s.mj_step);
       auto *ctrl = reinterpret_cast<double *>(s.mj_ctrl);
@@ -677,11 +683,14 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
       }
       continue;
     }
+    const int n_steps = period_substeps(s, v.cwiseAbs().maxCoeff());
+    tr.refined_periods += n_steps != s.substeps;
+    const double h = s.period / n_steps;
     if (stick_slip) {  // simulation.simulate with the plant's stick-slip integrator
-      for (int i = 0; i < s.substeps; ++i) stick_slip->advance(t + i * h, q, v, tau, h, i == 0);
+      for (int i = 0; i < n_steps; ++i) stick_slip->advance(t + i * h, q, v, tau, h, i == 0);
       continue;
     }
-    for (int i = 0; i < s.substeps; ++i) {  // simulation._rk4_step with the torque held
+    for (int i = 0; i < n_steps; ++i) {  // simulation._rk4_step with the torque held
       const double ti = t + i * h;
       const Vector k1q = v, k1v = plant.acceleration(ti, q, v, tau);
       const Vector k2q = v + 0.5 * h * k1v, k2v = plant.acceleration(ti + 0.5 * h, q + 0.5 * h * k1q, k2q, tau);

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,10 @@ struct LoopSpec {
   // simulation
   double period = 1e-3;
   int substeps = 1;
+  // simulation.period_substeps: a period whose fastest joint would turn more than this in one plant
+  // step is cut into ceil(period * |v|max / max_step_rotation) steps (at most max_period_substeps)
+  double max_step_rotation = std::numeric_limits<double>::infinity();
+  int max_period_substeps = 10000;
   long steps = 0;
   double max_speed = 1e3;
   Vector q0, v0;
@@ -110,6 +115,7 @@ struct LoopTrace {
   long divergence_index = -1;  // step at which it diverged
   int divergence_joint = -1;   // joint that ran away (-1: non-finite state or torque)
   long friction_events = 0, unresolved_events = 0;  // StickSlipIntegrator's counts
+  long refined_periods = 0;                           // periods whose plant step was cut for speed
 };
 
 // A control law without a compiled twin (the hybrid loop: a Python controller's compute), called

@@ -37,12 +37,13 @@ def _warn(row: dict) -> str:
     return ", ".join(kinds) if kinds else "none"
 
 
-def _markdown(columns: list[tuple[str, str, object]], rows: list[dict], made_by: str = "") -> str:
+def _markdown(columns: list[tuple[str, str, object]], rows: list[dict], made_by: str = "",
+              chaos_note: bool = True) -> str:
     """A Markdown table: ``columns`` are (header, "l" or "r", function of the row giving the cell)."""
     lines = ["| " + " | ".join(h for h, _, _ in columns) + " |",
              "|" + "|".join("---" if a == "l" else "---:" for _, a, _ in columns) + "|"]
     lines += ["| " + " | ".join(cell(r) for _, _, cell in columns) + " |" for r in rows]
-    note = f"\n\n{CHAOS_NOTE}" if any(r.get("chaotic") for r in rows) else ""
+    note = f"\n\n{CHAOS_NOTE}" if chaos_note and any(r.get("chaotic") for r in rows) else ""
     return "\n".join(lines) + note + (f"\n\nMade by `{made_by}`.\n" if made_by else "\n")
 
 
@@ -106,28 +107,65 @@ def arm_presets() -> str:
 def plant_convergence() -> str:
     data = _data("plant_convergence")
 
+    def value(key, scale=1.0):  # a chaotic row: the median over its runs at the default step
+        def cell(r):
+            v = r.get(f"{key}_median", r[key]) if r["chaotic"] else r[key]
+            return f"{scale * v:.3g}"
+        return cell
+
     def delta(key):
-        return lambda r: "–" if r["both_diverged"] else f"{100 * r[f'{key}_relative_difference']:.2f}"
+        def cell(r):
+            if r["both_diverged"]:
+                return "–"
+            if r["chaotic"]:
+                return f"{100 * r[f'{key}_median_difference']:.2f} (p = {r[f'{key}_p']:.2g})"
+            return f"{100 * r[f'{key}_relative_difference']:.2f}"
+        return cell
 
     def verdict(r):
         if r["both_diverged"]:
             return "diverges at both steps"
         label = "converged" if r["converged"] else "**not converged**"
-        return label + (" (chaotic: within the probes' spread)" if r["chaotic"] and r["converged"] else
-                        " (chaotic)" if r["chaotic"] else "")
+        if r["chaotic"]:
+            runs = len(data["probes"]) + 1
+            label += (f" (chaotic: {runs} runs per step; diverged {r['diverged_runs']} and "
+                      f"{r['fine_diverged_runs']})")
+        return label
 
     table = _markdown([("preset", "l", _text("preset")), ("controller", "l", _text("controller")),
-                       ("RMS error [mm]", "r", lambda r: _mm(r["rms_error_after_2s"])),
-                       ("Δ error [%]", "r", delta("rms_error_after_2s")), TORQUE,
-                       ("Δ torque [%]", "r", delta("rms_torque")), CHATTER,
+                       ("RMS error [mm]", "r", value("rms_error_after_2s", 1e3)),
+                       ("Δ error [%]", "r", delta("rms_error_after_2s")),
+                       ("RMS torque [N m]", "r", value("rms_torque")),
+                       ("Δ torque [%]", "r", delta("rms_torque")),
+                       ("chatter [N m]", "r", value("torque_chatter")),
                        ("Δ chatter [%]", "r", delta("torque_chatter")),
-                       ("stick-slip events", "r", _text("friction_events")), ("verdict", "l", verdict)],
-                      data["rows"])
+                       ("stick-slip events", "r", _text("friction_events")),
+                       ("cut periods", "r", _text("refined_periods")), ("verdict", "l", verdict)],
+                      data["rows"], chaos_note=False)
     converged = sum(r["converged"] for r in data["rows"])
-    return table + (f"\nΔ: the default step (one RK4 step per 1 ms period) against {data['fine']} steps per "
-                    f"period; tolerances 2 % (error, torque) and 10 % (chatter). {converged} of "
-                    f"{len(data['rows'])} runs converged. Made by `python benchmarks/plant_convergence.py "
-                    "--json docs/data/plant_convergence.json`.\n")
+    return table + (f"\nΔ: the default step (one RK4 step per 1 ms period, cut where a joint turns more than "
+                    f"0.02 rad in one) against {data['fine']} steps per period; tolerances 2 % (error, "
+                    f"torque) and 10 % (chatter). A chaotic row gives the median over its runs at the "
+                    f"default step and, as Δ, the difference between the two steps' medians with the "
+                    f"two-sided Mann–Whitney p-value of their runs; a metric agrees when p ≥ "
+                    f"{data['alpha']:g} or Δ is within its tolerance, and the row converges when every "
+                    f"metric agrees and Fisher's exact p on the diverged runs is ≥ {data['alpha']:g}. Cut "
+                    f"periods: control periods whose step the speed rule cut. "
+                    f"{converged} of {len(data['rows'])} runs converged. Made by `python "
+                    "benchmarks/plant_convergence.py --json docs/data/plant_convergence.json`.\n")
+
+
+def adaptive_step() -> str:
+    def rotation(r):
+        return "fixed 1 ms step" if r["max_step_rotation"] is None else f"{r['max_step_rotation']:g}"
+
+    return _markdown([("max_step_rotation [rad]", "l", rotation),
+                      ("energy drift", "r", lambda r: f"{r['energy_drift']:.2g}"),
+                      ("fastest joint [rad/s]", "r", lambda r: f"{r['max_joint_speed']:.0f}"),
+                      ("cut periods", "r", lambda r: f"{r['refined_periods']} of {r['periods']}"),
+                      ("wall [s]", "r", lambda r: f"{r['wall_seconds']:.2f}")],
+                     _data("adaptive_step")["rows"],
+                     "python benchmarks/adaptive_step.py --json docs/data/adaptive_step.json")
 
 
 def friction_compensation() -> str:
@@ -282,7 +320,7 @@ RENDERERS = {"engine-gap-presets": engine_gap_presets, "engine-gap-tuned": engin
              "arm-presets": arm_presets, "paper-robustness": _study("paper-robustness"),
              "panda-robustness": _study("panda-robustness"), "paper-reproduction": paper_reproduction,
              "nn-options": nn_options,
-             "subtask": subtask, "plant-convergence": plant_convergence,
+             "subtask": subtask, "plant-convergence": plant_convergence, "adaptive-step": adaptive_step,
              "friction-compensation": friction_compensation, "tuned-headline": tuned_headline,
              "tuned-settings": tuned_settings}
 

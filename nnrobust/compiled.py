@@ -182,9 +182,10 @@ def loop_spec(setup, duration: float):
     """The compiled loop's description of a built experiment (every array it needs)."""
     import numpy as np
 
+    from .config import step_rotation_limit
     from .controllers import NNCompensator, TaskSpacePD
     from .model import PinocchioModel
-    from .simulation import MAX_SPEED
+    from .simulation import MAX_PERIOD_SUBSTEPS, MAX_SPEED
     from .trajectories import PiecewisePolynomialPath
 
     def f(x):  # the C++ side takes contiguous float64 arrays
@@ -196,6 +197,7 @@ def loop_spec(setup, duration: float):
     steps = int(round(duration / sim.control_period))
     s = module.LoopSpec()
     s.period, s.substeps, s.steps, s.max_speed = sim.control_period, setup.substeps, steps, MAX_SPEED
+    s.max_step_rotation, s.max_period_substeps = step_rotation_limit(setup.config), MAX_PERIOD_SUBSTEPS
     s.q0, s.v0 = f(setup.q0), f(setup.v0)
     s.viscous, s.coulomb = f(plant.friction.viscous), f(plant.friction.coulomb)
     s.static_friction = f(np.where(plant.sticky, plant.friction.static, 0.0))
@@ -314,7 +316,7 @@ def _trace(setup, spec, out):
                 "manipulability": np.asarray(out.manipulability)[:done], "h": np.asarray(out.h)[:done]}
     return Trace(t, np.asarray(out.q)[:done], np.asarray(out.dq)[:done], np.asarray(out.tau)[:done],
                  np.asarray(out.tau_cmd)[:done], z, signals, out.status, message, recorded,
-                 out.friction_events, out.unresolved_events)
+                 out.friction_events, out.unresolved_events, out.refined_periods)
 
 
 def simulate_compiled(setup, duration: float):

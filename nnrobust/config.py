@@ -449,6 +449,11 @@ class SimulationConfig:
         integration_step: the RK4 step [s]; when given it sets substeps = control_period /
             integration_step, which must be a whole number (a step never spans two periods).
         integrator: ``rk4`` or ``solve_ivp``.
+        max_step_rotation: the most the fastest joint may turn in one RK4 step [rad or m], at its
+            speed at the start of a control period; a faster period is cut into more steps (both
+            loops; docs/plant.md#speed-adaptive-step). MuJoCo (plant.engine) keeps its own
+            fixed step.
+        adaptive_step: whether max_step_rotation applies (false: T / substeps throughout).
         backend: ``auto`` (the compiled loop when every component of the experiment has a
             compiled twin; the hybrid loop for a custom controller; else the Python loop),
             ``compiled``, ``hybrid`` (the compiled plant calling the Python controller once per
@@ -466,6 +471,8 @@ class SimulationConfig:
     substeps: int | None = None
     integration_step: float | None = None
     integrator: str = "rk4"
+    max_step_rotation: float = 0.02
+    adaptive_step: bool = True
     backend: str = "auto"
     q_seed: list[float] | None = None
     initial_task_offset: list[float] | None = None
@@ -806,6 +813,15 @@ def _positive(path: str, values) -> None:
         raise ConfigError(path, f"must be positive, got {values}")
 
 
+def step_rotation_limit(config: ExperimentConfig) -> float:
+    """simulation.max_step_rotation where the speed-adaptive step applies (RK4 on Pinocchio's
+    plant with simulation.adaptive_step), else inf: the step stays T / substeps.
+    """
+    sim = config.simulation
+    adaptive = sim.adaptive_step and sim.integrator == "rk4" and config.plant.engine != "mujoco"
+    return sim.max_step_rotation if adaptive else math.inf
+
+
 def nominal_kind(config: ExperimentConfig) -> str:
     """``nominal.kind`` resolved: ``auto`` is the closed form on the paper's arm
     (``three_link_planar``, planar task), the URDF model on every other arm.
@@ -1061,6 +1077,10 @@ def validate(config: ExperimentConfig) -> None:
     _positive("simulation.control_period", sim.control_period)
     if sim.substeps is not None:
         _positive("simulation.substeps", sim.substeps)
+    if sim.max_step_rotation <= 0:
+        raise ConfigError("simulation.max_step_rotation", f"must be positive [rad or m], got "
+                          f"{sim.max_step_rotation:g}; to keep the plant step fixed, set "
+                          "simulation.adaptive_step = false")
     if sim.integration_step is not None:
         _positive("simulation.integration_step", sim.integration_step)
         ratio = sim.control_period / sim.integration_step

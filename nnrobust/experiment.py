@@ -11,7 +11,14 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pinocchio as pin
 
-from .config import ExperimentConfig, default_criteria, nominal_kind, path_key, provenance_header
+from .config import (
+    ExperimentConfig,
+    default_criteria,
+    nominal_kind,
+    path_key,
+    provenance_header,
+    step_rotation_limit,
+)
 from .controllers import (
     AdditiveRBFBasis,
     Controller,
@@ -732,7 +739,8 @@ def run_experiment(config: ExperimentConfig, progress=None, setup: Setup | None 
     else:
         trace = simulate(
             setup.plant, setup.controller, setup.q0, setup.v0, sim.duration,
-            sim.control_period, setup.substeps, sim.integrator, progress=progress,
+            sim.control_period, setup.substeps, sim.integrator, step_rotation_limit(config),
+            progress=progress,
         )
     wall = time.perf_counter() - start
     if backend != "python" and progress is not None and trace.t.size:

@@ -11,6 +11,7 @@ import numpy as np
 
 from . import verdicts
 from .model.tasks import display_coordinates
+from .simulation import MAX_PERIOD_SUBSTEPS
 from .subtasks.manipulability import det
 
 METRIC_UNITS = {
@@ -45,6 +46,8 @@ METRIC_UNITS = {
     "plant_step": "s",
     "friction_events": "count",
     "unresolved_events": "count",
+    "refined_periods": "count",
+    "step_rotation": "rad (m for a prismatic joint)",
 }
 """Units of the scalar metrics in metrics.json."""
 
@@ -78,6 +81,11 @@ class Result:
         plant_step: the plant's integration step [s] (control period / substeps), or NaN.
         friction_events: stick-slip events the plant located inside its steps (docs/plant.md).
         unresolved_events: plant steps with more events than it resolves (a warning).
+        refined_periods: control periods whose plant step was cut for speed
+            (simulation.max_step_rotation, docs/plant.md#speed-adaptive-step).
+        step_rotation: the most a joint turned in one plant step, from its speeds at the ends of
+            each period and the step that period used [rad or m] (a warning above
+            verdicts.STEP_ROTATION); NaN where unknown.
         plant_engine: the true plant's physics engine, ``pinocchio`` or ``mujoco``
             (docs/engines.md).
         engine_audit: for MuJoCo, its version and the worst relative differences of M, the bias
@@ -108,6 +116,8 @@ class Result:
     plant_step: float = float("nan")
     friction_events: int = 0
     unresolved_events: int = 0
+    refined_periods: int = 0
+    step_rotation: float = float("nan")
     plant_engine: str = "pinocchio"
     engine_audit: dict | None = None
 
@@ -152,6 +162,8 @@ class Result:
             plant_step=(config.simulation.control_period / substeps if config is not None else float("nan")),
             friction_events=trace.friction_events,
             unresolved_events=trace.unresolved_events,
+            refined_periods=trace.refined_periods,
+            step_rotation=step_rotation(trace.dq, config, substeps) if config is not None else float("nan"),
         )
 
     def experiment(self):
@@ -234,6 +246,8 @@ class Result:
             "plant_step": self.plant_step,
             "friction_events": self.friction_events,
             "unresolved_events": self.unresolved_events,
+            "refined_periods": self.refined_periods,
+            "step_rotation": self.step_rotation,
             "realtime_factor": simulated / self.wall_seconds if self.wall_seconds > 0 else None,
             "plant_engine": self.plant_engine,
             "engine_audit": self.engine_audit,
@@ -325,8 +339,27 @@ class Result:
             backend=metrics.get("backend", "python"), plant_step=metrics.get("plant_step", float("nan")),
             friction_events=metrics.get("friction_events", 0),
             unresolved_events=metrics.get("unresolved_events", 0),
+            refined_periods=metrics.get("refined_periods", 0),
+            step_rotation=metrics.get("step_rotation", float("nan")),
             plant_engine=metrics.get("plant_engine", "pinocchio"), engine_audit=metrics.get("engine_audit"),
         )
+
+
+def step_rotation(dq: np.ndarray, config, substeps: int) -> float:
+    """The most a joint turned in one plant step [rad or m]: per control period, the larger of the
+    fastest joint's speeds at its two ends times the step the period used
+    (simulation.period_substeps; MuJoCo's step is fixed).
+    """
+    if dq.size == 0 or not np.all(np.isfinite(dq)):
+        return float("nan")
+    from .config import step_rotation_limit
+
+    sim, rotation = config.simulation, step_rotation_limit(config)
+    speed = np.abs(dq).max(axis=1)
+    needed = np.ceil(sim.control_period * speed / rotation)  # period_substeps, vectorised
+    steps = np.where(needed <= substeps, substeps, np.minimum(needed, MAX_PERIOD_SUBSTEPS))
+    ends = np.maximum(speed, np.append(speed[1:], speed[-1]))
+    return float(np.max(ends * sim.control_period / steps))
 
 
 OPTIONAL_ARRAYS = ("chain", "tau_cmd", "torque_limit", "lower_limit", "upper_limit", "prismatic")

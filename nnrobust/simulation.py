@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -20,6 +21,23 @@ INTEGRATORS = ("rk4", "solve_ivp")
 
 MAX_SPEED = 1e3
 """A joint faster than this [rad/s or m/s] counts as divergence (both loops)."""
+
+MAX_STEP_ROTATION = 0.02
+"""Default simulation.max_step_rotation [rad or m]: the most the fastest joint may turn in one plant
+step at the start of a control period before that period's step is cut (:func:`period_substeps`)."""
+
+MAX_PERIOD_SUBSTEPS = 10_000
+"""The most plant steps one control period is cut into (as simulation.substeps)."""
+
+
+def period_substeps(speed: float, period: float, substeps: int, max_rotation: float) -> int:
+    """Plant steps for one control period: ``substeps``, or more when the fastest joint, at its
+    speed at the period's start [rad/s or m/s], would turn more than ``max_rotation`` in one
+    (Coriolis and centrifugal rates grow with q', and with them the RK4 truncation error; both
+    loops, docs/plant.md#speed-adaptive-step). ``max_rotation = inf`` keeps the step fixed.
+    """
+    needed = math.ceil(period * speed / max_rotation)
+    return substeps if needed <= substeps else min(needed, MAX_PERIOD_SUBSTEPS)
 
 
 @dataclass
@@ -43,6 +61,7 @@ class Trace:
         friction_events: stick-slip events located inside plant steps (:mod:`nnrobust.plant.stick_slip`;
             mode changes when a new command arrives are not counted).
         unresolved_events: integration steps with more events than it resolves.
+        refined_periods: control periods whose plant step was cut for speed (:func:`period_substeps`).
 
     """
 
@@ -58,6 +77,7 @@ class Trace:
     recorded: dict | None = None
     friction_events: int = 0
     unresolved_events: int = 0
+    refined_periods: int = 0
 
 
 def _rk4_step(f, t: float, X: np.ndarray, h: float) -> np.ndarray:
@@ -108,6 +128,7 @@ def simulate(
     control_period: float = 1e-3,
     substeps: int = 1,
     integrator: str = "rk4",
+    max_step_rotation: float = MAX_STEP_ROTATION,
     rtol: float = 1e-10,
     atol: float = 1e-10,
     max_speed: float = MAX_SPEED,
@@ -130,6 +151,8 @@ def simulate(
         duration: simulated time [s].
         control_period: T, the zero-order-hold period [s].
         substeps: integration steps per control period (RK4 step = T / substeps).
+        max_step_rotation: a period whose fastest joint would turn more than this [rad or m] in
+            one step is integrated in more (:func:`period_substeps`; RK4 without an engine).
         integrator: "rk4" or "solve_ivp" (DOP853 with rtol, atol, restarted every period).
         max_speed: a joint speed above this [rad/s or m/s] counts as divergence.
         progress: called as progress(t, q) every ``progress_every`` control steps (progress bar,
@@ -162,14 +185,13 @@ def simulate(
         return np.concatenate([X[n:], plant.acceleration(t, X[:n], X[n:], tau)])
 
     user_code = not type(controller).__module__.startswith("nnrobust.")
-    h = control_period / substeps
     engine = plant.engine
     if engine is not None:  # MuJoCo integrates the plant (nnrobust.plant.mujoco_engine)
         engine.reset(np.asarray(q0, float), np.asarray(v0, float))
     stick_slip = (StickSlipIntegrator(plant, np.asarray(v0, float)) if plant.sticky.any() and engine is None
                   else None)
     status, message, done = "completed", "", steps
-    k, t = 0, 0.0
+    k, t, refined = 0, 0.0, 0
     try:
         for k in range(steps):
             check_interrupt()  # an interrupt lost in a garbage-collection callback (signals.py)
@@ -208,16 +230,21 @@ def simulate(
                 z = out.state
             if engine is not None:
                 X = np.concatenate(engine.advance(t, tau, control_period))
-            elif stick_slip is not None:  # q, v: the views of X sliced at the top of the step
+                continue
+            n_steps = (period_substeps(float(np.max(np.abs(v))), control_period, substeps, max_step_rotation)
+                       if integrator == "rk4" else substeps)
+            refined += n_steps != substeps
+            h = control_period / n_steps
+            if stick_slip is not None:  # q, v: the views of X sliced at the top of the step
                 if integrator == "rk4":
                     flow = rk4_flow(plant, tau)
-                    for i in range(substeps):
+                    for i in range(n_steps):
                         q, v = stick_slip.advance(flow, t + i * h, q, v, tau, h, new_command=i == 0)
                 else:
                     q, v = stick_slip.advance(_ivp_flow(plant, tau, rtol, atol), t, q, v, tau, control_period)
                 X = np.concatenate([q, v])
             elif integrator == "rk4":
-                for i in range(substeps):
+                for i in range(n_steps):
                     X = _rk4_step(f, t + i * h, X, h)
             else:
                 from scipy.integrate import solve_ivp  # imported once, and only when chosen
@@ -233,4 +260,5 @@ def simulate(
         {name: arr[sl] for name, arr in sig_rec.items()}, status, message,
         friction_events=stick_slip.events if stick_slip else 0,
         unresolved_events=stick_slip.unresolved if stick_slip else 0,
+        refined_periods=refined,
     )

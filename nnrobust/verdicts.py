@@ -30,7 +30,8 @@ RHO_MIN = 1.0
 STEP_ROTATION = 0.05
 """[rad or m] A joint that moves more than this in one plant step makes the RK4 step too long for
 the dynamics its speed excites (Coriolis and centrifugal rates scale with q'): results may depend
-on the step (docs/plant.md)."""
+on the step (docs/plant.md). The speed-adaptive step keeps it below simulation.max_step_rotation
+(0.02) at each period's start; the warning fires where a period's speed outgrew that."""
 
 SUBTASK_LOSS = 0.05
 """The subtask degrades: h at the end below h at the start by more than this fraction of
@@ -106,14 +107,16 @@ def run_warnings(metrics: dict, joint_names: list[str], units: list[str]) -> lis
     if metrics.get("runaway"):
         out.append(f"runaway: RMS error {1e3 * metrics['rms_error_last_fifth']:.3g} mm over the last "
                    f"fifth against {1e3 * metrics['rms_error_early']:.3g} mm over [2 s, 40 %]")
-    turn = metrics.get("max_joint_speed", 0.0) * metrics.get("plant_step", float("nan"))
+    turn = metrics.get("step_rotation")
+    if turn is None:  # a run folder from before the speed-adaptive step
+        turn = metrics.get("max_joint_speed", 0.0) * metrics.get("plant_step", float("nan"))
     if turn > STEP_ROTATION:
         i = metrics["joint_speed_joint"]
         unit = "m" if units[i] == "m/s" else "rad"
-        steps = math.ceil(turn / STEP_ROTATION)
         out.append(f"plant step too long: joint {joint_names[i]!r} reached {metrics['max_joint_speed']:.3g} "
-                   f"{units[i]}, {turn:.3g} {unit} per plant step (docs/plant.md); the metrics may depend on "
-                   f"the step: set simulation.substeps {steps}x higher")
+                   f"{units[i]} and turned up to {turn:.3g} {unit} in one plant step (docs/plant.md); the "
+                   "metrics may depend on the step: set simulation.max_step_rotation lower, or "
+                   f"simulation.substeps {math.ceil(turn / STEP_ROTATION)}x higher")
     if metrics.get("unresolved_events"):
         out.append(f"plant not converged: {metrics['unresolved_events']} plant steps held more stick-slip "
                    "events than the integrator resolves (docs/plant.md); set simulation.substeps higher")

@@ -118,15 +118,18 @@ KINDS = ["nn", "no-u0", "sliding-mode", "computed-torque", "pd"]
 
 
 def _both_backends(preset, duration, **changes):
+    from nnrobust.config import step_rotation_limit
     from nnrobust.experiment import build
     from nnrobust.presets import load_preset
     from nnrobust.simulation import simulate
 
-    config = load_preset(preset).replace(simulation={"duration": duration}, **changes)
+    simulation = {"duration": duration, **changes.pop("simulation", {})}
+    config = load_preset(preset).replace(simulation=simulation, **changes)
     setup = build(config)
     assert compiled.twin_refusal(setup) == ""
     reference = simulate(setup.plant, setup.controller, setup.q0, setup.v0, duration,
-                         config.simulation.control_period, setup.substeps)
+                         config.simulation.control_period, setup.substeps,
+                         max_step_rotation=step_rotation_limit(config))
     setup = build(config)  # fresh sensor noise generator and controller state
     return reference, compiled.simulate_compiled(setup, duration)
 
@@ -184,11 +187,27 @@ def test_auto_takes_the_compiled_loop_only_with_a_twin_for_every_component():
 
 @needs_extension
 def test_a_compiled_run_diverges_like_the_python_run():
-    """Unstable gains without actuator limits: both loops stop at the same step, naming the joint."""
+    """Unstable gains without actuator limits: both loops stop at the same step, naming the joint,
+    having cut the same periods' steps as the joints sped up (simulation.max_step_rotation)."""
     changes = {"controller": {"Kp": [1e6], "Kv": [2e3]}, "plant": {"torque_limits": "none"}}
     py, cc = _both_backends("paper-ellipse", 2.0, **changes)
     assert py.status == cc.status == "diverged"
     assert cc.t.size == py.t.size and cc.message == py.message
+    assert cc.refined_periods == py.refined_periods > 0
+
+
+@needs_extension
+@pytest.mark.parametrize("preset", ["paper-ellipse", "panda-ellipse"])
+def test_the_speed_adaptive_step_is_the_same_on_both_loops(preset):
+    """With simulation.max_step_rotation small enough to cut most periods (10 µrad: above 0.01 rad/s),
+    both loops cut the same periods into the same steps: the arrays agree to 1e-8, the counts
+    exactly (stick-slip events located inside the cut steps included)."""
+    py, cc = _both_backends(preset, 0.5, simulation={"max_step_rotation": 1e-5})
+    assert cc.status == py.status == "completed"
+    assert cc.refined_periods == py.refined_periods > 100
+    assert cc.friction_events == py.friction_events
+    for name in ("q", "dq", "tau", "z"):
+        np.testing.assert_allclose(getattr(cc, name), getattr(py, name), rtol=0, atol=1e-8, err_msg=name)
 
 
 @needs_extension

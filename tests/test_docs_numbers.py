@@ -24,7 +24,7 @@ DATA_FILES = ["paper_reproduction", "nn_options", "subtask", "arm_presets"]
 STUDIES = ["paper_robustness", "panda_robustness"]
 """Summaries of the shipped sweeps (their summary.json)."""
 OTHERS = ["friction_compensation", "plant_convergence", "tuned_comparison", "falsify_paper_factors",
-          "engine_gap"]
+          "engine_gap", "adaptive_step"]
 """Data files with a re-run test of their own below."""
 
 
@@ -103,6 +103,17 @@ def test_a_run_of_the_plant_convergence_data_reproduces():
         assert again[key] == pytest.approx(run[key], rel=1e-9), key
     row = next(r for r in data["rows"] if r["preset"] == "paper-ellipse" and r["controller"] == "nn")
     assert row["converged"] and not row["chaotic"]
+
+
+def test_the_default_row_of_the_adaptive_step_data_reproduces():
+    """The falling arm at the default max_step_rotation: the same energy drift and cut periods."""
+    import adaptive_step
+
+    data = json.loads((render_tables.DATA / "adaptive_step.json").read_text())
+    row = next(r for r in data["rows"] if r["max_step_rotation"] == 0.02)
+    again = adaptive_step.row(0.02, data["duration"])
+    assert again["energy_drift"] == pytest.approx(row["energy_drift"], rel=1e-6)
+    assert again["refined_periods"] == row["refined_periods"]
 
 
 def test_a_best_setting_of_the_tuned_comparison_reproduces():
@@ -207,6 +218,11 @@ GAP = "engine_gap"
 PRINTED = ("paper-ellipse-paper-law",)
 FALSIFIED = "falsify_paper_factors"
 
+def _convergence(preset: str, key: str, controller: str = "computed-torque"):
+    return lambda data: next(r[key] for r in data["rows"] if r["preset"] == preset
+                             and r["controller"] == controller)
+
+
 QUOTED_FIGURES: list[tuple] = [
     # document, a pattern capturing one number, data file, where the number is (keys, or a function of
     # the data), scale from the data's unit to the printed one
@@ -294,6 +310,10 @@ QUOTED_FIGURES: list[tuple] = [
      _gap_error(PRINTED[0], "no-u0", "mujoco"), 1e3),
     ("docs/engines.md", r"at the 1 ms step, (\d+) of the 24", GAP, _failing("implicitfast"), 1.0),
     ("docs/engines.md", r"With 4× as many steps, (\d+) of those 24", GAP, _failing("implicitfast_fine"), 1.0),
+    ("docs/plant.md", r"chatter\s+medians differ by ([\d.]+) % between", "plant_convergence",
+     _convergence("paper-line", "torque_chatter_median_difference"), 1e2),
+    ("docs/plant.md", r"the difference is real \(p =\s+([\d.]+)\)", "plant_convergence",
+     _convergence("paper-line", "torque_chatter_p"), 1.0),
 ]
 """Figures quoted in prose, each checked against its data file (within half a unit of the last
 printed digit, or 2 %)."""
@@ -345,15 +365,30 @@ def test_the_published_worst_plants_rerun_to_their_metrics():
 
 def test_the_nn_worst_plant_fails_on_the_python_loop_too():
     """The NN's worst plant is a chaotic run once saturated: the Python loop, whose rounding differs,
-    ends elsewhere (docs/falsification.md quotes 95 mm against 818 mm), but past the 50 mm required
-    as well: the verdict does not depend on the loop."""
+    ends elsewhere (docs/falsification.md quotes both), but past the 50 mm required as well: the
+    verdict does not depend on the loop."""
     from nnrobust.experiment import run_experiment
 
     data = json.loads((render_tables.DATA / f"{FALSIFIED}.json").read_text())
     config = _worst_config(data["controllers"]["nn"]["worst"]["command"])
     metrics = run_experiment(config.replace(simulation={"backend": "python"})).metrics()
+    text = (ROOT / "docs" / "falsification.md").read_text()
+    quoted = float(re.search(r"The Python loop, whose rounding differs,\s+gives (\d+) mm", text).group(1))
     assert metrics["rms_error_after_2s"] > 0.05
-    assert metrics["rms_error_after_2s"] * 1e3 == pytest.approx(95, abs=5)  # the figure the docs quote
+    assert metrics["rms_error_after_2s"] * 1e3 == pytest.approx(quoted, abs=0.5)
+
+
+def test_the_plant_the_search_no_longer_finds_still_fails():
+    """docs/falsification.md: the NN's worst plant of the search before the speed-adaptive step,
+    rerun from its printed command, still gives the figure quoted, past 50 mm."""
+    from nnrobust.experiment import run_experiment
+
+    text = (ROOT / "docs" / "falsification.md").read_text()
+    block = re.search(r"still gives\s+(\d+) mm:\s+(nnrobust run .*?)\n\n", text, re.S)
+    command = " ".join(block.group(2).replace("\\\n", " ").split())
+    metrics = run_experiment(_worst_config(command)).metrics()
+    assert metrics["refined_periods"] > 0  # the step was cut for speed
+    assert metrics["rms_error_after_2s"] * 1e3 == pytest.approx(float(block.group(1)), abs=0.5)
 
 
 def test_every_worst_plant_fails_on_mujoco_too():

@@ -39,7 +39,7 @@ def test_the_spaces_come_from_the_arm_and_share_their_gain_coordinates(scales):
     lam = scales["task_inertia"]
     assert pd_["controller.pd_Kp"] == [pytest.approx(lam * 1e4)]
     assert pd_["controller.pd_Kd"] == [pytest.approx(2 * 0.8 * lam * 100.0)]
-    assert {p.name for p in spaces["nn"].params} >= {"nn.F", "nn.sigma", "nn.eps_min", "controller.k"}
+    assert {p.name for p in spaces["nn"].params} >= {"nn.F", "leakage_rate", "nn.eps_min", "controller.k"}
     assert {p.name for p in spaces["sliding-mode"].params} >= {"controller.sliding_gain",
                                                                "controller.sliding_boundary"}
 
@@ -54,15 +54,30 @@ def test_the_task_inertia_is_that_of_the_arm(scales):
 
 def test_a_best_setting_on_a_bound_widens_it_unless_the_bound_is_physical(scales):
     space = search_space("nn", scales)
-    w, sigma = space.param("bandwidth"), space.param("nn.sigma")
+    w, F = space.param("bandwidth"), space.param("nn.F")
     values = {p.name: math.sqrt(p.low * p.high) for p in space.params}
-    values.update({"bandwidth": w.high, "nn.sigma": sigma.high})
+    values.update({"bandwidth": w.high, "nn.F": F.low})
     edges = {(b["param"], b["side"]) for b in space.at_bound(values)}
-    assert edges == {("bandwidth", "high"), ("nn.sigma", "high")}
+    assert edges == {("bandwidth", "high"), ("nn.F", "low")}
     wider = space.widened(values)
     assert wider.param("bandwidth").high == w.high  # sampling: physical
-    assert wider.param("nn.sigma").high == pytest.approx(10 * sigma.high)
+    assert wider.param("nn.F").low == pytest.approx(F.low / 10)
     assert space.widened({p.name: math.sqrt(p.low * p.high) for p in space.params}) == space
+
+
+def test_the_leakage_is_searched_as_its_rate_between_physical_bounds(scales):
+    """sigma enters the adaptation only as F sigma: its bounds are one control period (F sigma T
+    = 1) and 1 % over the run (F sigma D = 0.01), never widened, and sigma = rate / F."""
+    space = search_space("nn", scales)
+    rate = space.param("leakage_rate")
+    assert rate.high == pytest.approx(1 / scales["period"]) and rate.high_reason.startswith("sampling")
+    assert rate.low == pytest.approx(0.01 / scales["duration"]) and rate.low_reason
+    values = {p.name: math.sqrt(p.low * p.high) for p in space.params}
+    for end in (rate.low, rate.high):
+        assert space.widened({**values, "leakage_rate": end}).param("leakage_rate") == rate
+    out = space.overrides({**values, "leakage_rate": 2.0, "nn.F": 0.5})
+    assert out["nn.sigma"] == pytest.approx(4.0) and "leakage_rate" not in out
+    assert space.weakest()["leakage_rate"] == rate.high
 
 
 def test_the_constraints_judge_a_setting_on_all_its_samples():

@@ -9,7 +9,11 @@ coordinates for every controller, so no law gets a wider reach than another:
 
 w spans from one oscillation per run to the sampling limit w (1/2 + d) T = 1 (period T, delay d
 periods: the phase lag of the zero-order hold and the delay reaches a radian there); the
-self-motion gain k, a first-order velocity loop, stops at k T = 1. The robust terms' levels
+self-motion gain k, a first-order velocity loop, stops at k T = 1. The NN's leakage is searched
+as its rate F sigma [1/s] (sigma = rate / F, which reaches every (F, sigma)), from 1 % over the
+run (F sigma D = 0.01: less changes nothing the run can show) to one control period (F sigma T =
+1: Z then follows |w| phi / sigma, no longer adaptive), so that its bounds are physical as F
+moves. The robust terms' levels
 scale with the arm's task acceleration a = max_i (tau_i / M_ii) |J|: the largest acceleration
 its actuators give the tool [m/s^2]. A bound that is physical (sampling, eq. 17) is never
 widened; the others are, when a best setting sits on them.
@@ -94,6 +98,8 @@ class SearchSpace:
             out.update({"controller.pd_Kp": [lam * w * w], "controller.pd_Kd": [2 * z * lam * w]})
         else:
             out.update({"controller.Kp": [w * w], "controller.Kv": [2 * z * w]})
+        if "leakage_rate" in values:  # sigma-modification's rate F sigma: Z' = F |w| phi - F sigma Z
+            out["nn.sigma"] = values["leakage_rate"] / values["nn.F"]
         if "nn.eps_min" in out:  # the boundary layer is held at its floor (eps0 = eps_min)
             out["nn.eps0"] = out["nn.eps_min"]
         return out
@@ -168,8 +174,11 @@ def search_space(controller: str, scales: dict[str, float]) -> SearchSpace:
         params.append(Param("controller.k", 0.1, 1.0 / T, "1/s", high_reason=f"sampling: k T <= 1, "
                             f"{1.0 / T:.4g} 1/s"))
     if controller == "nn":
+        D = scales["duration"]
         params += [Param("nn.F", 1e-2, 1e3, "-", weak="low"),
-                   Param("nn.sigma", 1e-4, 10.0, "1/s", weak="high"),
+                   Param("leakage_rate", 0.01 / D, 1.0 / T, "1/s", weak="high",
+                         low_reason=f"run length: F sigma D = 0.01, {0.01 / D:.3g} 1/s",
+                         high_reason=f"sampling: F sigma T = 1, {1.0 / T:.4g} 1/s"),
                    Param("nn.eps_min", 1e-5 * a, a, "m/s^2", weak="high")]
     elif controller == "sliding-mode":
         params += [Param("controller.sliding_gain", 1e-3 * a, 10 * a, "m/s^2", weak="low"),
