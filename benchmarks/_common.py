@@ -4,6 +4,8 @@ turn each run into one row of metrics (the scripts import it from their own fold
 from __future__ import annotations
 
 import os
+import signal
+import sys
 from concurrent.futures import ProcessPoolExecutor
 
 from nnrobust.experiment import run_experiment
@@ -58,6 +60,15 @@ def run_probed_row(job: dict) -> dict:
     return row
 
 
+def _end_with_parent() -> None:
+    """Pool initializer: on Linux the kernel sends this worker SIGTERM when the script that started
+    it dies, however it dies (``nnrobust bench`` also stops the script's whole process group)."""
+    if sys.platform.startswith("linux"):
+        import ctypes
+
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
+
+
 def run_rows(jobs: list[dict], workers: int | None = None, echo=None, runner=run_row) -> list[dict]:
     """Every job's row, in order, on ``workers`` processes (default: the machine's cores);
     ``runner`` turns a job into its row (a module-level function, so workers can import it)."""
@@ -69,7 +80,7 @@ def run_rows(jobs: list[dict], workers: int | None = None, echo=None, runner=run
             if echo:
                 echo(rows[-1])
         return rows
-    with ProcessPoolExecutor(workers) as pool:
+    with ProcessPoolExecutor(workers, initializer=_end_with_parent) as pool:
         for row in pool.map(runner, jobs):
             rows.append(row)
             if echo:

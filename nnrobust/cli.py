@@ -474,10 +474,37 @@ def cmd_bench(args) -> int:
     code = 0
     for name in names:
         print(f"== {name}", flush=True)
-        done = subprocess.run([sys.executable, str(root / f"{name}.py"), "--json",
-                               str(out / f"{name}.json")], check=False)
-        code = code or done.returncode
+        # its own process group: a stop signal here ends the script and every worker it started
+        command = [sys.executable, str(root / f"{name}.py"), "--json", str(out / f"{name}.json")]
+        child = subprocess.Popen(command, start_new_session=True)
+        try:
+            code = code or child.wait()
+        except KeyboardInterrupt:
+            _stop_group(child)
+            raise
     return 1 if code else 0
+
+
+def _stop_group(child, grace: float = 10.0) -> None:
+    """SIGTERM to a child's process group (the child and every process it started), SIGKILL to
+    what is left of it after ``grace`` seconds: no orphan workers.
+    """
+    import signal
+    import subprocess
+
+    try:
+        os.killpg(child.pid, signal.SIGTERM)
+    except ProcessLookupError:
+        return
+    try:
+        child.wait(grace)
+    except subprocess.TimeoutExpired:
+        pass
+    try:
+        os.killpg(child.pid, signal.SIGKILL)
+    except ProcessLookupError:
+        pass
+    child.wait()
 
 
 def cmd_presets(args) -> int:

@@ -218,6 +218,13 @@ GAP = "engine_gap"
 PRINTED = ("paper-ellipse-paper-law",)
 FALSIFIED = "falsify_paper_factors"
 
+def _drift_ratio(coarse: float, fine: float):
+    def ratio(data):
+        drift = {r["max_step_rotation"]: r["energy_drift"] for r in data["rows"]}
+        return drift[coarse] / drift[fine]
+    return ratio
+
+
 def _convergence(preset: str, key: str, controller: str = "computed-torque"):
     return lambda data: next(r[key] for r in data["rows"] if r["preset"] == preset
                              and r["controller"] == controller)
@@ -310,6 +317,10 @@ QUOTED_FIGURES: list[tuple] = [
      _gap_error(PRINTED[0], "no-u0", "mujoco"), 1e3),
     ("docs/engines.md", r"at the 1 ms step, (\d+) of the 24", GAP, _failing("implicitfast"), 1.0),
     ("docs/engines.md", r"With 4× as many steps, (\d+) of those 24", GAP, _failing("implicitfast_fine"), 1.0),
+    ("docs/plant.md", r"Quartering θ cuts the drift\s+(\d+)×", "adaptive_step",
+     _drift_ratio(0.02, 0.005), 1.0),
+    ("docs/plant.md", r"Quartering θ cuts the drift\s+\d+× and (\d+)×", "adaptive_step",
+     _drift_ratio(0.04, 0.01), 1.0),
     ("docs/plant.md", r"chatter\s+medians differ by ([\d.]+) % between", "plant_convergence",
      _convergence("paper-line", "torque_chatter_median_difference"), 1e2),
     ("docs/plant.md", r"the difference is real \(p =\s+([\d.]+)\)", "plant_convergence",

@@ -376,3 +376,39 @@ def test_planted_links_are_never_written_through(tmp_path):
     assert _run(out, "--overwrite", "--no-plots", "--no-animation") == 0
     for victim in [*victims.values(), lock_victim]:
         assert victim.read_text() == "precious", victim
+
+
+def _processes_mentioning(marker: str) -> list[int]:
+    """Live processes whose command line contains ``marker`` (Linux /proc)."""
+    out = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                if marker in (entry / "cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace"):
+                    out.append(int(entry.name))
+            except OSError:
+                continue
+    return out
+
+
+@pytest.mark.skipif(not Path("/proc/self/cmdline").exists(), reason="reads /proc")
+def test_sigterm_of_bench_leaves_no_worker_behind(tmp_path):
+    """`nnrobust bench` stopped by SIGTERM while a benchmark's worker pool runs: the script and
+    every worker it started are gone within seconds (they used to run on with parent pid 1)."""
+    out = tmp_path / "bench-out"  # in every command line of the benchmark and of its workers
+    proc = subprocess.Popen([sys.executable, "-m", "nnrobust.cli", "bench", "plant_convergence", "--out",
+                             str(out)], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 90
+    while time.monotonic() < deadline and len(_processes_mentioning(str(out))) < 3:  # script + 2 workers
+        time.sleep(0.2)
+    assert len(_processes_mentioning(str(out))) >= 3, "the benchmark's workers never started"
+    time.sleep(1.0)
+    proc.send_signal(signal.SIGTERM)
+    proc.wait(timeout=60)
+    deadline = time.monotonic() + 20
+    while time.monotonic() < deadline and _processes_mentioning(str(out)):
+        time.sleep(0.2)
+    left = _processes_mentioning(str(out))
+    for pid in left:  # do not leave them to the rest of the suite
+        os.kill(pid, signal.SIGKILL)
+    assert not left, f"{len(left)} processes left behind"
