@@ -376,7 +376,7 @@ def cmd_falsify(args) -> int:
     from .falsify import FalsifySpec, run_falsify
 
     spec = FalsifySpec(args.sweep, [c.strip() for c in args.controllers.split(",") if c.strip()],
-                       args.require, args.budget, args.seed)
+                       args.require, args.budget, args.seed, args.margin)
     progress, started = _simulations_bar(args.quiet, lambda done, total: (
         f"falsify {args.sweep}: {', '.join(spec.controllers)}, {spec.budget} simulations each and as many "
         f"for random search; {done} of {total} already done"))
@@ -396,6 +396,8 @@ def cmd_falsify(args) -> int:
             print(f"{name}: {verdict} in {entry['simulations']} simulations; least margin "
                   f"{worst['margin']:.4g} (random search: {baseline['worst']['margin']:.4g}); worst plant: "
                   f"{worst['command']}")
+        for name, margin in summary.get("margin", {}).items():
+            print(format_margin(name, margin))
         print(f"summary in {out}/summary.json, history in {out}/history, {out}/falsification.csv",
               file=sys.stderr)
     if args.keep_worst:
@@ -405,6 +407,19 @@ def cmd_falsify(args) -> int:
             if not args.quiet:
                 print(f"worst plant kept: {folder}/ (nnrobust view {folder})", file=sys.stderr)
     return 0
+
+
+def format_margin(name: str, margin: dict) -> str:
+    """One controller's robustness margin in a line: the largest scale of the box searched without
+    a violation, and the scale and plant that violated.
+    """
+    held = (f"no violation found up to {margin['holds_up_to']:.3g} x the box"
+            if margin["holds_up_to"] > 0 else "the centre of the box already fails")
+    if margin["violated_at"] is None:
+        return (f"{name}: margin >= {margin['holds_up_to']:.3g} ({held}, the largest scale tried, with "
+                f"{margin['simulations']} simulations)")
+    return (f"{name}: margin {margin['holds_up_to']:.3g} ({held} with {margin['simulations']} simulations; "
+            f"violated at {margin['violated_at']:.3g} x by {margin['violating_plant']['command']})")
 
 
 def format_tuning(summary: dict) -> str:
@@ -740,6 +755,10 @@ def build_parser() -> argparse.ArgumentParser:
     falsify.add_argument("--keep-worst", action="store_true",
                          help="rerun each controller's worst plant into OUT/worst/CONTROLLER as a full run "
                          "folder (arrays, metrics, plots, animation)")
+    falsify.add_argument("--margin", action="store_true",
+                         help="also find each controller's robustness margin: the largest scale s of the box "
+                         "about its centre with no violation found, by doubling then bisection on s, each "
+                         "scale searched at a quarter of the budget (docs/falsification.md)")
     falsify.add_argument("--quiet", action="store_true", help="print nothing but errors")
     falsify.set_defaults(func=cmd_falsify)
 

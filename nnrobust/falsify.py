@@ -27,7 +27,7 @@ import math
 import os
 import time
 import uuid
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -37,6 +37,12 @@ from .exceptions import ConfigError, NNRobustError
 from .properties import Property
 from .signals import signals_as_interrupt
 
+MAX_SCALE = 8.0
+"""The largest scale of the box the robustness margin tries (``--margin``)."""
+MARGIN_STEPS = 7
+"""Scales the margin's search tries after the box itself (doubling, then bisection)."""
+MARGIN_TOLERANCE = 0.1
+"""The margin's bisection stops when its bracket is narrower than this fraction of its top."""
 MARKER = "falsify.toml"
 HISTORY = "history"
 MAX_BUDGET = 100_000
@@ -60,6 +66,28 @@ class Box:
         for key, lo, hi, log, x in zip(self.keys, self.low, self.high, self.log, u):
             out[key] = float(lo * (hi / lo) ** x if log else lo + x * (hi - lo))
         return out
+
+    def scaled(self, s: float) -> Box:
+        """The box scaled by s about its centre: each range's half-width times s (on the log scale
+        for loguniform keys); s = 0 is the centre alone, s = 1 the box itself.
+        """
+        log = self.log
+        ratio = np.divide(self.high, self.low, out=np.ones_like(self.low), where=log)  # log keys: low > 0
+        centre = np.where(log, np.sqrt(np.abs(self.low * self.high)), 0.5 * (self.low + self.high))
+        half = np.where(log, np.sqrt(ratio), 0.5 * (self.high - self.low))
+        low = np.where(log, centre / half**s, centre - s * half)
+        low = np.where(~log & (self.low >= 0), np.maximum(low, 0.0), low)  # non-negative stays so
+        high = np.where(log, centre * half**s, centre + s * half)
+        return Box(self.keys, low, high, log)
+
+    def largest_scale(self) -> float:
+        """The largest s for which :meth:`scaled` keeps every positive linear range at least 10 %
+        of its centre away from zero (a factor or a scale must not reach 0), at most MAX_SCALE.
+        """
+        positive = ~self.log & (self.low > 0)
+        centre, half = 0.5 * (self.low + self.high), 0.5 * (self.high - self.low)
+        limits = 0.9 * centre[positive & (half > 0)] / half[positive & (half > 0)]
+        return float(min(MAX_SCALE, *limits)) if limits.size else MAX_SCALE
 
 
 def box_of(spec) -> Box:
@@ -103,6 +131,12 @@ class FalsifySpec:
     require: list[str]
     budget: int
     seed: int = 0
+    margin: bool = False
+
+    @property
+    def margin_budget(self) -> int:
+        """Simulations per controller and scale of the margin's search (a quarter of the budget)."""
+        return max(4, self.budget // 4)
 
     def __post_init__(self):
         if (
@@ -129,6 +163,7 @@ class FalsifySpec:
                 "require": self.require,
                 "budget": self.budget,
                 "seed": self.seed,
+                **({"margin": True} if self.margin else {}),
             }
         )
 
@@ -238,6 +273,130 @@ class _Search:
                 self.es = None
 
 
+class _Driver:
+    """Runs searches on the cluster in batches the size of the worker pool, taking the points
+    already simulated from the history (a resumed search asks the same points again) and
+    appending the new ones to it.
+    """
+
+    def __init__(self, client, folder: Path, done: dict, base_toml: str, properties, progress):
+        self.client, self.folder, self.done = client, folder, done
+        self.base_toml, self.properties, self.progress = base_toml, properties, progress
+        self.workers = max(len(client.scheduler_info().get("workers", {})), 1)
+        self.sweep: Any = None  # the sweep, scattered to the workers
+        self.finished = 0  # simulations of the calls before (the progress bar counts on)
+
+    def __call__(self, searches: dict, boxes: dict, rows: dict, total: int, stop_at_violation=False):
+        """Run every search to the end of its budget (or to its first violation); ``total``: the
+        simulations this call plans, for the progress bar.
+        """
+        planned = self.finished + total
+        while any(s.remaining > 0 for s in searches.values()):
+            asked = {key: search.ask(self.workers) for key, search in searches.items()
+                     if search.remaining > 0}
+            futures = {}
+            for key, points in asked.items():
+                for offset, (_, u) in enumerate(points):
+                    index = len(rows[key]) + offset
+                    cached = self.done.get((*key, index))
+                    if cached is None or not np.allclose(cached["u"], u, atol=1e-12):
+                        futures[(key, index)] = self.client.submit(
+                            evaluate, self.sweep, self.base_toml, key[0], boxes[key].values(u),
+                            self.properties, pure=False, retries=1)
+            new = []
+            for key, points in asked.items():
+                for phase, u in points:
+                    index = len(rows[key])
+                    if (key, index) in futures:
+                        row = {"controller": key[0], "search": key[1], "index": index, "phase": phase,
+                               "u": [float(x) for x in u], "values": boxes[key].values(u),
+                               **futures[(key, index)].result()}
+                        new.append(row)
+                    else:
+                        row = self.done[(*key, index)]
+                    rows[key].append(row)
+                searches[key].tell(points, [r["objective"] for r in rows[key][-len(points):]])
+                if stop_at_violation and any(r["objective"] < 0 for r in rows[key]):
+                    searches[key].budget = searches[key].asked  # a violation is all the margin needs
+            if new:
+                _write_history(self.folder, new)
+            if self.progress:
+                self.progress(self.finished + sum(len(rows[key]) for key in searches), planned)
+        self.finished += sum(len(rows[key]) for key in searches)
+
+
+@dataclass
+class _Bracket:
+    """One controller's margin search: the largest scale without a violation found (``low``), the
+    least with one (``high``), the scale to search next, and what each scale gave.
+    """
+
+    cap: float
+    low: float | None = None
+    high: float | None = None
+    next: float | None = None
+    plant: dict | None = None
+    steps: list[dict] = field(default_factory=list)
+
+    def record(self, scale: float, history: list[dict]) -> None:
+        """The search at ``scale`` ended: narrow the bracket and choose the next scale (doubling
+        until a violation, the centre once one is found, then bisection to MARGIN_TOLERANCE).
+        """
+        worst = min(history, key=lambda r: r["objective"])
+        violated = worst["objective"] < 0
+        self.steps.append({"scale": scale, "falsified": violated, "simulations": len(history),
+                           "least_margin": worst["objective"]})
+        if violated:
+            self.high, self.plant = scale, worst
+        else:
+            self.low = scale
+        if self.high is None:  # not violated yet: double, up to the cap
+            self.next = None if scale >= self.cap else min(2 * scale, self.cap)
+        elif self.low is None:  # violated: does the centre of the box (the nominal plant) hold?
+            self.next = None if scale == 0.0 else 0.0
+        elif self.high - self.low <= MARGIN_TOLERANCE * self.high:
+            self.next = None
+        else:
+            self.next = 0.5 * (self.low + self.high)
+
+
+def _margins(spec: FalsifySpec, sweep, box: Box, rows: dict, drive: _Driver) -> dict:
+    """The robustness margin of each controller: the box scaled by s about its centre, s searched
+    by doubling from the box itself (s = 1, the main search) up to :meth:`Box.largest_scale`,
+    then by bisection, each scale searched at ``spec.margin_budget`` simulations and stopped at
+    its first violation. Where the box itself is violated, the centre (s = 0) is tried first.
+    """
+    from .sweep.spec import Sample, rerun_command, sample_seed
+
+    brackets = {name: _Bracket(box.largest_scale()) for name in sweep.controllers}
+    for name, bracket in brackets.items():
+        bracket.record(1.0, rows[(name, "falsifier")])
+    for step in range(MARGIN_STEPS):
+        active = [(name, b.next) for name, b in brackets.items() if b.next is not None]
+        if not active:
+            break
+        searches, boxes = {}, {}
+        for i, (name, scale) in enumerate(active):
+            key = (name, f"margin {scale:.6g}")
+            budget = 1 if scale == 0.0 else spec.margin_budget
+            searches[key] = _Search(len(box.keys), budget, spec.seed + 104729 * (step + 1) + 7919 * i, False)
+            boxes[key] = box.scaled(scale)
+            rows[key] = []
+        drive(searches, boxes, rows, sum(s.budget for s in searches.values()), stop_at_violation=True)
+        for (name, scale), key in zip(active, searches):
+            brackets[name].record(scale, rows[key])
+    out = {}
+    for name, b in brackets.items():
+        plant = None
+        if b.plant is not None:
+            command = rerun_command(sweep, Sample(-1, b.plant["values"], sample_seed(sweep.seed, 0)), name)
+            plant = {"values": b.plant["values"], "margins": b.plant["margins"], "command": command}
+        out[name] = {"holds_up_to": b.low if b.low is not None else 0.0, "violated_at": b.high,
+                     "largest_scale": b.cap, "simulations": sum(x["simulations"] for x in b.steps[1:]),
+                     "steps": b.steps, "violating_plant": plant}
+    return out
+
+
 def _history(folder: Path) -> dict[tuple[str, str, int], dict]:
     """The rows simulated so far, by (controller, search, index)."""
     import pandas as pd
@@ -341,56 +500,19 @@ def _run_falsify(spec: FalsifySpec, folder: Path, workers, scheduler, overwrite:
     total = len(searches) * spec.budget
     started = time.monotonic()
     with signals_as_interrupt(), _client(workers, scheduler) as client:
-        n_workers = max(len(client.scheduler_info().get("workers", {})), 1)
-        sweep_future = client.scatter(sweep, broadcast=True)
-        while any(s.remaining > 0 for s in searches.values()):
-            asked = {key: search.ask(n_workers) for key, search in searches.items() if search.remaining > 0}
-            futures = {}
-            for key, points in asked.items():
-                for offset, (_, u) in enumerate(points):
-                    index = len(rows[key]) + offset
-                    cached = done.get((*key, index))
-                    if cached is None or not np.allclose(cached["u"], u, atol=1e-12):
-                        futures[(key, index)] = client.submit(
-                            evaluate,
-                            sweep_future,
-                            base_toml,
-                            key[0],
-                            box.values(u),
-                            properties,
-                            pure=False,
-                            retries=1,
-                        )
-            new = []
-            for key, points in asked.items():
-                for phase, u in points:
-                    index = len(rows[key])
-                    if (key, index) in futures:
-                        row = {
-                            "controller": key[0],
-                            "search": key[1],
-                            "index": index,
-                            "phase": phase,
-                            "u": [float(x) for x in u],
-                            "values": box.values(u),
-                            **futures[(key, index)].result(),
-                        }
-                        new.append(row)
-                    else:
-                        row = done[(*key, index)]
-                    rows[key].append(row)
-                searches[key].tell(points, [r["objective"] for r in rows[key][-len(points) :]])
-            if new:
-                _write_history(folder, new)
-            if progress:
-                progress(sum(len(r) for r in rows.values()), total)
+        drive = _Driver(client, folder, done, base_toml, properties, progress)
+        drive.sweep = client.scatter(sweep, broadcast=True)
+        drive(searches, dict.fromkeys(searches, box), rows, total)
+        margins = _margins(spec, sweep, box, rows, drive) if spec.margin else None
     seconds = time.monotonic() - started
     summary = _summary(spec, sweep, box, properties, rows, seconds, rerun_command, Sample, sample_seed)
+    if margins is not None:
+        summary["margin"] = margins
     from .results import write_json_atomic
 
     write_json_atomic(folder / "summary.json", summary)
     _write_csv(folder, summary)
-    plot_convergence(rows, folder)
+    plot_convergence({k: v for k, v in rows.items() if k[1] in ("falsifier", "random")}, folder)
     return summary
 
 

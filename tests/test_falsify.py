@@ -93,3 +93,51 @@ def test_a_search_finds_the_worst_plant_reruns_it_and_resumes(tmp_path, capsys):
         run_falsify(other, out, workers=2)
     run_falsify(other, out, workers=2, overwrite=True)  # the search's own outputs replaced, worst/ too
     assert not (out / "worst").exists()
+
+
+def test_the_box_scales_about_its_centre():
+    spec = parse_sweep({"name": "b", "base": "paper-ellipse", "controllers": ["nn"],
+                        "vary": {"plant.disturbance_scale": {"uniform": [0.5, 1.5]},
+                                 "plant.friction_scale": {"loguniform": [0.5, 2.0]},
+                                 "nominal.relative_error": {"uniform": [0.0, 0.3]}}})
+    box = box_of(spec)
+    double = box.scaled(2.0)
+    assert double.low.tolist() == pytest.approx([0.0, 0.25, 0.0])  # relative_error stays >= 0
+    assert double.high.tolist() == pytest.approx([2.0, 4.0, 0.45])
+    centre = box.scaled(0.0)
+    assert centre.low.tolist() == pytest.approx(centre.high.tolist()) and centre.low[1] == pytest.approx(1.0)
+    assert box.scaled(1.0).low.tolist() == pytest.approx(box.low.tolist())
+    assert box.largest_scale() == pytest.approx(0.9 * 1.0 / 0.5)  # disturbance_scale keeps 10 % of 1
+
+
+def test_the_margin_brackets_the_scale_where_a_monotone_property_breaks(tmp_path, capsys):
+    """One coordinate, the disturbance scale in [0.5, 1.5] (centre 1), the task-space PD (whose
+    error grows with the disturbance) and a bound on the error met exactly at 1.7, i.e. at s* =
+    1.4 times the box: the margin's bracket holds s*, is narrower than 10 % of its top, and its
+    violating plant reruns past the bound."""
+    from nnrobust.experiment import run_experiment
+    from nnrobust.presets import load_preset
+
+    base = load_preset("paper-ellipse").replace(simulation={"duration": 3.0}, controller={"kind": "pd"})
+    errors = [run_experiment(base.replace(plant={"disturbance_scale": d})).metrics()["rms_error_after_2s"]
+              for d in (1.5, 1.7, 1.9)]
+    assert errors[0] < errors[1] < errors[2]  # monotone where it matters
+    sweep = tmp_path / "m.toml"
+    sweep.write_text('name = "m"\nbase = "paper-ellipse"\ncontrollers = ["pd"]\nseed = 4\n[set]\n'
+                     '"simulation.duration" = 3.0\n[vary]\n'
+                     '"plant.disturbance_scale" = {uniform = [0.5, 1.5]}\n')
+    spec = FalsifySpec(str(sweep), ["pd"], [f"rms_error_after_2s<={errors[1]!r}"], 64, seed=2, margin=True)
+    summary = run_falsify(spec, tmp_path / "out", workers=2)
+    margin = summary["margin"]["pd"]
+    assert not summary["controllers"]["pd"]["falsified"]  # the box itself holds
+    assert margin["holds_up_to"] <= 1.4 + 1e-9 <= margin["violated_at"]
+    assert margin["violated_at"] - margin["holds_up_to"] <= 0.1 * margin["violated_at"]
+    plant = margin["violating_plant"]
+    assert plant["values"]["plant.disturbance_scale"] >= 1.7
+    assert margin["steps"][0]["scale"] == 1.0 and len(margin["steps"]) <= 8
+    import shlex
+
+    words = shlex.split(plant["command"])
+    quiet = ["--quiet", "--no-plots", "--no-animation"]
+    assert main([*words[1:], "--out", str(tmp_path / "again"), *quiet]) == 0
+    assert json.loads((tmp_path / "again" / "metrics.json").read_text())["rms_error_after_2s"] > errors[1]
