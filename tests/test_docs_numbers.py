@@ -24,7 +24,7 @@ DATA_FILES = ["paper_reproduction", "nn_options", "subtask", "arm_presets"]
 STUDIES = ["paper_robustness", "panda_robustness"]
 """Summaries of the shipped sweeps (their summary.json)."""
 OTHERS = ["friction_compensation", "plant_convergence", "tuned_comparison", "falsify_paper_factors",
-          "engine_gap", "adaptive_step"]
+          "engine_gap", "adaptive_step", "tune_noisy_case_b"]
 """Data files with a re-run test of their own below."""
 
 
@@ -116,25 +116,35 @@ def test_the_default_row_of_the_adaptive_step_data_reproduces():
     assert again["refined_periods"] == row["refined_periods"]
 
 
-def test_a_best_setting_of_the_tuned_comparison_reproduces():
-    """The PD's best setting on case (b), ideal sensing, rerun on its training sample."""
+def _rerun_best(summary: dict, controllers: list[str], name: str) -> None:
+    """A tuning's best setting of ``name``, rerun on its training sample, gives its metrics."""
     from nnrobust.config import apply_overrides
     from nnrobust.experiment import run_experiment
     from nnrobust.sweep.spec import base_config, draw, experiment
     from nnrobust.tune import TuneSpec
     from nnrobust.tune.engine import sweep_of
 
-    data = json.loads((render_tables.DATA / "tuned_comparison.json").read_text())
-    case = next(c for c in data["cases"] if c["case"] == "case (b) ellipse" and c["sensing"] == "ideal")
-    summary = case["summary"]
-    spec = TuneSpec(summary["target"], data["controllers"], summary["budget"], len(summary["train_samples"]),
+    spec = TuneSpec(summary["target"], controllers, summary["budget"], len(summary["train_samples"]),
                     len(summary["validation_samples"]), seed=summary["seed"])
     sweep = sweep_of(spec)
-    best = summary["controllers"]["pd"]["best"]
-    config = apply_overrides(experiment(sweep, base_config(sweep), draw(sweep, 0), "pd"), best["params"])
+    best = summary["controllers"][name]["best"]
+    config = apply_overrides(experiment(sweep, base_config(sweep), draw(sweep, 0), name), best["params"])
     again = run_experiment(config).metrics()
     for key in ("rms_error_after_2s", "rms_torque", "torque_chatter"):
         assert again[key] == pytest.approx(best["train"][key], rel=1e-9), key
+
+
+def test_a_best_setting_of_the_tuned_comparison_reproduces():
+    """The PD's best setting on case (b), ideal sensing, rerun on its training sample."""
+    data = json.loads((render_tables.DATA / "tuned_comparison.json").read_text())
+    case = next(c for c in data["cases"] if c["case"] == "case (b) ellipse" and c["sensing"] == "ideal")
+    _rerun_best(case["summary"], data["controllers"], "pd")
+
+
+def test_the_nn_best_setting_of_the_tuning_example_reproduces():
+    """docs/tuning.md's command (noisy case b): the NN's best setting, rerun on its training sample."""
+    summary = json.loads((render_tables.DATA / "tune_noisy_case_b.json").read_text())
+    _rerun_best(summary, list(summary["controllers"]), "nn")
 
 
 def _at(data, path):
@@ -217,6 +227,11 @@ CASE_A, CASE_B, PANDA_ARM = "case (a) line", "case (b) ellipse", "Panda ellipse"
 GAP = "engine_gap"
 PRINTED = ("paper-ellipse-paper-law",)
 FALSIFIED = "falsify_paper_factors"
+
+def _best(controller: str):
+    """The held-out RMS error of a controller's best setting in a tuning's summary."""
+    return lambda data: data["controllers"][controller]["best"]["validation"]["rms_error_after_2s"]
+
 
 def _drift_ratio(coarse: float, fine: float):
     def ratio(data):
@@ -343,6 +358,11 @@ QUOTED_FIGURES: list[tuple] = [
      _gap_error(PRINTED[0], "no-u0", "mujoco"), 1e3),
     ("docs/engines.md", r"at the 1 ms step, (\d+) of the 24", GAP, _failing("implicitfast"), 1.0),
     ("docs/engines.md", r"With 4× as many steps, (\d+) of those 24", GAP, _failing("implicitfast_fine"), 1.0),
+    ("docs/tuning.md", r"held-out errors NN ([\d.]+) mm", "tune_noisy_case_b", _best("nn"), 1e3),
+    ("docs/tuning.md", r"errors NN [\d.]+ mm, no-u0 ([\d.]+) mm", "tune_noisy_case_b", _best("no-u0"), 1e3),
+    ("docs/tuning.md", r"PD ([\d.]+) mm and sliding mode", "tune_noisy_case_b", _best("pd"), 1e3),
+    ("docs/tuning.md", r"and sliding mode\s+([\d.]+) mm \(its", "tune_noisy_case_b", _best("sliding-mode"),
+     1e3),
     ("docs/plant.md", r"Quartering θ cuts the drift\s+(\d+)×", "adaptive_step",
      _drift_ratio(0.02, 0.005), 1.0),
     ("docs/plant.md", r"Quartering θ cuts the drift\s+\d+× and (\d+)×", "adaptive_step",
