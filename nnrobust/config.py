@@ -114,6 +114,13 @@ class PlantConfig:
         disturbance_scale: factor applied to the disturbance.
         friction_scale: factor applied to the plant's viscous and Coulomb friction (after the
             choice above; the controller's nominal friction is not scaled).
+        joint_friction_scales: one more factor per joint on the plant's friction (after
+            friction_scale); entries not given are 1, so one can be set or searched alone as
+            ``plant.joint_friction_scales[i]`` (docs/falsification.md).
+        joint_disturbance_scales: one factor per joint on its disturbance torque (after
+            disturbance_scale), set like joint_friction_scales.
+        disturbance_omega_scale: factor on every angular frequency of the disturbance.
+        disturbance_phase_shift: added to every phase of the disturbance [rad].
         stiction: static friction level F_s / Coulomb level F_c (>= 1; 1: the plain Coulomb
             law): a joint at rest stays held until it needs more than F_s (docs/plant.md).
         torque_limits: ``urdf`` (the URDF's effort limits; joints without one are unlimited),
@@ -148,6 +155,10 @@ class PlantConfig:
     disturbance_phase: list[list[float]] | None = None
     disturbance_scale: float = 1.0
     friction_scale: float = 1.0
+    joint_friction_scales: list[float] | None = None
+    joint_disturbance_scales: list[float] | None = None
+    disturbance_omega_scale: float = 1.0
+    disturbance_phase_shift: float = 0.0
     stiction: float = 1.0
     torque_limits: str | list[float] = "urdf"
     joint_stops: bool = True
@@ -914,7 +925,8 @@ MAX_FACTOR = 100.0
 INDEXED = re.compile(r"^([a-z_]+)\.([A-Za-z_]+)\[(\d{1,4})\]$")
 """``section.field[i]``: one entry of a list-valued key (``nominal.factors[2]``)."""
 
-FILLED_LISTS = {("nominal", "factors"): 1.0}
+FILLED_LISTS = {("nominal", "factors"): 1.0, ("plant", "joint_friction_scales"): 1.0,
+                ("plant", "joint_disturbance_scales"): 1.0}
 """List keys whose entries not given are known (a factor not given is 1): set entry by entry."""
 
 
@@ -1014,6 +1026,16 @@ def validate(config: ExperimentConfig) -> None:
                           "model: set kind = 'urdf' (closed-form takes beta, p and relative_error)")
     _non_negative("plant.disturbance_scale", pc.disturbance_scale)
     _non_negative("plant.friction_scale", pc.friction_scale)
+    for key in ("joint_friction_scales", "joint_disturbance_scales"):
+        scales = getattr(pc, key)
+        if scales is not None and any(not 0 <= f <= MAX_FACTOR for f in scales):
+            raise ConfigError(f"plant.{key}", f"each factor must be in [0, {MAX_FACTOR:g}], got {scales}")
+    if not 0 < pc.disturbance_omega_scale <= MAX_FACTOR:
+        raise ConfigError("plant.disturbance_omega_scale",
+                          f"must be in (0, {MAX_FACTOR:g}], got {pc.disturbance_omega_scale:g}")
+    if abs(pc.disturbance_phase_shift) > 1e3:
+        raise ConfigError("plant.disturbance_phase_shift", f"{pc.disturbance_phase_shift:g} rad; give it "
+                          "within +-1000 rad (it acts modulo 2 pi)")
     if not 1 <= pc.stiction < 1e6:
         raise ConfigError("plant.stiction", f"the static / Coulomb friction ratio must be in [1, 1e6), got "
                           f"{pc.stiction}")

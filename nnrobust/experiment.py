@@ -157,9 +157,10 @@ def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
     tau_ref = functools.cache(lambda: torque_scale(robot))  # once (with its warning), if asked for
     base = (scaled_friction(robot, pc.viscous_level, pc.coulomb_level, tau_ref()) if pc.friction == "scaled"
             else Friction(robot.viscous_friction, robot.coulomb_friction))
-    coulomb = pc.friction_scale * _vector("plant.coulomb_friction", pc.coulomb_friction, n, base.coulomb)
+    scale = pc.friction_scale * _joint_scales("plant.joint_friction_scales", pc.joint_friction_scales, n)
+    coulomb = scale * _vector("plant.coulomb_friction", pc.coulomb_friction, n, base.coulomb)
     friction = Friction(
-        pc.friction_scale * _vector("plant.viscous_friction", pc.viscous_friction, n, base.viscous),
+        scale * _vector("plant.viscous_friction", pc.viscous_friction, n, base.viscous),
         coulomb, static=pc.stiction * coulomb,
     )
     kind = pc.disturbance
@@ -184,12 +185,23 @@ def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
             raise ConfigError("plant.disturbance_amplitude", str(err)) from err
         if disturbance.n != n:
             raise ConfigError("plant.disturbance_amplitude", f"has {disturbance.n} rows, need {n}")
-    if pc.disturbance_scale != 1.0:
-        disturbance = SinusoidalDisturbance(
-            disturbance.amplitude * pc.disturbance_scale, disturbance.omega, disturbance.phase
-        )
+    rows = pc.disturbance_scale * _joint_scales("plant.joint_disturbance_scales",
+                                                pc.joint_disturbance_scales, n)
+    if np.any(rows != 1.0) or pc.disturbance_omega_scale != 1.0 or pc.disturbance_phase_shift != 0.0:
+        disturbance = SinusoidalDisturbance(disturbance.amplitude * rows[:, None],
+                                            disturbance.omega * pc.disturbance_omega_scale,
+                                            disturbance.phase + pc.disturbance_phase_shift)
     return Plant(true_model(config, robot), friction, disturbance, build_torque_limits(config, robot),
                  build_stops(config, robot, tau_ref), build_sensor(config, n), config.sensing.delay)
+
+
+def _joint_scales(path: str, scales: list[float] | None, n: int) -> np.ndarray:
+    """One factor per joint, the entries not given 1; more entries than joints are refused."""
+    if scales is None:
+        return np.ones(n)
+    if len(scales) > n:
+        raise ConfigError(path, f"has {len(scales)} entries; the robot has {n} joints")
+    return np.array(list(scales) + [1.0] * (n - len(scales)))
 
 
 def true_model(config: ExperimentConfig, robot: PinocchioModel) -> PinocchioModel:

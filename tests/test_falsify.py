@@ -95,6 +95,23 @@ def test_a_search_finds_the_worst_plant_reruns_it_and_resumes(tmp_path, capsys):
     assert not (out / "worst").exists()
 
 
+def test_per_joint_plant_keys_are_coordinates_of_the_box():
+    """One joint's friction scale and the disturbance's frequency, searched as box coordinates:
+    each point builds the plant it names."""
+    from nnrobust.experiment import build
+    from nnrobust.sweep.spec import Sample, base_config, experiment
+
+    spec = parse_sweep({"name": "b", "base": "paper-ellipse", "controllers": ["nn"],
+                        "vary": {"plant.joint_friction_scales[1]": {"loguniform": [0.5, 2.0]},
+                                 "plant.disturbance_omega_scale": {"uniform": [0.5, 1.5]}}})
+    box = box_of(spec)
+    values = box.values(np.array([1.0, 0.0]))
+    plant = build(experiment(spec, base_config(spec), Sample(-1, values, 1), "nn")).plant
+    nominal = build(base_config(spec)).plant
+    np.testing.assert_allclose(plant.friction.viscous, nominal.friction.viscous * [1.0, 2.0, 1.0])
+    np.testing.assert_allclose(plant.disturbance.omega, 0.5 * nominal.disturbance.omega)
+
+
 def test_the_box_scales_about_its_centre():
     spec = parse_sweep({"name": "b", "base": "paper-ellipse", "controllers": ["nn"],
                         "vary": {"plant.disturbance_scale": {"uniform": [0.5, 1.5]},

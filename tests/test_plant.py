@@ -144,3 +144,30 @@ def test_solve_ivp_and_rk4_agree_through_stick_slip():
                                     integrator=integrator, rtol=1e-10, atol=1e-10)
     assert runs["rk4"].friction_events > 0
     assert np.abs(runs["rk4"].q - runs["solve_ivp"].q).max() < 1e-6
+
+
+def test_per_joint_friction_and_disturbance_scales_and_the_disturbance_frequency_and_phase():
+    """plant.joint_friction_scales and joint_disturbance_scales multiply each joint's friction and
+    disturbance row after the global scales, missing entries being 1; disturbance_omega_scale and
+    disturbance_phase_shift move every harmonic; one entry is set alone as an indexed key."""
+    from nnrobust.config import apply_overrides
+    from nnrobust.presets import load_preset
+
+    base = load_preset("paper-ellipse").replace(plant={"friction_scale": 2.0, "disturbance_scale": 0.5})
+    ref = build(base).plant
+    changed = build(apply_overrides(base, {"plant.joint_friction_scales[2]": 3.0,
+                                           "plant.joint_disturbance_scales": [0.0, 4.0],
+                                           "plant.disturbance_omega_scale": 1.5,
+                                           "plant.disturbance_phase_shift": 0.25})).plant
+    np.testing.assert_array_equal(changed.friction.viscous, ref.friction.viscous * [1.0, 1.0, 3.0])
+    np.testing.assert_array_equal(changed.friction.coulomb, ref.friction.coulomb * [1.0, 1.0, 3.0])
+    np.testing.assert_array_equal(changed.friction.static, ref.friction.static * [1.0, 1.0, 3.0])
+    np.testing.assert_array_equal(changed.disturbance.amplitude,
+                                  ref.disturbance.amplitude * [[0.0], [4.0], [1.0]])
+    np.testing.assert_array_equal(changed.disturbance.omega, 1.5 * ref.disturbance.omega)
+    np.testing.assert_array_equal(changed.disturbance.phase, ref.disturbance.phase + 0.25)
+    t = 0.37  # the torque itself, joint by joint
+    d_ref, d = ref.disturbance(t), changed.disturbance(t)
+    A, w, ph = ref.disturbance.amplitude, ref.disturbance.omega, ref.disturbance.phase
+    np.testing.assert_allclose(d[1], 4.0 * np.sum(A[1] * np.sin(1.5 * w * t + ph[1] + 0.25)), rtol=1e-12)
+    assert d[0] == 0.0 and d_ref[0] != 0.0
