@@ -413,13 +413,13 @@ def format_margin(name: str, margin: dict) -> str:
     """One controller's robustness margin in a line: the largest scale of the box searched without
     a violation, and the scale and plant that violated.
     """
-    held = (f"no violation found up to {margin['holds_up_to']:.3g} x the box"
-            if margin["holds_up_to"] > 0 else "the centre of the box already fails")
-    if margin["violated_at"] is None:
-        return (f"{name}: margin >= {margin['holds_up_to']:.3g} ({held}, the largest scale tried, with "
-                f"{margin['simulations']} simulations)")
-    return (f"{name}: margin {margin['holds_up_to']:.3g} ({held} with {margin['simulations']} simulations; "
-            f"violated at {margin['violated_at']:.3g} x by {margin['violating_plant']['command']})")
+    plant, low, high = margin["violating_plant"], margin["holds_up_to"], margin["violated_at"]
+    if high == 0.0:
+        return f"{name}: margin 0 (the nominal plant, the centre of the box, fails: {plant['command']})"
+    held = f"no violation found up to {low:.3g} x the box with {margin['simulations']} simulations"
+    if high is None:
+        return f"{name}: margin >= {low:.3g} ({held}, the largest scale tried)"
+    return f"{name}: margin {low:.3g} ({held}; violated at {high:.3g} x by {plant['command']})"
 
 
 def format_tuning(summary: dict) -> str:

@@ -363,6 +363,30 @@ QUOTED_FIGURES: list[tuple] = [
     ("docs/tuning.md", r"PD ([\d.]+) mm and sliding mode", "tune_noisy_case_b", _best("pd"), 1e3),
     ("docs/tuning.md", r"and sliding mode\s+([\d.]+) mm \(its", "tune_noisy_case_b", _best("sliding-mode"),
      1e3),
+    ("docs/falsification.md", r"\| nn \| ([\d.]+) × the box", FALSIFIED,
+     ("margin", "nn", "holds_up_to"), 1.0),
+    ("docs/falsification.md", r"\| nn \| [\d.]+ × the box \| ([\d.]+) ×", FALSIFIED,
+     ("margin", "nn", "violated_at"), 1.0),
+    ("docs/falsification.md", r"\| nn \| [\d.]+ × the box \| [\d.]+ × \| (\d+) \|", FALSIFIED,
+     ("margin", "nn", "simulations"), 1.0),
+    ("docs/falsification.md", r"\| sliding-mode \| ([\d.]+) × the box", FALSIFIED,
+     ("margin", "sliding-mode", "holds_up_to"), 1.0),
+    ("docs/falsification.md", r"\| sliding-mode \| [\d.]+ × the box \| ([\d.]+) ×", FALSIFIED,
+     ("margin", "sliding-mode", "violated_at"), 1.0),
+    ("docs/falsification.md", r"\| sliding-mode \| [\d.]+ × the box \| [\d.]+ × \| (\d+) \|", FALSIFIED,
+     ("margin", "sliding-mode", "simulations"), 1.0),
+    ("docs/falsification.md", r"\| no-u0 \| (0): the nominal plant fails", FALSIFIED,
+     ("margin", "no-u0", "violated_at"),
+     1.0),
+    ("docs/falsification.md", r"\| computed-torque \| (0): the nominal plant fails", FALSIFIED,
+     ("margin", "computed-torque", "violated_at"), 1.0),
+    ("docs/falsification.md", r"Scaled to (\d+) % of the box", FALSIFIED,
+     ("margin", "nn", "holds_up_to"), 100.0),
+    ("docs/falsification.md", r"sliding-mode term tolerates (\d+) %", FALSIFIED,
+     ("margin", "sliding-mode", "holds_up_to"), 100.0),
+    ("README.md", r"up to ([\d.]+) of its size for the", FALSIFIED, ("margin", "nn", "holds_up_to"), 1.0),
+    ("README.md", r"NN controller and ([\d.]+) for the sliding-mode", FALSIFIED,
+     ("margin", "sliding-mode", "holds_up_to"), 1.0),
     ("docs/plant.md", r"Quartering θ cuts the drift\s+(\d+)×", "adaptive_step",
      _drift_ratio(0.02, 0.005), 1.0),
     ("docs/plant.md", r"Quartering θ cuts the drift\s+\d+× and (\d+)×", "adaptive_step",
@@ -433,6 +457,22 @@ def test_the_nn_worst_plant_fails_on_the_python_loop_too():
     quoted = float(re.search(r"The Python loop, whose rounding differs,\s+gives (\d+) mm", text).group(1))
     assert metrics["rms_error_after_2s"] > 0.05
     assert metrics["rms_error_after_2s"] * 1e3 == pytest.approx(quoted, abs=0.5)
+
+
+def test_the_margins_violating_plants_rerun_to_their_margins():
+    """docs/falsification.md's margins: the plant that violated each robust law's property at the
+    top of its bracket reruns from its printed command to the margins the search recorded."""
+    from nnrobust.experiment import run_experiment
+    from nnrobust.properties import run_properties
+
+    data = json.loads((render_tables.DATA / f"{FALSIFIED}.json").read_text())
+    properties = run_properties(data["properties"])
+    for name in ("nn", "sliding-mode"):
+        plant = data["margin"][name]["violating_plant"]
+        metrics = run_experiment(_worst_config(plant["command"])).metrics()
+        for p in properties:
+            assert p.margin(metrics) == pytest.approx(plant["margins"][p.text], rel=1e-9), name
+            assert p.margin(metrics) < 0, name
 
 
 def test_the_plant_the_search_no_longer_finds_still_fails():
