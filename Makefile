@@ -69,7 +69,16 @@ docs-data: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/subtask.py --json $(DATA)/subtask.json
 	$(BIN)/python benchmarks/arm_presets.py --json $(DATA)/arm_presets.json
 	$(BIN)/python benchmarks/tuned_comparison.py --json $(DATA)/tuned_comparison.json --figure docs/img/tuned_comparison.png
+	$(BIN)/python benchmarks/engine_gap.py --json $(DATA)/engine_gap.json
 	$(BIN)/python benchmarks/plant_convergence.py --json $(DATA)/plant_convergence.json
+	$(BIN)/python benchmarks/adaptive_step.py --json $(DATA)/adaptive_step.json
+	$(BIN)/nnrobust tune paper-ellipse-noisy --controllers nn,no-u0,pd,sliding-mode --budget 120 \
+	  --max-rms-torque 10 --max-saturated 0.01 --workers 2 --out $(OUT)/tune-noisy --overwrite --quiet
+	cp $(OUT)/tune-noisy/summary.json $(DATA)/tune_noisy_case_b.json
+	$(BIN)/nnrobust falsify benchmarks/falsification/paper-factors.toml \
+	  --controllers nn,sliding-mode,no-u0,computed-torque --require "rms_error_after_2s<=0.05" \
+	  --budget 200 --margin --out $(OUT)/falsify-paper-factors --overwrite --quiet
+	cp $(OUT)/falsify-paper-factors/summary.json $(DATA)/falsify_paper_factors.json
 	for study in paper-robustness panda-robustness; do \
 	  $(BIN)/nnrobust sweep $$study --out $(OUT)/$$study --overwrite --keep-worst 1 && \
 	  cp $(OUT)/$$study/summary.json $(DATA)/$$(echo $$study | tr - _).json || exit 1; \
