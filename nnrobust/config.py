@@ -130,6 +130,9 @@ class PlantConfig:
         joint_stop_stiffness: stop stiffness / the joint's torque scale [1/rad]: the stop
             pushes back with the joint's full effort at 1/joint_stop_stiffness beyond the limit.
         joint_stop_damping: Hunt-Crossley damping alpha of the stops [s/rad].
+        payload: a load at the task frame [kg], a solid sphere of 2 cm radius centred on the
+            frame's origin, carried by the true plant only (the controller's nominal model does
+            not know it), on either engine; searchable like any key (docs/falsification.md).
         armature: rotor inertia added to the diagonal of M, one value for all joints or one per
             joint [kg m^2 or kg] (none: 0); the true plant's alone, on either engine (a
             nominal model from the URDF does not know it).
@@ -165,6 +168,7 @@ class PlantConfig:
     joint_stop_stiffness: float = 100.0
     joint_stop_damping: float = 1.0
     armature: list[float] | None = None
+    payload: float = 0.0
     engine: str = "pinocchio"
     mujoco_integrator: str = "rk4"
 
@@ -919,6 +923,8 @@ def _within_range(config: ExperimentConfig) -> None:
             raise ConfigError(key, f"{shown} is outside [{low:g}, {high:g}]")
 
 
+MAX_PAYLOAD = 1000.0
+"""Largest ``plant.payload`` [kg]."""
 MAX_FACTOR = 100.0
 """Largest factor on a nominal inertial parameter (``nominal.factors``)."""
 
@@ -1030,6 +1036,8 @@ def validate(config: ExperimentConfig) -> None:
         scales = getattr(pc, key)
         if scales is not None and any(not 0 <= f <= MAX_FACTOR for f in scales):
             raise ConfigError(f"plant.{key}", f"each factor must be in [0, {MAX_FACTOR:g}], got {scales}")
+    if not 0 <= pc.payload <= MAX_PAYLOAD:
+        raise ConfigError("plant.payload", f"must be in [0, {MAX_PAYLOAD:g}] kg, got {pc.payload:g}")
     if not 0 < pc.disturbance_omega_scale <= MAX_FACTOR:
         raise ConfigError("plant.disturbance_omega_scale",
                           f"must be in (0, {MAX_FACTOR:g}], got {pc.disturbance_omega_scale:g}")

@@ -204,12 +204,32 @@ def _joint_scales(path: str, scales: list[float] | None, n: int) -> np.ndarray:
     return np.array(list(scales) + [1.0] * (n - len(scales)))
 
 
+PAYLOAD_RADIUS = 0.02
+"""[m] ``plant.payload`` is a solid sphere of this radius on the task frame's origin."""
+
+
+def payload_inertia(mass: float, placement: pin.SE3) -> pin.Inertia:
+    """``plant.payload``: a solid sphere of PAYLOAD_RADIUS centred at ``placement``'s origin, in
+    the frame ``placement`` is expressed in (the task frame's parent joint).
+    """
+    return pin.Inertia(mass, placement.translation, np.eye(3) * 0.4 * mass * PAYLOAD_RADIUS**2)
+
+
 def true_model(config: ExperimentConfig, robot: PinocchioModel) -> PinocchioModel:
-    """The true robot's dynamics: the robot, with ``plant.armature`` on the diagonal of M (a copy)."""
-    if config.plant.armature is None:
+    """The true robot's dynamics: the robot with ``plant.armature`` on the diagonal of M and
+    ``plant.payload`` carried by the task frame's joint (a copy; the nominal model knows
+    neither).
+    """
+    pc = config.plant
+    if pc.armature is None and pc.payload == 0.0:
         return robot
     model = pin.Model(robot.model)
-    model.armature = _vector("plant.armature", config.plant.armature, robot.nq)
+    if pc.armature is not None:
+        model.armature = _vector("plant.armature", pc.armature, robot.nq)
+    if pc.payload > 0.0:
+        frame = model.frames[model.getFrameId(robot.task_frame)]
+        joint = frame.parentJoint
+        model.inertias[joint] = model.inertias[joint] + payload_inertia(pc.payload, frame.placement)
     true = PinocchioModel(model, robot.task_frame, robot.task, robot.name)
     true.urdf_text = robot.urdf_text
     return true
@@ -223,8 +243,12 @@ def build_engine(config: ExperimentConfig, plant: Plant, substeps: int) -> None:
 
     pc, true = config.plant, plant.model
     assert isinstance(true, PinocchioModel)  # build_plant's true_model
+    payload = None
+    if pc.payload > 0.0:  # on the body of the task frame's joint, where Pinocchio's true model has it
+        frame = true.model.frames[true.model.getFrameId(true.task_frame)]
+        payload = (true.model.names[frame.parentJoint], payload_inertia(pc.payload, frame.placement))
     plant.engine = build_mujoco_plant(true, plant, config.simulation.control_period, substeps,
-                                      pc.mujoco_integrator, true.model.armature, pc.stiction)
+                                      pc.mujoco_integrator, true.model.armature, pc.stiction, payload)
 
 
 def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsModel:

@@ -422,6 +422,8 @@ CONFIG_CASES = [
     Case("more per-joint disturbance scales than joints",
          lambda d: _build(plant={"joint_disturbance_scales": [1.0, 1.0, 1.0, 1.0]}),
          ex.ConfigError, "plant.joint_disturbance_scales: has 4 entries; the robot has 3 joints"),
+    Case("a negative payload", lambda d: _toml(d, "[plant]\npayload = -1.0\n"),
+         ex.ConfigError, "plant.payload: must be in [0, 1000] kg, got -1"),
     Case("a disturbance frequency scale of zero",
          lambda d: _toml(d, "[plant]\ndisturbance_omega_scale = 0.0\n"),
          ex.ConfigError, "plant.disturbance_omega_scale: must be in (0, 100]"),

@@ -172,9 +172,18 @@ def _late_rms(name: str, kind: str) -> float:
 
 @pytest.mark.parametrize("name", ["kinova", "so101", "tiago", "solo12"])
 def test_nn_controller_tracks_on_robots_the_paper_never_saw(name):
-    """2 s of the NN controller: bounded, and at least 3x better than the same law without u_0."""
+    """2 s of the NN controller: bounded, at least 3x better than the same law without u_0, and the
+    errors docs/robots.md prints (to their 3 digits)."""
+    import re
+    from pathlib import Path
+
     nn, baseline = _late_rms(name, "nn"), _late_rms(name, "no-u0")
     assert nn < 0.02 and 3 * nn < baseline, (nn, baseline)
+    docs = (Path(__file__).resolve().parents[1] / "docs" / "robots.md").read_text()
+    row = re.search(rf"\| {name}( leg)? \| \d+ \| ([\d.]+) mm \| ([\d.]+) mm \|", docs)
+    assert row, f"docs/robots.md has no row for {name}: run python -m tests.test_any_robot"
+    assert (row.group(2), row.group(3)) == (f"{nn * 1e3:.3g}", f"{baseline * 1e3:.3g}"), \
+        "run python -m tests.test_any_robot and paste its table into docs/robots.md"
 
 
 def test_compiled_loop_equals_python_with_unlimited_joints_in_the_joint_criteria():

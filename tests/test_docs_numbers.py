@@ -387,6 +387,8 @@ QUOTED_FIGURES: list[tuple] = [
     ("README.md", r"up to ([\d.]+) of its size for the", FALSIFIED, ("margin", "nn", "holds_up_to"), 1.0),
     ("README.md", r"NN controller and ([\d.]+) for the sliding-mode", FALSIFIED,
      ("margin", "sliding-mode", "holds_up_to"), 1.0),
+    ("docs/robots.md", r"the UR5, (\d+)–\d+× better than no-u0", "arm_presets", _ratio("panda-pose"), 1.0),
+    ("docs/robots.md", r"the UR5, \d+–(\d+)× better than no-u0", "arm_presets", _ratio("panda-ellipse"), 1.0),
     ("docs/plant.md", r"Quartering θ cuts the drift\s+(\d+)×", "adaptive_step",
      _drift_ratio(0.02, 0.005), 1.0),
     ("docs/plant.md", r"Quartering θ cuts the drift\s+\d+× and (\d+)×", "adaptive_step",

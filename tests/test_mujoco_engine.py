@@ -196,6 +196,24 @@ def test_armature_enters_both_engines_alike():
     assert np.all(setup.nominal.mass(q) != setup.plant.model.mass(q))  # the controller does not know it
 
 
+@pytest.mark.parametrize("preset", ["paper-ellipse", "panda-ellipse"])
+def test_a_payload_enters_both_engines_alike(preset):
+    """plant.payload: MuJoCo's model carries the same sphere (the audit of M, the bias and gravity
+    against Pinocchio's loaded true model still passes, and its total mass grows by the payload);
+    a run with it is the same on both loops."""
+    from nnrobust import compiled
+
+    config = load_preset(preset).replace(plant={"engine": "mujoco", "payload": 2.5},
+                                         simulation={"duration": 0.5})
+    setup = build(config)
+    assert max(setup.plant.engine.audit.values()) <= AUDIT_TOLERANCE
+    plain = build(config.replace(plant={"payload": 0.0})).plant.engine
+    assert setup.plant.engine.model.body_mass.sum() == pytest.approx(plain.model.body_mass.sum() + 2.5)
+    if compiled.available():
+        runs = [run_experiment(config.replace(simulation={"backend": b})) for b in ("compiled", "python")]
+        np.testing.assert_allclose(runs[0].q, runs[1].q, atol=1e-8)
+
+
 def test_options_mujoco_cannot_honour_are_refused():
     config = load_preset("paper-ellipse")
     config.plant.engine, config.plant.stiction = "mujoco", 1.5

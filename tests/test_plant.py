@@ -171,3 +171,32 @@ def test_per_joint_friction_and_disturbance_scales_and_the_disturbance_frequency
     A, w, ph = ref.disturbance.amplitude, ref.disturbance.omega, ref.disturbance.phase
     np.testing.assert_allclose(d[1], 4.0 * np.sum(A[1] * np.sin(1.5 * w * t + ph[1] + 0.25)), rtol=1e-12)
     assert d[0] == 0.0 and d_ref[0] != 0.0
+
+
+@pytest.mark.parametrize("preset", ["paper-ellipse", "panda-ellipse"])
+def test_a_payload_is_a_sphere_at_the_task_frame_in_the_true_plant_only(preset):
+    """plant.payload = m: the true plant's M(q) gains exactly the kinetic energy of a solid sphere
+    at the task frame, m Jv^T Jv + (2/5) m r^2 Jw^T Jw (frame Jacobians in world axes), and its
+    gravity exactly m g through Jv; the controller's nominal model is unchanged."""
+    import pinocchio as pin
+
+    from nnrobust.experiment import PAYLOAD_RADIUS
+    from nnrobust.presets import load_preset
+
+    base = load_preset(preset)
+    m = 2.5
+    plain, loaded = build(base), build(base.replace(plant={"payload": m}))
+    robot, true = plain.plant.model, loaded.plant.model
+    frame = robot.model.getFrameId(robot.task_frame)
+    g = robot.model.gravity.linear
+    rng = np.random.default_rng(3)
+    low, high = robot.working_range
+    for _ in range(5):
+        q = rng.uniform(low, high)
+        J = pin.computeFrameJacobian(robot.model, robot.model.createData(), q, frame, pin.LOCAL_WORLD_ALIGNED)
+        Jv, Jw = J[:3], J[3:]
+        sphere = m * Jv.T @ Jv + 0.4 * m * PAYLOAD_RADIUS**2 * Jw.T @ Jw
+        np.testing.assert_allclose(true.mass(q) - robot.mass(q), sphere, atol=1e-10)
+        np.testing.assert_allclose(true.gravity(q) - robot.gravity(q), -m * Jv.T @ g, atol=1e-10)
+    q = plain.q0
+    np.testing.assert_array_equal(loaded.nominal.mass(q), plain.nominal.mass(q))

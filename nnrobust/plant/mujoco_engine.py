@@ -189,10 +189,12 @@ def build_mujoco_plant(
     integrator: str = "rk4",
     armature: np.ndarray | None = None,
     stiction: float = 1.0,
+    payload: tuple | None = None,
 ) -> MujocoPlant:
     """The MuJoCo model of ``plant`` (a :class:`~nnrobust.plant.Plant` on the Pinocchio model
     ``robot``), compiled and audited; refused with the reason named where the engines would not
-    simulate the same arm.
+    simulate the same arm. ``payload``: (joint name, pin.Inertia in that joint's frame), a body
+    added to the one the joint moves (``plant.payload``).
     """
     mujoco = import_mujoco()
     if integrator not in MUJOCO_INTEGRATORS:
@@ -246,6 +248,13 @@ def build_mujoco_plant(
         )
         if np.isfinite(limit):
             motor.forcerange = [-limit, limit]
+    if payload is not None:
+        jname, inertia = payload
+        body = joints[jname].parent  # the body the joint moves
+        # at the joint's frame, its centre of mass at the lever (MuJoCo fuses it into the body)
+        body.add_body(name="nnrobust_payload", pos=[0.0, 0.0, 0.0], ipos=np.asarray(inertia.lever, float),
+                      mass=float(inertia.mass), inertia=np.diag(inertia.inertia).astype(float),
+                      explicitinertial=True)
     spec.option.timestep = h
     spec.option.integrator = getattr(mujoco.mjtIntegrator, f"mjINT_{integrator.upper()}")
     spec.option.gravity = np.asarray(pin_model.gravity.linear, float)
