@@ -476,8 +476,9 @@ class SimulationConfig:
         q_seed: inverse-kinematics seed for q(0) [rad] (default: mid-range of the joint limits).
         initial_task_offset: x(0) - x_d(0), m entries [m] (pose: position [m], then a rotation
             vector [rad] applied in world axes); default zero: start on the path.
-        memory_limit: the most memory the run's recorded arrays may take [GB]; a run estimated
-            above it is refused before it starts (docs/bad-inputs.md).
+        memory_limit: the most memory the run may take [GB], its recorded arrays and its
+            Pinocchio models (which grow as n^3); a run estimated above it, or above what the
+            machine has available, is refused before it starts (docs/bad-inputs.md).
 
     """
 

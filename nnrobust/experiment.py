@@ -702,29 +702,59 @@ def checked(config: ExperimentConfig) -> ExperimentConfig:
     return from_dict(data)
 
 
+DATA_BYTES_PER_CUBED_JOINT = 31.3
+"""Bytes one ``pinocchio.Data`` of an n-joint chain takes, per n^3 (measured on planar50 to
+planar200: 31.1 to 32.1); 0.85 GB for 300 joints."""
+
+MODEL_COPIES = 6
+"""Models with their data a run may hold at once: the plant's, the nominal's and the compiled
+loop's copies of both, with their kinematics."""
+
+
 def memory_estimate(config: ExperimentConfig, n: int, m: int) -> float:
-    """Bytes the run's recorded arrays take, times 3 for the copies made while the result is
-    assembled and written: per control step q, q', tau, tau_cmd (4n), the chain (3(n + 1)),
-    x, x_d, e (3 x 6 at most), the compensator state (1 + inputs x centres + 1), sensor draws
-    (2n) and a few signals, in float64.
+    """Bytes a run takes: its recorded arrays, times 3 for the copies made while the result is
+    assembled and written (per control step q, q', tau, tau_cmd (4n), the chain (3(n + 1)),
+    x, x_d, e (3 x 6 at most), the compensator state (1 + inputs x centres + 1), sensor draws (2n)
+    and a few signals, in float64), plus :data:`MODEL_COPIES` Pinocchio models with their data,
+    which grow as n^3 (:data:`DATA_BYTES_PER_CUBED_JOINT`).
     """
     sim, nn = config.simulation, config.nn
     steps = sim.duration / sim.control_period
     inputs = 2 * n if nn.basis_input == "joint" else 2 * m
     per_step = 4 * n + 3 * (n + 1) + 18 + (2 + inputs * nn.centers) + 2 * n + 8
-    return 3 * 8 * steps * per_step
+    return 3 * 8 * steps * per_step + MODEL_COPIES * DATA_BYTES_PER_CUBED_JOINT * n**3
+
+
+def available_memory() -> float | None:
+    """Bytes the machine has available now (Linux's MemAvailable), or None where unknown."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return None
 
 
 def check_memory(config: ExperimentConfig, n: int, m: int) -> None:
-    """Refuse, before anything runs, a run whose arrays would not fit simulation.memory_limit."""
+    """Refuse, before anything runs, a run whose estimated memory (:func:`memory_estimate`) would
+    not fit simulation.memory_limit, or the memory the machine has available, whichever is less
+    (a limit set higher than the machine cannot keep the kernel from killing the run).
+    """
     need = memory_estimate(config, n, m) / 1e9
-    limit = config.simulation.memory_limit
-    if need > limit:
-        sim = config.simulation
+    sim = config.simulation
+    what = (f"this run needs about {need:.3g} GB ({sim.duration:g} s at {sim.control_period:g} s per step, "
+            f"{n} joints)")
+    if need > sim.memory_limit:
         raise ConfigError("simulation.memory_limit",
-                          f"this run needs about {need:.3g} GB ({sim.duration:g} s at "
-                          f"{sim.control_period:g} s per step, {n} joints) and the limit is {limit:g} GB; "
+                          f"{what} and the limit is {sim.memory_limit:g} GB; "
                           "shorten simulation.duration, lengthen control_period or raise memory_limit")
+    available = available_memory()
+    if available is not None and need > available / 1e9:
+        raise ConfigError("simulation.memory_limit",
+                          f"{what} and this machine has {available / 1e9:.3g} GB available; "
+                          "shorten simulation.duration or lengthen control_period")
 
 
 def choose_backend(setup: Setup) -> str:
