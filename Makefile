@@ -53,6 +53,7 @@ REQUIRE_COMPILED := $(if $(shell command -v c++ 2>/dev/null),1,0)
 
 test: $(VENV)/.installed-test $(VENV)/.browser
 	$(BIN)/ruff check nnrobust tests benchmarks docs examples
+	$(BIN)/ruff format --check nnrobust tests benchmarks docs examples
 	$(BIN)/mypy
 	NNROBUST_REQUIRE_COMPILED=$(REQUIRE_COMPILED) $(BIN)/python -m pytest -q
 

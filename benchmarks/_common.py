@@ -11,10 +11,24 @@ from concurrent.futures import ProcessPoolExecutor
 from nnrobust.experiment import run_experiment
 from nnrobust.presets import load_preset
 
-ROW_METRICS = ("status", "rms_error_after_2s", "max_error", "rms_torque", "max_torque_cmd",
-               "torque_chatter", "saturated_fraction", "max_joint_limit_violation", "final_rho_hat",
-               "rms_error_early", "rms_error_last_fifth", "runaway", "h_start", "h_end", "warnings",
-               "rms_orientation_error_after_2s")
+ROW_METRICS = (
+    "status",
+    "rms_error_after_2s",
+    "max_error",
+    "rms_torque",
+    "max_torque_cmd",
+    "torque_chatter",
+    "saturated_fraction",
+    "max_joint_limit_violation",
+    "final_rho_hat",
+    "rms_error_early",
+    "rms_error_last_fifth",
+    "runaway",
+    "h_start",
+    "h_end",
+    "warnings",
+    "rms_orientation_error_after_2s",
+)
 """The metrics each benchmark row keeps."""
 
 
@@ -45,8 +59,10 @@ def run_probed_row(job: dict) -> dict:
     scale = getattr(config.plant, key)
     probes = [row]
     for sign in (1, -1):
-        changes = {**job["changes"], "plant": {**job["changes"].get("plant", {}),
-                                               key: scale * (1 + sign * PROBE)}}
+        changes = {
+            **job["changes"],
+            "plant": {**job["changes"].get("plant", {}), key: scale * (1 + sign * PROBE)},
+        }
         probes.append(run_row({**job, "changes": changes}))
     row["chaotic"] = False
     for name in PROBED_METRICS:
@@ -98,8 +114,9 @@ def parser(doc: str):
     return p
 
 
-def report(args, jobs: list[dict], columns: list[tuple[str, int, object]], runner=run_probed_row,
-           **extra) -> list[dict]:
+def report(
+    args, jobs: list[dict], columns: list[tuple[str, int, object]], runner=run_probed_row, **extra
+) -> list[dict]:
     """Run the jobs (each with its chaos probes), print one line per row as it arrives
     (``columns``: header, width, and a function of the row giving the cell text), and write
     {**extra, "rows": rows} to --json."""
@@ -108,8 +125,12 @@ def report(args, jobs: list[dict], columns: list[tuple[str, int, object]], runne
     print(" ".join(f"{h:>{w}s}" if i else f"{h:{w}s}" for i, (h, w, _) in enumerate(columns)))
 
     def echo(row):
-        print(" ".join(f"{cell(row):>{w}s}" if i else f"{cell(row):{w}s}"
-                       for i, (_, w, cell) in enumerate(columns)), flush=True)
+        print(
+            " ".join(
+                f"{cell(row):>{w}s}" if i else f"{cell(row):{w}s}" for i, (_, w, cell) in enumerate(columns)
+            ),
+            flush=True,
+        )
 
     rows = run_rows(jobs, args.workers, echo, runner)
     if args.json:

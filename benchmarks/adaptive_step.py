@@ -53,10 +53,15 @@ def row(rotation: float, duration: float) -> dict:
     wall = time.perf_counter() - start
     energy = np.array([plant.energy(q, v) for q, v in zip(trace.q, trace.dq)])
     kinetic = max(robot.kinetic_energy(q, v) for q, v in zip(trace.q, trace.dq))
-    return {"max_step_rotation": rotation if math.isfinite(rotation) else None, "status": trace.status,
-            "energy_drift": float(np.abs(energy - energy[0]).max() / kinetic),
-            "max_joint_speed": float(np.abs(trace.dq).max()), "refined_periods": trace.refined_periods,
-            "periods": int(trace.t.size), "wall_seconds": wall}
+    return {
+        "max_step_rotation": rotation if math.isfinite(rotation) else None,
+        "status": trace.status,
+        "energy_drift": float(np.abs(energy - energy[0]).max() / kinetic),
+        "max_joint_speed": float(np.abs(trace.dq).max()),
+        "refined_periods": trace.refined_periods,
+        "periods": int(trace.t.size),
+        "wall_seconds": wall,
+    }
 
 
 def main() -> None:
@@ -64,18 +69,24 @@ def main() -> None:
     p.add_argument("--json", help="write the rows as JSON to this file")
     p.add_argument("--duration", type=float, default=5.0, help="simulated time [s]")
     args = p.parse_args()
-    print(f"{'max_step_rotation':>18s} {'energy drift':>13s} {'max speed':>10s} {'cut periods':>12s} "
-          f"{'wall [s]':>9s}")
+    print(
+        f"{'max_step_rotation':>18s} {'energy drift':>13s} {'max speed':>10s} {'cut periods':>12s} "
+        f"{'wall [s]':>9s}"
+    )
     rows = []
     for rotation in ROTATIONS:
         r = row(rotation, args.duration)
         rows.append(r)
         label = "fixed" if r["max_step_rotation"] is None else f"{rotation:g}"
-        print(f"{label:>18s} {r['energy_drift']:13.3g} {r['max_joint_speed']:10.1f} "
-              f"{r['refined_periods']:12d} {r['wall_seconds']:9.2f}", flush=True)
+        print(
+            f"{label:>18s} {r['energy_drift']:13.3g} {r['max_joint_speed']:10.1f} "
+            f"{r['refined_periods']:12d} {r['wall_seconds']:9.2f}",
+            flush=True,
+        )
     if args.json:
-        write_json_atomic(args.json, {"duration": args.duration, "q0": Q0.tolist(), "v0": V0.tolist(),
-                                      "rows": rows})
+        write_json_atomic(
+            args.json, {"duration": args.duration, "q0": Q0.tolist(), "v0": V0.tolist(), "rows": rows}
+        )
 
 
 if __name__ == "__main__":

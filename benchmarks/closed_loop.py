@@ -69,10 +69,14 @@ def _contenders(preset: str, duration: float) -> dict:
     dt = config.simulation.control_period
     steps = int(round(duration / dt))
     robot = setup.robot
-    out = {"nnrobust, Python loop": lambda: simulate(setup.plant, setup.controller, setup.q0, setup.v0,
-                                                     duration, dt),
-           "floor, Python + pin": lambda: python_floor_loop(robot.model, robot.task_frame, setup.q0,
-                                                            setup.v0, steps, dt)}
+    out = {
+        "nnrobust, Python loop": lambda: simulate(
+            setup.plant, setup.controller, setup.q0, setup.v0, duration, dt
+        ),
+        "floor, Python + pin": lambda: python_floor_loop(
+            robot.model, robot.task_frame, setup.q0, setup.v0, steps, dt
+        ),
+    }
     mujoco = _mujoco_setup(config)
     if compiled.available():
         if not compiled.twin_refusal(setup):
@@ -82,11 +86,13 @@ def _contenders(preset: str, duration: float) -> dict:
         loaded = compiled.load_model(robot.model, robot.task_frame)
         out["floor, C++"] = lambda: compiled.floor_loop(loaded, setup.q0, setup.v0, steps, dt)
     if mujoco is not None:
-        out["nnrobust, Python, MuJoCo"] = lambda: simulate(mujoco.plant, mujoco.controller, mujoco.q0,
-                                                          mujoco.v0, duration, dt)
+        out["nnrobust, Python, MuJoCo"] = lambda: simulate(
+            mujoco.plant, mujoco.controller, mujoco.q0, mujoco.v0, duration, dt
+        )
     custom = build(config.replace(controller={"kind": "custom", "class": f"{CUSTOM}:TaskPD"}))
-    out["TaskPD, Python loop"] = lambda: simulate(custom.plant, custom.controller, custom.q0, custom.v0,
-                                                  duration, dt)
+    out["TaskPD, Python loop"] = lambda: simulate(
+        custom.plant, custom.controller, custom.q0, custom.v0, duration, dt
+    )
     if compiled.available():
         out["TaskPD, hybrid loop"] = lambda: compiled.simulate_hybrid(custom, duration)
         trace = compiled.simulate_hybrid(custom, duration)  # the run its compute is timed on, and replayed
@@ -155,10 +161,20 @@ def main() -> None:
         for name, wall in best.items():
             step = wall / steps
             ratio = wall / floor if floor else None
-            rows.append({"preset": preset, "contender": name, "step_seconds": step,
-                         "realtime_factor": args.duration / wall, "ratio_to_cpp_floor": ratio})
-            print(f"{preset:14s} {name:24s} {step * 1e6:10.1f} {args.duration / wall:12.1f} "
-                  f"{'-' if ratio is None else f'{ratio:.1f}':>12s}", flush=True)
+            rows.append(
+                {
+                    "preset": preset,
+                    "contender": name,
+                    "step_seconds": step,
+                    "realtime_factor": args.duration / wall,
+                    "ratio_to_cpp_floor": ratio,
+                }
+            )
+            print(
+                f"{preset:14s} {name:24s} {step * 1e6:10.1f} {args.duration / wall:12.1f} "
+                f"{'-' if ratio is None else f'{ratio:.1f}':>12s}",
+                flush=True,
+            )
     if args.json:
         write_json_atomic(args.json, {"duration": args.duration, "rows": rows})
 

@@ -17,8 +17,10 @@ from _common import parser, run_rows
 
 from nnrobust.results import write_json_atomic
 
-BASE = {"controller": {"kind": "computed-torque", "Kp": [100.0], "Kv": [20.0]},
-        "plant": {"disturbance": "none"}}
+BASE = {
+    "controller": {"kind": "computed-torque", "Kp": [100.0], "Kv": [20.0]},
+    "plant": {"disturbance": "none"},
+}
 VARIANTS = {
     "k = 10 (self-motion on)": {},
     "k = 0 (no self-motion)": {"controller": {"k": 0.0}},
@@ -40,9 +42,16 @@ def _merge(*parts: dict) -> dict:
 
 def jobs() -> list[dict]:
     """Every variant under every probe."""
-    return [{"variant": name, "probe": probe, "preset": "paper-ellipse",
-             "changes": _merge(BASE, changes, {"plant": {"friction_scale": scale}})}
-            for name, changes in VARIANTS.items() for probe, scale in PROBES.items()]
+    return [
+        {
+            "variant": name,
+            "probe": probe,
+            "preset": "paper-ellipse",
+            "changes": _merge(BASE, changes, {"plant": {"friction_scale": scale}}),
+        }
+        for name, changes in VARIANTS.items()
+        for probe, scale in PROBES.items()
+    ]
 
 
 def summary(runs: list[dict]) -> list[dict]:
@@ -65,8 +74,10 @@ def main() -> None:
     rows = summary(runs)
     print(f"{'variant':36s} {'RMS e [mm] median (range)':>30s} {'RMS tau':>8s} {'chatter':>8s}")
     for r in rows:
-        e = f"{1e3 * r['rms_error_after_2s']:.4g} ({1e3 * r['rms_error_after_2s_min']:.4g}-" \
+        e = (
+            f"{1e3 * r['rms_error_after_2s']:.4g} ({1e3 * r['rms_error_after_2s_min']:.4g}-"
             f"{1e3 * r['rms_error_after_2s_max']:.4g})"
+        )
         print(f"{r['variant']:36s} {e:>30s} {r['rms_torque']:8.3f} {r['torque_chatter']:8.4f}")
     if args.json:
         write_json_atomic(args.json, {"rows": rows, "runs": runs})

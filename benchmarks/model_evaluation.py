@@ -1,6 +1,6 @@
 """Time per evaluation of M, N, J and J'q': Pinocchio vs the closed-form three-link model.
 
-    python benchmarks/model_evaluation.py --json out/bench/model_evaluation.json
+python benchmarks/model_evaluation.py --json out/bench/model_evaluation.json
 """
 
 from __future__ import annotations

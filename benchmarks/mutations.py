@@ -22,36 +22,69 @@ ROOT = Path(__file__).resolve().parent.parent
 
 MUTATIONS = [
     # name, file, original text, mutated text, test files that must catch it
-    ("coulomb friction deleted from the plant", "nnrobust/plant/plant.py",
-     "fr.viscous * v + fr.coulomb * mode, fr.torque(v)", "fr.viscous * v, fr.viscous * v",
-     ["tests/test_stick_slip.py", "tests/test_plant.py"]),
-    ("coulomb friction deleted from the friction law", "nnrobust/plant/friction.py",
-     "return self.viscous * v + self.coulomb * sign", "return self.viscous * v + 0 * sign",
-     ["tests/test_stick_slip.py", "tests/test_plant.py"]),
-    ("stiction ignored (held only up to F_c)", "nnrobust/plant/stick_slip.py",
-     "static, coulomb = plant.friction.static[rest], plant.friction.coulomb[rest]",
-     "static, coulomb = plant.friction.coulomb[rest], plant.friction.coulomb[rest]",
-     ["tests/test_stick_slip.py"]),
-    ("sigma-modification removed", "nnrobust/controllers/nn_compensator.py",
-     "if self.sigma > 0.0:\n            decay", "if False:\n            decay",
-     ["tests/test_controllers.py", "tests/test_long_runs.py"]),
-    ("noise added after the encoder's rounding", "nnrobust/plant/sensing.py",
-     "q_m = q + self.position_noise * self._rng.standard_normal(q.size)",
-     "q_m = q",
-     ["tests/test_limits.py"]),
-    ("torque saturation removed", "nnrobust/plant/limits.py",
-     "return tau if limit is None else np.clip(tau, -limit, limit)", "return tau",
-     ["tests/test_limits.py"]),
-    ("joint stops removed", "nnrobust/plant/limits.py",
-     "        if not d.any():\n            return np.zeros_like(q)",
-     "        if True:\n            return np.zeros_like(q)",
-     ["tests/test_limits.py"]),
-    ("disturbance sign flipped", "nnrobust/plant/plant.py",
-     "net = tau - friction - self.disturbance(t)", "net = tau - friction + self.disturbance(t)",
-     ["tests/test_plant.py", "tests/test_stick_slip.py"]),
-    ("NN compensator weakened to a third", "nnrobust/controllers/task_space.py",
-     "MUTATE-U0", "MUTATE-U0",
-     ["tests/test_experiment.py"]),
+    (
+        "coulomb friction deleted from the plant",
+        "nnrobust/plant/plant.py",
+        "fr.viscous * v + fr.coulomb * mode, fr.torque(v)",
+        "fr.viscous * v, fr.viscous * v",
+        ["tests/test_stick_slip.py", "tests/test_plant.py"],
+    ),
+    (
+        "coulomb friction deleted from the friction law",
+        "nnrobust/plant/friction.py",
+        "return self.viscous * v + self.coulomb * sign",
+        "return self.viscous * v + 0 * sign",
+        ["tests/test_stick_slip.py", "tests/test_plant.py"],
+    ),
+    (
+        "stiction ignored (held only up to F_c)",
+        "nnrobust/plant/stick_slip.py",
+        "static, coulomb = plant.friction.static[rest], plant.friction.coulomb[rest]",
+        "static, coulomb = plant.friction.coulomb[rest], plant.friction.coulomb[rest]",
+        ["tests/test_stick_slip.py"],
+    ),
+    (
+        "sigma-modification removed",
+        "nnrobust/controllers/nn_compensator.py",
+        "if self.sigma > 0.0:\n            decay",
+        "if False:\n            decay",
+        ["tests/test_controllers.py", "tests/test_long_runs.py"],
+    ),
+    (
+        "noise added after the encoder's rounding",
+        "nnrobust/plant/sensing.py",
+        "q_m = q + self.position_noise * self._rng.standard_normal(q.size)",
+        "q_m = q",
+        ["tests/test_limits.py"],
+    ),
+    (
+        "torque saturation removed",
+        "nnrobust/plant/limits.py",
+        "return tau if limit is None else np.clip(tau, -limit, limit)",
+        "return tau",
+        ["tests/test_limits.py"],
+    ),
+    (
+        "joint stops removed",
+        "nnrobust/plant/limits.py",
+        "        if not d.any():\n            return np.zeros_like(q)",
+        "        if True:\n            return np.zeros_like(q)",
+        ["tests/test_limits.py"],
+    ),
+    (
+        "disturbance sign flipped",
+        "nnrobust/plant/plant.py",
+        "net = tau - friction - self.disturbance(t)",
+        "net = tau - friction + self.disturbance(t)",
+        ["tests/test_plant.py", "tests/test_stick_slip.py"],
+    ),
+    (
+        "NN compensator weakened to a third",
+        "nnrobust/controllers/task_space.py",
+        "MUTATE-U0",
+        "MUTATE-U0",
+        ["tests/test_experiment.py"],
+    ),
 ]
 
 
@@ -99,12 +132,23 @@ def run(name: str, path: str, original: str, mutated: str, tests: list[str]) -> 
         target.write_text(text)
         env = {**os.environ, "NNROBUST_REQUIRE_COMPILED": "0"}
         start = time.perf_counter()
-        proc = subprocess.run([sys.executable, "-c", RUNNER, str(dest), *tests], cwd=dest, env=env,
-                              capture_output=True, text=True)
+        proc = subprocess.run(
+            [sys.executable, "-c", RUNNER, str(dest), *tests],
+            cwd=dest,
+            env=env,
+            capture_output=True,
+            text=True,
+        )
         lines = [line for line in proc.stdout.splitlines() if line.strip()]
-        return {"mutation": name, "file": path, "tests": tests, "caught": proc.returncode == 1,
-                "exit_code": proc.returncode, "seconds": time.perf_counter() - start,
-                "summary": lines[-1] if lines else proc.stderr.strip()[-300:]}
+        return {
+            "mutation": name,
+            "file": path,
+            "tests": tests,
+            "caught": proc.returncode == 1,
+            "exit_code": proc.returncode,
+            "seconds": time.perf_counter() - start,
+            "summary": lines[-1] if lines else proc.stderr.strip()[-300:],
+        }
 
 
 def main() -> None:
@@ -118,11 +162,16 @@ def main() -> None:
             continue
         row = run(*mutation)
         rows.append(row)
-        print(f"{'caught  ' if row['caught'] else 'SURVIVED'} {row['mutation']:45s} {row['seconds']:6.1f} s  "
-              f"{row['summary']}", flush=True)
+        print(
+            f"{'caught  ' if row['caught'] else 'SURVIVED'} {row['mutation']:45s} {row['seconds']:6.1f} s  "
+            f"{row['summary']}",
+            flush=True,
+        )
     survived = [r["mutation"] for r in rows if not r["caught"]]
-    print(f"{len(rows) - len(survived)} of {len(rows)} mutations caught" +
-          (f"; survived: {', '.join(survived)}" if survived else ""))
+    print(
+        f"{len(rows) - len(survived)} of {len(rows)} mutations caught"
+        + (f"; survived: {', '.join(survived)}" if survived else "")
+    )
     if args.json:
         from nnrobust.results import write_json_atomic
 

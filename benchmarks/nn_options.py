@@ -25,19 +25,24 @@ VARIANTS = {
 }
 
 
-COLUMNS = [("variant", 36, lambda r: r["variant"]), ("rms e t>=2s [mm]", 17, mm("rms_error_after_2s")),
-           ("max e [mm]", 11, mm("max_error")), ("rms tau [N m]", 14, number("rms_torque")),
-           ("chatter [N m]", 14, number("torque_chatter")),
-           ("sat %", 6, number("saturated_fraction", ".2f", 100)),
-           ("rho-hat end", 12, number("final_rho_hat", ".3g"))]
+COLUMNS = [
+    ("variant", 36, lambda r: r["variant"]),
+    ("rms e t>=2s [mm]", 17, mm("rms_error_after_2s")),
+    ("max e [mm]", 11, mm("max_error")),
+    ("rms tau [N m]", 14, number("rms_torque")),
+    ("chatter [N m]", 14, number("torque_chatter")),
+    ("sat %", 6, number("saturated_fraction", ".2f", 100)),
+    ("rho-hat end", 12, number("final_rho_hat", ".3g")),
+]
 
 
 def main() -> None:
     p = parser(__doc__)
     p.add_argument("--preset", default="paper-ellipse")
     args = p.parse_args()
-    jobs = [{"variant": name, "preset": args.preset, "changes": changes}
-            for name, changes in VARIANTS.items()]
+    jobs = [
+        {"variant": name, "preset": args.preset, "changes": changes} for name, changes in VARIANTS.items()
+    ]
     report(args, jobs, COLUMNS, preset=args.preset)
 
 

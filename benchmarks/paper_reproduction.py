@@ -33,14 +33,21 @@ VARIANTS = {
 
 def jobs() -> list[dict]:
     """One job per case and variant."""
-    return [{"case": case, "variant": name, "preset": preset, "changes": changes}
-            for (case, preset), (name, changes) in itertools.product(CASES.items(), VARIANTS.items())]
+    return [
+        {"case": case, "variant": name, "preset": preset, "changes": changes}
+        for (case, preset), (name, changes) in itertools.product(CASES.items(), VARIANTS.items())
+    ]
 
 
-COLUMNS = [("case", 17, lambda r: r["case"]), ("variant", 44, lambda r: r["variant"]),
-           ("rms e [mm]", 10, mm("rms_error_after_2s")), ("rms tau", 8, number("rms_torque")),
-           ("chatter", 8, number("torque_chatter")), ("sat %", 6, number("saturated_fraction", ".2f", 100)),
-           ("warnings", 9, lambda r: str(len(r["warnings"])))]
+COLUMNS = [
+    ("case", 17, lambda r: r["case"]),
+    ("variant", 44, lambda r: r["variant"]),
+    ("rms e [mm]", 10, mm("rms_error_after_2s")),
+    ("rms tau", 8, number("rms_torque")),
+    ("chatter", 8, number("torque_chatter")),
+    ("sat %", 6, number("saturated_fraction", ".2f", 100)),
+    ("warnings", 9, lambda r: str(len(r["warnings"]))),
+]
 
 
 def main() -> None:

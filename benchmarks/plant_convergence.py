@@ -36,8 +36,12 @@ TOLERANCES = {"rms_error_after_2s": 0.02, "rms_torque": 0.02, "torque_chatter": 
 PROBE = 1e-6
 """Relative change of the disturbance or the friction in the probe runs that measure chaos."""
 
-PROBES = {f"{key} x (1 {sign} {k}e-6)": {f"{key}_scale": 1 + (1 if sign == "+" else -1) * k * PROBE}
-          for key in ("disturbance", "friction") for k in (1, 2) for sign in "+-"}
+PROBES = {
+    f"{key} x (1 {sign} {k}e-6)": {f"{key}_scale": 1 + (1 if sign == "+" else -1) * k * PROBE}
+    for key in ("disturbance", "friction")
+    for k in (1, 2)
+    for sign in "+-"
+}
 
 ALPHA = 0.01
 """A chaotic run is not converged when its two steps' samples differ at this level."""
@@ -95,10 +99,16 @@ def verdict(runs: list[dict]) -> dict:
     default, fine = by["default"], by["fine"]
     coarse = [r for r in runs if not r["run"].startswith("fine")]  # the default step and its probes
     fines = [r for r in runs if r["run"].startswith("fine")]
-    out = {"preset": default["preset"], "controller": default["controller"],
-           "status": default["status"], "fine_status": fine["status"],
-           "friction_events": default["friction_events"], "unresolved_events": default["unresolved_events"],
-           "fine_unresolved_events": fine["unresolved_events"], "refined_periods": default["refined_periods"]}
+    out = {
+        "preset": default["preset"],
+        "controller": default["controller"],
+        "status": default["status"],
+        "fine_status": fine["status"],
+        "friction_events": default["friction_events"],
+        "unresolved_events": default["unresolved_events"],
+        "fine_unresolved_events": fine["unresolved_events"],
+        "refined_periods": default["refined_periods"],
+    }
     both_diverged = default["status"] == fine["status"] == "diverged"
     out["both_diverged"] = both_diverged
     chaotic, close = False, default["status"] == fine["status"]
@@ -139,8 +149,11 @@ def main() -> None:
     done = itertools.count(1)
 
     def progress(row):
-        print(f"  [{next(done)}/{len(all_jobs)}] {row['preset']} {row['controller']} {row['run']}: "
-              f"{row['status']}", flush=True)
+        print(
+            f"  [{next(done)}/{len(all_jobs)}] {row['preset']} {row['controller']} {row['run']}: "
+            f"{row['status']}",
+            flush=True,
+        )
 
     rows = run_rows(all_jobs, args.workers, echo=progress, runner=_collect_extra)
 
@@ -153,25 +166,42 @@ def main() -> None:
     rows += run_rows(more, args.workers, echo=progress, runner=_collect_extra)
     rows.sort(key=key)  # stable: each group keeps its order
     verdicts = [verdict(list(g)) for _, g in itertools.groupby(rows, key=key)]
-    header = (f"{'preset':24s} {'controller':16s} {'rms e [mm]':>11s} {'d%':>6s} {'rms tau':>8s} {'d%':>6s} "
-              f"{'chatter':>8s} {'d%':>6s} {'events':>7s} {'verdict':>10s}")
+    header = (
+        f"{'preset':24s} {'controller':16s} {'rms e [mm]':>11s} {'d%':>6s} {'rms tau':>8s} {'d%':>6s} "
+        f"{'chatter':>8s} {'d%':>6s} {'events':>7s} {'verdict':>10s}"
+    )
     print(header)
     for v in verdicts:
+
         def pct(key):
             return f"{100 * v[f'{key}_relative_difference']:.2f}"
 
         label = ("converged" if v["converged"] else "NOT") + (
-            " (diverged)" if v["both_diverged"] else " (chaotic)" if v["chaotic"] else "")
-        print(f"{v['preset']:24s} {v['controller']:16s} {1e3 * v['rms_error_after_2s']:11.4f} "
-              f"{pct('rms_error_after_2s'):>6s} {v['rms_torque']:8.3f} {pct('rms_torque'):>6s} "
-              f"{v['torque_chatter']:8.4f} {pct('torque_chatter'):>6s} {v['friction_events']:7d} "
-              f"{label:>10s}")
-    print(f"{sum(v['converged'] for v in verdicts)} of {len(verdicts)} converged at one plant step per "
-          f"period (reference: {args.fine})")
+            " (diverged)" if v["both_diverged"] else " (chaotic)" if v["chaotic"] else ""
+        )
+        print(
+            f"{v['preset']:24s} {v['controller']:16s} {1e3 * v['rms_error_after_2s']:11.4f} "
+            f"{pct('rms_error_after_2s'):>6s} {v['rms_torque']:8.3f} {pct('rms_torque'):>6s} "
+            f"{v['torque_chatter']:8.4f} {pct('torque_chatter'):>6s} {v['friction_events']:7d} "
+            f"{label:>10s}"
+        )
+    print(
+        f"{sum(v['converged'] for v in verdicts)} of {len(verdicts)} converged at one plant step per "
+        f"period (reference: {args.fine})"
+    )
     if args.json:
-        write_json_atomic(args.json, {"fine": args.fine, "probe": PROBE, "probes": list(PROBES),
-                                      "alpha": ALPHA, "tolerances": TOLERANCES, "rows": verdicts,
-                                      "runs": rows})
+        write_json_atomic(
+            args.json,
+            {
+                "fine": args.fine,
+                "probe": PROBE,
+                "probes": list(PROBES),
+                "alpha": ALPHA,
+                "tolerances": TOLERANCES,
+                "rows": verdicts,
+                "runs": rows,
+            },
+        )
 
 
 if __name__ == "__main__":

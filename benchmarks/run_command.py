@@ -34,8 +34,9 @@ CONTENDERS = {
 def _once(preset: str, flags: list[str], env: dict, folder: Path) -> float:
     command = [sys.executable, "-m", "nnrobust.cli", "run", preset, "--out", str(folder), "--quiet", *flags]
     start = time.perf_counter()
-    subprocess.run(command, check=True, env={**os.environ, **env}, stdout=subprocess.DEVNULL,
-                   stderr=subprocess.DEVNULL)
+    subprocess.run(
+        command, check=True, env={**os.environ, **env}, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+    )
     return time.perf_counter() - start
 
 
@@ -55,17 +56,36 @@ def main() -> None:
     finally:
         shutil.rmtree(work, ignore_errors=True)
     first = statistics.median(times[next(iter(CONTENDERS))])
-    rows = [{"contender": name, "median_seconds": statistics.median(t), "fastest_seconds": min(t),
-             "seconds": t, "ratio_to_default": statistics.median(t) / first} for name, t in times.items()]
-    print(f"nnrobust run {args.preset}: wall time per command, {args.repeat} interleaved runs each "
-          f"({default_workers()} drawing processes by default on this machine)")
+    rows = [
+        {
+            "contender": name,
+            "median_seconds": statistics.median(t),
+            "fastest_seconds": min(t),
+            "seconds": t,
+            "ratio_to_default": statistics.median(t) / first,
+        }
+        for name, t in times.items()
+    ]
+    print(
+        f"nnrobust run {args.preset}: wall time per command, {args.repeat} interleaved runs each "
+        f"({default_workers()} drawing processes by default on this machine)"
+    )
     print(f"{'contender':28s} {'median [s]':>10s} {'fastest [s]':>11s} {'/ default':>9s}")
     for r in rows:
-        print(f"{r['contender']:28s} {r['median_seconds']:10.2f} {r['fastest_seconds']:11.2f} "
-              f"{r['ratio_to_default']:9.2f}")
+        print(
+            f"{r['contender']:28s} {r['median_seconds']:10.2f} {r['fastest_seconds']:11.2f} "
+            f"{r['ratio_to_default']:9.2f}"
+        )
     if args.json:
-        write_json_atomic(args.json, {"preset": args.preset, "repeat": args.repeat,
-                                      "drawing_processes": default_workers(), "rows": rows})
+        write_json_atomic(
+            args.json,
+            {
+                "preset": args.preset,
+                "repeat": args.repeat,
+                "drawing_processes": default_workers(),
+                "rows": rows,
+            },
+        )
 
 
 if __name__ == "__main__":

@@ -100,8 +100,12 @@ def main() -> None:
         fig, ax = plt.subplots(figsize=(5, 3.6))
         ref = np.array(SIZES, float)
         for backend in backends:
-            ax.loglog(SIZES, np.array(seconds[backend]) * 1e6, "o-",
-                      label=f"{backend} loop (exponent {exponents[backend]:.2f})")
+            ax.loglog(
+                SIZES,
+                np.array(seconds[backend]) * 1e6,
+                "o-",
+                label=f"{backend} loop (exponent {exponents[backend]:.2f})",
+            )
             ax.loglog(ref, seconds[backend][2] * 1e6 * ref / SIZES[2], "k--", lw=0.8)
         ax.set_xlabel("joints n")
         ax.set_ylabel("closed-loop step [us]")

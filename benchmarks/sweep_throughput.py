@@ -24,12 +24,24 @@ from nnrobust.sweep.engine import LOOPBACK_HTTP
 def measure(workers: int, samples: int) -> dict:
     from distributed import LocalCluster
 
-    spec = parse_sweep({"name": f"throughput-{workers}", "base": "paper-ellipse", "controllers": ["nn"],
-                        "samples": samples, "seed": 3,
-                        "vary": {"plant.disturbance_scale": {"uniform": [0.5, 2.0]}}})
+    spec = parse_sweep(
+        {
+            "name": f"throughput-{workers}",
+            "base": "paper-ellipse",
+            "controllers": ["nn"],
+            "samples": samples,
+            "seed": 3,
+            "vary": {"plant.disturbance_scale": {"uniform": [0.5, 2.0]}},
+        }
+    )
     folder = Path(tempfile.mkdtemp(prefix="nnrobust-sweep-"))
-    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
-                           dashboard_address=LOOPBACK_HTTP)
+    cluster = LocalCluster(
+        n_workers=workers,
+        threads_per_worker=1,
+        processes=True,
+        host="127.0.0.1",
+        dashboard_address=LOOPBACK_HTTP,
+    )
     try:
         start = time.perf_counter()
         run_sweep(spec, folder / "out", scheduler=cluster.scheduler_address)
@@ -39,10 +51,15 @@ def measure(workers: int, samples: int) -> dict:
         cluster.close()
         shutil.rmtree(folder, ignore_errors=True)
     busy = float(frame["task_seconds"].sum())
-    return {"workers": workers, "samples": samples, "wall_seconds": wall,
-            "samples_per_second": samples / wall,
-            "task_seconds_mean": busy / samples, "overhead": 1.0 - busy / (workers * wall),
-            "backend": sorted(set(frame["backend"]))}
+    return {
+        "workers": workers,
+        "samples": samples,
+        "wall_seconds": wall,
+        "samples_per_second": samples / wall,
+        "task_seconds_mean": busy / samples,
+        "overhead": 1.0 - busy / (workers * wall),
+        "backend": sorted(set(frame["backend"])),
+    }
 
 
 def main() -> None:
@@ -53,8 +70,10 @@ def main() -> None:
     rows = [measure(workers, args.samples) for workers in (1, 2)]
     print(f"{'workers':>7s} {'samples/s':>10s} {'s per sample':>13s} {'overhead':>9s} backend")
     for r in rows:
-        print(f"{r['workers']:7d} {r['samples_per_second']:10.2f} {r['task_seconds_mean']:13.3f} "
-              f"{100 * r['overhead']:8.1f}% {','.join(r['backend'])}")
+        print(
+            f"{r['workers']:7d} {r['samples_per_second']:10.2f} {r['task_seconds_mean']:13.3f} "
+            f"{100 * r['overhead']:8.1f}% {','.join(r['backend'])}"
+        )
     speedup = rows[1]["samples_per_second"] / rows[0]["samples_per_second"]
     print(f"2 workers / 1 worker: {speedup:.2f}x")
     if args.json:

@@ -72,19 +72,35 @@ def main() -> None:
     for case, sensing, target, torque in CASES:
         path = HERE.parent / target if target.endswith(".toml") else target
         train = 2 if _samples_differ(str(path)) else 1
-        spec = TuneSpec(str(path), CONTROLLERS, args.budget, train_samples=train,
-                        validation=4, max_rms_torque=torque, max_saturated=0.01, seed=0)
+        spec = TuneSpec(
+            str(path),
+            CONTROLLERS,
+            args.budget,
+            train_samples=train,
+            validation=4,
+            max_rms_torque=torque,
+            max_saturated=0.01,
+            seed=0,
+        )
         summary = run_tune(spec, Path(args.out) / _slug(case, sensing), workers=args.workers)
         summary["target"] = target  # as written above, relative to the checkout
         cases.append({"case": case, "sensing": sensing, "summary": summary})
         for name, entry in summary["controllers"].items():
             best = entry["best"]
-            text = "no setting met the constraints" if best is None else (
-                f"{1e3 * best['train']['rms_error_after_2s']:.4g} mm train, "
-                f"{1e3 * best['validation'].get('rms_error_after_2s', float('nan')):.4g} mm held out, "
-                f"{best['train']['rms_torque']:.3g} N m"
-                + ("; at bounds: " + ", ".join(b["param"] for b in best["at_bound"])
-                   if best["at_bound"] else ""))
+            text = (
+                "no setting met the constraints"
+                if best is None
+                else (
+                    f"{1e3 * best['train']['rms_error_after_2s']:.4g} mm train, "
+                    f"{1e3 * best['validation'].get('rms_error_after_2s', float('nan')):.4g} mm held out, "
+                    f"{best['train']['rms_torque']:.3g} N m"
+                    + (
+                        "; at bounds: " + ", ".join(b["param"] for b in best["at_bound"])
+                        if best["at_bound"]
+                        else ""
+                    )
+                )
+            )
             print(f"{case:17s} {sensing:6s} {name:13s} {text}", flush=True)
     if args.json:
         write_json_atomic(args.json, {"budget": args.budget, "controllers": CONTROLLERS, "cases": cases})
@@ -110,8 +126,14 @@ def plot(cases: list[dict], path: str) -> None:
                 ax.plot(*zip(*points), "o-", ms=3, color=colors[name], label=name)
             if entry["best"]:
                 best = entry["best"]["train"]
-                ax.plot(best["rms_torque"], 1e3 * best["rms_error_after_2s"], "*", ms=12, color=colors[name],
-                        markeredgecolor="k")
+                ax.plot(
+                    best["rms_torque"],
+                    1e3 * best["rms_error_after_2s"],
+                    "*",
+                    ms=12,
+                    color=colors[name],
+                    markeredgecolor="k",
+                )
         ax.axvline(summary["constraints"]["max_rms_torque"], color="0.5", ls=":")
         ax.set_yscale("log")
         ax.set_title(f"{case['case']}, {case['sensing']}", fontsize=10)
@@ -119,8 +141,11 @@ def plot(cases: list[dict], path: str) -> None:
         ax.set_ylabel("RMS error, t ≥ 2 s [mm]")
         ax.grid(True, which="both", alpha=0.3)
     axes.flat[0].legend(fontsize=8)
-    fig.suptitle(f"Pareto fronts at {cases[0]['summary']['budget']} simulations per controller "
-                 "(★ best under the constraints; dotted: the torque limit)", fontsize=10)
+    fig.suptitle(
+        f"Pareto fronts at {cases[0]['summary']['budget']} simulations per controller "
+        "(★ best under the constraints; dotted: the torque limit)",
+        fontsize=10,
+    )
     fig.tight_layout()
     tmp = Path(path).with_name(f".{Path(path).name}.partial.png")
     fig.savefig(tmp, dpi=110)

@@ -19,8 +19,15 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 DATA = ROOT / "docs" / "data"
-DOCUMENTS = ("README.md", "docs/controller.md", "docs/plant.md", "docs/fair-comparison.md",
-             "docs/robots.md", "docs/robustness.md", "docs/engines.md")
+DOCUMENTS = (
+    "README.md",
+    "docs/controller.md",
+    "docs/plant.md",
+    "docs/fair-comparison.md",
+    "docs/robots.md",
+    "docs/robustness.md",
+    "docs/engines.md",
+)
 TABLE = re.compile(r"(<!-- table: (?P<name>[\w-]+) -->\n)(?P<body>.*?)(<!-- /table -->)", re.S)
 
 
@@ -37,11 +44,14 @@ def _warn(row: dict) -> str:
     return ", ".join(kinds) if kinds else "none"
 
 
-def _markdown(columns: list[tuple[str, str, object]], rows: list[dict], made_by: str = "",
-              chaos_note: bool = True) -> str:
+def _markdown(
+    columns: list[tuple[str, str, object]], rows: list[dict], made_by: str = "", chaos_note: bool = True
+) -> str:
     """A Markdown table: ``columns`` are (header, "l" or "r", function of the row giving the cell)."""
-    lines = ["| " + " | ".join(h for h, _, _ in columns) + " |",
-             "|" + "|".join("---" if a == "l" else "---:" for _, a, _ in columns) + "|"]
+    lines = [
+        "| " + " | ".join(h for h, _, _ in columns) + " |",
+        "|" + "|".join("---" if a == "l" else "---:" for _, a, _ in columns) + "|",
+    ]
     lines += ["| " + " | ".join(cell(r) for _, _, cell in columns) + " |" for r in rows]
     note = f"\n\n{CHAOS_NOTE}" if chaos_note and any(r.get("chaotic") for r in rows) else ""
     return "\n".join(lines) + note + (f"\n\nMade by `{made_by}`.\n" if made_by else "\n")
@@ -58,17 +68,21 @@ def _text(key: str):
 def _probed(key: str, scale: float = 1.0):
     """A metric's cell: 3 significant digits, or for a chaotic row its range over the chaos probes
     (benchmarks/_common.py: the disturbance scaled by 1 +- 1e-6) marked †."""
+
     def cell(r):
         if r.get(key) is None:
             return "–"
         if r.get("chaotic") and f"{key}_min" in r:
             return f"{scale * r[f'{key}_min']:.3g}–{scale * r[f'{key}_max']:.3g} †"
         return f"{scale * r[key]:.3g}"
+
     return cell
 
 
-CHAOS_NOTE = ("† chaotic: scaling the disturbance by 1 ± 1e-6 moves this run's metrics by more than 1 %; "
-              "the range is over the three runs, and no digit beyond it means anything.")
+CHAOS_NOTE = (
+    "† chaotic: scaling the disturbance by 1 ± 1e-6 moves this run's metrics by more than 1 %; "
+    "the range is over the three runs, and no digit beyond it means anything."
+)
 
 ERROR = ("RMS error, t ≥ 2 s [mm]", "r", _probed("rms_error_after_2s", 1e3))
 TORQUE = ("RMS torque [N m]", "r", _probed("rms_torque"))
@@ -78,30 +92,66 @@ WARNINGS = ("warnings", "l", _warn)
 
 
 def paper_reproduction() -> str:
-    return _markdown([("case", "l", _text("case")), ("controller", "l", _text("variant")), ERROR, TORQUE,
-                      CHATTER, SATURATED, WARNINGS], _data("paper_reproduction")["rows"],
-                     "python benchmarks/paper_reproduction.py --json docs/data/paper_reproduction.json")
+    return _markdown(
+        [
+            ("case", "l", _text("case")),
+            ("controller", "l", _text("variant")),
+            ERROR,
+            TORQUE,
+            CHATTER,
+            SATURATED,
+            WARNINGS,
+        ],
+        _data("paper_reproduction")["rows"],
+        "python benchmarks/paper_reproduction.py --json docs/data/paper_reproduction.json",
+    )
 
 
 def nn_options() -> str:
-    return _markdown([("variant", "l", _text("variant")), ERROR,
-                      ("max e [mm]", "r", lambda r: _mm(r["max_error"])), TORQUE, CHATTER, SATURATED,
-                      ("ρ̂ at 20 s", "r", _g3("final_rho_hat"))], _data("nn_options")["rows"],
-                     "python benchmarks/nn_options.py --json docs/data/nn_options.json")
+    return _markdown(
+        [
+            ("variant", "l", _text("variant")),
+            ERROR,
+            ("max e [mm]", "r", lambda r: _mm(r["max_error"])),
+            TORQUE,
+            CHATTER,
+            SATURATED,
+            ("ρ̂ at 20 s", "r", _g3("final_rho_hat")),
+        ],
+        _data("nn_options")["rows"],
+        "python benchmarks/nn_options.py --json docs/data/nn_options.json",
+    )
 
 
 def subtask() -> str:
-    return _markdown([("variant", "l", _text("variant")),
-                      ("h(0)", "r", lambda r: f"{r['h_start']:.4f}"),
-                      ("h(20 s)", "r", lambda r: f"{r['h_end']:.4f}"), ERROR, TORQUE],
-                     _data("subtask")["rows"], "python benchmarks/subtask.py --json docs/data/subtask.json")
+    return _markdown(
+        [
+            ("variant", "l", _text("variant")),
+            ("h(0)", "r", lambda r: f"{r['h_start']:.4f}"),
+            ("h(20 s)", "r", lambda r: f"{r['h_end']:.4f}"),
+            ERROR,
+            TORQUE,
+        ],
+        _data("subtask")["rows"],
+        "python benchmarks/subtask.py --json docs/data/subtask.json",
+    )
 
 
 def arm_presets() -> str:
-    return _markdown([("preset", "l", _text("preset")), ("controller", "l", _text("controller")), ERROR,
-                      ("RMS rotation error [mrad]", "r", _g3("rms_orientation_error_after_2s", 1e3)),
-                      TORQUE, CHATTER, SATURATED, WARNINGS], _data("arm_presets")["rows"],
-                     "python benchmarks/arm_presets.py --json docs/data/arm_presets.json")
+    return _markdown(
+        [
+            ("preset", "l", _text("preset")),
+            ("controller", "l", _text("controller")),
+            ERROR,
+            ("RMS rotation error [mrad]", "r", _g3("rms_orientation_error_after_2s", 1e3)),
+            TORQUE,
+            CHATTER,
+            SATURATED,
+            WARNINGS,
+        ],
+        _data("arm_presets")["rows"],
+        "python benchmarks/arm_presets.py --json docs/data/arm_presets.json",
+    )
 
 
 def plant_convergence() -> str:
@@ -111,6 +161,7 @@ def plant_convergence() -> str:
         def cell(r):
             v = r.get(f"{key}_median", r[key]) if r["chaotic"] else r[key]
             return f"{scale * v:.3g}"
+
         return cell
 
     def delta(key):
@@ -120,6 +171,7 @@ def plant_convergence() -> str:
             if r["chaotic"]:
                 return f"{100 * r[f'{key}_median_difference']:.2f} (p = {r[f'{key}_p']:.2g})"
             return f"{100 * r[f'{key}_relative_difference']:.2f}"
+
         return cell
 
     def verdict(r):
@@ -128,44 +180,59 @@ def plant_convergence() -> str:
         label = "converged" if r["converged"] else "**not converged**"
         if r["chaotic"]:
             runs = len(data["probes"]) + 1
-            label += (f" (chaotic: {runs} runs per step; diverged {r['diverged_runs']} and "
-                      f"{r['fine_diverged_runs']})")
+            label += (
+                f" (chaotic: {runs} runs per step; diverged {r['diverged_runs']} and "
+                f"{r['fine_diverged_runs']})"
+            )
         return label
 
-    table = _markdown([("preset", "l", _text("preset")), ("controller", "l", _text("controller")),
-                       ("RMS error [mm]", "r", value("rms_error_after_2s", 1e3)),
-                       ("Δ error [%]", "r", delta("rms_error_after_2s")),
-                       ("RMS torque [N m]", "r", value("rms_torque")),
-                       ("Δ torque [%]", "r", delta("rms_torque")),
-                       ("chatter [N m]", "r", value("torque_chatter")),
-                       ("Δ chatter [%]", "r", delta("torque_chatter")),
-                       ("stick-slip events", "r", _text("friction_events")),
-                       ("cut periods", "r", _text("refined_periods")), ("verdict", "l", verdict)],
-                      data["rows"], chaos_note=False)
+    table = _markdown(
+        [
+            ("preset", "l", _text("preset")),
+            ("controller", "l", _text("controller")),
+            ("RMS error [mm]", "r", value("rms_error_after_2s", 1e3)),
+            ("Δ error [%]", "r", delta("rms_error_after_2s")),
+            ("RMS torque [N m]", "r", value("rms_torque")),
+            ("Δ torque [%]", "r", delta("rms_torque")),
+            ("chatter [N m]", "r", value("torque_chatter")),
+            ("Δ chatter [%]", "r", delta("torque_chatter")),
+            ("stick-slip events", "r", _text("friction_events")),
+            ("cut periods", "r", _text("refined_periods")),
+            ("verdict", "l", verdict),
+        ],
+        data["rows"],
+        chaos_note=False,
+    )
     converged = sum(r["converged"] for r in data["rows"])
-    return table + (f"\nΔ: the default step (one RK4 step per 1 ms period, cut where a joint turns more than "
-                    f"0.02 rad in one) against {data['fine']} steps per period; tolerances 2 % (error, "
-                    f"torque) and 10 % (chatter). A chaotic row gives the median over its runs at the "
-                    f"default step and, as Δ, the difference between the two steps' medians with the "
-                    f"two-sided Mann–Whitney p-value of their runs; a metric agrees when p ≥ "
-                    f"{data['alpha']:g} or Δ is within its tolerance, and the row converges when every "
-                    f"metric agrees and Fisher's exact p on the diverged runs is ≥ {data['alpha']:g}. Cut "
-                    f"periods: control periods whose step the speed rule cut. "
-                    f"{converged} of {len(data['rows'])} runs converged. Made by `python "
-                    "benchmarks/plant_convergence.py --json docs/data/plant_convergence.json`.\n")
+    return table + (
+        f"\nΔ: the default step (one RK4 step per 1 ms period, cut where a joint turns more than "
+        f"0.02 rad in one) against {data['fine']} steps per period; tolerances 2 % (error, "
+        f"torque) and 10 % (chatter). A chaotic row gives the median over its runs at the "
+        f"default step and, as Δ, the difference between the two steps' medians with the "
+        f"two-sided Mann–Whitney p-value of their runs; a metric agrees when p ≥ "
+        f"{data['alpha']:g} or Δ is within its tolerance, and the row converges when every "
+        f"metric agrees and Fisher's exact p on the diverged runs is ≥ {data['alpha']:g}. Cut "
+        f"periods: control periods whose step the speed rule cut. "
+        f"{converged} of {len(data['rows'])} runs converged. Made by `python "
+        "benchmarks/plant_convergence.py --json docs/data/plant_convergence.json`.\n"
+    )
 
 
 def adaptive_step() -> str:
     def rotation(r):
         return "fixed 1 ms step" if r["max_step_rotation"] is None else f"{r['max_step_rotation']:g}"
 
-    return _markdown([("max_step_rotation [rad]", "l", rotation),
-                      ("energy drift", "r", lambda r: f"{r['energy_drift']:.2g}"),
-                      ("fastest joint [rad/s]", "r", lambda r: f"{r['max_joint_speed']:.0f}"),
-                      ("cut periods", "r", lambda r: f"{r['refined_periods']} of {r['periods']}"),
-                      ("wall [s]", "r", lambda r: f"{r['wall_seconds']:.2f}")],
-                     _data("adaptive_step")["rows"],
-                     "python benchmarks/adaptive_step.py --json docs/data/adaptive_step.json")
+    return _markdown(
+        [
+            ("max_step_rotation [rad]", "l", rotation),
+            ("energy drift", "r", lambda r: f"{r['energy_drift']:.2g}"),
+            ("fastest joint [rad/s]", "r", lambda r: f"{r['max_joint_speed']:.0f}"),
+            ("cut periods", "r", lambda r: f"{r['refined_periods']} of {r['periods']}"),
+            ("wall [s]", "r", lambda r: f"{r['wall_seconds']:.2f}"),
+        ],
+        _data("adaptive_step")["rows"],
+        "python benchmarks/adaptive_step.py --json docs/data/adaptive_step.json",
+    )
 
 
 def friction_compensation() -> str:
@@ -174,18 +241,25 @@ def friction_compensation() -> str:
             low, mid, high = (scale * r[k] for k in (f"{key}_min", key, f"{key}_max"))
             same = f"{low:.3g}" == f"{high:.3g}"
             return f"{mid:.3g}" if same else f"{mid:.3g} ({low:.3g}–{high:.3g})"
+
         return cell
 
-    return _markdown([("variant", "l", _text("variant")),
-                      ("RMS error, t ≥ 2 s [mm]", "r", spread("rms_error_after_2s", 1e3)),
-                      ("RMS torque [N m]", "r", spread("rms_torque")),
-                      ("chatter [N m]", "r", spread("torque_chatter"))],
-                     _data("friction_compensation")["rows"],
-                     "python benchmarks/friction_compensation.py --json docs/data/friction_compensation.json")
+    return _markdown(
+        [
+            ("variant", "l", _text("variant")),
+            ("RMS error, t ≥ 2 s [mm]", "r", spread("rms_error_after_2s", 1e3)),
+            ("RMS torque [N m]", "r", spread("rms_torque")),
+            ("chatter [N m]", "r", spread("torque_chatter")),
+        ],
+        _data("friction_compensation")["rows"],
+        "python benchmarks/friction_compensation.py --json docs/data/friction_compensation.json",
+    )
 
 
-TUNED_COMMAND = ("python benchmarks/tuned_comparison.py --json docs/data/tuned_comparison.json "
-                 "--figure docs/img/tuned_comparison.png")
+TUNED_COMMAND = (
+    "python benchmarks/tuned_comparison.py --json docs/data/tuned_comparison.json "
+    "--figure docs/img/tuned_comparison.png"
+)
 
 
 def _tuned_cell(best: dict | None) -> str:
@@ -199,17 +273,21 @@ def tuned_headline() -> str:
     data = _data("tuned_comparison")
     panels = [(c["case"], c["sensing"]) for c in data["cases"]]
     columns = [("controller", "l", _text("controller"))] + [
-        (f"{case}, {sensing}", "r", lambda r, i=i: _tuned_cell(r["best"][i])) for i, (case, sensing) in
-        enumerate(panels)]
-    rows = [{"controller": name, "best": [c["summary"]["controllers"][name]["best"] for c in data["cases"]]}
-            for name in data["controllers"]]
+        (f"{case}, {sensing}", "r", lambda r, i=i: _tuned_cell(r["best"][i]))
+        for i, (case, sensing) in enumerate(panels)
+    ]
+    rows = [
+        {"controller": name, "best": [c["summary"]["controllers"][name]["best"] for c in data["cases"]]}
+        for name in data["controllers"]
+    ]
     limits = sorted({c["summary"]["constraints"]["max_rms_torque"] for c in data["cases"]})
     return _markdown(columns, rows) + (
         f"\nHeld-out RMS task error (t ≥ 2 s) of each controller's best setting under the constraints (RMS "
         f"torque in brackets), after `nnrobust tune` gave every controller {data['budget']} simulations "
         f"per case: RMS torque ≤ {' or '.join(f'{v:g}' for v in limits)} N m (the paper's arm or the "
         "Panda), at most 1 % saturated steps, no runaway, no stop hit. Made by "
-        f"`{TUNED_COMMAND}`.\n")
+        f"`{TUNED_COMMAND}`.\n"
+    )
 
 
 def tuned_settings() -> str:
@@ -219,28 +297,63 @@ def tuned_settings() -> str:
         for name, entry in case["summary"]["controllers"].items():
             best = entry["best"]
             if best is None:
-                rows.append({"case": f"{case['case']}, {case['sensing']}", "controller": name, "setting": "–",
-                             "train": "–", "held": "–", "torque": "–", "chatter": "–", "bounds": "–"})
+                rows.append(
+                    {
+                        "case": f"{case['case']}, {case['sensing']}",
+                        "controller": name,
+                        "setting": "–",
+                        "train": "–",
+                        "held": "–",
+                        "torque": "–",
+                        "chatter": "–",
+                        "bounds": "–",
+                    }
+                )
                 continue
-            setting = ", ".join(f"{k.split('.')[-1]} {v[0] if isinstance(v, list) else v:.3g}"
-                                for k, v in best["params"].items() if k != "nn.eps0")
-            bounds = "; ".join(f"{b['param']} {b['side']}" + (" (physical)" if b["physical"] else "")
-                               for b in best["at_bound"]) or "interior"
-            rows.append({"case": f"{case['case']}, {case['sensing']}", "controller": name, "setting": setting,
-                         "train": _mm(best["train"]["rms_error_after_2s"]),
-                         "held": _mm(best["validation"].get("rms_error_after_2s")),
-                         "torque": f"{best['train']['rms_torque']:.3g}",
-                         "chatter": f"{best['train']['torque_chatter']:.3g}", "bounds": bounds})
-    return _markdown([("case", "l", _text("case")), ("controller", "l", _text("controller")),
-                      ("best setting", "l", _text("setting")), ("train error [mm]", "r", _text("train")),
-                      ("held-out error [mm]", "r", _text("held")), ("RMS torque [N m]", "r", _text("torque")),
-                      ("chatter [N m]", "r", _text("chatter")), ("on a bound", "l", _text("bounds"))],
-                     rows, TUNED_COMMAND)
+            setting = ", ".join(
+                f"{k.split('.')[-1]} {v[0] if isinstance(v, list) else v:.3g}"
+                for k, v in best["params"].items()
+                if k != "nn.eps0"
+            )
+            bounds = (
+                "; ".join(
+                    f"{b['param']} {b['side']}" + (" (physical)" if b["physical"] else "")
+                    for b in best["at_bound"]
+                )
+                or "interior"
+            )
+            rows.append(
+                {
+                    "case": f"{case['case']}, {case['sensing']}",
+                    "controller": name,
+                    "setting": setting,
+                    "train": _mm(best["train"]["rms_error_after_2s"]),
+                    "held": _mm(best["validation"].get("rms_error_after_2s")),
+                    "torque": f"{best['train']['rms_torque']:.3g}",
+                    "chatter": f"{best['train']['torque_chatter']:.3g}",
+                    "bounds": bounds,
+                }
+            )
+    return _markdown(
+        [
+            ("case", "l", _text("case")),
+            ("controller", "l", _text("controller")),
+            ("best setting", "l", _text("setting")),
+            ("train error [mm]", "r", _text("train")),
+            ("held-out error [mm]", "r", _text("held")),
+            ("RMS torque [N m]", "r", _text("torque")),
+            ("chatter [N m]", "r", _text("chatter")),
+            ("on a bound", "l", _text("bounds")),
+        ],
+        rows,
+        TUNED_COMMAND,
+    )
 
 
 def _study(name: str):
     """A shipped study's summary (docs/data/<name>.json, DIR/summary.json of its sweep): per
     controller the error and torque statistics, then the median error at each grid value."""
+
     def render() -> str:
         summary = _data(name.replace("-", "_"))
         entries = [{"controller": c, **e} for c, e in summary["controllers"].items()]
@@ -248,32 +361,48 @@ def _study(name: str):
         def stat(key, which, scale=1e3):
             return lambda e: "–" if e[key][which] is None else f"{scale * e[key][which]:.3g}"
 
-        table = _markdown([("controller", "l", _text("controller")), ("runs", "r", _text("rows")),
-                           ("completed", "r", lambda e: f"{100 * e['success_rate']:.0f} %"),
-                           ("median error [mm]", "r", stat("rms_error_after_2s", "median")),
-                           ("p95 [mm]", "r", stat("rms_error_after_2s", "p95")),
-                           ("max [mm]", "r", stat("rms_error_after_2s", "max")),
-                           ("median torque [N m]", "r", stat("rms_torque", "median", 1.0)),
-                           ("p95 [N m]", "r", stat("rms_torque", "p95", 1.0)),
-                           ("saturated steps [%]", "r",
-                            lambda e: f"{100 * e['saturated_fraction_mean']:.2g}"),
-                           ("runs with warnings", "r", _text("rows_with_warnings"))], entries)
+        table = _markdown(
+            [
+                ("controller", "l", _text("controller")),
+                ("runs", "r", _text("rows")),
+                ("completed", "r", lambda e: f"{100 * e['success_rate']:.0f} %"),
+                ("median error [mm]", "r", stat("rms_error_after_2s", "median")),
+                ("p95 [mm]", "r", stat("rms_error_after_2s", "p95")),
+                ("max [mm]", "r", stat("rms_error_after_2s", "max")),
+                ("median torque [N m]", "r", stat("rms_torque", "median", 1.0)),
+                ("p95 [N m]", "r", stat("rms_torque", "p95", 1.0)),
+                ("saturated steps [%]", "r", lambda e: f"{100 * e['saturated_fraction_mean']:.2g}"),
+                ("runs with warnings", "r", _text("rows_with_warnings")),
+            ],
+            entries,
+        )
         for key, values in next(iter(summary["controllers"].values()))["by_grid"].items():
             columns = [("controller", "l", _text("controller"))] + [
-                (f"{key} = {value}", "r",
-                 lambda e, k=key, v=value: "–" if e["by_grid"][k][v]["median"] is None else
-                 f"{1e3 * e['by_grid'][k][v]['median']:.3g} ({1e3 * e['by_grid'][k][v]['p95']:.3g})")
-                for value in values]
+                (
+                    f"{key} = {value}",
+                    "r",
+                    lambda e, k=key, v=value: (
+                        "–"
+                        if e["by_grid"][k][v]["median"] is None
+                        else f"{1e3 * e['by_grid'][k][v]['median']:.3g} "
+                        f"({1e3 * e['by_grid'][k][v]['p95']:.3g})"
+                    ),
+                )
+                for value in values
+            ]
             table += "\nMedian (95th percentile) RMS error, t ≥ 2 s [mm], at each value of the grid:\n\n"
             table += _markdown(columns, entries)
-        return table + (f"\n{summary['samples']} samples; errors are RMS over t ≥ 2 s. Made by "
-                         f"`nnrobust sweep {name} --out out/{name}` (summary.json).\n")
+        return table + (
+            f"\n{summary['samples']} samples; errors are RMS over t ≥ 2 s. Made by "
+            f"`nnrobust sweep {name} --out out/{name}` (summary.json).\n"
+        )
 
     return render
 
 
 def _gap_cell(variant: str):
     """A variant's RMS error t >= 2 s [mm] and, for MuJoCo, its change from Pinocchio's in %."""
+
     def cell(r):
         value, reference = r[variant].get("rms_error_after_2s"), r["pinocchio"].get("rms_error_after_2s")
         if value is None:
@@ -282,26 +411,35 @@ def _gap_cell(variant: str):
         if variant != "pinocchio" and reference:
             text += f" ({100 * (value - reference) / reference:+.1f} %)"
         return text + ("" if r[variant].get("status") == "completed" else f" {r[variant]['status']}")
+
     return cell
 
 
 def _flips(variant: str):
     """The verdicts that differ between Pinocchio's run and the variant's."""
+
     def cell(r):
         pin, other = r["verdicts"]["pinocchio"], r["verdicts"][variant]
         keys = dict.fromkeys([*pin, *other])
-        flips = [f"{k}: {pin.get(k, 'no')} → {other.get(k, 'no')}" for k in keys
-                 if pin.get(k, "no") != other.get(k, "no")]
+        flips = [
+            f"{k}: {pin.get(k, 'no')} → {other.get(k, 'no')}"
+            for k in keys
+            if pin.get(k, "no") != other.get(k, "no")
+        ]
         return "; ".join(flips) or "none"
+
     return cell
 
 
-GAP_COLUMNS = [("Pinocchio [mm]", "r", _gap_cell("pinocchio")),
-               ("MuJoCo RK4", "r", _gap_cell("mujoco")), ("RK4, 4× steps", "r", _gap_cell("mujoco_fine")),
-               ("implicitfast", "r", _gap_cell("implicitfast")),
-               ("implicitfast, 4× steps", "r", _gap_cell("implicitfast_fine")),
-               ("verdicts that change (RK4)", "l", _flips("mujoco")),
-               ("(implicitfast)", "l", _flips("implicitfast"))]
+GAP_COLUMNS = [
+    ("Pinocchio [mm]", "r", _gap_cell("pinocchio")),
+    ("MuJoCo RK4", "r", _gap_cell("mujoco")),
+    ("RK4, 4× steps", "r", _gap_cell("mujoco_fine")),
+    ("implicitfast", "r", _gap_cell("implicitfast")),
+    ("implicitfast, 4× steps", "r", _gap_cell("implicitfast_fine")),
+    ("verdicts that change (RK4)", "l", _flips("mujoco")),
+    ("(implicitfast)", "l", _flips("implicitfast")),
+]
 GAP_COMMAND = "python benchmarks/engine_gap.py --json docs/data/engine_gap.json"
 
 
@@ -311,22 +449,35 @@ def engine_gap_presets() -> str:
 
 
 def engine_gap_tuned() -> str:
-    columns = [("case", "l", lambda r: f"{r['case']}, {r['sensing']}"),
-               ("controller", "l", _text("controller")), ("sample", "r", _text("sample")), *GAP_COLUMNS]
+    columns = [
+        ("case", "l", lambda r: f"{r['case']}, {r['sensing']}"),
+        ("controller", "l", _text("controller")),
+        ("sample", "r", _text("sample")),
+        *GAP_COLUMNS,
+    ]
     return _markdown(columns, _data("engine_gap")["tuned"], GAP_COMMAND)
 
 
-RENDERERS = {"engine-gap-presets": engine_gap_presets, "engine-gap-tuned": engine_gap_tuned,
-             "arm-presets": arm_presets, "paper-robustness": _study("paper-robustness"),
-             "panda-robustness": _study("panda-robustness"), "paper-reproduction": paper_reproduction,
-             "nn-options": nn_options,
-             "subtask": subtask, "plant-convergence": plant_convergence, "adaptive-step": adaptive_step,
-             "friction-compensation": friction_compensation, "tuned-headline": tuned_headline,
-             "tuned-settings": tuned_settings}
+RENDERERS = {
+    "engine-gap-presets": engine_gap_presets,
+    "engine-gap-tuned": engine_gap_tuned,
+    "arm-presets": arm_presets,
+    "paper-robustness": _study("paper-robustness"),
+    "panda-robustness": _study("panda-robustness"),
+    "paper-reproduction": paper_reproduction,
+    "nn-options": nn_options,
+    "subtask": subtask,
+    "plant-convergence": plant_convergence,
+    "adaptive-step": adaptive_step,
+    "friction-compensation": friction_compensation,
+    "tuned-headline": tuned_headline,
+    "tuned-settings": tuned_settings,
+}
 
 
 def render(text: str) -> str:
     """The document with every table re-rendered from its data."""
+
     def replace(match):
         name = match["name"]
         if name not in RENDERERS:

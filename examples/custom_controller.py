@@ -23,7 +23,9 @@ class TaskPD(nnrobust.Controller):
 
     signal_names = ("effort",)
     search_space = {  # what `nnrobust tune` searches, log-uniformly (bounds it finds the best on are widened)
-        "Kp": (10.0, 1e5, "1/s^2"), "Kd": (1.0, 1e3, "1/s"), "damping": (0.1, 100.0, "1/s"),
+        "Kp": (10.0, 1e5, "1/s^2"),
+        "Kd": (1.0, 1e3, "1/s"),
+        "damping": (0.1, 100.0, "1/s"),
     }
 
     def __init__(self, context, Kp=400.0, Kd=40.0, damping=5.0):
@@ -49,8 +51,13 @@ def main() -> None:
     parser.add_argument("--out", default="out/examples", help="folder of the two run folders")
     args = parser.parse_args()
     base = nnrobust.load_preset("paper-ellipse").replace(simulation={"duration": args.duration})
-    mine = base.replace(controller={"kind": "custom", "class": f"{Path(__file__).resolve()}:TaskPD",
-                                    "params": {"Kp": 400.0, "Kd": 40.0}})
+    mine = base.replace(
+        controller={
+            "kind": "custom",
+            "class": f"{Path(__file__).resolve()}:TaskPD",
+            "params": {"Kp": 400.0, "Kd": 40.0},
+        }
+    )
     print(f"{'controller':<12} {'RMS error t>=2s [mm]':>21} {'RMS torque [N m]':>17}")
     for name, config in (("TaskPD", mine), ("nn", base)):
         result = nnrobust.run_experiment(config)

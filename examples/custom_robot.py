@@ -16,7 +16,10 @@ import numpy as np
 import nnrobust
 
 LINKS = [  # length [m], mass [kg], effort limit [N m]
-    (0.35, 3.0, 60.0), (0.30, 2.2, 40.0), (0.25, 1.5, 25.0), (0.20, 1.0, 15.0),
+    (0.35, 3.0, 60.0),
+    (0.30, 2.2, 40.0),
+    (0.25, 1.5, 25.0),
+    (0.20, 1.0, 15.0),
 ]
 
 
@@ -35,8 +38,12 @@ def planar_arm_urdf() -> str:
             f'    <inertia ixx="1e-4" ixy="0" ixz="0" iyy="{izz}" iyz="0" izz="{izz}"/></inertial></link>',
         ]
         parent, offset = f"link{i}", length
-    parts += ['  <joint name="tool_joint" type="fixed"><parent link="link4"/><child link="tool"/>',
-              f'    <origin xyz="{offset} 0 0"/></joint>', '  <link name="tool"/>', '</robot>']
+    parts += [
+        '  <joint name="tool_joint" type="fixed"><parent link="link4"/><child link="tool"/>',
+        f'    <origin xyz="{offset} 0 0"/></joint>',
+        '  <link name="tool"/>',
+        "</robot>",
+    ]
     return "\n".join(parts) + "\n"
 
 
@@ -68,8 +75,10 @@ def main() -> None:
     )
     result = nnrobust.run_experiment(config)
     metrics = result.metrics()
-    print(f"status {metrics['status']}, RMS error {1e3 * metrics['rms_error']:.2f} mm, "
-          f"RMS torque {metrics['rms_torque']:.2f} N m, backend {result.backend}")
+    print(
+        f"status {metrics['status']}, RMS error {1e3 * metrics['rms_error']:.2f} mm, "
+        f"RMS torque {metrics['rms_torque']:.2f} N m, backend {result.backend}"
+    )
     for warning in metrics["warnings"]:
         print("warning:", warning)
     nnrobust.write_run(out / "four-link-nn", result, overwrite=True, animation=False)

@@ -38,11 +38,18 @@ def main() -> None:
     if args.run:
         result = nnrobust.Result.load(args.run)  # every recorded array, as numpy
         metrics = json.loads((Path(args.run) / "metrics.json").read_text())
-        frame = pd.DataFrame({"t": result.t, "error_mm": 1e3 * result.position_error(),
-                              **{f"tau{i + 1}": result.tau[:, i] for i in range(result.tau.shape[1])}})
+        frame = pd.DataFrame(
+            {
+                "t": result.t,
+                "error_mm": 1e3 * result.position_error(),
+                **{f"tau{i + 1}": result.tau[:, i] for i in range(result.tau.shape[1])},
+            }
+        )
         peak = frame["error_mm"].idxmax()
-        print(f"\n{args.run}: {len(frame)} samples, status {metrics['status']}, "
-              f"peak error {frame.loc[peak, 'error_mm']:.3f} mm at t = {frame.loc[peak, 't']:.3f} s")
+        print(
+            f"\n{args.run}: {len(frame)} samples, status {metrics['status']}, "
+            f"peak error {frame.loc[peak, 'error_mm']:.3f} mm at t = {frame.loc[peak, 't']:.3f} s"
+        )
         print(frame.describe().loc[["mean", "max"]].round(3).to_string())
         assert np.isfinite(result.q).all()
 

@@ -27,18 +27,28 @@ def main() -> None:
     parser.add_argument("--out", default="out/examples/sweep")
     args = parser.parse_args()
     here = Path(__file__).resolve().parent
-    spec = parse_sweep({
-        "name": "disturbance-range",
-        "base": "paper-ellipse",
-        "controllers": ["nn", "no-u0",
-                        {"name": "taskpd", "class": f"{here / 'custom_controller.py'}:TaskPD",
-                         "params": {"Kp": 400.0, "Kd": 40.0}}],
-        "samples": args.samples,
-        "seed": 7,
-        "set": {"simulation.duration": args.duration},
-        "vary": {"plant.disturbance_scale": {"uniform": [0.0, 3.0]},
-                 "plant.friction_scale": {"uniform": [0.5, 1.5]}},
-    })
+    spec = parse_sweep(
+        {
+            "name": "disturbance-range",
+            "base": "paper-ellipse",
+            "controllers": [
+                "nn",
+                "no-u0",
+                {
+                    "name": "taskpd",
+                    "class": f"{here / 'custom_controller.py'}:TaskPD",
+                    "params": {"Kp": 400.0, "Kd": 40.0},
+                },
+            ],
+            "samples": args.samples,
+            "seed": 7,
+            "set": {"simulation.duration": args.duration},
+            "vary": {
+                "plant.disturbance_scale": {"uniform": [0.0, 3.0]},
+                "plant.friction_scale": {"uniform": [0.5, 1.5]},
+            },
+        }
+    )
 
     def progress(done, total):
         print(f"\r{done}/{total} rows", end="", flush=True)
@@ -50,8 +60,10 @@ def main() -> None:
     print(f"{'controller':<10} {'rows':>5} {'median [mm]':>12} {'p95 [mm]':>9} {'worst [mm]':>11}")
     for name, entry in summary["controllers"].items():
         error = entry["rms_error_after_2s"]
-        print(f"{name:<10} {entry['rows']:>5} {1e3 * error['median']:>12.3f} {1e3 * error['p95']:>9.3f} "
-              f"{1e3 * error['max']:>11.3f}")
+        print(
+            f"{name:<10} {entry['rows']:>5} {1e3 * error['median']:>12.3f} {1e3 * error['p95']:>9.3f} "
+            f"{1e3 * error['max']:>11.3f}"
+        )
     print("rerun the worst taskpd sample:", summary["controllers"]["taskpd"]["worst"]["command"])
 
 

@@ -24,8 +24,17 @@ TABLE_COLUMNS = (
     ("saturated_fraction", 100.0),
     ("final_rho_hat", 1.0),
 )
-HEADERS = ("run", "status", "rms e [mm]", "rms e t>=2s [mm]", "max e [mm]", "rms tau [N m]",
-           "chatter [N m]", "saturated [%]", "rho-hat end")
+HEADERS = (
+    "run",
+    "status",
+    "rms e [mm]",
+    "rms e t>=2s [mm]",
+    "max e [mm]",
+    "rms tau [N m]",
+    "chatter [N m]",
+    "saturated [%]",
+    "rho-hat end",
+)
 
 
 ORIENTATION_COLUMN = ("rms_orientation_error_after_2s", 1e3)
@@ -54,8 +63,9 @@ def format_table(rows: list[tuple[str, dict]]) -> str:
                 row.append("-" if value is None else f"{value * scale:.4g}")
         cells.append(row)
     widths = [max(len(r[i]) for r in cells) for i in range(len(headers))]
-    lines = ["  ".join(c.rjust(w) if i else c.ljust(w) for i, (c, w) in enumerate(zip(r, widths)))
-             for r in cells]
+    lines = [
+        "  ".join(c.rjust(w) if i else c.ljust(w) for i, (c, w) in enumerate(zip(r, widths))) for r in cells
+    ]
     lines.insert(1, "  ".join("-" * w for w in widths))
     return "\n".join(lines)
 
@@ -103,8 +113,10 @@ def _controller_choice(text: str) -> str:
 
     if text in CONTROLLER_KINDS or CLASS_PATTERN.fullmatch(text):
         return text
-    raise argparse.ArgumentTypeError(f"{text!r} is not one of {', '.join(CONTROLLER_KINDS)} nor a class as "
-                                     "file.py:Class or package.module:Class")
+    raise argparse.ArgumentTypeError(
+        f"{text!r} is not one of {', '.join(CONTROLLER_KINDS)} nor a class as "
+        "file.py:Class or package.module:Class"
+    )
 
 
 def controller_change(choice: str) -> dict:
@@ -150,8 +162,11 @@ def _run_into(args, config, out: Path) -> int:
     from .config import controller_label
 
     if not args.quiet:
-        print(f"running {config.name} with controller {controller_label(config)!r} "
-              f"for {config.simulation.duration:g} s ...", file=sys.stderr)
+        print(
+            f"running {config.name} with controller {controller_label(config)!r} "
+            f"for {config.simulation.duration:g} s ...",
+            file=sys.stderr,
+        )
     # the figures' process is forked now, so that it imports matplotlib while the run simulates
     with Drawing(plots=not args.no_plots, animation=not args.no_animation) as drawing:
         return _simulate_and_write(args, config, out, drawing)
@@ -187,8 +202,11 @@ def _simulate_and_write(args, config, out: Path, drawing: Drawing) -> int:
             for verdict in metrics["warnings"]:
                 print(f"warning: {verdict}", file=sys.stderr)
             print(format_table([(str(written), metrics)]))
-            print(f"simulated {metrics['simulated_seconds']:.2f} s in {metrics['wall_seconds']:.2f} s "
-                  f"wall; results in {written}/", file=sys.stderr)
+            print(
+                f"simulated {metrics['simulated_seconds']:.2f} s in {metrics['wall_seconds']:.2f} s "
+                f"wall; results in {written}/",
+                file=sys.stderr,
+            )
         if viewer is not None:
             from .viewer import draw_run
 
@@ -206,8 +224,10 @@ def _simulate_and_write(args, config, out: Path, drawing: Drawing) -> int:
 def _serve_until_interrupted(viewer, seconds: float | None = None) -> None:
     import time
 
-    print(f"viewer at {viewer.web_url} (127.0.0.1 only unless --host says otherwise); "
-          "Ctrl-C to stop", file=sys.stderr)
+    print(
+        f"viewer at {viewer.web_url} (127.0.0.1 only unless --host says otherwise); Ctrl-C to stop",
+        file=sys.stderr,
+    )
     end = None if seconds is None else time.monotonic() + seconds
     try:
         while end is None or time.monotonic() < end:
@@ -250,8 +270,12 @@ def cmd_view(args) -> int:
 def _bar(done: int, total: int, text: str) -> None:
     """One progress line on stderr, redrawn in place."""
     filled = int(30 * done / max(total, 1))
-    print(f"\r[{'#' * filled}{' ' * (30 - filled)}] {done}/{total} {text}   ", end="", file=sys.stderr,
-          flush=True)
+    print(
+        f"\r[{'#' * filled}{' ' * (30 - filled)}] {done}/{total} {text}   ",
+        end="",
+        file=sys.stderr,
+        flush=True,
+    )
 
 
 def _resumable(work, kept: str):
@@ -280,8 +304,11 @@ def cmd_sweep(args) -> int:
         if not started:  # the sweep validated and its cluster is up
             started.append(time.monotonic())
             where = args.scheduler or f"a local cluster of {args.workers or 'one worker per core'}"
-            print(f"sweep {spec.name}: {spec.size} samples x {len(spec.controllers)} controllers on "
-                  f"{where}; {done} of {total} rows already done", file=sys.stderr)
+            print(
+                f"sweep {spec.name}: {spec.size} samples x {len(spec.controllers)} controllers on "
+                f"{where}; {done} of {total} rows already done",
+                file=sys.stderr,
+            )
         if len(started) == 1:
             started.append(done)  # rows already there when the sweep started
         elapsed = time.monotonic() - started[0]
@@ -290,8 +317,10 @@ def cmd_sweep(args) -> int:
         _bar(done, total, f"rows, {rate:.2f}/s, ETA {eta}")
 
     started: list[float] = []
-    counts = _resumable(lambda: run_sweep(spec, out, args.workers, args.scheduler, args.overwrite, progress),
-                        f"sweep interrupted; the rows written so far are in {out}/results")
+    counts = _resumable(
+        lambda: run_sweep(spec, out, args.workers, args.scheduler, args.overwrite, progress),
+        f"sweep interrupted; the rows written so far are in {out}/results",
+    )
     if counts is None:
         return 130
     if started:
@@ -320,8 +349,11 @@ def cmd_sweep(args) -> int:
         for controller, entry in summary["controllers"].items():
             if "worst" in entry:
                 print(f"worst {controller}: sample {entry['worst']['sample']}: {entry['worst']['command']}")
-        print(f"{counts['computed']} rows computed, {counts['skipped']} already there; results in "
-              f"{out}/results (pandas.read_parquet), summary in {out}/summary.json", file=sys.stderr)
+        print(
+            f"{counts['computed']} rows computed, {counts['skipped']} already there; results in "
+            f"{out}/results (pandas.read_parquet), summary in {out}/summary.json",
+            file=sys.stderr,
+        )
     return 0
 
 
@@ -337,8 +369,11 @@ def _sweep_claim(args, spec) -> tuple[list, tuple[float, float] | None]:
         raise ConfigError("--epsilon", "give --epsilon and --beta together (the claim and its confidence)")
     if args.epsilon is None:
         if properties:
-            raise ConfigError("--require", "needs --epsilon and --beta: the claim P(fail) <= EPSILON with "
-                              "confidence 1 - BETA that the sweep certifies")
+            raise ConfigError(
+                "--require",
+                "needs --epsilon and --beta: the claim P(fail) <= EPSILON with "
+                "confidence 1 - BETA that the sweep certifies",
+            )
         return properties, None
     if not properties:
         raise ConfigError("--epsilon", "certifies the properties of --require; give at least one")
@@ -346,9 +381,12 @@ def _sweep_claim(args, spec) -> tuple[list, tuple[float, float] | None]:
     needed = samples_needed(args.epsilon, args.beta, args.failures)
     if spec.samples < needed and not args.allow_small:
         cell = " per grid point" if spec.grid_keys else ""
-        raise ConfigError("samples", f"P(fail) <= {args.epsilon:g} with confidence {1 - args.beta:g} needs "
-                          f"N >= {needed} samples{cell} with at most {args.failures} failures; the sweep "
-                          f"draws {spec.samples}: raise samples, or --allow-small to report the bound anyway")
+        raise ConfigError(
+            "samples",
+            f"P(fail) <= {args.epsilon:g} with confidence {1 - args.beta:g} needs "
+            f"N >= {needed} samples{cell} with at most {args.failures} failures; the sweep "
+            f"draws {spec.samples}: raise samples, or --allow-small to report the bound anyway",
+        )
     return properties, (args.epsilon, args.beta)
 
 
@@ -375,16 +413,27 @@ def cmd_falsify(args) -> int:
     """Search each controller's worst plant in the sweep file's box, at one budget."""
     from .falsify import FalsifySpec, run_falsify
 
-    spec = FalsifySpec(args.sweep, [c.strip() for c in args.controllers.split(",") if c.strip()],
-                       args.require, args.budget, args.seed, args.margin)
-    progress, started = _simulations_bar(args.quiet, lambda done, total: (
-        f"falsify {args.sweep}: {', '.join(spec.controllers)}, {spec.budget} simulations each and as many "
-        f"for random search; {done} of {total} already done"))
+    spec = FalsifySpec(
+        args.sweep,
+        [c.strip() for c in args.controllers.split(",") if c.strip()],
+        args.require,
+        args.budget,
+        args.seed,
+        args.margin,
+    )
+    progress, started = _simulations_bar(
+        args.quiet,
+        lambda done, total: (
+            f"falsify {args.sweep}: {', '.join(spec.controllers)}, {spec.budget} simulations each and as "
+            f"many for random search; {done} of {total} already done"
+        ),
+    )
 
     out = Path(args.out)
     summary = _resumable(
         lambda: run_falsify(spec, out, args.workers, args.scheduler, args.overwrite, progress),
-        f"search interrupted; the plants simulated so far are in {out}/history")
+        f"search interrupted; the plants simulated so far are in {out}/history",
+    )
     if summary is None:
         return 130
     if started:
@@ -393,13 +442,17 @@ def cmd_falsify(args) -> int:
         for name, entry in summary["controllers"].items():
             worst, baseline = entry["worst"], entry["random_baseline"]
             verdict = "FALSIFIED" if entry["falsified"] else "not falsified"
-            print(f"{name}: {verdict} in {entry['simulations']} simulations; least margin "
-                  f"{worst['margin']:.4g} (random search: {baseline['worst']['margin']:.4g}); worst plant: "
-                  f"{worst['command']}")
+            print(
+                f"{name}: {verdict} in {entry['simulations']} simulations; least margin "
+                f"{worst['margin']:.4g} (random search: {baseline['worst']['margin']:.4g}); worst plant: "
+                f"{worst['command']}"
+            )
         for name, margin in summary.get("margin", {}).items():
             print(format_margin(name, margin))
-        print(f"summary in {out}/summary.json, history in {out}/history, {out}/falsification.csv",
-              file=sys.stderr)
+        print(
+            f"summary in {out}/summary.json, history in {out}/history, {out}/falsification.csv",
+            file=sys.stderr,
+        )
     if args.keep_worst:
         from .falsify import keep_worst
 
@@ -426,22 +479,29 @@ def format_tuning(summary: dict) -> str:
     """Each controller's best setting under the constraints: errors on the training and the
     held-out samples, torque, chatter, and the bounds it sits on.
     """
-    lines = [f"{'controller':14s} {'train e [mm]':>12s} {'held-out e [mm]':>15s} {'rms tau':>8s} "
-             f"{'chatter':>8s}  setting"]
+    lines = [
+        f"{'controller':14s} {'train e [mm]':>12s} {'held-out e [mm]':>15s} {'rms tau':>8s} "
+        f"{'chatter':>8s}  setting"
+    ]
     for name, entry in summary["controllers"].items():
         best = entry["best"]
         if best is None:
             lines.append(f"{name:14s} {entry['note']}")
             continue
         held_out = best["validation"].get("rms_error_after_2s")
-        settings = ", ".join(f"{k} = {v[0] if isinstance(v, list) else v:.4g}"
-                             for k, v in best["params"].items())
-        lines.append(f"{name:14s} {1e3 * best['train']['rms_error_after_2s']:12.4g} "
-                     f"{'-' if held_out is None else f'{1e3 * held_out:.4g}':>15s} "
-                     f"{best['train']['rms_torque']:8.3f} {best['train']['torque_chatter']:8.4f}  {settings}")
+        settings = ", ".join(
+            f"{k} = {v[0] if isinstance(v, list) else v:.4g}" for k, v in best["params"].items()
+        )
+        lines.append(
+            f"{name:14s} {1e3 * best['train']['rms_error_after_2s']:12.4g} "
+            f"{'-' if held_out is None else f'{1e3 * held_out:.4g}':>15s} "
+            f"{best['train']['rms_torque']:8.3f} {best['train']['torque_chatter']:8.4f}  {settings}"
+        )
         for b in best["at_bound"]:
-            lines.append(f"{'':14s} at the {b['side']} bound of {b['param']} ({b['bound']:.4g})"
-                         + (f": {b['physical']}" if b["physical"] else ""))
+            lines.append(
+                f"{'':14s} at the {b['side']} bound of {b['param']} ({b['bound']:.4g})"
+                + (f": {b['physical']}" if b["physical"] else "")
+            )
     return "\n".join(lines)
 
 
@@ -451,25 +511,40 @@ def cmd_tune(args) -> int:
 
     from .tune import TuneSpec, run_tune
 
-    spec = TuneSpec(args.target, [c.strip() for c in args.controllers.split(",") if c.strip()], args.budget,
-                    args.train_samples, args.validation,
-                    math.inf if args.max_rms_torque is None else args.max_rms_torque,
-                    1.0 if args.max_saturated is None else args.max_saturated, args.seed)
-    progress, started = _simulations_bar(args.quiet, lambda done, total: (
-        f"tune {args.target}: {', '.join(spec.controllers)}, {spec.budget} simulations each ({spec.trials} "
-        f"settings x {spec.train_samples} samples); {done} of {total} already done"))
+    spec = TuneSpec(
+        args.target,
+        [c.strip() for c in args.controllers.split(",") if c.strip()],
+        args.budget,
+        args.train_samples,
+        args.validation,
+        math.inf if args.max_rms_torque is None else args.max_rms_torque,
+        1.0 if args.max_saturated is None else args.max_saturated,
+        args.seed,
+    )
+    progress, started = _simulations_bar(
+        args.quiet,
+        lambda done, total: (
+            f"tune {args.target}: {', '.join(spec.controllers)}, {spec.budget} simulations each "
+            f"({spec.trials} settings x {spec.train_samples} samples); {done} of {total} already done"
+        ),
+    )
 
     out = Path(args.out)
-    summary = _resumable(lambda: run_tune(spec, out, args.workers, args.scheduler, args.overwrite, progress),
-                         f"tuning interrupted; the settings tried so far are in {out}/trials")
+    summary = _resumable(
+        lambda: run_tune(spec, out, args.workers, args.scheduler, args.overwrite, progress),
+        f"tuning interrupted; the settings tried so far are in {out}/trials",
+    )
     if summary is None:
         return 130
     if started:
         print(file=sys.stderr)
     if not args.quiet:
         print(format_tuning(summary))
-        print(f"summary in {out}/summary.json, settings in {out}/trials (pandas.read_parquet), Pareto fronts "
-              f"in {out}/pareto.png", file=sys.stderr)
+        print(
+            f"summary in {out}/summary.json, settings in {out}/trials (pandas.read_parquet), Pareto fronts "
+            f"in {out}/pareto.png",
+            file=sys.stderr,
+        )
     return 0
 
 
@@ -559,8 +634,10 @@ def cmd_robots(args) -> int:
     if args.all:
         print(f"\n{len(names) - failed} of {len(names)} load.")
     else:
-        print("\nAlso: planar<N> for N up to 300 (generated chain), any example-robot-data name "
-              "(nnrobust robots --all), a URDF file.")
+        print(
+            "\nAlso: planar<N> for N up to 300 (generated chain), any example-robot-data name "
+            "(nnrobust robots --all), a URDF file."
+        )
     return 1 if failed and not args.all else 0
 
 
@@ -596,8 +673,12 @@ def cmd_compare(args) -> int:
         print(f"\nchanges from {rows[0][0]}:")
         print(delta_table(rows))
         changed = verdict_changes(rows, properties)
-        print("\nverdicts that change:" if changed else "\nno verdict changes"
-              + (f" ({', '.join(p.text for p in properties)} and the warnings)" if properties else ""))
+        print(
+            "\nverdicts that change:"
+            if changed
+            else "\nno verdict changes"
+            + (f" ({', '.join(p.text for p in properties)} and the warnings)" if properties else "")
+        )
         for line in changed:
             print(f"  {line}")
 
@@ -619,48 +700,71 @@ def build_parser() -> argparse.ArgumentParser:
         prog="nnrobust",
         description="Robust neural-network control of redundant manipulators: simulate the "
         "paper's experiments or your own, and compare controllers.",
-        epilog=EXIT_CODES, formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog=EXIT_CODES,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--version", action="version", version=f"nnrobust {__version__}")
     sub = parser.add_subparsers(dest="command")
 
-    run = sub.add_parser("run", help="run a preset or an experiment file (TOML)",
-                         description="Simulate a preset or a TOML experiment file and write a run "
-                         "folder: config.toml, result.npz, metrics.json, plots/, animation.html.")
+    run = sub.add_parser(
+        "run",
+        help="run a preset or an experiment file (TOML)",
+        description="Simulate a preset or a TOML experiment file and write a run "
+        "folder: config.toml, result.npz, metrics.json, plots/, animation.html.",
+    )
     run.add_argument("target", help="preset name (see 'nnrobust presets') or path to a .toml file")
     run.add_argument("--out", help="run folder (default out/NAME-CONTROLLER)")
-    run.add_argument("--controller", type=_controller_choice,
-                     metavar="{" + ",".join(CONTROLLERS) + ",FILE.py:CLASS}",
-                     help="override the controller: nn (eq. 9 + NN compensator), no-u0 "
-                     "(eq. 9 without u_0), computed-torque (eq. 9 with the true model and friction), "
-                     "sliding-mode (eq. 9 + fixed-gain boundary-layer sliding mode), pd (task-space "
-                     "PD + gravity compensation), or your own class as file.py:Class or package.module:Class "
-                     "(its parameters from --set controller.params.NAME=VALUE; docs/extending.md)")
+    run.add_argument(
+        "--controller",
+        type=_controller_choice,
+        metavar="{" + ",".join(CONTROLLERS) + ",FILE.py:CLASS}",
+        help="override the controller: nn (eq. 9 + NN compensator), no-u0 "
+        "(eq. 9 without u_0), computed-torque (eq. 9 with the true model and friction), "
+        "sliding-mode (eq. 9 + fixed-gain boundary-layer sliding mode), pd (task-space "
+        "PD + gravity compensation), or your own class as file.py:Class or package.module:Class "
+        "(its parameters from --set controller.params.NAME=VALUE; docs/extending.md)",
+    )
     run.add_argument("--duration", type=float, help="override the simulated time [s]")
-    run.add_argument("--backend", choices=("auto", "compiled", "hybrid", "python"),
-                     help="simulation loop: compiled (C++), hybrid (the compiled plant calling a Python "
-                     "controller once per period), python (the reference) or auto (compiled when the "
-                     "experiment has a compiled twin, hybrid for a custom controller; the default)")
-    run.add_argument("--set", action="append", metavar="KEY=VALUE",
-                     help="set one key of the experiment (dotted, TOML value), e.g. --set nn.sigma=0.5 "
-                     "--set 'controller.Kp=[100.0]'; repeatable, checked like an experiment file")
+    run.add_argument(
+        "--backend",
+        choices=("auto", "compiled", "hybrid", "python"),
+        help="simulation loop: compiled (C++), hybrid (the compiled plant calling a Python "
+        "controller once per period), python (the reference) or auto (compiled when the "
+        "experiment has a compiled twin, hybrid for a custom controller; the default)",
+    )
+    run.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY=VALUE",
+        help="set one key of the experiment (dotted, TOML value), e.g. --set nn.sigma=0.5 "
+        "--set 'controller.Kp=[100.0]'; repeatable, checked like an experiment file",
+    )
     run.add_argument("--overwrite", action="store_true", help="replace an existing run folder")
     run.add_argument("--no-plots", action="store_true", help="skip the figures")
-    run.add_argument("--no-animation", action="store_true",
-                     help="skip animation.html (the 3-D replay; a few MB for meshed robots)")
-    run.add_argument("--quiet", action="store_true",
-                     help="print nothing but errors (no progress bar, no summary table)")
-    run.add_argument("--view", action="store_true",
-                     help="watch the arm live in meshcat while it runs, then replay the run until "
-                     "Ctrl-C")
+    run.add_argument(
+        "--no-animation",
+        action="store_true",
+        help="skip animation.html (the 3-D replay; a few MB for meshed robots)",
+    )
+    run.add_argument(
+        "--quiet", action="store_true", help="print nothing but errors (no progress bar, no summary table)"
+    )
+    run.add_argument(
+        "--view",
+        action="store_true",
+        help="watch the arm live in meshcat while it runs, then replay the run until Ctrl-C",
+    )
     _viewer_options(run)
     run.set_defaults(func=cmd_run)
 
-    plot = sub.add_parser("plot", help="draw the figures and animation of run folders again",
-                          description="Draw plots/ and animation.html of run folders from their "
-                          "result.npz, as 'nnrobust run' draws them: after a drawing that was "
-                          "interrupted or skipped (--no-plots, --no-animation), or to redraw after an "
-                          "upgrade. The arrays and metrics are not touched.")
+    plot = sub.add_parser(
+        "plot",
+        help="draw the figures and animation of run folders again",
+        description="Draw plots/ and animation.html of run folders from their "
+        "result.npz, as 'nnrobust run' draws them: after a drawing that was "
+        "interrupted or skipped (--no-plots, --no-animation), or to redraw after an "
+        "upgrade. The arrays and metrics are not touched.",
+    )
     plot.add_argument("runs", nargs="+", help="run folders written by 'nnrobust run'")
     plot.add_argument("--no-plots", action="store_true", help="leave plots/ as it is")
     plot.add_argument("--no-animation", action="store_true", help="leave animation.html as it is")
@@ -669,121 +773,205 @@ def build_parser() -> argparse.ArgumentParser:
     presets = sub.add_parser("presets", help="list the shipped presets")
     presets.set_defaults(func=cmd_presets)
 
-    robots = sub.add_parser("robots", help="list the arms known to work (n, chain, task frame)",
-                            description="Load every arm nnrobust knows (the paper's arm, a generated "
-                            "planar chain and example-robot-data arms) and print its joint count, "
-                            "default chain and task frame. With --all: every robot example-robot-data "
-                            "ships, loaded or refused with the reason (docs/robots.md).")
-    robots.add_argument("--all", action="store_true",
-                        help="every example-robot-data robot, not only the arms known to work")
+    robots = sub.add_parser(
+        "robots",
+        help="list the arms known to work (n, chain, task frame)",
+        description="Load every arm nnrobust knows (the paper's arm, a generated "
+        "planar chain and example-robot-data arms) and print its joint count, "
+        "default chain and task frame. With --all: every robot example-robot-data "
+        "ships, loaded or refused with the reason (docs/robots.md).",
+    )
+    robots.add_argument(
+        "--all", action="store_true", help="every example-robot-data robot, not only the arms known to work"
+    )
     robots.set_defaults(func=cmd_robots)
 
-    compare = sub.add_parser("compare", help="compare run folders: metrics table and plots",
-                             description="Print the metrics of several run folders side by side "
-                             "(labelled by folder name, or by as much of the path as tells them "
-                             "apart), each metric's change from the first run, and the verdicts "
-                             "(status, warnings, --require properties) that differ; with --out, draw "
-                             "their paths, errors and torques in one figure. The same experiment run "
-                             "with --set plant.engine=mujoco gives the sim-to-sim gap (docs/engines.md).")
+    compare = sub.add_parser(
+        "compare",
+        help="compare run folders: metrics table and plots",
+        description="Print the metrics of several run folders side by side "
+        "(labelled by folder name, or by as much of the path as tells them "
+        "apart), each metric's change from the first run, and the verdicts "
+        "(status, warnings, --require properties) that differ; with --out, draw "
+        "their paths, errors and torques in one figure. The same experiment run "
+        "with --set plant.engine=mujoco gives the sim-to-sim gap (docs/engines.md).",
+    )
     compare.add_argument("runs", nargs="+", help="run folders written by 'nnrobust run'")
     compare.add_argument("--out", help="folder for the comparison figure (PNG and SVG)")
-    compare.add_argument("--require", action="append", metavar="EXPR",
-                         help="a property each run is checked against, METRIC OP VALUE (e.g. "
-                         "'rms_error_after_2s<=0.05'); repeatable; shown where runs disagree")
+    compare.add_argument(
+        "--require",
+        action="append",
+        metavar="EXPR",
+        help="a property each run is checked against, METRIC OP VALUE (e.g. "
+        "'rms_error_after_2s<=0.05'); repeatable; shown where runs disagree",
+    )
     compare.set_defaults(func=cmd_compare)
 
-    view = sub.add_parser("view", help="replay a run folder in the meshcat viewer (browser)",
-                          description="Serve the run's 3-D replay (arm from the URDF, desired path, "
-                          "end-effector trace) with meshcat and print the address to open. The "
-                          "run folder's animation.html is the same replay as a file.")
+    view = sub.add_parser(
+        "view",
+        help="replay a run folder in the meshcat viewer (browser)",
+        description="Serve the run's 3-D replay (arm from the URDF, desired path, "
+        "end-effector trace) with meshcat and print the address to open. The "
+        "run folder's animation.html is the same replay as a file.",
+    )
     view.add_argument("run", help="run folder written by 'nnrobust run'")
     view.add_argument("--open", action="store_true", help="open the page in the default browser")
     view.add_argument("--seconds", type=float, help="stop after this many seconds (default: Ctrl-C)")
     _viewer_options(view)
     view.set_defaults(func=cmd_view)
 
-    sweep = sub.add_parser("sweep", help="run a robustness sweep (Monte Carlo over the uncertainty set)",
-                           description="Run one experiment over many samples of model error, friction, "
-                           "disturbance, gains or seeds with several controllers, on dask.distributed: "
-                           "a local cluster on 127.0.0.1 by default, or an existing scheduler. Re-running "
-                           "the same command into the same folder computes only the missing rows "
-                           "(docs/robustness.md).")
-    sweep.add_argument("sweep", help="sweep file (TOML), or a shipped study: "
-                       f"{', '.join(shipped_sweeps())}")
+    sweep = sub.add_parser(
+        "sweep",
+        help="run a robustness sweep (Monte Carlo over the uncertainty set)",
+        description="Run one experiment over many samples of model error, friction, "
+        "disturbance, gains or seeds with several controllers, on dask.distributed: "
+        "a local cluster on 127.0.0.1 by default, or an existing scheduler. Re-running "
+        "the same command into the same folder computes only the missing rows "
+        "(docs/robustness.md).",
+    )
+    sweep.add_argument("sweep", help=f"sweep file (TOML), or a shipped study: {', '.join(shipped_sweeps())}")
     sweep.add_argument("--out", required=True, help="sweep folder (results/, sweep.toml, summary.json)")
     sweep.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
     sweep.add_argument("--scheduler", help="address of an existing dask scheduler, e.g. tcp://host:8786")
-    sweep.add_argument("--overwrite", action="store_true",
-                       help="replace the results of a different sweep in --out")
-    sweep.add_argument("--keep-worst", type=int, default=0, metavar="K",
-                       help="write full run folders (with animation) of the K worst samples of each "
-                       "controller into DIR/worst/")
+    sweep.add_argument(
+        "--overwrite", action="store_true", help="replace the results of a different sweep in --out"
+    )
+    sweep.add_argument(
+        "--keep-worst",
+        type=int,
+        default=0,
+        metavar="K",
+        help="write full run folders (with animation) of the K worst samples of each "
+        "controller into DIR/worst/",
+    )
     sweep.add_argument("--quiet", action="store_true", help="print nothing but errors")
-    sweep.add_argument("--require", action="append", metavar="EXPR", default=[],
-                       help="a property every run should have, METRIC OP VALUE (repeatable), e.g. "
-                       "'rms_error_after_2s<=0.05', 'runaway==false'; with --epsilon and --beta, "
-                       "summary.json gets a certificate per controller (docs/robustness.md)")
+    sweep.add_argument(
+        "--require",
+        action="append",
+        metavar="EXPR",
+        default=[],
+        help="a property every run should have, METRIC OP VALUE (repeatable), e.g. "
+        "'rms_error_after_2s<=0.05', 'runaway==false'; with --epsilon and --beta, "
+        "summary.json gets a certificate per controller (docs/robustness.md)",
+    )
     sweep.add_argument("--epsilon", type=float, help="claim P(a property fails) <= EPSILON ...")
     sweep.add_argument("--beta", type=float, help="... with confidence 1 - BETA (one-sided Clopper-Pearson)")
-    sweep.add_argument("--failures", type=int, default=0, metavar="K",
-                       help="plan the sample size for up to K failures (default 0)")
-    sweep.add_argument("--allow-small", action="store_true",
-                       help="run a sweep too small to prove the claim, and report its bound anyway")
+    sweep.add_argument(
+        "--failures",
+        type=int,
+        default=0,
+        metavar="K",
+        help="plan the sample size for up to K failures (default 0)",
+    )
+    sweep.add_argument(
+        "--allow-small",
+        action="store_true",
+        help="run a sweep too small to prove the claim, and report its bound anyway",
+    )
     sweep.set_defaults(func=cmd_sweep)
 
-    falsify = sub.add_parser("falsify", help="search the worst plant of an uncertainty box",
-                             description="Search the sweep file's [vary] box (uniform and loguniform ranges) "
-                             "for the plant on which each controller most violates the --require properties: "
-                             "a Sobol start, then CMA-ES with restarts, at one budget of simulations per "
-                             "controller on dask.distributed, with uniform random search at the same budget "
-                             "as the baseline. Re-running the same command into the same folder resumes "
-                             "(docs/falsification.md).")
+    falsify = sub.add_parser(
+        "falsify",
+        help="search the worst plant of an uncertainty box",
+        description="Search the sweep file's [vary] box (uniform and loguniform ranges) "
+        "for the plant on which each controller most violates the --require properties: "
+        "a Sobol start, then CMA-ES with restarts, at one budget of simulations per "
+        "controller on dask.distributed, with uniform random search at the same budget "
+        "as the baseline. Re-running the same command into the same folder resumes "
+        "(docs/falsification.md).",
+    )
     falsify.add_argument("sweep", help="sweep file (TOML) or shipped study whose [vary] ranges are the box")
-    falsify.add_argument("--controllers", required=True, help="comma-separated controller kinds, custom "
-                         "classes as file.py:Class, or the sweep file's custom entries")
-    falsify.add_argument("--require", action="append", required=True, metavar="EXPR",
-                         help="a property to falsify, METRIC OP VALUE (repeatable), e.g. "
-                         "'rms_error_after_2s<=0.05'")
-    falsify.add_argument("--budget", type=int, required=True, help="simulations per controller (and as many "
-                         "for its random baseline)")
+    falsify.add_argument(
+        "--controllers",
+        required=True,
+        help="comma-separated controller kinds, custom "
+        "classes as file.py:Class, or the sweep file's custom entries",
+    )
+    falsify.add_argument(
+        "--require",
+        action="append",
+        required=True,
+        metavar="EXPR",
+        help="a property to falsify, METRIC OP VALUE (repeatable), e.g. 'rms_error_after_2s<=0.05'",
+    )
+    falsify.add_argument(
+        "--budget",
+        type=int,
+        required=True,
+        help="simulations per controller (and as many for its random baseline)",
+    )
     falsify.add_argument("--seed", type=int, default=0, help="seed of the search (default 0)")
-    falsify.add_argument("--out", required=True, help="folder (falsify.toml, history/, summary.json, "
-                         "falsification.csv, convergence.png)")
+    falsify.add_argument(
+        "--out",
+        required=True,
+        help="folder (falsify.toml, history/, summary.json, falsification.csv, convergence.png)",
+    )
     falsify.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
     falsify.add_argument("--scheduler", help="address of an existing dask scheduler")
     falsify.add_argument("--overwrite", action="store_true", help="replace a different search in --out")
-    falsify.add_argument("--keep-worst", action="store_true",
-                         help="rerun each controller's worst plant into OUT/worst/CONTROLLER as a full run "
-                         "folder (arrays, metrics, plots, animation)")
-    falsify.add_argument("--margin", action="store_true",
-                         help="also find each controller's robustness margin: the largest scale s of the box "
-                         "about its centre with no violation found, by doubling then bisection on s, each "
-                         "scale searched at a quarter of the budget (docs/falsification.md)")
+    falsify.add_argument(
+        "--keep-worst",
+        action="store_true",
+        help="rerun each controller's worst plant into OUT/worst/CONTROLLER as a full run "
+        "folder (arrays, metrics, plots, animation)",
+    )
+    falsify.add_argument(
+        "--margin",
+        action="store_true",
+        help="also find each controller's robustness margin: the largest scale s of the box "
+        "about its centre with no violation found, by doubling then bisection on s, each "
+        "scale searched at a quarter of the budget (docs/falsification.md)",
+    )
     falsify.add_argument("--quiet", action="store_true", help="print nothing but errors")
     falsify.set_defaults(func=cmd_falsify)
 
-    tune = sub.add_parser("tune", help="tune controllers at an equal budget of simulations",
-                          description="Tune each controller with the same optimiser (Optuna's TPE, "
-                          "minimising the RMS error after 2 s under the constraints; torque and chatter are "
-                          "recorded for the Pareto fronts) over a search space derived from the arm, at the "
-                          "same budget of simulations, on the same samples, under the same constraints; "
-                          "then check each best setting on held-out samples. Re-running the same command "
-                          "into the same folder resumes (docs/tuning.md).")
-    tune.add_argument("target", help="a preset, an experiment file, or a sweep file whose [vary] "
-                      "distributions are the uncertainty the settings are tuned over")
-    tune.add_argument("--controllers", required=True, help="comma-separated controller kinds, e.g. "
-                      "nn,no-u0,pd,sliding-mode; a custom class as file.py:Class (it declares its "
-                      "search_space); or the names of a sweep file's custom entries")
+    tune = sub.add_parser(
+        "tune",
+        help="tune controllers at an equal budget of simulations",
+        description="Tune each controller with the same optimiser (Optuna's TPE, "
+        "minimising the RMS error after 2 s under the constraints; torque and chatter are "
+        "recorded for the Pareto fronts) over a search space derived from the arm, at the "
+        "same budget of simulations, on the same samples, under the same constraints; "
+        "then check each best setting on held-out samples. Re-running the same command "
+        "into the same folder resumes (docs/tuning.md).",
+    )
+    tune.add_argument(
+        "target",
+        help="a preset, an experiment file, or a sweep file whose [vary] "
+        "distributions are the uncertainty the settings are tuned over",
+    )
+    tune.add_argument(
+        "--controllers",
+        required=True,
+        help="comma-separated controller kinds, e.g. "
+        "nn,no-u0,pd,sliding-mode; a custom class as file.py:Class (it declares its "
+        "search_space); or the names of a sweep file's custom entries",
+    )
     tune.add_argument("--budget", type=int, required=True, help="simulations per controller (training)")
-    tune.add_argument("--out", required=True,
-                      help="tuning folder (tune.toml, trials/, summary.json, pareto.png)")
+    tune.add_argument(
+        "--out", required=True, help="tuning folder (tune.toml, trials/, summary.json, pareto.png)"
+    )
     tune.add_argument("--max-rms-torque", type=float, metavar="X", help="constraint: RMS torque <= X [N m]")
-    tune.add_argument("--max-saturated", type=float, metavar="F",
-                      help="constraint: at most this fraction of steps saturated (0 to 1)")
-    tune.add_argument("--train-samples", type=int, default=1, metavar="S",
-                      help="samples (noise seeds, uncertainty draws) each setting runs on (default 1)")
-    tune.add_argument("--validation", type=int, default=4, metavar="K",
-                      help="held-out samples each best setting is checked on (default 4)")
+    tune.add_argument(
+        "--max-saturated",
+        type=float,
+        metavar="F",
+        help="constraint: at most this fraction of steps saturated (0 to 1)",
+    )
+    tune.add_argument(
+        "--train-samples",
+        type=int,
+        default=1,
+        metavar="S",
+        help="samples (noise seeds, uncertainty draws) each setting runs on (default 1)",
+    )
+    tune.add_argument(
+        "--validation",
+        type=int,
+        default=4,
+        metavar="K",
+        help="held-out samples each best setting is checked on (default 4)",
+    )
     tune.add_argument("--seed", type=int, default=0, help="seed of the optimiser and the samples")
     tune.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
     tune.add_argument("--scheduler", help="address of an existing dask scheduler, e.g. tcp://host:8786")
@@ -791,9 +979,12 @@ def build_parser() -> argparse.ArgumentParser:
     tune.add_argument("--quiet", action="store_true", help="print nothing but errors")
     tune.set_defaults(func=cmd_tune)
 
-    bench = sub.add_parser("bench", help="run the benchmarks (source checkout)",
-                           description="Run the scripts in benchmarks/ (all, or those named) and "
-                           "write each one's JSON into --out; docs/benchmarks.md explains them.")
+    bench = sub.add_parser(
+        "bench",
+        help="run the benchmarks (source checkout)",
+        description="Run the scripts in benchmarks/ (all, or those named) and "
+        "write each one's JSON into --out; docs/benchmarks.md explains them.",
+    )
     bench.add_argument("names", nargs="*", help="benchmark names, e.g. step_scaling (default: all)")
     bench.add_argument("--out", default="out/bench", help="folder for the JSON files")
     bench.set_defaults(func=cmd_bench)
@@ -801,8 +992,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _viewer_options(parser) -> None:
-    parser.add_argument("--host", default="127.0.0.1",
-                        help="address the viewer listens on (default 127.0.0.1: this machine only)")
+    parser.add_argument(
+        "--host",
+        default="127.0.0.1",
+        help="address the viewer listens on (default 127.0.0.1: this machine only)",
+    )
     parser.add_argument("--port", type=int, help="viewer web port (default: first free from 7000)")
 
 

@@ -23,8 +23,10 @@ def _load():
         try:
             _MODULE = importlib.import_module("nnrobust._loop")
         except ImportError as err:
-            _REASON = (f"the compiled loop is not built ({err}); reinstall nnrobust with a C++ compiler "
-                       "(g++ and cmake) to build it")
+            _REASON = (
+                f"the compiled loop is not built ({err}); reinstall nnrobust with a C++ compiler "
+                "(g++ and cmake) to build it"
+            )
     return _MODULE
 
 
@@ -62,10 +64,15 @@ def floor_loop(model, q0, v0, steps: int, dt: float):
 # ---- the compiled closed loop ---------------------------------------------------------------------
 
 
-COMPILED_CRITERIA = {"PaperCriterion": "paper", "HalfDetManipulability": "half_det",
-                     "Manipulability": "manipulability", "JointLimitAvoidance": "joint_limits",
-                     "JointCentering": "joint_centering", "JointSmoothness": "joint_smoothness",
-                     "SphereObstacles": "obstacles"}
+COMPILED_CRITERIA = {
+    "PaperCriterion": "paper",
+    "HalfDetManipulability": "half_det",
+    "Manipulability": "manipulability",
+    "JointLimitAvoidance": "joint_limits",
+    "JointCentering": "joint_centering",
+    "JointSmoothness": "joint_smoothness",
+    "SphereObstacles": "obstacles",
+}
 """The criteria with a compiled twin, by class name."""
 DET_CRITERIA = ("paper", "half_det", "manipulability")
 """Criteria of det(J J^T): compiled for planar and position tasks (m <= 3)."""
@@ -94,17 +101,25 @@ def twin_refusal(setup) -> str:
     if is_custom(controller):
         return f"a custom controller ({type(controller).__name__}) runs in Python: --backend hybrid or python"
     checks = [
-        (type(controller) in (TaskSpaceController, TaskSpacePD),
-         f"controller.kind {config.controller.kind!r}"),
+        (
+            type(controller) in (TaskSpaceController, TaskSpacePD),
+            f"controller.kind {config.controller.kind!r}",
+        ),
         (isinstance(setup.nominal, (ThreeLinkPlanarModel, PinocchioModel)), "the nominal model"),
-        (type(setup.trajectory) in (EllipseTrajectory, PiecewisePolynomialPath, PoseTrajectory)
-         and type(getattr(setup.trajectory, "path", setup.trajectory)) in (EllipseTrajectory,
-                                                                          PiecewisePolynomialPath),
-         "the trajectory"),
+        (
+            type(setup.trajectory) in (EllipseTrajectory, PiecewisePolynomialPath, PoseTrajectory)
+            and type(getattr(setup.trajectory, "path", setup.trajectory))
+            in (EllipseTrajectory, PiecewisePolynomialPath),
+            "the trajectory",
+        ),
     ]
     compensator = getattr(controller, "compensator", None)
-    checks.append((compensator is None or type(compensator) in (NNCompensator, SlidingModeCompensator),
-                   "a custom robust term"))
+    checks.append(
+        (
+            compensator is None or type(compensator) in (NNCompensator, SlidingModeCompensator),
+            "a custom robust term",
+        )
+    )
     for ok, what in checks:
         if not ok:
             return f"{what} has no compiled twin yet"
@@ -129,11 +144,20 @@ def _plant_refusal(setup) -> str:
         (config.simulation.integrator == "rk4", f"the integrator {config.simulation.integrator!r}"),
         (setup.robot.task in ("planar", "position", "pose"), f"a {setup.robot.task!r} task"),
         (setup.plant.friction.smoothing <= 0, "a smoothed plant friction"),
-        (criterion is None or (isinstance(criterion, WeightedCriteria) and all(
-            type(c).__name__ in COMPILED_CRITERIA for c in criterion.criteria)), "a criterion"),
-        (criterion is None or setup.robot.task != "pose" or not any(
-            COMPILED_CRITERIA.get(type(c).__name__) in DET_CRITERIA for c in criterion.criteria),
-         "a manipulability criterion on a pose task"),
+        (
+            criterion is None
+            or (
+                isinstance(criterion, WeightedCriteria)
+                and all(type(c).__name__ in COMPILED_CRITERIA for c in criterion.criteria)
+            ),
+            "a criterion",
+        ),
+        (
+            criterion is None
+            or setup.robot.task != "pose"
+            or not any(COMPILED_CRITERIA.get(type(c).__name__) in DET_CRITERIA for c in criterion.criteria),
+            "a manipulability criterion on a pose task",
+        ),
     ]
     for ok, what in checks:
         if not ok:
@@ -265,8 +289,11 @@ def loop_spec(setup, duration: float):
     s.z0 = f(controller.initial_state())
     if isinstance(comp, NNCompensator):
         s.robust, s.BtP = "nn", f(comp.BtP)
-        s.basis_joint, s.basis_bias, s.law_corrected = (comp.basis_input == "joint", comp.basis.bias,
-                                                        comp.law == "corrected")
+        s.basis_joint, s.basis_bias, s.law_corrected = (
+            comp.basis_input == "joint",
+            comp.basis.bias,
+            comp.law == "corrected",
+        )
         s.basis_centers, s.basis_inv2w2 = f(comp.basis.grid), f(comp.basis.inverse_two_width_sq)
         s.F, s.gamma, s.eps_min, s.sigma = comp.F, comp.gamma, comp.eps_min, comp.sigma
     elif comp is not None:
@@ -282,8 +309,11 @@ def _prepared(setup, duration: float):
         raise NNRobustError(f"simulation.backend = 'compiled': {refusal}")
     spec = loop_spec(setup, duration)
     plant = load_model(setup.plant.model.pinocchio_model, setup.robot.task_frame)
-    nominal = (load_model(setup.nominal.model, setup.nominal.task_frame) if spec.nominal_kind == "pinocchio"
-               else None)
+    nominal = (
+        load_model(setup.nominal.model, setup.nominal.task_frame)
+        if spec.nominal_kind == "pinocchio"
+        else None
+    )
     return plant, nominal, spec
 
 
@@ -298,8 +328,12 @@ def _trace(setup, spec, out):
     t = np.arange(done) * period
     signals = {"damping": np.asarray(out.damping)[:done]}
     if spec.robust == "nn":
-        signals = {"rho_hat": np.asarray(out.rho_hat)[:done], "eps": np.asarray(out.eps)[:done],
-                   "z_norm": np.asarray(out.z_norm)[:done], **signals}
+        signals = {
+            "rho_hat": np.asarray(out.rho_hat)[:done],
+            "eps": np.asarray(out.eps)[:done],
+            "z_norm": np.asarray(out.z_norm)[:done],
+            **signals,
+        }
     message = ""
     if out.status == "diverged":
         k = out.divergence_index
@@ -312,11 +346,26 @@ def _trace(setup, spec, out):
         clear_interrupt()
     z = np.asarray(out.z)[:done] if spec.z0.size else np.zeros((done, 0))
     n = setup.plant.nq
-    recorded = {"chain": np.asarray(out.chain)[:done].reshape(done, n + 1, 3),
-                "manipulability": np.asarray(out.manipulability)[:done], "h": np.asarray(out.h)[:done]}
-    return Trace(t, np.asarray(out.q)[:done], np.asarray(out.dq)[:done], np.asarray(out.tau)[:done],
-                 np.asarray(out.tau_cmd)[:done], z, signals, out.status, message, recorded,
-                 out.friction_events, out.unresolved_events, out.refined_periods)
+    recorded = {
+        "chain": np.asarray(out.chain)[:done].reshape(done, n + 1, 3),
+        "manipulability": np.asarray(out.manipulability)[:done],
+        "h": np.asarray(out.h)[:done],
+    }
+    return Trace(
+        t,
+        np.asarray(out.q)[:done],
+        np.asarray(out.dq)[:done],
+        np.asarray(out.tau)[:done],
+        np.asarray(out.tau_cmd)[:done],
+        z,
+        signals,
+        out.status,
+        message,
+        recorded,
+        out.friction_events,
+        out.unresolved_events,
+        out.refined_periods,
+    )
 
 
 def simulate_compiled(setup, duration: float):
@@ -380,7 +429,7 @@ def simulate_hybrid(setup, duration: float):
     plant = load_model(setup.plant.model.pinocchio_model, setup.robot.task_frame)
     law = _HybridLaw(setup.controller, spec.steps, setup.plant.nq, spec.period)
     trace = _trace(setup, spec, _module().run_hybrid(plant, spec, law))
-    trace.signals = {name: values[:trace.t.size] for name, values in law.signals.items()}
+    trace.signals = {name: values[: trace.t.size] for name, values in law.signals.items()}
     return trace
 
 

@@ -275,22 +275,31 @@ asks for more than any actuator gives, and below about 1e-60 s its coefficients 
 
 def _check_extents(tc: TrajectoryConfig) -> None:
     """Path points and axes within :data:`MAX_PATH_EXTENT`, rates within :data:`MAX_PATH_RATE`."""
-    vectors = {"center": tc.center, "axis_a": tc.axis_a, "axis_b": tc.axis_b, "start": tc.start,
-               "goal": tc.goal}
+    vectors = {
+        "center": tc.center,
+        "axis_a": tc.axis_a,
+        "axis_b": tc.axis_b,
+        "start": tc.start,
+        "goal": tc.goal,
+    }
     for name, values in vectors.items():
         if values is not None and any(abs(v) > MAX_PATH_EXTENT for v in values):
             raise ConfigError(f"trajectory.{name}", f"{values} has a coordinate beyond {MAX_PATH_EXTENT:g} m")
     for i, point in enumerate(tc.waypoints or []):
         if any(abs(v) > MAX_PATH_EXTENT for v in point):
-            raise ConfigError(f"trajectory.waypoints[{i}]",
-                              f"{point} has a coordinate beyond {MAX_PATH_EXTENT:g} m")
+            raise ConfigError(
+                f"trajectory.waypoints[{i}]", f"{point} has a coordinate beyond {MAX_PATH_EXTENT:g} m"
+            )
     for name in ("omega", "rotation_omega"):
         if abs(getattr(tc, name)) > MAX_PATH_RATE:
-            raise ConfigError(f"trajectory.{name}",
-                              f"{getattr(tc, name):g} rad/s is beyond {MAX_PATH_RATE:g} rad/s")
+            raise ConfigError(
+                f"trajectory.{name}", f"{getattr(tc, name):g} rad/s is beyond {MAX_PATH_RATE:g} rad/s"
+            )
     if abs(tc.rotation_amplitude) > math.pi:
-        raise ConfigError("trajectory.rotation_amplitude",
-                          f"{tc.rotation_amplitude:g} rad is more than half a turn; at most pi")
+        raise ConfigError(
+            "trajectory.rotation_amplitude",
+            f"{tc.rotation_amplitude:g} rad is more than half a turn; at most pi",
+        )
 
 
 def _check_path(tc: TrajectoryConfig) -> None:
@@ -304,31 +313,42 @@ def _check_path(tc: TrajectoryConfig) -> None:
         return
     if tc.kind == "point_to_point":
         if tc.goal is None:
-            raise ConfigError("trajectory.goal", "a point_to_point move needs its goal, e.g. "
-                              "goal = [0.5, 0.1, 0.4]")
+            raise ConfigError(
+                "trajectory.goal", "a point_to_point move needs its goal, e.g. goal = [0.5, 0.1, 0.4]"
+            )
         if tc.start is not None and len(tc.start) != len(tc.goal):
-            raise ConfigError("trajectory.start", f"has {len(tc.start)} entries, trajectory.goal has "
-                              f"{len(tc.goal)}")
+            raise ConfigError(
+                "trajectory.start", f"has {len(tc.start)} entries, trajectory.goal has {len(tc.goal)}"
+            )
         if not tc.move_time >= MIN_MOVE_TIME:
-            raise ConfigError("trajectory.move_time",
-                              f"must be at least {MIN_MOVE_TIME:g} s, got {tc.move_time}")
+            raise ConfigError(
+                "trajectory.move_time", f"must be at least {MIN_MOVE_TIME:g} s, got {tc.move_time}"
+            )
         return
     points, times = tc.waypoints, tc.waypoint_times
     if not points or len(points) < 2:
-        raise ConfigError("trajectory.waypoints", "a waypoint path needs at least 2 points, e.g. "
-                          "waypoints = [[0.4, 0.0, 0.5], [0.4, 0.2, 0.5]]")
+        raise ConfigError(
+            "trajectory.waypoints",
+            "a waypoint path needs at least 2 points, e.g. waypoints = [[0.4, 0.0, 0.5], [0.4, 0.2, 0.5]]",
+        )
     if len(points) > MAX_WAYPOINTS:
         raise ConfigError("trajectory.waypoints", f"{len(points)} points; at most {MAX_WAYPOINTS}")
     sizes = {len(p) for p in points}
     if len(sizes) != 1:
-        raise ConfigError("trajectory.waypoints", f"every point needs as many entries; got sizes "
-                          f"{sorted(sizes)}")
+        raise ConfigError(
+            "trajectory.waypoints", f"every point needs as many entries; got sizes {sorted(sizes)}"
+        )
     if times is None or len(times) != len(points):
-        raise ConfigError("trajectory.waypoint_times", f"needs one time per waypoint ({len(points)}), got "
-                          f"{None if times is None else len(times)}")
+        raise ConfigError(
+            "trajectory.waypoint_times",
+            f"needs one time per waypoint ({len(points)}), got {None if times is None else len(times)}",
+        )
     if times[0] < 0 or any(b - a < MIN_MOVE_TIME for a, b in zip(times, times[1:])):
-        raise ConfigError("trajectory.waypoint_times", f"must start at 0 or later and increase by at least "
-                          f"{MIN_MOVE_TIME:g} s from one point to the next, got {times}")
+        raise ConfigError(
+            "trajectory.waypoint_times",
+            f"must start at 0 or later and increase by at least "
+            f"{MIN_MOVE_TIME:g} s from one point to the next, got {times}",
+        )
 
 
 @dataclass
@@ -536,8 +556,10 @@ class ExperimentConfig:
 def _toml_keys(data: dict) -> dict:
     """``class_`` -> ``class`` in every section (:data:`KEY_ALIASES`)."""
     fields = {v: k for k, v in KEY_ALIASES.items()}
-    return {key: ({fields.get(k, k): v for k, v in value.items()} if isinstance(value, dict) else value)
-            for key, value in data.items()}
+    return {
+        key: ({fields.get(k, k): v for k, v in value.items()} if isinstance(value, dict) else value)
+        for key, value in data.items()
+    }
 
 
 def _drop_none(obj):
@@ -571,8 +593,9 @@ def _check_type(path: str, value, annotation):
         for alternative in inner:  # e.g. str | list[float]: the first that takes the value
             if (typing.get_origin(alternative) or alternative) is type(value):
                 return _check_type(path, value, alternative)
-        kinds = " or ".join("a list" if typing.get_origin(a) is list else f"a {_TYPE_WORDS[a]}"
-                            for a in inner)
+        kinds = " or ".join(
+            "a list" if typing.get_origin(a) is list else f"a {_TYPE_WORDS[a]}" for a in inner
+        )
         raise ConfigError(path, f"expected {kinds}, got {type(value).__name__} {value!r}")
     if origin is list:
         if not isinstance(value, list):
@@ -582,8 +605,10 @@ def _check_type(path: str, value, annotation):
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise ConfigError(path, f"expected a number, got {type(value).__name__} {value!r}")
         if isinstance(value, int) and abs(value) >= 2**63:
-            raise ConfigError(path, f"expected a finite number of sensible size, got an integer of "
-                              f"{len(str(abs(value)))} digits")
+            raise ConfigError(
+                path,
+                f"expected a finite number of sensible size, got an integer of {len(str(abs(value)))} digits",
+            )
         if not math.isfinite(value):
             raise ConfigError(path, f"expected a finite number, got {value!r}")
         return float(value)
@@ -591,8 +616,9 @@ def _check_type(path: str, value, annotation):
         if isinstance(value, bool) or not isinstance(value, int):
             raise ConfigError(path, f"expected an integer, got {type(value).__name__} {value!r}")
         if abs(value) >= 2**63:
-            raise ConfigError(path, f"expected an integer in (-2^63, 2^63), got one of "
-                              f"{len(str(abs(value)))} digits")
+            raise ConfigError(
+                path, f"expected an integer in (-2^63, 2^63), got one of {len(str(abs(value)))} digits"
+            )
         return value
     if annotation is bool:
         if not isinstance(value, bool):
@@ -603,8 +629,9 @@ def _check_type(path: str, value, annotation):
             raise ConfigError(path, f"expected a table, got {type(value).__name__} {value!r}")
         for key in value:
             if not key.isidentifier():
-                raise ConfigError(f"{path}.{key}", "is not a valid Python identifier (a keyword "
-                                  "argument name)")
+                raise ConfigError(
+                    f"{path}.{key}", "is not a valid Python identifier (a keyword argument name)"
+                )
         return dict(value)
     if annotation is str:
         if not isinstance(value, str):
@@ -701,8 +728,11 @@ def load_config(path: str | Path) -> ExperimentConfig:
         except OSError:
             now = ""
         if now and now != recorded.group(1):
-            warnings.warn(f"{path}: the {what} ({source}) has changed since this run was written "
-                          f"(SHA-256 {recorded.group(1)[:12]}... then, {now[:12]}... now)", stacklevel=2)
+            warnings.warn(
+                f"{path}: the {what} ({source}) has changed since this run was written "
+                f"(SHA-256 {recorded.group(1)[:12]}... then, {now[:12]}... now)",
+                stacklevel=2,
+            )
     return config
 
 
@@ -721,12 +751,18 @@ def _file_data(path: Path, text: str, depth: int = 0) -> dict:
     data = parse_toml(text, str(path))
     folder = path.resolve().parent
     robot, controller = data.get("robot"), data.get("controller")
-    if (isinstance(robot, dict) and isinstance(robot.get("source"), str)
-            and _is_relative_urdf_path(robot["source"])):
+    if (
+        isinstance(robot, dict)
+        and isinstance(robot.get("source"), str)
+        and _is_relative_urdf_path(robot["source"])
+    ):
         resolved = (folder / robot["source"]).resolve()
         if not resolved.is_file():
-            raise ConfigError(f"{path}: robot.source", f"{robot['source']!r} is not a file in {folder} (a "
-                              "relative path in an experiment file is read from the file's folder)")
+            raise ConfigError(
+                f"{path}: robot.source",
+                f"{robot['source']!r} is not a file in {folder} (a "
+                "relative path in an experiment file is read from the file's folder)",
+            )
         robot["source"] = str(resolved)
     if isinstance(controller, dict) and isinstance(controller.get("class"), str):
         from .controllers.custom import class_file
@@ -740,9 +776,10 @@ def _file_data(path: Path, text: str, depth: int = 0) -> dict:
     if not isinstance(base, str):
         raise ConfigError(f"{path}: base", f"expected a preset name or an experiment file, got {base!r}")
     if depth >= MAX_BASE_DEPTH:
-        raise ConfigError(f"{path}: base", "experiment files start from one another more than "
-                          f"{MAX_BASE_DEPTH} "
-                          "deep (a cycle?)")
+        raise ConfigError(
+            f"{path}: base",
+            f"experiment files start from one another more than {MAX_BASE_DEPTH} deep (a cycle?)",
+        )
     if base.endswith(".toml"):
         base_path = (folder / base).resolve()
         if not base_path.is_file():
@@ -807,8 +844,10 @@ def provenance_header(config: ExperimentConfig) -> str:
         except metadata.PackageNotFoundError:
             return "?"
 
-    lines = [f"# written by nnrobust {__version__} (pin {version('pin')}, example-robot-data "
-             f"{version('example-robot-data')})"]
+    lines = [
+        f"# written by nnrobust {__version__} (pin {version('pin')}, example-robot-data "
+        f"{version('example-robot-data')})"
+    ]
     digest = urdf_digest(config.robot.source)
     if digest:
         lines.append(f"# urdf sha256: {digest}")
@@ -883,15 +922,20 @@ def _check_custom(c: ControllerConfig) -> None:
     if c.kind != "custom":
         for key, value in (("class", c.class_), ("params", c.params)):
             if value is not None:
-                raise ConfigError(f"controller.{key}", f"is read only with kind = 'custom' (kind is "
-                                  f"{c.kind!r})")
+                raise ConfigError(
+                    f"controller.{key}", f"is read only with kind = 'custom' (kind is {c.kind!r})"
+                )
         return
     if c.class_ is None:
-        raise ConfigError("controller.class", "kind = 'custom' needs the class: \"my_laws.py:MyLaw\" (a file "
-                          "relative to the experiment file) or \"package.module:MyLaw\"")
+        raise ConfigError(
+            "controller.class",
+            "kind = 'custom' needs the class: \"my_laws.py:MyLaw\" (a file "
+            'relative to the experiment file) or "package.module:MyLaw"',
+        )
     if not CLASS_PATTERN.fullmatch(c.class_):
-        raise ConfigError("controller.class", f"{c.class_!r} is not \"file.py:Class\" nor "
-                          "\"package.module:Class\"")
+        raise ConfigError(
+            "controller.class", f'{c.class_!r} is not "file.py:Class" nor "package.module:Class"'
+        )
 
 
 MAX_GAIN = 1e12
@@ -908,15 +952,25 @@ def _within_range(config: ExperimentConfig) -> None:
     :data:`RANGE_LIMITS`; beyond, a refusal rather than two different runs.
     """
     c, nn = config.controller, config.nn
-    for key, values in (("controller.Kp", c.Kp), ("controller.Kv", c.Kv), ("controller.pd_Kp", c.pd_Kp),
-                        ("controller.pd_Kd", c.pd_Kd), ("controller.k", [c.k]),
-                        ("controller.sliding_gain", [c.sliding_gain]),
-                        ("controller.sliding_boundary", [c.sliding_boundary]), ("nn.F", [nn.F]),
-                        ("nn.gamma", [nn.gamma]), ("nn.sigma", [nn.sigma]), ("nn.eps0", [nn.eps0])):
+    for key, values in (
+        ("controller.Kp", c.Kp),
+        ("controller.Kv", c.Kv),
+        ("controller.pd_Kp", c.pd_Kp),
+        ("controller.pd_Kd", c.pd_Kd),
+        ("controller.k", [c.k]),
+        ("controller.sliding_gain", [c.sliding_gain]),
+        ("controller.sliding_boundary", [c.sliding_boundary]),
+        ("nn.F", [nn.F]),
+        ("nn.gamma", [nn.gamma]),
+        ("nn.sigma", [nn.sigma]),
+        ("nn.eps0", [nn.eps0]),
+    ):
         if any(abs(v) > MAX_GAIN for v in values):
             shown = values if len(values) > 1 else values[0]
-            raise ConfigError(key, f"{shown} is beyond {MAX_GAIN:g}; no sampled loop at a realistic period "
-                              "uses such a value")
+            raise ConfigError(
+                key,
+                f"{shown} is beyond {MAX_GAIN:g}; no sampled loop at a realistic period uses such a value",
+            )
     low, high = RANGE_LIMITS
     for key, values in (("nn.error_range", nn.error_range), ("nn.velocity_range", [nn.velocity_range])):
         if any(not low <= v <= high for v in values):
@@ -932,8 +986,11 @@ MAX_FACTOR = 100.0
 INDEXED = re.compile(r"^([a-z_]+)\.([A-Za-z_]+)\[(\d{1,4})\]$")
 """``section.field[i]``: one entry of a list-valued key (``nominal.factors[2]``)."""
 
-FILLED_LISTS = {("nominal", "factors"): 1.0, ("plant", "joint_friction_scales"): 1.0,
-                ("plant", "joint_disturbance_scales"): 1.0}
+FILLED_LISTS = {
+    ("nominal", "factors"): 1.0,
+    ("plant", "joint_friction_scales"): 1.0,
+    ("plant", "joint_disturbance_scales"): 1.0,
+}
 """List keys whose entries not given are known (a factor not given is 1): set entry by entry."""
 
 
@@ -941,13 +998,17 @@ def validate(config: ExperimentConfig) -> None:
     """Check values that a type alone does not constrain (robot-independent checks)."""
     c, nn, sim = config.controller, config.nn, config.simulation
     if not NAME_PATTERN.fullmatch(config.name) or ".." in config.name:
-        raise ConfigError("name", f"{config.name!r} is not a valid name: 1 to 100 letters, digits, '.', '_', "
-                          "'+' or '-', starting with a letter or digit, without '..' (it names the run "
-                          "folder out/<name>-<controller>)")
+        raise ConfigError(
+            "name",
+            f"{config.name!r} is not a valid name: 1 to 100 letters, digits, '.', '_', "
+            "'+' or '-', starting with a letter or digit, without '..' (it names the run "
+            "folder out/<name>-<controller>)",
+        )
     gravity = config.robot.gravity
     if gravity is not None and (len(gravity) != 3 or math.hypot(*gravity) > 1e3):
-        raise ConfigError("robot.gravity", f"needs 3 entries (x, y, z) [m/s^2] of at most 1000 m/s^2 in all, "
-                          f"got {gravity}")
+        raise ConfigError(
+            "robot.gravity", f"needs 3 entries (x, y, z) [m/s^2] of at most 1000 m/s^2 in all, got {gravity}"
+        )
     if config.robot.chain is not None and len(config.robot.chain) != 2:
         raise ConfigError("robot.chain", f"needs 2 frame names, [base, tip], got {config.robot.chain}")
     choices = {
@@ -971,15 +1032,19 @@ def validate(config: ExperimentConfig) -> None:
     _check_path(tc)
     m_path = tc.dimension
     if m_path not in (2, 3):
-        raise ConfigError(f"trajectory.{path_key(tc)}", "path points have 2 (x, y) or 3 (x, y, z) "
-                          f"entries, got {m_path}")
+        raise ConfigError(
+            f"trajectory.{path_key(tc)}", f"path points have 2 (x, y) or 3 (x, y, z) entries, got {m_path}"
+        )
     if config.robot.task == "pose":
         m, where = 6, "the pose task has m = 6"
         if m_path != 3:
-            raise ConfigError(f"trajectory.{path_key(tc)}", f"a pose task needs a 3-D path, got {m_path} "
-                              "entries")
-        for path, values in (("trajectory.orientation_rpy", tc.orientation_rpy),
-                             ("trajectory.rotation_axis", tc.rotation_axis)):
+            raise ConfigError(
+                f"trajectory.{path_key(tc)}", f"a pose task needs a 3-D path, got {m_path} entries"
+            )
+        for path, values in (
+            ("trajectory.orientation_rpy", tc.orientation_rpy),
+            ("trajectory.rotation_axis", tc.rotation_axis),
+        ):
             if values is not None and len(values) != 3:
                 raise ConfigError(path, f"needs 3 entries, got {len(values)}")
         if not any(tc.rotation_axis):
@@ -991,10 +1056,15 @@ def validate(config: ExperimentConfig) -> None:
         if len(values) == 1:  # one value for every task coordinate
             setattr(c, name, values * m)
         elif len(values) != m:
-            raise ConfigError(f"controller.{name}", f"has {len(values)} entries, {where} "
-                              "(or give one value for all)")
-    for path, values in (("controller.Kp", c.Kp), ("controller.Kv", c.Kv),
-                         ("controller.pd_Kp", c.pd_Kp), ("controller.pd_Kd", c.pd_Kd)):
+            raise ConfigError(
+                f"controller.{name}", f"has {len(values)} entries, {where} (or give one value for all)"
+            )
+    for path, values in (
+        ("controller.Kp", c.Kp),
+        ("controller.Kv", c.Kv),
+        ("controller.pd_Kp", c.pd_Kp),
+        ("controller.pd_Kd", c.pd_Kd),
+    ):
         _positive(path, values)
     _check_custom(c)
     for kp, kv in zip(c.Kp, c.Kv) if c.kind in EQ9_KINDS else ():  # pd and custom laws do not use them
@@ -1022,15 +1092,19 @@ def validate(config: ExperimentConfig) -> None:
     _positive("nominal.mass_scale", nc.mass_scale)
     _positive("nominal.inertia_scale", nc.inertia_scale)
     if not 0 <= nc.relative_error < 1:
-        raise ConfigError("nominal.relative_error", f"must be in [0, 1) so masses stay positive, got "
-                          f"{nc.relative_error}")
+        raise ConfigError(
+            "nominal.relative_error", f"must be in [0, 1) so masses stay positive, got {nc.relative_error}"
+        )
     if nc.com_error < 0:
         raise ConfigError("nominal.com_error", f"must be >= 0 [m], got {nc.com_error}")
     if nc.factors is not None and any(not 0 < f <= MAX_FACTOR for f in nc.factors):
         raise ConfigError("nominal.factors", f"each factor must be in (0, {MAX_FACTOR:g}], got {nc.factors}")
     if nominal_kind(config) == "closed-form" and (nc.mass_scale, nc.inertia_scale, nc.com_error) != (1, 1, 0):
-        raise ConfigError("nominal.kind", "mass_scale, inertia_scale and com_error perturb the URDF "
-                          "model: set kind = 'urdf' (closed-form takes beta, p and relative_error)")
+        raise ConfigError(
+            "nominal.kind",
+            "mass_scale, inertia_scale and com_error perturb the URDF "
+            "model: set kind = 'urdf' (closed-form takes beta, p and relative_error)",
+        )
     _non_negative("plant.disturbance_scale", pc.disturbance_scale)
     _non_negative("plant.friction_scale", pc.friction_scale)
     for key in ("joint_friction_scales", "joint_disturbance_scales"):
@@ -1040,35 +1114,51 @@ def validate(config: ExperimentConfig) -> None:
     if not 0 <= pc.payload <= MAX_PAYLOAD:
         raise ConfigError("plant.payload", f"must be in [0, {MAX_PAYLOAD:g}] kg, got {pc.payload:g}")
     if not 0 < pc.disturbance_omega_scale <= MAX_FACTOR:
-        raise ConfigError("plant.disturbance_omega_scale",
-                          f"must be in (0, {MAX_FACTOR:g}], got {pc.disturbance_omega_scale:g}")
+        raise ConfigError(
+            "plant.disturbance_omega_scale",
+            f"must be in (0, {MAX_FACTOR:g}], got {pc.disturbance_omega_scale:g}",
+        )
     if abs(pc.disturbance_phase_shift) > 1e3:
-        raise ConfigError("plant.disturbance_phase_shift", f"{pc.disturbance_phase_shift:g} rad; give it "
-                          "within +-1000 rad (it acts modulo 2 pi)")
+        raise ConfigError(
+            "plant.disturbance_phase_shift",
+            f"{pc.disturbance_phase_shift:g} rad; give it within +-1000 rad (it acts modulo 2 pi)",
+        )
     if not 1 <= pc.stiction < 1e6:
-        raise ConfigError("plant.stiction", f"the static / Coulomb friction ratio must be in [1, 1e6), got "
-                          f"{pc.stiction}")
+        raise ConfigError(
+            "plant.stiction", f"the static / Coulomb friction ratio must be in [1, 1e6), got {pc.stiction}"
+        )
     if isinstance(pc.torque_limits, str):
         if pc.torque_limits not in ("urdf", "none"):
-            raise ConfigError("plant.torque_limits", f"{pc.torque_limits!r} is not one of urdf, none "
-                              "(or give one limit per joint [N m])")
+            raise ConfigError(
+                "plant.torque_limits",
+                f"{pc.torque_limits!r} is not one of urdf, none (or give one limit per joint [N m])",
+            )
     else:
         _positive("plant.torque_limits", pc.torque_limits)
     _positive("plant.joint_stop_stiffness", pc.joint_stop_stiffness)
     _non_negative("plant.joint_stop_damping", pc.joint_stop_damping)
     if pc.armature is not None and (not pc.armature or any(not 0 <= a < 1e6 for a in pc.armature)):
-        raise ConfigError("plant.armature", f"needs one value for all joints or one per joint, each in "
-                          f"[0, 1e6) [kg m^2 or kg], got {pc.armature}")
+        raise ConfigError(
+            "plant.armature",
+            f"needs one value for all joints or one per joint, each in "
+            f"[0, 1e6) [kg m^2 or kg], got {pc.armature}",
+        )
     if pc.engine == "mujoco" and sim.integrator != "rk4":
-        raise ConfigError("simulation.integrator", f"{sim.integrator!r} integrates the pinocchio engine; "
-                          "MuJoCo has its own (plant.mujoco_integrator)")
+        raise ConfigError(
+            "simulation.integrator",
+            f"{sim.integrator!r} integrates the pinocchio engine; "
+            "MuJoCo has its own (plant.mujoco_integrator)",
+        )
     se = config.sensing
-    for path, values in (("sensing.position_noise", se.position_noise),
-                         ("sensing.velocity_noise", se.velocity_noise),
-                         ("sensing.encoder_resolution", se.encoder_resolution)):
+    for path, values in (
+        ("sensing.position_noise", se.position_noise),
+        ("sensing.velocity_noise", se.velocity_noise),
+        ("sensing.encoder_resolution", se.encoder_resolution),
+    ):
         if not values or any(v < 0 for v in values):
-            raise ConfigError(path, f"needs one value for all joints or one per joint, each >= 0, got "
-                              f"{values}")
+            raise ConfigError(
+                path, f"needs one value for all joints or one per joint, each >= 0, got {values}"
+            )
     for path, seed in (("sensing.seed", se.seed), ("nominal.seed", config.nominal.seed)):
         if not 0 <= seed < 2**63:
             raise ConfigError(path, f"must be an integer in [0, 2^63), got {seed}")
@@ -1077,9 +1167,11 @@ def validate(config: ExperimentConfig) -> None:
     _non_negative("controller.coulomb_smoothing", c.coulomb_smoothing)
     _positive("controller.sliding_gain", c.sliding_gain)
     _positive("controller.sliding_boundary", c.sliding_boundary)
-    for key, number in (("plant.viscous_level", pc.viscous_level),
-                        ("plant.coulomb_level", pc.coulomb_level),
-                        ("plant.disturbance_level", pc.disturbance_level)):
+    for key, number in (
+        ("plant.viscous_level", pc.viscous_level),
+        ("plant.coulomb_level", pc.coulomb_level),
+        ("plant.disturbance_level", pc.disturbance_level),
+    ):
         _non_negative(key, number)
     _positive("subtasks.C", config.subtasks.C)
     _positive("subtasks.obstacle_influence", config.subtasks.obstacle_influence)
@@ -1094,8 +1186,9 @@ def validate(config: ExperimentConfig) -> None:
     if config.subtasks.weights is not None:
         named = config.subtasks.criteria or []
         if len(config.subtasks.weights) != len(named):
-            raise ConfigError("subtasks.weights",
-                              f"{len(config.subtasks.weights)} weights for {len(named)} criteria")
+            raise ConfigError(
+                "subtasks.weights", f"{len(config.subtasks.weights)} weights for {len(named)} criteria"
+            )
         _positive("subtasks.weights", config.subtasks.weights)
         total = sum(config.subtasks.weights)
         if not math.isclose(total, config.subtasks.C, rel_tol=1e-9):
@@ -1109,9 +1202,12 @@ def validate(config: ExperimentConfig) -> None:
     if sim.substeps is not None:
         _positive("simulation.substeps", sim.substeps)
     if sim.max_step_rotation <= 0:
-        raise ConfigError("simulation.max_step_rotation", f"must be positive [rad or m], got "
-                          f"{sim.max_step_rotation:g}; to keep the plant step fixed, set "
-                          "simulation.adaptive_step = false")
+        raise ConfigError(
+            "simulation.max_step_rotation",
+            f"must be positive [rad or m], got "
+            f"{sim.max_step_rotation:g}; to keep the plant step fixed, set "
+            "simulation.adaptive_step = false",
+        )
     if sim.integration_step is not None:
         _positive("simulation.integration_step", sim.integration_step)
         ratio = sim.control_period / sim.integration_step
@@ -1131,12 +1227,18 @@ def validate(config: ExperimentConfig) -> None:
     if sim.duration < sim.control_period:
         raise ConfigError("simulation.duration", "is shorter than one control period")
     if sim.substeps is not None and sim.substeps > MAX_SUBSTEPS:
-        raise ConfigError("simulation.substeps", f"{sim.substeps} integration steps per control period; at "
-                          f"most {MAX_SUBSTEPS} (a shorter control_period does the same job)")
+        raise ConfigError(
+            "simulation.substeps",
+            f"{sim.substeps} integration steps per control period; at "
+            f"most {MAX_SUBSTEPS} (a shorter control_period does the same job)",
+        )
     steps = sim.duration / sim.control_period
     if steps > MAX_STEPS:
-        raise ConfigError("simulation.duration", f"{sim.duration:g} s at a control period of "
-                          f"{sim.control_period:g} s is {steps:.3g} steps; at most {MAX_STEPS:.0e}")
+        raise ConfigError(
+            "simulation.duration",
+            f"{sim.duration:g} s at a control period of "
+            f"{sim.control_period:g} s is {steps:.3g} steps; at most {MAX_STEPS:.0e}",
+        )
     if nn.centers > MAX_CENTERS:
         raise ConfigError("nn.centers", f"{nn.centers} centres per input; at most {MAX_CENTERS}")
     _positive("simulation.memory_limit", sim.memory_limit)
@@ -1223,8 +1325,9 @@ def check_dotted_key(key: str) -> None:
     hints = typing.get_type_hints(ExperimentConfig)
     if len(parts) == 1:
         if parts[0] not in top or dataclasses.is_dataclass(hints.get(parts[0])):
-            raise ConfigError(key, "not a key of the experiment schema; use section.field, e.g. "
-                              "simulation.duration")
+            raise ConfigError(
+                key, "not a key of the experiment schema; use section.field, e.g. simulation.duration"
+            )
         return
     section, field_name = parts[0], ".".join(parts[1:])
     if section not in top or not dataclasses.is_dataclass(hints[section]):
@@ -1267,13 +1370,16 @@ def _set_entry(table: dict, section: str, field_name: str, index: int, value) ->
     current = table.get(field_name)
     fill = FILLED_LISTS.get((section, field_name))
     if current is None and fill is None:
-        raise ConfigError(f"{section}.{field_name}[{index}]", f"{section}.{field_name} is not set: give the "
-                          "whole list first (in [set]), then vary its entries")
+        raise ConfigError(
+            f"{section}.{field_name}[{index}]",
+            f"{section}.{field_name} is not set: give the whole list first (in [set]), then vary its entries",
+        )
     entries = list(current) if current is not None else []
     if index >= len(entries):
         if fill is None:
-            raise ConfigError(f"{section}.{field_name}[{index}]",
-                              f"{section}.{field_name} has {len(entries)} entries")
+            raise ConfigError(
+                f"{section}.{field_name}[{index}]", f"{section}.{field_name} has {len(entries)} entries"
+            )
         entries += [fill] * (index + 1 - len(entries))
     entries[index] = value
     table[field_name] = entries

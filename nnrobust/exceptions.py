@@ -65,9 +65,7 @@ class FrameNotFound(NNRobustError):
     def __init__(self, frame: str, available: list[str]):
         self.frame = frame
         self.available = available
-        super().__init__(
-            f"task frame {frame!r} not found; frames in the model: {', '.join(available)}"
-        )
+        super().__init__(f"task frame {frame!r} not found; frames in the model: {', '.join(available)}")
 
 
 class ConfigError(NNRobustError):

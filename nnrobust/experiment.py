@@ -128,8 +128,9 @@ def build_torque_limits(config: ExperimentConfig, robot: PinocchioModel) -> np.n
     return _vector("plant.torque_limits", limits, robot.nq)
 
 
-def build_stops(config: ExperimentConfig, robot: PinocchioModel,
-                tau_ref: Callable[[], np.ndarray] | None = None) -> JointStops | None:
+def build_stops(
+    config: ExperimentConfig, robot: PinocchioModel, tau_ref: Callable[[], np.ndarray] | None = None
+) -> JointStops | None:
     """Hard stops at the URDF's position limits, stiffness relative to each joint's torque scale
     (``tau_ref()``, default :func:`torque_scale`).
     """
@@ -144,9 +145,12 @@ def build_stops(config: ExperimentConfig, robot: PinocchioModel,
 def build_sensor(config: ExperimentConfig, n: int) -> Sensor:
     """Noise and quantisation of the measurements, one value for all joints or one per joint."""
     se = config.sensing
-    return Sensor(_per_joint("sensing.position_noise", se.position_noise, n),
-                  _per_joint("sensing.velocity_noise", se.velocity_noise, n),
-                  _per_joint("sensing.encoder_resolution", se.encoder_resolution, n), se.seed)
+    return Sensor(
+        _per_joint("sensing.position_noise", se.position_noise, n),
+        _per_joint("sensing.velocity_noise", se.velocity_noise, n),
+        _per_joint("sensing.encoder_resolution", se.encoder_resolution, n),
+        se.seed,
+    )
 
 
 def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
@@ -155,13 +159,17 @@ def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
     """
     n, pc = robot.nq, config.plant
     tau_ref = functools.cache(lambda: torque_scale(robot))  # once (with its warning), if asked for
-    base = (scaled_friction(robot, pc.viscous_level, pc.coulomb_level, tau_ref()) if pc.friction == "scaled"
-            else Friction(robot.viscous_friction, robot.coulomb_friction))
+    base = (
+        scaled_friction(robot, pc.viscous_level, pc.coulomb_level, tau_ref())
+        if pc.friction == "scaled"
+        else Friction(robot.viscous_friction, robot.coulomb_friction)
+    )
     scale = pc.friction_scale * _joint_scales("plant.joint_friction_scales", pc.joint_friction_scales, n)
     coulomb = scale * _vector("plant.coulomb_friction", pc.coulomb_friction, n, base.coulomb)
     friction = Friction(
         scale * _vector("plant.viscous_friction", pc.viscous_friction, n, base.viscous),
-        coulomb, static=pc.stiction * coulomb,
+        coulomb,
+        static=pc.stiction * coulomb,
     )
     kind = pc.disturbance
     if kind == "auto":  # the paper's tau_d belongs to the paper's arm
@@ -177,22 +185,35 @@ def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
     else:
         amplitude = np.asarray(pc.disturbance_amplitude, dtype=float)
         omega = np.asarray(pc.disturbance_omega, dtype=float)
-        phase = (np.zeros_like(amplitude) if pc.disturbance_phase is None
-                 else np.asarray(pc.disturbance_phase, dtype=float))
+        phase = (
+            np.zeros_like(amplitude)
+            if pc.disturbance_phase is None
+            else np.asarray(pc.disturbance_phase, dtype=float)
+        )
         try:
             disturbance = SinusoidalDisturbance(amplitude, omega, phase)
         except ValueError as err:
             raise ConfigError("plant.disturbance_amplitude", str(err)) from err
         if disturbance.n != n:
             raise ConfigError("plant.disturbance_amplitude", f"has {disturbance.n} rows, need {n}")
-    rows = pc.disturbance_scale * _joint_scales("plant.joint_disturbance_scales",
-                                                pc.joint_disturbance_scales, n)
+    rows = pc.disturbance_scale * _joint_scales(
+        "plant.joint_disturbance_scales", pc.joint_disturbance_scales, n
+    )
     if np.any(rows != 1.0) or pc.disturbance_omega_scale != 1.0 or pc.disturbance_phase_shift != 0.0:
-        disturbance = SinusoidalDisturbance(disturbance.amplitude * rows[:, None],
-                                            disturbance.omega * pc.disturbance_omega_scale,
-                                            disturbance.phase + pc.disturbance_phase_shift)
-    return Plant(true_model(config, robot), friction, disturbance, build_torque_limits(config, robot),
-                 build_stops(config, robot, tau_ref), build_sensor(config, n), config.sensing.delay)
+        disturbance = SinusoidalDisturbance(
+            disturbance.amplitude * rows[:, None],
+            disturbance.omega * pc.disturbance_omega_scale,
+            disturbance.phase + pc.disturbance_phase_shift,
+        )
+    return Plant(
+        true_model(config, robot),
+        friction,
+        disturbance,
+        build_torque_limits(config, robot),
+        build_stops(config, robot, tau_ref),
+        build_sensor(config, n),
+        config.sensing.delay,
+    )
 
 
 def _joint_scales(path: str, scales: list[float] | None, n: int) -> np.ndarray:
@@ -247,8 +268,16 @@ def build_engine(config: ExperimentConfig, plant: Plant, substeps: int) -> None:
     if pc.payload > 0.0:  # on the body of the task frame's joint, where Pinocchio's true model has it
         frame = true.model.frames[true.model.getFrameId(true.task_frame)]
         payload = (true.model.names[frame.parentJoint], payload_inertia(pc.payload, frame.placement))
-    plant.engine = build_mujoco_plant(true, plant, config.simulation.control_period, substeps,
-                                      pc.mujoco_integrator, true.model.armature, pc.stiction, payload)
+    plant.engine = build_mujoco_plant(
+        true,
+        plant,
+        config.simulation.control_period,
+        substeps,
+        pc.mujoco_integrator,
+        true.model.armature,
+        pc.stiction,
+        payload,
+    )
 
 
 def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsModel:
@@ -261,8 +290,9 @@ def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsMo
         return PinocchioModel(exact.model, robot.task_frame, robot.task, robot.name)
     if nominal_kind(config) == "urdf":
         if nc.perturbed:
-            model = perturb_inertias(robot.model, nc.mass_scale, nc.inertia_scale,
-                                     nc.relative_error, nc.com_error, nc.seed)
+            model = perturb_inertias(
+                robot.model, nc.mass_scale, nc.inertia_scale, nc.relative_error, nc.com_error, nc.seed
+            )
             if nc.factors is not None:
                 model = _with_factors(model, nc.factors)
         else:
@@ -297,13 +327,19 @@ def _with_factors(model: pin.Model, factors: list[float]) -> pin.Model:
     factor of ``nominal.factors``: the masses first, then the inertias, bodies with mass in order.
     """
     bodies = [j for j in range(1, model.njoints) if model.inertias[j].mass > 0]
-    factors = _padded(factors, 2 * len(bodies), f"the URDF model has {len(bodies)} bodies with mass: "
-                      f"{2 * len(bodies)} factors, masses then inertias")
+    factors = _padded(
+        factors,
+        2 * len(bodies),
+        f"the URDF model has {len(bodies)} bodies with mass: {2 * len(bodies)} factors, masses then inertias",
+    )
     out = pin.Model(model)
     for i, j in enumerate(bodies):
         body = model.inertias[j]
-        out.inertias[j] = pin.Inertia(body.mass * factors[i], np.asarray(body.lever),
-                                      np.asarray(body.inertia) * factors[len(bodies) + i])
+        out.inertias[j] = pin.Inertia(
+            body.mass * factors[i],
+            np.asarray(body.lever),
+            np.asarray(body.inertia) * factors[len(bodies) + i],
+        )
     return out
 
 
@@ -311,8 +347,11 @@ def _make_criterion(name: str, config: ExperimentConfig, robot: PinocchioModel) 
     sc = config.subtasks
     if name == "paper":
         if robot.nq != 3:
-            raise ConfigError("subtasks.criteria", f"'paper' (eq. 19) is for 3 joints, the robot has "
-                              f"{robot.nq}; use e.g. 'manipulability' and 'joint_centering'")
+            raise ConfigError(
+                "subtasks.criteria",
+                f"'paper' (eq. 19) is for 3 joints, the robot has "
+                f"{robot.nq}; use e.g. 'manipulability' and 'joint_centering'",
+            )
         return PaperCriterion()
     if name == "half_det_manipulability":
         return HalfDetManipulability()
@@ -360,28 +399,46 @@ def build_basis(config: ExperimentConfig, robot: PinocchioModel, m: int) -> Addi
 
 def build_nominal_friction(config: ExperimentConfig, n: int) -> Friction:
     """F-hat as the nominal section declares it, compensated with controller.coulomb_smoothing."""
-    return Friction(_vector("nominal.viscous_friction", config.nominal.viscous_friction, n, np.zeros(n)),
-                    _vector("nominal.coulomb_friction", config.nominal.coulomb_friction, n, np.zeros(n)),
-                    config.controller.coulomb_smoothing)
+    return Friction(
+        _vector("nominal.viscous_friction", config.nominal.viscous_friction, n, np.zeros(n)),
+        _vector("nominal.coulomb_friction", config.nominal.coulomb_friction, n, np.zeros(n)),
+        config.controller.coulomb_smoothing,
+    )
 
 
-def build_context(config: ExperimentConfig, robot: PinocchioModel, nominal: DynamicsModel,
-                  trajectory: Trajectory, criterion: Criterion | None, plant: Plant,
-                  q0: np.ndarray) -> ControllerContext:
+def build_context(
+    config: ExperimentConfig,
+    robot: PinocchioModel,
+    nominal: DynamicsModel,
+    trajectory: Trajectory,
+    criterion: Criterion | None,
+    plant: Plant,
+    q0: np.ndarray,
+) -> ControllerContext:
     """What a controller is built from (:class:`ControllerContext`): never the true plant's model."""
     c = config.controller
     return ControllerContext(
-        nominal=nominal, trajectory=trajectory, criterion=criterion, period=config.simulation.control_period,
-        torque_limits=None if plant.torque_limit is None else plant.torque_limit.copy(), q0=q0.copy(),
-        lower_limits=robot.lower_limits.copy(), upper_limits=robot.upper_limits.copy(),
-        nominal_friction=build_nominal_friction(config, robot.nq), null_space_gain=c.k,
+        nominal=nominal,
+        trajectory=trajectory,
+        criterion=criterion,
+        period=config.simulation.control_period,
+        torque_limits=None if plant.torque_limit is None else plant.torque_limit.copy(),
+        q0=q0.copy(),
+        lower_limits=robot.lower_limits.copy(),
+        upper_limits=robot.upper_limits.copy(),
+        nominal_friction=build_nominal_friction(config, robot.nq),
+        null_space_gain=c.k,
         pseudo_inverse=DampedPseudoInverse(c.pinv_threshold, c.pinv_max_damping),
     )
 
 
 def build_controller(
-    config: ExperimentConfig, robot: PinocchioModel, nominal: DynamicsModel,
-    trajectory: Trajectory, criterion: Criterion | None, true_friction: Friction | None = None,
+    config: ExperimentConfig,
+    robot: PinocchioModel,
+    nominal: DynamicsModel,
+    trajectory: Trajectory,
+    criterion: Criterion | None,
+    true_friction: Friction | None = None,
     context: ControllerContext | None = None,
 ) -> Controller:
     """The control law named by controller.kind (computed-torque takes ``true_friction`` as F-hat;
@@ -394,15 +451,22 @@ def build_controller(
         return build_custom(c.class_ or "", c.params, context)
     pinv = DampedPseudoInverse(c.pinv_threshold, c.pinv_max_damping)
     if c.kind == "pd":
-        return TaskSpacePD(nominal, trajectory, np.diag(c.pd_Kp), np.diag(c.pd_Kd),
-                           c.pd_null_damping, pinv)
+        return TaskSpacePD(nominal, trajectory, np.diag(c.pd_Kp), np.diag(c.pd_Kd), c.pd_null_damping, pinv)
     Kp, Kv = np.diag(c.Kp), np.diag(c.Kv)
     compensator: NNCompensator | SlidingModeCompensator | None = None
     if c.kind == "nn":
         nn = config.nn
         compensator = NNCompensator(
-            Kp, Kv, build_basis(config, robot, trajectory.m), nn.basis_input, nn.F, nn.gamma,
-            nn.eps0, nn.eps_min, nn.sigma, nn.law,
+            Kp,
+            Kv,
+            build_basis(config, robot, trajectory.m),
+            nn.basis_input,
+            nn.F,
+            nn.gamma,
+            nn.eps0,
+            nn.eps_min,
+            nn.sigma,
+            nn.law,
         )
     elif c.kind == "sliding-mode":
         compensator = SlidingModeCompensator(Kp, Kv, c.sliding_gain, c.sliding_boundary)
@@ -412,8 +476,9 @@ def build_controller(
         nominal_friction = Friction(true_friction.viscous, true_friction.coulomb, c.coulomb_smoothing)
     else:
         nominal_friction = build_nominal_friction(config, robot.nq)
-    return TaskSpaceController(nominal, trajectory, Kp, Kv, c.k, criterion, nominal_friction,
-                               compensator, pinv)
+    return TaskSpaceController(
+        nominal, trajectory, Kp, Kv, c.k, criterion, nominal_friction, compensator, pinv
+    )
 
 
 def _seed(config: ExperimentConfig, robot: PinocchioModel) -> np.ndarray:
@@ -423,8 +488,11 @@ def _seed(config: ExperimentConfig, robot: PinocchioModel) -> np.ndarray:
     if outside.size:
         i = int(outside[0])
         more = f" (and {outside.size - 1} more joints)" if outside.size > 1 else ""
-        raise ConfigError("simulation.q_seed", f"joint {robot.joint_names[i]!r} = {seed[i]:g} is "
-                          f"outside its limits [{lower[i]:g}, {upper[i]:g}]{more}")
+        raise ConfigError(
+            "simulation.q_seed",
+            f"joint {robot.joint_names[i]!r} = {seed[i]:g} is "
+            f"outside its limits [{lower[i]:g}, {upper[i]:g}]{more}",
+        )
     return seed
 
 
@@ -462,8 +530,13 @@ def build_path(config: ExperimentConfig, robot: PinocchioModel) -> PositionPath:
         return quintic_point_to_point(start, goal, tc.move_time)
     if tc.kind == "waypoints":
         return spline_through(tc.waypoints, tc.waypoint_times)
-    return EllipseTrajectory(np.asarray(tc.center, float), np.asarray(tc.axis_a, float),
-                             np.asarray(tc.axis_b, float), tc.omega, tc.phase)
+    return EllipseTrajectory(
+        np.asarray(tc.center, float),
+        np.asarray(tc.axis_a, float),
+        np.asarray(tc.axis_b, float),
+        tc.omega,
+        tc.phase,
+    )
 
 
 def build_trajectory(config: ExperimentConfig, robot: PinocchioModel) -> Trajectory:
@@ -476,11 +549,16 @@ def build_trajectory(config: ExperimentConfig, robot: PinocchioModel) -> Traject
         R0 = pin.rpy.rpyToMatrix(*tc.orientation_rpy)
     else:  # the orientation the arm has when its tip is at p_d(0)
         position_task = PinocchioModel(robot.model, robot.task_frame, "position", robot.name)
-        q = _reach(position_task, path(0.0)[0], _seed(config, robot), "p_d(0)",
-                   f"trajectory.{path_key(tc)}")
+        q = _reach(position_task, path(0.0)[0], _seed(config, robot), "p_d(0)", f"trajectory.{path_key(tc)}")
         R0 = split_pose(robot.task_position(q))[1].copy()
-    return PoseTrajectory(path, R0, np.asarray(tc.rotation_axis, dtype=float),
-                          tc.rotation_amplitude, tc.rotation_omega, tc.rotation_phase)
+    return PoseTrajectory(
+        path,
+        R0,
+        np.asarray(tc.rotation_axis, dtype=float),
+        tc.rotation_amplitude,
+        tc.rotation_omega,
+        tc.rotation_phase,
+    )
 
 
 def initial_state(
@@ -489,8 +567,11 @@ def initial_state(
     """q(0) by IK of x_d(0) + offset from the seed; q'(0) = J+ x_d'(0) (no initial velocity error)."""
     sim = config.simulation
     xd0, dxd0, _ = trajectory(0.0)
-    offset = np.zeros(trajectory.m) if sim.initial_task_offset is None else np.asarray(
-        sim.initial_task_offset, dtype=float)
+    offset = (
+        np.zeros(trajectory.m)
+        if sim.initial_task_offset is None
+        else np.asarray(sim.initial_task_offset, dtype=float)
+    )
     if offset.shape != (trajectory.m,):
         raise ConfigError("simulation.initial_task_offset", f"needs {trajectory.m} entries")
     if robot.task == "pose":
@@ -498,8 +579,9 @@ def initial_state(
         target = pose_vector(p + offset[:3], pin.exp3(offset[3:]) @ R)
     else:
         target = xd0 + offset
-    q0 = _reach(robot, target, _seed(config, robot), "x_d(0) + offset",
-                f"trajectory.{path_key(config.trajectory)}")
+    q0 = _reach(
+        robot, target, _seed(config, robot), "x_d(0) + offset", f"trajectory.{path_key(config.trajectory)}"
+    )
     J = robot.task_jacobian(q0)
     v0 = DampedPseudoInverse().matrix(J) @ dxd0
     return q0, v0
@@ -509,8 +591,13 @@ WORKSPACE_SAMPLES = 48
 """Instants at which check_workspace solves the inverse kinematics."""
 
 
-def check_workspace(config: ExperimentConfig, robot: PinocchioModel, trajectory: Trajectory,
-                    q0: np.ndarray, samples: int = WORKSPACE_SAMPLES) -> None:
+def check_workspace(
+    config: ExperimentConfig,
+    robot: PinocchioModel,
+    trajectory: Trajectory,
+    q0: np.ndarray,
+    samples: int = WORKSPACE_SAMPLES,
+) -> None:
     """Refuse a trajectory the arm cannot reach within its joint limits, before the run.
 
     Inverse kinematics at ``samples`` instants over the run (each from the previous solution);
@@ -546,9 +633,11 @@ def check_mass_matrix(robot: PinocchioModel, q0: np.ndarray) -> None:
     eigenvalues, vectors = np.linalg.eigh(M) if np.all(np.isfinite(M)) else (np.array([np.nan]), None)
     if vectors is None or not eigenvalues[0] > 1e-10 * max(eigenvalues[-1], 1e-300):
         joint = robot.joint_names[int(np.argmax(np.abs(vectors[:, 0])))] if vectors is not None else "?"
-        raise ModelMismatch(f"{robot.name}: M(q) is singular at q(0) (smallest eigenvalue "
-                            f"{eigenvalues[0]:.3g}): joint {joint!r} moves (almost) no inertia; check its "
-                            "axis and the inertias of the links it moves")
+        raise ModelMismatch(
+            f"{robot.name}: M(q) is singular at q(0) (smallest eigenvalue "
+            f"{eigenvalues[0]:.3g}): joint {joint!r} moves (almost) no inertia; check its "
+            "axis and the inertias of the links it moves"
+        )
 
 
 STOP_STEP = 1.0
@@ -588,25 +677,33 @@ def plant_step(config: ExperimentConfig, plant: Plant, q0: np.ndarray) -> int:
             stops = replace(stops, stiffness=np.where(soften, sized, stops.stiffness))
             plant.stops = stops
             joints = ", ".join(f"{names[i]!r} ({yield_at_scale[i]:.2g} rad)" for i in np.flatnonzero(soften))
-            warnings.warn(f"joint stops sized to the plant step: the stops of {joints} are softened to their "
-                          f"effective inertia / h^2 (they ring at 1/h = {1 / T:g} rad/s, and yield so much "
-                          "at the joint's torque scale; set simulation.substeps to keep them stiff; "
-                          "docs/plant.md)", stacklevel=3)
+            warnings.warn(
+                f"joint stops sized to the plant step: the stops of {joints} are softened to their "
+                f"effective inertia / h^2 (they ring at 1/h = {1 / T:g} rad/s, and yield so much "
+                "at the joint's torque scale; set simulation.substeps to keep them stiff; "
+                "docs/plant.md)",
+                stacklevel=3,
+            )
             omega = np.where(bounded, np.sqrt(stops.stiffness * np.diag(M_inv)), 0.0)
         i = int(np.argmax(omega))
         if T * omega[i] > RK4_STABLE_STEP:
             needed = _substeps_needed(T, omega[i])
-            reasons.append(f"the stop of joint {names[i]!r} rings at {omega[i]:.3g} rad/s (a light link with "
-                           "a large effort)")
+            reasons.append(
+                f"the stop of joint {names[i]!r} rings at {omega[i]:.3g} rad/s (a light link with "
+                "a large effort)"
+            )
     if np.any(plant.friction.viscous):
         fastest = float(np.max(np.linalg.eigvals(M_inv @ np.diag(plant.friction.viscous)).real))
         if T * fastest > RK4_STABLE_STEP:
             needed = max(needed, _substeps_needed(T, fastest))
             reasons.append(f"viscous friction has a mode of {fastest:.3g} 1/s (light outer links)")
     if needed > 1:
-        warnings.warn(f"simulation.substeps = {needed} chosen (plant step {T / needed:.3g} s): "
-                      f"{'; '.join(reasons)}; RK4 would diverge at {T:g} s. Set simulation.substeps to "
-                      "choose", stacklevel=3)
+        warnings.warn(
+            f"simulation.substeps = {needed} chosen (plant step {T / needed:.3g} s): "
+            f"{'; '.join(reasons)}; RK4 would diverge at {T:g} s. Set simulation.substeps to "
+            "choose",
+            stacklevel=3,
+        )
     return needed
 
 
@@ -661,17 +758,31 @@ def build(config: ExperimentConfig) -> Setup:
     """
     config = checked(config)
     rc = config.robot
-    robot = load_robot(rc.source, rc.task_frame, rc.task,
-                       tuple(rc.gravity) if rc.gravity else None, rc.locked_joints, rc.chain)
+    robot = load_robot(
+        rc.source,
+        rc.task_frame,
+        rc.task,
+        tuple(rc.gravity) if rc.gravity else None,
+        rc.locked_joints,
+        rc.chain,
+    )
     if robot.task != "pose" and config.trajectory.dimension != robot.m:
-        raise ConfigError(f"trajectory.{path_key(config.trajectory)}", f"has {config.trajectory.dimension} "
-                          f"entries per point, the {rc.task!r} task has m = {robot.m}")
+        raise ConfigError(
+            f"trajectory.{path_key(config.trajectory)}",
+            f"has {config.trajectory.dimension} entries per point, the {rc.task!r} task has m = {robot.m}",
+        )
     if robot.m > robot.nq:
-        raise ConfigError("robot.task", f"m = {robot.m} > n = {robot.nq}: the arm has fewer joints than the "
-                          "task has coordinates (choose a smaller task or a longer robot.chain)")
+        raise ConfigError(
+            "robot.task",
+            f"m = {robot.m} > n = {robot.nq}: the arm has fewer joints than the "
+            "task has coordinates (choose a smaller task or a longer robot.chain)",
+        )
     if robot.m == robot.nq:
-        warnings.warn(f"{robot.name}: not redundant (n = m = {robot.nq}): the null-space subtask has no room "
-                      "and eq. (9) is plain task-space control", stacklevel=2)
+        warnings.warn(
+            f"{robot.name}: not redundant (n = m = {robot.nq}): the null-space subtask has no room "
+            "and eq. (9) is plain task-space control",
+            stacklevel=2,
+        )
     check_memory(config, robot.nq, robot.m)
     trajectory = build_trajectory(config, robot)
     plant = build_plant(config, robot)
@@ -744,17 +855,23 @@ def check_memory(config: ExperimentConfig, n: int, m: int) -> None:
     """
     need = memory_estimate(config, n, m) / 1e9
     sim = config.simulation
-    what = (f"this run needs about {need:.3g} GB ({sim.duration:g} s at {sim.control_period:g} s per step, "
-            f"{n} joints)")
+    what = (
+        f"this run needs about {need:.3g} GB ({sim.duration:g} s at {sim.control_period:g} s per step, "
+        f"{n} joints)"
+    )
     if need > sim.memory_limit:
-        raise ConfigError("simulation.memory_limit",
-                          f"{what} and the limit is {sim.memory_limit:g} GB; "
-                          "shorten simulation.duration, lengthen control_period or raise memory_limit")
+        raise ConfigError(
+            "simulation.memory_limit",
+            f"{what} and the limit is {sim.memory_limit:g} GB; "
+            "shorten simulation.duration, lengthen control_period or raise memory_limit",
+        )
     available = available_memory()
     if available is not None and need > available / 1e9:
-        raise ConfigError("simulation.memory_limit",
-                          f"{what} and this machine has {available / 1e9:.3g} GB available; "
-                          "shorten simulation.duration or lengthen control_period")
+        raise ConfigError(
+            "simulation.memory_limit",
+            f"{what} and this machine has {available / 1e9:.3g} GB available; "
+            "shorten simulation.duration or lengthen control_period",
+        )
 
 
 def choose_backend(setup: Setup) -> str:
@@ -804,8 +921,15 @@ def run_experiment(config: ExperimentConfig, progress=None, setup: Setup | None 
         trace = simulate_hybrid(setup, sim.duration)
     else:
         trace = simulate(
-            setup.plant, setup.controller, setup.q0, setup.v0, sim.duration,
-            sim.control_period, setup.substeps, sim.integrator, step_rotation_limit(config),
+            setup.plant,
+            setup.controller,
+            setup.q0,
+            setup.v0,
+            sim.duration,
+            sim.control_period,
+            setup.substeps,
+            sim.integrator,
+            step_rotation_limit(config),
             progress=progress,
         )
     wall = time.perf_counter() - start
@@ -813,16 +937,29 @@ def run_experiment(config: ExperimentConfig, progress=None, setup: Setup | None 
         progress(float(trace.t[-1]), trace.q[-1])
     if trace.status == "diverged":
         trace.message += "; " + likely_cause(setup, trace)
-    result = Result.from_trace(trace, setup.robot, setup.trajectory, setup.criterion, config, wall,
-                               setup.plant.torque_limit, setup.substeps)
+    result = Result.from_trace(
+        trace,
+        setup.robot,
+        setup.trajectory,
+        setup.criterion,
+        config,
+        wall,
+        setup.plant.torque_limit,
+        setup.substeps,
+    )
     result.backend = backend
     engine = setup.plant.engine
     if engine is not None:
         from .plant.mujoco_engine import AUDIT_STATES, AUDIT_TOLERANCE, mujoco_version
 
         result.plant_engine = "mujoco"
-        result.engine_audit = {"version": mujoco_version(), "integrator": engine.integrator,
-                               "states": AUDIT_STATES, "tolerance": AUDIT_TOLERANCE, **engine.audit}
+        result.engine_audit = {
+            "version": mujoco_version(),
+            "integrator": engine.integrator,
+            "states": AUDIT_STATES,
+            "tolerance": AUDIT_TOLERANCE,
+            **engine.audit,
+        }
     if result.config:
         result.config = provenance_header(config) + result.config
     return result
@@ -837,16 +974,22 @@ def likely_cause(setup: Setup, trace) -> str:
         grad = config.controller.k * np.abs(setup.criterion.gradient(robot, q))
         i = int(np.argmax(grad))
         if grad[i] > 1e3:
-            return (f"likely cause: an exploding criterion gradient (k dh/dq = {grad[i]:.3g} on joint "
-                    f"{names[i]!r}); lower controller.k or check subtasks.criteria")
+            return (
+                f"likely cause: an exploding criterion gradient (k dh/dq = {grad[i]:.3g} on joint "
+                f"{names[i]!r}); lower controller.k or check subtasks.criteria"
+            )
     effort, bad = robot.effort_limits, implausible_efforts(robot)
     if np.any(bad) and setup.plant.torque_limit is not None:
         i = int(np.flatnonzero(bad)[np.argmax(effort[bad])])
-        return (f"likely cause: an implausible effort limit ({effort[i]:.3g} on joint {names[i]!r}, over "
-                f"{PLAUSIBLE_EFFORT_RATIO:g}x what the arm needs), so torque saturation does not bound the "
-                "command; set plant.torque_limits or the URDF's effort")
+        return (
+            f"likely cause: an implausible effort limit ({effort[i]:.3g} on joint {names[i]!r}, over "
+            f"{PLAUSIBLE_EFFORT_RATIO:g}x what the arm needs), so torque saturation does not bound the "
+            "command; set plant.torque_limits or the URDF's effort"
+        )
     if setup.plant.torque_limit is None:
         peak = float(np.nanmax(np.abs(trace.tau_cmd))) if trace.tau_cmd.size else float("nan")
-        return (f"likely cause: the commanded torque grew without bound (peak {peak:.3g} N m) with no "
-                "actuator limits (plant.torque_limits = 'none')")
+        return (
+            f"likely cause: the commanded torque grew without bound (peak {peak:.3g} N m) with no "
+            "actuator limits (plant.torque_limits = 'none')"
+        )
     return "likely cause: the closed loop is unstable for these gains and this model error"

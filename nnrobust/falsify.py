@@ -292,8 +292,9 @@ class _Driver:
         """
         planned = self.finished + total
         while any(s.remaining > 0 for s in searches.values()):
-            asked = {key: search.ask(self.workers) for key, search in searches.items()
-                     if search.remaining > 0}
+            asked = {
+                key: search.ask(self.workers) for key, search in searches.items() if search.remaining > 0
+            }
             futures = {}
             for key, points in asked.items():
                 for offset, (_, u) in enumerate(points):
@@ -301,21 +302,34 @@ class _Driver:
                     cached = self.done.get((*key, index))
                     if cached is None or not np.allclose(cached["u"], u, atol=1e-12):
                         futures[(key, index)] = self.client.submit(
-                            evaluate, self.sweep, self.base_toml, key[0], boxes[key].values(u),
-                            self.properties, pure=False, retries=1)
+                            evaluate,
+                            self.sweep,
+                            self.base_toml,
+                            key[0],
+                            boxes[key].values(u),
+                            self.properties,
+                            pure=False,
+                            retries=1,
+                        )
             new = []
             for key, points in asked.items():
                 for phase, u in points:
                     index = len(rows[key])
                     if (key, index) in futures:
-                        row = {"controller": key[0], "search": key[1], "index": index, "phase": phase,
-                               "u": [float(x) for x in u], "values": boxes[key].values(u),
-                               **futures[(key, index)].result()}
+                        row = {
+                            "controller": key[0],
+                            "search": key[1],
+                            "index": index,
+                            "phase": phase,
+                            "u": [float(x) for x in u],
+                            "values": boxes[key].values(u),
+                            **futures[(key, index)].result(),
+                        }
                         new.append(row)
                     else:
                         row = self.done[(*key, index)]
                     rows[key].append(row)
-                searches[key].tell(points, [r["objective"] for r in rows[key][-len(points):]])
+                searches[key].tell(points, [r["objective"] for r in rows[key][-len(points) :]])
                 if stop_at_violation and any(r["objective"] < 0 for r in rows[key]):
                     searches[key].budget = searches[key].asked  # a violation is all the margin needs
             if new:
@@ -344,8 +358,14 @@ class _Bracket:
         """
         worst = min(history, key=lambda r: r["objective"])
         violated = worst["objective"] < 0
-        self.steps.append({"scale": scale, "falsified": violated, "simulations": len(history),
-                           "least_margin": worst["objective"]})
+        self.steps.append(
+            {
+                "scale": scale,
+                "falsified": violated,
+                "simulations": len(history),
+                "least_margin": worst["objective"],
+            }
+        )
         if violated:
             self.high, self.plant = scale, worst
         else:
@@ -391,9 +411,14 @@ def _margins(spec: FalsifySpec, sweep, box: Box, rows: dict, drive: _Driver) -> 
         if b.plant is not None:
             command = rerun_command(sweep, Sample(-1, b.plant["values"], sample_seed(sweep.seed, 0)), name)
             plant = {"values": b.plant["values"], "margins": b.plant["margins"], "command": command}
-        out[name] = {"holds_up_to": b.low if b.low is not None else 0.0, "violated_at": b.high,
-                     "largest_scale": b.cap, "simulations": sum(x["simulations"] for x in b.steps[1:]),
-                     "steps": b.steps, "violating_plant": plant}
+        out[name] = {
+            "holds_up_to": b.low if b.low is not None else 0.0,
+            "violated_at": b.high,
+            "largest_scale": b.cap,
+            "simulations": sum(x["simulations"] for x in b.steps[1:]),
+            "steps": b.steps,
+            "violating_plant": plant,
+        }
     return out
 
 
@@ -436,8 +461,15 @@ def prepare_folder(spec: FalsifySpec, folder: Path, overwrite: bool) -> None:
     """
     from .study_folder import prepare, write_new
 
-    outputs = (HISTORY, MARKER, "summary.json", "falsification.csv", "convergence.png", "convergence.svg",
-               WORST)
+    outputs = (
+        HISTORY,
+        MARKER,
+        "summary.json",
+        "falsification.csv",
+        "convergence.png",
+        "convergence.svg",
+        WORST,
+    )
     prepare(folder, "falsify", spec.to_toml(), outputs, overwrite, "search")
     (folder / HISTORY).mkdir(exist_ok=True)
     write_new(folder / f".{MARKER}.partial", spec.to_toml())

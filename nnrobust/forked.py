@@ -90,9 +90,14 @@ class ForkedJobs:
     (an error, Ctrl-C, nothing to draw) stops the first worker.
     """
 
-    def __init__(self, jobs: Sequence[Callable[[Any], None]], weights: Sequence[float] | None = None,
-                 workers: int | None = None, prepare: Callable[[], None] | None = None,
-                 load: Callable[[Any], Any] | None = None):
+    def __init__(
+        self,
+        jobs: Sequence[Callable[[Any], None]],
+        weights: Sequence[float] | None = None,
+        workers: int | None = None,
+        prepare: Callable[[], None] | None = None,
+        load: Callable[[Any], Any] | None = None,
+    ):
         self._jobs = list(jobs)
         self._weights = [1.0] * len(self._jobs) if weights is None else list(weights)
         workers = default_workers() if workers is None else workers
@@ -290,7 +295,7 @@ def _worker(work: Callable[[], list[dict]], write: int, parent: int) -> None:  #
 def _write_all(fd: int, data: bytes) -> None:
     view = memoryview(data)
     while view:
-        view = view[os.write(fd, view):]
+        view = view[os.write(fd, view) :]
 
 
 def _read_all(fd: int) -> bytes:
@@ -313,8 +318,12 @@ def _category(category):
 
 def _error_record(err: BaseException) -> dict:
     if isinstance(err, OSError):
-        return {"kind": "OSError", "errno": err.errno, "strerror": err.strerror or str(err),
-                "filename": None if err.filename is None else str(err.filename)}
+        return {
+            "kind": "OSError",
+            "errno": err.errno,
+            "strerror": err.strerror or str(err),
+            "filename": None if err.filename is None else str(err.filename),
+        }
     if isinstance(err, KeyboardInterrupt):
         return {"kind": "KeyboardInterrupt"}
     return {"kind": "error", "text": "".join(traceback.format_exception(err)).strip()}

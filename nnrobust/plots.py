@@ -37,7 +37,7 @@ def envelope(t: np.ndarray, y: np.ndarray, buckets: int = MAX_BUCKETS) -> tuple[
     keep = [np.array([0, n - 1])]
     for start, count, length in ((0, longer, size + 1), (longer * (size + 1), buckets - longer, size)):
         if count:
-            blocks = y[start: start + count * length].reshape(count, length)
+            blocks = y[start : start + count * length].reshape(count, length)
             offsets = start + np.arange(count) * length
             keep += [blocks.argmin(axis=1) + offsets, blocks.argmax(axis=1) + offsets]
     index = np.unique(np.concatenate(keep))
@@ -91,8 +91,9 @@ def _save(fig, folder: Path, name: str) -> list[Path]:
     ink = None if raster is None else _ink_box(raster)
     if ink is not None:
         (r0, r1), (c0, c1) = ink  # pixel rows from the top, columns from the left
-        crop = Bbox.from_extents(room.x0 + c0 / DPI, room.y1 - r1 / DPI,
-                                 room.x0 + c1 / DPI, room.y1 - r0 / DPI)
+        crop = Bbox.from_extents(
+            room.x0 + c0 / DPI, room.y1 - r1 / DPI, room.x0 + c1 / DPI, room.y1 - r0 / DPI
+        )
     else:
         crop = fig.get_tightbbox(fig.canvas.get_renderer()).padded(PAD)
     paths = []
@@ -132,12 +133,19 @@ def _ink_box(raster: np.ndarray) -> tuple[tuple[int, int], tuple[int, int]] | No
     """
     ink = np.any(raster != raster[0, 0], axis=2)
     rows, columns = np.flatnonzero(ink.any(axis=1)), np.flatnonzero(ink.any(axis=0))
-    if rows.size == 0 or rows[0] == 0 or columns[0] == 0 or rows[-1] == ink.shape[0] - 1 or (
-            columns[-1] == ink.shape[1] - 1):
+    if (
+        rows.size == 0
+        or rows[0] == 0
+        or columns[0] == 0
+        or rows[-1] == ink.shape[0] - 1
+        or (columns[-1] == ink.shape[1] - 1)
+    ):
         return None
     pad = int(round(PAD * DPI))
-    return ((max(rows[0] - pad, 0), min(rows[-1] + 1 + pad, ink.shape[0])),
-            (max(columns[0] - pad, 0), min(columns[-1] + 1 + pad, ink.shape[1])))
+    return (
+        (max(rows[0] - pad, 0), min(rows[-1] + 1 + pad, ink.shape[0])),
+        (max(columns[0] - pad, 0), min(columns[-1] + 1 + pad, ink.shape[1])),
+    )
 
 
 AXES = ("x", "y", "z")
@@ -145,8 +153,13 @@ AXES = ("x", "y", "z")
 
 def legend_outside(ax, **kwargs):
     """The legend to the right of the axes, off the data."""
-    return ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0,
-                     fontsize=kwargs.pop("fontsize", 8), **kwargs)
+    return ax.legend(
+        loc="upper left",
+        bbox_to_anchor=(1.01, 1.0),
+        borderaxespad=0.0,
+        fontsize=kwargs.pop("fontsize", 8),
+        **kwargs,
+    )
 
 
 def _position_size(result: Result) -> int:
@@ -207,14 +220,17 @@ class DrawingPlane:
             ax.set_ylabel("y [m]")
 
 
-def plot_path_in_plane(result: Result, ax, label: str = "actual", legend: bool = True,
-                       plane: DrawingPlane | None = None) -> None:
+def plot_path_in_plane(
+    result: Result, ax, label: str = "actual", legend: bool = True, plane: DrawingPlane | None = None
+) -> None:
     """Desired vs actual end-effector path (Figs. 1, 4) in the x-y plane of a planar task, else
     projected on the desired path's own plane (:func:`path_plane`).
     """
     plane = plane or DrawingPlane.of(result)
-    for data, style, name in ((result.x_d, dict(ls="--", color="k", lw=1.5), "desired $x_d$"),
-                              (result.x, dict(lw=1.0, color="C0"), label)):
+    for data, style, name in (
+        (result.x_d, dict(ls="--", color="k", lw=1.5), "desired $x_d$"),
+        (result.x, dict(lw=1.0, color="C0"), label),
+    ):
         ax.plot(*plane.project(_path(data)).T, label=name, **style)
     ax.plot(*plane.project(result.x[0]), "o", ms=4, color="C0", label="start")
     plane.label(ax)
@@ -246,8 +262,10 @@ def _path_figure(result: Result):
     plane = DrawingPlane.of(result)
     normal = np.cross(*plane.axes)
     normal *= np.sign(normal[2]) if normal[2] else 1.0
-    view.view_init(elev=float(np.degrees(np.arcsin(np.clip(normal[2], -1, 1)))) * 0.6 + 15,
-                   azim=float(np.degrees(np.arctan2(normal[1], normal[0]))) + 25)  # the path face-on, tilted
+    view.view_init(
+        elev=float(np.degrees(np.arcsin(np.clip(normal[2], -1, 1)))) * 0.6 + 15,
+        azim=float(np.degrees(np.arctan2(normal[1], normal[0]))) + 25,
+    )  # the path face-on, tilted
     view.set_xlabel("x [m]")
     view.set_ylabel("y [m]")
     view.zaxis.set_rotate_label(False)  # mplot3d would turn it upside down at some view angles
@@ -277,8 +295,9 @@ def readable_log_ticks(ax) -> None:
     low, high = ax.get_ylim()
     if low > 0 and high / low < 1e3:
         ax.yaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(_plain_label))
-        ax.yaxis.set_minor_formatter(matplotlib.ticker.FuncFormatter(
-            lambda value, position: _plain_label(value, position, (2, 5))))
+        ax.yaxis.set_minor_formatter(
+            matplotlib.ticker.FuncFormatter(lambda value, position: _plain_label(value, position, (2, 5)))
+        )
 
 
 def log_floor(*series: np.ndarray) -> float:
@@ -290,7 +309,7 @@ def log_floor(*series: np.ndarray) -> float:
     values = values[np.isfinite(values) & (values > 0)]
     if values.size == 0:
         return 1e-12
-    late = np.concatenate([np.asarray(s, dtype=float)[len(s) // 2:] for s in series])
+    late = np.concatenate([np.asarray(s, dtype=float)[len(s) // 2 :] for s in series])
     late = late[np.isfinite(late) & (late > 0)]
     floor = 0.5 * float(np.min(late)) if late.size else float(np.min(values))
     return max(floor, float(np.max(values)) * 1e-6)
@@ -302,11 +321,13 @@ def _errors_figure(result: Result):
     """
     t, npos, pose = result.t, _position_size(result), result.e.shape[1] == 6
     parts: list[tuple[str, str, np.ndarray, np.ndarray, tuple[str, ...]]] = [
-        ("position", "mm", result.e[:, :npos], result.position_error(), AXES)]
+        ("position", "mm", result.e[:, :npos], result.position_error(), AXES)
+    ]
     orientation = result.orientation_error()
     if pose and orientation is not None:
-        parts.append(("orientation", "mrad", result.e[:, 3:6], orientation,
-                      tuple(f"\\theta {a}" for a in AXES)))
+        parts.append(
+            ("orientation", "mrad", result.e[:, 3:6], orientation, tuple(f"\\theta {a}" for a in AXES))
+        )
     fig, axes = plt.subplots(2 * len(parts), 1, figsize=(7, 3.6 * len(parts) + 1.6), sharex=True)
     fig.subplots_adjust(hspace=0.3)
     for k, (what, unit, components, norm, names) in enumerate(parts):
@@ -345,8 +366,11 @@ def _joint_series_figure(result: Result, name: str):
         data, lw, units = result.tau, 0.6, _unit(result, "N m", "N")
         title = "Applied joint torques (dotted: effort limits; faint: commanded where it differs)"
         limits = (None if result.torque_limit is None else -result.torque_limit, result.torque_limit)
-    quantity = "joint position" if name == "joints" else ("joint torque" if set(units) == {"N m"}
-                                                          else "joint torque or force")
+    quantity = (
+        "joint position"
+        if name == "joints"
+        else ("joint torque" if set(units) == {"N m"} else "joint torque or force")
+    )
     ylabel = f"{quantity} [{' or '.join(sorted(set(units), key=units.index))}]"
     fig, ax = plt.subplots(figsize=(7, 3.5))
     top = None
@@ -361,7 +385,7 @@ def _joint_series_figure(result: Result, name: str):
         if bounds:  # each joint's legend entry names its own limits, drawn or off the axis
             shown = [b for b in bounds if top is None or abs(b) <= top]
             label += f" ({_limit_text(bounds)}{'' if len(shown) == len(bounds) else ', off the axis'})"
-        line, = _series(ax.plot, t, data[:, i], lw=lw, label=label)
+        (line,) = _series(ax.plot, t, data[:, i], lw=lw, label=label)
         commanded = result.tau_cmd if name == "torques" else None
         if commanded is not None and np.any(commanded[:, i] != data[:, i]):
             _series(ax.plot, t, commanded[:, i], lw=0.4, alpha=0.35, color=line.get_color())
@@ -392,9 +416,15 @@ def criterion_units(name: str, m: int) -> str:
     """The unit of one criterion h_i for a task of size m (the joint criteria are ratios)."""
     manipulability = MANIPULABILITY_UNITS.get(m, "mixed")
     squared = {2: "m$^4$", 3: "m$^6$", 6: "m$^6$"}.get(m, "mixed")
-    return {"manipulability": manipulability, "half_det_manipulability": squared,
-            "joint_limits": "1", "joint_centering": "1", "joint_smoothness": "rad$^2$",
-            "obstacles": "m$^2$", "paper": "m$^4$ + rad$^2$"}.get(name, "mixed")
+    return {
+        "manipulability": manipulability,
+        "half_det_manipulability": squared,
+        "joint_limits": "1",
+        "joint_centering": "1",
+        "joint_smoothness": "rad$^2$",
+        "obstacles": "m$^2$",
+        "paper": "m$^4$ + rad$^2$",
+    }.get(name, "mixed")
 
 
 def _criterion_formula(name: str) -> str:
@@ -417,16 +447,22 @@ def _criterion_name(result: Result) -> tuple[str, str]:
     from .config import default_criteria
 
     m = result.e.shape[1]
-    names = sub.criteria if sub.criteria is not None else default_criteria(
-        result.q.shape[1], {2: "planar", 6: "pose"}.get(m, "position"))
+    names = (
+        sub.criteria
+        if sub.criteria is not None
+        else default_criteria(result.q.shape[1], {2: "planar", 6: "pose"}.get(m, "position"))
+    )
     if not names:
         return "no subtask criterion", "-"
     weights = sub.weights or [sub.C / len(names)] * len(names)
     units = [criterion_units(c, m) for c in names]
     unit = " + ".join(dict.fromkeys(units))  # a weighted sum of terms of different units
-    terms = [(c if w == 1 else f"{w:g} {c}") if c != "paper" else
-             (_criterion_formula(c) if w == 1 else f"{w:g} [{_criterion_formula(c)}]")
-             for w, c in zip(weights, names)]
+    terms = [
+        (c if w == 1 else f"{w:g} {c}")
+        if c != "paper"
+        else (_criterion_formula(c) if w == 1 else f"{w:g} [{_criterion_formula(c)}]")
+        for w, c in zip(weights, names)
+    ]
     return "h(q) = " + " + ".join(terms), unit
 
 
@@ -517,9 +553,11 @@ def comparison_warnings(results: dict[str, Result]) -> list[str]:
             configs[label] = None
     said = []
     readable = {k: c for k, c in configs.items() if c is not None}
-    for what, get in (("robot", lambda c: (c.robot.source, c.robot.chain, c.robot.task_frame)),
-                      ("task", lambda c: c.robot.task),
-                      ("desired trajectory", lambda c: c.trajectory)):
+    for what, get in (
+        ("robot", lambda c: (c.robot.source, c.robot.chain, c.robot.task_frame)),
+        ("task", lambda c: c.robot.task),
+        ("desired trajectory", lambda c: c.trajectory),
+    ):
         values = {label: get(c) for label, c in readable.items()}
         if len({repr(v) for v in values.values()}) > 1:
             shown = "; ".join(f"{label}: {_short(v)}" for label, v in values.items())
@@ -546,8 +584,9 @@ def plot_comparison(results: dict[str, Result], folder: str | Path) -> list[Path
     for i, (name, res) in enumerate(results.items()):
         color = f"C{i % 10}"
         for data, style in ((res.x_d, {"ls": "--", "lw": 1.2}), (res.x, {"lw": 0.9})):
-            axes[0].plot(*plane.project(_path(data)).T, color=color,
-                         label=name if data is res.x else None, **style)
+            axes[0].plot(
+                *plane.project(_path(data)).T, color=color, label=name if data is res.x else None, **style
+            )
         _series(axes[1].semilogy, res.t, np.maximum(1e3 * res.position_error(), 1e-9), lw=0.8, color=color)
         _series(axes[2].plot, res.t, np.linalg.norm(res.tau, axis=1), lw=0.5, color=color)
     axes[1].set_ylim(bottom=log_floor(*(1e3 * r.position_error() for r in results.values())))
@@ -556,8 +595,9 @@ def plot_comparison(results: dict[str, Result], folder: str | Path) -> list[Path
     for axis in (axes[0].xaxis, axes[0].yaxis):  # a narrow panel: few ticks, so that labels do not touch
         axis.set_major_locator(matplotlib.ticker.MaxNLocator(4))
     plane.label(axes[0])
-    axes[0].set_title("paths (dashed: desired)" + (" in the first run's path plane" if plane.spatial else ""),
-                      fontsize=9)
+    axes[0].set_title(
+        "paths (dashed: desired)" + (" in the first run's path plane" if plane.spatial else ""), fontsize=9
+    )
     axes[1].set_xlabel("t [s]")
     axes[1].set_ylabel("|position error| [mm]")
     axes[2].set_xlabel("t [s]")

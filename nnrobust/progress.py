@@ -13,8 +13,9 @@ class ProgressBar:
     log file, CI) a line is printed every 25 % of the run.
     """
 
-    def __init__(self, duration: float, stream=None, delay: float = 1.0, interval: float = 0.2,
-                 width: int = 30):
+    def __init__(
+        self, duration: float, stream=None, delay: float = 1.0, interval: float = 0.2, width: int = 30
+    ):
         self.duration = duration
         self.stream = stream or sys.stderr
         self.delay, self.interval, self.width = delay, interval, width
@@ -30,8 +31,7 @@ class ProgressBar:
         done = min(max(t / self.duration, 0.0), 1.0) if self.duration > 0 else 1.0
         bar = "#" * int(round(done * self.width))
         speed = t / wall if wall > 0 else 0.0
-        return (f"[{bar:<{self.width}s}] {t:7.2f} / {self.duration:.2f} s simulated, "
-                f"{speed:5.2f}x real time")
+        return f"[{bar:<{self.width}s}] {t:7.2f} / {self.duration:.2f} s simulated, {speed:5.2f}x real time"
 
     def __call__(self, t: float, q=None) -> None:
         """Report simulated time t (q is accepted for the simulate() callback signature)."""

@@ -68,8 +68,11 @@ def parse(text: str, metrics: list[str] | tuple[str, ...], flags: tuple[str, ...
     key = f"--require {text!r}"
     match = PATTERN.match(text)
     if not match:
-        raise ConfigError(key, f"is not METRIC OP VALUE with OP one of {' '.join(OPERATORS)}, e.g. "
-                          "rms_error_after_2s<=0.05 or runaway==false")
+        raise ConfigError(
+            key,
+            f"is not METRIC OP VALUE with OP one of {' '.join(OPERATORS)}, e.g. "
+            "rms_error_after_2s<=0.05 or runaway==false",
+        )
     metric, op, raw = match.groups()
     if metric not in metrics and metric not in flags:
         close = difflib.get_close_matches(metric, [*metrics, *flags], n=1)
@@ -142,10 +145,17 @@ def certificate(prop: Property, margins: list[float], epsilon: float, beta: floa
     n = len(margins)
     failures = sum(1 for m in margins if not (m > 0 if prop.op in ("<", ">") else m >= 0))
     upper = clopper_pearson_upper(failures, n, beta) if n else 1.0
-    return {"property": prop.text, "N": n, "k": failures, "epsilon": epsilon, "beta": beta,
-            "p_upper": upper, "holds": bool(n and upper <= epsilon),
-            "method": "one-sided Clopper-Pearson (exact binomial) bound on P(fail) over the sweep's "
-                      "distribution; the samples are independent draws of it"}
+    return {
+        "property": prop.text,
+        "N": n,
+        "k": failures,
+        "epsilon": epsilon,
+        "beta": beta,
+        "p_upper": upper,
+        "holds": bool(n and upper <= epsilon),
+        "method": "one-sided Clopper-Pearson (exact binomial) bound on P(fail) over the sweep's "
+        "distribution; the samples are independent draws of it",
+    }
 
 
 def wilks_upper(values: list[float], quantile: float, beta: float) -> float | None:
@@ -175,8 +185,11 @@ def certify(spec, frame, properties: list[Property], epsilon: float, beta: float
     distribution = hashlib.sha256(described.encode()).hexdigest()
     for controller in spec.controllers:
         rows = frame[frame["controller"] == controller]
-        cells = [((), rows)] if not spec.grid_keys else [
-            (key, group) for key, group in rows.groupby(spec.grid_keys, sort=True, dropna=False)]
+        cells = (
+            [((), rows)]
+            if not spec.grid_keys
+            else [(key, group) for key, group in rows.groupby(spec.grid_keys, sort=True, dropna=False)]
+        )
         certificates, bounds = [], []
         for cell, group in cells:
             records = group.to_dict("records")
@@ -186,14 +199,22 @@ def certify(spec, frame, properties: list[Property], epsilon: float, beta: float
                 entry.update(distribution=distribution, **({"grid": where} if where else {}))
                 certificates.append(entry)
                 if prop.op in ("<=", "<", ">=", ">"):
-                    values = [float(r[prop.metric]) if r.get("status") == "completed" else math.inf
-                              for r in records]
+                    values = [
+                        float(r[prop.metric]) if r.get("status") == "completed" else math.inf for r in records
+                    ]
                     low = prop.op in (">=", ">")
                     bound = wilks_upper([-v for v in values] if low else values, 1 - epsilon, beta)
-                    bounds.append({"metric": prop.metric, "quantile": 1 - epsilon, "confidence": 1 - beta,
-                                   "bound": None if bound is None else (-bound if low else bound),
-                                   "side": "lower" if low else "upper", "N": len(records),
-                                   **({"grid": where} if where else {})})
+                    bounds.append(
+                        {
+                            "metric": prop.metric,
+                            "quantile": 1 - epsilon,
+                            "confidence": 1 - beta,
+                            "bound": None if bound is None else (-bound if low else bound),
+                            "side": "lower" if low else "upper",
+                            "N": len(records),
+                            **({"grid": where} if where else {}),
+                        }
+                    )
         out[controller] = {"certificates": certificates, "quantile_bounds": bounds}
     return out
 
@@ -205,12 +226,16 @@ def format_certificates(certified: dict[str, dict]) -> list[str]:
         for c in entry["certificates"]:
             where = "".join(f" {k}={v}" for k, v in c.get("grid", {}).items())
             verdict = "holds" if c["holds"] else "not shown"
-            lines.append(f"{controller}{where}: P({c['property']} fails) <= {c['p_upper']:.3g} with "
-                         f"confidence {1 - c['beta']:g} (N = {c['N']}, k = {c['k']}); P(fail) <= "
-                         f"{c['epsilon']:g}: {verdict}")
+            lines.append(
+                f"{controller}{where}: P({c['property']} fails) <= {c['p_upper']:.3g} with "
+                f"confidence {1 - c['beta']:g} (N = {c['N']}, k = {c['k']}); P(fail) <= "
+                f"{c['epsilon']:g}: {verdict}"
+            )
         for b in entry["quantile_bounds"]:
             if b["bound"] is not None:
                 side = "<=" if b["side"] == "upper" else ">="
-                lines.append(f"{controller}: with confidence {b['confidence']:g}, {100 * b['quantile']:g} % "
-                             f"of plants give {b['metric']} {side} {b['bound']:.4g} (Wilks, N = {b['N']})")
+                lines.append(
+                    f"{controller}: with confidence {b['confidence']:g}, {100 * b['quantile']:g} % "
+                    f"of plants give {b['metric']} {side} {b['bound']:.4g} (Wilks, N = {b['N']})"
+                )
     return lines

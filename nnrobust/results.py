@@ -122,8 +122,17 @@ class Result:
     engine_audit: dict | None = None
 
     @classmethod
-    def from_trace(cls, trace, robot, trajectory, criterion, config, wall_seconds: float,
-                   torque_limit: np.ndarray | None = None, substeps: int = 1) -> Result:
+    def from_trace(
+        cls,
+        trace,
+        robot,
+        trajectory,
+        criterion,
+        config,
+        wall_seconds: float,
+        torque_limit: np.ndarray | None = None,
+        substeps: int = 1,
+    ) -> Result:
         """Add task-space quantities (true kinematics) and the criterion to a simulation trace
         (those the loop recorded already are taken as they are).
         """
@@ -155,10 +164,25 @@ class Result:
             e = x - x_d
         signals = dict(trace.signals, h=h, manipulability=manip)
         return cls(
-            trace.t, trace.q, trace.dq, trace.tau, x, x_d, e, signals, trace.status,
-            trace.message, config.to_toml() if config is not None else "", wall_seconds,
-            list(robot.joint_names), chain, trace.tau_cmd, torque_limit, robot.lower_limits,
-            robot.upper_limits, robot.prismatic,
+            trace.t,
+            trace.q,
+            trace.dq,
+            trace.tau,
+            x,
+            x_d,
+            e,
+            signals,
+            trace.status,
+            trace.message,
+            config.to_toml() if config is not None else "",
+            wall_seconds,
+            list(robot.joint_names),
+            chain,
+            trace.tau_cmd,
+            torque_limit,
+            robot.lower_limits,
+            robot.upper_limits,
+            robot.prismatic,
             plant_step=(config.simulation.control_period / substeps if config is not None else float("nan")),
             friction_events=trace.friction_events,
             unresolved_events=trace.unresolved_events,
@@ -200,8 +224,11 @@ class Result:
         tau_cmd = self.tau if self.tau_cmd is None else self.tau_cmd
         saturated, torque_ratio = verdicts.saturation(tau_cmd, self.torque_limit)
         lower, upper = self.lower_limit, self.upper_limit
-        violation, violating = (verdicts.joint_limit_violation(self.q, lower, upper)
-                                if lower is not None and upper is not None else (0.0, -1))
+        violation, violating = (
+            verdicts.joint_limit_violation(self.q, lower, upper)
+            if lower is not None and upper is not None
+            else (0.0, -1)
+        )
         runaway, rms_early, rms_late = verdicts.runaway(self.t, err)
         growing, rho_middle, rho_late = verdicts.rho_growing(self.t, rho)
         degraded, h_start, h_end = verdicts.subtask_loss(self.signals.get("h"))
@@ -258,8 +285,11 @@ class Result:
             out["max_orientation_error"] = float(turn.max()) if turn.size else float("nan")
         if self.message:
             out["message"] = self.message
-        units = ["m/s" if p else "rad/s" for p in self.prismatic] if self.prismatic is not None else (
-            ["rad/s"] * self.q.shape[1])
+        units = (
+            ["m/s" if p else "rad/s" for p in self.prismatic]
+            if self.prismatic is not None
+            else (["rad/s"] * self.q.shape[1])
+        )
         out["warnings"] = verdicts.run_warnings(out, self.joint_names, units)
         return out
 
@@ -267,15 +297,25 @@ class Result:
     def summary_rows(self) -> list[tuple[str, str]]:
         """(quantity, value) of the headline metrics, errors in mm: what a notebook shows."""
         m = self.metrics()
-        rows = [("status", str(m["status"])), ("backend", self.backend), ("plant engine", self.plant_engine),
-                ("simulated", f"{self.t[-1] + (self.t[1] - self.t[0] if self.t.size > 1 else 0):.3g} s"
-                 if self.t.size else "0 s")]
-        for key, label, scale, unit in (("rms_error", "RMS error", 1e3, "mm"),
-                                        ("rms_error_after_2s", "RMS error, t >= 2 s", 1e3, "mm"),
-                                        ("max_error", "max error", 1e3, "mm"),
-                                        ("rms_torque", "RMS torque", 1.0, "N m"),
-                                        ("torque_chatter", "chatter", 1.0, "N m"),
-                                        ("saturated_fraction", "saturated steps", 100.0, "%")):
+        rows = [
+            ("status", str(m["status"])),
+            ("backend", self.backend),
+            ("plant engine", self.plant_engine),
+            (
+                "simulated",
+                f"{self.t[-1] + (self.t[1] - self.t[0] if self.t.size > 1 else 0):.3g} s"
+                if self.t.size
+                else "0 s",
+            ),
+        ]
+        for key, label, scale, unit in (
+            ("rms_error", "RMS error", 1e3, "mm"),
+            ("rms_error_after_2s", "RMS error, t >= 2 s", 1e3, "mm"),
+            ("max_error", "max error", 1e3, "mm"),
+            ("rms_torque", "RMS torque", 1.0, "N m"),
+            ("torque_chatter", "chatter", 1.0, "N m"),
+            ("saturated_fraction", "saturated steps", 100.0, "%"),
+        ):
             value = m.get(key)
             if value is not None:
                 rows.append((label, f"{scale * value:.4g} {unit}"))
@@ -288,8 +328,9 @@ class Result:
         import html
         import io
 
-        table = "".join(f"<tr><td>{html.escape(k)}</td><td>{html.escape(v)}</td></tr>"
-                        for k, v in self.summary_rows())
+        table = "".join(
+            f"<tr><td>{html.escape(k)}</td><td>{html.escape(v)}</td></tr>" for k, v in self.summary_rows()
+        )
         images = []
         from . import plots
 
@@ -300,8 +341,10 @@ class Result:
             buffer = io.BytesIO()
             fig.savefig(buffer, format="png", dpi=80, bbox_inches="tight")
             plots.plt.close(fig)
-            images.append(f'<img src="data:image/png;base64,{base64.b64encode(buffer.getvalue()).decode()}" '
-                          f'alt="{name}" style="max-width:48%">')
+            images.append(
+                f'<img src="data:image/png;base64,{base64.b64encode(buffer.getvalue()).decode()}" '
+                f'alt="{name}" style="max-width:48%">'
+            )
         return f"<table>{table}</table><div>{''.join(images)}</div>"
 
     def save_npz(self, path: str | Path) -> None:
@@ -326,22 +369,36 @@ class Result:
             arrays = {k: data[k] for k in data.files}
         metrics = json.loads((folder / "metrics.json").read_text())
         config = (folder / "config.toml").read_text() if (folder / "config.toml").exists() else ""
-        signals = {k[len("signal_"):]: v for k, v in arrays.items() if k.startswith("signal_")}
+        signals = {k[len("signal_") :]: v for k, v in arrays.items() if k.startswith("signal_")}
         optional = {name: arrays.get(name) for name in OPTIONAL_ARRAYS}
         return cls(
-            t=arrays["t"], q=arrays["q"], dq=arrays["dq"], tau=arrays["tau"], x=arrays["x"],
-            x_d=arrays["x_d"], e=arrays["e"], signals=signals, status=metrics.get("status", "completed"),
-            message=metrics.get("message", ""), config=config,
+            t=arrays["t"],
+            q=arrays["q"],
+            dq=arrays["dq"],
+            tau=arrays["tau"],
+            x=arrays["x"],
+            x_d=arrays["x_d"],
+            e=arrays["e"],
+            signals=signals,
+            status=metrics.get("status", "completed"),
+            message=metrics.get("message", ""),
+            config=config,
             wall_seconds=metrics.get("wall_seconds", float("nan")),
-            joint_names=arrays["joint_names"].tolist(), chain=optional["chain"], tau_cmd=optional["tau_cmd"],
-            torque_limit=optional["torque_limit"], lower_limit=optional["lower_limit"],
-            upper_limit=optional["upper_limit"], prismatic=optional["prismatic"],
-            backend=metrics.get("backend", "python"), plant_step=metrics.get("plant_step", float("nan")),
+            joint_names=arrays["joint_names"].tolist(),
+            chain=optional["chain"],
+            tau_cmd=optional["tau_cmd"],
+            torque_limit=optional["torque_limit"],
+            lower_limit=optional["lower_limit"],
+            upper_limit=optional["upper_limit"],
+            prismatic=optional["prismatic"],
+            backend=metrics.get("backend", "python"),
+            plant_step=metrics.get("plant_step", float("nan")),
             friction_events=metrics.get("friction_events", 0),
             unresolved_events=metrics.get("unresolved_events", 0),
             refined_periods=metrics.get("refined_periods", 0),
             step_rotation=metrics.get("step_rotation", float("nan")),
-            plant_engine=metrics.get("plant_engine", "pinocchio"), engine_audit=metrics.get("engine_audit"),
+            plant_engine=metrics.get("plant_engine", "pinocchio"),
+            engine_audit=metrics.get("engine_audit"),
         )
 
 

@@ -82,16 +82,20 @@ def check_out_folder(folder: str | Path, overwrite: bool) -> Path:
     resolved = folder.resolve()
     cwd = Path.cwd().resolve()
     if resolved == cwd or resolved in cwd.parents or resolved == Path(resolved.anchor):
-        raise RunFolderError(f"{folder} is the working folder or one of its ancestors; choose a folder "
-                             "below it, e.g. out/my-run")
+        raise RunFolderError(
+            f"{folder} is the working folder or one of its ancestors; choose a folder "
+            "below it, e.g. out/my-run"
+        )
     if folder.exists() and not folder.is_dir():
         raise RunFolderError(f"{folder} exists and is not a folder; choose another --out")
     if folder.is_dir() and any(folder.iterdir()):
         if not overwrite:
             raise RunFolderExists(f"{folder} exists; pass --overwrite (overwrite=True) to replace it")
         if not is_run_folder(folder):
-            raise RunFolderError(f"{folder} is not a run folder (no {MARKER}); --overwrite replaces only "
-                                 "run folders nnrobust wrote. Choose another --out")
+            raise RunFolderError(
+                f"{folder} is not a run folder (no {MARKER}); --overwrite replaces only "
+                "run folders nnrobust wrote. Choose another --out"
+            )
     parent = folder.parent
     existing = next((p for p in (parent, *parent.parents) if p.exists()), None)
     if existing is not None and not existing.is_dir():
@@ -125,8 +129,10 @@ def locked(folder: str | Path):
             if err.errno not in (errno.EAGAIN, errno.EACCES):
                 raise
             holder = os.pread(fd, 32, 0).decode(errors="replace").strip() or "?"
-            raise RunFolderError(f"another nnrobust run (pid {holder}) is writing {folder}; wait for it to "
-                                 "finish or choose another --out") from None
+            raise RunFolderError(
+                f"another nnrobust run (pid {holder}) is writing {folder}; wait for it to "
+                "finish or choose another --out"
+            ) from None
         os.ftruncate(fd, 0)
         os.pwrite(fd, str(os.getpid()).encode(), 0)
         try:
@@ -189,8 +195,15 @@ def _place(tmp: Path, folder: Path) -> None:
 FIGURE_NAMES = ("path", "errors", "joints", "torques", "subtask", "snapshots", "nn")
 """The figures of a run (nnrobust.plots.FIGURES, named here so that matplotlib is not imported)."""
 
-FIGURE_WEIGHTS = {"path": 2.0, "errors": 1.1, "joints": 1.1, "torques": 0.8, "subtask": 0.9,
-                  "snapshots": 1.0, "nn": 1.2}
+FIGURE_WEIGHTS = {
+    "path": 2.0,
+    "errors": 1.1,
+    "joints": 1.1,
+    "torques": 0.8,
+    "subtask": 0.9,
+    "snapshots": 1.0,
+    "nn": 1.2,
+}
 """Relative cost of drawing each figure (measured on the Panda's run: the 3-D path costs most)."""
 
 PLOTS_PARTIAL, ANIMATION_PARTIAL = ".plots.partial", ".animation.html.partial"
@@ -225,9 +238,16 @@ class Drawing:
 
     def __init__(self, plots: bool = True, animation: bool = True):
         self.plots, self.animation = plots, animation
-        self._figures = ForkedJobs([functools.partial(_draw_figure, name=name) for name in FIGURE_NAMES],
-                                   [FIGURE_WEIGHTS[name] for name in FIGURE_NAMES],
-                                   prepare=_import_plots, load=_figure_input) if plots else None
+        self._figures = (
+            ForkedJobs(
+                [functools.partial(_draw_figure, name=name) for name in FIGURE_NAMES],
+                [FIGURE_WEIGHTS[name] for name in FIGURE_NAMES],
+                prepare=_import_plots,
+                load=_figure_input,
+            )
+            if plots
+            else None
+        )
 
     def close(self) -> None:
         """Stop the drawing processes (if :meth:`write` did not run)."""
@@ -275,8 +295,11 @@ class Drawing:
             raise
         except OSError as err:
             _clean_partials(folder)
-            warnings.warn(f"{folder}: plots or animation not written ({err.strerror or err}); the arrays "
-                          "and metrics are saved", stacklevel=3)
+            warnings.warn(
+                f"{folder}: plots or animation not written ({err.strerror or err}); the arrays "
+                "and metrics are saved",
+                stacklevel=3,
+            )
             return "failed"
         return "complete"
 
@@ -307,13 +330,21 @@ class ExtrasInterrupted(KeyboardInterrupt):
     """
 
     def __init__(self, folder: Path):
-        super().__init__(f"interrupted while writing plots; the arrays and metrics are saved in {folder}/ "
-                         f"('nnrobust plot {folder}' draws the plots)")
+        super().__init__(
+            f"interrupted while writing plots; the arrays and metrics are saved in {folder}/ "
+            f"('nnrobust plot {folder}' draws the plots)"
+        )
         self.folder = folder
 
 
-def write_run(folder: str | Path, result, overwrite: bool = False, plots: bool = True,
-              animation: bool = True, drawing: Drawing | None = None) -> Path:
+def write_run(
+    folder: str | Path,
+    result,
+    overwrite: bool = False,
+    plots: bool = True,
+    animation: bool = True,
+    drawing: Drawing | None = None,
+) -> Path:
     """Write a run folder: config.toml, result.npz, metrics.json and the marker first (atomically),
     then plots/ and animation.html (by ``drawing``, made before the simulation, whose own plots
     and animation settings then apply; else by a :class:`Drawing` made now). Returns the folder
@@ -327,14 +358,17 @@ def write_run(folder: str | Path, result, overwrite: bool = False, plots: bool =
     from .results import Result
 
     if not isinstance(result, Result):
-        raise RunFolderError(f"write_run needs a Result (what run_experiment returns), got "
-                             f"{type(result).__name__}")
+        raise RunFolderError(
+            f"write_run needs a Result (what run_experiment returns), got {type(result).__name__}"
+        )
     folder = check_out_folder(folder, overwrite)
-    if (result.status != "completed" and is_run_folder(folder) and _status_of(folder) == "completed"):
+    if result.status != "completed" and is_run_folder(folder) and _status_of(folder) == "completed":
         kept = folder
         folder = check_out_folder(folder.with_name(f"{folder.name}.{result.status}"), True)
-        warnings.warn(f"{kept} holds a completed run and is kept; this {result.status} run is written to "
-                      f"{folder}", stacklevel=2)
+        warnings.warn(
+            f"{kept} holds a completed run and is kept; this {result.status} run is written to {folder}",
+            stacklevel=2,
+        )
     tmp = folder.parent / f".{folder.name}.partial-{os.getpid()}"
     shutil.rmtree(tmp, ignore_errors=True)
     try:
@@ -344,8 +378,9 @@ def write_run(folder: str | Path, result, overwrite: bool = False, plots: bool =
     except OSError as err:
         shutil.rmtree(tmp, ignore_errors=True)
         where = "the previous run there is unchanged" if folder.exists() else "nothing was written there"
-        raise RunFolderError(f"could not write {folder} ({err.strerror or err}); {where}; "
-                             f"{_rescue_arrays(result, folder)}") from err
+        raise RunFolderError(
+            f"could not write {folder} ({err.strerror or err}); {where}; {_rescue_arrays(result, folder)}"
+        ) from err
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise
@@ -368,8 +403,9 @@ def redraw_run(folder: str | Path, plots: bool = True, animation: bool = True) -
     folder = Path(folder)
     result = load_run(folder)
     if not is_run_folder(folder):
-        raise RunFolderError(f"{folder} is not a run folder (no {MARKER}); only folders nnrobust wrote are "
-                             "drawn into")
+        raise RunFolderError(
+            f"{folder} is not a run folder (no {MARKER}); only folders nnrobust wrote are drawn into"
+        )
     with locked(folder):
         try:
             with Drawing(plots, animation) as draw:
@@ -410,17 +446,21 @@ def check_run_folder(folder: Path) -> None:
     for name in ("metrics.json", "config.toml"):
         path = folder / name
         if path.exists() and path.stat().st_size > MAX_SMALL_FILE:
-            raise RunFolderError(f"{folder}: {name} has {path.stat().st_size / 1e6:.0f} MB; a run's has a "
-                                 "few kB")
+            raise RunFolderError(
+                f"{folder}: {name} has {path.stat().st_size / 1e6:.0f} MB; a run's has a few kB"
+            )
     try:
         with zipfile.ZipFile(folder / "result.npz") as archive:
             expanded = sum(info.file_size for info in archive.infolist())
     except (zipfile.BadZipFile, OSError) as err:
-        raise RunFolderError(f"{folder}: a damaged run folder (result.npz is not an .npz archive: "
-                             f"{err})") from err
+        raise RunFolderError(
+            f"{folder}: a damaged run folder (result.npz is not an .npz archive: {err})"
+        ) from err
     if expanded > MAX_RESULT_BYTES:
-        raise RunFolderError(f"{folder}: result.npz would expand to {expanded / 1e9:.3g} GB; at most "
-                             f"{MAX_RESULT_BYTES / 1e9:g} GB is read")
+        raise RunFolderError(
+            f"{folder}: result.npz would expand to {expanded / 1e9:.3g} GB; at most "
+            f"{MAX_RESULT_BYTES / 1e9:g} GB is read"
+        )
     try:
         metrics = json.loads((folder / "metrics.json").read_text())
     except RecursionError as err:
@@ -433,17 +473,24 @@ def check_run_folder(folder: Path) -> None:
 
     for key in METRIC_UNITS:
         value = metrics.get(key)
-        if value is not None and key != "singular_episodes" and (
-                isinstance(value, bool) or not isinstance(value, (int, float))):
-            raise RunFolderError(f"{folder}: a damaged run folder (metrics.json: {key} is "
-                                 f"{type(value).__name__} {str(value)[:40]!r}, not a number)")
+        if (
+            value is not None
+            and key != "singular_episodes"
+            and (isinstance(value, bool) or not isinstance(value, (int, float)))
+        ):
+            raise RunFolderError(
+                f"{folder}: a damaged run folder (metrics.json: {key} is "
+                f"{type(value).__name__} {str(value)[:40]!r}, not a number)"
+            )
     from .plant.mujoco_engine import ENGINES
 
     engine, audit = metrics.get("plant_engine", "pinocchio"), metrics.get("engine_audit")
     if engine not in ENGINES or not (audit is None or isinstance(audit, dict)):
-        raise RunFolderError(f"{folder}: a damaged run folder (metrics.json: plant_engine "
-                             f"{str(engine)[:40]!r} is not one of {', '.join(ENGINES)}, or engine_audit "
-                             "is not a table)")
+        raise RunFolderError(
+            f"{folder}: a damaged run folder (metrics.json: plant_engine "
+            f"{str(engine)[:40]!r} is not one of {', '.join(ENGINES)}, or engine_audit "
+            "is not a table)"
+        )
 
 
 def _check_shapes(result, folder: Path) -> None:
@@ -452,8 +499,9 @@ def _check_shapes(result, folder: Path) -> None:
     """
     n_t = result.t.shape[0] if result.t.ndim == 1 else -1
     if n_t < 1:
-        raise RunFolderError(f"{folder}: a damaged run folder (result.npz: t has shape {result.t.shape}, "
-                             "not N samples)")
+        raise RunFolderError(
+            f"{folder}: a damaged run folder (result.npz: t has shape {result.t.shape}, not N samples)"
+        )
     joints = result.q.shape[1] if result.q.ndim == 2 else -1
     expected: dict[str, tuple[int, ...]] = {"q": (n_t, joints), "dq": (n_t, joints), "tau": (n_t, joints)}
     m = result.e.shape[1] if result.e.ndim == 2 else -1
@@ -464,12 +512,16 @@ def _check_shapes(result, folder: Path) -> None:
     for name, shape in expected.items():
         array = getattr(result, name)
         if joints < 1 or m < 1 or array.shape != shape:
-            raise RunFolderError(f"{folder}: a damaged run folder (result.npz: {name} has shape "
-                                 f"{array.shape}, expected {shape} for {n_t} samples)")
+            raise RunFolderError(
+                f"{folder}: a damaged run folder (result.npz: {name} has shape "
+                f"{array.shape}, expected {shape} for {n_t} samples)"
+            )
     for name, values in result.signals.items():
         if values.shape != (n_t,):
-            raise RunFolderError(f"{folder}: a damaged run folder (result.npz: signal {name!r} has shape "
-                                 f"{values.shape}, expected ({n_t},))")
+            raise RunFolderError(
+                f"{folder}: a damaged run folder (result.npz: signal {name!r} has shape "
+                f"{values.shape}, expected ({n_t},))"
+            )
 
 
 def load_run(folder: str | Path):
@@ -483,10 +535,19 @@ def load_run(folder: str | Path):
     check_run_folder(folder)
     try:
         result = Result.load(folder)
-    except (OSError, ValueError, KeyError, EOFError, TypeError, AttributeError, IndexError,
-            zipfile.BadZipFile) as err:
+    except (
+        OSError,
+        ValueError,
+        KeyError,
+        EOFError,
+        TypeError,
+        AttributeError,
+        IndexError,
+        zipfile.BadZipFile,
+    ) as err:
         what = "metrics.json" if isinstance(err, json.JSONDecodeError) else "result.npz or metrics.json"
-        raise RunFolderError(f"{folder}: a damaged run folder ({what} cannot be read: "
-                             f"{type(err).__name__}: {err})") from err
+        raise RunFolderError(
+            f"{folder}: a damaged run folder ({what} cannot be read: {type(err).__name__}: {err})"
+        ) from err
     _check_shapes(result, folder)
     return result

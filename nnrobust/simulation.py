@@ -115,8 +115,9 @@ def speed_message(model, v: np.ndarray, max_speed: float, t: float) -> str:
     i = int(np.argmax(np.abs(v)))
     names = getattr(model, "joint_names", None) or [f"joint {j + 1}" for j in range(v.size)]
     unit = joint_units(model)[i]
-    return (f"joint {names[i]!r} reached {v[i]:.3g} {unit} (limit for divergence {max_speed:g}) "
-            f"at t = {t:.4f} s")
+    return (
+        f"joint {names[i]!r} reached {v[i]:.3g} {unit} (limit for divergence {max_speed:g}) at t = {t:.4f} s"
+    )
 
 
 def simulate(
@@ -188,8 +189,9 @@ def simulate(
     engine = plant.engine
     if engine is not None:  # MuJoCo integrates the plant (nnrobust.plant.mujoco_engine)
         engine.reset(np.asarray(q0, float), np.asarray(v0, float))
-    stick_slip = (StickSlipIntegrator(plant, np.asarray(v0, float)) if plant.sticky.any() and engine is None
-                  else None)
+    stick_slip = (
+        StickSlipIntegrator(plant, np.asarray(v0, float)) if plant.sticky.any() and engine is None else None
+    )
     status, message, done = "completed", "", steps
     k, t, refined = 0, 0.0, 0
     try:
@@ -231,8 +233,11 @@ def simulate(
             if engine is not None:
                 X = np.concatenate(engine.advance(t, tau, control_period))
                 continue
-            n_steps = (period_substeps(float(np.max(np.abs(v))), control_period, substeps, max_step_rotation)
-                       if integrator == "rk4" else substeps)
+            n_steps = (
+                period_substeps(float(np.max(np.abs(v))), control_period, substeps, max_step_rotation)
+                if integrator == "rk4"
+                else substeps
+            )
             refined += n_steps != substeps
             h = control_period / n_steps
             if stick_slip is not None:  # q, v: the views of X sliced at the top of the step
@@ -256,8 +261,15 @@ def simulate(
         clear_interrupt()
     sl = slice(0, done)
     return Trace(
-        t_rec[sl], q_rec[sl], v_rec[sl], tau_rec[sl], cmd_rec[sl], z_rec[sl],
-        {name: arr[sl] for name, arr in sig_rec.items()}, status, message,
+        t_rec[sl],
+        q_rec[sl],
+        v_rec[sl],
+        tau_rec[sl],
+        cmd_rec[sl],
+        z_rec[sl],
+        {name: arr[sl] for name, arr in sig_rec.items()},
+        status,
+        message,
         friction_events=stick_slip.events if stick_slip else 0,
         unresolved_events=stick_slip.unresolved if stick_slip else 0,
         refined_periods=refined,

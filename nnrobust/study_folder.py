@@ -28,8 +28,10 @@ def check_place(folder: Path, option: str = "--out") -> None:
     here = Path.cwd().resolve()
     target = folder.resolve()
     if target == here or target in here.parents:
-        raise NNRobustError(f"{option} {folder}: is the working folder or one of its ancestors; a study "
-                            "writes into a folder of its own (e.g. --out out/study)")
+        raise NNRobustError(
+            f"{option} {folder}: is the working folder or one of its ancestors; a study "
+            "writes into a folder of its own (e.g. --out out/study)"
+        )
     if folder.exists() and not folder.is_dir():
         raise NNRobustError(f"{option} {folder}: is a file, not a folder; choose another {option}")
 
@@ -50,8 +52,9 @@ def held(folder: Path):
         yield folder
 
 
-def prepare(folder: Path, kind: str, study: str, outputs: tuple[str, ...], overwrite: bool,
-            what: str) -> None:
+def prepare(
+    folder: Path, kind: str, study: str, outputs: tuple[str, ...], overwrite: bool, what: str
+) -> None:
     """Create ``folder`` for a ``kind`` study (its resolved text ``study``), or accept it for
     resuming the same one; a different one is refused unless ``overwrite``, which removes only
     ``outputs`` (the names the command writes) before the new study starts.
@@ -59,12 +62,15 @@ def prepare(folder: Path, kind: str, study: str, outputs: tuple[str, ...], overw
     check_place(folder)
     marker = folder / marker_name(kind)
     if folder.exists() and not marker.is_file() and any(folder.iterdir()):
-        raise NNRobustError(f"{folder} exists and is not a {what} folder (no {marker.name}); choose another "
-                            "--out")
+        raise NNRobustError(
+            f"{folder} exists and is not a {what} folder (no {marker.name}); choose another --out"
+        )
     if marker.is_file() and marker.read_text() != study:
         if not overwrite:
-            raise NNRobustError(f"{folder} holds a different {what} ({marker.name} differs); pass "
-                                f"--overwrite to replace what the {what} wrote, or choose another --out")
+            raise NNRobustError(
+                f"{folder} holds a different {what} ({marker.name} differs); pass "
+                f"--overwrite to replace what the {what} wrote, or choose another --out"
+            )
         for name in outputs:
             path = folder / name
             if path.is_dir() and not path.is_symlink():

@@ -153,8 +153,10 @@ def spline_through(points, times) -> PiecewisePolynomialPath:
 
     points, times = np.asarray(points, dtype=float), np.asarray(times, dtype=float)
     if points.ndim != 2 or points.shape[0] != times.size or times.size < 2:
-        raise ValueError(f"trajectory: {points.shape[0] if points.ndim == 2 else '?'} waypoints for "
-                         f"{times.size} times; give at least 2 of each, as many of one as of the other")
+        raise ValueError(
+            f"trajectory: {points.shape[0] if points.ndim == 2 else '?'} waypoints for "
+            f"{times.size} times; give at least 2 of each, as many of one as of the other"
+        )
     spline = CubicSpline(times, points, bc_type="clamped")
     coefficients = np.transpose(spline.c[::-1], (1, 0, 2))  # scipy: c[k] multiplies (t - b)^(3 - k)
     return PiecewisePolynomialPath(times, coefficients)
@@ -220,8 +222,11 @@ class PoseTrajectory:
         theta, dtheta, arg = self._angle(t)
         ddtheta = -self.amplitude * self.omega**2 * math.sin(arg)
         R = pin.exp3(theta * self.axis) @ self.rotation0
-        return (pose_vector(p, R), np.concatenate([dp, dtheta * self.axis]),
-                np.concatenate([ddp, ddtheta * self.axis]))
+        return (
+            pose_vector(p, R),
+            np.concatenate([dp, dtheta * self.axis]),
+            np.concatenate([ddp, ddtheta * self.axis]),
+        )
 
     def position(self, t: np.ndarray) -> np.ndarray:
         """[p_d, log3(R_d)] at each time of an array, len(t) x 6 [m, rad]."""

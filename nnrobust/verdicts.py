@@ -92,35 +92,49 @@ def run_warnings(metrics: dict, joint_names: list[str], units: list[str]) -> lis
     """The warnings of a run, from its metrics (see the module constants for the thresholds)."""
     out = []
     if metrics["saturated_fraction"] > SATURATION_WARNING:
-        out.append(f"torque saturation: the command exceeded the effort limit in "
-                   f"{100 * metrics['saturated_fraction']:.1f} % of the steps (peak "
-                   f"{metrics['max_torque_ratio']:.2f}x the limit)")
+        out.append(
+            f"torque saturation: the command exceeded the effort limit in "
+            f"{100 * metrics['saturated_fraction']:.1f} % of the steps (peak "
+            f"{metrics['max_torque_ratio']:.2f}x the limit)"
+        )
     if metrics["max_joint_limit_violation"] > 0:
         i = metrics["joint_limit_joint"]
         unit = "m" if units[i] == "m/s" else "rad"
-        out.append(f"joint stop: joint {joint_names[i]!r} went {metrics['max_joint_limit_violation']:.3g} "
-                   f"{unit} beyond its limit")
+        out.append(
+            f"joint stop: joint {joint_names[i]!r} went {metrics['max_joint_limit_violation']:.3g} "
+            f"{unit} beyond its limit"
+        )
     if metrics.get("rho_hat_growing"):
-        out.append(f"rho-hat keeps growing: peak {metrics['rho_hat_peak_middle']:.3g} over [20 %, 60 %] "
-                   f"of the run, {metrics['rho_hat_peak_last_fifth']:.3g} over the last fifth "
-                   "(parameter drift; nn.sigma > 0 bounds it)")
+        out.append(
+            f"rho-hat keeps growing: peak {metrics['rho_hat_peak_middle']:.3g} over [20 %, 60 %] "
+            f"of the run, {metrics['rho_hat_peak_last_fifth']:.3g} over the last fifth "
+            "(parameter drift; nn.sigma > 0 bounds it)"
+        )
     if metrics.get("runaway"):
-        out.append(f"runaway: RMS error {1e3 * metrics['rms_error_last_fifth']:.3g} mm over the last "
-                   f"fifth against {1e3 * metrics['rms_error_early']:.3g} mm over [2 s, 40 %]")
+        out.append(
+            f"runaway: RMS error {1e3 * metrics['rms_error_last_fifth']:.3g} mm over the last "
+            f"fifth against {1e3 * metrics['rms_error_early']:.3g} mm over [2 s, 40 %]"
+        )
     turn = metrics.get("step_rotation")
     if turn is None:  # a run folder from before the speed-adaptive step
         turn = metrics.get("max_joint_speed", 0.0) * metrics.get("plant_step", float("nan"))
     if turn > STEP_ROTATION:
         i = metrics["joint_speed_joint"]
         unit = "m" if units[i] == "m/s" else "rad"
-        out.append(f"plant step too long: joint {joint_names[i]!r} reached {metrics['max_joint_speed']:.3g} "
-                   f"{units[i]} and turned up to {turn:.3g} {unit} in one plant step (docs/plant.md); the "
-                   "metrics may depend on the step: set simulation.max_step_rotation lower, or "
-                   f"simulation.substeps {math.ceil(turn / STEP_ROTATION)}x higher")
+        out.append(
+            f"plant step too long: joint {joint_names[i]!r} reached {metrics['max_joint_speed']:.3g} "
+            f"{units[i]} and turned up to {turn:.3g} {unit} in one plant step (docs/plant.md); the "
+            "metrics may depend on the step: set simulation.max_step_rotation lower, or "
+            f"simulation.substeps {math.ceil(turn / STEP_ROTATION)}x higher"
+        )
     if metrics.get("unresolved_events"):
-        out.append(f"plant not converged: {metrics['unresolved_events']} plant steps held more stick-slip "
-                   "events than the integrator resolves (docs/plant.md); set simulation.substeps higher")
+        out.append(
+            f"plant not converged: {metrics['unresolved_events']} plant steps held more stick-slip "
+            "events than the integrator resolves (docs/plant.md); set simulation.substeps higher"
+        )
     if metrics.get("subtask_degraded"):
-        out.append(f"subtask degraded: h fell from {metrics['h_start']:.3g} to {metrics['h_end']:.3g} "
-                   "(model error acts in the null space too, docs/controller.md)")
+        out.append(
+            f"subtask degraded: h fell from {metrics['h_start']:.3g} to {metrics['h_end']:.3g} "
+            "(model error acts in the null space too, docs/controller.md)"
+        )
     return out

@@ -8,8 +8,14 @@ import numpy as np
 
 from nnrobust import load_robot
 
-ARM_CASES = [("panda", "position"), ("panda", "pose"), ("ur5", "position"), ("planar7", "planar"),
-             ("planar7", "position"), ("three_link_planar", "planar")]
+ARM_CASES = [
+    ("panda", "position"),
+    ("panda", "pose"),
+    ("ur5", "position"),
+    ("planar7", "planar"),
+    ("planar7", "position"),
+    ("three_link_planar", "planar"),
+]
 """(robot, task kind) pairs for the kinematic and null-space tests."""
 
 

@@ -34,13 +34,16 @@ ARM = """<?xml version="1.0"?>
 """
 
 
-FLANGE = ('<joint name="flange_joint" type="fixed"><parent link="l2"/><child link="flange"/>'
-          '<origin xyz="0.3 0 0"/></joint><link name="flange"><inertial><mass value="0"/>'
-          '<inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>')
+FLANGE = (
+    '<joint name="flange_joint" type="fixed"><parent link="l2"/><child link="flange"/>'
+    '<origin xyz="0.3 0 0"/></joint><link name="flange"><inertial><mass value="0"/>'
+    '<inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"/></inertial></link>'
+)
 """A flange frame with mass 0 and an inertia of 0.1 kg m^2, as pybullet's Panda has."""
 
-CAD_PRODUCTS = ('ixx="0.0053694" ixy="0.0014185" ixz="-0.00092094" iyy="0.0032423" iyz="-0.00169178" '
-                'izz="0.00501731"')
+CAD_PRODUCTS = (
+    'ixx="0.0053694" ixy="0.0014185" ixz="-0.00092094" iyy="0.0032423" iyz="-0.00169178" izz="0.00501731"'
+)
 """pybullet's xarm6 link3: 13 % past the triangle inequality as written, physical with the
 products' sign flipped."""
 
@@ -54,9 +57,12 @@ def _l2_inertia(attributes: str | None) -> str:
     """The arm with link l2's <inertia> attributes replaced (None: l2 without <inertial>)."""
     text = arm()
     head, tail = text.rsplit('<inertial><origin xyz="0.15 0 0"/>', 1)
-    old = tail[:tail.index("</inertial>") + len("</inertial>")]
-    new = "" if attributes is None else (
-        f'<inertial><origin xyz="0.15 0 0"/><mass value="1"/><inertia {attributes}/></inertial>')
+    old = tail[: tail.index("</inertial>") + len("</inertial>")]
+    new = (
+        ""
+        if attributes is None
+        else (f'<inertial><origin xyz="0.15 0 0"/><mass value="1"/><inertia {attributes}/></inertial>')
+    )
     return head + tail.replace(old, new, 1)
 
 
@@ -167,287 +173,677 @@ def _non_utf8(folder: Path) -> Path:
     return path
 
 
-CYCLE = arm(extra='<joint name="j3" type="revolute"><parent link="l2"/><child link="base"/>'
-                  '<axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>')
+CYCLE = arm(
+    extra='<joint name="j3" type="revolute"><parent link="l2"/><child link="base"/>'
+    '<axis xyz="0 0 1"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
+)
 
 URDF_CASES = [
-    Case("URDF file that does not exist", lambda d: _load("no/such/robot.urdf"),
-         ex.RobotLoadError, "no such file"),
-    Case("URDF file that is not UTF-8", lambda d: _load(_non_utf8(d)),
-         ex.UrdfSyntaxError, "not UTF-8"),
-    Case("malformed XML (unclosed tag)", lambda d: _load(arm().replace("</robot>", "")),
-         ex.UrdfSyntaxError, "malformed XML at line"),
-    Case("root element is not <robot>", lambda d: _load("<html><body/></html>"),
-         ex.UrdfStructureError, "needs <robot>"),
-    Case("joint whose child link is not defined",
-         lambda d: _load(arm(extra='<joint name="j9" type="fixed"><parent link="l2"/>'
-                                   '<child link="ghost"/></joint>')),
-         ex.UrdfStructureError, "child link 'ghost' is not defined"),
-    Case("link that no joint attaches (two roots)",
-         lambda d: _load(arm(extra='<link name="floating"/>')),
-         ex.UrdfStructureError, "have no parent joint"),
-    Case("two links with the same name", lambda d: _load(arm(extra='<link name="l1"/>')),
-         ex.UrdfStructureError, "two links are named 'l1'"),
-    Case("kinematic cycle (Pinocchio alone returns an empty model)", lambda d: _load(CYCLE),
-         ex.KinematicCycle, "form a closed loop"),
-    Case("no movable joint",
-         lambda d: _load('<robot name="r"><link name="a"/><joint name="f" type="fixed">'
-                         '<parent link="a"/><child link="b"/></joint><link name="b"/></robot>'),
-         ex.ModelMismatch, "no movable joint"),
-    Case("planar joint (no single angle or length)",
-         lambda d: _load(arm().replace('name="j1" type="revolute"', 'name="j1" type="planar"')),
-         ex.ModelMismatch, "joints 'j1' (Planar) have no single angle or length"),
-    Case("the last link massless (its inertia is dropped: then nothing moves)",
-         lambda d: _load(arm(mass="0")), ex.InvalidInertia, "joint 'j2' moves no mass"),
-    Case("a massless frame link with an inertia (an exporter's convention)",
-         lambda d: _load(arm(extra=FLANGE)), None,
-         "massless link flange read with no inertia (a rotational inertia without mass is no body",
-         warns=InertiaAssumptionWarning),
-    Case("products of inertia in the CAD sign convention",
-         lambda d: _load(_l2_inertia(CAD_PRODUCTS)), None,
-         "products of inertia read with the opposite sign (+integral of x y dm, the CAD convention; "
-         "URDF's ixy is -integral of x y dm): as written, link l2 break",
-         warns=InertiaAssumptionWarning),
-    Case("a triangle inequality broken by rounding (0.5 %)",
-         lambda d: _load(arm(ixx="0.0201")), None,
-         "link l2 break the triangle inequality by at most 1 % (rounding), taken as given",
-         warns=InertiaAssumptionWarning),
+    Case(
+        "URDF file that does not exist",
+        lambda d: _load("no/such/robot.urdf"),
+        ex.RobotLoadError,
+        "no such file",
+    ),
+    Case("URDF file that is not UTF-8", lambda d: _load(_non_utf8(d)), ex.UrdfSyntaxError, "not UTF-8"),
+    Case(
+        "malformed XML (unclosed tag)",
+        lambda d: _load(arm().replace("</robot>", "")),
+        ex.UrdfSyntaxError,
+        "malformed XML at line",
+    ),
+    Case(
+        "root element is not <robot>",
+        lambda d: _load("<html><body/></html>"),
+        ex.UrdfStructureError,
+        "needs <robot>",
+    ),
+    Case(
+        "joint whose child link is not defined",
+        lambda d: _load(
+            arm(extra='<joint name="j9" type="fixed"><parent link="l2"/><child link="ghost"/></joint>')
+        ),
+        ex.UrdfStructureError,
+        "child link 'ghost' is not defined",
+    ),
+    Case(
+        "link that no joint attaches (two roots)",
+        lambda d: _load(arm(extra='<link name="floating"/>')),
+        ex.UrdfStructureError,
+        "have no parent joint",
+    ),
+    Case(
+        "two links with the same name",
+        lambda d: _load(arm(extra='<link name="l1"/>')),
+        ex.UrdfStructureError,
+        "two links are named 'l1'",
+    ),
+    Case(
+        "kinematic cycle (Pinocchio alone returns an empty model)",
+        lambda d: _load(CYCLE),
+        ex.KinematicCycle,
+        "form a closed loop",
+    ),
+    Case(
+        "no movable joint",
+        lambda d: _load(
+            '<robot name="r"><link name="a"/><joint name="f" type="fixed">'
+            '<parent link="a"/><child link="b"/></joint><link name="b"/></robot>'
+        ),
+        ex.ModelMismatch,
+        "no movable joint",
+    ),
+    Case(
+        "planar joint (no single angle or length)",
+        lambda d: _load(arm().replace('name="j1" type="revolute"', 'name="j1" type="planar"')),
+        ex.ModelMismatch,
+        "joints 'j1' (Planar) have no single angle or length",
+    ),
+    Case(
+        "the last link massless (its inertia is dropped: then nothing moves)",
+        lambda d: _load(arm(mass="0")),
+        ex.InvalidInertia,
+        "joint 'j2' moves no mass",
+    ),
+    Case(
+        "a massless frame link with an inertia (an exporter's convention)",
+        lambda d: _load(arm(extra=FLANGE)),
+        None,
+        "massless link flange read with no inertia (a rotational inertia without mass is no body",
+        warns=InertiaAssumptionWarning,
+    ),
+    Case(
+        "products of inertia in the CAD sign convention",
+        lambda d: _load(_l2_inertia(CAD_PRODUCTS)),
+        None,
+        "products of inertia read with the opposite sign (+integral of x y dm, the CAD convention; "
+        "URDF's ixy is -integral of x y dm): as written, link l2 break",
+        warns=InertiaAssumptionWarning,
+    ),
+    Case(
+        "a triangle inequality broken by rounding (0.5 %)",
+        lambda d: _load(arm(ixx="0.0201")),
+        None,
+        "link l2 break the triangle inequality by at most 1 % (rounding), taken as given",
+        warns=InertiaAssumptionWarning,
+    ),
     Case("negative mass", lambda d: _load(arm(mass="-2")), ex.InvalidInertia, "must not be negative"),
-    Case("inertia not positive definite", lambda d: _load(arm(ixx="-0.001")),
-         ex.InvalidInertia, "not positive semi-definite"),
-    Case("inertia that breaks the triangle inequality", lambda d: _load(arm(ixx="0.05")),
-         ex.InvalidInertia, "1 link with impossible inertial data: 'l2': principal moments "
-         "[0.01, 0.01, 0.05] break the triangle inequality I1 + I2 >= I3 by 60 % of I3"),
-    Case("two impossible links, named at once",
-         lambda d: _load(arm(ixx="0.05").replace('ixx="0.001" ixy="0" ixz="0" iyy="0.01"',
-                                                 'ixx="-0.001" ixy="0" ixz="0" iyy="0.01"')),
-         ex.InvalidInertia, "2 links with impossible inertial data: 'l1': the inertia is not positive "
-         "semi-definite"),
-    Case("NaN in an inertial origin",
-         lambda d: _load(arm().replace('<origin xyz="0.15 0 0"/>', '<origin xyz="nan 0 0"/>')),
-         ex.UrdfStructureError, "link 'l2' <origin> xyz: 'nan 0 0' is not 3 finite numbers"),
-    Case("inertia with only ixx, iyy, izz (the parser would zero it)",
-         lambda d: _load(_l2_inertia('ixx="0.001" iyy="0.01" izz="0.01"')),
-         ex.InvalidInertia, "link 'l2': <inertia> needs all six of ixx, ixy, ixz, iyy, iyz, izz (missing "
-         "ixy, ixz, iyz"),
-    Case("mass of 1e308 kg", lambda d: _load(arm(mass="1e308")), ex.InvalidInertia,
-         "mass 1e+308 kg is beyond any robot link"),
-    Case("inertia of 1e300 kg m^2",
-         lambda d: _load(_l2_inertia('ixx="0.001" ixy="0" ixz="0" iyy="1e300" iyz="0" izz="1e300"')),
-         ex.InvalidInertia, "beyond any robot link (at most 100000 kg m^2)"),
-    Case("zero joint axis", lambda d: _load(arm().replace('<axis xyz="0 0 1"/>', '<axis xyz="0 0 0"/>', 1)),
-         ex.UrdfStructureError, "joint 'j1' <axis>: xyz = '0 0 0' is zero"),
-    Case("reversed joint limits",
-         lambda d: _load(arm().replace('<limit lower="-3" upper="3"', '<limit lower="2" upper="-2"', 1)),
-         ex.UrdfStructureError, "joint 'j1' <limit>: lower = 2 is above upper = -2"),
-    Case("NaN joint limit",
-         lambda d: _load(arm().replace('<limit lower="-3"', '<limit lower="nan"', 1)),
-         ex.UrdfStructureError, "joint 'j1' <limit> lower: 'nan' is not a finite number"),
-    Case("revolute joint without <limit>",
-         lambda d: _load(arm().replace('<limit lower="-3" upper="3" effort="10" velocity="3"/>', '', 1)),
-         ex.UrdfStructureError, "joint 'j1': a revolute joint needs <limit"),
-    Case("negative joint damping",
-         lambda d: _load(_first_axis_then('<dynamics damping="-1"/>')),
-         ex.UrdfStructureError, "joint 'j1' <dynamics> damping: -1 is outside [0, 1e+07]"),
-    Case("unknown joint type", lambda d: _load(arm().replace('type="revolute"', 'type="hinge"', 1)),
-         ex.UrdfStructureError, "joint 'j1': type 'hinge' is not one of revolute"),
-    Case("mimic joint left out of the locked joints",
-         lambda d: _load(arm().replace('<axis xyz="0 0 1"/>', '<axis xyz="0 0 1"/><mimic joint="j1"/>', 2)
-                         .replace('<mimic joint="j1"/>', '', 1), locked_joints=[]),
-         ex.UrdfStructureError, "joint 'j2' mimics joint 'j1': nnrobust does not model mimic joints"),
-    Case("moving link with no mass after it",
-         lambda d: _load(_l2_inertia(None)), ex.InvalidInertia, "joint 'j2' moves no mass"),
-    Case("value the C++ parser refuses (its message made one line)",
-         lambda d: _load(_first_axis_then('<calibration rising="x"/>')),
-         ex.RobotLoadError, "the parser says: Error: rising value (x) is not a valid float"),
-    Case("mass that is not a number", lambda d: _load(arm(mass="heavy")),
-         ex.UrdfStructureError, "'heavy' is not a finite number"),
-    Case("entity expansion ('billion laughs')", lambda d: _load(BILLION_LAUGHS),
-         ex.UrdfRefused, "DTD or entity declarations"),
+    Case(
+        "inertia not positive definite",
+        lambda d: _load(arm(ixx="-0.001")),
+        ex.InvalidInertia,
+        "not positive semi-definite",
+    ),
+    Case(
+        "inertia that breaks the triangle inequality",
+        lambda d: _load(arm(ixx="0.05")),
+        ex.InvalidInertia,
+        "1 link with impossible inertial data: 'l2': principal moments "
+        "[0.01, 0.01, 0.05] break the triangle inequality I1 + I2 >= I3 by 60 % of I3",
+    ),
+    Case(
+        "two impossible links, named at once",
+        lambda d: _load(
+            arm(ixx="0.05").replace(
+                'ixx="0.001" ixy="0" ixz="0" iyy="0.01"', 'ixx="-0.001" ixy="0" ixz="0" iyy="0.01"'
+            )
+        ),
+        ex.InvalidInertia,
+        "2 links with impossible inertial data: 'l1': the inertia is not positive semi-definite",
+    ),
+    Case(
+        "NaN in an inertial origin",
+        lambda d: _load(arm().replace('<origin xyz="0.15 0 0"/>', '<origin xyz="nan 0 0"/>')),
+        ex.UrdfStructureError,
+        "link 'l2' <origin> xyz: 'nan 0 0' is not 3 finite numbers",
+    ),
+    Case(
+        "inertia with only ixx, iyy, izz (the parser would zero it)",
+        lambda d: _load(_l2_inertia('ixx="0.001" iyy="0.01" izz="0.01"')),
+        ex.InvalidInertia,
+        "link 'l2': <inertia> needs all six of ixx, ixy, ixz, iyy, iyz, izz (missing ixy, ixz, iyz",
+    ),
+    Case(
+        "mass of 1e308 kg",
+        lambda d: _load(arm(mass="1e308")),
+        ex.InvalidInertia,
+        "mass 1e+308 kg is beyond any robot link",
+    ),
+    Case(
+        "inertia of 1e300 kg m^2",
+        lambda d: _load(_l2_inertia('ixx="0.001" ixy="0" ixz="0" iyy="1e300" iyz="0" izz="1e300"')),
+        ex.InvalidInertia,
+        "beyond any robot link (at most 100000 kg m^2)",
+    ),
+    Case(
+        "zero joint axis",
+        lambda d: _load(arm().replace('<axis xyz="0 0 1"/>', '<axis xyz="0 0 0"/>', 1)),
+        ex.UrdfStructureError,
+        "joint 'j1' <axis>: xyz = '0 0 0' is zero",
+    ),
+    Case(
+        "reversed joint limits",
+        lambda d: _load(arm().replace('<limit lower="-3" upper="3"', '<limit lower="2" upper="-2"', 1)),
+        ex.UrdfStructureError,
+        "joint 'j1' <limit>: lower = 2 is above upper = -2",
+    ),
+    Case(
+        "NaN joint limit",
+        lambda d: _load(arm().replace('<limit lower="-3"', '<limit lower="nan"', 1)),
+        ex.UrdfStructureError,
+        "joint 'j1' <limit> lower: 'nan' is not a finite number",
+    ),
+    Case(
+        "revolute joint without <limit>",
+        lambda d: _load(arm().replace('<limit lower="-3" upper="3" effort="10" velocity="3"/>', "", 1)),
+        ex.UrdfStructureError,
+        "joint 'j1': a revolute joint needs <limit",
+    ),
+    Case(
+        "negative joint damping",
+        lambda d: _load(_first_axis_then('<dynamics damping="-1"/>')),
+        ex.UrdfStructureError,
+        "joint 'j1' <dynamics> damping: -1 is outside [0, 1e+07]",
+    ),
+    Case(
+        "unknown joint type",
+        lambda d: _load(arm().replace('type="revolute"', 'type="hinge"', 1)),
+        ex.UrdfStructureError,
+        "joint 'j1': type 'hinge' is not one of revolute",
+    ),
+    Case(
+        "mimic joint left out of the locked joints",
+        lambda d: _load(
+            arm()
+            .replace('<axis xyz="0 0 1"/>', '<axis xyz="0 0 1"/><mimic joint="j1"/>', 2)
+            .replace('<mimic joint="j1"/>', "", 1),
+            locked_joints=[],
+        ),
+        ex.UrdfStructureError,
+        "joint 'j2' mimics joint 'j1': nnrobust does not model mimic joints",
+    ),
+    Case(
+        "moving link with no mass after it",
+        lambda d: _load(_l2_inertia(None)),
+        ex.InvalidInertia,
+        "joint 'j2' moves no mass",
+    ),
+    Case(
+        "value the C++ parser refuses (its message made one line)",
+        lambda d: _load(_first_axis_then('<calibration rising="x"/>')),
+        ex.RobotLoadError,
+        "the parser says: Error: rising value (x) is not a valid float",
+    ),
+    Case(
+        "mass that is not a number",
+        lambda d: _load(arm(mass="heavy")),
+        ex.UrdfStructureError,
+        "'heavy' is not a finite number",
+    ),
+    Case(
+        "entity expansion ('billion laughs')",
+        lambda d: _load(BILLION_LAUGHS),
+        ex.UrdfRefused,
+        "DTD or entity declarations",
+    ),
     Case("file larger than 20 MB", lambda d: _load(_huge(d)), ex.UrdfRefused, "larger than the 20 MB"),
-    Case("package:// mesh that escapes the allowed folders",
-         lambda d: _load(_file(d, "escape.urdf", arm(
-             visual='<visual><geometry><mesh filename="package://../../../../etc/passwd"/></geometry></visual>'))),
-         ex.UnsafePath, "outside the allowed folders"),
-    Case("URDF text with a mesh outside the working folder (read and embedded before)",
-         lambda d: _working_in(d, _load(arm(
-             visual='<visual><geometry><mesh filename="/etc/passwd"/></geometry></visual>'))),
-         ex.UnsafePath, "mesh '/etc/passwd' resolves to /etc/passwd, outside the allowed folders"),
-    Case("URDF text with a file:// mesh outside the working folder",
-         lambda d: _working_in(d, _load(arm(
-             visual='<visual><geometry><mesh filename="file:///etc/hostname"/></geometry></visual>'))),
-         ex.UnsafePath, "outside the allowed folders"),
-    Case("mesh fetched over the network",
-         lambda d: _load(_file(d, "http.urdf", arm(
-             visual='<visual><geometry><mesh filename="http://example.com/l1.stl"/></geometry></visual>'))),
-         ex.UnsafePath, "only package:// and file paths"),
-    Case("visual mesh file missing (warns, still simulates)",
-         lambda d: _load(_file(d, "nomesh.urdf", arm(
-             visual='<visual><geometry><mesh filename="meshes/l1.stl"/></geometry></visual>'))),
-         None, "not found", warns=Warning),
-    Case("task frame that does not exist", lambda d: _load("three_link_planar", task_frame="gripper"),
-         ex.FrameNotFound, "task frame 'gripper' not found; frames in the model: universe"),
-    Case("robot name that example-robot-data does not ship", lambda d: _load("no_such_robot"),
-         ex.RobotLoadError, "not a URDF file, not planar<N>, and not a robot example-robot-data ships"),
+    Case(
+        "package:// mesh that escapes the allowed folders",
+        lambda d: _load(
+            _file(
+                d,
+                "escape.urdf",
+                arm(
+                    visual='<visual><geometry><mesh filename="package://../../../../etc/passwd"/></geometry></visual>'
+                ),
+            )
+        ),
+        ex.UnsafePath,
+        "outside the allowed folders",
+    ),
+    Case(
+        "URDF text with a mesh outside the working folder (read and embedded before)",
+        lambda d: _working_in(
+            d, _load(arm(visual='<visual><geometry><mesh filename="/etc/passwd"/></geometry></visual>'))
+        ),
+        ex.UnsafePath,
+        "mesh '/etc/passwd' resolves to /etc/passwd, outside the allowed folders",
+    ),
+    Case(
+        "URDF text with a file:// mesh outside the working folder",
+        lambda d: _working_in(
+            d,
+            _load(
+                arm(visual='<visual><geometry><mesh filename="file:///etc/hostname"/></geometry></visual>')
+            ),
+        ),
+        ex.UnsafePath,
+        "outside the allowed folders",
+    ),
+    Case(
+        "mesh fetched over the network",
+        lambda d: _load(
+            _file(
+                d,
+                "http.urdf",
+                arm(
+                    visual='<visual><geometry><mesh filename="http://example.com/l1.stl"/></geometry></visual>'
+                ),
+            )
+        ),
+        ex.UnsafePath,
+        "only package:// and file paths",
+    ),
+    Case(
+        "visual mesh file missing (warns, still simulates)",
+        lambda d: _load(
+            _file(
+                d,
+                "nomesh.urdf",
+                arm(visual='<visual><geometry><mesh filename="meshes/l1.stl"/></geometry></visual>'),
+            )
+        ),
+        None,
+        "not found",
+        warns=Warning,
+    ),
+    Case(
+        "task frame that does not exist",
+        lambda d: _load("three_link_planar", task_frame="gripper"),
+        ex.FrameNotFound,
+        "task frame 'gripper' not found; frames in the model: universe",
+    ),
+    Case(
+        "robot name that example-robot-data does not ship",
+        lambda d: _load("no_such_robot"),
+        ex.RobotLoadError,
+        "not a URDF file, not planar<N>, and not a robot example-robot-data ships",
+    ),
 ]
 
 PAPER = 'base = "paper-ellipse"\n'
 """An experiment file's first line: start from the paper's case (b)."""
 
 CONFIG_CASES = [
-    Case("a point-to-point move of 1e-300 s",
-         lambda d: _toml(d, f"{PAPER}[trajectory]\nkind = 'point_to_point'\ngoal = [0.3, 0.4]\n"
-                            "move_time = 1e-300\n"),
-         ex.ConfigError, "trajectory.move_time: must be at least 0.001 s, got 1e-300"),
-    Case("waypoint times 1e-300 s apart",
-         lambda d: _toml(d, f"{PAPER}[trajectory]\nkind = 'waypoints'\nwaypoints = [[0.3, 0.4], [0.3, 0.5]]\n"
-                            "waypoint_times = [0.0, 1e-300]\n"),
-         ex.ConfigError, "trajectory.waypoint_times: must start at 0 or later and increase by at least "
-         "0.001 s"),
-    Case("a goal at 1e308 m",
-         lambda d: _toml(d, f"{PAPER}[trajectory]\nkind = 'point_to_point'\ngoal = [1e308, 0.4]\n"),
-         ex.ConfigError, "trajectory.goal: [1e+308, 0.4] has a coordinate beyond 1000 m"),
-    Case("an ellipse at omega = 1e300 rad/s", lambda d: _toml(d, f"{PAPER}[trajectory]\nomega = 1e300\n"),
-         ex.ConfigError, "trajectory.omega: 1e+300 rad/s is beyond 10000 rad/s"),
-    Case("a rocking amplitude of 1e300 rad",
-         lambda d: _toml(d, f"{PAPER}[trajectory]\nrotation_amplitude = 1e300\n"),
-         ex.ConfigError, "trajectory.rotation_amplitude: 1e+300 rad is more than half a turn"),
-    Case("experiment file that does not exist", lambda d: _read_config(d / "missing.toml"),
-         ex.ConfigError, "cannot read the file"),
+    Case(
+        "a point-to-point move of 1e-300 s",
+        lambda d: _toml(
+            d, f"{PAPER}[trajectory]\nkind = 'point_to_point'\ngoal = [0.3, 0.4]\nmove_time = 1e-300\n"
+        ),
+        ex.ConfigError,
+        "trajectory.move_time: must be at least 0.001 s, got 1e-300",
+    ),
+    Case(
+        "waypoint times 1e-300 s apart",
+        lambda d: _toml(
+            d,
+            f"{PAPER}[trajectory]\nkind = 'waypoints'\nwaypoints = [[0.3, 0.4], [0.3, 0.5]]\n"
+            "waypoint_times = [0.0, 1e-300]\n",
+        ),
+        ex.ConfigError,
+        "trajectory.waypoint_times: must start at 0 or later and increase by at least 0.001 s",
+    ),
+    Case(
+        "a goal at 1e308 m",
+        lambda d: _toml(d, f"{PAPER}[trajectory]\nkind = 'point_to_point'\ngoal = [1e308, 0.4]\n"),
+        ex.ConfigError,
+        "trajectory.goal: [1e+308, 0.4] has a coordinate beyond 1000 m",
+    ),
+    Case(
+        "an ellipse at omega = 1e300 rad/s",
+        lambda d: _toml(d, f"{PAPER}[trajectory]\nomega = 1e300\n"),
+        ex.ConfigError,
+        "trajectory.omega: 1e+300 rad/s is beyond 10000 rad/s",
+    ),
+    Case(
+        "a rocking amplitude of 1e300 rad",
+        lambda d: _toml(d, f"{PAPER}[trajectory]\nrotation_amplitude = 1e300\n"),
+        ex.ConfigError,
+        "trajectory.rotation_amplitude: 1e+300 rad is more than half a turn",
+    ),
+    Case(
+        "experiment file that does not exist",
+        lambda d: _read_config(d / "missing.toml"),
+        ex.ConfigError,
+        "cannot read the file",
+    ),
     Case("invalid TOML", lambda d: _toml(d, "[controller\nKp = 1"), ex.ConfigError, "invalid TOML"),
-    Case("unknown key (with a suggestion)", lambda d: _toml(d, "[controller]\nKpp = [10.0]\n"),
-         ex.ConfigError, "controller.Kpp: unknown key; did you mean 'Kp'?"),
-    Case("unknown section", lambda d: _toml(d, "[controler]\nkind = 'nn'\n"),
-         ex.ConfigError, "did you mean 'controller'?"),
-    Case("wrong type", lambda d: _toml(d, "[controller]\nk = 'ten'\n"),
-         ex.ConfigError, "controller.k: expected a number, got str 'ten'"),
-    Case("non-finite number", lambda d: _toml(d, "[controller]\nk = inf\n"),
-         ex.ConfigError, "expected a finite number"),
-    Case("negative gain", lambda d: _toml(d, "[controller]\nKp = [-10.0, 10.0]\n"),
-         ex.ConfigError, "controller.Kp: must be positive"),
-    Case("Kv^2 <= Kp (Q not positive definite)",
-         lambda d: _toml(d, "[controller]\nKp = [20.0]\nKv = [4.0]\n"),
-         ex.ConfigError, "Kv^2 = 16 must exceed Kp = 20"),
-    Case("zero control period", lambda d: _toml(d, "[simulation]\ncontrol_period = 0.0\n"),
-         ex.ConfigError, "simulation.control_period: must be positive"),
-    Case("no integration step per control period (substeps = 0)",
-         lambda d: _toml(d, "[simulation]\nsubsteps = 0\n"),
-         ex.ConfigError, "simulation.substeps: must be positive"),
-    Case("no rotation allowed per plant step (max_step_rotation = 0)",
-         lambda d: _toml(d, "[simulation]\nmax_step_rotation = 0.0\n"),
-         ex.ConfigError, "simulation.max_step_rotation: must be positive [rad or m], got 0; to keep"),
-    Case("control period shorter than the integration step",
-         lambda d: _toml(d, "[simulation]\ncontrol_period = 0.001\nintegration_step = 0.002\n"),
-         ex.ConfigError, "simulation.integration_step: 0.002 s is longer than the control period"),
-    Case("control period not a whole number of integration steps",
-         lambda d: _toml(d, "[simulation]\ncontrol_period = 0.001\nintegration_step = 0.0003\n"),
-         ex.ConfigError, "is not a whole number of steps"),
-    Case("duration shorter than one control period",
-         lambda d: _toml(d, "[simulation]\nduration = 0.0005\n"),
-         ex.ConfigError, "shorter than one control period"),
-    Case("weights that do not sum to C",
-         lambda d: _toml(d, "[subtasks]\ncriteria = ['manipulability', 'joint_centering']\n"
-                            "weights = [1.0, 1.0]\nC = 1.0\n"),
-         ex.ConfigError, "sum to 2 but subtasks.C = 1"),
-    Case("unknown choice", lambda d: _toml(d, "[nn]\nlaw = 'fast'\n"),
-         ex.ConfigError, "nn.law: 'fast' is not one of corrected, printed"),
-    Case("gain vector of the wrong length", lambda d: _toml(d, "[controller]\nKp = [1.0, 2.0, 3.0]\n"),
-         ex.ConfigError, "controller.Kp: has 3 entries, the task has m = 2"),
-    Case("initial joint angle outside the limits", lambda d: _build(simulation={"q_seed": [0.2, 4.0, 1.0]}),
-         ex.ConfigError, "simulation.q_seed: joint 'joint2' = 4 is outside its limits [-2.8, 2.8]"),
-    Case("start point out of reach", lambda d: _build(trajectory={"center": [1.5, 0.4]}),
-         ex.ConfigError, "is out of reach from q_seed"),
-    Case("trajectory that leaves the workspace later", lambda d: _build(trajectory={"axis_b": [0.0, 0.8]}),
-         ex.ConfigError, "trajectory: leaves the workspace: at t ="),
-    Case("criterion for another arm", lambda d: _build(robot={"source": "planar7"},
-                                                       plant={"disturbance": "none"},
-                                                       nominal={"kind": "urdf"}),
-         ex.ConfigError, "'paper' (eq. 19) is for 3 joints"),
-    Case("viscous friction too stiff for the RK4 step (substeps = 1 set)",
-         lambda d: _build("planar7-ellipse", robot={"source": "planar15"},
-                          simulation={"q_seed": [0.9] + [-0.1] * 14, "substeps": 1}),
-         ex.ConfigError, "simulation.substeps: viscous friction makes the dynamics stiff"),
-    Case("viscous friction too stiff for the RK4 step (substeps unset: chosen)",
-         lambda d: _build("planar7-ellipse", robot={"source": "planar15"},
-                          simulation={"q_seed": [0.9] + [-0.1] * 14}),
-         None, "simulation.substeps = 2 chosen (plant step 0.0005 s)",
-         warns=UserWarning),
-    Case("joint stops too stiff for the RK4 step (substeps = 1 set)",
-         lambda d: _build(plant={"joint_stop_stiffness": 1e6}, simulation={"substeps": 1}),
-         ex.ConfigError, "plant.joint_stop_stiffness: the stop of joint"),
-    Case("joint stops too stiff for the RK4 step (substeps unset: the stops are sized)",
-         lambda d: _build(plant={"joint_stop_stiffness": 1e6}), None,
-         "joint stops sized to the plant step: the stops of 'joint1'", warns=UserWarning),
-    Case("unknown torque-limit choice", lambda d: _toml(d, "[plant]\ntorque_limits = 'max'\n"),
-         ex.ConfigError, "plant.torque_limits: 'max' is not one of urdf, none"),
-    Case("torque limit of the wrong type", lambda d: _toml(d, "[plant]\ntorque_limits = 60\n"),
-         ex.ConfigError, "plant.torque_limits: expected a string or a list, got int 60"),
-    Case("torque limits, one per joint, of the wrong length",
-         lambda d: _build(plant={"torque_limits": [60.0, 40.0]}),
-         ex.ConfigError, "plant.torque_limits: has 2 entries, the robot has 3 joints"),
-    Case("zero torque limit", lambda d: _toml(d, "[plant]\ntorque_limits = [60.0, 0.0, 20.0]\n"),
-         ex.ConfigError, "plant.torque_limits: must be positive"),
-    Case("negative sensor noise", lambda d: _toml(d, "[sensing]\nposition_noise = [-1e-3]\n"),
-         ex.ConfigError, "sensing.position_noise: needs one value for all joints or one per joint"),
-    Case("negative delay", lambda d: _toml(d, "[sensing]\ndelay = -1\n"),
-         ex.ConfigError, "sensing.delay: must be >= 0 control periods"),
-    Case("negative seed", lambda d: _toml(d, "[sensing]\nseed = -3\n"),
-         ex.ConfigError, "sensing.seed: must be an integer in [0, 2^63)"),
-    Case("gravity with two entries", lambda d: _toml(d, "[robot]\ngravity = [0.0, -9.81]\n"),
-         ex.ConfigError, "robot.gravity: needs 3 entries"),
-    Case("400-digit integer", lambda d: _toml(d, "[sensing]\nseed = " + "9" * 400 + "\n"),
-         ex.ConfigError, "sensing.seed: expected an integer in (-2^63, 2^63), got one of 400 digits"),
-    Case("400-digit integer for a number", lambda d: _toml(d, "[controller]\nk = " + "9" * 400 + "\n"),
-         ex.ConfigError, "controller.k: expected a finite number of sensible size"),
-    Case("TOML nested 5000 deep", lambda d: _toml(d, "x = " + "[" * 5000 + "]" * 5000 + "\n"),
-         ex.ConfigError, "invalid TOML: nested too deeply"),
-    Case("experiment file that is a device (/dev/zero)", lambda d: _read_config(Path("/dev/zero")),
-         ex.ConfigError, "/dev/zero: not a regular file"),
-    Case("experiment file that is a FIFO", lambda d: _read_config(_fifo(d)),
-         ex.ConfigError, "not a regular file"),
-    Case("experiment file over 1 MB", lambda d: _toml(d, "# padding\n" * 200_000),
-         ex.ConfigError, "larger than 1000 kB, the most read for an experiment file"),
-    Case("name with a control character", lambda d: _toml(d, 'name = "run\\u001b[2J"\n'),
-         ex.ConfigError, "name: 'run\\x1b[2J' is not a valid name"),
-    Case("name that climbs out of out/", lambda d: _toml(d, 'name = "../../escape"\n'),
-         ex.ConfigError, "name: '../../escape' is not a valid name"),
-    Case("closed-form nominal model with a URDF perturbation",
-         lambda d: _toml(d, "[nominal]\nkind = 'closed-form'\nmass_scale = 1.1\n"),
-         ex.ConfigError, "nominal.kind: mass_scale, inertia_scale and com_error perturb the URDF model"),
-    Case("negative friction scale", lambda d: _toml(d, "[plant]\nfriction_scale = -1.0\n"),
-         ex.ConfigError, "plant.friction_scale: must be >= 0"),
-    Case("a per-joint friction scale below zero",
-         lambda d: _toml(d, "[plant]\njoint_friction_scales = [1.0, -0.5]\n"),
-         ex.ConfigError, "plant.joint_friction_scales: each factor must be in [0, 100]"),
-    Case("more per-joint disturbance scales than joints",
-         lambda d: _build(plant={"joint_disturbance_scales": [1.0, 1.0, 1.0, 1.0]}),
-         ex.ConfigError, "plant.joint_disturbance_scales: has 4 entries; the robot has 3 joints"),
-    Case("a negative payload", lambda d: _toml(d, "[plant]\npayload = -1.0\n"),
-         ex.ConfigError, "plant.payload: must be in [0, 1000] kg, got -1"),
-    Case("a disturbance frequency scale of zero",
-         lambda d: _toml(d, "[plant]\ndisturbance_omega_scale = 0.0\n"),
-         ex.ConfigError, "plant.disturbance_omega_scale: must be in (0, 100]"),
-    Case("static friction below the Coulomb level", lambda d: _toml(d, "[plant]\nstiction = 0.5\n"),
-         ex.ConfigError, "plant.stiction: the static / Coulomb friction ratio must be in [1, 1e6)"),
-    Case("plant engine that does not exist", lambda d: _toml(d, "[plant]\nengine = 'bullet'\n"),
-         ex.ConfigError, "plant.engine: 'bullet' is not one of pinocchio, mujoco"),
-    Case("MuJoCo integrator that does not exist",
-         lambda d: _toml(d, "[plant]\nmujoco_integrator = 'verlet'\n"),
-         ex.ConfigError, "plant.mujoco_integrator: 'verlet' is not one of rk4, implicitfast, euler"),
-    Case("static friction on MuJoCo (one friction level)",
-         lambda d: _build(plant={"engine": "mujoco", "stiction": 1.5}),
-         ex.ConfigError, "plant.stiction: MuJoCo's frictionloss has one level"),
-    Case("negative armature", lambda d: _toml(d, "[plant]\narmature = [-0.1]\n"),
-         ex.ConfigError, "plant.armature: needs one value for all joints or one per joint, each in [0, 1e6)"),
-    Case("substeps beyond any need", lambda d: _toml(d, "[simulation]\nsubsteps = 100000\n"),
-         ex.ConfigError, "simulation.substeps: 100000 integration steps per control period; at most 10000"),
-    Case("control rate of a terahertz", lambda d: _toml(d, "[simulation]\ncontrol_period = 1e-12\n"),
-         ex.ConfigError, "simulation.duration: 20 s at a control period of 1e-12 s is 2e+13 steps"),
-    Case("basis of a million centres", lambda d: _toml(d, "[nn]\ncenters = 1000000\n"),
-         ex.ConfigError, "nn.centers: 1000000 centres per input; at most 1000"),
-    Case("run that needs more memory than simulation.memory_limit",
-         lambda d: _build(simulation={"duration": 1e5}),
-         ex.ConfigError, "simulation.memory_limit: this run needs about 211 GB"),
+    Case(
+        "unknown key (with a suggestion)",
+        lambda d: _toml(d, "[controller]\nKpp = [10.0]\n"),
+        ex.ConfigError,
+        "controller.Kpp: unknown key; did you mean 'Kp'?",
+    ),
+    Case(
+        "unknown section",
+        lambda d: _toml(d, "[controler]\nkind = 'nn'\n"),
+        ex.ConfigError,
+        "did you mean 'controller'?",
+    ),
+    Case(
+        "wrong type",
+        lambda d: _toml(d, "[controller]\nk = 'ten'\n"),
+        ex.ConfigError,
+        "controller.k: expected a number, got str 'ten'",
+    ),
+    Case(
+        "non-finite number",
+        lambda d: _toml(d, "[controller]\nk = inf\n"),
+        ex.ConfigError,
+        "expected a finite number",
+    ),
+    Case(
+        "negative gain",
+        lambda d: _toml(d, "[controller]\nKp = [-10.0, 10.0]\n"),
+        ex.ConfigError,
+        "controller.Kp: must be positive",
+    ),
+    Case(
+        "Kv^2 <= Kp (Q not positive definite)",
+        lambda d: _toml(d, "[controller]\nKp = [20.0]\nKv = [4.0]\n"),
+        ex.ConfigError,
+        "Kv^2 = 16 must exceed Kp = 20",
+    ),
+    Case(
+        "zero control period",
+        lambda d: _toml(d, "[simulation]\ncontrol_period = 0.0\n"),
+        ex.ConfigError,
+        "simulation.control_period: must be positive",
+    ),
+    Case(
+        "no integration step per control period (substeps = 0)",
+        lambda d: _toml(d, "[simulation]\nsubsteps = 0\n"),
+        ex.ConfigError,
+        "simulation.substeps: must be positive",
+    ),
+    Case(
+        "no rotation allowed per plant step (max_step_rotation = 0)",
+        lambda d: _toml(d, "[simulation]\nmax_step_rotation = 0.0\n"),
+        ex.ConfigError,
+        "simulation.max_step_rotation: must be positive [rad or m], got 0; to keep",
+    ),
+    Case(
+        "control period shorter than the integration step",
+        lambda d: _toml(d, "[simulation]\ncontrol_period = 0.001\nintegration_step = 0.002\n"),
+        ex.ConfigError,
+        "simulation.integration_step: 0.002 s is longer than the control period",
+    ),
+    Case(
+        "control period not a whole number of integration steps",
+        lambda d: _toml(d, "[simulation]\ncontrol_period = 0.001\nintegration_step = 0.0003\n"),
+        ex.ConfigError,
+        "is not a whole number of steps",
+    ),
+    Case(
+        "duration shorter than one control period",
+        lambda d: _toml(d, "[simulation]\nduration = 0.0005\n"),
+        ex.ConfigError,
+        "shorter than one control period",
+    ),
+    Case(
+        "weights that do not sum to C",
+        lambda d: _toml(
+            d, "[subtasks]\ncriteria = ['manipulability', 'joint_centering']\nweights = [1.0, 1.0]\nC = 1.0\n"
+        ),
+        ex.ConfigError,
+        "sum to 2 but subtasks.C = 1",
+    ),
+    Case(
+        "unknown choice",
+        lambda d: _toml(d, "[nn]\nlaw = 'fast'\n"),
+        ex.ConfigError,
+        "nn.law: 'fast' is not one of corrected, printed",
+    ),
+    Case(
+        "gain vector of the wrong length",
+        lambda d: _toml(d, "[controller]\nKp = [1.0, 2.0, 3.0]\n"),
+        ex.ConfigError,
+        "controller.Kp: has 3 entries, the task has m = 2",
+    ),
+    Case(
+        "initial joint angle outside the limits",
+        lambda d: _build(simulation={"q_seed": [0.2, 4.0, 1.0]}),
+        ex.ConfigError,
+        "simulation.q_seed: joint 'joint2' = 4 is outside its limits [-2.8, 2.8]",
+    ),
+    Case(
+        "start point out of reach",
+        lambda d: _build(trajectory={"center": [1.5, 0.4]}),
+        ex.ConfigError,
+        "is out of reach from q_seed",
+    ),
+    Case(
+        "trajectory that leaves the workspace later",
+        lambda d: _build(trajectory={"axis_b": [0.0, 0.8]}),
+        ex.ConfigError,
+        "trajectory: leaves the workspace: at t =",
+    ),
+    Case(
+        "criterion for another arm",
+        lambda d: _build(
+            robot={"source": "planar7"}, plant={"disturbance": "none"}, nominal={"kind": "urdf"}
+        ),
+        ex.ConfigError,
+        "'paper' (eq. 19) is for 3 joints",
+    ),
+    Case(
+        "viscous friction too stiff for the RK4 step (substeps = 1 set)",
+        lambda d: _build(
+            "planar7-ellipse",
+            robot={"source": "planar15"},
+            simulation={"q_seed": [0.9] + [-0.1] * 14, "substeps": 1},
+        ),
+        ex.ConfigError,
+        "simulation.substeps: viscous friction makes the dynamics stiff",
+    ),
+    Case(
+        "viscous friction too stiff for the RK4 step (substeps unset: chosen)",
+        lambda d: _build(
+            "planar7-ellipse", robot={"source": "planar15"}, simulation={"q_seed": [0.9] + [-0.1] * 14}
+        ),
+        None,
+        "simulation.substeps = 2 chosen (plant step 0.0005 s)",
+        warns=UserWarning,
+    ),
+    Case(
+        "joint stops too stiff for the RK4 step (substeps = 1 set)",
+        lambda d: _build(plant={"joint_stop_stiffness": 1e6}, simulation={"substeps": 1}),
+        ex.ConfigError,
+        "plant.joint_stop_stiffness: the stop of joint",
+    ),
+    Case(
+        "joint stops too stiff for the RK4 step (substeps unset: the stops are sized)",
+        lambda d: _build(plant={"joint_stop_stiffness": 1e6}),
+        None,
+        "joint stops sized to the plant step: the stops of 'joint1'",
+        warns=UserWarning,
+    ),
+    Case(
+        "unknown torque-limit choice",
+        lambda d: _toml(d, "[plant]\ntorque_limits = 'max'\n"),
+        ex.ConfigError,
+        "plant.torque_limits: 'max' is not one of urdf, none",
+    ),
+    Case(
+        "torque limit of the wrong type",
+        lambda d: _toml(d, "[plant]\ntorque_limits = 60\n"),
+        ex.ConfigError,
+        "plant.torque_limits: expected a string or a list, got int 60",
+    ),
+    Case(
+        "torque limits, one per joint, of the wrong length",
+        lambda d: _build(plant={"torque_limits": [60.0, 40.0]}),
+        ex.ConfigError,
+        "plant.torque_limits: has 2 entries, the robot has 3 joints",
+    ),
+    Case(
+        "zero torque limit",
+        lambda d: _toml(d, "[plant]\ntorque_limits = [60.0, 0.0, 20.0]\n"),
+        ex.ConfigError,
+        "plant.torque_limits: must be positive",
+    ),
+    Case(
+        "negative sensor noise",
+        lambda d: _toml(d, "[sensing]\nposition_noise = [-1e-3]\n"),
+        ex.ConfigError,
+        "sensing.position_noise: needs one value for all joints or one per joint",
+    ),
+    Case(
+        "negative delay",
+        lambda d: _toml(d, "[sensing]\ndelay = -1\n"),
+        ex.ConfigError,
+        "sensing.delay: must be >= 0 control periods",
+    ),
+    Case(
+        "negative seed",
+        lambda d: _toml(d, "[sensing]\nseed = -3\n"),
+        ex.ConfigError,
+        "sensing.seed: must be an integer in [0, 2^63)",
+    ),
+    Case(
+        "gravity with two entries",
+        lambda d: _toml(d, "[robot]\ngravity = [0.0, -9.81]\n"),
+        ex.ConfigError,
+        "robot.gravity: needs 3 entries",
+    ),
+    Case(
+        "400-digit integer",
+        lambda d: _toml(d, "[sensing]\nseed = " + "9" * 400 + "\n"),
+        ex.ConfigError,
+        "sensing.seed: expected an integer in (-2^63, 2^63), got one of 400 digits",
+    ),
+    Case(
+        "400-digit integer for a number",
+        lambda d: _toml(d, "[controller]\nk = " + "9" * 400 + "\n"),
+        ex.ConfigError,
+        "controller.k: expected a finite number of sensible size",
+    ),
+    Case(
+        "TOML nested 5000 deep",
+        lambda d: _toml(d, "x = " + "[" * 5000 + "]" * 5000 + "\n"),
+        ex.ConfigError,
+        "invalid TOML: nested too deeply",
+    ),
+    Case(
+        "experiment file that is a device (/dev/zero)",
+        lambda d: _read_config(Path("/dev/zero")),
+        ex.ConfigError,
+        "/dev/zero: not a regular file",
+    ),
+    Case(
+        "experiment file that is a FIFO",
+        lambda d: _read_config(_fifo(d)),
+        ex.ConfigError,
+        "not a regular file",
+    ),
+    Case(
+        "experiment file over 1 MB",
+        lambda d: _toml(d, "# padding\n" * 200_000),
+        ex.ConfigError,
+        "larger than 1000 kB, the most read for an experiment file",
+    ),
+    Case(
+        "name with a control character",
+        lambda d: _toml(d, 'name = "run\\u001b[2J"\n'),
+        ex.ConfigError,
+        "name: 'run\\x1b[2J' is not a valid name",
+    ),
+    Case(
+        "name that climbs out of out/",
+        lambda d: _toml(d, 'name = "../../escape"\n'),
+        ex.ConfigError,
+        "name: '../../escape' is not a valid name",
+    ),
+    Case(
+        "closed-form nominal model with a URDF perturbation",
+        lambda d: _toml(d, "[nominal]\nkind = 'closed-form'\nmass_scale = 1.1\n"),
+        ex.ConfigError,
+        "nominal.kind: mass_scale, inertia_scale and com_error perturb the URDF model",
+    ),
+    Case(
+        "negative friction scale",
+        lambda d: _toml(d, "[plant]\nfriction_scale = -1.0\n"),
+        ex.ConfigError,
+        "plant.friction_scale: must be >= 0",
+    ),
+    Case(
+        "a per-joint friction scale below zero",
+        lambda d: _toml(d, "[plant]\njoint_friction_scales = [1.0, -0.5]\n"),
+        ex.ConfigError,
+        "plant.joint_friction_scales: each factor must be in [0, 100]",
+    ),
+    Case(
+        "more per-joint disturbance scales than joints",
+        lambda d: _build(plant={"joint_disturbance_scales": [1.0, 1.0, 1.0, 1.0]}),
+        ex.ConfigError,
+        "plant.joint_disturbance_scales: has 4 entries; the robot has 3 joints",
+    ),
+    Case(
+        "a negative payload",
+        lambda d: _toml(d, "[plant]\npayload = -1.0\n"),
+        ex.ConfigError,
+        "plant.payload: must be in [0, 1000] kg, got -1",
+    ),
+    Case(
+        "a disturbance frequency scale of zero",
+        lambda d: _toml(d, "[plant]\ndisturbance_omega_scale = 0.0\n"),
+        ex.ConfigError,
+        "plant.disturbance_omega_scale: must be in (0, 100]",
+    ),
+    Case(
+        "static friction below the Coulomb level",
+        lambda d: _toml(d, "[plant]\nstiction = 0.5\n"),
+        ex.ConfigError,
+        "plant.stiction: the static / Coulomb friction ratio must be in [1, 1e6)",
+    ),
+    Case(
+        "plant engine that does not exist",
+        lambda d: _toml(d, "[plant]\nengine = 'bullet'\n"),
+        ex.ConfigError,
+        "plant.engine: 'bullet' is not one of pinocchio, mujoco",
+    ),
+    Case(
+        "MuJoCo integrator that does not exist",
+        lambda d: _toml(d, "[plant]\nmujoco_integrator = 'verlet'\n"),
+        ex.ConfigError,
+        "plant.mujoco_integrator: 'verlet' is not one of rk4, implicitfast, euler",
+    ),
+    Case(
+        "static friction on MuJoCo (one friction level)",
+        lambda d: _build(plant={"engine": "mujoco", "stiction": 1.5}),
+        ex.ConfigError,
+        "plant.stiction: MuJoCo's frictionloss has one level",
+    ),
+    Case(
+        "negative armature",
+        lambda d: _toml(d, "[plant]\narmature = [-0.1]\n"),
+        ex.ConfigError,
+        "plant.armature: needs one value for all joints or one per joint, each in [0, 1e6)",
+    ),
+    Case(
+        "substeps beyond any need",
+        lambda d: _toml(d, "[simulation]\nsubsteps = 100000\n"),
+        ex.ConfigError,
+        "simulation.substeps: 100000 integration steps per control period; at most 10000",
+    ),
+    Case(
+        "control rate of a terahertz",
+        lambda d: _toml(d, "[simulation]\ncontrol_period = 1e-12\n"),
+        ex.ConfigError,
+        "simulation.duration: 20 s at a control period of 1e-12 s is 2e+13 steps",
+    ),
+    Case(
+        "basis of a million centres",
+        lambda d: _toml(d, "[nn]\ncenters = 1000000\n"),
+        ex.ConfigError,
+        "nn.centers: 1000000 centres per input; at most 1000",
+    ),
+    Case(
+        "run that needs more memory than simulation.memory_limit",
+        lambda d: _build(simulation={"duration": 1e5}),
+        ex.ConfigError,
+        "simulation.memory_limit: this run needs about 211 GB",
+    ),
 ]
 
 
@@ -497,8 +893,12 @@ def _damaged_run(folder: Path, damage: str):
     from nnrobust.run_folder import load_run, write_run
 
     run = folder / damage
-    write_run(run, run_experiment(load_preset("paper-line").replace(simulation={"duration": 0.05})),
-              plots=False, animation=False)
+    write_run(
+        run,
+        run_experiment(load_preset("paper-line").replace(simulation={"duration": 0.05})),
+        plots=False,
+        animation=False,
+    )
     if damage == "truncated":
         data = (run / "result.npz").read_bytes()
         (run / "result.npz").write_bytes(data[: len(data) // 2])
@@ -517,7 +917,7 @@ def _damaged_run(folder: Path, damage: str):
             archive.writestr("t.npy", bytes(1 << 16))
         data = bytearray((run / "result.npz").read_bytes())
         entry = data.rindex(b"PK\x01\x02")  # the central directory record; its size field at +24
-        data[entry + 24: entry + 28] = (0xFFFFFFF0).to_bytes(4, "little")
+        data[entry + 24 : entry + 28] = (0xFFFFFFF0).to_bytes(4, "little")
         (run / "result.npz").write_bytes(bytes(data))
     elif damage == "shape":
         arrays = dict(np.load(run / "result.npz"))
@@ -541,52 +941,127 @@ def _viewer(host: str = "127.0.0.1", port: int | None = None):
 
 
 VIEWER_CASES = [
-    Case("viewer --port 0", lambda d: _viewer(port=0), ex.NNRobustError,
-         "--port 0: a TCP port is 1 to 65535"),
-    Case("viewer --port 99999", lambda d: _viewer(port=99999), ex.NNRobustError,
-         "--port 99999: a TCP port is 1 to 65535"),
-    Case("viewer --host that does not resolve", lambda d: _viewer("no-such-host.invalid"), ex.NNRobustError,
-         "--host 'no-such-host.invalid' is not an address or host name this machine can resolve"),
-    Case("viewer --host of another machine", lambda d: _viewer("203.0.113.1", 7999), ex.NNRobustError,
-         "the viewer cannot listen on 203.0.113.1:7999"),
+    Case(
+        "viewer --port 0", lambda d: _viewer(port=0), ex.NNRobustError, "--port 0: a TCP port is 1 to 65535"
+    ),
+    Case(
+        "viewer --port 99999",
+        lambda d: _viewer(port=99999),
+        ex.NNRobustError,
+        "--port 99999: a TCP port is 1 to 65535",
+    ),
+    Case(
+        "viewer --host that does not resolve",
+        lambda d: _viewer("no-such-host.invalid"),
+        ex.NNRobustError,
+        "--host 'no-such-host.invalid' is not an address or host name this machine can resolve",
+    ),
+    Case(
+        "viewer --host of another machine",
+        lambda d: _viewer("203.0.113.1", 7999),
+        ex.NNRobustError,
+        "the viewer cannot listen on 203.0.113.1:7999",
+    ),
 ]
 
 RUN_FOLDER_CASES = [
-    Case("--out naming a file", lambda d: _check_out(_file(d, "taken", "x")),
-         RunFolderError, "taken exists and is not a folder"),
-    Case("--out naming a symbolic link", lambda d: _check_out(_symlink(d)),
-         RunFolderError, "link is a symbolic link"),
+    Case(
+        "--out naming a file",
+        lambda d: _check_out(_file(d, "taken", "x")),
+        RunFolderError,
+        "taken exists and is not a folder",
+    ),
+    Case(
+        "--out naming a symbolic link",
+        lambda d: _check_out(_symlink(d)),
+        RunFolderError,
+        "link is a symbolic link",
+    ),
     Case("--out .", lambda d: _check_out(Path(".")), RunFolderError, "not '.' or '..'"),
-    Case("--out inside a file", lambda d: _check_out(_file(d, "plain", "x") / "run"),
-         RunFolderError, "plain is a file, not a folder"),
-    Case("existing run folder without --overwrite", lambda d: _check_out(_file(d, "old", "x").parent),
-         ex.RunFolderExists, "exists; pass --overwrite"),
-    Case("--overwrite on a folder of the user's", lambda d: _check_out(_user_folder(d), True),
-         RunFolderError, "mine is not a run folder (no .nnrobust-run)"),
-    Case("a second run into a folder another run is writing", _locked_twice,
-         RunFolderError, "another nnrobust run (pid "),
-    Case("truncated result.npz", lambda d: _damaged_run(d, "truncated"),
-         RunFolderError, "a damaged run folder (result.npz is not an .npz archive: File is not a zip file)"),
-    Case("garbled metrics.json", lambda d: _damaged_run(d, "garbled"),
-         RunFolderError, "a damaged run folder (metrics.json cannot be read"),
-    Case("object array in result.npz (would need unpickling)", lambda d: _damaged_run(d, "pickled"),
-         RunFolderError, "Object arrays cannot be loaded when allow_pickle=False"),
-    Case("a received run whose config.toml is a FIFO", lambda d: _damaged_run(d, "fifo"),
-         RunFolderError, "config.toml is not a regular file; a run folder holds regular files"),
-    Case("a received run whose metrics.json links to /dev/zero", lambda d: _damaged_run(d, "zero"),
-         RunFolderError, "metrics.json is a symbolic link; a run folder holds regular files"),
-    Case("a zip bomb as result.npz (a few kB said to expand to 4.29 GB)", lambda d: _damaged_run(d, "bomb"),
-         RunFolderError, "result.npz would expand to 4.29 GB; at most 4 GB is read"),
-    Case("q shorter than t", lambda d: _damaged_run(d, "shape"),
-         RunFolderError, "a damaged run folder (result.npz: q has shape"),
-    Case("metrics.json nested 200,000 deep", lambda d: _damaged_run(d, "deep"),
-         RunFolderError, "metrics.json is nested too deeply"),
-    Case("a string where metrics.json holds a number", lambda d: _damaged_run(d, "string"),
-         RunFolderError, "metrics.json: rms_error is str 'small', not a number"),
+    Case(
+        "--out inside a file",
+        lambda d: _check_out(_file(d, "plain", "x") / "run"),
+        RunFolderError,
+        "plain is a file, not a folder",
+    ),
+    Case(
+        "existing run folder without --overwrite",
+        lambda d: _check_out(_file(d, "old", "x").parent),
+        ex.RunFolderExists,
+        "exists; pass --overwrite",
+    ),
+    Case(
+        "--overwrite on a folder of the user's",
+        lambda d: _check_out(_user_folder(d), True),
+        RunFolderError,
+        "mine is not a run folder (no .nnrobust-run)",
+    ),
+    Case(
+        "a second run into a folder another run is writing",
+        _locked_twice,
+        RunFolderError,
+        "another nnrobust run (pid ",
+    ),
+    Case(
+        "truncated result.npz",
+        lambda d: _damaged_run(d, "truncated"),
+        RunFolderError,
+        "a damaged run folder (result.npz is not an .npz archive: File is not a zip file)",
+    ),
+    Case(
+        "garbled metrics.json",
+        lambda d: _damaged_run(d, "garbled"),
+        RunFolderError,
+        "a damaged run folder (metrics.json cannot be read",
+    ),
+    Case(
+        "object array in result.npz (would need unpickling)",
+        lambda d: _damaged_run(d, "pickled"),
+        RunFolderError,
+        "Object arrays cannot be loaded when allow_pickle=False",
+    ),
+    Case(
+        "a received run whose config.toml is a FIFO",
+        lambda d: _damaged_run(d, "fifo"),
+        RunFolderError,
+        "config.toml is not a regular file; a run folder holds regular files",
+    ),
+    Case(
+        "a received run whose metrics.json links to /dev/zero",
+        lambda d: _damaged_run(d, "zero"),
+        RunFolderError,
+        "metrics.json is a symbolic link; a run folder holds regular files",
+    ),
+    Case(
+        "a zip bomb as result.npz (a few kB said to expand to 4.29 GB)",
+        lambda d: _damaged_run(d, "bomb"),
+        RunFolderError,
+        "result.npz would expand to 4.29 GB; at most 4 GB is read",
+    ),
+    Case(
+        "q shorter than t",
+        lambda d: _damaged_run(d, "shape"),
+        RunFolderError,
+        "a damaged run folder (result.npz: q has shape",
+    ),
+    Case(
+        "metrics.json nested 200,000 deep",
+        lambda d: _damaged_run(d, "deep"),
+        RunFolderError,
+        "metrics.json is nested too deeply",
+    ),
+    Case(
+        "a string where metrics.json holds a number",
+        lambda d: _damaged_run(d, "string"),
+        RunFolderError,
+        "metrics.json: rms_error is str 'small', not a number",
+    ),
 ]
+
 
 def _tune(folder: Path, *args: str, **kwargs):
     """nnrobust tune's checks, as the command line calls them (nothing runs: each is refused first)."""
+
     def run():
         from nnrobust.tune import TuneSpec, run_tune
 
@@ -597,6 +1072,7 @@ def _tune(folder: Path, *args: str, **kwargs):
 
 def _tune_into(folder: Path, make) -> Callable[[], object]:
     """A tuning into a folder ``make`` prepares."""
+
     def run():
         from nnrobust.tune import TuneSpec, run_tune
 
@@ -606,8 +1082,14 @@ def _tune_into(folder: Path, make) -> Callable[[], object]:
 
 
 def _grid_sweep(folder: Path) -> str:
-    return str(_file(folder, "grid.toml", 'name = "g"\nbase = "paper-ellipse"\ncontrollers = ["pd"]\n'
-                     '[vary]\n"plant.friction_scale" = [0.5, 2.0]\n'))
+    return str(
+        _file(
+            folder,
+            "grid.toml",
+            'name = "g"\nbase = "paper-ellipse"\ncontrollers = ["pd"]\n'
+            '[vary]\n"plant.friction_scale" = [0.5, 2.0]\n',
+        )
+    )
 
 
 def _user_folder_for_tune(folder: Path) -> Path:
@@ -617,32 +1099,67 @@ def _user_folder_for_tune(folder: Path) -> Path:
 
 
 TUNE_CASES = [
-    Case("tune: a budget of 0", lambda d: _tune(d, "paper-ellipse", ["pd"], 0), ex.ConfigError,
-         "--budget: must be an integer in [2, 100000]"),
-    Case("tune: a budget of 10^9", lambda d: _tune(d, "paper-ellipse", ["pd"], 10**9), ex.ConfigError,
-         "--budget: must be an integer in [2, 100000]"),
-    Case("tune: an unknown controller", lambda d: _tune(d, "paper-ellipse", ["lqr"], 10), ex.ConfigError,
-         "--controllers: 'lqr' is not one of nn, no-u0, computed-torque, sliding-mode, pd, a class as "
-         "file.py:Class, nor a custom entry of the sweep file (it has none)"),
-    Case("tune: a class without a search space",
-         lambda d: _tune(d, "paper-ellipse", [f"{LAWS}:Counter"], 10), ex.ConfigError,
-         "--controllers Counter: Counter declares no search space"),
-    Case("tune: a controller named twice", lambda d: _tune(d, "paper-ellipse", ["pd", "pd"], 10),
-         ex.ConfigError, "--controllers: needs distinct names"),
-    Case("tune: a NaN torque limit",
-         lambda d: _tune(d, "paper-ellipse", ["pd"], 10, max_rms_torque=float("nan")),
-         ex.ConfigError, "--max-rms-torque: must be > 0 [N m]"),
-    Case("tune: a saturated fraction above 1",
-         lambda d: _tune(d, "paper-ellipse", ["pd"], 10, max_saturated=2.0),
-         ex.ConfigError, "--max-saturated: must be in [0, 1]"),
-    Case("tune: fewer simulations than training samples",
-         lambda d: _tune(d, "paper-ellipse", ["pd"], 3, train_samples=4), ex.ConfigError,
-         "--budget: 3 simulations cannot run one setting on 4 training samples"),
-    Case("tune: a sweep file with a grid", lambda d: _tune(d, _grid_sweep(d), ["pd"], 10), ex.ConfigError,
-         "tuning draws its samples from [vary] distributions"),
-    Case("tune: --out a folder of the user's", lambda d: _tune_into(d, _user_folder_for_tune),
-         ex.NNRobustError, "my-study exists and is not a tuning folder (no .nnrobust-tune); choose another "
-         "--out"),
+    Case(
+        "tune: a budget of 0",
+        lambda d: _tune(d, "paper-ellipse", ["pd"], 0),
+        ex.ConfigError,
+        "--budget: must be an integer in [2, 100000]",
+    ),
+    Case(
+        "tune: a budget of 10^9",
+        lambda d: _tune(d, "paper-ellipse", ["pd"], 10**9),
+        ex.ConfigError,
+        "--budget: must be an integer in [2, 100000]",
+    ),
+    Case(
+        "tune: an unknown controller",
+        lambda d: _tune(d, "paper-ellipse", ["lqr"], 10),
+        ex.ConfigError,
+        "--controllers: 'lqr' is not one of nn, no-u0, computed-torque, sliding-mode, pd, a class as "
+        "file.py:Class, nor a custom entry of the sweep file (it has none)",
+    ),
+    Case(
+        "tune: a class without a search space",
+        lambda d: _tune(d, "paper-ellipse", [f"{LAWS}:Counter"], 10),
+        ex.ConfigError,
+        "--controllers Counter: Counter declares no search space",
+    ),
+    Case(
+        "tune: a controller named twice",
+        lambda d: _tune(d, "paper-ellipse", ["pd", "pd"], 10),
+        ex.ConfigError,
+        "--controllers: needs distinct names",
+    ),
+    Case(
+        "tune: a NaN torque limit",
+        lambda d: _tune(d, "paper-ellipse", ["pd"], 10, max_rms_torque=float("nan")),
+        ex.ConfigError,
+        "--max-rms-torque: must be > 0 [N m]",
+    ),
+    Case(
+        "tune: a saturated fraction above 1",
+        lambda d: _tune(d, "paper-ellipse", ["pd"], 10, max_saturated=2.0),
+        ex.ConfigError,
+        "--max-saturated: must be in [0, 1]",
+    ),
+    Case(
+        "tune: fewer simulations than training samples",
+        lambda d: _tune(d, "paper-ellipse", ["pd"], 3, train_samples=4),
+        ex.ConfigError,
+        "--budget: 3 simulations cannot run one setting on 4 training samples",
+    ),
+    Case(
+        "tune: a sweep file with a grid",
+        lambda d: _tune(d, _grid_sweep(d), ["pd"], 10),
+        ex.ConfigError,
+        "tuning draws its samples from [vary] distributions",
+    ),
+    Case(
+        "tune: --out a folder of the user's",
+        lambda d: _tune_into(d, _user_folder_for_tune),
+        ex.NNRobustError,
+        "my-study exists and is not a tuning folder (no .nnrobust-tune); choose another --out",
+    ),
 ]
 
 LAWS = Path(__file__).parent / "controllers" / "eq9_again.py"
@@ -651,8 +1168,11 @@ LAWS = Path(__file__).parent / "controllers" / "eq9_again.py"
 def _custom(folder: Path, cls: str, params: str = "") -> ReadConfig:
     """An experiment file with a custom controller from a copy of tests/controllers/eq9_again.py."""
     (folder / "laws.py").write_text(LAWS.read_text())
-    return _toml(folder, f'base = "paper-ellipse"\n[controller]\nkind = "custom"\nclass = "laws.py:{cls}"\n'
-                         f'{params}\n[simulation]\nduration = 0.1\n')
+    return _toml(
+        folder,
+        f'base = "paper-ellipse"\n[controller]\nkind = "custom"\nclass = "laws.py:{cls}"\n'
+        f"{params}\n[simulation]\nduration = 0.1\n",
+    )
 
 
 class RunExperiment(ReadConfig):
@@ -669,35 +1189,82 @@ def _custom_run(folder: Path, cls: str, params: str = "") -> RunExperiment:
 
 
 CUSTOM_CASES = [
-    Case("custom: no class", lambda d: _toml(d, 'base = "paper-ellipse"\n[controller]\nkind = "custom"\n'),
-         ex.ConfigError, "controller.class: kind = 'custom' needs the class"),
-    Case("custom: class with a built-in kind",
-         lambda d: _toml(d, 'base = "paper-ellipse"\n[controller]\nclass = "laws.py:Eq9"\n'),
-         ex.ConfigError, "controller.class: is read only with kind = 'custom' (kind is 'nn')"),
-    Case("custom: a file that is not there", lambda d: RunExperiment(_toml(
-        d, 'base = "paper-ellipse"\n[controller]\nkind = "custom"\nclass = "nope.py:Eq9"\n').path),
-        ex.ConfigError, "nope.py' is not a file"),
-    Case("custom: a class not in the file", lambda d: _custom_run(d, "Eq"), ex.ConfigError,
-         "has no 'Eq'; did you mean 'Eq9'?"),
-    Case("custom: not a Controller", lambda d: _custom_run(d, "NotAController"), ex.ConfigError,
-         "is not a subclass of nnrobust.Controller"),
-    Case("custom: compute not implemented", lambda d: _custom_run(d, "Abstract"), ex.ConfigError,
-         "does not implement compute"),
-    Case("custom: an unknown parameter",
-         lambda d: _custom_run(d, "Eq9", "[controller.params]\nKp = 1.0\nKvv = 2.0"),
-         ex.ConfigError, "controller.params.Kvv: Eq9 takes no such parameter; did you mean 'Kv'?"),
-    Case("custom: a missing parameter", lambda d: _custom_run(d, "Eq9", "[controller.params]\nKp = 1.0"),
-         ex.ConfigError, "controller.params: Eq9 needs Kv"),
-    Case("custom: the constructor refuses a value",
-         lambda d: _custom_run(d, "NeedsGain", "[controller.params]\ngain = -1.0"), ex.ConfigError,
-         "NeedsGain(context, **params) raised ValueError: gain must be >= 0, got -1.0 (laws.py, line"),
-    Case("custom: an undeclared signal", lambda d: _custom_run(d, "Undeclared"), ex.ControllerError,
-         "returned signal 'surprise', which is not in its signal_names"),
-    Case("custom: a torque of the wrong size", lambda d: _custom_run(d, "WrongShape"), ex.ControllerError,
-         "returned a torque of shape (4,) at t = 0 s; the arm has 3 joints"),
-    Case("custom: an exception in compute", lambda d: _custom_run(d, "Raises"), ex.ControllerError,
-         "Raises.compute raised at t = 0.011 s: IndexError: list index out of range (laws.py, line"),
+    Case(
+        "custom: no class",
+        lambda d: _toml(d, 'base = "paper-ellipse"\n[controller]\nkind = "custom"\n'),
+        ex.ConfigError,
+        "controller.class: kind = 'custom' needs the class",
+    ),
+    Case(
+        "custom: class with a built-in kind",
+        lambda d: _toml(d, 'base = "paper-ellipse"\n[controller]\nclass = "laws.py:Eq9"\n'),
+        ex.ConfigError,
+        "controller.class: is read only with kind = 'custom' (kind is 'nn')",
+    ),
+    Case(
+        "custom: a file that is not there",
+        lambda d: RunExperiment(
+            _toml(d, 'base = "paper-ellipse"\n[controller]\nkind = "custom"\nclass = "nope.py:Eq9"\n').path
+        ),
+        ex.ConfigError,
+        "nope.py' is not a file",
+    ),
+    Case(
+        "custom: a class not in the file",
+        lambda d: _custom_run(d, "Eq"),
+        ex.ConfigError,
+        "has no 'Eq'; did you mean 'Eq9'?",
+    ),
+    Case(
+        "custom: not a Controller",
+        lambda d: _custom_run(d, "NotAController"),
+        ex.ConfigError,
+        "is not a subclass of nnrobust.Controller",
+    ),
+    Case(
+        "custom: compute not implemented",
+        lambda d: _custom_run(d, "Abstract"),
+        ex.ConfigError,
+        "does not implement compute",
+    ),
+    Case(
+        "custom: an unknown parameter",
+        lambda d: _custom_run(d, "Eq9", "[controller.params]\nKp = 1.0\nKvv = 2.0"),
+        ex.ConfigError,
+        "controller.params.Kvv: Eq9 takes no such parameter; did you mean 'Kv'?",
+    ),
+    Case(
+        "custom: a missing parameter",
+        lambda d: _custom_run(d, "Eq9", "[controller.params]\nKp = 1.0"),
+        ex.ConfigError,
+        "controller.params: Eq9 needs Kv",
+    ),
+    Case(
+        "custom: the constructor refuses a value",
+        lambda d: _custom_run(d, "NeedsGain", "[controller.params]\ngain = -1.0"),
+        ex.ConfigError,
+        "NeedsGain(context, **params) raised ValueError: gain must be >= 0, got -1.0 (laws.py, line",
+    ),
+    Case(
+        "custom: an undeclared signal",
+        lambda d: _custom_run(d, "Undeclared"),
+        ex.ControllerError,
+        "returned signal 'surprise', which is not in its signal_names",
+    ),
+    Case(
+        "custom: a torque of the wrong size",
+        lambda d: _custom_run(d, "WrongShape"),
+        ex.ControllerError,
+        "returned a torque of shape (4,) at t = 0 s; the arm has 3 joints",
+    ),
+    Case(
+        "custom: an exception in compute",
+        lambda d: _custom_run(d, "Raises"),
+        ex.ControllerError,
+        "Raises.compute raised at t = 0.011 s: IndexError: list index out of range (laws.py, line",
+    ),
 ]
+
 
 def _require(*texts: str):
     def check():
@@ -749,66 +1316,136 @@ def _workers(count: int):
 
 
 SCHEDULER_CASES = [
-    Case("--scheduler 'not a url'", lambda d: _scheduler("not a url"), ex.NNRobustError,
-         "--scheduler 'not a url': not a dask scheduler's address; give tcp://HOST:PORT"),
-    Case("--scheduler with TLS", lambda d: _scheduler("tls://127.0.0.1:8786"), ex.NNRobustError,
-         "tls:// is not supported (a TLS cluster needs dask's security settings"),
-    Case("--scheduler at a refused port", lambda d: _scheduler("tcp://127.0.0.1:1"), ex.NNRobustError,
-         "--scheduler tcp://127.0.0.1:1: cannot connect (Connection refused)"),
-    Case("--workers -1", lambda d: _workers(-1), ex.NNRobustError,
-         "--workers -1: give 1 to 1024 local worker"),
+    Case(
+        "--scheduler 'not a url'",
+        lambda d: _scheduler("not a url"),
+        ex.NNRobustError,
+        "--scheduler 'not a url': not a dask scheduler's address; give tcp://HOST:PORT",
+    ),
+    Case(
+        "--scheduler with TLS",
+        lambda d: _scheduler("tls://127.0.0.1:8786"),
+        ex.NNRobustError,
+        "tls:// is not supported (a TLS cluster needs dask's security settings",
+    ),
+    Case(
+        "--scheduler at a refused port",
+        lambda d: _scheduler("tcp://127.0.0.1:1"),
+        ex.NNRobustError,
+        "--scheduler tcp://127.0.0.1:1: cannot connect (Connection refused)",
+    ),
+    Case(
+        "--workers -1", lambda d: _workers(-1), ex.NNRobustError, "--workers -1: give 1 to 1024 local worker"
+    ),
 ]
 
 API_CASES = [
-    Case("nn.error_range of 1e-300 (the loops would disagree)",
-         lambda d: _toml(d, f"{PAPER}[nn]\nbasis_input = 'error'\nerror_range = [1e-300, 1e-300]\n"),
-         ex.ConfigError, "nn.error_range: [1e-300, 1e-300] is outside [1e-09, 1e+09]"),
-    Case("gains of 1e300 (the loops would disagree)",
-         lambda d: _toml(d, f"{PAPER}[controller]\nKp = [1e300]\nKv = [1e300]\n"),
-         ex.ConfigError, "controller.Kp: [1e+300, 1e+300] is beyond 1e+12"),
-    Case("Python API: controller.kind changed to 'lqr' after loading",
-         lambda d: _mutated(lambda c: setattr(c.controller, "kind", "lqr")), ex.ConfigError,
-         "controller.kind: 'lqr' is not one of nn, no-u0"),
-    Case("Python API: a negative Kp set after loading",
-         lambda d: _mutated(lambda c: setattr(c.controller, "Kp", [-1.0, -1.0])), ex.ConfigError,
-         "controller.Kp: must be positive, got [-1.0, -1.0]"),
-    Case("Python API: duration = nan set after loading",
-         lambda d: _mutated(lambda c: setattr(c.simulation, "duration", float("nan"))), ex.ConfigError,
-         "simulation.duration: expected a finite number, got nan"),
-    Case("Python API: control_period = 0 set after loading",
-         lambda d: _mutated(lambda c: setattr(c.simulation, "control_period", 0.0)), ex.ConfigError,
-         "simulation.control_period: must be positive, got 0.0"),
-    Case("Python API: substeps = 0 set after loading",
-         lambda d: _mutated(lambda c: setattr(c.simulation, "substeps", 0)), ex.ConfigError,
-         "simulation.substeps: must be positive, got 0"),
-    Case("Python API: write_run given something else than a Result",
-         lambda d: (lambda: __import__("nnrobust").write_run(d / "run", 3)), RunFolderError,
-         "write_run needs a Result (what run_experiment returns), got int"),
+    Case(
+        "nn.error_range of 1e-300 (the loops would disagree)",
+        lambda d: _toml(d, f"{PAPER}[nn]\nbasis_input = 'error'\nerror_range = [1e-300, 1e-300]\n"),
+        ex.ConfigError,
+        "nn.error_range: [1e-300, 1e-300] is outside [1e-09, 1e+09]",
+    ),
+    Case(
+        "gains of 1e300 (the loops would disagree)",
+        lambda d: _toml(d, f"{PAPER}[controller]\nKp = [1e300]\nKv = [1e300]\n"),
+        ex.ConfigError,
+        "controller.Kp: [1e+300, 1e+300] is beyond 1e+12",
+    ),
+    Case(
+        "Python API: controller.kind changed to 'lqr' after loading",
+        lambda d: _mutated(lambda c: setattr(c.controller, "kind", "lqr")),
+        ex.ConfigError,
+        "controller.kind: 'lqr' is not one of nn, no-u0",
+    ),
+    Case(
+        "Python API: a negative Kp set after loading",
+        lambda d: _mutated(lambda c: setattr(c.controller, "Kp", [-1.0, -1.0])),
+        ex.ConfigError,
+        "controller.Kp: must be positive, got [-1.0, -1.0]",
+    ),
+    Case(
+        "Python API: duration = nan set after loading",
+        lambda d: _mutated(lambda c: setattr(c.simulation, "duration", float("nan"))),
+        ex.ConfigError,
+        "simulation.duration: expected a finite number, got nan",
+    ),
+    Case(
+        "Python API: control_period = 0 set after loading",
+        lambda d: _mutated(lambda c: setattr(c.simulation, "control_period", 0.0)),
+        ex.ConfigError,
+        "simulation.control_period: must be positive, got 0.0",
+    ),
+    Case(
+        "Python API: substeps = 0 set after loading",
+        lambda d: _mutated(lambda c: setattr(c.simulation, "substeps", 0)),
+        ex.ConfigError,
+        "simulation.substeps: must be positive, got 0",
+    ),
+    Case(
+        "Python API: write_run given something else than a Result",
+        lambda d: lambda: __import__("nnrobust").write_run(d / "run", 3),
+        RunFolderError,
+        "write_run needs a Result (what run_experiment returns), got int",
+    ),
 ]
 
 PROPERTY_CASES = [
-    Case("--require: not an expression", lambda d: _require("rms_error < 0.05 mm"), ex.ConfigError,
-         "is not METRIC OP VALUE with OP one of <= >= == != < >"),
-    Case("--require: an unknown metric", lambda d: _require("rms_eror_after_2s<=0.05"), ex.ConfigError,
-         "no metric 'rms_eror_after_2s'; did you mean 'rms_error_after_2s'?"),
-    Case("--require: a NaN bound", lambda d: _require("rms_error<=nan"), ex.ConfigError,
-         "the bound must be a finite number, got nan"),
-    Case("--require: a flag compared by size", lambda d: _require("runaway<=1"), ex.ConfigError,
-         "runaway is true or false: compare it with == or != to true or false"),
-    Case("--epsilon of 0", lambda d: _claim(0.0, 0.05), ex.ConfigError,
-         "--epsilon: must be a probability in (0, 1)"),
-    Case("--beta of 1", lambda d: _claim(0.05, 1.0), ex.ConfigError,
-         "--beta: must be a probability in (0, 1)"),
-    Case("--failures of 10^9", lambda d: _claim(0.05, 0.05, 10**9), ex.ConfigError,
-         "--failures: must be an integer in [0, 10000]"),
+    Case(
+        "--require: not an expression",
+        lambda d: _require("rms_error < 0.05 mm"),
+        ex.ConfigError,
+        "is not METRIC OP VALUE with OP one of <= >= == != < >",
+    ),
+    Case(
+        "--require: an unknown metric",
+        lambda d: _require("rms_eror_after_2s<=0.05"),
+        ex.ConfigError,
+        "no metric 'rms_eror_after_2s'; did you mean 'rms_error_after_2s'?",
+    ),
+    Case(
+        "--require: a NaN bound",
+        lambda d: _require("rms_error<=nan"),
+        ex.ConfigError,
+        "the bound must be a finite number, got nan",
+    ),
+    Case(
+        "--require: a flag compared by size",
+        lambda d: _require("runaway<=1"),
+        ex.ConfigError,
+        "runaway is true or false: compare it with == or != to true or false",
+    ),
+    Case(
+        "--epsilon of 0",
+        lambda d: _claim(0.0, 0.05),
+        ex.ConfigError,
+        "--epsilon: must be a probability in (0, 1)",
+    ),
+    Case(
+        "--beta of 1", lambda d: _claim(0.05, 1.0), ex.ConfigError, "--beta: must be a probability in (0, 1)"
+    ),
+    Case(
+        "--failures of 10^9",
+        lambda d: _claim(0.05, 0.05, 10**9),
+        ex.ConfigError,
+        "--failures: must be an integer in [0, 10000]",
+    ),
 ]
+
 
 def _falsify(**changes):
     def check():
         from nnrobust.falsify import FalsifySpec
 
-        return FalsifySpec(**{"target": "s.toml", "controllers": ["nn"], "require": ["rms_error<=0.05"],
-                              "budget": 100, **changes})
+        return FalsifySpec(
+            **{
+                "target": "s.toml",
+                "controllers": ["nn"],
+                "require": ["rms_error<=0.05"],
+                "budget": 100,
+                **changes,
+            }
+        )
 
     return check
 
@@ -818,28 +1455,64 @@ def _box(folder: Path, vary: str):
         from nnrobust.falsify import box_of
         from nnrobust.sweep import load_sweep
 
-        return box_of(load_sweep(_file(folder, "s.toml", f'name = "s"\nbase = "paper-ellipse"\n'
-                                                          f'controllers = ["nn"]\n[vary]\n{vary}')))
+        return box_of(
+            load_sweep(
+                _file(
+                    folder,
+                    "s.toml",
+                    f'name = "s"\nbase = "paper-ellipse"\ncontrollers = ["nn"]\n[vary]\n{vary}',
+                )
+            )
+        )
 
     return check
 
 
 FALSIFY_CASES = [
-    Case("falsify: a budget of 0", lambda d: _falsify(budget=0), ex.ConfigError,
-         "--budget: must be an integer in [4, 100000], got 0"),
-    Case("falsify: a budget of 10^9", lambda d: _falsify(budget=10**9), ex.ConfigError,
-         "--budget: must be an integer in [4, 100000]"),
-    Case("falsify: no property", lambda d: _falsify(require=[]), ex.ConfigError,
-         "--require: falsify needs at least one property to falsify"),
-    Case("falsify: an empty box", lambda d: _box(d, ""), ex.ConfigError,
-         "vary: the sweep file varies nothing: falsify needs a box of uniform or loguniform ranges"),
-    Case("falsify: a normal distribution (no box)",
-         lambda d: _box(d, '"nn.sigma" = {normal = [0.1, 0.02]}\n'), ex.ConfigError,
-         "vary.nn.sigma: falsify searches uniform and loguniform ranges, not normal"),
+    Case(
+        "falsify: a budget of 0",
+        lambda d: _falsify(budget=0),
+        ex.ConfigError,
+        "--budget: must be an integer in [4, 100000], got 0",
+    ),
+    Case(
+        "falsify: a budget of 10^9",
+        lambda d: _falsify(budget=10**9),
+        ex.ConfigError,
+        "--budget: must be an integer in [4, 100000]",
+    ),
+    Case(
+        "falsify: no property",
+        lambda d: _falsify(require=[]),
+        ex.ConfigError,
+        "--require: falsify needs at least one property to falsify",
+    ),
+    Case(
+        "falsify: an empty box",
+        lambda d: _box(d, ""),
+        ex.ConfigError,
+        "vary: the sweep file varies nothing: falsify needs a box of uniform or loguniform ranges",
+    ),
+    Case(
+        "falsify: a normal distribution (no box)",
+        lambda d: _box(d, '"nn.sigma" = {normal = [0.1, 0.02]}\n'),
+        ex.ConfigError,
+        "vary.nn.sigma: falsify searches uniform and loguniform ranges, not normal",
+    ),
 ]
 
-CASES = (URDF_CASES + CONFIG_CASES + RUN_FOLDER_CASES + VIEWER_CASES + TUNE_CASES + CUSTOM_CASES
-         + PROPERTY_CASES + FALSIFY_CASES + API_CASES + SCHEDULER_CASES)
+CASES = (
+    URDF_CASES
+    + CONFIG_CASES
+    + RUN_FOLDER_CASES
+    + VIEWER_CASES
+    + TUNE_CASES
+    + CUSTOM_CASES
+    + PROPERTY_CASES
+    + FALSIFY_CASES
+    + API_CASES
+    + SCHEDULER_CASES
+)
 
 
 def message_of(case: Case, folder: Path) -> str:
@@ -900,8 +1573,11 @@ def render_table(folder: Path) -> str:
     ]
     for case in CASES:
         message = message_of(case, folder)
-        for path, name in ((folder.resolve(), "<dir>"), (folder, "<dir>"),
-                           (folder.resolve().parent, "<dir>/..")):
+        for path, name in (
+            (folder.resolve(), "<dir>"),
+            (folder, "<dir>"),
+            (folder.resolve().parent, "<dir>/.."),
+        ):
             message = message.replace(str(path), name)
         message = re.sub(r"pid \d+", "pid <pid>", message).replace("|", "\\|").replace("\n", " ")
         name = case.error.__name__ if case.error else "warning, loads"

@@ -15,8 +15,7 @@ def printed_mass(q, beta, p) -> np.ndarray:
     c2, c3, c23 = np.cos(q[1]), np.cos(q[2]), np.cos(q[1] + q[2])
     m11 = b1 + 2 * p1 * c2 + p2 * c23 + p3 * c3
     m12 = b2 + p1 * c2 + p2 * c23
-    return np.array([[m11, m12, b3], [m12, b2 + 2 * p3 * c3, b3 + p3 * c3],
-                     [b3, b3 + p3 * c3, b3]])
+    return np.array([[m11, m12, b3], [m12, b2 + 2 * p3 * c3, b3 + p3 * c3], [b3, b3 + p3 * c3, b3]])
 
 
 def printed_coriolis(q, v, p) -> np.ndarray:
@@ -26,8 +25,10 @@ def printed_coriolis(q, v, p) -> np.ndarray:
     v1, v2, v3 = v
     a = p1 * s2 + p2 * s12
     b = p2 * s12 + p3 * s12
-    return np.array([
-        [-a * v2 - b * v3, -a * (v1 + v2) - b * v3, b * (-v1 + v2 + v3)],
-        [a * v1 + p3 * s3 * v3, -b * v3, -p3 * s3 * (3 * v1 + v2 + v3)],
-        [a * v1 - p3 * s3 * v2, p3 * s3 * (v1 + v2), 0.0],
-    ])
+    return np.array(
+        [
+            [-a * v2 - b * v3, -a * (v1 + v2) - b * v3, b * (-v1 + v2 + v3)],
+            [a * v1 + p3 * s3 * v3, -b * v3, -p3 * s3 * (3 * v1 + v2 + v3)],
+            [a * v1 - p3 * s3 * v2, p3 * s3 * (v1 + v2), 0.0],
+        ]
+    )

@@ -24,8 +24,7 @@ def random_states(n: int, count: int, seed: int = 0, speed: float = 3.0):
     """``count`` seeded (q, q', q'') triples with angles in [-pi, pi]."""
     rng = np.random.default_rng(seed)
     for _ in range(count):
-        yield (rng.uniform(-np.pi, np.pi, n), rng.uniform(-speed, speed, n),
-               rng.uniform(-speed, speed, n))
+        yield (rng.uniform(-np.pi, np.pi, n), rng.uniform(-speed, speed, n), rng.uniform(-speed, speed, n))
 
 
 def finite_difference(f, q: np.ndarray, direction: np.ndarray, h: float = 1e-6) -> np.ndarray:

@@ -43,10 +43,12 @@ def test_continuous_joints_keep_the_dynamics_of_the_unbounded_joints(name):
         angles = rng.uniform(-4, 4, rebuilt.nv)
         v, a = rng.normal(size=rebuilt.nv), rng.normal(size=rebuilt.nv)
         q = configuration_from_angles(original, angles)
-        np.testing.assert_allclose(np.triu(pin.crba(rebuilt, e, angles)), np.triu(pin.crba(original, d, q)),
-                                   atol=1e-12)
-        np.testing.assert_allclose(pin.rnea(rebuilt, e, angles, v, a), pin.rnea(original, d, q, v, a),
-                                   atol=1e-10)
+        np.testing.assert_allclose(
+            np.triu(pin.crba(rebuilt, e, angles)), np.triu(pin.crba(original, d, q)), atol=1e-12
+        )
+        np.testing.assert_allclose(
+            pin.rnea(rebuilt, e, angles, v, a), pin.rnea(original, d, q, v, a), atol=1e-10
+        )
         pin.computeJointJacobians(original, d, q)
         pin.computeJointJacobians(rebuilt, e, angles)
         pin.updateFramePlacements(original, d)
@@ -54,8 +56,11 @@ def test_continuous_joints_keep_the_dynamics_of_the_unbounded_joints(name):
         for fid in range(0, original.nframes, 7):
             np.testing.assert_allclose(e.oMf[fid].homogeneous, d.oMf[fid].homogeneous, atol=1e-12)
             lwa = pin.LOCAL_WORLD_ALIGNED
-            np.testing.assert_allclose(pin.getFrameJacobian(rebuilt, e, fid, lwa),
-                                       pin.getFrameJacobian(original, d, fid, lwa), atol=1e-12)
+            np.testing.assert_allclose(
+                pin.getFrameJacobian(rebuilt, e, fid, lwa),
+                pin.getFrameJacobian(original, d, fid, lwa),
+                atol=1e-12,
+            )
         continuous = [original.joints[original.getJointId(j)].idx_v for j in continuous_joint_names(original)]
         expected = angles.copy()
         expected[continuous] = np.arctan2(np.sin(angles[continuous]), np.cos(angles[continuous]))
@@ -96,18 +101,22 @@ def test_a_floating_base_is_fixed_to_the_world_and_said_once():
         warnings.simplefilter("always")
         leg = load_robot("solo12", task="position")
     assert [str(w.message) for w in caught] == [
-        "solo12: a floating-base robot, simulated with its base fixed to the world"]
+        "solo12: a floating-base robot, simulated with its base fixed to the world"
+    ]
     assert leg.nq == 3 and leg.task_frame == "HR_FOOT"
     assert all(name.startswith("HR_") for name in leg.joint_names)
 
 
-@pytest.mark.parametrize("name, n, frame, first", [
-    ("panda", 7, "panda_hand_tcp", "panda_joint1"),  # fingers locked
-    ("talos_arm", 6, "wrist_left_ft_tool_link", "arm_left_2_joint"),  # gripper locked, not a finger link
-    ("baxter", 7, "right_hand_range_link", "right_s0"),  # one arm, not the whole robot
-    ("tiago", 8, "hand_tool_link", "torso_lift_joint"),  # wheels, head and hand locked
-    ("finger_edu", 3, "finger_tip_link", "finger_base_to_upper_joint"),  # a robot that is a finger
-])
+@pytest.mark.parametrize(
+    "name, n, frame, first",
+    [
+        ("panda", 7, "panda_hand_tcp", "panda_joint1"),  # fingers locked
+        ("talos_arm", 6, "wrist_left_ft_tool_link", "arm_left_2_joint"),  # gripper locked, not a finger link
+        ("baxter", 7, "right_hand_range_link", "right_s0"),  # one arm, not the whole robot
+        ("tiago", 8, "hand_tool_link", "torso_lift_joint"),  # wheels, head and hand locked
+        ("finger_edu", 3, "finger_tip_link", "finger_base_to_upper_joint"),  # a robot that is a finger
+    ],
+)
 def test_the_default_chain_rule(name, n, frame, first):
     robot = _quiet(load_robot, name, task="position")
     assert (robot.nq, robot.task_frame, robot.joint_names[0]) == (n, frame, first)
@@ -162,9 +171,12 @@ def _late_rms(name: str, kind: str) -> float:
     q = _well_conditioned(robot)
     x = robot.task_position(q)
     config = load_preset("panda-ellipse").replace(
-        name=f"{name}-ellipse", robot={"source": name, "task": "position"}, controller={"kind": kind},
+        name=f"{name}-ellipse",
+        robot={"source": name, "task": "position"},
+        controller={"kind": kind},
         trajectory={"center": [float(v) for v in x], "axis_a": [0.0, 0.03, 0.0], "axis_b": [0.02, 0.0, 0.02]},
-        simulation={"duration": 2.0, "q_seed": [float(v) for v in q], "substeps": 4})
+        simulation={"duration": 2.0, "q_seed": [float(v) for v in q], "substeps": 4},
+    )
     result = _quiet(run_experiment, config)
     assert result.status == "completed" and np.all(np.isfinite(result.q)), result.message
     return float(np.sqrt(np.mean(result.position_error()[result.t >= 1.0] ** 2)))
@@ -182,8 +194,9 @@ def test_nn_controller_tracks_on_robots_the_paper_never_saw(name):
     docs = (Path(__file__).resolve().parents[1] / "docs" / "robots.md").read_text()
     row = re.search(rf"\| {name}( leg)? \| \d+ \| ([\d.]+) mm \| ([\d.]+) mm \|", docs)
     assert row, f"docs/robots.md has no row for {name}: run python -m tests.test_any_robot"
-    assert (row.group(2), row.group(3)) == (f"{nn * 1e3:.3g}", f"{baseline * 1e3:.3g}"), \
+    assert (row.group(2), row.group(3)) == (f"{nn * 1e3:.3g}", f"{baseline * 1e3:.3g}"), (
         "run python -m tests.test_any_robot and paste its table into docs/robots.md"
+    )
 
 
 def test_compiled_loop_equals_python_with_unlimited_joints_in_the_joint_criteria():
@@ -192,10 +205,12 @@ def test_compiled_loop_equals_python_with_unlimited_joints_in_the_joint_criteria
     q = _well_conditioned(robot)
     x = robot.task_position(q)
     config = load_preset("panda-ellipse").replace(
-        name="kinova-ellipse", robot={"source": "kinova", "task": "position"},
+        name="kinova-ellipse",
+        robot={"source": "kinova", "task": "position"},
         trajectory={"center": [float(v) for v in x], "axis_a": [0.0, 0.03, 0.0], "axis_b": [0.02, 0.0, 0.02]},
         simulation={"duration": 0.5, "q_seed": [float(v) for v in q], "substeps": 4},
-        subtasks={"criteria": ["joint_centering", "joint_limits"], "weights": [0.5, 0.5]})
+        subtasks={"criteria": ["joint_centering", "joint_limits"], "weights": [0.5, 0.5]},
+    )
     from tests.test_compiled import needs_extension
 
     if needs_extension.args[0]:
@@ -227,8 +242,10 @@ if __name__ == "__main__":  # the table of docs/robots.md: python -m tests.test_
     print("| robot | n | NN | no-u0 |\n|---|---:|---:|---:|")
     for robot_name in ("kinova", "so101", "tiago", "solo12"):
         n = _quiet(load_robot, robot_name, task="position").nq
-        print(f"| {robot_name} | {n} | {_late_rms(robot_name, 'nn') * 1e3:.3g} mm | "
-              f"{_late_rms(robot_name, 'no-u0') * 1e3:.3g} mm |")
+        print(
+            f"| {robot_name} | {n} | {_late_rms(robot_name, 'nn') * 1e3:.3g} mm | "
+            f"{_late_rms(robot_name, 'no-u0') * 1e3:.3g} mm |"
+        )
 
 
 @pytest.mark.parametrize("controller", ["nn", "pd"])
@@ -239,9 +256,11 @@ def test_a_minimal_experiment_file_runs_on_any_arm(tmp_path, controller):
     from nnrobust.experiment import build, run_experiment
 
     path = tmp_path / "minimal.toml"
-    path.write_text('[robot]\nsource = "panda"\ntask = "position"\n[trajectory]\ncenter = [0.45, 0.0, 0.45]\n'
-                    'axis_a = [0.1, 0.0, 0.0]\naxis_b = [0.0, 0.1, 0.0]\n[simulation]\nduration = 2.5\n'
-                    f'[controller]\nkind = "{controller}"\n')
+    path.write_text(
+        '[robot]\nsource = "panda"\ntask = "position"\n[trajectory]\ncenter = [0.45, 0.0, 0.45]\n'
+        "axis_a = [0.1, 0.0, 0.0]\naxis_b = [0.0, 0.1, 0.0]\n[simulation]\nduration = 2.5\n"
+        f'[controller]\nkind = "{controller}"\n'
+    )
     config = load_config(path)
     setup = build(config)
     assert [type(c).__name__ for c in setup.criterion.criteria] == ["Manipulability", "JointLimitAvoidance"]
@@ -278,18 +297,26 @@ def test_exports_conventions_are_read_as_such_and_the_dynamics_follow():
     with pytest.warns(InertiaAssumptionWarning, match="massless link flange read with no inertia") as said:
         robot = load_robot(arm(extra=FLANGE))
     assert len(said) == 1
-    by_hand = arm(extra=FLANGE.replace('ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"',
-                                       'ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"'))
+    by_hand = arm(
+        extra=FLANGE.replace(
+            'ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.1"',
+            'ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"',
+        )
+    )
     np.testing.assert_allclose(robot.mass(np.array(q)), _mass_matrix(by_hand, q), rtol=0, atol=1e-15)
     as_written = _pinocchio_mass(arm(extra=FLANGE), q)  # Pinocchio alone adds the flange's 0.1 kg m^2
     assert as_written[1, 1] > robot.mass(np.array(q))[1, 1] + 0.09
 
     with pytest.warns(InertiaAssumptionWarning, match="opposite sign"):
         robot = load_robot(_l2_inertia(CAD_PRODUCTS))
-    flipped = CAD_PRODUCTS.replace('ixy="0.0014185"', 'ixy="-0.0014185"').replace(
-        'ixz="-0.00092094"', 'ixz="0.00092094"').replace('iyz="-0.00169178"', 'iyz="0.00169178"')
-    np.testing.assert_allclose(robot.mass(np.array(q)), _mass_matrix(_l2_inertia(flipped), q), rtol=0,
-                               atol=1e-15)
+    flipped = (
+        CAD_PRODUCTS.replace('ixy="0.0014185"', 'ixy="-0.0014185"')
+        .replace('ixz="-0.00092094"', 'ixz="0.00092094"')
+        .replace('iyz="-0.00169178"', 'iyz="0.00169178"')
+    )
+    np.testing.assert_allclose(
+        robot.mass(np.array(q)), _mass_matrix(_l2_inertia(flipped), q), rtol=0, atol=1e-15
+    )
 
 
 def _pinocchio_mass(text: str, q) -> np.ndarray:
@@ -305,8 +332,11 @@ def test_the_pybullet_arms_load_unmodified(tmp_path):
     from nnrobust.model.urdf_check import InertiaAssumptionWarning
 
     data = Path(__file__).parent / "data" / "pybullet"
-    expected = {"kuka_iiwa/model.urdf": None, "franka_panda/panda.urdf": "massless links panda_link8, "
-                "panda_grasptarget", "xarm/xarm6_robot.urdf": "opposite sign"}
+    expected = {
+        "kuka_iiwa/model.urdf": None,
+        "franka_panda/panda.urdf": "massless links panda_link8, panda_grasptarget",
+        "xarm/xarm6_robot.urdf": "opposite sign",
+    }
     for name, said in expected.items():
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
@@ -326,10 +356,12 @@ def test_the_pybullet_arms_track_a_circle_with_the_defaults(arm, controller, tmp
 
     path = tmp_path / "circle.toml"
     source = Path(__file__).parent / "data" / "pybullet" / arm
-    path.write_text(f'[robot]\nsource = "{source}"\ntask = "position"\n[trajectory]\n'
-                    'center = [0.45, 0.0, 0.5]\naxis_a = [0.1, 0.0, 0.0]\naxis_b = [0.0, 0.1, 0.0]\n'
-                    '[simulation]\nduration = 3.0\n'
-                    f'[controller]\nkind = "{controller}"\n')
+    path.write_text(
+        f'[robot]\nsource = "{source}"\ntask = "position"\n[trajectory]\n'
+        "center = [0.45, 0.0, 0.5]\naxis_a = [0.1, 0.0, 0.0]\naxis_b = [0.0, 0.1, 0.0]\n"
+        "[simulation]\nduration = 3.0\n"
+        f'[controller]\nkind = "{controller}"\n'
+    )
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         result = run_experiment(load_config(path))

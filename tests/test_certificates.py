@@ -52,27 +52,30 @@ def test_wilks_bound_is_the_order_statistic_that_covers_the_quantile():
 
 
 def test_margins_are_signed_and_normalised():
-    error, = run_properties(["rms_error_after_2s<=0.05"])
+    (error,) = run_properties(["rms_error_after_2s<=0.05"])
     assert error.margin({"status": "completed", "rms_error_after_2s": 0.04}) == pytest.approx(0.2)
     assert error.margin({"status": "completed", "rms_error_after_2s": 0.06}) == pytest.approx(-0.2)
     assert error.margin({"status": "diverged", "rms_error_after_2s": 0.01}) == -math.inf
     assert error.margin({"status": "completed", "rms_error_after_2s": float("nan")}) == -math.inf
-    runaway, = run_properties(["runaway==false"])
+    (runaway,) = run_properties(["runaway==false"])
     assert runaway.margin({"status": "completed", "runaway": False}) == 1.0
     assert runaway.margin({"status": "completed", "runaway": True}) == -1.0
-    strict, = run_properties(["max_torque_ratio<1"])
+    (strict,) = run_properties(["max_torque_ratio<1"])
     assert not strict.holds({"status": "completed", "max_torque_ratio": 1.0})
     assert run_properties(["max_torque_ratio<=1"])[0].holds({"status": "completed", "max_torque_ratio": 1.0})
 
 
-@pytest.mark.parametrize("texts, words", [
-    (["rms_error<0.05 mm"], "is not METRIC OP VALUE"),
-    (["rms_eror_after_2s<=0.05"], "no metric 'rms_eror_after_2s'; did you mean 'rms_error_after_2s'?"),
-    (["rms_error<=nan"], "the bound must be a finite number"),
-    (["rms_error<=fast"], "'fast' is not a number"),
-    (["runaway<=1"], "runaway is true or false: compare it with == or !="),
-    (["rms_error<=1", "rms_error<=1"], "names a property twice"),
-])
+@pytest.mark.parametrize(
+    "texts, words",
+    [
+        (["rms_error<0.05 mm"], "is not METRIC OP VALUE"),
+        (["rms_eror_after_2s<=0.05"], "no metric 'rms_eror_after_2s'; did you mean 'rms_error_after_2s'?"),
+        (["rms_error<=nan"], "the bound must be a finite number"),
+        (["rms_error<=fast"], "'fast' is not a number"),
+        (["runaway<=1"], "runaway is true or false: compare it with == or !="),
+        (["rms_error<=1", "rms_error<=1"], "names a property twice"),
+    ],
+)
 def test_bad_properties_get_one_line_errors(texts, words):
     with pytest.raises(ConfigError, match=".*") as err:
         run_properties(texts)
@@ -87,22 +90,26 @@ def test_a_sweep_certifies_each_controller_from_its_rows(tmp_path, capsys):
     from nnrobust.sweep import read_results
 
     sweep = tmp_path / "s.toml"
-    sweep.write_text('name = "c"\nbase = "paper-ellipse"\ncontrollers = ["nn", "no-u0"]\nsamples = 6\n'
-                     'seed = 2\n[set]\n"simulation.duration" = 2.2\n[vary]\n'
-                     '"plant.disturbance_scale" = {uniform = [0.0, 3.0]}\n')
+    sweep.write_text(
+        'name = "c"\nbase = "paper-ellipse"\ncontrollers = ["nn", "no-u0"]\nsamples = 6\n'
+        'seed = 2\n[set]\n"simulation.duration" = 2.2\n[vary]\n'
+        '"plant.disturbance_scale" = {uniform = [0.0, 3.0]}\n'
+    )
     claim = ["--require", "rms_error_after_2s<=0.02", "--epsilon", "0.05", "--beta", "0.05"]
     assert main(["sweep", str(sweep), "--out", str(tmp_path / "out"), *claim]) == 2
     err = capsys.readouterr().err
     assert "needs N >= 59 samples with at most 0 failures; the sweep draws 6" in err
     assert not (tmp_path / "out").exists()
-    assert main(["sweep", str(sweep), "--out", str(tmp_path / "out"), "--workers", "2", "--allow-small",
-                 *claim]) == 0
+    assert (
+        main(["sweep", str(sweep), "--out", str(tmp_path / "out"), "--workers", "2", "--allow-small", *claim])
+        == 0
+    )
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     frame = read_results(tmp_path / "out")
     for controller in ("nn", "no-u0"):
         rows = frame[frame["controller"] == controller]
         failures = int(((rows["status"] != "completed") | ~(rows["rms_error_after_2s"] <= 0.02)).sum())
-        certificate, = summary["controllers"][controller]["certificates"]
+        (certificate,) = summary["controllers"][controller]["certificates"]
         assert (certificate["N"], certificate["k"]) == (6, failures)
         expected = 1.0 if failures == 6 else beta_distribution.ppf(0.95, failures + 1, 6 - failures)
         assert certificate["p_upper"] == pytest.approx(expected, rel=1e-12)

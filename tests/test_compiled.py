@@ -37,8 +37,10 @@ def _robots():
         "paper arm": paper_robot(),
         "paper arm, vertical plane": paper_robot(VERTICAL_GRAVITY),
         "panda, fingers locked": panda,
-        "panda, perturbed inertias": (perturb_inertias(panda.model, 1.1, 0.9, 0.2, 0.01, seed=3),
-                                      panda.task_frame),
+        "panda, perturbed inertias": (
+            perturb_inertias(panda.model, 1.1, 0.9, 0.2, 0.01, seed=3),
+            panda.task_frame,
+        ),
         "planar7": arm("planar7", "planar"),
     }
 
@@ -109,8 +111,13 @@ def test_without_the_extension_the_package_says_why(monkeypatch):
 
 # ---- the compiled closed loop against the Python reference -------------------------------------
 
-PAPER_PRESETS = ["paper-ellipse", "paper-line", "paper-ellipse-noisy", "paper-ellipse-paper-law",
-                 "paper-ellipse-vertical"]
+PAPER_PRESETS = [
+    "paper-ellipse",
+    "paper-line",
+    "paper-ellipse-noisy",
+    "paper-ellipse-paper-law",
+    "paper-ellipse-vertical",
+]
 ARM_PRESETS = ["panda-ellipse", "panda-pose", "ur5-ellipse", "planar7-ellipse"]
 """Presets on Pinocchio nominal models (perturbed URDFs), planar, position and pose tasks, the
 manipulability and joint-range criteria, the error-space NN basis."""
@@ -127,9 +134,16 @@ def _both_backends(preset, duration, **changes):
     config = load_preset(preset).replace(simulation=simulation, **changes)
     setup = build(config)
     assert compiled.twin_refusal(setup) == ""
-    reference = simulate(setup.plant, setup.controller, setup.q0, setup.v0, duration,
-                         config.simulation.control_period, setup.substeps,
-                         max_step_rotation=step_rotation_limit(config))
+    reference = simulate(
+        setup.plant,
+        setup.controller,
+        setup.q0,
+        setup.v0,
+        duration,
+        config.simulation.control_period,
+        setup.substeps,
+        max_step_rotation=step_rotation_limit(config),
+    )
     setup = build(config)  # fresh sensor noise generator and controller state
     return reference, compiled.simulate_compiled(setup, duration)
 
@@ -175,14 +189,21 @@ def test_auto_takes_the_compiled_loop_only_with_a_twin_for_every_component():
 
     paper = build(load_preset("paper-ellipse").replace(simulation={"duration": 1.0}))
     assert choose_backend(paper) == "compiled"
-    assert choose_backend(build(load_preset("panda-ellipse").replace(simulation={"duration": 1.0}))) == \
-        "compiled"
+    assert (
+        choose_backend(build(load_preset("panda-ellipse").replace(simulation={"duration": 1.0})))
+        == "compiled"
+    )
     stiff = build(load_preset("panda-pose").replace(simulation={"duration": 1.0, "integrator": "solve_ivp"}))
     assert choose_backend(stiff) == "python"
     assert compiled.twin_refusal(stiff) == "the integrator 'solve_ivp' has no compiled twin yet"
     with pytest.raises(NNRobustError, match="simulation.backend: 'compiled' cannot run this experiment"):
-        choose_backend(build(load_preset("panda-pose").replace(
-            simulation={"duration": 1.0, "backend": "compiled", "integrator": "solve_ivp"})))
+        choose_backend(
+            build(
+                load_preset("panda-pose").replace(
+                    simulation={"duration": 1.0, "backend": "compiled", "integrator": "solve_ivp"}
+                )
+            )
+        )
 
 
 @needs_extension
@@ -288,9 +309,14 @@ def test_obstacle_and_smoothness_criteria_are_compiled(preset):
     setup = build(load_preset(preset))
     n, chain = setup.robot.nq, setup.robot.chain_points(setup.q0)
     near = 0.5 * (chain[1] + chain[2]) + np.array([0.0, 0.08, 0.0])  # 8 cm off the second link
-    subtasks = {"criteria": ["obstacles", "joint_smoothness"], "weights": [0.7, 0.3],
-                "obstacles": [[*near, 0.03]], "obstacle_influence": 0.2, "link_radius": 0.01,
-                "smoothness_coefficients": [0.5, -1.0, 1.0] + [0.2] * (n - 3)}
+    subtasks = {
+        "criteria": ["obstacles", "joint_smoothness"],
+        "weights": [0.7, 0.3],
+        "obstacles": [[*near, 0.03]],
+        "obstacle_influence": 0.2,
+        "link_radius": 0.01,
+        "smoothness_coefficients": [0.5, -1.0, 1.0] + [0.2] * (n - 3),
+    }
     py, cc = _both_backends(preset, 0.5, subtasks=subtasks)
     for name in ("q", "dq", "tau", "z"):
         np.testing.assert_allclose(getattr(cc, name), getattr(py, name), rtol=0, atol=1e-8, err_msg=name)
@@ -306,8 +332,12 @@ def test_obstacle_and_smoothness_criteria_are_compiled(preset):
 def test_per_joint_plant_scales_are_the_same_on_both_loops():
     """Per-joint friction and disturbance scales, a disturbance frequency scale and phase shift:
     the compiled loop and the Python loop agree to 1e-8 (both read the built plant)."""
-    plant = {"joint_friction_scales": [0.5, 2.0, 1.5], "joint_disturbance_scales": [2.0, 0.5],
-             "disturbance_omega_scale": 1.3, "disturbance_phase_shift": 0.7}
+    plant = {
+        "joint_friction_scales": [0.5, 2.0, 1.5],
+        "joint_disturbance_scales": [2.0, 0.5],
+        "disturbance_omega_scale": 1.3,
+        "disturbance_phase_shift": 0.7,
+    }
     py, cc = _both_backends("paper-ellipse", 0.5, plant=plant)
     assert cc.status == py.status == "completed"
     for name in ("q", "dq", "tau"):

@@ -44,8 +44,9 @@ def test_kronecker_lyapunov_solver_matches_scipy():
         A -= (np.max(np.linalg.eigvals(A).real) + 0.5) * np.eye(n)  # shift the spectrum left
         B = rng.normal(size=(n, n))
         Q = B @ B.T + np.eye(n)
-        np.testing.assert_allclose(solve_lyapunov(A, Q), solve_continuous_lyapunov(A.T, -Q), rtol=1e-9,
-                                   atol=1e-11)
+        np.testing.assert_allclose(
+            solve_lyapunov(A, Q), solve_continuous_lyapunov(A.T, -Q), rtol=1e-9, atol=1e-11
+        )
 
 
 def test_omega_is_kp_e_plus_kv_edot():
@@ -132,8 +133,11 @@ def test_perfect_model_gives_the_linear_error_dynamics():
     wd = np.sqrt(6.0)
     e0 = np.array([0.02, -0.01])
     # e'(0) = J q'(0) - x_d'(0) = 0 since q'(0) = J+ x_d'(0)
-    analytic = np.exp(-2 * trace.t)[:, None] * (
-        np.cos(wd * trace.t)[:, None] + (2 / wd) * np.sin(wd * trace.t)[:, None]) * e0
+    analytic = (
+        np.exp(-2 * trace.t)[:, None]
+        * (np.cos(wd * trace.t)[:, None] + (2 / wd) * np.sin(wd * trace.t)[:, None])
+        * e0
+    )
     assert np.abs(e - analytic).max() < 2e-4 * np.abs(e0).max() * 10
 
 
@@ -157,8 +161,9 @@ def test_sampled_adaptive_law_is_the_exact_solution_with_held_inputs(sigma):
     y, q, v = np.array([0.1, 0.2, 0.3, -0.1]), np.full(3, 0.2), np.full(3, -0.1)
     z = np.concatenate([np.linspace(0.1, 2.0, comp.L), [0.6]])
     for period in (1e-3, 0.25):
-        np.testing.assert_allclose(comp.advance(q, v, y, z, period), _held_rk4(comp, q, v, y, z, period),
-                                   rtol=1e-10, atol=1e-12)
+        np.testing.assert_allclose(
+            comp.advance(q, v, y, z, period), _held_rk4(comp, q, v, y, z, period), rtol=1e-10, atol=1e-12
+        )
 
 
 def test_sigma_modification_forgets_at_rate_F_sigma_and_settles_at_the_drive_over_sigma():
@@ -170,16 +175,21 @@ def test_sigma_modification_forgets_at_rate_F_sigma_and_settles_at_the_drive_ove
     q, v = np.full(3, 0.2), np.full(3, -0.1)
     z = np.concatenate([np.linspace(0.1, 2.0, comp.L), [0.6]])
     rest = comp.advance(q, v, np.zeros(4), z, 0.3)
-    np.testing.assert_allclose(rest[:comp.L], z[:comp.L] * np.exp(-4.0 * 0.5 * 0.3), rtol=1e-13)
+    np.testing.assert_allclose(rest[: comp.L], z[: comp.L] * np.exp(-4.0 * 0.5 * 0.3), rtol=1e-13)
     y = np.array([0.1, 0.2, 0.3, -0.1])
     drive = np.linalg.norm(comp.omega(y)) * comp.basis(comp.network_input(q, v, y))
     settled = comp.advance(q, v, y, z, 50.0)
-    np.testing.assert_allclose(settled[:comp.L], drive / 0.5, rtol=1e-12)
+    np.testing.assert_allclose(settled[: comp.L], drive / 0.5, rtol=1e-12)
 
 
 @settings(max_examples=200, deadline=None)
-@given(st.lists(st.floats(-10, 10), min_size=2, max_size=2), st.lists(st.floats(-10, 10), min_size=2,
-       max_size=2), st.floats(0.0, 50.0), st.floats(1e-6, 5.0), st.floats(0.0, 1.0))
+@given(
+    st.lists(st.floats(-10, 10), min_size=2, max_size=2),
+    st.lists(st.floats(-10, 10), min_size=2, max_size=2),
+    st.floats(0.0, 50.0),
+    st.floats(1e-6, 5.0),
+    st.floats(0.0, 1.0),
+)
 def test_lyapunov_inequality_of_the_corrected_law(w, eta_dir, rho, eps, shrink):
     """omega^T (u_0 + eta) <= eps whenever rho-hat >= |eta| (the step of the paper's Lyapunov
     argument that makes V' <= -y^T Q y / 2 + eps); the printed law has no such bound."""

@@ -27,8 +27,10 @@ def _experiment(folder: Path, cls: str, params: str = "", extra: str = "", durat
     """An experiment file beside a copy of the controller file, starting from a preset."""
     shutil.copy(LAWS, folder / "laws.py")
     path = folder / "experiment.toml"
-    path.write_text(f'base = "paper-ellipse"\nname = "mine"\n\n[controller]\nkind = "custom"\n'
-                    f'class = "laws.py:{cls}"\n{params}\n[simulation]\nduration = {duration}\n{extra}')
+    path.write_text(
+        f'base = "paper-ellipse"\nname = "mine"\n\n[controller]\nkind = "custom"\n'
+        f'class = "laws.py:{cls}"\n{params}\n[simulation]\nduration = {duration}\n{extra}'
+    )
     return path
 
 
@@ -37,8 +39,9 @@ def test_the_context_is_enough_to_write_eq9_again(tmp_path):
     tracks the built-in no-u0 law to 1e-9 rad over 0.5 s of the paper's case (b)."""
     config = load_config(_experiment(tmp_path, "Eq9", "[controller.params]\nKp = 10.0\nKv = 4.0\n"))
     mine = run_experiment(config)
-    builtin = run_experiment(load_preset("paper-ellipse").replace(simulation={"duration": 0.5},
-                                                                  controller={"kind": "no-u0"}))
+    builtin = run_experiment(
+        load_preset("paper-ellipse").replace(simulation={"duration": 0.5}, controller={"kind": "no-u0"})
+    )
     assert mine.status == builtin.status == "completed"
     assert mine.backend == ("hybrid" if compiled.available() else "python")
     np.testing.assert_allclose(mine.q, builtin.q, atol=1e-9, rtol=0)
@@ -55,13 +58,18 @@ def test_the_context_holds_the_nominal_model_never_the_true_one(tmp_path):
     assert ctx.period == setup.config.simulation.control_period and (ctx.n, ctx.m) == (3, 2)
     np.testing.assert_array_equal(ctx.torque_limits, setup.plant.torque_limit)
     np.testing.assert_array_equal(ctx.q0, setup.q0)
-    panda = build(load_preset("panda-ellipse").replace(
-        simulation={"duration": 0.1}, controller={"kind": "custom", "class": f"{LAWS}:Counter"}))
+    panda = build(
+        load_preset("panda-ellipse").replace(
+            simulation={"duration": 0.1}, controller={"kind": "custom", "class": f"{LAWS}:Counter"}
+        )
+    )
     assert panda.controller.n == 7
     import pinocchio as pin
 
-    assert isinstance(build(load_preset("panda-ellipse").replace(simulation={"duration": 0.1}))
-                      .nominal.pinocchio_model, pin.Model)
+    assert isinstance(
+        build(load_preset("panda-ellipse").replace(simulation={"duration": 0.1})).nominal.pinocchio_model,
+        pin.Model,
+    )
 
 
 def test_a_run_records_its_class_and_reruns_bit_for_bit_from_elsewhere(tmp_path, monkeypatch):
@@ -91,9 +99,26 @@ def test_a_run_records_its_class_and_reruns_bit_for_bit_from_elsewhere(tmp_path,
 def test_run_takes_a_class_on_the_command_line_with_its_params(tmp_path, monkeypatch):
     shutil.copy(LAWS, tmp_path / "laws.py")
     monkeypatch.chdir(tmp_path)
-    assert main(["run", "paper-ellipse", "--controller", "laws.py:Eq9", "--set", "controller.params.Kp=10.0",
-                 "--set", "controller.params.Kv=4.0", "--duration", "0.2", "--quiet", "--no-plots",
-                 "--no-animation"]) == 0
+    assert (
+        main(
+            [
+                "run",
+                "paper-ellipse",
+                "--controller",
+                "laws.py:Eq9",
+                "--set",
+                "controller.params.Kp=10.0",
+                "--set",
+                "controller.params.Kv=4.0",
+                "--duration",
+                "0.2",
+                "--quiet",
+                "--no-plots",
+                "--no-animation",
+            ]
+        )
+        == 0
+    )
     config = load_config(tmp_path / "out" / "paper-ellipse-Eq9" / "config.toml")
     assert config.controller.params == {"Kp": 10.0, "Kv": 4.0}
     with warnings.catch_warnings():
@@ -102,16 +127,23 @@ def test_run_takes_a_class_on_the_command_line_with_its_params(tmp_path, monkeyp
     assert back.controller.class_ is None
 
 
-@pytest.mark.parametrize("cls, params, key, words", [
-    ("Nope", "", "controller.class", "has no 'Nope'"),
-    ("Eq", "", "controller.class", "did you mean 'Eq9'"),
-    ("NotAController", "", "controller.class", "not a subclass of nnrobust.Controller"),
-    ("Abstract", "", "controller.class", "does not implement compute"),
-    ("Eq9", "[controller.params]\nKp = 1.0\nKvv = 2.0\n", "controller.params.Kvv", "did you mean 'Kv'"),
-    ("Eq9", "[controller.params]\nKp = 1.0\n", "controller.params", "Eq9 needs Kv"),
-    ("NeedsGain", "[controller.params]\ngain = -1.0\n", "controller.params",
-     "ValueError: gain must be >= 0, got -1.0 (laws.py, line"),
-])
+@pytest.mark.parametrize(
+    "cls, params, key, words",
+    [
+        ("Nope", "", "controller.class", "has no 'Nope'"),
+        ("Eq", "", "controller.class", "did you mean 'Eq9'"),
+        ("NotAController", "", "controller.class", "not a subclass of nnrobust.Controller"),
+        ("Abstract", "", "controller.class", "does not implement compute"),
+        ("Eq9", "[controller.params]\nKp = 1.0\nKvv = 2.0\n", "controller.params.Kvv", "did you mean 'Kv'"),
+        ("Eq9", "[controller.params]\nKp = 1.0\n", "controller.params", "Eq9 needs Kv"),
+        (
+            "NeedsGain",
+            "[controller.params]\ngain = -1.0\n",
+            "controller.params",
+            "ValueError: gain must be >= 0, got -1.0 (laws.py, line",
+        ),
+    ],
+)
 def test_a_bad_class_or_bad_params_is_one_error_naming_the_key(tmp_path, cls, params, key, words):
     config = load_config(_experiment(tmp_path, cls, params).parent / "experiment.toml")
     with pytest.raises(ConfigError) as err:
@@ -119,11 +151,20 @@ def test_a_bad_class_or_bad_params_is_one_error_naming_the_key(tmp_path, cls, pa
     assert err.value.key == key and words in str(err.value), str(err.value)
 
 
-@pytest.mark.parametrize("cls, words", [
-    ("Undeclared", "returned signal 'surprise', which is not in its signal_names ('elapsed',); declare it"),
-    ("WrongShape", "returned a torque of shape (4,) at t = 0 s; the arm has 3 joints"),
-    ("Raises", "Raises.compute raised at t = 0.011 s: IndexError: list index out of range (laws.py, line"),
-])
+@pytest.mark.parametrize(
+    "cls, words",
+    [
+        (
+            "Undeclared",
+            "returned signal 'surprise', which is not in its signal_names ('elapsed',); declare it",
+        ),
+        ("WrongShape", "returned a torque of shape (4,) at t = 0 s; the arm has 3 joints"),
+        (
+            "Raises",
+            "Raises.compute raised at t = 0.011 s: IndexError: list index out of range (laws.py, line",
+        ),
+    ],
+)
 def test_a_controller_that_breaks_the_contract_while_running_is_named(tmp_path, cls, words):
     config = load_config(_experiment(tmp_path, cls))
     with pytest.raises(ControllerError) as err:
@@ -137,7 +178,7 @@ def test_class_and_params_belong_to_custom_and_custom_needs_a_class():
         config.replace(controller={"class": "laws.py:Eq9"})
     with pytest.raises(ConfigError, match="controller.class: kind = 'custom' needs the class"):
         config.replace(controller={"kind": "custom"})
-    with pytest.raises(ConfigError, match="is not \"file.py:Class\""):
+    with pytest.raises(ConfigError, match='is not "file.py:Class"'):
         config.replace(controller={"kind": "custom", "class": "laws.py"})
     with pytest.raises(ConfigError, match="controller.params.2x: .* not a valid Python identifier"):
         config.replace(controller={"kind": "custom", "class": "a.py:B", "params": {"2x": 1}})
@@ -170,9 +211,21 @@ def test_an_experiment_file_starts_from_a_preset_or_another_file(tmp_path):
 
 
 def test_the_front_door_exposes_the_workflow():
-    for name in ("load_robot", "load_preset", "ExperimentConfig", "build", "run_experiment", "Result",
-                 "write_run", "plot_run", "run_sweep", "run_tune", "Controller", "ControlOutput",
-                 "ControllerContext"):
+    for name in (
+        "load_robot",
+        "load_preset",
+        "ExperimentConfig",
+        "build",
+        "run_experiment",
+        "Result",
+        "write_run",
+        "plot_run",
+        "run_sweep",
+        "run_tune",
+        "Controller",
+        "ControlOutput",
+        "ControllerContext",
+    ):
         assert name in nnrobust.__all__ and getattr(nnrobust, name) is not None
 
 
@@ -188,8 +241,9 @@ def test_the_hybrid_loop_is_the_python_loop_with_a_compiled_plant(preset):
     picks it for a custom controller."""
     base = load_preset(preset).replace(simulation={"duration": 2.5})
     c = base.controller
-    config = base.replace(controller={"kind": "custom", "class": f"{LAWS}:Eq9",
-                                      "params": {"Kp": c.Kp, "Kv": c.Kv}})
+    config = base.replace(
+        controller={"kind": "custom", "class": f"{LAWS}:Eq9", "params": {"Kp": c.Kp, "Kv": c.Kv}}
+    )
     hybrid = run_experiment(config)
     python = run_experiment(config.replace(simulation={"backend": "python"}))
     assert (hybrid.backend, python.backend) == ("hybrid", "python")
@@ -204,11 +258,17 @@ def test_the_hybrid_loop_is_the_python_loop_with_a_compiled_plant(preset):
 
 
 @needs_extension
-@pytest.mark.parametrize("cls, words", [
-    ("Undeclared", "returned signal 'surprise', which is not in its signal_names"),
-    ("WrongShape", "returned a torque of shape (4,) at t = 0 s; the arm has 3 joints"),
-    ("Raises", "Raises.compute raised at t = 0.011 s: IndexError: list index out of range (laws.py, line"),
-])
+@pytest.mark.parametrize(
+    "cls, words",
+    [
+        ("Undeclared", "returned signal 'surprise', which is not in its signal_names"),
+        ("WrongShape", "returned a torque of shape (4,) at t = 0 s; the arm has 3 joints"),
+        (
+            "Raises",
+            "Raises.compute raised at t = 0.011 s: IndexError: list index out of range (laws.py, line",
+        ),
+    ],
+)
 def test_the_hybrid_loop_names_a_broken_contract_as_the_python_loop_does(tmp_path, cls, words):
     config = load_config(_experiment(tmp_path, cls, extra='backend = "hybrid"\n'))
     with pytest.raises(ControllerError) as err:
@@ -255,4 +315,4 @@ def test_a_result_shows_its_summary_and_figures_in_a_notebook():
     page = result._repr_html_()
     metrics = result.metrics()
     assert f"{1e3 * metrics['rms_error_after_2s']:.4g} mm" in page and "subtask degraded" in page
-    assert page.count("<img src=\"data:image/png;base64,") == 2
+    assert page.count('<img src="data:image/png;base64,') == 2

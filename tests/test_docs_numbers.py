@@ -23,8 +23,15 @@ DATA_FILES = ["paper_reproduction", "nn_options", "subtask", "arm_presets"]
 """Rows of benchmarks/_common.py jobs (preset and changes)."""
 STUDIES = ["paper_robustness", "panda_robustness"]
 """Summaries of the shipped sweeps (their summary.json)."""
-OTHERS = ["friction_compensation", "plant_convergence", "tuned_comparison", "falsify_paper_factors",
-          "engine_gap", "adaptive_step", "tune_noisy_case_b"]
+OTHERS = [
+    "friction_compensation",
+    "plant_convergence",
+    "tuned_comparison",
+    "falsify_paper_factors",
+    "engine_gap",
+    "adaptive_step",
+    "tune_noisy_case_b",
+]
 """Data files with a re-run test of their own below."""
 
 
@@ -61,6 +68,7 @@ def test_the_worst_sample_of_a_study_reproduces(name):
 
 def _quickest_row(rows):
     """The first row of the shortest runs (on the 3-link arm where there is a choice)."""
+
     def cost(row):
         return (row["changes"].get("simulation", {}).get("duration", 20.0), "panda" in row["preset"])
 
@@ -96,8 +104,11 @@ def test_a_run_of_the_friction_compensation_data_reproduces():
 def test_a_run_of_the_plant_convergence_data_reproduces():
     """The default-step run of paper-ellipse with the NN, and the table's claim that it converged."""
     data = json.loads((render_tables.DATA / "plant_convergence.json").read_text())
-    run = next(r for r in data["runs"] if r["preset"] == "paper-ellipse" and r["controller"] == "nn"
-               and r["run"] == "default")
+    run = next(
+        r
+        for r in data["runs"]
+        if r["preset"] == "paper-ellipse" and r["controller"] == "nn" and r["run"] == "default"
+    )
     again = _rerun(run)
     for key in ("rms_error_after_2s", "rms_torque", "torque_chatter", "friction_events"):
         assert again[key] == pytest.approx(run[key], rel=1e-9), key
@@ -124,8 +135,14 @@ def _rerun_best(summary: dict, controllers: list[str], name: str) -> None:
     from nnrobust.tune import TuneSpec
     from nnrobust.tune.engine import sweep_of
 
-    spec = TuneSpec(summary["target"], controllers, summary["budget"], len(summary["train_samples"]),
-                    len(summary["validation_samples"]), seed=summary["seed"])
+    spec = TuneSpec(
+        summary["target"],
+        controllers,
+        summary["budget"],
+        len(summary["train_samples"]),
+        len(summary["validation_samples"]),
+        seed=summary["seed"],
+    )
     sweep = sweep_of(spec)
     best = summary["controllers"][name]["best"]
     config = apply_overrides(experiment(sweep, base_config(sweep), draw(sweep, 0), name), best["params"])
@@ -167,6 +184,7 @@ def _grid(controller, point, statistic):
 
 def _falsified(controller, search=None):
     """The worst RMS error after 2 s a falsification found (or its random baseline)."""
+
     def get(data):
         entry = data["controllers"][controller]
         entry = entry[search] if search else entry
@@ -177,23 +195,28 @@ def _falsified(controller, search=None):
 
 def _held(case, controller, sensing="noisy"):
     """The held-out RMS error of a controller's best setting in tuned_comparison.json."""
+
     def get(data):
         entry = next(c for c in data["cases"] if c["case"] == case and c["sensing"] == sensing)
         return entry["summary"]["controllers"][controller]["best"]["validation"]["rms_error_after_2s"]
+
     return get
 
 
 def _row(case, variant):
     """A paper_reproduction.json row's RMS error."""
-    return lambda data: next(r["rms_error_after_2s"] for r in data["rows"]
-                             if r["case"] == case and r["variant"] == variant)
+    return lambda data: next(
+        r["rms_error_after_2s"] for r in data["rows"] if r["case"] == case and r["variant"] == variant
+    )
 
 
 def _ratio(preset):
     """no-u0's RMS error over the NN's on a real-arm preset (arm_presets.json)."""
+
     def get(data):
         error = {r["controller"]: r["rms_error_after_2s"] for r in data["rows"] if r["preset"] == preset}
         return error["no-u0"] / error["nn"]
+
     return get
 
 
@@ -203,9 +226,14 @@ def _error(row, variant):
 
 def _gaps(part, controller=None, exclude=(), variant="mujoco", reference="pinocchio"):
     """|error on ``variant`` / error on ``reference`` - 1| in % for each row of engine_gap.json."""
+
     def get(data):
-        return [100 * abs(_error(r, variant) / _error(r, reference) - 1) for r in data[part]
-                if controller in (None, r["controller"]) and r.get("preset") not in exclude]
+        return [
+            100 * abs(_error(r, variant) / _error(r, reference) - 1)
+            for r in data[part]
+            if controller in (None, r["controller"]) and r.get("preset") not in exclude
+        ]
+
     return get
 
 
@@ -214,8 +242,9 @@ def _gap_stat(stat, *args, **kwargs):
 
 
 def _gap_error(preset, controller, variant):
-    return lambda data: next(_error(r, variant) for r in data["presets"]
-                             if r["preset"] == preset and r["controller"] == controller)
+    return lambda data: next(
+        _error(r, variant) for r in data["presets"] if r["preset"] == preset and r["controller"] == controller
+    )
 
 
 def _failing(variant, factor=2.0):
@@ -228,6 +257,7 @@ GAP = "engine_gap"
 PRINTED = ("paper-ellipse-paper-law",)
 FALSIFIED = "falsify_paper_factors"
 
+
 def _best(controller: str):
     """The held-out RMS error of a controller's best setting in a tuning's summary."""
     return lambda data: data["controllers"][controller]["best"]["validation"]["rms_error_after_2s"]
@@ -237,12 +267,14 @@ def _drift_ratio(coarse: float, fine: float):
     def ratio(data):
         drift = {r["max_step_rotation"]: r["energy_drift"] for r in data["rows"]}
         return drift[coarse] / drift[fine]
+
     return ratio
 
 
 def _convergence(preset: str, key: str, controller: str = "computed-torque"):
-    return lambda data: next(r[key] for r in data["rows"] if r["preset"] == preset
-                             and r["controller"] == controller)
+    return lambda data: next(
+        r[key] for r in data["rows"] if r["preset"] == preset and r["controller"] == controller
+    )
 
 
 QUOTED_FIGURES: list[tuple] = [
@@ -271,132 +303,386 @@ QUOTED_FIGURES: list[tuple] = [
     ("README.md", r"the PD [\d.]+ / ([\d.]+) /", TUNED, _held(CASE_B, "pd"), 1e3),
     ("README.md", r"the PD [\d.]+ / [\d.]+ / ([\d.]+) mm", TUNED, _held(PANDA_ARM, "pd"), 1e3),
     ("README.md", r"narrowly: ([\d.]+) against", TUNED, _held(CASE_A, "nn", "ideal"), 1e3),
-    ("README.md", r"narrowly: [\d.]+ against\s+([\d.]+) mm \(sliding mode\)", TUNED,
-     _held(CASE_A, "sliding-mode", "ideal"), 1e3),
-    ("README.md", r"on case \(a\), ([\d.]+) against [\d.]+ mm \(no-u0\) on case \(b\)", TUNED,
-     _held(CASE_B, "nn", "ideal"), 1e3),
-    ("README.md", r"against ([\d.]+) mm \(no-u0\) on case \(b\)", TUNED,
-     _held(CASE_B, "no-u0", "ideal"), 1e3),
-    ("README.md", r"case \(b\), ([\d.]+)\s+against [\d.]+ mm on the Panda", TUNED,
-     _held(PANDA_ARM, "nn", "ideal"), 1e3),
-    ("README.md", r"against ([\d.]+) mm on the Panda. The PD is", TUNED, _held(PANDA_ARM, "no-u0", "ideal"),
-     1e3),
+    (
+        "README.md",
+        r"narrowly: [\d.]+ against\s+([\d.]+) mm \(sliding mode\)",
+        TUNED,
+        _held(CASE_A, "sliding-mode", "ideal"),
+        1e3,
+    ),
+    (
+        "README.md",
+        r"on case \(a\), ([\d.]+) against [\d.]+ mm \(no-u0\) on case \(b\)",
+        TUNED,
+        _held(CASE_B, "nn", "ideal"),
+        1e3,
+    ),
+    (
+        "README.md",
+        r"against ([\d.]+) mm \(no-u0\) on case \(b\)",
+        TUNED,
+        _held(CASE_B, "no-u0", "ideal"),
+        1e3,
+    ),
+    (
+        "README.md",
+        r"case \(b\), ([\d.]+)\s+against [\d.]+ mm on the Panda",
+        TUNED,
+        _held(PANDA_ARM, "nn", "ideal"),
+        1e3,
+    ),
+    (
+        "README.md",
+        r"against ([\d.]+) mm on the Panda. The PD is",
+        TUNED,
+        _held(PANDA_ARM, "no-u0", "ideal"),
+        1e3,
+    ),
     ("README.md", r"error 54× \(([\d.]+) against", "paper_reproduction", _row(CASE_B, "NN, defaults"), 1e3),
-    ("README.md", r"error 54× \([\d.]+ against (\d+) mm", "paper_reproduction",
-     _row(CASE_B, "no-u0 baseline"), 1e3),
-    ("docs/fair-comparison.md", r"on case \(a\) ([\d.]+) mm, against", TUNED, _held(CASE_A, "nn", "ideal"),
-     1e3),
-    ("docs/fair-comparison.md", r"on case \(b\) ([\d.]+) mm against", TUNED,
-     _held(CASE_B, "nn", "ideal"), 1e3),
-    ("docs/fair-comparison.md", r"on the Panda ([\d.]+) mm against ([\d.]+) mm for no-u0", TUNED,
-     _held(PANDA_ARM, "nn", "ideal"), 1e3),
-    ("docs/fair-comparison.md", r"Its best errors are ([\d.]+) mm \(case a\)", TUNED,
-     _held(CASE_A, "nn"), 1e3),
+    (
+        "README.md",
+        r"error 54× \([\d.]+ against (\d+) mm",
+        "paper_reproduction",
+        _row(CASE_B, "no-u0 baseline"),
+        1e3,
+    ),
+    (
+        "docs/fair-comparison.md",
+        r"on case \(a\) ([\d.]+) mm, against",
+        TUNED,
+        _held(CASE_A, "nn", "ideal"),
+        1e3,
+    ),
+    (
+        "docs/fair-comparison.md",
+        r"on case \(b\) ([\d.]+) mm against",
+        TUNED,
+        _held(CASE_B, "nn", "ideal"),
+        1e3,
+    ),
+    (
+        "docs/fair-comparison.md",
+        r"on the Panda ([\d.]+) mm against ([\d.]+) mm for no-u0",
+        TUNED,
+        _held(PANDA_ARM, "nn", "ideal"),
+        1e3,
+    ),
+    (
+        "docs/fair-comparison.md",
+        r"Its best errors are ([\d.]+) mm \(case a\)",
+        TUNED,
+        _held(CASE_A, "nn"),
+        1e3,
+    ),
     ("docs/fair-comparison.md", r"\(case a\), ([\d.]+) mm \(case b\)", TUNED, _held(CASE_B, "nn"), 1e3),
     ("docs/fair-comparison.md", r"\(case b\) and ([\d.]+) mm \(Panda\)", TUNED, _held(PANDA_ARM, "nn"), 1e3),
-    ("docs/fair-comparison.md", r"reaches ([\d.]+) and [\d.]+ mm on the paper's cases", TUNED,
-     _held(CASE_A, "no-u0"), 1e3),
-    ("docs/fair-comparison.md", r"reaches [\d.]+ and ([\d.]+) mm on the paper's cases", TUNED,
-     _held(CASE_B, "no-u0"), 1e3),
-    ("docs/fair-comparison.md", r"cases and ([\d.]+) mm on\s+the Panda", TUNED,
-     _held(PANDA_ARM, "no-u0"), 1e3),
-    ("docs/fair-comparison.md", r"close to no-u0 on the Panda \(([\d.]+) mm\)", TUNED,
-     _held(PANDA_ARM, "sliding-mode"), 1e3),
-    ("docs/fair-comparison.md", r"arm it ends worse: ([\d.]+) and", TUNED, _held(CASE_A, "sliding-mode"),
-     1e3),
-    ("docs/fair-comparison.md", r"it ends worse: [\d.]+ and ([\d.]+) mm", TUNED,
-     _held(CASE_B, "sliding-mode"), 1e3),
-    ("docs/controller.md", r"smoothness: ([\d.]+) mm against", "paper_reproduction",
-     _row(CASE_B, "NN, defaults"), 1e3),
-    ("docs/controller.md", r"paper's law's (\d+) mm, but", "paper_reproduction",
-     _row(CASE_B, "NN, paper's law, ideal actuators"), 1e3),
-    ("docs/controller.md", r"tracks to ([\d.]+) mm at", "paper_reproduction",
-     _row(CASE_B, "NN, tuned (Kp 400, Kv 40, sigma 0.5), 120 s"), 1e3),
+    (
+        "docs/fair-comparison.md",
+        r"reaches ([\d.]+) and [\d.]+ mm on the paper's cases",
+        TUNED,
+        _held(CASE_A, "no-u0"),
+        1e3,
+    ),
+    (
+        "docs/fair-comparison.md",
+        r"reaches [\d.]+ and ([\d.]+) mm on the paper's cases",
+        TUNED,
+        _held(CASE_B, "no-u0"),
+        1e3,
+    ),
+    (
+        "docs/fair-comparison.md",
+        r"cases and ([\d.]+) mm on\s+the Panda",
+        TUNED,
+        _held(PANDA_ARM, "no-u0"),
+        1e3,
+    ),
+    (
+        "docs/fair-comparison.md",
+        r"close to no-u0 on the Panda \(([\d.]+) mm\)",
+        TUNED,
+        _held(PANDA_ARM, "sliding-mode"),
+        1e3,
+    ),
+    (
+        "docs/fair-comparison.md",
+        r"arm it ends worse: ([\d.]+) and",
+        TUNED,
+        _held(CASE_A, "sliding-mode"),
+        1e3,
+    ),
+    (
+        "docs/fair-comparison.md",
+        r"it ends worse: [\d.]+ and ([\d.]+) mm",
+        TUNED,
+        _held(CASE_B, "sliding-mode"),
+        1e3,
+    ),
+    (
+        "docs/controller.md",
+        r"smoothness: ([\d.]+) mm against",
+        "paper_reproduction",
+        _row(CASE_B, "NN, defaults"),
+        1e3,
+    ),
+    (
+        "docs/controller.md",
+        r"paper's law's (\d+) mm, but",
+        "paper_reproduction",
+        _row(CASE_B, "NN, paper's law, ideal actuators"),
+        1e3,
+    ),
+    (
+        "docs/controller.md",
+        r"tracks to ([\d.]+) mm at",
+        "paper_reproduction",
+        _row(CASE_B, "NN, tuned (Kp 400, Kv 40, sigma 0.5), 120 s"),
+        1e3,
+    ),
     ("README.md", r"loses the ellipse: (\d+) mm RMS", FALSIFIED, _falsified("nn"), 1e3),
     ("README.md", r"and (\d+) mm for random search", FALSIFIED, _falsified("nn", "random_baseline"), 1e3),
-    ("README.md", r"The sliding-mode term fails too \((\d+) mm\)", FALSIFIED, _falsified("sliding-mode"),
-     1e3),
+    (
+        "README.md",
+        r"The sliding-mode term fails too \((\d+) mm\)",
+        FALSIFIED,
+        _falsified("sliding-mode"),
+        1e3,
+    ),
     ("docs/falsification.md", r"\| nn \| (\d+) mm \|", FALSIFIED, _falsified("nn"), 1e3),
-    ("docs/falsification.md", r"\| nn \| \d+ mm \| \d+ \| (\d+) mm \|", FALSIFIED,
-     _falsified("nn", "random_baseline"), 1e3),
-    ("docs/falsification.md", r"\| sliding-mode \| (\d+) mm \|", FALSIFIED, _falsified("sliding-mode"),
-     1e3),
-    ("docs/falsification.md", r"\| sliding-mode \| \d+ mm \| \d+ \| (\d+) mm \|", FALSIFIED,
-     _falsified("sliding-mode", "random_baseline"), 1e3),
+    (
+        "docs/falsification.md",
+        r"\| nn \| \d+ mm \| \d+ \| (\d+) mm \|",
+        FALSIFIED,
+        _falsified("nn", "random_baseline"),
+        1e3,
+    ),
+    ("docs/falsification.md", r"\| sliding-mode \| (\d+) mm \|", FALSIFIED, _falsified("sliding-mode"), 1e3),
+    (
+        "docs/falsification.md",
+        r"\| sliding-mode \| \d+ mm \| \d+ \| (\d+) mm \|",
+        FALSIFIED,
+        _falsified("sliding-mode", "random_baseline"),
+        1e3,
+    ),
     ("docs/falsification.md", r"\| no-u0 \| (\d+) mm \|", FALSIFIED, _falsified("no-u0"), 1e3),
-    ("docs/falsification.md", r"\| computed-torque \| (\d+) mm \|", FALSIFIED, _falsified("computed-torque"),
-     1e3),
+    (
+        "docs/falsification.md",
+        r"\| computed-torque \| (\d+) mm \|",
+        FALSIFIED,
+        _falsified("computed-torque"),
+        1e3,
+    ),
     ("docs/robustness.md", r"median error grows from (\d+) mm to", PAPER, _grid("nn", "0.5", "median"), 1e3),
-    ("docs/robustness.md", r"median error grows from \d+ mm to (\d+) mm", PAPER, _grid("nn", "2.0", "median"),
-     1e3),
+    (
+        "docs/robustness.md",
+        r"median error grows from \d+ mm to (\d+) mm",
+        PAPER,
+        _grid("nn", "2.0", "median"),
+        1e3,
+    ),
     ("docs/robustness.md", r"friction × 0.52\) reaches (\d+) mm", PAPER, _study("nn", "max"), 1e3),
     ("docs/robustness.md", r"p95 (\d+) mm at twice the", PAPER, _grid("sliding-mode", "2.0", "p95"), 1e3),
     ("docs/robustness.md", r"disturbance, against (\d+) mm", PAPER, _grid("nn", "2.0", "p95"), 1e3),
     ("docs/robustness.md", r"has the best median\*\* \(([\d.]+) mm\)", PANDA, _study("nn", "median"), 1e3),
     ("docs/robustness.md", r"has a median of ([\d.]+) mm", PANDA, _study("sliding-mode", "median"), 1e3),
-    ("docs/robustness.md", r"and a maximum of ([\d.]+) mm over all", PANDA, _study("sliding-mode", "max"),
-     1e3),
+    (
+        "docs/robustness.md",
+        r"and a maximum of ([\d.]+) mm over all",
+        PANDA,
+        _study("sliding-mode", "max"),
+        1e3,
+    ),
     ("docs/engines.md", r"ends within ([\d.]+) % of its Pinocchio", GAP, _gap_stat(max, "tuned"), 1.0),
-    ("README.md", r"every tuned setting above ends within ([\d.]+) % of its", GAP, _gap_stat(max, "tuned"),
-     1.0),
-    ("docs/engines.md", r"samples. The\s+median change is ([\d.]+) %", GAP, _gap_stat(np.median, "tuned"),
-     1.0),
-    ("docs/engines.md", r"its 4× run differs by at most ([\d.]+) %", GAP,
-     _gap_stat(max, "tuned", variant="mujoco_fine", reference="mujoco"), 1.0),
-    ("docs/engines.md", r"agree as well\.\*\* The median change is ([\d.]+) %", GAP,
-     _gap_stat(np.median, "presets"), 1.0),
-    ("docs/engines.md", r"compensator is within ([\d.]+) % on every preset", GAP,
-     _gap_stat(max, "presets", "nn", exclude=PRINTED), 1.0),
-    ("docs/engines.md", r"has\s+not converged \(([\d.]+) % between steps\)", GAP,
-     lambda data: 100 * abs(_gap_error(PRINTED[0], "nn", "mujoco_fine")(data)
-                            / _gap_error(PRINTED[0], "nn", "mujoco")(data) - 1), 1.0),
-    ("docs/engines.md", r"paper-ellipse has (\d+) mm of", GAP,
-     _gap_error("paper-ellipse", "no-u0", "pinocchio"), 1e3),
-    ("docs/engines.md", r"error on Pinocchio and (\d+) mm on MuJoCo", GAP,
-     _gap_error("paper-ellipse", "no-u0", "mujoco"), 1e3),
-    ("docs/engines.md", r"It completes on MuJoCo, at (\d+) mm", GAP,
-     _gap_error(PRINTED[0], "no-u0", "mujoco"), 1e3),
+    (
+        "README.md",
+        r"every tuned setting above ends within ([\d.]+) % of its",
+        GAP,
+        _gap_stat(max, "tuned"),
+        1.0,
+    ),
+    (
+        "docs/engines.md",
+        r"samples. The\s+median change is ([\d.]+) %",
+        GAP,
+        _gap_stat(np.median, "tuned"),
+        1.0,
+    ),
+    (
+        "docs/engines.md",
+        r"its 4× run differs by at most ([\d.]+) %",
+        GAP,
+        _gap_stat(max, "tuned", variant="mujoco_fine", reference="mujoco"),
+        1.0,
+    ),
+    (
+        "docs/engines.md",
+        r"agree as well\.\*\* The median change is ([\d.]+) %",
+        GAP,
+        _gap_stat(np.median, "presets"),
+        1.0,
+    ),
+    (
+        "docs/engines.md",
+        r"compensator is within ([\d.]+) % on every preset",
+        GAP,
+        _gap_stat(max, "presets", "nn", exclude=PRINTED),
+        1.0,
+    ),
+    (
+        "docs/engines.md",
+        r"has\s+not converged \(([\d.]+) % between steps\)",
+        GAP,
+        lambda data: (
+            100
+            * abs(
+                _gap_error(PRINTED[0], "nn", "mujoco_fine")(data)
+                / _gap_error(PRINTED[0], "nn", "mujoco")(data)
+                - 1
+            )
+        ),
+        1.0,
+    ),
+    (
+        "docs/engines.md",
+        r"paper-ellipse has (\d+) mm of",
+        GAP,
+        _gap_error("paper-ellipse", "no-u0", "pinocchio"),
+        1e3,
+    ),
+    (
+        "docs/engines.md",
+        r"error on Pinocchio and (\d+) mm on MuJoCo",
+        GAP,
+        _gap_error("paper-ellipse", "no-u0", "mujoco"),
+        1e3,
+    ),
+    (
+        "docs/engines.md",
+        r"It completes on MuJoCo, at (\d+) mm",
+        GAP,
+        _gap_error(PRINTED[0], "no-u0", "mujoco"),
+        1e3,
+    ),
     ("docs/engines.md", r"at the 1 ms step, (\d+) of the 24", GAP, _failing("implicitfast"), 1.0),
     ("docs/engines.md", r"With 4× as many steps, (\d+) of those 24", GAP, _failing("implicitfast_fine"), 1.0),
     ("docs/tuning.md", r"held-out errors NN ([\d.]+) mm", "tune_noisy_case_b", _best("nn"), 1e3),
     ("docs/tuning.md", r"errors NN [\d.]+ mm, no-u0 ([\d.]+) mm", "tune_noisy_case_b", _best("no-u0"), 1e3),
     ("docs/tuning.md", r"PD ([\d.]+) mm and sliding mode", "tune_noisy_case_b", _best("pd"), 1e3),
-    ("docs/tuning.md", r"and sliding mode\s+([\d.]+) mm \(its", "tune_noisy_case_b", _best("sliding-mode"),
-     1e3),
-    ("docs/falsification.md", r"\| nn \| ([\d.]+) × the box", FALSIFIED,
-     ("margin", "nn", "holds_up_to"), 1.0),
-    ("docs/falsification.md", r"\| nn \| [\d.]+ × the box \| ([\d.]+) ×", FALSIFIED,
-     ("margin", "nn", "violated_at"), 1.0),
-    ("docs/falsification.md", r"\| nn \| [\d.]+ × the box \| [\d.]+ × \| (\d+) \|", FALSIFIED,
-     ("margin", "nn", "simulations"), 1.0),
-    ("docs/falsification.md", r"\| sliding-mode \| ([\d.]+) × the box", FALSIFIED,
-     ("margin", "sliding-mode", "holds_up_to"), 1.0),
-    ("docs/falsification.md", r"\| sliding-mode \| [\d.]+ × the box \| ([\d.]+) ×", FALSIFIED,
-     ("margin", "sliding-mode", "violated_at"), 1.0),
-    ("docs/falsification.md", r"\| sliding-mode \| [\d.]+ × the box \| [\d.]+ × \| (\d+) \|", FALSIFIED,
-     ("margin", "sliding-mode", "simulations"), 1.0),
-    ("docs/falsification.md", r"\| no-u0 \| (0): the nominal plant fails", FALSIFIED,
-     ("margin", "no-u0", "violated_at"),
-     1.0),
-    ("docs/falsification.md", r"\| computed-torque \| (0): the nominal plant fails", FALSIFIED,
-     ("margin", "computed-torque", "violated_at"), 1.0),
-    ("docs/falsification.md", r"Scaled to (\d+) % of the box", FALSIFIED,
-     ("margin", "nn", "holds_up_to"), 100.0),
-    ("docs/falsification.md", r"sliding-mode term tolerates (\d+) %", FALSIFIED,
-     ("margin", "sliding-mode", "holds_up_to"), 100.0),
+    (
+        "docs/tuning.md",
+        r"and sliding mode\s+([\d.]+) mm \(its",
+        "tune_noisy_case_b",
+        _best("sliding-mode"),
+        1e3,
+    ),
+    (
+        "docs/falsification.md",
+        r"\| nn \| ([\d.]+) × the box",
+        FALSIFIED,
+        ("margin", "nn", "holds_up_to"),
+        1.0,
+    ),
+    (
+        "docs/falsification.md",
+        r"\| nn \| [\d.]+ × the box \| ([\d.]+) ×",
+        FALSIFIED,
+        ("margin", "nn", "violated_at"),
+        1.0,
+    ),
+    (
+        "docs/falsification.md",
+        r"\| nn \| [\d.]+ × the box \| [\d.]+ × \| (\d+) \|",
+        FALSIFIED,
+        ("margin", "nn", "simulations"),
+        1.0,
+    ),
+    (
+        "docs/falsification.md",
+        r"\| sliding-mode \| ([\d.]+) × the box",
+        FALSIFIED,
+        ("margin", "sliding-mode", "holds_up_to"),
+        1.0,
+    ),
+    (
+        "docs/falsification.md",
+        r"\| sliding-mode \| [\d.]+ × the box \| ([\d.]+) ×",
+        FALSIFIED,
+        ("margin", "sliding-mode", "violated_at"),
+        1.0,
+    ),
+    (
+        "docs/falsification.md",
+        r"\| sliding-mode \| [\d.]+ × the box \| [\d.]+ × \| (\d+) \|",
+        FALSIFIED,
+        ("margin", "sliding-mode", "simulations"),
+        1.0,
+    ),
+    (
+        "docs/falsification.md",
+        r"\| no-u0 \| (0): the nominal plant fails",
+        FALSIFIED,
+        ("margin", "no-u0", "violated_at"),
+        1.0,
+    ),
+    (
+        "docs/falsification.md",
+        r"\| computed-torque \| (0): the nominal plant fails",
+        FALSIFIED,
+        ("margin", "computed-torque", "violated_at"),
+        1.0,
+    ),
+    (
+        "docs/falsification.md",
+        r"Scaled to (\d+) % of the box",
+        FALSIFIED,
+        ("margin", "nn", "holds_up_to"),
+        100.0,
+    ),
+    (
+        "docs/falsification.md",
+        r"sliding-mode term tolerates (\d+) %",
+        FALSIFIED,
+        ("margin", "sliding-mode", "holds_up_to"),
+        100.0,
+    ),
     ("README.md", r"up to ([\d.]+) of its size for the", FALSIFIED, ("margin", "nn", "holds_up_to"), 1.0),
-    ("README.md", r"NN controller and ([\d.]+) for the sliding-mode", FALSIFIED,
-     ("margin", "sliding-mode", "holds_up_to"), 1.0),
+    (
+        "README.md",
+        r"NN controller and ([\d.]+) for the sliding-mode",
+        FALSIFIED,
+        ("margin", "sliding-mode", "holds_up_to"),
+        1.0,
+    ),
     ("docs/robots.md", r"the UR5, (\d+)–\d+× better than no-u0", "arm_presets", _ratio("panda-pose"), 1.0),
     ("docs/robots.md", r"the UR5, \d+–(\d+)× better than no-u0", "arm_presets", _ratio("panda-ellipse"), 1.0),
-    ("docs/plant.md", r"Quartering θ cuts the drift\s+(\d+)×", "adaptive_step",
-     _drift_ratio(0.02, 0.005), 1.0),
-    ("docs/plant.md", r"Quartering θ cuts the drift\s+\d+× and (\d+)×", "adaptive_step",
-     _drift_ratio(0.04, 0.01), 1.0),
-    ("docs/plant.md", r"chatter\s+medians differ by ([\d.]+) % between", "plant_convergence",
-     _convergence("paper-line", "torque_chatter_median_difference"), 1e2),
-    ("docs/plant.md", r"the difference is real \(p =\s+([\d.]+)\)", "plant_convergence",
-     _convergence("paper-line", "torque_chatter_p"), 1.0),
+    (
+        "docs/plant.md",
+        r"Quartering θ cuts the drift\s+(\d+)×",
+        "adaptive_step",
+        _drift_ratio(0.02, 0.005),
+        1.0,
+    ),
+    (
+        "docs/plant.md",
+        r"Quartering θ cuts the drift\s+\d+× and (\d+)×",
+        "adaptive_step",
+        _drift_ratio(0.04, 0.01),
+        1.0,
+    ),
+    (
+        "docs/plant.md",
+        r"chatter\s+medians differ by ([\d.]+) % between",
+        "plant_convergence",
+        _convergence("paper-line", "torque_chatter_median_difference"),
+        1e2,
+    ),
+    (
+        "docs/plant.md",
+        r"the difference is real \(p =\s+([\d.]+)\)",
+        "plant_convergence",
+        _convergence("paper-line", "torque_chatter_p"),
+        1.0,
+    ),
 ]
 """Figures quoted in prose, each checked against its data file (within half a unit of the last
 printed digit, or 2 %)."""
@@ -417,8 +703,11 @@ def test_every_quoted_figure_matches_its_data():
         # the quoted figure is the data rounded to its printed digits: within half a unit of the last
         digits = match.group(1).split(".")[1] if "." in match.group(1) else ""
         half = 0.5 * 10 ** -len(digits) if digits else 0.5
-        assert abs(quoted - scale * value) <= max(half, 0.02 * abs(scale * value)), \
-            (document, pattern, scale * value)
+        assert abs(quoted - scale * value) <= max(half, 0.02 * abs(scale * value)), (
+            document,
+            pattern,
+            scale * value,
+        )
 
 
 def _worst_config(command: str):
@@ -535,7 +824,8 @@ def test_the_engine_gap_claims_of_the_docs_hold_in_its_data():
         by_case = {}
         for r in data["tuned"]:
             by_case.setdefault((r["case"], r["sensing"]), {}).setdefault(r["controller"], []).append(
-                _error(r, variant))
+                _error(r, variant)
+            )
         return {case: sorted(c, key=lambda name: np.mean(c[name])) for case, c in by_case.items()}
 
     assert len(ranking("pinocchio")) == 6 and ranking("mujoco") == ranking("pinocchio")

@@ -12,25 +12,36 @@ EXAMPLES = ROOT / "examples"
 
 
 def _run(script: str, *args: str) -> str:
-    done = subprocess.run([sys.executable, str(EXAMPLES / script), *args], cwd=ROOT, capture_output=True,
-                          text=True, timeout=600)
+    done = subprocess.run(
+        [sys.executable, str(EXAMPLES / script), *args], cwd=ROOT, capture_output=True, text=True, timeout=600
+    )
     assert done.returncode == 0, done.stderr[-3000:]
     return done.stdout
 
 
 def test_every_example_is_tested():
-    tested = {"custom_controller.py", "custom_robot.py", "sweep.py", "read_results.py", "tuning.py",
-              "slotine_li.toml", "controllers/slotine_li.py"}
+    tested = {
+        "custom_controller.py",
+        "custom_robot.py",
+        "sweep.py",
+        "read_results.py",
+        "tuning.py",
+        "slotine_li.toml",
+        "controllers/slotine_li.py",
+    }
     assert {str(p.relative_to(EXAMPLES)) for p in EXAMPLES.rglob("*.py")} | {
-        p.name for p in EXAMPLES.glob("*.toml")} == tested
+        p.name for p in EXAMPLES.glob("*.toml")
+    } == tested
 
 
 def test_custom_controller_runs_beside_the_nn(tmp_path):
     out = _run("custom_controller.py", "--duration", "2.5", "--out", str(tmp_path))
     assert "TaskPD" in out and "nn" in out
     assert (tmp_path / "paper-ellipse-TaskPD" / "result.npz").is_file()
-    assert 'class = "' + str(EXAMPLES / "custom_controller.py") + ':TaskPD"' in (
-        tmp_path / "paper-ellipse-TaskPD" / "config.toml").read_text()
+    assert (
+        'class = "' + str(EXAMPLES / "custom_controller.py") + ':TaskPD"'
+        in (tmp_path / "paper-ellipse-TaskPD" / "config.toml").read_text()
+    )
 
 
 def test_custom_robot_then_sweep_then_pandas(tmp_path):
@@ -74,8 +85,22 @@ def test_slotine_li_runs_from_its_experiment_file(tmp_path):
     from nnrobust.cli import main
 
     run = tmp_path / "run"
-    assert main(["run", str(EXAMPLES / "slotine_li.toml"), "--duration", "2.5", "--out", str(run), "--quiet",
-                 "--no-plots", "--no-animation"]) == 0
+    assert (
+        main(
+            [
+                "run",
+                str(EXAMPLES / "slotine_li.toml"),
+                "--duration",
+                "2.5",
+                "--out",
+                str(run),
+                "--quiet",
+                "--no-plots",
+                "--no-animation",
+            ]
+        )
+        == 0
+    )
     metrics = json.loads((run / "metrics.json").read_text())
     assert metrics["status"] == "completed" and metrics["rms_error_after_2s"] < 1e-3
     assert metrics["backend"] in ("hybrid", "python")

@@ -37,12 +37,17 @@ def test_nn_controller_beats_baseline_tenfold(paper_runs, preset):
     # and both are what the README publishes (docs/data/paper_reproduction.json), within 2 %: a
     # weaker compensator that still beats a 360 mm baseline tenfold fails here
     case = {"paper-line": "case (a) line", "paper-ellipse": "case (b) ellipse"}[preset]
-    published = {r["variant"]: r for r in json.loads((DATA / "paper_reproduction.json").read_text())["rows"]
-                 if r["case"] == case}
-    assert nn["rms_error_after_2s"] == pytest.approx(published["NN, defaults"]["rms_error_after_2s"],
-                                                     rel=0.02)
-    assert base["rms_error_after_2s"] == pytest.approx(published["no-u0 baseline"]["rms_error_after_2s"],
-                                                       rel=0.02)
+    published = {
+        r["variant"]: r
+        for r in json.loads((DATA / "paper_reproduction.json").read_text())["rows"]
+        if r["case"] == case
+    }
+    assert nn["rms_error_after_2s"] == pytest.approx(
+        published["NN, defaults"]["rms_error_after_2s"], rel=0.02
+    )
+    assert base["rms_error_after_2s"] == pytest.approx(
+        published["no-u0 baseline"]["rms_error_after_2s"], rel=0.02
+    )
 
 
 def test_every_preset_validates():
@@ -116,8 +121,23 @@ def test_cli_run_compare_and_errors(tmp_path, capsys):
     """nnrobust run / compare / presets work; bad input gives exit code 2 and one message."""
     out_nn, out_pd = tmp_path / "nn", tmp_path / "pd"
     assert main(["run", "paper-ellipse", "--duration", "0.3", "--out", str(out_nn), "--quiet"]) == 0
-    assert main(["run", "paper-ellipse", "--controller", "pd", "--duration", "0.3",
-                 "--out", str(out_pd), "--quiet", "--no-plots"]) == 0
+    assert (
+        main(
+            [
+                "run",
+                "paper-ellipse",
+                "--controller",
+                "pd",
+                "--duration",
+                "0.3",
+                "--out",
+                str(out_pd),
+                "--quiet",
+                "--no-plots",
+            ]
+        )
+        == 0
+    )
     assert main(["compare", str(out_nn), str(out_pd), "--out", str(tmp_path / "cmp")]) == 0
     table = capsys.readouterr().out
     assert "nn" in table and "pd" in table and (tmp_path / "cmp" / "comparison.png").exists()

@@ -27,25 +27,53 @@ seed = 4
 
 
 def test_the_box_is_the_sweeps_ranges():
-    spec = parse_sweep({"name": "b", "base": "paper-ellipse", "controllers": ["nn"],
-                        "vary": {"plant.disturbance_scale": {"uniform": [0.0, 4.0]},
-                                 "plant.friction_scale": {"loguniform": [0.5, 2.0]}}})
+    spec = parse_sweep(
+        {
+            "name": "b",
+            "base": "paper-ellipse",
+            "controllers": ["nn"],
+            "vary": {
+                "plant.disturbance_scale": {"uniform": [0.0, 4.0]},
+                "plant.friction_scale": {"loguniform": [0.5, 2.0]},
+            },
+        }
+    )
     box = box_of(spec)
-    assert box.values(np.array([0.5, 0.5])) == pytest.approx({"plant.disturbance_scale": 2.0,
-                                                             "plant.friction_scale": 1.0})  # log midpoint
-    assert box.values(np.array([1.0, 0.0])) == pytest.approx({"plant.disturbance_scale": 4.0,
-                                                             "plant.friction_scale": 0.5})
-    grid = box_of(parse_sweep({"name": "b", "base": "paper-ellipse", "controllers": ["nn"],
-                               "vary": {"plant.disturbance_scale": [0.5, 1.0, 2.0]}}))
+    assert box.values(np.array([0.5, 0.5])) == pytest.approx(
+        {"plant.disturbance_scale": 2.0, "plant.friction_scale": 1.0}
+    )  # log midpoint
+    assert box.values(np.array([1.0, 0.0])) == pytest.approx(
+        {"plant.disturbance_scale": 4.0, "plant.friction_scale": 0.5}
+    )
+    grid = box_of(
+        parse_sweep(
+            {
+                "name": "b",
+                "base": "paper-ellipse",
+                "controllers": ["nn"],
+                "vary": {"plant.disturbance_scale": [0.5, 1.0, 2.0]},
+            }
+        )
+    )
     assert (grid.low.tolist(), grid.high.tolist()) == ([0.5], [2.0])  # the range the grid spans
-    for vary, words in (({"controller.k": ["a", "b"]}, "falsify searches ranges"),
-                        ({"nn.sigma": {"normal": [0.1, 0.02]}}, "not normal"), ({}, "varies nothing")):
+    for vary, words in (
+        ({"controller.k": ["a", "b"]}, "falsify searches ranges"),
+        ({"nn.sigma": {"normal": [0.1, 0.02]}}, "not normal"),
+        ({}, "varies nothing"),
+    ):
         with pytest.raises(ConfigError, match=words):
             box_of(parse_sweep({"name": "b", "base": "paper-ellipse", "controllers": ["nn"], "vary": vary}))
 
 
-@pytest.mark.parametrize("kwargs, flag", [({"budget": 0}, "--budget"), ({"budget": 10**9}, "--budget"),
-                                          ({"require": []}, "--require"), ({"seed": -1}, "--seed")])
+@pytest.mark.parametrize(
+    "kwargs, flag",
+    [
+        ({"budget": 0}, "--budget"),
+        ({"budget": 10**9}, "--budget"),
+        ({"require": []}, "--require"),
+        ({"seed": -1}, "--seed"),
+    ],
+)
 def test_bad_searches_are_refused_with_the_flag_named(kwargs, flag):
     args = {"target": "x.toml", "controllers": ["nn"], "require": ["rms_error<=1"], "budget": 10, **kwargs}
     with pytest.raises(ConfigError, match=flag):
@@ -101,9 +129,17 @@ def test_per_joint_plant_keys_are_coordinates_of_the_box():
     from nnrobust.experiment import build
     from nnrobust.sweep.spec import Sample, base_config, experiment
 
-    spec = parse_sweep({"name": "b", "base": "paper-ellipse", "controllers": ["nn"],
-                        "vary": {"plant.joint_friction_scales[1]": {"loguniform": [0.5, 2.0]},
-                                 "plant.disturbance_omega_scale": {"uniform": [0.5, 1.5]}}})
+    spec = parse_sweep(
+        {
+            "name": "b",
+            "base": "paper-ellipse",
+            "controllers": ["nn"],
+            "vary": {
+                "plant.joint_friction_scales[1]": {"loguniform": [0.5, 2.0]},
+                "plant.disturbance_omega_scale": {"uniform": [0.5, 1.5]},
+            },
+        }
+    )
     box = box_of(spec)
     values = box.values(np.array([1.0, 0.0]))
     plant = build(experiment(spec, base_config(spec), Sample(-1, values, 1), "nn")).plant
@@ -113,10 +149,18 @@ def test_per_joint_plant_keys_are_coordinates_of_the_box():
 
 
 def test_the_box_scales_about_its_centre():
-    spec = parse_sweep({"name": "b", "base": "paper-ellipse", "controllers": ["nn"],
-                        "vary": {"plant.disturbance_scale": {"uniform": [0.5, 1.5]},
-                                 "plant.friction_scale": {"loguniform": [0.5, 2.0]},
-                                 "nominal.relative_error": {"uniform": [0.0, 0.3]}}})
+    spec = parse_sweep(
+        {
+            "name": "b",
+            "base": "paper-ellipse",
+            "controllers": ["nn"],
+            "vary": {
+                "plant.disturbance_scale": {"uniform": [0.5, 1.5]},
+                "plant.friction_scale": {"loguniform": [0.5, 2.0]},
+                "nominal.relative_error": {"uniform": [0.0, 0.3]},
+            },
+        }
+    )
     box = box_of(spec)
     double = box.scaled(2.0)
     assert double.low.tolist() == pytest.approx([0.0, 0.25, 0.0])  # relative_error stays >= 0
@@ -136,13 +180,17 @@ def test_the_margin_brackets_the_scale_where_a_monotone_property_breaks(tmp_path
     from nnrobust.presets import load_preset
 
     base = load_preset("paper-ellipse").replace(simulation={"duration": 3.0}, controller={"kind": "pd"})
-    errors = [run_experiment(base.replace(plant={"disturbance_scale": d})).metrics()["rms_error_after_2s"]
-              for d in (1.5, 1.7, 1.9)]
+    errors = [
+        run_experiment(base.replace(plant={"disturbance_scale": d})).metrics()["rms_error_after_2s"]
+        for d in (1.5, 1.7, 1.9)
+    ]
     assert errors[0] < errors[1] < errors[2]  # monotone where it matters
     sweep = tmp_path / "m.toml"
-    sweep.write_text('name = "m"\nbase = "paper-ellipse"\ncontrollers = ["pd"]\nseed = 4\n[set]\n'
-                     '"simulation.duration" = 3.0\n[vary]\n'
-                     '"plant.disturbance_scale" = {uniform = [0.5, 1.5]}\n')
+    sweep.write_text(
+        'name = "m"\nbase = "paper-ellipse"\ncontrollers = ["pd"]\nseed = 4\n[set]\n'
+        '"simulation.duration" = 3.0\n[vary]\n'
+        '"plant.disturbance_scale" = {uniform = [0.5, 1.5]}\n'
+    )
     spec = FalsifySpec(str(sweep), ["pd"], [f"rms_error_after_2s<={errors[1]!r}"], 64, seed=2, margin=True)
     summary = run_falsify(spec, tmp_path / "out", workers=2)
     margin = summary["margin"]["pd"]

@@ -77,8 +77,12 @@ def test_a_pose_run_shows_each_error_in_its_own_unit():
     pose = run_experiment(load_preset("panda-pose").replace(simulation={"duration": 0.5}))
     fig = _figure("errors", pose)
     labels = [ax.get_ylabel() for ax in fig.axes[:4]]
-    assert labels == ["position error [mm]", "|position error| [mm]", "orientation error [mrad]",
-                      "|orientation error| [mrad]"]
+    assert labels == [
+        "position error [mm]",
+        "|position error| [mm]",
+        "orientation error [mrad]",
+        "|orientation error| [mrad]",
+    ]
     for log_axis in (fig.axes[1], fig.axes[3]):  # plain numbers at 1, 2, 5 x 10^k, not 2x10^0
         shown = [t.get_text() for t in log_axis.get_yticklabels(which="both") if t.get_text()]
         assert shown and all(text.replace(".", "").isdigit() for text in shown), shown
@@ -88,8 +92,10 @@ def test_a_pose_run_shows_each_error_in_its_own_unit():
 
 
 def test_joint_and_torque_figures_draw_every_limit_and_keep_legends_off_the_data(paper):
-    for name, limits in (("joints", (paper.lower_limit, paper.upper_limit)),
-                         ("torques", (paper.torque_limit,))):
+    for name, limits in (
+        ("joints", (paper.lower_limit, paper.upper_limit)),
+        ("torques", (paper.torque_limit,)),
+    ):
         fig = _figure(name, paper)
         ax = fig.axes[0]
         lines = [line for line in ax.get_lines() if (line.get_gid() or "").startswith("limit:")]
@@ -119,8 +125,9 @@ def test_each_joints_legend_names_its_own_effort_limit_and_says_when_it_is_off_t
 
 
 def test_compare_draws_errors_in_mm_with_ticks_that_do_not_touch(panda, paper, tmp_path):
-    other = run_experiment(load_preset("paper-ellipse").replace(simulation={"duration": 1.0},
-                                                                controller={"kind": "no-u0"}))
+    other = run_experiment(
+        load_preset("paper-ellipse").replace(simulation={"duration": 1.0}, controller={"kind": "no-u0"})
+    )
     captured = {}
     original = plots._save
 
@@ -128,9 +135,13 @@ def test_compare_draws_errors_in_mm_with_ticks_that_do_not_touch(panda, paper, t
         fig.canvas.draw()
         path = fig.axes[0]
         frame = path.get_window_extent()
-        captured["ticks"] = [(label.get_text(), label.get_window_extent()) for label in path.get_xticklabels()
-                             if label.get_text() and frame.x0 - 1 <= label.get_window_extent().x0
-                             and label.get_window_extent().x1 <= frame.x1 + 1]
+        captured["ticks"] = [
+            (label.get_text(), label.get_window_extent())
+            for label in path.get_xticklabels()
+            if label.get_text()
+            and frame.x0 - 1 <= label.get_window_extent().x0
+            and label.get_window_extent().x1 <= frame.x1 + 1
+        ]
         captured["error"] = fig.axes[1]
         return original(fig, folder, stem)
 
@@ -152,8 +163,10 @@ def test_prismatic_joints_are_labelled_in_metres_and_newtons(paper):
     import dataclasses
 
     mixed = dataclasses.replace(paper, prismatic=np.array([False, True, False]))
-    for name, label, unit in (("joints", "joint position [rad or m]", "[m]"),
-                              ("torques", "joint torque or force [N m or N]", "[N]")):
+    for name, label, unit in (
+        ("joints", "joint position [rad or m]", "[m]"),
+        ("torques", "joint torque or force [N m or N]", "[N]"),
+    ):
         fig = _figure(name, mixed)
         ax = fig.axes[0]
         assert ax.get_ylabel() == label
@@ -179,8 +192,11 @@ def test_subtask_figure_names_the_criterion_and_its_units(panda, paper):
 
 
 def test_compare_warns_when_runs_differ_and_draws_each_desired_path(panda, paper, tmp_path):
-    other = run_experiment(load_preset("panda-ellipse").replace(
-        simulation={"duration": 0.5}, trajectory={"omega": 0.5}, controller={"kind": "no-u0"}))
+    other = run_experiment(
+        load_preset("panda-ellipse").replace(
+            simulation={"duration": 0.5}, trajectory={"omega": 0.5}, controller={"kind": "no-u0"}
+        )
+    )
     said = plots.comparison_warnings({"a": panda, "b": other})
     assert said == [said[0]] and "desired trajectory" in said[0] and "omega 0.5" in said[0]
     assert any("robot" in s for s in plots.comparison_warnings({"panda": panda, "paper": paper}))
@@ -214,7 +230,8 @@ def test_saved_figures_are_cropped_to_what_they_draw(panda, tmp_path, name):
         assert np.all(border == 255)
     width_pt, height_pt = _svg_size_pt(svg)
     assert width_pt == pytest.approx(columns / plots.DPI * 72, abs=1) and (
-        height_pt == pytest.approx(rows / plots.DPI * 72, abs=1))
+        height_pt == pytest.approx(rows / plots.DPI * 72, abs=1)
+    )
 
 
 def test_a_figure_larger_than_its_room_is_cropped_by_its_layout(tmp_path):

@@ -46,6 +46,7 @@ def test_the_first_worker_prepares_before_the_input_exists_and_the_others_inheri
     """prepare runs in a forked process while this one still works (its file appears before run
     is called); every job runs once, in two processes other than this one, both of which see
     what prepare set up; the jobs get load(message); meanwhile runs here."""
+
     def prepare():
         os.environ["PREPARED_IN"] = str(os.getpid())
         (tmp_path / "prepared").write_text(str(os.getpid()))
@@ -53,10 +54,12 @@ def test_the_first_worker_prepares_before_the_input_exists_and_the_others_inheri
     def job(i):
         def run(data):
             (tmp_path / f"job{i}").write_text(f"{os.getpid()} {os.environ.get('PREPARED_IN')} {data}")
+
         return run
 
-    with ForkedJobs([job(i) for i in range(5)], workers=2, prepare=prepare,
-                    load=lambda message: message.upper()) as jobs:
+    with ForkedJobs(
+        [job(i) for i in range(5)], workers=2, prepare=prepare, load=lambda message: message.upper()
+    ) as jobs:
         assert jobs.forked
         first = _wait_for(tmp_path / "prepared")  # before the input is given
         assert first != str(os.getpid()) and "PREPARED_IN" not in os.environ
@@ -91,10 +94,12 @@ def test_warnings_and_errors_come_back_from_every_worker():
 def test_an_interrupted_parent_stops_every_worker(tmp_path):
     """Ctrl-C here while both workers still work: neither runs when the interrupt arrives (the
     first worker stops the one it forked before it leaves)."""
+
     def job(i):
         def run(data):
             (tmp_path / f"pid{i}").write_text(str(os.getpid()))
             time.sleep(60)
+
         return run
 
     def meanwhile():
@@ -127,6 +132,7 @@ def test_workers_ignore_ctrl_c_the_parent_decides(tmp_path):
         def run(data):
             os.kill(os.getpid(), signal.SIGINT)  # as a terminal's Ctrl-C reaches the whole group
             (tmp_path / f"done{i}").write_text("yes")
+
         return run
 
     ForkedJobs([job(0), job(1)], workers=2).run(None, meanwhile=lambda: time.sleep(0.2))
@@ -162,8 +168,12 @@ def test_the_workers_die_with_a_killed_parent(tmp_path):
 
 def test_one_worker_runs_everything_here_in_order(tmp_path):
     order = []
-    jobs = ForkedJobs([lambda data: order.append(("job", data, os.getpid()))], workers=1,
-                      prepare=lambda: order.append(("prepare", os.getpid())), load=lambda m: m * 2)
+    jobs = ForkedJobs(
+        [lambda data: order.append(("job", data, os.getpid()))],
+        workers=1,
+        prepare=lambda: order.append(("prepare", os.getpid())),
+        load=lambda m: m * 2,
+    )
     assert not jobs.forked
     jobs.run(21, meanwhile=lambda: order.append(("meanwhile", os.getpid())))
     me = os.getpid()

@@ -23,10 +23,44 @@ from hypothesis import strategies as st
 MEMORY = 4 * 1024**3  # address space per input [bytes]
 SECONDS = 120  # wall time per input
 
-WEIRD_VALUES = ["nan", "inf", "-inf", "", "1e400", "-1", "0", "x", "9" * 400, "1 2", "0 0 0 0", "1e-320",
-                "\x00", "\u202e", "1,5", "0x10", "  3  "]
-WEIRD_TOML = ["nan", "inf", "-1", "0", "1e300", "-1e300", "9" * 400, '"x"', '""', "true", "[]", "[[1.0]]",
-              "[1.0, 2.0]", "{a = 1}", '"' + "a" * 5000 + '"', '"\\u0000\\u001b"', "[" * 60 + "]" * 60]
+WEIRD_VALUES = [
+    "nan",
+    "inf",
+    "-inf",
+    "",
+    "1e400",
+    "-1",
+    "0",
+    "x",
+    "9" * 400,
+    "1 2",
+    "0 0 0 0",
+    "1e-320",
+    "\x00",
+    "\u202e",
+    "1,5",
+    "0x10",
+    "  3  ",
+]
+WEIRD_TOML = [
+    "nan",
+    "inf",
+    "-1",
+    "0",
+    "1e300",
+    "-1e300",
+    "9" * 400,
+    '"x"',
+    '""',
+    "true",
+    "[]",
+    "[[1.0]]",
+    "[1.0, 2.0]",
+    "{a = 1}",
+    '"' + "a" * 5000 + '"',
+    '"\\u0000\\u001b"',
+    "[" * 60 + "]" * 60,
+]
 
 
 def _limits():
@@ -35,9 +69,25 @@ def _limits():
 
 def _run_cli(folder: Path, target: str) -> tuple[int, str]:
     out = folder / "out"
-    proc = subprocess.run([sys.executable, "-m", "nnrobust.cli", "run", target, "--out", str(out), "--quiet",
-                           "--no-animation", "--no-plots"], cwd=folder, capture_output=True, text=True,
-                          timeout=SECONDS, preexec_fn=_limits)
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "nnrobust.cli",
+            "run",
+            target,
+            "--out",
+            str(out),
+            "--quiet",
+            "--no-animation",
+            "--no-plots",
+        ],
+        cwd=folder,
+        capture_output=True,
+        text=True,
+        timeout=SECONDS,
+        preexec_fn=_limits,
+    )
     return proc.returncode, proc.stderr
 
 
@@ -73,30 +123,34 @@ def _mutate_urdf(text: str, rng: random.Random) -> str:
         attributes = list(re.finditer(r'(\w+)="([^"]*)"', text))
         if kind == 0 and attributes:
             m = rng.choice(attributes)
-            text = text[:m.start(2)] + rng.choice(WEIRD_VALUES).replace('"', "") + text[m.end(2):]
+            text = text[: m.start(2)] + rng.choice(WEIRD_VALUES).replace('"', "") + text[m.end(2) :]
         elif kind == 1 and attributes:
             m = rng.choice(attributes)
-            text = text[:m.start()] + text[m.end():]
+            text = text[: m.start()] + text[m.end() :]
         elif kind == 2:
             elements = list(re.finditer(r"<(\w+)[^<>]*/>", text))
             if elements:
                 m = rng.choice(elements)
-                text = text[:m.start()] + text[m.end():]
+                text = text[: m.start()] + text[m.end() :]
         elif kind == 3:
             elements = list(re.finditer(r"<(\w+)[^<>]*/>", text))
             if elements:
                 m = rng.choice(elements)
-                text = text[:m.end()] + m.group(0) + text[m.end():]
+                text = text[: m.end()] + m.group(0) + text[m.end() :]
         elif kind == 4:
-            text = text[:rng.randrange(len(text))]
+            text = text[: rng.randrange(len(text))]
         else:
             at = rng.randrange(len(text))
             text = text[:at] + rng.choice(["<", ">", "&", "\x01", "]]>", "<!--", "\ufffd"]) + text[at:]
     return text
 
 
-@settings(max_examples=12, deadline=None, derandomize=True,
-          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@settings(
+    max_examples=12,
+    deadline=None,
+    derandomize=True,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
 @given(seed=st.integers(0, 2**32 - 1))
 def test_mutated_urdfs(seed, tmp_path_factory):
     folder = tmp_path_factory.mktemp("urdf")
@@ -120,8 +174,10 @@ def _mutate_toml(text: str, rng: random.Random) -> str:
         elif kind == 1 and values:
             del lines[rng.choice(values)]
         elif kind == 2:
-            lines.insert(rng.randrange(len(lines) + 1), rng.choice(["bogus = 1", "[bogus]", "[robot]",
-                                                                   "name = 'a/../b'", "x.y.z = 1"]))
+            lines.insert(
+                rng.randrange(len(lines) + 1),
+                rng.choice(["bogus = 1", "[bogus]", "[robot]", "name = 'a/../b'", "x.y.z = 1"]),
+            )
         elif kind == 3:
             cut = rng.randrange(len("\n".join(lines)))
             lines = "\n".join(lines)[:cut].splitlines()
@@ -131,16 +187,21 @@ def _mutate_toml(text: str, rng: random.Random) -> str:
     return "\n".join(lines) + "\n"
 
 
-@settings(max_examples=14, deadline=None, derandomize=True,
-          suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@settings(
+    max_examples=14,
+    deadline=None,
+    derandomize=True,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
 @given(seed=st.integers(0, 2**32 - 1))
 def test_mutated_experiment_files(seed, tmp_path_factory):
     from nnrobust.presets import load_preset
 
     folder = tmp_path_factory.mktemp("toml")
     base = load_preset("paper-line").replace(simulation={"duration": 0.05}).to_toml()
-    (folder / "e.toml").write_text(_mutate_toml(base, random.Random(seed)), encoding="utf-8",
-                                   errors="surrogateescape")
+    (folder / "e.toml").write_text(
+        _mutate_toml(base, random.Random(seed)), encoding="utf-8", errors="surrogateescape"
+    )
     code, stderr = _run_cli(folder, "e.toml")
     _check_outcome(folder, {"e.toml"}, code, stderr)
 
@@ -153,8 +214,21 @@ def test_a_signal_at_a_random_instant(seed, tmp_path):
     left, and no process survives."""
     rng = random.Random(seed)
     out = tmp_path / "run"
-    cmd = [sys.executable, "-m", "nnrobust.cli", "run", "paper-line", "--out", str(out), "--overwrite",
-           "--duration", "1.5", "--backend", "python", "--quiet"]
+    cmd = [
+        sys.executable,
+        "-m",
+        "nnrobust.cli",
+        "run",
+        "paper-line",
+        "--out",
+        str(out),
+        "--overwrite",
+        "--duration",
+        "1.5",
+        "--backend",
+        "python",
+        "--quiet",
+    ]
     subprocess.run(cmd, check=True, timeout=SECONDS, capture_output=True)
     before = (out / "result.npz").read_bytes()
     sig = rng.choice([signal.SIGINT, signal.SIGTERM, signal.SIGHUP])

@@ -21,8 +21,12 @@ def _experiment(tmp_path, **sections):
 def test_divergence_stops_the_run_and_keeps_the_partial_result(tmp_path, capsys):
     """Kv T = 2 at the 1 ms zero-order hold is unstable without actuator limits: the run stops and
     says which joint ran away, how fast (rad/s), when, and the likely cause."""
-    experiment = _experiment(tmp_path, controller={"Kp": [1e6], "Kv": [2e3]},
-                             plant={"torque_limits": "none"}, simulation={"duration": 2.0})
+    experiment = _experiment(
+        tmp_path,
+        controller={"Kp": [1e6], "Kv": [2e3]},
+        plant={"torque_limits": "none"},
+        simulation={"duration": 2.0},
+    )
     out = tmp_path / "run"
     assert main(["run", str(experiment), "--out", str(out), "--quiet", "--no-animation"]) == 1
     err = capsys.readouterr().err
@@ -38,11 +42,9 @@ def test_divergence_stops_the_run_and_keeps_the_partial_result(tmp_path, capsys)
 def test_saturation_keeps_the_same_gains_bounded_and_says_so(tmp_path, capsys):
     """The same unstable gains with the URDF's effort limits: the run completes, and its
     warnings say the command saturated (peak ratio far above 1)."""
-    experiment = _experiment(tmp_path, controller={"Kp": [1e6], "Kv": [2e3]},
-                             simulation={"duration": 0.5})
+    experiment = _experiment(tmp_path, controller={"Kp": [1e6], "Kv": [2e3]}, simulation={"duration": 0.5})
     out = tmp_path / "run"
-    assert main(["run", str(experiment), "--out", str(out), "--no-animation",
-                 "--no-plots"]) == 0
+    assert main(["run", str(experiment), "--out", str(out), "--no-animation", "--no-plots"]) == 0
     assert "warning: torque saturation" in capsys.readouterr().err
     metrics = json.loads((out / "metrics.json").read_text())
     assert metrics["saturated_fraction"] > 0.5 and metrics["max_torque_ratio"] > 10
@@ -99,7 +101,8 @@ def test_a_signal_stops_a_compiled_run_and_keeps_its_result():
 def test_near_singular_episodes_are_recorded():
     """With the damping threshold at sigma_min = 0.36 m the ellipse crosses it: episodes listed."""
     config = load_preset("paper-ellipse").replace(
-        controller={"pinv_threshold": 0.36, "pinv_max_damping": 0.05}, simulation={"duration": 6.0})
+        controller={"pinv_threshold": 0.36, "pinv_max_damping": 0.05}, simulation={"duration": 6.0}
+    )
     metrics = run_experiment(config).metrics()
     episodes = metrics["singular_episodes"]
     assert episodes["count"] >= 1 and 0 < metrics["singular_fraction"] < 1
@@ -110,8 +113,7 @@ def test_near_singular_episodes_are_recorded():
 def test_singular_episode_intervals():
     t = np.arange(10) * 0.1
     damped = np.array([0, 1, 1, 0, 0, 1, 0, 0, 1, 1], dtype=bool)
-    assert singular_episodes(t, damped) == {
-        "count": 3, "intervals": [[0.1, 0.2], [0.5, 0.5], [0.8, 0.9]]}
+    assert singular_episodes(t, damped) == {"count": 3, "intervals": [[0.1, 0.2], [0.5, 0.5], [0.8, 0.9]]}
     assert singular_episodes(t, np.zeros(10, dtype=bool)) == {"count": 0, "intervals": []}
 
 
@@ -126,7 +128,8 @@ def test_divergence_cause_names_an_exploding_criterion_gradient():
     from nnrobust.experiment import build, likely_cause
 
     config = load_preset("paper-ellipse").replace(
-        controller={"k": 1e4}, subtasks={"criteria": ["joint_limits"]}, simulation={"duration": 1.0})
+        controller={"k": 1e4}, subtasks={"criteria": ["joint_limits"]}, simulation={"duration": 1.0}
+    )
     setup = build(config)
     q = setup.q0.copy()
     q[1] = 2.79  # joint2 next to its +2.8 rad limit: the barrier's steepest part
@@ -144,7 +147,9 @@ def test_divergence_cause_names_an_implausible_effort_limit(tmp_path):
     config = load_preset("paper-ellipse").replace(
         robot={"source": str(urdf)},
         plant={"friction": "scaled", "disturbance": "scaled", "joint_stops": False},
-        nominal={"kind": "urdf"}, simulation={"duration": 1.0})
+        nominal={"kind": "urdf"},
+        simulation={"duration": 1.0},
+    )
     with pytest.warns(UserWarning, match=r"effort limits of joints 'joint1' \(50000\)"):
         setup = build(config)  # the scaled friction and disturbance do not take it at face value
     message = likely_cause(setup, _fake_trace(setup.q0, 3))

@@ -39,8 +39,9 @@ def test_bad_input_gets_its_error_and_message(case, tmp_path):
     assert case.fragment in str(info.value)
 
 
-@pytest.mark.parametrize("case", [c for c in URDF_CASES if c.error is not None and "frame" not in c.what],
-                         ids=lambda c: c.what)
+@pytest.mark.parametrize(
+    "case", [c for c in URDF_CASES if c.error is not None and "frame" not in c.what], ids=lambda c: c.what
+)
 def test_command_line_answers_a_bad_urdf_with_one_line(case, tmp_path, capsys, monkeypatch):
     """The same URDFs named in an experiment file: exit code 2, one 'nnrobust: error:' line."""
     import nnrobust.model.loading as loading
@@ -96,11 +97,15 @@ def test_command_line_answers_a_bad_experiment_with_one_line(case, tmp_path, cap
     assert not (tmp_path / "run").exists()
 
 
-@pytest.mark.parametrize("argv, flag", [
-    (["--budget", "0"], "--budget"), (["--budget", "1000000000"], "--budget"),
-    (["--budget", "10", "--max-rms-torque", "nan"], "--max-rms-torque"),
-    (["--budget", "10", "--max-saturated", "2"], "--max-saturated"),
-])
+@pytest.mark.parametrize(
+    "argv, flag",
+    [
+        (["--budget", "0"], "--budget"),
+        (["--budget", "1000000000"], "--budget"),
+        (["--budget", "10", "--max-rms-torque", "nan"], "--max-rms-torque"),
+        (["--budget", "10", "--max-saturated", "2"], "--max-saturated"),
+    ],
+)
 def test_command_line_answers_a_bad_tuning_with_one_line(argv, flag, tmp_path, capsys):
     from nnrobust.cli import main
 
@@ -128,8 +133,11 @@ def test_a_long_chain_is_checked_in_linear_time():
 
     n = 45_000
     parts = ['<robot name="r"><link name="l0"/>']
-    parts += [f'<joint name="j{i}" type="fixed"><parent link="l{i - 1}"/><child link="l{i}"/></joint>'
-              f'<link name="l{i}"/>' for i in range(1, n)]
+    parts += [
+        f'<joint name="j{i}" type="fixed"><parent link="l{i - 1}"/><child link="l{i}"/></joint>'
+        f'<link name="l{i}"/>'
+        for i in range(1, n)
+    ]
     text = "".join(parts) + "</robot>"
     start = time.perf_counter()
     check_urdf(text, "<long chain>")
@@ -158,10 +166,14 @@ def _ros_workspace(root: Path, missing: bool = False) -> Path:
     (pkg / "meshes" / "l1.stl").write_text(STL)
     if not missing:
         (pkg / "meshes" / "l2.stl").write_text(STL)
-    text = arm(visual='<visual><geometry><mesh filename="package://my_arm/meshes/l1.stl"/></geometry></visual>')
+    text = arm(
+        visual='<visual><geometry><mesh filename="package://my_arm/meshes/l1.stl"/></geometry></visual>'
+    )
     head, tail = text.rsplit("</inertial></link>", 1)  # link l2 gets the second mesh
-    text = (head + '</inertial><visual><geometry><mesh filename="package://my_arm/meshes/l2.stl"/></geometry>'
-            '</visual></link>' + tail)
+    text = (
+        head + '</inertial><visual><geometry><mesh filename="package://my_arm/meshes/l2.stl"/></geometry>'
+        "</visual></link>" + tail
+    )
     assert text.count("package://") == 2
     path = pkg / "urdf" / "arm.urdf"
     path.write_text(text)
@@ -220,12 +232,18 @@ def test_quiet_prints_no_warning(tmp_path, capsys):
     run's own warnings stay in metrics.json)."""
     source = Path(__file__).parent / "data" / "pybullet" / "xarm" / "xarm6_robot.urdf"
     path = tmp_path / "x.toml"
-    path.write_text(f'[robot]\nsource = "{source}"\ntask = "position"\n[trajectory]\n'
-                    'center = [0.45, 0.0, 0.5]\naxis_a = [0.1, 0.0, 0.0]\naxis_b = [0.0, 0.1, 0.0]\n'
-                    '[simulation]\nduration = 0.2\n')
+    path.write_text(
+        f'[robot]\nsource = "{source}"\ntask = "position"\n[trajectory]\n'
+        "center = [0.45, 0.0, 0.5]\naxis_a = [0.1, 0.0, 0.0]\naxis_b = [0.0, 0.1, 0.0]\n"
+        "[simulation]\nduration = 0.2\n"
+    )
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        assert main(["run", str(path), "--out", str(tmp_path / "run"), "--quiet", "--no-plots",
-                     "--no-animation"]) == 0
+        assert (
+            main(
+                ["run", str(path), "--out", str(tmp_path / "run"), "--quiet", "--no-plots", "--no-animation"]
+            )
+            == 0
+        )
     assert not [w for w in caught if "inertial data" in str(w.message)]
     assert capsys.readouterr().err == ""

@@ -134,8 +134,13 @@ def test_sensor_noise_has_the_asked_standard_deviation_and_is_seeded():
     np.testing.assert_allclose(dv.std(axis=0), 0.02, rtol=0.1)
     assert np.abs(dq.mean()) < 1e-4
     again = Recorder()
-    simulate(_free_plant(sensor=Sensor(np.full(3, 1e-3), np.full(3, 0.02), np.zeros(3), seed=4)),
-             again, np.full(3, 0.5), np.zeros(3), 2.0)
+    simulate(
+        _free_plant(sensor=Sensor(np.full(3, 1e-3), np.full(3, 0.02), np.zeros(3), seed=4)),
+        again,
+        np.full(3, 0.5),
+        np.zeros(3),
+        2.0,
+    )
     np.testing.assert_array_equal(rec.measured[-1][0], again.measured[-1][0])
 
 

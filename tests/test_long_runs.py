@@ -35,8 +35,9 @@ def test_defaults_stay_bounded_for_120_s_with_saturation(preset):
 
 def test_the_papers_law_with_a_large_gain_is_flagged():
     """F = 50, eps_min = 0, sigma = 0 over 60 s: rho-hat grows without bound and the run says so."""
-    config = load_preset("paper-ellipse").replace(nn={"F": 50.0, "eps_min": 0.0, "sigma": 0.0},
-                                                  simulation={"duration": 60.0})
+    config = load_preset("paper-ellipse").replace(
+        nn={"F": 50.0, "eps_min": 0.0, "sigma": 0.0}, simulation={"duration": 60.0}
+    )
     metrics = run_experiment(config).metrics()
     assert metrics["warnings"]
     assert metrics["rho_hat_growing"]
@@ -62,7 +63,8 @@ def test_sigma_modification_bounds_Z_by_omega_over_sigma():
     result = run_experiment(config, setup=setup)
     comp, robot, trajectory = setup.controller.compensator, setup.robot, setup.trajectory
     de = np.array([robot.task_jacobian(q) @ v for q, v in zip(result.q, result.dq)]) - np.array(
-        [trajectory(t)[1] for t in result.t])
+        [trajectory(t)[1] for t in result.t]
+    )
     omega = result.e @ np.diag(config.controller.Kp) + de @ np.diag(config.controller.Kv)
     bound = np.linalg.norm(omega, axis=1).max() / comp.sigma
     assert 0 < np.linalg.norm(result.signals["z_norm"], np.inf)
@@ -71,8 +73,12 @@ def test_sigma_modification_bounds_Z_by_omega_over_sigma():
     # each weight is a running average of its drive |w| phi_i / sigma: below its largest value
     # so far (without the leakage the weights integrate the drive and pass it within seconds)
     weights = _trace(setup).z[:, : comp.L]
-    drive = np.array([np.linalg.norm(comp.omega(y)) * comp.basis(comp.network_input(q, v, y))
-                      for q, v, y in zip(result.q, result.dq, _errors(result, setup))])
+    drive = np.array(
+        [
+            np.linalg.norm(comp.omega(y)) * comp.basis(comp.network_input(q, v, y))
+            for q, v, y in zip(result.q, result.dq, _errors(result, setup))
+        ]
+    )
     ceiling = np.maximum.accumulate(np.maximum(drive / comp.sigma, weights[0]), axis=0)
     assert np.all(weights <= ceiling * (1 + 1e-6) + 1e-12)
 
@@ -88,6 +94,7 @@ def _trace(setup):
 
         return simulate_compiled(setup, sim.duration)
     return simulate(setup.plant, setup.controller, setup.q0, setup.v0, sim.duration, sim.control_period)
+
 
 def _errors(result, setup):
     """y_k = [e, e'] as the controller saw it (ideal sensing), from the recorded states."""

@@ -47,8 +47,9 @@ def test_potential_energy_gradient_is_gravity():
     oracle = closed_form_of(robot)
     for q, _, _ in random_states(3, 10, seed=2):
         for model in (robot, oracle):
-            grad = np.array([finite_difference(lambda x: np.array(model.potential_energy(x)), q, d)
-                             for d in np.eye(3)]).ravel()
+            grad = np.array(
+                [finite_difference(lambda x: np.array(model.potential_energy(x)), q, d) for d in np.eye(3)]
+            ).ravel()
             np.testing.assert_allclose(grad, model.gravity(q), atol=1e-6)
 
 
@@ -98,8 +99,10 @@ def test_printed_mass_matrix_is_wrong():
     q0 = np.zeros(3)
     M = printed_mass(q0, params.beta, params.p)
     assert np.min(np.linalg.eigvalsh(M)) < -0.03  # an inertia matrix must be positive definite
-    worst = max(np.abs(printed_mass(q, params.beta, params.p) - robot.mass(q)).max()
-                for q, _, _ in random_states(3, 20, seed=6))
+    worst = max(
+        np.abs(printed_mass(q, params.beta, params.p) - robot.mass(q)).max()
+        for q, _, _ in random_states(3, 20, seed=6)
+    )
     assert worst > 0.1
 
 

@@ -203,8 +203,9 @@ def test_a_payload_enters_both_engines_alike(preset):
     a run with it is the same on both loops."""
     from nnrobust import compiled
 
-    config = load_preset(preset).replace(plant={"engine": "mujoco", "payload": 2.5},
-                                         simulation={"duration": 0.5})
+    config = load_preset(preset).replace(
+        plant={"engine": "mujoco", "payload": 2.5}, simulation={"duration": 0.5}
+    )
     setup = build(config)
     assert max(setup.plant.engine.audit.values()) <= AUDIT_TOLERANCE
     plain = build(config.replace(plant={"payload": 0.0})).plant.engine

@@ -57,8 +57,9 @@ def test_friction_only_dissipates_energy():
     """With viscous and Coulomb friction and no input, energy never increases, not even in the
     steps where a joint stops or reverses (the stick-slip events are located inside the step)."""
     robot = paper_robot()
-    plant = Plant(robot, Friction(robot.viscous_friction, robot.coulomb_friction),
-                  SinusoidalDisturbance.none(3))
+    plant = Plant(
+        robot, Friction(robot.viscous_friction, robot.coulomb_friction), SinusoidalDisturbance.none(3)
+    )
     trace = simulate(plant, ConstantTorque(np.zeros(3)), Q0, V0, 3.0)
     E = energies(plant, trace)
     assert trace.friction_events > 0
@@ -75,8 +76,9 @@ def test_energy_balance_with_torque_and_disturbance(coulomb):
     tau = np.array([2.0, -1.0, 0.5])
     trace = simulate(plant, ConstantTorque(tau), Q0, V0, 2.0, control_period=1e-4)
     E = energies(plant, trace)
-    power = np.array([v @ (tau - plant.friction.torque(v) - plant.disturbance(t))
-                      for t, v in zip(trace.t, trace.dq)])
+    power = np.array(
+        [v @ (tau - plant.friction.torque(v) - plant.disturbance(t)) for t, v in zip(trace.t, trace.dq)]
+    )
     work = np.sum(0.5 * (power[1:] + power[:-1])) * 1e-4  # trapezoid
     assert E[-1] - E[0] == pytest.approx(work, rel=1e-4, abs=1e-6)
     assert (trace.friction_events > 0) == (coulomb > 0)
@@ -124,8 +126,16 @@ def test_rk4_and_solve_ivp_agree_on_the_paper_closed_loop(controller):
     runs = {}
     for integrator in ("rk4", "solve_ivp"):
         setup = build(base.replace(simulation={"integrator": integrator}))
-        runs[integrator] = simulate(setup.plant, setup.controller, setup.q0, setup.v0, 2.0,
-                                    integrator=integrator, rtol=1e-8, atol=1e-8)
+        runs[integrator] = simulate(
+            setup.plant,
+            setup.controller,
+            setup.q0,
+            setup.v0,
+            2.0,
+            integrator=integrator,
+            rtol=1e-8,
+            atol=1e-8,
+        )
     diff = np.abs(runs["rk4"].q - runs["solve_ivp"].q).max()
     assert diff < 1e-4, diff
 
@@ -135,13 +145,22 @@ def test_solve_ivp_and_rk4_agree_through_stick_slip():
     closed loop agrees to 1e-6 rad (before, sgn made the adaptive integrator crawl)."""
     base = ExperimentConfig().replace(
         nominal={"p": [0.4, 0.1, 0.1], "viscous_friction": [4.0, 1.0, 0.2]},
-        controller={"kind": "no-u0"}, simulation={"q_seed": [0.2, 1.0, 1.0], "duration": 0.5},
+        controller={"kind": "no-u0"},
+        simulation={"q_seed": [0.2, 1.0, 1.0], "duration": 0.5},
     )
     runs = {}
     for integrator in ("rk4", "solve_ivp"):
         setup = build(base.replace(simulation={"integrator": integrator}))
-        runs[integrator] = simulate(setup.plant, setup.controller, setup.q0, setup.v0, 0.5,
-                                    integrator=integrator, rtol=1e-10, atol=1e-10)
+        runs[integrator] = simulate(
+            setup.plant,
+            setup.controller,
+            setup.q0,
+            setup.v0,
+            0.5,
+            integrator=integrator,
+            rtol=1e-10,
+            atol=1e-10,
+        )
     assert runs["rk4"].friction_events > 0
     assert np.abs(runs["rk4"].q - runs["solve_ivp"].q).max() < 1e-6
 
@@ -155,15 +174,23 @@ def test_per_joint_friction_and_disturbance_scales_and_the_disturbance_frequency
 
     base = load_preset("paper-ellipse").replace(plant={"friction_scale": 2.0, "disturbance_scale": 0.5})
     ref = build(base).plant
-    changed = build(apply_overrides(base, {"plant.joint_friction_scales[2]": 3.0,
-                                           "plant.joint_disturbance_scales": [0.0, 4.0],
-                                           "plant.disturbance_omega_scale": 1.5,
-                                           "plant.disturbance_phase_shift": 0.25})).plant
+    changed = build(
+        apply_overrides(
+            base,
+            {
+                "plant.joint_friction_scales[2]": 3.0,
+                "plant.joint_disturbance_scales": [0.0, 4.0],
+                "plant.disturbance_omega_scale": 1.5,
+                "plant.disturbance_phase_shift": 0.25,
+            },
+        )
+    ).plant
     np.testing.assert_array_equal(changed.friction.viscous, ref.friction.viscous * [1.0, 1.0, 3.0])
     np.testing.assert_array_equal(changed.friction.coulomb, ref.friction.coulomb * [1.0, 1.0, 3.0])
     np.testing.assert_array_equal(changed.friction.static, ref.friction.static * [1.0, 1.0, 3.0])
-    np.testing.assert_array_equal(changed.disturbance.amplitude,
-                                  ref.disturbance.amplitude * [[0.0], [4.0], [1.0]])
+    np.testing.assert_array_equal(
+        changed.disturbance.amplitude, ref.disturbance.amplitude * [[0.0], [4.0], [1.0]]
+    )
     np.testing.assert_array_equal(changed.disturbance.omega, 1.5 * ref.disturbance.omega)
     np.testing.assert_array_equal(changed.disturbance.phase, ref.disturbance.phase + 0.25)
     t = 0.37  # the torque itself, joint by joint

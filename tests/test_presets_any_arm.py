@@ -14,8 +14,7 @@ PRESETS = ["panda-ellipse", "panda-pose", "ur5-ellipse", "planar7-ellipse"]
 
 
 def _run(preset, kind, duration):
-    config = load_preset(preset).replace(controller={"kind": kind},
-                                         simulation={"duration": duration})
+    config = load_preset(preset).replace(controller={"kind": kind}, simulation={"duration": duration})
     result = run_experiment(config)
     assert result.status == "completed", result.message
     return result.metrics()

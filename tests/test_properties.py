@@ -83,9 +83,13 @@ def test_controller_output_is_finite_for_any_finite_state(preset):
     L = controller.compensator.L
 
     @SETTINGS
-    @given(_angles(n), st.lists(st.floats(-50, 50), min_size=n, max_size=n).map(np.array),
-           st.floats(0, 100), st.lists(st.floats(0, 1e3), min_size=L, max_size=L).map(np.array),
-           st.floats(0, 2))
+    @given(
+        _angles(n),
+        st.lists(st.floats(-50, 50), min_size=n, max_size=n).map(np.array),
+        st.floats(0, 100),
+        st.lists(st.floats(0, 1e3), min_size=L, max_size=L).map(np.array),
+        st.floats(0, 2),
+    )
     def check(q, v, t, Z, eps):
         z = np.concatenate([Z, [eps]])
         out = controller.compute(t, q, v, z, 1e-3)
@@ -103,8 +107,12 @@ def test_controller_output_is_finite_for_any_finite_state(preset):
 def _mutations(text: str):
     """Strategy: the text with a slice deleted, duplicated or replaced by random characters."""
     n = len(text)
-    return st.tuples(st.integers(0, n), st.integers(0, 200), st.sampled_from(["delete", "dup", "junk"]),
-                     st.text(max_size=40)).map(lambda a: _mutate(text, *a))
+    return st.tuples(
+        st.integers(0, n),
+        st.integers(0, 200),
+        st.sampled_from(["delete", "dup", "junk"]),
+        st.text(max_size=40),
+    ).map(lambda a: _mutate(text, *a))
 
 
 def _mutate(text, start, length, how, junk):
@@ -152,20 +160,34 @@ def _field_names():
 
     from nnrobust.config import ExperimentConfig
 
-    sections = [f.default_factory for f in dataclasses.fields(ExperimentConfig)
-                if f.default_factory is not dataclasses.MISSING]
+    sections = [
+        f.default_factory
+        for f in dataclasses.fields(ExperimentConfig)
+        if f.default_factory is not dataclasses.MISSING
+    ]
     return sorted({f.name for section in sections for f in dataclasses.fields(section)})
 
 
 @settings(max_examples=100, deadline=None)
-@given(st.dictionaries(st.sampled_from(["controller", "nn", "simulation", "subtasks", "trajectory",
-                                        "nominal", "plant", "robot"]),
-                       st.dictionaries(st.one_of(st.sampled_from(_field_names()), st.text(max_size=8)),
-                                       st.one_of(st.floats(allow_nan=True), st.integers(),
-                                                 st.text(max_size=5), st.lists(st.floats(), max_size=4),
-                                                 st.booleans()),
-                                       max_size=3),
-                       max_size=3))
+@given(
+    st.dictionaries(
+        st.sampled_from(
+            ["controller", "nn", "simulation", "subtasks", "trajectory", "nominal", "plant", "robot"]
+        ),
+        st.dictionaries(
+            st.one_of(st.sampled_from(_field_names()), st.text(max_size=8)),
+            st.one_of(
+                st.floats(allow_nan=True),
+                st.integers(),
+                st.text(max_size=5),
+                st.lists(st.floats(), max_size=4),
+                st.booleans(),
+            ),
+            max_size=3,
+        ),
+        max_size=3,
+    )
+)
 def test_configuration_from_random_tables_raises_only_config_errors(data):
     """Real keys with random values (and random keys): from_dict and, when that accepts them,
     building the experiment (robot-dependent checks) raise nothing but the library's errors, and

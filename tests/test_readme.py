@@ -21,8 +21,12 @@ def test_readme_panda_experiment_runs_and_repeats(tmp_path, capsys):
     assert main(["run", str(experiment), "--out", str(out), "--duration", "1.0", "--no-plots"]) == 0
     assert "completed" in capsys.readouterr().out
     assert (out / "animation.html").stat().st_size > 1_000_000
-    assert main(["run", str(out / "config.toml"), "--out", str(again), "--quiet", "--no-plots",
-                 "--no-animation"]) == 0
+    assert (
+        main(
+            ["run", str(out / "config.toml"), "--out", str(again), "--quiet", "--no-plots", "--no-animation"]
+        )
+        == 0
+    )
     np.testing.assert_array_equal(Result.load(out).tau, Result.load(again).tau)
     assert main(["compare", str(out), str(again)]) == 0
 

@@ -58,8 +58,9 @@ def test_every_gradient_matches_finite_differences(name, task):
                 fd[k] = (criterion.value(robot, q + e) - criterion.value(robot, q - e)) / 2e-6
             grad = criterion.gradient(robot, q)
             assert np.any(grad != 0), label
-            np.testing.assert_allclose(grad, fd, rtol=1e-5, atol=1e-7 * max(1.0, np.abs(fd).max()),
-                                       err_msg=f"{name} {task} {label}")
+            np.testing.assert_allclose(
+                grad, fd, rtol=1e-5, atol=1e-7 * max(1.0, np.abs(fd).max()), err_msg=f"{name} {task} {label}"
+            )
 
 
 def test_joint_criteria_values():
@@ -119,13 +120,15 @@ def _perfect_run(robot, criterion, k, trajectory, q0, duration=2.0):
     controller = TaskSpaceController(nominal, trajectory, Kp, Kv, k, criterion)
     trace = simulate(plant, controller, q0, np.zeros(robot.nq), duration, control_period=1e-3)
     assert trace.status == "completed"
-    e = np.array([trajectory.error(robot.task_position(q), trajectory(t)[0])
-                  for t, q in zip(trace.t, trace.q)])
+    e = np.array(
+        [trajectory.error(robot.task_position(q), trajectory(t)[0]) for t, q in zip(trace.t, trace.q)]
+    )
     return trace, e
 
 
-@pytest.mark.parametrize(("name", "task"), [("panda", "position"), ("ur5", "position"),
-                                            ("planar7", "planar")])
+@pytest.mark.parametrize(
+    ("name", "task"), [("panda", "position"), ("ur5", "position"), ("planar7", "planar")]
+)
 def test_subtasks_do_not_disturb_the_task_error(name, task):
     """Fixed target, start 5 cm off: e(t) = e0 (1 + 5 t) exp(-5 t) (Kp = 25, Kv = 10, critical)."""
     robot = arm(name, task)
@@ -133,8 +136,9 @@ def test_subtasks_do_not_disturb_the_task_error(name, task):
     x0 = robot.task_position(q0)
     offset = np.full(robot.m, 0.05 / np.sqrt(robot.m))
     target = EllipseTrajectory(x0 - offset, np.zeros(robot.m), np.zeros(robot.m))
-    criterion = WeightedCriteria([Manipulability(), JointCentering(robot.lower_limits,
-                                                                   robot.upper_limits)], [1, 1], 1.0)
+    criterion = WeightedCriteria(
+        [Manipulability(), JointCentering(robot.lower_limits, robot.upper_limits)], [1, 1], 1.0
+    )
     trace, e_with = _perfect_run(robot, criterion, 10.0, target, q0)
     _, e_without = _perfect_run(robot, None, 0.0, target, q0)
     t = trace.t[:, None]
@@ -145,10 +149,15 @@ def test_subtasks_do_not_disturb_the_task_error(name, task):
     np.testing.assert_allclose(e_with, e_without, atol=2e-4)
 
 
-@pytest.mark.parametrize(("name", "task", "which"), [("panda", "position", "manipulability"),
-                                                     ("panda", "pose", "joint_centering"),
-                                                     ("ur5", "position", "joint_limits"),
-                                                     ("planar7", "planar", "manipulability")])
+@pytest.mark.parametrize(
+    ("name", "task", "which"),
+    [
+        ("panda", "position", "manipulability"),
+        ("panda", "pose", "joint_centering"),
+        ("ur5", "position", "joint_limits"),
+        ("planar7", "planar", "manipulability"),
+    ],
+)
 def test_pure_self_motion_improves_the_criterion(name, task, which):
     robot = arm(name, task)
     q0 = random_configurations(robot, 1, seed=15)[0]
@@ -181,9 +190,10 @@ def test_ik_reaches_a_reachable_target_from_another_seed(name, task):
     0.3 rad away: IK reaches it (residual < 1e-10), within the limits, at a configuration whose
     forward kinematics is the target (checked independently of the solver's own residual)."""
     robot = arm(name, task)
-    q_true, = random_configurations(robot, 1, seed=15)
-    seed = np.clip(q_true + 0.3 * np.sign(np.sin(np.arange(robot.nq) + 1.0)),
-                   robot.lower_limits, robot.upper_limits)
+    (q_true,) = random_configurations(robot, 1, seed=15)
+    seed = np.clip(
+        q_true + 0.3 * np.sign(np.sin(np.arange(robot.nq) + 1.0)), robot.lower_limits, robot.upper_limits
+    )
     target = robot.task_position(q_true)
     q, residual = solve_ik(robot, target, seed, robot.lower_limits, robot.upper_limits)
     assert residual < 1e-10
@@ -197,8 +207,9 @@ def test_initial_state_keeps_a_margin_inside_the_limits():
     from nnrobust.experiment import IK_LIMIT_MARGIN, build
     from nnrobust.presets import load_preset
 
-    setup = build(load_preset("paper-ellipse").replace(simulation={"q_seed": [0.2, 2.8, 1.0],
-                                                                   "duration": 1.0}))
+    setup = build(
+        load_preset("paper-ellipse").replace(simulation={"q_seed": [0.2, 2.8, 1.0], "duration": 1.0})
+    )
     lower, upper = setup.robot.lower_limits, setup.robot.upper_limits
     margin = IK_LIMIT_MARGIN * (upper - lower)
     assert np.all(setup.q0 >= lower + margin - 1e-12) and np.all(setup.q0 <= upper - margin + 1e-12)

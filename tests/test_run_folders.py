@@ -53,8 +53,22 @@ def test_a_second_run_into_a_locked_folder_is_refused(tmp_path, capsys):
 def test_two_concurrent_processes_one_result(tmp_path):
     """Two real processes started together: exactly one writes the folder, the other exits 2."""
     out = tmp_path / "run"
-    cmd = [sys.executable, "-m", "nnrobust.cli", "run", "paper-ellipse", "--out", str(out), "--duration", "2",
-           "--no-plots", "--no-animation", "--quiet", "--backend", "python"]
+    cmd = [
+        sys.executable,
+        "-m",
+        "nnrobust.cli",
+        "run",
+        "paper-ellipse",
+        "--out",
+        str(out),
+        "--duration",
+        "2",
+        "--no-plots",
+        "--no-animation",
+        "--quiet",
+        "--backend",
+        "python",
+    ]
     procs = [subprocess.Popen(cmd, stderr=subprocess.PIPE, text=True) for _ in range(2)]
     codes = sorted(p.wait(timeout=300) for p in procs)
     assert codes == [0, 2]
@@ -80,8 +94,19 @@ def test_a_failed_run_never_replaces_a_completed_one(tmp_path, capsys):
     assert _run(out) == 0
     before = (out / "result.npz").read_bytes()
     # torque limits off and a huge Kv: the run diverges
-    assert _run(out, "--overwrite", "--set", "plant.torque_limits='none'", "--set", "controller.Kv=[2000.0]",
-                "--set", "plant.joint_stops=false") == 1
+    assert (
+        _run(
+            out,
+            "--overwrite",
+            "--set",
+            "plant.torque_limits='none'",
+            "--set",
+            "controller.Kv=[2000.0]",
+            "--set",
+            "plant.joint_stops=false",
+        )
+        == 1
+    )
     assert (out / "result.npz").read_bytes() == before and _marker(out)["status"] == "completed"
     beside = tmp_path / "run.diverged"
     assert _marker(beside)["status"] == "diverged" and (beside / "result.npz").is_file()
@@ -98,8 +123,12 @@ def test_ctrl_c_while_plotting_keeps_the_finished_simulation(tmp_path, monkeypat
     with pytest.raises(ExtrasInterrupted, match="arrays and metrics are saved"):
         write_run(tmp_path / "run", result)
     folder = tmp_path / "run"
-    assert _marker(folder) | {"nnrobust": None} == {"format": 1, "nnrobust": None, "status": "completed",
-                                                    "extras": "interrupted"}
+    assert _marker(folder) | {"nnrobust": None} == {
+        "format": 1,
+        "nnrobust": None,
+        "status": "completed",
+        "extras": "interrupted",
+    }
     np.testing.assert_array_equal(Result.load(folder).q, result.q)
     assert sorted(p.name for p in folder.iterdir()) == [MARKER, "config.toml", "metrics.json", "result.npz"]
 
@@ -121,6 +150,7 @@ def test_plot_draws_again_the_figures_a_run_drew(tmp_path, capsys):
 
 def test_plot_finishes_a_run_whose_drawing_was_interrupted(tmp_path, monkeypatch, capsys):
     result = run_experiment(load_preset("paper-line").replace(simulation={"duration": 0.3}))
+
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
@@ -138,8 +168,12 @@ def test_plot_finishes_a_run_whose_drawing_was_interrupted(tmp_path, monkeypatch
 def test_plot_draws_only_into_run_folders(tmp_path, capsys):
     """A folder of the user's that holds a run's files among its own: refused, left as it was."""
     folder = tmp_path / "mine"
-    write_run(folder, run_experiment(load_preset("paper-line").replace(simulation={"duration": 0.1})),
-              plots=False, animation=False)
+    write_run(
+        folder,
+        run_experiment(load_preset("paper-line").replace(simulation={"duration": 0.1})),
+        plots=False,
+        animation=False,
+    )
     (folder / MARKER).unlink()
     (folder / "notes.txt").write_text("mine")
     before = sorted(p.name for p in folder.iterdir())
@@ -159,8 +193,11 @@ def test_a_write_failure_keeps_the_previous_run_and_rescues_the_arrays(tmp_path,
         raise OSError(28, "No space left on device")
 
     monkeypatch.setattr("nnrobust.run_folder._write_marker", full)
-    with pytest.raises(RunFolderError, match=r"No space left.*previous run there is unchanged.*arrays are in "
-                                             r"(\S+\.npz)") as caught:
+    with pytest.raises(
+        RunFolderError,
+        match=r"No space left.*previous run there is unchanged.*arrays are in "
+        r"(\S+\.npz)",
+    ) as caught:
         write_run(folder, result, overwrite=True, plots=False, animation=False)
     rescued = Path(str(caught.value).rsplit("arrays are in ", 1)[1])
     with np.load(rescued) as data:
@@ -279,8 +316,13 @@ def test_experiment_files_are_read_bounded(kind, tmp_path, capsys):
         Path(target).write_text("[sensing]\nseed = " + "9" * 400 + "\n")
     assert main(["run", target, "--out", str(tmp_path / "out"), "--quiet"]) == 2
     line = _one_error_line(capsys)
-    assert {"/dev/zero": "not a regular file", "fifo": "not a regular file", "huge": "larger than 1000 kB",
-            "deep": "nested too deeply", "bigint": "integer in (-2^63, 2^63)"}[kind] in line
+    assert {
+        "/dev/zero": "not a regular file",
+        "fifo": "not a regular file",
+        "huge": "larger than 1000 kB",
+        "deep": "nested too deeply",
+        "bigint": "integer in (-2^63, 2^63)",
+    }[kind] in line
 
 
 def test_runs_too_large_for_memory_are_refused_before_they_start(capsys, tmp_path):
@@ -288,9 +330,11 @@ def test_runs_too_large_for_memory_are_refused_before_they_start(capsys, tmp_pat
     assert "simulation.memory_limit: this run needs about 211 GB" in _one_error_line(capsys)
     assert _run(tmp_path / "ok", "--set", "simulation.memory_limit=0.0001") == 2
     assert "raise memory_limit" in _one_error_line(capsys)
-    for key, value, fragment in (("simulation.substeps", "100000", "at most 10000"),
-                                 ("nn.centers", "100000", "at most 1000"),
-                                 ("simulation.control_period", "1e-12", "steps; at most")):
+    for key, value, fragment in (
+        ("simulation.substeps", "100000", "at most 10000"),
+        ("nn.centers", "100000", "at most 1000"),
+        ("simulation.control_period", "1e-12", "steps; at most"),
+    ):
         assert _run(tmp_path / "x", "--set", f"{key}={value}") == 2
         assert fragment in _one_error_line(capsys)
 
@@ -301,18 +345,21 @@ def test_the_memory_estimate_counts_the_models_and_stops_at_what_the_machine_has
     machine's available memory does not let a run through."""
     from nnrobust import experiment
 
-    probe = ("import gc, pinocchio as pin\n"
-             "from nnrobust.model import load_robot\n"
-             "def rss():\n"
-             "    lines = open('/proc/self/status').read().splitlines()\n"
-             "    return next(float(x.split()[1]) * 1e3 for x in lines if x.startswith('VmRSS'))\n"
-             "robot = load_robot('planar150'); gc.collect(); before = rss()\n"
-             "data = pin.Data(robot.model); print(rss() - before)\n")
+    probe = (
+        "import gc, pinocchio as pin\n"
+        "from nnrobust.model import load_robot\n"
+        "def rss():\n"
+        "    lines = open('/proc/self/status').read().splitlines()\n"
+        "    return next(float(x.split()[1]) * 1e3 for x in lines if x.startswith('VmRSS'))\n"
+        "robot = load_robot('planar150'); gc.collect(); before = rss()\n"
+        "data = pin.Data(robot.model); print(rss() - before)\n"
+    )
     done = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True)
     measured = float(done.stdout.split()[-1])  # in a fresh interpreter: no freed memory to reuse
     assert measured == pytest.approx(experiment.DATA_BYTES_PER_CUBED_JOINT * 150**3, rel=0.15)
-    config = load_preset("planar7-ellipse").replace(robot={"source": "planar150"},
-                                                    simulation={"memory_limit": 0.5, "duration": 1.0})
+    config = load_preset("planar7-ellipse").replace(
+        robot={"source": "planar150"}, simulation={"memory_limit": 0.5, "duration": 1.0}
+    )
     with pytest.raises(ConfigError, match=r"needs about 0.6\d+ GB \(1 s at 0.001 s per step, 150 joints\)"):
         experiment.build(config)
     monkeypatch.setattr(experiment, "available_memory", lambda: 1e7)  # 10 MB left
@@ -325,9 +372,24 @@ def test_a_signal_mid_run_leaves_a_partial_run_marked_as_such(sig, tmp_path):
     """SIGINT, SIGTERM or SIGHUP during the simulation: exit 130 or 1 with the partial run in
     place, marked interrupted; no hidden partial folder, no lock file, no process left."""
     out = tmp_path / "run"
-    proc = subprocess.Popen([sys.executable, "-m", "nnrobust.cli", "run", "paper-ellipse", "--out", str(out),
-                             "--duration", "60", "--backend", "python", "--no-animation"],
-                            stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "nnrobust.cli",
+            "run",
+            "paper-ellipse",
+            "--out",
+            str(out),
+            "--duration",
+            "60",
+            "--backend",
+            "python",
+            "--no-animation",
+        ],
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline:  # wait until the simulation is under way
         time.sleep(0.5)
@@ -388,8 +450,10 @@ def test_planted_links_are_never_written_through(tmp_path):
     never followed: their targets keep their content."""
     out = tmp_path / "run"
     assert _run(out, "--no-plots", "--no-animation") == 0
-    victims = {name: tmp_path / f"victim-{i}" for i, name in enumerate(
-        (".nnrobust-run.partial", ".animation.html.partial"))}
+    victims = {
+        name: tmp_path / f"victim-{i}"
+        for i, name in enumerate((".nnrobust-run.partial", ".animation.html.partial"))
+    }
     for name, victim in victims.items():
         victim.write_text("precious")
         (out / name).symlink_to(victim)
@@ -421,8 +485,12 @@ def test_sigterm_of_bench_leaves_no_worker_behind(tmp_path):
     """`nnrobust bench` stopped by SIGTERM while a benchmark's worker pool runs: the script and
     every worker it started are gone within seconds (they used to run on with parent pid 1)."""
     out = tmp_path / "bench-out"  # in every command line of the benchmark and of its workers
-    proc = subprocess.Popen([sys.executable, "-m", "nnrobust.cli", "bench", "plant_convergence", "--out",
-                             str(out)], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "nnrobust.cli", "bench", "plant_convergence", "--out", str(out)],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     deadline = time.monotonic() + 90
     while time.monotonic() < deadline and len(_processes_mentioning(str(out))) < 3:  # script + 2 workers
         time.sleep(0.2)

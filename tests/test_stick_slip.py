@@ -69,8 +69,11 @@ def test_settled_modes_hold_within_the_static_level_on_the_coupled_arm():
     """On the paper's arm at rest under random torques, every held joint needs at most F_s, every
     released joint needed more, and a released joint accelerates the way it slides."""
     robot = paper_robot()
-    plant = Plant(robot, Friction(robot.viscous_friction, [1.0, 1.0, 1.0], static=[1.5, 1.5, 1.5]),
-                  SinusoidalDisturbance.none(3))
+    plant = Plant(
+        robot,
+        Friction(robot.viscous_friction, [1.0, 1.0, 1.0], static=[1.5, 1.5, 1.5]),
+        SinusoidalDisturbance.none(3),
+    )
     rng = np.random.default_rng(3)
     seen = set()
     for _ in range(200):
@@ -103,15 +106,29 @@ def test_static_friction_below_coulomb_is_refused():
         Friction([0.1], [1.0], static=[0.5])
 
 
-@pytest.mark.parametrize("backend", ["python", pytest.param("compiled", marks=pytest.mark.skipif(
-    not compiled.available(), reason=compiled.unavailable_reason()))])
+@pytest.mark.parametrize(
+    "backend",
+    [
+        "python",
+        pytest.param(
+            "compiled",
+            marks=pytest.mark.skipif(not compiled.available(), reason=compiled.unavailable_reason()),
+        ),
+    ],
+)
 def test_the_plant_step_is_converged_for_a_chattering_controller(backend):
     """A stiff sliding mode on paper-ellipse (the case where a fixed step across sgn made 10 x the
     chatter): 1 and 16 plant steps per period agree within 2 % in RMS torque, 10 % in chatter."""
     config = load_preset("paper-ellipse").replace(
-        controller={"kind": "sliding-mode", "Kp": [1e4], "Kv": [200.0], "sliding_gain": 40.0,
-                    "sliding_boundary": 5.0},
-        simulation={"duration": 3.0, "backend": backend})
+        controller={
+            "kind": "sliding-mode",
+            "Kp": [1e4],
+            "Kv": [200.0],
+            "sliding_gain": 40.0,
+            "sliding_boundary": 5.0,
+        },
+        simulation={"duration": 3.0, "backend": backend},
+    )
     from nnrobust.experiment import run_experiment
 
     coarse, fine = (run_experiment(config.replace(simulation={"substeps": s})).metrics() for s in (1, 16))

@@ -12,17 +12,20 @@ from nnrobust.subtasks import (
 from .problems import closed_form_of, finite_difference, paper_robot, random_states
 
 
-@pytest.mark.parametrize("criterion", [PaperCriterion(), HalfDetManipulability(),
-                                       Manipulability(), JointSmoothness()],
-                         ids=["eq19", "half_det", "sqrt_det", "smoothness"])
+@pytest.mark.parametrize(
+    "criterion",
+    [PaperCriterion(), HalfDetManipulability(), Manipulability(), JointSmoothness()],
+    ids=["eq19", "half_det", "sqrt_det", "smoothness"],
+)
 @pytest.mark.parametrize("which", ["pinocchio", "closed-form"])
 def test_gradient_matches_finite_differences(criterion, which):
     """Analytic gradients equal central differences on 20 random configurations."""
     robot = paper_robot()
     model = robot if which == "pinocchio" else closed_form_of(robot)
     for q, _, _ in random_states(3, 20, seed=7):
-        fd = np.array([finite_difference(lambda x: np.array(criterion.value(model, x)), q, d)
-                       for d in np.eye(3)]).ravel()
+        fd = np.array(
+            [finite_difference(lambda x: np.array(criterion.value(model, x)), q, d) for d in np.eye(3)]
+        ).ravel()
         np.testing.assert_allclose(criterion.gradient(model, q), fd, atol=1e-7)
 
 
@@ -69,10 +72,18 @@ PRISMATIC_ARM = """<robot name="rprr">
 """
 
 
-@pytest.mark.parametrize("source, task", [("panda", "position"), ("panda", "pose"), ("ur5", "position"),
-                                          ("planar12", "planar"), ("three_link_planar", "planar"),
-                                          (PRISMATIC_ARM, "position")],
-                         ids=["panda-position", "panda-pose", "ur5", "planar12", "paper-arm", "prismatic"])
+@pytest.mark.parametrize(
+    "source, task",
+    [
+        ("panda", "position"),
+        ("panda", "pose"),
+        ("ur5", "position"),
+        ("planar12", "planar"),
+        ("three_link_planar", "planar"),
+        (PRISMATIC_ARM, "position"),
+    ],
+    ids=["panda-position", "panda-pose", "ur5", "planar12", "paper-arm", "prismatic"],
+)
 def test_linear_time_manipulability_gradient(source, task):
     """PinocchioModel.det_jjt_gradient (O(n) prefix and suffix sums, docs/equations.md) equals
     central finite differences of det(J J^T) and the kinematic-Hessian form."""

@@ -75,8 +75,9 @@ def test_a_sample_reruns_as_a_normal_run(tmp_path, capsys):
     words = shlex.split(rerun_command(spec, draw(spec, 4), "nn"))
     assert words[:5] == ["nnrobust", "run", "paper-ellipse", "--controller", "nn"]
     sets = [words[i + 1] for i, word in enumerate(words) if word == "--set"]
-    config = apply_overrides(load_preset("paper-ellipse").replace(controller={"kind": "nn"}),
-                             dict(parse_override(s) for s in sets))
+    config = apply_overrides(
+        load_preset("paper-ellipse").replace(controller={"kind": "nn"}), dict(parse_override(s) for s in sets)
+    )
     metrics = run_experiment(config).metrics()
     assert metrics["rms_error_after_2s"] == pytest.approx(row["rms_error_after_2s"], rel=1e-12)
 
@@ -88,12 +89,14 @@ def test_a_killed_worker_costs_only_its_chunk(tmp_path):
 
     spec = load_sweep(_sweep_file(tmp_path, duration=6.0))
     out = tmp_path / "out"
-    cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                           dashboard_address=LOOPBACK_HTTP)
+    cluster = LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=LOOPBACK_HTTP
+    )
     try:
         result = {}
-        thread = threading.Thread(target=lambda: result.update(
-            run_sweep(spec, out, scheduler=cluster.scheduler_address)))
+        thread = threading.Thread(
+            target=lambda: result.update(run_sweep(spec, out, scheduler=cluster.scheduler_address))
+        )
         thread.start()
         deadline = time.monotonic() + 60
         while not list((out / "results").glob("part-*.parquet")) and time.monotonic() < deadline:
@@ -191,17 +194,31 @@ BAD = [
     ("unknown dotted key", {"vary": {"nn.sigmaa": [0.1]}}, "did you mean 'nn.sigma'"),
     ("empty grid", {"vary": {"nn.sigma": []}}, "expected a non-empty list"),
     ("negative samples", {"samples": 0}, "samples: expected an integer >= 1"),
-    ("custom entry without class", {"controllers": [{"name": "mine"}]},
-     "controllers\\[0\\]: a custom entry is"),
-    ("custom entry named like a kind", {"controllers": [{"name": "nn", "class": "a.py:B"}]},
-     "controllers\\[0\\].name: 'nn' must be .* not a built-in kind"),
-    ("custom entry twice",
-     {"controllers": [{"name": "a", "class": "a.py:B"}, {"name": "a", "class": "a.py:C"}]},
-     "lists a controller twice"),
-    ("controller kind in set", {"set": {"controller.kind": "pd"}},
-     "set.controller.kind: the controllers list"),
-    ("controller params in vary", {"vary": {"controller.params.Kp": [1.0]}},
-     "vary.controller.params.Kp: the controllers list"),
+    (
+        "custom entry without class",
+        {"controllers": [{"name": "mine"}]},
+        "controllers\\[0\\]: a custom entry is",
+    ),
+    (
+        "custom entry named like a kind",
+        {"controllers": [{"name": "nn", "class": "a.py:B"}]},
+        "controllers\\[0\\].name: 'nn' must be .* not a built-in kind",
+    ),
+    (
+        "custom entry twice",
+        {"controllers": [{"name": "a", "class": "a.py:B"}, {"name": "a", "class": "a.py:C"}]},
+        "lists a controller twice",
+    ),
+    (
+        "controller kind in set",
+        {"set": {"controller.kind": "pd"}},
+        "set.controller.kind: the controllers list",
+    ),
+    (
+        "controller params in vary",
+        {"vary": {"controller.params.Kp": [1.0]}},
+        "vary.controller.params.Kp: the controllers list",
+    ),
 ]
 
 
@@ -211,8 +228,9 @@ def test_grid_points_follow_the_product_and_a_huge_grid_is_refused_at_once():
     import itertools
 
     vary = {"nn.sigma": [0.1, 0.2, 0.3], "nn.F": [1.0, 2.0], "controller.k": [1.0, 2.0, 5.0, 7.0]}
-    spec = parse_sweep({"name": "g", "base": "paper-ellipse", "controllers": ["nn"], "samples": 2,
-                        "vary": vary})
+    spec = parse_sweep(
+        {"name": "g", "base": "paper-ellipse", "controllers": ["nn"], "samples": 2, "vary": vary}
+    )
     points = list(itertools.product(*vary.values()))
     assert [spec.grid_point(i) for i in range(len(points))] == points and spec.size == 2 * len(points)
     huge = {f"nn.{k}": list(range(1, 1001)) for k in ("F", "gamma", "eps0", "centers")}
@@ -266,16 +284,21 @@ def test_cli_sweep_writes_results_summary_and_rerun_commands(tmp_path, capsys):
     error = nn["rms_error_after_2s"]
     assert error["median"] <= error["p95"] <= error["max"]
     frame = read_results(out)
-    assert np.isclose(frame[frame["controller"] == "nn"]["rms_error_after_2s"].max(),
-                      nn["rms_error_after_2s"]["max"])
+    assert np.isclose(
+        frame[frame["controller"] == "nn"]["rms_error_after_2s"].max(), nn["rms_error_after_2s"]["max"]
+    )
     by_scale = nn["by_grid"]["plant.disturbance_scale"]
     assert set(by_scale) == {"0.5", "2.0"}
     rows = frame[(frame["controller"] == "nn") & (frame["plant.disturbance_scale"] == 2.0)]
     assert np.isclose(by_scale["2.0"]["median"], rows["rms_error_after_2s"].median())
     assert (out / "sweep.toml").read_text() == load_sweep(path).to_toml()
     plots = sorted(p.name for p in (out / "plots").glob("*.png"))
-    assert plots == ["error_cdf.png", "error_vs_nn_sigma.png", "error_vs_plant_disturbance_scale.png",
-                     "pareto.png"]
+    assert plots == [
+        "error_cdf.png",
+        "error_vs_nn_sigma.png",
+        "error_vs_plant_disturbance_scale.png",
+        "pareto.png",
+    ]
     # --keep-worst 1: the worst nn sample as a full run folder, the same run as its row
     worst = nn["worst"]
     folder = out / "worst" / f"nn-sample-{worst['sample']}"
@@ -294,7 +317,9 @@ def test_a_custom_controller_joins_a_sweep_as_a_table_entry(tmp_path, monkeypatc
     from pathlib import Path
 
     shutil.copy(Path(__file__).parent / "controllers" / "eq9_again.py", tmp_path / "laws.py")
-    path = _sweep_file(tmp_path, text="""
+    path = _sweep_file(
+        tmp_path,
+        text="""
 name = "mine"
 base = "paper-ellipse"
 controllers = ["no-u0", {name = "eq9", class = "laws.py:Eq9", params = {Kp = 10.0, Kv = 4.0}}]
@@ -303,15 +328,17 @@ samples = 2
 "simulation.duration" = 2.2
 [vary]
 "plant.disturbance_scale" = {uniform = [0.5, 2.0]}
-""")
+""",
+    )
     out = tmp_path / "out"
     monkeypatch.chdir(tmp_path / "..")
     assert main(["sweep", str(path), "--out", str(out), "--workers", "2"]) == 0
     frame = read_results(out).sort_values(["controller", "sample"])
     mine, builtin = frame[frame["controller"] == "eq9"], frame[frame["controller"] == "no-u0"]
     assert list(mine["status"]) == ["completed"] * 2
-    np.testing.assert_allclose(mine["rms_error_after_2s"].to_numpy(),
-                               builtin["rms_error_after_2s"].to_numpy(), rtol=1e-6)
+    np.testing.assert_allclose(
+        mine["rms_error_after_2s"].to_numpy(), builtin["rms_error_after_2s"].to_numpy(), rtol=1e-6
+    )
     summary = json.loads((out / "summary.json").read_text())
     assert set(summary["controllers"]) == {"no-u0", "eq9"}
     command = summary["controllers"]["eq9"]["worst"]["command"]
@@ -323,7 +350,7 @@ samples = 2
     again = json.loads((tmp_path / "again" / "metrics.json").read_text())
     worst = summary["controllers"]["eq9"]["worst"]
     assert again["rms_error_after_2s"] == pytest.approx(worst["rms_error_after_2s"], rel=1e-12)
-    assert 'params = {Kp = 10.0, Kv = 4.0}' in (out / "sweep.toml").read_text()
+    assert "params = {Kp = 10.0, Kv = 4.0}" in (out / "sweep.toml").read_text()
 
 
 @pytest.mark.parametrize("name", ["paper-robustness", "panda-robustness"])
@@ -350,19 +377,29 @@ def test_client_memory_does_not_grow_with_samples(tmp_path):
     from distributed import LocalCluster
 
     def peak(samples: int) -> int:
-        spec = parse_sweep({"name": f"memory-{samples}", "base": "paper-ellipse", "controllers": ["no-u0"],
-                            "samples": samples, "seed": 2, "set": {"simulation.duration": 0.01},
-                            "vary": {"plant.friction_scale": {"uniform": [0.5, 2.0]}}})
+        spec = parse_sweep(
+            {
+                "name": f"memory-{samples}",
+                "base": "paper-ellipse",
+                "controllers": ["no-u0"],
+                "samples": samples,
+                "seed": 2,
+                "set": {"simulation.duration": 0.01},
+                "vary": {"plant.friction_scale": {"uniform": [0.5, 2.0]}},
+            }
+        )
         tracemalloc.start()
         try:
-            run_sweep(spec, tmp_path / f"out-{samples}", scheduler=cluster.scheduler_address,
-                      seconds_per_job=1e-3)
+            run_sweep(
+                spec, tmp_path / f"out-{samples}", scheduler=cluster.scheduler_address, seconds_per_job=1e-3
+            )
             return tracemalloc.get_traced_memory()[1]
         finally:
             tracemalloc.stop()
 
-    cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
-                           dashboard_address=LOOPBACK_HTTP)
+    cluster = LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=LOOPBACK_HTTP
+    )
     try:
         peak(20)  # warm up: imports, connections
         small, large = peak(40), peak(400)
@@ -393,8 +430,15 @@ def test_a_sample_that_raises_is_a_row_and_the_sweep_goes_on(monkeypatch):
     from nnrobust.sweep.engine import run_rows
     from nnrobust.sweep.spec import base_config
 
-    spec = parse_sweep({"name": "e", "base": "paper-ellipse", "controllers": ["nn"], "samples": 2,
-                        "set": {"simulation.duration": 0.2}})
+    spec = parse_sweep(
+        {
+            "name": "e",
+            "base": "paper-ellipse",
+            "controllers": ["nn"],
+            "samples": 2,
+            "set": {"simulation.duration": 0.2},
+        }
+    )
     real, calls = nnrobust.experiment.run_experiment, []
 
     def flaky(config, *args, **kwargs):
@@ -450,7 +494,9 @@ def test_a_scheduler_address_that_is_not_a_scheduler_is_one_error_within_seconds
 def test_grids_of_mixed_types_and_seeds_beyond_2_53_are_stored_exactly(tmp_path):
     """Issue 22 item 13: a grid mixing a name and a list, and seeds beyond 2^53, used to crash
     pyarrow on the first part; runs shorter than 2 s used to crash the plots."""
-    path = _sweep_file(tmp_path, text="""
+    path = _sweep_file(
+        tmp_path,
+        text="""
 name = "mix"
 base = "paper-ellipse"
 controllers = ["pd"]
@@ -459,7 +505,8 @@ controllers = ["pd"]
 [vary]
 "plant.torque_limits" = ["urdf", [60.0, 40.0, 20.0]]
 "sensing.seed" = [9007199254740993, 3]
-""")
+""",
+    )
     assert main(["sweep", str(path), "--out", str(tmp_path / "out"), "--workers", "1", "--quiet"]) == 0
     frame = read_results(tmp_path / "out")
     assert set(frame["sensing.seed"]) == {9007199254740993, 3}  # exact: a float64 column would round it

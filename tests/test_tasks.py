@@ -56,8 +56,9 @@ def test_jacobian_derivative_matches_finite_differences(name, task):
         np.testing.assert_allclose(H3[:, :, k], fd, atol=1e-7)
 
 
-@pytest.mark.parametrize(("name", "task"), [("panda", "position"), ("planar7", "planar"),
-                                            ("three_link_planar", "planar")])
+@pytest.mark.parametrize(
+    ("name", "task"), [("panda", "position"), ("planar7", "planar"), ("three_link_planar", "planar")]
+)
 def test_chain_jacobians_match_finite_differences(name, task):
     robot = arm(name, task)
     q = random_configurations(robot, 1, seed=6)[0]

@@ -55,21 +55,39 @@ def test_bad_piecewise_paths_are_refused():
         spline_through([[0, 0]], [0.0])
 
 
-@pytest.mark.parametrize("changes, key, message", [
-    ({"kind": "point_to_point"}, "trajectory.goal", "needs its goal"),
-    ({"kind": "point_to_point", "goal": [0.5, 0.1], "start": [0.1, 0.2, 0.3]}, "trajectory.start",
-     "has 3 entries"),
-    ({"kind": "point_to_point", "goal": [0.5, 0.1], "move_time": -1.0}, "trajectory.move_time",
-     "at least 0.001 s"),
-    ({"kind": "waypoints", "waypoints": [[0.5, 0.1]]}, "trajectory.waypoints", "at least 2"),
-    ({"kind": "waypoints", "waypoints": [[0.5, 0.1], [0.4, 0.2]], "waypoint_times": [0.0]},
-     "trajectory.waypoint_times", "one time per waypoint"),
-    ({"kind": "waypoints", "waypoints": [[0.5, 0.1], [0.4, 0.2]], "waypoint_times": [1.0, 1.0]},
-     "trajectory.waypoint_times", "increase by at least 0.001 s"),
-    ({"kind": "waypoints", "waypoints": [[0.5, 0.1], [0.4, 0.2, 0.3]], "waypoint_times": [0.0, 1.0]},
-     "trajectory.waypoints", "as many entries"),
-    ({"kind": "spiral"}, "trajectory.kind", "is not one of ellipse, point_to_point, waypoints"),
-])
+@pytest.mark.parametrize(
+    "changes, key, message",
+    [
+        ({"kind": "point_to_point"}, "trajectory.goal", "needs its goal"),
+        (
+            {"kind": "point_to_point", "goal": [0.5, 0.1], "start": [0.1, 0.2, 0.3]},
+            "trajectory.start",
+            "has 3 entries",
+        ),
+        (
+            {"kind": "point_to_point", "goal": [0.5, 0.1], "move_time": -1.0},
+            "trajectory.move_time",
+            "at least 0.001 s",
+        ),
+        ({"kind": "waypoints", "waypoints": [[0.5, 0.1]]}, "trajectory.waypoints", "at least 2"),
+        (
+            {"kind": "waypoints", "waypoints": [[0.5, 0.1], [0.4, 0.2]], "waypoint_times": [0.0]},
+            "trajectory.waypoint_times",
+            "one time per waypoint",
+        ),
+        (
+            {"kind": "waypoints", "waypoints": [[0.5, 0.1], [0.4, 0.2]], "waypoint_times": [1.0, 1.0]},
+            "trajectory.waypoint_times",
+            "increase by at least 0.001 s",
+        ),
+        (
+            {"kind": "waypoints", "waypoints": [[0.5, 0.1], [0.4, 0.2, 0.3]], "waypoint_times": [0.0, 1.0]},
+            "trajectory.waypoints",
+            "as many entries",
+        ),
+        ({"kind": "spiral"}, "trajectory.kind", "is not one of ellipse, point_to_point, waypoints"),
+    ],
+)
 def test_trajectory_keys_are_checked(changes, key, message):
     with pytest.raises(ConfigError, match=message) as caught:
         load_preset("paper-ellipse").replace(trajectory=changes)
@@ -78,14 +96,17 @@ def test_trajectory_keys_are_checked(changes, key, message):
 
 def _panda(task, trajectory, duration):
     return load_preset("panda-pose" if task == "pose" else "panda-ellipse").replace(
-        trajectory=trajectory, simulation={"duration": duration})
+        trajectory=trajectory, simulation={"duration": duration}
+    )
 
 
 MOVES = {
     "point_to_point": {"kind": "point_to_point", "goal": [0.5, 0.15, 0.35], "move_time": 1.5},
-    "waypoints": {"kind": "waypoints",
-                  "waypoints": [[0.45, 0.0, 0.45], [0.5, 0.12, 0.5], [0.4, 0.15, 0.4], [0.45, 0.0, 0.45]],
-                  "waypoint_times": [0.0, 0.8, 1.6, 2.4]},
+    "waypoints": {
+        "kind": "waypoints",
+        "waypoints": [[0.45, 0.0, 0.45], [0.5, 0.12, 0.5], [0.4, 0.15, 0.4], [0.45, 0.0, 0.45]],
+        "waypoint_times": [0.0, 0.8, 1.6, 2.4],
+    },
 }
 
 
@@ -116,8 +137,9 @@ def test_a_point_to_point_move_ends_on_its_goal(task):
     result = run_experiment(config)
     assert result.status == "completed"
     after = result.t >= 1.5 + 0.5
-    np.testing.assert_allclose(result.x_d[after, :3], np.broadcast_to([0.5, 0.15, 0.35], (after.sum(), 3)),
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        result.x_d[after, :3], np.broadcast_to([0.5, 0.15, 0.35], (after.sum(), 3)), atol=1e-12
+    )
     assert result.position_error()[after].max() < 3e-3
     setup = build(config)  # the move starts where the hand is at q_seed
     x0 = setup.robot.task_position(setup.q0)

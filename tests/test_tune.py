@@ -40,8 +40,10 @@ def test_the_spaces_come_from_the_arm_and_share_their_gain_coordinates(scales):
     assert pd_["controller.pd_Kp"] == [pytest.approx(lam * 1e4)]
     assert pd_["controller.pd_Kd"] == [pytest.approx(2 * 0.8 * lam * 100.0)]
     assert {p.name for p in spaces["nn"].params} >= {"nn.F", "leakage_rate", "nn.eps_min", "controller.k"}
-    assert {p.name for p in spaces["sliding-mode"].params} >= {"controller.sliding_gain",
-                                                               "controller.sliding_boundary"}
+    assert {p.name for p in spaces["sliding-mode"].params} >= {
+        "controller.sliding_gain",
+        "controller.sliding_boundary",
+    }
 
 
 def test_the_task_inertia_is_that_of_the_arm(scales):
@@ -82,8 +84,15 @@ def test_the_leakage_is_searched_as_its_rate_between_physical_bounds(scales):
 
 def test_the_constraints_judge_a_setting_on_all_its_samples():
     spec = TuneSpec("paper-ellipse", ["pd"], 10, max_rms_torque=5.0, max_saturated=0.01)
-    good = {"status": "completed", "rms_error_after_2s": 1e-3, "rms_torque": 4.0, "torque_chatter": 0.1,
-            "saturated_fraction": 0.0, "runaway": False, "max_joint_limit_violation": 0.0}
+    good = {
+        "status": "completed",
+        "rms_error_after_2s": 1e-3,
+        "rms_torque": 4.0,
+        "torque_chatter": 0.1,
+        "saturated_fraction": 0.0,
+        "runaway": False,
+        "max_joint_limit_violation": 0.0,
+    }
     objectives, constraints, mean = judge(spec, [good, {**good, "rms_torque": 5.5}])
     assert objectives[1] == pytest.approx(4.75) and all(c <= 0 for c in constraints)
     _, constraints, _ = judge(spec, [good, {**good, "rms_torque": 7.0}])
@@ -94,12 +103,19 @@ def test_the_constraints_judge_a_setting_on_all_its_samples():
     assert all(c > 0 for c in constraints) and objectives[0] >= 1.0
 
 
-@pytest.mark.parametrize("kwargs, flag", [
-    ({"budget": 0}, "--budget"), ({"budget": 10**9}, "--budget"), ({"controllers": ["lqr"]}, "--controllers"),
-    ({"controllers": ["pd", "pd"]}, "--controllers"), ({"controllers": []}, "--controllers"),
-    ({"max_rms_torque": float("nan")}, "--max-rms-torque"), ({"max_saturated": 2.0}, "--max-saturated"),
-    ({"budget": 3, "train_samples": 4}, "--budget"),
-])
+@pytest.mark.parametrize(
+    "kwargs, flag",
+    [
+        ({"budget": 0}, "--budget"),
+        ({"budget": 10**9}, "--budget"),
+        ({"controllers": ["lqr"]}, "--controllers"),
+        ({"controllers": ["pd", "pd"]}, "--controllers"),
+        ({"controllers": []}, "--controllers"),
+        ({"max_rms_torque": float("nan")}, "--max-rms-torque"),
+        ({"max_saturated": 2.0}, "--max-saturated"),
+        ({"budget": 3, "train_samples": 4}, "--budget"),
+    ],
+)
 def test_bad_tunings_are_refused_with_the_flag_named(kwargs, flag):
     args = {"target": "paper-ellipse", "controllers": ["pd"], "budget": 10, **kwargs}
     with pytest.raises(ConfigError, match=flag):
@@ -108,13 +124,17 @@ def test_bad_tunings_are_refused_with_the_flag_named(kwargs, flag):
 
 def test_a_sweep_with_a_grid_is_refused_and_its_distributions_are_the_samples(tmp_path):
     grid = tmp_path / "grid.toml"
-    grid.write_text('name = "g"\nbase = "paper-ellipse"\ncontrollers = ["pd"]\n[vary]\n'
-                    '"plant.friction_scale" = [0.5, 2.0]\n')
+    grid.write_text(
+        'name = "g"\nbase = "paper-ellipse"\ncontrollers = ["pd"]\n[vary]\n'
+        '"plant.friction_scale" = [0.5, 2.0]\n'
+    )
     with pytest.raises(ConfigError, match="grid"):
         sweep_of(TuneSpec(str(grid), ["pd"], 10))
     drawn = tmp_path / "drawn.toml"
-    drawn.write_text('name = "d"\nbase = "paper-ellipse"\ncontrollers = ["pd"]\n[vary]\n'
-                     '"plant.friction_scale" = {loguniform = [0.5, 2.0]}\n')
+    drawn.write_text(
+        'name = "d"\nbase = "paper-ellipse"\ncontrollers = ["pd"]\n[vary]\n'
+        '"plant.friction_scale" = {loguniform = [0.5, 2.0]}\n'
+    )
     sweep = sweep_of(TuneSpec(str(drawn), ["pd", "nn"], 10, train_samples=2, validation=3))
     assert sweep.samples == 5 and sweep.controllers == ["pd", "nn"]
 
@@ -130,8 +150,16 @@ def short_experiment(tmp_path_factory):
 @pytest.fixture(scope="module")
 def tuned(short_experiment, tmp_path_factory):
     out = tmp_path_factory.mktemp("tune") / "out"
-    spec = TuneSpec(str(short_experiment), ["no-u0", "pd"], 8, train_samples=2, validation=2,
-                    max_rms_torque=10.0, max_saturated=0.01, seed=3)
+    spec = TuneSpec(
+        str(short_experiment),
+        ["no-u0", "pd"],
+        8,
+        train_samples=2,
+        validation=2,
+        max_rms_torque=10.0,
+        max_saturated=0.01,
+        seed=3,
+    )
     return spec, out, run_tune(spec, out, workers=2)
 
 
@@ -153,8 +181,10 @@ def test_every_controller_gets_the_same_budget_samples_and_constraints(tuned):
         assert best is not None and best["train"]["rms_torque"] <= 10.0
         assert set(best["validation"]) >= {"rms_error_after_2s", "rms_torque", "torque_chatter"}
         assert best["train"]["rms_error_after_2s"] == min(
-            json.loads(r)["train"]["rms_error_after_2s"] for r, f in zip(trials["row"], trials["feasible"])
-            if f and json.loads(r)["controller"] == name)
+            json.loads(r)["train"]["rms_error_after_2s"]
+            for r, f in zip(trials["row"], trials["feasible"])
+            if f and json.loads(r)["controller"] == name
+        )
         assert all(p["train"]["rms_torque"] <= 10.0 for p in entry["pareto"])
     assert (out / "pareto.png").stat().st_size > 10_000
 
@@ -190,15 +220,29 @@ def test_the_same_command_resumes_and_a_different_one_is_refused(tuned, short_ex
 
 def test_tune_refuses_a_folder_it_did_not_write(tmp_path, short_experiment):
     (tmp_path / "notes.md").write_text("mine")
-    code = main(["tune", str(short_experiment), "--controllers", "pd", "--budget", "4", "--out",
-                 str(tmp_path), "--quiet"])
+    code = main(
+        [
+            "tune",
+            str(short_experiment),
+            "--controllers",
+            "pd",
+            "--budget",
+            "4",
+            "--out",
+            str(tmp_path),
+            "--quiet",
+        ]
+    )
     assert code == 2 and (tmp_path / "notes.md").read_text() == "mine"
-    assert main(["tune", "paper-ellipse", "--controllers", "lqr", "--budget", "4", "--out",
-                 str(tmp_path / "x")]) == 2
+    assert (
+        main(["tune", "paper-ellipse", "--controllers", "lqr", "--budget", "4", "--out", str(tmp_path / "x")])
+        == 2
+    )
 
 
 def test_a_robust_law_tunes_its_gains_first_then_starts_from_them_with_the_term_at_its_weakest(
-        short_experiment, tmp_path):
+    short_experiment, tmp_path
+):
     """Sliding mode: the first 30 % of its budget run the no-u0 law (u_0 off) over the gains alone;
     the full search then starts from the best gains with K at its low and Phi at its high bound,
     and its best is chosen among runs of the law itself."""
@@ -206,8 +250,9 @@ def test_a_robust_law_tunes_its_gains_first_then_starts_from_them_with_the_term_
 
     spec = TuneSpec(str(short_experiment), ["sliding-mode"], 10, validation=0, max_rms_torque=10.0, seed=1)
     summary = run_tune(spec, tmp_path / "out", workers=1)
-    rows = sorted((json.loads(r) for r in pd.read_parquet(tmp_path / "out" / "trials")["row"]),
-                  key=lambda r: r["trial"])
+    rows = sorted(
+        (json.loads(r) for r in pd.read_parquet(tmp_path / "out" / "trials")["row"]), key=lambda r: r["trial"]
+    )
     gains = [r for r in rows if r["phase"] == "gains"]
     assert [r["trial"] for r in gains] == [0, 1, 2] and all(r["law"] == "no-u0" for r in gains)
     assert all(set(r["search"]) == {"bandwidth", "damping_ratio", "controller.k"} for r in gains)
@@ -219,7 +264,8 @@ def test_a_robust_law_tunes_its_gains_first_then_starts_from_them_with_the_term_
     weakest = space.weakest()
     assert first["search"]["controller.sliding_gain"] == pytest.approx(weakest["controller.sliding_gain"])
     assert first["search"]["controller.sliding_boundary"] == pytest.approx(
-        weakest["controller.sliding_boundary"])
+        weakest["controller.sliding_boundary"]
+    )
     entry = summary["controllers"]["sliding-mode"]
     assert "controller.sliding_gain" in entry["best"]["params"] and entry["simulations"] == 10
 
@@ -234,8 +280,9 @@ def test_a_custom_class_is_tuned_in_the_space_it_declares(short_experiment, tmp_
     from nnrobust.sweep.spec import base_config, draw, experiment
 
     laws = Path(__file__).parent / "controllers" / "eq9_again.py"
-    spec = TuneSpec(str(short_experiment), ["no-u0", f"{laws}:Eq9"], 12, train_samples=2, validation=1,
-                    seed=5)
+    spec = TuneSpec(
+        str(short_experiment), ["no-u0", f"{laws}:Eq9"], 12, train_samples=2, validation=1, seed=5
+    )
     summary = run_tune(spec, tmp_path / "out", workers=2)
     assert set(summary["controllers"]) == {"no-u0", "Eq9"}
     entry = summary["controllers"]["Eq9"]
@@ -245,6 +292,10 @@ def test_a_custom_class_is_tuned_in_the_space_it_declares(short_experiment, tmp_
     assert best is not None, entry
     assert set(best["params"]) == {"controller.params.Kp", "controller.params.Kv"}
     sweep = sweep_of(spec)
-    runs = [run_experiment(apply_overrides(experiment(sweep, base_config(sweep), draw(sweep, s), "Eq9"),
-                                           best["params"])).metrics()["rms_error_after_2s"] for s in (0, 1)]
+    runs = [
+        run_experiment(
+            apply_overrides(experiment(sweep, base_config(sweep), draw(sweep, s), "Eq9"), best["params"])
+        ).metrics()["rms_error_after_2s"]
+        for s in (0, 1)
+    ]
     assert np.mean(runs) == pytest.approx(best["train"]["rms_error_after_2s"], rel=1e-9)

@@ -112,7 +112,8 @@ def test_stiff_viscous_friction_sets_the_substeps_or_is_refused_before_the_run()
     from nnrobust.presets import load_preset
 
     config = load_preset("planar7-ellipse").replace(
-        robot={"source": "planar15"}, simulation={"q_seed": [0.9] + [-0.1] * 14})
+        robot={"source": "planar15"}, simulation={"q_seed": [0.9] + [-0.1] * 14}
+    )
     with pytest.warns(UserWarning, match=r"substeps = 2 chosen \(plant step 0.0005 s\): .*viscous friction"):
         assert build(config).substeps == 2
     with pytest.raises(ConfigError, match=r"simulation.substeps: .* set substeps >= 2"):
@@ -133,8 +134,9 @@ def test_friction_scale_scales_the_plant_friction_only():
     np.testing.assert_allclose(scaled.plant.friction.viscous, 2.5 * one.plant.friction.viscous, rtol=1e-15)
     np.testing.assert_allclose(scaled.plant.friction.coulomb, 2.5 * one.plant.friction.coulomb, rtol=1e-15)
     assert one.plant.friction.viscous.any()
-    np.testing.assert_array_equal(scaled.controller.nominal_friction.viscous,
-                                  one.controller.nominal_friction.viscous)
+    np.testing.assert_array_equal(
+        scaled.controller.nominal_friction.viscous, one.controller.nominal_friction.viscous
+    )
 
 
 def test_relative_error_of_the_closed_form_model():
@@ -181,9 +183,11 @@ def test_model_error_as_factors_a_search_can_move_along():
     assert changed.inertias[1].mass == pytest.approx(2 * base.inertias[1].mass, rel=1e-15)
     np.testing.assert_allclose(changed.inertias[7].inertia, 0.5 * base.inertias[7].inertia, rtol=1e-15)
     assert changed.inertias[2].mass == base.inertias[2].mass
-    for overrides, words in (({"nominal.seed[0]": 1}, "not a list"),
-                             ({"controller.Kp[5]": 1.0}, "has 2 entries"),
-                             ({"nominal.factors[1]": -1.0}, "must be in (0, 100]")):
+    for overrides, words in (
+        ({"nominal.seed[0]": 1}, "not a list"),
+        ({"controller.Kp[5]": 1.0}, "has 2 entries"),
+        ({"nominal.factors[1]": -1.0}, "must be in (0, 100]"),
+    ):
         with pytest.raises(ConfigError, match=re.escape(words)):
             apply_overrides(paper, overrides)
     with pytest.raises(ConfigError, match="the closed-form model has 6 parameters"):

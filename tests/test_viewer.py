@@ -21,9 +21,19 @@ from nnrobust.presets import load_preset
 from nnrobust.results import Result
 from nnrobust.run_folder import write_run
 
-CHROMIUM_FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                  "--disable-background-networking", "--disable-component-update", "--disable-sync",
-                  "--hide-scrollbars", "--window-size=640,480", "--virtual-time-budget=2000"]
+CHROMIUM_FLAGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--hide-scrollbars",
+    "--window-size=640,480",
+    "--virtual-time-budget=2000",
+]
 
 
 @pytest.fixture(scope="module")
@@ -103,12 +113,16 @@ def test_visual_geometry_matches_pinocchios_own_parse(name):
         model, visual = load_visual_model(name, locked_joints=[])
     robot = example_robot(name)
     reference_model = pin.buildModelFromUrdf(str(robot.urdf))
-    reference = pin.buildGeomFromUrdf(reference_model, str(robot.urdf), pin.GeometryType.VISUAL,
-                                      package_dirs=list(robot.package_dirs))
+    reference = pin.buildGeomFromUrdf(
+        reference_model, str(robot.urdf), pin.GeometryType.VISUAL, package_dirs=list(robot.package_dirs)
+    )
     assert visual.ngeoms == reference.ngeoms > 0
     for ours, theirs in zip(visual.geometryObjects, reference.geometryObjects):
-        assert (ours.name, ours.parentJoint, ours.parentFrame) == (theirs.name, theirs.parentJoint,
-                                                                   theirs.parentFrame)
+        assert (ours.name, ours.parentJoint, ours.parentFrame) == (
+            theirs.name,
+            theirs.parentJoint,
+            theirs.parentFrame,
+        )
         np.testing.assert_allclose(ours.placement.homogeneous, theirs.placement.homogeneous, atol=1e-12)
         assert Path(ours.meshPath).resolve() == Path(theirs.meshPath).resolve() or not theirs.meshPath
         np.testing.assert_allclose(ours.meshScale, theirs.meshScale)
@@ -158,7 +172,7 @@ def _listening_addresses(pid: int) -> list[str]:
                     ip = socket.inet_ntop(socket.AF_INET, bytes.fromhex(hex_ip)[::-1])
                 else:
                     raw = bytes.fromhex(hex_ip)  # four little-endian 32-bit words
-                    words = b"".join(raw[i:i + 4][::-1] for i in range(0, 16, 4))
+                    words = b"".join(raw[i : i + 4][::-1] for i in range(0, 16, 4))
                     ip = socket.inet_ntop(socket.AF_INET6, words)
                 addresses.append(f"{ip}:{int(hex_port, 16)}")
     return addresses
@@ -195,8 +209,13 @@ def _chromium() -> str | None:
 def _screenshot(browser: str, page: Path, instant: float, out: Path, profile: Path) -> np.ndarray:
     import matplotlib.image
 
-    cmd = [browser, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", f"--screenshot={out}",
-           f"{page.resolve().as_uri()}#t={instant}"]
+    cmd = [
+        browser,
+        *CHROMIUM_FLAGS,
+        f"--user-data-dir={profile}",
+        f"--screenshot={out}",
+        f"{page.resolve().as_uri()}#t={instant}",
+    ]
     done = subprocess.run(cmd, capture_output=True, timeout=120, check=False)
     if not out.exists():
         pytest.fail(f"Chromium wrote no screenshot (exit {done.returncode}): {done.stderr[-500:]!r}")
@@ -256,8 +275,13 @@ def console_errors(browser: str, page: Path, tmp_path: Path) -> list[str]:
     after 2 s of virtual time)."""
     hooked = tmp_path / f"hooked-{page.name}"
     hooked.write_text(page.read_text().replace("<head>", "<head>" + CONSOLE_HOOK, 1))
-    cmd = [browser, *CHROMIUM_FLAGS, f"--user-data-dir={tmp_path / 'console-profile'}", "--dump-dom",
-           hooked.resolve().as_uri()]
+    cmd = [
+        browser,
+        *CHROMIUM_FLAGS,
+        f"--user-data-dir={tmp_path / 'console-profile'}",
+        "--dump-dom",
+        hooked.resolve().as_uri(),
+    ]
     done = subprocess.run(cmd, capture_output=True, timeout=120, check=False, text=True)
     found = re.search(r'<pre id="nnrobust-errors">(.*?)</pre>', done.stdout, re.S)
     if not found:
@@ -265,10 +289,15 @@ def console_errors(browser: str, page: Path, tmp_path: Path) -> list[str]:
     return json.loads(html.unescape(found.group(1)))
 
 
-MIXED_OBJ = "\n".join(
-    ["o box"] + [f"v {x} {y} {z}" for x in (0, 0.1) for y in (0, 0.05) for z in (0, 0.3)]
-    + ["vt 0 0", "vt 1 0", "vt 1 1", "vn 1 0 0"]
-    + ["f 1/1/1 2/2/1 4/3/1", "f 5/1/1 7/2/1 8/3/1", "f 1//1 5//1 6//1", "f 3//1 4//1 8//1"]) + "\n"
+MIXED_OBJ = (
+    "\n".join(
+        ["o box"]
+        + [f"v {x} {y} {z}" for x in (0, 0.1) for y in (0, 0.05) for z in (0, 0.3)]
+        + ["vt 0 0", "vt 1 0", "vt 1 1", "vn 1 0 0"]
+        + ["f 1/1/1 2/2/1 4/3/1", "f 5/1/1 7/2/1 8/3/1", "f 1//1 5//1 6//1", "f 3//1 4//1 8//1"]
+    )
+    + "\n"
+)
 """An OBJ whose faces mix texture coordinates with none, as exporters write partly textured parts."""
 
 
@@ -283,11 +312,19 @@ def test_the_browser_reports_no_error_for_a_run_or_a_mixed_obj_mesh(paper_run, t
     assert console_errors(browser, paper_run / "animation.html", tmp_path) == []
     (tmp_path / "meshes").mkdir()
     (tmp_path / "meshes" / "box.obj").write_text(MIXED_OBJ)
-    urdf = paper_arm_urdf().read_text().replace('<geometry><box size="0.40 0.04 0.03"/></geometry>',
-                                                '<geometry><mesh filename="meshes/box.obj"/></geometry>', 1)
+    urdf = (
+        paper_arm_urdf()
+        .read_text()
+        .replace(
+            '<geometry><box size="0.40 0.04 0.03"/></geometry>',
+            '<geometry><mesh filename="meshes/box.obj"/></geometry>',
+            1,
+        )
+    )
     (tmp_path / "arm.urdf").write_text(urdf)
-    config = ExperimentConfig().replace(robot={"source": str(tmp_path / "arm.urdf")},
-                                        simulation={"duration": 0.5})
+    config = ExperimentConfig().replace(
+        robot={"source": str(tmp_path / "arm.urdf")}, simulation={"duration": 0.5}
+    )
     write_run(tmp_path / "run", run_experiment(config))
     assert console_errors(browser, tmp_path / "run" / "animation.html", tmp_path) == []
     uniform = uniform_obj(MIXED_OBJ)
@@ -335,11 +372,14 @@ def test_module_server_refuses_an_address_it_cannot_bind():
     assert set(_children_of(os.getpid())) <= before  # no server process was left behind
 
 
-@pytest.mark.parametrize("args, message", [
-    (["--port", "0"], "--port 0: a TCP port is 1 to 65535"),
-    (["--port", "99999"], "--port 99999: a TCP port is 1 to 65535"),
-    (["--host", "no-such-host.invalid"], "--host 'no-such-host.invalid' is not an address"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--port", "0"], "--port 0: a TCP port is 1 to 65535"),
+        (["--port", "99999"], "--port 99999: a TCP port is 1 to 65535"),
+        (["--host", "no-such-host.invalid"], "--host 'no-such-host.invalid' is not an address"),
+    ],
+)
 def test_view_refuses_bad_addresses_in_one_line(paper_run, capsys, args, message):
     assert main(["view", str(paper_run), "--seconds", "0", *args]) == 2
     err = capsys.readouterr().err.strip().splitlines()
@@ -364,8 +404,10 @@ def test_the_server_does_not_outlive_a_killed_parent(tmp_path):
     import sys
     import time
 
-    script = ("from nnrobust.viewer import start_viewer\n"
-              "v = start_viewer()\nprint(v.process.pid, flush=True)\nimport time\ntime.sleep(60)\n")
+    script = (
+        "from nnrobust.viewer import start_viewer\n"
+        "v = start_viewer()\nprint(v.process.pid, flush=True)\nimport time\ntime.sleep(60)\n"
+    )
     parent = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
     server = int(parent.stdout.readline())
     parent.send_signal(signal.SIGKILL)
@@ -403,10 +445,26 @@ def test_run_with_live_view_streams_the_arm(tmp_path, monkeypatch, capsys):
     import nnrobust.cli as cli
 
     served = []
-    monkeypatch.setattr(cli, "_serve_until_interrupted", lambda viewer, seconds=None: served.append(
-        viewer.process.poll() is None))
-    assert main(["run", "paper-ellipse", "--duration", "0.5", "--view", "--no-plots",
-                 "--out", str(tmp_path / "run")]) == 0
+    monkeypatch.setattr(
+        cli,
+        "_serve_until_interrupted",
+        lambda viewer, seconds=None: served.append(viewer.process.poll() is None),
+    )
+    assert (
+        main(
+            [
+                "run",
+                "paper-ellipse",
+                "--duration",
+                "0.5",
+                "--view",
+                "--no-plots",
+                "--out",
+                str(tmp_path / "run"),
+            ]
+        )
+        == 0
+    )
     assert served == [True]  # the server was up when the run was shown
     assert "live view: http://127.0.0.1:" in capsys.readouterr().err
 
@@ -425,6 +483,11 @@ def test_command_line_basics(capsys):
     assert main([]) == 0
     shown = capsys.readouterr().out
     assert "usage: nnrobust" in shown and "exit codes:" in shown and "130" in shown
-    pipe = subprocess.run(f"{sys.executable} -m nnrobust.cli presets | head -1", shell=True,
-                          capture_output=True, text=True, timeout=120)
+    pipe = subprocess.run(
+        f"{sys.executable} -m nnrobust.cli presets | head -1",
+        shell=True,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert pipe.stdout.count("\n") == 1 and pipe.stderr == "", pipe.stderr

@@ -99,8 +99,18 @@ def _pseudo_inertia(pi):
 def _from_pseudo_inertia(P):
     sigma = P[:3, :3]
     inertia = np.trace(sigma) * np.eye(3) - sigma
-    return np.array([P[3, 3], *P[:3, 3], inertia[0, 0], inertia[0, 1], inertia[1, 1],
-                     inertia[0, 2], inertia[1, 2], inertia[2, 2]])
+    return np.array(
+        [
+            P[3, 3],
+            *P[:3, 3],
+            inertia[0, 0],
+            inertia[0, 1],
+            inertia[1, 1],
+            inertia[0, 2],
+            inertia[1, 2],
+            inertia[2, 2],
+        ]
+    )
 
 
 def _vector(name, value, size):
@@ -121,20 +131,32 @@ class SlotineLi(Controller):
     signal_names = ("param_drift", "s_norm", "effort", "min_pseudo_inertia")
     state_size = 0  # set per instance in __init__: 10 inertial parameters per joint
 
-    def __init__(self, context, Lambda=100.0, K_D=None, gamma=1.0, null_damping=1.0,
-                 criterion_gain=0.0, regressor="exact", K_D_step=0.3, leakage=0.0,
-                 project=True):
+    def __init__(
+        self,
+        context,
+        Lambda=100.0,
+        K_D=None,
+        gamma=1.0,
+        null_damping=1.0,
+        criterion_gain=0.0,
+        regressor="exact",
+        K_D_step=0.3,
+        leakage=0.0,
+        project=True,
+    ):
         ctx = self.ctx = context
         pm = ctx.nominal.pinocchio_model
         if pm is None:
             raise ValueError(
                 "SlotineLi needs the nominal model as a Pinocchio model for its regressor, but "
                 "context.nominal.pinocchio_model is None (the closed-form paper arm); set "
-                '[nominal] kind = "urdf" in the experiment file')
+                '[nominal] kind = "urdf" in the experiment file'
+            )
         if pm.nq != ctx.n or pm.nv != ctx.n:
             raise ValueError(
                 f"SlotineLi supports arms with nq = nv = n; the nominal model has nq = {pm.nq}, "
-                f"nv = {pm.nv}, n = {ctx.n}")
+                f"nv = {pm.nv}, n = {ctx.n}"
+            )
         if regressor not in ("exact", "approx"):
             raise ValueError(f"regressor must be 'exact' or 'approx', got {regressor!r}")
         self.model, self.data = pm, pm.createData()
@@ -148,21 +170,20 @@ class SlotineLi(Controller):
             self.K_D = shape * float(K_D_step) / (T * lam)
         else:
             self.K_D = _vector("K_D", K_D, ctx.n)
-        self.kd_step = float(
-            T * np.max(np.linalg.eigvals(np.linalg.solve(M0, np.diag(self.K_D))).real))
+        self.kd_step = float(T * np.max(np.linalg.eigvals(np.linalg.solve(M0, np.diag(self.K_D))).real))
         if self.kd_step > 0.6:
             warnings.warn(
                 f"SlotineLi: T*lambda_max(M^-1 K_D) = {self.kd_step:.2f} at q0 (K_D = "
                 f"{np.round(self.K_D, 3).tolist()}); above about 1 the sampled loop goes unstable",
-                stacklevel=2)
+                stacklevel=2,
+            )
         self.gamma = float(_vector("gamma", gamma, 1)[0])
         self.null_damping = float(_vector("null_damping", null_damping, 1)[0])
         self.criterion_gain = float(criterion_gain)
         self.leakage = float(_vector("leakage", leakage, 1)[0])
         self.project = bool(project)
         self.regressor = regressor
-        self.theta0 = np.concatenate(
-            [pm.inertias[i].toDynamicParameters() for i in range(1, pm.njoints)])
+        self.theta0 = np.concatenate([pm.inertias[i].toDynamicParameters() for i in range(1, pm.njoints)])
         self.state_size = self.theta0.size
         # floor of each link's pseudo-inertia eigenvalues: a radius of gyration of ~3 mm
         self.pseudo_floor = 1e-5 * np.maximum(self.theta0[0::10], 1e-3)
@@ -180,11 +201,11 @@ class SlotineLi(Controller):
         """
         out = theta.copy()
         for k, i in enumerate(range(0, theta.size, 10)):
-            P = _pseudo_inertia(theta[i:i + 10])
+            P = _pseudo_inertia(theta[i : i + 10])
             w, V = np.linalg.eigh(P)
             if w[0] < self.pseudo_floor[k]:
                 clipped = (V * np.maximum(w, self.pseudo_floor[k])) @ V.T
-                out[i:i + 10] = _from_pseudo_inertia(clipped)
+                out[i : i + 10] = _from_pseudo_inertia(clipped)
         return out
 
     def _Y(self, q, v, a):
@@ -195,7 +216,8 @@ class SlotineLi(Controller):
         if self.regressor == "approx":
             return self._Y(q, v_r, a_r)
         return self._Y(q, self._zero, a_r) + 0.25 * (
-            self._Y(q, v + v_r, self._zero) - self._Y(q, v - v_r, self._zero))
+            self._Y(q, v + v_r, self._zero) - self._Y(q, v - v_r, self._zero)
+        )
 
     def compute(self, t, q, v, z, period=0.0):
         """τ at the measured (q, q̇) with θ̂ = z; θ̂ advanced by explicit Euler over `period`."""
@@ -218,18 +240,24 @@ class SlotineLi(Controller):
         s = v - v_r
 
         Y = self.regressor_matrix(q, v, v_r, a_r)
-        tau = (Y @ theta + self.armature * a_r - self.K_D * s
-               + ctx.nominal_friction.torque(v))
+        tau = Y @ theta + self.armature * a_r - self.K_D * s + ctx.nominal_friction.torque(v)
 
         dtheta = -self.gamma * (Y.T @ s) - self.leakage * (theta - self.theta0)
         theta_next = theta + period * dtheta
         if self.project:
             theta_next = self.project_consistent(theta_next)
-        return ControlOutput(tau, {
-            "param_drift": float(np.linalg.norm(theta - self.theta0)),
-            "s_norm": float(np.linalg.norm(s)),
-            "effort": float(np.linalg.norm(tau)),
-            "min_pseudo_inertia": float(min(
-                np.linalg.eigvalsh(_pseudo_inertia(theta[i:i + 10])).min()
-                for i in range(0, theta.size, 10))),
-        }, state=theta_next)
+        return ControlOutput(
+            tau,
+            {
+                "param_drift": float(np.linalg.norm(theta - self.theta0)),
+                "s_norm": float(np.linalg.norm(s)),
+                "effort": float(np.linalg.norm(tau)),
+                "min_pseudo_inertia": float(
+                    min(
+                        np.linalg.eigvalsh(_pseudo_inertia(theta[i : i + 10])).min()
+                        for i in range(0, theta.size, 10)
+                    )
+                ),
+            },
+            state=theta_next,
+        )

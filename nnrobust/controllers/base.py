@@ -51,8 +51,9 @@ class Controller(ABC):
         return np.zeros(self.state_size)
 
     @abstractmethod
-    def compute(self, t: float, q: np.ndarray, v: np.ndarray, z: np.ndarray,
-                period: float = 0.0) -> ControlOutput:
+    def compute(
+        self, t: float, q: np.ndarray, v: np.ndarray, z: np.ndarray, period: float = 0.0
+    ) -> ControlOutput:
         """Torque, signals and (for a stateful law) z after ``period`` [s] at time t [s]."""
 
 

@@ -41,8 +41,11 @@ def file_digest(path: str | Path) -> str:
 
 def _import_file(path: Path):
     if not path.is_file():
-        raise ConfigError(KEY, f"{str(path)!r} is not a file (a relative path in an experiment file is read "
-                          "from the file's folder)")
+        raise ConfigError(
+            KEY,
+            f"{str(path)!r} is not a file (a relative path in an experiment file is read "
+            "from the file's folder)",
+        )
     digest = file_digest(path)
     name = f"nnrobust_user_{''.join(c if c.isalnum() else '_' for c in path.stem)}_{digest[:16]}"
     if name in sys.modules:
@@ -81,22 +84,29 @@ def load_class(spec: str) -> type[Controller]:
         try:
             module = importlib.import_module(where)
         except ModuleNotFoundError as err:
-            raise ConfigError(KEY, f"no module {where!r} ({err}); give a file as \"file.py:{name}\" or "
-                              "install "
-                              "the package") from err
+            raise ConfigError(
+                KEY, f'no module {where!r} ({err}); give a file as "file.py:{name}" or install the package'
+            ) from err
         except Exception as err:
             raise ConfigError(KEY, f"importing {where} raised {_located(err)}") from err
     cls = getattr(module, name, None)
     if cls is None:
-        found = sorted(k for k, v in vars(module).items() if isinstance(v, type) and issubclass(v, Controller)
-                       and v.__module__ == module.__name__)
+        found = sorted(
+            k
+            for k, v in vars(module).items()
+            if isinstance(v, type) and issubclass(v, Controller) and v.__module__ == module.__name__
+        )
         close = difflib.get_close_matches(name, found, n=1)
         hint = f"; did you mean {close[0]!r}?" if close else ""
-        raise ConfigError(KEY, f"{where} has no {name!r}{hint} Controllers there: "
-                          f"{', '.join(found) or 'none'}")
+        raise ConfigError(
+            KEY, f"{where} has no {name!r}{hint} Controllers there: {', '.join(found) or 'none'}"
+        )
     if not (isinstance(cls, type) and issubclass(cls, Controller)):
-        raise ConfigError(KEY, f"{where}:{name} is not a subclass of nnrobust.Controller (it is "
-                          f"{type(cls).__name__} {getattr(cls, '__name__', '')!r})")
+        raise ConfigError(
+            KEY,
+            f"{where}:{name} is not a subclass of nnrobust.Controller (it is "
+            f"{type(cls).__name__} {getattr(cls, '__name__', '')!r})",
+        )
     if inspect.isabstract(cls):
         missing = ", ".join(sorted(cls.__abstractmethods__))
         raise ConfigError(KEY, f"{where}:{name} does not implement {missing}")
@@ -117,10 +127,13 @@ def check_params(cls: type, params: dict) -> None:
         if key not in names:
             close = difflib.get_close_matches(key, names, n=1)
             hint = f"; did you mean {close[0]!r}?" if close else ""
-            raise ConfigError(f"controller.params.{key}", f"{cls.__name__} takes no such parameter{hint} "
-                              f"Parameters: {', '.join(names) or 'none'}")
-    missing = [p.name for p in parameters
-               if p.default is p.empty and p.name in names and p.name not in params]
+            raise ConfigError(
+                f"controller.params.{key}",
+                f"{cls.__name__} takes no such parameter{hint} Parameters: {', '.join(names) or 'none'}",
+            )
+    missing = [
+        p.name for p in parameters if p.default is p.empty and p.name in names and p.name not in params
+    ]
     if missing:
         raise ConfigError("controller.params", f"{cls.__name__} needs {', '.join(missing)}")
 
@@ -135,8 +148,9 @@ def build_custom(spec: str, params: dict | None, context: ControllerContext) -> 
     except NNRobustError:
         raise
     except Exception as err:
-        raise ConfigError("controller.params",
-                          f"{cls.__name__}(context, **params) raised {_located(err)}") from err
+        raise ConfigError(
+            "controller.params", f"{cls.__name__}(context, **params) raised {_located(err)}"
+        ) from err
     names = controller.signal_names
     if isinstance(names, str) or not all(isinstance(s, str) for s in names):
         raise ConfigError(KEY, f"{cls.__name__}.signal_names must be a tuple of names, got {names!r}")
@@ -156,22 +170,26 @@ def check_output(controller: Controller, out, n: int, state_size: int, t: float)
     if tau is None:
         raise ControllerError(f"{name}.compute must return a ControlOutput, got {type(out).__name__}")
     if tau.shape != (n,):
-        raise ControllerError(f"{name}.compute returned a torque of shape {tau.shape} at t = {t:g} s; "
-                              "the arm "
-                              f"has {n} joints")
+        raise ControllerError(
+            f"{name}.compute returned a torque of shape {tau.shape} at t = {t:g} s; the arm has {n} joints"
+        )
     undeclared(controller, out.signals)
     if out.state is not None and np.shape(out.state) != (state_size,):
-        raise ControllerError(f"{name}.compute returned a state of shape {np.shape(out.state)}; "
-                              f"initial_state() has {state_size} entries")
+        raise ControllerError(
+            f"{name}.compute returned a state of shape {np.shape(out.state)}; "
+            f"initial_state() has {state_size} entries"
+        )
 
 
 def undeclared(controller: Controller, signals: dict) -> None:
     """Refuse a signal the controller did not declare in ``signal_names``."""
     extra = [s for s in signals if s not in controller.signal_names]
     if extra:
-        raise ControllerError(f"{type(controller).__name__}.compute returned signal {extra[0]!r}, which "
-                              "is not "
-                              f"in its signal_names {tuple(controller.signal_names)}; declare it there")
+        raise ControllerError(
+            f"{type(controller).__name__}.compute returned signal {extra[0]!r}, which "
+            "is not "
+            f"in its signal_names {tuple(controller.signal_names)}; declare it there"
+        )
 
 
 def failed(controller: Controller, err: Exception, t: float) -> ControllerError:

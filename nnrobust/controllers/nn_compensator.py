@@ -92,8 +92,13 @@ class NNCompensator:
             raise ValueError(f"nn.law: {self.law!r} is not one of {U0_LAWS}")
         if self.basis_input not in BASIS_INPUTS:
             raise ValueError(f"nn.basis_input: {self.basis_input!r} is not one of {BASIS_INPUTS}")
-        if (self.F <= 0 or self.gamma < 0 or self.eps0 <= 0 or not 0 <= self.eps_min <= self.eps0
-                or self.sigma < 0):
+        if (
+            self.F <= 0
+            or self.gamma < 0
+            or self.eps0 <= 0
+            or not 0 <= self.eps_min <= self.eps0
+            or self.sigma < 0
+        ):
             raise ValueError(
                 "nn: need F > 0, gamma >= 0, eps0 > 0, 0 <= eps_min <= eps0, sigma >= 0; got "
                 f"F={self.F}, gamma={self.gamma}, eps0={self.eps0}, eps_min={self.eps_min}, "
@@ -135,9 +140,7 @@ class NNCompensator:
         gain = rho * rho if self.law == "corrected" else rho
         return -gain * w / denom, rho
 
-    def state_derivative(
-        self, q: np.ndarray, v: np.ndarray, y: np.ndarray, z: np.ndarray
-    ) -> np.ndarray:
+    def state_derivative(self, q: np.ndarray, v: np.ndarray, y: np.ndarray, z: np.ndarray) -> np.ndarray:
         """[Z', eps'] = [F (|w| phi(s) - sigma Z), -gamma (eps - eps_min)]."""
         Z = z[: self.L]
         phi = self.basis(self.network_input(q, v, y))

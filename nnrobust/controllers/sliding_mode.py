@@ -37,8 +37,9 @@ class SlidingModeCompensator:
 
     def __post_init__(self):
         if self.gain < 0 or self.boundary <= 0:
-            raise ValueError(f"sliding_mode: need gain >= 0 and boundary > 0, got {self.gain}, "
-                             f"{self.boundary}")
+            raise ValueError(
+                f"sliding_mode: need gain >= 0 and boundary > 0, got {self.gain}, {self.boundary}"
+            )
         _, B = error_dynamics(self.Kp, self.Kv)
         self.BtP = B.T @ lyapunov_P(self.Kp, self.Kv)
 

@@ -69,8 +69,9 @@ class TaskSpaceController(Controller):
         xd, dxd, ddxd = self.trajectory(t)
         return self.trajectory.error(x, xd), J @ v - dxd, ddxd
 
-    def compute(self, t: float, q: np.ndarray, v: np.ndarray, z: np.ndarray,
-                period: float = 0.0) -> ControlOutput:
+    def compute(
+        self, t: float, q: np.ndarray, v: np.ndarray, z: np.ndarray, period: float = 0.0
+    ) -> ControlOutput:
         """Eq. (9); the compensator's state is advanced over ``period``."""
         x, J, jdot_v = self.nominal.task_state(q, v)
         e, de, ddxd = self._error(t, x, J, v)
@@ -123,8 +124,9 @@ class TaskSpacePD(Controller):
         self.null_damping = float(null_damping)
         self.pinv = pinv or DampedPseudoInverse()
 
-    def compute(self, t: float, q: np.ndarray, v: np.ndarray, z: np.ndarray,
-                period: float = 0.0) -> ControlOutput:
+    def compute(
+        self, t: float, q: np.ndarray, v: np.ndarray, z: np.ndarray, period: float = 0.0
+    ) -> ControlOutput:
         """Task-space PD plus G-hat(q) and null-space damping."""
         x, J, _ = self.nominal.task_state(q, v)
         xd, dxd, _ = self.trajectory(t)

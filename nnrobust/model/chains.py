@@ -70,8 +70,9 @@ def default_chain(model: pin.Model) -> tuple[str, list[str]]:
         if best_key is None or key < best_key:
             best, best_key = fid, key
     if best is None:
-        raise RobotLoadError(model.name, "no movable joint: nothing to control (a floating base alone "
-                             "is fixed to the world)")
+        raise RobotLoadError(
+            model.name, "no movable joint: nothing to control (a floating base alone is fixed to the world)"
+        )
     path = _path_joints(model, best)
     keep = set(_arm_joints(model, path) or path)  # a robot that is a hand or a finger keeps its joints
     locked = [model.names[j] for j in range(1, model.njoints) if j not in keep]
@@ -81,8 +82,11 @@ def default_chain(model: pin.Model) -> tuple[str, list[str]]:
 def _frame_id(model: pin.Model, name: str, role: str) -> int:
     if not model.existFrame(name):
         names = sorted({f.name for f in model.frames if f.type in LINK_FRAME_TYPES})
-        raise RobotLoadError(model.name, f"robot.chain: {role} frame {name!r} is not in the model; body "
-                             f"frames: {', '.join(names[:60])}{' ...' if len(names) > 60 else ''}")
+        raise RobotLoadError(
+            model.name,
+            f"robot.chain: {role} frame {name!r} is not in the model; body "
+            f"frames: {', '.join(names[:60])}{' ...' if len(names) > 60 else ''}",
+        )
     return frame_id(model, name)
 
 
@@ -95,8 +99,11 @@ def chain_between(model: pin.Model, base: str, tip: str) -> list[str]:
     tip_path = _path_joints(model, tip_id)
     base_joint = model.frames[base_id].parentJoint
     if base_joint and base_joint not in tip_path:
-        raise RobotLoadError(model.name, f"robot.chain: frame {base!r} is not between the root and "
-                             f"{tip!r}; the chain runs from a frame to one of its descendants")
+        raise RobotLoadError(
+            model.name,
+            f"robot.chain: frame {base!r} is not between the root and "
+            f"{tip!r}; the chain runs from a frame to one of its descendants",
+        )
     keep = [j for j in tip_path if j not in below_base]
     if not keep:
         raise RobotLoadError(model.name, f"robot.chain: no moving joint between {base!r} and {tip!r}")

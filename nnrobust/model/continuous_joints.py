@@ -13,12 +13,27 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-_REVOLUTE = {"JointModelRUBX": pin.JointModelRX, "JointModelRUBY": pin.JointModelRY,
-             "JointModelRUBZ": pin.JointModelRZ}
+_REVOLUTE = {
+    "JointModelRUBX": pin.JointModelRX,
+    "JointModelRUBY": pin.JointModelRY,
+    "JointModelRUBZ": pin.JointModelRZ,
+}
 
-_V_SIZED = ("effortLimit", "velocityLimit", "lowerEffortLimit", "upperEffortLimit", "lowerVelocityLimit",
-            "upperVelocityLimit", "lowerDryFrictionLimit", "upperDryFrictionLimit", "friction", "damping",
-            "armature", "rotorInertia", "rotorGearRatio")
+_V_SIZED = (
+    "effortLimit",
+    "velocityLimit",
+    "lowerEffortLimit",
+    "upperEffortLimit",
+    "lowerVelocityLimit",
+    "upperVelocityLimit",
+    "lowerDryFrictionLimit",
+    "upperDryFrictionLimit",
+    "friction",
+    "damping",
+    "armature",
+    "rotorInertia",
+    "rotorGearRatio",
+)
 """Per-velocity-coordinate arrays of a Model that carry over unchanged (those this Pinocchio has)."""
 
 
@@ -46,7 +61,7 @@ def angles_from_configuration(model: pin.Model, q: np.ndarray) -> np.ndarray:
             c, s = q[joint.idx_q], q[joint.idx_q + 1]
             out[joint.idx_v] = np.arctan2(s, c)
         else:
-            out[joint.idx_v:joint.idx_v + joint.nv] = q[joint.idx_q:joint.idx_q + joint.nq]
+            out[joint.idx_v : joint.idx_v + joint.nv] = q[joint.idx_q : joint.idx_q + joint.nq]
     return out
 
 
@@ -57,9 +72,9 @@ def configuration_from_angles(model: pin.Model, angles: np.ndarray) -> np.ndarra
         joint = model.joints[i]
         if _revolute_twin(joint) is not None:
             a = angles[joint.idx_v]
-            q[joint.idx_q:joint.idx_q + 2] = np.cos(a), np.sin(a)
+            q[joint.idx_q : joint.idx_q + 2] = np.cos(a), np.sin(a)
         else:
-            q[joint.idx_q:joint.idx_q + joint.nq] = angles[joint.idx_v:joint.idx_v + joint.nv]
+            q[joint.idx_q : joint.idx_q + joint.nq] = angles[joint.idx_v : joint.idx_v + joint.nv]
     return q
 
 
@@ -77,13 +92,14 @@ def with_revolute_continuous_joints(model: pin.Model) -> pin.Model:
     for i in range(1, model.njoints):
         joint = model.joints[i]
         twin = _revolute_twin(joint)
-        added = new.addJoint(model.parents[i], joint if twin is None else twin, model.jointPlacements[i],
-                             model.names[i])
+        added = new.addJoint(
+            model.parents[i], joint if twin is None else twin, model.jointPlacements[i], model.names[i]
+        )
         assert added == i
         new.appendBodyToJoint(i, model.inertias[i], pin.SE3.Identity())
         if twin is None:
-            lower.append(model.lowerPositionLimit[joint.idx_q:joint.idx_q + joint.nq])
-            upper.append(model.upperPositionLimit[joint.idx_q:joint.idx_q + joint.nq])
+            lower.append(model.lowerPositionLimit[joint.idx_q : joint.idx_q + joint.nq])
+            upper.append(model.upperPositionLimit[joint.idx_q : joint.idx_q + joint.nq])
         else:
             lower.append([-np.inf])
             upper.append([np.inf])

@@ -62,8 +62,9 @@ def _plain_urdf(loader) -> bool:
     """Whether the loader class only names a URDF file (no code of its own, no SDF)."""
     from example_robot_data.utils import RobotLoader
 
-    custom = any("__init__" in klass.__dict__ for klass in loader.__mro__
-                 if klass not in (RobotLoader, object))
+    custom = any(
+        "__init__" in klass.__dict__ for klass in loader.__mro__ if klass not in (RobotLoader, object)
+    )
     return bool(loader.urdf_filename) and not loader.sdf_filename and not custom
 
 
@@ -82,8 +83,9 @@ def example_robot(name: str) -> ExampleRobot:
         except OSError as err:
             raise RobotLoadError(name, f"example-robot-data does not hold its URDF ({err})") from err
         urdf = model_dir / relative
-        model = _parsed(f"example-robot-data:{name}", "invalid URDF",
-                        lambda: pin.buildModelFromUrdf(str(urdf)))
+        model = _parsed(
+            f"example-robot-data:{name}", "invalid URDF", lambda: pin.buildModelFromUrdf(str(urdf))
+        )
         return ExampleRobot(name, model, urdf, (str(model_dir.parent.parent),), bool(loader.free_flyer))
     robot = _loaded(name)
     model = _symmetric_limits(pin.Model(robot.model))

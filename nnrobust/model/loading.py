@@ -41,8 +41,10 @@ _SHIPPED = {PAPER_ARM: "three_link_planar.urdf"}
 ARMS: dict[str, dict] = {
     PAPER_ARM: {"description": "the paper's three-link planar arm (urdf/)"},
     "planar7": {"description": "generated 7-link planar chain, 1 m reach (any planar<N>, N <= 300)"},
-    "panda": {"description": "Franka Emika Panda, fingers locked",
-              "locked_joints": ["panda_finger_joint1", "panda_finger_joint2"]},
+    "panda": {
+        "description": "Franka Emika Panda, fingers locked",
+        "locked_joints": ["panda_finger_joint1", "panda_finger_joint2"],
+    },
     "ur3": {"description": "Universal Robots UR3"},
     "ur5": {"description": "Universal Robots UR5"},
     "ur10": {"description": "Universal Robots UR10"},
@@ -127,14 +129,18 @@ def _build(source: str, locked_joints=None, chain=None, say_notes: bool = True) 
         if not is_example_robot(value):
             close = difflib.get_close_matches(value, robot_names(), n=3)
             hint = f"; did you mean {', '.join(close)}?" if close else ""
-            raise RobotLoadError(value, f"not a URDF file, not planar<N>, and not a robot example-robot-data "
-                                 f"ships{hint} (nnrobust robots --all lists them)")
+            raise RobotLoadError(
+                value,
+                f"not a URDF file, not planar<N>, and not a robot example-robot-data "
+                f"ships{hint} (nnrobust robots --all lists them)",
+            )
         example = example_robot(value)
         model = with_revolute_continuous_joints(pin.Model(example.model))  # a copy: the load is cached
         if example.note and say_notes:
             warnings.warn(f"{value}: {example.note}", stacklevel=3)
-        return _Built(model, f"example-robot-data:{value}", None, None, example, frozenset(),
-                      unique_frame_names(model))
+        return _Built(
+            model, f"example-robot-data:{value}", None, None, example, frozenset(), unique_frame_names(model)
+        )
     generated = PLANAR_CHAIN_NAME.match(source) is not None
     name = value if kind == "file" else (source if generated else "<urdf string>")
     text = read_urdf_file(value) if kind == "file" else value
@@ -190,8 +196,9 @@ def _locks(built: _Built, source: str, locked_joints, chain) -> tuple[list[str],
     model = built.model
     missing = [j for j in locked_joints or () if not model.existJointName(j)]
     if missing:
-        raise RobotLoadError(built.name, f"cannot lock unknown joints {missing}; joints: "
-                             f"{list(model.names)[1:]}")
+        raise RobotLoadError(
+            built.name, f"cannot lock unknown joints {missing}; joints: {list(model.names)[1:]}"
+        )
     if chain is not None:
         base, tip = chain
         names = chain_between(model, base, tip) + list(locked_joints or [])
@@ -214,11 +221,16 @@ def _reduced(built: _Built, locked: list[str], visual: pin.GeometryModel | None 
         model = pin.buildReducedModel(model, ids, pin.neutral(model))
     elif ids:
         model, visual = pin.buildReducedModel(model, visual, ids, pin.neutral(model))
-    odd = [f"{model.names[i]!r} ({model.joints[i].shortname().removeprefix('JointModel')})"
-           for i in range(1, model.njoints) if model.joints[i].nq != model.joints[i].nv]
+    odd = [
+        f"{model.names[i]!r} ({model.joints[i].shortname().removeprefix('JointModel')})"
+        for i in range(1, model.njoints)
+        if model.joints[i].nq != model.joints[i].nv
+    ]
     if odd:
-        raise ModelMismatch(f"{built.name}: joints {', '.join(odd)} have no single angle or length; lock "
-                            "them (robot.locked_joints) or choose a chain without them (robot.chain)")
+        raise ModelMismatch(
+            f"{built.name}: joints {', '.join(odd)} have no single angle or length; lock "
+            "them (robot.locked_joints) or choose a chain without them (robot.chain)"
+        )
     if model.nv == 0:
         raise ModelMismatch(f"{built.name}: every joint is locked; nothing is left to move")
     return model, visual
@@ -263,8 +275,11 @@ def _visual_geometry(built: _Built, source: str) -> pin.GeometryModel:
         frame = pin.Frame(model.frames[fid])
         frame.name = name
         model.frames[fid] = frame
-    visual = _parsed(built.name, "cannot read the visual geometry",
-                     lambda: pin.buildGeomFromUrdfString(model, text, pin.GeometryType.VISUAL))
+    visual = _parsed(
+        built.name,
+        "cannot read the visual geometry",
+        lambda: pin.buildGeomFromUrdfString(model, text, pin.GeometryType.VISUAL),
+    )
     for obj in visual.geometryObjects:
         if obj.name in meshes:
             path, scale = meshes[obj.name]
@@ -335,6 +350,9 @@ def load_robot(
         model.gravity.linear = np.asarray(gravity, dtype=float)
     frame = task_frame or frame or default_task_frame(model)
     robot = PinocchioModel(model, frame, task=task, name=built.name)
-    robot.urdf_text = built.text if built.example is None else (
-        read_urdf_file(built.example.urdf) if built.example.urdf is not None else None)
+    robot.urdf_text = (
+        built.text
+        if built.example is None
+        else (read_urdf_file(built.example.urdf) if built.example.urdf is not None else None)
+    )
     return robot

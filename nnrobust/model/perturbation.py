@@ -22,8 +22,9 @@ def rotational_inertia_problem(I: np.ndarray, rel_tol: float = 0.0, point_mass: 
     if not positive:
         return f"the inertia is not {what} (principal moments {shown} kg m^2)"
     if moments[0] + moments[1] < moments[2] * (1 - rel_tol):
-        return (f"principal moments {shown} break the triangle inequality I1 + I2 >= I3 "
-                "(no rigid body has them)")
+        return (
+            f"principal moments {shown} break the triangle inequality I1 + I2 >= I3 (no rigid body has them)"
+        )
     return None
 
 

@@ -42,9 +42,7 @@ class PinocchioModel:
 
     def __init__(self, model: pin.Model, task_frame: str, task: str = "planar", name: str = ""):
         if task not in TASK_KINDS:
-            raise ModelMismatch(
-                f"unknown task kind {task!r}; valid kinds: {', '.join(TASK_KINDS)}"
-            )
+            raise ModelMismatch(f"unknown task kind {task!r}; valid kinds: {', '.join(TASK_KINDS)}")
         if model.nq != model.nv:
             raise ModelMismatch(
                 f"{name or model.name}: nq = {model.nq} != nv = {model.nv}; joints with a "
@@ -249,8 +247,9 @@ class PinocchioModel:
     @cached_property
     def prismatic(self) -> np.ndarray:
         """Whether each joint is prismatic (positions in m, efforts in N) rather than revolute."""
-        return np.array(["Prismatic" in j.shortname() or j.shortname()[-2:-1] == "P"
-                         for j in self.model.joints[1:]])
+        return np.array(
+            ["Prismatic" in j.shortname() or j.shortname()[-2:-1] == "P" for j in self.model.joints[1:]]
+        )
 
     @property
     def velocity_limits(self) -> np.ndarray:
@@ -273,7 +272,4 @@ class PinocchioModel:
         return np.asarray(self.model.friction).copy()
 
     def __repr__(self) -> str:
-        return (
-            f"PinocchioModel({self.name!r}, n={self.nq}, task={self.task!r}, "
-            f"frame={self.task_frame!r})"
-        )
+        return f"PinocchioModel({self.name!r}, n={self.nq}, task={self.task!r}, frame={self.task_frame!r})"

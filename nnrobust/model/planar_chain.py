@@ -11,8 +11,11 @@ PLANAR_CHAIN_NAME = re.compile(r"^planar(\d+)$")
 
 
 def _per_link(name: str, value, n: int) -> np.ndarray:
-    arr = np.broadcast_to(np.asarray(value, dtype=float), (n,)) if np.ndim(value) == 0 else np.asarray(
-        value, dtype=float)
+    arr = (
+        np.broadcast_to(np.asarray(value, dtype=float), (n,))
+        if np.ndim(value) == 0
+        else np.asarray(value, dtype=float)
+    )
     if arr.shape != (n,):
         raise ValueError(f"planar chain: {name} has {arr.size} entries, the chain has {n} links")
     if not np.all(np.isfinite(arr)):
@@ -64,8 +67,9 @@ def planar_chain_urdf(
         if np.any(arr < 0):
             raise ValueError(f"planar chain: {name} must be >= 0, got {arr.tolist()}")
     if joint_limit <= 0 or velocity_limit <= 0 or width <= 0 or reference_acceleration <= 0:
-        raise ValueError("planar chain: joint_limit, velocity_limit, width and "
-                         "reference_acceleration must be positive")
+        raise ValueError(
+            "planar chain: joint_limit, velocity_limit, width and reference_acceleration must be positive"
+        )
     izz = mass * (length**2 + width**2) / 12.0
     ixx = mass * 2 * width**2 / 12.0
     starts = np.concatenate([[0.0], np.cumsum(length)[:-1]])

@@ -90,8 +90,7 @@ class ThreeLinkParameters:
         """
         if model.nq != 3 or model.njoints != 4:
             raise ModelMismatch(
-                f"{model.name}: the closed-form model needs exactly 3 revolute joints, "
-                f"got nq = {model.nq}"
+                f"{model.name}: the closed-form model needs exactly 3 revolute joints, got nq = {model.nq}"
             )
         for j in range(1, 4):
             if model.joints[j].shortname() != "JointModelRZ" or model.parents[j] != j - 1:
@@ -106,16 +105,12 @@ class ThreeLinkParameters:
         offsets.append(tip.placement)
         for placement in [model.jointPlacements[1], *offsets]:
             if not np.allclose(placement.rotation, np.eye(3)) or abs(placement.translation[1]) > 1e-12:
-                raise ModelMismatch(
-                    f"{model.name}: joint and task-frame offsets must lie on the link x-axes"
-                )
+                raise ModelMismatch(f"{model.name}: joint and task-frame offsets must lie on the link x-axes")
         lengths = tuple(float(pl.translation[0]) for pl in offsets)
         inertias = model.inertias[1:4]
         for j, inertia in enumerate(inertias, start=1):
             if abs(inertia.lever[1]) > 1e-12:
-                raise ModelMismatch(
-                    f"{model.name}: centre of mass of link {j} is off the link x-axis"
-                )
+                raise ModelMismatch(f"{model.name}: centre of mass of link {j} is off the link x-axis")
         g = model.gravity.linear
         return cls.from_links(
             masses=tuple(float(i.mass) for i in inertias),

@@ -40,8 +40,9 @@ def read_urdf_file(path: str | Path) -> str:
     path = Path(path)
     size = path.stat().st_size
     if size > MAX_URDF_BYTES:
-        raise UrdfRefused(str(path), f"{size / 1e6:.1f} MB is larger than the {MAX_URDF_BYTES / 1e6:g} MB "
-                          "a URDF may have")
+        raise UrdfRefused(
+            str(path), f"{size / 1e6:.1f} MB is larger than the {MAX_URDF_BYTES / 1e6:g} MB a URDF may have"
+        )
     try:
         return path.read_bytes().decode("utf-8")
     except UnicodeDecodeError as err:
@@ -77,8 +78,16 @@ _INERTIA_KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
 _MOVING = ("revolute", "continuous", "prismatic")
 
 
-def _attribute(element: ET.Element, key: str, where: str, source: str, default: str | None = None,
-               count: int = 1, low: float = -math.inf, high: float = math.inf) -> list[float]:
+def _attribute(
+    element: ET.Element,
+    key: str,
+    where: str,
+    source: str,
+    default: str | None = None,
+    count: int = 1,
+    low: float = -math.inf,
+    high: float = math.inf,
+) -> list[float]:
     """Numbers of one attribute, finite and within [low, high]; missing is an error unless a
     default is given (what the URDF specification defaults it to).
     """
@@ -126,19 +135,30 @@ def _read_inertial(link: ET.Element, name: str, source: str) -> tuple[float, np.
     if mass < 0:
         raise InvalidInertia(source, f"{where}: mass {mass:g} kg must not be negative")
     if mass > MAX_MASS:
-        raise InvalidInertia(source, f"{where}: mass {mass:g} kg is beyond any robot link "
-                             f"(at most {MAX_MASS:g} kg)")
+        raise InvalidInertia(
+            source, f"{where}: mass {mass:g} kg is beyond any robot link (at most {MAX_MASS:g} kg)"
+        )
     missing = [key for key in _INERTIA_KEYS if inertia_el.get(key) is None]
     if missing:
-        raise InvalidInertia(source, f"{where}: <inertia> needs all six of {', '.join(_INERTIA_KEYS)} "
-                             f"(missing {', '.join(missing)}; write 0 for a zero product of inertia)")
+        raise InvalidInertia(
+            source,
+            f"{where}: <inertia> needs all six of {', '.join(_INERTIA_KEYS)} "
+            f"(missing {', '.join(missing)}; write 0 for a zero product of inertia)",
+        )
     values = {key: _number_list(inertia_el.get(key), 1, f"{where} {key}", source)[0] for key in _INERTIA_KEYS}
-    I = np.array([[values["ixx"], values["ixy"], values["ixz"]],
-                  [values["ixy"], values["iyy"], values["iyz"]],
-                  [values["ixz"], values["iyz"], values["izz"]]])
+    I = np.array(
+        [
+            [values["ixx"], values["ixy"], values["ixz"]],
+            [values["ixy"], values["iyy"], values["iyz"]],
+            [values["ixz"], values["iyz"], values["izz"]],
+        ]
+    )
     if np.abs(I).max() > MAX_INERTIA:
-        raise InvalidInertia(source, f"{where}: an inertia of {np.abs(I).max():g} kg m^2 is beyond any robot "
-                             f"link (at most {MAX_INERTIA:g} kg m^2)")
+        raise InvalidInertia(
+            source,
+            f"{where}: an inertia of {np.abs(I).max():g} kg m^2 is beyond any robot "
+            f"link (at most {MAX_INERTIA:g} kg m^2)",
+        )
     return mass, I
 
 
@@ -155,8 +175,9 @@ def _opposite_products(I: np.ndarray) -> np.ndarray:
     return np.where(np.eye(3, dtype=bool), I, -I)
 
 
-def _check_inertias(links: dict[str, ET.Element], parent_of: dict[str, tuple[str, str]],
-                    source: str) -> tuple[dict[str, float], list[str], bool]:
+def _check_inertias(
+    links: dict[str, ET.Element], parent_of: dict[str, tuple[str, str]], source: str
+) -> tuple[dict[str, float], list[str], bool]:
     """Every moving link's mass and inertia, told into three kinds (docs/robots.md, "Inertial
     data"): impossible (refused, every such link named at once), conventions of real exports
     (read as such, with one warning) and data as given.
@@ -189,8 +210,10 @@ def _check_inertias(links: dict[str, ET.Element], parent_of: dict[str, tuple[str
             continue
         moments = np.linalg.eigvalsh(I)
         if not moments[0] >= -(1e-9 * abs(moments[2]) + 1e-15):
-            impossible.append(f"{name!r}: the inertia is not positive semi-definite (principal moments "
-                              f"{np.round(moments, 9).tolist()} kg m^2)")
+            impossible.append(
+                f"{name!r}: the inertia is not positive semi-definite (principal moments "
+                f"{np.round(moments, 9).tolist()} kg m^2)"
+            )
             continue
         bodies[name] = I
     broken = [name for name, I in bodies.items() if _triangle_excess(I) > 1e-9]
@@ -202,27 +225,41 @@ def _check_inertias(links: dict[str, ET.Element], parent_of: dict[str, tuple[str
             rounded.append(name)
         else:
             moments = np.round(np.linalg.eigvalsh(bodies[name]), 9).tolist()
-            impossible.append(f"{name!r}: principal moments {moments} break the triangle inequality "
-                              f"I1 + I2 >= I3 by {100 * excess:.3g} % of I3 (no rigid body has them; "
-                              f"{100 * TRIANGLE_TOLERANCE:g} % is taken as rounding)")
+            impossible.append(
+                f"{name!r}: principal moments {moments} break the triangle inequality "
+                f"I1 + I2 >= I3 by {100 * excess:.3g} % of I3 (no rigid body has them; "
+                f"{100 * TRIANGLE_TOLERANCE:g} % is taken as rounding)"
+            )
     if impossible:
-        raise InvalidInertia(source, f"{len(impossible)} link{'s' if len(impossible) > 1 else ''} with "
-                             f"impossible inertial data: {'; '.join(impossible)}")
+        raise InvalidInertia(
+            source,
+            f"{len(impossible)} link{'s' if len(impossible) > 1 else ''} with "
+            f"impossible inertial data: {'; '.join(impossible)}",
+        )
     assumed = []
     if massless:
-        assumed.append(f"massless link{'s' if len(massless) > 1 else ''} {', '.join(massless)} read with no "
-                       "inertia (a rotational inertia without mass is no body: a frame link)")
+        assumed.append(
+            f"massless link{'s' if len(massless) > 1 else ''} {', '.join(massless)} read with no "
+            "inertia (a rotational inertia without mass is no body: a frame link)"
+        )
     if flipped:
-        assumed.append(f"products of inertia read with the opposite sign (+integral of x y dm, the CAD "
-                       f"convention; URDF's ixy is -integral of x y dm): as written, link"
-                       f"{'s' if len(broken) > 1 else ''} {', '.join(broken)} break the triangle inequality, "
-                       "read so every link keeps it")
+        assumed.append(
+            f"products of inertia read with the opposite sign (+integral of x y dm, the CAD "
+            f"convention; URDF's ixy is -integral of x y dm): as written, link"
+            f"{'s' if len(broken) > 1 else ''} {', '.join(broken)} break the triangle inequality, "
+            "read so every link keeps it"
+        )
     if rounded:
-        assumed.append(f"link{'s' if len(rounded) > 1 else ''} {', '.join(rounded)} break the triangle "
-                       f"inequality by at most {100 * TRIANGLE_TOLERANCE:g} % (rounding), taken as given")
+        assumed.append(
+            f"link{'s' if len(rounded) > 1 else ''} {', '.join(rounded)} break the triangle "
+            f"inequality by at most {100 * TRIANGLE_TOLERANCE:g} % (rounding), taken as given"
+        )
     if assumed:
-        warnings.warn(f"{source}: inertial data read with assumptions: {'; '.join(assumed)}",
-                      InertiaAssumptionWarning, stacklevel=4)
+        warnings.warn(
+            f"{source}: inertial data read with assumptions: {'; '.join(assumed)}",
+            InertiaAssumptionWarning,
+            stacklevel=4,
+        )
     return masses, massless, flipped
 
 
@@ -257,14 +294,16 @@ def _check_joint(joint: ET.Element, name: str, source: str, locked: frozenset[st
         if axis is not None:
             xyz = _attribute(axis, "xyz", f"{where} <axis>", source, "1 0 0", 3)
             if math.hypot(*xyz) < 1e-9:
-                raise UrdfStructureError(source, f"{where} <axis>: xyz = {axis.get('xyz')!r} is zero; "
-                                         "an axis needs a direction")
+                raise UrdfStructureError(
+                    source, f"{where} <axis>: xyz = {axis.get('xyz')!r} is zero; an axis needs a direction"
+                )
     limit = joint.find("limit")
     if kind in ("revolute", "prismatic") and limit is None:
         raise UrdfStructureError(source, f"{where}: a {kind} joint needs <limit lower upper effort velocity>")
     if limit is not None and kind in _MOVING:
-        lower, upper = (_attribute(limit, key, f"{where} <limit>", source, "0")[0]
-                        for key in ("lower", "upper"))
+        lower, upper = (
+            _attribute(limit, key, f"{where} <limit>", source, "0")[0] for key in ("lower", "upper")
+        )
         if kind != "continuous" and lower > upper:
             raise UrdfStructureError(source, f"{where} <limit>: lower = {lower:g} is above upper = {upper:g}")
         _attribute(limit, "effort", f"{where} <limit>", source, None, 1, 0, MAX_EFFORT)
@@ -275,9 +314,12 @@ def _check_joint(joint: ET.Element, name: str, source: str, locked: frozenset[st
             _attribute(dynamics, key, f"{where} <dynamics>", source, "0", 1, 0, MAX_EFFORT)
     mimic = joint.find("mimic")
     if mimic is not None and name not in locked:
-        raise UrdfStructureError(source, f"{where} mimics joint {mimic.get('joint')!r}: nnrobust does not "
-                                 "model mimic joints (the parser would make it an independent joint); "
-                                 f"lock it with robot.locked_joints = [{name!r}] or remove <mimic>")
+        raise UrdfStructureError(
+            source,
+            f"{where} mimics joint {mimic.get('joint')!r}: nnrobust does not "
+            "model mimic joints (the parser would make it an independent joint); "
+            f"lock it with robot.locked_joints = [{name!r}] or remove <mimic>",
+        )
 
 
 def mimic_joints(text: str) -> frozenset[str]:
@@ -286,8 +328,9 @@ def mimic_joints(text: str) -> frozenset[str]:
         root = ET.fromstring(text)
     except ET.ParseError:
         return frozenset()
-    return frozenset(j.get("name", "") for j in root.iter("joint")
-                     if j.find("mimic") is not None and j.get("name"))
+    return frozenset(
+        j.get("name", "") for j in root.iter("joint") if j.find("mimic") is not None and j.get("name")
+    )
 
 
 def _check_origin_of_root(link: ET.Element, name: str, source: str) -> None:
@@ -297,8 +340,12 @@ def _check_origin_of_root(link: ET.Element, name: str, source: str) -> None:
         _check_origin(inertial, f"link {name!r}", source)
 
 
-def _check_mass_moves(joints: dict[str, ET.Element], parent_of: dict[str, tuple[str, str]],
-                      masses: dict[str, float], source: str) -> None:
+def _check_mass_moves(
+    joints: dict[str, ET.Element],
+    parent_of: dict[str, tuple[str, str]],
+    masses: dict[str, float],
+    source: str,
+) -> None:
     """Every moving joint must move some mass, or M(q) is singular (O(links))."""
     below = dict(masses)  # link -> mass of its subtree
     children: dict[str, list[str]] = {}
@@ -314,9 +361,12 @@ def _check_mass_moves(joints: dict[str, ET.Element], parent_of: dict[str, tuple[
             below[parent_of[link][0]] += below[link]
     for child, (_, joint) in parent_of.items():
         if joints[joint].get("type") in _MOVING and below[child] <= 0:
-            raise InvalidInertia(source, f"joint {joint!r} moves no mass (link {child!r} and the links after "
-                                 "it have no <inertial>): M(q) would be singular; give them masses or "
-                                 "make the joint fixed")
+            raise InvalidInertia(
+                source,
+                f"joint {joint!r} moves no mass (link {child!r} and the links after "
+                "it have no <inertial>): M(q) would be singular; give them masses or "
+                "make the joint fixed",
+            )
 
 
 def mesh_roots(base: Path | None) -> list[Path]:
@@ -336,11 +386,11 @@ def mesh_roots(base: Path | None) -> list[Path]:
 def _resolve_mesh(uri: str, base: Path | None, roots: list[Path], source: str) -> Path | None:
     """The file a mesh URI names (maybe missing), or None when it cannot be located at all."""
     if uri.startswith("package://"):
-        relative = uri[len("package://"):].lstrip("/")  # package:///pkg/... as Pinocchio reads it
+        relative = uri[len("package://") :].lstrip("/")  # package:///pkg/... as Pinocchio reads it
         tail = relative.split("/", 1)[1] if "/" in relative else relative
         candidates = [root / rel for root in roots for rel in (relative, tail)]
     elif uri.startswith("file://"):
-        candidates = [Path(uri[len("file://"):])]
+        candidates = [Path(uri[len("file://") :])]
     elif "://" in uri:
         raise UnsafePath(source, f"mesh {uri!r}: only package:// and file paths are read")
     elif os.path.isabs(uri):
@@ -348,22 +398,30 @@ def _resolve_mesh(uri: str, base: Path | None, roots: list[Path], source: str) -
     else:
         candidates = [(base if base is not None else Path.cwd()) / uri]
     if not roots:
-        raise UnsafePath(source, f"mesh {uri!r}: no folder may be read (the working folder is the "
-                         "filesystem root)")
+        raise UnsafePath(
+            source, f"mesh {uri!r}: no folder may be read (the working folder is the filesystem root)"
+        )
     allowed = [r.resolve() for r in roots]
     found = None
     for candidate in candidates:
         real = candidate.resolve()
         if not any(real == r or r in real.parents for r in allowed):
-            raise UnsafePath(source, f"mesh {uri!r} resolves to {real}, outside the allowed folders "
-                             f"{[str(r) for r in allowed]}")
+            raise UnsafePath(
+                source,
+                f"mesh {uri!r} resolves to {real}, outside the allowed folders {[str(r) for r in allowed]}",
+            )
         if found is None and real.is_file():
             found = real
     return found or candidates[0].resolve()
 
 
-def check_urdf(text: str, source: str, base: Path | None = None,
-               roots: list[Path] | None = None, locked: frozenset[str] = frozenset()) -> str:
+def check_urdf(
+    text: str,
+    source: str,
+    base: Path | None = None,
+    roots: list[Path] | None = None,
+    locked: frozenset[str] = frozenset(),
+) -> str:
     """Refuse a URDF that Pinocchio would mis-read; warn about missing visual meshes; return the
     text to parse: the URDF itself, or with the inertial assumptions of real exports written in
     (:func:`_check_inertias`, said in one warning).
@@ -377,17 +435,22 @@ def check_urdf(text: str, source: str, base: Path | None = None,
 
     """
     if len(text) > MAX_URDF_BYTES:
-        raise UrdfRefused(source, f"{len(text) / 1e6:.1f} MB is larger than the "
-                          f"{MAX_URDF_BYTES / 1e6:g} MB a URDF may have")
+        raise UrdfRefused(
+            source, f"{len(text) / 1e6:.1f} MB is larger than the {MAX_URDF_BYTES / 1e6:g} MB a URDF may have"
+        )
     if "<!DOCTYPE" in text or "<!ENTITY" in text:
-        raise UrdfRefused(source, "DTD or entity declarations (<!DOCTYPE, <!ENTITY) are not "
-                          "allowed in a URDF; they are never needed and can expand without bound")
+        raise UrdfRefused(
+            source,
+            "DTD or entity declarations (<!DOCTYPE, <!ENTITY) are not "
+            "allowed in a URDF; they are never needed and can expand without bound",
+        )
     try:
         root = ET.fromstring(text)
     except ET.ParseError as err:
         line, column = err.position
-        raise UrdfSyntaxError(source, f"malformed XML at line {line}, column {column + 1}: "
-                              f"{str(err).split(':')[0]}") from err
+        raise UrdfSyntaxError(
+            source, f"malformed XML at line {line}, column {column + 1}: {str(err).split(':')[0]}"
+        ) from err
     if sum(1 for _ in root.iter()) > MAX_ELEMENTS:
         raise UrdfRefused(source, f"more than {MAX_ELEMENTS} XML elements")
     if root.tag != "robot":
@@ -406,18 +469,25 @@ def check_urdf(text: str, source: str, base: Path | None = None,
         parent, child = parent_el.get("link", ""), child_el.get("link", "")
         for role, link in (("parent", parent), ("child", child)):
             if link not in links:
-                raise UrdfStructureError(source, f"joint {name!r}: {role} link {link!r} is not defined "
-                                         f"(links: {', '.join(sorted(links))})")
+                raise UrdfStructureError(
+                    source,
+                    f"joint {name!r}: {role} link {link!r} is not defined "
+                    f"(links: {', '.join(sorted(links))})",
+                )
         if child in parent_of:
-            raise UrdfStructureError(source, f"link {child!r} is the child of two joints "
-                                     f"({parent_of[child][1]!r} and {name!r})")
+            raise UrdfStructureError(
+                source, f"link {child!r} is the child of two joints ({parent_of[child][1]!r} and {name!r})"
+            )
         parent_of[child] = (parent, name)
 
     _refuse_cycles(parent_of, source)
     roots_found = [name for name in links if name not in parent_of]
     if len(roots_found) != 1:
-        raise UrdfStructureError(source, f"links {sorted(roots_found)} have no parent joint: the "
-                                 "links do not form one tree (every link but the root needs one)")
+        raise UrdfStructureError(
+            source,
+            f"links {sorted(roots_found)} have no parent joint: the "
+            "links do not form one tree (every link but the root needs one)",
+        )
     _check_origin_of_root(links[roots_found[0]], roots_found[0], source)
 
     masses, massless, flipped = _check_inertias(links, parent_of, source)
@@ -432,13 +502,18 @@ def check_urdf(text: str, source: str, base: Path | None = None,
         path = _resolve_mesh(uri, base, allowed, source)
         if path is not None and not path.is_file():
             where = "visual" if id(mesh) in visual_meshes else "collision"
-            warnings.warn(f"{source}: {where} mesh {uri!r} not found ({path}); the robot simulates, "
-                          "the viewer leaves that part out", MissingMeshWarning, stacklevel=3)
+            warnings.warn(
+                f"{source}: {where} mesh {uri!r} not found ({path}); the robot simulates, "
+                "the viewer leaves that part out",
+                MissingMeshWarning,
+                stacklevel=3,
+            )
     return _repaired(root, massless, flipped) or text
 
 
-def resolved_visuals(text: str, source: str, base: Path | None = None,
-                     roots: list[Path] | None = None) -> str:
+def resolved_visuals(
+    text: str, source: str, base: Path | None = None, roots: list[Path] | None = None
+) -> str:
     """The URDF with every visual mesh's filename replaced by the file it resolves to under the
     mesh rules (:func:`mesh_roots`, or ``roots``), and every visual whose mesh is missing removed,
     so that the geometry parser reads no other file and one missing mesh costs only its own part.
@@ -501,10 +576,13 @@ def _refuse_cycles(parent_of: dict[str, tuple[str, str]], source: str) -> None:
         link = start
         while link in parent_of and link not in done:
             if link in on_walk:
-                loop = walk[walk.index(link):] + [link]
+                loop = walk[walk.index(link) :] + [link]
                 joints = [parent_of[x][1] for x in loop[:-1]]
-                raise KinematicCycle(source, f"the joints {joints} form a closed loop through links "
-                                     f"{loop}; Pinocchio models trees only")
+                raise KinematicCycle(
+                    source,
+                    f"the joints {joints} form a closed loop through links "
+                    f"{loop}; Pinocchio models trees only",
+                )
             walk.append(link)
             on_walk.add(link)
             link = parent_of[link][0]

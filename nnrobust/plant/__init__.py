@@ -7,5 +7,14 @@ from .plant import Plant
 from .scaling import scaled_disturbance, scaled_friction, torque_scale
 from .sensing import Sensor
 
-__all__ = ["Friction", "JointStops", "Plant", "Sensor", "SinusoidalDisturbance", "saturate",
-           "scaled_disturbance", "scaled_friction", "torque_scale"]
+__all__ = [
+    "Friction",
+    "JointStops",
+    "Plant",
+    "Sensor",
+    "SinusoidalDisturbance",
+    "saturate",
+    "scaled_disturbance",
+    "scaled_friction",
+    "torque_scale",
+]

@@ -37,8 +37,10 @@ class Friction:
         object.__setattr__(self, "coulomb", np.asarray(self.coulomb, dtype=float))
         static = self.coulomb if self.static is None else np.asarray(self.static, dtype=float)
         if static.shape != self.coulomb.shape or np.any(~(static >= self.coulomb)):
-            raise ValueError(f"friction: the static level F_s {static.tolist()} must be >= the Coulomb "
-                             f"level F_c {self.coulomb.tolist()}, joint by joint")
+            raise ValueError(
+                f"friction: the static level F_s {static.tolist()} must be >= the Coulomb "
+                f"level F_c {self.coulomb.tolist()}, joint by joint"
+            )
         object.__setattr__(self, "static", static)
 
     @classmethod

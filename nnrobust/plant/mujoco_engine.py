@@ -252,9 +252,14 @@ def build_mujoco_plant(
         jname, inertia = payload
         body = joints[jname].parent  # the body the joint moves
         # at the joint's frame, its centre of mass at the lever (MuJoCo fuses it into the body)
-        body.add_body(name="nnrobust_payload", pos=[0.0, 0.0, 0.0], ipos=np.asarray(inertia.lever, float),
-                      mass=float(inertia.mass), inertia=np.diag(inertia.inertia).astype(float),
-                      explicitinertial=True)
+        body.add_body(
+            name="nnrobust_payload",
+            pos=[0.0, 0.0, 0.0],
+            ipos=np.asarray(inertia.lever, float),
+            mass=float(inertia.mass),
+            inertia=np.diag(inertia.inertia).astype(float),
+            explicitinertial=True,
+        )
     spec.option.timestep = h
     spec.option.integrator = getattr(mujoco.mjtIntegrator, f"mjINT_{integrator.upper()}")
     spec.option.gravity = np.asarray(pin_model.gravity.linear, float)

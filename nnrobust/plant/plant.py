@@ -90,8 +90,14 @@ class Plant:
         """
         return self.model.forward_dynamics(q, v, self.net_torque(t, q, v, tau, np.sign(v).astype(int)))
 
-    def net_torque(self, t: float, q: np.ndarray, v: np.ndarray, tau: np.ndarray, mode: np.ndarray,
-                   ) -> np.ndarray:
+    def net_torque(
+        self,
+        t: float,
+        q: np.ndarray,
+        v: np.ndarray,
+        tau: np.ndarray,
+        mode: np.ndarray,
+    ) -> np.ndarray:
         """The torque on the arm but its own dynamics, tau + tau_stop - tau_d - F [N m].
 
         A sticky joint's dry friction is F_c mode_i (0 where it is held).
@@ -103,8 +109,9 @@ class Plant:
             net = net + self.stops.torque(q, v)
         return net
 
-    def constrained_acceleration(self, t: float, q: np.ndarray, v: np.ndarray, tau: np.ndarray,
-                                 mode: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def constrained_acceleration(
+        self, t: float, q: np.ndarray, v: np.ndarray, tau: np.ndarray, mode: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         """(q'', f_held) with the friction modes held (:mod:`nnrobust.plant.stick_slip`).
 
         A sticky joint slips with F_c mode_i (mode +-1) or is held (mode 0: q''_i = 0); f_held is

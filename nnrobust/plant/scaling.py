@@ -74,15 +74,19 @@ def torque_scale(robot: PinocchioModel) -> np.ndarray:
     bad = _beyond(effort, need)
     if np.any(bad):
         joints = ", ".join(f"{robot.joint_names[i]!r} ({effort[i]:g})" for i in np.flatnonzero(bad))
-        warnings.warn(f"{robot.name}: effort limits of joints {joints} [N m] are over "
-                      f"{PLAUSIBLE_EFFORT_RATIO:g}x the {need:.3g} N m the arm needs at most "
-                      "(M_ii 10 rad/s^2 + |G_i| over its range); the scaled friction and disturbance "
-                      "size those joints by their own need instead (docs/plant.md)", stacklevel=3)
+        warnings.warn(
+            f"{robot.name}: effort limits of joints {joints} [N m] are over "
+            f"{PLAUSIBLE_EFFORT_RATIO:g}x the {need:.3g} N m the arm needs at most "
+            "(M_ii 10 rad/s^2 + |G_i| over its range); the scaled friction and disturbance "
+            "size those joints by their own need instead (docs/plant.md)",
+            stacklevel=3,
+        )
     return np.where(usable(effort) & ~bad, effort, torque_needed(robot, robot.mid_configuration))
 
 
-def scaled_friction(robot: PinocchioModel, viscous_level: float, coulomb_level: float,
-                    tau_ref: np.ndarray | None = None) -> Friction:
+def scaled_friction(
+    robot: PinocchioModel, viscous_level: float, coulomb_level: float, tau_ref: np.ndarray | None = None
+) -> Friction:
     """Coulomb = coulomb_level tau_ref; viscous = viscous_level tau_ref / v_max (v_max from the URDF,
     else 3 rad/s): at top speed the viscous torque is viscous_level of the joint's torque scale
     (``tau_ref``, default :func:`torque_scale`).
@@ -93,8 +97,9 @@ def scaled_friction(robot: PinocchioModel, viscous_level: float, coulomb_level: 
     return Friction(viscous_level * tau / speed, coulomb_level * tau)
 
 
-def scaled_disturbance(robot: PinocchioModel, level: float,
-                       tau_ref: np.ndarray | None = None) -> SinusoidalDisturbance:
+def scaled_disturbance(
+    robot: PinocchioModel, level: float, tau_ref: np.ndarray | None = None
+) -> SinusoidalDisturbance:
     """tau_d,i(t) = level tau_ref,i (sin(t + phi_i) + sin(2 t + 2 phi_i)) / 2, phi_i = i x golden
     angle: the paper's two harmonics (1 and 2 rad/s), peak at most level tau_ref on every joint
     (``tau_ref``, default :func:`torque_scale`).

@@ -205,8 +205,16 @@ class StickSlipIntegrator:
         self.events = 0
         self.unresolved = 0
 
-    def advance(self, flow: Flow, t: float, q: np.ndarray, v: np.ndarray, tau: np.ndarray, h: float,
-                new_command: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    def advance(
+        self,
+        flow: Flow,
+        t: float,
+        q: np.ndarray,
+        v: np.ndarray,
+        tau: np.ndarray,
+        h: float,
+        new_command: bool = True,
+    ) -> tuple[np.ndarray, np.ndarray]:
         """(q, v) at t + h from (q, v) at t under the torque tau, switching modes at events.
 
         ``new_command``: tau changed since the last call, so the joints at rest choose again
@@ -230,6 +238,7 @@ class StickSlipIntegrator:
             g_start = _events(plant, t, q, v, tau, mode, slipping, held)
             first, which = span, -1
             for i in triggered:
+
                 def g(s, i=i):
                     qs, vs = flow(t, q, v, mode, s)
                     return _events(plant, t + s, qs, vs, tau, mode, slipping, held)[i]

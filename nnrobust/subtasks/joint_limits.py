@@ -14,8 +14,9 @@ def _finite_range(lower, upper) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """
     lower, upper = np.asarray(lower, dtype=float), np.asarray(upper, dtype=float)
     if lower.shape != upper.shape or lower.ndim != 1:
-        raise ValueError(f"joint limits: lower {lower.shape} and upper {upper.shape} must be vectors "
-                         "of the same length")
+        raise ValueError(
+            f"joint limits: lower {lower.shape} and upper {upper.shape} must be vectors of the same length"
+        )
     unlimited = (lower == -np.inf) & (upper == np.inf)
     finite = np.isfinite(lower) & np.isfinite(upper) & (upper - lower > 0) & (upper - lower <= 1e3)
     bad = ~unlimited & ~finite
@@ -25,8 +26,9 @@ def _finite_range(lower, upper) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
             f"(lower {lower[bad].tolist()}, upper {upper[bad].tolist()}); set <limit> in the URDF"
         )
     if np.all(unlimited):
-        raise ValueError("joint limits: no joint has limits (all are continuous); the criterion has "
-                         "nothing to do")
+        raise ValueError(
+            "joint limits: no joint has limits (all are continuous); the criterion has nothing to do"
+        )
     return np.where(unlimited, -1.0, lower), np.where(unlimited, 1.0, upper), ~unlimited
 
 
@@ -57,7 +59,7 @@ class JointLimitAvoidance(Criterion):
         knot = np.clip(q, self._low_knot, self._high_knot)
         s = (self.upper - knot) * (knot - self.lower)
         b = self.span**2 / (4 * s)
-        db = -self.span**2 * (self.upper + self.lower - 2 * knot) / (4 * s**2)
+        db = -(self.span**2) * (self.upper + self.lower - 2 * knot) / (4 * s**2)
         return np.where(self.limited, b + db * (q - knot), 1.0), np.where(self.limited, db, 0.0)
 
     def value(self, model: DynamicsModel, q: np.ndarray) -> float:

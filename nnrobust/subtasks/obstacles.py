@@ -31,8 +31,9 @@ class SphereObstacles(Criterion):
         self.centers = np.atleast_2d(np.asarray(centers, dtype=float))
         self.radii = np.atleast_1d(np.asarray(radii, dtype=float))
         if self.centers.shape[1:] != (3,) or self.radii.shape != (self.centers.shape[0],):
-            raise ValueError(f"obstacles: need K x 3 centres and K radii, got {self.centers.shape} "
-                             f"and {self.radii.shape}")
+            raise ValueError(
+                f"obstacles: need K x 3 centres and K radii, got {self.centers.shape} and {self.radii.shape}"
+            )
         if np.any(self.radii < 0) or influence <= 0 or link_radius < 0:
             raise ValueError("obstacles: radii and link_radius must be >= 0 and influence > 0")
         self.influence = float(influence)

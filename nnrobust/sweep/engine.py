@@ -32,8 +32,9 @@ def _require_engine():
         import distributed  # noqa: F401
         import pyarrow  # noqa: F401
     except ImportError as err:
-        raise NNRobustError(f"sweeps need dask.distributed and pyarrow ({err}); "
-                            "pip install 'nnrobust[sweep]'") from err
+        raise NNRobustError(
+            f"sweeps need dask.distributed and pyarrow ({err}); pip install 'nnrobust[sweep]'"
+        ) from err
 
 
 # ---- on the workers ------------------------------------------------------------------------------
@@ -109,15 +110,18 @@ def schema(spec: SweepSpec):
             return pa.int64()  # seeds: exact beyond 2^53, where a float64 column would round them
         if numbers:
             return pa.float64()
-        if all(isinstance(v, list) and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)
-               for v in values):
+        if all(
+            isinstance(v, list) and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)
+            for v in values
+        ):
             return pa.list_(pa.float64())
         return pa.string()  # strings, or a mix of types: each value as its TOML text
 
     fields = [("sample", pa.int64()), ("controller", pa.string())]
     for key, value in spec.vary.items():
-        values = value if isinstance(value, list) else (
-            list(value.values())[0] if "choice" in value else [0.0])
+        values = (
+            value if isinstance(value, list) else (list(value.values())[0] if "choice" in value else [0.0])
+        )
         fields.append((key, varied_type(values)))
     fields += [("seed", pa.int64()), ("warnings", pa.list_(pa.string()))]
     fields += [(name, pa.string()) for name in TEXTS] + [(name, pa.bool_()) for name in FLAGS]
@@ -140,8 +144,9 @@ def _write_part(folder: Path, rows: list[dict], table_schema) -> Path:
     columns = {name: [row.get(name) for row in rows] for name in table_schema.names}
     for field in table_schema:  # a varied value of another type than its column's: its TOML text
         if field.type == pa.string():
-            columns[field.name] = [v if v is None or isinstance(v, str) else _toml_text(v)
-                                   for v in columns[field.name]]
+            columns[field.name] = [
+                v if v is None or isinstance(v, str) else _toml_text(v) for v in columns[field.name]
+            ]
     table = pa.Table.from_pydict(columns, schema=table_schema)
     path = folder / RESULTS / f"part-{uuid.uuid4().hex[:12]}.parquet"
     tmp = path.with_name(f".{path.name}.partial")
@@ -204,8 +209,10 @@ def check_scheduler(address: str) -> str:
         hint = "" if parts.scheme in ("tcp", "") else f"; {parts.scheme}:// is not supported"
         if parts.scheme == "tls":
             hint += " (a TLS cluster needs dask's security settings: connect from Python, distributed.Client)"
-        raise NNRobustError(f"--scheduler {address!r}: not a dask scheduler's address; give tcp://HOST:PORT, "
-                            f"e.g. tcp://127.0.0.1:8786{hint}")
+        raise NNRobustError(
+            f"--scheduler {address!r}: not a dask scheduler's address; give tcp://HOST:PORT, "
+            f"e.g. tcp://127.0.0.1:8786{hint}"
+        )
     where = f"--scheduler {address}"
     try:
         with socket.create_connection((parts.hostname, port), timeout=PROBE_SECONDS) as sock:
@@ -214,20 +221,27 @@ def check_scheduler(address: str) -> str:
             while len(head) < 8:
                 chunk = sock.recv(8 - len(head))
                 if not chunk:
-                    raise NNRobustError(f"{where}: the peer closed the connection without a dask handshake; "
-                                        "is it a dask scheduler?")
+                    raise NNRobustError(
+                        f"{where}: the peer closed the connection without a dask handshake; "
+                        "is it a dask scheduler?"
+                    )
                 head += chunk
     except TimeoutError as err:
-        raise NNRobustError(f"{where}: no dask handshake within {PROBE_SECONDS:g} s (a silent port, or a "
-                            "server of another protocol such as a web server); give a dask scheduler's "
-                            "address") from err
+        raise NNRobustError(
+            f"{where}: no dask handshake within {PROBE_SECONDS:g} s (a silent port, or a "
+            "server of another protocol such as a web server); give a dask scheduler's "
+            "address"
+        ) from err
     except OSError as err:
-        raise NNRobustError(f"{where}: cannot connect ({err.strerror or err}); is a dask scheduler running "
-                            "there?") from err
+        raise NNRobustError(
+            f"{where}: cannot connect ({err.strerror or err}); is a dask scheduler running there?"
+        ) from err
     (announced,) = struct.unpack("<Q", head)
     if not 0 < announced <= MAX_HANDSHAKE:
-        raise NNRobustError(f"{where}: the peer does not speak dask's protocol (its first message announces "
-                            f"{announced} bytes); give a dask scheduler's address")
+        raise NNRobustError(
+            f"{where}: the peer does not speak dask's protocol (its first message announces "
+            f"{announced} bytes); give a dask scheduler's address"
+        )
     return f"tcp://{parts.hostname}:{port}"
 
 
@@ -248,9 +262,14 @@ def _client(workers: int | None, scheduler: str | None):
         return
     if workers is not None and not (isinstance(workers, int) and 1 <= workers <= MAX_WORKERS):
         raise NNRobustError(f"--workers {workers}: give 1 to {MAX_WORKERS} local worker processes")
-    cluster = LocalCluster(n_workers=workers or os.cpu_count() or 1, threads_per_worker=1,
-                           processes=True, host="127.0.0.1", dashboard_address=LOOPBACK_HTTP,
-                           silence_logs=logging.ERROR)
+    cluster = LocalCluster(
+        n_workers=workers or os.cpu_count() or 1,
+        threads_per_worker=1,
+        processes=True,
+        host="127.0.0.1",
+        dashboard_address=LOOPBACK_HTTP,
+        silence_logs=logging.ERROR,
+    )
     client = Client(cluster)
     try:
         yield client
@@ -284,8 +303,15 @@ def chunk_size(jobs: int, workers: int, seconds_per_job: float) -> int:
     return max(1, min(by_time, by_balance))
 
 
-def run_sweep(spec: SweepSpec, folder: str | Path, workers: int | None = None, scheduler: str | None = None,
-              overwrite: bool = False, progress=None, seconds_per_job: float = 0.5) -> dict:
+def run_sweep(
+    spec: SweepSpec,
+    folder: str | Path,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    overwrite: bool = False,
+    progress=None,
+    seconds_per_job: float = 0.5,
+) -> dict:
     """Run (or resume) a sweep into ``folder``; returns {"computed": rows, "skipped": rows, "parts": n}.
 
     ``progress(done, total)`` is called as chunks finish.
@@ -296,12 +322,22 @@ def run_sweep(spec: SweepSpec, folder: str | Path, workers: int | None = None, s
     from ..study_folder import held
 
     with held(folder):  # one sweep at a time into a folder: never a row twice
-        return _run_sweep(spec, folder, base_toml, jobs, workers, scheduler, overwrite, progress,
-                          seconds_per_job)
+        return _run_sweep(
+            spec, folder, base_toml, jobs, workers, scheduler, overwrite, progress, seconds_per_job
+        )
 
 
-def _run_sweep(spec: SweepSpec, folder: Path, base_toml: str, jobs: list, workers, scheduler, overwrite: bool,
-               progress, seconds_per_job: float) -> dict:
+def _run_sweep(
+    spec: SweepSpec,
+    folder: Path,
+    base_toml: str,
+    jobs: list,
+    workers,
+    scheduler,
+    overwrite: bool,
+    progress,
+    seconds_per_job: float,
+) -> dict:
     prepare_folder(spec, folder, overwrite)
     done = _done_rows(folder)
     jobs = [job for job in jobs if job not in done]
@@ -316,11 +352,13 @@ def _run_sweep(spec: SweepSpec, folder: Path, base_toml: str, jobs: list, worker
 
         n_workers = max(len(client.scheduler_info().get("workers", {})), 1)
         size = chunk_size(len(jobs), n_workers, seconds_per_job)
-        chunks = [jobs[i:i + size] for i in range(0, len(jobs), size)]
+        chunks = [jobs[i : i + size] for i in range(0, len(jobs), size)]
         spec_future = client.scatter(spec, broadcast=True)
         base_future = client.scatter(base_toml, broadcast=True)
-        futures = [client.submit(run_rows, spec_future, base_future, chunk, pure=False, retries=2)
-                   for chunk in chunks]
+        futures = [
+            client.submit(run_rows, spec_future, base_future, chunk, pure=False, retries=2)
+            for chunk in chunks
+        ]
         if progress:
             progress(skipped, total)
         pending = as_completed(futures)

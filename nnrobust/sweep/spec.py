@@ -93,8 +93,14 @@ class SweepSpec:
     def to_toml(self) -> str:
         """The resolved sweep file (what DIR/sweep.toml holds)."""
         entries = [{"name": c, **self.custom[c]} if c in self.custom else c for c in self.controllers]
-        head = {"name": self.name, "description": self.description, "base": self.base,
-                "controllers": entries, "samples": self.samples, "seed": self.seed}
+        head = {
+            "name": self.name,
+            "description": self.description,
+            "base": self.base,
+            "controllers": entries,
+            "samples": self.samples,
+            "seed": self.seed,
+        }
         lines = [dump_toml(head).rstrip("\n")]
         for table in ("set", "vary"):
             lines += ["", f"[{table}]"]
@@ -131,9 +137,10 @@ def _number(path: str, value) -> float:
 
 def _check_distribution(key: str, table: dict) -> None:
     if len(table) != 1:
-        raise ConfigError(f"vary.{key}", f"needs exactly one of {', '.join(DISTRIBUTIONS)}, got "
-                          f"{sorted(table)}")
-    (kind, params), = table.items()
+        raise ConfigError(
+            f"vary.{key}", f"needs exactly one of {', '.join(DISTRIBUTIONS)}, got {sorted(table)}"
+        )
+    ((kind, params),) = table.items()
     path = f"vary.{key}.{kind}"
     if kind not in DISTRIBUTIONS:
         raise ConfigError(path, f"unknown distribution; valid: {', '.join(DISTRIBUTIONS)}")
@@ -162,29 +169,39 @@ def _controllers(entries, where: str) -> tuple[list[str], dict]:
     """
     key = f"{where}: controllers"
     if not isinstance(entries, list) or not entries:
-        raise ConfigError(key, f"needs a list of {', '.join(CONTROLLER_KINDS)} or tables "
-                          "{name = ..., class = \"file.py:Class\", params = {...}}, "
-                          f"got {entries!r}")
+        raise ConfigError(
+            key,
+            f"needs a list of {', '.join(CONTROLLER_KINDS)} or tables "
+            '{name = ..., class = "file.py:Class", params = {...}}, '
+            f"got {entries!r}",
+        )
     names, custom = [], {}
     for i, entry in enumerate(entries):
         if isinstance(entry, dict):
             unknown = [k for k in entry if k not in CUSTOM_KEYS]
             if unknown or not isinstance(entry.get("name"), str) or not isinstance(entry.get("class"), str):
-                raise ConfigError(f"{key}[{i}]", "a custom entry is {name = \"...\", class = "
-                                  "\"file.py:Class\", "
-                                  f"params = {{...}}}} (params optional), got {entry!r}")
+                raise ConfigError(
+                    f"{key}[{i}]",
+                    'a custom entry is {name = "...", class = '
+                    '"file.py:Class", '
+                    f"params = {{...}}}} (params optional), got {entry!r}",
+                )
             if not NAME.fullmatch(entry["name"]) or entry["name"] in CONTROLLER_KINDS:
-                raise ConfigError(f"{key}[{i}].name", f"{entry['name']!r} must be 1-40 letters, digits, "
-                                  "'_' or '-' "
-                                  "and not a built-in kind")
+                raise ConfigError(
+                    f"{key}[{i}].name",
+                    f"{entry['name']!r} must be 1-40 letters, digits, '_' or '-' and not a built-in kind",
+                )
             custom[entry["name"]] = {"class": entry["class"], "params": dict(entry.get("params") or {})}
             names.append(entry["name"])
         elif entry in CONTROLLER_KINDS:
             names.append(entry)
         else:
-            raise ConfigError(f"{key}[{i}]", f"{entry!r} is not one of {', '.join(CONTROLLER_KINDS)} nor "
-                              "a table "
-                              "{name = ..., class = \"file.py:Class\", params = {...}}")
+            raise ConfigError(
+                f"{key}[{i}]",
+                f"{entry!r} is not one of {', '.join(CONTROLLER_KINDS)} nor "
+                "a table "
+                '{name = ..., class = "file.py:Class", params = {...}}',
+            )
     if len(set(names)) != len(names):
         raise ConfigError(key, f"lists a controller twice: {names}")
     return names, custom
@@ -206,12 +223,20 @@ def parse_sweep(data: dict, where: str = "sweep") -> SweepSpec:
         raise ConfigError(f"{where}: name", "name and base must be strings")
     controllers, custom = _controllers(data["controllers"], where)
     for table in ("set", "vary"):
-        chosen = [k for k in data.get(table, {}) if isinstance(k, str) and k.split(".")[:2] in (
-            ["controller", "kind"], ["controller", "class"], ["controller", "params"])]
+        chosen = [
+            k
+            for k in data.get(table, {})
+            if isinstance(k, str)
+            and k.split(".")[:2]
+            in (["controller", "kind"], ["controller", "class"], ["controller", "params"])
+        ]
         if chosen:
-            raise ConfigError(f"{where}: {table}.{chosen[0]}", "the controllers list chooses each row's "
-                              "controller; give a custom law's parameters in its entry: {name = ..., class = "
-                              "..., params = {...}}")
+            raise ConfigError(
+                f"{where}: {table}.{chosen[0]}",
+                "the controllers list chooses each row's "
+                "controller; give a custom law's parameters in its entry: {name = ..., class = "
+                "..., params = {...}}",
+            )
     for key, low in (("samples", 1), ("seed", 0)):
         value = data.get(key, low)
         if isinstance(value, bool) or not isinstance(value, int) or not low <= value < 2**63:
@@ -230,14 +255,26 @@ def parse_sweep(data: dict, where: str = "sweep") -> SweepSpec:
         if isinstance(value, dict):
             _check_distribution(key, value)
         elif not isinstance(value, list) or not value:
-            raise ConfigError(f"{where}: vary.{key}", "expected a non-empty list (grid) or a "
-                              f"distribution table, got {value!r}")
-    spec = SweepSpec(data["name"], data["base"], list(controllers), data.get("samples", 1),
-                     data.get("seed", 0), dict(data.get("set", {})), dict(vary),
-                     data.get("description", ""), custom)
+            raise ConfigError(
+                f"{where}: vary.{key}",
+                f"expected a non-empty list (grid) or a distribution table, got {value!r}",
+            )
+    spec = SweepSpec(
+        data["name"],
+        data["base"],
+        list(controllers),
+        data.get("samples", 1),
+        data.get("seed", 0),
+        dict(data.get("set", {})),
+        dict(vary),
+        data.get("description", ""),
+        custom,
+    )
     if spec.size * len(controllers) > MAX_ROWS:
-        raise ConfigError(f"{where}: samples", f"{spec.size} samples x {len(controllers)} controllers "
-                          f"exceed {MAX_ROWS} rows")
+        raise ConfigError(
+            f"{where}: samples",
+            f"{spec.size} samples x {len(controllers)} controllers exceed {MAX_ROWS} rows",
+        )
     return spec
 
 
@@ -283,8 +320,11 @@ def base_config(spec: SweepSpec) -> ExperimentConfig:
     elif spec.base in preset_names():
         config = load_preset(spec.base)
     else:
-        raise ConfigError("base", f"{spec.base!r} is neither an experiment file (.toml) nor a preset; "
-                          f"presets: {', '.join(preset_names())}")
+        raise ConfigError(
+            "base",
+            f"{spec.base!r} is neither an experiment file (.toml) nor a preset; "
+            f"presets: {', '.join(preset_names())}",
+        )
     try:
         return apply_overrides(config, spec.set)
     except ConfigError as err:
@@ -303,7 +343,7 @@ def draw(spec: SweepSpec, sample_id: int) -> Sample:
     seed = sample_seed(spec.seed, sample_id)
     rng = np.random.default_rng(seed)
     for key in spec.random_keys:
-        (kind, params), = spec.vary[key].items()
+        ((kind, params),) = spec.vary[key].items()
         if kind == "uniform":
             value = float(rng.uniform(*params))
         elif kind == "normal":
@@ -323,16 +363,19 @@ model error draw and sensor noise, the same for every controller (common random 
 
 def experiment(spec: SweepSpec, base: ExperimentConfig, sample: Sample, controller: str) -> ExperimentConfig:
     """The experiment of one (sample, controller) row, validated."""
-    overrides = {key: sample.seed % 2**31 for key in SEEDED_KEYS
-                 if key not in spec.set and key not in spec.vary}
+    overrides = {
+        key: sample.seed % 2**31 for key in SEEDED_KEYS if key not in spec.set and key not in spec.vary
+    }
     overrides.update(sample.values)
     overrides.update(controller_overrides(spec, controller))
     try:
         return apply_overrides(base, overrides)
     except ConfigError as err:
         values = ", ".join(f"{k} = {v!r}" for k, v in sample.values.items())
-        raise ConfigError(f"vary: {err.key}", f"{str(err).split(': ', 1)[1]} (sample {sample.id}: "
-                          f"{values or 'no varied values'})") from err
+        raise ConfigError(
+            f"vary: {err.key}",
+            f"{str(err).split(': ', 1)[1]} (sample {sample.id}: {values or 'no varied values'})",
+        ) from err
 
 
 def controller_overrides(spec: SweepSpec, controller: str) -> dict:
@@ -340,16 +383,22 @@ def controller_overrides(spec: SweepSpec, controller: str) -> dict:
     if controller not in spec.custom:
         return {"controller.kind": controller}
     entry = spec.custom[controller]
-    return {"controller.kind": "custom", "controller.class": entry["class"],
-            "controller.params": entry["params"] or None}
+    return {
+        "controller.kind": "custom",
+        "controller.class": entry["class"],
+        "controller.params": entry["params"] or None,
+    }
 
 
 def rerun_command(spec: SweepSpec, sample: Sample, controller: str) -> str:
     """The one-line command that reruns a sample as a normal run, every argument shell-quoted."""
     import shlex
 
-    values = {**spec.set, **{key: sample.seed % 2**31 for key in SEEDED_KEYS
-                             if key not in spec.set and key not in spec.vary}, **sample.values}
+    values = {
+        **spec.set,
+        **{key: sample.seed % 2**31 for key in SEEDED_KEYS if key not in spec.set and key not in spec.vary},
+        **sample.values,
+    }
     if controller in spec.custom:
         values.update({f"controller.params.{k}": v for k, v in spec.custom[controller]["params"].items()})
     chosen = spec.custom[controller]["class"] if controller in spec.custom else controller

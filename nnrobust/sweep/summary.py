@@ -17,8 +17,11 @@ def _stats(values: np.ndarray) -> dict:
     values = values[np.isfinite(values)]
     if not values.size:
         return {"median": None, "p95": None, "max": None}
-    return {"median": float(np.median(values)), "p95": float(np.percentile(values, 95)),
-            "max": float(values.max())}
+    return {
+        "median": float(np.median(values)),
+        "p95": float(np.percentile(values, 95)),
+        "max": float(values.max()),
+    }
 
 
 def _equal(cell, value) -> bool:
@@ -36,25 +39,37 @@ def summarize(spec: SweepSpec, frame) -> dict:
     for controller in spec.controllers:
         rows = frame[frame["controller"] == controller]
         completed = rows[rows["status"] == "completed"]
-        entry: dict[str, object] = {"rows": int(len(rows)),
-                 "success_rate": float(len(completed) / len(rows)) if len(rows) else None,
-                 "saturated_fraction_mean": (float(completed["saturated_fraction"].mean())
-                                             if len(completed) else None),
-                 "rows_with_warnings": int(sum(len(w) > 0 for w in rows["warnings"]))}
+        entry: dict[str, object] = {
+            "rows": int(len(rows)),
+            "success_rate": float(len(completed) / len(rows)) if len(rows) else None,
+            "saturated_fraction_mean": (
+                float(completed["saturated_fraction"].mean()) if len(completed) else None
+            ),
+            "rows_with_warnings": int(sum(len(w) > 0 for w in rows["warnings"])),
+        }
         for key in STATISTICS:
             entry[key] = _stats(completed[key].to_numpy(dtype=float))
         entry["by_grid"] = {
-            key: {str(value): _stats(completed[completed[key].map(lambda v, w=value: _equal(v, w))]
-                                     ["rms_error_after_2s"].to_numpy(dtype=float))
-                  for value in spec.vary[key]}
-            for key in spec.grid_keys}
+            key: {
+                str(value): _stats(
+                    completed[completed[key].map(lambda v, w=value: _equal(v, w))][
+                        "rms_error_after_2s"
+                    ].to_numpy(dtype=float)
+                )
+                for value in spec.vary[key]
+            }
+            for key in spec.grid_keys
+        }
         ranked = completed[np.isfinite(completed["rms_error_after_2s"].to_numpy(dtype=float))]
         if len(ranked):
             worst = ranked.loc[ranked["rms_error_after_2s"].idxmax()]
             sample = draw(spec, int(worst["sample"]))
-            entry["worst"] = {"sample": int(worst["sample"]),
-                              "rms_error_after_2s": float(worst["rms_error_after_2s"]),
-                              "values": sample.values, "command": rerun_command(spec, sample, controller)}
+            entry["worst"] = {
+                "sample": int(worst["sample"]),
+                "rms_error_after_2s": float(worst["rms_error_after_2s"]),
+                "values": sample.values,
+                "command": rerun_command(spec, sample, controller),
+            }
         out["controllers"][controller] = entry
     return out
 
@@ -66,8 +81,10 @@ def write_summary(folder: str | Path, summary: dict) -> Path:
 
 def format_summary(summary: dict) -> str:
     """The closing table: one line per controller (errors in mm, torques in N m)."""
-    head = (f"{'controller':16s} {'rows':>6s} {'ok %':>6s} {'median e [mm]':>14s} {'p95 e [mm]':>11s} "
-            f"{'max e [mm]':>11s} {'median tau':>11s} {'p95 tau':>9s} {'sat %':>6s}")
+    head = (
+        f"{'controller':16s} {'rows':>6s} {'ok %':>6s} {'median e [mm]':>14s} {'p95 e [mm]':>11s} "
+        f"{'max e [mm]':>11s} {'median tau':>11s} {'p95 tau':>9s} {'sat %':>6s}"
+    )
     lines = [head, "-" * len(head)]
 
     def mm(v):
@@ -80,9 +97,11 @@ def format_summary(summary: dict) -> str:
         ok = "-" if e["success_rate"] is None else f"{100 * e['success_rate']:.0f}"
         sat = "-" if e["saturated_fraction_mean"] is None else f"{100 * e['saturated_fraction_mean']:.2f}"
         err, tau = e["rms_error_after_2s"], e["rms_torque"]
-        lines.append(f"{controller:16s} {e['rows']:6d} {ok:>6s} {mm(err['median']):>14s} "
-                     f"{mm(err['p95']):>11s} {mm(err['max']):>11s} {nm(tau['median']):>11s} "
-                     f"{nm(tau['p95']):>9s} {sat:>6s}")
+        lines.append(
+            f"{controller:16s} {e['rows']:6d} {ok:>6s} {mm(err['median']):>14s} "
+            f"{mm(err['p95']):>11s} {mm(err['max']):>11s} {nm(tau['median']):>11s} "
+            f"{nm(tau['p95']):>9s} {sat:>6s}"
+        )
     return "\n".join(lines)
 
 
@@ -146,8 +165,9 @@ def plot_sweep(spec: SweepSpec, frame, folder: str | Path) -> list[Path]:
             error = 1e3 * rows["rms_error_after_2s"].to_numpy(dtype=float)
             shown = np.isfinite(error)
             if shown.any():
-                ax.scatter(np.asarray(values, dtype=float)[shown], error[shown], s=10, alpha=0.6,
-                           label=controller)
+                ax.scatter(
+                    np.asarray(values, dtype=float)[shown], error[shown], s=10, alpha=0.6, label=controller
+                )
             if labels is not None:
                 ax.set_xticks(range(len(labels)), [label[:20] for label in labels], fontsize=7)
         log_scale(ax, "y", done["rms_error_after_2s"])

@@ -39,8 +39,13 @@ OBJECTIVES = ("rms_error_after_2s", "rms_torque", "torque_chatter")
 """What every setting is recorded with (the Pareto front's axes, all minimised): [m], [N m], [N m].
 The search minimises the first under the constraints."""
 
-CONSTRAINTS = ("rms_torque_over_limit", "saturated_over_limit", "runaway", "joint_limit_violation",
-               "completed")
+CONSTRAINTS = (
+    "rms_torque_over_limit",
+    "saturated_over_limit",
+    "runaway",
+    "joint_limit_violation",
+    "completed",
+)
 """Each setting's constraints, met when <= 0 (the order of :func:`judge`'s list)."""
 
 FAILED = (1.0, 1e4, 1e4)
@@ -80,22 +85,29 @@ class TuneSpec:
     seed: int = 0
 
     def __post_init__(self):
-        checks = [("--budget", self.budget >= 2 and self.budget <= 100_000, "an integer in [2, 100000]"),
-                  ("--train-samples", 1 <= self.train_samples <= 1000, "an integer in [1, 1000]"),
-                  ("--validation", 0 <= self.validation <= 1000, "an integer in [0, 1000]"),
-                  ("--max-rms-torque", self.max_rms_torque > 0, "> 0 [N m]"),
-                  ("--max-saturated", 0 <= self.max_saturated <= 1, "in [0, 1]"),
-                  ("--seed", 0 <= self.seed < 2**31, "an integer in [0, 2^31)")]
+        checks = [
+            ("--budget", self.budget >= 2 and self.budget <= 100_000, "an integer in [2, 100000]"),
+            ("--train-samples", 1 <= self.train_samples <= 1000, "an integer in [1, 1000]"),
+            ("--validation", 0 <= self.validation <= 1000, "an integer in [0, 1000]"),
+            ("--max-rms-torque", self.max_rms_torque > 0, "> 0 [N m]"),
+            ("--max-saturated", 0 <= self.max_saturated <= 1, "in [0, 1]"),
+            ("--seed", 0 <= self.seed < 2**31, "an integer in [0, 2^31)"),
+        ]
         for flag, ok, valid in checks:
             if not ok:
                 raise ConfigError(flag, f"must be {valid}")
         if self.budget < self.train_samples:
-            raise ConfigError("--budget", f"{self.budget} simulations cannot run one setting on "
-                              f"{self.train_samples} training samples")
+            raise ConfigError(
+                "--budget",
+                f"{self.budget} simulations cannot run one setting on {self.train_samples} training samples",
+            )
         if not self.controllers or len(set(self.controllers)) != len(self.controllers):
-            raise ConfigError("--controllers", f"needs distinct names among {', '.join(TUNABLE)}, custom "
-                              "classes as file.py:Class, or the custom entries of a sweep file; got "
-                              f"{', '.join(self.controllers) or 'none'}")
+            raise ConfigError(
+                "--controllers",
+                f"needs distinct names among {', '.join(TUNABLE)}, custom "
+                "classes as file.py:Class, or the custom entries of a sweep file; got "
+                f"{', '.join(self.controllers) or 'none'}",
+            )
 
     @property
     def trials(self) -> int:
@@ -106,10 +118,18 @@ class TuneSpec:
         """The resolved tuning (DIR/tune.toml)."""
         from ..config import dump_toml
 
-        return dump_toml({"target": self.target, "controllers": self.controllers, "budget": self.budget,
-                          "train_samples": self.train_samples, "validation": self.validation,
-                          "max_rms_torque": self.max_rms_torque if math.isfinite(self.max_rms_torque)
-                          else "inf", "max_saturated": self.max_saturated, "seed": self.seed})
+        return dump_toml(
+            {
+                "target": self.target,
+                "controllers": self.controllers,
+                "budget": self.budget,
+                "train_samples": self.train_samples,
+                "validation": self.validation,
+                "max_rms_torque": self.max_rms_torque if math.isfinite(self.max_rms_torque) else "inf",
+                "max_saturated": self.max_saturated,
+                "seed": self.seed,
+            }
+        )
 
 
 def sweep_of(spec: TuneSpec):
@@ -131,14 +151,22 @@ def sweep_of(spec: TuneSpec):
     if is_sweep:
         sweep = load_sweep(spec.target)
         if sweep.grid_keys:
-            raise ConfigError("vary", f"tuning draws its samples from [vary] distributions; the grid keys "
-                              f"{', '.join(sweep.grid_keys)} are lists (make them a distribution or "
-                              "set them in [set])")
+            raise ConfigError(
+                "vary",
+                f"tuning draws its samples from [vary] distributions; the grid keys "
+                f"{', '.join(sweep.grid_keys)} are lists (make them a distribution or "
+                "set them in [set])",
+            )
         sweep.samples, sweep.seed = size, spec.seed
     else:
         base = str(path.resolve()) if path.suffix == ".toml" else spec.target
-        sweep = SweepSpec(name=path.stem if path.suffix == ".toml" else spec.target, base=base,
-                          controllers=[], samples=size, seed=spec.seed)
+        sweep = SweepSpec(
+            name=path.stem if path.suffix == ".toml" else spec.target,
+            base=base,
+            controllers=[],
+            samples=size,
+            seed=spec.seed,
+        )
     return _with_controllers(sweep, spec.controllers)
 
 
@@ -161,9 +189,12 @@ def _with_controllers(sweep, names: list[str]):
             custom[cls] = {"class": f"{path.resolve()}:{cls}" if path is not None else name, "params": {}}
             controllers.append(cls)
         else:
-            raise ConfigError("--controllers", f"{name!r} is not one of {', '.join(TUNABLE)}, a class as "
-                              f"file.py:Class, nor a custom entry of the sweep file "
-                              f"({', '.join(sweep.custom) or 'it has none'})")
+            raise ConfigError(
+                "--controllers",
+                f"{name!r} is not one of {', '.join(TUNABLE)}, a class as "
+                f"file.py:Class, nor a custom entry of the sweep file "
+                f"({', '.join(sweep.custom) or 'it has none'})",
+            )
     if len(set(controllers)) != len(controllers):
         raise ConfigError("--controllers", f"names a controller twice: {', '.join(controllers)}")
     sweep.controllers, sweep.custom = controllers, custom
@@ -171,6 +202,7 @@ def _with_controllers(sweep, names: list[str]):
 
 
 # ---- on the workers ------------------------------------------------------------------------------
+
 
 def evaluate(sweep, base_toml: str, controller: str, overrides: dict, sample_id: int) -> dict:
     """One simulation of a setting on one sample: its metrics (or the reason it failed)."""
@@ -192,6 +224,7 @@ def evaluate(sweep, base_toml: str, controller: str, overrides: dict, sample_id:
 
 # ---- on the client -------------------------------------------------------------------------------
 
+
 def judge(spec: TuneSpec, runs: list[dict]) -> tuple[tuple[float, ...], list[float], dict]:
     """(objectives, constraints <= 0 when met, the mean metrics) of one setting's runs."""
     completed = all(r.get("status") == "completed" for r in runs)
@@ -201,8 +234,13 @@ def judge(spec: TuneSpec, runs: list[dict]) -> tuple[tuple[float, ...], list[flo
     saturated = float(max(r["saturated_fraction"] for r in runs))
     violation = float(max(r["max_joint_limit_violation"] for r in runs))
     runaway = bool(any(r["runaway"] for r in runs))
-    mean = {**numbers, "saturated_fraction": saturated, "max_joint_limit_violation": violation,
-            "runaway": runaway, "status": "completed"}
+    mean = {
+        **numbers,
+        "saturated_fraction": saturated,
+        "max_joint_limit_violation": violation,
+        "runaway": runaway,
+        "status": "completed",
+    }
     torque = numbers["rms_torque"] - spec.max_rms_torque if math.isfinite(spec.max_rms_torque) else -1.0
     constraints = [torque, saturated - spec.max_saturated, 1.0 if runaway else -1.0, violation, -1.0]
     return tuple(numbers[k] for k in OBJECTIVES), constraints, mean
@@ -227,10 +265,14 @@ def _write_trials(folder: Path, rows: list[dict]) -> None:
 
     flat = []
     for r in rows:
-        item = {"controller": r["controller"], "trial": r["trial"], "feasible": r["feasible"],
-                **{f"search.{k}": v for k, v in r["search"].items()},
-                **{f"train.{k}": v for k, v in r["train"].items() if not isinstance(v, (list, dict))},
-                "row": json.dumps(r)}
+        item = {
+            "controller": r["controller"],
+            "trial": r["trial"],
+            "feasible": r["feasible"],
+            **{f"search.{k}": v for k, v in r["search"].items()},
+            **{f"train.{k}": v for k, v in r["train"].items() if not isinstance(v, (list, dict))},
+            "row": json.dumps(r),
+        }
         flat.append(item)
     path = folder / TRIALS / f"part-{uuid.uuid4().hex[:12]}.parquet"
     tmp = path.with_name(f".{path.name}.partial")
@@ -245,8 +287,14 @@ def prepare_folder(spec: TuneSpec, folder: Path, overwrite: bool) -> None:
     """
     from ..study_folder import prepare, write_new
 
-    prepare(folder, "tune", spec.to_toml(), (TRIALS, MARKER, "summary.json", "pareto.png", "pareto.svg"),
-            overwrite, "tuning")
+    prepare(
+        folder,
+        "tune",
+        spec.to_toml(),
+        (TRIALS, MARKER, "summary.json", "pareto.png", "pareto.svg"),
+        overwrite,
+        "tuning",
+    )
     (folder / TRIALS).mkdir(exist_ok=True)
     write_new(folder / f".{MARKER}.partial", spec.to_toml())
     os.replace(folder / f".{MARKER}.partial", folder / MARKER)
@@ -292,15 +340,23 @@ class _Controller:
         optuna.logging.set_verbosity(optuna.logging.WARNING)
         warnings.filterwarnings("ignore", category=optuna.exceptions.ExperimentalWarning)
         phase = self.phase
-        sampler = optuna.samplers.TPESampler(seed=self.sampler_seed + 7919 * len(self.rows),
-                                             multivariate=True, constant_liar=True,
-                                             n_startup_trials=min(10, max(2, self.spec.trials // 5)))
+        sampler = optuna.samplers.TPESampler(
+            seed=self.sampler_seed + 7919 * len(self.rows),
+            multivariate=True,
+            constant_liar=True,
+            n_startup_trials=min(10, max(2, self.spec.trials // 5)),
+        )
         study = optuna.create_study(direction="minimize", sampler=sampler)
         history = [r for r in self.rows if r["phase"] == phase]
         for row in history:
-            study.add_trial(optuna.trial.create_trial(
-                params=row["search"], distributions=self._distributions(phase), value=row["objectives"][0],
-                constraints=dict(zip(CONSTRAINTS, row["constraints"]))))
+            study.add_trial(
+                optuna.trial.create_trial(
+                    params=row["search"],
+                    distributions=self._distributions(phase),
+                    value=row["objectives"][0],
+                    constraints=dict(zip(CONSTRAINTS, row["constraints"])),
+                )
+            )
         if phase == "all" and self.gain_trials and not history:
             for gains in self.starts():
                 study.enqueue_trial({**gains["search"], **self.space.weakest()})
@@ -320,13 +376,21 @@ class _Controller:
         with a tenth and a quarter of the torque limit to spare (a robust term adds torque, and
         the best gains often sit on the limit).
         """
-        feasible = sorted((r for r in self.rows if r["feasible"] and r["phase"] == "gains"),
-                          key=lambda r: r["train"]["rms_error_after_2s"])
+        feasible = sorted(
+            (r for r in self.rows if r["feasible"] and r["phase"] == "gains"),
+            key=lambda r: r["train"]["rms_error_after_2s"],
+        )
         limit = self.spec.max_rms_torque
         out: list[dict] = []
         for share in (1.0, 0.9, 0.75):
-            pick = next((r for r in feasible
-                         if not math.isfinite(limit) or r["train"]["rms_torque"] <= share * limit), None)
+            pick = next(
+                (
+                    r
+                    for r in feasible
+                    if not math.isfinite(limit) or r["train"]["rms_torque"] <= share * limit
+                ),
+                None,
+            )
             if pick is not None and pick not in out:
                 out.append(pick)
         return out
@@ -357,8 +421,14 @@ class _Controller:
         return out
 
 
-def run_tune(spec: TuneSpec, folder: str | Path, workers: int | None = None, scheduler: str | None = None,
-             overwrite: bool = False, progress=None) -> dict:
+def run_tune(
+    spec: TuneSpec,
+    folder: str | Path,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    overwrite: bool = False,
+    progress=None,
+) -> dict:
     """Run (or resume) a tuning into ``folder``; returns the summary (also DIR/summary.json).
 
     ``progress(done, total)`` is called as settings finish (done and total count simulations).
@@ -370,8 +440,9 @@ def run_tune(spec: TuneSpec, folder: str | Path, workers: int | None = None, sch
         return _run_tune(spec, Path(folder), workers, scheduler, overwrite, progress)
 
 
-def _run_tune(spec: TuneSpec, folder: Path, workers: int | None, scheduler: str | None, overwrite: bool,
-              progress) -> dict:
+def _run_tune(
+    spec: TuneSpec, folder: Path, workers: int | None, scheduler: str | None, overwrite: bool, progress
+) -> dict:
     from ..sweep.engine import _client, _require_engine
     from ..sweep.spec import base_config, draw, experiment
 
@@ -394,8 +465,11 @@ def _run_tune(spec: TuneSpec, folder: Path, workers: int | None, scheduler: str 
         first = experiment(sweep, base, draw(sweep, 0), name)
         if name in sweep.custom:  # its declared space; built once at the space's centre
             space = custom_space(name, load_class(sweep.custom[name]["class"]))
-            build(apply_overrides(first, space.overrides({p.name: math.sqrt(p.low * p.high)
-                                                          for p in space.params})))
+            build(
+                apply_overrides(
+                    first, space.overrides({p.name: math.sqrt(p.low * p.high) for p in space.params})
+                )
+            )
         else:
             space = search_space(name, arm_scales(build(first)))
         controllers[name] = _Controller(spec, name, space, index)
@@ -420,9 +494,22 @@ def _run_tune(spec: TuneSpec, folder: Path, workers: int | None, scheduler: str 
             progress(done_count(), total)
         while any(c.remaining > 0 for c in controllers.values()):
             asked = [(c, *item) for c in controllers.values() for item in c.ask(batch)]
-            futures = [[client.submit(evaluate, sweep_future, base_toml, c.law(phase),
-                                      c.space.overrides(values), s, pure=False, retries=1) for s in train]
-                       for c, _, values, phase in asked]
+            futures = [
+                [
+                    client.submit(
+                        evaluate,
+                        sweep_future,
+                        base_toml,
+                        c.law(phase),
+                        c.space.overrides(values),
+                        s,
+                        pure=False,
+                        retries=1,
+                    )
+                    for s in train
+                ]
+                for c, _, values, phase in asked
+            ]
             finished = []
             for (c, trial, values, phase), runs in zip(asked, futures):
                 results = [f.result() for f in runs]
@@ -430,12 +517,23 @@ def _run_tune(spec: TuneSpec, folder: Path, workers: int | None, scheduler: str 
                 for key, value in zip(CONSTRAINTS, constraints):
                     trial.set_constraint(key, value)
                 c.study.tell(trial, objectives[0])
-                finished.append((c, {"controller": c.name, "phase": phase, "law": c.law(phase),
-                                     "search": values,
-                                     "params": c.space.overrides(values),
-                                     "objectives": list(objectives), "constraints": constraints,
-                                     "feasible": all(v <= 0 for v in constraints), "train": mean,
-                                     "runs": results}))
+                finished.append(
+                    (
+                        c,
+                        {
+                            "controller": c.name,
+                            "phase": phase,
+                            "law": c.law(phase),
+                            "search": values,
+                            "params": c.space.overrides(values),
+                            "objectives": list(objectives),
+                            "constraints": constraints,
+                            "feasible": all(v <= 0 for v in constraints),
+                            "train": mean,
+                            "runs": results,
+                        },
+                    )
+                )
             for c, row in finished:  # after every tell: recording may widen a space (a new study)
                 row["trial"] = len(c.rows)
                 c.record(row)
@@ -466,8 +564,10 @@ def _pareto(rows: list[dict]) -> list[dict]:
     out = []
     for r in feasible:
         a = np.asarray(r["objectives"])
-        dominated = any(np.all(np.asarray(o["objectives"]) <= a) and np.any(np.asarray(o["objectives"]) < a)
-                        for o in feasible)
+        dominated = any(
+            np.all(np.asarray(o["objectives"]) <= a) and np.any(np.asarray(o["objectives"]) < a)
+            for o in feasible
+        )
         if not dominated:
             out.append(r)
     return sorted(out, key=lambda r: r["objectives"][0])
@@ -477,31 +577,54 @@ def _summary(spec, sweep, controllers, client, sweep_future, base_toml) -> dict:
     from ..sweep.spec import draw
 
     held_out = list(range(spec.train_samples, spec.train_samples + spec.validation))
-    out = {"target": spec.target, "budget": spec.budget, "trials": spec.trials, "seed": spec.seed,
-           "objectives": list(OBJECTIVES),
-           "constraints": {"max_rms_torque": spec.max_rms_torque if math.isfinite(spec.max_rms_torque)
-                           else None, "max_saturated": spec.max_saturated, "runaway": False,
-                           "max_joint_limit_violation": 0.0},
-           "train_samples": [{"sample": i, "seed": draw(sweep, i).seed, **draw(sweep, i).values}
-                             for i in range(spec.train_samples)],
-           "validation_samples": [{"sample": i, "seed": draw(sweep, i).seed, **draw(sweep, i).values}
-                                  for i in held_out],
-           "controllers": {}}
+    out = {
+        "target": spec.target,
+        "budget": spec.budget,
+        "trials": spec.trials,
+        "seed": spec.seed,
+        "objectives": list(OBJECTIVES),
+        "constraints": {
+            "max_rms_torque": spec.max_rms_torque if math.isfinite(spec.max_rms_torque) else None,
+            "max_saturated": spec.max_saturated,
+            "runaway": False,
+            "max_joint_limit_violation": 0.0,
+        },
+        "train_samples": [
+            {"sample": i, "seed": draw(sweep, i).seed, **draw(sweep, i).values}
+            for i in range(spec.train_samples)
+        ],
+        "validation_samples": [
+            {"sample": i, "seed": draw(sweep, i).seed, **draw(sweep, i).values} for i in held_out
+        ],
+        "controllers": {},
+    }
     for name, c in controllers.items():
         best = c.best()
-        entry: dict = {"simulations": len(c.rows) * spec.train_samples, "space": c.space.to_dict(),
-                       "pareto": [{"params": r["params"], "search": r["search"], "train": r["train"]}
-                                  for r in _pareto([r for r in c.rows if r["phase"] == "all"])],
-                       "gain_phase_simulations": c.gain_trials * spec.train_samples}
+        entry: dict = {
+            "simulations": len(c.rows) * spec.train_samples,
+            "space": c.space.to_dict(),
+            "pareto": [
+                {"params": r["params"], "search": r["search"], "train": r["train"]}
+                for r in _pareto([r for r in c.rows if r["phase"] == "all"])
+            ],
+            "gain_phase_simulations": c.gain_trials * spec.train_samples,
+        }
         if best is None:
             entry["best"] = None
             entry["note"] = "no setting met the constraints"
         else:
-            runs = [client.submit(evaluate, sweep_future, base_toml, name, best["params"], s, pure=False)
-                    for s in held_out]
+            runs = [
+                client.submit(evaluate, sweep_future, base_toml, name, best["params"], s, pure=False)
+                for s in held_out
+            ]
             validation = judge(spec, [f.result() for f in runs])[2] if held_out else {}
-            entry["best"] = {"params": best["params"], "search": best["search"], "train": best["train"],
-                             "validation": validation, "at_bound": c.space.at_bound(best["search"])}
+            entry["best"] = {
+                "params": best["params"],
+                "search": best["search"],
+                "train": best["train"],
+                "validation": validation,
+                "at_bound": c.space.at_bound(best["search"]),
+            }
         out["controllers"][name] = entry
     return out
 
@@ -525,8 +648,12 @@ def plot_pareto(summary: dict, folder: Path) -> None:
         if points:
             ax.plot(*zip(*points), "o-", ms=4, label=name)
         if entry["best"]:
-            ax.plot(entry["best"]["train"]["rms_torque"], 1e3 * entry["best"]["train"]["rms_error_after_2s"],
-                    "k*", ms=10)
+            ax.plot(
+                entry["best"]["train"]["rms_torque"],
+                1e3 * entry["best"]["train"]["rms_error_after_2s"],
+                "k*",
+                ms=10,
+            )
     limit = summary["constraints"]["max_rms_torque"]
     if limit:
         ax.axvline(limit, color="0.5", ls=":", label=f"RMS torque limit {limit:g} N m")

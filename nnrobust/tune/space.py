@@ -129,8 +129,16 @@ class SearchSpace:
 
     def to_dict(self) -> dict:
         """JSON-ready description of the space."""
-        return {p.name: {"low": p.low, "high": p.high, "unit": p.unit, "low_reason": p.low_reason,
-                         "high_reason": p.high_reason} for p in self.params}
+        return {
+            p.name: {
+                "low": p.low,
+                "high": p.high,
+                "unit": p.unit,
+                "low_reason": p.low_reason,
+                "high_reason": p.high_reason,
+            }
+            for p in self.params
+        }
 
 
 def arm_scales(setup) -> dict[str, float]:
@@ -149,16 +157,22 @@ def arm_scales(setup) -> dict[str, float]:
     tau = np.where(np.isfinite(tau) & (tau > 0), tau, torque_scale(robot))
     acceleration = float(np.max(tau / np.diag(M)) * np.linalg.norm(J, 2))
     delay = config.sensing.delay
-    return {"period": sim.control_period, "delay": delay, "duration": sim.duration,
-            "task_inertia": task_inertia, "task_acceleration": acceleration,
-            "joint_inertia": float(np.mean(np.diag(M)))}
+    return {
+        "period": sim.control_period,
+        "delay": delay,
+        "duration": sim.duration,
+        "task_inertia": task_inertia,
+        "task_acceleration": acceleration,
+        "joint_inertia": float(np.mean(np.diag(M))),
+    }
 
 
 def search_space(controller: str, scales: dict[str, float]) -> SearchSpace:
     """The search space of a controller on an arm (see the module docstring)."""
     if controller not in TUNABLE:
-        raise ValueError(f"tune: no search space for controller {controller!r}; tunable: "
-                         f"{', '.join(TUNABLE)}")
+        raise ValueError(
+            f"tune: no search space for controller {controller!r}; tunable: {', '.join(TUNABLE)}"
+        )
     T, d = scales["period"], scales["delay"]
     w_high = 1.0 / ((0.5 + d) * T)
     w_low = 2 * math.pi / scales["duration"]
@@ -171,18 +185,29 @@ def search_space(controller: str, scales: dict[str, float]) -> SearchSpace:
         params.append(Param("controller.pd_null_damping", m * w_low, m * w_high, "N m s/rad"))
     else:
         params.append(Param("damping_ratio", 0.51, 5.0, "-", low_reason="eq. (17): K_v^2 > K_p"))
-        params.append(Param("controller.k", 0.1, 1.0 / T, "1/s", high_reason=f"sampling: k T <= 1, "
-                            f"{1.0 / T:.4g} 1/s"))
+        params.append(
+            Param("controller.k", 0.1, 1.0 / T, "1/s", high_reason=f"sampling: k T <= 1, {1.0 / T:.4g} 1/s")
+        )
     if controller == "nn":
         D = scales["duration"]
-        params += [Param("nn.F", 1e-2, 1e3, "-", weak="low"),
-                   Param("leakage_rate", 0.01 / D, 1.0 / T, "1/s", weak="high",
-                         low_reason=f"run length: F sigma D = 0.01, {0.01 / D:.3g} 1/s",
-                         high_reason=f"sampling: F sigma T = 1, {1.0 / T:.4g} 1/s"),
-                   Param("nn.eps_min", 1e-5 * a, a, "m/s^2", weak="high")]
+        params += [
+            Param("nn.F", 1e-2, 1e3, "-", weak="low"),
+            Param(
+                "leakage_rate",
+                0.01 / D,
+                1.0 / T,
+                "1/s",
+                weak="high",
+                low_reason=f"run length: F sigma D = 0.01, {0.01 / D:.3g} 1/s",
+                high_reason=f"sampling: F sigma T = 1, {1.0 / T:.4g} 1/s",
+            ),
+            Param("nn.eps_min", 1e-5 * a, a, "m/s^2", weak="high"),
+        ]
     elif controller == "sliding-mode":
-        params += [Param("controller.sliding_gain", 1e-3 * a, 10 * a, "m/s^2", weak="low"),
-                   Param("controller.sliding_boundary", 1e-5 * a, a, "m/s^2", weak="high")]
+        params += [
+            Param("controller.sliding_gain", 1e-3 * a, 10 * a, "m/s^2", weak="low"),
+            Param("controller.sliding_boundary", 1e-5 * a, a, "m/s^2", weak="high"),
+        ]
     return SearchSpace(controller, tuple(params), scales["task_inertia"])
 
 
@@ -196,17 +221,26 @@ def custom_space(name: str, cls: type) -> SearchSpace:
     declared = getattr(cls, "search_space", None)
     key = f"--controllers {name}"
     if not isinstance(declared, dict) or not declared:
-        raise ConfigError(key, f"{cls.__name__} declares no search space: give the class a search_space = "
-                          "{'param': (low, high, 'unit'), ...} of its constructor's parameters "
-                          "(docs/extending.md)")
+        raise ConfigError(
+            key,
+            f"{cls.__name__} declares no search space: give the class a search_space = "
+            "{'param': (low, high, 'unit'), ...} of its constructor's parameters "
+            "(docs/extending.md)",
+        )
     params = []
     for param, bounds in declared.items():
-        ok = (isinstance(bounds, (tuple, list)) and len(bounds) in (2, 3)
-              and all(isinstance(b, (int, float)) and not isinstance(b, bool) for b in bounds[:2])
-              and 0 < bounds[0] < bounds[1] < math.inf)
+        ok = (
+            isinstance(bounds, (tuple, list))
+            and len(bounds) in (2, 3)
+            and all(isinstance(b, (int, float)) and not isinstance(b, bool) for b in bounds[:2])
+            and 0 < bounds[0] < bounds[1] < math.inf
+        )
         if not isinstance(param, str) or not param.isidentifier() or not ok:
-            raise ConfigError(key, f"{cls.__name__}.search_space[{param!r}] = {bounds!r}: needs a parameter "
-                              "name and (low, high[, unit]) with 0 < low < high (searched on a log scale)")
+            raise ConfigError(
+                key,
+                f"{cls.__name__}.search_space[{param!r}] = {bounds!r}: needs a parameter "
+                "name and (low, high[, unit]) with 0 < low < high (searched on a log scale)",
+            )
         unit = str(bounds[2]) if len(bounds) == 3 else "-"
         params.append(Param(f"controller.params.{param}", float(bounds[0]), float(bounds[1]), unit))
     return SearchSpace(name, tuple(params), custom=True)

@@ -91,8 +91,10 @@ def uniform_obj(text: str) -> str:
             return f"{parts[0]}/{parts[1]}/{parts[2]}" if normals else f"{parts[0]}/{parts[1]}"
         return f"{parts[0]}//{parts[2]}" if normals else parts[0]
 
-    out = [("f " + " ".join(corner(c.split("/")) for c in line.split()[1:]))
-           if line.startswith("f ") else line for line in lines]
+    out = [
+        ("f " + " ".join(corner(c.split("/")) for c in line.split()[1:])) if line.startswith("f ") else line
+        for line in lines
+    ]
     return "\n".join(out) + "\n"
 
 
@@ -145,14 +147,13 @@ class SceneRecorder:
             viewer_js = fh.read()
         return (
             "<!DOCTYPE html>\n<html>\n<head><meta charset=utf-8><title>"
-            f"{_escape(title)}</title></head>\n<body style=\"margin: 0\">\n"
+            f'{_escape(title)}</title></head>\n<body style="margin: 0">\n'
             '<div id="meshcat-pane" style="width: 100vw; height: 100vh; overflow: hidden"></div>\n'
             f"<script>{viewer_js}</script>\n<script>\n"
             'var viewer = new MeshCat.Viewer(document.getElementById("meshcat-pane"));\n'
             "function nnrobustApply(b64) {\n"
             "  viewer.handle_command_bytearray(Uint8Array.from(atob(b64), c => c.charCodeAt(0)));\n"
-            "}\n"
-            + "".join(commands) + SEEK_SCRIPT + "</script>\n</body>\n</html>\n"
+            "}\n" + "".join(commands) + SEEK_SCRIPT + "</script>\n</body>\n</html>\n"
         )
 
 
@@ -169,8 +170,10 @@ def _escape(text: str) -> str:
 
 
 def _line(points: np.ndarray, color: int) -> mg.Line:
-    return mg.Line(mg.PointsGeometry(np.ascontiguousarray(points.T, dtype=np.float32)),
-                   mg.LineBasicMaterial(color=color, linewidth=2))
+    return mg.Line(
+        mg.PointsGeometry(np.ascontiguousarray(points.T, dtype=np.float32)),
+        mg.LineBasicMaterial(color=color, linewidth=2),
+    )
 
 
 def world_points(positions: np.ndarray, plane_z) -> np.ndarray:
@@ -248,7 +251,8 @@ class RunScene:
         self.vis["/Cameras/default"].set_transform(_translation(target))  # the orbit centre
         offset = eye - target  # meshcat's camera node is y-up: world (x, y, z) -> (x, z, -y)
         self.vis["/Cameras/default/rotated/<object>"].set_property(
-            "position", [float(offset[0]), float(offset[2]), float(-offset[1])])
+            "position", [float(offset[0]), float(offset[2]), float(-offset[1])]
+        )
 
     def animate(self, result: Result, desired: np.ndarray, fps: float = 30.0) -> None:
         """Arm and target (``desired``, N x 3) over the run, a keyframe every 1/fps s simulated."""
@@ -274,8 +278,9 @@ class PoseRecorder:
 
     def animation(self, vis: meshcat.Visualizer, fps: float) -> KeyframeAnimation:
         """The recorded poses as an animation of the nodes of ``vis``, one keyframe per 1/fps s."""
-        return KeyframeAnimation({vis[name].path.lower(): (np.array(p), np.array(q))
-                                  for name, (p, q) in self.poses.items()}, fps)
+        return KeyframeAnimation(
+            {vis[name].path.lower(): (np.array(p), np.array(q)) for name, (p, q) in self.poses.items()}, fps
+        )
 
 
 class _NodePoses:
@@ -305,14 +310,29 @@ class KeyframeAnimation:
 
     def lower(self) -> list[dict]:
         """The payload as meshcat's ``Animation.lower`` gives it, each track's keys as typed arrays."""
-        def track(name, kind, values):
-            return {"name": name, "type": kind, "times": _float32(np.arange(len(values))),
-                    "values": _float32(values)}
 
-        return [{"path": path, "clip": {"fps": self.fps, "name": "default",
-                                        "tracks": [track(".position", "vector3", positions),
-                                                   track(".quaternion", "quaternion", quaternions)]}}
-                for path, (positions, quaternions) in self.tracks.items()]
+        def track(name, kind, values):
+            return {
+                "name": name,
+                "type": kind,
+                "times": _float32(np.arange(len(values))),
+                "values": _float32(values),
+            }
+
+        return [
+            {
+                "path": path,
+                "clip": {
+                    "fps": self.fps,
+                    "name": "default",
+                    "tracks": [
+                        track(".position", "vector3", positions),
+                        track(".quaternion", "quaternion", quaternions),
+                    ],
+                },
+            }
+            for path, (positions, quaternions) in self.tracks.items()
+        ]
 
 
 def _float32(values: np.ndarray) -> umsgpack.Ext:
@@ -346,8 +366,9 @@ def _translation(p: np.ndarray) -> np.ndarray:
     return T
 
 
-def draw_run(vis: meshcat.Visualizer, result: Result, config: ExperimentConfig,
-             fps: float = 30.0) -> RunScene:
+def draw_run(
+    vis: meshcat.Visualizer, result: Result, config: ExperimentConfig, fps: float = 30.0
+) -> RunScene:
     """The whole run in ``vis``: robot, desired path, actual trace, animation."""
     scene = RunScene(vis, config)
     actual, desired = tip_positions(result)

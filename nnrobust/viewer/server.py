@@ -52,13 +52,16 @@ def _bridge_class():
 def check_listen_address(host: str, port: int | None) -> None:
     """Refuse, with one clear line, an address the viewer cannot listen on."""
     if port is not None and not 1 <= port <= 65535:
-        raise NNRobustError(f"--port {port}: a TCP port is 1 to 65535 (omit --port for the first free "
-                            "one from 7000)")
+        raise NNRobustError(
+            f"--port {port}: a TCP port is 1 to 65535 (omit --port for the first free one from 7000)"
+        )
     try:
         infos = socket.getaddrinfo(host, port or 0, type=socket.SOCK_STREAM)
     except (socket.gaierror, UnicodeError):
-        raise NNRobustError(f"--host {host!r} is not an address or host name this machine can resolve; "
-                            "use 127.0.0.1 (this machine only) or 0.0.0.0 (every interface)") from None
+        raise NNRobustError(
+            f"--host {host!r} is not an address or host name this machine can resolve; "
+            "use 127.0.0.1 (this machine only) or 0.0.0.0 (every interface)"
+        ) from None
     family, _, _, _, address = infos[0]
     with socket.socket(family, socket.SOCK_STREAM) as probe:
         probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
@@ -66,13 +69,16 @@ def check_listen_address(host: str, port: int | None) -> None:
             probe.bind(address)
         except OSError as err:
             what = f"port {port} is in use" if err.errno == errno.EADDRINUSE else (err.strerror or str(err))
-            raise NNRobustError(f"the viewer cannot listen on {host}:{port or 'any port'}: {what}; "
-                                "use an address of this machine (127.0.0.1, or 0.0.0.0 for every "
-                                "interface) and a free port") from None
+            raise NNRobustError(
+                f"the viewer cannot listen on {host}:{port or 'any port'}: {what}; "
+                "use an address of this machine (127.0.0.1, or 0.0.0.0 for every "
+                "interface) and a free port"
+            ) from None
 
 
 def _exit_with_parent() -> None:
     """Exit when stdin (a pipe from the parent) closes: the parent has ended, however it ended."""
+
     def watch():
         sys.stdin.buffer.read()
         os._exit(0)
@@ -85,8 +91,9 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--host", default=LOOPBACK, help="address to listen on (default 127.0.0.1)")
     parser.add_argument("--port", type=int, help="web port (default: the first free from 7000)")
-    parser.add_argument("--exit-with-parent", action="store_true",
-                        help="exit when stdin closes (how start_viewer runs it)")
+    parser.add_argument(
+        "--exit-with-parent", action="store_true", help="exit when stdin closes (how start_viewer runs it)"
+    )
     args = parser.parse_args(argv)
     if args.exit_with_parent:
         _exit_with_parent()
@@ -132,9 +139,16 @@ def start_viewer(host: str = LOOPBACK, port: int | None = None, timeout: float =
     cmd = [sys.executable, "-u", "-m", "nnrobust.viewer.server", "--host", host, "--exit-with-parent"]
     if port is not None:
         cmd += ["--port", str(port)]
-    process = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                               text=True, start_new_session=True)
+    process = subprocess.Popen(
+        cmd,
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        start_new_session=True,
+    )
     lines: queue.Queue[str] = queue.Queue()
+
     def read(stream) -> None:  # meshcat's lines, then "" at its end
         for line in stream:
             lines.put(line)
