@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import difflib
+import functools
 import math
 import os
 import re
@@ -640,10 +641,16 @@ def _check_type(path: str, value, annotation):
     raise TypeError(f"unsupported annotation {annotation!r} at {path}")  # pragma: no cover
 
 
+@functools.cache
+def _type_hints(cls) -> dict:
+    """The annotations of a config dataclass, resolved once (every sample of a sweep parses one)."""
+    return typing.get_type_hints(cls)
+
+
 def _section_from_dict(cls, data: dict, path: str):
     if not isinstance(data, dict):
         raise ConfigError(path, f"expected a table, got {type(data).__name__}")
-    hints = typing.get_type_hints(cls)
+    hints = _type_hints(cls)
     names = [f.name for f in dataclasses.fields(cls)]
     values = {}
     shown = [next((a for a, f in KEY_ALIASES.items() if f == n), n) for n in names]
@@ -829,24 +836,27 @@ def _is_relative_urdf_path(source: str) -> bool:
     return source.lower().endswith(".urdf") or "/" in source or os.sep in source
 
 
+@functools.cache
+def _package_version(package: str) -> str:
+    """An installed package's version, or "?" (read once per process)."""
+    from importlib import metadata
+
+    try:
+        return metadata.version(package)
+    except metadata.PackageNotFoundError:
+        return "?"
+
+
 def provenance_header(config: ExperimentConfig) -> str:
     """Comment lines for a run's config.toml: the versions that ran it and the SHA-256 of the
     robot's URDF, so that a run can be repeated, and checked, from anywhere.
     """
-    from importlib import metadata
-
     from . import __version__
     from .model.loading import urdf_digest
 
-    def version(package: str) -> str:
-        try:
-            return metadata.version(package)
-        except metadata.PackageNotFoundError:
-            return "?"
-
     lines = [
-        f"# written by nnrobust {__version__} (pin {version('pin')}, example-robot-data "
-        f"{version('example-robot-data')})"
+        f"# written by nnrobust {__version__} (pin {_package_version('pin')}, example-robot-data "
+        f"{_package_version('example-robot-data')})"
     ]
     digest = urdf_digest(config.robot.source)
     if digest:

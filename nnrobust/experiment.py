@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import hashlib
 import time
 import warnings
 from collections.abc import Callable
@@ -591,6 +592,27 @@ WORKSPACE_SAMPLES = 48
 """Instants at which check_workspace solves the inverse kinematics."""
 
 
+_REACHABLE: set[tuple] = set()
+"""Paths this process has found reachable (:func:`check_workspace`): a sweep's samples share
+their arm and path, and the check's inverse kinematics costs a tenth of a short run."""
+
+
+def _reach_key(config: ExperimentConfig, robot: PinocchioModel, q0: np.ndarray, samples: int) -> tuple:
+    """What the workspace check depends on: the arm (its configuration and its URDF's text, or
+    its name where code builds it), the path, the duration and q(0).
+    """
+    text = getattr(robot, "urdf_text", None)
+    digest = hashlib.sha256(text.encode()).hexdigest() if text else robot.name
+    return (
+        repr(config.robot),
+        repr(config.trajectory),
+        config.simulation.duration,
+        q0.tobytes(),
+        samples,
+        digest,
+    )
+
+
 def check_workspace(
     config: ExperimentConfig,
     robot: PinocchioModel,
@@ -601,8 +623,12 @@ def check_workspace(
     """Refuse a trajectory the arm cannot reach within its joint limits, before the run.
 
     Inverse kinematics at ``samples`` instants over the run (each from the previous solution);
-    the message names the worst instant and point.
+    the message names the worst instant and point. A path found reachable is remembered for the
+    process (:data:`_REACHABLE`).
     """
+    key = _reach_key(config, robot, q0, samples)
+    if key in _REACHABLE:
+        return
     times = np.linspace(0.0, config.simulation.duration, samples)
     q, worst = q0, (0.0, 0.0, np.zeros(0))
     for t in times:
@@ -619,6 +645,9 @@ def check_workspace(
             f"reach within the joint limits (task error {residual:.3g} left after inverse "
             "kinematics); move the path (trajectory.center and axes, goal or waypoints)",
         )
+    if len(_REACHABLE) > 1024:
+        _REACHABLE.clear()
+    _REACHABLE.add(key)
 
 
 RK4_STABLE_STEP = 2.5

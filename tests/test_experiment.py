@@ -209,3 +209,23 @@ def test_plots_draw_the_envelope_of_long_series(n):
     assert set(t[spikes]) <= set(t2)  # every spike is drawn
     short = np.arange(100.0)
     assert envelope(short, short)[1] is short
+
+
+def test_a_reachable_path_is_checked_once_per_process_and_a_changed_one_again(monkeypatch):
+    """The workspace check's inverse kinematics runs once for a sweep's shared arm and path; a
+    path that leaves the workspace is still refused, however many reachable ones came before."""
+    import nnrobust.experiment as ex
+    from nnrobust.exceptions import ConfigError
+
+    calls = []
+    real = ex.solve_ik
+    monkeypatch.setattr(ex, "solve_ik", lambda *a, **k: calls.append(1) or real(*a, **k))
+    monkeypatch.setattr(ex, "_REACHABLE", set())
+    config = load_preset("paper-ellipse").replace(simulation={"duration": 2.0})
+    ex.build(config)
+    first = len(calls)
+    ex.build(config.replace(plant={"disturbance_scale": 1.5}))  # another plant, the same arm and path
+    assert first > ex.WORKSPACE_SAMPLES - 1 and len(calls) - first < ex.WORKSPACE_SAMPLES
+    for _ in range(2):
+        with pytest.raises(ConfigError, match="leaves the workspace"):
+            ex.build(config.replace(trajectory={"axis_b": [0.0, 0.8]}))
