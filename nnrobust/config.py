@@ -19,6 +19,7 @@ from .controllers.nn_compensator import DEFAULTS as NN_DEFAULTS
 from .exceptions import ConfigError
 from .model.tasks import TASK_KINDS
 from .plant.mujoco_engine import ENGINES, MUJOCO_INTEGRATORS
+from .simulation import MAX_STEP_ROTATION
 
 
 @dataclass
@@ -508,7 +509,7 @@ class SimulationConfig:
     substeps: int | None = None
     integration_step: float | None = None
     integrator: str = "rk4"
-    max_step_rotation: float = 0.02
+    max_step_rotation: float = MAX_STEP_ROTATION
     adaptive_step: bool = True
     backend: str = "auto"
     q_seed: list[float] | None = None

@@ -221,20 +221,20 @@ def _joint_scales(path: str, scales: list[float] | None, n: int) -> np.ndarray:
     """One factor per joint, the entries not given 1; more entries than joints are refused."""
     if scales is None:
         return np.ones(n)
-    if len(scales) > n:
-        raise ConfigError(path, f"has {len(scales)} entries; the robot has {n} joints")
-    return np.array(list(scales) + [1.0] * (n - len(scales)))
+    return np.array(_padded(path, scales, n, f"has {len(scales)} entries; the robot has {n} joints"))
 
 
 PAYLOAD_RADIUS = 0.02
 """[m] ``plant.payload`` is a solid sphere of this radius on the task frame's origin."""
 
 
-def payload_inertia(mass: float, placement: pin.SE3) -> pin.Inertia:
-    """``plant.payload``: a solid sphere of PAYLOAD_RADIUS centred at ``placement``'s origin, in
-    the frame ``placement`` is expressed in (the task frame's parent joint).
+def payload(model: pin.Model, task_frame: str, mass: float) -> tuple[int, pin.Inertia]:
+    """``plant.payload``: the joint that carries it (the task frame's parent) and its inertia in
+    that joint's frame, a solid sphere of PAYLOAD_RADIUS centred on the task frame's origin.
     """
-    return pin.Inertia(mass, placement.translation, np.eye(3) * 0.4 * mass * PAYLOAD_RADIUS**2)
+    frame = model.frames[model.getFrameId(task_frame)]
+    sphere = np.eye(3) * 0.4 * mass * PAYLOAD_RADIUS**2
+    return frame.parentJoint, pin.Inertia(mass, frame.placement.translation, sphere)
 
 
 def true_model(config: ExperimentConfig, robot: PinocchioModel) -> PinocchioModel:
@@ -249,9 +249,8 @@ def true_model(config: ExperimentConfig, robot: PinocchioModel) -> PinocchioMode
     if pc.armature is not None:
         model.armature = _vector("plant.armature", pc.armature, robot.nq)
     if pc.payload > 0.0:
-        frame = model.frames[model.getFrameId(robot.task_frame)]
-        joint = frame.parentJoint
-        model.inertias[joint] = model.inertias[joint] + payload_inertia(pc.payload, frame.placement)
+        joint, inertia = payload(model, robot.task_frame, pc.payload)
+        model.inertias[joint] = model.inertias[joint] + inertia
     true = PinocchioModel(model, robot.task_frame, robot.task, robot.name)
     true.urdf_text = robot.urdf_text
     return true
@@ -265,10 +264,10 @@ def build_engine(config: ExperimentConfig, plant: Plant, substeps: int) -> None:
 
     pc, true = config.plant, plant.model
     assert isinstance(true, PinocchioModel)  # build_plant's true_model
-    payload = None
+    load = None
     if pc.payload > 0.0:  # on the body of the task frame's joint, where Pinocchio's true model has it
-        frame = true.model.frames[true.model.getFrameId(true.task_frame)]
-        payload = (true.model.names[frame.parentJoint], payload_inertia(pc.payload, frame.placement))
+        joint, inertia = payload(true.model, true.task_frame, pc.payload)
+        load = (true.model.names[joint], inertia)
     plant.engine = build_mujoco_plant(
         true,
         plant,
@@ -277,7 +276,7 @@ def build_engine(config: ExperimentConfig, plant: Plant, substeps: int) -> None:
         pc.mujoco_integrator,
         true.model.armature,
         pc.stiction,
-        payload,
+        load,
     )
 
 
@@ -308,7 +307,12 @@ def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsMo
         drawn = 1 + np.random.default_rng(nc.seed).uniform(-nc.relative_error, nc.relative_error, 6)
         beta, p = tuple(np.multiply(beta, drawn[:3])), tuple(np.multiply(p, drawn[3:]))
     if nc.factors is not None:
-        given = _padded(nc.factors, 6, "the closed-form model has 6 parameters (beta_1..3, p_1..3)")
+        given = _padded(
+            "nominal.factors",
+            nc.factors,
+            6,
+            f"the closed-form model has 6 parameters (beta_1..3, p_1..3); got {len(nc.factors)} factors",
+        )
         beta, p = tuple(np.multiply(beta, given[:3])), tuple(np.multiply(p, given[3:]))
     return ThreeLinkPlanarModel(
         ThreeLinkParameters(beta, p, true.lengths, true.gamma, true.gravity),
@@ -316,10 +320,12 @@ def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsMo
     )
 
 
-def _padded(factors: list[float], size: int, what: str) -> list[float]:
-    """``nominal.factors`` with the entries not given as 1; more than the model has is refused."""
+def _padded(path: str, factors: list[float], size: int, refusal: str) -> list[float]:
+    """A list of factors (``nominal.factors``, per-joint scales) with the entries not given as 1;
+    more than ``size`` is refused, the key ``path`` named with ``refusal``.
+    """
     if len(factors) > size:
-        raise ConfigError("nominal.factors", f"{what}; got {len(factors)} factors")
+        raise ConfigError(path, refusal)
     return list(factors) + [1.0] * (size - len(factors))
 
 
@@ -329,9 +335,11 @@ def _with_factors(model: pin.Model, factors: list[float]) -> pin.Model:
     """
     bodies = [j for j in range(1, model.njoints) if model.inertias[j].mass > 0]
     factors = _padded(
+        "nominal.factors",
         factors,
         2 * len(bodies),
-        f"the URDF model has {len(bodies)} bodies with mass: {2 * len(bodies)} factors, masses then inertias",
+        f"the URDF model has {len(bodies)} bodies with mass: {2 * len(bodies)} factors, masses then "
+        f"inertias; got {len(factors)} factors",
     )
     out = pin.Model(model)
     for i, j in enumerate(bodies):

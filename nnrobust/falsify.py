@@ -279,11 +279,11 @@ class _Driver:
     appending the new ones to it.
     """
 
-    def __init__(self, client, folder: Path, done: dict, base_toml: str, properties, progress):
+    def __init__(self, client, folder: Path, done: dict, sweep, base_toml: str, properties, progress):
         self.client, self.folder, self.done = client, folder, done
         self.base_toml, self.properties, self.progress = base_toml, properties, progress
         self.workers = max(len(client.scheduler_info().get("workers", {})), 1)
-        self.sweep: Any = None  # the sweep, scattered to the workers
+        self.sweep = client.scatter(sweep, broadcast=True)  # sent to every worker once
         self.finished = 0  # simulations of the calls before (the progress bar counts on)
 
     def __call__(self, searches: dict, boxes: dict, rows: dict, total: int, stop_at_violation=False):
@@ -532,8 +532,7 @@ def _run_falsify(spec: FalsifySpec, folder: Path, workers, scheduler, overwrite:
     total = len(searches) * spec.budget
     started = time.monotonic()
     with signals_as_interrupt(), _client(workers, scheduler) as client:
-        drive = _Driver(client, folder, done, base_toml, properties, progress)
-        drive.sweep = client.scatter(sweep, broadcast=True)
+        drive = _Driver(client, folder, done, sweep, base_toml, properties, progress)
         drive(searches, dict.fromkeys(searches, box), rows, total)
         margins = _margins(spec, sweep, box, rows, drive) if spec.margin else None
     seconds = time.monotonic() - started

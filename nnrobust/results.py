@@ -11,7 +11,7 @@ import numpy as np
 
 from . import verdicts
 from .model.tasks import display_coordinates
-from .simulation import MAX_PERIOD_SUBSTEPS
+from .simulation import period_substeps
 from .subtasks.manipulability import det
 
 METRIC_UNITS = {
@@ -413,8 +413,7 @@ def step_rotation(dq: np.ndarray, config, substeps: int) -> float:
 
     sim, rotation = config.simulation, step_rotation_limit(config)
     speed = np.abs(dq).max(axis=1)
-    needed = np.ceil(sim.control_period * speed / rotation)  # period_substeps, vectorised
-    steps = np.where(needed <= substeps, substeps, np.minimum(needed, MAX_PERIOD_SUBSTEPS))
+    steps = period_substeps(speed, sim.control_period, substeps, rotation)
     ends = np.maximum(speed, np.append(speed[1:], speed[-1]))
     return float(np.max(ends * sim.control_period / steps))
 

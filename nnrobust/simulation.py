@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -30,14 +29,16 @@ MAX_PERIOD_SUBSTEPS = 10_000
 """The most plant steps one control period is cut into (as simulation.substeps)."""
 
 
-def period_substeps(speed: float, period: float, substeps: int, max_rotation: float) -> int:
+def period_substeps(speed, period: float, substeps: int, max_rotation: float):
     """Plant steps for one control period: ``substeps``, or more when the fastest joint, at its
     speed at the period's start [rad/s or m/s], would turn more than ``max_rotation`` in one
     (Coriolis and centrifugal rates grow with q', and with them the RK4 truncation error; both
     loops, docs/plant.md#speed-adaptive-step). ``max_rotation = inf`` keeps the step fixed.
+    ``speed`` may be an array of periods' speeds (results.step_rotation); the compiled loop's
+    twin is closed_loop.cpp's period_substeps.
     """
-    needed = math.ceil(period * speed / max_rotation)
-    return substeps if needed <= substeps else min(needed, MAX_PERIOD_SUBSTEPS)
+    needed = np.ceil(period * np.asarray(speed, dtype=float) / max_rotation)
+    return np.where(needed <= substeps, substeps, np.minimum(needed, MAX_PERIOD_SUBSTEPS)).astype(int)
 
 
 @dataclass
@@ -234,7 +235,7 @@ def simulate(
                 X = np.concatenate(engine.advance(t, tau, control_period))
                 continue
             n_steps = (
-                period_substeps(float(np.max(np.abs(v))), control_period, substeps, max_step_rotation)
+                int(period_substeps(np.max(np.abs(v)), control_period, substeps, max_step_rotation))
                 if integrator == "rk4"
                 else substeps
             )
