@@ -61,10 +61,64 @@ def test_a_best_setting_on_a_bound_widens_it_unless_the_bound_is_physical(scales
     values.update({"bandwidth": w.high, "nn.F": F.low})
     edges = {(b["param"], b["side"]) for b in space.at_bound(values)}
     assert edges == {("bandwidth", "high"), ("nn.F", "low")}
-    wider = space.widened(values)
+    wider, moved = space.widened(values)
     assert wider.param("bandwidth").high == w.high  # sampling: physical
     assert wider.param("nn.F").low == pytest.approx(F.low / 10)
-    assert space.widened({p.name: math.sqrt(p.low * p.high) for p in space.params}) == space
+    assert moved == [{"param": "nn.F", "side": "low", "old": F.low, "bound": wider.param("nn.F").low}]
+    assert space.widened(values, skip=lambda name, side: name == "nn.F")[1] == []
+    assert space.widened({p.name: math.sqrt(p.low * p.high) for p in space.params}) == (space, [])
+
+
+def _drive(controller, objective, until: int) -> None:
+    """Run a _Controller's ask/tell/record loop on a synthetic objective of its values."""
+
+    def metrics(values):
+        return {
+            "status": "completed",
+            "rms_error_after_2s": objective(values),
+            "rms_torque": 1.0,
+            "torque_chatter": 0.0,
+            "saturated_fraction": 0.0,
+            "runaway": False,
+            "max_joint_limit_violation": 0.0,
+        }
+
+    while len(controller.rows) < until:  # as run_tune: tell a batch, then record it
+        rows = [controller.tell(t, v, phase, [metrics(v)]) for t, v, phase in controller.ask(2)]
+        for row in rows:
+            controller.record(row)
+
+
+def test_a_bound_is_widened_until_the_best_is_interior_with_a_worse_probe_beyond_it():
+    """An optimum two and a half decades past a non-physical bound: from half the budget on the
+    bound moves out a decade at a time, each move probed half a decade beyond the old bound,
+    until the best is interior; resuming from the rows asks what the uninterrupted search asks."""
+    from nnrobust.tune.engine import _Controller
+    from nnrobust.tune.space import Param, SearchSpace
+
+    space = SearchSpace("toy", (Param("controller.params.x", 1.0, 10.0, "-"),), custom=True)
+    spec = TuneSpec("paper-ellipse", ["toy"], 60, validation=0)
+    toy = _Controller(spec, "toy", space, 0)
+    x = "controller.params.x"
+    objective = lambda v: (math.log10(v[x]) - 2.5) ** 2 + 1e-3  # noqa: E731
+    _drive(toy, objective, 38)
+    resumed = _Controller(spec, "toy", space, 0)
+    for row in [dict(r) for r in toy.rows]:
+        resumed.record(row)
+    _drive(toy, objective, 60)
+    _drive(resumed, objective, 60)
+    assert [r["search"] for r in resumed.rows] == [r["search"] for r in toy.rows]
+    assert toy.widenings and all(w["trial"] >= 30 for w in toy.widenings)  # from half the budget on
+    probes = [r for r in toy.rows if r["queued"]]
+    assert [r["search"][x] for r in probes] == pytest.approx([w["probe"] for w in toy.widenings])
+    assert [w["old"] for w in toy.widenings] == pytest.approx([10.0 ** (k + 1) for k in range(len(probes))])
+    best = toy.best()
+    assert toy.space.at_bound(best["search"]) == []
+    assert 10**2 < best["search"][x] < 10**3 and toy.space.param(x).high == pytest.approx(1e3)
+    beyond = [r for r in toy.rows if r["search"][x] > best["search"][x]]
+    assert beyond and all(
+        r["train"]["rms_error_after_2s"] > best["train"]["rms_error_after_2s"] for r in beyond
+    )
 
 
 def test_the_leakage_is_searched_as_its_rate_between_physical_bounds(scales):
@@ -76,7 +130,7 @@ def test_the_leakage_is_searched_as_its_rate_between_physical_bounds(scales):
     assert rate.low == pytest.approx(0.01 / scales["duration"]) and rate.low_reason
     values = {p.name: math.sqrt(p.low * p.high) for p in space.params}
     for end in (rate.low, rate.high):
-        assert space.widened({**values, "leakage_rate": end}).param("leakage_rate") == rate
+        assert space.widened({**values, "leakage_rate": end})[0].param("leakage_rate") == rate
     out = space.overrides({**values, "leakage_rate": 2.0, "nn.F": 0.5})
     assert out["nn.sigma"] == pytest.approx(4.0) and "leakage_rate" not in out
     assert space.weakest()["leakage_rate"] == rate.high

@@ -10,9 +10,11 @@ simulations, left the NN at 22 mm where a hand search found 0.13 mm). It asks fo
 settings per controller; their simulations run on the sweep's Dask cluster
 (one task per setting and training sample) and are told back. Every finished trial is appended
 to DIR/trials as a Parquet part, so an interrupted tuning resumes from what it wrote: the studies
-are rebuilt from the rows. After half and three quarters of the budget, a best setting on a
-bound of its space widens that bound a decade (unless it is physical); the rows already run stay
-in the widened space's history.
+are rebuilt from the rows. From half the budget on, whenever the best setting sits on a bound of
+its space that is not physical, that bound moves out a decade and the next setting tried is a
+probe: the best with that coordinate half a decade past the old bound. A best that stays is then
+interior with a worse setting tried beyond it; one that moves goes on being checked. The rows
+already run stay in the widened space's history.
 """
 
 from __future__ import annotations
@@ -53,10 +55,12 @@ FAILED = (1.0, 1e4, 1e4)
 
 MARKER = "tune.toml"
 TRIALS = "trials"
-CHECKPOINTS = (0.5, 0.75)
+WIDEN_FROM = 0.5
+"""Fraction of a controller's settings after which a best setting on a bound widens its space."""
+MAX_WIDENINGS = 4
+"""Decades a bound may move out; past them it is reported in ``at_bound`` as searched to its end."""
 GAIN_SHARE = 0.3
 """Share of a robust law's budget spent on its gains with u_0 = 0 (see _Controller)."""
-"""Fractions of the budget after which a best setting on a bound widens its space."""
 
 
 @dataclass
@@ -315,6 +319,8 @@ class _Controller:
         self.spec, self.name, self.space = spec, name, space
         self.gain_trials = int(GAIN_SHARE * spec.trials) if space.robust else 0
         self.rows: list[dict] = []
+        self.widenings: list[dict] = []  # {param, side, old, bound, trial, probe}, in order
+        self.queue: list[dict] = []  # settings to try before the sampler's own: starts, probes
         self.sampler_seed = spec.seed + index
         self.study = self._study()
 
@@ -357,9 +363,6 @@ class _Controller:
                     constraints=dict(zip(CONSTRAINTS, row["constraints"])),
                 )
             )
-        if phase == "all" and self.gain_trials and not history:
-            for gains in self.starts():
-                study.enqueue_trial({**gains["search"], **self.space.weakest()})
         return study
 
     @property
@@ -395,27 +398,74 @@ class _Controller:
                 out.append(pick)
         return out
 
+    def tell(self, trial, values: dict, phase: str, results: list[dict]) -> dict:
+        """Judge a setting's runs, tell the study, and return its trials-table row."""
+        objectives, constraints, mean = judge(self.spec, results)
+        for key, value in zip(CONSTRAINTS, constraints):
+            trial.set_constraint(key, value)
+        self.study.tell(trial, objectives[0])
+        return {
+            "controller": self.name,
+            "phase": phase,
+            "law": self.law(phase),
+            "search": values,
+            "params": self.space.overrides(values),
+            "objectives": list(objectives),
+            "constraints": constraints,
+            "feasible": all(v <= 0 for v in constraints),
+            "queued": values in self.queue,
+            "train": mean,
+            "runs": results,
+        }
+
     def record(self, row: dict) -> None:
-        """Add a finished trial; at a checkpoint, widen the space where the best sits on a bound."""
+        """Add a finished trial; from WIDEN_FROM of the budget on, widen the space where the best
+        sits on a bound that is not physical, and queue a probe past it (module docstring).
+        Replaying the rows in order repeats every widening and probe, so a resumed tuning asks
+        what an uninterrupted one would.
+        """
         before = self.phase
+        row["trial"] = len(self.rows)
         self.rows.append(row)
-        done = len(self.rows)
-        if self.phase != before:
-            self.study = self._study()
-        if any(done == max(1, int(f * self.spec.trials)) for f in CHECKPOINTS):
-            best = self.best()
-            if best is not None:
-                wider = self.space.widened(best["search"])
-                if wider != self.space:
-                    self.space = wider
-                    self.study = self._study()
+        if row.get("queued"):
+            self.queue = [p for p in self.queue if p != row["search"]]
+        if before == "gains" and self.phase == "all":
+            self.queue += [{**g["search"], **self.space.weakest()} for g in self.starts()]
+        if len(self.rows) < max(1, int(WIDEN_FROM * self.spec.trials)) or self.phase != "all":
+            return
+        best = self.best()
+        if best is None:
+            return
+        moved = {w["param"] + w["side"]: 0 for w in self.widenings}
+        for w in self.widenings:
+            moved[w["param"] + w["side"]] += 1
+        wider, widenings = self.space.widened(
+            best["search"], skip=lambda p, side: moved.get(p + side, 0) >= MAX_WIDENINGS
+        )
+        if not widenings:
+            return
+        self.space = wider
+        probe = dict(best["search"])
+        for w in widenings:
+            old = w["old"]
+            probe[w["param"]] = old / math.sqrt(10) if w["side"] == "low" else old * math.sqrt(10)
+            self.widenings.append({**w, "trial": len(self.rows), "probe": probe[w["param"]]})
+        self.queue.append(probe)
 
     def ask(self, count: int) -> list[tuple[optuna.trial.Trial, dict, str]]:
-        """Up to ``count`` new settings of the current phase: (Optuna trial, values, phase)."""
+        """Up to ``count`` new settings of the current phase: (Optuna trial, values, phase),
+        queued settings first. The study is rebuilt from the rows, seeded by their number, so
+        what is asked depends on the rows alone: a resumed tuning asks what an uninterrupted one
+        would.
+        """
+        self.study = self._study()
         phase = self.phase
         left = (self.gain_trials - len(self.rows)) if phase == "gains" else self.remaining
         out = []
+        pending = list(self.queue)
         for _ in range(min(count, left)):
+            if pending:
+                self.study.enqueue_trial(pending.pop(0))
             trial = self.study.ask(self._distributions(phase))
             out.append((trial, dict(trial.params), phase))
         return out
@@ -477,8 +527,6 @@ def _run_tune(
     for row in _read_trials(folder):  # resume: replay the history, widening as it did
         if row["controller"] in controllers:
             controllers[row["controller"]].record(row)
-    for c in controllers.values():
-        c.study = c._study()
     base_toml = base.to_toml()
     train = list(range(spec.train_samples))
     total = spec.trials * len(controllers) * spec.train_samples
@@ -510,32 +558,11 @@ def _run_tune(
                 ]
                 for c, _, values, phase in asked
             ]
-            finished = []
-            for (c, trial, values, phase), runs in zip(asked, futures):
-                results = [f.result() for f in runs]
-                objectives, constraints, mean = judge(spec, results)
-                for key, value in zip(CONSTRAINTS, constraints):
-                    trial.set_constraint(key, value)
-                c.study.tell(trial, objectives[0])
-                finished.append(
-                    (
-                        c,
-                        {
-                            "controller": c.name,
-                            "phase": phase,
-                            "law": c.law(phase),
-                            "search": values,
-                            "params": c.space.overrides(values),
-                            "objectives": list(objectives),
-                            "constraints": constraints,
-                            "feasible": all(v <= 0 for v in constraints),
-                            "train": mean,
-                            "runs": results,
-                        },
-                    )
-                )
+            finished = [
+                (c, c.tell(trial, values, phase, [f.result() for f in runs]))
+                for (c, trial, values, phase), runs in zip(asked, futures)
+            ]
             for c, row in finished:  # after every tell: recording may widen a space (a new study)
-                row["trial"] = len(c.rows)
                 c.record(row)
             _write_trials(folder, [row for _, row in finished])
             if progress:
@@ -625,6 +652,7 @@ def _summary(spec, sweep, controllers, client, sweep_future, base_toml) -> dict:
                 "validation": validation,
                 "at_bound": c.space.at_bound(best["search"]),
             }
+        entry["widened"] = c.widenings
         out["controllers"][name] = entry
     return out
 

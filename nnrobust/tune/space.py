@@ -115,17 +115,23 @@ class SearchSpace:
                 out.append({"param": p.name, "side": "high", "bound": p.high, "physical": p.high_reason})
         return out
 
-    def widened(self, values: dict[str, float]) -> SearchSpace:
-        """The space with every non-physical bound that ``values`` sits on moved out a decade."""
-        params = []
+    def widened(self, values: dict[str, float], skip=None) -> tuple[SearchSpace, list[dict]]:
+        """The space with every non-physical bound that ``values`` sits on moved out a decade,
+        and what moved: ``{param, side, old, bound}`` each. ``skip(param, side)`` keeps a bound.
+        """
+        params, moved = [], []
         for p in self.params:
             pos = p.position(values[p.name])
-            if pos < EDGE and not p.low_reason:
-                p = replace(p, low=p.low / 10)
-            elif pos > 1 - EDGE and not p.high_reason:
-                p = replace(p, high=p.high * 10)
+            side = "low" if pos < EDGE and not p.low_reason else ""
+            side = "high" if pos > 1 - EDGE and not p.high_reason else side
+            if side and not (skip and skip(p.name, side)):
+                old = p.low if side == "low" else p.high
+                p = replace(p, low=p.low / 10) if side == "low" else replace(p, high=p.high * 10)
+                moved.append(
+                    {"param": p.name, "side": side, "old": old, "bound": p.low if side == "low" else p.high}
+                )
             params.append(p)
-        return replace(self, params=tuple(params))
+        return replace(self, params=tuple(params)), moved
 
     def to_dict(self) -> dict:
         """JSON-ready description of the space."""
