@@ -329,10 +329,10 @@ class ExtrasInterrupted(KeyboardInterrupt):
     complete without them.
     """
 
-    def __init__(self, folder: Path):
+    def __init__(self, folder: Path, when: str = "while writing plots"):
         super().__init__(
-            f"interrupted while writing plots; the arrays and metrics are saved in {folder}/ "
-            f"('nnrobust plot {folder}' draws the plots)"
+            f"interrupted {when}; the arrays and metrics are saved in {folder}/ "
+            f"('nnrobust plot {folder}' draws the plots and the animation)"
         )
         self.folder = folder
 
@@ -371,10 +371,17 @@ def write_run(
         )
     tmp = folder.parent / f".{folder.name}.partial-{os.getpid()}"
     shutil.rmtree(tmp, ignore_errors=True)
+    placed = False
     try:
         with signals_deferred():  # a finished simulation is saved whole, then Ctrl-C is honoured
             _write_core(tmp, result, result.metrics())
             _place(tmp, folder)
+            placed = True
+    except KeyboardInterrupt:  # delivered as the save ended: the folder is whole, its extras pending
+        shutil.rmtree(tmp, ignore_errors=True)
+        if placed:
+            raise ExtrasInterrupted(folder, "as the run was saved, before its plots") from None
+        raise
     except OSError as err:
         shutil.rmtree(tmp, ignore_errors=True)
         where = "the previous run there is unchanged" if folder.exists() else "nothing was written there"

@@ -133,6 +133,31 @@ def test_ctrl_c_while_plotting_keeps_the_finished_simulation(tmp_path, monkeypat
     assert sorted(p.name for p in folder.iterdir()) == [MARKER, "config.toml", "metrics.json", "result.npz"]
 
 
+def test_ctrl_c_while_the_run_is_saved_names_what_was_kept_and_nnrobust_plot(tmp_path, monkeypatch, capsys):
+    """A second Ctrl-C while a long run's arrays are written is held until they are in place; it
+    then says the folder is complete and that `nnrobust plot` draws the rest (it said only
+    `nnrobust: interrupted`, the marker saying extras pending)."""
+    import os
+    import signal
+
+    from nnrobust import run_folder
+
+    place = run_folder._place
+
+    def place_then_ctrl_c(tmp, folder):
+        place(tmp, folder)
+        os.kill(os.getpid(), signal.SIGINT)  # held by signals_deferred until the block ends
+
+    monkeypatch.setattr(run_folder, "_place", place_then_ctrl_c)
+    folder = tmp_path / "run"
+    code = main(["run", "paper-line", "--out", str(folder), "--duration", "0.3", "--quiet"])
+    err = capsys.readouterr().err
+    assert code == 130 and f"'nnrobust plot {folder}' draws the plots" in err, err
+    assert "as the run was saved" in err and _marker(folder)["extras"] == "pending"
+    monkeypatch.undo()
+    assert main(["plot", str(folder)]) == 0 and _marker(folder)["extras"] == "complete"
+
+
 def test_plot_draws_again_the_figures_a_run_drew(tmp_path, capsys):
     """nnrobust plot on a run folder whose plots/ and animation.html are gone: the same PNG files,
     pixel for pixel, and the animation back; the arrays untouched."""
