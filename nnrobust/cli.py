@@ -413,14 +413,13 @@ def cmd_falsify(args) -> int:
     """Search each controller's worst plant in the sweep file's box, at one budget."""
     from .falsify import FalsifySpec, run_falsify
 
-    spec = FalsifySpec(
-        args.sweep,
-        [c.strip() for c in args.controllers.split(",") if c.strip()],
-        args.require,
-        args.budget,
-        args.seed,
-        args.margin,
-    )
+    controllers = [c.strip() for c in args.controllers.split(",") if c.strip()]
+    tuned = None
+    if args.tuned:
+        from .tune.engine import tuned_settings
+
+        tuned = tuned_settings(args.tuned, controllers)
+    spec = FalsifySpec(args.sweep, controllers, args.require, args.budget, args.seed, args.margin, tuned)
     progress, started = _simulations_bar(
         args.quiet,
         lambda done, total: (
@@ -901,6 +900,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="simulations per controller (and as many for its random baseline)",
     )
     falsify.add_argument("--seed", type=int, default=0, help="seed of the search (default 0)")
+    falsify.add_argument(
+        "--tuned",
+        metavar="DIR",
+        help="run each listed law at its best setting in this tuning (nnrobust tune's DIR or its "
+        "summary.json), as NAME-tuned",
+    )
     falsify.add_argument(
         "--out",
         required=True,

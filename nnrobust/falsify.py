@@ -132,6 +132,7 @@ class FalsifySpec:
     budget: int
     seed: int = 0
     margin: bool = False
+    tuned: dict | None = None  # law -> the dotted-key settings it runs at (tune.engine.tuned_settings)
 
     @property
     def margin_budget(self) -> int:
@@ -164,6 +165,7 @@ class FalsifySpec:
                 "budget": self.budget,
                 "seed": self.seed,
                 **({"margin": True} if self.margin else {}),
+                **({"tuned": self.tuned} if self.tuned else {}),
             }
         )
 
@@ -508,7 +510,7 @@ def _run_falsify(spec: FalsifySpec, folder: Path, workers, scheduler, overwrite:
             f"falsify needs the cma package ({err}); pip install 'nnrobust[falsify]'"
         ) from err
     properties = run_properties(spec.require)
-    sweep = _with_controllers(load_sweep(spec.target), spec.controllers)
+    sweep = _with_controllers(load_sweep(spec.target), spec.controllers, spec.tuned)
     box = box_of(sweep)
     base = base_config(sweep)
     for name in sweep.controllers:  # every controller's experiment validated before anything runs
@@ -596,7 +598,7 @@ def keep_worst(spec: FalsifySpec, summary: dict, folder: str | Path) -> list[Pat
     from .sweep.spec import Sample, base_config, experiment, load_sweep, sample_seed
     from .tune.engine import _with_controllers
 
-    sweep = _with_controllers(load_sweep(spec.target), spec.controllers)
+    sweep = _with_controllers(load_sweep(spec.target), spec.controllers, spec.tuned)
     base = base_config(sweep)
     written = []
     for name, entry in summary["controllers"].items():

@@ -206,3 +206,34 @@ def test_the_margin_brackets_the_scale_where_a_monotone_property_breaks(tmp_path
     quiet = ["--quiet", "--no-plots", "--no-animation"]
     assert main([*words[1:], "--out", str(tmp_path / "again"), *quiet]) == 0
     assert json.loads((tmp_path / "again" / "metrics.json").read_text())["rms_error_after_2s"] > errors[1]
+
+
+def test_tuned_settings_are_falsified_as_named_entries(tmp_path, capsys):
+    """--tuned DIR runs each law at its best setting in a tuning's summary, as NAME-tuned: the
+    worst plant's command carries the settings and reruns to its metrics; a law the tuning did
+    not tune, or a folder that is not a tuning, is refused naming --tuned."""
+    import shlex
+
+    sweep = tmp_path / "fz.toml"
+    sweep.write_text(SWEEP)
+    tuning = tmp_path / "tuning"
+    tuning.mkdir()
+    settings = {"controller.pd_Kp": [2000.0], "controller.pd_Kd": [90.0], "controller.pd_null_damping": 0.7}
+    summary = {"controllers": {"pd": {"best": {"params": settings}}, "nn": {"best": None}}}
+    (tuning / "summary.json").write_text(json.dumps(summary))
+    out = tmp_path / "out"
+    base = ["falsify", str(sweep), "--require", "rms_error<=0.02", "--budget", "4", "--quiet"]
+    assert main([*base, "--controllers", "pd", "--tuned", str(tuning), "--out", str(out)]) == 0
+    found = json.loads((out / "summary.json").read_text())
+    assert list(found["controllers"]) == ["pd-tuned"]
+    words = shlex.split(found["controllers"]["pd-tuned"]["worst"]["command"])
+    assert "controller.pd_Kp=[2000.0]" in words and "controller.pd_null_damping=0.7" in words
+    assert (
+        main([*words[1:], "--out", str(tmp_path / "again"), "--quiet", "--no-plots", "--no-animation"]) == 0
+    )
+    again = json.loads((tmp_path / "again" / "metrics.json").read_text())
+    assert again["rms_error"] == found["controllers"]["pd-tuned"]["worst"]["metrics"]["rms_error"]
+    capsys.readouterr()
+    assert main([*base, "--controllers", "nn", "--tuned", str(tuning), "--out", str(tmp_path / "x")]) == 2
+    assert "--tuned" in capsys.readouterr().err
+    assert main([*base, "--controllers", "pd", "--tuned", str(tmp_path), "--out", str(tmp_path / "y")]) == 2

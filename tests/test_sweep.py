@@ -197,7 +197,27 @@ BAD = [
     (
         "custom entry without class",
         {"controllers": [{"name": "mine"}]},
-        "controllers\\[0\\]: a custom entry is",
+        "controllers\\[0\\]: a table entry is",
+    ),
+    (
+        "entry with a class and a kind",
+        {"controllers": [{"name": "mine", "class": "a.py:B", "kind": "nn"}]},
+        "controllers\\[0\\]: a table entry is",
+    ),
+    (
+        "entry of an unknown kind",
+        {"controllers": [{"name": "mine", "kind": "lqr"}]},
+        "controllers\\[0\\].kind: 'lqr' is not one of nn",
+    ),
+    (
+        "entry setting the plant",
+        {"controllers": [{"name": "mine", "kind": "nn", "set": {"plant.payload": 1.0}}]},
+        "controllers\\[0\\].set.plant.payload: an entry's settings are the law's own",
+    ),
+    (
+        "entry setting an unknown key",
+        {"controllers": [{"name": "mine", "kind": "nn", "set": {"nn.FF": 1.0}}]},
+        "controllers\\[0\\].set.nn.FF: .*did you mean 'nn.F'",
     ),
     (
         "custom entry named like a kind",

@@ -44,8 +44,9 @@ class SweepSpec:
         name: the sweep's name.
         base: a preset name or an experiment file (relative paths from the sweep file's folder).
         controllers: the names of the controllers every sample runs with: built-in kinds, and
-            the names of custom entries.
-        custom: per custom entry's name, its ``{"class": ..., "params": {...}}`` (a controllers
+            the names of table entries.
+        custom: per table entry's name, its ``{"class": ..., "params": {...}}`` (a custom law)
+            or ``{"kind": ..., "set": {...}}`` (a built-in law with its own settings) (a controllers
             entry ``{name = ..., class = "file.py:Class", params = {...}}``).
         samples: random draws per grid point.
         seed: seed of the draws (each sample's own seed derives from it and the sample id).
@@ -159,48 +160,80 @@ def _check_distribution(key: str, table: dict) -> None:
         raise ConfigError(path, f"needs a standard deviation >= 0, got {b:g}")
 
 
-CUSTOM_KEYS = ("name", "class", "params")
-"""The keys of a custom controllers entry."""
+ENTRY_KEYS = ("name", "class", "params", "kind", "set")
+"""The keys of a table in a sweep's controllers list."""
+
+ENTRY_FORMS = (
+    '{name = "...", class = "file.py:Class", params = {...}} (a custom law) or '
+    '{name = "...", kind = "nn", set = {"nn.F" = 0.5, ...}} (a built-in law with settings of its own)'
+)
+
+SETTING_ROOTS = ("controller", "nn")
+"""The sections a named entry's ``set`` may change: the controller's own settings."""
+
+
+def _entry(entry: dict, key: str) -> dict:
+    """A controllers table checked: ``{class, params}`` of a custom law, or ``{kind, set}``."""
+    shape = (
+        not [k for k in entry if k not in ENTRY_KEYS]
+        and isinstance(entry.get("name"), str)
+        and (
+            (isinstance(entry.get("class"), str) and "kind" not in entry and "set" not in entry)
+            or (isinstance(entry.get("kind"), str) and "class" not in entry and "params" not in entry)
+        )
+    )
+    if not shape:
+        raise ConfigError(key, f"a table entry is {ENTRY_FORMS}, got {entry!r}")
+    if not NAME.fullmatch(entry["name"]) or entry["name"] in CONTROLLER_KINDS:
+        raise ConfigError(
+            f"{key}.name",
+            f"{entry['name']!r} must be 1-40 letters, digits, '_' or '-' and not a built-in kind",
+        )
+    if "class" in entry:
+        return {"class": entry["class"], "params": dict(entry.get("params") or {})}
+    if entry["kind"] not in CONTROLLER_KINDS:
+        raise ConfigError(f"{key}.kind", f"{entry['kind']!r} is not one of {', '.join(CONTROLLER_KINDS)}")
+    settings = entry.get("set") or {}
+    if not isinstance(settings, dict):
+        raise ConfigError(f"{key}.set", f"expected a table of dotted keys, got {settings!r}")
+    for dotted in settings:
+        root = str(dotted).split(".")[0]
+        if root not in SETTING_ROOTS or str(dotted).split(".")[:2] in (
+            ["controller", "kind"],
+            ["controller", "class"],
+            ["controller", "params"],
+        ):
+            raise ConfigError(
+                f"{key}.set.{dotted}",
+                "an entry's settings are the law's own: controller.* (but kind, class, params) and nn.*",
+            )
+        try:
+            check_dotted_key(dotted)
+        except ConfigError as err:
+            raise ConfigError(f"{key}.set.{err.key}", str(err).split(": ", 1)[1]) from err
+    return {"kind": entry["kind"], "set": dict(settings)}
 
 
 def _controllers(entries, where: str) -> tuple[list[str], dict]:
-    """(names, custom entries by name) of a sweep's controllers list: built-in kinds and tables
-    ``{name = "slotine", class = "laws.py:SlotineLi", params = {...}}``.
+    """(names, table entries by name) of a sweep's controllers list: built-in kinds, and tables
+    naming a custom law or a built-in law with settings of its own (:data:`ENTRY_FORMS`).
     """
     key = f"{where}: controllers"
     if not isinstance(entries, list) or not entries:
         raise ConfigError(
-            key,
-            f"needs a list of {', '.join(CONTROLLER_KINDS)} or tables "
-            '{name = ..., class = "file.py:Class", params = {...}}, '
-            f"got {entries!r}",
+            key, f"needs a list of {', '.join(CONTROLLER_KINDS)} or tables {ENTRY_FORMS}, got {entries!r}"
         )
     names, custom = [], {}
     for i, entry in enumerate(entries):
         if isinstance(entry, dict):
-            unknown = [k for k in entry if k not in CUSTOM_KEYS]
-            if unknown or not isinstance(entry.get("name"), str) or not isinstance(entry.get("class"), str):
-                raise ConfigError(
-                    f"{key}[{i}]",
-                    'a custom entry is {name = "...", class = '
-                    '"file.py:Class", '
-                    f"params = {{...}}}} (params optional), got {entry!r}",
-                )
-            if not NAME.fullmatch(entry["name"]) or entry["name"] in CONTROLLER_KINDS:
-                raise ConfigError(
-                    f"{key}[{i}].name",
-                    f"{entry['name']!r} must be 1-40 letters, digits, '_' or '-' and not a built-in kind",
-                )
-            custom[entry["name"]] = {"class": entry["class"], "params": dict(entry.get("params") or {})}
+            custom[entry.get("name")] = _entry(entry, f"{key}[{i}]")
             names.append(entry["name"])
         elif entry in CONTROLLER_KINDS:
             names.append(entry)
         else:
             raise ConfigError(
                 f"{key}[{i}]",
-                f"{entry!r} is not one of {', '.join(CONTROLLER_KINDS)} nor "
-                "a table "
-                '{name = ..., class = "file.py:Class", params = {...}}',
+                f"{entry!r} is not one of {', '.join(CONTROLLER_KINDS)} nor a table {ENTRY_FORMS}",
             )
     if len(set(names)) != len(names):
         raise ConfigError(key, f"lists a controller twice: {names}")
@@ -304,6 +337,8 @@ def load_sweep(path: str | Path) -> SweepSpec:
     from ..controllers.custom import class_file
 
     for entry in spec.custom.values():  # a controller file is read from the sweep file's folder
+        if "class" not in entry:
+            continue
         where, name = class_file(entry["class"]), entry["class"].rpartition(":")[2]
         if where is not None and not where.is_absolute():
             entry["class"] = f"{(path.parent / where).resolve()}:{name}"
@@ -379,10 +414,14 @@ def experiment(spec: SweepSpec, base: ExperimentConfig, sample: Sample, controll
 
 
 def controller_overrides(spec: SweepSpec, controller: str) -> dict:
-    """The dotted keys that choose a row's controller: a built-in kind, or a custom class and params."""
+    """The dotted keys that choose a row's controller: a built-in kind (with an entry's settings),
+    or a custom class and params.
+    """
     if controller not in spec.custom:
         return {"controller.kind": controller}
     entry = spec.custom[controller]
+    if "kind" in entry:
+        return {"controller.kind": entry["kind"], **entry["set"]}
     return {
         "controller.kind": "custom",
         "controller.class": entry["class"],
@@ -399,9 +438,10 @@ def rerun_command(spec: SweepSpec, sample: Sample, controller: str) -> str:
         **{key: sample.seed % 2**31 for key in SEEDED_KEYS if key not in spec.set and key not in spec.vary},
         **sample.values,
     }
-    if controller in spec.custom:
-        values.update({f"controller.params.{k}": v for k, v in spec.custom[controller]["params"].items()})
-    chosen = spec.custom[controller]["class"] if controller in spec.custom else controller
+    entry = spec.custom.get(controller, {"kind": controller, "set": {}})
+    values.update(entry.get("set") or {})
+    values.update({f"controller.params.{k}": v for k, v in (entry.get("params") or {}).items()})
+    chosen = entry.get("class") or entry["kind"]
     words = ["nnrobust", "run", spec.base, "--controller", chosen]
     for key, value in values.items():
         words += ["--set", f"{key}={_inline(value)}"]

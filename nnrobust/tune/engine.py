@@ -174,16 +174,48 @@ def sweep_of(spec: TuneSpec):
     return _with_controllers(sweep, spec.controllers)
 
 
-def _with_controllers(sweep, names: list[str]):
-    """The sweep with the tuning's controllers: built-in kinds, the sweep file's custom entries by
+def tuned_settings(path: str | Path, names: list[str]) -> dict[str, dict]:
+    """Each named built-in law's best setting in a tuning's summary (``DIR`` or its summary.json):
+    name -> its dotted-key overrides.
+    """
+    from ..config import read_text_file
+
+    file = Path(path) / "summary.json" if Path(path).is_dir() else Path(path)
+    try:
+        summary = json.loads(read_text_file(file, what="tuning summary"))
+        entries = summary["controllers"]
+    except (ValueError, KeyError, TypeError) as err:
+        raise ConfigError("--tuned", f"{file} is not a tuning's summary.json ({err})") from err
+    out = {}
+    for name in names:
+        if name not in TUNABLE:
+            raise ConfigError(
+                "--tuned", f"{name!r}: only the shipped laws ({', '.join(TUNABLE)}) take tuned settings"
+            )
+        best = (entries.get(name) or {}).get("best")
+        if not best:
+            raise ConfigError(
+                "--tuned",
+                f"{file} has no best setting for {name!r} (it tuned {', '.join(entries) or 'nothing'})",
+            )
+        out[name] = dict(best["params"])
+    return out
+
+
+def _with_controllers(sweep, names: list[str], tuned: dict | None = None):
+    """The sweep with the tuning's controllers: built-in kinds, the sweep file's table entries by
     name, and classes given as file.py:Class (named by the class, the file read from the working
-    folder).
+    folder). A built-in law in ``tuned`` (name -> dotted-key settings) runs at those settings as
+    the entry ``NAME-tuned``.
     """
     from ..controllers.custom import class_file
 
     custom, controllers = {}, []
     for name in names:
-        if name in TUNABLE:
+        if tuned and name in tuned:
+            custom[f"{name}-tuned"] = {"kind": name, "set": dict(tuned[name])}
+            controllers.append(f"{name}-tuned")
+        elif name in TUNABLE:
             controllers.append(name)
         elif name in sweep.custom:
             custom[name] = sweep.custom[name]
@@ -513,15 +545,16 @@ def _run_tune(
         for sample_id in range(sweep.samples):
             experiment(sweep, base, draw(sweep, sample_id), name)
         first = experiment(sweep, base, draw(sweep, 0), name)
-        if name in sweep.custom:  # its declared space; built once at the space's centre
-            space = custom_space(name, load_class(sweep.custom[name]["class"]))
+        entry = sweep.custom.get(name, {"kind": name})
+        if "class" in entry:  # its declared space; built once at the space's centre
+            space = custom_space(name, load_class(entry["class"]))
             build(
                 apply_overrides(
                     first, space.overrides({p.name: math.sqrt(p.low * p.high) for p in space.params})
                 )
             )
         else:
-            space = search_space(name, arm_scales(build(first)))
+            space = search_space(entry["kind"], arm_scales(build(first)))
         controllers[name] = _Controller(spec, name, space, index)
     prepare_folder(spec, folder, overwrite)
     for row in _read_trials(folder):  # resume: replay the history, widening as it did
