@@ -533,3 +533,29 @@ controllers = ["pd"]
     assert set(frame["plant.torque_limits"]) == {"urdf", "[60.0, 40.0, 20.0]"}
     assert set(frame["status"]) == {"completed"}
     assert (tmp_path / "out" / "plots" / "error_vs_plant_torque_limits.png").is_file()
+
+
+def test_a_bad_value_late_in_a_long_grid_is_refused_before_the_rest_is_checked(monkeypatch):
+    """The first sample of every distinct grid value is checked first: a bad 10,000th grid value
+    is refused after a handful of checks, not after the 9,999 good samples (44 s before)."""
+    from nnrobust.sweep import engine
+    from nnrobust.sweep.spec import draw
+
+    spec = parse_sweep(
+        {
+            "name": "late",
+            "base": "paper-ellipse",
+            "controllers": ["nn", "no-u0"],
+            "samples": 2,
+            "vary": {"simulation.duration": [3.0] * 9_999 + [-1.0], "plant.friction_scale": [1.0, 2.0]},
+        }
+    )
+    first = engine._first_checked(spec)
+    for key in spec.grid_keys:  # every distinct value of every grid key is among them
+        assert {draw(spec, i).values[key] for i in first} == set(spec.vary[key])
+    checked = []
+    experiment = engine.experiment
+    monkeypatch.setattr(engine, "experiment", lambda *a: checked.append(a[2].id) or experiment(*a))
+    with pytest.raises(ConfigError, match=r"simulation.duration: must be positive, got -1.0 \(sample 39996"):
+        plan(spec)
+    assert len(checked) < 10

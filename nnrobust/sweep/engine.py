@@ -285,6 +285,9 @@ def plan(spec: SweepSpec) -> tuple[str, list[tuple[int, str]]]:
     experiments, which the workers rebuild.
     """
     base = base_config(spec)
+    for sample_id in _first_checked(spec):  # each distinct grid value's first sample, at once
+        for controller in spec.controllers:
+            experiment(spec, base, draw(spec, sample_id), controller)
     jobs = []
     for sample_id in range(spec.size):
         sample = draw(spec, sample_id)
@@ -292,6 +295,21 @@ def plan(spec: SweepSpec) -> tuple[str, list[tuple[int, str]]]:
             experiment(spec, base, sample, controller)  # validates; not kept
             jobs.append((sample_id, controller))
     return base.to_toml(), jobs
+
+
+def _first_checked(spec: SweepSpec) -> list[int]:
+    """One sample per distinct value of each grid key (the others at their first value, the first
+    draw): checked before the rest, so a bad value late in a long grid is refused at once."""
+    ids: list[int] = []
+    stride = spec.samples
+    for key in reversed(spec.grid_keys):
+        seen: list = []
+        for position, value in enumerate(spec.vary[key]):
+            if value not in seen:
+                seen.append(value)
+                ids.append(position * stride)
+        stride *= len(spec.vary[key])
+    return sorted(set(ids))
 
 
 def chunk_size(jobs: int, workers: int, seconds_per_job: float) -> int:
