@@ -31,6 +31,7 @@ from .controllers import (
     TaskSpacePD,
 )
 from .controllers.custom import build_custom
+from .controllers.task_space import sized_null_damping
 from .exceptions import ConfigError, ModelMismatch
 from .ik import solve_ik
 from .model import (
@@ -460,7 +461,13 @@ def build_controller(
         return build_custom(c.class_ or "", c.params, context)
     pinv = DampedPseudoInverse(c.pinv_threshold, c.pinv_max_damping)
     if c.kind == "pd":
-        return TaskSpacePD(nominal, trajectory, np.diag(c.pd_Kp), np.diag(c.pd_Kd), c.pd_null_damping, pinv)
+        Kd = np.diag(c.pd_Kd)
+        damping = c.pd_null_damping
+        if damping is None:
+            if context is None:
+                raise ValueError("the PD's null-space damping is sized from a ControllerContext")
+            damping = sized_null_damping(nominal, context.q0, Kd, context.period)
+        return TaskSpacePD(nominal, trajectory, np.diag(c.pd_Kp), Kd, damping, pinv)
     Kp, Kv = np.diag(c.Kp), np.diag(c.Kv)
     compensator: NNCompensator | SlidingModeCompensator | None = None
     if c.kind == "nn":

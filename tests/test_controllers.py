@@ -228,3 +228,32 @@ def test_one_set_of_nn_defaults_for_the_class_and_the_configuration():
     fields = {f.name: f.default for f in dataclasses.fields(NNCompensator)}
     for name in ("F", "gamma", "eps0", "eps_min", "sigma", "law", "basis_input"):
         assert fields[name] == getattr(config, name), name
+
+
+def test_the_pd_null_damping_is_sized_from_the_arm():
+    """D = r m_s on the paper's arm, computed by hand from its closed-form model: the self-motion
+    n = J_1 x J_2 (the kernel of the 2 x 3 J) has inertia m_s = n^T M n / |n|^2, and the task
+    damping's rate r is the geometric mean of eig(J M^-1 J^T K_d), sqrt(det) for two rows; at a
+    long period, D stops at m_s / (2 T). The PD built at the defaults uses it; a value set is kept."""
+    from nnrobust.config import apply_overrides
+    from nnrobust.controllers.task_space import sized_null_damping
+    from nnrobust.presets import load_preset
+
+    from .problems import closed_form_of
+
+    model = closed_form_of(paper_robot())
+    q0, Kd = np.array([0.3, 1.1, -0.7]), np.diag([40.0, 25.0])
+    M, J = model.mass(q0), model.task_jacobian(q0)
+    n = np.cross(J[0], J[1])
+    m_s = n @ M @ n / (n @ n)
+    r = np.sqrt(np.linalg.det(J @ np.linalg.inv(M) @ J.T @ Kd))
+    assert sized_null_damping(model, q0, Kd, 1e-3) == pytest.approx(r * m_s, rel=1e-10)
+    assert sized_null_damping(model, q0, Kd, 0.5) == pytest.approx(m_s / (2 * 0.5), rel=1e-10)
+    config = apply_overrides(load_preset("paper-ellipse"), {"controller.kind": "pd"})
+    setup = build(config)
+    expected = sized_null_damping(setup.nominal, setup.q0, np.diag(config.controller.pd_Kd), 1e-3)
+    assert setup.controller.null_damping == pytest.approx(expected)
+    panda = build(apply_overrides(load_preset("panda-ellipse"), {"controller.kind": "pd"}))
+    assert (round(expected, 1), round(panda.controller.null_damping, 1)) == (2.2, 1.3)  # docs/controller.md
+    config = apply_overrides(config, {"controller.pd_null_damping": 0.25})
+    assert build(config).controller.null_damping == 0.25

@@ -91,6 +91,29 @@ class TaskSpaceController(Controller):
         return ControlOutput(tau, signals, z_next)
 
 
+def sized_null_damping(nominal: DynamicsModel, q0: np.ndarray, Kd: np.ndarray, period: float) -> float:
+    """The PD's null-space damping D sized from the arm at q(0) [N m s/rad].
+
+    The self-motion q' = N s (N an orthonormal basis of ker J) has inertia M_s = N^T M N, and
+    D (I - J+J) q' damps it at the rates eig(D M_s^-1). D is chosen so that it decays at the task
+    damping's rate r, the geometric mean of eig(Lambda^-1 K_d) with Lambda^-1 = J M^-1 J^T (the
+    rate at which K_d damps the task error), D = r m_s (m_s the geometric mean of eig M_s), and
+    never faster than half the sampling rate on the lightest self-motion, D <= lambda_min(M_s) /
+    (2 T): a damping torque held for a period T overshoots past D T / m = 1. An arm without
+    self-motion (n = m) is damped at r times its mean joint inertia (the term then does nothing).
+    """
+    from scipy.linalg import null_space
+
+    M, J = nominal.mass(q0), nominal.task_jacobian(q0)
+    rates = np.linalg.eigvals(J @ np.linalg.solve(M, J.T) @ np.asarray(Kd, dtype=float)).real
+    rate = float(np.exp(np.mean(np.log(np.clip(rates, 1e-12, None)))))
+    N = null_space(J)
+    if N.shape[1] == 0:
+        return rate * float(np.mean(np.diag(M)))
+    inertia = np.clip(np.linalg.eigvalsh(N.T @ M @ N), 1e-12, None)
+    return float(min(rate * np.exp(np.mean(np.log(inertia))), 0.5 * inertia[0] / period))
+
+
 class TaskSpacePD(Controller):
     """PD with gravity compensation in task space: tau = J^T (-Kp e - Kd e') + G-hat - D (I - J+J) q'.
 
