@@ -299,7 +299,8 @@ def plan(spec: SweepSpec) -> tuple[str, list[tuple[int, str]]]:
 
 def _first_checked(spec: SweepSpec) -> list[int]:
     """One sample per distinct value of each grid key (the others at their first value, the first
-    draw): checked before the rest, so a bad value late in a long grid is refused at once."""
+    draw): checked before the rest, so a bad value late in a long grid is refused at once.
+    """
     ids: list[int] = []
     stride = spec.samples
     for key in reversed(spec.grid_keys):
