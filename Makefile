@@ -60,7 +60,8 @@ test: $(VENV)/.installed-test $(VENV)/.browser
 bench: $(VENV)/.installed
 	$(BIN)/nnrobust bench --out $(OUT)/bench
 
-# Every number in README.md and docs/: regenerate each data file (about an hour on 2 cores),
+# Every number in README.md and docs/: regenerate each data file (about 1.5 hours on 2 cores;
+# the resumable tunings and searches start afresh, so a changed plant or tuner is not replayed),
 # then rewrite the tables from them (tests/test_docs_numbers.py checks both).
 DATA := docs/data
 docs-data: $(VENV)/.installed-test
@@ -69,6 +70,8 @@ docs-data: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/nn_options.py --json $(DATA)/nn_options.json
 	$(BIN)/python benchmarks/subtask.py --json $(DATA)/subtask.json
 	$(BIN)/python benchmarks/arm_presets.py --json $(DATA)/arm_presets.json
+	rm -rf $(OUT)/tuned $(OUT)/tune-noisy $(OUT)/falsify-paper-factors $(OUT)/falsify-panda-factors \
+	  $(OUT)/falsify-tuned $(OUT)/paper-robustness $(OUT)/panda-robustness
 	$(BIN)/python benchmarks/tuned_comparison.py --json $(DATA)/tuned_comparison.json --figure docs/img/tuned_comparison.png
 	$(BIN)/python benchmarks/engine_gap.py --json $(DATA)/engine_gap.json
 	$(BIN)/python benchmarks/plant_convergence.py --json $(DATA)/plant_convergence.json
@@ -80,6 +83,14 @@ docs-data: $(VENV)/.installed-test
 	  --controllers nn,sliding-mode,no-u0,computed-torque --require "rms_error_after_2s<=0.05" \
 	  --budget 200 --margin --out $(OUT)/falsify-paper-factors --overwrite --quiet
 	cp $(OUT)/falsify-paper-factors/summary.json $(DATA)/falsify_paper_factors.json
+	$(BIN)/nnrobust falsify benchmarks/falsification/panda-factors.toml \
+	  --controllers nn,no-u0,sliding-mode,pd --require "rms_error_after_2s<=0.005" \
+	  --budget 200 --out $(OUT)/falsify-panda-factors --quiet
+	cp $(OUT)/falsify-panda-factors/summary.json $(DATA)/falsify_panda_factors.json
+	$(BIN)/nnrobust falsify benchmarks/falsification/paper-factors-noisy.toml \
+	  --controllers nn,no-u0,pd,sliding-mode --tuned $(DATA)/tune_noisy_case_b.json \
+	  --require "rms_error_after_2s<=0.0005" --budget 200 --margin --out $(OUT)/falsify-tuned --quiet
+	cp $(OUT)/falsify-tuned/summary.json $(DATA)/falsify_tuned_noisy.json
 	for study in paper-robustness panda-robustness; do \
 	  $(BIN)/nnrobust sweep $$study --out $(OUT)/$$study --overwrite --keep-worst 1 && \
 	  cp $(OUT)/$$study/summary.json $(DATA)/$$(echo $$study | tr - _).json || exit 1; \

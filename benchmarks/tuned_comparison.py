@@ -153,7 +153,7 @@ def plot(cases: list[dict], path: str) -> None:
         ax.grid(True, which="both", alpha=0.3)
     axes.flat[0].legend(fontsize=8)
     fig.suptitle(
-        f"Pareto fronts at {cases[0]['summary']['budget']} simulations per controller "
+        f"Pareto fronts at {cases[0]['summary']['budget']} simulations per controller, optimiser seed 0 "
         "(★ best under the constraints; dotted: the torque limit)",
         fontsize=10,
     )

@@ -16,6 +16,7 @@ import json
 import re
 import sys
 from pathlib import Path
+from statistics import median
 
 ROOT = Path(__file__).resolve().parent.parent
 DATA = ROOT / "docs" / "data"
@@ -27,6 +28,7 @@ DOCUMENTS = (
     "docs/robots.md",
     "docs/robustness.md",
     "docs/engines.md",
+    "docs/falsification.md",
 )
 TABLE = re.compile(r"(<!-- table: (?P<name>[\w-]+) -->\n)(?P<body>.*?)(<!-- /table -->)", re.S)
 
@@ -262,31 +264,86 @@ TUNED_COMMAND = (
 )
 
 
-def _tuned_cell(best: dict | None) -> str:
-    if best is None:
-        return "no setting met the constraints"
-    held = best["validation"].get("rms_error_after_2s", best["train"]["rms_error_after_2s"])
-    return f"{1e3 * held:.3g} mm ({best['train']['rms_torque']:.2g} N m)"
+def tuned_seed_errors(case: dict, name: str) -> list[float]:
+    """The held-out RMS error [m] of a controller's best setting for each optimiser seed of a case
+    (the seeds where a setting met the constraints)."""
+    out = []
+    for seed in case["seeds"]:
+        best = seed["best"][name]
+        if best is not None:
+            out.append(best["validation"].get("rms_error_after_2s", best["train"]["rms_error_after_2s"]))
+    return out
+
+
+def tuned_verdict(case: dict, names: list[str]) -> dict:
+    """A case's verdict: the controller with the least median held-out error over the seeds,
+    whether it is clear (its worst seed beats every other controller's best seed), and the NN's
+    median over the best other controller's."""
+    medians = {n: median(e) for n in names if (e := tuned_seed_errors(case, n))}
+    best = min(medians, key=medians.__getitem__)
+    others = [n for n in medians if n != best]
+    clear = all(max(tuned_seed_errors(case, best)) < min(tuned_seed_errors(case, n)) for n in others)
+    rival = min((n for n in medians if n != "nn"), key=medians.__getitem__)
+    return {
+        "best": best,
+        "clear": clear,
+        "medians": medians,
+        "rival": rival,
+        "nn_ratio": medians["nn"] / medians[rival],
+    }
 
 
 def tuned_headline() -> str:
     data = _data("tuned_comparison")
-    panels = [(c["case"], c["sensing"]) for c in data["cases"]]
+    seeds = data["seeds"]
+
+    def cell(case, name):
+        errors = tuned_seed_errors(case, name)
+        if not errors:
+            return "no setting met the constraints"
+        text = f"{1e3 * median(errors):.3g} ({1e3 * min(errors):.2g}–{1e3 * max(errors):.2g})"
+        text += f", {len(errors)} of {seeds} seeds" if len(errors) < seeds else ""
+        return f"**{text}**" if tuned_verdict(case, data["controllers"])["best"] == name else text
+
     columns = [("controller", "l", _text("controller"))] + [
-        (f"{case}, {sensing}", "r", lambda r, i=i: _tuned_cell(r["best"][i]))
-        for i, (case, sensing) in enumerate(panels)
+        (f"{c['case']}, {c['sensing']}", "r", lambda r, c=c: cell(c, r["controller"])) for c in data["cases"]
     ]
-    rows = [
-        {"controller": name, "best": [c["summary"]["controllers"][name]["best"] for c in data["cases"]]}
-        for name in data["controllers"]
-    ]
+    rows = [{"controller": name} for name in data["controllers"]]
     limits = sorted({c["summary"]["constraints"]["max_rms_torque"] for c in data["cases"]})
     return _markdown(columns, rows) + (
-        f"\nHeld-out RMS task error (t ≥ 2 s) of each controller's best setting under the constraints (RMS "
-        f"torque in brackets), after `nnrobust tune` gave every controller {data['budget']} simulations "
+        f"\nHeld-out RMS task error (t ≥ 2 s) in mm of each controller's best setting under the "
+        f"constraints: the median over {seeds} optimiser seeds (0 to {seeds - 1}), and in brackets "
+        f"the least and the greatest. Each seed gave every controller {data['budget']} simulations "
         f"per case: RMS torque ≤ {' or '.join(f'{v:g}' for v in limits)} N m (the paper's arm or the "
-        "Panda), at most 1 % saturated steps, no runaway, no stop hit. Made by "
-        f"`{TUNED_COMMAND}`.\n"
+        "Panda), at most 1 % saturated steps, no runaway, no stop hit. The least median is in bold. "
+        f"Made by `{TUNED_COMMAND}`.\n"
+    )
+
+
+def tuned_verdicts() -> str:
+    data = _data("tuned_comparison")
+    rows = []
+    for case in data["cases"]:
+        v = tuned_verdict(case, data["controllers"])
+        rows.append(
+            {
+                "case": f"{case['case']}, {case['sensing']}",
+                "best": v["best"],
+                "clear": "yes" if v["clear"] else "no: within the seeds' spread",
+                "nn": f"{v['nn_ratio']:.2g}",
+                "rival": v["rival"],
+            }
+        )
+    return _markdown(
+        [
+            ("case", "l", _text("case")),
+            ("least median error", "l", _text("best")),
+            ("every seed better than every other controller's?", "l", _text("clear")),
+            ("NN median / best other's", "r", _text("nn")),
+            ("best other", "l", _text("rival")),
+        ],
+        rows,
+        TUNED_COMMAND,
     )
 
 
@@ -294,13 +351,15 @@ def tuned_settings() -> str:
     data = _data("tuned_comparison")
     rows = []
     for case in data["cases"]:
-        for name, entry in case["summary"]["controllers"].items():
-            best = entry["best"]
+        for name, seed, best in (
+            (n, s["seed"], s["best"][n]) for n in data["controllers"] for s in case["seeds"]
+        ):
             if best is None:
                 rows.append(
                     {
                         "case": f"{case['case']}, {case['sensing']}",
                         "controller": name,
+                        "seed": seed,
                         "setting": "–",
                         "train": "–",
                         "held": "–",
@@ -326,6 +385,7 @@ def tuned_settings() -> str:
                 {
                     "case": f"{case['case']}, {case['sensing']}",
                     "controller": name,
+                    "seed": seed,
                     "setting": setting,
                     "train": _mm(best["train"]["rms_error_after_2s"]),
                     "held": _mm(best["validation"].get("rms_error_after_2s")),
@@ -338,6 +398,7 @@ def tuned_settings() -> str:
         [
             ("case", "l", _text("case")),
             ("controller", "l", _text("controller")),
+            ("seed", "r", _text("seed")),
             ("best setting", "l", _text("setting")),
             ("train error [mm]", "r", _text("train")),
             ("held-out error [mm]", "r", _text("held")),
@@ -458,7 +519,76 @@ def engine_gap_tuned() -> str:
     return _markdown(columns, _data("engine_gap")["tuned"], GAP_COMMAND)
 
 
+FALSIFY_COMMANDS = {
+    "falsify_panda_factors": (
+        "nnrobust falsify benchmarks/falsification/panda-factors.toml --controllers "
+        'nn,no-u0,sliding-mode,pd --require "rms_error_after_2s<=0.005" --budget 200 --workers 2 '
+        "--out out/falsify-panda-factors"
+    ),
+    "falsify_tuned_noisy": (
+        "nnrobust falsify benchmarks/falsification/paper-factors-noisy.toml --controllers "
+        "nn,no-u0,pd,sliding-mode --tuned docs/data/tune_noisy_case_b.json --require "
+        '"rms_error_after_2s<=0.0005" --budget 200 --margin --workers 2 --out out/falsify-tuned'
+    ),
+}
+"""The command each falsification data file comes from (its summary.json, copied)."""
+
+
+def _margin_cell(margin: dict | None) -> str:
+    if not margin:
+        return "–"
+    holds, violated = margin["holds_up_to"], margin["violated_at"]
+    if violated is None:
+        return f"at least {margin['largest_scale']:.2g} (no violation found)"
+    if violated == 0:
+        return "0: the nominal plant fails"
+    return f"{holds:.2g} (violated at {violated:.2g})"
+
+
+def _falsified(name: str):
+    """A falsification's results: per controller, its worst plant and the random baseline's, the
+    plant's friction, disturbance and payload, and the margin where one was searched."""
+
+    def render() -> str:
+        data = _data(name)
+        rows = []
+        for controller, entry in data["controllers"].items():
+            worst, baseline = entry["worst"], entry["random_baseline"]["worst"]
+            values = worst["values"]
+            margin = data.get("margin", {}).get(controller) or entry.get("margin")
+            rows.append(
+                {
+                    "controller": controller,
+                    "falsified": f"yes, at simulation {entry['first_violation']}"
+                    if entry["falsified"]
+                    else "no",
+                    "worst": _mm(worst["metrics"]["rms_error_after_2s"]),
+                    "random": _mm(baseline["metrics"]["rms_error_after_2s"]),
+                    "plant": ", ".join(
+                        f"{k.split('.')[-1]} {values[k]:.2g}"
+                        for k in ("plant.friction_scale", "plant.disturbance_scale", "plant.payload")
+                        if k in values
+                    ),
+                    "margin": _margin_cell(margin),
+                }
+            )
+        columns = [
+            ("controller", "l", _text("controller")),
+            ("falsified", "l", _text("falsified")),
+            ("worst RMS error after 2 s [mm]", "r", _text("worst")),
+            ("random search, same budget [mm]", "r", _text("random")),
+            ("worst plant (friction, disturbance, payload [kg])", "l", _text("plant")),
+        ]
+        if any(r["margin"] != "–" for r in rows):
+            columns.append(("margin (× the box)", "l", _text("margin")))
+        return _markdown(columns, rows, FALSIFY_COMMANDS[name])
+
+    return render
+
+
 RENDERERS = {
+    "falsify-panda-factors": _falsified("falsify_panda_factors"),
+    "falsify-tuned-noisy": _falsified("falsify_tuned_noisy"),
     "engine-gap-presets": engine_gap_presets,
     "engine-gap-tuned": engine_gap_tuned,
     "arm-presets": arm_presets,
@@ -472,6 +602,7 @@ RENDERERS = {
     "friction-compensation": friction_compensation,
     "tuned-headline": tuned_headline,
     "tuned-settings": tuned_settings,
+    "tuned-verdicts": tuned_verdicts,
 }
 
 

@@ -1327,9 +1327,15 @@ def dump_toml(data: dict) -> str:
 # ---- dotted overrides (``run --set``, sweep files) ------------------------------------------
 
 
-@functools.cache
-def _field_names(cls) -> list[str]:
-    return [f.name for f in dataclasses.fields(cls)]
+_FIELD_NAMES: dict[typing.Any, list[str]] = {}
+
+
+def _field_names(cls: typing.Any) -> list[str]:
+    """A config dataclass's field names, listed once per class."""
+    names = _FIELD_NAMES.get(cls)
+    if names is None:
+        names = _FIELD_NAMES[cls] = [f.name for f in dataclasses.fields(cls)]
+    return names
 
 
 def check_dotted_key(key: str) -> None:
