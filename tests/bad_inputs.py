@@ -1468,7 +1468,56 @@ def _box(folder: Path, vary: str):
     return check
 
 
+def _entry_sweep(folder: Path, entry: str):
+    def check():
+        from nnrobust.sweep import load_sweep
+
+        text = f'name = "s"\nbase = "paper-ellipse"\ncontrollers = ["nn", {entry}]\n'
+        return load_sweep(_file(folder, "s.toml", text))
+
+    return check
+
+
+def _tuned(folder: Path, summary: str, names: list[str]):
+    def check():
+        from nnrobust.tune.engine import tuned_settings
+
+        return tuned_settings(_file(folder, "summary.json", summary), names)
+
+    return check
+
+
 FALSIFY_CASES = [
+    Case(
+        "sweep file: a controllers entry of an unknown kind",
+        lambda d: _entry_sweep(d, '{name = "fast", kind = "lqr"}'),
+        ex.ConfigError,
+        "controllers[1].kind: 'lqr' is not one of nn",
+    ),
+    Case(
+        "sweep file: a controllers entry that sets the plant",
+        lambda d: _entry_sweep(d, '{name = "fast", kind = "nn", set = {"plant.payload" = 1.0}}'),
+        ex.ConfigError,
+        "controllers[1].set.plant.payload: an entry's settings are the law's own",
+    ),
+    Case(
+        "sweep file: a controllers entry with a class and a kind",
+        lambda d: _entry_sweep(d, '{name = "fast", kind = "nn", class = "a.py:B"}'),
+        ex.ConfigError,
+        "controllers[1]: a table entry is",
+    ),
+    Case(
+        "falsify --tuned: a law the tuning has no best setting for",
+        lambda d: _tuned(d, '{"controllers": {"nn": {"best": null}}}', ["nn"]),
+        ex.ConfigError,
+        "--tuned: ",
+    ),
+    Case(
+        "falsify --tuned: a file that is not a tuning's summary",
+        lambda d: _tuned(d, "[1, 2]", ["nn"]),
+        ex.ConfigError,
+        "is not a tuning's summary.json",
+    ),
     Case(
         "falsify: a budget of 0",
         lambda d: _falsify(budget=0),

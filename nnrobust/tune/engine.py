@@ -23,6 +23,7 @@ import json
 import math
 import os
 import uuid
+from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -183,9 +184,14 @@ def tuned_settings(path: str | Path, names: list[str]) -> dict[str, dict]:
     file = Path(path) / "summary.json" if Path(path).is_dir() else Path(path)
     try:
         summary = json.loads(read_text_file(file, what="tuning summary"))
-        entries = summary["controllers"]
-    except (ValueError, KeyError, TypeError) as err:
-        raise ConfigError("--tuned", f"{file} is not a tuning's summary.json ({err})") from err
+    except ValueError as err:
+        raise ConfigError("--tuned", f"{file} is not JSON ({err})") from err
+    entries = summary.get("controllers") if isinstance(summary, dict) else None
+    if not isinstance(entries, dict) or not all(isinstance(e, dict) for e in entries.values()):
+        raise ConfigError(
+            "--tuned",
+            f"{file} is not a tuning's summary.json (no controllers table; nnrobust tune writes one)",
+        )
     out = {}
     for name in names:
         if name not in TUNABLE:
@@ -468,11 +474,9 @@ class _Controller:
         best = self.best()
         if best is None:
             return
-        moved = {w["param"] + w["side"]: 0 for w in self.widenings}
-        for w in self.widenings:
-            moved[w["param"] + w["side"]] += 1
+        moved = Counter((w["param"], w["side"]) for w in self.widenings)
         wider, widenings = self.space.widened(
-            best["search"], skip=lambda p, side: moved.get(p + side, 0) >= MAX_WIDENINGS
+            best["search"], skip=lambda p, side: moved[p, side] >= MAX_WIDENINGS
         )
         if not widenings:
             return
