@@ -428,7 +428,9 @@ def _history(folder: Path) -> dict[tuple[str, str, int], dict]:
     """The rows simulated so far, by (controller, search, index)."""
     import pandas as pd
 
-    parts = sorted((folder / HISTORY).glob("part-*.parquet"))
+    from .study_folder import readable_parts
+
+    parts = readable_parts(folder / HISTORY)
     if not parts:
         return {}
     frame = pd.concat([pd.read_parquet(p) for p in parts], ignore_index=True)
@@ -461,7 +463,7 @@ def prepare_folder(spec: FalsifySpec, folder: Path, overwrite: bool) -> None:
     """Create DIR or accept it for resuming; a different search is refused unless ``overwrite``,
     which replaces only what a search wrote (:mod:`nnrobust.study_folder`).
     """
-    from .study_folder import prepare, write_new
+    from .study_folder import parts_folder, prepare, write_new
 
     outputs = (
         HISTORY,
@@ -473,7 +475,7 @@ def prepare_folder(spec: FalsifySpec, folder: Path, overwrite: bool) -> None:
         WORST,
     )
     prepare(folder, "falsify", spec.to_toml(), outputs, overwrite, "search")
-    (folder / HISTORY).mkdir(exist_ok=True)
+    parts_folder(folder, HISTORY)
     write_new(folder / f".{MARKER}.partial", spec.to_toml())
     os.replace(folder / f".{MARKER}.partial", folder / MARKER)
 

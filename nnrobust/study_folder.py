@@ -95,3 +95,36 @@ def write_new(path: Path, text: str) -> None:
     fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0), 0o644)
     with os.fdopen(fd, "w", encoding="utf-8") as fh:
         fh.write(text)
+
+
+def parts_folder(folder: Path, name: str) -> Path:
+    """DIR/name, the folder of a study's Parquet parts, created if missing; refused if something
+    else holds its place.
+    """
+    path = folder / name
+    if path.exists() and (path.is_symlink() or not path.is_dir()):
+        raise NNRobustError(
+            f"{path} is not a folder: a study keeps its rows there as Parquet parts; move it away "
+            "and run the same command to resume"
+        )
+    path.mkdir(exist_ok=True)
+    return path
+
+
+def readable_parts(folder: Path) -> list[Path]:
+    """The Parquet parts in ``folder`` (part-*.parquet), each checked to open: a damaged part (a
+    study writes every part whole, so something else changed it) is refused by name, never
+    skipped or recomputed silently.
+    """
+    import pyarrow.parquet as pq
+
+    parts = sorted(folder.glob("part-*.parquet"))
+    for part in parts:
+        try:
+            pq.ParquetFile(part)
+        except Exception as err:  # pyarrow raises ArrowInvalid, OSError, ...
+            raise NNRobustError(
+                f"{part} is not a readable Parquet part ({type(err).__name__}); it was changed "
+                "after it was written: delete it and run the same command to recompute its rows"
+            ) from err
+    return parts

@@ -1487,7 +1487,35 @@ def _tuned(folder: Path, summary: str, names: list[str]):
     return check
 
 
+def _damaged_parts(folder: Path, damage: str):
+    def check():
+        from nnrobust.study_folder import parts_folder, readable_parts
+
+        study = folder / f"study-{damage}"
+        study.mkdir(exist_ok=True)
+        if damage == "file":
+            (study / "results").write_text("not a folder")
+        else:
+            (study / "results").mkdir(exist_ok=True)
+            (study / "results" / "part-0123456789ab.parquet").write_text("garbage")
+        return readable_parts(parts_folder(study, "results"))
+
+    return check
+
+
 FALSIFY_CASES = [
+    Case(
+        "resume: a Parquet part damaged after it was written (sweep, tune, falsify)",
+        lambda d: _damaged_parts(d, "part"),
+        ex.NNRobustError,
+        "is not a readable Parquet part (ArrowInvalid); it was changed after it was written",
+    ),
+    Case(
+        "resume: a file where the rows folder was (sweep, tune, falsify)",
+        lambda d: _damaged_parts(d, "file"),
+        ex.NNRobustError,
+        "results is not a folder: a study keeps its rows there",
+    ),
     Case(
         "sweep file: a controllers entry of an unknown kind",
         lambda d: _entry_sweep(d, '{name = "fast", kind = "lqr"}'),

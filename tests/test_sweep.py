@@ -559,3 +559,27 @@ def test_a_bad_value_late_in_a_long_grid_is_refused_before_the_rest_is_checked(m
     with pytest.raises(ConfigError, match=r"simulation.duration: must be positive, got -1.0 \(sample 39996"):
         plan(spec)
     assert len(checked) < 10
+
+
+def test_a_damaged_results_folder_is_refused_on_resume_and_names_what_to_do(tmp_path, capsys):
+    """A part changed after it was written, or a file where results/ was: the resume stops with
+    one line naming it (it was a pyarrow or FileExistsError traceback); removing it resumes."""
+    sweep = tmp_path / "s.toml"
+    sweep.write_text(
+        'name = "s"\nbase = "paper-ellipse"\ncontrollers = ["nn"]\nsamples = 2\n'
+        '[set]\n"simulation.duration" = 0.5\n'
+    )
+    out = tmp_path / "out"
+    command = ["sweep", str(sweep), "--out", str(out), "--workers", "1", "--quiet"]
+    assert main(command) == 0
+    part = sorted((out / "results").glob("part-*.parquet"))[0]
+    part.write_bytes(b"garbage")
+    assert main(command) == 2
+    assert f"{part} is not a readable Parquet part" in capsys.readouterr().err
+    part.unlink()
+    assert main(command) == 0 and len(read_results(out)) == 2  # its rows computed again
+    import shutil
+
+    shutil.rmtree(out / "results")
+    (out / "results").write_text("mine")
+    assert main(command) == 2 and "results is not a folder" in capsys.readouterr().err

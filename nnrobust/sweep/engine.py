@@ -84,7 +84,9 @@ def _done_rows(folder: Path) -> set[tuple[int, str]]:
     import pyarrow.parquet as pq
 
     done: set[tuple[int, str]] = set()
-    for part in sorted((folder / RESULTS).glob("part-*.parquet")):
+    from ..study_folder import readable_parts
+
+    for part in readable_parts(folder / RESULTS):
         table = pq.read_table(part, columns=["sample", "controller"])
         done.update(zip(table.column("sample").to_pylist(), table.column("controller").to_pylist()))
     return done
@@ -164,10 +166,10 @@ def prepare_folder(spec: SweepSpec, folder: Path, overwrite: bool) -> None:
     replaces only what a sweep wrote (:mod:`nnrobust.study_folder`). DIR/sweep.toml is the
     resolved sweep, for the reader.
     """
-    from ..study_folder import prepare, write_new
+    from ..study_folder import parts_folder, prepare, write_new
 
     prepare(folder, "sweep", spec.to_toml(), OUTPUTS, overwrite, "sweep")
-    (folder / RESULTS).mkdir(exist_ok=True)
+    parts_folder(folder, RESULTS)
     write_new(folder / f".{MARKER}.partial", spec.to_toml())
     os.replace(folder / f".{MARKER}.partial", folder / MARKER)
 
@@ -397,7 +399,10 @@ def read_results(folder: str | Path):
     """The sweep's rows as a pandas DataFrame (every part)."""
     import pandas as pd
 
-    return pd.read_parquet(Path(folder) / RESULTS)
+    from ..study_folder import readable_parts
+
+    parts = readable_parts(Path(folder) / RESULTS)
+    return pd.concat([pd.read_parquet(p) for p in parts], ignore_index=True) if parts else pd.DataFrame()
 
 
 def log(message: str) -> None:

@@ -291,7 +291,9 @@ def judge(spec: TuneSpec, runs: list[dict]) -> tuple[tuple[float, ...], list[flo
 def _read_trials(folder: Path) -> list[dict]:
     import pandas as pd
 
-    parts = sorted((folder / TRIALS).glob("part-*.parquet"))
+    from ..study_folder import readable_parts
+
+    parts = readable_parts(folder / TRIALS)
     if not parts:
         return []
     frame = pd.concat([pd.read_parquet(p) for p in parts], ignore_index=True)
@@ -327,7 +329,7 @@ def prepare_folder(spec: TuneSpec, folder: Path, overwrite: bool) -> None:
     which replaces only what a tuning wrote (:mod:`nnrobust.study_folder`). DIR/tune.toml is the
     resolved tuning, for the reader.
     """
-    from ..study_folder import prepare, write_new
+    from ..study_folder import parts_folder, prepare, write_new
 
     prepare(
         folder,
@@ -337,7 +339,7 @@ def prepare_folder(spec: TuneSpec, folder: Path, overwrite: bool) -> None:
         overwrite,
         "tuning",
     )
-    (folder / TRIALS).mkdir(exist_ok=True)
+    parts_folder(folder, TRIALS)
     write_new(folder / f".{MARKER}.partial", spec.to_toml())
     os.replace(folder / f".{MARKER}.partial", folder / MARKER)
 
