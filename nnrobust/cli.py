@@ -223,11 +223,10 @@ def _simulate_and_write(args, config, out: Path, drawing: Drawing) -> int:
 
 def _serve_until_interrupted(viewer, seconds: float | None = None) -> None:
     import time
+    from urllib.parse import urlsplit
 
-    print(
-        f"viewer at {viewer.web_url} (127.0.0.1 only unless --host says otherwise); Ctrl-C to stop",
-        file=sys.stderr,
-    )
+    host = urlsplit(viewer.web_url).hostname
+    print(f"viewer at {viewer.web_url} (listening on {host} only); Ctrl-C to stop", file=sys.stderr)
     end = None if seconds is None else time.monotonic() + seconds
     try:
         while end is None or time.monotonic() < end:

@@ -491,3 +491,12 @@ def test_command_line_basics(capsys):
         timeout=120,
     )
     assert pipe.stdout.count("\n") == 1 and pipe.stderr == "", pipe.stderr
+
+
+def test_an_ipv6_host_gets_a_url_a_browser_can_open():
+    """--host ::1 printed http://::1:7000/static/, which no browser opens; the host goes in brackets."""
+    from nnrobust.viewer.server import url_for
+
+    assert url_for("http://::1:7000/static/", "::1") == "http://[::1]:7000/static/"
+    assert url_for("http://127.0.0.1:7000/static/", "127.0.0.1") == "http://127.0.0.1:7000/static/"
+    assert url_for("http://[::1]:7000/static/", "[::1]") == "http://[::1]:7000/static/"

@@ -49,6 +49,15 @@ def _bridge_class():
     return LoopbackBridge
 
 
+def url_for(web_url: str, host: str) -> str:
+    """The meshcat web URL with an IPv6 host in brackets (``http://[::1]:7000/``), as a browser
+    needs it; other URLs unchanged.
+    """
+    if ":" in host and not host.startswith("["):
+        return web_url.replace(f"//{host}:", f"//[{host}]:", 1)
+    return web_url
+
+
 def check_listen_address(host: str, port: int | None) -> None:
     """Refuse, with one clear line, an address the viewer cannot listen on."""
     if port is not None and not 1 <= port <= 65535:
@@ -99,7 +108,7 @@ def main(argv: list[str] | None = None) -> None:
         _exit_with_parent()
     bridge = _bridge_class()(host=args.host, port=args.port)
     print(f"zmq_url={bridge.zmq_url}", flush=True)
-    print(f"web_url={bridge.web_url}", flush=True)
+    print(f"web_url={url_for(bridge.web_url, args.host)}", flush=True)
     try:
         bridge.run()
     except KeyboardInterrupt:
