@@ -34,6 +34,9 @@ def check_place(folder: Path, option: str = "--out") -> None:
         )
     if folder.exists() and not folder.is_dir():
         raise NNRobustError(f"{option} {folder}: is a file, not a folder; choose another {option}")
+    blocking = next((p for p in folder.parents if p.exists()), None)
+    if blocking is not None and not blocking.is_dir():
+        raise NNRobustError(f"{option} {folder}: {blocking} is a file, not a folder; choose another {option}")
 
 
 @contextlib.contextmanager

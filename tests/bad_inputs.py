@@ -1160,6 +1160,12 @@ TUNE_CASES = [
         ex.NNRobustError,
         "my-study exists and is not a tuning folder (no .nnrobust-tune); choose another --out",
     ),
+    Case(
+        "tune (sweep, falsify): --out inside a file",
+        lambda d: _tune_into(d, lambda f: _file(f, "plain-file", "x") / "study"),
+        ex.NNRobustError,
+        "plain-file is a file, not a folder; choose another --out",
+    ),
 ]
 
 LAWS = Path(__file__).parent / "controllers" / "eq9_again.py"
