@@ -119,6 +119,21 @@ def _controller_choice(text: str) -> str:
     )
 
 
+MAX_KEEP_WORST = 100
+"""Most run folders --keep-worst writes per controller (each holds a whole run and its animation)."""
+
+
+def _keep_count(text: str) -> int:
+    """--keep-worst K: an integer in [0, MAX_KEEP_WORST]."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if not 0 <= value <= MAX_KEEP_WORST:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer in [0, {MAX_KEEP_WORST}]")
+    return value
+
+
 def controller_change(choice: str) -> dict:
     """The controller section's change for --controller: a kind, or a custom class (a file path
     from the working folder).
@@ -454,7 +469,7 @@ def cmd_falsify(args) -> int:
     if args.keep_worst:
         from .falsify import keep_worst
 
-        for folder in keep_worst(spec, summary, out):
+        for folder in keep_worst(spec, summary, out, args.keep_worst):
             if not args.quiet:
                 print(f"worst plant kept: {folder}/ (nnrobust view {folder})", file=sys.stderr)
     return 0
@@ -836,7 +851,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sweep.add_argument(
         "--keep-worst",
-        type=int,
+        type=_keep_count,
         default=0,
         metavar="K",
         help="write full run folders (with animation) of the K worst samples of each "
@@ -915,9 +930,14 @@ def build_parser() -> argparse.ArgumentParser:
     falsify.add_argument("--overwrite", action="store_true", help="replace a different search in --out")
     falsify.add_argument(
         "--keep-worst",
-        action="store_true",
-        help="rerun each controller's worst plant into OUT/worst/CONTROLLER as a full run "
-        "folder (arrays, metrics, plots, animation)",
+        type=_keep_count,
+        nargs="?",
+        const=1,
+        default=0,
+        metavar="K",
+        help="rerun each controller's K worst distinct plants (1 without K) into "
+        "OUT/worst/CONTROLLER, CONTROLLER-2, ... as full run folders (arrays, metrics, plots, "
+        "animation)",
     )
     falsify.add_argument(
         "--margin",

@@ -591,9 +591,11 @@ WORST = "worst"
 """Sub-folder of the worst plants' run folders (``--keep-worst``)."""
 
 
-def keep_worst(spec: FalsifySpec, summary: dict, folder: str | Path) -> list[Path]:
-    """Each controller's worst plant, rerun on this machine as a full run folder (arrays, metrics,
-    plots, animation) in DIR/worst/CONTROLLER: the run its printed command makes.
+def keep_worst(spec: FalsifySpec, summary: dict, folder: str | Path, count: int = 1) -> list[Path]:
+    """The ``count`` worst plants the search found for each controller, rerun on this machine as
+    full run folders (arrays, metrics, plots, animation): DIR/worst/CONTROLLER for the worst (the
+    run its printed command makes), DIR/worst/CONTROLLER-2, -3, ... for the next distinct ones,
+    from the search's history in order of their least margin.
     """
     from .experiment import run_experiment
     from .run_folder import write_run
@@ -602,11 +604,23 @@ def keep_worst(spec: FalsifySpec, summary: dict, folder: str | Path) -> list[Pat
 
     sweep = _with_controllers(load_sweep(spec.target), spec.controllers, spec.tuned)
     base = base_config(sweep)
+    history = _history(Path(folder)) if count > 1 else {}
     written = []
     for name, entry in summary["controllers"].items():
-        sample = Sample(-1, entry["worst"]["values"], sample_seed(sweep.seed, 0))
-        config = experiment(sweep, base, sample, name)
-        written.append(write_run(Path(folder) / WORST / name, run_experiment(config), overwrite=True))
+        plants = [entry["worst"]["values"]]
+        ranked = sorted(
+            (r for (c, search, _), r in history.items() if c == name and search == "falsifier"),
+            key=lambda r: r["objective"],
+        )
+        for row in ranked:
+            if len(plants) >= count:
+                break
+            if row["values"] not in plants:
+                plants.append(row["values"])
+        for rank, values in enumerate(plants, start=1):
+            config = experiment(sweep, base, Sample(-1, values, sample_seed(sweep.seed, 0)), name)
+            target = Path(folder) / WORST / (name if rank == 1 else f"{name}-{rank}")
+            written.append(write_run(target, run_experiment(config), overwrite=True))
     return written
 
 

@@ -112,10 +112,18 @@ def test_a_search_finds_the_worst_plant_reruns_it_and_resumes(tmp_path, capsys):
     assert resumed["controllers"]["nn"]["worst"] == worst
     from nnrobust.falsify import keep_worst
 
-    kept = keep_worst(spec, summary, out)  # --keep-worst: the worst plant as a full run folder
-    assert kept == [out / "worst" / "nn"] and (out / "worst" / "nn" / "animation.html").is_file()
-    kept_metrics = json.loads((out / "worst" / "nn" / "metrics.json").read_text())
-    assert kept_metrics["rms_error"] == worst["metrics"]["rms_error"]
+    kept = keep_worst(spec, summary, out, 2)  # --keep-worst 2: the two worst plants as run folders
+    assert kept == [out / "worst" / "nn", out / "worst" / "nn-2"]
+    assert (out / "worst" / "nn" / "animation.html").is_file()
+    kept_metrics = [json.loads((k / "metrics.json").read_text()) for k in kept]
+    assert kept_metrics[0]["rms_error"] == worst["metrics"]["rms_error"]
+    import pandas as pd
+
+    history = pd.read_parquet(out / "history")
+    rows = [json.loads(r) for r in history["row"]]
+    errors = sorted((r["metrics"]["rms_error"] for r in rows if r["search"] == "falsifier"), reverse=True)
+    second = next(e for e in errors if e < worst["metrics"]["rms_error"])  # the next distinct plant
+    assert kept_metrics[1]["rms_error"] == pytest.approx(second, rel=1e-12)
     other = FalsifySpec(str(sweep), ["nn"], ["rms_error<=0.03"], 16, seed=1)
     with pytest.raises(Exception, match="holds a different search"):
         run_falsify(other, out, workers=2)
