@@ -85,7 +85,7 @@ docs-data: $(VENV)/.installed-test
 	cp $(OUT)/falsify-paper-factors/summary.json $(DATA)/falsify_paper_factors.json
 	$(BIN)/nnrobust falsify benchmarks/falsification/panda-factors.toml \
 	  --controllers nn,no-u0,sliding-mode,pd --require "rms_error_after_2s<=0.005" \
-	  --budget 200 --out $(OUT)/falsify-panda-factors --quiet
+	  --budget 200 --margin --out $(OUT)/falsify-panda-factors --quiet
 	cp $(OUT)/falsify-panda-factors/summary.json $(DATA)/falsify_panda_factors.json
 	$(BIN)/nnrobust falsify benchmarks/falsification/paper-factors-noisy.toml \
 	  --controllers nn,no-u0,pd,sliding-mode --tuned $(DATA)/tune_noisy_case_b.json \

@@ -522,8 +522,8 @@ def engine_gap_tuned() -> str:
 FALSIFY_COMMANDS = {
     "falsify_panda_factors": (
         "nnrobust falsify benchmarks/falsification/panda-factors.toml --controllers "
-        'nn,no-u0,sliding-mode,pd --require "rms_error_after_2s<=0.005" --budget 200 --workers 2 '
-        "--out out/falsify-panda-factors"
+        'nn,no-u0,sliding-mode,pd --require "rms_error_after_2s<=0.005" --budget 200 --margin '
+        "--workers 2 --out out/falsify-panda-factors"
     ),
     "falsify_tuned_noisy": (
         "nnrobust falsify benchmarks/falsification/paper-factors-noisy.toml --controllers "

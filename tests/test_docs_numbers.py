@@ -336,6 +336,20 @@ def _nn_ideal_ratio(pick):
 
 
 QUOTED_FIGURES: list[tuple] = [
+    (
+        "docs/falsification.md",
+        r"for the NN\s+up to ([\d.]+) times its size",
+        "falsify_panda_factors",
+        lambda d: d["margin"]["nn"]["largest_scale"],
+        1.0,
+    ),
+    (
+        "docs/falsification.md",
+        r"sliding-mode term holds up to ([\d.]+) of it",
+        "falsify_panda_factors",
+        _margin("sliding-mode"),
+        1.0,
+    ),
     ("README.md", r"\(its worst: ([\d.]+) mm in", "falsify_panda_factors", _falsified("nn"), 1e3),
     (
         "README.md",
