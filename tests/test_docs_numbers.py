@@ -337,6 +337,13 @@ def _nn_ideal_ratio(pick):
 
 QUOTED_FIGURES: list[tuple] = [
     (
+        "README.md",
+        r"none to ([\d.]+) times the box",
+        "falsify_panda_factors",
+        lambda d: d["margin"]["nn"]["largest_scale"],
+        1.0,
+    ),
+    (
         "docs/falsification.md",
         r"for the NN\s+up to ([\d.]+) times its size",
         "falsify_panda_factors",
