@@ -426,15 +426,9 @@ def _margins(spec: FalsifySpec, sweep, box: Box, rows: dict, drive: _Driver) -> 
 
 def _history(folder: Path) -> dict[tuple[str, str, int], dict]:
     """The rows simulated so far, by (controller, search, index)."""
-    import pandas as pd
+    from .study_folder import read_parts
 
-    from .study_folder import readable_parts
-
-    parts = readable_parts(folder / HISTORY)
-    if not parts:
-        return {}
-    frame = pd.concat([pd.read_parquet(p) for p in parts], ignore_index=True)
-    rows = [json.loads(r) for r in frame["row"]]
+    rows = [json.loads(r) for t in read_parts(folder / HISTORY, ["row"]) for r in t.column("row").to_pylist()]
     return {(r["controller"], r["search"], r["index"]): r for r in rows}
 
 
@@ -463,7 +457,7 @@ def prepare_folder(spec: FalsifySpec, folder: Path, overwrite: bool) -> None:
     """Create DIR or accept it for resuming; a different search is refused unless ``overwrite``,
     which replaces only what a search wrote (:mod:`nnrobust.study_folder`).
     """
-    from .study_folder import parts_folder, prepare, write_new
+    from .study_folder import prepare
 
     outputs = (
         HISTORY,
@@ -474,10 +468,7 @@ def prepare_folder(spec: FalsifySpec, folder: Path, overwrite: bool) -> None:
         "convergence.svg",
         WORST,
     )
-    prepare(folder, "falsify", spec.to_toml(), outputs, overwrite, "search")
-    parts_folder(folder, HISTORY)
-    write_new(folder / f".{MARKER}.partial", spec.to_toml())
-    os.replace(folder / f".{MARKER}.partial", folder / MARKER)
+    prepare(folder, "falsify", spec.to_toml(), outputs, overwrite, "search", HISTORY, MARKER)
 
 
 def run_falsify(

@@ -56,11 +56,20 @@ def held(folder: Path):
 
 
 def prepare(
-    folder: Path, kind: str, study: str, outputs: tuple[str, ...], overwrite: bool, what: str
+    folder: Path,
+    kind: str,
+    study: str,
+    outputs: tuple[str, ...],
+    overwrite: bool,
+    what: str,
+    parts: str,
+    readable: str,
 ) -> None:
     """Create ``folder`` for a ``kind`` study (its resolved text ``study``), or accept it for
     resuming the same one; a different one is refused unless ``overwrite``, which removes only
-    ``outputs`` (the names the command writes) before the new study starts.
+    ``outputs`` (the names the command writes) before the new study starts. Then DIR/``parts``
+    holds the study's Parquet parts (:func:`parts_folder`) and DIR/``readable`` its resolved text,
+    for the reader.
     """
     check_place(folder)
     marker = folder / marker_name(kind)
@@ -86,6 +95,9 @@ def prepare(
         raise NNRobustError(f"cannot create {folder}: {err.strerror or err}") from err
     write_new(folder / f".{marker.name}.partial", study)
     os.replace(folder / f".{marker.name}.partial", marker)
+    parts_folder(folder, parts)
+    write_new(folder / f".{readable}.partial", study)
+    os.replace(folder / f".{readable}.partial", folder / readable)
 
 
 def write_new(path: Path, text: str) -> None:
@@ -114,20 +126,20 @@ def parts_folder(folder: Path, name: str) -> Path:
     return path
 
 
-def readable_parts(folder: Path) -> list[Path]:
-    """The Parquet parts in ``folder`` (part-*.parquet), each checked to open: a damaged part (a
-    study writes every part whole, so something else changed it) is refused by name, never
-    skipped or recomputed silently.
+def read_parts(folder: Path, columns: list[str] | None = None) -> list:
+    """Every Parquet part in ``folder`` (part-*.parquet, in name order) as a pyarrow Table of
+    ``columns`` (all if None). A damaged part (a study writes every part whole, so something else
+    changed it) is refused by name, never skipped or recomputed silently.
     """
     import pyarrow.parquet as pq
 
-    parts = sorted(folder.glob("part-*.parquet"))
-    for part in parts:
+    tables = []
+    for part in sorted(folder.glob("part-*.parquet")):
         try:
-            pq.ParquetFile(part)
+            tables.append(pq.read_table(part, columns=columns))
         except Exception as err:  # pyarrow raises ArrowInvalid, OSError, ...
             raise NNRobustError(
                 f"{part} is not a readable Parquet part ({type(err).__name__}); it was changed "
                 "after it was written: delete it and run the same command to recompute its rows"
             ) from err
-    return parts
+    return tables

@@ -1495,7 +1495,7 @@ def _tuned(folder: Path, summary: str, names: list[str]):
 
 def _damaged_parts(folder: Path, damage: str):
     def check():
-        from nnrobust.study_folder import parts_folder, readable_parts
+        from nnrobust.study_folder import parts_folder, read_parts
 
         study = folder / f"study-{damage}"
         study.mkdir(exist_ok=True)
@@ -1504,7 +1504,7 @@ def _damaged_parts(folder: Path, damage: str):
         else:
             (study / "results").mkdir(exist_ok=True)
             (study / "results" / "part-0123456789ab.parquet").write_text("garbage")
-        return readable_parts(parts_folder(study, "results"))
+        return read_parts(parts_folder(study, "results"))
 
     return check
 

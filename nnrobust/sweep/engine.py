@@ -81,13 +81,10 @@ def run_rows(spec: SweepSpec, base_toml: str, jobs: list[tuple[int, str]]) -> li
 
 
 def _done_rows(folder: Path) -> set[tuple[int, str]]:
-    import pyarrow.parquet as pq
+    from ..study_folder import read_parts
 
     done: set[tuple[int, str]] = set()
-    from ..study_folder import readable_parts
-
-    for part in readable_parts(folder / RESULTS):
-        table = pq.read_table(part, columns=["sample", "controller"])
+    for table in read_parts(folder / RESULTS, ["sample", "controller"]):
         done.update(zip(table.column("sample").to_pylist(), table.column("controller").to_pylist()))
     return done
 
@@ -166,12 +163,9 @@ def prepare_folder(spec: SweepSpec, folder: Path, overwrite: bool) -> None:
     replaces only what a sweep wrote (:mod:`nnrobust.study_folder`). DIR/sweep.toml is the
     resolved sweep, for the reader.
     """
-    from ..study_folder import parts_folder, prepare, write_new
+    from ..study_folder import prepare
 
-    prepare(folder, "sweep", spec.to_toml(), OUTPUTS, overwrite, "sweep")
-    parts_folder(folder, RESULTS)
-    write_new(folder / f".{MARKER}.partial", spec.to_toml())
-    os.replace(folder / f".{MARKER}.partial", folder / MARKER)
+    prepare(folder, "sweep", spec.to_toml(), OUTPUTS, overwrite, "sweep", RESULTS, MARKER)
 
 
 LOOPBACK_HTTP = "127.0.0.1:0"
@@ -399,10 +393,10 @@ def read_results(folder: str | Path):
     """The sweep's rows as a pandas DataFrame (every part)."""
     import pandas as pd
 
-    from ..study_folder import readable_parts
+    from ..study_folder import read_parts
 
-    parts = readable_parts(Path(folder) / RESULTS)
-    return pd.concat([pd.read_parquet(p) for p in parts], ignore_index=True) if parts else pd.DataFrame()
+    tables = read_parts(Path(folder) / RESULTS)
+    return pd.concat([t.to_pandas() for t in tables], ignore_index=True) if tables else pd.DataFrame()
 
 
 def log(message: str) -> None:

@@ -289,15 +289,9 @@ def judge(spec: TuneSpec, runs: list[dict]) -> tuple[tuple[float, ...], list[flo
 
 
 def _read_trials(folder: Path) -> list[dict]:
-    import pandas as pd
+    from ..study_folder import read_parts
 
-    from ..study_folder import readable_parts
-
-    parts = readable_parts(folder / TRIALS)
-    if not parts:
-        return []
-    frame = pd.concat([pd.read_parquet(p) for p in parts], ignore_index=True)
-    rows = [json.loads(r) for r in frame["row"]]
+    rows = [json.loads(r) for t in read_parts(folder / TRIALS, ["row"]) for r in t.column("row").to_pylist()]
     return sorted(rows, key=lambda r: (r["controller"], r["trial"]))
 
 
@@ -329,19 +323,10 @@ def prepare_folder(spec: TuneSpec, folder: Path, overwrite: bool) -> None:
     which replaces only what a tuning wrote (:mod:`nnrobust.study_folder`). DIR/tune.toml is the
     resolved tuning, for the reader.
     """
-    from ..study_folder import parts_folder, prepare, write_new
+    from ..study_folder import prepare
 
-    prepare(
-        folder,
-        "tune",
-        spec.to_toml(),
-        (TRIALS, MARKER, "summary.json", "pareto.png", "pareto.svg"),
-        overwrite,
-        "tuning",
-    )
-    parts_folder(folder, TRIALS)
-    write_new(folder / f".{MARKER}.partial", spec.to_toml())
-    os.replace(folder / f".{MARKER}.partial", folder / MARKER)
+    outputs = (TRIALS, MARKER, "summary.json", "pareto.png", "pareto.svg")
+    prepare(folder, "tune", spec.to_toml(), outputs, overwrite, "tuning", TRIALS, MARKER)
 
 
 class _Controller:
