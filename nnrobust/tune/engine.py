@@ -347,7 +347,6 @@ class _Controller:
         self.widenings: list[dict] = []  # {param, side, old, bound, trial, probe}, in order
         self.queue: list[dict] = []  # settings to try before the sampler's own: starts, probes
         self.sampler_seed = spec.seed + index
-        self.study = self._study()
 
     @property
     def phase(self) -> str:
@@ -428,7 +427,7 @@ class _Controller:
         objectives, constraints, mean = judge(self.spec, results)
         for key, value in zip(CONSTRAINTS, constraints):
             trial.set_constraint(key, value)
-        self.study.tell(trial, objectives[0])
+        trial.study.tell(trial, objectives[0])
         return {
             "controller": self.name,
             "phase": phase,
@@ -481,15 +480,15 @@ class _Controller:
         what is asked depends on the rows alone: a resumed tuning asks what an uninterrupted one
         would.
         """
-        self.study = self._study()
+        study = self._study()
         phase = self.phase
         left = (self.gain_trials - len(self.rows)) if phase == "gains" else self.remaining
         out = []
         pending = list(self.queue)
         for _ in range(min(count, left)):
             if pending:
-                self.study.enqueue_trial(pending.pop(0))
-            trial = self.study.ask(self._distributions(phase))
+                study.enqueue_trial(pending.pop(0))
+            trial = study.ask(self._distributions(phase))
             out.append((trial, dict(trial.params), phase))
         return out
 
