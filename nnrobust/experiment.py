@@ -448,24 +448,20 @@ def build_controller(
     nominal: DynamicsModel,
     trajectory: Trajectory,
     criterion: Criterion | None,
-    true_friction: Friction | None = None,
-    context: ControllerContext | None = None,
+    true_friction: Friction | None,
+    context: ControllerContext,
 ) -> Controller:
     """The control law named by controller.kind (computed-torque takes ``true_friction`` as F-hat;
-    a custom law is built from ``context``).
+    a custom law is built from ``context``, and the PD's null-space damping sized from it).
     """
     c = config.controller
     if c.kind == "custom":
-        if context is None:
-            raise ValueError("a custom controller is built from a ControllerContext")
         return build_custom(c.class_ or "", c.params, context)
     pinv = DampedPseudoInverse(c.pinv_threshold, c.pinv_max_damping)
     if c.kind == "pd":
         Kd = np.diag(c.pd_Kd)
         damping = c.pd_null_damping
         if damping is None:
-            if context is None:
-                raise ValueError("the PD's null-space damping is sized from a ControllerContext")
             damping = sized_null_damping(nominal, context.q0, Kd, context.period)
         return TaskSpacePD(nominal, trajectory, np.diag(c.pd_Kp), Kd, damping, pinv)
     Kp, Kv = np.diag(c.Kp), np.diag(c.Kv)
