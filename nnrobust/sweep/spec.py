@@ -45,9 +45,9 @@ class SweepSpec:
         base: a preset name or an experiment file (relative paths from the sweep file's folder).
         controllers: the names of the controllers every sample runs with: built-in kinds, and
             the names of table entries.
-        custom: per table entry's name, its ``{"class": ..., "params": {...}}`` (a custom law)
-            or ``{"kind": ..., "set": {...}}`` (a built-in law with its own settings) (a controllers
-            entry ``{name = ..., class = "file.py:Class", params = {...}}``).
+        entries: per name of a table in the controllers list, ``{"class": ..., "params": {...}}``
+            (a custom law) or ``{"kind": ..., "set": {...}}`` (a built-in law with its own
+            settings).
         samples: random draws per grid point.
         seed: seed of the draws (each sample's own seed derives from it and the sample id).
         set: fixed overrides, dotted keys.
@@ -64,7 +64,7 @@ class SweepSpec:
     set: dict = field(default_factory=dict)
     vary: dict = field(default_factory=dict)
     description: str = ""
-    custom: dict = field(default_factory=dict)
+    entries: dict = field(default_factory=dict)
 
     @property
     def grid_keys(self) -> list[str]:
@@ -93,7 +93,7 @@ class SweepSpec:
 
     def to_toml(self) -> str:
         """The resolved sweep file (what DIR/sweep.toml holds)."""
-        entries = [{"name": c, **self.custom[c]} if c in self.custom else c for c in self.controllers]
+        entries = [{"name": c, **self.entries[c]} if c in self.entries else c for c in self.controllers]
         head = {
             "name": self.name,
             "description": self.description,
@@ -223,10 +223,10 @@ def _controllers(entries, where: str) -> tuple[list[str], dict]:
         raise ConfigError(
             key, f"needs a list of {', '.join(CONTROLLER_KINDS)} or tables {ENTRY_FORMS}, got {entries!r}"
         )
-    names, custom = [], {}
+    names, tables = [], {}
     for i, entry in enumerate(entries):
         if isinstance(entry, dict):
-            custom[entry.get("name")] = _entry(entry, f"{key}[{i}]")
+            tables[entry.get("name")] = _entry(entry, f"{key}[{i}]")
             names.append(entry["name"])
         elif entry in CONTROLLER_KINDS:
             names.append(entry)
@@ -237,11 +237,11 @@ def _controllers(entries, where: str) -> tuple[list[str], dict]:
             )
     if len(set(names)) != len(names):
         raise ConfigError(key, f"lists a controller twice: {names}")
-    return names, custom
+    return names, tables
 
 
 NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]{0,39}")
-"""A custom controller's name in a sweep: it names rows, columns and folders."""
+"""A controllers table's name in a sweep: it names rows, columns and folders."""
 
 
 def parse_sweep(data: dict, where: str = "sweep") -> SweepSpec:
@@ -254,7 +254,7 @@ def parse_sweep(data: dict, where: str = "sweep") -> SweepSpec:
             raise ConfigError(f"{where}: {key}", "missing")
     if not isinstance(data["name"], str) or not isinstance(data["base"], str):
         raise ConfigError(f"{where}: name", "name and base must be strings")
-    controllers, custom = _controllers(data["controllers"], where)
+    controllers, entries = _controllers(data["controllers"], where)
     for table in ("set", "vary"):
         chosen = [
             k
@@ -301,7 +301,7 @@ def parse_sweep(data: dict, where: str = "sweep") -> SweepSpec:
         dict(data.get("set", {})),
         dict(vary),
         data.get("description", ""),
-        custom,
+        entries,
     )
     if spec.size * len(controllers) > MAX_ROWS:
         raise ConfigError(
@@ -336,7 +336,7 @@ def load_sweep(path: str | Path) -> SweepSpec:
         spec.base = str((path.parent / base).resolve())
     from ..controllers.custom import class_file
 
-    for entry in spec.custom.values():  # a controller file is read from the sweep file's folder
+    for entry in spec.entries.values():  # a controller file is read from the sweep file's folder
         if "class" not in entry:
             continue
         where, name = class_file(entry["class"]), entry["class"].rpartition(":")[2]
@@ -417,9 +417,9 @@ def controller_overrides(spec: SweepSpec, controller: str) -> dict:
     """The dotted keys that choose a row's controller: a built-in kind (with an entry's settings),
     or a custom class and params.
     """
-    if controller not in spec.custom:
+    if controller not in spec.entries:
         return {"controller.kind": controller}
-    entry = spec.custom[controller]
+    entry = spec.entries[controller]
     if "kind" in entry:
         return {"controller.kind": entry["kind"], **entry["set"]}
     return {
@@ -438,7 +438,7 @@ def rerun_command(spec: SweepSpec, sample: Sample, controller: str) -> str:
         **{key: sample.seed % 2**31 for key in SEEDED_KEYS if key not in spec.set and key not in spec.vary},
         **sample.values,
     }
-    entry = spec.custom.get(controller, {"kind": controller, "set": {}})
+    entry = spec.entries.get(controller, {"kind": controller, "set": {}})
     values.update(entry.get("set") or {})
     values.update({f"controller.params.{k}": v for k, v in (entry.get("params") or {}).items()})
     chosen = entry.get("class") or entry["kind"]

@@ -216,30 +216,30 @@ def _with_controllers(sweep, names: list[str], tuned: dict | None = None):
     """
     from ..controllers.custom import class_file
 
-    custom, controllers = {}, []
+    entries, controllers = {}, []
     for name in names:
         if tuned and name in tuned:
-            custom[f"{name}-tuned"] = {"kind": name, "set": dict(tuned[name])}
+            entries[f"{name}-tuned"] = {"kind": name, "set": dict(tuned[name])}
             controllers.append(f"{name}-tuned")
         elif name in TUNABLE:
             controllers.append(name)
-        elif name in sweep.custom:
-            custom[name] = sweep.custom[name]
+        elif name in sweep.entries:
+            entries[name] = sweep.entries[name]
             controllers.append(name)
         elif CLASS_PATTERN.fullmatch(name):
             path, cls = class_file(name), name.rpartition(":")[2]
-            custom[cls] = {"class": f"{path.resolve()}:{cls}" if path is not None else name, "params": {}}
+            entries[cls] = {"class": f"{path.resolve()}:{cls}" if path is not None else name, "params": {}}
             controllers.append(cls)
         else:
             raise ConfigError(
                 "--controllers",
                 f"{name!r} is not one of {', '.join(TUNABLE)}, a class as "
                 f"file.py:Class, nor a custom entry of the sweep file "
-                f"({', '.join(sweep.custom) or 'it has none'})",
+                f"({', '.join(sweep.entries) or 'it has none'})",
             )
     if len(set(controllers)) != len(controllers):
         raise ConfigError("--controllers", f"names a controller twice: {', '.join(controllers)}")
-    sweep.controllers, sweep.custom = controllers, custom
+    sweep.controllers, sweep.entries = controllers, entries
     return sweep
 
 
@@ -535,7 +535,7 @@ def _run_tune(
         for sample_id in range(sweep.samples):
             experiment(sweep, base, draw(sweep, sample_id), name)
         first = experiment(sweep, base, draw(sweep, 0), name)
-        entry = sweep.custom.get(name, {"kind": name})
+        entry = sweep.entries.get(name, {"kind": name})
         if "class" in entry:  # its declared space; built once at the space's centre
             space = custom_space(name, load_class(entry["class"]))
             build(
