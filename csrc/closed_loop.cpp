@@ -569,7 +569,19 @@ void record_kinematics(LoadedModel &m, const LoopSpec &s, const Criteria &criter
   }
 }
 
-// simulation.period_substeps: the plant steps of one control period, cut for the fastest joint.
+// simulation.step_rate: the fastest joint's speed, or the ring frequency of a stop a joint is at or
+// would reach within the period, whichever is higher.
+double step_rate(const LoopSpec &s, const Vector &q, const Vector &v) {
+  double rate = v.cwiseAbs().maxCoeff();
+  if (!s.stops || s.stop_ring.size() != q.size()) return rate;
+  for (Eigen::Index i = 0; i < q.size(); ++i) {
+    const double beyond = std::max(q[i] - s.stop_upper[i], s.stop_lower[i] - q[i]);
+    if (beyond + std::abs(v[i]) * s.period > 0.0) rate = std::max(rate, s.stop_ring[i]);
+  }
+  return rate;
+}
+
+// simulation.period_substeps: the plant steps of one control period, cut for its step_rate.
 int period_substeps(const LoopSpec &s, double speed) {
   const double needed = std::ceil(s.period * speed / s.max_step_rotation);
   return needed <= s.substeps ? s.substeps : static_cast<int>(std::min<double>(needed, s.max_period_substeps));
@@ -683,7 +695,7 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
       }
       continue;
     }
-    const int n_steps = period_substeps(s, v.cwiseAbs().maxCoeff());
+    const int n_steps = period_substeps(s, step_rate(s, q, v));
     tr.refined_periods += n_steps != s.substeps;
     const double h = s.period / n_steps;
     if (stick_slip) {  // simulation.simulate with the plant's stick-slip integrator

@@ -42,7 +42,7 @@ struct LoopSpec {
   Vector dist_omega;                  // K
   Vector torque_limit;                // n (inf: none); empty: ideal actuators
   bool stops = false;
-  Vector stop_lower, stop_upper, stop_stiffness;
+  Vector stop_lower, stop_upper, stop_stiffness, stop_ring;  // ring: sqrt(K (M^-1)_ii) at q0 [rad/s]
   double stop_alpha = 0.0;
   Vector position_noise, velocity_noise, resolution;  // n (zeros: ideal)
   Rows noise_q, noise_v;                              // steps x n standard normal draws (or empty)

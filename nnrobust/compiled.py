@@ -232,6 +232,8 @@ def loop_spec(setup, duration: float):
         s.stops = True
         s.stop_lower, s.stop_upper = f(plant.stops.lower), f(plant.stops.upper)
         s.stop_stiffness, s.stop_alpha = f(plant.stops.stiffness), plant.stops.alpha
+        ring = plant.stops.ring if plant.stops.ring is not None else np.zeros(plant.stops.lower.size)
+        s.stop_ring = f(ring)
     sensor = plant.sensor
     s.position_noise, s.velocity_noise = f(sensor.position_noise), f(sensor.velocity_noise)
     s.resolution = f(sensor.resolution)

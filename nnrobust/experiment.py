@@ -747,6 +747,17 @@ def plant_step(config: ExperimentConfig, plant: Plant, q0: np.ndarray) -> int:
     return needed
 
 
+def stop_rings(plant: Plant, q0: np.ndarray) -> None:
+    """Give the plant's stops their ring frequencies sqrt(K_i (M(q0)^-1)_ii) [rad/s], which the
+    adaptive step resolves while a joint is at its stop (simulation.step_rate).
+    """
+    stops = plant.stops
+    if stops is not None:
+        bounded = np.isfinite(stops.upper) | np.isfinite(stops.lower)
+        M_inv_diag = np.diag(np.linalg.inv(plant.model.mass(q0)))
+        plant.stops = replace(stops, ring=np.where(bounded, np.sqrt(stops.stiffness * M_inv_diag), 0.0))
+
+
 def check_stiffness(config: ExperimentConfig, plant: Plant, q0: np.ndarray, substeps: int) -> None:
     """Refuse an RK4 step that viscous friction or the joint stops make unstable.
 
@@ -831,6 +842,7 @@ def build(config: ExperimentConfig) -> Setup:
     q0, v0 = initial_state(config, robot, trajectory)
     check_mass_matrix(robot, q0)
     substeps = plant_step(config, plant, q0)
+    stop_rings(plant, q0)
     build_engine(config, plant, substeps)
     context = build_context(config, robot, nominal, trajectory, criterion, plant, q0)
     controller = build_controller(config, robot, nominal, trajectory, criterion, plant.friction, context)

@@ -81,7 +81,7 @@ class Result:
         plant_step: the plant's integration step [s] (control period / substeps), or NaN.
         friction_events: stick-slip events the plant located inside its steps (docs/plant.md).
         unresolved_events: plant steps with more events than it resolves (a warning).
-        refined_periods: control periods whose plant step was cut for speed
+        refined_periods: control periods whose plant step was cut for speed or a stop
             (simulation.max_step_rotation, docs/plant.md#speed-adaptive-step).
         step_rotation: the most a joint turned in one plant step, from its speeds at the ends of
             each period and the step that period used [rad or m] (a warning above

@@ -29,6 +29,16 @@ MAX_PERIOD_SUBSTEPS = 10_000
 """The most plant steps one control period is cut into (as simulation.substeps)."""
 
 
+def step_rate(q: np.ndarray, v: np.ndarray, stops, period: float) -> float:
+    """The rate [rad/s] a control period's plant step must resolve: the fastest joint's speed,
+    or the ring frequency of a stop a joint is at or would reach within the period, whichever is
+    higher (a contact's onset and its rebound bend the trajectory at that rate; docs/plant.md
+    #speed-adaptive-step). The compiled twin is closed_loop.cpp's step_rate.
+    """
+    speed = float(np.max(np.abs(v)))
+    return speed if stops is None else max(speed, stops.ringing(q, v, period))
+
+
 def period_substeps(speed, period: float, substeps: int, max_rotation: float):
     """Plant steps for one control period: ``substeps``, or more when the fastest joint, at its
     speed at the period's start [rad/s or m/s], would turn more than ``max_rotation`` in one
@@ -62,7 +72,7 @@ class Trace:
         friction_events: stick-slip events located inside plant steps (:mod:`nnrobust.plant.stick_slip`;
             mode changes when a new command arrives are not counted).
         unresolved_events: integration steps with more events than it resolves.
-        refined_periods: control periods whose plant step was cut for speed (:func:`period_substeps`).
+        refined_periods: control periods whose plant step was cut for speed or a stop (:func:`step_rate`).
 
     """
 
@@ -235,7 +245,14 @@ def simulate(
                 X = np.concatenate(engine.advance(t, tau, control_period))
                 continue
             n_steps = (
-                int(period_substeps(np.max(np.abs(v)), control_period, substeps, max_step_rotation))
+                int(
+                    period_substeps(
+                        step_rate(q, v, plant.stops, control_period),
+                        control_period,
+                        substeps,
+                        max_step_rotation,
+                    )
+                )
                 if integrator == "rk4"
                 else substeps
             )

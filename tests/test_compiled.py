@@ -232,6 +232,17 @@ def test_the_speed_adaptive_step_is_the_same_on_both_loops(preset):
 
 
 @needs_extension
+def test_the_step_is_cut_at_the_stops_alike_on_both_loops():
+    """Computed torque on paper-line throws the wrist into its stops within 2 s: both loops cut
+    the same periods for the stops' ring frequencies (simulation.step_rate) and agree to 1e-9."""
+    py, cc = _both_backends("paper-line", 2.0, controller={"kind": "computed-torque"})
+    assert cc.status == py.status == "completed"
+    assert np.max(np.maximum(py.q - 2.8, -2.8 - py.q)[:, 1:]) > 0.01  # in a stop
+    assert cc.refined_periods == py.refined_periods > 100
+    np.testing.assert_allclose(cc.q, py.q, rtol=0, atol=1e-9)
+
+
+@needs_extension
 @pytest.mark.parametrize("preset", ["paper-ellipse", "paper-line", "panda-ellipse", "panda-pose"])
 def test_a_compiled_result_equals_the_python_result(preset):
     """What the compiled loop records for the Result (chain points, x, e, the criterion h and the

@@ -34,6 +34,9 @@ class JointStops:
         lower, upper: the joint limits [rad or m]; +-inf for a joint without a stop.
         stiffness: K per joint [N m/rad or N/m].
         alpha: Hunt-Crossley damping [s/rad or s/m].
+        ring: per joint, the frequency [rad/s] at which the arm rings against the stop, sqrt(K_i
+            (M^-1)_ii) at q(0) (0 for a joint without a stop); the plant step resolves it while
+            the joint is at its stop (:func:`nnrobust.simulation.step_rate`). None: not known.
 
     """
 
@@ -41,10 +44,22 @@ class JointStops:
     upper: np.ndarray
     stiffness: np.ndarray
     alpha: float = 1.0
+    ring: np.ndarray | None = None
 
     def __post_init__(self):
-        for name in ("lower", "upper", "stiffness"):
-            object.__setattr__(self, name, np.asarray(getattr(self, name), dtype=float))
+        for name in ("lower", "upper", "stiffness", "ring"):
+            if getattr(self, name) is not None:
+                object.__setattr__(self, name, np.asarray(getattr(self, name), dtype=float))
+
+    def ringing(self, q: np.ndarray, v: np.ndarray, period: float) -> float:
+        """The highest ring frequency [rad/s] among the joints at their stop, or that would reach
+        it within ``period`` at their speed (0 if none, or the frequencies are not known).
+        """
+        if self.ring is None:
+            return 0.0
+        beyond = np.maximum(q - self.upper, self.lower - q)  # > 0 at the stop; -inf without one
+        near = beyond + np.abs(v) * period > 0.0
+        return float(np.max(self.ring[near])) if near.any() else 0.0
 
     def penetration(self, q: np.ndarray) -> np.ndarray:
         """Signed distance beyond the limits, per joint: > 0 above upper, < 0 below lower, else 0."""
