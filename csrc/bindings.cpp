@@ -110,6 +110,8 @@ NB_MODULE(_loop, m) {
   FIELD(steps); FIELD(max_speed); FIELD(q0); FIELD(v0);
   FIELD(viscous); FIELD(coulomb); FIELD(static_friction); FIELD(dist_amplitude); FIELD(dist_phase); FIELD(dist_omega);
   FIELD(torque_limit); FIELD(stops); FIELD(stop_lower); FIELD(stop_upper); FIELD(stop_stiffness); FIELD(stop_ring);
+  FIELD(pulse_start); FIELD(pulse_end); FIELD(pulse_torque); FIELD(wrench_start); FIELD(wrench_end); FIELD(wrench);
+  FIELD(payload_start); FIELD(payload_inertia); FIELD(payload_joint);
   FIELD(stop_alpha); FIELD(position_noise); FIELD(velocity_noise); FIELD(resolution); FIELD(noise_q);
   FIELD(noise_v); FIELD(delay); FIELD(mj_step); FIELD(mj_model); FIELD(mj_data); FIELD(mj_qpos); FIELD(mj_qvel);
   FIELD(mj_ctrl); FIELD(mj_qfrc_applied); FIELD(mj_qpos_index); FIELD(mj_dof_index); FIELD(nominal_kind); FIELD(nominal); FIELD(m); FIELD(nominal_viscous);

@@ -675,6 +675,7 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
       break;
     }
     z = out.z;
+    plant.begin_period(t);  // the loads held over this period
     if (s.mj_step) {  // MujocoPlant.advance: MuJoCo's steps with tau held, -tau_d at each mid-step
       const double h = s.period / s.substeps;
       using Step = void (*)(const void *, void *);
@@ -686,7 +687,7 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
       for (int i = 0; i < n; ++i) ctrl[i] = tau[i];
       for (int j = 0; j < s.substeps; ++j) {
         const double mid = t + (j + 0.5) * h;
-        for (int i = 0; i < n; ++i) applied[s.mj_dof_index[i]] = -plant.disturbance(i, mid);
+        for (int i = 0; i < n; ++i) applied[s.mj_dof_index[i]] = -plant.disturbance(i, mid) + plant.load(i);
         step(reinterpret_cast<const void *>(s.mj_model), reinterpret_cast<void *>(s.mj_data));
       }
       for (int i = 0; i < n; ++i) {

@@ -44,6 +44,14 @@ struct LoopSpec {
   bool stops = false;
   Vector stop_lower, stop_upper, stop_stiffness, stop_ring;  // ring: sqrt(K (M^-1)_ii) at q0 [rad/s]
   double stop_alpha = 0.0;
+  // [[plant.loads]] (nnrobust/plant/loads.py, Plant.begin_period), switched at control instants:
+  // joint torque pulses u over [start, end), tool wrenches w (world axes at the task frame) over
+  // [start, end), payload changes at start; payload_inertia holds the dynamic parameters
+  // (pin.Inertia.toDynamicParameters) of the joint payload_joint after each change, then before any
+  Vector pulse_start, pulse_end, wrench_start, wrench_end, payload_start;  // P, P, W, W, C
+  Matrix pulse_torque, wrench;                                            // n x P, 6 x W
+  Matrix payload_inertia;                                                 // 10 x (C + 1)
+  int payload_joint = 0;
   Vector position_noise, velocity_noise, resolution;  // n (zeros: ideal)
   Rows noise_q, noise_v;                              // steps x n standard normal draws (or empty)
   int delay = 0;

@@ -1,5 +1,5 @@
 // The true robot's right-hand side: the twin of nnrobust/plant/plant.py (friction, sinusoidal
-// disturbance, joint stops, forward dynamics), included by closed_loop.cpp only.
+// disturbance, external loads, joint stops, forward dynamics), included by closed_loop.cpp only.
 #pragma once
 
 #include <algorithm>
@@ -49,6 +49,37 @@ struct Plant {
     return dist_[i];
   }
 
+  // Plant.begin_period: the loads of [[plant.loads]] held over the control period that starts at t
+  // (the joint torque and the tool wrench; the payload's inertia set on its joint)
+  void begin_period(double t) {
+    const int n = static_cast<int>(s.q0.size());
+    load_.setZero(n);
+    for (int p = 0; p < s.pulse_start.size(); ++p)
+      if (s.pulse_start[p] <= t && t < s.pulse_end[p]) load_ += s.pulse_torque.col(p);
+    wrench_.setZero(6);
+    has_wrench_ = false;
+    for (int w = 0; w < s.wrench_start.size(); ++w)
+      if (s.wrench_start[w] <= t && t < s.wrench_end[w]) {
+        wrench_ += s.wrench.col(w);
+        has_wrench_ = true;
+      }
+    const int changes = static_cast<int>(s.payload_start.size());
+    if (changes) {
+      int carried = 0;  // changes so far (sorted by start)
+      for (int c = 0; c < changes; ++c) carried += s.payload_start[c] <= t;
+      const int index = carried ? carried - 1 : changes;  // the last column: before any change
+      if (index != payload_index_) {
+        m.model.inertias[s.payload_joint] = pinocchio::Inertia::FromDynamicParameters(s.payload_inertia.col(index));
+        payload_index_ = index;
+        q_mass_.resize(0);  // M, V_m and G changed
+        q_bias_.resize(0);
+      }
+    }
+  }
+
+  // Plant.load_torque: u + J(q)^T w of the held loads (zero without any)
+  double load(int i) const { return load_.size() ? load_[i] : 0.0; }
+
   double stop_torque(int i, double q, double v) const {  // JointStops.torque
     if (!s.stops) return 0.0;
     const double pen = std::max(q - s.stop_upper[i], 0.0) + std::min(q - s.stop_lower[i], 0.0);
@@ -68,10 +99,13 @@ struct Plant {
   const Vector &net_torque(double t, const Vector &q, const Vector &v, const Vector &tau, const Modes &mode) {
     const int n = static_cast<int>(q.size());
     net_.resize(n);
+    if (has_wrench_) loaded_ = load_ + m.frame_jacobian(q).transpose() * wrench_;
     for (int i = 0; i < n; ++i) {
       const double friction = sticky(i) ? s.viscous[i] * v[i] + s.coulomb[i] * mode[i]
                                         : s.viscous[i] * v[i] + s.coulomb[i] * sign(v[i]);
       net_[i] = tau[i] - friction - disturbance(i, t);
+      if (has_wrench_) net_[i] += loaded_[i];
+      else if (load_.size()) net_[i] += load_[i];
       net_[i] += stop_torque(i, q[i], v[i]);
     }
     return net_;
@@ -136,6 +170,9 @@ struct Plant {
  private:
   // workspaces: sized once, so a step allocates nothing here
   Vector net_, r_, rf_, dist_;
+  Vector load_, wrench_, loaded_;  // begin_period's held loads; loaded_: with J^T w
+  bool has_wrench_ = false;
+  int payload_index_ = -1;
   double dist_t_ = std::numeric_limits<double>::quiet_NaN();
   Matrix M_, Mff_;
   Vector q_mass_, q_bias_, v_bias_, bias_;

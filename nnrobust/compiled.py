@@ -202,6 +202,26 @@ def _criterion_spec(s, setup, f) -> None:
             s.obstacle_influence, s.link_radius = c.influence, c.link_radius
 
 
+def _loads_spec(s, plant, f) -> None:
+    """``[[plant.loads]]`` into the spec (Plant.begin_period's data)."""
+    import numpy as np
+
+    loads = plant.loads
+    if not loads:
+        return
+    n = plant.nq
+    s.pulse_start = f([p.start for p in loads.pulses])
+    s.pulse_end = f([p.end for p in loads.pulses])
+    s.pulse_torque = f(np.array([p.torque for p in loads.pulses]).T.reshape(n, -1))
+    s.wrench_start = f([w.start for w in loads.wrenches])
+    s.wrench_end = f([w.end for w in loads.wrenches])
+    s.wrench = f(np.array([w.wrench for w in loads.wrenches]).T.reshape(6, -1))
+    if loads.payloads:
+        s.payload_start = f([c.start for c in loads.payloads])
+        s.payload_inertia = f(np.array([i.toDynamicParameters() for i in plant.payload_inertias]).T)
+        s.payload_joint = plant.model.model.frames[plant.model.frame_id].parentJoint
+
+
 def loop_spec(setup, duration: float):
     """The compiled loop's description of a built experiment (every array it needs)."""
     import numpy as np
@@ -228,6 +248,7 @@ def loop_spec(setup, duration: float):
     s.dist_amplitude, s.dist_phase = f(plant.disturbance.amplitude), f(plant.disturbance.phase)
     s.dist_omega = f(plant.disturbance.omega)
     s.torque_limit = f(np.zeros(0) if plant.torque_limit is None else plant.torque_limit)
+    _loads_spec(s, plant, f)
     if plant.stops is not None:
         s.stops = True
         s.stop_lower, s.stop_upper = f(plant.stops.lower), f(plant.stops.upper)

@@ -136,6 +136,14 @@ class PlantConfig:
         payload: a load at the task frame [kg], a solid sphere of 2 cm radius centred on the
             frame's origin, carried by the true plant only (the controller's nominal model does
             not know it), on either engine; searchable like any key (docs/falsification.md).
+        loads: external loads that switch at control instants (``[[plant.loads]]``, one table
+            each; docs/plant.md): ``kind = "step"`` (``torque``: one value per joint [N m], from
+            ``time`` [s] for ``duration`` [s], default to the end), ``"impulse"`` (``impulse``
+            per joint [N m s] spread over ``duration``, default one control period),
+            ``"wrench"`` (``force`` [N] and ``moment`` [N m] in world axes at the task frame,
+            from ``time`` for ``duration``) or ``"payload"`` (from ``time`` on the task frame
+            carries ``mass`` [kg] beside ``payload``; the nominal model does not know it).
+            Times and durations are whole numbers of control periods.
         armature: rotor inertia added to the diagonal of M, one value for all joints or one per
             joint [kg m^2 or kg] (none: 0); the true plant's alone, on either engine (a
             nominal model from the URDF does not know it).
@@ -172,6 +180,7 @@ class PlantConfig:
     joint_stop_damping: float = 1.0
     armature: list[float] | None = None
     payload: float = 0.0
+    loads: list[dict] | None = None
     engine: str = "pinocchio"
     mujoco_integrator: str = "rk4"
 
@@ -1248,6 +1257,10 @@ def validate(config: ExperimentConfig) -> None:
                 f"{sim.integration_step:g} s (ratio {ratio:.6g})",
             )
         sim.substeps = int(round(ratio))
+    if config.plant.loads:
+        from .plant.loads import parse_loads
+
+        parse_loads(config.plant.loads, config.simulation.control_period)
     if sim.duration < sim.control_period:
         raise ConfigError("simulation.duration", "is shorter than one control period")
     if sim.substeps is not None and sim.substeps > MAX_SUBSTEPS:

@@ -53,6 +53,7 @@ from .plant import (
     scaled_friction,
     torque_scale,
 )
+from .plant.loads import ExternalLoads, parse_loads
 from .plant.scaling import PLAUSIBLE_EFFORT_RATIO, implausible_efforts, usable
 from .results import Result
 from .simulation import simulate
@@ -207,15 +208,32 @@ def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
             disturbance.omega * pc.disturbance_omega_scale,
             disturbance.phase + pc.disturbance_phase_shift,
         )
+    true = true_model(config, robot)
+    loads = parse_loads(pc.loads, config.simulation.control_period, n)
     return Plant(
-        true_model(config, robot),
+        true,
         friction,
         disturbance,
         build_torque_limits(config, robot),
         build_stops(config, robot, tau_ref),
         build_sensor(config, n),
         config.sensing.delay,
+        loads=loads,
+        payload_inertias=payload_inertias(true, loads),
     )
+
+
+def payload_inertias(true: PinocchioModel, loads: ExternalLoads) -> tuple[pin.Inertia, ...]:
+    """The inertia of the joint that carries the task frame after each payload change of
+    ``[[plant.loads]]`` (the sphere of ``plant.payload`` with that mass, added to the joint's own),
+    and last its inertia before any change.
+    """
+    if not loads.payloads:
+        return ()
+    joint = true.model.frames[true.frame_id].parentJoint
+    before = pin.Inertia(true.model.inertias[joint])
+    after = [before + payload(true.model, true.task_frame, c.mass)[1] for c in loads.payloads]
+    return (*after, before)
 
 
 def _joint_scales(path: str, scales: list[float] | None, n: int) -> np.ndarray:
@@ -240,11 +258,12 @@ def payload(model: pin.Model, task_frame: str, mass: float) -> tuple[int, pin.In
 
 def true_model(config: ExperimentConfig, robot: PinocchioModel) -> PinocchioModel:
     """The true robot's dynamics: the robot with ``plant.armature`` on the diagonal of M and
-    ``plant.payload`` carried by the task frame's joint (a copy; the nominal model knows
-    neither).
+    ``plant.payload`` carried by the task frame's joint (a copy, also when a payload change of
+    ``[[plant.loads]]`` will alter it; the nominal model knows neither).
     """
     pc = config.plant
-    if pc.armature is None and pc.payload == 0.0:
+    changes = any(entry.get("kind") == "payload" for entry in pc.loads or ())
+    if pc.armature is None and pc.payload == 0.0 and not changes:
         return robot
     model = pin.Model(robot.model)
     if pc.armature is not None:
@@ -265,6 +284,14 @@ def build_engine(config: ExperimentConfig, plant: Plant, substeps: int) -> None:
 
     pc, true = config.plant, plant.model
     assert isinstance(true, PinocchioModel)  # build_plant's true_model
+    assert plant.loads is not None  # Plant sets an empty one
+    if plant.loads.wrenches or plant.loads.payloads:
+        kind = "wrench" if plant.loads.wrenches else "payload"
+        raise ConfigError(
+            "plant.loads",
+            f"a {kind!r} load has no MuJoCo twin yet: use plant.engine = 'pinocchio' (step and impulse "
+            "loads run on both engines)",
+        )
     load = None
     if pc.payload > 0.0:  # on the body of the task frame's joint, where Pinocchio's true model has it
         joint, inertia = payload(true.model, true.task_frame, pc.payload)

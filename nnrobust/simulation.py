@@ -152,7 +152,8 @@ def simulate(
     At each control instant t_k the controller reads the plant's sensor, returns a command and its
     next state; the command reaches the actuators ``plant.delay`` periods later (before that the
     first command is held), is clipped to the effort limits and held over the period while
-    (q, q') are integrated with the stops, friction and disturbance acting continuously. Joints
+    (q, q') are integrated with the stops, friction and disturbance acting continuously, and the
+    external loads (``[[plant.loads]]``) switched at control instants. Joints
     with dry friction are integrated as stick-slip, their events located inside the step
     (:mod:`nnrobust.plant.stick_slip`).
 
@@ -224,6 +225,7 @@ def simulate(
             commands.append(out.tau)
             tau_cmd = commands[0]  # computed d periods ago (the first command until then)
             tau = plant.applied_torque(tau_cmd)
+            plant.begin_period(t)  # the loads held over this period (nnrobust.plant.loads)
             q_rec[k], v_rec[k], tau_rec[k], cmd_rec[k], z_rec[k] = q, v, tau, tau_cmd, z
             try:
                 for name, value in out.signals.items():
@@ -242,7 +244,7 @@ def simulate(
             if out.state is not None:
                 z = out.state
             if engine is not None:
-                X = np.concatenate(engine.advance(t, tau, control_period))
+                X = np.concatenate(engine.advance(t, tau, control_period, plant.held.torque))
                 continue
             n_steps = (
                 int(

@@ -126,13 +126,19 @@ class MujocoPlant:
         self.data.qvel[self.dof_index] = v0
         mujoco.mj_forward(self.model, self.data)
 
-    def advance(self, t: float, tau: np.ndarray, period: float) -> tuple[np.ndarray, np.ndarray]:
-        """(q, q') after one control period with the applied torque ``tau`` held."""
+    def advance(
+        self, t: float, tau: np.ndarray, period: float, load: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """(q, q') after one control period with the applied torque ``tau`` and the joint torque
+        ``load`` of ``[[plant.loads]]`` held.
+        """
         mujoco = import_mujoco()
         d, h = self.data, period / self.substeps
         d.ctrl[:] = tau
         for i in range(self.substeps):
             d.qfrc_applied[self.dof_index] = -self.disturbance(t + (i + 0.5) * h)
+            if load is not None:
+                d.qfrc_applied[self.dof_index] += load
             mujoco.mj_step(self.model, d)
         return d.qpos[self.qpos_index].copy(), d.qvel[self.dof_index].copy()
 

@@ -5,11 +5,14 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+import pinocchio as pin
 
 from ..model.base import DynamicsModel
+from ..model.pinocchio_model import PinocchioModel
 from .disturbance import SinusoidalDisturbance
 from .friction import Friction
 from .limits import JointStops, saturate
+from .loads import ExternalLoads, HeldLoads
 from .mujoco_engine import MujocoPlant
 from .sensing import Sensor
 
@@ -32,6 +35,11 @@ class Plant:
         sensor: what the controller measures (default exact).
         delay: control periods between a measurement and the torque computed from it (>= 0).
         engine: MuJoCo, when it integrates the plant (built by the experiment).
+        loads: torque steps and impulses, a tool wrench, payload changes (``[[plant.loads]]``),
+            held over each control period from :meth:`begin_period`.
+        payload_inertias: for each payload change of ``loads``, the inertia of the joint that
+            carries the task frame with that payload (its last entry: without any), a
+            Pinocchio model only.
 
     """
 
@@ -45,6 +53,8 @@ class Plant:
     engine: MujocoPlant | None = field(default=None, repr=False)
     """A second engine that integrates the plant instead (``plant.engine = "mujoco"``,
     :mod:`nnrobust.plant.mujoco_engine`); None: this class's dynamics, integrated by the loop."""
+    loads: ExternalLoads | None = None
+    payload_inertias: tuple = field(default=(), repr=False)
     sticky: np.ndarray = field(init=False, repr=False)
     """Joints with dry friction that holds them at rest (F_s > 0): integrated as stick-slip."""
 
@@ -72,6 +82,40 @@ class Plant:
         if self.delay < 0:
             raise ValueError(f"plant: delay must be >= 0 control periods, got {self.delay}")
         self.sticky = (self.friction.static > 0) & (self.friction.smoothing <= 0)
+        if self.loads is None:
+            self.loads = ExternalLoads(n)
+        self.held: HeldLoads = self.loads.at(0.0)
+        if self.loads.wrenches or self.loads.payloads:
+            if not isinstance(self.model, PinocchioModel):
+                raise ValueError("plant.loads: a wrench or a payload change needs a Pinocchio model")
+            self._pin = self.model
+            self._payload_joint = self.model.model.frames[self.model.frame_id].parentJoint
+            if self.loads.payloads and len(self.payload_inertias) != len(self.loads.payloads) + 1:
+                raise ValueError(
+                    "plant: payload_inertias needs one inertia per payload change and one without"
+                )
+
+    def begin_period(self, t: float) -> None:
+        """Hold the loads of the control period that starts at t [s] (:mod:`.loads`): the joint
+        torque and wrench that act over it, and the payload the task frame carries during it.
+        """
+        loads = self.loads
+        assert loads is not None  # __post_init__ sets an empty one
+        held = loads.at(t)
+        if loads.payloads:
+            carried = sum(c.start <= t for c in loads.payloads)  # changes so far (sorted)
+            inertia = self.payload_inertias[carried - 1]  # [-1]: none yet
+            self._pin.model.inertias[self._payload_joint] = inertia
+        self.held = held
+
+    def load_torque(self, q: np.ndarray) -> np.ndarray:
+        """The held loads' torque on the joints, u + J(q)^T w [N m]."""
+        held = self.held
+        if held.wrench is None:
+            return held.torque
+        m = self._pin
+        J = pin.computeFrameJacobian(m.model, m.data, q, m.frame_id, pin.LOCAL_WORLD_ALIGNED)
+        return held.torque + J.T @ held.wrench
 
     @property
     def nq(self) -> int:
@@ -98,13 +142,16 @@ class Plant:
         tau: np.ndarray,
         mode: np.ndarray,
     ) -> np.ndarray:
-        """The torque on the arm but its own dynamics, tau + tau_stop - tau_d - F [N m].
+        """The torque on the arm but its own dynamics, tau + tau_stop - tau_d - F + the held
+        loads (:meth:`load_torque`) [N m].
 
         A sticky joint's dry friction is F_c mode_i (0 where it is held).
         """
         fr = self.friction
         friction = np.where(self.sticky, fr.viscous * v + fr.coulomb * mode, fr.torque(v))
         net = tau - friction - self.disturbance(t)
+        if self.loads:
+            net = net + self.load_torque(q)
         if self.stops is not None:
             net = net + self.stops.torque(q, v)
         return net
