@@ -36,6 +36,10 @@ _EXPORTS = {
     "Controller": ".controllers",
     "ControlOutput": ".controllers",
     "ControllerContext": ".controllers",
+    # ... and of a trajectory, disturbance or self-motion criterion of your own
+    "Trajectory": ".trajectories",
+    "Disturbance": ".plant.disturbance",
+    "Criterion": ".subtasks.base",
     # models
     "DynamicsModel": ".model",
     "PinocchioModel": ".model",

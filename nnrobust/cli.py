@@ -139,7 +139,7 @@ def controller_change(choice: str) -> dict:
     from the working folder).
     """
     from .config import CONTROLLER_KINDS
-    from .controllers.custom import class_file
+    from .user_code import class_file
 
     if choice in CONTROLLER_KINDS:
         return {"kind": choice, "class": None, "params": None}

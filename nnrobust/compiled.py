@@ -135,12 +135,14 @@ def _plant_refusal(setup) -> str:
     """Why the compiled plant cannot simulate this experiment ("" when it can): the part of
     :func:`twin_refusal` that the hybrid loop needs too (plant, integrator, task, criterion).
     """
+    from .plant.disturbance import SinusoidalDisturbance
     from .subtasks import WeightedCriteria
 
     if not available():
         return unavailable_reason()
     config, criterion = setup.config, setup.criterion
     checks = [
+        (isinstance(setup.plant.disturbance, SinusoidalDisturbance), "a custom disturbance"),
         (config.simulation.integrator == "rk4", f"the integrator {config.simulation.integrator!r}"),
         (setup.robot.task in ("planar", "position", "pose"), f"a {setup.robot.task!r} task"),
         (setup.plant.friction.smoothing <= 0, "a smoothed plant friction"),
@@ -222,8 +224,10 @@ def _loads_spec(s, plant, f) -> None:
         s.payload_joint = plant.model.model.frames[plant.model.frame_id].parentJoint
 
 
-def loop_spec(setup, duration: float):
-    """The compiled loop's description of a built experiment (every array it needs)."""
+def loop_spec(setup, duration: float, external: bool = False):
+    """The compiled loop's description of a built experiment (every array it needs); with
+    ``external``, of its plant alone (the hybrid loop: the controller is called in Python).
+    """
     import numpy as np
 
     from .config import step_rotation_limit
@@ -272,7 +276,7 @@ def loop_spec(setup, duration: float):
         s.mj_dof_index = [int(i) for i in plant.engine.dof_index]
     s.m = setup.robot.m
     _criterion_spec(s, setup, f)
-    if is_custom(controller):  # the hybrid loop: the law is Python's, only its state size matters here
+    if external:  # the hybrid loop: the law is Python's, only its state size matters here
         s.law = "external"
         s.z0 = f(controller.initial_state())
         return s
@@ -448,7 +452,7 @@ def simulate_hybrid(setup, duration: float):
     refusal = hybrid_refusal(setup)
     if refusal:
         raise NNRobustError(f"simulation.backend = 'hybrid': {refusal}")
-    spec = loop_spec(setup, duration)
+    spec = loop_spec(setup, duration, external=True)
     plant = load_model(setup.plant.model.pinocchio_model, setup.robot.task_frame)
     law = _HybridLaw(setup.controller, spec.steps, setup.plant.nq, spec.period)
     trace = _trace(setup, spec, _module().run_hybrid(plant, spec, law))

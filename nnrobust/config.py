@@ -107,13 +107,18 @@ class PlantConfig:
         viscous_friction: F_d [N m s/rad]; overrides the ``friction`` choice when given.
         coulomb_friction: [N m]; overrides the ``friction`` choice when given.
         disturbance: ``paper`` (tau_d of Sect. 4), ``none``, ``scaled`` (two harmonics of peak
-            disturbance_level x torque scale per joint), ``sinusoid`` (the fields below) or
+            disturbance_level x torque scale per joint), ``sinusoid`` (the fields below),
+            ``custom`` (``Class(robot, **disturbance_params)`` of ``disturbance_class``, a
+            :class:`nnrobust.Disturbance`; docs/extending.md) or
             ``auto`` (the default: ``paper`` on the paper's arm, ``three_link_planar``, else
             ``scaled``).
         disturbance_level: ``scaled``: peak disturbance / torque scale.
         disturbance_amplitude: n x K amplitudes [N m] (``sinusoid``).
         disturbance_omega: K angular frequencies [rad/s] (``sinusoid``).
         disturbance_phase: n x K phases [rad] (``sinusoid``; default 0).
+        disturbance_class: for ``custom``, the class (``"file.py:Class"`` or
+            ``"package.module:Class"``).
+        disturbance_params: for ``custom``, the keyword arguments of its constructor.
         disturbance_scale: factor applied to the disturbance.
         friction_scale: factor applied to the plant's viscous and Coulomb friction (after the
             choice above; the controller's nominal friction is not scaled).
@@ -167,6 +172,8 @@ class PlantConfig:
     disturbance_amplitude: list[list[float]] | None = None
     disturbance_omega: list[float] | None = None
     disturbance_phase: list[list[float]] | None = None
+    disturbance_class: str | None = None
+    disturbance_params: dict | None = None
     disturbance_scale: float = 1.0
     friction_scale: float = 1.0
     joint_friction_scales: list[float] | None = None
@@ -209,21 +216,26 @@ class SensingConfig:
 
 @dataclass
 class TrajectoryConfig:
-    """The desired path x_d(t) [m], of one of three kinds.
+    """The desired path x_d(t) [m], of one of three kinds, or a user's class.
 
     - ``ellipse`` (eq. 18): x_d(t) = center + axis_a cos(omega t + phase) + axis_b sin(omega t +
       phase); a zero axis_b gives the paper's line;
     - ``point_to_point``: from ``start`` to ``goal`` along a straight line in ``move_time``
       seconds, with the quintic time law (at rest at both ends), then held;
     - ``waypoints``: a cubic spline through ``waypoints`` at ``waypoint_times``, at rest at both
-      ends, then held.
+      ends, then held;
+    - ``custom``: ``Class(robot, **params)`` of ``class`` (``"file.py:Class"`` or
+      ``"package.module:Class"``), a :class:`nnrobust.Trajectory` (planar and position tasks;
+      docs/extending.md).
 
     For a ``pose`` task the orientation is R_d(t) = exp(theta(t) u) R_0 with
     theta(t) = rotation_amplitude sin(rotation_omega t + rotation_phase) (held at R_0 when the
     amplitude is 0).
 
     Attributes:
-        kind: ``ellipse``, ``point_to_point`` or ``waypoints``.
+        kind: ``ellipse``, ``point_to_point``, ``waypoints`` or ``custom``.
+        class_: for ``custom``, the trajectory's class (TOML key ``class``).
+        params: for ``custom``, the keyword arguments of its constructor (TOML table).
         center, axis_a, axis_b: the ellipse's centre and semi-axes (2 or 3 entries) [m].
         omega: angular frequency along the ellipse [rad/s].
         phase: phase at t = 0 [rad].
@@ -258,6 +270,8 @@ class TrajectoryConfig:
     rotation_amplitude: float = 0.0
     rotation_omega: float = 1.0
     rotation_phase: float = 0.0
+    class_: str | None = None
+    params: dict | None = None
 
     @property
     def dimension(self) -> int:
@@ -269,7 +283,7 @@ class TrajectoryConfig:
         return len(self.center)
 
 
-TRAJECTORY_KINDS = ("ellipse", "point_to_point", "waypoints")
+TRAJECTORY_KINDS = ("ellipse", "point_to_point", "waypoints", "custom")
 
 MAX_WAYPOINTS = 10_000
 
@@ -466,14 +480,19 @@ class SubtaskConfig:
     Attributes:
         criteria: names (``paper``, ``half_det_manipulability``, ``manipulability``,
             ``joint_limits``, ``joint_centering``, ``joint_smoothness``, ``obstacles``; see
-            docs/controller.md); empty for pure null-space damping; not given: the paper's on a
-            three-joint planar arm, else manipulability and joint_limits (:func:`default_criteria`).
+            docs/controller.md), or ``custom`` (``Class(robot, **criterion_params)`` of
+            ``criterion_class``, a :class:`nnrobust.Criterion`; docs/extending.md); empty for
+            pure null-space damping; not given: the paper's on a three-joint planar arm, else
+            manipulability and joint_limits (:func:`default_criteria`).
         weights: w_i, positive and summing to C (default: C / number of criteria each).
         C: the constant of eq. (4).
         smoothness_coefficients: c of ``joint_smoothness`` (default the paper's (0.5, -1, 1)).
         obstacles: spheres [x, y, z, radius] [m] for ``obstacles``.
         obstacle_influence: distance d_0 within which an obstacle repels a link [m].
         link_radius: thickness of the links for ``obstacles`` [m].
+        criterion_class: for ``custom``, the criterion's class (``"file.py:Class"`` or
+            ``"package.module:Class"``).
+        criterion_params: for ``custom``, the keyword arguments of its constructor.
 
     """
 
@@ -484,6 +503,8 @@ class SubtaskConfig:
     obstacles: list[list[float]] = field(default_factory=list)
     obstacle_influence: float = 0.1
     link_radius: float = 0.0
+    criterion_class: str | None = None
+    criterion_params: dict | None = None
 
 
 @dataclass
@@ -743,10 +764,11 @@ def load_config(path: str | Path) -> ExperimentConfig:
         raise ConfigError(f"{path}: {err.key}", str(err).split(": ", 1)[1]) from err
     from .model.loading import urdf_digest
 
-    for what, pattern, source, digest in (
-        ("robot's URDF", RECORDED_DIGEST, config.robot.source, urdf_digest),
-        ("controller file", RECORDED_CONTROLLER, controller_file(config), _controller_digest),
-    ):
+    checks = [("robot's URDF", RECORDED_DIGEST, config.robot.source, urdf_digest)]
+    for part, source in user_files(config).items():
+        pattern = re.compile(rf"^# {part} sha256: ([0-9a-f]{{64}})$", re.MULTILINE)
+        checks.append((f"{part} file", pattern, source, _file_digest))
+    for what, pattern, source, digest in checks:
         recorded = pattern.search(text)
         if not recorded or not source:
             continue
@@ -764,20 +786,28 @@ def load_config(path: str | Path) -> ExperimentConfig:
 
 
 RECORDED_DIGEST = re.compile(r"^# urdf sha256: ([0-9a-f]{64})$", re.MULTILINE)
-RECORDED_CONTROLLER = re.compile(r"^# controller sha256: ([0-9a-f]{64})$", re.MULTILINE)
+
+USER_CLASS_KEYS = {
+    "controller": ("controller", "class"),
+    "trajectory": ("trajectory", "class"),
+    "disturbance": ("plant", "disturbance_class"),
+    "criterion": ("subtasks", "criterion_class"),
+}
+"""The parts an experiment file may take from a user's class: part -> (section, TOML key)."""
 
 MAX_BASE_DEPTH = 8
 """Experiment files that start from one another (``base = "file.toml"``), at most this deep."""
 
 
 def _file_data(path: Path, text: str, depth: int = 0) -> dict:
-    """An experiment file's table with its relative paths (robot.source, controller.class) made
+    """An experiment file's table with its relative paths (robot.source, the classes of
+    :data:`USER_CLASS_KEYS`) made
     absolute from the file's folder, merged over its ``base`` (a preset name or an experiment
     file): the file's keys win, section by section.
     """
     data = parse_toml(text, str(path))
     folder = path.resolve().parent
-    robot, controller = data.get("robot"), data.get("controller")
+    robot = data.get("robot")
     if (
         isinstance(robot, dict)
         and isinstance(robot.get("source"), str)
@@ -791,12 +821,14 @@ def _file_data(path: Path, text: str, depth: int = 0) -> dict:
                 "relative path in an experiment file is read from the file's folder)",
             )
         robot["source"] = str(resolved)
-    if isinstance(controller, dict) and isinstance(controller.get("class"), str):
-        from .controllers.custom import class_file
+    from .user_code import class_file
 
-        where, name = class_file(controller["class"]), controller["class"].rpartition(":")[2]
-        if where is not None and not where.is_absolute():
-            controller["class"] = f"{(folder / where).resolve()}:{name}"
+    for section, key in USER_CLASS_KEYS.values():
+        table = data.get(section)
+        if isinstance(table, dict) and isinstance(table.get(key), str):
+            where, name = class_file(table[key]), table[key].rpartition(":")[2]
+            if where is not None and not where.is_absolute():
+                table[key] = f"{(folder / where).resolve()}:{name}"
     if "base" not in data:
         return data
     base = data.pop("base")
@@ -827,17 +859,30 @@ def _file_data(path: Path, text: str, depth: int = 0) -> dict:
     return merged
 
 
-def controller_file(config: ExperimentConfig) -> str:
-    """The file of a custom controller's class, or "" (a module path, or a built-in law)."""
-    from .controllers.custom import class_file
+def user_classes(config: ExperimentConfig) -> dict[str, str]:
+    """The user classes the experiment uses: part (controller, trajectory, disturbance,
+    criterion) -> its ``"file.py:Class"`` or ``"package.module:Class"``.
+    """
+    c, tc, pc, sc = config.controller, config.trajectory, config.plant, config.subtasks
+    used = {
+        "controller": c.class_ if c.kind == "custom" else None,
+        "trajectory": tc.class_ if tc.kind == "custom" else None,
+        "disturbance": pc.disturbance_class if pc.disturbance == "custom" else None,
+        "criterion": sc.criterion_class if "custom" in (sc.criteria or ()) else None,
+    }
+    return {part: spec for part, spec in used.items() if spec}
 
-    spec = config.controller.class_
-    path = class_file(spec) if config.controller.kind == "custom" and spec else None
-    return str(path) if path else ""
+
+def user_files(config: ExperimentConfig) -> dict[str, str]:
+    """The files of the user classes the experiment uses (part -> path; module paths left out)."""
+    from .user_code import class_file
+
+    paths = {part: class_file(spec) for part, spec in user_classes(config).items()}
+    return {part: str(path) for part, path in paths.items() if path is not None}
 
 
-def _controller_digest(source: str) -> str:
-    from .controllers.custom import file_digest
+def _file_digest(source: str) -> str:
+    from .user_code import file_digest
 
     return file_digest(source)
 
@@ -869,7 +914,8 @@ def _package_version(package: str) -> str:
 
 def provenance_header(config: ExperimentConfig) -> str:
     """Comment lines for a run's config.toml: the versions that ran it and the SHA-256 of the
-    robot's URDF, so that a run can be repeated, and checked, from anywhere.
+    robot's URDF and of every user class's file, so that a run can be repeated, and checked,
+    from anywhere.
     """
     from . import __version__
     from .model.loading import urdf_digest
@@ -881,9 +927,9 @@ def provenance_header(config: ExperimentConfig) -> str:
     digest = urdf_digest(config.robot.source)
     if digest:
         lines.append(f"# urdf sha256: {digest}")
-    source = controller_file(config)
-    if source and Path(source).is_file():
-        lines.append(f"# controller sha256: {_controller_digest(source)}")
+    for part, source in user_files(config).items():
+        if Path(source).is_file():
+            lines.append(f"# {part} sha256: {_file_digest(source)}")
     return "\n".join(lines) + "\n"
 
 
@@ -939,33 +985,101 @@ NAME_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9._+-]{0,99}")
 
 
 def path_key(tc: TrajectoryConfig) -> str:
-    """The key that places the path: center, goal or waypoints."""
-    return {"ellipse": "center", "point_to_point": "goal", "waypoints": "waypoints"}.get(tc.kind, "center")
+    """The key that places the path: center, goal, waypoints (or class, for a user's)."""
+    keys = {"ellipse": "center", "point_to_point": "goal", "waypoints": "waypoints", "custom": "class"}
+    return keys.get(tc.kind, "center")
 
 
 CLASS_PATTERN = re.compile(r"(?P<where>[^:]+):(?P<name>[A-Za-z_][A-Za-z0-9_]*)")
-"""``controller.class``: ``file.py:Class`` or ``package.module:Class``."""
+"""A user's class (``controller.class``, ``trajectory.class``, ...): ``file.py:Class`` or
+``package.module:Class``."""
 
 
-def _check_custom(c: ControllerConfig) -> None:
-    """``class`` and ``params`` belong to ``kind = "custom"``, which needs a class."""
-    if c.kind != "custom":
-        for key, value in (("class", c.class_), ("params", c.params)):
-            if value is not None:
-                raise ConfigError(
-                    f"controller.{key}", f"is read only with kind = 'custom' (kind is {c.kind!r})"
-                )
-        return
-    if c.class_ is None:
+def _check_trajectory(config: ExperimentConfig) -> tuple[int, str]:
+    """A shipped path's keys against the task: (m, where m comes from, for messages)."""
+    tc = config.trajectory
+    _check_path(tc)
+    m_path = tc.dimension
+    if m_path not in (2, 3):
         raise ConfigError(
-            "controller.class",
-            "kind = 'custom' needs the class: \"my_laws.py:MyLaw\" (a file "
-            'relative to the experiment file) or "package.module:MyLaw"',
+            f"trajectory.{path_key(tc)}", f"path points have 2 (x, y) or 3 (x, y, z) entries, got {m_path}"
         )
-    if not CLASS_PATTERN.fullmatch(c.class_):
-        raise ConfigError(
-            "controller.class", f'{c.class_!r} is not "file.py:Class" nor "package.module:Class"'
-        )
+    if config.robot.task != "pose":
+        return m_path, f"the task has m = {m_path} (trajectory.{path_key(tc)})"
+    if m_path != 3:
+        raise ConfigError(f"trajectory.{path_key(tc)}", f"a pose task needs a 3-D path, got {m_path} entries")
+    for path, values in (
+        ("trajectory.orientation_rpy", tc.orientation_rpy),
+        ("trajectory.rotation_axis", tc.rotation_axis),
+    ):
+        if values is not None and len(values) != 3:
+            raise ConfigError(path, f"needs 3 entries, got {len(values)}")
+    if not any(tc.rotation_axis):
+        raise ConfigError("trajectory.rotation_axis", "must be a non-zero vector")
+    return 6, "the pose task has m = 6"
+
+
+def _check_gains(c: ControllerConfig, m: int, where: str) -> None:
+    """Kp, Kv, pd_Kp, pd_Kd: one value for all m task coordinates (repeated here) or m, positive."""
+    for name in ("Kp", "Kv", "pd_Kp", "pd_Kd"):
+        values = getattr(c, name)
+        if len(values) == 1:  # one value for every task coordinate
+            setattr(c, name, values * m)
+        elif len(values) != m:
+            raise ConfigError(
+                f"controller.{name}", f"has {len(values)} entries, {where} (or give one value for all)"
+            )
+    for path, values in (
+        ("controller.Kp", c.Kp),
+        ("controller.Kv", c.Kv),
+        ("controller.pd_Kp", c.pd_Kp),
+        ("controller.pd_Kd", c.pd_Kd),
+    ):
+        _positive(path, values)
+
+
+def _check_user_classes(config: ExperimentConfig) -> None:
+    """A class and its params belong to the choice that names a user's class (e.g.
+    ``controller.kind = "custom"``), which needs the class.
+    """
+    c, tc, pc, sc = config.controller, config.trajectory, config.plant, config.subtasks
+    criteria = sc.criteria or []
+    for class_key, params_key, spec, params, custom, choice, now in (
+        ("controller.class", "controller.params", c.class_, c.params, c.kind == "custom", "kind", c.kind),
+        ("trajectory.class", "trajectory.params", tc.class_, tc.params, tc.kind == "custom", "kind", tc.kind),
+        (
+            "plant.disturbance_class",
+            "plant.disturbance_params",
+            pc.disturbance_class,
+            pc.disturbance_params,
+            pc.disturbance == "custom",
+            "disturbance",
+            pc.disturbance,
+        ),
+        (
+            "subtasks.criterion_class",
+            "subtasks.criterion_params",
+            sc.criterion_class,
+            sc.criterion_params,
+            "custom" in criteria,
+            "criteria",
+            criteria,
+        ),
+    ):
+        wanted = "criteria = [..., 'custom']" if choice == "criteria" else f"{choice} = 'custom'"
+        if not custom:
+            for key, value in ((class_key, spec), (params_key, params)):
+                if value is not None:
+                    raise ConfigError(key, f"is read only with {wanted} ({choice} is {now!r})")
+            continue
+        if spec is None:
+            raise ConfigError(
+                class_key,
+                f'{wanted} needs the class: "my_code.py:MyClass" (a file relative to the experiment '
+                'file) or "package.module:MyClass"',
+            )
+        if not CLASS_PATTERN.fullmatch(spec):
+            raise ConfigError(class_key, f'{spec!r} is not "file.py:Class" nor "package.module:Class"')
 
 
 MAX_GAIN = 1e12
@@ -1046,7 +1160,10 @@ def validate(config: ExperimentConfig) -> None:
         "robot.task": (config.robot.task, tuple(TASK_KINDS)),
         "nominal.kind": (config.nominal.kind, ("auto", "closed-form", "urdf")),
         "plant.friction": (config.plant.friction, ("urdf", "scaled")),
-        "plant.disturbance": (config.plant.disturbance, ("auto", "paper", "none", "scaled", "sinusoid")),
+        "plant.disturbance": (
+            config.plant.disturbance,
+            ("auto", "paper", "none", "scaled", "sinusoid", "custom"),
+        ),
         "plant.engine": (config.plant.engine, ENGINES),
         "plant.mujoco_integrator": (config.plant.mujoco_integrator, MUJOCO_INTEGRATORS),
         "controller.kind": (c.kind, (*CONTROLLER_KINDS, "custom")),
@@ -1060,44 +1177,21 @@ def validate(config: ExperimentConfig) -> None:
         if value not in valid:
             raise ConfigError(path, f"{value!r} is not one of {', '.join(valid)}")
     tc = config.trajectory
-    _check_path(tc)
-    m_path = tc.dimension
-    if m_path not in (2, 3):
-        raise ConfigError(
-            f"trajectory.{path_key(tc)}", f"path points have 2 (x, y) or 3 (x, y, z) entries, got {m_path}"
+    if tc.kind == "custom":
+        if config.robot.task == "pose":
+            raise ConfigError(
+                "trajectory.kind",
+                "a custom trajectory is for planar and position tasks; a pose task takes the "
+                "shipped paths with their orientation (ellipse, point_to_point, waypoints)",
+            )
+        m, where = (
+            TASK_KINDS[config.robot.task],
+            f"the {config.robot.task} task has m = {TASK_KINDS[config.robot.task]}",
         )
-    if config.robot.task == "pose":
-        m, where = 6, "the pose task has m = 6"
-        if m_path != 3:
-            raise ConfigError(
-                f"trajectory.{path_key(tc)}", f"a pose task needs a 3-D path, got {m_path} entries"
-            )
-        for path, values in (
-            ("trajectory.orientation_rpy", tc.orientation_rpy),
-            ("trajectory.rotation_axis", tc.rotation_axis),
-        ):
-            if values is not None and len(values) != 3:
-                raise ConfigError(path, f"needs 3 entries, got {len(values)}")
-        if not any(tc.rotation_axis):
-            raise ConfigError("trajectory.rotation_axis", "must be a non-zero vector")
     else:
-        m, where = m_path, f"the task has m = {m_path} (trajectory.{path_key(tc)})"
-    for name in ("Kp", "Kv", "pd_Kp", "pd_Kd"):
-        values = getattr(c, name)
-        if len(values) == 1:  # one value for every task coordinate
-            setattr(c, name, values * m)
-        elif len(values) != m:
-            raise ConfigError(
-                f"controller.{name}", f"has {len(values)} entries, {where} (or give one value for all)"
-            )
-    for path, values in (
-        ("controller.Kp", c.Kp),
-        ("controller.Kv", c.Kv),
-        ("controller.pd_Kp", c.pd_Kp),
-        ("controller.pd_Kd", c.pd_Kd),
-    ):
-        _positive(path, values)
-    _check_custom(c)
+        m, where = _check_trajectory(config)
+    _check_gains(c, m, where)
+    _check_user_classes(config)
     for kp, kv in zip(c.Kp, c.Kv) if c.kind in EQ9_KINDS else ():  # pd and custom laws do not use them
         if kv * kv <= kp:
             raise ConfigError(

@@ -12,6 +12,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pinocchio as pin
 
+from . import user_parts
 from .config import (
     ExperimentConfig,
     default_criteria,
@@ -53,6 +54,7 @@ from .plant import (
     scaled_friction,
     torque_scale,
 )
+from .plant.disturbance import Disturbance, ScaledDisturbance
 from .plant.loads import ExternalLoads, parse_loads
 from .plant.scaling import PLAUSIBLE_EFFORT_RATIO, implausible_efforts, usable
 from .results import Result
@@ -175,6 +177,7 @@ def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
         static=pc.stiction * coulomb,
     )
     kind = pc.disturbance
+    disturbance: Disturbance
     if kind == "auto":  # the paper's tau_d belongs to the paper's arm
         kind = "paper" if config.robot.source == "three_link_planar" else "scaled"
     if kind == "scaled":
@@ -185,6 +188,8 @@ def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
         disturbance = SinusoidalDisturbance.paper()
     elif kind == "none":
         disturbance = SinusoidalDisturbance.none(n)
+    elif kind == "custom":
+        disturbance = user_parts.build_disturbance(pc.disturbance_class or "", pc.disturbance_params, robot)
     else:
         amplitude = np.asarray(pc.disturbance_amplitude, dtype=float)
         omega = np.asarray(pc.disturbance_omega, dtype=float)
@@ -202,7 +207,16 @@ def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
     rows = pc.disturbance_scale * _joint_scales(
         "plant.joint_disturbance_scales", pc.joint_disturbance_scales, n
     )
-    if np.any(rows != 1.0) or pc.disturbance_omega_scale != 1.0 or pc.disturbance_phase_shift != 0.0:
+    if not isinstance(disturbance, SinusoidalDisturbance):
+        for key, value, default in (
+            ("disturbance_omega_scale", pc.disturbance_omega_scale, 1.0),
+            ("disturbance_phase_shift", pc.disturbance_phase_shift, 0.0),
+        ):
+            if value != default:
+                raise ConfigError(f"plant.{key}", "acts on sinusoids; a custom disturbance has none")
+        if np.any(rows != 1.0):
+            disturbance = ScaledDisturbance(disturbance, rows)
+    elif np.any(rows != 1.0) or pc.disturbance_omega_scale != 1.0 or pc.disturbance_phase_shift != 0.0:
         disturbance = SinusoidalDisturbance(
             disturbance.amplitude * rows[:, None],
             disturbance.omega * pc.disturbance_omega_scale,
@@ -403,6 +417,8 @@ def _make_criterion(name: str, config: ExperimentConfig, robot: PinocchioModel) 
     if name == "joint_smoothness":
         c = sc.smoothness_coefficients or list(PAPER_SMOOTHNESS)
         return JointSmoothness(tuple(_vector("subtasks.smoothness_coefficients", c, robot.nq)))
+    if name == "custom":
+        return user_parts.build_criterion(sc.criterion_class or "", sc.criterion_params, robot)
     assert name == "obstacles", name  # build_criterion checked the name against CRITERIA
     obstacles = np.asarray(sc.obstacles, dtype=float)
     return SphereObstacles(obstacles[:, :3], obstacles[:, 3], sc.obstacle_influence, sc.link_radius)
@@ -414,9 +430,9 @@ def build_criterion(config: ExperimentConfig, robot: PinocchioModel) -> Criterio
     names = default_criteria(robot.nq, robot.task) if sc.criteria is None else sc.criteria
     if not names:
         return None
-    unknown = [c for c in names if c not in CRITERIA]
+    unknown = [c for c in names if c not in CRITERIA and c != "custom"]
     if unknown:
-        raise ConfigError("subtasks.criteria", f"unknown {unknown}; valid: {', '.join(CRITERIA)}")
+        raise ConfigError("subtasks.criteria", f"unknown {unknown}; valid: {', '.join(CRITERIA)}, custom")
     criteria = [_make_criterion(name, config, robot) for name in names]
     return WeightedCriteria(criteria, sc.weights, sc.C)
 
@@ -579,8 +595,12 @@ def build_path(config: ExperimentConfig, robot: PinocchioModel) -> PositionPath:
 
 
 def build_trajectory(config: ExperimentConfig, robot: PinocchioModel) -> Trajectory:
-    """The position path (:func:`build_path`), with a rocking or held orientation for a pose task."""
+    """The position path (:func:`build_path`), with a rocking or held orientation for a pose task;
+    or a user's trajectory (``kind = "custom"``).
+    """
     tc = config.trajectory
+    if tc.kind == "custom":
+        return user_parts.build_trajectory(tc.class_ or "", tc.params, robot, robot.task)
     path = build_path(config, robot)
     if robot.task != "pose":
         return path
@@ -956,7 +976,8 @@ def check_memory(config: ExperimentConfig, n: int, m: int) -> None:
 def choose_backend(setup: Setup) -> str:
     """``compiled``, ``hybrid`` or ``python`` for ``simulation.backend``. ``auto`` takes the
     compiled loop where the experiment has a compiled twin, the hybrid loop (compiled plant, the
-    Python controller once per period) for a custom controller, else the Python loop; one warning
+    Python controller once per period) where only the controller's side has none (a custom
+    controller or trajectory), else the Python loop; one warning
     when the extension itself is missing.
     """
     from . import compiled
@@ -974,7 +995,7 @@ def choose_backend(setup: Setup) -> str:
         raise ConfigError("simulation.backend", f"'compiled' cannot run this experiment: {refusal}")
     if not refusal:
         return "compiled"
-    if compiled.is_custom(setup.controller) and not compiled.hybrid_refusal(setup):
+    if not compiled.hybrid_refusal(setup):  # a Python-only part: a custom controller or trajectory
         return "hybrid"
     if not compiled.available():
         warnings.warn(f"running on the Python backend: {refusal}", stacklevel=3)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
 import numpy as np
@@ -11,8 +12,35 @@ import pinocchio as pin
 from .model.tasks import pose_vector, task_error
 
 
+class Trajectory(ABC):
+    """A desired task trajectory: t -> (x_d, x_d', x_d''), the contract of every trajectory, the
+    shipped ones and a user's (``trajectory.kind = "custom"``, docs/extending.md).
+
+    A user's class is built as ``Class(robot, **trajectory.params)``, with ``robot`` the arm's
+    model (:class:`nnrobust.DynamicsModel`: ``task_position``, ``mid_configuration``, ...), and
+    sets ``m``, the task dimension (2 planar, 3 position; a pose task needs the shipped
+    trajectories).
+    """
+
+    m: int
+    """Task dimension."""
+
+    @abstractmethod
+    def __call__(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(x_d, x_d', x_d'') at time t [m, m/s, m/s^2]."""
+
+    def position(self, t: np.ndarray) -> np.ndarray:
+        """x_d at each time of an array, len(t) x m [m]."""
+        t = np.asarray(t, dtype=float)
+        return np.array([self(tk)[0] for tk in t]).reshape(t.size, self.m)
+
+    def error(self, x: np.ndarray, x_d: np.ndarray) -> np.ndarray:
+        """E = x - x_d [m]."""
+        return x - x_d
+
+
 @dataclass(frozen=True)
-class EllipseTrajectory:
+class EllipseTrajectory(Trajectory):
     """x_d(t) = c + a cos(omega t + phase) + b sin(omega t + phase), eq. (18).
 
     A zero ``b`` gives the paper's straight line of case (a). Works in any task dimension m.
@@ -40,11 +68,7 @@ class EllipseTrajectory:
                 f"trajectory: center {self.center.shape}, axis_a {self.axis_a.shape} and "
                 f"axis_b {self.axis_b.shape} must have the same length"
             )
-
-    @property
-    def m(self) -> int:
-        """Task dimension."""
-        return self.center.size
+        object.__setattr__(self, "m", self.center.size)
 
     def __call__(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(x_d, x_d', x_d'') at time t [m, m/s, m/s^2]."""
@@ -66,7 +90,7 @@ class EllipseTrajectory:
 
 
 @dataclass(frozen=True)
-class PiecewisePolynomialPath:
+class PiecewisePolynomialPath(Trajectory):
     """x_d(t) = sum_j c[p, j] (t - b_p)^j for b_p <= t < b_{p+1}, held at its end values (with zero
     velocity and acceleration) before b_0 and after b_P. The form of both the quintic
     point-to-point motion and the waypoint spline, evaluated the same way by the compiled loop.
@@ -89,11 +113,7 @@ class PiecewisePolynomialPath:
             raise ValueError(f"trajectory: coefficients of shape {c.shape} for {b.size - 1} pieces")
         object.__setattr__(self, "breaks", b)
         object.__setattr__(self, "coefficients", c)
-
-    @property
-    def m(self) -> int:
-        """Task dimension."""
-        return self.coefficients.shape[2]
+        object.__setattr__(self, "m", c.shape[2])
 
     def _piece(self, t: float) -> tuple[int, float, bool]:
         """(piece, local time t - b_p, inside [b_0, b_P])."""
@@ -167,7 +187,7 @@ PositionPath = EllipseTrajectory | PiecewisePolynomialPath
 
 
 @dataclass(frozen=True)
-class PoseTrajectory:
+class PoseTrajectory(Trajectory):
     """A 6-D pose path: the position follows a path, the orientation rocks about a fixed axis.
 
     p_d(t) = path(t) (the ellipse of eq. 18 in 3-D, a point-to-point move or a waypoint spline)
@@ -237,7 +257,3 @@ class PoseTrajectory:
     def error(self, x: np.ndarray, x_d: np.ndarray) -> np.ndarray:
         """[p - p_d, log3(R R_d^T)] [m, rad]."""
         return task_error("pose", x, x_d)
-
-
-Trajectory = EllipseTrajectory | PiecewisePolynomialPath | PoseTrajectory
-"""Any desired task trajectory."""

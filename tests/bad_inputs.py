@@ -1272,6 +1272,59 @@ CUSTOM_CASES = [
 ]
 
 
+PARTS = Path(__file__).parent / "parts" / "again.py"
+
+
+def _part(folder: Path, body: str) -> RunExperiment:
+    """An experiment file using a class of tests/parts/again.py (copied beside it), then run."""
+    (folder / "parts.py").write_text(PARTS.read_text())
+    return RunExperiment(
+        _toml(folder, f'base = "paper-ellipse"\n{body}\n[simulation]\nduration = 0.1\n').path
+    )
+
+
+PART_CASES = [
+    Case(
+        "custom disturbance: wrong size",
+        lambda d: _part(d, '[plant]\ndisturbance = "custom"\ndisturbance_class = "parts.py:WrongSize"'),
+        ex.ConfigError,
+        "plant.disturbance_class: WrongSize(0.0) returned shape (2,); expected (3,)",
+    ),
+    Case(
+        "custom trajectory: not a Trajectory",
+        lambda d: _part(d, '[trajectory]\nkind = "custom"\nclass = "parts.py:NotATrajectory"'),
+        ex.ConfigError,
+        "NotATrajectory is not a subclass of nnrobust.Trajectory",
+    ),
+    Case(
+        "custom criterion: no class",
+        lambda d: _part(d, '[subtasks]\ncriteria = ["custom"]\nweights = [1.0]'),
+        ex.ConfigError,
+        "subtasks.criterion_class: criteria = [..., 'custom'] needs the class",
+    ),
+    Case(
+        "load: time between control instants",
+        lambda d: _part(d, '[[plant.loads]]\nkind = "step"\ntime = 0.0105\ntorque = [1.0, 0.0, 0.0]'),
+        ex.ConfigError,
+        "plant.loads[0].time: 0.0105 s is not a whole number (>= 0) of control periods",
+    ),
+    Case(
+        "load: torque for the wrong arm",
+        lambda d: _part(d, '[[plant.loads]]\nkind = "impulse"\ntime = 0.01\nimpulse = [1.0, 0.0]'),
+        ex.ConfigError,
+        "plant.loads[0].impulse: has 2 entries; give 3",
+    ),
+    Case(
+        "load: a key of another kind",
+        lambda d: _part(
+            d, '[[plant.loads]]\nkind = "payload"\ntime = 0.01\nmass = 1.0\nforce = [1.0, 0.0, 0.0]'
+        ),
+        ex.ConfigError,
+        "plant.loads[0].force: is not a key of a 'payload' load",
+    ),
+]
+
+
 def _require(*texts: str):
     def check():
         from nnrobust.properties import run_properties
@@ -1591,6 +1644,7 @@ CASES = (
     + VIEWER_CASES
     + TUNE_CASES
     + CUSTOM_CASES
+    + PART_CASES
     + PROPERTY_CASES
     + FALSIFY_CASES
     + API_CASES

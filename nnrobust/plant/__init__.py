@@ -1,6 +1,6 @@
 """The simulated robot: true model, friction, disturbance, actuator limits, stops and sensors."""
 
-from .disturbance import SinusoidalDisturbance
+from .disturbance import Disturbance, SinusoidalDisturbance
 from .friction import Friction
 from .limits import JointStops, saturate
 from .plant import Plant
@@ -12,6 +12,7 @@ __all__ = [
     "JointStops",
     "Plant",
     "Sensor",
+    "Disturbance",
     "SinusoidalDisturbance",
     "saturate",
     "scaled_disturbance",

@@ -2,13 +2,26 @@
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
 import numpy as np
 
 
+class Disturbance(ABC):
+    """tau_d(t) of eq. (7), a torque per joint that the plant subtracts from the actuators': the
+    contract of the shipped disturbance and a user's (``plant.disturbance = "custom"``,
+    docs/extending.md), built as ``Class(robot, **plant.disturbance_params)`` with ``robot`` the
+    arm's model (``nq``, ``joint_names``, ``effort_limits``, ...).
+    """
+
+    @abstractmethod
+    def __call__(self, t: float) -> np.ndarray:
+        """tau_d(t), one torque per joint [N m or N]."""
+
+
 @dataclass(frozen=True)
-class SinusoidalDisturbance:
+class SinusoidalDisturbance(Disturbance):
     """tau_d,i(t) = sum_k A[i, k] sin(omega[k] t + phase[i, k]).
 
     Attributes:
@@ -60,3 +73,17 @@ class SinusoidalDisturbance:
     def __call__(self, t: float) -> np.ndarray:
         """tau_d(t) [N m]."""
         return (self.amplitude * np.sin(self.omega * t + self.phase)).sum(axis=1)
+
+
+@dataclass(frozen=True)
+class ScaledDisturbance(Disturbance):
+    """Another disturbance with joint i's torque times ``rows[i]`` (``plant.disturbance_scale`` and
+    ``plant.joint_disturbance_scales`` on a custom disturbance).
+    """
+
+    inner: Disturbance
+    rows: np.ndarray
+
+    def __call__(self, t: float) -> np.ndarray:
+        """The scaled torque, rows * tau_d(t) [N m]."""
+        return self.rows * np.asarray(self.inner(t), dtype=float)

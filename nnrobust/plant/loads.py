@@ -133,14 +133,14 @@ def _periods(path: str, value, period: float, positive: bool) -> float:
     return round(count) * period
 
 
-def _vector(path: str, value, size: int | None, unit: str) -> np.ndarray:
+def _vector(path: str, value, size: int | None, unit: str, per_joint: bool) -> np.ndarray:
     if not isinstance(value, list) or not all(
         isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v) for v in value
     ):
         raise ConfigError(path, f"expected a list of finite numbers [{unit}], got {value!r}")
     if size is not None and len(value) != size:
-        what = "joints" if unit.startswith("N m") and size != 3 else "entries"
-        raise ConfigError(path, f"has {len(value)} entries; give {size} ({what}) [{unit}]")
+        each = " (one per joint)" if per_joint else ""
+        raise ConfigError(path, f"has {len(value)} entries; give {size}{each} [{unit}]")
     return np.asarray(value, dtype=float)
 
 
@@ -179,15 +179,15 @@ def parse_loads(entries: list[dict] | None, period: float, n: int | None = None)
             if key not in entry:
                 raise ConfigError(f"{where}.{key}", f"a {kind!r} load needs one value per joint")
             unit = "N m" if kind == "step" else "N m s"
-            value = _vector(f"{where}.{key}", entry[key], n, unit)
+            value = _vector(f"{where}.{key}", entry[key], n, unit, per_joint=True)
             pulses.append(TorquePulse(start, end, value if kind == "step" else value / duration))
         elif kind == "wrench":
             if "force" not in entry and "moment" not in entry:
                 raise ConfigError(
                     f"{where}.force", "a 'wrench' load needs force [N] and/or moment [N m] (3 each)"
                 )
-            force = _vector(f"{where}.force", entry.get("force", [0.0] * 3), 3, "N")
-            moment = _vector(f"{where}.moment", entry.get("moment", [0.0] * 3), 3, "N m")
+            force = _vector(f"{where}.force", entry.get("force", [0.0] * 3), 3, "N", per_joint=False)
+            moment = _vector(f"{where}.moment", entry.get("moment", [0.0] * 3), 3, "N m", per_joint=False)
             wrenches.append(ToolWrench(start, end, np.concatenate([force, moment])))
         else:
             mass = entry.get("mass")

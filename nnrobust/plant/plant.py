@@ -9,7 +9,7 @@ import pinocchio as pin
 
 from ..model.base import DynamicsModel
 from ..model.pinocchio_model import PinocchioModel
-from .disturbance import SinusoidalDisturbance
+from .disturbance import Disturbance
 from .friction import Friction
 from .limits import JointStops, saturate
 from .loads import ExternalLoads, HeldLoads
@@ -45,7 +45,7 @@ class Plant:
 
     model: DynamicsModel
     friction: Friction
-    disturbance: SinusoidalDisturbance
+    disturbance: Disturbance
     torque_limit: np.ndarray | None = None
     stops: JointStops | None = None
     sensor: Sensor | None = field(default=None)
@@ -67,7 +67,7 @@ class Plant:
         sizes = [
             ("friction.viscous", self.friction.viscous.size),
             ("friction.coulomb", self.friction.coulomb.size),
-            ("disturbance", self.disturbance.n),
+            ("disturbance", np.size(self.disturbance(0.0))),
             ("sensor", self.sensor.position_noise.size),
         ]
         if self.torque_limit is not None:

@@ -334,7 +334,7 @@ def load_sweep(path: str | Path) -> SweepSpec:
     base = Path(spec.base)
     if base.suffix == ".toml" and not base.is_absolute():
         spec.base = str((path.parent / base).resolve())
-    from ..controllers.custom import class_file
+    from ..user_code import class_file
 
     for entry in spec.entries.values():  # a controller file is read from the sweep file's folder
         if "class" not in entry:

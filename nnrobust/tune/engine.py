@@ -214,7 +214,7 @@ def _with_controllers(sweep, names: list[str], tuned: dict | None = None):
     folder). A built-in law in ``tuned`` (name -> dotted-key settings) runs at those settings as
     the entry ``NAME-tuned``.
     """
-    from ..controllers.custom import class_file
+    from ..user_code import class_file
 
     entries, controllers = {}, []
     for name in names:
@@ -527,8 +527,9 @@ def _run_tune(
     sweep = sweep_of(spec)
     base = base_config(sweep)
     from ..config import apply_overrides
-    from ..controllers.custom import load_class
+    from ..controllers.base import Controller
     from ..experiment import build
+    from ..user_code import load_class
 
     controllers = {}
     for index, name in enumerate(sweep.controllers):  # every experiment validated before anything runs
@@ -537,7 +538,7 @@ def _run_tune(
         first = experiment(sweep, base, draw(sweep, 0), name)
         entry = sweep.entries.get(name, {"kind": name})
         if "class" in entry:  # its declared space; built once at the space's centre
-            space = custom_space(name, load_class(entry["class"]))
+            space = custom_space(name, load_class(entry["class"], Controller, "controller.class"))
             build(
                 apply_overrides(
                     first, space.overrides({p.name: math.sqrt(p.low * p.high) for p in space.params})
