@@ -16,6 +16,7 @@
 namespace nb = nanobind;
 using nnrobust::LoadedModel;
 using nnrobust::LoopSpec;
+using nnrobust::ModelSpec;
 using nnrobust::LoopTrace;
 using nnrobust::ThreeLinkSpec;
 
@@ -89,8 +90,23 @@ std::vector<LoopTrace> batch(std::vector<LoadedModel *> plants, std::vector<Load
 
 NB_MODULE(_loop, m) {
   m.doc() = "The compiled closed loop of nnrobust (Pinocchio C++ API).";
-  nb::class_<LoadedModel>(m, "LoadedModel", "A Pinocchio model received from Python by serialization.")
-      .def(nb::init<const std::string &, const std::string &>(), nb::arg("serialized"), nb::arg("frame"))
+  nb::class_<ModelSpec>(m, "ModelSpec", "A Pinocchio model as numbers (nnrobust/compiled.py, model_spec).")
+      .def(nb::init<>())
+      .def_rw("joint_types", &ModelSpec::joint_types)
+      .def_rw("joint_names", &ModelSpec::joint_names)
+      .def_rw("parents", &ModelSpec::parents)
+      .def_rw("axes", &ModelSpec::axes)
+      .def_rw("rotations", &ModelSpec::rotations)
+      .def_rw("translations", &ModelSpec::translations)
+      .def_rw("inertias", &ModelSpec::inertias)
+      .def_rw("armature", &ModelSpec::armature)
+      .def_rw("gravity", &ModelSpec::gravity)
+      .def_rw("frame_name", &ModelSpec::frame_name)
+      .def_rw("frame_joint", &ModelSpec::frame_joint)
+      .def_rw("frame_rotation", &ModelSpec::frame_rotation)
+      .def_rw("frame_translation", &ModelSpec::frame_translation);
+  nb::class_<LoadedModel>(m, "LoadedModel", "A Pinocchio model rebuilt on the C++ side from a ModelSpec.")
+      .def(nb::init<const ModelSpec &>(), nb::arg("spec"))
       .def_prop_ro("nq", &LoadedModel::nq)
       .def("mass", &LoadedModel::mass, nb::arg("q"), "M(q) [kg m^2].")
       .def("bias", &LoadedModel::bias, nb::arg("q"), nb::arg("v"), "V_m(q, v) v + G(q) [N m].")

@@ -86,11 +86,13 @@ inline void getJointJacobian(const Model &m, const Data &d, pinocchio::JointInde
       m, d, joint, rf, out);
 }
 
-// A frame's 6 x n Jacobian at q (kinematics computed).
+// A frame's 6 x n Jacobian at q: the joint Jacobians, then the frame's (two calls the library
+// instantiates; pinocchio::computeFrameJacobian with these types is not, and instantiating it cost
+// every unit that includes this header 0.75 GB of compiler memory).
 inline void computeFrameJacobian(const Model &m, Data &d, const Vec &q, pinocchio::FrameIndex frame,
                                  pinocchio::ReferenceFrame rf, Matrix6x &J) {
-  pinocchio::computeFrameJacobian<double, 0, pinocchio::JointCollectionDefaultTpl, Vec, Matrix6x>(m, d, q, frame, rf,
-                                                                                                  J);
+  computeJointJacobians(m, d, q);
+  getFrameJacobian(m, d, frame, rf, J);
 }
 
 }  // namespace nnrobust::pin

@@ -49,11 +49,53 @@ def unavailable_reason() -> str:
     return _REASON
 
 
-def load_model(model: pin.Model, frame: str):
-    """The C++ copy of a Pinocchio model (exactly this model: serialized with Pinocchio's own
-    ``saveToString``), with ``frame`` as its task frame.
+COMPILED_JOINTS = frozenset(
+    f"JointModel{kind}"
+    for kind in (
+        "RX", "RY", "RZ", "PX", "PY", "PZ", "RUBX", "RUBY", "RUBZ",
+        "RevoluteUnaligned", "PrismaticUnaligned", "RevoluteUnboundedUnaligned",
+    )
+)  # fmt: skip
+"""Joint types the C++ side rebuilds (csrc/model.cpp): every joint of a fixed-base arm's URDF."""
+
+
+def model_spec(model: pin.Model, frame: str):
+    """A Pinocchio model as the numbers its dynamics and kinematics read (joint types, parents,
+    placements, inertias, armature, gravity, the task frame): the C++ side rebuilds exactly this
+    model from them (csrc/model.cpp).
     """
-    return _module().LoadedModel(model.saveToString(), frame)
+    import numpy as np
+
+    spec = _module().ModelSpec()
+    joints = range(1, model.njoints)
+    kinds = [model.joints[j].shortname() for j in joints]
+    unknown = sorted(set(kinds) - COMPILED_JOINTS)
+    if unknown:
+        raise NNRobustError(f"a joint of type {unknown[0]} has no compiled twin")
+    spec.joint_types, spec.joint_names = kinds, [model.names[j] for j in joints]
+    spec.parents = [int(model.parents[j]) for j in joints]
+    axes = [getattr(model.joints[j].extract(), "axis", np.zeros(3)) for j in joints]
+    spec.axes = np.array(axes, dtype=float).reshape(-1, 3)
+    placements = [model.jointPlacements[j] for j in joints]
+    spec.rotations = np.vstack([p.rotation for p in placements]).reshape(-1, 3)
+    spec.translations = np.array([p.translation for p in placements], dtype=float).reshape(-1, 3)
+    inertias = [model.inertias[j] for j in joints]
+    spec.inertias = np.array(
+        [[i.mass, *i.lever, *np.asarray(i.inertia).ravel()] for i in inertias], dtype=float
+    ).reshape(-1, 13)
+    spec.armature = np.asarray(model.armature, dtype=float)
+    spec.gravity = np.asarray(model.gravity.linear, dtype=float)
+    task = model.frames[model.getFrameId(frame)]
+    spec.frame_name, spec.frame_joint = frame, int(task.parentJoint)
+    spec.frame_rotation, spec.frame_translation = task.placement.rotation, task.placement.translation
+    return spec
+
+
+def load_model(model: pin.Model, frame: str):
+    """The C++ copy of a Pinocchio model (exactly this model, rebuilt from :func:`model_spec`),
+    with ``frame`` as its task frame.
+    """
+    return _module().LoadedModel(model_spec(model, frame))
 
 
 def floor_loop(model, q0, v0, steps: int, dt: float):
@@ -141,7 +183,9 @@ def _plant_refusal(setup) -> str:
     if not available():
         return unavailable_reason()
     config, criterion = setup.config, setup.criterion
+    kinds = {j.shortname() for j in setup.plant.model.pinocchio_model.joints[1:]}
     checks = [
+        (kinds <= COMPILED_JOINTS, f"a joint of type {min(kinds - COMPILED_JOINTS, default='')}"),
         (isinstance(setup.plant.disturbance, SinusoidalDisturbance), "a custom disturbance"),
         (config.simulation.integrator == "rk4", f"the integrator {config.simulation.integrator!r}"),
         (setup.robot.task in ("planar", "position", "pose"), f"a {setup.robot.task!r} task"),
