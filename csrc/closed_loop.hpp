@@ -13,6 +13,8 @@
 
 namespace nnrobust {
 
+inline double sign(double x) { return (x > 0) - (x < 0); }  // numpy.sign
+
 // Row-major: a step reads or writes one contiguous row of each per-step array (a column-major
 // steps x n array would make every recorded value a cache miss, which dominated the step for
 // long chains).

@@ -55,9 +55,8 @@ LoadedModel::LoadedModel(const ModelSpec &s) {
   model.gravity.linear(s.gravity);
   // append_inertia false: adding the frame's zero inertia to its joint's would recompute that
   // joint's centre of mass and move it by an ulp
-  frame = model.addFrame(
-      pinocchio::Frame(s.frame_name, s.frame_joint, placement(s.frame_rotation, s.frame_translation), pinocchio::OP_FRAME),
-      false);
+  const pinocchio::SE3 at = placement(s.frame_rotation, s.frame_translation);
+  frame = model.addFrame(pinocchio::Frame(s.frame_name, s.frame_joint, at, pinocchio::OP_FRAME), false);
   data = pinocchio::Data(model);
 }
 

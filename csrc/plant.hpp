@@ -15,8 +15,6 @@
 
 namespace nnrobust {
 
-inline double sign(double x) { return (x > 0) - (x < 0); }
-
 using Modes = Eigen::VectorXi;  // per joint: +1 / -1 slipping, 0 held (nnrobust.plant.stick_slip)
 
 struct Plant {

@@ -1,0 +1,156 @@
+#include "controllers.hpp"
+
+#include <algorithm>
+
+#include <Eigen/Eigenvalues>
+#include <pinocchio/spatial/explog.hpp>
+
+namespace nnrobust {
+
+Controller::Controller(const LoopSpec &spec, Nominal &model) : s(spec), nominal(model), criteria{spec} {
+  L = static_cast<int>(spec.basis_bias) + static_cast<int>(spec.basis_centers.size());
+}
+
+// AdditiveRBFBasis.__call__
+Vector Controller::basis(const Vector &in) const {
+  Vector phi(L);
+  int i = 0;
+  if (s.basis_bias) phi[i++] = 1.0;
+  for (int j = 0; j < s.basis_centers.rows(); ++j)
+    for (int c = 0; c < s.basis_centers.cols(); ++c) {
+      const double d = in[j] - s.basis_centers(j, c);
+      phi[i++] = std::exp(-(d * d) * s.basis_inv2w2[j]);
+    }
+  return phi;
+}
+
+// DampedPseudoInverse.factor
+Matrix Controller::pinv_factor(const Matrix &J, double &lam2) const {
+  const Matrix JJt = J * J.transpose();
+  const double sigma_min_sq =
+      std::max(Eigen::SelfAdjointEigenSolver<Matrix>(JJt, Eigen::EigenvaluesOnly).eigenvalues()[0], 0.0);
+  const double thr_sq = s.pinv_threshold * s.pinv_threshold;
+  lam2 = sigma_min_sq >= thr_sq ? 0.0 : s.pinv_max_damping * s.pinv_max_damping * (1.0 - sigma_min_sq / thr_sq);
+  return (JJt + lam2 * Matrix::Identity(J.rows(), J.rows())).inverse();
+}
+
+// EllipseTrajectory or PiecewisePolynomialPath.__call__
+void Controller::path(double t, Vector &pd, Vector &dpd, Vector &ddpd) const {
+  if (s.path_kind != "piecewise") {
+    const double ph = s.omega * t + s.phase, cw = std::cos(ph), sw = std::sin(ph);
+    pd = s.center + s.axis_a * cw + s.axis_b * sw;
+    dpd = s.omega * (-s.axis_a * sw + s.axis_b * cw);
+    ddpd = -(s.omega * s.omega) * (s.axis_a * cw + s.axis_b * sw);
+    return;
+  }
+  const Vector &b = s.path_breaks;
+  const int pieces = static_cast<int>(b.size()) - 1, order = static_cast<int>(s.path_coefficients.rows()) / pieces;
+  int p = 0;
+  double h = 0.0;
+  bool moving = false;
+  if (t >= b[pieces]) {
+    p = pieces - 1;
+    h = b[pieces] - b[p];
+  } else if (t > b[0]) {
+    p = static_cast<int>(std::upper_bound(b.data(), b.data() + b.size(), t) - b.data()) - 1;
+    h = t - b[p];
+    moving = true;
+  }
+  const int m = static_cast<int>(s.path_coefficients.cols());
+  pd = s.path_coefficients.row(p * order + order - 1).transpose();
+  dpd = Vector::Zero(m);
+  ddpd = Vector::Zero(m);
+  for (int j = order - 2; j >= 0; --j) {
+    ddpd = ddpd * h + 2 * dpd;
+    dpd = dpd * h + pd;
+    pd = pd * h + s.path_coefficients.row(p * order + j).transpose();
+  }
+  if (!moving) {
+    dpd.setZero();
+    ddpd.setZero();
+  }
+}
+
+// TaskSpaceController.compute (eq. 9 with u_0 and the null-space term of eq. 3), or TaskSpacePD's
+Output Controller::compute(double t, const Vector &q, const Vector &v, const Vector &z) {
+  Output out;
+  out.z = z;
+  const TaskState ts = nominal.task_state(q, v);
+  const Matrix &J = ts.J;
+  Vector pd, dpd, ddpd;
+  path(t, pd, dpd, ddpd);
+  Vector e, dxd, ddxd;
+  if (s.pose) {  // PoseTrajectory.__call__ and tasks.task_error("pose")
+    const double arg = s.rotation_omega * t + s.rotation_phase;
+    const double theta = s.rotation_amplitude * std::sin(arg);
+    const double dtheta = s.rotation_amplitude * s.rotation_omega * std::cos(arg);
+    const double ddtheta = -s.rotation_amplitude * s.rotation_omega * s.rotation_omega * std::sin(arg);
+    const Eigen::Matrix3d Rd = pinocchio::exp3(Vector3d(theta * s.rotation_axis)) * s.rotation0;
+    e.resize(6);
+    dxd.resize(6);
+    ddxd.resize(6);
+    e << ts.x - pd, pinocchio::log3(Eigen::Matrix3d(ts.R * Rd.transpose()));
+    dxd << dpd, dtheta * s.rotation_axis;
+    ddxd << ddpd, ddtheta * s.rotation_axis;
+  } else {
+    e = ts.x - pd;
+    dxd = dpd;
+    ddxd = ddpd;
+  }
+  const Vector de = J * v - dxd;
+  double lam2 = 0.0;
+  const Matrix inv = pinv_factor(J, lam2);
+  const Matrix J_pinv = J.transpose() * inv;
+  out.damping = lam2;
+  if (s.law == "pd") {  // TaskSpacePD.compute
+    Vector tau = J.transpose() * (-s.pd_Kp * e - s.pd_Kd * de) + nominal.gravity(q);
+    tau -= s.null_damping * (v - J_pinv * (J * v));
+    out.tau = tau;
+    return out;
+  }
+  Vector y(2 * e.size());
+  y << e, de;
+  Vector u0 = Vector::Zero(e.size());
+  if (s.robust == "nn") {
+    const Vector w = s.BtP * y;
+    Vector in(s.basis_joint ? 2 * q.size() : y.size());
+    if (s.basis_joint) in << q, v;
+    else in = y;
+    const Vector phi = basis(in);
+    const double rho = z.head(L).dot(phi);
+    const double eps = std::max(z[L], 0.0);
+    const double wn = w.norm(), denom = rho * wn + eps;
+    if (denom > 0.0) u0 = -(s.law_corrected ? rho * rho : rho) * w / denom;
+    out.rho_hat = rho;
+    out.eps = z[L];
+    out.z_norm = z.head(L).norm();
+    // NNCompensator.advance: exact solution over the period with (w, phi) held
+    const Vector drive = wn * phi;
+    if (s.sigma > 0.0) {
+      const double decay = std::exp(-s.F * s.sigma * s.period);
+      out.z.head(L) = z.head(L) * decay + (drive / s.sigma) * (1.0 - decay);
+    } else {
+      out.z.head(L) = z.head(L) + s.F * s.period * drive;
+    }
+    out.z[L] = s.eps_min + (z[L] - s.eps_min) * std::exp(-s.gamma * s.period);
+  } else if (s.robust == "sliding") {
+    const Vector w = s.BtP * y;
+    u0 = -s.sliding_gain * w / std::max(w.norm(), s.sliding_boundary);
+  }
+  const Vector task_acc = ddxd - ts.jdot_v - s.Kv * de - s.Kp * e + u0;
+  Vector a = J_pinv * task_acc;
+  if (s.k != 0.0) {
+    const Vector grad = s.criteria.empty() ? Vector(Vector::Zero(q.size())) : criteria.gradient(nominal, q, ts);
+    const Vector zz = grad - v;
+    a += s.k * (zz - J_pinv * (J * zz));
+  }
+  Vector friction(q.size());
+  for (int i = 0; i < q.size(); ++i) {
+    const double sg = s.coulomb_smoothing <= 0 ? sign(v[i]) : std::clamp(v[i] / s.coulomb_smoothing, -1.0, 1.0);
+    friction[i] = s.nominal_viscous[i] * v[i] + s.nominal_coulomb[i] * sg;
+  }
+  out.tau = nominal.inverse_dynamics(q, v, a) + friction;
+  return out;
+}
+
+}  // namespace nnrobust

@@ -1,0 +1,36 @@
+// The control laws on the C++ side: the twins of nnrobust/controllers (TaskSpaceController's eq. (9)
+// with no u_0, the NN compensator or the sliding-mode term; TaskSpacePD), with the desired path of
+// nnrobust/trajectories.py.
+#pragma once
+
+#include <cmath>
+
+#include "nominal.hpp"
+#include "subtasks.hpp"
+
+namespace nnrobust {
+
+struct Output {
+  Vector tau;
+  Vector z;
+  double rho_hat = NAN, eps = NAN, z_norm = NAN, damping = 0.0;
+};
+
+struct Controller {
+  const LoopSpec &s;
+  Nominal &nominal;
+  Criteria criteria;
+  int L = 0;
+
+  Controller(const LoopSpec &spec, Nominal &model);
+  // AdditiveRBFBasis.__call__: [1, exp(-(s_j - c_jk)^2 inv2w2_j) for j, k]
+  Vector basis(const Vector &in) const;
+  // DampedPseudoInverse.factor: ((J J^T + lambda^2 I)^-1, lambda^2)
+  Matrix pinv_factor(const Matrix &J, double &lam2) const;
+  // the position path at t: EllipseTrajectory or PiecewisePolynomialPath.__call__ (Horner's rule)
+  void path(double t, Vector &pd, Vector &dpd, Vector &ddpd) const;
+  // the law's torque, signals and next state at t from the measured (q, v) and the state z
+  Output compute(double t, const Vector &q, const Vector &v, const Vector &z);
+};
+
+}  // namespace nnrobust

@@ -1,0 +1,206 @@
+#include "nominal.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "pin_calls.hpp"
+
+namespace nnrobust {
+
+// ---- ThreeLinkPlanarModel (nnrobust/model/three_link.py) ----------------------------------------
+Matrix3d ThreeLink::mass(const Vector3d &q) const {
+  const double c2 = std::cos(q[1]), c3 = std::cos(q[2]), c23 = std::cos(q[1] + q[2]);
+  const double m11 = s.beta[0] + 2 * s.p[0] * c2 + 2 * s.p[1] * c23 + 2 * s.p[2] * c3;
+  const double m12 = s.beta[1] + s.p[0] * c2 + s.p[1] * c23 + 2 * s.p[2] * c3;
+  const double m13 = s.beta[2] + s.p[1] * c23 + s.p[2] * c3;
+  const double m22 = s.beta[1] + 2 * s.p[2] * c3;
+  const double m23 = s.beta[2] + s.p[2] * c3;
+  Matrix3d M;
+  M << m11, m12, m13, m12, m22, m23, m13, m23, s.beta[2];
+  return M;
+}
+
+Vector3d ThreeLink::bias(const Vector3d &q, const Vector3d &v) const {
+  const double s2 = std::sin(q[1]), s3 = std::sin(q[2]), s23 = std::sin(q[1] + q[2]);
+  const double a = s.p[0] * s2 + s.p[1] * s23, b = s.p[1] * s23 + s.p[2] * s3, c = s.p[2] * s3;
+  const double v1 = v[0], v2 = v[1], v3 = v[2];
+  Matrix3d V;
+  V << -a * v2 - b * v3, -a * (v1 + v2) - b * v3, -b * (v1 + v2 + v3),
+      a * v1 - c * v3, -c * v3, -c * (v1 + v2 + v3),
+      b * v1 + c * v2, c * (v1 + v2), 0.0;
+  Vector3d theta(q[0], q[0] + q[1], q[0] + q[1] + q[2]);
+  Vector3d dU;
+  for (int j = 0; j < 3; ++j)
+    dU[j] = s.gamma[j] * (s.gravity[0] * std::sin(theta[j]) - s.gravity[1] * std::cos(theta[j]));
+  Vector3d G(dU[0] + dU[1] + dU[2], dU[1] + dU[2], dU[2]);
+  return V * v + G;
+}
+
+void ThreeLink::task_state(const Vector3d &q, const Vector3d &v, Vector2d &x, Matrix23 &J, Vector2d &jdot_v) const {
+  Vector3d theta(q[0], q[0] + q[1], q[0] + q[1] + q[2]);
+  Vector3d w(v[0], v[0] + v[1], v[0] + v[1] + v[2]);
+  Vector3d c = theta.array().cos(), sn = theta.array().sin();
+  x << s.lengths.dot(c), s.lengths.dot(sn);
+  Eigen::Matrix<double, 2, 3> cols;
+  cols.row(0) = -(s.lengths.array() * sn.array()).matrix().transpose();
+  cols.row(1) = (s.lengths.array() * c.array()).matrix().transpose();
+  J.col(2) = cols.col(2);
+  J.col(1) = cols.col(2) + cols.col(1);
+  J.col(0) = J.col(1) + cols.col(0);
+  Vector3d lw2 = (s.lengths.array() * w.array().square()).matrix();
+  jdot_v << -c.dot(lw2), -sn.dot(lw2);
+}
+
+Matrix23 ThreeLink::jacobian_tail(const Vector3d &q) const {
+  Vector3d theta(q[0], q[0] + q[1], q[0] + q[1] + q[2]);
+  Eigen::Matrix<double, 2, 3> terms, tail;
+  for (int j = 0; j < 3; ++j) terms.col(j) << -s.lengths[j] * std::cos(theta[j]), -s.lengths[j] * std::sin(theta[j]);
+  tail.col(2) = terms.col(2);
+  tail.col(1) = terms.col(2) + terms.col(1);
+  tail.col(0) = tail.col(1) + terms.col(0);
+  return tail;
+}
+
+// ---- manipulability.det and adjugate -------------------------------------------------------------
+double det_small(const Matrix &A) {
+  if (A.rows() == 1) return A(0, 0);
+  if (A.rows() == 2) return A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0);
+  if (A.rows() > 3) return A.determinant();
+  const Vector3d a0 = A.col(0), a1 = A.col(1), a2 = A.col(2);
+  return a0.dot(a1.cross(a2));
+}
+
+Matrix adjugate_small(const Matrix &A) {
+  Matrix adj(A.rows(), A.cols());
+  if (A.rows() == 1) {
+    adj(0, 0) = 1.0;
+  } else if (A.rows() == 2) {
+    adj << A(1, 1), -A(0, 1), -A(1, 0), A(0, 0);
+  } else {
+    const Vector3d a0 = A.col(0), a1 = A.col(1), a2 = A.col(2);
+    adj.row(0) = a1.cross(a2).transpose();
+    adj.row(1) = a2.cross(a0).transpose();
+    adj.row(2) = a0.cross(a1).transpose();
+  }
+  return adj;
+}
+
+// ---- the closed-form nominal model ----------------------------------------------------------------
+TaskState ClosedFormNominal::task_state(const Vector &q, const Vector &v) {
+  Vector2d x, jdot_v;
+  Matrix23 J;
+  model.task_state(q, v, x, J, jdot_v);
+  return {x, jdot_v, J};
+}
+
+Vector ClosedFormNominal::inverse_dynamics(const Vector &q, const Vector &v, const Vector &a) {
+  return model.mass(q) * Vector3d(a) + model.bias(q, v);
+}
+
+Vector ClosedFormNominal::gravity(const Vector &q) { return model.bias(q, Vector3d::Zero()); }
+
+// einsum("ij,jlk,il->k", adj, H, J) x 2 with H[:, l, k] = tail[:, max(l, k)]
+Vector ClosedFormNominal::det_gradient(const Vector &q, const TaskState &ts) {
+  const Matrix &J = ts.J;
+  const Matrix23 tail = model.jacobian_tail(q);
+  const Matrix adj = adjugate_small(J * J.transpose());
+  Vector grad = Vector::Zero(3);
+  for (int k = 0; k < 3; ++k) {
+    double sum = 0.0;
+    for (int i = 0; i < 2; ++i)
+      for (int j = 0; j < 2; ++j)
+        for (int l = 0; l < 3; ++l) sum += adj(i, j) * tail(j, std::max(l, k)) * J(i, l);
+    grad[k] = 2.0 * sum;
+  }
+  return grad;
+}
+
+// ThreeLinkPlanarModel.chain_points / chain_jacobians
+void ClosedFormNominal::chain(const Vector &q, Matrix &points, std::vector<Matrix> &jacobians) {
+  const Vector3d theta(q[0], q[0] + q[1], q[0] + q[1] + q[2]);
+  points = Matrix::Zero(4, 3);
+  jacobians.assign(4, Matrix::Zero(3, 3));
+  for (int j = 1; j < 4; ++j) {
+    points.row(j) = points.row(j - 1);
+    points(j, 0) += model.s.lengths[j - 1] * std::cos(theta[j - 1]);
+    points(j, 1) += model.s.lengths[j - 1] * std::sin(theta[j - 1]);
+    for (int k = 0; k < j; ++k)
+      for (int i = k; i < j; ++i) {
+        jacobians[j](0, k) += -model.s.lengths[i] * std::sin(theta[i]);
+        jacobians[j](1, k) += model.s.lengths[i] * std::cos(theta[i]);
+      }
+  }
+}
+
+// ---- PinocchioModel (nnrobust/model/pinocchio_model.py) ------------------------------------------
+TaskState PinocchioNominal::task_state(const Vector &q, const Vector &v) {
+  pin::forwardKinematics(m.model, m.data, q, v, Vector::Zero(m.model.nv));
+  pin::computeJointJacobians(m.model, m.data);
+  const auto &placement = pin::updateFramePlacement(m.model, m.data, m.frame);
+  const auto acc = pin::getFrameClassicalAcceleration(m.model, m.data, m.frame, pinocchio::LOCAL_WORLD_ALIGNED);
+  TaskState ts;
+  pin::Matrix6x J6 = pin::Matrix6x::Zero(6, m.model.nv);
+  pin::getFrameJacobian(m.model, m.data, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, J6);
+  ts.J6 = J6;
+  ts.x = placement.translation().head(std::min(rows, 3));
+  ts.jdot_v = acc.toVector().head(rows);
+  ts.J = ts.J6.topRows(rows);
+  ts.R = placement.rotation();
+  return ts;
+}
+
+Vector PinocchioNominal::inverse_dynamics(const Vector &q, const Vector &v, const Vector &a) {
+  return pin::rnea(m.model, m.data, q, v, a);
+}
+
+Vector PinocchioNominal::gravity(const Vector &q) { return pin::computeGeneralizedGravity(m.model, m.data, q); }
+
+// grad_k = 2 (<u_k, P_k> + <w_k, S_k>), docs/equations.md "Manipulability gradient", from the
+// frame Jacobian the task state already holds (no second kinematics pass)
+Vector PinocchioNominal::det_gradient(const Vector &, const TaskState &ts) {
+  const Matrix &J6 = ts.J6;
+  const Matrix &J = ts.J;
+  Matrix W6 = Matrix::Zero(6, J6.cols());
+  W6.topRows(rows) = adjugate_small(J * J.transpose()) * J;
+  const int n = static_cast<int>(J6.cols());
+  Vector grad(n);
+  Vector3d prefix = Vector3d::Zero(), suffix = Vector3d::Zero();
+  std::vector<Vector3d> after(n);
+  for (int l = 0; l < n; ++l) {
+    const Vector3d u = J6.col(l).head<3>(), w = J6.col(l).tail<3>();
+    after[l] = u.cross(Vector3d(W6.col(l).head<3>())) + w.cross(Vector3d(W6.col(l).tail<3>()));
+  }
+  std::vector<Vector3d> suffixes(n);
+  for (int l = n - 1; l >= 0; --l) {
+    suffix += after[l];
+    suffixes[l] = suffix;
+  }
+  for (int k = 0; k < n; ++k) {
+    const Vector3d u = J6.col(k).head<3>(), w = J6.col(k).tail<3>();
+    grad[k] = 2.0 * (u.dot(prefix) + w.dot(suffixes[k]));
+    prefix += Vector3d(W6.col(k).head<3>()).cross(w);
+  }
+  return grad;
+}
+
+// PinocchioModel.chain_points / chain_jacobians
+void PinocchioNominal::chain(const Vector &q, Matrix &points, std::vector<Matrix> &jacobians) {
+  const int joints = m.model.njoints - 1, n = m.model.nv;
+  pin::computeJointJacobians(m.model, m.data, q);
+  pin::updateFramePlacement(m.model, m.data, m.frame);
+  points.resize(joints + 1, 3);
+  jacobians.assign(joints + 1, Matrix::Zero(3, n));
+  pin::Matrix6x J = pin::Matrix6x::Zero(6, n);
+  for (int j = 1; j <= joints; ++j) {
+    points.row(j - 1) = m.data.oMi[j].translation().transpose();
+    J.setZero();
+    pin::getJointJacobian(m.model, m.data, j, pinocchio::LOCAL_WORLD_ALIGNED, J);
+    jacobians[j - 1] = J.topRows(3);
+  }
+  points.row(joints) = m.data.oMf[m.frame].translation().transpose();
+  J.setZero();
+  pin::getFrameJacobian(m.model, m.data, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, J);
+  jacobians[joints] = J.topRows(3);
+}
+
+}  // namespace nnrobust

@@ -1,0 +1,72 @@
+// The controller's nominal models on the C++ side: the twins of nnrobust/model (three_link.py's
+// closed form and pinocchio_model.py), behind one interface the controller calls.
+#pragma once
+
+#include <vector>
+
+#include "closed_loop.hpp"
+
+namespace nnrobust {
+
+using Eigen::Matrix3d;
+using Eigen::Vector2d;
+using Eigen::Vector3d;
+using Matrix23 = Eigen::Matrix<double, 2, 3>;
+
+// nnrobust.model.three_link.ThreeLinkPlanarModel: the paper's closed-form nominal model.
+struct ThreeLink {
+  const ThreeLinkSpec &s;
+
+  Matrix3d mass(const Vector3d &q) const;
+  Vector3d bias(const Vector3d &q, const Vector3d &v) const;  // V_m(q, v) v + G(q)
+  // (x, J, J'q') of ThreeLinkPlanarModel.task_state
+  void task_state(const Vector3d &q, const Vector3d &v, Vector2d &x, Matrix23 &J, Vector2d &jdot_v) const;
+  // H[:, i, k] = dJ_i/dq_k = tail[:, max(i, k)], tail[:, j] = -sum_{l >= j} l_l (cos, sin) theta_l
+  Matrix23 jacobian_tail(const Vector3d &q) const;
+};
+
+struct TaskState {
+  Vector x, jdot_v;  // x: the frame's position (2 or 3 entries)
+  Matrix J;          // m x n
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();  // the frame's orientation (pose tasks)
+  Matrix J6;         // the whole 6 x n frame Jacobian, world-aligned (Pinocchio models only)
+};
+
+// det and adjugate of J J^T, shared by both nominal models and the recording
+double det_small(const Matrix &A);      // manipulability.det: closed form for m <= 3, else LU
+Matrix adjugate_small(const Matrix &A);  // manipulability.adjugate for m <= 3
+
+struct Nominal {
+  virtual ~Nominal() = default;
+  virtual TaskState task_state(const Vector &q, const Vector &v) = 0;
+  virtual Vector inverse_dynamics(const Vector &q, const Vector &v, const Vector &a) = 0;  // M a + N
+  virtual Vector gravity(const Vector &q) = 0;
+  // d det(J J^T)/dq at the q of `ts` (the task state just computed)
+  virtual Vector det_gradient(const Vector &q, const TaskState &ts) = 0;
+  // chain_points (rows: joint origins, then the task frame) and chain_jacobians (3 x n each)
+  virtual void chain(const Vector &q, Matrix &points, std::vector<Matrix> &jacobians) = 0;
+};
+
+struct ClosedFormNominal : Nominal {
+  ThreeLink model;
+  explicit ClosedFormNominal(const ThreeLinkSpec &s) : model{s} {}
+  TaskState task_state(const Vector &q, const Vector &v) override;
+  Vector inverse_dynamics(const Vector &q, const Vector &v, const Vector &a) override;
+  Vector gravity(const Vector &q) override;
+  Vector det_gradient(const Vector &q, const TaskState &ts) override;
+  void chain(const Vector &q, Matrix &points, std::vector<Matrix> &jacobians) override;
+};
+
+// PinocchioModel: task_state, inverse_dynamics (RNEA), gravity, det_jjt_gradient (O(n))
+struct PinocchioNominal : Nominal {
+  LoadedModel &m;
+  int rows;
+  PinocchioNominal(LoadedModel &model, int task_rows) : m(model), rows(task_rows) {}
+  TaskState task_state(const Vector &q, const Vector &v) override;
+  Vector inverse_dynamics(const Vector &q, const Vector &v, const Vector &a) override;
+  Vector gravity(const Vector &q) override;
+  Vector det_gradient(const Vector &q, const TaskState &ts) override;
+  void chain(const Vector &q, Matrix &points, std::vector<Matrix> &jacobians) override;
+};
+
+}  // namespace nnrobust
