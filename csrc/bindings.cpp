@@ -174,4 +174,20 @@ NB_MODULE(_loop, m) {
   m.def("floor_loop", &nnrobust::floor_loop, nb::arg("model"), nb::arg("q0"), nb::arg("v0"),
         nb::arg("steps"), nb::arg("dt"), nb::call_guard<nb::gil_scoped_release>(),
         "The bare C++ loop (RNEA + frame kinematics + 4 ABA per step); returns the final [q, v].");
+  // each compiled component alone, for the twin tests (tests/test_twins.py)
+  nb::class_<nnrobust::ControlStep>(m, "ControlStep", "One compiled control step's output.")
+      .def_ro("tau", &nnrobust::ControlStep::tau)
+      .def_ro("z", &nnrobust::ControlStep::z)
+      .def_ro("rho_hat", &nnrobust::ControlStep::rho_hat)
+      .def_ro("eps", &nnrobust::ControlStep::eps)
+      .def_ro("damping", &nnrobust::ControlStep::damping);
+  m.def("twin_control", &nnrobust::twin_control, nb::arg("nominal").none(), nb::arg("spec"), nb::arg("t"),
+        nb::arg("q"), nb::arg("v"), nb::arg("z"), "The compiled law's output and next state at one state.");
+  m.def("twin_criterion_gradient", &nnrobust::twin_criterion_gradient, nb::arg("nominal").none(), nb::arg("spec"),
+        nb::arg("q"), "The compiled weighted criterion's gradient on the nominal model at q.");
+  m.def("twin_criterion_value", &nnrobust::twin_criterion_value, nb::arg("robot"), nb::arg("spec"), nb::arg("q"),
+        "The compiled weighted criterion's value on the true robot at q (as recorded).");
+  m.def("twin_plant_acceleration", &nnrobust::twin_plant_acceleration, nb::arg("plant"), nb::arg("spec"),
+        nb::arg("t"), nb::arg("q"), nb::arg("v"), nb::arg("tau"),
+        "The compiled plant's q'' at (t, q, v) under the applied torque tau, the loads held from t.");
 }

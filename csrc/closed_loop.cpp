@@ -5,8 +5,11 @@
 #include <chrono>
 #include <cmath>
 #include <deque>
+#include <exception>
 #include <limits>
 #include <memory>
+#include <mutex>
+#include <stdexcept>
 #include <thread>
 
 #include "controllers.hpp"
@@ -37,6 +40,14 @@ void record_kinematics(LoadedModel &m, const LoopSpec &s, const Criteria &criter
     const Matrix points = Eigen::Map<const Rows>(tr.chain.row(k).data(), joints + 1, 3);
     tr.h[k] = criteria.value(q, J, points);
   }
+}
+
+// The controller's nominal model: the closed form, or the Pinocchio model `nominal_model`.
+std::unique_ptr<Nominal> make_nominal(const LoopSpec &s, LoadedModel *nominal_model) {
+  if (s.nominal_kind == "closed-form") return std::make_unique<ClosedFormNominal>(s.nominal);
+  if (s.nominal_kind != "pinocchio") throw std::invalid_argument("LoopSpec.nominal_kind: unknown " + s.nominal_kind);
+  if (nominal_model == nullptr) throw std::invalid_argument("nominal_kind 'pinocchio' needs the nominal model");
+  return std::make_unique<PinocchioNominal>(*nominal_model, s.m);
 }
 
 // simulation.step_rate: the fastest joint's speed, or the ring frequency of a stop a joint is at or
@@ -77,9 +88,7 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
   tr.chain = Rows::Constant(steps, 3 * (model.model.njoints), nan);
   tr.manipulability = tr.rho_hat;
   tr.h = tr.rho_hat;
-  std::unique_ptr<Nominal> nominal;
-  if (s.nominal_kind == "pinocchio") nominal = std::make_unique<PinocchioNominal>(*nominal_model, s.m);
-  else nominal = std::make_unique<ClosedFormNominal>(s.nominal);
+  const std::unique_ptr<Nominal> nominal = make_nominal(s, nominal_model);
   Controller controller(s, *nominal);
   Plant plant{model, s};
   std::unique_ptr<StickSlipIntegrator> stick_slip;
@@ -190,6 +199,36 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
   return tr;
 }
 
+ControlStep twin_control(LoadedModel *nominal_model, const LoopSpec &s, double t, const Vector &q, const Vector &v,
+                         const Vector &z) {
+  const std::unique_ptr<Nominal> nominal = make_nominal(s, nominal_model);
+  Controller controller(s, *nominal);
+  const Output out = controller.compute(t, q, v, z);
+  return {out.tau, out.z, out.rho_hat, out.eps, out.damping};
+}
+
+Vector twin_criterion_gradient(LoadedModel *nominal_model, const LoopSpec &s, const Vector &q) {
+  const std::unique_ptr<Nominal> nominal = make_nominal(s, nominal_model);
+  const Criteria criteria(s);
+  return criteria.gradient(*nominal, q, nominal->task_state(q, Vector::Zero(q.size())));
+}
+
+double twin_criterion_value(LoadedModel &robot, const LoopSpec &s, const Vector &q) {
+  const Criteria criteria(s);
+  LoopTrace tr;
+  tr.chain = Rows::Zero(1, 3 * robot.model.njoints);
+  tr.manipulability = tr.h = Vector::Constant(1, std::numeric_limits<double>::quiet_NaN());
+  record_kinematics(robot, s, criteria, q, 0, tr);
+  return tr.h[0];
+}
+
+Vector twin_plant_acceleration(LoadedModel &model, const LoopSpec &s, double t, const Vector &q, const Vector &v,
+                               const Vector &tau) {
+  Plant plant{model, s};
+  plant.begin_period(t);
+  return plant.acceleration(t, q, v, tau);
+}
+
 namespace {
 std::atomic<bool> batch_stop{false};
 bool batch_stopped() { return batch_stop.load(); }
@@ -203,10 +242,19 @@ std::vector<LoopTrace> run_batch(const std::vector<BatchItem> &items, int thread
   const int count = std::max(1, std::min<int>(threads, static_cast<int>(items.size())));
   std::vector<std::thread> pool;
   running = count;
+  std::exception_ptr failure;  // the first error of any run, raised in the calling thread
+  std::mutex failure_lock;
   for (int w = 0; w < count; ++w)
     pool.emplace_back([&]() {
-      for (size_t i = next++; i < items.size(); i = next++)
-        traces[i] = run_loop(*items[i].plant, items[i].nominal, *items[i].spec, &batch_stopped);
+      for (size_t i = next++; i < items.size(); i = next++) {
+        try {
+          traces[i] = run_loop(*items[i].plant, items[i].nominal, *items[i].spec, &batch_stopped);
+        } catch (...) {
+          const std::lock_guard<std::mutex> hold(failure_lock);
+          if (!failure) failure = std::current_exception();
+          batch_stop = true;
+        }
+      }
       --running;
     });
   while (running.load() > 0) {  // the calling thread watches for Ctrl-C and SIGTERM
@@ -215,6 +263,7 @@ std::vector<LoopTrace> run_batch(const std::vector<BatchItem> &items, int thread
   }
   for (auto &t : pool) t.join();
   batch_stop = false;
+  if (failure) std::rethrow_exception(failure);
   return traces;
 }
 

@@ -141,6 +141,21 @@ using ExternalLaw = std::function<bool(double t, const Vector &q, const Vector &
 LoopTrace run_loop(LoadedModel &plant, LoadedModel *nominal, const LoopSpec &spec, bool (*interrupted)(),
                    const ExternalLaw *external = nullptr);
 
+// Each compiled component alone, on one state, for the per-component twin tests
+// (tests/test_twins.py): the law's output and next state (TaskSpaceController / TaskSpacePD
+// .compute), the weighted criterion's gradient on the nominal model and value on the true robot,
+// and the plant's q'' (Plant.acceleration, the loads held from t).
+struct ControlStep {
+  Vector tau, z;
+  double rho_hat, eps, damping;
+};
+ControlStep twin_control(LoadedModel *nominal, const LoopSpec &spec, double t, const Vector &q, const Vector &v,
+                         const Vector &z);
+Vector twin_criterion_gradient(LoadedModel *nominal, const LoopSpec &spec, const Vector &q);
+double twin_criterion_value(LoadedModel &robot, const LoopSpec &spec, const Vector &q);
+Vector twin_plant_acceleration(LoadedModel &plant, const LoopSpec &spec, double t, const Vector &q, const Vector &v,
+                               const Vector &tau);
+
 // One run of a batch: its own models (each LoadedModel has its own Pinocchio Data) and spec.
 struct BatchItem {
   LoadedModel *plant;

@@ -1,14 +1,24 @@
 #include "controllers.hpp"
 
 #include <algorithm>
+#include <stdexcept>
 
 #include <Eigen/Eigenvalues>
 #include <pinocchio/spatial/explog.hpp>
 
 namespace nnrobust {
 
-Controller::Controller(const LoopSpec &spec, Nominal &model) : s(spec), nominal(model), criteria{spec} {
+Controller::Controller(const LoopSpec &spec, Nominal &model) : s(spec), nominal(model), criteria(spec) {
   L = static_cast<int>(spec.basis_bias) + static_cast<int>(spec.basis_centers.size());
+  if (spec.law != "pd" && spec.law != "task-space" && spec.law != "external")
+    throw std::invalid_argument("LoopSpec.law: unknown law " + spec.law);
+  if (spec.robust != "none" && spec.robust != "nn" && spec.robust != "sliding")
+    throw std::invalid_argument("LoopSpec.robust: unknown robust term " + spec.robust);
+  if (spec.path_kind != "ellipse" && spec.path_kind != "piecewise")
+    throw std::invalid_argument("LoopSpec.path_kind: unknown path " + spec.path_kind);
+  law_pd = spec.law == "pd";
+  piecewise = spec.path_kind == "piecewise";
+  robust = spec.robust == "nn" ? Robust::nn : spec.robust == "sliding" ? Robust::sliding : Robust::none;
 }
 
 // AdditiveRBFBasis.__call__
@@ -36,7 +46,7 @@ Matrix Controller::pinv_factor(const Matrix &J, double &lam2) const {
 
 // EllipseTrajectory or PiecewisePolynomialPath.__call__
 void Controller::path(double t, Vector &pd, Vector &dpd, Vector &ddpd) const {
-  if (s.path_kind != "piecewise") {
+  if (!piecewise) {
     const double ph = s.omega * t + s.phase, cw = std::cos(ph), sw = std::sin(ph);
     pd = s.center + s.axis_a * cw + s.axis_b * sw;
     dpd = s.omega * (-s.axis_a * sw + s.axis_b * cw);
@@ -102,7 +112,7 @@ Output Controller::compute(double t, const Vector &q, const Vector &v, const Vec
   const Matrix inv = pinv_factor(J, lam2);
   const Matrix J_pinv = J.transpose() * inv;
   out.damping = lam2;
-  if (s.law == "pd") {  // TaskSpacePD.compute
+  if (law_pd) {  // TaskSpacePD.compute
     Vector tau = J.transpose() * (-s.pd_Kp * e - s.pd_Kd * de) + nominal.gravity(q);
     tau -= s.null_damping * (v - J_pinv * (J * v));
     out.tau = tau;
@@ -111,7 +121,7 @@ Output Controller::compute(double t, const Vector &q, const Vector &v, const Vec
   Vector y(2 * e.size());
   y << e, de;
   Vector u0 = Vector::Zero(e.size());
-  if (s.robust == "nn") {
+  if (robust == Robust::nn) {
     const Vector w = s.BtP * y;
     Vector in(s.basis_joint ? 2 * q.size() : y.size());
     if (s.basis_joint) in << q, v;
@@ -133,7 +143,7 @@ Output Controller::compute(double t, const Vector &q, const Vector &v, const Vec
       out.z.head(L) = z.head(L) + s.F * s.period * drive;
     }
     out.z[L] = s.eps_min + (z[L] - s.eps_min) * std::exp(-s.gamma * s.period);
-  } else if (s.robust == "sliding") {
+  } else if (robust == Robust::sliding) {
     const Vector w = s.BtP * y;
     u0 = -s.sliding_gain * w / std::max(w.norm(), s.sliding_boundary);
   }

@@ -21,6 +21,9 @@ struct Controller {
   Nominal &nominal;
   Criteria criteria;
   int L = 0;
+  // s.law, s.robust and s.path_kind resolved once (an unknown name is refused)
+  bool law_pd = false, piecewise = false;
+  enum class Robust { none, nn, sliding } robust = Robust::none;
 
   Controller(const LoopSpec &spec, Nominal &model);
   // AdditiveRBFBasis.__call__: [1, exp(-(s_j - c_jk)^2 inv2w2_j) for j, k]

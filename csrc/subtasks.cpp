@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace nnrobust {
 
@@ -20,6 +21,23 @@ std::vector<ObstaclePair> obstacle_pairs(const LoopSpec &s, const Matrix &points
     }
   }
   return pairs;
+}
+
+Criteria::Criteria(const LoopSpec &spec) : s(spec) {
+  const std::pair<const char *, CriterionKind> names[] = {
+      {"paper", CriterionKind::paper},
+      {"half_det", CriterionKind::half_det},
+      {"manipulability", CriterionKind::manipulability},
+      {"joint_limits", CriterionKind::joint_limits},
+      {"joint_centering", CriterionKind::joint_centering},
+      {"joint_smoothness", CriterionKind::joint_smoothness},
+      {"obstacles", CriterionKind::obstacles},
+  };
+  for (const std::string &name : spec.criteria) {
+    const auto *found = std::find_if(std::begin(names), std::end(names), [&](const auto &p) { return name == p.first; });
+    if (found == std::end(names)) throw std::invalid_argument("LoopSpec.criteria: unknown criterion " + name);
+    kinds.push_back(found->second);
+  }
 }
 
 // JointLimitAvoidance._barrier
@@ -68,22 +86,22 @@ Vector Criteria::gradient(Nominal &model, const Vector &q, const TaskState &ts) 
     }
   };
   for (size_t c = 0; c < s.criteria.size(); ++c) {
-    const std::string &kind = s.criteria[c];
+    const CriterionKind kind = kinds[c];
     Vector g;
-    if (kind == "paper" || kind == "half_det") {
+    if (kind == CriterionKind::paper || kind == CriterionKind::half_det) {
       det_terms();
       g = 0.5 * ddet;
-      if (kind == "paper") g += -s.smoothness.dot(q) * s.smoothness;
-    } else if (kind == "manipulability") {
+      if (kind == CriterionKind::paper) g += -s.smoothness.dot(q) * s.smoothness;
+    } else if (kind == CriterionKind::manipulability) {
       det_terms();
       g = det <= 1e-300 ? Vector(Vector::Zero(n)) : Vector(ddet / (2.0 * std::sqrt(det)));
-    } else if (kind == "joint_limits") {
+    } else if (kind == CriterionKind::joint_limits) {
       Vector b, db;
       barrier(q, b, db);
       g = -db / static_cast<double>(n);
-    } else if (kind == "joint_smoothness") {
+    } else if (kind == CriterionKind::joint_smoothness) {
       g = -s.smoothing_coefficients.dot(q) * s.smoothing_coefficients;
-    } else if (kind == "obstacles") {  // sum over pairs of depth * (-n^T ((1 - t) J_a + t J_b))
+    } else if (kind == CriterionKind::obstacles) {  // sum over pairs of depth * (-n^T ((1 - t) J_a + t J_b))
       Matrix points;
       std::vector<Matrix> jacobians;
       model.chain(q, points, jacobians);
@@ -106,23 +124,23 @@ double Criteria::value(const Vector &q, const Matrix &J, const Matrix &points) c
   const double det = det_small(J * J.transpose());
   double h = 0.0;
   for (size_t c = 0; c < s.criteria.size(); ++c) {
-    const std::string &kind = s.criteria[c];
+    const CriterionKind kind = kinds[c];
     double v;
-    if (kind == "paper") {
+    if (kind == CriterionKind::paper) {
       const double cq = s.smoothness.dot(q);
       v = 0.5 * det + (-0.5 * cq * cq);
-    } else if (kind == "half_det") {
+    } else if (kind == CriterionKind::half_det) {
       v = 0.5 * det;
-    } else if (kind == "manipulability") {
+    } else if (kind == CriterionKind::manipulability) {
       v = std::sqrt(std::max(det, 0.0));
-    } else if (kind == "joint_limits") {
+    } else if (kind == CriterionKind::joint_limits) {
       Vector b, db;
       barrier(q, b, db);
       v = -b.mean();
-    } else if (kind == "joint_smoothness") {
+    } else if (kind == CriterionKind::joint_smoothness) {
       const double cq = s.smoothing_coefficients.dot(q);
       v = -0.5 * cq * cq;
-    } else if (kind == "obstacles") {
+    } else if (kind == CriterionKind::obstacles) {
       v = 0.0;
       for (const ObstaclePair &p : obstacle_pairs(s, points)) v += p.depth * p.depth;
       v *= -0.5;

@@ -17,8 +17,14 @@ struct ObstaclePair {
 
 std::vector<ObstaclePair> obstacle_pairs(const LoopSpec &s, const Matrix &points);
 
+// The shipped criteria, named in LoopSpec.criteria (resolved once, not compared per step).
+enum class CriterionKind { paper, half_det, manipulability, joint_limits, joint_centering, joint_smoothness, obstacles };
+
 struct Criteria {
   const LoopSpec &s;
+  std::vector<CriterionKind> kinds;  // s.criteria's names, resolved
+
+  explicit Criteria(const LoopSpec &spec);  // an unknown name is refused (std::invalid_argument)
 
   // JointLimitAvoidance._barrier: (b, b') with the linear continuation outside the knots; a joint
   // without limits (a continuous joint) has b = 1, b' = 0

@@ -1,0 +1,149 @@
+"""Each compiled component against its Python twin, alone, on random states: the law's torque and
+next state, the weighted criterion's gradient (on the nominal model) and value (on the true robot),
+and the plant's q''. A whole-run comparison (tests/test_compiled.py) can hide a component that
+differs only where a run rarely goes; these states are drawn across the joints' ranges.
+"""
+
+import numpy as np
+import pytest
+
+from nnrobust import compiled
+from nnrobust.experiment import build
+from nnrobust.model import PinocchioModel
+from nnrobust.presets import load_preset
+
+pytestmark = pytest.mark.skipif(not compiled.available(), reason=compiled.unavailable_reason())
+
+CASES = {
+    "paper arm, NN, paper criterion": ("paper-ellipse", {}),
+    "paper arm, sliding mode": ("paper-ellipse", {"controller": {"kind": "sliding-mode"}}),
+    "paper arm, PD": ("paper-ellipse", {"controller": {"kind": "pd"}}),
+    "paper arm, error basis, printed law": (
+        "paper-ellipse",
+        {"nn": {"basis_input": "error", "law": "printed", "sigma": 0.0}},
+    ),
+    "paper line, point to point": ("paper-line", {}),
+    "Panda, manipulability and joint limits": ("panda-ellipse", {}),
+    "Panda pose, computed torque": ("panda-pose", {"controller": {"kind": "computed-torque"}}),
+    "UR5, no u0": ("ur5-ellipse", {"controller": {"kind": "no-u0"}}),
+    "planar7, obstacles and smoothness": (
+        "planar7-ellipse",
+        {
+            "subtasks": {
+                "criteria": ["obstacles", "joint_smoothness", "joint_centering"],
+                "weights": [0.5, 0.3, 0.2],
+                "obstacles": [[0.3, 0.2, 0.0, 0.05]],
+                "obstacle_influence": 0.3,
+                "smoothness_coefficients": [0.5, -1.0, 1.0, 0.2, -0.3, 0.1, 0.4],
+            }
+        },
+    ),
+}
+
+
+def _config(name):
+    preset, changes = CASES[name]
+    return load_preset(preset).replace(simulation={"duration": 0.01}, **changes)
+
+
+def _twin(name):
+    setup = build(_config(name))
+    assert compiled.twin_refusal(setup) == ""
+    spec = compiled.loop_spec(setup, 0.01)
+    robot = compiled.load_model(setup.plant.model.pinocchio_model, setup.robot.task_frame)
+    nominal = (
+        compiled.load_model(setup.nominal.model, setup.nominal.task_frame)
+        if isinstance(setup.nominal, PinocchioModel)
+        else None
+    )
+    return setup, spec, robot, nominal
+
+
+def _states(setup, count, seed):
+    """Random (t, q, v, z): q across the joints' ranges, v up to 2 rad/s, z a positive NN state."""
+    rng = np.random.default_rng(seed)
+    lower, upper = setup.robot.lower_limits, setup.robot.upper_limits
+    lower, upper = np.where(np.isfinite(lower), lower, -np.pi), np.where(np.isfinite(upper), upper, np.pi)
+    z0 = setup.controller.initial_state()
+    for _ in range(count):
+        q = rng.uniform(lower + 0.02 * (upper - lower), upper - 0.02 * (upper - lower))
+        v = rng.uniform(-2.0, 2.0, q.size)
+        z = z0 + rng.uniform(0.0, 5.0, z0.size)
+        yield rng.uniform(0.0, 20.0), q, v, z
+
+
+def _close(a, b, what, rel=1e-9):
+    a, b = np.asarray(a, float), np.asarray(b, float)
+    scale = max(1.0, float(np.abs(b).max(initial=0.0)))
+    np.testing.assert_allclose(a, b, rtol=0, atol=rel * scale, err_msg=what)
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_each_law_step_is_its_python_twin(name):
+    """Torque, next state and the pseudo-inverse's damping of one control step."""
+    setup, spec, _, nominal = _twin(name)
+    period = setup.config.simulation.control_period
+    module = compiled._module()
+    for t, q, v, z in _states(setup, 25, seed=1):
+        ours = module.twin_control(nominal, spec, t, q, v, z)
+        theirs = setup.controller.compute(t, q, v, z, period)
+        _close(ours.tau, theirs.tau, f"{name}: tau at t = {t:.3f}")
+        if z.size:
+            _close(ours.z, theirs.state if theirs.state is not None else z, f"{name}: z_next")
+        _close(ours.damping, theirs.signals["damping"], f"{name}: damping")
+        if "rho_hat" in theirs.signals:
+            _close(ours.rho_hat, theirs.signals["rho_hat"], f"{name}: rho_hat")
+            _close(ours.eps, theirs.signals["eps"], f"{name}: eps")
+
+
+@pytest.mark.parametrize("name", [n for n in CASES if _config(n).subtasks.criteria != []])
+def test_each_criterion_is_its_python_twin(name):
+    """Gradient on the nominal model (what the law uses) and value on the true robot (what is
+    recorded), across the joints' ranges."""
+    setup, spec, robot, nominal = _twin(name)
+    module = compiled._module()
+    for _, q, _, _ in _states(setup, 25, seed=2):
+        _close(
+            module.twin_criterion_gradient(nominal, spec, q),
+            setup.criterion.gradient(setup.nominal, q),
+            f"{name}: gradient",
+        )
+        _close(
+            module.twin_criterion_value(robot, spec, q), setup.criterion.value(setup.robot, q), f"{name}: h"
+        )
+
+
+@pytest.mark.parametrize(
+    "plant",
+    [
+        {},
+        {"stiction": 1.5},
+        {"torque_limits": "none", "joint_stop_stiffness": 300.0},
+        {"loads": [{"kind": "wrench", "time": 0.0, "force": [3.0, -2.0, 1.0], "moment": [0.1, 0.0, 0.2]}]},
+    ],
+    ids=["as shipped", "stiction", "stiff stops", "tool wrench"],
+)
+@pytest.mark.parametrize("preset", ["paper-ellipse", "panda-ellipse"])
+def test_the_plant_derivative_is_its_python_twin(preset, plant):
+    """Q'' of the slipping law with friction, disturbance, stops (states beyond the limits
+    included) and a held load, at random times and torques."""
+    setup = build(load_preset(preset).replace(simulation={"duration": 0.01}, plant=plant))
+    spec = compiled.loop_spec(setup, 0.01)
+    model = compiled.load_model(setup.plant.model.pinocchio_model, setup.robot.task_frame)
+    module = compiled._module()
+    rng = np.random.default_rng(3)
+    lower, upper = setup.robot.lower_limits, setup.robot.upper_limits
+    stopped = 0
+    for t, q, v, _ in _states(setup, 25, seed=4):
+        past = rng.uniform(size=q.size) < 0.4  # these joints pressed into a stop, up to 0.02 rad
+        depth = rng.uniform(0.0, 0.02, q.size)
+        q = np.where(past, np.where(rng.uniform(size=q.size) < 0.5, upper + depth, lower - depth), q)
+        stopped += int(past.sum())
+        tau = rng.uniform(-5.0, 5.0, q.size)
+        setup.plant.begin_period(t)
+        _close(
+            module.twin_plant_acceleration(model, spec, t, q, v, tau),
+            setup.plant.acceleration(t, q, v, tau),
+            f"{preset}: q'' (limits {lower.round(2)}..{upper.round(2)})",
+        )
+    assert stopped > 10
