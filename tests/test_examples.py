@@ -23,6 +23,7 @@ def test_every_example_is_tested():
     tested = {
         "custom_controller.py",
         "custom_robot.py",
+        "disturbances.py",
         "sweep.py",
         "read_results.py",
         "tuning.py",
@@ -32,6 +33,14 @@ def test_every_example_is_tested():
     assert {str(p.relative_to(EXAMPLES)) for p in EXAMPLES.rglob("*.py")} | {
         p.name for p in EXAMPLES.glob("*.toml")
     } == tested
+
+
+def test_disturbances_compares_each_load_with_the_quiet_run():
+    out = _run("disturbances.py", "--duration", "4", "--controller", "pd")
+    for event in ("push", "tap", "hand", "parcel", "square wave"):
+        assert event in out
+    rows = [line.split() for line in out.splitlines() if line.startswith(("push", "hand"))]
+    assert all(float(row[-1]) != float(row[-2]) for row in rows)  # the loads acted
 
 
 def test_custom_controller_runs_beside_the_nn(tmp_path):
