@@ -3,14 +3,24 @@
 from __future__ import annotations
 
 import argparse
+import errno
 import json
 import os
 import sys
 import warnings
 from pathlib import Path
 
-from .exceptions import NNRobustError, one_line
-from .run_folder import Drawing, ExtrasInterrupted, check_out_folder, load_run, locked, redraw_run, write_run
+from .exceptions import ConfigError, NNRobustError, one_line
+from .run_folder import (
+    Drawing,
+    ExtrasInterrupted,
+    RunFolderError,
+    check_out_folder,
+    load_run,
+    locked,
+    redraw_run,
+    write_run,
+)
 from .signals import ignore_stop_signals, install_stop_handlers, signals_as_interrupt
 
 TABLE_COLUMNS = (
@@ -164,7 +174,16 @@ def cmd_run(args) -> int:
     if args.set:
         from .config import apply_overrides, parse_override
 
-        config = apply_overrides(config, dict(parse_override(item) for item in args.set))
+        overrides = dict(parse_override(item) for item in args.set)
+        for flag, given, keys in (
+            ("--controller", args.controller, ("controller.kind", "controller.class")),
+            ("--duration", args.duration is not None, ("simulation.duration",)),
+            ("--backend", args.backend or args.view, ("simulation.backend",)),
+        ):
+            both = [key for key in keys if key in overrides]
+            if given and both:
+                raise ConfigError(both[0], f"given twice, by {flag} and by --set; give it once")
+        config = apply_overrides(config, overrides)
     from .config import controller_label
 
     out = check_out_folder(args.out or f"out/{config.name}-{controller_label(config)}", args.overwrite)
@@ -669,8 +688,22 @@ def run_labels(folders: list[str]) -> list[str]:
         depth += 1
 
 
+def check_figure_folder(folder: str) -> None:
+    """Refuse, before any work, a folder for figures that cannot be made or written."""
+    path = Path(folder)
+    if path.exists() and not path.is_dir():
+        raise RunFolderError(f"{folder} exists and is not a folder; choose another --out")
+    existing = next((p for p in (path, *path.parents) if p.exists()), Path("."))
+    if not existing.is_dir():
+        raise RunFolderError(f"{existing} is a file, not a folder: {folder} cannot be made there")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise RunFolderError(f"{existing} is not writable: {folder} cannot be made there")
+
+
 def cmd_compare(args) -> int:
     """Table of metrics and overlaid plots for several run folders."""
+    if args.out:
+        check_figure_folder(args.out)
     rows, results = [], {}
     for label, folder in zip(run_labels(args.runs), args.runs):
         result = load_run(folder)  # checks that metrics.json holds a table
@@ -1056,6 +1089,15 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     except NNRobustError as err:
         print(f"nnrobust: error: {err}", file=sys.stderr)  # one bounded line (NNRobustError.__str__)
+        return 2
+    except OSError as err:  # a path too long, a full or read-only disk, met where no check named it
+        where = f"{err.filename}: " if err.filename else ""
+        print(f"nnrobust: error: {one_line(where + (err.strerror or str(err)))}", file=sys.stderr)
+        return 1 if err.errno in (errno.ENOSPC, errno.EDQUOT, errno.EIO, errno.EROFS) else 2
+    except ValueError as err:
+        if "null byte" not in str(err):  # a programming error: its traceback is wanted
+            raise
+        print("nnrobust: error: a path or name contains a NUL character (\\x00)", file=sys.stderr)
         return 2
     except ExtrasInterrupted as err:
         print(f"nnrobust: {err}", file=sys.stderr)

@@ -1126,7 +1126,17 @@ def _within_range(config: ExperimentConfig) -> None:
 MAX_PAYLOAD = 1000.0
 """Largest ``plant.payload`` [kg]."""
 MAX_FACTOR = 100.0
-"""Largest factor on a nominal inertial parameter (``nominal.factors``)."""
+"""Largest factor on a nominal inertial parameter (``nominal.factors``) or on the plant's friction
+or disturbance (``plant.friction_scale``, ...)."""
+MAX_PHYSICAL = 1e6
+"""Largest friction coefficient, stop damping or closed-form parameter accepted: beyond it the
+plant is so stiff that no plant step resolves it (a 1e10 friction scale asked for 1.7e8 RK4 steps
+per period)."""
+MAX_STOP_STIFFNESS = 1e6
+"""Largest ``plant.joint_stop_stiffness`` [1/rad] (the default is 100)."""
+MAX_PINV = 1e3
+"""Largest ``controller.pinv_threshold`` and ``pinv_max_damping`` [m/rad]: a task Jacobian's
+singular values are metres per radian."""
 
 INDEXED = re.compile(r"^([a-z_]+)\.([A-Za-z_]+)\[(\d{1,4})\]$")
 """``section.field[i]``: one entry of a list-valued key (``nominal.factors[2]``)."""
@@ -1202,8 +1212,11 @@ def validate(config: ExperimentConfig) -> None:
     _non_negative("controller.k", c.k)
     if c.pd_null_damping is not None:
         _non_negative("controller.pd_null_damping", c.pd_null_damping)
-    _positive("controller.pinv_threshold", c.pinv_threshold)
-    _positive("controller.pinv_max_damping", c.pinv_max_damping)
+    for key in ("pinv_threshold", "pinv_max_damping"):
+        if not 0 < getattr(c, key) <= MAX_PINV:
+            raise ConfigError(
+                f"controller.{key}", f"must be in (0, {MAX_PINV:g}] [m/rad], got {getattr(c, key):g}"
+            )
     _positive("nn.F", nn.F)
     _positive("nn.eps0", nn.eps0)
     _positive("nn.centers", nn.centers)
@@ -1232,8 +1245,21 @@ def validate(config: ExperimentConfig) -> None:
             "mass_scale, inertia_scale and com_error perturb the URDF "
             "model: set kind = 'urdf' (closed-form takes beta, p and relative_error)",
         )
-    _non_negative("plant.disturbance_scale", pc.disturbance_scale)
-    _non_negative("plant.friction_scale", pc.friction_scale)
+    for key in ("disturbance_scale", "friction_scale"):
+        if not 0 <= getattr(pc, key) <= MAX_FACTOR:
+            raise ConfigError(f"plant.{key}", f"must be in [0, {MAX_FACTOR:g}], got {getattr(pc, key):g}")
+    for section, key, values, unit in (
+        ("plant", "viscous_friction", pc.viscous_friction, "N m s/rad"),
+        ("plant", "coulomb_friction", pc.coulomb_friction, "N m"),
+        ("nominal", "viscous_friction", nc.viscous_friction, "N m s/rad"),
+        ("nominal", "coulomb_friction", nc.coulomb_friction, "N m"),
+        ("nominal", "beta", nc.beta, "kg m^2"),
+        ("nominal", "p", nc.p, "kg m^2"),
+    ):
+        if values is not None and any(not 0 <= v <= MAX_PHYSICAL for v in values):
+            raise ConfigError(
+                f"{section}.{key}", f"each entry must be in [0, {MAX_PHYSICAL:g}] [{unit}], got {values}"
+            )
     for key in ("joint_friction_scales", "joint_disturbance_scales"):
         scales = getattr(pc, key)
         if scales is not None and any(not 0 <= f <= MAX_FACTOR for f in scales):
@@ -1262,8 +1288,17 @@ def validate(config: ExperimentConfig) -> None:
             )
     else:
         _positive("plant.torque_limits", pc.torque_limits)
-    _positive("plant.joint_stop_stiffness", pc.joint_stop_stiffness)
-    _non_negative("plant.joint_stop_damping", pc.joint_stop_damping)
+    if not 0 < pc.joint_stop_stiffness <= MAX_STOP_STIFFNESS:
+        raise ConfigError(
+            "plant.joint_stop_stiffness",
+            f"must be in (0, {MAX_STOP_STIFFNESS:g}] (the stop's stiffness / the joint's torque scale, "
+            f"per rad), got {pc.joint_stop_stiffness:g}",
+        )
+    if not 0 <= pc.joint_stop_damping <= MAX_PHYSICAL:
+        raise ConfigError(
+            "plant.joint_stop_damping",
+            f"must be in [0, {MAX_PHYSICAL:g}] s/rad, got {pc.joint_stop_damping:g}",
+        )
     if pc.armature is not None and (not pc.armature or any(not 0 <= a < 1e6 for a in pc.armature)):
         raise ConfigError(
             "plant.armature",
@@ -1349,6 +1384,12 @@ def validate(config: ExperimentConfig) -> None:
                 "simulation.integration_step",
                 f"the control period {sim.control_period:g} s is not a whole number of steps of "
                 f"{sim.integration_step:g} s (ratio {ratio:.6g})",
+            )
+        if sim.substeps is not None and sim.substeps != int(round(ratio)):
+            raise ConfigError(
+                "simulation.substeps",
+                f"{sim.substeps} disagrees with simulation.integration_step = {sim.integration_step:g} s "
+                f"({int(round(ratio))} steps per control period); give one of the two",
             )
         sim.substeps = int(round(ratio))
     if config.plant.loads:

@@ -14,6 +14,7 @@ import pinocchio as pin
 
 from . import user_parts
 from .config import (
+    MAX_SUBSTEPS,
     ExperimentConfig,
     default_criteria,
     nominal_kind,
@@ -784,6 +785,13 @@ def plant_step(config: ExperimentConfig, plant: Plant, q0: np.ndarray) -> int:
         if T * fastest > RK4_STABLE_STEP:
             needed = max(needed, _substeps_needed(T, fastest))
             reasons.append(f"viscous friction has a mode of {fastest:.3g} 1/s (light outer links)")
+    if needed > MAX_SUBSTEPS:
+        raise ConfigError(
+            "simulation.substeps",
+            f"the plant is too stiff for RK4 at any practical step: {'; '.join(reasons)} asks for "
+            f"{needed:,} steps per control period (at most {MAX_SUBSTEPS:,}); lower the friction or "
+            "the stop stiffness, or shorten simulation.control_period",
+        )
     if needed > 1:
         warnings.warn(
             f"simulation.substeps = {needed} chosen (plant step {T / needed:.3g} s): "

@@ -133,9 +133,9 @@ def locked(folder: str | Path):
                 f"another nnrobust run (pid {holder}) is writing {folder}; wait for it to "
                 "finish or choose another --out"
             ) from None
-        os.ftruncate(fd, 0)
-        os.pwrite(fd, str(os.getpid()).encode(), 0)
         try:
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, str(os.getpid()).encode(), 0)
             yield folder
         finally:
             with contextlib.suppress(OSError):

@@ -764,7 +764,7 @@ CONFIG_CASES = [
         "negative friction scale",
         lambda d: _toml(d, "[plant]\nfriction_scale = -1.0\n"),
         ex.ConfigError,
-        "plant.friction_scale: must be >= 0",
+        "plant.friction_scale: must be in [0, 100], got -1",
     ),
     Case(
         "a per-joint friction scale below zero",
@@ -1399,6 +1399,60 @@ SCHEDULER_CASES = [
 ]
 
 API_CASES = [
+    Case(
+        "a friction scale of 1e10 (a plant no step resolves)",
+        lambda d: _toml(d, f"{PAPER}[plant]\nfriction_scale = 1e10\n"),
+        ex.ConfigError,
+        "plant.friction_scale: must be in [0, 100], got 1e+10",
+    ),
+    Case(
+        "viscous friction of 1e6 N m s/rad (stiffer than any practical step)",
+        lambda d: _build(plant={"viscous_friction": [1e6, 1e6, 1e6]}),
+        ex.ConfigError,
+        "simulation.substeps: the plant is too stiff for RK4 at any practical step",
+    ),
+    Case(
+        "a negative Coulomb friction",
+        lambda d: _toml(d, f"{PAPER}[plant]\ncoulomb_friction = [-1.0, 0.0, 0.0]\n"),
+        ex.ConfigError,
+        "plant.coulomb_friction: each entry must be in [0, 1e+06] [N m]",
+    ),
+    Case(
+        "a stop stiffness of 1e308",
+        lambda d: _toml(d, f"{PAPER}[plant]\njoint_stop_stiffness = 1e308\n"),
+        ex.ConfigError,
+        "plant.joint_stop_stiffness: must be in (0, 1e+06]",
+    ),
+    Case(
+        "a pseudo-inverse threshold of 1e155 m/rad",
+        lambda d: _toml(d, f"{PAPER}[controller]\npinv_threshold = 1e155\n"),
+        ex.ConfigError,
+        "controller.pinv_threshold: must be in (0, 1000] [m/rad]",
+    ),
+    Case(
+        "substeps and an integration step that disagree",
+        lambda d: _toml(d, f"{PAPER}[simulation]\nsubsteps = 5\nintegration_step = 0.0005\n"),
+        ex.ConfigError,
+        "simulation.substeps: 5 disagrees with simulation.integration_step = 0.0005 s",
+    ),
+    Case(
+        "a planar chain named with 5000 digits",
+        lambda d: _load("planar" + "9" * 5000),
+        ex.RobotLoadError,
+        "a generated planar chain has 1 to 300 links",
+    ),
+    Case(
+        "Python API: load_robot with 2 gravity entries",
+        lambda d: _load("three_link_planar", gravity=(0.0, -9.81)),
+        ex.RobotLoadError,
+        "gravity needs 3 finite numbers of at most 1000 m/s^2, got (0.0, -9.81)",
+    ),
+    Case(
+        "Python API: load_robot with a chain of 3 frames",
+        lambda d: _load("three_link_planar", chain=["a", "b", "c"]),
+        ex.RobotLoadError,
+        "chain needs 2 frame names, (base, tip)",
+    ),
     Case(
         "nn.error_range of 1e-300 (the loops would disagree)",
         lambda d: _toml(d, f"{PAPER}[nn]\nbasis_input = 'error'\nerror_range = [1e-300, 1e-300]\n"),

@@ -351,7 +351,7 @@ def test_experiment_files_are_read_bounded(kind, tmp_path, capsys):
 
 
 def test_runs_too_large_for_memory_are_refused_before_they_start(capsys, tmp_path):
-    assert _run(tmp_path / "big", "--set", "simulation.duration=100000.0") == 2
+    assert _run(tmp_path / "big", "--duration", "100000") == 2  # after QUICK's: the last one counts
     assert "simulation.memory_limit: this run needs about 211 GB" in _one_error_line(capsys)
     assert _run(tmp_path / "ok", "--set", "simulation.memory_limit=0.0001") == 2
     assert "raise memory_limit" in _one_error_line(capsys)

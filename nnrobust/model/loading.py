@@ -76,9 +76,11 @@ def _resolve(source: str) -> tuple[str, str]:
         return "xml", source
     chain = PLANAR_CHAIN_NAME.match(source)
     if chain:
-        n = int(chain.group(1))
+        digits = chain.group(1).lstrip("0")
+        n = int(digits) if len(digits) <= 6 else MAX_JOINTS + 1  # never parse thousands of digits
         if not 1 <= n <= MAX_JOINTS:
-            raise RobotLoadError(source, f"a generated planar chain has 1 to {MAX_JOINTS} links")
+            shown = source if len(source) <= 20 else f"{source[:16]}... ({len(digits)} digits)"
+            raise RobotLoadError(shown, f"a generated planar chain has 1 to {MAX_JOINTS} links")
         return "xml", planar_chain_urdf(n)
     path = urdf_dir() / _SHIPPED[source] if source in _SHIPPED else Path(source)
     if path.suffix.lower() == ".urdf" or path.exists():
@@ -313,6 +315,10 @@ def default_task_frame(model: pin.Model) -> str:
     return default_chain(model)[0]
 
 
+MAX_GRAVITY = 1e3
+"""Largest gravity component accepted [m/s^2] (100 g)."""
+
+
 def load_robot(
     source: str | Path,
     task_frame: str | None = None,
@@ -343,6 +349,19 @@ def load_robot(
 
     """
     source = str(source)
+    if chain is not None and (isinstance(chain, str) or len(chain) != 2):
+        raise RobotLoadError(source, f"chain needs 2 frame names, (base, tip), got {chain!r}")
+    if gravity is not None:
+        entries = list(gravity) if isinstance(gravity, (list, tuple, np.ndarray)) else []
+        if len(entries) != 3 or not all(
+            isinstance(x, (int, float, np.floating))
+            and not isinstance(x, bool)
+            and abs(float(x)) <= MAX_GRAVITY
+            for x in entries
+        ):
+            raise RobotLoadError(
+                source, f"gravity needs 3 finite numbers of at most {MAX_GRAVITY:g} m/s^2, got {gravity!r}"
+            )
     built = _build(source, locked_joints, chain)
     locked, frame = _locks(built, source, locked_joints, chain)
     model, _ = _reduced(built, locked)
