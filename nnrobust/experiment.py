@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import hashlib
 import time
@@ -909,10 +910,17 @@ def checked(config: ExperimentConfig) -> ExperimentConfig:
     """A validated copy of a configuration (types and values, as :func:`config.from_dict` checks
     an experiment file's).
     """
+    from . import config as config_module
     from .config import from_dict
 
     if not isinstance(config, ExperimentConfig):
         raise ConfigError("config", f"expected an ExperimentConfig, got {type(config).__name__}")
+    for field in dataclasses.fields(ExperimentConfig):  # a section replaced after loading
+        section = getattr(config, field.name)
+        wanted = vars(config_module).get(field.type) if isinstance(field.type, str) else field.type
+        if isinstance(wanted, type) and dataclasses.is_dataclass(wanted) and not isinstance(section, wanted):
+            got = f"{type(section).__name__} {section!r}"[:200]
+            raise ConfigError(field.name, f"expected a {wanted.__name__} section, got {got}")
     try:
         data = config.to_dict()
     except (TypeError, ValueError, RecursionError) as err:
@@ -1016,7 +1024,8 @@ def run_experiment(config: ExperimentConfig, progress=None, setup: Setup | None 
     it once, at the end). ``wall_seconds`` is the simulation loop's wall time alone.
     """
     setup = setup or build(config)
-    sim = setup.config.simulation
+    config = setup.config  # the checked copy: what ran is what is recorded
+    sim = config.simulation
     backend = choose_backend(setup)
     start = time.perf_counter()
     if backend == "compiled":

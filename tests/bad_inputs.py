@@ -1472,6 +1472,12 @@ API_CASES = [
         "controller.kind: 'lqr' is not one of nn, no-u0",
     ),
     Case(
+        "Python API: a section replaced by None after loading",
+        lambda d: _mutated(lambda c: setattr(c, "nominal", None)),
+        ex.ConfigError,
+        "nominal: expected a NominalConfig section, got NoneType None",
+    ),
+    Case(
         "Python API: a negative Kp set after loading",
         lambda d: _mutated(lambda c: setattr(c.controller, "Kp", [-1.0, -1.0])),
         ex.ConfigError,
