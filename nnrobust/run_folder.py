@@ -502,7 +502,7 @@ def check_run_folder(folder: Path) -> None:
 
 def _check_shapes(result, folder: Path) -> None:
     """The arrays of a loaded run agree: t is 1-D with N samples, q, dq, tau N x n, x, x_d, e N x m,
-    the chain N x (n + 1) x 3, every signal N long.
+    the chain N x (n + 1) x 3, every signal N long, all of them real numbers.
     """
     n_t = result.t.shape[0] if result.t.ndim == 1 else -1
     if n_t < 1:
@@ -523,7 +523,19 @@ def _check_shapes(result, folder: Path) -> None:
                 f"{folder}: a damaged run folder (result.npz: {name} has shape "
                 f"{array.shape}, expected {shape} for {n_t} samples)"
             )
+    for name in ("t", *expected):
+        array = getattr(result, name)
+        if array.dtype.kind not in "fiu":
+            raise RunFolderError(
+                f"{folder}: a damaged run folder (result.npz: {name} holds {array.dtype} values, "
+                "not real numbers)"
+            )
     for name, values in result.signals.items():
+        if values.dtype.kind not in "fiub":
+            raise RunFolderError(
+                f"{folder}: a damaged run folder (result.npz: signal {name!r} holds {values.dtype} "
+                "values, not real numbers)"
+            )
         if values.shape != (n_t,):
             raise RunFolderError(
                 f"{folder}: a damaged run folder (result.npz: signal {name!r} has shape "

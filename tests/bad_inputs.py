@@ -923,6 +923,10 @@ def _damaged_run(folder: Path, damage: str):
         arrays = dict(np.load(run / "result.npz"))
         arrays["q"] = arrays["q"][:-1]
         np.savez(run / "result.npz", **arrays)
+    elif damage in ("text", "complex"):
+        arrays = dict(np.load(run / "result.npz"))
+        arrays["t"] = arrays["t"].astype(str if damage == "text" else complex)
+        np.savez(run / "result.npz", **arrays)
     elif damage == "deep":
         (run / "metrics.json").write_text("[" * 200_000 + "]" * 200_000)
     elif damage == "string":
@@ -1043,6 +1047,18 @@ RUN_FOLDER_CASES = [
         lambda d: _damaged_run(d, "shape"),
         RunFolderError,
         "a damaged run folder (result.npz: q has shape",
+    ),
+    Case(
+        "t saved as text",
+        lambda d: _damaged_run(d, "text"),
+        RunFolderError,
+        "a damaged run folder (result.npz: t holds <U",
+    ),
+    Case(
+        "t saved as complex numbers",
+        lambda d: _damaged_run(d, "complex"),
+        RunFolderError,
+        "a damaged run folder (result.npz: t holds complex128 values, not real numbers)",
     ),
     Case(
         "metrics.json nested 200,000 deep",
