@@ -1128,6 +1128,9 @@ MAX_PAYLOAD = 1000.0
 MAX_FACTOR = 100.0
 """Largest factor on a nominal inertial parameter (``nominal.factors``) or on the plant's friction
 or disturbance (``plant.friction_scale``, ...)."""
+MIN_STEP_ROTATION = 1e-6
+"""Smallest ``simulation.max_step_rotation`` [rad or m]: below it every fast period is cut to the
+most steps a period may take, and a run crawls (1e-300 ran 46x slower than real time)."""
 MAX_PHYSICAL = 1e6
 """Largest friction coefficient, stop damping or closed-form parameter accepted: beyond it the
 plant is so stiff that no plant step resolves it (a 1e10 friction scale asked for 1.7e8 RK4 steps
@@ -1220,7 +1223,9 @@ def validate(config: ExperimentConfig) -> None:
     _positive("nn.F", nn.F)
     _positive("nn.eps0", nn.eps0)
     _positive("nn.centers", nn.centers)
-    _positive("nn.width", nn.width)
+    low, high = RANGE_LIMITS
+    if not low <= nn.width <= high:  # 1e-308 makes the basis 0/0: the two loops would disagree
+        raise ConfigError("nn.width", f"{nn.width:g} is outside [{low:g}, {high:g}]")
     _positive("nn.velocity_range", nn.velocity_range)
     _positive("nn.error_range", nn.error_range)
     _within_range(config)
@@ -1326,6 +1331,12 @@ def validate(config: ExperimentConfig) -> None:
             raise ConfigError(path, f"must be an integer in [0, 2^63), got {seed}")
     if se.delay < 0:
         raise ConfigError("sensing.delay", f"must be >= 0 control periods, got {se.delay}")
+    if sim.control_period > 0 and se.delay * sim.control_period >= sim.duration:
+        raise ConfigError(
+            "sensing.delay",
+            f"{se.delay} control periods is the whole run ({sim.duration:g} s) or more: no command "
+            "computed from a measurement would reach the actuators",
+        )
     _non_negative("controller.coulomb_smoothing", c.coulomb_smoothing)
     _positive("controller.sliding_gain", c.sliding_gain)
     _positive("controller.sliding_boundary", c.sliding_boundary)
@@ -1363,12 +1374,17 @@ def validate(config: ExperimentConfig) -> None:
     _positive("simulation.control_period", sim.control_period)
     if sim.substeps is not None:
         _positive("simulation.substeps", sim.substeps)
-    if sim.max_step_rotation <= 0:
+    if sim.max_step_rotation < MIN_STEP_ROTATION:
         raise ConfigError(
             "simulation.max_step_rotation",
-            f"must be positive [rad or m], got "
+            f"must be at least {MIN_STEP_ROTATION:g} [rad or m], got "
             f"{sim.max_step_rotation:g}; to keep the plant step fixed, set "
             "simulation.adaptive_step = false",
+        )
+    offset = sim.initial_task_offset
+    if offset is not None and any(abs(v) > MAX_PATH_EXTENT for v in offset):
+        raise ConfigError(
+            "simulation.initial_task_offset", f"{offset} has an entry beyond {MAX_PATH_EXTENT:g} m (or rad)"
         )
     if sim.integration_step is not None:
         _positive("simulation.integration_step", sim.integration_step)

@@ -169,9 +169,14 @@ def _rescue_arrays(result, folder: Path) -> str:
     try:
         fd, path = tempfile.mkstemp(prefix=f"nnrobust-{folder.name[:40]}-", suffix=".npz")
         os.close(fd)
+    except OSError:
+        return "the new arrays could not be saved anywhere"
+    try:
         result.save_npz(path)
         return f"the new arrays are in {path}"
     except OSError:
+        with contextlib.suppress(OSError):
+            os.unlink(path)  # no empty file left behind
         return "the new arrays could not be saved anywhere"
 
 

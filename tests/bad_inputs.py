@@ -560,7 +560,31 @@ CONFIG_CASES = [
         "no rotation allowed per plant step (max_step_rotation = 0)",
         lambda d: _toml(d, "[simulation]\nmax_step_rotation = 0.0\n"),
         ex.ConfigError,
-        "simulation.max_step_rotation: must be positive [rad or m], got 0; to keep",
+        "simulation.max_step_rotation: must be at least 1e-06 [rad or m], got 0; to keep",
+    ),
+    Case(
+        "a plant step allowed to turn 1e-300 rad (every period cut to the most steps)",
+        lambda d: _toml(d, "[simulation]\nmax_step_rotation = 1e-300\n"),
+        ex.ConfigError,
+        "simulation.max_step_rotation: must be at least 1e-06 [rad or m], got 1e-300",
+    ),
+    Case(
+        "a sensing delay as long as the run",
+        lambda d: _toml(d, "[simulation]\nduration = 0.1\n[sensing]\ndelay = 100000000\n"),
+        ex.ConfigError,
+        "sensing.delay: 100000000 control periods is the whole run (0.1 s) or more",
+    ),
+    Case(
+        "an NN basis width of 1e-308 (the loops would disagree)",
+        lambda d: _toml(d, "[nn]\nwidth = 1e-308\n"),
+        ex.ConfigError,
+        "nn.width: 1e-308 is outside [1e-09, 1e+09]",
+    ),
+    Case(
+        "an initial task offset of 1e308 m",
+        lambda d: _toml(d, "[simulation]\ninitial_task_offset = [1e308, 0.0]\n"),
+        ex.ConfigError,
+        "simulation.initial_task_offset: [1e+308, 0.0] has an entry beyond 1000 m",
     ),
     Case(
         "control period shorter than the integration step",
