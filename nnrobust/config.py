@@ -1218,7 +1218,7 @@ def validate(config: ExperimentConfig) -> None:
     for key in ("pinv_threshold", "pinv_max_damping"):
         if not 0 < getattr(c, key) <= MAX_PINV:
             raise ConfigError(
-                f"controller.{key}", f"must be in (0, {MAX_PINV:g}] [m/rad], got {getattr(c, key):g}"
+                f"controller.{key}", f"must be in (0, {MAX_PINV:g}] m/rad, got {getattr(c, key):g}"
             )
     _positive("nn.F", nn.F)
     _positive("nn.eps0", nn.eps0)
@@ -1263,7 +1263,7 @@ def validate(config: ExperimentConfig) -> None:
     ):
         if values is not None and any(not 0 <= v <= MAX_PHYSICAL for v in values):
             raise ConfigError(
-                f"{section}.{key}", f"each entry must be in [0, {MAX_PHYSICAL:g}] [{unit}], got {values}"
+                f"{section}.{key}", f"each entry must be in [0, {MAX_PHYSICAL:g}] {unit}, got {values}"
             )
     for key in ("joint_friction_scales", "joint_disturbance_scales"):
         scales = getattr(pc, key)
@@ -1377,7 +1377,7 @@ def validate(config: ExperimentConfig) -> None:
     if sim.max_step_rotation < MIN_STEP_ROTATION:
         raise ConfigError(
             "simulation.max_step_rotation",
-            f"must be at least {MIN_STEP_ROTATION:g} [rad or m], got "
+            f"must be at least {MIN_STEP_ROTATION:g} rad (or m), got "
             f"{sim.max_step_rotation:g}; to keep the plant step fixed, set "
             "simulation.adaptive_step = false",
         )

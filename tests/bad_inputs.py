@@ -560,13 +560,13 @@ CONFIG_CASES = [
         "no rotation allowed per plant step (max_step_rotation = 0)",
         lambda d: _toml(d, "[simulation]\nmax_step_rotation = 0.0\n"),
         ex.ConfigError,
-        "simulation.max_step_rotation: must be at least 1e-06 [rad or m], got 0; to keep",
+        "simulation.max_step_rotation: must be at least 1e-06 rad (or m), got 0; to keep",
     ),
     Case(
         "a plant step allowed to turn 1e-300 rad (every period cut to the most steps)",
         lambda d: _toml(d, "[simulation]\nmax_step_rotation = 1e-300\n"),
         ex.ConfigError,
-        "simulation.max_step_rotation: must be at least 1e-06 [rad or m], got 1e-300",
+        "simulation.max_step_rotation: must be at least 1e-06 rad (or m), got 1e-300",
     ),
     Case(
         "a sensing delay as long as the run",
@@ -1455,7 +1455,7 @@ API_CASES = [
         "a negative Coulomb friction",
         lambda d: _toml(d, f"{PAPER}[plant]\ncoulomb_friction = [-1.0, 0.0, 0.0]\n"),
         ex.ConfigError,
-        "plant.coulomb_friction: each entry must be in [0, 1e+06] [N m]",
+        "plant.coulomb_friction: each entry must be in [0, 1e+06] N m",
     ),
     Case(
         "a stop stiffness of 1e308",
@@ -1467,7 +1467,7 @@ API_CASES = [
         "a pseudo-inverse threshold of 1e155 m/rad",
         lambda d: _toml(d, f"{PAPER}[controller]\npinv_threshold = 1e155\n"),
         ex.ConfigError,
-        "controller.pinv_threshold: must be in (0, 1000] [m/rad]",
+        "controller.pinv_threshold: must be in (0, 1000] m/rad",
     ),
     Case(
         "substeps and an integration step that disagree",
