@@ -1331,7 +1331,7 @@ def validate(config: ExperimentConfig) -> None:
             raise ConfigError(path, f"must be an integer in [0, 2^63), got {seed}")
     if se.delay < 0:
         raise ConfigError("sensing.delay", f"must be >= 0 control periods, got {se.delay}")
-    if sim.control_period > 0 and se.delay * sim.control_period >= sim.duration:
+    if se.delay > 0 and sim.control_period > 0 and se.delay * sim.control_period >= sim.duration > 0:
         raise ConfigError(
             "sensing.delay",
             f"{se.delay} control periods is the whole run ({sim.duration:g} s) or more: no command "
