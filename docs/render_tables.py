@@ -214,7 +214,7 @@ def plant_convergence() -> str:
         f"two-sided Mann–Whitney p-value of their runs; a metric agrees when p ≥ "
         f"{data['alpha']:g} or Δ is within its tolerance, and the row converges when every "
         f"metric agrees and Fisher's exact p on the diverged runs is ≥ {data['alpha']:g}. Cut "
-        f"periods: control periods whose step the speed rule cut. "
+        f"periods: control periods whose step was cut for speed or for a stop's contact. "
         f"{converged} of {len(data['rows'])} runs converged. Made by `python "
         "benchmarks/plant_convergence.py --json docs/data/plant_convergence.json`.\n"
     )
