@@ -46,7 +46,7 @@ def step_seconds(n: int, steps: int, repeats: int, backend: str = "python") -> f
         plant={"friction": "urdf", "disturbance": "none", "joint_stops": False},  # module docstring
         subtasks={"criteria": ["manipulability", "joint_centering"], "weights": [0.5, 0.5]},
         controller={"k": 2.0},  # module docstring
-        simulation={"q_seed": seed, "duration": steps * 1e-3},
+        simulation={"q_seed": seed, "duration": steps * 1e-3, "memory_limit": 16.0},  # 300 joints: 5 GB
     )
     setup = build(config)
     best, set_up = np.inf, np.inf
