@@ -184,6 +184,12 @@ def cmd_run(args) -> int:
             if given and both:
                 raise ConfigError(both[0], f"given twice, by {flag} and by --set; give it once")
         config = apply_overrides(config, overrides)
+        from .config import inert_reason
+
+        for key in overrides:
+            reason = inert_reason(config, key)
+            if reason:
+                warnings.warn(f"--set {key} changes nothing here: {reason}", stacklevel=2)
     from .config import controller_label
 
     out = check_out_folder(args.out or f"out/{config.name}-{controller_label(config)}", args.overwrite)

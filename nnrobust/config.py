@@ -1038,6 +1038,106 @@ def _check_gains(c: ControllerConfig, m: int, where: str) -> None:
         _positive(path, values)
 
 
+def inert_keys(config: ExperimentConfig) -> dict[str, str]:
+    """Keys (``section.key``, or ``section.`` for a whole section) that this configuration does
+    not read, each with the choice that makes it so: a key set here changes nothing.
+    """
+    c, tc, pc, sc, sim = (
+        config.controller,
+        config.trajectory,
+        config.plant,
+        config.subtasks,
+        config.simulation,
+    )
+    inert: dict[str, str] = {}
+
+    def mark(keys, why):
+        for key in keys:
+            inert.setdefault(key, why)
+
+    kind = f"controller.kind = {c.kind!r}"
+    if c.kind not in EQ9_KINDS:
+        mark(["controller.Kp", "controller.Kv", "controller.k", "subtasks."], f"{kind} is not eq. (9)")
+        mark(["controller.coulomb_smoothing", "nominal.viscous_friction", "nominal.coulomb_friction"], kind)
+    if c.kind != "nn":
+        mark(["nn."], kind)
+    if c.kind != "sliding-mode":
+        mark(["controller.sliding_gain", "controller.sliding_boundary"], kind)
+    if c.kind != "pd":
+        mark(["controller.pd_Kp", "controller.pd_Kd", "controller.pd_null_damping"], kind)
+    if c.kind == "computed-torque":
+        mark(["nominal."], "computed torque uses the true model")
+    if c.kind == "custom":
+        mark(["controller.pinv_threshold", "controller.pinv_max_damping"], kind)
+    if c.kind in EQ9_KINDS and c.k == 0:
+        mark(["subtasks."], "controller.k = 0 (no self-motion)")
+    if nominal_kind(config) == "urdf":
+        mark(["nominal.beta", "nominal.p"], "nominal.kind = 'urdf' (beta and p are the closed form's)")
+    if c.kind == "nn" and config.nn.basis_input == "joint":
+        mark(["nn.error_range"], "nn.basis_input = 'joint'")
+    if c.kind == "nn" and config.nn.basis_input == "error":
+        mark(["nn.velocity_range"], "nn.basis_input = 'error'")
+    if pc.friction != "scaled":
+        mark(["plant.viscous_level", "plant.coulomb_level"], f"plant.friction = {pc.friction!r}")
+    if pc.disturbance == "none":
+        mark(
+            ["plant.disturbance_scale", "plant.joint_disturbance_scales", "plant.disturbance_omega_scale",
+             "plant.disturbance_phase_shift", "plant.disturbance_level"],
+            "plant.disturbance = 'none'",
+        )  # fmt: skip
+    if pc.disturbance not in ("scaled", "auto"):
+        mark(["plant.disturbance_level"], f"plant.disturbance = {pc.disturbance!r}")
+    if pc.disturbance != "sinusoid":
+        mark(["plant.disturbance_amplitude", "plant.disturbance_omega", "plant.disturbance_phase"],
+             f"plant.disturbance = {pc.disturbance!r}")  # fmt: skip
+    if pc.engine != "mujoco":
+        mark(["plant.mujoco_integrator"], f"plant.engine = {pc.engine!r}")
+    if not pc.joint_stops:
+        mark(["plant.joint_stop_stiffness", "plant.joint_stop_damping"], "plant.joint_stops = false")
+    fixed = (
+        "simulation.adaptive_step = false" if not sim.adaptive_step
+        else "simulation.integrator = 'solve_ivp'" if sim.integrator == "solve_ivp"
+        else "plant.engine = 'mujoco'" if pc.engine == "mujoco"
+        else ""
+    )  # fmt: skip
+    if fixed:
+        mark(["simulation.max_step_rotation"], fixed)
+    if sim.integrator == "solve_ivp":
+        mark(["simulation.substeps", "simulation.integration_step"], "simulation.integrator = 'solve_ivp'")
+    path_keys = {
+        "ellipse": ["center", "axis_a", "axis_b", "omega", "phase"],
+        "point_to_point": ["start", "goal", "move_time"],
+        "waypoints": ["waypoints", "waypoint_times"],
+        "custom": ["class", "params"],
+    }
+    for other, keys in path_keys.items():
+        if other != tc.kind:
+            mark([f"trajectory.{k}" for k in keys], f"trajectory.kind = {tc.kind!r}")
+    if config.robot.task != "pose":
+        mark(
+            [f"trajectory.{k}" for k in ("orientation_rpy", "rotation_axis", "rotation_amplitude",
+                                         "rotation_omega", "rotation_phase")],
+            f"robot.task = {config.robot.task!r}",
+        )  # fmt: skip
+    criteria = sc.criteria if sc.criteria is not None else default_criteria(3, config.robot.task)
+    if "obstacles" not in criteria:
+        mark(["subtasks.obstacles", "subtasks.obstacle_influence", "subtasks.link_radius"],
+             "'obstacles' is not in subtasks.criteria")  # fmt: skip
+    if "joint_smoothness" not in criteria:
+        mark(["subtasks.smoothness_coefficients"], "'joint_smoothness' is not in subtasks.criteria")
+    return inert
+
+
+def inert_reason(config: ExperimentConfig, key: str) -> str:
+    """Why setting ``key`` (``section.key`` or ``section.key[i]``) changes nothing here, or ""."""
+    base = key.split("[", 1)[0]
+    inert = inert_keys(config)
+    if base in inert:
+        return inert[base]
+    section = base.split(".", 1)[0] + "."
+    return inert.get(section, "")
+
+
 def _check_user_classes(config: ExperimentConfig) -> None:
     """A class and its params belong to the choice that names a user's class (e.g.
     ``controller.kind = "custom"``), which needs the class.

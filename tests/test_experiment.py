@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from nnrobust.cli import main
-from nnrobust.config import ExperimentConfig, from_dict, load_config
+from nnrobust.config import KEY_ALIASES, ExperimentConfig, from_dict, load_config
 from nnrobust.exceptions import ConfigError, RunFolderExists
 from nnrobust.experiment import build, run_experiment
 from nnrobust.presets import load_preset, preset_names
@@ -229,3 +229,51 @@ def test_a_reachable_path_is_checked_once_per_process_and_a_changed_one_again(mo
     for _ in range(2):
         with pytest.raises(ConfigError, match="leaves the workspace"):
             ex.build(config.replace(trajectory={"axis_b": [0.0, 0.8]}))
+
+
+INERT_CASES = [
+    ("paper-ellipse", {}),
+    ("paper-ellipse", {"controller": {"kind": "pd"}}),
+    ("paper-ellipse", {"controller": {"kind": "computed-torque"}}),
+    ("paper-ellipse", {"controller": {"kind": "sliding-mode"}, "plant": {"disturbance": "none"}}),
+    ("panda-ellipse", {"simulation": {"adaptive_step": False}, "plant": {"joint_stops": False}}),
+]
+
+
+@pytest.mark.parametrize(("preset", "changes"), INERT_CASES)
+def test_every_key_called_inert_changes_nothing(preset, changes):
+    """config.inert_keys: each numeric key it names, changed, leaves the run bit for bit the same
+    (what `run --set` warns about), and a key it does not name is not claimed inert."""
+    from nnrobust.config import inert_keys
+
+    sections = {**changes, "simulation": {**changes.get("simulation", {}), "duration": 0.05}}
+    config = load_preset(preset).replace(**sections)
+    reference = run_experiment(config).q
+    inert = inert_keys(config)
+    representative = {"nn.": "nn.F", "subtasks.": "subtasks.C", "nominal.": "nominal.relative_error"}
+    checked = 0
+    for key in inert:
+        key = representative.get(key, key)
+        section, name = key.split(".")
+        value = getattr(getattr(config, section), KEY_ALIASES.get(name, name))
+        if value is None and name == "pd_null_damping":
+            value = 1.0
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            continue  # lists, strings and unset lists: numbers only here
+        new = 0.2 if name == "relative_error" else value * 1.5 + 0.1
+        changed = config.replace(**{section: {name: new}})
+        if section == "subtasks" and name == "C":
+            changed = config.replace(subtasks={"C": new, "weights": None})
+        np.testing.assert_array_equal(run_experiment(changed).q, reference, err_msg=f"{key} = {new}")
+        checked += 1
+    assert checked >= 3
+    assert "controller.Kp" not in inert or config.controller.kind == "pd"
+
+
+def test_run_warns_about_a_set_key_that_changes_nothing(tmp_path):
+    with pytest.warns(UserWarning, match=r"--set controller.Kp changes nothing here: controller.kind = 'pd'"):
+        args = ["run", "paper-ellipse", "--controller", "pd", "--set", "controller.Kp=[20.0]"]
+        code = main(
+            [*args, "--duration", "0.05", "--no-plots", "--no-animation", "--out", str(tmp_path / "r")]
+        )
+    assert code == 0
