@@ -1627,11 +1627,11 @@ def _box(folder: Path, vary: str):
     return check
 
 
-def _entry_sweep(folder: Path, entry: str):
+def _entry_sweep(folder: Path, entry: str, tables: str = ""):
     def check():
         from nnrobust.sweep import load_sweep
 
-        text = f'name = "s"\nbase = "paper-ellipse"\ncontrollers = ["nn", {entry}]\n'
+        text = f'name = "s"\nbase = "paper-ellipse"\ncontrollers = ["nn", {entry}]\n{tables}'
         return load_sweep(_file(folder, "s.toml", text))
 
     return check
@@ -1686,6 +1686,14 @@ FALSIFY_CASES = [
         lambda d: _entry_sweep(d, '{name = "fast", kind = "nn", set = {"plant.payload" = 1.0}}'),
         ex.ConfigError,
         "controllers[1].set.plant.payload: an entry's settings are the law's own",
+    ),
+    Case(
+        "sweep file: [set] and a controllers entry set the same key",
+        lambda d: _entry_sweep(
+            d, '{name = "fast", kind = "nn", set = {"nn.F" = 0.5}}', '[set]\n"nn.F" = 5.0\n'
+        ),
+        ex.ConfigError,
+        "set.nn.F: is also set by the controllers entry 'fast', whose own value would win",
     ),
     Case(
         "sweep file: a controllers entry with a class and a kind",

@@ -270,6 +270,16 @@ def parse_sweep(data: dict, where: str = "sweep") -> SweepSpec:
                 "controller; give a custom law's parameters in its entry: {name = ..., class = "
                 "..., params = {...}}",
             )
+    for name, entry in entries.items():  # an entry's own settings win over [set] and [vary]: refuse both
+        for table in ("set", "vary"):
+            table_keys = data.get(table, {}) if isinstance(data.get(table, {}), dict) else {}
+            both = [k for k in (entry.get("set") or {}) if k in table_keys]
+            if both:
+                raise ConfigError(
+                    f"{where}: {table}.{both[0]}",
+                    f"is also set by the controllers entry {name!r}, whose own value would win for "
+                    "its rows; give it in one place",
+                )
     for key, low in (("samples", 1), ("seed", 0)):
         value = data.get(key, low)
         if isinstance(value, bool) or not isinstance(value, int) or not low <= value < 2**63:
