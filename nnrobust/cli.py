@@ -168,6 +168,10 @@ def cmd_run(args) -> int:
     if args.backend:
         changes.setdefault("simulation", {})["backend"] = args.backend
     if args.view:  # the live view follows the run step by step: the Python loop
+        if args.backend and args.backend != "python":
+            raise ConfigError(
+                "--backend", f"--view follows the run on the Python loop; drop --backend {args.backend}"
+            )
         changes.setdefault("simulation", {})["backend"] = "python"
     if changes:
         config = config.replace(**changes)
