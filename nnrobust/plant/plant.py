@@ -37,9 +37,9 @@ class Plant:
         engine: MuJoCo, when it integrates the plant (built by the experiment).
         loads: torque steps and impulses, a tool wrench, payload changes (``[[plant.loads]]``),
             held over each control period from :meth:`begin_period`.
-        payload_inertias: for each payload change of ``loads``, the inertia of the joint that
-            carries the task frame with that payload (its last entry: without any), a
-            Pinocchio model only.
+        payload_inertias: for each payload change of ``loads`` in order, the inertia of the
+            joint that carries the task frame with that payload; the last entry is that joint's
+            inertia before any change (a Pinocchio model, copied for the plant alone).
 
     """
 
