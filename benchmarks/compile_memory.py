@@ -14,6 +14,7 @@ import argparse
 import glob
 import re
 import shlex
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -26,10 +27,19 @@ ROOT = Path(__file__).resolve().parent.parent
 TARGET_GB = 1.5
 
 
+def _tool(name: str, *places: str) -> str:
+    """A program the measurement needs, or a one-line exit naming it."""
+    found = next((p for p in places if Path(p).is_file()), None) or shutil.which(name)
+    if found is None:
+        sys.exit(f"compile_memory: needs {name} ({' or '.join(places) or 'on PATH'}); install it")
+    return found
+
+
 def unit_commands(build: Path) -> dict[str, list[str]]:
     """csrc unit name -> its compile command (argv), from Ninja's record of the build."""
+    ninja = _tool("ninja", str(Path(sys.executable).parent / "ninja"))
     listing = subprocess.run(
-        ["ninja", "-C", str(build), "-t", "commands"], capture_output=True, text=True, check=True
+        [ninja, "-C", str(build), "-t", "commands"], capture_output=True, text=True, check=True
     ).stdout
     commands = {}
     for line in listing.splitlines():
@@ -46,7 +56,9 @@ def measure(argv: list[str]) -> tuple[float, float]:
         argv[argv.index("-o") + 1] = str(Path(scratch) / "unit.o")
         argv = [a for a in argv if a not in ("-MD", "-MMD")]
         start = time.perf_counter()
-        done = subprocess.run(["/usr/bin/time", "-v", *argv], capture_output=True, text=True)
+        done = subprocess.run(
+            [_tool("GNU time", "/usr/bin/time"), "-v", *argv], capture_output=True, text=True
+        )
         wall = time.perf_counter() - start
     if done.returncode != 0:
         sys.exit(f"compile failed:\n{done.stderr[-3000:]}")
