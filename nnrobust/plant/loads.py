@@ -96,13 +96,6 @@ class ExternalLoads:
                 wrench = w.wrench if wrench is None else wrench + w.wrench
         return HeldLoads(torque, wrench)
 
-    def switch_times(self) -> np.ndarray:
-        """Every instant at which a load starts or ends [s] (finite ones, sorted)."""
-        times = [p.start for p in self.pulses] + [p.end for p in self.pulses]
-        times += [w.start for w in self.wrenches] + [w.end for w in self.wrenches]
-        times += [c.start for c in self.payloads]
-        return np.unique([t for t in times if np.isfinite(t)])
-
 
 _KEYS = {
     "step": ("torque",),
