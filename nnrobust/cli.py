@@ -16,6 +16,7 @@ from .run_folder import (
     ExtrasInterrupted,
     RunFolderError,
     check_out_folder,
+    check_parent,
     load_run,
     locked,
     redraw_run,
@@ -703,11 +704,7 @@ def check_figure_folder(folder: str) -> None:
     path = Path(folder)
     if path.exists() and not path.is_dir():
         raise RunFolderError(f"{folder} exists and is not a folder; choose another --out")
-    existing = next((p for p in (path, *path.parents) if p.exists()), Path("."))
-    if not existing.is_dir():
-        raise RunFolderError(f"{existing} is a file, not a folder: {folder} cannot be made there")
-    if not os.access(existing, os.W_OK | os.X_OK):
-        raise RunFolderError(f"{existing} is not writable: {folder} cannot be made there")
+    check_parent(path)
 
 
 def cmd_compare(args) -> int:

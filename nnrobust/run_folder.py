@@ -96,6 +96,12 @@ def check_out_folder(folder: str | Path, overwrite: bool) -> Path:
                 f"{folder} is not a run folder (no {MARKER}); --overwrite replaces only "
                 "run folders nnrobust wrote. Choose another --out"
             )
+    check_parent(folder)
+    return folder
+
+
+def check_parent(folder: Path) -> None:
+    """Make ``folder``'s parent, or refuse at once: a file on its path, no permission to write."""
     parent = folder.parent
     existing = next((p for p in (parent, *parent.parents) if p.exists()), None)
     if existing is not None and not existing.is_dir():
@@ -106,7 +112,6 @@ def check_out_folder(folder: str | Path, overwrite: bool) -> Path:
         raise RunFolderError(f"cannot create {parent}: {err.strerror or err}") from err
     if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
         raise RunFolderError(f"cannot write in {parent} (permission denied); choose another --out")
-    return folder
 
 
 @contextlib.contextmanager
