@@ -787,13 +787,26 @@ def load_config(path: str | Path) -> ExperimentConfig:
 
 RECORDED_DIGEST = re.compile(r"^# urdf sha256: ([0-9a-f]{64})$", re.MULTILINE)
 
-USER_CLASS_KEYS = {
-    "controller": ("controller", "class"),
-    "trajectory": ("trajectory", "class"),
-    "disturbance": ("plant", "disturbance_class"),
-    "criterion": ("subtasks", "criterion_class"),
+USER_PARTS = {
+    "controller": ("controller", "class", "params", "kind"),
+    "trajectory": ("trajectory", "class", "params", "kind"),
+    "disturbance": ("plant", "disturbance_class", "disturbance_params", "disturbance"),
+    "criterion": ("subtasks", "criterion_class", "criterion_params", "criteria"),
 }
-"""The parts an experiment file may take from a user's class: part -> (section, TOML key)."""
+"""The parts an experiment may take from a user's class: part -> (section, TOML key of the class,
+of its params, and of the choice that names it: ``"custom"``, or ``"custom"`` in a list)."""
+
+
+def _user_part(config: ExperimentConfig, part: str) -> tuple[str | None, dict | None, bool, object]:
+    """(class, params, chosen, the choice's value) of one of :data:`USER_PARTS` in a configuration."""
+    section, class_key, params_key, choice = USER_PARTS[part]
+    table = getattr(config, section)
+    now = getattr(table, choice)
+    if choice == "criteria":
+        now = now or []
+    chosen = "custom" in now if isinstance(now, list) else now == "custom"
+    return getattr(table, KEY_ALIASES.get(class_key, class_key)), getattr(table, params_key), chosen, now
+
 
 MAX_BASE_DEPTH = 8
 """Experiment files that start from one another (``base = "file.toml"``), at most this deep."""
@@ -801,7 +814,7 @@ MAX_BASE_DEPTH = 8
 
 def _file_data(path: Path, text: str, depth: int = 0) -> dict:
     """An experiment file's table with its relative paths (robot.source, the classes of
-    :data:`USER_CLASS_KEYS`) made
+    :data:`USER_PARTS`) made
     absolute from the file's folder, merged over its ``base`` (a preset name or an experiment
     file): the file's keys win, section by section.
     """
@@ -823,7 +836,7 @@ def _file_data(path: Path, text: str, depth: int = 0) -> dict:
         robot["source"] = str(resolved)
     from .user_code import class_file
 
-    for section, key in USER_CLASS_KEYS.values():
+    for section, key, _, _ in USER_PARTS.values():
         table = data.get(section)
         if isinstance(table, dict) and isinstance(table.get(key), str):
             where, name = class_file(table[key]), table[key].rpartition(":")[2]
@@ -863,14 +876,8 @@ def user_classes(config: ExperimentConfig) -> dict[str, str]:
     """The user classes the experiment uses: part (controller, trajectory, disturbance,
     criterion) -> its ``"file.py:Class"`` or ``"package.module:Class"``.
     """
-    c, tc, pc, sc = config.controller, config.trajectory, config.plant, config.subtasks
-    used = {
-        "controller": c.class_ if c.kind == "custom" else None,
-        "trajectory": tc.class_ if tc.kind == "custom" else None,
-        "disturbance": pc.disturbance_class if pc.disturbance == "custom" else None,
-        "criterion": sc.criterion_class if "custom" in (sc.criteria or ()) else None,
-    }
-    return {part: spec for part, spec in used.items() if spec}
+    parts = {part: _user_part(config, part) for part in USER_PARTS}
+    return {part: spec for part, (spec, _, chosen, _) in parts.items() if chosen and spec}
 
 
 def user_files(config: ExperimentConfig) -> dict[str, str]:
@@ -1142,30 +1149,9 @@ def _check_user_classes(config: ExperimentConfig) -> None:
     """A class and its params belong to the choice that names a user's class (e.g.
     ``controller.kind = "custom"``), which needs the class.
     """
-    c, tc, pc, sc = config.controller, config.trajectory, config.plant, config.subtasks
-    criteria = sc.criteria or []
-    for class_key, params_key, spec, params, custom, choice, now in (
-        ("controller.class", "controller.params", c.class_, c.params, c.kind == "custom", "kind", c.kind),
-        ("trajectory.class", "trajectory.params", tc.class_, tc.params, tc.kind == "custom", "kind", tc.kind),
-        (
-            "plant.disturbance_class",
-            "plant.disturbance_params",
-            pc.disturbance_class,
-            pc.disturbance_params,
-            pc.disturbance == "custom",
-            "disturbance",
-            pc.disturbance,
-        ),
-        (
-            "subtasks.criterion_class",
-            "subtasks.criterion_params",
-            sc.criterion_class,
-            sc.criterion_params,
-            "custom" in criteria,
-            "criteria",
-            criteria,
-        ),
-    ):
+    for part, (section, class_name, params_name, choice) in USER_PARTS.items():
+        spec, params, custom, now = _user_part(config, part)
+        class_key, params_key = f"{section}.{class_name}", f"{section}.{params_name}"
         wanted = "criteria = [..., 'custom']" if choice == "criteria" else f"{choice} = 'custom'"
         if not custom:
             for key, value in ((class_key, spec), (params_key, params)):
