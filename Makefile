@@ -19,7 +19,7 @@ $(VENV)/.build-deps: pyproject.toml $(BIN)/activate
 	  | xargs $(BIN)/pip install --quiet
 	touch $@
 
-SOURCES := CMakeLists.txt $(wildcard csrc/*.hpp csrc/*.cpp)
+SOURCES := CMakeLists.txt $(wildcard csrc/*.hpp csrc/*.cpp csrc/laws/*.hpp csrc/laws/*.cpp)
 
 $(VENV)/.installed: pyproject.toml $(SOURCES) $(VENV)/.build-deps
 	CMAKE_BUILD_PARALLEL_LEVEL=2 $(BIN)/pip install --quiet --no-build-isolation -e .

@@ -1,6 +1,7 @@
 // nnrobust._loop: the one binding module of the compiled backend (docs/compiled.md).
 #include <nanobind/eigen/dense.h>
 #include <nanobind/nanobind.h>
+#include <nanobind/stl/map.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/vector.h>
 
@@ -134,7 +135,7 @@ NB_MODULE(_loop, m) {
   FIELD(nominal_coulomb); FIELD(coulomb_smoothing); FIELD(center); FIELD(axis_a); FIELD(axis_b);
   FIELD(path_kind); FIELD(path_breaks); FIELD(path_coefficients);
   FIELD(omega); FIELD(phase); FIELD(pose); FIELD(rotation0); FIELD(rotation_axis);
-  FIELD(rotation_amplitude); FIELD(rotation_omega); FIELD(rotation_phase); FIELD(law); FIELD(Kp); FIELD(Kv); FIELD(k); FIELD(pd_Kp); FIELD(pd_Kd);
+  FIELD(rotation_amplitude); FIELD(rotation_omega); FIELD(rotation_phase); FIELD(law); FIELD(law_params); FIELD(law_signals); FIELD(Kp); FIELD(Kv); FIELD(k); FIELD(pd_Kp); FIELD(pd_Kd);
   FIELD(null_damping); FIELD(criteria); FIELD(criterion_weights); FIELD(smoothness); FIELD(limit_lower);
   FIELD(limit_upper); FIELD(limit_margin); FIELD(smoothing_coefficients); FIELD(obstacle_centers);
   FIELD(obstacle_radii); FIELD(obstacle_influence); FIELD(link_radius);
@@ -148,6 +149,7 @@ NB_MODULE(_loop, m) {
       .def_ro("tau", &LoopTrace::tau)
       .def_ro("tau_cmd", &LoopTrace::tau_cmd)
       .def_ro("z", &LoopTrace::z)
+      .def_ro("signals", &LoopTrace::signals)
       .def_ro("rho_hat", &LoopTrace::rho_hat)
       .def_ro("eps", &LoopTrace::eps)
       .def_ro("z_norm", &LoopTrace::z_norm)
@@ -180,7 +182,8 @@ NB_MODULE(_loop, m) {
       .def_ro("z", &nnrobust::ControlStep::z)
       .def_ro("rho_hat", &nnrobust::ControlStep::rho_hat)
       .def_ro("eps", &nnrobust::ControlStep::eps)
-      .def_ro("damping", &nnrobust::ControlStep::damping);
+      .def_ro("damping", &nnrobust::ControlStep::damping)
+      .def_ro("signals", &nnrobust::ControlStep::signals);
   m.def("twin_control", &nnrobust::twin_control, nb::arg("nominal").none(), nb::arg("spec"), nb::arg("t"),
         nb::arg("q"), nb::arg("v"), nb::arg("z"), "The compiled law's output and next state at one state.");
   m.def("twin_criterion_gradient", &nnrobust::twin_criterion_gradient, nb::arg("nominal").none(), nb::arg("spec"),

@@ -81,6 +81,7 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
   tr.tau = tr.q;
   tr.tau_cmd = tr.q;
   tr.z = Rows::Constant(steps, s.z0.size(), nan);
+  tr.signals = Rows::Constant(steps, s.law_signals, nan);
   tr.rho_hat = Vector::Constant(steps, nan);
   tr.eps = tr.rho_hat;
   tr.z_norm = tr.rho_hat;
@@ -138,6 +139,12 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
     tr.eps[k] = out.eps;
     tr.z_norm[k] = out.z_norm;
     tr.damping[k] = out.damping;
+    if (s.law_signals) {
+      if (out.signals.size() != s.law_signals)
+        throw std::length_error("the law " + s.law + " returned " + std::to_string(out.signals.size()) +
+                                " signals; its Python twin declares " + std::to_string(s.law_signals));
+      tr.signals.row(k) = out.signals;
+    }
     if (q.allFinite()) record_kinematics(model, s, controller.criteria, q, k, tr);
     if (!out.tau.allFinite() || !q.allFinite() || !v.allFinite()) {
       tr.status = "diverged";
@@ -204,7 +211,7 @@ ControlStep twin_control(LoadedModel *nominal_model, const LoopSpec &s, double t
   const std::unique_ptr<Nominal> nominal = make_nominal(s, nominal_model);
   Controller controller(s, *nominal);
   const Output out = controller.compute(t, q, v, z);
-  return {out.tau, out.z, out.rho_hat, out.eps, out.damping};
+  return {out.tau, out.z, out.rho_hat, out.eps, out.damping, out.signals};
 }
 
 Vector twin_criterion_gradient(LoadedModel *nominal_model, const LoopSpec &s, const Vector &q) {

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -83,8 +84,11 @@ struct LoopSpec {
   Eigen::Matrix3d rotation0 = Eigen::Matrix3d::Identity();
   Eigen::Vector3d rotation_axis = Eigen::Vector3d::UnitZ();
   double rotation_amplitude = 0.0, rotation_omega = 1.0, rotation_phase = 0.0;
-  // the law: "task-space" (TaskSpaceController, eq. 9) or "pd" (TaskSpacePD)
+  // the law: "task-space" (TaskSpaceController, eq. 9), "pd" (TaskSpacePD), or a registered law's
+  // twin (csrc/laws/) with its fields by name (Law.twin_values) and its number of signals
   std::string law = "task-space";
+  std::map<std::string, Matrix> law_params;
+  int law_signals = 0;
   Matrix Kp, Kv;
   double k = 0.0;
   Matrix pd_Kp, pd_Kd;
@@ -115,6 +119,7 @@ struct LoopSpec {
 // What simulate() returns (nnrobust.simulation.Trace).
 struct LoopTrace {
   Rows q, dq, tau, tau_cmd, z;
+  Rows signals;  // a registered law's signals: steps x LoopSpec.law_signals
   Vector rho_hat, eps, z_norm, damping;
   // what Result.from_trace records, from the true robot's kinematics (nnrobust/results.py)
   Rows chain;            // steps x 3(n + 1): joint origins, then the task frame, in world axes
@@ -148,6 +153,7 @@ LoopTrace run_loop(LoadedModel &plant, LoadedModel *nominal, const LoopSpec &spe
 struct ControlStep {
   Vector tau, z;
   double rho_hat, eps, damping;
+  Vector signals;
 };
 ControlStep twin_control(LoadedModel *nominal, const LoopSpec &spec, double t, const Vector &q, const Vector &v,
                          const Vector &z);

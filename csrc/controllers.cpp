@@ -1,5 +1,7 @@
 #include "controllers.hpp"
 
+#include "laws/law.hpp"
+
 #include <algorithm>
 #include <stdexcept>
 
@@ -10,8 +12,12 @@ namespace nnrobust {
 
 Controller::Controller(const LoopSpec &spec, Nominal &model) : s(spec), nominal(model), criteria(spec) {
   L = static_cast<int>(spec.basis_bias) + static_cast<int>(spec.basis_centers.size());
-  if (spec.law != "pd" && spec.law != "task-space" && spec.law != "external")
-    throw std::invalid_argument("LoopSpec.law: unknown law " + spec.law);
+  if (spec.law != "pd" && spec.law != "task-space" && spec.law != "external") {
+    const LawFactory factory = find_law(spec.law);
+    if (!factory) throw std::invalid_argument("LoopSpec.law: unknown law " + spec.law);
+    LawContext context{spec, model, *this};
+    law = factory(LawParams{spec.law, spec.law_params}, context);
+  }
   if (spec.robust != "none" && spec.robust != "nn" && spec.robust != "sliding")
     throw std::invalid_argument("LoopSpec.robust: unknown robust term " + spec.robust);
   if (spec.path_kind != "ellipse" && spec.path_kind != "piecewise")
@@ -20,6 +26,8 @@ Controller::Controller(const LoopSpec &spec, Nominal &model) : s(spec), nominal(
   piecewise = spec.path_kind == "piecewise";
   robust = spec.robust == "nn" ? Robust::nn : spec.robust == "sliding" ? Robust::sliding : Robust::none;
 }
+
+Controller::~Controller() = default;
 
 // AdditiveRBFBasis.__call__
 Vector Controller::basis(const Vector &in) const {
@@ -81,33 +89,42 @@ void Controller::path(double t, Vector &pd, Vector &dpd, Vector &ddpd) const {
   }
 }
 
-// TaskSpaceController.compute (eq. 9 with u_0 and the null-space term of eq. 3), or TaskSpacePD's
-Output Controller::compute(double t, const Vector &q, const Vector &v, const Vector &z) {
-  Output out;
-  out.z = z;
-  const TaskState ts = nominal.task_state(q, v);
-  const Matrix &J = ts.J;
+TaskReference Controller::reference(double t, const Vector &q, const Vector &v) const {
+  TaskReference r{nominal.task_state(q, v), {}, {}, {}, {}};
+  const TaskState &ts = r.ts;
   Vector pd, dpd, ddpd;
   path(t, pd, dpd, ddpd);
-  Vector e, dxd, ddxd;
   if (s.pose) {  // PoseTrajectory.__call__ and tasks.task_error("pose")
     const double arg = s.rotation_omega * t + s.rotation_phase;
     const double theta = s.rotation_amplitude * std::sin(arg);
     const double dtheta = s.rotation_amplitude * s.rotation_omega * std::cos(arg);
     const double ddtheta = -s.rotation_amplitude * s.rotation_omega * s.rotation_omega * std::sin(arg);
     const Eigen::Matrix3d Rd = pinocchio::exp3(Vector3d(theta * s.rotation_axis)) * s.rotation0;
-    e.resize(6);
-    dxd.resize(6);
-    ddxd.resize(6);
-    e << ts.x - pd, pinocchio::log3(Eigen::Matrix3d(ts.R * Rd.transpose()));
-    dxd << dpd, dtheta * s.rotation_axis;
-    ddxd << ddpd, ddtheta * s.rotation_axis;
+    r.e.resize(6);
+    r.dxd.resize(6);
+    r.ddxd.resize(6);
+    r.e << ts.x - pd, pinocchio::log3(Eigen::Matrix3d(ts.R * Rd.transpose()));
+    r.dxd << dpd, dtheta * s.rotation_axis;
+    r.ddxd << ddpd, ddtheta * s.rotation_axis;
   } else {
-    e = ts.x - pd;
-    dxd = dpd;
-    ddxd = ddpd;
+    r.e = ts.x - pd;
+    r.dxd = dpd;
+    r.ddxd = ddpd;
   }
-  const Vector de = J * v - dxd;
+  r.de = ts.J * v - r.dxd;
+  return r;
+}
+
+// TaskSpaceController.compute (eq. 9 with u_0 and the null-space term of eq. 3), or TaskSpacePD's;
+// a registered law's own compute
+Output Controller::compute(double t, const Vector &q, const Vector &v, const Vector &z) {
+  if (law) return law->compute(t, q, v, z);
+  Output out;
+  out.z = z;
+  const TaskReference r = reference(t, q, v);
+  const TaskState &ts = r.ts;
+  const Matrix &J = ts.J;
+  const Vector &e = r.e, &de = r.de, &ddxd = r.ddxd;
   double lam2 = 0.0;
   const Matrix inv = pinv_factor(J, lam2);
   const Matrix J_pinv = J.transpose() * inv;
@@ -154,13 +171,18 @@ Output Controller::compute(double t, const Vector &q, const Vector &v, const Vec
     const Vector zz = grad - v;
     a += s.k * (zz - J_pinv * (J * zz));
   }
-  Vector friction(q.size());
-  for (int i = 0; i < q.size(); ++i) {
+  out.tau = nominal.inverse_dynamics(q, v, a) + nominal_friction(v);
+  return out;
+}
+
+// Friction.torque of the controller's F-hat
+Vector Controller::nominal_friction(const Vector &v) const {
+  Vector friction(v.size());
+  for (int i = 0; i < v.size(); ++i) {
     const double sg = s.coulomb_smoothing <= 0 ? sign(v[i]) : std::clamp(v[i] / s.coulomb_smoothing, -1.0, 1.0);
     friction[i] = s.nominal_viscous[i] * v[i] + s.nominal_coulomb[i] * sg;
   }
-  out.tau = nominal.inverse_dynamics(q, v, a) + friction;
-  return out;
+  return friction;
 }
 
 }  // namespace nnrobust

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cmath>
+#include <memory>
 
 #include "nominal.hpp"
 #include "subtasks.hpp"
@@ -14,7 +15,11 @@ struct Output {
   Vector tau;
   Vector z;
   double rho_hat = NAN, eps = NAN, z_norm = NAN, damping = 0.0;
+  Vector signals;  // a registered law's (LoopSpec.law_signals entries)
 };
+
+struct Law;
+struct TaskReference;
 
 struct Controller {
   const LoopSpec &s;
@@ -24,14 +29,20 @@ struct Controller {
   // s.law, s.robust and s.path_kind resolved once (an unknown name is refused)
   bool law_pd = false, piecewise = false;
   enum class Robust { none, nn, sliding } robust = Robust::none;
+  std::unique_ptr<Law> law;  // a registered law (csrc/laws/), built from spec.law_params
 
   Controller(const LoopSpec &spec, Nominal &model);
+  ~Controller();
   // AdditiveRBFBasis.__call__: [1, exp(-(s_j - c_jk)^2 inv2w2_j) for j, k]
   Vector basis(const Vector &in) const;
   // DampedPseudoInverse.factor: ((J J^T + lambda^2 I)^-1, lambda^2)
   Matrix pinv_factor(const Matrix &J, double &lam2) const;
   // the position path at t: EllipseTrajectory or PiecewisePolynomialPath.__call__ (Horner's rule)
   void path(double t, Vector &pd, Vector &dpd, Vector &ddpd) const;
+  // the task state and error at t (PoseTrajectory and tasks.task_error for a pose)
+  TaskReference reference(double t, const Vector &q, const Vector &v) const;
+  // Friction.torque of F-hat (nominal_viscous, nominal_coulomb, coulomb_smoothing) at v
+  Vector nominal_friction(const Vector &v) const;
   // the law's torque, signals and next state at t from the measured (q, v) and the state z
   Output compute(double t, const Vector &q, const Vector &v, const Vector &z);
 };

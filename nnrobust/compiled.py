@@ -133,6 +133,7 @@ def twin_refusal(setup) -> str:
     quantisation, delay), integrated by RK4.
     """
     from .controllers import NNCompensator, SlidingModeCompensator, TaskSpaceController, TaskSpacePD
+    from .controllers.registry import registered_law
     from .model import PinocchioModel, ThreeLinkPlanarModel
     from .trajectories import EllipseTrajectory, PiecewisePolynomialPath, PoseTrajectory
 
@@ -142,9 +143,11 @@ def twin_refusal(setup) -> str:
         return refusal
     if is_custom(controller):
         return f"a custom controller ({type(controller).__name__}) runs in Python: --backend hybrid or python"
+    law = registered_law(config.controller.kind)
     checks = [
         (
-            type(controller) in (TaskSpaceController, TaskSpacePD),
+            type(controller) in (TaskSpaceController, TaskSpacePD)
+            or (law is not None and law.twin is not None),
             f"controller.kind {config.controller.kind!r}",
         ),
         (isinstance(setup.nominal, (ThreeLinkPlanarModel, PinocchioModel)), "the nominal model"),
@@ -268,6 +271,12 @@ def _loads_spec(s, plant, f) -> None:
         s.payload_joint = plant.model.model.frames[plant.model.frame_id].parentJoint
 
 
+def _friction_spec(s, friction, f) -> None:
+    """The controller's F-hat into the spec."""
+    s.nominal_viscous, s.nominal_coulomb = f(friction.viscous), f(friction.coulomb)
+    s.coulomb_smoothing = friction.smoothing
+
+
 def loop_spec(setup, duration: float, external: bool = False):
     """The compiled loop's description of a built experiment (every array it needs); with
     ``external``, of its plant alone (the hybrid loop: the controller is called in Python).
@@ -276,6 +285,7 @@ def loop_spec(setup, duration: float, external: bool = False):
 
     from .config import step_rotation_limit
     from .controllers import NNCompensator, TaskSpacePD
+    from .controllers.registry import registered_law
     from .model import PinocchioModel
     from .simulation import MAX_PERIOD_SUBSTEPS, MAX_SPEED
     from .trajectories import PiecewisePolynomialPath
@@ -347,14 +357,22 @@ def loop_spec(setup, duration: float, external: bool = False):
         s.omega, s.phase = trajectory.omega, trajectory.phase
     s.pinv_threshold, s.pinv_max_damping = controller.pinv.threshold, controller.pinv.max_damping
     s.nominal_viscous, s.nominal_coulomb = f(np.zeros(n)), f(np.zeros(n))
+    law = registered_law(setup.config.controller.kind)
+    if law is not None:  # a registered law's twin: its declared fields, F-hat, its signals
+        s.law, s.law_params, s.law_signals = (
+            law.twin,
+            law.twin_values(controller),
+            len(controller.signal_names),
+        )
+        _friction_spec(s, controller.nominal_friction, f)
+        s.z0 = f(controller.initial_state())
+        return s
     if isinstance(controller, TaskSpacePD):
         s.law = "pd"
         s.pd_Kp, s.pd_Kd, s.null_damping = f(controller.Kp), f(controller.Kd), controller.null_damping
         s.z0 = np.zeros(0)
         return s
-    s.nominal_viscous = f(controller.nominal_friction.viscous)
-    s.nominal_coulomb = f(controller.nominal_friction.coulomb)
-    s.coulomb_smoothing = controller.nominal_friction.smoothing
+    _friction_spec(s, controller.nominal_friction, f)
     s.Kp, s.Kv, s.k = f(controller.Kp), f(controller.Kv), controller.k
     comp = controller.compensator
     s.z0 = f(controller.initial_state())
@@ -398,7 +416,10 @@ def _trace(setup, spec, out):
     done, period = out.done, setup.config.simulation.control_period
     t = np.arange(done) * period
     signals = {"damping": np.asarray(out.damping)[:done]}
-    if spec.robust == "nn":
+    if spec.law_signals:  # a registered law's, in its signal_names order
+        names = setup.controller.signal_names
+        signals = {name: np.asarray(out.signals)[:done, i] for i, name in enumerate(names)}
+    elif spec.robust == "nn":
         signals = {
             "rho_hat": np.asarray(out.rho_hat)[:done],
             "eps": np.asarray(out.eps)[:done],

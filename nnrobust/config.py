@@ -427,7 +427,19 @@ class ControllerConfig:
 
 
 CONTROLLER_KINDS = ("nn", "no-u0", "computed-torque", "sliding-mode", "pd")
-"""The built-in values of ``controller.kind``; ``custom`` names a user's class (``controller.class``)."""
+"""The built-in values of ``controller.kind`` set by flat keys; the registered laws
+(:func:`controller_kinds`) take ``[controller.params]``, and ``custom`` names a user's class
+(``controller.class``)."""
+
+
+def controller_kinds() -> tuple[str, ...]:
+    """Every valid ``controller.kind``: the built-in kinds, the registered laws
+    (nnrobust/controllers/laws/) and ``custom``.
+    """
+    from .controllers.registry import law_names
+
+    return (*CONTROLLER_KINDS, *law_names(), "custom")
+
 
 EQ9_KINDS = ("nn", "no-u0", "computed-torque", "sliding-mode")
 """The kinds that are the task-space law of eq. (9), whose Kp and Kv eq. (17) constrains."""
@@ -1063,7 +1075,9 @@ def inert_keys(config: ExperimentConfig) -> dict[str, str]:
             inert.setdefault(key, why)
 
     kind = f"controller.kind = {c.kind!r}"
-    if c.kind not in EQ9_KINDS:
+    if c.kind not in EQ9_KINDS and c.kind != "custom" and c.kind != "pd":  # a registered law
+        mark(["controller.Kp", "controller.Kv", "controller.k"], f"{kind} is not eq. (9)")
+    elif c.kind not in EQ9_KINDS:
         mark(["controller.Kp", "controller.Kv", "controller.k", "subtasks."], f"{kind} is not eq. (9)")
         mark(["controller.coulomb_smoothing", "nominal.viscous_friction", "nominal.coulomb_friction"], kind)
     if c.kind != "nn":
@@ -1149,9 +1163,19 @@ def _check_user_classes(config: ExperimentConfig) -> None:
     """A class and its params belong to the choice that names a user's class (e.g.
     ``controller.kind = "custom"``), which needs the class.
     """
+    from .controllers.registry import registered_law
+
     for part, (section, class_name, params_name, choice) in USER_PARTS.items():
         spec, params, custom, now = _user_part(config, part)
         class_key, params_key = f"{section}.{class_name}", f"{section}.{params_name}"
+        law = registered_law(str(now)) if part == "controller" else None
+        if law is not None:  # a registered law: its declared params, no class
+            if spec is not None:
+                raise ConfigError(
+                    class_key, f"is read only with kind = 'custom' (kind is {now!r}, a shipped law)"
+                )
+            law.resolve(params, None, TASK_KINDS[config.robot.task])
+            continue
         wanted = "criteria = [..., 'custom']" if choice == "criteria" else f"{choice} = 'custom'"
         if not custom:
             for key, value in ((class_key, spec), (params_key, params)):
@@ -1265,7 +1289,7 @@ def validate(config: ExperimentConfig) -> None:
         ),
         "plant.engine": (config.plant.engine, ENGINES),
         "plant.mujoco_integrator": (config.plant.mujoco_integrator, MUJOCO_INTEGRATORS),
-        "controller.kind": (c.kind, (*CONTROLLER_KINDS, "custom")),
+        "controller.kind": (c.kind, controller_kinds()),
         "nn.law": (nn.law, ("corrected", "printed")),
         "nn.basis_input": (nn.basis_input, ("joint", "error")),
         "simulation.integrator": (sim.integrator, ("rk4", "solve_ivp")),

@@ -34,6 +34,7 @@ from .controllers import (
     TaskSpacePD,
 )
 from .controllers.custom import build_custom
+from .controllers.registry import registered_law
 from .controllers.task_space import sized_null_damping
 from .exceptions import ConfigError, ModelMismatch
 from .ik import solve_ik
@@ -502,6 +503,9 @@ def build_controller(
     c = config.controller
     if c.kind == "custom":
         return build_custom(c.class_ or "", c.params, context)
+    law = registered_law(c.kind)
+    if law is not None:
+        return law.build(context, c.params)
     pinv = DampedPseudoInverse(c.pinv_threshold, c.pinv_max_damping)
     if c.kind == "pd":
         Kd = np.diag(c.pd_Kd)

@@ -1,0 +1,59 @@
+// The registered control laws on the C++ side (the twins of nnrobust/controllers/laws/): each law
+// is one file here that registers itself by name with NNROBUST_LAW, reads its numbers by name
+// from the fields its Python twin declares (Law.twin_fields; no defaults here: a missing field
+// is an error that names it), and uses the shared parts of the controller (the desired motion,
+// the damped pseudo-inverse, the criteria) through LawContext.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "../controllers.hpp"
+
+namespace nnrobust {
+
+// A registered law's fields, as LoopSpec.law_params carries them: 2-D arrays by name (a number
+// is 1 x 1, a vector k x 1).
+struct LawParams {
+  const std::string &law;
+  const std::map<std::string, Matrix> &values;
+
+  const Matrix &matrix(const std::string &name) const;
+  Vector vector(const std::string &name) const;  // a k x 1 field
+  double scalar(const std::string &name) const;  // a 1 x 1 field
+};
+
+// The task-space reference at a control instant (TaskSpaceController.compute's first lines):
+// the nominal model's task state, the task error e = x - x_d and e' = J q' - x_d', x_d', x_d''.
+struct TaskReference {
+  TaskState ts;
+  Vector e, de, dxd, ddxd;
+};
+
+// What a law is built with: the loop's spec, the controller's nominal model and the shared parts.
+struct LawContext {
+  const LoopSpec &spec;
+  Nominal &nominal;
+  Controller &shared;
+};
+
+struct Law {
+  virtual ~Law() = default;
+  // the torque, the signals (in the Python law's signal_names order) and the next state at t
+  virtual Output compute(double t, const Vector &q, const Vector &v, const Vector &z) = 0;
+};
+
+using LawFactory = std::unique_ptr<Law> (*)(const LawParams &, LawContext &);
+bool register_law(const char *name, LawFactory factory);
+LawFactory find_law(const std::string &name);  // nullptr when none has this name
+
+}  // namespace nnrobust
+
+// Registers `Class` (constructed as Class(const LawParams &, LawContext &)) under `name`.
+#define NNROBUST_LAW(name, Class)                                                                            \
+  static const bool nnrobust_registered_##Class = ::nnrobust::register_law(                                  \
+      name, [](const ::nnrobust::LawParams &p, ::nnrobust::LawContext &c) -> std::unique_ptr<::nnrobust::Law> { \
+        return std::make_unique<Class>(p, c);                                                                \
+      })

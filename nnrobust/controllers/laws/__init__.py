@@ -1,0 +1,3 @@
+"""The registered control laws: one module each, with its compiled twin in csrc/laws/ under the
+same name (nnrobust.controllers.registry imports every module here).
+"""

@@ -1,0 +1,219 @@
+"""The registry of control laws declared beside their code (docs/extending.md).
+
+A registered law is a :class:`nnrobust.Controller` built as ``Class(context, **params)`` from an
+experiment's ``controller.kind = NAME`` and ``[controller.params]``. Its module declares, once,
+with :func:`register_law`: its name, its parameters (unit, default, range, size, search bounds),
+its class and its compiled twin; every module of nnrobust/controllers/laws/ is imported
+to find them. The configuration checks, ``nnrobust run --help``, the docs' key
+reference (docs/controller.md) and the compiled loop's spec are derived from that declaration, so
+adding a law touches its Python file, its C++ twin (csrc/laws/) and its tests.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..exceptions import ConfigError
+
+
+@dataclass(frozen=True)
+class LawParam:
+    """One parameter of a registered law (a key of ``[controller.params]``).
+
+    Attributes:
+        name: the keyword argument of the law's constructor.
+        default: its value when the experiment leaves it out (None: the law sizes it, as ``doc``
+            says).
+        unit: its unit ("-" for none).
+        doc: one line on what it is.
+        low, high: the closed range of every entry (numbers).
+        size: ``"1"`` (a number), ``"m"`` (one or one per task coordinate) or ``"n"`` (one or
+            one per joint).
+        choices: the accepted strings, for a text parameter.
+        search: (low, high) of the tuner's log-uniform search, or a function of the arm's scales
+            (:func:`nnrobust.tune.arm_scales`) returning them; None: not searched.
+
+    """
+
+    name: str
+    default: float | str | bool | None
+    unit: str
+    doc: str
+    low: float = -math.inf
+    high: float = math.inf
+    size: str = "1"
+    choices: tuple[str, ...] = ()
+    search: tuple[float, float] | Callable[[dict], tuple[float, float]] | None = None
+
+    def check(self, value, n: int | None, m: int, key: str):
+        """The value checked and normalised (a float, a vector of its size, a bool or a string)."""
+        if self.choices:
+            if value not in self.choices:
+                raise ConfigError(key, f"expected one of {', '.join(map(repr, self.choices))}, got {value!r}")
+            return value
+        if isinstance(self.default, bool):
+            if not isinstance(value, bool):
+                raise ConfigError(key, f"expected true or false, got {value!r}")
+            return value
+        size = {"1": 1, "n": n, "m": m}[self.size]  # n is None before the robot is loaded
+        entries = value if isinstance(value, list) and self.size != "1" else [value]
+        if not entries or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in entries):
+            wanted = "a number" if self.size == "1" else f"a number or a list of {size or self.size}"
+            raise ConfigError(key, f"expected {wanted} [{self.unit}], got {value!r}")
+        arr = np.asarray(entries, dtype=float)
+        if size is not None and arr.size not in (1, size):
+            raise ConfigError(key, f"needs 1 or {size} entries ({self.size} = {size}), got {arr.size}")
+        bad = ~np.isfinite(arr) | (arr < self.low) | (arr > self.high)
+        if bad.any():
+            raise ConfigError(
+                key,
+                f"{float(arr[np.flatnonzero(bad)[0]]):g} is outside [{self.low:g}, {self.high:g}] [{self.unit}]",
+            )
+        if self.size == "1":
+            return float(arr[0])
+        return np.full(size or 1, arr[0]) if arr.size == 1 else arr
+
+    def describe(self) -> str:
+        """The parameter as the docs' key reference and the CLI help print it."""
+        default = "sized by the law" if self.default is None else repr(self.default)
+        size = {"1": "", "n": ", one or one per joint", "m": ", one or one per task coordinate"}[self.size]
+        return f"{self.name} [{self.unit}{size}]: {self.doc} (default {default})"
+
+
+@dataclass(frozen=True)
+class Law:
+    """A control law as the registry knows it.
+
+    Attributes:
+        name: the value of ``controller.kind``.
+        cls: the :class:`nnrobust.Controller` subclass, built as ``cls(context, **params)``.
+        summary: one line for the CLI help and the docs.
+        params: its parameters, in the constructor's order.
+        twin: the name its compiled twin registers under in csrc/laws/ (None: Python only).
+        twin_fields: the attributes of a built controller the twin reads (each a number, a
+            vector or a matrix), by name: the one list of what crosses to C++.
+
+    """
+
+    name: str
+    cls: type
+    summary: str
+    params: tuple[LawParam, ...]
+    twin: str | None = None
+    twin_fields: tuple[str, ...] = field(default=())
+
+    def param(self, name: str) -> LawParam | None:
+        """The declared parameter of this name, or None."""
+        return next((p for p in self.params if p.name == name), None)
+
+    def resolve(self, params: dict | None, n: int | None, m: int) -> dict:
+        """Every parameter's value: the given ones checked, the others at their defaults (n None:
+        the sizes of per-joint parameters are checked when the robot is built).
+        """
+        given = dict(params or {})
+        unknown = [k for k in given if self.param(k) is None]
+        if unknown:
+            from ..config import _suggest
+
+            raise ConfigError(
+                f"controller.params.{unknown[0]}",
+                f"{self.name} has no parameter {unknown[0]!r}"
+                f"{_suggest(unknown[0], [p.name for p in self.params])}; its parameters: "
+                f"{', '.join(p.name for p in self.params)}",
+            )
+        out = {}
+        for p in self.params:
+            if p.name in given:
+                out[p.name] = p.check(given[p.name], n, m, f"controller.params.{p.name}")
+            else:
+                out[p.name] = p.default
+        return out
+
+    def build(self, context, params: dict | None):
+        """``cls(context, **params)`` with every parameter checked and defaulted; an error of the
+        constructor names ``controller.params``.
+        """
+        from ..exceptions import NNRobustError
+        from ..user_code import located
+
+        resolved = self.resolve(params, context.n, context.m)
+        try:
+            return self.cls(context, **resolved)
+        except NNRobustError:
+            raise
+        except Exception as err:
+            raise ConfigError(
+                "controller.params", f"{self.cls.__name__}(context, **params) raised {located(err)}"
+            ) from err
+
+    def twin_values(self, controller) -> dict[str, np.ndarray]:
+        """The twin's fields of a built controller, each as a 2-D float array (a number 1 x 1,
+        a vector k x 1): what the compiled law reads by name (csrc/laws/law.hpp).
+        """
+        out = {}
+        for name in self.twin_fields:
+            value = np.asarray(getattr(controller, name), dtype=float)
+            out[name] = np.ascontiguousarray(value.reshape(-1, 1) if value.ndim < 2 else value)
+        return out
+
+    def search_bounds(self, scales: dict) -> dict[str, tuple[float, float, str]]:
+        """Parameter -> (low, high, unit) of the tuner's search on an arm of these scales."""
+        out = {}
+        for p in self.params:
+            if p.search is None:
+                continue
+            low, high = p.search(scales) if callable(p.search) else p.search
+            out[p.name] = (float(low), float(high), p.unit)
+        return out
+
+
+LAWS: dict[str, Law] = {}
+"""The registered laws by name, filled as their modules are imported (nnrobust.controllers)."""
+
+
+def register_law(law: Law) -> Law:
+    """Add a law to the registry (its module calls this once, at import)."""
+    if law.name in LAWS and LAWS[law.name].cls is not law.cls:
+        raise ValueError(f"a control law named {law.name!r} is already registered")
+    LAWS[law.name] = law
+    return law
+
+
+def _discover() -> None:
+    """Import every module of nnrobust/controllers/laws/: each registers its law."""
+    import importlib
+    import pkgutil
+
+    from . import laws
+
+    for module in pkgutil.iter_modules(laws.__path__):
+        importlib.import_module(f"{laws.__name__}.{module.name}")
+
+
+def registered_law(name: str) -> Law | None:
+    """The registered law named ``name`` (``controller.kind``), or None."""
+    if not LAWS:
+        _discover()
+    return LAWS.get(name)
+
+
+def law_names() -> tuple[str, ...]:
+    """The names of the registered laws, in registration order."""
+    registered_law("")
+    return tuple(LAWS)
+
+
+def key_reference() -> str:
+    """The registered laws and their ``[controller.params]``, as docs/controller.md lists them."""
+    registered_law("")
+    lines = []
+    for law in LAWS.values():
+        twin = f"compiled twin `csrc/laws/{law.twin}.cpp`" if law.twin else "Python only"
+        lines.append(f'### `kind = "{law.name}"`\n\n{law.summary} ({twin})\n')
+        lines += [f"- `{p.describe()}`" for p in law.params]
+        lines.append("")
+    return "\n".join(lines)
