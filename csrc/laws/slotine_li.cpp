@@ -1,0 +1,130 @@
+// SlotineLi (nnrobust/controllers/laws/slotine_li.py): task-space Slotine–Li adaptive control,
+// Y(q, q', q'_r, q''_r) theta-hat - K_D s, theta-hat advanced by explicit Euler over the period.
+#include <Eigen/Eigenvalues>
+#include <pinocchio/algorithm/regressor.hpp>
+
+#include "../nominal.hpp"
+#include "law.hpp"
+
+namespace nnrobust {
+namespace {
+
+struct SlotineLi : Law {
+  LawContext c;
+  Vector Lambda, K_D, theta0, armature, pseudo_floor;
+  double gamma, leakage, null_damping, criterion_gain;
+  bool exact, project;
+  PinocchioNominal *pin_model = nullptr;  // else the closed form, one unit model per column of Y
+  std::vector<ThreeLinkSpec> unit_specs;
+
+  SlotineLi(const LawParams &p, LawContext &context)
+      : c(context), Lambda(p.vector("Lambda")), K_D(p.vector("K_D")), theta0(p.vector("theta0")),
+        armature(p.vector("armature")), pseudo_floor(p.vector("pseudo_floor")), gamma(p.scalar("gamma")),
+        leakage(p.scalar("leakage")), null_damping(p.scalar("null_damping")),
+        criterion_gain(p.scalar("criterion_gain")), exact(p.scalar("exact") != 0.0),
+        project(p.scalar("project") != 0.0) {
+    pin_model = dynamic_cast<PinocchioNominal *>(&c.nominal);
+    if (!pin_model) {
+      const ThreeLinkSpec &s = c.spec.nominal;
+      for (int i = 0; i < 9; ++i) {  // theta = (beta, p, gamma)
+        ThreeLinkSpec unit = s;
+        unit.beta.setZero();
+        unit.p.setZero();
+        unit.gamma.setZero();
+        (i < 3 ? unit.beta : i < 6 ? unit.p : unit.gamma)[i % 3] = 1.0;
+        unit_specs.push_back(unit);
+      }
+    }
+  }
+
+  // Y with Y theta = M(q) a_r + C(q, v) v_r + G(q) (C(q, v_r) v_r when not exact), SlotineLi.regressor
+  Matrix regressor(const Vector &q, const Vector &v, const Vector &v_r, const Vector &a_r) const {
+    const Vector zero = Vector::Zero(q.size());
+    if (pin_model) {
+      auto Y = [&](const Vector &vel, const Vector &acc) -> Matrix {
+        return pinocchio::computeJointTorqueRegressor(pin_model->m.model, pin_model->m.data, q, vel, acc);
+      };
+      if (!exact) return Y(v_r, a_r);
+      const Matrix Y0 = Y(zero, a_r), Yp = Y(v + v_r, zero), Ym = Y(v - v_r, zero);
+      return Y0 + 0.25 * (Yp - Ym);
+    }
+    Matrix Y(3, 9);
+    const Vector3d q3 = q;
+    for (int i = 0; i < 9; ++i) {
+      const ThreeLink unit{unit_specs[i]};
+      const Vector3d g = unit.bias(q3, Vector3d::Zero());
+      const Vector3d coriolis = exact ? Vector3d(0.25 * (unit.bias(q3, v + v_r) - unit.bias(q3, v - v_r)))
+                                      : Vector3d(unit.bias(q3, v_r) - g);
+      Y.col(i) = unit.mass(q3) * a_r + coriolis + g;
+    }
+    return Y;
+  }
+
+  static Eigen::Matrix4d pseudo_inertia(const Vector &pi) {
+    Eigen::Matrix3d I;
+    I << pi[4], pi[5], pi[7], pi[5], pi[6], pi[8], pi[7], pi[8], pi[9];
+    Eigen::Matrix4d P;
+    P.topLeftCorner<3, 3>() = 0.5 * I.trace() * Eigen::Matrix3d::Identity() - I;
+    P.topRightCorner<3, 1>() = pi.segment<3>(1);
+    P.bottomLeftCorner<1, 3>() = pi.segment<3>(1).transpose();
+    P(3, 3) = pi[0];
+    return P;
+  }
+
+  double min_inertia_eigenvalue(const Vector &q, const Vector &theta) const {
+    if (!pin_model) {
+      Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
+      for (int i = 0; i < 9; ++i) M += theta[i] * ThreeLink{unit_specs[i]}.mass(q);
+      return Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(M, Eigen::EigenvaluesOnly).eigenvalues()[0];
+    }
+    double lowest = INFINITY;
+    for (int i = 0; i < theta.size(); i += 10) {
+      const Eigen::Matrix4d P = pseudo_inertia(theta.segment(i, 10));
+      lowest = std::min(lowest, Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d>(P, Eigen::EigenvaluesOnly).eigenvalues()[0]);
+    }
+    return lowest;
+  }
+
+  // SlotineLi.projected
+  Vector projected(const Vector &theta) const {
+    Vector out = theta;
+    for (int k = 0, i = 0; i < theta.size(); ++k, i += 10) {
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> eig(pseudo_inertia(theta.segment(i, 10)));
+      if (eig.eigenvalues()[0] >= pseudo_floor[k]) continue;
+      const Eigen::Vector4d w = eig.eigenvalues().cwiseMax(pseudo_floor[k]);
+      const Eigen::Matrix4d P = eig.eigenvectors() * w.asDiagonal() * eig.eigenvectors().transpose();
+      const Eigen::Matrix3d I = P.topLeftCorner<3, 3>().trace() * Eigen::Matrix3d::Identity() - P.topLeftCorner<3, 3>();
+      out.segment(i, 10) << P(3, 3), P(0, 3), P(1, 3), P(2, 3), I(0, 0), I(0, 1), I(1, 1), I(0, 2), I(1, 2), I(2, 2);
+    }
+    return out;
+  }
+
+  // SlotineLi.compute
+  Output compute(double t, const Vector &q, const Vector &v, const Vector &z) override {
+    const TaskReference r = c.shared.reference(t, q, v);
+    const Matrix &J = r.ts.J;
+    double lam2 = 0.0;
+    const Matrix J_pinv = J.transpose() * c.shared.pinv_factor(J, lam2);
+    Vector null = -null_damping * v;
+    if (criterion_gain != 0.0 && !c.spec.criteria.empty())
+      null += criterion_gain * c.shared.criteria.gradient(c.nominal, q, r.ts);
+    const Vector v_r = J_pinv * (r.dxd - Lambda.cwiseProduct(r.e)) + (null - J_pinv * (J * null));
+    const Vector a_r = J_pinv * (r.ddxd - Lambda.cwiseProduct(r.de) - r.ts.jdot_v);
+    const Vector s = v - v_r;
+    const Matrix Y = regressor(q, v, v_r, a_r);
+    Output out;
+    out.tau = Y * z + armature.cwiseProduct(a_r) - K_D.cwiseProduct(s) + c.shared.nominal_friction(v);
+    out.z = z + c.spec.period * (-gamma * (Y.transpose() * s) - leakage * (z - theta0));
+    if (project) out.z = projected(out.z);
+    out.damping = lam2;
+    out.signals.resize(3);
+    out.signals << (z - theta0).norm(), s.norm(), min_inertia_eigenvalue(q, z);
+    return out;
+  }
+};
+
+}  // namespace
+
+NNROBUST_LAW("slotine_li", SlotineLi);
+
+}  // namespace nnrobust

@@ -1,0 +1,241 @@
+"""Task-space Slotine–Li adaptive control of a redundant arm (``controller.kind = "slotine-li"``;
+compiled twin csrc/laws/slotine_li.cpp; docs/controller.md).
+
+With J⁺ the experiment's damped pseudo-inverse and N = I − J⁺J:
+
+    q̇_r = J⁺ (ẋ_d − Λ e) + N (k_h ∇h(q) − k_n q̇)       q̈_r = J⁺ (ẍ_d − Λ ė − J̇ q̇)
+    s   = q̇ − q̇_r
+    τ   = Y(q, q̇, q̇_r, q̈_r) θ̂ − K_D s + F̂(q̇)
+    θ̂⁺  = θ̂ + T (−γ Yᵀ s − σ (θ̂ − θ̂(0)))                (explicit Euler over the period T)
+
+Y θ = M(q) q̈_r + C(q, q̇) q̇_r + G(q) with C the Christoffel Coriolis matrix (Ṁ − 2C skew), the
+one the Lyapunov argument needs; θ̂ is the state z. On a Pinocchio nominal model θ holds 10
+parameters per joint (``Inertia.toDynamicParameters``) and Y comes from three calls of
+``computeJointTorqueRegressor``, by polarisation (C(q, v) w is a symmetric bilinear form):
+
+    Y = Y(q, 0, q̈_r) + ¼ [Y(q, q̇ + q̇_r, 0) − Y(q, q̇ − q̇_r, 0)]
+
+and, with ``project``, each link's 4×4 pseudo-inertia is kept positive definite after every
+step (its eigenvalues clipped at 1e-5 × the link's nominal mass), so that θ̂ stays physical. On
+the paper's closed-form arm θ = (β₁, β₂, β₃, p₁, p₂, p₃, γ₁, γ₂, γ₃), in which M, C and G are
+linear (docs/errata.md); column i of Y is that arm's M q̈_r + C q̇_r + G with θ = e_i.
+
+Deliberate approximations: q̈_r uses J̇ q̇ (not J̇ q̇_r) and drops the derivatives of J⁺ outside
+the task and of the null-space term, so q̈_r is exact in the task directions only.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, cast
+
+import numpy as np
+import pinocchio as pin
+
+from ...exceptions import ConfigError
+from ..base import Controller, ControllerContext, ControlOutput
+from ..registry import Law, LawParam, register_law
+
+K_D_STEP_WARN = 1.0
+"""T λ_max(M̂⁻¹ K_D) at q(0) beyond which the sampled s-loop goes unstable."""
+
+PSEUDO_FLOOR = 1e-5
+"""A link's pseudo-inertia eigenvalues are kept above this fraction of its nominal mass [m²]."""
+
+
+def pseudo_inertia(pi: np.ndarray) -> np.ndarray:
+    """[[tr(I)/2 − I, m c], [m cᵀ, m]] of one link's 10 parameters (m, m c, Ixx, Ixy, Iyy, Ixz,
+    Iyz, Izz about the joint frame); positive definite iff they are a physical body's.
+    """
+    m, h = pi[0], pi[1:4]
+    inertia = np.array([[pi[4], pi[5], pi[7]], [pi[5], pi[6], pi[8]], [pi[7], pi[8], pi[9]]])
+    P = np.empty((4, 4))
+    P[:3, :3] = 0.5 * np.trace(inertia) * np.eye(3) - inertia
+    P[:3, 3] = P[3, :3] = h
+    P[3, 3] = m
+    return P
+
+
+def from_pseudo_inertia(P: np.ndarray) -> np.ndarray:
+    """The 10 parameters of a pseudo-inertia (the inverse of :func:`pseudo_inertia`)."""
+    inertia = np.trace(P[:3, :3]) * np.eye(3) - P[:3, :3]
+    return np.array([P[3, 3], *P[:3, 3], *inertia[[0, 0, 1, 0, 1, 2], [0, 1, 1, 2, 2, 2]]])
+
+
+class SlotineLi(Controller):
+    """Task-space Slotine–Li adaptive law (see the module docstring)."""
+
+    signal_names = ("param_drift", "s_norm", "min_inertia_eigenvalue")
+
+    def __init__(
+        self,
+        context: ControllerContext,
+        Lambda=100.0,
+        K_D=None,
+        K_D_step=0.3,
+        gamma=1.0,
+        leakage=0.0,
+        null_damping=1.0,
+        criterion_gain=0.0,
+        regressor="exact",
+        project=True,
+    ):
+        ctx = self.context = context
+        nominal, n, m = ctx.nominal, ctx.n, ctx.m
+        self.pinv, self.nominal_friction = ctx.pseudo_inverse, ctx.nominal_friction
+        self.Lambda = np.broadcast_to(np.asarray(Lambda, dtype=float), (m,)).copy()
+        model: Any = nominal.pinocchio_model
+        if model is not None:
+            if model.nq != n or model.nv != n:
+                raise ConfigError(
+                    "controller.kind", f"slotine-li needs nq = nv; the nominal model has nq = {model.nq}"
+                )
+            self.model, self.data = model, model.createData()
+            self.theta0 = np.concatenate(
+                [model.inertias[j].toDynamicParameters() for j in range(1, model.njoints)]
+            )
+            self.armature = np.asarray(model.armature, dtype=float).copy()
+            self.pseudo_floor = PSEUDO_FLOOR * np.maximum(self.theta0[0::10], 1e-3)
+        else:  # the closed-form arm: theta = (beta, p, gamma), one unit model per column of Y
+            from ...model.three_link import ThreeLinkParameters, ThreeLinkPlanarModel
+
+            params = cast(ThreeLinkPlanarModel, nominal).params
+            self.theta0 = np.array([*params.beta, *params.p, *params.gamma], dtype=float)
+            self.units = []
+            for i in range(9):
+                e = np.eye(9)[i]
+                unit = ThreeLinkParameters(
+                    tuple(e[:3]), tuple(e[3:6]), params.lengths, tuple(e[6:]), params.gravity
+                )
+                self.units.append(ThreeLinkPlanarModel(unit))
+            self.armature = np.zeros(n)
+            self.pseudo_floor = np.zeros(0)
+            project = False
+        M0 = np.asarray(nominal.mass(np.asarray(ctx.q0, dtype=float)), dtype=float)
+        if K_D is None:  # K_D proportional to diag M(q0), T lambda_max(M^-1 K_D) = K_D_step
+            shape = np.diag(M0).copy()
+            K_D = (
+                shape
+                * K_D_step
+                / (ctx.period * np.max(np.linalg.eigvals(np.linalg.solve(M0, np.diag(shape))).real))
+            )
+        self.K_D = np.broadcast_to(np.asarray(K_D, dtype=float), (n,)).copy()
+        step = ctx.period * np.max(np.linalg.eigvals(np.linalg.solve(M0, np.diag(self.K_D))).real)
+        if step > K_D_STEP_WARN:
+            raise ConfigError(
+                "controller.params.K_D",
+                f"T lambda_max(M^-1 K_D) = {step:.3g} at q(0) > {K_D_STEP_WARN:g}: the sampled loop "
+                "is unstable there; lower K_D or leave it out (sized by K_D_step)",
+            )
+        self.gamma, self.leakage = float(gamma), float(leakage)
+        self.null_damping, self.criterion_gain = float(null_damping), float(criterion_gain)
+        self.exact, self.project = float(regressor == "exact"), float(bool(project))
+        self.state_size = self.theta0.size
+        self._zero, self._eye = np.zeros(n), np.eye(n)
+
+    def initial_state(self) -> np.ndarray:
+        """θ̂(0): the nominal model's parameters."""
+        return self.theta0.copy()
+
+    def regressor(self, q, v, v_r, a_r) -> np.ndarray:
+        """Y with Y θ = M(q) a_r + C(q, v) v_r + G(q) (C(q, v_r) v_r with ``regressor = "approx"``)."""
+        if hasattr(self, "units"):
+            w = v if self.exact else v_r
+            return np.column_stack(
+                [u.mass(q) @ a_r + u.coriolis_matrix(q, w) @ v_r + u.gravity(q) for u in self.units]
+            )
+
+        def Y(vel, acc):
+            return pin.computeJointTorqueRegressor(self.model, self.data, q, vel, acc).copy()
+
+        if not self.exact:
+            return Y(v_r, a_r)
+        return Y(self._zero, a_r) + 0.25 * (Y(v + v_r, self._zero) - Y(v - v_r, self._zero))
+
+    def min_inertia_eigenvalue(self, q, theta) -> float:
+        """The smallest eigenvalue of the links' pseudo-inertias (Pinocchio) or of M̂(q) (closed form)."""
+        if hasattr(self, "units"):
+            return float(np.linalg.eigvalsh(sum(t * u.mass(q) for t, u in zip(theta, self.units))).min())
+        return float(
+            min(np.linalg.eigvalsh(pseudo_inertia(theta[i : i + 10])).min() for i in range(0, theta.size, 10))
+        )
+
+    def projected(self, theta: np.ndarray) -> np.ndarray:
+        """θ̂ with every link's pseudo-inertia eigenvalues clipped at its floor."""
+        out = theta.copy()
+        for k, i in enumerate(range(0, theta.size, 10)):
+            w, V = np.linalg.eigh(pseudo_inertia(theta[i : i + 10]))
+            if w[0] < self.pseudo_floor[k]:
+                out[i : i + 10] = from_pseudo_inertia((V * np.maximum(w, self.pseudo_floor[k])) @ V.T)
+        return out
+
+    def compute(self, t, q, v, z, period=0.0) -> ControlOutput:
+        """τ at the measured (q, q̇) with θ̂ = z, and θ̂ after ``period``."""
+        ctx = self.context
+        theta = np.asarray(z, dtype=float)
+        x, J, jdot_v = ctx.nominal.task_state(q, v)
+        x_d, dx_d, ddx_d = ctx.trajectory(t)
+        e = ctx.trajectory.error(x, x_d)
+        de = J @ v - dx_d
+        J_pinv = self.pinv.matrix(J)
+        null = -self.null_damping * v
+        if self.criterion_gain and ctx.criterion is not None:
+            null = null + self.criterion_gain * ctx.criterion.gradient(ctx.nominal, q)
+        v_r = J_pinv @ (dx_d - self.Lambda * e) + (null - J_pinv @ (J @ null))
+        a_r = J_pinv @ (ddx_d - self.Lambda * de - jdot_v)
+        s = v - v_r
+        Y = self.regressor(q, v, v_r, a_r)
+        tau = Y @ theta + self.armature * a_r - self.K_D * s + self.nominal_friction.torque(v)
+        theta_next = theta + period * (-self.gamma * (Y.T @ s) - self.leakage * (theta - self.theta0))
+        if self.project:
+            theta_next = self.projected(theta_next)
+        signals = {
+            "param_drift": float(np.linalg.norm(theta - self.theta0)),
+            "s_norm": float(np.linalg.norm(s)),
+            "min_inertia_eigenvalue": self.min_inertia_eigenvalue(q, theta),
+        }
+        return ControlOutput(tau, signals, theta_next)
+
+
+def _bandwidth(scales: dict) -> tuple[float, float]:
+    """Λ from one oscillation per run to the sampling limit Λ (1/2 + delay) T = 1."""
+    return 2 * math.pi / scales["duration"], 1.0 / ((0.5 + scales["delay"]) * scales["period"])
+
+
+_PARAMS = (
+    LawParam(
+        "Lambda", 100.0, "1/s", "task-error bandwidth of s = q' − q'_r", 0.0, 1e6, "m", search=_bandwidth
+    ),
+    LawParam("K_D", None, "N m s/rad", "damping of s; unset: ∝ diag M̂(q0), sized by K_D_step", 0.0, 1e6, "n"),
+    LawParam("K_D_step", 0.3, "-", "T λmax(M̂⁻¹ K_D) at q0 when K_D is unset", 1e-6, 1.0, search=(0.01, 1.0)),
+    LawParam("gamma", 1.0, "-", "adaptation gain Γ = γ I", 0.0, 1e6, search=(1e-3, 1e2)),
+    LawParam("leakage", 0.0, "1/s", "σ-modification towards θ̂(0)", 0.0, 1e3),
+    LawParam("null_damping", 1.0, "1/s", "k_n: null-space velocity damping inside q'_r", 0.0, 1e3),
+    LawParam("criterion_gain", 0.0, "-", "k_h: ascent of the self-motion criterion in q'_r", 0.0, 1e3),
+    LawParam("regressor", "exact", "-", "C(q, q') q'_r, or C(q, q'_r) q'_r", choices=("exact", "approx")),
+    LawParam("project", True, "-", "keep θ̂ physically consistent (Pinocchio models)"),
+)
+
+LAW = register_law(
+    Law(
+        "slotine-li",
+        SlotineLi,
+        "task-space Slotine–Li adaptive control, Y θ̂ − K_D s with θ̂' = −γ Yᵀ s (Pinocchio's "
+        "joint-torque regressor, or the paper's β, p, γ on the closed-form arm)",
+        _PARAMS,
+        twin="slotine_li",
+        twin_fields=(
+            "Lambda",
+            "K_D",
+            "gamma",
+            "leakage",
+            "null_damping",
+            "criterion_gain",
+            "exact",
+            "project",
+            "theta0",
+            "armature",
+            "pseudo_floor",
+        ),  # fmt: skip
+    )
+)

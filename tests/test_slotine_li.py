@@ -1,0 +1,183 @@
+"""The shipped Slotine–Li law (nnrobust/controllers/laws/slotine_li.py, csrc/laws/slotine_li.cpp):
+its regressor against the model's own dynamics (the Christoffel Coriolis matrix: C q' = the
+model's bias, M' − 2C skew-symmetric by finite differences), its compiled twin step by step, a
+controller written independently from the documented contract (examples/controllers/), what
+adaptation buys, and its configuration errors.
+"""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from nnrobust import compiled, run_experiment
+from nnrobust.exceptions import ConfigError
+from nnrobust.experiment import build
+from nnrobust.model import PinocchioModel
+from nnrobust.presets import load_preset
+
+EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+
+CASES = {
+    "paper arm, closed form": ("paper-ellipse", {}, {}),
+    "paper arm, URDF nominal, approx": (
+        "paper-ellipse",
+        {"nominal": {"kind": "urdf"}},
+        {"regressor": "approx"},
+    ),
+    "Panda, criterion, leakage": ("panda-ellipse", {}, {"criterion_gain": 0.5, "leakage": 0.2, "gamma": 3.0}),
+    "Panda pose": ("panda-pose", {}, {"Lambda": 50.0}),
+}
+
+
+def _setup(name, duration=0.01):
+    preset, changes, params = CASES[name]
+    config = load_preset(preset).replace(
+        controller={"kind": "slotine-li", "params": params}, simulation={"duration": duration}, **changes
+    )
+    return build(config)
+
+
+def _states(setup, count, seed):
+    """Random (t, q, v, z): q across the joints' ranges, v up to 2 rad/s, θ̂ within ±30 % of θ̂(0)
+    (some links then unphysical, so that the projection acts)."""
+    rng = np.random.default_rng(seed)
+    lower, upper = setup.robot.lower_limits, setup.robot.upper_limits
+    lower, upper = np.where(np.isfinite(lower), lower, -np.pi), np.where(np.isfinite(upper), upper, np.pi)
+    z0 = setup.controller.initial_state()
+    for _ in range(count):
+        q = rng.uniform(lower + 0.02 * (upper - lower), upper - 0.02 * (upper - lower))
+        yield rng.uniform(0.0, 10.0), q, rng.uniform(-2.0, 2.0, q.size), z0 * rng.uniform(0.7, 1.3, z0.size)
+
+
+def _christoffel(setup, q, v):
+    """C(q, v) as the law's regressor implies it: C w = Y(q, v, w, 0) θ(0) − G(q)."""
+    law, theta = setup.controller, setup.controller.initial_state()
+    zero = np.zeros(q.size)
+    gravity = law.regressor(q, zero, zero, zero) @ theta
+    return np.column_stack([law.regressor(q, v, w, zero) @ theta - gravity for w in np.eye(q.size)]), gravity
+
+
+@pytest.mark.parametrize("name", ["paper arm, closed form", "Panda, criterion, leakage"])
+def test_the_regressor_is_the_models_dynamics_with_the_christoffel_coriolis_matrix(name):
+    setup = _setup(name)
+    model = setup.nominal
+    for _, q, v, _ in _states(setup, 5, seed=1):
+        a = np.random.default_rng(2).normal(size=q.size)
+        C, gravity = _christoffel(setup, q, v)
+        np.testing.assert_allclose(gravity, model.gravity(q), atol=1e-10)
+        np.testing.assert_allclose(C @ v + gravity, model.bias(q, v), atol=1e-10)  # C(q, v) v
+        theta = setup.controller.initial_state()
+        armature = setup.controller.armature * a
+        tau = setup.controller.regressor(q, v, v, a) @ theta + armature
+        np.testing.assert_allclose(tau, model.inverse_dynamics(q, v, a), atol=1e-9)
+        h = 1e-6  # M'(q, v) by central differences along v
+        M_dot = (model.mass(q + h * v) - model.mass(q - h * v)) / (2 * h)
+        skew = M_dot - 2 * C
+        np.testing.assert_allclose(skew, -skew.T, atol=1e-6 * max(1.0, np.abs(M_dot).max()))
+
+
+@pytest.mark.skipif(not compiled.available(), reason=compiled.unavailable_reason())
+@pytest.mark.parametrize("name", list(CASES))
+def test_each_compiled_step_is_its_python_twin(name):
+    """Torque, next θ̂ (projection included) and the signals of one step, on random states."""
+    setup = _setup(name)
+    assert compiled.twin_refusal(setup) == ""
+    spec = compiled.loop_spec(setup, 0.01)
+    nominal = (
+        compiled.load_model(setup.nominal.model, setup.nominal.task_frame)
+        if isinstance(setup.nominal, PinocchioModel)
+        else None
+    )
+    period, module = setup.config.simulation.control_period, compiled._module()
+    projected = 0
+    for t, q, v, z in _states(setup, 20, seed=3):
+        ours = module.twin_control(nominal, spec, t, q, v, z)
+        theirs = setup.controller.compute(t, q, v, z, period)
+        scale = max(1.0, np.abs(theirs.tau).max())
+        np.testing.assert_allclose(ours.tau, theirs.tau, rtol=0, atol=1e-10 * scale, err_msg=f"{name}: tau")
+        np.testing.assert_allclose(
+            ours.z, theirs.state, rtol=0, atol=1e-10 * np.abs(theirs.state).max(), err_msg="z"
+        )
+        signals = [theirs.signals[s] for s in setup.controller.signal_names]
+        np.testing.assert_allclose(ours.signals, signals, rtol=1e-9, atol=1e-12, err_msg=f"{name}: signals")
+        unprojected = z + period * (theirs.state - z)  # projection moves z by more than one Euler step
+        projected += not np.allclose(theirs.state, unprojected)
+    if setup.controller.project:
+        assert projected > 0, "no state exercised the projection"
+
+
+@pytest.mark.skipif(not compiled.available(), reason=compiled.unavailable_reason())
+def test_the_compiled_run_is_the_python_run():
+    results = {
+        backend: run_experiment(
+            load_preset("panda-ellipse").replace(
+                controller={"kind": "slotine-li"}, simulation={"duration": 0.5, "backend": backend}
+            )
+        )
+        for backend in ("compiled", "python")
+    }
+    assert results["compiled"].backend == "compiled"
+    np.testing.assert_allclose(results["compiled"].q, results["python"].q, rtol=0, atol=1e-9)
+    for name in ("param_drift", "s_norm", "min_inertia_eigenvalue"):
+        np.testing.assert_allclose(
+            results["compiled"].signals[name], results["python"].signals[name], atol=1e-8
+        )
+
+
+def test_it_is_the_law_someone_else_wrote_from_the_documented_contract():
+    """examples/controllers/slotine_li.py (written against docs/extending.md alone) and the shipped
+    law, given the same gains, run the same trajectory on the Panda."""
+    gains = {
+        "Lambda": 100.0,
+        "K_D": [40.0, 40.0, 40.0, 40.0, 8.0, 8.0, 2.0],
+        "gamma": 1.0,
+        "null_damping": 1.0,
+    }
+    base = load_preset("panda-ellipse").replace(simulation={"duration": 0.3, "backend": "python"})
+    shipped = run_experiment(base.replace(controller={"kind": "slotine-li", "params": gains}))
+    theirs = run_experiment(
+        base.replace(
+            controller={
+                "kind": "custom",
+                "class": f"{EXAMPLES / 'controllers' / 'slotine_li.py'}:SlotineLi",
+                "params": gains,
+            }
+        )
+    )
+    np.testing.assert_allclose(shipped.q, theirs.q, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(shipped.signals["param_drift"], theirs.signals["param_drift"], rtol=1e-8)
+
+
+def test_adaptation_removes_most_of_the_pandas_model_error():
+    """The Panda's nominal inertias are off by the preset's model error: adapting θ̂ (γ = 1) cuts
+    the tracking error to under half of the same law with θ̂ frozen (γ = 0)."""
+    errors = {}
+    for gamma in (0.0, 1.0):
+        config = load_preset("panda-ellipse").replace(
+            controller={"kind": "slotine-li", "params": {"gamma": gamma}}, simulation={"duration": 4.0}
+        )
+        errors[gamma] = run_experiment(config).metrics()["rms_error_after_2s"]
+    assert errors[1.0] < 0.5 * errors[0.0], errors
+
+
+@pytest.mark.parametrize(
+    "params, message",
+    [
+        ({"Lamda": 10.0}, r"controller.params.Lamda: slotine-li has no parameter 'Lamda'.*'Lambda'"),
+        ({"Lambda": -1.0}, r"controller.params.Lambda: -1 is outside \[0, 1e\+06\] \[1/s\]"),
+        ({"Lambda": [1.0, 2.0, 3.0]}, r"controller.params.Lambda: needs 1 or 2 entries"),
+        ({"regressor": "fast"}, r"controller.params.regressor: expected one of 'exact', 'approx'"),
+        ({"project": 1}, r"controller.params.project: expected true or false"),
+        ({"K_D": [1.0, 2.0]}, r"controller.params.K_D: needs 1 or 3 entries"),
+        ({"K_D": 1e5}, r"controller.params.K_D: T lambda_max\(M\^-1 K_D\) = .* the sampled loop is unstable"),
+    ],
+)
+def test_bad_parameters_are_named(params, message):
+    with pytest.raises(ConfigError, match=message):
+        build(load_preset("paper-ellipse").replace(controller={"kind": "slotine-li", "params": params}))
+
+
+def test_a_class_with_a_shipped_law_is_refused():
+    with pytest.raises(ConfigError, match="controller.class: is read only with kind = 'custom'"):
+        load_preset("paper-ellipse").replace(controller={"kind": "slotine-li", "class": "x.py:Law"})
