@@ -124,7 +124,7 @@ Output Controller::compute(double t, const Vector &q, const Vector &v, const Vec
   const TaskReference r = reference(t, q, v);
   const TaskState &ts = r.ts;
   const Matrix &J = ts.J;
-  const Vector &e = r.e, &de = r.de, &ddxd = r.ddxd;
+  const Vector &e = r.e, &de = r.de;
   double lam2 = 0.0;
   const Matrix inv = pinv_factor(J, lam2);
   const Matrix J_pinv = J.transpose() * inv;
@@ -164,15 +164,23 @@ Output Controller::compute(double t, const Vector &q, const Vector &v, const Vec
     const Vector w = s.BtP * y;
     u0 = -s.sliding_gain * w / std::max(w.norm(), s.sliding_boundary);
   }
-  const Vector task_acc = ddxd - ts.jdot_v - s.Kv * de - s.Kp * e + u0;
-  Vector a = J_pinv * task_acc;
-  if (s.k != 0.0) {
-    const Vector grad = s.criteria.empty() ? Vector(Vector::Zero(q.size())) : criteria.gradient(nominal, q, ts);
-    const Vector zz = grad - v;
-    a += s.k * (zz - J_pinv * (J * zz));
-  }
-  out.tau = nominal.inverse_dynamics(q, v, a) + nominal_friction(v);
+  out.tau = eq9_torque(q, v, r, J_pinv, u0, s.Kp, s.Kv, s.k);
   return out;
+}
+
+// TaskSpaceController.compute after u_0: M-hat a + N-hat + F-hat with
+// a = J+ (x_d'' - J'q' - Kv e' - Kp e + u_0) + k (I - J+J)(grad h - q')
+Vector Controller::eq9_torque(const Vector &q, const Vector &v, const TaskReference &r, const Matrix &J_pinv,
+                              const Vector &u0, const Matrix &Kp, const Matrix &Kv, double k) {
+  const Matrix &J = r.ts.J;
+  const Vector task_acc = r.ddxd - r.ts.jdot_v - Kv * r.de - Kp * r.e + u0;
+  Vector a = J_pinv * task_acc;
+  if (k != 0.0) {
+    const Vector grad = s.criteria.empty() ? Vector(Vector::Zero(q.size())) : criteria.gradient(nominal, q, r.ts);
+    const Vector zz = grad - v;
+    a += k * (zz - J_pinv * (J * zz));
+  }
+  return nominal.inverse_dynamics(q, v, a) + nominal_friction(v);
 }
 
 // Friction.torque of the controller's F-hat

@@ -41,6 +41,9 @@ struct Controller {
   void path(double t, Vector &pd, Vector &dpd, Vector &ddpd) const;
   // the task state and error at t (PoseTrajectory and tasks.task_error for a pose)
   TaskReference reference(double t, const Vector &q, const Vector &v) const;
+  // TaskSpaceController.compute from u_0 on: the torque of eq. (9) with these gains
+  Vector eq9_torque(const Vector &q, const Vector &v, const TaskReference &r, const Matrix &J_pinv, const Vector &u0,
+                    const Matrix &Kp, const Matrix &Kv, double k);
   // Friction.torque of F-hat (nominal_viscous, nominal_coulomb, coulomb_smoothing) at v
   Vector nominal_friction(const Vector &v) const;
   // the law's torque, signals and next state at t from the measured (q, v) and the state z

@@ -120,12 +120,12 @@ def _live_view(args, config, setup):
 
 def _controller_choice(text: str) -> str:
     """--controller: a built-in kind, or a custom class (``file.py:Class``, ``package.module:Class``)."""
-    from .config import CLASS_PATTERN, CONTROLLER_KINDS
+    from .config import CLASS_PATTERN, shipped_laws
 
-    if text in CONTROLLER_KINDS or CLASS_PATTERN.fullmatch(text):
+    if text in shipped_laws() or CLASS_PATTERN.fullmatch(text):
         return text
     raise argparse.ArgumentTypeError(
-        f"{text!r} is not one of {', '.join(CONTROLLER_KINDS)} nor a class as "
+        f"{text!r} is not one of {', '.join(shipped_laws())} nor a class as "
         "file.py:Class or package.module:Class"
     )
 
@@ -149,10 +149,10 @@ def controller_change(choice: str) -> dict:
     """The controller section's change for --controller: a kind, or a custom class (a file path
     from the working folder).
     """
-    from .config import CONTROLLER_KINDS
+    from .config import shipped_laws
     from .user_code import class_file
 
-    if choice in CONTROLLER_KINDS:
+    if choice in shipped_laws():
         return {"kind": choice, "class": None, "params": None}
     path, name = class_file(choice), choice.rpartition(":")[2]
     return {"kind": "custom", "class": f"{path.resolve()}:{name}" if path is not None else choice}
@@ -746,7 +746,8 @@ def cmd_compare(args) -> int:
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``nnrobust`` command."""
     from . import __version__
-    from .config import CONTROLLER_KINDS as CONTROLLERS
+    from .config import shipped_laws
+    from .controllers.registry import LAWS, law_names
     from .sweep.spec import shipped_sweeps
 
     parser = argparse.ArgumentParser(
@@ -770,12 +771,15 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument(
         "--controller",
         type=_controller_choice,
-        metavar="{" + ",".join(CONTROLLERS) + ",FILE.py:CLASS}",
+        metavar="{" + ",".join(shipped_laws()) + ",FILE.py:CLASS}",
         help="override the controller: nn (eq. 9 + NN compensator), no-u0 "
         "(eq. 9 without u_0), computed-torque (eq. 9 with the true model and friction), "
         "sliding-mode (eq. 9 + fixed-gain boundary-layer sliding mode), pd (task-space "
-        "PD + gravity compensation), or your own class as file.py:Class or package.module:Class "
-        "(its parameters from --set controller.params.NAME=VALUE; docs/extending.md)",
+        "PD + gravity compensation), "
+        + "".join(f"{name} ({LAWS[name].summary.split(',')[0]}), " for name in law_names())
+        + "or your own class as file.py:Class or package.module:Class "
+        "(parameters of these last from --set controller.params.NAME=VALUE; docs/controller.md, "
+        "docs/extending.md)",
     )
     run.add_argument("--duration", type=float, help="override the simulated time [s]")
     run.add_argument(

@@ -161,7 +161,9 @@ def twin_refusal(setup) -> str:
     compensator = getattr(controller, "compensator", None)
     checks.append(
         (
-            compensator is None or type(compensator) in (NNCompensator, SlidingModeCompensator),
+            compensator is None
+            or type(compensator) in (NNCompensator, SlidingModeCompensator)
+            or law is not None,
             "a custom robust term",
         )
     )

@@ -432,13 +432,18 @@ CONTROLLER_KINDS = ("nn", "no-u0", "computed-torque", "sliding-mode", "pd")
 (``controller.class``)."""
 
 
-def controller_kinds() -> tuple[str, ...]:
-    """Every valid ``controller.kind``: the built-in kinds, the registered laws
-    (nnrobust/controllers/laws/) and ``custom``.
+def shipped_laws() -> tuple[str, ...]:
+    """The laws nnrobust ships: the built-in kinds and the registered laws
+    (nnrobust/controllers/laws/).
     """
     from .controllers.registry import law_names
 
-    return (*CONTROLLER_KINDS, *law_names(), "custom")
+    return (*CONTROLLER_KINDS, *law_names())
+
+
+def controller_kinds() -> tuple[str, ...]:
+    """Every valid ``controller.kind``: the shipped laws and ``custom``."""
+    return (*shipped_laws(), "custom")
 
 
 EQ9_KINDS = ("nn", "no-u0", "computed-torque", "sliding-mode")

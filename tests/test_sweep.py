@@ -583,3 +583,65 @@ def test_a_damaged_results_folder_is_refused_on_resume_and_names_what_to_do(tmp_
     shutil.rmtree(out / "results")
     (out / "results").write_text("mine")
     assert main(command) == 2 and "results is not a folder" in capsys.readouterr().err
+
+
+def test_a_registered_law_joins_a_sweep_by_name_and_as_an_entry_with_its_params(tmp_path, monkeypatch):
+    """controllers = ["slotine-li", {name, kind = "slotine-li", params}]: both run on every sample,
+    the entry at its own parameters, and the printed command reruns its worst row exactly."""
+    import json
+    import shlex
+
+    path = _sweep_file(
+        tmp_path,
+        text="""
+name = "classics"
+base = "paper-ellipse"
+controllers = ["slotine-li", {name = "sl-slow", kind = "slotine-li", params = {Lambda = 30.0, gamma = 0.5}}]
+samples = 2
+[set]
+"simulation.duration" = 2.2
+[vary]
+"plant.disturbance_scale" = {uniform = [0.5, 2.0]}
+""",
+    )
+    out = tmp_path / "out"
+    assert main(["sweep", str(path), "--out", str(out), "--workers", "2"]) == 0
+    frame = read_results(out).sort_values(["controller", "sample"])
+    fast, slow = frame[frame["controller"] == "slotine-li"], frame[frame["controller"] == "sl-slow"]
+    assert list(fast["status"]) == list(slow["status"]) == ["completed"] * 2
+    assert (slow["rms_error_after_2s"].to_numpy() > 2 * fast["rms_error_after_2s"].to_numpy()).all()
+    words = shlex.split(
+        json.loads((out / "summary.json").read_text())["controllers"]["sl-slow"]["worst"]["command"]
+    )
+    assert words[3:5] == ["--controller", "slotine-li"] and "controller.params.Lambda=30.0" in words
+    monkeypatch.chdir(tmp_path)
+    assert (
+        main([*words[1:], "--out", str(tmp_path / "again"), "--quiet", "--no-plots", "--no-animation"]) == 0
+    )
+    again = json.loads((tmp_path / "again" / "metrics.json").read_text())
+    assert again["rms_error_after_2s"] == pytest.approx(slow["rms_error_after_2s"].max(), rel=1e-12)
+
+
+def test_a_registered_law_entry_is_checked_against_its_declaration(tmp_path, capsys):
+    path = _sweep_file(
+        tmp_path,
+        text="""
+name = "classics"
+base = "paper-ellipse"
+controllers = [{name = "sl", kind = "slotine-li", params = {Lamda = 30.0}}]
+samples = 1
+""",
+    )
+    assert main(["sweep", str(path), "--out", str(tmp_path / "out")]) == 2
+    assert "controller.params.Lamda: slotine-li has no parameter 'Lamda'" in capsys.readouterr().err
+    nn_params = _sweep_file(
+        tmp_path,
+        text="""
+name = "x"
+base = "paper-ellipse"
+controllers = [{name = "fast", kind = "nn", params = {F = 3.0}}]
+samples = 1
+""",
+    )
+    with pytest.raises(ConfigError, match="a table entry is"):
+        load_sweep(nn_params)

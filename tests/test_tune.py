@@ -353,3 +353,39 @@ def test_a_custom_class_is_tuned_in_the_space_it_declares(short_experiment, tmp_
         for s in (0, 1)
     ]
     assert np.mean(runs) == pytest.approx(best["train"]["rms_error_after_2s"], rel=1e-9)
+
+
+def test_a_registered_law_is_tuned_in_the_space_it_declares(short_experiment, tmp_path):
+    """slotine-li declares Lambda (up to the sampling limit, never widened), K_D_step and gamma
+    (its adaptation, weakest at the low end): the tuner searches exactly those at the shared
+    budget, and its best setting reruns to its training metrics."""
+    from nnrobust.config import apply_overrides
+    from nnrobust.experiment import run_experiment
+    from nnrobust.sweep.spec import base_config, draw, experiment
+
+    scales = arm_scales(build(load_preset("paper-ellipse-noisy")))
+    space = search_space("slotine-li", scales)
+    assert [p.name for p in space.params] == [
+        "controller.params.Lambda",
+        "controller.params.K_D_step",
+        "controller.params.gamma",
+    ]
+    assert space.param("controller.params.Lambda").high == pytest.approx(
+        1 / ((0.5 + scales["delay"]) * scales["period"])
+    )
+    assert space.param("controller.params.Lambda").high_reason.startswith("sampling")
+    assert space.weakest() == {"controller.params.gamma": 1e-3}
+    spec = TuneSpec(str(short_experiment), ["slotine-li"], 8, train_samples=2, validation=0, seed=2)
+    summary = run_tune(spec, tmp_path / "out", workers=2)
+    best = summary["controllers"]["slotine-li"]["best"]
+    assert best is not None and set(best["params"]) == {p.name for p in space.params}
+    sweep = sweep_of(spec)
+    runs = [
+        run_experiment(
+            apply_overrides(
+                experiment(sweep, base_config(sweep), draw(sweep, s), "slotine-li"), best["params"]
+            )
+        ).metrics()["rms_error_after_2s"]
+        for s in (0, 1)
+    ]
+    assert np.mean(runs) == pytest.approx(best["train"]["rms_error_after_2s"], rel=1e-9)

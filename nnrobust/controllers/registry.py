@@ -31,23 +31,31 @@ class LawParam:
         unit: its unit ("-" for none).
         doc: one line on what it is.
         low, high: the closed range of every entry (numbers).
-        size: ``"1"`` (a number), ``"m"`` (one or one per task coordinate) or ``"n"`` (one or
-            one per joint).
+        size: ``"1"`` (a number), ``"2"`` (two numbers), ``"m"`` (one or one per task
+            coordinate) or ``"n"`` (one or one per joint).
+        integer: the number must be whole.
         choices: the accepted strings, for a text parameter.
         search: (low, high) of the tuner's log-uniform search, or a function of the arm's scales
             (:func:`nnrobust.tune.arm_scales`) returning them; None: not searched.
+        low_reason, high_reason: why a search bound is physical (the tuner never widens it), or "".
+        weak: for a knob of a robust or adaptive term, the end (``low`` or ``high``) at which the
+            term does least (the tuner's check that the term earns its place); "" for gains.
 
     """
 
     name: str
-    default: float | str | bool | None
+    default: float | str | bool | tuple[float, ...] | None
     unit: str
     doc: str
     low: float = -math.inf
     high: float = math.inf
     size: str = "1"
     choices: tuple[str, ...] = ()
+    integer: bool = False
     search: tuple[float, float] | Callable[[dict], tuple[float, float]] | None = None
+    low_reason: str = ""
+    high_reason: str = ""
+    weak: str = ""
 
     def check(self, value, n: int | None, m: int, key: str):
         """The value checked and normalised (a float, a vector of its size, a bool or a string)."""
@@ -59,19 +67,24 @@ class LawParam:
             if not isinstance(value, bool):
                 raise ConfigError(key, f"expected true or false, got {value!r}")
             return value
-        size = {"1": 1, "n": n, "m": m}[self.size]  # n is None before the robot is loaded
+        size = {"1": 1, "2": 2, "n": n, "m": m}[self.size]  # n is None before the robot is loaded
         entries = value if isinstance(value, list) and self.size != "1" else [value]
         if not entries or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in entries):
             wanted = "a number" if self.size == "1" else f"a number or a list of {size or self.size}"
             raise ConfigError(key, f"expected {wanted} [{self.unit}], got {value!r}")
         arr = np.asarray(entries, dtype=float)
+        if self.integer and (arr != np.round(arr)).any():
+            raise ConfigError(key, f"expected a whole number, got {value!r}")
+        if self.size == "2" and arr.size != 2:
+            raise ConfigError(key, f"needs 2 entries, got {arr.size}")
         if size is not None and arr.size not in (1, size):
             raise ConfigError(key, f"needs 1 or {size} entries ({self.size} = {size}), got {arr.size}")
         bad = ~np.isfinite(arr) | (arr < self.low) | (arr > self.high)
         if bad.any():
             raise ConfigError(
                 key,
-                f"{float(arr[np.flatnonzero(bad)[0]]):g} is outside [{self.low:g}, {self.high:g}] [{self.unit}]",
+                f"{float(arr[np.flatnonzero(bad)[0]]):g} is outside "
+                f"[{self.low:g}, {self.high:g}] [{self.unit}]",
             )
         if self.size == "1":
             return float(arr[0])
@@ -80,7 +93,12 @@ class LawParam:
     def describe(self) -> str:
         """The parameter as the docs' key reference and the CLI help print it."""
         default = "sized by the law" if self.default is None else repr(self.default)
-        size = {"1": "", "n": ", one or one per joint", "m": ", one or one per task coordinate"}[self.size]
+        size = {
+            "1": "",
+            "2": ", two entries",
+            "n": ", one or one per joint",
+            "m": ", one or one per task coordinate",
+        }[self.size]
         return f"{self.name} [{self.unit}{size}]: {self.doc} (default {default})"
 
 
@@ -158,16 +176,6 @@ class Law:
         for name in self.twin_fields:
             value = np.asarray(getattr(controller, name), dtype=float)
             out[name] = np.ascontiguousarray(value.reshape(-1, 1) if value.ndim < 2 else value)
-        return out
-
-    def search_bounds(self, scales: dict) -> dict[str, tuple[float, float, str]]:
-        """Parameter -> (low, high, unit) of the tuner's search on an arm of these scales."""
-        out = {}
-        for p in self.params:
-            if p.search is None:
-                continue
-            low, high = p.search(scales) if callable(p.search) else p.search
-            out[p.name] = (float(low), float(high), p.unit)
         return out
 
 

@@ -17,14 +17,15 @@ from pathlib import Path
 import numpy as np
 
 from ..config import (
-    CONTROLLER_KINDS,
     ExperimentConfig,
     apply_overrides,
     check_dotted_key,
     dump_toml,
     parse_toml,
     read_text_file,
+    shipped_laws,
 )
+from ..controllers.registry import registered_law
 from ..exceptions import ConfigError
 
 DISTRIBUTIONS = ("uniform", "normal", "loguniform", "choice")
@@ -165,7 +166,8 @@ ENTRY_KEYS = ("name", "class", "params", "kind", "set")
 
 ENTRY_FORMS = (
     '{name = "...", class = "file.py:Class", params = {...}} (a custom law) or '
-    '{name = "...", kind = "nn", set = {"nn.F" = 0.5, ...}} (a built-in law with settings of its own)'
+    '{name = "...", kind = "nn", set = {"nn.F" = 0.5, ...}} (a built-in law with settings of its own; '
+    "a registered law such as slotine-li takes params = {...} too)"
 )
 
 SETTING_ROOTS = ("controller", "nn")
@@ -179,20 +181,24 @@ def _entry(entry: dict, key: str) -> dict:
         and isinstance(entry.get("name"), str)
         and (
             (isinstance(entry.get("class"), str) and "kind" not in entry and "set" not in entry)
-            or (isinstance(entry.get("kind"), str) and "class" not in entry and "params" not in entry)
+            or (
+                isinstance(entry.get("kind"), str)
+                and "class" not in entry
+                and ("params" not in entry or registered_law(entry["kind"]) is not None)
+            )
         )
     )
     if not shape:
         raise ConfigError(key, f"a table entry is {ENTRY_FORMS}, got {entry!r}")
-    if not NAME.fullmatch(entry["name"]) or entry["name"] in CONTROLLER_KINDS:
+    if not NAME.fullmatch(entry["name"]) or entry["name"] in shipped_laws():
         raise ConfigError(
             f"{key}.name",
             f"{entry['name']!r} must be 1-40 letters, digits, '_' or '-' and not a built-in kind",
         )
     if "class" in entry:
         return {"class": entry["class"], "params": dict(entry.get("params") or {})}
-    if entry["kind"] not in CONTROLLER_KINDS:
-        raise ConfigError(f"{key}.kind", f"{entry['kind']!r} is not one of {', '.join(CONTROLLER_KINDS)}")
+    if entry["kind"] not in shipped_laws():
+        raise ConfigError(f"{key}.kind", f"{entry['kind']!r} is not one of {', '.join(shipped_laws())}")
     settings = entry.get("set") or {}
     if not isinstance(settings, dict):
         raise ConfigError(f"{key}.set", f"expected a table of dotted keys, got {settings!r}")
@@ -211,7 +217,10 @@ def _entry(entry: dict, key: str) -> dict:
             check_dotted_key(dotted)
         except ConfigError as err:
             raise ConfigError(f"{key}.set.{err.key}", str(err).split(": ", 1)[1]) from err
-    return {"kind": entry["kind"], "set": dict(settings)}
+    params = entry.get("params")
+    if params is not None and not isinstance(params, dict):
+        raise ConfigError(f"{key}.params", f"expected a table of the law's parameters, got {params!r}")
+    return {"kind": entry["kind"], "set": dict(settings), **({"params": dict(params)} if params else {})}
 
 
 def _controllers(entries, where: str) -> tuple[list[str], dict]:
@@ -221,19 +230,19 @@ def _controllers(entries, where: str) -> tuple[list[str], dict]:
     key = f"{where}: controllers"
     if not isinstance(entries, list) or not entries:
         raise ConfigError(
-            key, f"needs a list of {', '.join(CONTROLLER_KINDS)} or tables {ENTRY_FORMS}, got {entries!r}"
+            key, f"needs a list of {', '.join(shipped_laws())} or tables {ENTRY_FORMS}, got {entries!r}"
         )
     names, tables = [], {}
     for i, entry in enumerate(entries):
         if isinstance(entry, dict):
             tables[entry.get("name")] = _entry(entry, f"{key}[{i}]")
             names.append(entry["name"])
-        elif entry in CONTROLLER_KINDS:
+        elif entry in shipped_laws():
             names.append(entry)
         else:
             raise ConfigError(
                 f"{key}[{i}]",
-                f"{entry!r} is not one of {', '.join(CONTROLLER_KINDS)} nor a table {ENTRY_FORMS}",
+                f"{entry!r} is not one of {', '.join(shipped_laws())} nor a table {ENTRY_FORMS}",
             )
     if len(set(names)) != len(names):
         raise ConfigError(key, f"lists a controller twice: {names}")
@@ -431,7 +440,8 @@ def controller_overrides(spec: SweepSpec, controller: str) -> dict:
         return {"controller.kind": controller}
     entry = spec.entries[controller]
     if "kind" in entry:
-        return {"controller.kind": entry["kind"], **entry["set"]}
+        params = {"controller.params": entry["params"]} if entry.get("params") else {}
+        return {"controller.kind": entry["kind"], **params, **entry["set"]}
     return {
         "controller.kind": "custom",
         "controller.class": entry["class"],

@@ -33,7 +33,7 @@ import numpy as np
 from ..config import CLASS_PATTERN
 from ..exceptions import ConfigError, NNRobustError
 from ..signals import signals_as_interrupt
-from .space import TUNABLE, SearchSpace, arm_scales, custom_space, search_space
+from .space import SearchSpace, arm_scales, custom_space, search_space, tunable
 
 if TYPE_CHECKING:
     import optuna
@@ -109,7 +109,7 @@ class TuneSpec:
         if not self.controllers or len(set(self.controllers)) != len(self.controllers):
             raise ConfigError(
                 "--controllers",
-                f"needs distinct names among {', '.join(TUNABLE)}, custom "
+                f"needs distinct names among {', '.join(tunable())}, custom "
                 "classes as file.py:Class, or the custom entries of a sweep file; got "
                 f"{', '.join(self.controllers) or 'none'}",
             )
@@ -194,9 +194,9 @@ def tuned_settings(path: str | Path, names: list[str]) -> dict[str, dict]:
         )
     out = {}
     for name in names:
-        if name not in TUNABLE:
+        if name not in tunable():
             raise ConfigError(
-                "--tuned", f"{name!r}: only the shipped laws ({', '.join(TUNABLE)}) take tuned settings"
+                "--tuned", f"{name!r}: only the shipped laws ({', '.join(tunable())}) take tuned settings"
             )
         best = (entries.get(name) or {}).get("best")
         if not best:
@@ -221,7 +221,7 @@ def _with_controllers(sweep, names: list[str], tuned: dict | None = None):
         if tuned and name in tuned:
             entries[f"{name}-tuned"] = {"kind": name, "set": dict(tuned[name])}
             controllers.append(f"{name}-tuned")
-        elif name in TUNABLE:
+        elif name in tunable():
             controllers.append(name)
         elif name in sweep.entries:
             entries[name] = sweep.entries[name]
@@ -233,7 +233,7 @@ def _with_controllers(sweep, names: list[str], tuned: dict | None = None):
         else:
             raise ConfigError(
                 "--controllers",
-                f"{name!r} is not one of {', '.join(TUNABLE)}, a class as "
+                f"{name!r} is not one of {', '.join(tunable())}, a class as "
                 f"file.py:Class, nor a custom entry of the sweep file "
                 f"({', '.join(sweep.entries) or 'it has none'})",
             )

@@ -27,7 +27,17 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 TUNABLE = ("nn", "no-u0", "computed-torque", "sliding-mode", "pd")
-"""Controllers with a search space."""
+"""The built-in kinds, each with a search space."""
+
+
+def tunable() -> tuple[str, ...]:
+    """The shipped laws with a search space: the built-in kinds and the registered laws that
+    declare search bounds (nnrobust/controllers/laws/).
+    """
+    from ..controllers.registry import LAWS, law_names
+
+    return (*TUNABLE, *(n for n in law_names() if any(p.search for p in LAWS[n].params)))
+
 
 EDGE = 0.03
 """A value within this fraction of its log range from a bound is "at the bound"."""
@@ -175,10 +185,26 @@ def arm_scales(setup) -> dict[str, float]:
 
 def search_space(controller: str, scales: dict[str, float]) -> SearchSpace:
     """The search space of a controller on an arm (see the module docstring)."""
-    if controller not in TUNABLE:
+    from ..controllers.registry import registered_law
+
+    if controller not in tunable():
         raise ValueError(
-            f"tune: no search space for controller {controller!r}; tunable: {', '.join(TUNABLE)}"
+            f"tune: no search space for controller {controller!r}; tunable: {', '.join(tunable())}"
         )
+    law = registered_law(controller)
+    if law is not None:  # its declared bounds: fixed, or derived from the arm
+        params = []
+        for p in law.params:
+            if p.search is None:
+                continue
+            low, high = p.search(scales) if callable(p.search) else p.search
+            params.append(
+                Param(
+                    f"controller.params.{p.name}", float(low), float(high), p.unit,
+                    low_reason=p.low_reason, high_reason=p.high_reason, weak=p.weak,
+                )
+            )  # fmt: skip
+        return SearchSpace(controller, tuple(params), custom=True)
     T, d = scales["period"], scales["delay"]
     w_high = 1.0 / ((0.5 + d) * T)
     w_low = 2 * math.pi / scales["duration"]
