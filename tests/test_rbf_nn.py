@@ -52,8 +52,8 @@ def _known_uncertainty(F, duration=30.0):
 
 
 def test_the_network_learns_the_uncertainty_it_is_given():
-    """η = J M⁻¹ τ_ext along the run: over the last 10 s ‖Ŵᵀφ‖ follows ‖η‖ to 30 % RMS (19 %
-    measured: the additive basis cannot fit η exactly), and the tracking error over those 10 s is under a tenth
+    """η = J M⁻¹ τ_ext along the run: over the last 10 s ‖Ŵᵀφ‖ follows ‖η‖ to 30 % RMS (the
+    additive basis cannot fit η exactly), and the tracking error over those 10 s is under a tenth
     of the same law with learning off (F = 0), which the torque pushes 0.45 m off the path."""
     learned = run_experiment(_known_uncertainty(F=1.0))
     frozen = run_experiment(_known_uncertainty(F=0.0))
