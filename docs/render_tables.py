@@ -586,7 +586,35 @@ def _falsified(name: str):
     return render
 
 
+def registered_laws() -> str:
+    """The registered laws and their [controller.params], from their declarations."""
+    from nnrobust.controllers.registry import LAWS, law_names
+
+    lines = [
+        "| `controller.kind` | parameter | unit | default | range | searched by `tune` |",
+        "|---|---|---|---|---|---|",
+    ]
+    for name in law_names():
+        for p in LAWS[name].params:
+            size = {"1": "", "2": " (2 entries)", "n": " (per joint)", "m": " (per task row)"}[p.size]
+            valid = (
+                " or ".join(f"`{c}`" for c in p.choices)
+                if p.choices
+                else ("true or false" if isinstance(p.default, bool) else f"[{p.low:g}, {p.high:g}]{size}")
+            )
+            shown = f"{p.default:.4g}" if isinstance(p.default, float) else str(p.default)
+            default = "sized by the law" if p.default is None else f"`{shown}`"
+            search = (
+                ""
+                if p.search is None
+                else ("from the arm" if callable(p.search) else f"{p.search[0]:g} to {p.search[1]:g}")
+            )
+            lines.append(f"| `{name}` | `{p.name}`: {p.doc} | {p.unit} | {default} | {valid} | {search} |")
+    return "\n".join(lines) + "\n\nMade from the laws' declarations (`nnrobust/controllers/laws/`).\n"
+
+
 RENDERERS = {
+    "registered-laws": registered_laws,
     "falsify-panda-factors": _falsified("falsify_panda_factors"),
     "falsify-tuned-noisy": _falsified("falsify_tuned_noisy"),
     "engine-gap-presets": engine_gap_presets,

@@ -3,10 +3,11 @@
 A registered law is a :class:`nnrobust.Controller` built as ``Class(context, **params)`` from an
 experiment's ``controller.kind = NAME`` and ``[controller.params]``. Its module declares, once,
 with :func:`register_law`: its name, its parameters (unit, default, range, size, search bounds),
-its class and its compiled twin; every module of nnrobust/controllers/laws/ is imported
-to find them. The configuration checks, ``nnrobust run --help``, the docs' key
-reference (docs/controller.md) and the compiled loop's spec are derived from that declaration, so
-adding a law touches its Python file, its C++ twin (csrc/laws/) and its tests.
+its class and its compiled twin; every module of nnrobust/controllers/laws/ is imported to find
+them. The configuration checks, ``nnrobust run --help``, the tuner's search space, the docs' key
+reference (docs/controller.md, written by docs/render_tables.py) and the compiled loop's spec
+are derived from that declaration, so adding a law touches its Python file, its C++ twin
+(csrc/laws/) and its tests.
 """
 
 from __future__ import annotations
@@ -89,17 +90,6 @@ class LawParam:
         if self.size == "1":
             return float(arr[0])
         return np.full(size or 1, arr[0]) if arr.size == 1 else arr
-
-    def describe(self) -> str:
-        """The parameter as the docs' key reference and the CLI help print it."""
-        default = "sized by the law" if self.default is None else repr(self.default)
-        size = {
-            "1": "",
-            "2": ", two entries",
-            "n": ", one or one per joint",
-            "m": ", one or one per task coordinate",
-        }[self.size]
-        return f"{self.name} [{self.unit}{size}]: {self.doc} (default {default})"
 
 
 @dataclass(frozen=True)
@@ -213,15 +203,3 @@ def law_names() -> tuple[str, ...]:
     """The names of the registered laws, in registration order."""
     registered_law("")
     return tuple(LAWS)
-
-
-def key_reference() -> str:
-    """The registered laws and their ``[controller.params]``, as docs/controller.md lists them."""
-    registered_law("")
-    lines = []
-    for law in LAWS.values():
-        twin = f"compiled twin `csrc/laws/{law.twin}.cpp`" if law.twin else "Python only"
-        lines.append(f'### `kind = "{law.name}"`\n\n{law.summary} ({twin})\n')
-        lines += [f"- `{p.describe()}`" for p in law.params]
-        lines.append("")
-    return "\n".join(lines)

@@ -130,7 +130,7 @@ _PARAMS = (
         high_reason="sampling: w (1/2 + delay) T = 1",
     ),
     LawParam(
-        "damping_ratio", 2 / math.sqrt(10.0), "-", "ζ: K_v = 2 ζ ω I", 0.5 + 1e-9, 1e3, search=(0.51, 5.0),
+        "damping_ratio", 2 / math.sqrt(10.0), "-", "ζ: K_v = 2 ζ ω I", 0.501, 1e3, search=(0.51, 5.0),
         low_reason="eq. (17): K_v^2 > K_p",
     ),
     LawParam(
