@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from nnrobust.cli import main
-from nnrobust.config import KEY_ALIASES, ExperimentConfig, from_dict, load_config
+from nnrobust.config import EQ9_KINDS, KEY_ALIASES, ExperimentConfig, from_dict, load_config
 from nnrobust.exceptions import ConfigError, RunFolderExists
 from nnrobust.experiment import build, run_experiment
 from nnrobust.presets import load_preset, preset_names
@@ -237,6 +237,8 @@ INERT_CASES = [
     ("paper-ellipse", {"controller": {"kind": "computed-torque"}}),
     ("paper-ellipse", {"controller": {"kind": "sliding-mode"}, "plant": {"disturbance": "none"}}),
     ("panda-ellipse", {"simulation": {"adaptive_step": False}, "plant": {"joint_stops": False}}),
+    ("paper-ellipse", {"controller": {"kind": "slotine-li"}}),
+    ("panda-ellipse", {"controller": {"kind": "rbf-nn"}}),
 ]
 
 
@@ -267,7 +269,7 @@ def test_every_key_called_inert_changes_nothing(preset, changes):
         np.testing.assert_array_equal(run_experiment(changed).q, reference, err_msg=f"{key} = {new}")
         checked += 1
     assert checked >= 3
-    assert "controller.Kp" not in inert or config.controller.kind == "pd"
+    assert "controller.Kp" not in inert or config.controller.kind not in EQ9_KINDS
 
 
 def test_run_warns_about_a_set_key_that_changes_nothing(tmp_path):
