@@ -27,7 +27,12 @@ struct ThreeLinkSpec {
   Eigen::Vector2d gravity = Eigen::Vector2d::Zero();
 };
 
-// Everything one run needs, filled in by nnrobust/compiled.py from a built experiment.
+// Everything one run needs, filled in by nnrobust/compiled.py from a built experiment. The
+// parameters of the laws, paths and criteria have no defaults here (Python's are the only ones):
+// they start as NaN, so a field the Python side did not fill poisons the run (status "diverged")
+// instead of running silently with a value that disagrees with Python's.
+constexpr double unset = std::numeric_limits<double>::quiet_NaN();
+
 struct LoopSpec {
   // simulation
   double period = 1e-3;
@@ -71,9 +76,9 @@ struct LoopSpec {
   ThreeLinkSpec nominal;
   int m = 2;  // task rows: 2 (planar: x, y), 3 (position) or 6 (pose: position, then rotation)
   Vector nominal_viscous, nominal_coulomb;
-  double coulomb_smoothing = 0.0;
+  double coulomb_smoothing = unset;
   Vector center, axis_a, axis_b;  // nnrobust.trajectories.EllipseTrajectory (2 or 3 entries)
-  double omega = 1.0, phase = 0.0;
+  double omega = unset, phase = unset;
   // or PiecewisePolynomialPath ("piecewise"): breaks b_0..b_P; row p (degree + 1) + j of the
   // coefficients (P (degree + 1) x m) multiplies (t - b_p)^j
   std::string path_kind = "ellipse";
@@ -83,36 +88,36 @@ struct LoopSpec {
   bool pose = false;
   Eigen::Matrix3d rotation0 = Eigen::Matrix3d::Identity();
   Eigen::Vector3d rotation_axis = Eigen::Vector3d::UnitZ();
-  double rotation_amplitude = 0.0, rotation_omega = 1.0, rotation_phase = 0.0;
+  double rotation_amplitude = unset, rotation_omega = unset, rotation_phase = unset;
   // the law: "task-space" (TaskSpaceController, eq. 9), "pd" (TaskSpacePD), or a registered law's
   // twin (csrc/laws/) with its fields by name (Law.twin_values) and its number of signals
   std::string law = "task-space";
   std::map<std::string, Matrix> law_params;
   int law_signals = 0;
   Matrix Kp, Kv;
-  double k = 0.0;
+  double k = unset;
   Matrix pd_Kp, pd_Kd;
-  double null_damping = 0.0;
+  double null_damping = unset;
   // criteria of WeightedCriteria (weights already scaled to sum to C): "paper", "half_det",
   // "manipulability", "joint_limits", "joint_centering", "joint_smoothness", "obstacles"
   std::vector<std::string> criteria;
   Vector criterion_weights;
   Vector smoothness;                  // PaperCriterion's JointSmoothness coefficients
   Vector limit_lower, limit_upper;    // joint criteria: the URDF's limits
-  double limit_margin = 0.05;         // JointLimitAvoidance.margin
+  double limit_margin = unset;        // JointLimitAvoidance.margin
   Vector smoothing_coefficients;      // JointSmoothness (the criterion "joint_smoothness")
   Matrix obstacle_centers;            // SphereObstacles: K x 3 [m]
   Vector obstacle_radii;              // K [m]
-  double obstacle_influence = 0.1, link_radius = 0.0;
-  double pinv_threshold = 0.02, pinv_max_damping = 0.02;
+  double obstacle_influence = unset, link_radius = unset;
+  double pinv_threshold = unset, pinv_max_damping = unset;
   // robust term: "none", "nn" (NNCompensator) or "sliding" (SlidingModeCompensator)
   std::string robust = "none";
   Matrix BtP;  // m x 2m
-  double sliding_gain = 0.0, sliding_boundary = 1.0;
+  double sliding_gain = unset, sliding_boundary = unset;
   bool basis_joint = true, basis_bias = true, law_corrected = true;
   Matrix basis_centers;  // dim(s) x K
   Vector basis_inv2w2;   // dim(s)
-  double F = 1.0, gamma = 1.0, eps_min = 0.0, sigma = 0.0;
+  double F = unset, gamma = unset, eps_min = unset, sigma = unset;
   Vector z0;
 };
 

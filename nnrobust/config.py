@@ -1560,17 +1560,17 @@ def validate(config: ExperimentConfig) -> None:
 _TOML_ESCAPES = {"\\": "\\\\", '"': '\\"', "\n": "\\n", "\t": "\\t", "\r": "\\r"}
 
 
+_TOML_ESCAPED = re.compile(r'[\\"\x00-\x1f\x7f]')
+
+
 def _toml_string(value: str) -> str:
     """A TOML basic string: quotes, backslashes and every control character escaped."""
-    out = []
-    for c in value:
-        if c in _TOML_ESCAPES:
-            out.append(_TOML_ESCAPES[c])
-        elif ord(c) < 0x20 or ord(c) == 0x7F:
-            out.append(f"\\u{ord(c):04x}")
-        else:
-            out.append(c)
-    return '"' + "".join(out) + '"'
+
+    def escape(match: re.Match) -> str:
+        c = match.group()
+        return _TOML_ESCAPES.get(c) or f"\\u{ord(c):04x}"
+
+    return '"' + _TOML_ESCAPED.sub(escape, value) + '"'
 
 
 def _toml_key(key: str) -> str:
