@@ -7,6 +7,8 @@ from pathlib import Path
 
 import pytest
 
+from nnrobust import compiled
+
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
 
@@ -21,6 +23,7 @@ def _run(script: str, *args: str) -> str:
 
 def test_every_example_is_tested():
     tested = {
+        "classics.py",
         "custom_controller.py",
         "custom_robot.py",
         "disturbances.py",
@@ -41,6 +44,20 @@ def test_disturbances_compares_each_load_with_the_quiet_run():
         assert event in out
     rows = [line.split() for line in out.splitlines() if line.startswith(("push", "hand"))]
     assert all(float(row[-1]) != float(row[-2]) for row in rows)  # the loads acted
+
+
+def test_classics_run_beside_the_nn_on_the_compiled_loop():
+    out = _run("classics.py", "--duration", "2.5")
+    rows = [line.split() for line in out.splitlines()[1:]]
+    assert [(r[0], r[1]) for r in rows] == [
+        (preset, law)
+        for preset in ("paper-ellipse", "panda-ellipse")
+        for law in ("nn", "sliding-mode", "no-u0", "slotine-li", "rbf-nn")
+    ]
+    loops = {r[-2] for r in rows}
+    assert loops == ({"compiled"} if compiled.available() else {"python"}) and all(
+        r[-1] == "(completed)" for r in rows
+    )
 
 
 def test_custom_controller_runs_beside_the_nn(tmp_path):
