@@ -1,4 +1,4 @@
-"""Peak memory and time of each compiler process that builds the compiled loop (csrc/*.cpp).
+"""Peak memory and time of each compiler process that builds the compiled loop (csrc/, csrc/laws/).
 
 Each translation unit's own compile command, as CMake wrote it for Ninja in the build folder that
 `make` uses, is run again under GNU time (``/usr/bin/time -v``), one after the other, into a
@@ -43,7 +43,7 @@ def unit_commands(build: Path) -> dict[str, list[str]]:
     ).stdout
     commands = {}
     for line in listing.splitlines():
-        match = re.search(r"-c (\S+/csrc/(\w+\.cpp))", line)
+        match = re.search(r"-c (\S+/csrc/((?:laws/)?\w+\.cpp))", line)
         if match:
             commands[match.group(2)] = shlex.split(line)
     return commands

@@ -356,27 +356,33 @@ def test_a_custom_class_is_tuned_in_the_space_it_declares(short_experiment, tmp_
 
 
 def test_a_registered_law_is_tuned_in_the_space_it_declares(short_experiment, tmp_path):
-    """slotine-li declares Lambda (up to the sampling limit, never widened), K_D_step and gamma
-    (its adaptation, weakest at the low end): the tuner searches exactly those at the shared
-    budget, and its best setting reruns to its training metrics."""
+    """slotine-li declares Lambda (up to the sampling limit, never widened), K_D_step, and the
+    adaptation's gamma and leakage (weakest at gamma's low and leakage's high end): the tuner
+    searches exactly those at the shared budget, runs the law itself with its adaptation at the
+    weakest in the gain phase (not no-u0, which takes no such parameters), and its best setting
+    reruns to its training metrics."""
+    import pandas as pd
+
     from nnrobust.config import apply_overrides
     from nnrobust.experiment import run_experiment
     from nnrobust.sweep.spec import base_config, draw, experiment
 
     scales = arm_scales(build(load_preset("paper-ellipse-noisy")))
     space = search_space("slotine-li", scales)
-    assert [p.name for p in space.params] == [
-        "controller.params.Lambda",
-        "controller.params.K_D_step",
-        "controller.params.gamma",
-    ]
+    names = ["Lambda", "K_D_step", "gamma", "leakage"]
+    assert [p.name for p in space.params] == [f"controller.params.{n}" for n in names]
     assert space.param("controller.params.Lambda").high == pytest.approx(
         1 / ((0.5 + scales["delay"]) * scales["period"])
     )
     assert space.param("controller.params.Lambda").high_reason.startswith("sampling")
-    assert space.weakest() == {"controller.params.gamma": 1e-3}
-    spec = TuneSpec(str(short_experiment), ["slotine-li"], 8, train_samples=2, validation=0, seed=2)
+    assert space.weakest() == {"controller.params.gamma": 1e-3, "controller.params.leakage": 10.0}
+    spec = TuneSpec(str(short_experiment), ["slotine-li"], 10, train_samples=2, validation=0, seed=2)
     summary = run_tune(spec, tmp_path / "out", workers=2)
+    rows = [json.loads(r) for r in pd.read_parquet(tmp_path / "out" / "trials")["row"]]
+    gains = [r for r in rows if r["phase"] == "gains"]
+    assert gains and all(r["law"] == "slotine-li" for r in gains)
+    assert all(r["params"]["controller.params.gamma"] == 1e-3 for r in gains)
+    assert all(run["status"] == "completed" for r in rows for run in r["runs"]), rows
     best = summary["controllers"]["slotine-li"]["best"]
     assert best is not None and set(best["params"]) == {p.name for p in space.params}
     sweep = sweep_of(spec)

@@ -337,7 +337,9 @@ class _Controller:
     with u_0 = 0 (phase ``gains``), then searches every knob (phase ``all``) from its best gains
     with the robust term at its weakest: a random robust term at high gains chatters past the
     torque limit, and a search started there learns to avoid the only gains where the law can
-    win. Its best setting is chosen among the phase ``all`` runs, which use the law itself.
+    win. Its best setting is chosen among the phase ``all`` runs, which use the law itself. A
+    registered law with an adaptive or robust term (its ``weak`` parameters) runs itself in the
+    gain phase, with those parameters at their weakest.
     """
 
     def __init__(self, spec: TuneSpec, name: str, space: SearchSpace, index: int):
@@ -354,7 +356,13 @@ class _Controller:
 
     def law(self, phase: str) -> str:
         """The controller kind the runs of a phase use."""
-        return "no-u0" if phase == "gains" else self.name
+        return "no-u0" if phase == "gains" and not self.space.custom else self.name
+
+    def overrides(self, values: dict, phase: str) -> dict:
+        """The experiment overrides of a setting's runs in a phase."""
+        if phase == "gains" and self.space.custom:  # the law itself, its robust term at its weakest
+            values = {**values, **self.space.weakest()}
+        return self.space.overrides(values)
 
     def _distributions(self, phase: str):
         import optuna
@@ -433,7 +441,7 @@ class _Controller:
             "phase": phase,
             "law": self.law(phase),
             "search": values,
-            "params": self.space.overrides(values),
+            "params": self.overrides(values, phase),
             "objectives": list(objectives),
             "constraints": constraints,
             "feasible": all(v <= 0 for v in constraints),
@@ -573,7 +581,7 @@ def _run_tune(
                         sweep_future,
                         base_toml,
                         c.law(phase),
-                        c.space.overrides(values),
+                        c.overrides(values, phase),
                         s,
                         pure=False,
                         retries=1,

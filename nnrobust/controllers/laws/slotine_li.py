@@ -217,7 +217,9 @@ _PARAMS = (
     LawParam("K_D", None, "N m s/rad", "damping of s; unset: ∝ diag M̂(q0), sized by K_D_step", 0.0, 1e6, "n"),
     LawParam("K_D_step", 0.3, "-", "T λmax(M̂⁻¹ K_D) at q0 when K_D is unset", 1e-6, 1.0, search=(0.01, 1.0)),
     LawParam("gamma", 1.0, "-", "adaptation gain Γ = γ I", 0.0, 1e6, search=(1e-3, 1e2), weak="low"),
-    LawParam("leakage", 0.0, "1/s", "σ-modification towards θ̂(0)", 0.0, 1e3),
+    LawParam(
+        "leakage", 0.0, "1/s", "σ-modification towards θ̂(0)", 0.0, 1e3, search=(1e-3, 10.0), weak="high"
+    ),
     LawParam("null_damping", 1.0, "1/s", "k_n: null-space velocity damping inside q'_r", 0.0, 1e3),
     LawParam("criterion_gain", 0.0, "-", "k_h: ascent of the self-motion criterion in q'_r", 0.0, 1e3),
     LawParam("regressor", "exact", "-", "C(q, q') q'_r, or C(q, q'_r) q'_r", choices=("exact", "approx")),
