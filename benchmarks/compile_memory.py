@@ -5,7 +5,7 @@ Each translation unit's own compile command, as CMake wrote it for Ninja in the 
 scratch object file; the table gives its maximum resident set size. The target (docs/compiled.md):
 every unit under 1.5 GB, so that a 4 GB laptop builds the package.
 
-    python benchmarks/compile_memory.py [--build build/cp311-cp311-linux_x86_64] [--json FILE]
+    python benchmarks/compile_memory.py [--build build/cp311-cp311-linux_x86_64] [--json FILE] [UNIT ...]
 """
 
 from __future__ import annotations
@@ -73,13 +73,18 @@ def main() -> None:
         "--build", type=Path, default=Path(found[0]).parent if found else None, help="CMake build folder"
     )
     p.add_argument("--json", help="write the table to this file")
+    p.add_argument("units", nargs="*", help="only these units (e.g. laws/slotine_li.cpp; default: all)")
     args = p.parse_args()
     if args.build is None or not (args.build / "build.ninja").is_file():
         sys.exit("no build folder with build.ninja: run `make test` (or pass --build)")
     commands = unit_commands(args.build)
+    unknown = sorted(set(args.units) - set(commands))
+    if unknown:
+        sys.exit(f"compile_memory: no unit {unknown[0]}; units: {', '.join(sorted(commands))}")
+    commands = {u: argv for u, argv in commands.items() if not args.units or u in args.units}
     # -MD/-MF/-MT take a following path: drop the dependency-file arguments pairwise
     rows = []
-    print(f"{'unit':<18s} {'peak memory [GB]':>17s} {'time [s]':>9s}  under {TARGET_GB} GB")
+    print(f"{'unit':<20s} {'peak memory [GB]':>17s} {'time [s]':>9s}  under {TARGET_GB} GB")
     for unit, argv in sorted(commands.items()):
         cleaned, skip = [], False
         for a in argv:
@@ -92,7 +97,7 @@ def main() -> None:
             cleaned.append(a)
         gb, wall = measure(cleaned)
         rows.append({"unit": unit, "peak_memory_gb": round(gb, 3), "seconds": round(wall, 1)})
-        print(f"{unit:<18s} {gb:17.2f} {wall:9.1f}  {'yes' if gb < TARGET_GB else 'NO'}")
+        print(f"{unit:<20s} {gb:17.2f} {wall:9.1f}  {'yes' if gb < TARGET_GB else 'NO'}")
     if args.json:
         write_json_atomic(args.json, {"target_gb": TARGET_GB, "units": rows})
 

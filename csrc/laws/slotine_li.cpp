@@ -4,6 +4,7 @@
 #include <pinocchio/algorithm/regressor.hpp>
 
 #include "../nominal.hpp"
+#include "../pin_calls.hpp"
 #include "law.hpp"
 
 namespace nnrobust {
@@ -37,13 +38,33 @@ struct SlotineLi : Law {
     }
   }
 
+  // pinocchio.computeJointTorqueRegressor(q, v, a), from calls the pin wheel's library instantiates
+  // (instantiating that algorithm here took this unit's compiler to 2.2 GB): body i's regressor
+  // bodyRegressor(v_i, a_i + g_i) (local frame, a_i with the base's -g), moved to the world frame,
+  // gives joint j's row block J_j^T oMi* Y_i for every joint j on the path from i to the base.
+  Matrix joint_torque_regressor(const Vector &q, const Vector &v, const Vector &a) const {
+    const pinocchio::Model &model = pin_model->m.model;
+    pinocchio::Data &data = pin_model->m.data;
+    pin::forwardKinematics(model, data, q, v, a);
+    const pin::Matrix6x &J = pin::computeJointJacobians(model, data);
+    const pinocchio::Motion base(-model.gravity.linear(), Vector3d::Zero());  // a_gf[0] = -g
+    Matrix Y = Matrix::Zero(model.nv, 10 * (model.njoints - 1));
+    for (int i = 1; i < model.njoints; ++i) {
+      const pinocchio::Motion a_gf = data.a[i] + data.oMi[i].actInv(base);
+      const Eigen::Matrix<double, 6, 10> world =
+          data.oMi[i].toDualActionMatrix() * pinocchio::bodyRegressor(data.v[i], a_gf);
+      for (int j = i; j > 0; j = static_cast<int>(model.parents[j]))
+        Y.block(model.idx_vs[j], 10 * (i - 1), model.nvs[j], 10) =
+            J.middleCols(model.idx_vs[j], model.nvs[j]).transpose() * world;
+    }
+    return Y;
+  }
+
   // Y with Y theta = M(q) a_r + C(q, v) v_r + G(q) (C(q, v_r) v_r when not exact), SlotineLi.regressor
   Matrix regressor(const Vector &q, const Vector &v, const Vector &v_r, const Vector &a_r) const {
     const Vector zero = Vector::Zero(q.size());
     if (pin_model) {
-      auto Y = [&](const Vector &vel, const Vector &acc) -> Matrix {
-        return pinocchio::computeJointTorqueRegressor(pin_model->m.model, pin_model->m.data, q, vel, acc);
-      };
+      auto Y = [&](const Vector &vel, const Vector &acc) { return joint_torque_regressor(q, vel, acc); };
       if (!exact) return Y(v_r, a_r);
       const Matrix Y0 = Y(zero, a_r), Yp = Y(v + v_r, zero), Ym = Y(v - v_r, zero);
       return Y0 + 0.25 * (Yp - Ym);
