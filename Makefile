@@ -97,7 +97,7 @@ docs-data: $(VENV)/.installed-test
 	done
 	$(BIN)/python docs/render_tables.py
 
-# The test suite must catch each of benchmarks/mutations.py's broken lines (about 3 minutes).
+# The test suite must catch each of benchmarks/mutations.py's broken lines (about 4 minutes).
 mutations: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/mutations.py
 

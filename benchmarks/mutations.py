@@ -79,6 +79,27 @@ MUTATIONS = [
         ["tests/test_plant.py", "tests/test_stick_slip.py"],
     ),
     (
+        "Slotine-Li's Coriolis part taken at q'_r instead of the Christoffel C(q, q')",
+        "nnrobust/controllers/laws/slotine_li.py",
+        "return Y(self._zero, a_r) + 0.25 * (Y(v + v_r, self._zero) - Y(v - v_r, self._zero))",
+        "return Y(v_r, a_r)",
+        ["tests/test_slotine_li.py"],
+    ),
+    (
+        "the RBF network's learning sign flipped",
+        "nnrobust/controllers/laws/rbf_nn.py",
+        "drive, rate = np.outer(phi, w), ",
+        "drive, rate = -np.outer(phi, w), ",
+        ["tests/test_rbf_nn.py"],
+    ),
+    (
+        "the RBF network's e-modification dropped",
+        "nnrobust/controllers/laws/rbf_nn.py",
+        "rate = np.outer(phi, w), self.F * self.kappa * np.linalg.norm(w)",
+        "rate = np.outer(phi, w), 0.0 * self.kappa * np.linalg.norm(w)",
+        ["tests/test_rbf_nn.py"],
+    ),
+    (
         "NN compensator weakened to a third",
         "nnrobust/controllers/task_space.py",
         "MUTATE-U0",
