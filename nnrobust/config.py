@@ -1079,8 +1079,10 @@ def inert_keys(config: ExperimentConfig) -> dict[str, str]:
         for key in keys:
             inert.setdefault(key, why)
 
+    from .controllers.registry import registered_law
+
     kind = f"controller.kind = {c.kind!r}"
-    if c.kind not in EQ9_KINDS and c.kind != "custom" and c.kind != "pd":  # a registered law
+    if registered_law(c.kind) is not None:  # its own parameters; it may read subtasks and nominal
         mark(["controller.Kp", "controller.Kv", "controller.k"], f"{kind} is not eq. (9)")
     elif c.kind not in EQ9_KINDS:
         mark(["controller.Kp", "controller.Kv", "controller.k", "subtasks."], f"{kind} is not eq. (9)")

@@ -170,7 +170,10 @@ class Law:
 
 
 LAWS: dict[str, Law] = {}
-"""The registered laws by name, filled as their modules are imported (nnrobust.controllers)."""
+"""The registered laws by name, filled as their modules are imported (:func:`registered_law`
+imports every module of nnrobust/controllers/laws/ once)."""
+
+_DISCOVERED: list[bool] = []
 
 
 def register_law(law: Law) -> Law:
@@ -194,7 +197,8 @@ def _discover() -> None:
 
 def registered_law(name: str) -> Law | None:
     """The registered law named ``name`` (``controller.kind``), or None."""
-    if not LAWS:
+    if not _DISCOVERED:
+        _DISCOVERED.append(True)
         _discover()
     return LAWS.get(name)
 
