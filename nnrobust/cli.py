@@ -361,8 +361,18 @@ def cmd_sweep(args) -> int:
         _bar(done, total, f"rows, {rate:.2f}/s, ETA {eta}")
 
     started: list[float] = []
+    stop = None
+    if args.stop_early:
+        from .exceptions import ConfigError
+        from .properties import refuted_groups
+
+        if not claim:
+            raise ConfigError(
+                "--stop-early", "stops once a claim is refuted: give --require, --epsilon and --beta"
+            )
+        stop = lambda records: refuted_groups(spec, records, properties, *claim)  # noqa: E731
     counts = _resumable(
-        lambda: run_sweep(spec, out, args.workers, args.scheduler, args.overwrite, progress),
+        lambda: run_sweep(spec, out, args.workers, args.scheduler, args.overwrite, progress, stop=stop),
         f"sweep interrupted; the rows written so far are in {out}/results",
     )
     if counts is None:
@@ -375,7 +385,7 @@ def cmd_sweep(args) -> int:
     if properties and claim:
         from .properties import certify
 
-        certified = certify(spec, frame, properties, *claim)
+        certified = certify(spec, frame, properties, *claim, stopped_early=bool(counts.get("stopped")))
         for controller, entry in certified.items():
             summary["controllers"][controller].update(entry)
     write_summary(out, summary)
@@ -393,8 +403,9 @@ def cmd_sweep(args) -> int:
         for controller, entry in summary["controllers"].items():
             if "worst" in entry:
                 print(f"worst {controller}: sample {entry['worst']['sample']}: {entry['worst']['command']}")
+        stopped = f", {counts['stopped']} not run (claim already refuted)" if counts.get("stopped") else ""
         print(
-            f"{counts['computed']} rows computed, {counts['skipped']} already there; results in "
+            f"{counts['computed']} rows computed, {counts['skipped']} already there{stopped}; results in "
             f"{out}/results (pandas.read_parquet), summary in {out}/summary.json",
             file=sys.stderr,
         )
@@ -924,6 +935,12 @@ def build_parser() -> argparse.ArgumentParser:
         "--allow-small",
         action="store_true",
         help="run a sweep too small to prove the claim, and report its bound anyway",
+    )
+    sweep.add_argument(
+        "--stop-early",
+        action="store_true",
+        help="sequential stopping: stop a controller's rows (per grid cell) once its claim is "
+        "refuted whatever the rest give; a claim is proved only by all its rows",
     )
     sweep.set_defaults(func=cmd_sweep)
 

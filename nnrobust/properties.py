@@ -173,10 +173,13 @@ def wilks_upper(values: list[float], quantile: float, beta: float) -> float | No
     return None
 
 
-def certify(spec, frame, properties: list[Property], epsilon: float, beta: float) -> dict[str, dict]:
+def certify(
+    spec, frame, properties: list[Property], epsilon: float, beta: float, stopped_early: bool = False
+) -> dict[str, dict]:
     """Per controller: a certificate per property and grid cell, and Wilks' bound on each
     property's metric at the 1 - epsilon quantile with confidence 1 - beta. A row that did not
-    complete (diverged, refused) fails every property.
+    complete (diverged, refused) fails every property. With ``stopped_early`` (sequential
+    stopping), a cell that has fewer rows than planned says so: its claim was refuted first.
     """
     import hashlib
 
@@ -197,6 +200,12 @@ def certify(spec, frame, properties: list[Property], epsilon: float, beta: float
             for prop in properties:
                 entry = certificate(prop, [prop.margin(r) for r in records], epsilon, beta)
                 entry.update(distribution=distribution, **({"grid": where} if where else {}))
+                if stopped_early and len(records) < spec.samples:
+                    entry["planned"] = spec.samples
+                    entry["method"] += (
+                        f"; sequential stopping: stopped after {len(records)} of {spec.samples} rows, "
+                        "once some property's failures refuted the claim at the planned N"
+                    )
                 certificates.append(entry)
                 if prop.op in ("<=", "<", ">=", ">"):
                     values = [
@@ -217,6 +226,29 @@ def certify(spec, frame, properties: list[Property], epsilon: float, beta: float
                     )
         out[controller] = {"certificates": certificates, "quantile_bounds": bounds}
     return out
+
+
+def refuted_groups(
+    spec, records: list[dict], properties: list[Property], epsilon: float, beta: float
+) -> set[tuple[str, int]]:
+    """The (controller, grid cell) groups whose claim is already refuted (sequential stopping):
+    for some property, the k failures among the group's rows so far give p_upper(k, N) > epsilon
+    at the group's planned N = ``spec.samples``, so no outcome of its remaining rows can prove it.
+    A claim is proved only by all N rows: a group is never stopped for looking good.
+    """
+    failures: dict[tuple[str, int], dict[str, int]] = {}
+    for r in records:
+        group = (r["controller"], int(r["sample"]) // spec.samples)
+        counts = failures.setdefault(group, {})
+        for prop in properties:
+            m = prop.margin(r)
+            if not (m > 0 if prop.op in ("<", ">") else m >= 0):
+                counts[prop.text] = counts.get(prop.text, 0) + 1
+    return {
+        group
+        for group, counts in failures.items()
+        if any(clopper_pearson_upper(k, spec.samples, beta) > epsilon for k in counts.values())
+    }
 
 
 def format_certificates(certified: dict[str, dict]) -> list[str]:

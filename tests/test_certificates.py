@@ -115,3 +115,46 @@ def test_a_sweep_certifies_each_controller_from_its_rows(tmp_path, capsys):
         assert certificate["p_upper"] == pytest.approx(expected, rel=1e-12)
         assert certificate["holds"] is False  # six samples prove nothing at 5 %
     assert "P(rms_error_after_2s<=0.02 fails) <=" in capsys.readouterr().out
+
+
+def test_sequential_stopping_ends_a_refuted_claim_and_keeps_the_rest(tmp_path, capsys):
+    """--stop-early: no-u0 fails every sample (its error is hundreds of mm), so its claim is
+    refuted by its first rows (p_upper(k, 20) > epsilon for any k >= 1) and its other rows are not
+    run; the NN's rows, which do not refute it, all run. The certificates say what happened, and a
+    resumed sweep does not run the refuted rows either."""
+    pytest.importorskip("distributed")
+    from nnrobust.cli import main
+    from nnrobust.sweep import read_results
+
+    sweep = tmp_path / "s.toml"
+    sweep.write_text(
+        'name = "c"\nbase = "paper-ellipse"\ncontrollers = ["nn", "no-u0"]\nsamples = 20\n'
+        'seed = 2\n[set]\n"simulation.duration" = 2.2\n[vary]\n'
+        '"plant.disturbance_scale" = {uniform = [0.5, 1.5]}\n'
+    )
+    claim = ["--require", "rms_error_after_2s<=0.05", "--epsilon", "0.05", "--beta", "0.05", "--allow-small"]
+    out = tmp_path / "out"
+    assert main(["sweep", str(sweep), "--out", str(out), "--workers", "2", "--stop-early", *claim]) == 0
+    frame = read_results(out)
+    nn, no_u0 = (frame[frame["controller"] == c] for c in ("nn", "no-u0"))
+    assert len(nn) == 20 and (nn["rms_error_after_2s"] <= 0.05).all()
+    k = int((no_u0["rms_error_after_2s"] > 0.05).sum())
+    assert k == len(no_u0) and 1 <= len(no_u0) <= 10
+    assert clopper_pearson_upper(1, 20, 0.05) > 0.05  # one failure already refutes 20 samples
+    summary = json.loads((out / "summary.json").read_text())
+    (stopped,) = summary["controllers"]["no-u0"]["certificates"]
+    assert (stopped["N"], stopped["k"], stopped["planned"], stopped["holds"]) == (len(no_u0), k, 20, False)
+    assert "sequential stopping: stopped after" in stopped["method"]
+    (full,) = summary["controllers"]["nn"]["certificates"]
+    assert full["N"] == 20 and "planned" not in full
+    assert f"{20 - len(no_u0)} not run (claim already refuted)" in capsys.readouterr().err
+    assert main(["sweep", str(sweep), "--out", str(out), "--workers", "1", "--stop-early", *claim]) == 0
+    assert len(read_results(out)) == 20 + len(no_u0)
+    assert "0 rows computed" in capsys.readouterr().err
+
+
+def test_sequential_stopping_needs_a_claim(tmp_path, capsys):
+    from nnrobust.cli import main
+
+    assert main(["sweep", "paper-robustness", "--out", str(tmp_path / "o"), "--stop-early"]) == 2
+    assert "--stop-early: stops once a claim is refuted" in capsys.readouterr().err

@@ -326,10 +326,15 @@ def run_sweep(
     overwrite: bool = False,
     progress=None,
     seconds_per_job: float = 0.5,
+    stop=None,
 ) -> dict:
-    """Run (or resume) a sweep into ``folder``; returns {"computed": rows, "skipped": rows, "parts": n}.
+    """Run (or resume) a sweep into ``folder``; returns {"computed": rows, "skipped": rows,
+    "parts": n, "stopped": rows not run}.
 
-    ``progress(done, total)`` is called as chunks finish.
+    ``progress(done, total)`` is called as chunks finish. ``stop(records)``, given every row
+    written so far (dicts), returns the (controller, grid cell) groups whose remaining rows need
+    not run (sequential stopping, :func:`nnrobust.properties.refuted_groups`): their chunks are
+    then cancelled, and a resumed sweep skips them.
     """
     _require_engine()
     folder = Path(folder)
@@ -338,7 +343,7 @@ def run_sweep(
 
     with held(folder):  # one sweep at a time into a folder: never a row twice
         return _run_sweep(
-            spec, folder, base_toml, jobs, workers, scheduler, overwrite, progress, seconds_per_job
+            spec, folder, base_toml, jobs, workers, scheduler, overwrite, progress, seconds_per_job, stop
         )
 
 
@@ -352,14 +357,23 @@ def _run_sweep(
     overwrite: bool,
     progress,
     seconds_per_job: float,
+    stop=None,
 ) -> dict:
     prepare_folder(spec, folder, overwrite)
     done = _done_rows(folder)
     jobs = [job for job in jobs if job not in done]
     total = spec.size * len(spec.controllers)
     skipped = total - len(jobs)
+
+    def group(job) -> tuple[str, int]:
+        return job[1], job[0] // spec.samples
+
+    records = read_results(folder).to_dict("records") if stop and done else []
+    stopped = stop(records) if stop else set()
+    dropped = [job for job in jobs if group(job) in stopped]
+    jobs = [job for job in jobs if group(job) not in stopped]
     if not jobs:
-        return {"computed": 0, "skipped": skipped, "parts": 0}
+        return {"computed": 0, "skipped": skipped, "parts": 0, "stopped": len(dropped)}
     written = parts = 0
     table_schema = schema(spec)
     with signals_as_interrupt(), _client(workers, scheduler) as client:
@@ -367,26 +381,47 @@ def _run_sweep(
 
         n_workers = max(len(client.scheduler_info().get("workers", {})), 1)
         size = chunk_size(len(jobs), n_workers, seconds_per_job)
-        chunks = [jobs[i : i + size] for i in range(0, len(jobs), size)]
+        if stop:  # chunks of one group each, so that a stopped group's chunks can be cancelled
+            groups: dict[tuple[str, int], list] = {}
+            for job in jobs:
+                groups.setdefault(group(job), []).append(job)
+            by_group = [(g, js[i : i + size]) for g, js in groups.items() for i in range(0, len(js), size)]
+            by_group.sort(key=lambda item: item[1][0][0])  # samples in order, across groups
+            chunks = [chunk for _, chunk in by_group]
+        else:
+            chunks = [jobs[i : i + size] for i in range(0, len(jobs), size)]
         spec_future = client.scatter(spec, broadcast=True)
         base_future = client.scatter(base_toml, broadcast=True)
         futures = [
             client.submit(run_rows, spec_future, base_future, chunk, pure=False, retries=2)
             for chunk in chunks
         ]
+        chunk_of = {f.key: chunk for f, chunk in zip(futures, chunks)}
         if progress:
             progress(skipped, total)
         pending = as_completed(futures)
+        unfinished = {f.key: f for f in futures}
         del futures  # as_completed holds them until they finish; each is released once written
         for future in pending:
+            unfinished.pop(future.key, None)
+            if future.cancelled():
+                continue
             rows = future.result()
             future.release()  # the worker may drop the chunk's rows
             _write_part(folder, rows, table_schema)
             written += len(rows)
             parts += 1
+            if stop:
+                records += rows
+                newly = stop(records) - stopped
+                if newly:
+                    stopped |= newly
+                    cancel = [f for key, f in unfinished.items() if group(chunk_of[key][0]) in newly]
+                    client.cancel(cancel)
+                    dropped += [job for f in cancel for job in chunk_of[f.key]]
             if progress:
-                progress(skipped + written, total)
-    return {"computed": written, "skipped": skipped, "parts": parts}
+                progress(skipped + written + len(dropped), total)
+    return {"computed": written, "skipped": skipped, "parts": parts, "stopped": len(dropped)}
 
 
 def read_results(folder: str | Path):
