@@ -55,7 +55,7 @@ def test_every_row_once_then_resume_computes_nothing(tmp_path):
     assert (by_sample == 1).all()
     assert set(frame["plant.disturbance_scale"]) == {0.5, 2.0}
     again = run_sweep(spec, out, workers=2)
-    assert again == {"computed": 0, "skipped": 12, "parts": 0}
+    assert again == {"computed": 0, "skipped": 12, "parts": 0, "stopped": 0}
     _assert_complete(read_results(out), 6, ["nn", "no-u0"])
 
 
