@@ -28,7 +28,7 @@ from nnrobust.tune import TuneSpec, run_tune
 from nnrobust.tune.engine import error_torque_front
 
 HERE = Path(__file__).resolve().parent
-CONTROLLERS = ["nn", "no-u0", "pd", "sliding-mode"]
+CONTROLLERS = ["nn", "no-u0", "pd", "sliding-mode", "slotine-li", "rbf-nn"]
 CASES = [
     # case, sensing, tuning target, RMS torque limit [N m]
     ("case (a) line", "ideal", "paper-line", 10.0),
@@ -128,7 +128,7 @@ def plot(cases: list[dict], path: str) -> None:
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(3, 2, figsize=(10, 11), sharey=False)
-    colors = dict(zip(CONTROLLERS, ("C0", "C1", "C2", "C3")))
+    colors = {name: f"C{i}" for i, name in enumerate(CONTROLLERS)}
     for ax, case in zip(axes.flat, cases):
         summary = case["summary"]
         for name, entry in summary["controllers"].items():
