@@ -183,6 +183,13 @@ def arm_scales(setup) -> dict[str, float]:
     }
 
 
+def bandwidth_range(scales: dict) -> tuple[float, float]:
+    """A loop bandwidth's search range [rad/s]: from one oscillation per run to the sampling limit
+    w (1/2 + d) T = 1 (period T, delay d periods).
+    """
+    return 2 * math.pi / scales["duration"], 1.0 / ((0.5 + scales["delay"]) * scales["period"])
+
+
 def search_space(controller: str, scales: dict[str, float]) -> SearchSpace:
     """The search space of a controller on an arm (see the module docstring)."""
     from ..controllers.registry import registered_law
@@ -205,9 +212,8 @@ def search_space(controller: str, scales: dict[str, float]) -> SearchSpace:
                 )
             )  # fmt: skip
         return SearchSpace(controller, tuple(params), custom=True)
-    T, d = scales["period"], scales["delay"]
-    w_high = 1.0 / ((0.5 + d) * T)
-    w_low = 2 * math.pi / scales["duration"]
+    T = scales["period"]
+    w_low, w_high = bandwidth_range(scales)
     a = scales["task_acceleration"]
     sampling = f"sampling: w (1/2 + delay) T = 1, {w_high:.4g} rad/s"
     params = [Param("bandwidth", w_low, w_high, "rad/s", high_reason=sampling)]

@@ -22,6 +22,7 @@ import math
 
 import numpy as np
 
+from ...tune.space import bandwidth_range
 from ..base import ControllerContext
 from ..basis import AdditiveRBFBasis
 from ..nn_compensator import error_dynamics, lyapunov_P
@@ -114,11 +115,6 @@ class RBFNN(TaskSpaceController):
         self.joint_input = float(basis_input == "joint")
 
 
-def _bandwidth(scales: dict) -> tuple[float, float]:
-    """ω from one oscillation per run to the sampling limit ω (1/2 + delay) T = 1 (as eq. 9's)."""
-    return 2 * math.pi / scales["duration"], 1.0 / ((0.5 + scales["delay"]) * scales["period"])
-
-
 def _null_gain(scales: dict) -> tuple[float, float]:
     """The self-motion gain up to k T = 1 (as eq. 9's)."""
     return 0.1, 1.0 / scales["period"]
@@ -126,7 +122,7 @@ def _null_gain(scales: dict) -> tuple[float, float]:
 
 _PARAMS = (
     LawParam(
-        "bandwidth", math.sqrt(10.0), "rad/s", "ω: K_p = ω² I", 1e-6, 1e6, search=_bandwidth,
+        "bandwidth", math.sqrt(10.0), "rad/s", "ω: K_p = ω² I", 1e-6, 1e6, search=bandwidth_range,
         high_reason="sampling: w (1/2 + delay) T = 1",
     ),
     LawParam(

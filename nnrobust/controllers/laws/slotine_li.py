@@ -26,13 +26,13 @@ the task and of the null-space term, so q̈_r is exact in the task directions on
 
 from __future__ import annotations
 
-import math
 from typing import Any, cast
 
 import numpy as np
 import pinocchio as pin
 
 from ...exceptions import ConfigError
+from ...tune.space import bandwidth_range
 from ..base import Controller, ControllerContext, ControlOutput
 from ..registry import Law, LawParam, register_law
 
@@ -197,11 +197,6 @@ class SlotineLi(Controller):
         return ControlOutput(tau, signals, theta_next)
 
 
-def _bandwidth(scales: dict) -> tuple[float, float]:
-    """Λ from one oscillation per run to the sampling limit Λ (1/2 + delay) T = 1."""
-    return 2 * math.pi / scales["duration"], 1.0 / ((0.5 + scales["delay"]) * scales["period"])
-
-
 _PARAMS = (
     LawParam(
         "Lambda",
@@ -211,7 +206,7 @@ _PARAMS = (
         0.0,
         1e6,
         "m",
-        search=_bandwidth,
+        search=bandwidth_range,
         high_reason="sampling: Lambda (1/2 + delay) T = 1",
     ),
     LawParam("K_D", None, "N m s/rad", "damping of s; unset: ∝ diag M̂(q0), sized by K_D_step", 0.0, 1e6, "n"),
