@@ -241,8 +241,7 @@ def refuted_groups(
         group = (r["controller"], int(r["sample"]) // spec.samples)
         counts = failures.setdefault(group, {})
         for prop in properties:
-            m = prop.margin(r)
-            if not (m > 0 if prop.op in ("<", ">") else m >= 0):
+            if not prop.holds(r):
                 counts[prop.text] = counts.get(prop.text, 0) + 1
     return {
         group

@@ -12,7 +12,6 @@ from scipy.integrate import solve_ivp
 from nnrobust import compiled, run_experiment
 from nnrobust.exceptions import ConfigError
 from nnrobust.experiment import build
-from nnrobust.model import PinocchioModel
 from nnrobust.presets import load_preset
 
 CASES = {
@@ -95,12 +94,7 @@ def test_the_weight_update_is_the_exact_solution_over_a_period():
 def test_each_compiled_step_is_its_python_twin(name):
     setup = _setup(name)
     assert compiled.twin_refusal(setup) == ""
-    spec = compiled.loop_spec(setup, 0.01)
-    nominal = (
-        compiled.load_model(setup.nominal.model, setup.nominal.task_frame)
-        if isinstance(setup.nominal, PinocchioModel)
-        else None
-    )
+    _, nominal, spec = compiled._prepared(setup, 0.01)
     period, module = setup.config.simulation.control_period, compiled._module()
     rng = np.random.default_rng(5)
     lower, upper = setup.robot.working_range

@@ -13,7 +13,6 @@ import pytest
 from nnrobust import compiled, run_experiment
 from nnrobust.exceptions import ConfigError
 from nnrobust.experiment import build
-from nnrobust.model import PinocchioModel
 from nnrobust.presets import load_preset
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
@@ -83,12 +82,7 @@ def test_each_compiled_step_is_its_python_twin(name):
     """Torque, next θ̂ (projection included) and the signals of one step, on random states."""
     setup = _setup(name)
     assert compiled.twin_refusal(setup) == ""
-    spec = compiled.loop_spec(setup, 0.01)
-    nominal = (
-        compiled.load_model(setup.nominal.model, setup.nominal.task_frame)
-        if isinstance(setup.nominal, PinocchioModel)
-        else None
-    )
+    _, nominal, spec = compiled._prepared(setup, 0.01)
     period, module = setup.config.simulation.control_period, compiled._module()
     projected = 0
     for t, q, v, z in _states(setup, 20, seed=3):

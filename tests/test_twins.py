@@ -9,7 +9,6 @@ import pytest
 
 from nnrobust import compiled
 from nnrobust.experiment import build
-from nnrobust.model import PinocchioModel
 from nnrobust.presets import load_preset
 
 pytestmark = pytest.mark.skipif(not compiled.available(), reason=compiled.unavailable_reason())
@@ -49,13 +48,7 @@ def _config(name):
 def _twin(name):
     setup = build(_config(name))
     assert compiled.twin_refusal(setup) == ""
-    spec = compiled.loop_spec(setup, 0.01)
-    robot = compiled.load_model(setup.plant.model.pinocchio_model, setup.robot.task_frame)
-    nominal = (
-        compiled.load_model(setup.nominal.model, setup.nominal.task_frame)
-        if isinstance(setup.nominal, PinocchioModel)
-        else None
-    )
+    robot, nominal, spec = compiled._prepared(setup, 0.01)
     return setup, spec, robot, nominal
 
 
