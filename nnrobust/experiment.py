@@ -33,6 +33,7 @@ from .controllers import (
     TaskSpaceController,
     TaskSpacePD,
 )
+from .controllers.basis import input_box
 from .controllers.custom import build_custom
 from .controllers.registry import registered_law
 from .controllers.task_space import sized_null_damping
@@ -443,13 +444,9 @@ def build_criterion(config: ExperimentConfig, robot: PinocchioModel) -> Criterio
 def build_basis(config: ExperimentConfig, robot: PinocchioModel, m: int) -> AdditiveRBFBasis:
     """phi(s) over [q, q'] (joint limits, +-velocity_range) or [e, e'] (+-error_range)."""
     nn = config.nn
-    if nn.basis_input == "joint":
-        lo_q, hi_q = robot.working_range
-        v = np.full(robot.nq, nn.velocity_range)
-        low, high = np.concatenate([lo_q, -v]), np.concatenate([hi_q, v])
-    else:
-        r = np.concatenate([np.full(m, nn.error_range[0]), np.full(m, nn.error_range[1])])
-        low, high = -r, r
+    low, high = input_box(
+        nn.basis_input, robot.lower_limits, robot.upper_limits, nn.velocity_range, nn.error_range, m
+    )
     return AdditiveRBFBasis(low, high, nn.centers, nn.width, nn.bias)
 
 

@@ -65,3 +65,20 @@ class AdditiveRBFBasis:
         d = s[:, None] - self.grid
         rbf = np.exp(-(d * d) * self.inverse_two_width_sq[:, None]).ravel()
         return np.concatenate(([1.0], rbf)) if self.bias else rbf
+
+
+def input_box(
+    basis_input: str, lower: np.ndarray, upper: np.ndarray, velocity_range: float, error_range, m: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """The box phi's centres span: s = [q, q'] over the joint limits clipped to one turn
+    [-pi, pi] and +-velocity_range [rad/s] (``joint``), or s = [e, e'] over +-error_range[0] [m]
+    and +-error_range[1] [m/s] (``error``, m task coordinates).
+    """
+    if basis_input == "joint":
+        speed = np.full(len(lower), velocity_range)
+        return (
+            np.concatenate([np.maximum(lower, -np.pi), -speed]),
+            np.concatenate([np.minimum(upper, np.pi), speed]),
+        )
+    r = np.concatenate([np.full(m, error_range[0]), np.full(m, error_range[1])])
+    return -r, r

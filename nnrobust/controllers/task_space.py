@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Protocol
+
 import numpy as np
 
 from ..model.base import DynamicsModel
@@ -9,12 +11,27 @@ from ..plant.friction import Friction
 from ..subtasks.base import Criterion
 from ..trajectories import Trajectory
 from .base import Controller, ControlOutput
-from .nn_compensator import NNCompensator
 from .pseudoinverse import DampedPseudoInverse, project_null_space
-from .sliding_mode import SlidingModeCompensator
 
-RobustTerm = NNCompensator | SlidingModeCompensator
-"""A robust term u_0 of eq. (9): ``output(q, q', y, z, T) -> (u_0, z_next, signals)``."""
+
+class RobustTerm(Protocol):
+    """A robust term u_0 of eq. (9) (NNCompensator, SlidingModeCompensator, the RBF network's):
+    ``output(q, q', y, z, T) -> (u_0, z_next, signals)`` with state z of ``state_size`` entries.
+    """
+
+    @property
+    def state_size(self) -> int:
+        """Entries of its state z."""
+
+    @property
+    def signal_names(self) -> tuple[str, ...]:
+        """The scalar signals ``output`` returns."""
+
+    def initial_state(self) -> np.ndarray:
+        """z(0)."""
+
+    def output(self, q: np.ndarray, v: np.ndarray, y: np.ndarray, z: np.ndarray, period: float):
+        """(u_0, z after ``period``, signals) at the measured (q, q') and y = [e, e']."""
 
 
 class TaskSpaceController(Controller):

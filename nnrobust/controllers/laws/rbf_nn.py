@@ -24,7 +24,7 @@ import numpy as np
 
 from ...tune.space import bandwidth_range
 from ..base import ControllerContext
-from ..basis import AdditiveRBFBasis
+from ..basis import AdditiveRBFBasis, input_box
 from ..nn_compensator import error_dynamics, lyapunov_P
 from ..registry import Law, LawParam, register_law
 from ..task_space import TaskSpaceController
@@ -86,14 +86,9 @@ class RBFNN(TaskSpaceController):
     ):
         m = context.m
         Kp, Kv = np.eye(m) * bandwidth**2, np.eye(m) * (2 * damping_ratio * bandwidth)
-        if basis_input == "joint":
-            lower, upper = context.lower_limits, context.upper_limits
-            speed = np.full(context.n, velocity_range)
-            low = np.concatenate([np.maximum(lower, -np.pi), -speed])
-            high = np.concatenate([np.minimum(upper, np.pi), speed])
-        else:
-            r = np.concatenate([np.full(m, error_range[0]), np.full(m, error_range[1])])
-            low, high = -r, r
+        low, high = input_box(
+            basis_input, context.lower_limits, context.upper_limits, velocity_range, error_range, m
+        )
         basis = AdditiveRBFBasis(low, high, int(centers), width, True)
         compensator = RBFCompensator(Kp, Kv, basis, basis_input == "joint", F, kappa, k_z, W_B)
         super().__init__(
@@ -104,12 +99,9 @@ class RBFNN(TaskSpaceController):
             k,
             context.criterion,
             context.nominal_friction,
-            None,
+            compensator,
             context.pseudo_inverse,
         )
-        self.compensator = compensator  # type: ignore[assignment]
-        self.state_size = compensator.state_size
-        self.signal_names = (*compensator.signal_names, "damping")
         self.BtP, self.F, self.kappa, self.k_z, self.W_B = compensator.BtP, F, kappa, k_z, W_B
         self.centers, self.inv2w2 = basis.grid, basis.inverse_two_width_sq
         self.joint_input = float(basis_input == "joint")
