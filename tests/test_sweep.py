@@ -15,7 +15,7 @@ pytest.importorskip("pyarrow")
 from nnrobust.cli import main  # noqa: E402
 from nnrobust.exceptions import ConfigError, NNRobustError  # noqa: E402
 from nnrobust.sweep import load_sweep, parse_sweep, read_results, run_sweep  # noqa: E402
-from nnrobust.sweep.engine import LOOPBACK_HTTP, plan  # noqa: E402
+from nnrobust.sweep.engine import local_cluster, plan  # noqa: E402
 
 SWEEP = """
 name = "tiny"
@@ -85,13 +85,9 @@ def test_a_sample_reruns_as_a_normal_run(tmp_path, capsys):
 def test_a_killed_worker_costs_only_its_chunk(tmp_path):
     """kill -9 of a worker in mid-sweep: dask runs its chunk again, and the table is complete with
     every row exactly once."""
-    from distributed import LocalCluster
-
     spec = load_sweep(_sweep_file(tmp_path, duration=6.0))
     out = tmp_path / "out"
-    cluster = LocalCluster(
-        n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=LOOPBACK_HTTP
-    )
+    cluster = local_cluster(2)
     try:
         result = {}
         thread = threading.Thread(
@@ -394,8 +390,6 @@ def test_client_memory_does_not_grow_with_samples(tmp_path):
     import sys
     import tracemalloc
 
-    from distributed import LocalCluster
-
     def peak(samples: int) -> int:
         spec = parse_sweep(
             {
@@ -417,9 +411,7 @@ def test_client_memory_does_not_grow_with_samples(tmp_path):
         finally:
             tracemalloc.stop()
 
-    cluster = LocalCluster(
-        n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=LOOPBACK_HTTP
-    )
+    cluster = local_cluster(2)
     try:
         peak(20)  # warm up: imports, connections
         small, large = peak(40), peak(400)
@@ -441,6 +433,22 @@ def test_a_local_cluster_listens_on_loopback_only():
         sockets += [(host, port) for host, port in [scheduler.address.removeprefix("tcp://").rsplit(":", 1)]]
     assert sockets and all(host == "127.0.0.1" for host, _ in sockets), sockets
     assert all(int(port) != 8787 for _, port in sockets)
+
+
+def test_local_workers_keep_the_environments_malloc_thresholds(monkeypatch):
+    """Dask's nanny would set MALLOC_TRIM_THRESHOLD_ in its workers, which switches off glibc's
+    dynamic mmap threshold and costs a sweep's rows 10 % (benchmarks/sweep_throughput.py): the
+    local cluster's workers have the client's environment's value, absent or the user's."""
+    from nnrobust.sweep.engine import _client
+
+    monkeypatch.delenv("MALLOC_TRIM_THRESHOLD_", raising=False)
+    with _client(1, None) as client:
+        seen = client.run(lambda: os.environ.get("MALLOC_TRIM_THRESHOLD_"))
+    assert list(seen.values()) == [None], seen
+    monkeypatch.setenv("MALLOC_TRIM_THRESHOLD_", "1048576")
+    with _client(1, None) as client:
+        seen = client.run(lambda: os.environ.get("MALLOC_TRIM_THRESHOLD_"))
+    assert list(seen.values()) == ["1048576"], seen
 
 
 def test_a_sample_that_raises_is_a_row_and_the_sweep_goes_on(monkeypatch):

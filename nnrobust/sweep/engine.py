@@ -241,13 +241,51 @@ def check_scheduler(address: str) -> str:
     return f"tcp://{parts.hostname}:{port}"
 
 
+QUIET_CLUSTER = {
+    # Dask's nanny sets MALLOC_TRIM_THRESHOLD_ in its workers' environment so that they give freed
+    # memory back to the OS; setting it also turns off glibc's dynamic mmap threshold, so that
+    # every trace array of a run is mapped and page-faulted anew (about 6 % of a 20 s
+    # paper-ellipse row). A run's memory is bounded and the next run reuses it. A value set in the
+    # user's environment is still passed on.
+    "distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
+    # The timers of an idle 2-worker cluster take 9-10 % of a core, which a sweep on as many workers
+    # as cores takes from its runs: the event-loop health tick (every 20 ms in each process), the
+    # statistical profiler (a stack sample every 10 ms per worker), the system monitor (500 ms)
+    # and the memory monitor (100 ms). Slower, they take 1-1.5 %.
+    "distributed.admin.tick.interval": "1s",
+    "distributed.worker.profile.enabled": False,
+    "distributed.admin.system-monitor.interval": "2s",
+    "distributed.worker.memory.monitor-interval": "500ms",
+}
+"""Dask settings of the local cluster that `nnrobust sweep`, tune and falsify start; set them in
+the dask configuration of a cluster of your own (benchmarks/sweep_throughput.py measures them)."""
+
+
+def local_cluster(workers: int, **options):
+    """A dask LocalCluster of ``workers`` single-threaded worker processes on 127.0.0.1 (its HTTP
+    server on a free loopback port), with :data:`QUIET_CLUSTER`'s settings.
+    """
+    import dask
+    from distributed import LocalCluster
+
+    with dask.config.set(QUIET_CLUSTER):
+        return LocalCluster(
+            n_workers=workers,
+            threads_per_worker=1,
+            processes=True,
+            host="127.0.0.1",
+            dashboard_address=LOOPBACK_HTTP,
+            **options,
+        )
+
+
 @contextmanager
 def _client(workers: int | None, scheduler: str | None):
     """A client of an existing scheduler, or of a LocalCluster on 127.0.0.1 (its HTTP server on a
     free loopback port) with one single-threaded worker process per core; closed on the way out,
     whatever happens.
     """
-    from distributed import Client, LocalCluster
+    from distributed import Client
 
     if scheduler:
         client = Client(check_scheduler(scheduler), timeout="20s")
@@ -258,14 +296,7 @@ def _client(workers: int | None, scheduler: str | None):
         return
     if workers is not None and not (isinstance(workers, int) and 1 <= workers <= MAX_WORKERS):
         raise NNRobustError(f"--workers {workers}: give 1 to {MAX_WORKERS} local worker processes")
-    cluster = LocalCluster(
-        n_workers=workers or os.cpu_count() or 1,
-        threads_per_worker=1,
-        processes=True,
-        host="127.0.0.1",
-        dashboard_address=LOOPBACK_HTTP,
-        silence_logs=logging.ERROR,
-    )
+    cluster = local_cluster(workers or os.cpu_count() or 1, silence_logs=logging.ERROR)
     client = Client(cluster)
     try:
         yield client
