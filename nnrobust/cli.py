@@ -485,7 +485,9 @@ def cmd_falsify(args) -> int:
 
     out = Path(args.out)
     summary = _resumable(
-        lambda: run_falsify(spec, out, args.workers, args.scheduler, args.overwrite, progress),
+        lambda: run_falsify(
+            spec, out, args.workers, args.scheduler, args.overwrite, progress, (args.epsilon, args.beta)
+        ),
         f"search interrupted; the plants simulated so far are in {out}/history",
     )
     if summary is None:
@@ -503,6 +505,11 @@ def cmd_falsify(args) -> int:
             )
         for name, margin in summary.get("margin", {}).items():
             print(format_margin(name, margin))
+        from .properties import format_certificates
+
+        certified = {name: entry["certificate"] for name, entry in summary["controllers"].items()}
+        print("from the random baseline (independent draws of the box):")
+        print("\n".join(f"  {line}" for line in format_certificates(certified)))
         print(
             f"summary in {out}/summary.json, history in {out}/history, {out}/falsification.csv",
             file=sys.stderr,
@@ -1006,6 +1013,19 @@ def build_parser() -> argparse.ArgumentParser:
         help="also find each controller's robustness margin: the largest scale s of the box "
         "about its centre with no violation found, by doubling then bisection on s, each "
         "scale searched at a quarter of the budget (docs/falsification.md)",
+    )
+    falsify.add_argument(
+        "--epsilon",
+        type=float,
+        default=0.05,
+        help="the random baseline's runs, independent draws of the box, certify P(a property fails) "
+        "<= EPSILON (default 0.05) ...",
+    )
+    falsify.add_argument(
+        "--beta",
+        type=float,
+        default=0.05,
+        help="... with confidence 1 - BETA (default 0.05; one-sided Clopper-Pearson)",
     )
     falsify.add_argument("--quiet", action="store_true", help="print nothing but errors")
     falsify.set_defaults(func=cmd_falsify)

@@ -478,18 +478,24 @@ def run_falsify(
     scheduler: str | None = None,
     overwrite: bool = False,
     progress=None,
+    claim: tuple[float, float] = (0.05, 0.05),
 ) -> dict:
     """Search each controller's worst plant and its random baseline; returns the summary (also
     DIR/summary.json, DIR/falsification.csv and DIR/convergence.png). The folder is locked for
-    the search.
+    the search. ``claim`` = (epsilon, beta): the random baseline's runs, independent draws of the
+    box, certify P(a property fails) <= epsilon with confidence 1 - beta (:func:`certify_box`).
     """
+    from .properties import check_claim
     from .study_folder import held
 
+    check_claim(*claim)
     with held(Path(folder)):
-        return _run_falsify(spec, Path(folder), workers, scheduler, overwrite, progress)
+        return _run_falsify(spec, Path(folder), workers, scheduler, overwrite, progress, claim)
 
 
-def _run_falsify(spec: FalsifySpec, folder: Path, workers, scheduler, overwrite: bool, progress) -> dict:
+def _run_falsify(
+    spec: FalsifySpec, folder: Path, workers, scheduler, overwrite: bool, progress, claim: tuple[float, float]
+) -> dict:
     from .properties import run_properties
     from .sweep.engine import _client, _require_engine
     from .sweep.spec import Sample, base_config, experiment, load_sweep, rerun_command, sample_seed
@@ -532,6 +538,10 @@ def _run_falsify(spec: FalsifySpec, folder: Path, workers, scheduler, overwrite:
         margins = _margins(spec, sweep, box, rows, drive) if spec.margin else None
     seconds = time.monotonic() - started
     summary = _summary(spec, sweep, box, properties, rows, seconds, rerun_command, Sample, sample_seed)
+    for name in sweep.controllers:
+        summary["controllers"][name]["certificate"] = certify_box(
+            sweep, box, properties, rows[(name, "random")], *claim
+        )
     if margins is not None:
         summary["margin"] = margins
     from .results import write_json_atomic
@@ -576,6 +586,34 @@ def _summary(spec, sweep, box, properties, rows, seconds, rerun_command, Sample,
             }
         out["controllers"][name] = {**entry.pop("falsifier"), "random_baseline": entry["random"]}
     return out
+
+
+def certify_box(
+    sweep, box: Box, properties: list[Property], history: list[dict], epsilon: float, beta: float
+):
+    """What the random baseline's runs prove: its points are independent uniform draws of the box
+    (log-uniform on loguniform keys, a grid's range uniformly), so its N runs with k failures give
+    each property's one-sided Clopper-Pearson bound on P(fail) over that distribution, and Wilks'
+    bound on its metric (:func:`nnrobust.properties.certify_runs`). The falsifier's own points
+    were chosen by a search and never count.
+    """
+    import hashlib
+
+    from .properties import certify_runs
+
+    described = repr(
+        [(k, float(lo), float(hi), bool(g)) for k, lo, hi, g in zip(box.keys, box.low, box.high, box.log)]
+    ) + repr((sorted(sweep.set.items()), sweep.seed))
+    distribution = hashlib.sha256(described.encode()).hexdigest()
+    certificates, bounds = certify_runs([r["metrics"] for r in history], properties, epsilon, beta)
+    for entry in certificates:
+        entry["distribution"] = distribution
+        entry["method"] = (
+            "one-sided Clopper-Pearson (exact binomial) bound on P(fail) from the random baseline's "
+            "runs: independent uniform draws of the box (log-uniform on loguniform keys), each run at "
+            "the sweep's first sample seed; the falsifier's points never count"
+        )
+    return {"certificates": certificates, "quantile_bounds": bounds}
 
 
 WORST = "worst"

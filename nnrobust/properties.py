@@ -197,8 +197,8 @@ def certify(
         for cell, group in cells:
             records = group.to_dict("records")
             where = dict(zip(spec.grid_keys, cell if isinstance(cell, tuple) else (cell,)))
-            for prop in properties:
-                entry = certificate(prop, [prop.margin(r) for r in records], epsilon, beta)
+            found, quantiles = certify_runs(records, properties, epsilon, beta)
+            for entry in found:
                 entry.update(distribution=distribution, **({"grid": where} if where else {}))
                 if stopped_early and len(records) < spec.samples:
                     entry["planned"] = spec.samples
@@ -206,26 +206,37 @@ def certify(
                         f"; sequential stopping: stopped after {len(records)} of {spec.samples} rows, "
                         "once some property's failures refuted the claim at the planned N"
                     )
-                certificates.append(entry)
-                if prop.op in ("<=", "<", ">=", ">"):
-                    values = [
-                        float(r[prop.metric]) if r.get("status") == "completed" else math.inf for r in records
-                    ]
-                    low = prop.op in (">=", ">")
-                    bound = wilks_upper([-v for v in values] if low else values, 1 - epsilon, beta)
-                    bounds.append(
-                        {
-                            "metric": prop.metric,
-                            "quantile": 1 - epsilon,
-                            "confidence": 1 - beta,
-                            "bound": None if bound is None else (-bound if low else bound),
-                            "side": "lower" if low else "upper",
-                            "N": len(records),
-                            **({"grid": where} if where else {}),
-                        }
-                    )
+            certificates += found
+            bounds += [{**b, **({"grid": where} if where else {})} for b in quantiles]
         out[controller] = {"certificates": certificates, "quantile_bounds": bounds}
     return out
+
+
+def certify_runs(
+    records: list[dict], properties: list[Property], epsilon: float, beta: float
+) -> tuple[list[dict], list[dict]]:
+    """What N independent runs (their metrics, with ``status``) prove: a certificate per property,
+    and Wilks' bound on each ordered property's metric at the 1 - epsilon quantile with
+    confidence 1 - beta. A run that did not complete fails every property.
+    """
+    certificates, bounds = [], []
+    for prop in properties:
+        certificates.append(certificate(prop, [prop.margin(r) for r in records], epsilon, beta))
+        if prop.op in ("<=", "<", ">=", ">"):
+            values = [float(r[prop.metric]) if r.get("status") == "completed" else math.inf for r in records]
+            low = prop.op in (">=", ">")
+            bound = wilks_upper([-v for v in values] if low else values, 1 - epsilon, beta)
+            bounds.append(
+                {
+                    "metric": prop.metric,
+                    "quantile": 1 - epsilon,
+                    "confidence": 1 - beta,
+                    "bound": None if bound is None else (-bound if low else bound),
+                    "side": "lower" if low else "upper",
+                    "N": len(records),
+                }
+            )
+    return certificates, bounds
 
 
 def refuted_groups(

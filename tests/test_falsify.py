@@ -96,6 +96,7 @@ def test_a_search_finds_the_worst_plant_reruns_it_and_resumes(tmp_path, capsys):
     assert worst["values"]["plant.friction_scale"] < 1.0
     assert entry["falsified"] == (worst["margin"] < 0)
     assert worst["margin"] == pytest.approx((0.02 - worst["metrics"]["rms_error"]) / 0.02, rel=1e-12)
+    check_certificate(entry["certificate"], out, "rms_error", 0.02)
     import shlex
 
     words = shlex.split(worst["command"])
@@ -129,6 +130,38 @@ def test_a_search_finds_the_worst_plant_reruns_it_and_resumes(tmp_path, capsys):
         run_falsify(other, out, workers=2)
     run_falsify(other, out, workers=2, overwrite=True)  # the search's own outputs replaced, worst/ too
     assert not (out / "worst").exists()
+
+
+def check_certificate(certified: dict, out, metric: str, limit: float) -> None:
+    """The random baseline's certificate: N its runs, k those over the limit (read back from the
+    history), p_upper scipy's Beta quantile, and no Wilks bound from 16 runs (the 95 % quantile
+    with 95 % confidence needs 59)."""
+    import pandas as pd
+    from scipy.stats import beta
+
+    rows = [json.loads(r) for r in pd.read_parquet(out / "history")["row"]]
+    errors = [r["metrics"][metric] for r in rows if r["search"] == "random"]
+    k = sum(e > limit for e in errors)
+    (cert,) = certified["certificates"]
+    assert (cert["N"], cert["k"], cert["epsilon"], cert["beta"]) == (len(errors), k, 0.05, 0.05)
+    expected = 1.0 if k == len(errors) else beta.ppf(0.95, k + 1, len(errors) - k)
+    assert cert["p_upper"] == pytest.approx(expected, rel=1e-12)
+    assert cert["holds"] == (expected <= 0.05)
+    assert "random baseline" in cert["method"] and len(cert["distribution"]) == 64
+    (bound,) = certified["quantile_bounds"]
+    assert bound["bound"] is None and bound["N"] == len(errors)
+
+
+def test_a_claim_no_sample_can_make_is_one_line_error(tmp_path, capsys):
+    sweep = tmp_path / "fz.toml"
+    sweep.write_text(SWEEP)
+    words = ["falsify", str(sweep), "--controllers", "nn", "--require", "rms_error<=0.02", "--budget", "8"]
+    assert main([*words, "--epsilon", "1.5", "--out", str(tmp_path / "out")]) == 2
+    assert (
+        capsys.readouterr().err.strip()
+        == "nnrobust: error: --epsilon: must be a probability in (0, 1), got 1.5"
+    )
+    assert not (tmp_path / "out").exists()
 
 
 def test_per_joint_plant_keys_are_coordinates_of_the_box():
