@@ -520,14 +520,19 @@ def engine_gap_tuned() -> str:
 
 
 FALSIFY_COMMANDS = {
+    "falsify_paper_factors": (
+        "nnrobust falsify benchmarks/falsification/paper-factors.toml --controllers "
+        'nn,sliding-mode,no-u0,computed-torque,slotine-li,rbf-nn --require "rms_error_after_2s<=0.05" '
+        "--budget 200 --margin --workers 2 --out out/falsify-paper-factors"
+    ),
     "falsify_panda_factors": (
         "nnrobust falsify benchmarks/falsification/panda-factors.toml --controllers "
-        'nn,no-u0,sliding-mode,pd --require "rms_error_after_2s<=0.005" --budget 200 --margin '
-        "--workers 2 --out out/falsify-panda-factors"
+        'nn,no-u0,sliding-mode,pd,slotine-li,rbf-nn --require "rms_error_after_2s<=0.005" --budget 200 '
+        "--margin --workers 2 --out out/falsify-panda-factors"
     ),
     "falsify_tuned_noisy": (
         "nnrobust falsify benchmarks/falsification/paper-factors-noisy.toml --controllers "
-        "nn,no-u0,pd,sliding-mode --tuned docs/data/tune_noisy_case_b.json --require "
+        "nn,no-u0,pd,sliding-mode,slotine-li,rbf-nn --tuned docs/data/tune_noisy_case_b.json --require "
         '"rms_error_after_2s<=0.0005" --budget 200 --margin --workers 2 --out out/falsify-tuned'
     ),
 }
