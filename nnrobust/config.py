@@ -567,6 +567,17 @@ class SimulationConfig:
     initial_task_offset: list[float] | None = None
     memory_limit: float = 2.0
 
+    @property
+    def requested_substeps(self) -> int | None:
+        """Plant steps per control period as given: ``substeps``, or ``control_period /
+        integration_step`` (a whole number, :func:`validate`), or None (chosen by the run).
+        """
+        if self.substeps is not None:
+            return self.substeps
+        if self.integration_step is not None:
+            return int(round(self.control_period / self.integration_step))
+        return None
+
 
 @dataclass
 class ExperimentConfig:
@@ -1524,17 +1535,17 @@ def validate(config: ExperimentConfig) -> None:
                 f"{sim.substeps} disagrees with simulation.integration_step = {sim.integration_step:g} s "
                 f"({int(round(ratio))} steps per control period); give one of the two",
             )
-        sim.substeps = int(round(ratio))
     if config.plant.loads:
         from .plant.loads import parse_loads
 
         parse_loads(config.plant.loads, config.simulation.control_period)
     if sim.duration < sim.control_period:
         raise ConfigError("simulation.duration", "is shorter than one control period")
-    if sim.substeps is not None and sim.substeps > MAX_SUBSTEPS:
+    substeps = sim.requested_substeps
+    if substeps is not None and substeps > MAX_SUBSTEPS:
         raise ConfigError(
-            "simulation.substeps",
-            f"{sim.substeps} integration steps per control period; at "
+            "simulation.substeps" if sim.substeps is not None else "simulation.integration_step",
+            f"{substeps} integration steps per control period; at "
             f"most {MAX_SUBSTEPS} (a shorter control_period does the same job)",
         )
     steps = sim.duration / sim.control_period

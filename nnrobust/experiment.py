@@ -750,9 +750,10 @@ def plant_step(config: ExperimentConfig, plant: Plant, q0: np.ndarray) -> int:
     said in one warning.
     """
     sim = config.simulation
-    if sim.substeps is not None or sim.integrator != "rk4":
-        check_stiffness(config, plant, q0, sim.substeps or 1)
-        return sim.substeps or 1
+    given = sim.requested_substeps
+    if given is not None or sim.integrator != "rk4":
+        check_stiffness(config, plant, q0, given or 1)
+        return given or 1
     T, names = sim.control_period, plant.model.joint_names
     M_inv = np.linalg.inv(plant.model.mass(q0))
     needed, reasons = 1, []

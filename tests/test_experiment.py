@@ -58,6 +58,29 @@ def test_every_preset_validates():
         assert from_dict(__import__("tomllib").loads(config.to_toml())) == config
 
 
+@pytest.mark.parametrize("name", preset_names())
+def test_checking_a_configuration_changes_nothing_and_integration_step_is_substeps(name):
+    """validate only checks: every preset, and one given as an integration step, is the same
+    after it; the step is read where the run needs it, so that a run with integration_step = T/3
+    is the run with substeps = 3, bit for bit."""
+    from nnrobust.config import apply_overrides, validate
+
+    config = load_preset(name)
+    stepped = apply_overrides(config, {"simulation.integration_step": config.simulation.control_period / 3})
+    for c in (config, stepped):
+        before = c.to_toml()
+        validate(c)
+        assert c.to_toml() == before
+    assert stepped.simulation.substeps is None and stepped.simulation.requested_substeps == 3
+    if name == "paper-ellipse":
+        short = {"simulation.duration": 0.05}
+        by_step = run_experiment(apply_overrides(stepped, short))
+        by_count = run_experiment(apply_overrides(config, {**short, "simulation.substeps": 3}))
+        T = config.simulation.control_period
+        assert by_step.plant_step == by_count.plant_step == pytest.approx(T / 3)
+        assert np.array_equal(by_step.q, by_count.q)
+
+
 def test_config_errors_name_the_key(tmp_path):
     """Unknown keys suggest the closest one; Kv^2 <= Kp is refused with the reason."""
     with pytest.raises(ConfigError, match="did you mean 'duration'"):
