@@ -99,11 +99,12 @@ def _live_view(args, config, setup):
     """Start the viewer, draw the arm and the desired path; returns (viewer, callback)."""
     import numpy as np
 
+    from .run_info import RunInfo
     from .viewer import RunScene, start_viewer
     from .viewer.scene import world_points
 
     viewer = start_viewer(args.host, args.port)
-    scene = RunScene(viewer.vis, config)
+    scene = RunScene(viewer.vis, RunInfo.from_config(config))
     chain = setup.robot.chain_points(setup.q0)
     tip_z = chain[-1, 2]
     times = np.linspace(0.0, config.simulation.duration, 400)
@@ -255,7 +256,7 @@ def _simulate_and_write(args, config, out: Path, drawing: Drawing) -> int:
         if viewer is not None:
             from .viewer import draw_run
 
-            draw_run(viewer.vis, result, config)
+            draw_run(viewer.vis, result)
             _serve_until_interrupted(viewer)
     finally:
         if viewer is not None:
@@ -300,9 +301,8 @@ def cmd_view(args) -> int:
     if not (folder / "config.toml").is_file():
         raise NNRobustError(f"{folder}: not a run folder (config.toml is missing)")
     result = load_run(folder)
-    config = result.experiment()
     with start_viewer(args.host, args.port) as viewer:
-        draw_run(viewer.vis, result, config)
+        draw_run(viewer.vis, result)
         if args.open:
             import webbrowser
 

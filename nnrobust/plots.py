@@ -12,8 +12,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import matplotlib.ticker  # noqa: E402
 import numpy as np  # noqa: E402
 
-from .exceptions import NNRobustError  # noqa: E402
 from .results import Result  # noqa: E402
+from .run_info import MANIPULABILITY_UNITS  # noqa: E402
 
 FORMATS = ("png", "svg")
 
@@ -407,70 +407,11 @@ def _limit_text(bounds: list[float]) -> str:
     return " to ".join(f"{b:.3g}" for b in sorted(bounds))
 
 
-MANIPULABILITY_UNITS = {2: "m$^2$", 3: "m$^3$", 6: "m$^3$"}
-"""Units of sqrt det(J J^T) by task size m, for revolute joints (a pose's angular rows are
-dimensionless: rad per rad)."""
-
-
-def criterion_units(name: str, m: int) -> str:
-    """The unit of one criterion h_i for a task of size m (the joint criteria are ratios)."""
-    manipulability = MANIPULABILITY_UNITS.get(m, "mixed")
-    squared = {2: "m$^4$", 3: "m$^6$", 6: "m$^6$"}.get(m, "mixed")
-    return {
-        "manipulability": manipulability,
-        "half_det_manipulability": squared,
-        "joint_limits": "1",
-        "joint_centering": "1",
-        "joint_smoothness": "rad$^2$",
-        "obstacles": "m$^2$",
-        "paper": "m$^4$ + rad$^2$",
-    }.get(name, "mixed")
-
-
-def _criterion_formula(name: str) -> str:
-    """A criterion as a formula for a title: its description in :data:`CRITERIA`."""
-    from .subtasks import CRITERIA
-
-    text = CRITERIA.get(name, name)
-    if text.startswith("eq. ("):  # "eq. (19): formula (three joints)" -> "formula, eq. (19)"
-        label, _, text = text.partition(": ")
-        text = text.removesuffix(" (three joints)") + ", " + label
-    return text
-
-
-def _criterion_name(result: Result) -> tuple[str, str]:
-    """(h(q) as the run configured it, its weighted criteria of eq. 4; its unit)."""
-    try:
-        sub = result.experiment().subtasks
-    except (NNRobustError, ValueError):  # a result without a readable configuration
-        return "h(q)", "?"
-    from .config import default_criteria
-
-    m = result.e.shape[1]
-    names = (
-        sub.criteria
-        if sub.criteria is not None
-        else default_criteria(result.q.shape[1], {2: "planar", 6: "pose"}.get(m, "position"))
-    )
-    if not names:
-        return "no subtask criterion", "-"
-    weights = sub.weights or [sub.C / len(names)] * len(names)
-    units = [criterion_units(c, m) for c in names]
-    unit = " + ".join(dict.fromkeys(units))  # a weighted sum of terms of different units
-    terms = [
-        (c if w == 1 else f"{w:g} {c}")
-        if c != "paper"
-        else (_criterion_formula(c) if w == 1 else f"{w:g} [{_criterion_formula(c)}]")
-        for w, c in zip(weights, names)
-    ]
-    return "h(q) = " + " + ".join(terms), unit
-
-
 def _subtask_figure(result: Result):
     t = result.t
     fig, axes = plt.subplots(2, 1, figsize=(7, 4.5), sharex=True)
     _series(axes[0].plot, t, result.signals["h"], lw=0.9)
-    name, unit = _criterion_name(result)
+    name, unit = result.info.criterion_label if result.info else ("h(q)", "?")
     axes[0].set_ylabel(f"h(q) [{unit}]")
     axes[0].set_title(name, fontsize=9)
     _series(axes[1].plot, t, result.signals["manipulability"], lw=0.9)
@@ -545,20 +486,14 @@ def plot_run(result: Result, folder: str | Path, names=None) -> list[Path]:
 
 def comparison_warnings(results: dict[str, Result]) -> list[str]:
     """What makes runs hard to compare: a different robot, task or desired trajectory."""
-    configs = {}
-    for label, result in results.items():
-        try:
-            configs[label] = result.experiment()
-        except (NNRobustError, ValueError):
-            configs[label] = None
+    infos = {label: r.info for label, r in results.items() if r.info is not None}
     said = []
-    readable = {k: c for k, c in configs.items() if c is not None}
     for what, get in (
-        ("robot", lambda c: (c.robot.source, c.robot.chain, c.robot.task_frame)),
-        ("task", lambda c: c.robot.task),
-        ("desired trajectory", lambda c: c.trajectory),
+        ("robot", lambda i: i.robot),
+        ("task", lambda i: i.task),
+        ("desired trajectory", lambda i: i.trajectory),
     ):
-        values = {label: get(c) for label, c in readable.items()}
+        values = {label: get(i) for label, i in infos.items()}
         if len({repr(v) for v in values.values()}) > 1:
             shown = "; ".join(f"{label}: {_short(v)}" for label, v in values.items())
             said.append(f"the runs differ in their {what} ({shown})")
@@ -568,8 +503,8 @@ def comparison_warnings(results: dict[str, Result]) -> list[str]:
 def _short(value) -> str:
     if isinstance(value, tuple):
         value = value[0]
-    if not isinstance(value, str) and hasattr(value, "axis_a"):  # a TrajectoryConfig
-        return f"centre {value.center}, axes {value.axis_a} {value.axis_b}, omega {value.omega:g}"
+    if isinstance(value, dict) and "axis_a" in value:  # a trajectory's settings
+        return f"centre {value['center']}, axes {value['axis_a']} {value['axis_b']}, omega {value['omega']:g}"
     return str(value)[:80]
 
 

@@ -11,6 +11,7 @@ import numpy as np
 
 from . import verdicts
 from .model.tasks import display_coordinates
+from .run_info import RunInfo
 from .simulation import period_substeps
 from .subtasks.manipulability import det
 
@@ -69,7 +70,9 @@ class Result:
             damped pseudo-inverse, > 0 during a near-singular episode).
         status: ``completed``, ``diverged`` or ``interrupted``.
         message: why the run stopped early.
-        config: the configuration that produced it (TOML text).
+        config: the configuration that produced it (TOML text): what reruns it.
+        info: what its analysis reads of that configuration, typed (:class:`RunInfo`: the
+            criteria and their units, the robot, the task and trajectory), or None.
         wall_seconds: wall-clock time of the simulation [s].
         joint_names: names of the joints.
         chain: world positions of the joint origins and the task frame, N x (n + 1) x 3 [m]
@@ -120,6 +123,7 @@ class Result:
     step_rotation: float = float("nan")
     plant_engine: str = "pinocchio"
     engine_audit: dict | None = None
+    info: RunInfo | None = None
 
     @classmethod
     def from_trace(
@@ -188,6 +192,7 @@ class Result:
             unresolved_events=trace.unresolved_events,
             refined_periods=trace.refined_periods,
             step_rotation=step_rotation(trace.dq, config, substeps) if config is not None else float("nan"),
+            info=RunInfo.from_config(config, trace.q.shape[1]) if config is not None else None,
         )
 
     def experiment(self):
@@ -355,6 +360,8 @@ class Result:
         arrays = {k: getattr(self, k) for k in ("t", "q", "dq", "tau", "x", "x_d", "e")}
         arrays.update({f"signal_{k}": v for k, v in self.signals.items()})
         arrays["joint_names"] = np.asarray(self.joint_names)
+        if self.info is not None:
+            arrays["info"] = np.asarray(self.info.to_json())
         for name in OPTIONAL_ARRAYS:
             if getattr(self, name) is not None:
                 arrays[name] = getattr(self, name)
@@ -399,7 +406,23 @@ class Result:
             step_rotation=metrics.get("step_rotation", float("nan")),
             plant_engine=metrics.get("plant_engine", "pinocchio"),
             engine_audit=metrics.get("engine_audit"),
+            info=_stored_info(arrays, config, arrays["q"].shape[1]),
         )
+
+
+def _stored_info(arrays: dict, config: str, n: int) -> RunInfo | None:
+    """result.npz's run info; for a folder written before it had one, read from config.toml."""
+    if "info" in arrays:
+        return RunInfo.from_json(str(arrays["info"]))
+    if not config:
+        return None
+    from .config import from_dict, parse_toml
+    from .exceptions import NNRobustError
+
+    try:
+        return RunInfo.from_config(from_dict(parse_toml(config, "config.toml")), n)
+    except (NNRobustError, ValueError):  # a configuration this version cannot read
+        return None
 
 
 def step_rotation(dq: np.ndarray, config, substeps: int) -> float:

@@ -276,7 +276,8 @@ class Drawing:
         record, complete or failed (on Ctrl-C it records interrupted itself).
         """
         plots = self.plots and result.t.size > 1
-        animation = self.animation and result.config and result.chain is not None and result.t.size > 1
+        drawable = result.info is not None and result.chain is not None
+        animation = self.animation and drawable and result.t.size > 1
         if not plots:
             self.close()
         plots_tmp, html_tmp = folder / PLOTS_PARTIAL, folder / ANIMATION_PARTIAL
@@ -328,7 +329,7 @@ def _animation_html(result) -> str | None:
     from .viewer.scene import animation_html
 
     try:
-        return animation_html(result, result.experiment())
+        return animation_html(result)
     except NNRobustError as err:
         warnings.warn(f"no animation.html: {err}", stacklevel=4)
         return None

@@ -173,6 +173,29 @@ def test_plot_draws_again_the_figures_a_run_drew(tmp_path, capsys):
     assert (folder / "result.npz").read_bytes() == arrays and _marker(folder)["extras"] == "complete"
 
 
+def test_figures_and_animation_read_the_runs_info_not_its_toml(tmp_path, capsys):
+    """The analysis reads the typed run info stored with the arrays (criteria, weights, units,
+    robot): with config.toml unreadable, nnrobust plot draws the same figures, the subtask
+    figure's title and unit included, and the animation; the info round-trips exactly."""
+    from nnrobust.run_folder import load_run
+    from nnrobust.run_info import RunInfo
+
+    folder = tmp_path / "run"
+    words = ["run", "panda-ellipse", "--out", str(folder), "--duration", "0.3", "--quiet"]
+    assert main([*words, "--set", "subtasks.criteria=['joint_limits', 'manipulability']"]) == 0
+    drawn = {p.name: p.read_bytes() for p in (folder / "plots").glob("*.png")}
+    info = load_run(folder).info
+    assert info == RunInfo.from_config(load_run(folder).experiment(), 7)
+    assert info.criterion_label[0].startswith("h(q) = ") and "joint_limits" in info.criterion_label[0]
+    assert info.criterion_units == ("1", "m$^3$") and info.robot_source == "panda"
+    (folder / "config.toml").write_text("this is [not TOML")
+    shutil.rmtree(folder / "plots")
+    (folder / "animation.html").unlink()
+    assert main(["plot", str(folder)]) == 0
+    assert {p.name: p.read_bytes() for p in (folder / "plots").glob("*.png")} == drawn
+    assert (folder / "animation.html").stat().st_size > 5_000_000  # the Panda's meshes
+
+
 def test_plot_finishes_a_run_whose_drawing_was_interrupted(tmp_path, monkeypatch, capsys):
     result = run_experiment(load_preset("paper-line").replace(simulation={"duration": 0.3}))
 
@@ -282,8 +305,14 @@ def test_corrupt_run_folders_get_one_line(tmp_path, capsys):
     pickled = tmp_path / "pickled"
     assert _run(pickled) == 0
     np.savez(pickled / "result.npz", t=np.array([object()], dtype=object))
+    mistyped = tmp_path / "mistyped"
+    assert _run(mistyped) == 0
+    with np.load(mistyped / "result.npz") as data:
+        arrays = {k: data[k] for k in data.files}
+    arrays["info"] = np.asarray(json.dumps({**json.loads(str(arrays["info"])), "criterion_weights": ["x"]}))
+    np.savez(mistyped / "result.npz", **arrays)
     capsys.readouterr()
-    for bad in (truncated, garbage, listed, pickled, tmp_path / "missing"):
+    for bad in (truncated, garbage, listed, pickled, mistyped, tmp_path / "missing"):
         assert main(["compare", str(good), str(bad)]) == 2
         assert str(bad) in _one_error_line(capsys)
         assert main(["view", str(bad), "--seconds", "0"]) == 2

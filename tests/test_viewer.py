@@ -58,7 +58,7 @@ def test_animation_of_a_meshed_robot_embeds_its_meshes(tmp_path):
 
     config = load_preset("panda-ellipse").replace(simulation={"duration": 0.1})
     result = run_experiment(config)
-    html = animation_html(result, config)
+    html = animation_html(result)
     assert "panda" in html and len(html) > 5_000_000  # the Panda's meshes travel in the file
 
 
@@ -74,7 +74,7 @@ def test_animation_tracks_equal_meshcats_own_keyframes():
     config = load_preset("panda-ellipse").replace(simulation={"duration": 0.5})
     result = run_experiment(config)
     vis = meshcat.Visualizer(window=SceneRecorder())
-    scene = RunScene(vis, config)
+    scene = RunScene(vis, result.info)
     _, desired = tip_positions(result)
     index = np.arange(0, result.t.size, 33)
     reference, poses = Animation(default_framerate=30), PoseRecorder()
@@ -184,7 +184,7 @@ def test_viewer_listens_on_loopback_only(paper_run):
 
     result = Result.load(paper_run)
     with start_viewer() as viewer:
-        draw_run(viewer.vis, result, result.experiment())
+        draw_run(viewer.vis, result)
         addresses = _listening_addresses(viewer.process.pid)
         assert len(addresses) >= 2, addresses  # web server and ZeroMQ socket
         assert all(a.startswith("127.0.0.1:") for a in addresses), addresses
@@ -234,7 +234,7 @@ def test_browser_draws_the_arm_and_it_moves(paper_run, tmp_path):
 
     result = Result.load(paper_run)
     recorder = SceneRecorder()
-    draw_run(meshcat.Visualizer(window=recorder), result, result.experiment())
+    draw_run(meshcat.Visualizer(window=recorder), result)
     meshcat.Visualizer(window=recorder)["robot"].delete()
     background_page = tmp_path / "background.html"
     background_page.write_text(recorder.html())

@@ -15,10 +15,10 @@ import pinocchio as pin
 import umsgpack
 from meshcat.servers.tree import SceneTree, find_node, walk
 
-from ..config import ExperimentConfig
 from ..exceptions import NNRobustError
 from ..model.loading import load_visual_model
 from ..results import Result
+from ..run_info import RunInfo
 
 VIEWER_JS = os.path.join(os.path.dirname(meshcat.__file__), "viewer", "dist", "main.min.js")
 
@@ -210,15 +210,15 @@ class RunScene:
 
     Args:
         vis: a meshcat Visualizer (live, or on a :class:`SceneRecorder`).
-        config: the run's configuration (which robot, which joints locked).
+        info: the run's robot (source, locked joints, chain): a :class:`RunInfo`.
 
     """
 
-    def __init__(self, vis: meshcat.Visualizer, config: ExperimentConfig):
+    def __init__(self, vis: meshcat.Visualizer, info: RunInfo):
         MeshcatVisualizer = meshcat_visualizer_class()  # noqa: N806 - a class
 
-        rc = config.robot
-        model, visual = load_visual_model(rc.source, rc.locked_joints, rc.chain)
+        locked = None if info.locked_joints is None else list(info.locked_joints)
+        model, visual = load_visual_model(info.robot_source, locked, info.chain)
         self.vis = vis
         self.robot = MeshcatVisualizer(model, None, visual)
         with warnings.catch_warnings():
@@ -366,11 +366,9 @@ def _translation(p: np.ndarray) -> np.ndarray:
     return T
 
 
-def draw_run(
-    vis: meshcat.Visualizer, result: Result, config: ExperimentConfig, fps: float = 30.0
-) -> RunScene:
-    """The whole run in ``vis``: robot, desired path, actual trace, animation."""
-    scene = RunScene(vis, config)
+def draw_run(vis: meshcat.Visualizer, result: Result, fps: float = 30.0) -> RunScene:
+    """The whole run in ``vis``: robot (from ``result.info``), desired path, actual trace, animation."""
+    scene = RunScene(vis, _info(result))
     actual, desired = tip_positions(result)
     scene.draw_paths(desired, actual)
     scene.frame_camera(np.vstack([desired, _chain(result).reshape(-1, 3)]))
@@ -379,8 +377,15 @@ def draw_run(
     return scene
 
 
-def animation_html(result: Result, config: ExperimentConfig, fps: float = 30.0) -> str:
+def _info(result: Result) -> RunInfo:
+    if result.info is None:
+        raise NNRobustError("the run does not say which robot it ran (no run info): it cannot be drawn")
+    return result.info
+
+
+def animation_html(result: Result, fps: float = 30.0) -> str:
     """A self-contained HTML animation of the run (plays offline; ``#t=SECONDS`` pauses there)."""
     recorder = SceneRecorder()
-    draw_run(meshcat.Visualizer(window=recorder), result, config, fps)
-    return recorder.html(f"{config.name}: {config.controller.kind}")
+    draw_run(meshcat.Visualizer(window=recorder), result, fps)
+    info = _info(result)
+    return recorder.html(f"{info.name}: {info.controller}")
