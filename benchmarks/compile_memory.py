@@ -1,4 +1,4 @@
-"""Peak memory and time of each compiler process that builds the compiled loop (csrc/, csrc/laws/).
+"""Peak memory and time of each compiler process that builds the compiled loop (csrc/ and below).
 
 Each translation unit's own compile command, as CMake wrote it for Ninja in the build folder that
 `make` uses, is run again under GNU time (``/usr/bin/time -v``), one after the other, into a
@@ -43,7 +43,7 @@ def unit_commands(build: Path) -> dict[str, list[str]]:
     ).stdout
     commands = {}
     for line in listing.splitlines():
-        match = re.search(r"-c (\S+/csrc/((?:laws/)?\w+\.cpp))", line)
+        match = re.search(r"-c (\S+/csrc/((?:laws/|subtasks/)?\w+\.cpp))", line)
         if match:
             commands[match.group(2)] = shlex.split(line)
     return commands
@@ -84,7 +84,7 @@ def main() -> None:
     commands = {u: argv for u, argv in commands.items() if not args.units or u in args.units}
     # -MD/-MF/-MT take a following path: drop the dependency-file arguments pairwise
     rows = []
-    print(f"{'unit':<20s} {'peak memory [GB]':>17s} {'time [s]':>9s}  under {TARGET_GB} GB")
+    print(f"{'unit':<30s} {'peak memory [GB]':>17s} {'time [s]':>9s}  under {TARGET_GB} GB")
     for unit, argv in sorted(commands.items()):
         cleaned, skip = [], False
         for a in argv:
@@ -97,7 +97,7 @@ def main() -> None:
             cleaned.append(a)
         gb, wall = measure(cleaned)
         rows.append({"unit": unit, "peak_memory_gb": round(gb, 3), "seconds": round(wall, 1)})
-        print(f"{unit:<20s} {gb:17.2f} {wall:9.1f}  {'yes' if gb < TARGET_GB else 'NO'}")
+        print(f"{unit:<30s} {gb:17.2f} {wall:9.1f}  {'yes' if gb < TARGET_GB else 'NO'}")
     if args.json:
         write_json_atomic(args.json, {"target_gb": TARGET_GB, "units": rows})
 

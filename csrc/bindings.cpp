@@ -145,9 +145,7 @@ NB_MODULE(_loop, m) {
   FIELD(path_kind); FIELD(path_breaks); FIELD(path_coefficients);
   FIELD(omega); FIELD(phase); FIELD(pose); FIELD(rotation0); FIELD(rotation_axis);
   FIELD(rotation_amplitude); FIELD(rotation_omega); FIELD(rotation_phase); FIELD(law); FIELD(law_params); FIELD(law_signals); FIELD(Kp); FIELD(Kv); FIELD(k); FIELD(pd_Kp); FIELD(pd_Kd);
-  FIELD(null_damping); FIELD(criteria); FIELD(criterion_weights); FIELD(smoothness); FIELD(limit_lower);
-  FIELD(limit_upper); FIELD(limit_margin); FIELD(smoothing_coefficients); FIELD(obstacle_centers);
-  FIELD(obstacle_radii); FIELD(obstacle_influence); FIELD(link_radius);
+  FIELD(null_damping); FIELD(criteria); FIELD(criterion_params); FIELD(criterion_weights);
   FIELD(pinv_threshold); FIELD(pinv_max_damping); FIELD(robust); FIELD(BtP); FIELD(sliding_gain);
   FIELD(sliding_boundary); FIELD(basis_joint); FIELD(basis_bias); FIELD(law_corrected);
   FIELD(basis_centers); FIELD(basis_inv2w2); FIELD(F); FIELD(gamma); FIELD(eps_min); FIELD(sigma); FIELD(z0);

@@ -16,7 +16,7 @@
 #include "nominal.hpp"
 #include "pin_calls.hpp"
 #include "stick_slip.hpp"
-#include "subtasks.hpp"
+#include "subtasks/criterion.hpp"
 
 namespace nnrobust {
 namespace {

@@ -98,17 +98,11 @@ struct LoopSpec {
   double k = unset;
   Matrix pd_Kp, pd_Kd;
   double null_damping = unset;
-  // criteria of WeightedCriteria (weights already scaled to sum to C): "paper", "half_det",
-  // "manipulability", "joint_limits", "joint_centering", "joint_smoothness", "obstacles"
+  // WeightedCriteria: each criterion's registered name (csrc/subtasks/), its fields by name (its
+  // Python declaration's twin_fields) and its weight (already scaled to sum to C)
   std::vector<std::string> criteria;
+  std::vector<std::map<std::string, Matrix>> criterion_params;
   Vector criterion_weights;
-  Vector smoothness;                  // PaperCriterion's JointSmoothness coefficients
-  Vector limit_lower, limit_upper;    // joint criteria: the URDF's limits
-  double limit_margin = unset;        // JointLimitAvoidance.margin
-  Vector smoothing_coefficients;      // JointSmoothness (the criterion "joint_smoothness")
-  Matrix obstacle_centers;            // SphereObstacles: K x 3 [m]
-  Vector obstacle_radii;              // K [m]
-  double obstacle_influence = unset, link_radius = unset;
   double pinv_threshold = unset, pinv_max_damping = unset;
   // robust term: "none", "nn" (NNCompensator) or "sliding" (SlidingModeCompensator)
   std::string robust = "none";

@@ -16,7 +16,7 @@ Controller::Controller(const LoopSpec &spec, Nominal &model) : s(spec), nominal(
     const LawFactory factory = find_law(spec.law);
     if (!factory) throw std::invalid_argument("LoopSpec.law: unknown law " + spec.law);
     LawContext context{spec, model, *this};
-    law = factory(LawParams{spec.law, spec.law_params}, context);
+    law = factory(LawParams{"LoopSpec.law_params: the law " + spec.law, spec.law_params}, context);
   }
   if (spec.robust != "none" && spec.robust != "nn" && spec.robust != "sliding")
     throw std::invalid_argument("LoopSpec.robust: unknown robust term " + spec.robust);

@@ -7,7 +7,7 @@
 #include <memory>
 
 #include "nominal.hpp"
-#include "subtasks.hpp"
+#include "subtasks/criterion.hpp"
 
 namespace nnrobust {
 

@@ -106,20 +106,6 @@ def floor_loop(model, q0, v0, steps: int, dt: float):
 # ---- the compiled closed loop ---------------------------------------------------------------------
 
 
-COMPILED_CRITERIA = {
-    "PaperCriterion": "paper",
-    "HalfDetManipulability": "half_det",
-    "Manipulability": "manipulability",
-    "JointLimitAvoidance": "joint_limits",
-    "JointCentering": "joint_centering",
-    "JointSmoothness": "joint_smoothness",
-    "SphereObstacles": "obstacles",
-}
-"""The criteria with a compiled twin, by class name."""
-DET_CRITERIA = ("paper", "half_det", "manipulability")
-"""Criteria of det(J J^T): compiled for planar and position tasks (m <= 3)."""
-
-
 def twin_refusal(setup) -> str:
     """Why this experiment has no compiled twin ("" when it has one).
 
@@ -199,14 +185,14 @@ def _plant_refusal(setup) -> str:
             criterion is None
             or (
                 isinstance(criterion, WeightedCriteria)
-                and all(type(c).__name__ in COMPILED_CRITERIA for c in criterion.criteria)
+                and all(_twin_of(c) is not None for c in criterion.criteria)
             ),
             "a criterion",
         ),
         (
             criterion is None
             or setup.robot.task != "pose"
-            or not any(COMPILED_CRITERIA.get(type(c).__name__) in DET_CRITERIA for c in criterion.criteria),
+            or not any((kind := _twin_of(c)) is not None and kind.det for c in criterion.criteria),
             "a manipulability criterion on a pose task",
         ),
     ]
@@ -223,34 +209,25 @@ def hybrid_refusal(setup) -> str:
     return _plant_refusal(setup)
 
 
-def _criterion_spec(s, setup, f) -> None:
-    """The weighted criterion of the experiment into the spec (h is recorded on the true robot)."""
-    from .subtasks import (
-        PAPER_SMOOTHNESS,
-        JointCentering,
-        JointLimitAvoidance,
-        JointSmoothness,
-        PaperCriterion,
-        SphereObstacles,
-    )
+def _twin_of(criterion):
+    """The declaration of a shipped criterion with a compiled twin (None for a user's)."""
+    from .subtasks import kind_of
 
+    kind = kind_of(criterion)
+    return kind if kind is not None and kind.twin_fields is not None else None
+
+
+def _criterion_spec(s, setup, f) -> None:
+    """The weighted criterion of the experiment into the spec (h is recorded on the true robot):
+    each criterion's name and the fields its declaration gives its twin.
+    """
     criterion = setup.criterion
     if criterion is None:
         return
-    s.criteria = [COMPILED_CRITERIA[type(c).__name__] for c in criterion.criteria]
+    kinds = [_twin_of(c) for c in criterion.criteria]
+    s.criteria = [kind.name for kind in kinds]
+    s.criterion_params = [kind.twin_values(c) for kind, c in zip(kinds, criterion.criteria)]
     s.criterion_weights = f(criterion.weights)
-    for c in criterion.criteria:
-        if isinstance(c, PaperCriterion):
-            s.smoothness = f(PAPER_SMOOTHNESS)
-        if isinstance(c, (JointLimitAvoidance, JointCentering)):
-            s.limit_lower, s.limit_upper = f(setup.robot.lower_limits), f(setup.robot.upper_limits)
-        if isinstance(c, JointLimitAvoidance):
-            s.limit_margin = c.margin
-        if isinstance(c, JointSmoothness):
-            s.smoothing_coefficients = f(c.c)
-        if isinstance(c, SphereObstacles):
-            s.obstacle_centers, s.obstacle_radii = f(c.centers), f(c.radii)
-            s.obstacle_influence, s.link_radius = c.influence, c.link_radius
 
 
 def _loads_spec(s, plant, f) -> None:

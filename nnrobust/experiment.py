@@ -63,19 +63,7 @@ from .plant.loads import ExternalLoads, parse_loads
 from .plant.scaling import PLAUSIBLE_EFFORT_RATIO, implausible_efforts, usable
 from .results import Result
 from .simulation import simulate
-from .subtasks import (
-    CRITERIA,
-    PAPER_SMOOTHNESS,
-    Criterion,
-    HalfDetManipulability,
-    JointCentering,
-    JointLimitAvoidance,
-    JointSmoothness,
-    Manipulability,
-    PaperCriterion,
-    SphereObstacles,
-    WeightedCriteria,
-)
+from .subtasks import CRITERIA, CRITERION_KINDS, Criterion, WeightedCriteria
 from .trajectories import (
     EllipseTrajectory,
     PoseTrajectory,
@@ -398,36 +386,6 @@ def _with_factors(model: pin.Model, factors: list[float]) -> pin.Model:
     return out
 
 
-def _make_criterion(name: str, config: ExperimentConfig, robot: PinocchioModel) -> Criterion:
-    sc = config.subtasks
-    if name == "paper":
-        if robot.nq != 3:
-            raise ConfigError(
-                "subtasks.criteria",
-                f"'paper' (eq. 19) is for 3 joints, the robot has "
-                f"{robot.nq}; use e.g. 'manipulability' and 'joint_centering'",
-            )
-        return PaperCriterion()
-    if name == "half_det_manipulability":
-        return HalfDetManipulability()
-    if name == "manipulability":
-        return Manipulability()
-    if name in ("joint_limits", "joint_centering"):
-        cls = JointLimitAvoidance if name == "joint_limits" else JointCentering
-        try:
-            return cls(robot.lower_limits, robot.upper_limits)
-        except ValueError as err:
-            raise ConfigError("subtasks.criteria", f"{name!r}: {err}") from err
-    if name == "joint_smoothness":
-        c = sc.smoothness_coefficients or list(PAPER_SMOOTHNESS)
-        return JointSmoothness(tuple(_vector("subtasks.smoothness_coefficients", c, robot.nq)))
-    if name == "custom":
-        return user_parts.build_criterion(sc.criterion_class or "", sc.criterion_params, robot)
-    assert name == "obstacles", name  # build_criterion checked the name against CRITERIA
-    obstacles = np.asarray(sc.obstacles, dtype=float)
-    return SphereObstacles(obstacles[:, :3], obstacles[:, 3], sc.obstacle_influence, sc.link_radius)
-
-
 def build_criterion(config: ExperimentConfig, robot: PinocchioModel) -> Criterion | None:
     """Weighted sum of the named criteria, eq. (4), or None."""
     sc = config.subtasks
@@ -437,7 +395,12 @@ def build_criterion(config: ExperimentConfig, robot: PinocchioModel) -> Criterio
     unknown = [c for c in names if c not in CRITERIA and c != "custom"]
     if unknown:
         raise ConfigError("subtasks.criteria", f"unknown {unknown}; valid: {', '.join(CRITERIA)}, custom")
-    criteria = [_make_criterion(name, config, robot) for name in names]
+    criteria = [
+        user_parts.build_criterion(sc.criterion_class or "", sc.criterion_params, robot)
+        if name == "custom"
+        else CRITERION_KINDS[name].build(config, robot)
+        for name in names
+    ]
     return WeightedCriteria(criteria, sc.weights, sc.C)
 
 

@@ -13,7 +13,7 @@ import matplotlib.ticker  # noqa: E402
 import numpy as np  # noqa: E402
 
 from .results import Result  # noqa: E402
-from .run_info import MANIPULABILITY_UNITS  # noqa: E402
+from .subtasks.manipulability import MANIPULABILITY_UNITS  # noqa: E402
 
 FORMATS = ("png", "svg")
 

@@ -8,24 +8,6 @@ from __future__ import annotations
 import json
 from dataclasses import asdict, dataclass, field
 
-MANIPULABILITY_UNITS = {2: "m$^2$", 3: "m$^3$", 6: "m$^3$"}
-"""Units of sqrt det(J J^T) by task size m, for revolute joints (a pose's angular rows are
-dimensionless: rad per rad)."""
-
-
-def criterion_units(name: str, m: int) -> str:
-    """The unit of one criterion h_i for a task of size m (the joint criteria are ratios)."""
-    squared = {2: "m$^4$", 3: "m$^6$", 6: "m$^6$"}.get(m, "mixed")
-    return {
-        "manipulability": MANIPULABILITY_UNITS.get(m, "mixed"),
-        "half_det_manipulability": squared,
-        "joint_limits": "1",
-        "joint_centering": "1",
-        "joint_smoothness": "rad$^2$",
-        "obstacles": "m$^2$",
-        "paper": "m$^4$ + rad$^2$",
-    }.get(name, "mixed")
-
 
 @dataclass(frozen=True)
 class RunInfo:
@@ -65,6 +47,7 @@ class RunInfo:
         """
         from .config import controller_label, default_criteria
         from .model.tasks import TASK_KINDS
+        from .subtasks import criterion_unit
 
         rc, sub = config.robot, config.subtasks
         m = TASK_KINDS[rc.task]
@@ -86,7 +69,7 @@ class RunInfo:
             trajectory=json.loads(json.dumps(asdict(config.trajectory))),
             criteria=tuple(names),
             criterion_weights=tuple(float(w) for w in weights),
-            criterion_units=tuple(criterion_units(c, m) for c in names),
+            criterion_units=tuple(criterion_unit(c, m) for c in names),
         )
 
     def to_json(self) -> str:

@@ -25,6 +25,10 @@ CASES = {
     "Panda, manipulability and joint limits": ("panda-ellipse", {}),
     "Panda pose, computed torque": ("panda-pose", {"controller": {"kind": "computed-torque"}}),
     "UR5, no u0": ("ur5-ellipse", {"controller": {"kind": "no-u0"}}),
+    "planar7, half det and joint limits": (
+        "planar7-ellipse",
+        {"subtasks": {"criteria": ["half_det_manipulability", "joint_limits"], "weights": [0.7, 0.3]}},
+    ),
     "planar7, obstacles and smoothness": (
         "planar7-ellipse",
         {
@@ -104,6 +108,27 @@ def test_each_criterion_is_its_python_twin(name):
         _close(
             module.twin_criterion_value(robot, spec, q), setup.criterion.value(setup.robot, q), f"{name}: h"
         )
+
+
+def test_every_declared_criterion_has_a_twin_tested_here_and_reads_its_fields_by_name():
+    """Every shipped criterion declares a twin and is among the cases above; the C++ side builds
+    each from its fields by name: an unknown name, or a field left out, is an error naming it."""
+    from nnrobust.subtasks import CRITERION_KINDS
+
+    tested = {c for n in CASES for c in _twin(n)[0].config.subtasks.criteria or []}
+    tested |= {c for n in CASES if (s := _twin(n)[1]) is not None for c in s.criteria}  # defaults
+    assert {k for k, kind in CRITERION_KINDS.items() if kind.twin_fields is not None} == set(CRITERION_KINDS)
+    assert set(CRITERION_KINDS) <= tested, set(CRITERION_KINDS) - tested
+    setup, spec, robot, nominal = _twin("planar7, obstacles and smoothness")
+    module, q = compiled._module(), setup.q0
+    params = [dict(p) for p in spec.criterion_params]
+    del params[0]["influence"]
+    spec.criterion_params = params
+    with pytest.raises(ValueError, match="the criterion obstacles needs the field influence"):
+        module.twin_criterion_value(robot, spec, q)
+    spec.criteria = ["obstacle", *spec.criteria[1:]]
+    with pytest.raises(ValueError, match="unknown criterion obstacle"):
+        module.twin_criterion_value(robot, spec, q)
 
 
 @pytest.mark.parametrize(

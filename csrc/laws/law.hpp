@@ -11,19 +11,12 @@
 #include <vector>
 
 #include "../controllers.hpp"
+#include "../fields.hpp"
 
 namespace nnrobust {
 
-// A registered law's fields, as LoopSpec.law_params carries them: 2-D arrays by name (a number
-// is 1 x 1, a vector k x 1).
-struct LawParams {
-  const std::string &law;
-  const std::map<std::string, Matrix> &values;
-
-  const Matrix &matrix(const std::string &name) const;
-  Vector vector(const std::string &name) const;  // a k x 1 field
-  double scalar(const std::string &name) const;  // a 1 x 1 field
-};
+// A registered law's fields, as LoopSpec.law_params carries them (Law.twin_values).
+using LawParams = Fields;
 
 // The task-space reference at a control instant (TaskSpaceController.compute's first lines):
 // the nominal model's task state, the task error e = x - x_d and e' = J q' - x_d', x_d', x_d''.

@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from importlib import import_module
 
 import numpy as np
 
@@ -186,20 +187,21 @@ def register_law(law: Law) -> Law:
 
 def _discover() -> None:
     """Import every module of nnrobust/controllers/laws/: each registers its law."""
-    import importlib
     import pkgutil
 
     from . import laws
 
     for module in pkgutil.iter_modules(laws.__path__):
-        importlib.import_module(f"{laws.__name__}.{module.name}")
+        import_module(f"{laws.__name__}.{module.name}")
 
 
 def registered_law(name: str) -> Law | None:
-    """The registered law named ``name`` (``controller.kind``), or None."""
+    """The registered law named ``name`` (``controller.kind``), or None. The laws' modules are
+    imported on the first call; a failed import is raised, and tried again on the next call.
+    """
     if not _DISCOVERED:
-        _DISCOVERED.append(True)
         _discover()
+        _DISCOVERED.append(True)
     return LAWS.get(name)
 
 

@@ -5,21 +5,17 @@ from .joint_limits import JointCentering, JointLimitAvoidance
 from .joint_smoothness import PAPER_SMOOTHNESS, JointSmoothness, PaperCriterion
 from .manipulability import HalfDetManipulability, Manipulability
 from .obstacles import SphereObstacles
+from .registry import CRITERION_KINDS, CriterionKind, criterion_unit, kind_of
 
-CRITERIA = {
-    "paper": "eq. (19): 0.5 det(J J^T) - 0.5 (0.5 q1 - q2 + q3)^2 (three joints)",
-    "half_det_manipulability": "0.5 det(J J^T)",
-    "manipulability": "sqrt(det(J J^T)) (Yoshikawa)",
-    "joint_limits": "limit-avoidance barrier, -1 mid-range, -inf at a limit",
-    "joint_centering": "-(1/2n) sum ((q - mid) / range)^2",
-    "joint_smoothness": "-0.5 (c^T q)^2 with c = subtasks.smoothness_coefficients",
-    "obstacles": "-0.5 sum max(0, d0 - clearance)^2 over links and subtasks.obstacles",
-}
-"""Criteria by the name used in experiment configurations, with a one-line description."""
+CRITERIA = {name: CRITERION_KINDS[name].description for name in sorted(CRITERION_KINDS)}
+"""Criteria by the name used in experiment configurations, with a one-line description (from
+their declarations, :mod:`nnrobust.subtasks.registry`)."""
 
 __all__ = [
     "CRITERIA",
+    "CRITERION_KINDS",
     "Criterion",
+    "CriterionKind",
     "HalfDetManipulability",
     "JointCentering",
     "JointLimitAvoidance",
@@ -29,4 +25,6 @@ __all__ = [
     "PaperCriterion",
     "SphereObstacles",
     "WeightedCriteria",
+    "criterion_unit",
+    "kind_of",
 ]

@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..exceptions import ConfigError
 from ..model.base import DynamicsModel
 from .base import Criterion
+from .registry import CriterionKind, declare
 
 
 def _finite_range(lower, upper) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -49,6 +51,7 @@ class JointLimitAvoidance(Criterion):
     """Fraction of the range at each end where the barrier turns linear."""
 
     def __init__(self, lower: np.ndarray, upper: np.ndarray):
+        self.limits = (np.asarray(lower, dtype=float), np.asarray(upper, dtype=float))
         self.lower, self.upper, self.limited = _finite_range(lower, upper)
         self.span = self.upper - self.lower
         self._low_knot = self.lower + self.margin * self.span
@@ -75,6 +78,7 @@ class JointCentering(Criterion):
     """h = -(1/(2n)) sum_i ((q_i - c_i) / (u_i - l_i))^2 with c the mid-range (Liegeois 1977)."""
 
     def __init__(self, lower: np.ndarray, upper: np.ndarray):
+        self.limits = (np.asarray(lower, dtype=float), np.asarray(upper, dtype=float))
         lower, upper, limited = _finite_range(lower, upper)
         self.center = 0.5 * (lower + upper)
         self.span = np.where(limited, upper - lower, np.inf)  # a joint without limits: no term
@@ -86,3 +90,33 @@ class JointCentering(Criterion):
     def gradient(self, model: DynamicsModel, q: np.ndarray) -> np.ndarray:
         """-(q - c) / (n (u - l)^2)."""
         return -(q - self.center) / (q.size * self.span**2)
+
+
+def _from_limits(name: str, cls):
+    def build(config, robot):
+        try:
+            return cls(robot.lower_limits, robot.upper_limits)
+        except ValueError as err:
+            raise ConfigError("subtasks.criteria", f"{name!r}: {err}") from err
+
+    return build
+
+
+declare(
+    CriterionKind(
+        "joint_limits",
+        JointLimitAvoidance,
+        "limit-avoidance barrier, -1 mid-range, -inf at a limit",
+        lambda m: "1",
+        _from_limits("joint_limits", JointLimitAvoidance),
+        lambda c: {"lower": c.limits[0], "upper": c.limits[1], "margin": c.margin},
+    ),
+    CriterionKind(
+        "joint_centering",
+        JointCentering,
+        "-(1/2n) sum ((q - mid) / range)^2",
+        lambda m: "1",
+        _from_limits("joint_centering", JointCentering),
+        lambda c: {"lower": c.limits[0], "upper": c.limits[1]},
+    ),
+)

@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..exceptions import ConfigError
 from ..model.base import DynamicsModel
 from .base import Criterion
 from .manipulability import HalfDetManipulability
+from .registry import CriterionKind, declare
 
 PAPER_SMOOTHNESS = (0.5, -1.0, 1.0)
 """(q3 - 0.5 q2) - 0.5 (q2 - q1) = 0.5 q1 - q2 + q3: the coefficients c of eq. (19)."""
@@ -51,3 +53,43 @@ class PaperCriterion(Criterion):
     def gradient(self, model: DynamicsModel, q: np.ndarray) -> np.ndarray:
         """Grad h(q) of eq. (19), analytic."""
         return sum(term.gradient(model, q) for term in self._terms)
+
+
+def _paper(config, robot) -> PaperCriterion:
+    if robot.nq != 3:
+        raise ConfigError(
+            "subtasks.criteria",
+            f"'paper' (eq. 19) is for 3 joints, the robot has {robot.nq}; use e.g. 'manipulability' "
+            "and 'joint_centering'",
+        )
+    return PaperCriterion()
+
+
+def _smoothness(config, robot) -> JointSmoothness:
+    c = config.subtasks.smoothness_coefficients or list(PAPER_SMOOTHNESS)
+    if len(c) != robot.nq:
+        raise ConfigError(
+            "subtasks.smoothness_coefficients", f"has {len(c)} entries, the robot has {robot.nq} joints"
+        )
+    return JointSmoothness(tuple(float(x) for x in c))
+
+
+declare(
+    CriterionKind(
+        "paper",
+        PaperCriterion,
+        "eq. (19): 0.5 det(J J^T) - 0.5 (0.5 q1 - q2 + q3)^2 (three joints)",
+        lambda m: "m$^4$ + rad$^2$",
+        _paper,
+        lambda criterion: {"coefficients": PAPER_SMOOTHNESS},
+        det=True,
+    ),
+    CriterionKind(
+        "joint_smoothness",
+        JointSmoothness,
+        "-0.5 (c^T q)^2 with c = subtasks.smoothness_coefficients",
+        lambda m: "rad$^2$",
+        _smoothness,
+        lambda criterion: {"coefficients": criterion.c},
+    ),
+)

@@ -6,6 +6,11 @@ import numpy as np
 
 from ..model.base import DynamicsModel
 from .base import Criterion
+from .registry import CriterionKind, declare
+
+MANIPULABILITY_UNITS = {2: "m$^2$", 3: "m$^3$", 6: "m$^3$"}
+"""Units of sqrt det(J J^T) by task size m, for revolute joints (a pose's angular rows are
+dimensionless: rad per rad)."""
 
 
 def adjugate(A: np.ndarray) -> np.ndarray:
@@ -83,3 +88,25 @@ class Manipulability(Criterion):
         if det <= 1e-300:
             return np.zeros_like(q)
         return grad / (2.0 * np.sqrt(det))
+
+
+declare(
+    CriterionKind(
+        "half_det_manipulability",
+        HalfDetManipulability,
+        "0.5 det(J J^T)",
+        lambda m: {2: "m$^4$", 3: "m$^6$", 6: "m$^6$"}.get(m, "mixed"),
+        lambda config, robot: HalfDetManipulability(),
+        lambda criterion: {},
+        det=True,
+    ),
+    CriterionKind(
+        "manipulability",
+        Manipulability,
+        "sqrt(det(J J^T)) (Yoshikawa)",
+        lambda m: MANIPULABILITY_UNITS.get(m, "mixed"),
+        lambda config, robot: Manipulability(),
+        lambda criterion: {},
+        det=True,
+    ),
+)

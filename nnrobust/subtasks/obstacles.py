@@ -6,6 +6,7 @@ import numpy as np
 
 from ..model.base import DynamicsModel
 from .base import Criterion
+from .registry import CriterionKind, declare
 
 
 class SphereObstacles(Criterion):
@@ -71,3 +72,26 @@ class SphereObstacles(Criterion):
         wa = -(depth * (1 - t))[:, :, None] * normal  # S x K x 3
         wb = -(depth * t)[:, :, None] * normal
         return np.einsum("skx,sxn->n", wa, Js[:-1]) + np.einsum("skx,sxn->n", wb, Js[1:])
+
+
+def _obstacles(config, robot) -> SphereObstacles:
+    sc = config.subtasks
+    spheres = np.asarray(sc.obstacles, dtype=float)
+    return SphereObstacles(spheres[:, :3], spheres[:, 3], sc.obstacle_influence, sc.link_radius)
+
+
+declare(
+    CriterionKind(
+        "obstacles",
+        SphereObstacles,
+        "-0.5 sum max(0, d0 - clearance)^2 over links and subtasks.obstacles",
+        lambda m: "m$^2$",
+        _obstacles,
+        lambda c: {
+            "centers": c.centers,
+            "radii": c.radii,
+            "influence": c.influence,
+            "link_radius": c.link_radius,
+        },
+    ),
+)

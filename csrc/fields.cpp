@@ -1,0 +1,26 @@
+#include "fields.hpp"
+
+#include <stdexcept>
+
+namespace nnrobust {
+
+const Matrix &Fields::matrix(const std::string &name) const {
+  const auto it = values.find(name);
+  if (it == values.end())
+    throw std::invalid_argument(owner + " needs the field " + name + " (declare it in its Python twin's twin_fields)");
+  return it->second;
+}
+
+Vector Fields::vector(const std::string &name) const {
+  const Matrix &x = matrix(name);
+  if (x.cols() != 1) throw std::invalid_argument(owner + ": the field " + name + " is not a vector");
+  return x.col(0);
+}
+
+double Fields::scalar(const std::string &name) const {
+  const Matrix &x = matrix(name);
+  if (x.size() != 1) throw std::invalid_argument(owner + ": the field " + name + " is not a number");
+  return x(0, 0);
+}
+
+}  // namespace nnrobust

@@ -1,0 +1,71 @@
+"""The shipped self-motion criteria, each declared once beside its class: its configuration name
+(``subtasks.criteria``), a description, its unit, how an experiment builds it, and the fields its
+compiled twin (csrc/subtasks/, registered under the same name) is built from. The config checks,
+the docs' list, the figures' units and the compiled spec read these declarations.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .base import Criterion
+
+
+@dataclass(frozen=True)
+class CriterionKind:
+    """A shipped criterion.
+
+    Attributes:
+        name: its name in ``subtasks.criteria`` and of its compiled twin.
+        cls: its class (how a built criterion is recognised).
+        description: one line, with the equation (docs, figure titles).
+        unit: its unit for a task of size m (matplotlib text).
+        build: ``build(config, robot)`` -> the criterion (a ConfigError names the key at fault).
+        twin_fields: ``twin_fields(criterion)`` -> its numbers by name, as the twin reads them
+            (2-D arrays; a number is 1 x 1, a vector k x 1); None: no compiled twin.
+        det: whether it reads det(J J^T) (its twin is compiled for planar and position tasks).
+
+    """
+
+    name: str
+    cls: type
+    description: str
+    unit: Callable[[int], str]
+    build: Callable[[Any, Any], Criterion]
+    twin_fields: Callable[[Any], dict[str, Any]] | None = None
+    det: bool = False
+
+    def twin_values(self, criterion: Criterion) -> dict[str, np.ndarray]:
+        """The twin's fields as 2-D float arrays (what LoopSpec.criterion_params carries)."""
+        assert self.twin_fields is not None, self.name
+        out = {}
+        for key, value in self.twin_fields(criterion).items():
+            array = np.asarray(value, dtype=float)
+            out[key] = array.reshape(-1, 1) if array.ndim < 2 else array
+        return out
+
+
+CRITERION_KINDS: dict[str, CriterionKind] = {}
+"""The shipped criteria by name, in the order their modules declare them."""
+
+
+def declare(*kinds: CriterionKind) -> None:
+    """Register criteria (at the end of the module that defines their classes)."""
+    for kind in kinds:
+        assert kind.name not in CRITERION_KINDS, kind.name
+        CRITERION_KINDS[kind.name] = kind
+
+
+def kind_of(criterion: Criterion) -> CriterionKind | None:
+    """The declaration of a built criterion (by its class), or None for a user's."""
+    return next((k for k in CRITERION_KINDS.values() if type(criterion) is k.cls), None)
+
+
+def criterion_unit(name: str, m: int) -> str:
+    """The unit of the criterion ``name`` for a task of size m ("mixed" for a user's)."""
+    kind = CRITERION_KINDS.get(name)
+    return kind.unit(m) if kind is not None else "mixed"
