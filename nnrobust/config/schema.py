@@ -548,7 +548,7 @@ class ExperimentConfig:
         return from_dict(data)
 
 
-# ---- validation --------------------------------------------------------------------------
+# ---- helpers of the sections' own methods -------------------------------------------------
 
 
 def _drop_none(obj):
@@ -619,9 +619,6 @@ def path_key(tc: TrajectoryConfig) -> str:
     """The key that places the path: center, goal, waypoints (or class, for a user's)."""
     keys = {"ellipse": "center", "point_to_point": "goal", "waypoints": "waypoints", "custom": "class"}
     return keys.get(tc.kind, "center")
-
-
-# ---- dotted overrides (``run --set``, sweep files) ------------------------------------------
 
 
 _FIELD_NAMES: dict[typing.Any, list[str]] = {}
