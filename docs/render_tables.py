@@ -550,6 +550,15 @@ def _margin_cell(margin: dict | None) -> str:
     return f"{holds:.2g} (violated at {violated:.2g})"
 
 
+def _certificate_cell(certified: dict | None) -> str:
+    """The random baseline's certificate of the (first) property: k of N failing, the bound."""
+    if not certified:
+        return "–"
+    c = certified["certificates"][0]
+    bound = f"{100 * c['p_upper']:.1f}".removesuffix(".0")
+    return f"{c['k']} of {c['N']}: {bound} %"
+
+
 def _falsified(name: str):
     """A falsification's results: per controller, its worst plant and the random baseline's, the
     plant's friction, disturbance and payload, and the margin where one was searched."""
@@ -575,6 +584,7 @@ def _falsified(name: str):
                         if k in values
                     ),
                     "margin": _margin_cell(margin),
+                    "certificate": _certificate_cell(entry.get("certificate")),
                 }
             )
         columns = [
@@ -586,6 +596,11 @@ def _falsified(name: str):
         ]
         if any(r["margin"] != "–" for r in rows):
             columns.append(("margin (× the box)", "l", _text("margin")))
+        certified = [e["certificate"] for e in data["controllers"].values() if e.get("certificate")]
+        if certified:
+            confidence = 100 * (1 - certified[0]["certificates"][0]["beta"])
+            header = f"random plants failing: P(fail) ≤ ({confidence:g} % confidence)"
+            columns.append((header, "l", _text("certificate")))
         return _markdown(columns, rows, FALSIFY_COMMANDS[name])
 
     return render
@@ -620,6 +635,7 @@ def registered_laws() -> str:
 
 RENDERERS = {
     "registered-laws": registered_laws,
+    "falsify-paper-factors": _falsified("falsify_paper_factors"),
     "falsify-panda-factors": _falsified("falsify_panda_factors"),
     "falsify-tuned-noisy": _falsified("falsify_tuned_noisy"),
     "engine-gap-presets": engine_gap_presets,
