@@ -986,7 +986,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--tuned",
         metavar="DIR",
         help="run each listed law at its best setting in this tuning (nnrobust tune's DIR or its "
-        "summary.json), as NAME-tuned",
+        "summary.json, or one case of a tuned comparison as FILE#CASE/SENSING, e.g. "
+        "'docs/data/tuned_comparison.json#Panda ellipse/noisy'), as NAME-tuned",
     )
     falsify.add_argument(
         "--out",

@@ -2,6 +2,7 @@
 baseline, a worst plant that reruns bit for bit, and a search that resumes."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -278,3 +279,24 @@ def test_tuned_settings_are_falsified_as_named_entries(tmp_path, capsys):
     assert main([*base, "--controllers", "nn", "--tuned", str(tuning), "--out", str(tmp_path / "x")]) == 2
     assert "--tuned" in capsys.readouterr().err
     assert main([*base, "--controllers", "pd", "--tuned", str(tmp_path), "--out", str(tmp_path / "y")]) == 2
+
+
+def test_a_case_of_a_tuned_comparison_gives_its_seed_zero_settings(tmp_path):
+    """--tuned FILE#CASE/SENSING reads one case of benchmarks/tuned_comparison.py's JSON (the shipped
+    docs/data/tuned_comparison.json): the settings of its seed-0 tuning; no case, a wrong one, or a
+    case on a plain tuning is refused naming --tuned and the cases there are."""
+    from nnrobust.tune.engine import tuned_settings
+
+    data = Path(__file__).parent.parent / "docs" / "data" / "tuned_comparison.json"
+    comparison = json.loads(data.read_text())
+    case = next(c for c in comparison["cases"] if c["case"] == "Panda ellipse" and c["sensing"] == "noisy")
+    found = tuned_settings(f"{data}#Panda ellipse/noisy", ["nn", "rbf-nn"])
+    assert found == {n: case["summary"]["controllers"][n]["best"]["params"] for n in ("nn", "rbf-nn")}
+    assert found["nn"] != tuned_settings(f"{data}#Panda ellipse/ideal", ["nn"])["nn"]
+    for selector, words in (("", "name one of its cases"), ("#Panda/noisy", "not 'Panda/noisy'")):
+        with pytest.raises(ConfigError, match=f"--tuned: .*{words}"):
+            tuned_settings(f"{data}{selector}", ["nn"])
+    plain = tmp_path / "summary.json"
+    plain.write_text(json.dumps({"controllers": {"nn": {"best": {"params": {}}}}}))
+    with pytest.raises(ConfigError, match="not a tuned comparison: drop #x"):
+        tuned_settings(f"{plain}#x", ["nn"])

@@ -175,17 +175,34 @@ def sweep_of(spec: TuneSpec):
     return _with_controllers(sweep, spec.controllers)
 
 
+TUNED_FILE_BYTES = 50_000_000
+"""The largest tuning summary or tuned comparison --tuned reads (the shipped comparison is 1.2 MB)."""
+
+
 def tuned_settings(path: str | Path, names: list[str]) -> dict[str, dict]:
-    """Each named built-in law's best setting in a tuning's summary (``DIR`` or its summary.json):
-    name -> its dotted-key overrides.
+    """Each named built-in law's best setting in a tuning's summary (``DIR`` or its summary.json),
+    or in one case of a tuned comparison (benchmarks/tuned_comparison.py's JSON, its seed-0
+    tuning) named as ``FILE#CASE/SENSING``: name -> its dotted-key overrides.
     """
     from ..config import read_text_file
 
-    file = Path(path) / "summary.json" if Path(path).is_dir() else Path(path)
+    text, _, case = str(path).partition("#")
+    file = Path(text) / "summary.json" if Path(text).is_dir() else Path(text)
     try:
-        summary = json.loads(read_text_file(file, what="tuning summary"))
+        summary = json.loads(read_text_file(file, limit=TUNED_FILE_BYTES, what="tuning summary"))
     except ValueError as err:
         raise ConfigError("--tuned", f"{file} is not JSON ({err})") from err
+    if isinstance(summary, dict) and isinstance(summary.get("cases"), list):  # a tuned comparison
+        cases = {f"{c.get('case')}/{c.get('sensing')}": c for c in summary["cases"] if isinstance(c, dict)}
+        if case not in cases:
+            raise ConfigError(
+                "--tuned",
+                f"{file} is a tuned comparison: name one of its cases as {file}#CASE/SENSING, one of "
+                f"{', '.join(repr(k) for k in cases)}" + (f" (not {case!r})" if case else ""),
+            )
+        summary = cases[case].get("summary")
+    elif case:
+        raise ConfigError("--tuned", f"{file} is one tuning, not a tuned comparison: drop #{case}")
     entries = summary.get("controllers") if isinstance(summary, dict) else None
     if not isinstance(entries, dict) or not all(isinstance(e, dict) for e in entries.values()):
         raise ConfigError(
