@@ -503,6 +503,8 @@ def cmd_falsify(args) -> int:
                 f"{worst['margin']:.4g} (random search: {baseline['worst']['margin']:.4g}); worst plant: "
                 f"{worst['command']}"
             )
+        if summary.get("searched_as"):
+            print(f"searched: {summary['searched_as']}")
         for name, margin in summary.get("margin", {}).items():
             print(format_margin(name, margin))
         from .properties import format_certificates

@@ -354,6 +354,18 @@ def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsMo
     )
 
 
+def nominal_factor_count(config: ExperimentConfig) -> int:
+    """The entries of ``nominal.factors`` for this experiment's nominal model: the closed form's
+    6 (beta-hat, p-hat), or two per body with mass of the robot's model (masses, then inertias),
+    which ``nominal.relative_error`` draws its factors for.
+    """
+    if nominal_kind(config) != "urdf":
+        return 6
+    rc = config.robot
+    model = load_robot(rc.source, rc.task_frame, rc.task, None, rc.locked_joints, rc.chain).model
+    return 2 * sum(1 for j in range(1, model.njoints) if model.inertias[j].mass > 0)
+
+
 def _padded(path: str, factors: list[float], size: int, refusal: str) -> list[float]:
     """A list of factors (``nominal.factors``, per-joint scales) with the entries not given as 1;
     more than ``size`` is refused, the key ``path`` named with ``refusal``.

@@ -90,6 +90,46 @@ class Box:
         return float(min(MAX_SCALE, *limits)) if limits.size else MAX_SCALE
 
 
+def searchable(sweep, base) -> tuple[Any, str]:
+    """The sweep with its seeded model error made searchable, and a line saying so ("" if none).
+
+    ``nominal.relative_error`` in [lo, r] draws each parameter of the controller's model off by
+    its own factor in [1 - r, 1 + r] along a direction chosen by the seed, which no search can
+    move along. The models it can draw are the box of those factors, so falsify searches
+    ``nominal.factors[i]`` over [1 - r, 1 + r] instead, with ``relative_error`` set to 0 (the
+    centre-of-mass error, ``com_error``, stays seeded).
+    """
+    import copy
+
+    from .experiment import nominal_factor_count
+
+    spec = sweep.vary.get("nominal.relative_error")
+    if spec is None:
+        return sweep, ""
+    if any(k.startswith("nominal.factors") for k in sweep.vary):
+        raise ConfigError(
+            "vary.nominal.relative_error",
+            "falsify searches it as nominal.factors, which the sweep varies too: vary one of the two",
+        )
+    values = spec if isinstance(spec, list) else next(iter(spec.values()))
+    if isinstance(spec, dict) and next(iter(spec)) not in ("uniform", "loguniform"):
+        raise ConfigError("vary.nominal.relative_error", f"falsify searches ranges, not {next(iter(spec))}")
+    top = float(max(values))
+    if not 0 < top < 1:
+        raise ConfigError("vary.nominal.relative_error", f"needs a largest value in (0, 1), got {top}")
+    count = nominal_factor_count(base)
+    out = copy.deepcopy(sweep)
+    del out.vary["nominal.relative_error"]
+    for i in range(count):
+        out.vary[f"nominal.factors[{i}]"] = {"uniform": [1.0 - top, 1.0 + top]}
+    out.set["nominal.relative_error"] = 0.0
+    note = (
+        f"nominal.relative_error up to {top:g} is searched as the {count} factors it draws "
+        f"(nominal.factors[0..{count - 1}] each in [{1 - top:g}, {1 + top:g}], relative_error 0)"
+    )
+    return out, note
+
+
 def box_of(spec) -> Box:
     """The box of a sweep's ``[vary]`` ranges; grids and other distributions are refused."""
     keys, low, high, log = [], [], [], []
@@ -510,8 +550,9 @@ def _run_falsify(
         ) from err
     properties = run_properties(spec.require)
     sweep = _with_controllers(load_sweep(spec.target), spec.controllers, spec.tuned)
-    box = box_of(sweep)
     base = base_config(sweep)
+    sweep, expanded = searchable(sweep, base)
+    box = box_of(sweep)
     for name in sweep.controllers:  # every controller's experiment validated before anything runs
         for corner in (np.zeros(len(box.keys)), np.ones(len(box.keys))):
             experiment(sweep, base, Sample(-1, box.values(corner), sample_seed(sweep.seed, 0)), name)
@@ -538,6 +579,8 @@ def _run_falsify(
         margins = _margins(spec, sweep, box, rows, drive) if spec.margin else None
     seconds = time.monotonic() - started
     summary = _summary(spec, sweep, box, properties, rows, seconds, rerun_command, Sample, sample_seed)
+    if expanded:
+        summary["searched_as"] = expanded
     for name in sweep.controllers:
         summary["controllers"][name]["certificate"] = certify_box(
             sweep, box, properties, rows[(name, "random")], *claim
@@ -633,6 +676,7 @@ def keep_worst(spec: FalsifySpec, summary: dict, folder: str | Path, count: int 
 
     sweep = _with_controllers(load_sweep(spec.target), spec.controllers, spec.tuned)
     base = base_config(sweep)
+    sweep = searchable(sweep, base)[0]
     history = _history(Path(folder)) if count > 1 else {}
     written = []
     for name, entry in summary["controllers"].items():

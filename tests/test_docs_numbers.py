@@ -1162,6 +1162,24 @@ def test_the_margins_violating_plants_rerun_to_their_margins():
             assert p.margin(metrics) < 0, name
 
 
+def test_the_first_commands_worst_plant_is_worse_than_the_studys_worst_sample():
+    """docs/falsification.md's first command (issue 21's acceptance: falsify paper-robustness, the
+    NN, 200 simulations): the worst plant it printed reruns to the figure quoted, and that is worse
+    than the worst of the paper-robustness study's samples, whose figure is quoted beside it."""
+    from nnrobust.experiment import run_experiment
+
+    text = (ROOT / "docs" / "falsification.md").read_text()
+    said = re.search(r"gives (\d+) mm, against ([\d.]+) mm for the worst of the study's 150 samples", text)
+    block = re.search(r"the command it printed reruns it:\s+(nnrobust run .*?)\n\n", text, re.S)
+    command = " ".join(block.group(1).replace("\\\n", " ").split())
+    metrics = run_experiment(_worst_config(command)).metrics()
+    study = json.loads((render_tables.DATA / f"{PAPER}.json").read_text())
+    worst_sample = study["controllers"]["nn"]["rms_error_after_2s"]["max"]
+    assert 1e3 * metrics["rms_error_after_2s"] == pytest.approx(float(said.group(1)), abs=0.5)
+    assert 1e3 * worst_sample == pytest.approx(float(said.group(2)), abs=0.05)
+    assert metrics["rms_error_after_2s"] > worst_sample
+
+
 def test_the_plant_the_search_no_longer_finds_still_fails():
     """docs/falsification.md: the NN's worst plants of earlier searches (one on an earlier plant
     step, one of the previous regeneration), rerun from their printed commands, give the figures

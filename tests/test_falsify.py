@@ -165,6 +165,56 @@ def test_a_claim_no_sample_can_make_is_one_line_error(tmp_path, capsys):
     assert not (tmp_path / "out").exists()
 
 
+def test_a_seeded_relative_error_is_searched_as_the_factors_it_draws():
+    """nominal.relative_error draws each model parameter off by its own seeded factor in
+    [1 - r, 1 + r]: falsify searches those factors instead (6 on the closed-form arm, a mass and an
+    inertia per body on the Panda), with relative_error 0, and the plant of a point is the model
+    those factors give; both keys varied at once is refused."""
+    from nnrobust.experiment import build
+    from nnrobust.falsify import searchable
+    from nnrobust.sweep import load_sweep
+    from nnrobust.sweep.spec import Sample, base_config, experiment
+
+    study = load_sweep("paper-robustness")
+    sweep, note = searchable(study, base_config(study))
+    factors = [k for k in sweep.vary if k.startswith("nominal.factors")]
+    assert (
+        factors == [f"nominal.factors[{i}]" for i in range(6)] and "nominal.relative_error" not in sweep.vary
+    )
+    assert all(sweep.vary[k] == {"uniform": [0.7, 1.3]} for k in factors)
+    assert sweep.set["nominal.relative_error"] == 0.0 and "6 factors" in note
+    assert study.vary["nominal.relative_error"] == {"uniform": [0.0, 0.3]}  # the study itself untouched
+    values = {k: 1.0 + 0.1 * i for i, k in enumerate(factors)} | {"plant.disturbance_scale": 1.0}
+    config = experiment(sweep, base_config(sweep), Sample(-1, values, 7), "nn")
+    nominal = build(config.replace(simulation={"duration": 0.01})).nominal
+    true = build(config.replace(nominal={"factors": None}, simulation={"duration": 0.01})).nominal
+    assert np.allclose(nominal.params.beta, np.multiply(true.params.beta, [1.0, 1.1, 1.2]), rtol=1e-12)
+    assert np.allclose(nominal.params.p, np.multiply(true.params.p, [1.3, 1.4, 1.5]), rtol=1e-12)
+    panda = parse_sweep(
+        {
+            "name": "p",
+            "base": "panda-ellipse",
+            "controllers": ["nn"],
+            "vary": {"nominal.relative_error": {"uniform": [0.0, 0.2]}},
+        }
+    )
+    expanded, _ = searchable(panda, base_config(panda))
+    assert len(box_of(expanded).keys) == 14  # the Panda's 7 bodies: masses, then inertias
+    both = parse_sweep(
+        {
+            "name": "b",
+            "base": "paper-ellipse",
+            "controllers": ["nn"],
+            "vary": {
+                "nominal.relative_error": {"uniform": [0, 0.3]},
+                "nominal.factors[0]": {"uniform": [0.9, 1.1]},
+            },
+        }
+    )
+    with pytest.raises(ConfigError, match="vary one of the two"):
+        searchable(both, base_config(both))
+
+
 def test_per_joint_plant_keys_are_coordinates_of_the_box():
     """One joint's friction scale and the disturbance's frequency, searched as box coordinates:
     each point builds the plant it names."""
