@@ -535,6 +535,12 @@ FALSIFY_COMMANDS = {
         "nn,no-u0,pd,sliding-mode,slotine-li,rbf-nn --tuned docs/data/tune_noisy_case_b.json --require "
         '"rms_error_after_2s<=0.0005" --budget 200 --margin --workers 2 --out out/falsify-tuned'
     ),
+    "falsify_panda_tuned_noisy": (
+        "nnrobust falsify benchmarks/falsification/panda-factors-noisy.toml --controllers "
+        'nn,no-u0,pd,sliding-mode,slotine-li,rbf-nn --tuned "docs/data/tuned_comparison.json#Panda '
+        'ellipse/noisy" --require "rms_error_after_2s<=0.0005" --budget 200 --margin --workers 2 '
+        "--out out/falsify-panda-tuned"
+    ),
 }
 """The command each falsification data file comes from (its summary.json, copied)."""
 
@@ -638,6 +644,7 @@ RENDERERS = {
     "falsify-paper-factors": _falsified("falsify_paper_factors"),
     "falsify-panda-factors": _falsified("falsify_panda_factors"),
     "falsify-tuned-noisy": _falsified("falsify_tuned_noisy"),
+    "falsify-panda-tuned-noisy": _falsified("falsify_panda_tuned_noisy"),
     "engine-gap-presets": engine_gap_presets,
     "engine-gap-tuned": engine_gap_tuned,
     "arm-presets": arm_presets,

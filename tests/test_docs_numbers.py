@@ -30,6 +30,7 @@ OTHERS = [
     "falsify_paper_factors",
     "falsify_panda_factors",
     "falsify_tuned_noisy",
+    "falsify_panda_tuned_noisy",
     "engine_gap",
     "adaptive_step",
     "tune_noisy_case_b",
@@ -378,8 +379,44 @@ def _worst_seed(case, controller, sensing="noisy"):
 
 
 PF = "falsify_panda_factors"
+PT = "falsify_panda_tuned_noisy"
 
 QUOTED_FIGURES: list[tuple] = [
+    ("README.md", r"the tuned NN keeps only ([\d.]+)\s+of it", PT, _margin("nn-tuned"), 1.0),
+    (
+        "docs/falsification.md",
+        r"falsified at simulation (\d+) by a plant \(disturbance",
+        PT,
+        lambda d: d["controllers"]["nn-tuned"]["first_violation"],
+        1.0,
+    ),
+    (
+        "docs/falsification.md",
+        r"leaves the ellipse \((\d+) mm; MuJoCo as the plant",
+        PT,
+        _falsified("nn-tuned"),
+        1e3,
+    ),
+    ("docs/falsification.md", r"Its margin,\s+([\d.]+) of the box, is below", PT, _margin("nn-tuned"), 1.0),
+    ("docs/falsification.md", r"below even no-u0's ([\d.]+)", PT, _margin("no-u0-tuned"), 1.0),
+    ("docs/falsification.md", r"does worse\), and (\d+) of its 200", PT, _random_failures("nn-tuned"), 1.0),
+    (
+        "docs/falsification.md",
+        r"plants fail \(P\(fail\) ≤ ([\d.]+) %\)\.\n",
+        PT,
+        _certified("nn-tuned"),
+        100.0,
+    ),
+    ("docs/falsification.md", r"worst plants give ([\d.]+) mm\.", PT, _falsified("rbf-nn-tuned"), 1e3),
+    ("docs/falsification.md", r"worst plants give ([\d.]+) mm\.", PT, _falsified("sliding-mode-tuned"), 1e3),
+    (
+        "docs/falsification.md",
+        r"but at simulation\s+(\d+) the search",
+        PT,
+        lambda d: d["controllers"]["pd-tuned"]["first_violation"],
+        1.0,
+    ),
+    ("docs/falsification.md", r"saturates and\s+gives (\d+) mm \(MuJoCo", PT, _falsified("pd-tuned"), 1e3),
     ("README.md", r"\(its worst: ([\d.]+) mm in 200", PF, _falsified("nn"), 1e3),
     ("README.md", r"no violation up to ([\d.]+) of the box\), and", PF, _margin("nn"), 1.0),
     ("README.md", r"fails it \(P\(fail\) ≤ ([\d.]+) % with", PF, _certified("nn"), 100.0),
@@ -1112,7 +1149,9 @@ def _worst_config(command: str):
     return apply_overrides(load_preset(words[2]).replace(controller={"kind": controller}), sets)
 
 
-@pytest.mark.parametrize("name", [FALSIFIED, "falsify_panda_factors", "falsify_tuned_noisy"])
+@pytest.mark.parametrize(
+    "name", [FALSIFIED, "falsify_panda_factors", "falsify_tuned_noisy", "falsify_panda_tuned_noisy"]
+)
 def test_the_published_worst_plants_rerun_to_their_metrics(name):
     """docs/falsification.md's worst plants (docs/data/falsify_*.json, written by nnrobust
     falsify): each printed command reproduces the error the search recorded, bit for bit."""
@@ -1215,6 +1254,34 @@ def test_the_pandas_nn_worst_plant_is_what_the_text_says():
     mujoco = run_experiment(config.replace(plant={"engine": "mujoco"})).metrics()["rms_error_after_2s"]
     quoted = float(re.search(r"MuJoCo as the plant gives ([\d.]+) mm", text).group(1))
     assert mujoco > 0.005 and 1e3 * mujoco == pytest.approx(quoted, abs=0.05)
+
+
+def test_the_tuned_pandas_nn_and_pd_worst_plants_are_what_the_text_says():
+    """docs/falsification.md, the Panda at its tuned settings: the NN's worst plant saturates as
+    quoted with rho-hat growing, and both its and the PD's fail on MuJoCo by the figures quoted."""
+    pytest.importorskip("mujoco")
+    from nnrobust.experiment import run_experiment
+
+    data = json.loads((render_tables.DATA / "falsify_panda_tuned_noisy.json").read_text())
+    text = (ROOT / "docs" / "falsification.md").read_text()
+    nn = _worst_config(data["controllers"]["nn-tuned"]["worst"]["command"])
+    metrics = run_experiment(nn).metrics()
+    saturated = float(
+        re.search(r"the actuators saturate in\s+(\d+) % of the steps and it leaves", text).group(1)
+    )
+    assert 100 * metrics["saturated_fraction"] == pytest.approx(saturated, abs=0.5)
+    assert any("rho-hat keeps growing" in w for w in metrics["warnings"])
+    for name, pattern in (
+        ("nn-tuned", r"MuJoCo as the plant (\d+) mm\)"),
+        ("pd-tuned", r"\(MuJoCo (\d+) mm\)"),
+    ):
+        config = _worst_config(data["controllers"][name]["worst"]["command"]).replace(
+            plant={"engine": "mujoco"}
+        )
+        error = run_experiment(config).metrics()["rms_error_after_2s"]
+        assert error > 0.0005 and 1e3 * error == pytest.approx(
+            float(re.search(pattern, text).group(1)), abs=0.5
+        )
 
 
 def test_every_worst_plant_fails_on_mujoco_too():
