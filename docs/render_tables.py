@@ -639,8 +639,25 @@ def registered_laws() -> str:
     return "\n".join(lines) + "\n\nMade from the laws' declarations (`nnrobust/controllers/laws/`).\n"
 
 
+def disturbance_kinds() -> str:
+    """The shipped disturbances of plant.disturbance, from their declarations."""
+    from nnrobust.plant.disturbance import DISTURBANCE_KINDS
+
+    lines = ["| `plant.disturbance` | τ_d(t) |", "|---|---|"]
+    lines.append("| `auto` (default) | `paper` on the paper's arm, `scaled` on any other |")
+    lines += [f"| `{name}` | {DISTURBANCE_KINDS[name].description} |" for name in sorted(DISTURBANCE_KINDS)]
+    lines.append(
+        "| `custom` | a class of yours, `disturbance_class` and `disturbance_params` (docs/extending.md) |"
+    )
+    return (
+        "\n".join(lines)
+        + "\n\nMade from the disturbances' declarations (`DisturbanceKind`, nnrobust/plant/).\n"
+    )
+
+
 RENDERERS = {
     "registered-laws": registered_laws,
+    "disturbance-kinds": disturbance_kinds,
     "falsify-paper-factors": _falsified("falsify_paper_factors"),
     "falsify-panda-factors": _falsified("falsify_panda_factors"),
     "falsify-tuned-noisy": _falsified("falsify_tuned_noisy"),

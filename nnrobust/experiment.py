@@ -54,11 +54,10 @@ from .plant import (
     Plant,
     Sensor,
     SinusoidalDisturbance,
-    scaled_disturbance,
     scaled_friction,
     torque_scale,
 )
-from .plant.disturbance import Disturbance, ScaledDisturbance
+from .plant.disturbance import DISTURBANCE_KINDS, Disturbance, ScaledDisturbance
 from .plant.loads import ExternalLoads, parse_loads
 from .plant.scaling import PLAUSIBLE_EFFORT_RATIO, implausible_efforts, usable
 from .results import Result
@@ -172,30 +171,10 @@ def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
     disturbance: Disturbance
     if kind == "auto":  # the paper's tau_d belongs to the paper's arm
         kind = "paper" if config.robot.source == "three_link_planar" else "scaled"
-    if kind == "scaled":
-        disturbance = scaled_disturbance(robot, pc.disturbance_level, tau_ref())
-    elif kind == "paper":
-        if n != 3:
-            raise ConfigError("plant.disturbance", f"'paper' is for 3 joints, the robot has {n}")
-        disturbance = SinusoidalDisturbance.paper()
-    elif kind == "none":
-        disturbance = SinusoidalDisturbance.none(n)
-    elif kind == "custom":
+    if kind == "custom":
         disturbance = user_parts.build_disturbance(pc.disturbance_class or "", pc.disturbance_params, robot)
     else:
-        amplitude = np.asarray(pc.disturbance_amplitude, dtype=float)
-        omega = np.asarray(pc.disturbance_omega, dtype=float)
-        phase = (
-            np.zeros_like(amplitude)
-            if pc.disturbance_phase is None
-            else np.asarray(pc.disturbance_phase, dtype=float)
-        )
-        try:
-            disturbance = SinusoidalDisturbance(amplitude, omega, phase)
-        except ValueError as err:
-            raise ConfigError("plant.disturbance_amplitude", str(err)) from err
-        if disturbance.n != n:
-            raise ConfigError("plant.disturbance_amplitude", f"has {disturbance.n} rows, need {n}")
+        disturbance = DISTURBANCE_KINDS[kind].build(config, robot, tau_ref)
     rows = pc.disturbance_scale * _joint_scales(
         "plant.joint_disturbance_scales", pc.joint_disturbance_scales, n
     )

@@ -227,3 +227,33 @@ def test_a_payload_is_a_sphere_at_the_task_frame_in_the_true_plant_only(preset):
         np.testing.assert_allclose(true.gravity(q) - robot.gravity(q), -m * Jv.T @ g, atol=1e-10)
     q = plain.q0
     np.testing.assert_array_equal(loaded.nominal.mass(q), plain.nominal.mass(q))
+
+
+def test_every_declared_disturbance_is_a_choice_and_builds_what_it_says():
+    """plant.disturbance takes the declared kinds (and auto, custom); each builds on the paper's
+    arm: none is zero, paper the paper's tau_d, scaled peaks at disturbance_level x the torque
+    scale on every joint, sinusoid is the amplitudes given."""
+    from nnrobust.exceptions import ConfigError
+    from nnrobust.experiment import build
+    from nnrobust.plant.disturbance import DISTURBANCE_KINDS, SinusoidalDisturbance
+    from nnrobust.plant.scaling import torque_scale
+    from nnrobust.presets import load_preset
+
+    assert set(DISTURBANCE_KINDS) == {"none", "paper", "scaled", "sinusoid"}
+    base = load_preset("paper-ellipse").replace(simulation={"duration": 0.01})
+    with pytest.raises(ConfigError, match="auto, none, paper, scaled, sinusoid, custom"):
+        base.replace(plant={"disturbance": "gusts"})
+    times = np.linspace(0.0, 7.0, 701)
+    built = {k: build(base.replace(plant={"disturbance": k})).plant.disturbance for k in ("none", "paper")}
+    assert all(not built["none"](t).any() for t in times)
+    paper = SinusoidalDisturbance.paper()
+    assert all(np.array_equal(built["paper"](t), paper(t)) for t in times)
+    setup = build(base.replace(plant={"disturbance": "scaled", "disturbance_level": 0.2}))
+    peak = np.max([np.abs(setup.plant.disturbance(t)) for t in np.linspace(0, 2 * np.pi, 4001)], axis=0)
+    assert np.all(peak <= 0.2 * torque_scale(setup.robot) + 1e-12)
+    assert np.all(peak >= 0.85 * 0.2 * torque_scale(setup.robot))  # (sin x + sin 2x) / 2 peaks at 0.88
+    amplitude = [[1.0], [2.0], [3.0]]
+    given = base.replace(
+        plant={"disturbance": "sinusoid", "disturbance_amplitude": amplitude, "disturbance_omega": [2.0]}
+    )
+    assert np.allclose(build(given).plant.disturbance(np.pi / 4), [1.0, 2.0, 3.0])

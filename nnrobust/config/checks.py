@@ -10,6 +10,7 @@ import re
 
 from ..exceptions import ConfigError
 from ..model.tasks import TASK_KINDS
+from ..plant.disturbance import DISTURBANCE_KINDS
 from ..plant.mujoco_engine import ENGINES, MUJOCO_INTEGRATORS
 from .schema import (
     EQ9_KINDS,
@@ -407,7 +408,7 @@ def validate(config: ExperimentConfig) -> None:
         "plant.friction": (config.plant.friction, ("urdf", "scaled")),
         "plant.disturbance": (
             config.plant.disturbance,
-            ("auto", "paper", "none", "scaled", "sinusoid", "custom"),
+            ("auto", *sorted(DISTURBANCE_KINDS), "custom"),
         ),
         "plant.engine": (config.plant.engine, ENGINES),
         "plant.mujoco_integrator": (config.plant.mujoco_integrator, MUJOCO_INTEGRATORS),

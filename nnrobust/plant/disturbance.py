@@ -3,9 +3,13 @@
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+
+from ..exceptions import ConfigError
 
 
 class Disturbance(ABC):
@@ -87,3 +91,65 @@ class ScaledDisturbance(Disturbance):
     def __call__(self, t: float) -> np.ndarray:
         """The scaled torque, rows * tau_d(t) [N m]."""
         return self.rows * np.asarray(self.inner(t), dtype=float)
+
+
+@dataclass(frozen=True)
+class DisturbanceKind:
+    """A shipped disturbance, declared beside its code: its name in ``plant.disturbance``, one
+    line for the docs and errors, and ``build(config, robot, tau_ref)`` -> the Disturbance
+    (``tau_ref()`` the robot's torque scale, computed once if asked for; a ConfigError names the
+    key at fault). ``plant.disturbance_scale``, the per-joint scales, the frequency scale and the
+    phase shift then apply to whatever it builds.
+    """
+
+    name: str
+    description: str
+    build: Callable[[Any, Any, Callable[[], np.ndarray]], Disturbance]
+
+
+DISTURBANCE_KINDS: dict[str, DisturbanceKind] = {}
+"""The shipped disturbances by name (``auto`` and ``custom`` are choices of the experiment)."""
+
+
+def declare_disturbance(*kinds: DisturbanceKind) -> None:
+    """Register disturbances (in the module that builds them)."""
+    for kind in kinds:
+        assert kind.name not in DISTURBANCE_KINDS, kind.name
+        DISTURBANCE_KINDS[kind.name] = kind
+
+
+def _paper(config, robot, tau_ref) -> SinusoidalDisturbance:
+    if robot.nq != 3:
+        raise ConfigError("plant.disturbance", f"'paper' is for 3 joints, the robot has {robot.nq}")
+    return SinusoidalDisturbance.paper()
+
+
+def _sinusoid(config, robot, tau_ref) -> SinusoidalDisturbance:
+    pc = config.plant
+    amplitude = np.asarray(pc.disturbance_amplitude, dtype=float)
+    omega = np.asarray(pc.disturbance_omega, dtype=float)
+    phase = (
+        np.zeros_like(amplitude)
+        if pc.disturbance_phase is None
+        else np.asarray(pc.disturbance_phase, dtype=float)
+    )
+    try:
+        disturbance = SinusoidalDisturbance(amplitude, omega, phase)
+    except ValueError as err:
+        raise ConfigError("plant.disturbance_amplitude", str(err)) from err
+    if disturbance.n != robot.nq:
+        raise ConfigError("plant.disturbance_amplitude", f"has {disturbance.n} rows, need {robot.nq}")
+    return disturbance
+
+
+declare_disturbance(
+    DisturbanceKind("paper", "the paper's tau_d of its experiments (three joints)", _paper),
+    DisturbanceKind(
+        "none", "no disturbance", lambda config, robot, tau_ref: SinusoidalDisturbance.none(robot.nq)
+    ),
+    DisturbanceKind(
+        "sinusoid",
+        "sum_k A[i, k] sin(omega_k t + phi[i, k]) from plant.disturbance_amplitude, _omega, _phase",
+        _sinusoid,
+    ),
+)

@@ -7,7 +7,7 @@ import warnings
 import numpy as np
 
 from ..model.pinocchio_model import PinocchioModel
-from .disturbance import SinusoidalDisturbance
+from .disturbance import DisturbanceKind, SinusoidalDisturbance, declare_disturbance
 from .friction import Friction
 
 REFERENCE_ACCELERATION = 10.0
@@ -108,3 +108,12 @@ def scaled_disturbance(
     phi = GOLDEN_ANGLE * np.arange(robot.nq)
     amplitude = 0.5 * level * np.column_stack([tau, tau])
     return SinusoidalDisturbance(amplitude, np.array([1.0, 2.0]), np.column_stack([phi, 2 * phi]))
+
+
+declare_disturbance(
+    DisturbanceKind(
+        "scaled",
+        "two harmonics (1 and 2 rad/s) peaking at plant.disturbance_level x each joint's torque scale",
+        lambda config, robot, tau_ref: scaled_disturbance(robot, config.plant.disturbance_level, tau_ref()),
+    )
+)
