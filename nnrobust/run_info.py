@@ -88,7 +88,7 @@ class RunInfo:
             kind = TYPES[key]
             ok = (
                 (value is None and kind.endswith("?"))
-                or (kind.startswith("str") and isinstance(value, str))
+                or (kind.rstrip("?") == "str" and isinstance(value, str))
                 or (kind == "dict" and isinstance(value, dict))
                 or (
                     kind.startswith("strs")

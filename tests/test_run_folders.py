@@ -305,14 +305,15 @@ def test_corrupt_run_folders_get_one_line(tmp_path, capsys):
     pickled = tmp_path / "pickled"
     assert _run(pickled) == 0
     np.savez(pickled / "result.npz", t=np.array([object()], dtype=object))
-    mistyped = tmp_path / "mistyped"
-    assert _run(mistyped) == 0
-    with np.load(mistyped / "result.npz") as data:
-        arrays = {k: data[k] for k in data.files}
-    arrays["info"] = np.asarray(json.dumps({**json.loads(str(arrays["info"])), "criterion_weights": ["x"]}))
-    np.savez(mistyped / "result.npz", **arrays)
+    mistyped, stringy = tmp_path / "mistyped", tmp_path / "stringy"
+    for folder, change in ((mistyped, {"criterion_weights": ["x"]}), (stringy, {"criteria": "abc"})):
+        assert _run(folder) == 0
+        with np.load(folder / "result.npz") as data:
+            arrays = {k: data[k] for k in data.files}
+        arrays["info"] = np.asarray(json.dumps({**json.loads(str(arrays["info"])), **change}))
+        np.savez(folder / "result.npz", **arrays)
     capsys.readouterr()
-    for bad in (truncated, garbage, listed, pickled, mistyped, tmp_path / "missing"):
+    for bad in (truncated, garbage, listed, pickled, mistyped, stringy, tmp_path / "missing"):
         assert main(["compare", str(good), str(bad)]) == 2
         assert str(bad) in _one_error_line(capsys)
         assert main(["view", str(bad), "--seconds", "0"]) == 2
