@@ -46,7 +46,7 @@ from .model import (
     ThreeLinkPlanarModel,
     load_robot,
 )
-from .model.perturbation import perturb_inertias
+from .model.perturbation import bodies_with_mass, perturb_inertias
 from .model.tasks import pose_vector, split_pose
 from .plant import (
     Friction,
@@ -317,14 +317,17 @@ def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsMo
     beta = true.beta if nc.beta is None else tuple(_vector("nominal.beta", nc.beta, 3))
     p = true.p if nc.p is None else tuple(_vector("nominal.p", nc.p, 3))
     if nc.relative_error:
-        drawn = 1 + np.random.default_rng(nc.seed).uniform(-nc.relative_error, nc.relative_error, 6)
+        drawn = 1 + np.random.default_rng(nc.seed).uniform(
+            -nc.relative_error, nc.relative_error, CLOSED_FORM_FACTORS
+        )
         beta, p = tuple(np.multiply(beta, drawn[:3])), tuple(np.multiply(p, drawn[3:]))
     if nc.factors is not None:
         given = _padded(
             "nominal.factors",
             nc.factors,
-            6,
-            f"the closed-form model has 6 parameters (beta_1..3, p_1..3); got {len(nc.factors)} factors",
+            CLOSED_FORM_FACTORS,
+            f"the closed-form model has {CLOSED_FORM_FACTORS} parameters (beta_1..3, p_1..3); got "
+            f"{len(nc.factors)} factors",
         )
         beta, p = tuple(np.multiply(beta, given[:3])), tuple(np.multiply(p, given[3:]))
     return ThreeLinkPlanarModel(
@@ -333,16 +336,20 @@ def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsMo
     )
 
 
+CLOSED_FORM_FACTORS = 6
+"""Entries of ``nominal.factors`` on the closed-form model: beta-hat_1..3, p-hat_1..3."""
+
+
 def nominal_factor_count(config: ExperimentConfig) -> int:
     """The entries of ``nominal.factors`` for this experiment's nominal model: the closed form's
-    6 (beta-hat, p-hat), or two per body with mass of the robot's model (masses, then inertias),
+    beta-hat and p-hat, or two per body with mass of the robot's model (masses, then inertias),
     which ``nominal.relative_error`` draws its factors for.
     """
     if nominal_kind(config) != "urdf":
-        return 6
+        return CLOSED_FORM_FACTORS
     rc = config.robot
     model = load_robot(rc.source, rc.task_frame, rc.task, None, rc.locked_joints, rc.chain).model
-    return 2 * sum(1 for j in range(1, model.njoints) if model.inertias[j].mass > 0)
+    return 2 * len(bodies_with_mass(model))
 
 
 def _padded(path: str, factors: list[float], size: int, refusal: str) -> list[float]:
@@ -358,7 +365,7 @@ def _with_factors(model: pin.Model, factors: list[float]) -> pin.Model:
     """The model with each body's mass and rotational inertia (about its centre of mass) times its
     factor of ``nominal.factors``: the masses first, then the inertias, bodies with mass in order.
     """
-    bodies = [j for j in range(1, model.njoints) if model.inertias[j].mass > 0]
+    bodies = bodies_with_mass(model)
     factors = _padded(
         "nominal.factors",
         factors,

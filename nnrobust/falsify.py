@@ -130,6 +130,19 @@ def searchable(sweep, base) -> tuple[Any, str]:
     return out, note
 
 
+def _searched_sweep(spec: FalsifySpec):
+    """(the sweep as searched, its base experiment, what :func:`searchable` says): the target's
+    sweep with the controllers (tuned where asked), its seeded model error made searchable.
+    """
+    from .sweep.spec import base_config, load_sweep
+    from .tune.engine import _with_controllers
+
+    sweep = _with_controllers(load_sweep(spec.target), spec.controllers, spec.tuned)
+    base = base_config(sweep)
+    searched, note = searchable(sweep, base)
+    return searched, base, note
+
+
 def box_of(spec) -> Box:
     """The box of a sweep's ``[vary]`` ranges; grids and other distributions are refused."""
     keys, low, high, log = [], [], [], []
@@ -538,8 +551,7 @@ def _run_falsify(
 ) -> dict:
     from .properties import run_properties
     from .sweep.engine import _client, _require_engine
-    from .sweep.spec import Sample, base_config, experiment, load_sweep, rerun_command, sample_seed
-    from .tune.engine import _with_controllers
+    from .sweep.spec import Sample, experiment, rerun_command, sample_seed
 
     _require_engine()
     try:
@@ -549,9 +561,7 @@ def _run_falsify(
             f"falsify needs the cma package ({err}); pip install 'nnrobust[falsify]'"
         ) from err
     properties = run_properties(spec.require)
-    sweep = _with_controllers(load_sweep(spec.target), spec.controllers, spec.tuned)
-    base = base_config(sweep)
-    sweep, expanded = searchable(sweep, base)
+    sweep, base, expanded = _searched_sweep(spec)
     box = box_of(sweep)
     for name in sweep.controllers:  # every controller's experiment validated before anything runs
         for corner in (np.zeros(len(box.keys)), np.ones(len(box.keys))):
@@ -671,12 +681,9 @@ def keep_worst(spec: FalsifySpec, summary: dict, folder: str | Path, count: int 
     """
     from .experiment import run_experiment
     from .run_folder import write_run
-    from .sweep.spec import Sample, base_config, experiment, load_sweep, sample_seed
-    from .tune.engine import _with_controllers
+    from .sweep.spec import Sample, experiment, sample_seed
 
-    sweep = _with_controllers(load_sweep(spec.target), spec.controllers, spec.tuned)
-    base = base_config(sweep)
-    sweep = searchable(sweep, base)[0]
+    sweep, base, _ = _searched_sweep(spec)
     history = _history(Path(folder)) if count > 1 else {}
     written = []
     for name, entry in summary["controllers"].items():

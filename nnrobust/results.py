@@ -197,9 +197,7 @@ class Result:
 
     def experiment(self):
         """The :class:`~nnrobust.config.ExperimentConfig` that produced the run (from ``config``)."""
-        from .config import from_dict, parse_toml
-
-        return from_dict(parse_toml(self.config, "config.toml"))
+        return _experiment_of(self.config)
 
     def position_error(self) -> np.ndarray:
         """|position part of e| per sample [m] (the first two or three components)."""
@@ -410,17 +408,23 @@ class Result:
         )
 
 
+def _experiment_of(config: str):
+    """The experiment of a run's config.toml text."""
+    from .config import from_dict, parse_toml
+
+    return from_dict(parse_toml(config, "config.toml"))
+
+
 def _stored_info(arrays: dict, config: str, n: int) -> RunInfo | None:
     """result.npz's run info; for a folder written before it had one, read from config.toml."""
     if "info" in arrays:
         return RunInfo.from_json(str(arrays["info"]))
     if not config:
         return None
-    from .config import from_dict, parse_toml
     from .exceptions import NNRobustError
 
     try:
-        return RunInfo.from_config(from_dict(parse_toml(config, "config.toml")), n)
+        return RunInfo.from_config(_experiment_of(config), n)
     except (NNRobustError, ValueError):  # a configuration this version cannot read
         return None
 

@@ -33,6 +33,13 @@ def is_physical(inertia: pin.Inertia) -> bool:
     return bool(inertia.mass > 0) and rotational_inertia_problem(inertia.inertia) is None
 
 
+def bodies_with_mass(model: pin.Model) -> list[int]:
+    """The joints whose bodies have mass, in order: the bodies a model error perturbs
+    (:func:`perturb_inertias`, ``nominal.factors``).
+    """
+    return [j for j in range(1, model.njoints) if model.inertias[j].mass > 0]
+
+
 def perturb_inertias(
     model: pin.Model,
     mass_scale: float = 1.0,

@@ -385,7 +385,7 @@ def _info(result: Result) -> RunInfo:
 
 def animation_html(result: Result, fps: float = 30.0) -> str:
     """A self-contained HTML animation of the run (plays offline; ``#t=SECONDS`` pauses there)."""
+    info = _info(result)  # refused before anything is drawn
     recorder = SceneRecorder()
     draw_run(meshcat.Visualizer(window=recorder), result, fps)
-    info = _info(result)
     return recorder.html(f"{info.name}: {info.controller}")
