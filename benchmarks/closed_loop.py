@@ -34,8 +34,17 @@ CUSTOM = Path(__file__).resolve().parents[1] / "examples" / "custom_controller.p
 """The light custom controller of the hybrid rows: examples/custom_controller.py's TaskPD."""
 
 
+def cpp_floor_loop(loaded, q, v, steps, dt):
+    """The floor loop of benchmarks/floor_loop.cpp (its own module, nnrobust._floor_loop, on a
+    model that nnrobust._loop loaded); final [q, v].
+    """
+    from nnrobust import _floor_loop
+
+    return _floor_loop.floor_loop(loaded, q, v, steps, dt)
+
+
 def python_floor_loop(model, frame, q, v, steps, dt):
-    """The floor loop of csrc/floor_loop.cpp with Pinocchio's Python bindings; final [q, v]."""
+    """The floor loop of benchmarks/floor_loop.cpp with Pinocchio's Python bindings; final [q, v]."""
     data, fid, a = model.createData(), model.getFrameId(frame), np.zeros(model.nv)
     for _ in range(steps):
         pin.forwardKinematics(model, data, q, v, a)
@@ -84,7 +93,7 @@ def _contenders(preset: str, duration: float) -> dict:
         if mujoco is not None:
             out["nnrobust, compiled, MuJoCo"] = lambda: compiled.simulate_compiled(mujoco, duration)
         loaded = compiled.load_model(robot.model, robot.task_frame)
-        out["floor, C++"] = lambda: compiled.floor_loop(loaded, setup.q0, setup.v0, steps, dt)
+        out["floor, C++"] = lambda: cpp_floor_loop(loaded, setup.q0, setup.v0, steps, dt)
     if mujoco is not None:
         out["nnrobust, Python, MuJoCo"] = lambda: simulate(
             mujoco.plant, mujoco.controller, mujoco.q0, mujoco.v0, duration, dt

@@ -36,16 +36,17 @@ def _tool(name: str, *places: str) -> str:
 
 
 def unit_commands(build: Path) -> dict[str, list[str]]:
-    """csrc unit name -> its compile command (argv), from Ninja's record of the build."""
+    """Unit name -> its compile command (argv), from Ninja's record of the build."""
     ninja = _tool("ninja", str(Path(sys.executable).parent / "ninja"))
     listing = subprocess.run(
         [ninja, "-C", str(build), "-t", "commands"], capture_output=True, text=True, check=True
     ).stdout
     commands = {}
     for line in listing.splitlines():
-        match = re.search(r"-c (\S+/csrc/((?:laws/|subtasks/)?\w+\.cpp))", line)
-        if match:
-            commands[match.group(2)] = shlex.split(line)
+        match = re.search(r"-c (\S+?/(csrc|benchmarks)/(\S+\.cpp))", line)
+        if match:  # a unit of csrc/ by its path there (laws/rbf_nn.cpp), the benchmark's by its own
+            unit = match.group(3) if match.group(2) == "csrc" else f"benchmarks/{match.group(3)}"
+            commands[unit] = shlex.split(line)
     return commands
 
 

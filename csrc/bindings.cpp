@@ -141,14 +141,10 @@ NB_MODULE(_loop, m) {
   FIELD(stop_alpha); FIELD(position_noise); FIELD(velocity_noise); FIELD(resolution); FIELD(noise_q);
   FIELD(noise_v); FIELD(delay); FIELD(mj_step); FIELD(mj_model); FIELD(mj_data); FIELD(mj_qpos); FIELD(mj_qvel);
   FIELD(mj_ctrl); FIELD(mj_qfrc_applied); FIELD(mj_qpos_index); FIELD(mj_dof_index); FIELD(nominal_kind); FIELD(nominal); FIELD(m); FIELD(nominal_viscous);
-  FIELD(nominal_coulomb); FIELD(coulomb_smoothing); FIELD(center); FIELD(axis_a); FIELD(axis_b);
-  FIELD(path_kind); FIELD(path_breaks); FIELD(path_coefficients);
-  FIELD(omega); FIELD(phase); FIELD(pose); FIELD(rotation0); FIELD(rotation_axis);
-  FIELD(rotation_amplitude); FIELD(rotation_omega); FIELD(rotation_phase); FIELD(law); FIELD(law_params); FIELD(law_signals); FIELD(Kp); FIELD(Kv); FIELD(k); FIELD(pd_Kp); FIELD(pd_Kd);
-  FIELD(null_damping); FIELD(criteria); FIELD(criterion_params); FIELD(criterion_weights);
-  FIELD(pinv_threshold); FIELD(pinv_max_damping); FIELD(robust); FIELD(BtP); FIELD(sliding_gain);
-  FIELD(sliding_boundary); FIELD(basis_joint); FIELD(basis_bias); FIELD(law_corrected);
-  FIELD(basis_centers); FIELD(basis_inv2w2); FIELD(F); FIELD(gamma); FIELD(eps_min); FIELD(sigma); FIELD(z0);
+  FIELD(nominal_coulomb); FIELD(coulomb_smoothing); FIELD(path); FIELD(path_params); FIELD(pose);
+  FIELD(pose_params); FIELD(law); FIELD(law_params); FIELD(law_signals); FIELD(robust); FIELD(robust_params);
+  FIELD(criteria); FIELD(criterion_params); FIELD(criterion_weights); FIELD(pinv_threshold);
+  FIELD(pinv_max_damping); FIELD(z0);
 #undef FIELD
   nb::class_<LoopTrace>(m, "LoopTrace", "The arrays of a compiled run (nnrobust.simulation.Trace).")
       .def_ro("q", &LoopTrace::q)
@@ -157,10 +153,6 @@ NB_MODULE(_loop, m) {
       .def_ro("tau_cmd", &LoopTrace::tau_cmd)
       .def_ro("z", &LoopTrace::z)
       .def_ro("signals", &LoopTrace::signals)
-      .def_ro("rho_hat", &LoopTrace::rho_hat)
-      .def_ro("eps", &LoopTrace::eps)
-      .def_ro("z_norm", &LoopTrace::z_norm)
-      .def_ro("damping", &LoopTrace::damping)
       .def_ro("chain", &LoopTrace::chain)
       .def_ro("manipulability", &LoopTrace::manipulability)
       .def_ro("h", &LoopTrace::h)
@@ -180,16 +172,10 @@ NB_MODULE(_loop, m) {
   m.def("run_batch", &batch, nb::arg("plants"), nb::arg("nominals"), nb::arg("specs"), nb::arg("threads"),
         "Run several loops on C++ threads with the GIL released (one model pair per run; None "
         "nominals for the closed form); Ctrl-C and SIGTERM stop them all.");
-  m.def("floor_loop", &nnrobust::floor_loop, nb::arg("model"), nb::arg("q0"), nb::arg("v0"),
-        nb::arg("steps"), nb::arg("dt"), nb::call_guard<nb::gil_scoped_release>(),
-        "The bare C++ loop (RNEA + frame kinematics + 4 ABA per step); returns the final [q, v].");
   // each compiled component alone, for the twin tests (tests/test_twins.py)
   nb::class_<nnrobust::ControlStep>(m, "ControlStep", "One compiled control step's output.")
       .def_ro("tau", &nnrobust::ControlStep::tau)
       .def_ro("z", &nnrobust::ControlStep::z)
-      .def_ro("rho_hat", &nnrobust::ControlStep::rho_hat)
-      .def_ro("eps", &nnrobust::ControlStep::eps)
-      .def_ro("damping", &nnrobust::ControlStep::damping)
       .def_ro("signals", &nnrobust::ControlStep::signals);
   m.def("twin_control", &nnrobust::twin_control, nb::arg("nominal").none(), nb::arg("spec"), nb::arg("t"),
         nb::arg("q"), nb::arg("v"), nb::arg("z"), "The compiled law's output and next state at one state.");

@@ -82,13 +82,9 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
   tr.tau_cmd = tr.q;
   tr.z = Rows::Constant(steps, s.z0.size(), nan);
   tr.signals = Rows::Constant(steps, s.law_signals, nan);
-  tr.rho_hat = Vector::Constant(steps, nan);
-  tr.eps = tr.rho_hat;
-  tr.z_norm = tr.rho_hat;
-  tr.damping = tr.rho_hat;
   tr.chain = Rows::Constant(steps, 3 * (model.model.njoints), nan);
-  tr.manipulability = tr.rho_hat;
-  tr.h = tr.rho_hat;
+  tr.manipulability = Vector::Constant(steps, nan);
+  tr.h = tr.manipulability;
   const std::unique_ptr<Nominal> nominal = make_nominal(s, nominal_model);
   Controller controller(s, *nominal);
   Plant plant{model, s};
@@ -135,11 +131,7 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
     tr.tau.row(k) = tau;
     tr.tau_cmd.row(k) = tau_cmd;
     if (z.size()) tr.z.row(k) = z;
-    tr.rho_hat[k] = out.rho_hat;
-    tr.eps[k] = out.eps;
-    tr.z_norm[k] = out.z_norm;
-    tr.damping[k] = out.damping;
-    if (s.law_signals) {
+    if (!external) {
       if (out.signals.size() != s.law_signals)
         throw std::length_error("the law " + s.law + " returned " + std::to_string(out.signals.size()) +
                                 " signals; its Python twin declares " + std::to_string(s.law_signals));
@@ -211,7 +203,7 @@ ControlStep twin_control(LoadedModel *nominal_model, const LoopSpec &s, double t
   const std::unique_ptr<Nominal> nominal = make_nominal(s, nominal_model);
   Controller controller(s, *nominal);
   const Output out = controller.compute(t, q, v, z);
-  return {out.tau, out.z, out.rho_hat, out.eps, out.damping, out.signals};
+  return {out.tau, out.z, out.signals};
 }
 
 Vector twin_criterion_gradient(LoadedModel *nominal_model, const LoopSpec &s, const Vector &q) {

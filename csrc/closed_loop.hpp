@@ -77,49 +77,34 @@ struct LoopSpec {
   int m = 2;  // task rows: 2 (planar: x, y), 3 (position) or 6 (pose: position, then rotation)
   Vector nominal_viscous, nominal_coulomb;
   double coulomb_smoothing = unset;
-  Vector center, axis_a, axis_b;  // nnrobust.trajectories.EllipseTrajectory (2 or 3 entries)
-  double omega = unset, phase = unset;
-  // or PiecewisePolynomialPath ("piecewise"): breaks b_0..b_P; row p (degree + 1) + j of the
-  // coefficients (P (degree + 1) x m) multiplies (t - b_p)^j
-  std::string path_kind = "ellipse";
-  Vector path_breaks;
-  Matrix path_coefficients;
-  // a pose task (m = 6): PoseTrajectory's R_d(t) = exp3(theta(t) u) R_0, theta = A sin(w t + phi)
+  // the desired motion (nnrobust/trajectories/): the position path registered under `path`
+  // (csrc/trajectories/) with its fields by name (its Python class's twin_fields), and for a pose
+  // task (m = 6) PoseTrajectory's orientation fields
+  std::string path;
+  std::map<std::string, Matrix> path_params;
   bool pose = false;
-  Eigen::Matrix3d rotation0 = Eigen::Matrix3d::Identity();
-  Eigen::Vector3d rotation_axis = Eigen::Vector3d::UnitZ();
-  double rotation_amplitude = unset, rotation_omega = unset, rotation_phase = unset;
-  // the law: "task-space" (TaskSpaceController, eq. 9), "pd" (TaskSpacePD), or a registered law's
-  // twin (csrc/laws/) with its fields by name (Law.twin_values) and its number of signals
-  std::string law = "task-space";
+  std::map<std::string, Matrix> pose_params;
+  // the law registered under `law` (csrc/controllers/, csrc/laws/; "external": the hybrid loop's
+  // Python law) with its fields by name (Law.twin_values) and its number of signals; the eq. (9)
+  // law's robust term registered under `robust` ("" for u_0 = 0) with its fields
+  std::string law;
   std::map<std::string, Matrix> law_params;
   int law_signals = 0;
-  Matrix Kp, Kv;
-  double k = unset;
-  Matrix pd_Kp, pd_Kd;
-  double null_damping = unset;
+  std::string robust;
+  std::map<std::string, Matrix> robust_params;
   // WeightedCriteria: each criterion's registered name (csrc/subtasks/), its fields by name (its
   // Python declaration's twin_fields) and its weight (already scaled to sum to C)
   std::vector<std::string> criteria;
   std::vector<std::map<std::string, Matrix>> criterion_params;
   Vector criterion_weights;
   double pinv_threshold = unset, pinv_max_damping = unset;
-  // robust term: "none", "nn" (NNCompensator) or "sliding" (SlidingModeCompensator)
-  std::string robust = "none";
-  Matrix BtP;  // m x 2m
-  double sliding_gain = unset, sliding_boundary = unset;
-  bool basis_joint = true, basis_bias = true, law_corrected = true;
-  Matrix basis_centers;  // dim(s) x K
-  Vector basis_inv2w2;   // dim(s)
-  double F = unset, gamma = unset, eps_min = unset, sigma = unset;
   Vector z0;
 };
 
 // What simulate() returns (nnrobust.simulation.Trace).
 struct LoopTrace {
   Rows q, dq, tau, tau_cmd, z;
-  Rows signals;  // a registered law's signals: steps x LoopSpec.law_signals
-  Vector rho_hat, eps, z_norm, damping;
+  Rows signals;  // the law's signals: steps x LoopSpec.law_signals
   // what Result.from_trace records, from the true robot's kinematics (nnrobust/results.py)
   Rows chain;            // steps x 3(n + 1): joint origins, then the task frame, in world axes
   Vector manipulability; // sqrt(det(J J^T)) of the task Jacobian
@@ -150,9 +135,7 @@ LoopTrace run_loop(LoadedModel &plant, LoadedModel *nominal, const LoopSpec &spe
 // .compute), the weighted criterion's gradient on the nominal model and value on the true robot,
 // and the plant's q'' (Plant.acceleration, the loads held from t).
 struct ControlStep {
-  Vector tau, z;
-  double rho_hat, eps, damping;
-  Vector signals;
+  Vector tau, z, signals;
 };
 ControlStep twin_control(LoadedModel *nominal, const LoopSpec &spec, double t, const Vector &q, const Vector &v,
                          const Vector &z);

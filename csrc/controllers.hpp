@@ -1,21 +1,23 @@
-// The control laws on the C++ side: the twins of nnrobust/controllers (TaskSpaceController's eq. (9)
-// with no u_0, the NN compensator or the sliding-mode term; TaskSpacePD), with the desired path of
-// nnrobust/trajectories.py.
+// The parts every control law on the C++ side shares (the twins of nnrobust/controllers/ and
+// nnrobust/trajectories/): the desired motion and the task error, the damped pseudo-inverse, the
+// torque of eq. (9) and the nominal friction. The law itself is a registered component
+// (csrc/controllers/, csrc/laws/) named by LoopSpec.law and built from LoopSpec.law_params.
 #pragma once
 
 #include <cmath>
 #include <memory>
+#include <optional>
 
 #include "nominal.hpp"
 #include "subtasks/criterion.hpp"
+#include "trajectories/trajectory.hpp"
 
 namespace nnrobust {
 
 struct Output {
   Vector tau;
   Vector z;
-  double rho_hat = NAN, eps = NAN, z_norm = NAN, damping = 0.0;
-  Vector signals;  // a registered law's (LoopSpec.law_signals entries)
+  Vector signals;  // the law's, in its Python twin's signal_names order (LoopSpec.law_signals entries)
 };
 
 struct Law;
@@ -25,20 +27,15 @@ struct Controller {
   const LoopSpec &s;
   Nominal &nominal;
   Criteria criteria;
-  int L = 0;
-  // s.law, s.robust and s.path_kind resolved once (an unknown name is refused)
-  bool law_pd = false, piecewise = false;
-  enum class Robust { none, nn, sliding } robust = Robust::none;
-  std::unique_ptr<Law> law;  // a registered law (csrc/laws/), built from spec.law_params
+  std::unique_ptr<Path> path;               // LoopSpec.path, from path_params
+  std::optional<Orientation> orientation;   // a pose task's (LoopSpec.pose_params)
+  std::unique_ptr<Law> law;                 // LoopSpec.law, from law_params (none: "external")
 
+  // every name resolved here, once: an unknown one is refused (std::invalid_argument)
   Controller(const LoopSpec &spec, Nominal &model);
   ~Controller();
-  // AdditiveRBFBasis.__call__: [1, exp(-(s_j - c_jk)^2 inv2w2_j) for j, k]
-  Vector basis(const Vector &in) const;
   // DampedPseudoInverse.factor: ((J J^T + lambda^2 I)^-1, lambda^2)
   Matrix pinv_factor(const Matrix &J, double &lam2) const;
-  // the position path at t: EllipseTrajectory or PiecewisePolynomialPath.__call__ (Horner's rule)
-  void path(double t, Vector &pd, Vector &dpd, Vector &ddpd) const;
   // the task state and error at t (PoseTrajectory and tasks.task_error for a pose)
   TaskReference reference(double t, const Vector &q, const Vector &v) const;
   // TaskSpaceController.compute from u_0 on: the torque of eq. (9) with these gains

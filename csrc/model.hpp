@@ -46,7 +46,5 @@ struct LoadedModel {
   Matrix frame_jacobian(const Vector &q);         // 6 x n, world-aligned axes at the frame's origin
 };
 
-// The bare loop of benchmarks/closed_loop.py (floor_loop.cpp); returns the final [q, v].
-Vector floor_loop(LoadedModel &m, const Vector &q0, const Vector &v0, long steps, double dt);
 
 }  // namespace nnrobust

@@ -655,8 +655,23 @@ def disturbance_kinds() -> str:
     )
 
 
+def path_kinds() -> str:
+    """The shipped paths of trajectory.kind, from their declarations."""
+    from nnrobust.trajectories import PATH_KINDS
+
+    lines = ["| `kind` | x_d(t) | keys |", "|---|---|---|"]
+    for name, kind in PATH_KINDS.items():
+        default = " (default)" if name == "ellipse" else ""
+        lines.append(f"| `{name}`{default} | {kind.description} | {kind.keys_doc} |")
+    lines.append(
+        "| `custom` | a class of yours (planar and position tasks; docs/extending.md) | `class`, `params` |"
+    )
+    return "\n".join(lines) + "\n\nMade from the paths' declarations (`PathKind`, nnrobust/trajectories/).\n"
+
+
 RENDERERS = {
     "registered-laws": registered_laws,
+    "path-kinds": path_kinds,
     "disturbance-kinds": disturbance_kinds,
     "falsify-paper-factors": _falsified("falsify_paper_factors"),
     "falsify-panda-factors": _falsified("falsify_panda_factors"),

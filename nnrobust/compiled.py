@@ -98,30 +98,24 @@ def load_model(model: pin.Model, frame: str):
     return _module().LoadedModel(model_spec(model, frame))
 
 
-def floor_loop(model, q0, v0, steps: int, dt: float):
-    """The bare C++ loop of benchmarks/closed_loop.py: final [q, v] after ``steps`` steps of ``dt``."""
-    return _module().floor_loop(model, q0, v0, steps, dt)
-
-
 # ---- the compiled closed loop ---------------------------------------------------------------------
 
 
 def twin_refusal(setup) -> str:
     """Why this experiment has no compiled twin ("" when it has one).
 
-    The compiled loop covers (docs/compiled.md): the eq. (9) law (no u_0, the NN compensator with
-    either basis, the sliding-mode term; computed torque) and the task-space PD; the closed-form
-    three-link nominal model or any Pinocchio nominal model (perturbed or exact); planar,
-    position and pose tasks; the ellipse of eq. (18), the point-to-point and waypoint paths and
-    the pose trajectory over any of them; every shipped
-    criterion (paper, half_det_manipulability and manipulability not on pose tasks); and the
-    whole plant (friction, sinusoidal disturbance, saturation, stops, sensor noise,
-    quantisation, delay), integrated by RK4.
+    The compiled loop covers (docs/compiled.md) every component whose class declares a compiled
+    twin (``twin`` and ``twin_fields``): the eq. (9) law (no u_0, the NN compensator with either
+    basis, the sliding-mode term; computed torque), the task-space PD and the registered laws;
+    the closed-form three-link nominal model or any Pinocchio nominal model (perturbed or
+    exact); planar, position and pose tasks; the shipped paths and the pose trajectory over any
+    of them; every shipped criterion (paper, half_det_manipulability and manipulability not on
+    pose tasks); and the whole plant (friction, sinusoidal disturbance, saturation, stops,
+    sensor noise, quantisation, delay), integrated by RK4.
     """
-    from .controllers import NNCompensator, SlidingModeCompensator, TaskSpaceController, TaskSpacePD
     from .controllers.registry import registered_law
     from .model import PinocchioModel, ThreeLinkPlanarModel
-    from .trajectories import EllipseTrajectory, PiecewisePolynomialPath, PoseTrajectory
+    from .trajectories import PoseTrajectory
 
     config, controller = setup.config, setup.controller
     refusal = _plant_refusal(setup)
@@ -130,33 +124,28 @@ def twin_refusal(setup) -> str:
     if is_custom(controller):
         return f"a custom controller ({type(controller).__name__}) runs in Python: --backend hybrid or python"
     law = registered_law(config.controller.kind)
+    path = setup.trajectory.path if type(setup.trajectory) is PoseTrajectory else setup.trajectory
+    term = getattr(controller, "compensator", None)
     checks = [
         (
-            type(controller) in (TaskSpaceController, TaskSpacePD)
-            or (law is not None and law.twin is not None),
+            (law.twin if law is not None else own_twin(controller)) is not None,
             f"controller.kind {config.controller.kind!r}",
         ),
         (isinstance(setup.nominal, (ThreeLinkPlanarModel, PinocchioModel)), "the nominal model"),
-        (
-            type(setup.trajectory) in (EllipseTrajectory, PiecewisePolynomialPath, PoseTrajectory)
-            and type(getattr(setup.trajectory, "path", setup.trajectory))
-            in (EllipseTrajectory, PiecewisePolynomialPath),
-            "the trajectory",
-        ),
+        (own_twin(path) is not None, "the trajectory"),
+        (law is not None or term is None or own_twin(term) is not None, "a custom robust term"),
     ]
-    compensator = getattr(controller, "compensator", None)
-    checks.append(
-        (
-            compensator is None
-            or type(compensator) in (NNCompensator, SlidingModeCompensator)
-            or law is not None,
-            "a custom robust term",
-        )
-    )
     for ok, what in checks:
         if not ok:
             return f"{what} has no compiled twin yet"
     return ""
+
+
+def own_twin(component) -> str | None:
+    """The compiled twin a component's own class declares (``twin``; a subclass that does not
+    declare one has none), or None.
+    """
+    return type(component).__dict__.get("twin")
 
 
 def is_custom(controller) -> bool:
@@ -263,11 +252,12 @@ def loop_spec(setup, duration: float, external: bool = False):
     import numpy as np
 
     from .config import step_rotation_limit
-    from .controllers import NNCompensator, TaskSpacePD
     from .controllers.registry import registered_law
     from .model import PinocchioModel
+    from .plant.friction import Friction
     from .simulation import MAX_PERIOD_SUBSTEPS, MAX_SPEED
-    from .trajectories import PiecewisePolynomialPath
+    from .trajectories import PoseTrajectory
+    from .twins import twin_values
 
     def f(x):  # the C++ side takes contiguous float64 arrays
         return np.ascontiguousarray(x, dtype=float)
@@ -321,52 +311,23 @@ def loop_spec(setup, duration: float, external: bool = False):
         spec.beta, spec.p, spec.lengths = f(params.beta), f(params.p), f(params.lengths)
         spec.gamma, spec.gravity = f(params.gamma), f(params.gravity)
         s.nominal = spec
-    trajectory = setup.trajectory
-    if setup.robot.task == "pose":
-        s.pose, s.rotation0, s.rotation_axis = True, f(trajectory.rotation0), f(trajectory.axis)
-        s.rotation_amplitude, s.rotation_omega = trajectory.amplitude, trajectory.omega
-        s.rotation_phase = trajectory.phase
-        trajectory = trajectory.path
-    if isinstance(trajectory, PiecewisePolynomialPath):
-        pieces, order, m = trajectory.coefficients.shape
-        s.path_kind, s.path_breaks = "piecewise", f(trajectory.breaks)
-        s.path_coefficients = f(trajectory.coefficients.reshape(pieces * order, m))
-    else:
-        s.center, s.axis_a, s.axis_b = f(trajectory.center), f(trajectory.axis_a), f(trajectory.axis_b)
-        s.omega, s.phase = trajectory.omega, trajectory.phase
+    path = setup.trajectory
+    if isinstance(path, PoseTrajectory):
+        s.pose, s.pose_params = True, twin_values(path, path.twin_fields)
+        path = path.path
+    s.path, s.path_params = path.twin, twin_values(path, path.twin_fields)
     s.pinv_threshold, s.pinv_max_damping = controller.pinv.threshold, controller.pinv.max_damping
-    s.nominal_viscous, s.nominal_coulomb = f(np.zeros(n)), f(np.zeros(n))
+    _friction_spec(s, getattr(controller, "nominal_friction", None) or Friction.none(n), f)
     law = registered_law(setup.config.controller.kind)
-    if law is not None:  # a registered law's twin: its declared fields, F-hat, its signals
-        s.law, s.law_params, s.law_signals = (
-            law.twin,
-            law.twin_values(controller),
-            len(controller.signal_names),
-        )
-        _friction_spec(s, controller.nominal_friction, f)
-        s.z0 = f(controller.initial_state())
-        return s
-    if isinstance(controller, TaskSpacePD):
-        s.law = "pd"
-        s.pd_Kp, s.pd_Kd, s.null_damping = f(controller.Kp), f(controller.Kd), controller.null_damping
-        s.z0 = np.zeros(0)
-        return s
-    _friction_spec(s, controller.nominal_friction, f)
-    s.Kp, s.Kv, s.k = f(controller.Kp), f(controller.Kv), controller.k
-    comp = controller.compensator
+    if law is not None:  # a registered law's twin and its declared fields
+        s.law, s.law_params = law.twin, law.twin_values(controller)
+    else:  # one of the task-space laws (eq. 9 or the PD), with eq. (9)'s robust term
+        s.law, s.law_params = controller.twin, twin_values(controller, controller.twin_fields)
+        term = getattr(controller, "compensator", None)
+        if term is not None:
+            s.robust, s.robust_params = term.twin, twin_values(term, term.twin_fields)
+    s.law_signals = len(controller.signal_names)
     s.z0 = f(controller.initial_state())
-    if isinstance(comp, NNCompensator):
-        s.robust, s.BtP = "nn", f(comp.BtP)
-        s.basis_joint, s.basis_bias, s.law_corrected = (
-            comp.basis_input == "joint",
-            comp.basis.bias,
-            comp.law == "corrected",
-        )
-        s.basis_centers, s.basis_inv2w2 = f(comp.basis.grid), f(comp.basis.inverse_two_width_sq)
-        s.F, s.gamma, s.eps_min, s.sigma = comp.F, comp.gamma, comp.eps_min, comp.sigma
-    elif comp is not None:
-        s.robust, s.BtP = "sliding", f(comp.BtP)
-        s.sliding_gain, s.sliding_boundary = comp.gain, comp.boundary
     return s
 
 
@@ -394,17 +355,10 @@ def _trace(setup, spec, out):
 
     done, period = out.done, setup.config.simulation.control_period
     t = np.arange(done) * period
-    signals = {"damping": np.asarray(out.damping)[:done]}
-    if spec.law_signals:  # a registered law's, in its signal_names order
+    signals = {}  # the law's, in its signal_names order (the hybrid loop records its own)
+    if spec.law != "external":
         names = setup.controller.signal_names
         signals = {name: np.asarray(out.signals)[:done, i] for i, name in enumerate(names)}
-    elif spec.robust == "nn":
-        signals = {
-            "rho_hat": np.asarray(out.rho_hat)[:done],
-            "eps": np.asarray(out.eps)[:done],
-            "z_norm": np.asarray(out.z_norm)[:done],
-            **signals,
-        }
     message = ""
     if out.status == "diverged":
         k = out.divergence_index

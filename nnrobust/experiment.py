@@ -23,6 +23,7 @@ from .config import (
     provenance_header,
     step_rotation_limit,
 )
+from .config.arrays import joint_vector, per_joint
 from .controllers import (
     AdditiveRBFBasis,
     Controller,
@@ -38,7 +39,7 @@ from .controllers.custom import build_custom
 from .controllers.registry import registered_law
 from .controllers.task_space import sized_null_damping
 from .exceptions import ConfigError, ModelMismatch
-from .ik import solve_ik
+from .ik import finite_limits, reach, seed_configuration, solve_ik
 from .model import (
     DynamicsModel,
     PinocchioModel,
@@ -63,14 +64,8 @@ from .plant.scaling import PLAUSIBLE_EFFORT_RATIO, implausible_efforts, usable
 from .results import Result
 from .simulation import simulate
 from .subtasks import CRITERIA, CRITERION_KINDS, Criterion, WeightedCriteria
-from .trajectories import (
-    EllipseTrajectory,
-    PoseTrajectory,
-    PositionPath,
-    Trajectory,
-    quintic_point_to_point,
-    spline_through,
-)
+from .trajectories import Trajectory
+from .trajectories.build import build_trajectory
 
 
 @dataclass
@@ -91,28 +86,6 @@ class Setup:
     """Plant steps per control period: simulation.substeps, or chosen (:func:`plant_step`)."""
 
 
-def _vector(path: str, values, n: int, default: np.ndarray | None = None) -> np.ndarray:
-    """``values`` as n floats (``default`` when they are not given)."""
-    if values is None:
-        if default is None:
-            raise ConfigError(path, f"needs {n} values")
-        return default
-    arr = np.asarray(values, dtype=float)
-    if arr.shape != (n,):
-        raise ConfigError(path, f"has {arr.size} entries, the robot has {n} joints")
-    return arr
-
-
-def _per_joint(path: str, values: list[float], n: int) -> np.ndarray:
-    """One value for every joint, or one per joint."""
-    return np.full(n, float(values[0])) if len(values) == 1 else _vector(path, values, n)
-
-
-def _finite_limits(values: np.ndarray) -> np.ndarray:
-    """URDF limits with absent ones (not finite, or Pinocchio's huge placeholders) as inf."""
-    return np.where(np.isfinite(values) & (np.abs(values) < 1e6), values, np.copysign(np.inf, values))
-
-
 def build_torque_limits(config: ExperimentConfig, robot: PinocchioModel) -> np.ndarray | None:
     """Effort limit per joint [N m or N] (inf where the URDF has none), or None (ideal actuators)."""
     limits = config.plant.torque_limits
@@ -121,7 +94,7 @@ def build_torque_limits(config: ExperimentConfig, robot: PinocchioModel) -> np.n
     if limits == "urdf":
         effort = robot.effort_limits
         return np.where(usable(effort), effort, np.inf)
-    return _vector("plant.torque_limits", limits, robot.nq)
+    return joint_vector("plant.torque_limits", limits, robot.nq)
 
 
 def build_stops(
@@ -133,7 +106,7 @@ def build_stops(
     pc = config.plant
     if not pc.joint_stops:
         return None
-    lower, upper = _finite_limits(robot.lower_limits), _finite_limits(robot.upper_limits)
+    lower, upper = finite_limits(robot.lower_limits), finite_limits(robot.upper_limits)
     scale = torque_scale(robot) if tau_ref is None else tau_ref()
     return JointStops(lower, upper, pc.joint_stop_stiffness * scale, pc.joint_stop_damping)
 
@@ -142,9 +115,9 @@ def build_sensor(config: ExperimentConfig, n: int) -> Sensor:
     """Noise and quantisation of the measurements, one value for all joints or one per joint."""
     se = config.sensing
     return Sensor(
-        _per_joint("sensing.position_noise", se.position_noise, n),
-        _per_joint("sensing.velocity_noise", se.velocity_noise, n),
-        _per_joint("sensing.encoder_resolution", se.encoder_resolution, n),
+        per_joint("sensing.position_noise", se.position_noise, n),
+        per_joint("sensing.velocity_noise", se.velocity_noise, n),
+        per_joint("sensing.encoder_resolution", se.encoder_resolution, n),
         se.seed,
     )
 
@@ -161,9 +134,9 @@ def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
         else Friction(robot.viscous_friction, robot.coulomb_friction)
     )
     scale = pc.friction_scale * _joint_scales("plant.joint_friction_scales", pc.joint_friction_scales, n)
-    coulomb = scale * _vector("plant.coulomb_friction", pc.coulomb_friction, n, base.coulomb)
+    coulomb = scale * joint_vector("plant.coulomb_friction", pc.coulomb_friction, n, base.coulomb)
     friction = Friction(
-        scale * _vector("plant.viscous_friction", pc.viscous_friction, n, base.viscous),
+        scale * joint_vector("plant.viscous_friction", pc.viscous_friction, n, base.viscous),
         coulomb,
         static=pc.stiction * coulomb,
     )
@@ -252,7 +225,7 @@ def true_model(config: ExperimentConfig, robot: PinocchioModel) -> PinocchioMode
         return robot
     model = pin.Model(robot.model)
     if pc.armature is not None:
-        model.armature = _vector("plant.armature", pc.armature, robot.nq)
+        model.armature = joint_vector("plant.armature", pc.armature, robot.nq)
     if pc.payload > 0.0:
         joint, inertia = payload(model, robot.task_frame, pc.payload)
         model.inertias[joint] = model.inertias[joint] + inertia
@@ -314,8 +287,8 @@ def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsMo
     if robot.task != "planar":
         raise ConfigError("nominal.kind", "'closed-form' is the planar three-link model; use 'urdf'")
     true = ThreeLinkParameters.from_pinocchio(robot.model, robot.task_frame)
-    beta = true.beta if nc.beta is None else tuple(_vector("nominal.beta", nc.beta, 3))
-    p = true.p if nc.p is None else tuple(_vector("nominal.p", nc.p, 3))
+    beta = true.beta if nc.beta is None else tuple(joint_vector("nominal.beta", nc.beta, 3))
+    p = true.p if nc.p is None else tuple(joint_vector("nominal.p", nc.p, 3))
     if nc.relative_error:
         drawn = 1 + np.random.default_rng(nc.seed).uniform(
             -nc.relative_error, nc.relative_error, CLOSED_FORM_FACTORS
@@ -414,8 +387,8 @@ def build_basis(config: ExperimentConfig, robot: PinocchioModel, m: int) -> Addi
 def build_nominal_friction(config: ExperimentConfig, n: int) -> Friction:
     """F-hat as the nominal section declares it, compensated with controller.coulomb_smoothing."""
     return Friction(
-        _vector("nominal.viscous_friction", config.nominal.viscous_friction, n, np.zeros(n)),
-        _vector("nominal.coulomb_friction", config.nominal.coulomb_friction, n, np.zeros(n)),
+        joint_vector("nominal.viscous_friction", config.nominal.viscous_friction, n, np.zeros(n)),
+        joint_vector("nominal.coulomb_friction", config.nominal.coulomb_friction, n, np.zeros(n)),
         config.controller.coulomb_smoothing,
     )
 
@@ -500,90 +473,6 @@ def build_controller(
     )
 
 
-def _seed(config: ExperimentConfig, robot: PinocchioModel) -> np.ndarray:
-    lower, upper = robot.lower_limits, robot.upper_limits
-    seed = _vector("simulation.q_seed", config.simulation.q_seed, robot.nq, robot.mid_configuration)
-    outside = np.flatnonzero((seed < lower) | (seed > upper))
-    if outside.size:
-        i = int(outside[0])
-        more = f" (and {outside.size - 1} more joints)" if outside.size > 1 else ""
-        raise ConfigError(
-            "simulation.q_seed",
-            f"joint {robot.joint_names[i]!r} = {seed[i]:g} is "
-            f"outside its limits [{lower[i]:g}, {upper[i]:g}]{more}",
-        )
-    return seed
-
-
-IK_LIMIT_MARGIN = 0.02
-"""The initial configuration keeps this fraction of each joint's range inside its limits."""
-
-
-def _reach(robot: PinocchioModel, target: np.ndarray, seed: np.ndarray, what: str, key: str) -> np.ndarray:
-    lower, upper = _finite_limits(robot.lower_limits), _finite_limits(robot.upper_limits)
-    margin = np.where(np.isfinite(upper - lower), IK_LIMIT_MARGIN * (upper - lower), 0.0)
-    seed = np.clip(seed, lower + margin, upper - margin)
-    q, residual = solve_ik(robot, target, seed, robot.lower_limits + margin, robot.upper_limits - margin)
-    if residual > 1e-6:
-        p = split_pose(target)[0] if robot.task == "pose" else target
-        raise ConfigError(
-            key,
-            f"{what} (position {np.round(p, 4).tolist()} m) is out of reach from q_seed = "
-            f"{np.round(seed, 3).tolist()} (task error {residual:.3g} left)",
-        )
-    return q
-
-
-def build_path(config: ExperimentConfig, robot: PinocchioModel) -> PositionPath:
-    """The position path of ``trajectory.kind``: the ellipse of eq. (18), a quintic point-to-point
-    move (from the task frame's position at q_seed unless ``start`` is given) or a waypoint spline.
-    """
-    tc = config.trajectory
-    if tc.kind == "point_to_point":
-        goal = tc.goal or []
-        if tc.start is None:
-            p = robot.task_position(_seed(config, robot))
-            start = (split_pose(p)[0] if robot.task == "pose" else p)[: len(goal)]
-        else:
-            start = np.asarray(tc.start, dtype=float)
-        return quintic_point_to_point(start, goal, tc.move_time)
-    if tc.kind == "waypoints":
-        return spline_through(tc.waypoints, tc.waypoint_times)
-    return EllipseTrajectory(
-        np.asarray(tc.center, float),
-        np.asarray(tc.axis_a, float),
-        np.asarray(tc.axis_b, float),
-        tc.omega,
-        tc.phase,
-    )
-
-
-def build_trajectory(config: ExperimentConfig, robot: PinocchioModel) -> Trajectory:
-    """The position path (:func:`build_path`), with a rocking or held orientation for a pose task;
-    or a user's trajectory (``kind = "custom"``).
-    """
-    tc = config.trajectory
-    if tc.kind == "custom":
-        return user_parts.build_trajectory(tc.class_ or "", tc.params, robot, robot.task)
-    path = build_path(config, robot)
-    if robot.task != "pose":
-        return path
-    if tc.orientation_rpy is not None:
-        R0 = pin.rpy.rpyToMatrix(*tc.orientation_rpy)
-    else:  # the orientation the arm has when its tip is at p_d(0)
-        position_task = PinocchioModel(robot.model, robot.task_frame, "position", robot.name)
-        q = _reach(position_task, path(0.0)[0], _seed(config, robot), "p_d(0)", f"trajectory.{path_key(tc)}")
-        R0 = split_pose(robot.task_position(q))[1].copy()
-    return PoseTrajectory(
-        path,
-        R0,
-        np.asarray(tc.rotation_axis, dtype=float),
-        tc.rotation_amplitude,
-        tc.rotation_omega,
-        tc.rotation_phase,
-    )
-
-
 def initial_state(
     config: ExperimentConfig, robot: PinocchioModel, trajectory: Trajectory
 ) -> tuple[np.ndarray, np.ndarray]:
@@ -602,8 +491,12 @@ def initial_state(
         target = pose_vector(p + offset[:3], pin.exp3(offset[3:]) @ R)
     else:
         target = xd0 + offset
-    q0 = _reach(
-        robot, target, _seed(config, robot), "x_d(0) + offset", f"trajectory.{path_key(config.trajectory)}"
+    q0 = reach(
+        robot,
+        target,
+        seed_configuration(config, robot),
+        "x_d(0) + offset",
+        f"trajectory.{path_key(config.trajectory)}",
     )
     J = robot.task_jacobian(q0)
     v0 = DampedPseudoInverse().matrix(J) @ dxd0

@@ -1,12 +1,15 @@
-"""Inverse kinematics for the initial configuration."""
+"""Inverse kinematics for the initial configuration, and the seed it starts from."""
 
 from __future__ import annotations
 
 import numpy as np
 
+from .config.arrays import joint_vector
 from .controllers.pseudoinverse import DampedPseudoInverse
+from .exceptions import ConfigError
 from .model.base import DynamicsModel
-from .model.tasks import task_error
+from .model.pinocchio_model import PinocchioModel
+from .model.tasks import split_pose, task_error
 
 
 def solve_ik(
@@ -43,3 +46,46 @@ def solve_ik(
         if lower is not None and upper is not None:
             q = np.clip(q, lower, upper)
     return q, residual
+
+
+IK_LIMIT_MARGIN = 0.02
+"""The initial configuration keeps this fraction of each joint's range inside its limits."""
+
+
+def finite_limits(values: np.ndarray) -> np.ndarray:
+    """URDF limits with absent ones (not finite, or Pinocchio's huge placeholders) as inf."""
+    return np.where(np.isfinite(values) & (np.abs(values) < 1e6), values, np.copysign(np.inf, values))
+
+
+def seed_configuration(config, robot: PinocchioModel) -> np.ndarray:
+    """``simulation.q_seed`` (default: mid-range), refused outside the joint limits."""
+    lower, upper = robot.lower_limits, robot.upper_limits
+    seed = joint_vector("simulation.q_seed", config.simulation.q_seed, robot.nq, robot.mid_configuration)
+    outside = np.flatnonzero((seed < lower) | (seed > upper))
+    if outside.size:
+        i = int(outside[0])
+        more = f" (and {outside.size - 1} more joints)" if outside.size > 1 else ""
+        raise ConfigError(
+            "simulation.q_seed",
+            f"joint {robot.joint_names[i]!r} = {seed[i]:g} is "
+            f"outside its limits [{lower[i]:g}, {upper[i]:g}]{more}",
+        )
+    return seed
+
+
+def reach(robot: PinocchioModel, target: np.ndarray, seed: np.ndarray, what: str, key: str) -> np.ndarray:
+    """Q with f(q) = target, from ``seed`` and inside the limits by :data:`IK_LIMIT_MARGIN`; a
+    target out of reach is a ConfigError naming ``key`` (``what`` says which target it is).
+    """
+    lower, upper = finite_limits(robot.lower_limits), finite_limits(robot.upper_limits)
+    margin = np.where(np.isfinite(upper - lower), IK_LIMIT_MARGIN * (upper - lower), 0.0)
+    seed = np.clip(seed, lower + margin, upper - margin)
+    q, residual = solve_ik(robot, target, seed, robot.lower_limits + margin, robot.upper_limits - margin)
+    if residual > 1e-6:
+        p = split_pose(target)[0] if robot.task == "pose" else target
+        raise ConfigError(
+            key,
+            f"{what} (position {np.round(p, 4).tolist()} m) is out of reach from q_seed = "
+            f"{np.round(seed, 3).tolist()} (task error {residual:.3g} left)",
+        )
+    return q

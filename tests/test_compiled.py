@@ -19,7 +19,7 @@ from nnrobust.model.perturbation import perturb_inertias
 from .arms import arm, random_configurations
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
-from closed_loop import python_floor_loop  # noqa: E402  (the benchmark's Python twin of the floor)
+from closed_loop import cpp_floor_loop, python_floor_loop  # noqa: E402  (the benchmark's floors)
 
 from .problems import VERTICAL_GRAVITY, paper_robot
 
@@ -78,7 +78,7 @@ def test_the_floor_loop_is_the_python_loop(name, task):
     q0 = random_configurations(robot, 1, seed=2)[0]
     v0 = np.linspace(-0.5, 0.5, robot.nq)
     loaded = compiled.load_model(robot.model, robot.task_frame)
-    ours = compiled.floor_loop(loaded, q0, v0, 200, 1e-3)
+    ours = cpp_floor_loop(loaded, q0, v0, 200, 1e-3)
     theirs = python_floor_loop(robot.model, robot.task_frame, q0, v0, 200, 1e-3)
     np.testing.assert_allclose(ours, theirs, rtol=0, atol=1e-10)
 

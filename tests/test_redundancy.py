@@ -204,7 +204,8 @@ def test_ik_reaches_a_reachable_target_from_another_seed(name, task):
 
 def test_initial_state_keeps_a_margin_inside_the_limits():
     """A q_seed on a joint limit: the initial inverse kinematics starts 2 % of the range inside."""
-    from nnrobust.experiment import IK_LIMIT_MARGIN, build
+    from nnrobust.experiment import build
+    from nnrobust.ik import IK_LIMIT_MARGIN
     from nnrobust.presets import load_preset
 
     setup = build(

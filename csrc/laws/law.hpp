@@ -12,6 +12,7 @@
 
 #include "../controllers.hpp"
 #include "../fields.hpp"
+#include "../registry.hpp"
 
 namespace nnrobust {
 
@@ -38,15 +39,14 @@ struct Law {
   virtual Output compute(double t, const Vector &q, const Vector &v, const Vector &z) = 0;
 };
 
-using LawFactory = std::unique_ptr<Law> (*)(const LawParams &, LawContext &);
-bool register_law(const char *name, LawFactory factory);
-LawFactory find_law(const std::string &name);  // nullptr when none has this name
+// The laws by the name their Python twin declares (Law.twin, or the controller class's twin)
+using LawRegistry = Registry<Law, const LawParams &, LawContext &>;
 
 }  // namespace nnrobust
 
 // Registers `Class` (constructed as Class(const LawParams &, LawContext &)) under `name`.
 #define NNROBUST_LAW(name, Class)                                                                            \
-  static const bool nnrobust_registered_##Class = ::nnrobust::register_law(                                  \
+  static const bool nnrobust_registered_##Class = ::nnrobust::LawRegistry::add(                                      \
       name, [](const ::nnrobust::LawParams &p, ::nnrobust::LawContext &c) -> std::unique_ptr<::nnrobust::Law> { \
         return std::make_unique<Class>(p, c);                                                                \
       })

@@ -60,7 +60,6 @@ struct RBFNN : Law {
     double lam2 = 0.0;
     const Matrix J_pinv = r.ts.J.transpose() * c.shared.pinv_factor(r.ts.J, lam2);
     out.tau = c.shared.eq9_torque(q, v, r, J_pinv, u0, Kp, Kv, k);
-    out.damping = lam2;
     out.signals.resize(3);
     out.signals << eta_hat.norm(), size, lam2;
     return out;

@@ -137,7 +137,6 @@ struct SlotineLi : Law {
     out.tau = Y * z + armature.cwiseProduct(a_r) - K_D.cwiseProduct(s) + c.shared.nominal_friction(v);
     out.z = z + c.spec.period * (-gamma * (Y.transpose() * s) - leakage * (z - theta0));
     if (project) out.z = projected(out.z);
-    out.damping = lam2;
     out.signals.resize(3);
     out.signals << (z - theta0).norm(), s.norm(), min_inertia_eigenvalue(q, z);
     return out;

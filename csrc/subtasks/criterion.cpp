@@ -6,18 +6,6 @@
 
 namespace nnrobust {
 
-namespace {
-std::map<std::string, CriterionFactory> &registry() {
-  static std::map<std::string, CriterionFactory> criteria;
-  return criteria;
-}
-}  // namespace
-
-bool register_criterion(const char *name, CriterionFactory factory) {
-  registry()[name] = factory;
-  return true;
-}
-
 void DetAtQ::need() {
   if (done) return;
   det = det_small(ts.J * ts.J.transpose());
@@ -31,9 +19,9 @@ Criteria::Criteria(const LoopSpec &spec) : weights(spec.criterion_weights) {
   if (spec.criterion_params.size() != spec.criteria.size())
     throw std::invalid_argument("LoopSpec.criterion_params: one table of fields per criterion");
   for (size_t i = 0; i < spec.criteria.size(); ++i) {
-    const auto found = registry().find(spec.criteria[i]);
-    if (found == registry().end()) throw std::invalid_argument("LoopSpec.criteria: unknown criterion " + spec.criteria[i]);
-    terms.push_back(found->second(Fields{"LoopSpec.criterion_params: the criterion " + spec.criteria[i],
+    const auto factory = CriterionRegistry::find(spec.criteria[i]);
+    if (!factory) throw std::invalid_argument("LoopSpec.criteria: unknown criterion " + spec.criteria[i]);
+    terms.push_back(factory(Fields{"LoopSpec.criterion_params: the criterion " + spec.criteria[i],
                                          spec.criterion_params[i]}));
   }
   if (weights.size() != static_cast<long>(terms.size()))

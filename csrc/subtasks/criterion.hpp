@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "../fields.hpp"
+#include "../registry.hpp"
 
 namespace nnrobust {
 
@@ -40,8 +41,8 @@ struct Criterion {
   virtual Vector gradient(const Vector &q, DetAtQ &det) const = 0;
 };
 
-using CriterionFactory = std::unique_ptr<Criterion> (*)(const Fields &);
-bool register_criterion(const char *name, CriterionFactory factory);
+// The criteria by their configuration name
+using CriterionRegistry = Registry<Criterion, const Fields &>;
 
 // WeightedCriteria: sum_i w_i h_i over LoopSpec.criteria with their fields (criterion_params)
 struct Criteria {
@@ -58,7 +59,7 @@ struct Criteria {
 
 // Registers `Class` (constructed as Class(const Fields &)) under the criterion name `name`.
 #define NNROBUST_CRITERION(name, Class)                                                                \
-  static const bool nnrobust_registered_##Class = ::nnrobust::register_criterion(                        \
+  static const bool nnrobust_registered_##Class = ::nnrobust::CriterionRegistry::add(                      \
       name, [](const ::nnrobust::Fields &f) -> std::unique_ptr<::nnrobust::Criterion> {                  \
         return std::make_unique<Class>(f);                                                             \
       })

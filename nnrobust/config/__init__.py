@@ -3,6 +3,7 @@ configuration implies), :mod:`.toml_io` (experiment files in and out, with overr
 provenance) and :mod:`.checks` (checks that only check). Everything is importable from here.
 """
 
+from ..trajectories.piecewise import MAX_WAYPOINTS, MIN_MOVE_TIME  # the paths' own limits
 from .checks import (
     CLASS_PATTERN,
     FILLED_LISTS,
@@ -29,8 +30,6 @@ from .schema import (
     KEY_ALIASES,
     MAX_PATH_EXTENT,
     MAX_PATH_RATE,
-    MAX_WAYPOINTS,
-    MIN_MOVE_TIME,
     TRAJECTORY_KINDS,
     USER_PARTS,
     ControllerConfig,

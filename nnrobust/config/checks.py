@@ -12,12 +12,11 @@ from ..exceptions import ConfigError
 from ..model.tasks import TASK_KINDS
 from ..plant.disturbance import DISTURBANCE_KINDS
 from ..plant.mujoco_engine import ENGINES, MUJOCO_INTEGRATORS
+from ..trajectories import PATH_KINDS
 from .schema import (
     EQ9_KINDS,
     MAX_PATH_EXTENT,
     MAX_PATH_RATE,
-    MAX_WAYPOINTS,
-    MIN_MOVE_TIME,
     TRAJECTORY_KINDS,
     USER_PARTS,
     ControllerConfig,
@@ -61,52 +60,9 @@ def _check_extents(tc: TrajectoryConfig) -> None:
 
 
 def _check_path(tc: TrajectoryConfig) -> None:
-    """Check the path's own keys."""
+    """Check the path's own keys (its declaration's checks, nnrobust/trajectories/)."""
     _check_extents(tc)
-    if tc.kind == "ellipse":
-        m_path = len(tc.center)
-        for path, values in (("trajectory.axis_a", tc.axis_a), ("trajectory.axis_b", tc.axis_b)):
-            if len(values) != m_path:
-                raise ConfigError(path, f"has {len(values)} entries, trajectory.center has {m_path}")
-        return
-    if tc.kind == "point_to_point":
-        if tc.goal is None:
-            raise ConfigError(
-                "trajectory.goal", "a point_to_point move needs its goal, e.g. goal = [0.5, 0.1, 0.4]"
-            )
-        if tc.start is not None and len(tc.start) != len(tc.goal):
-            raise ConfigError(
-                "trajectory.start", f"has {len(tc.start)} entries, trajectory.goal has {len(tc.goal)}"
-            )
-        if not tc.move_time >= MIN_MOVE_TIME:
-            raise ConfigError(
-                "trajectory.move_time", f"must be at least {MIN_MOVE_TIME:g} s, got {tc.move_time}"
-            )
-        return
-    points, times = tc.waypoints, tc.waypoint_times
-    if not points or len(points) < 2:
-        raise ConfigError(
-            "trajectory.waypoints",
-            "a waypoint path needs at least 2 points, e.g. waypoints = [[0.4, 0.0, 0.5], [0.4, 0.2, 0.5]]",
-        )
-    if len(points) > MAX_WAYPOINTS:
-        raise ConfigError("trajectory.waypoints", f"{len(points)} points; at most {MAX_WAYPOINTS}")
-    sizes = {len(p) for p in points}
-    if len(sizes) != 1:
-        raise ConfigError(
-            "trajectory.waypoints", f"every point needs as many entries; got sizes {sorted(sizes)}"
-        )
-    if times is None or len(times) != len(points):
-        raise ConfigError(
-            "trajectory.waypoint_times",
-            f"needs one time per waypoint ({len(points)}), got {None if times is None else len(times)}",
-        )
-    if times[0] < 0 or any(b - a < MIN_MOVE_TIME for a, b in zip(times, times[1:])):
-        raise ConfigError(
-            "trajectory.waypoint_times",
-            f"must start at 0 or later and increase by at least "
-            f"{MIN_MOVE_TIME:g} s from one point to the next, got {times}",
-        )
+    PATH_KINDS[tc.kind].check(tc)
 
 
 def _non_negative(path: str, value: float) -> None:
@@ -248,12 +204,7 @@ def inert_keys(config: ExperimentConfig) -> dict[str, str]:
         mark(["simulation.max_step_rotation"], fixed)
     if sim.integrator == "solve_ivp":
         mark(["simulation.substeps", "simulation.integration_step"], "simulation.integrator = 'solve_ivp'")
-    path_keys = {
-        "ellipse": ["center", "axis_a", "axis_b", "omega", "phase"],
-        "point_to_point": ["start", "goal", "move_time"],
-        "waypoints": ["waypoints", "waypoint_times"],
-        "custom": ["class", "params"],
-    }
+    path_keys = {name: kind.keys for name, kind in PATH_KINDS.items()} | {"custom": ("class", "params")}
     for other, keys in path_keys.items():
         if other != tc.kind:
             mark([f"trajectory.{k}" for k in keys], f"trajectory.kind = {tc.kind!r}")

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 from ..controllers.nn_compensator import DEFAULTS as NN_DEFAULTS
 from ..simulation import MAX_STEP_ROTATION
+from ..trajectories import PATH_KINDS
 
 
 @dataclass
@@ -269,27 +270,18 @@ class TrajectoryConfig:
     @property
     def dimension(self) -> int:
         """Entries of a path point: 2 (planar) or 3."""
-        if self.kind == "point_to_point" and self.goal is not None:
-            return len(self.goal)
-        if self.kind == "waypoints" and self.waypoints:
-            return len(self.waypoints[0])
-        return len(self.center)
+        kind = PATH_KINDS.get(self.kind)
+        return kind.dimension(self) if kind is not None else len(self.center)
 
 
-TRAJECTORY_KINDS = ("ellipse", "point_to_point", "waypoints", "custom")
-
-MAX_WAYPOINTS = 10_000
-
+TRAJECTORY_KINDS = (*PATH_KINDS, "custom")
+"""The choices of ``trajectory.kind``: the shipped paths (their declarations) and a user's class."""
 
 MAX_PATH_EXTENT = 1e3
 """Largest coordinate of a path point or axis [m] (an arm's workspace is metres)."""
 
 MAX_PATH_RATE = 1e4
 """Largest angular frequency of a path or of its rocking [rad/s]."""
-
-MIN_MOVE_TIME = 1e-3
-"""Shortest point-to-point move or waypoint interval [s]: a quintic over less than a millisecond
-asks for more than any actuator gives, and below about 1e-60 s its coefficients overflow."""
 
 
 @dataclass
@@ -617,8 +609,8 @@ def default_criteria(n: int, task: str) -> list[str]:
 
 def path_key(tc: TrajectoryConfig) -> str:
     """The key that places the path: center, goal, waypoints (or class, for a user's)."""
-    keys = {"ellipse": "center", "point_to_point": "goal", "waypoints": "waypoints", "custom": "class"}
-    return keys.get(tc.kind, "center")
+    kind = PATH_KINDS.get(tc.kind)
+    return kind.keys[0] if kind is not None else "class" if tc.kind == "custom" else "center"
 
 
 _FIELD_NAMES: dict[typing.Any, list[str]] = {}

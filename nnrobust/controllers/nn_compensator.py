@@ -110,6 +110,44 @@ class NNCompensator:
         self.L = self.basis.size
 
     signal_names = ("rho_hat", "eps", "z_norm")
+    twin = "nn_compensator"  # csrc/controllers/nn_compensator.cpp
+    twin_fields = (
+        "BtP",
+        "centers",
+        "inv2w2",
+        "bias",
+        "joint_input",
+        "corrected",
+        "F",
+        "gamma",
+        "eps_min",
+        "sigma",
+    )
+
+    @property
+    def centers(self) -> np.ndarray:
+        """The basis's centres, dim(s) x K."""
+        return self.basis.grid
+
+    @property
+    def inv2w2(self) -> np.ndarray:
+        """1 / (2 width^2) of each input coordinate."""
+        return self.basis.inverse_two_width_sq
+
+    @property
+    def bias(self) -> bool:
+        """Whether phi has its constant unit."""
+        return self.basis.bias
+
+    @property
+    def joint_input(self) -> bool:
+        """Whether s = [q, q'] (else [e, e'])."""
+        return self.basis_input == "joint"
+
+    @property
+    def corrected(self) -> bool:
+        """Whether u_0 is the corrected form of eq. (15) (else the printed one)."""
+        return self.law == "corrected"
 
     @property
     def state_size(self) -> int:

@@ -163,11 +163,9 @@ class Law:
         """The twin's fields of a built controller, each as a 2-D float array (a number 1 x 1,
         a vector k x 1): what the compiled law reads by name (csrc/laws/law.hpp).
         """
-        out = {}
-        for name in self.twin_fields:
-            value = np.asarray(getattr(controller, name), dtype=float)
-            out[name] = np.ascontiguousarray(value.reshape(-1, 1) if value.ndim < 2 else value)
-        return out
+        from ..twins import twin_values
+
+        return twin_values(controller, self.twin_fields)
 
 
 LAWS: dict[str, Law] = {}

@@ -34,6 +34,8 @@ class SlidingModeCompensator:
 
     state_size = 0
     signal_names = ()
+    twin = "sliding_mode"  # csrc/controllers/sliding_mode.cpp
+    twin_fields = ("BtP", "gain", "boundary")
 
     def __post_init__(self):
         if self.gain < 0 or self.boundary <= 0:

@@ -17,6 +17,8 @@ from .pseudoinverse import DampedPseudoInverse, project_null_space
 class RobustTerm(Protocol):
     """A robust term u_0 of eq. (9) (NNCompensator, SlidingModeCompensator, the RBF network's):
     ``output(q, q', y, z, T) -> (u_0, z_next, signals)`` with state z of ``state_size`` entries.
+    A shipped term with a compiled twin (csrc/controllers/) also names it, ``twin``, and lists
+    the attributes it reads, ``twin_fields``.
     """
 
     @property
@@ -53,6 +55,9 @@ class TaskSpaceController(Controller):
         pinv: the damped pseudo-inverse.
 
     """
+
+    twin = "task_space"  # csrc/controllers/task_space.cpp, with its robust term's twin
+    twin_fields = ("Kp", "Kv", "k")
 
     def __init__(
         self,
@@ -147,6 +152,8 @@ class TaskSpacePD(Controller):
     """
 
     signal_names = ("damping",)
+    twin = "task_space_pd"  # csrc/controllers/task_space.cpp
+    twin_fields = ("Kp", "Kd", "null_damping")
 
     def __init__(
         self,

@@ -41,12 +41,10 @@ class CriterionKind:
 
     def twin_values(self, criterion: Criterion) -> dict[str, np.ndarray]:
         """The twin's fields as 2-D float arrays (what LoopSpec.criterion_params carries)."""
+        from ..twins import field_array
+
         assert self.twin_fields is not None, self.name
-        out = {}
-        for key, value in self.twin_fields(criterion).items():
-            array = np.asarray(value, dtype=float)
-            out[key] = array.reshape(-1, 1) if array.ndim < 2 else array
-        return out
+        return {key: field_array(value) for key, value in self.twin_fields(criterion).items()}
 
 
 CRITERION_KINDS: dict[str, CriterionKind] = {}

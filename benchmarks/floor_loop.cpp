@@ -1,10 +1,16 @@
 // The bare C++ closed loop that the compiled backend is measured against: per 1 ms control step,
 // one RNEA (the controller's M-hat a + N-hat), one frame-kinematics pass (x, J, J'q') and four ABA
 // calls (RK4 of the plant, torque held). It controls nothing useful; it is the cost floor of a step.
-#include "model.hpp"
-#include "pin_calls.hpp"
+// A benchmark target (benchmarks/closed_loop.py), built as its own module, nnrobust._floor_loop,
+// outside the product module nnrobust._loop; it takes the LoadedModel that _loop builds.
+#include <nanobind/eigen/dense.h>
+#include <nanobind/nanobind.h>
+
+#include "../csrc/model.hpp"
+#include "../csrc/pin_calls.hpp"
 
 namespace nnrobust {
+namespace {
 
 // Returns the final [q, v] after `steps` control steps of length `dt`.
 Vector floor_loop(LoadedModel &m, const Vector &q0, const Vector &v0, long steps, double dt) {
@@ -39,4 +45,13 @@ Vector floor_loop(LoadedModel &m, const Vector &q0, const Vector &v0, long steps
   return out;
 }
 
+}  // namespace
 }  // namespace nnrobust
+
+NB_MODULE(_floor_loop, m) {
+  namespace nb = nanobind;
+  m.doc() = "The bare C++ loop that benchmarks/closed_loop.py measures the compiled loop against.";
+  m.def("floor_loop", &nnrobust::floor_loop, nb::arg("model"), nb::arg("q0"), nb::arg("v0"), nb::arg("steps"),
+        nb::arg("dt"), nb::call_guard<nb::gil_scoped_release>(),
+        "RNEA + frame kinematics + 4 ABA per step on a nnrobust._loop.LoadedModel; returns the final [q, v].");
+}

@@ -1,0 +1,21 @@
+"""Desired task trajectories x_d(t) with analytic derivatives: one module per shipped path, each
+declared beside its class (:data:`PATH_KINDS`), and the pose trajectory over any of them.
+"""
+
+from .base import Trajectory
+from .ellipse import EllipseTrajectory
+from .piecewise import PiecewisePolynomialPath, quintic_point_to_point, spline_through
+from .pose import PoseTrajectory, PositionPath
+from .registry import PATH_KINDS, PathKind
+
+__all__ = [
+    "PATH_KINDS",
+    "EllipseTrajectory",
+    "PathKind",
+    "PiecewisePolynomialPath",
+    "PoseTrajectory",
+    "PositionPath",
+    "Trajectory",
+    "quintic_point_to_point",
+    "spline_through",
+]

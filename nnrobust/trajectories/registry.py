@@ -1,0 +1,50 @@
+"""The shipped position paths, each declared once beside its class: its name in
+``trajectory.kind``, what it is, the keys it reads, their checks, and how an experiment builds
+it. The configuration's choices and checks, the keys a configuration leaves inert, the builder
+and docs/robots.md's table read these declarations. A path's compiled twin is declared on its
+class, ``twin`` and ``twin_fields``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from .base import Trajectory
+
+
+@dataclass(frozen=True)
+class PathKind:
+    """A shipped position path.
+
+    Attributes:
+        name: its name in ``trajectory.kind``.
+        description: x_d(t) in one line (docs, errors).
+        keys: the ``[trajectory]`` keys it reads; the first places the path (errors about the
+            path's size name it).
+        keys_doc: the keys with their meaning, one line (docs).
+        check: ``check(trajectory_config)``: its keys' values (a ConfigError names the key).
+        dimension: ``dimension(trajectory_config)``: entries of a path point (2 or 3 are valid).
+        build: ``build(config, robot)`` -> the path.
+
+    """
+
+    name: str
+    description: str
+    keys: tuple[str, ...]
+    keys_doc: str
+    check: Callable[[Any], None]
+    dimension: Callable[[Any], int]
+    build: Callable[[Any, Any], Trajectory]
+
+
+PATH_KINDS: dict[str, PathKind] = {}
+"""The shipped paths by name, in the order their modules declare them."""
+
+
+def declare(*kinds: PathKind) -> None:
+    """Register paths (in the module that defines their class)."""
+    for kind in kinds:
+        assert kind.name not in PATH_KINDS, kind.name
+        PATH_KINDS[kind.name] = kind
