@@ -1,69 +1,57 @@
-"""Build an experiment from its configuration and run it: ``run_experiment(config) -> Result``."""
+"""Build an experiment from its configuration and run it: ``run_experiment(config) -> Result``.
+
+Each part is built in its own room: the plant in nnrobust/plant/build.py, the nominal model in
+nnrobust/model/nominal.py, the trajectory in nnrobust/trajectories/build.py, the criterion in
+nnrobust/subtasks/build.py and the controller in nnrobust/controllers/build.py. This module
+composes them, with what needs several at once: the initial state, the workspace, stiffness and
+memory checks, the plant's step and the backend.
+"""
 
 from __future__ import annotations
 
 import dataclasses
-import functools
 import hashlib
 import time
 import warnings
-from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
 import pinocchio as pin
 
-from . import user_parts
 from .config import (
     MAX_SUBSTEPS,
     ExperimentConfig,
-    default_criteria,
-    nominal_kind,
     path_key,
     provenance_header,
     step_rotation_limit,
 )
-from .config.arrays import joint_vector, per_joint
 from .controllers import (
-    AdditiveRBFBasis,
     Controller,
     ControllerContext,
     DampedPseudoInverse,
-    NNCompensator,
-    SlidingModeCompensator,
-    TaskSpaceController,
-    TaskSpacePD,
 )
-from .controllers.basis import input_box
-from .controllers.custom import build_custom
-from .controllers.registry import registered_law
-from .controllers.task_space import sized_null_damping
+from .controllers.build import build_context, build_controller
 from .exceptions import ConfigError, ModelMismatch
-from .ik import finite_limits, reach, seed_configuration, solve_ik
+from .ik import reach, seed_configuration, solve_ik
 from .model import (
     DynamicsModel,
     PinocchioModel,
-    ThreeLinkParameters,
-    ThreeLinkPlanarModel,
     load_robot,
 )
-from .model.perturbation import bodies_with_mass, perturb_inertias
+from .model.nominal import build_nominal
 from .model.tasks import pose_vector, split_pose
 from .plant import (
-    Friction,
-    JointStops,
     Plant,
-    Sensor,
-    SinusoidalDisturbance,
-    scaled_friction,
-    torque_scale,
 )
-from .plant.disturbance import DISTURBANCE_KINDS, Disturbance, ScaledDisturbance
-from .plant.loads import ExternalLoads, parse_loads
-from .plant.scaling import PLAUSIBLE_EFFORT_RATIO, implausible_efforts, usable
+from .plant.build import (
+    build_engine,
+    build_plant,
+)
+from .plant.scaling import PLAUSIBLE_EFFORT_RATIO, implausible_efforts
 from .results import Result
 from .simulation import simulate
-from .subtasks import CRITERIA, CRITERION_KINDS, Criterion, WeightedCriteria
+from .subtasks import Criterion
+from .subtasks.build import build_criterion
 from .trajectories import Trajectory
 from .trajectories.build import build_trajectory
 
@@ -84,393 +72,6 @@ class Setup:
     controller_context: ControllerContext | None = None
     substeps: int = 1
     """Plant steps per control period: simulation.substeps, or chosen (:func:`plant_step`)."""
-
-
-def build_torque_limits(config: ExperimentConfig, robot: PinocchioModel) -> np.ndarray | None:
-    """Effort limit per joint [N m or N] (inf where the URDF has none), or None (ideal actuators)."""
-    limits = config.plant.torque_limits
-    if limits == "none":
-        return None
-    if limits == "urdf":
-        effort = robot.effort_limits
-        return np.where(usable(effort), effort, np.inf)
-    return joint_vector("plant.torque_limits", limits, robot.nq)
-
-
-def build_stops(
-    config: ExperimentConfig, robot: PinocchioModel, tau_ref: Callable[[], np.ndarray] | None = None
-) -> JointStops | None:
-    """Hard stops at the URDF's position limits, stiffness relative to each joint's torque scale
-    (``tau_ref()``, default :func:`torque_scale`).
-    """
-    pc = config.plant
-    if not pc.joint_stops:
-        return None
-    lower, upper = finite_limits(robot.lower_limits), finite_limits(robot.upper_limits)
-    scale = torque_scale(robot) if tau_ref is None else tau_ref()
-    return JointStops(lower, upper, pc.joint_stop_stiffness * scale, pc.joint_stop_damping)
-
-
-def build_sensor(config: ExperimentConfig, n: int) -> Sensor:
-    """Noise and quantisation of the measurements, one value for all joints or one per joint."""
-    se = config.sensing
-    return Sensor(
-        per_joint("sensing.position_noise", se.position_noise, n),
-        per_joint("sensing.velocity_noise", se.velocity_noise, n),
-        per_joint("sensing.encoder_resolution", se.encoder_resolution, n),
-        se.seed,
-    )
-
-
-def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
-    """True model, friction (URDF or scaled to the robot, unless given), disturbance, actuator
-    limits, joint stops, sensors and delay.
-    """
-    n, pc = robot.nq, config.plant
-    tau_ref = functools.cache(lambda: torque_scale(robot))  # once (with its warning), if asked for
-    base = (
-        scaled_friction(robot, pc.viscous_level, pc.coulomb_level, tau_ref())
-        if pc.friction == "scaled"
-        else Friction(robot.viscous_friction, robot.coulomb_friction)
-    )
-    scale = pc.friction_scale * _joint_scales("plant.joint_friction_scales", pc.joint_friction_scales, n)
-    coulomb = scale * joint_vector("plant.coulomb_friction", pc.coulomb_friction, n, base.coulomb)
-    friction = Friction(
-        scale * joint_vector("plant.viscous_friction", pc.viscous_friction, n, base.viscous),
-        coulomb,
-        static=pc.stiction * coulomb,
-    )
-    kind = pc.disturbance
-    disturbance: Disturbance
-    if kind == "auto":  # the paper's tau_d belongs to the paper's arm
-        kind = "paper" if config.robot.source == "three_link_planar" else "scaled"
-    if kind == "custom":
-        disturbance = user_parts.build_disturbance(pc.disturbance_class or "", pc.disturbance_params, robot)
-    else:
-        disturbance = DISTURBANCE_KINDS[kind].build(config, robot, tau_ref)
-    rows = pc.disturbance_scale * _joint_scales(
-        "plant.joint_disturbance_scales", pc.joint_disturbance_scales, n
-    )
-    if not isinstance(disturbance, SinusoidalDisturbance):
-        for key, value, default in (
-            ("disturbance_omega_scale", pc.disturbance_omega_scale, 1.0),
-            ("disturbance_phase_shift", pc.disturbance_phase_shift, 0.0),
-        ):
-            if value != default:
-                raise ConfigError(f"plant.{key}", "acts on sinusoids; a custom disturbance has none")
-        if np.any(rows != 1.0):
-            disturbance = ScaledDisturbance(disturbance, rows)
-    elif np.any(rows != 1.0) or pc.disturbance_omega_scale != 1.0 or pc.disturbance_phase_shift != 0.0:
-        disturbance = SinusoidalDisturbance(
-            disturbance.amplitude * rows[:, None],
-            disturbance.omega * pc.disturbance_omega_scale,
-            disturbance.phase + pc.disturbance_phase_shift,
-        )
-    true = true_model(config, robot)
-    loads = parse_loads(pc.loads, config.simulation.control_period, n)
-    return Plant(
-        true,
-        friction,
-        disturbance,
-        build_torque_limits(config, robot),
-        build_stops(config, robot, tau_ref),
-        build_sensor(config, n),
-        config.sensing.delay,
-        loads=loads,
-        payload_inertias=payload_inertias(true, loads),
-    )
-
-
-def payload_inertias(true: PinocchioModel, loads: ExternalLoads) -> tuple[pin.Inertia, ...]:
-    """The inertia of the joint that carries the task frame after each payload change of
-    ``[[plant.loads]]`` (the sphere of ``plant.payload`` with that mass, added to the joint's own),
-    and last its inertia before any change.
-    """
-    if not loads.payloads:
-        return ()
-    joint = true.model.frames[true.frame_id].parentJoint
-    before = pin.Inertia(true.model.inertias[joint])
-    after = [before + payload(true.model, true.task_frame, c.mass)[1] for c in loads.payloads]
-    return (*after, before)
-
-
-def _joint_scales(path: str, scales: list[float] | None, n: int) -> np.ndarray:
-    """One factor per joint, the entries not given 1; more entries than joints are refused."""
-    if scales is None:
-        return np.ones(n)
-    return np.array(_padded(path, scales, n, f"has {len(scales)} entries; the robot has {n} joints"))
-
-
-PAYLOAD_RADIUS = 0.02
-"""[m] ``plant.payload`` is a solid sphere of this radius on the task frame's origin."""
-
-
-def payload(model: pin.Model, task_frame: str, mass: float) -> tuple[int, pin.Inertia]:
-    """``plant.payload``: the joint that carries it (the task frame's parent) and its inertia in
-    that joint's frame, a solid sphere of PAYLOAD_RADIUS centred on the task frame's origin.
-    """
-    frame = model.frames[model.getFrameId(task_frame)]
-    sphere = np.eye(3) * 0.4 * mass * PAYLOAD_RADIUS**2
-    return frame.parentJoint, pin.Inertia(mass, frame.placement.translation, sphere)
-
-
-def true_model(config: ExperimentConfig, robot: PinocchioModel) -> PinocchioModel:
-    """The true robot's dynamics: the robot with ``plant.armature`` on the diagonal of M and
-    ``plant.payload`` carried by the task frame's joint (a copy, also when a payload change of
-    ``[[plant.loads]]`` will alter it; the nominal model knows neither).
-    """
-    pc = config.plant
-    changes = any(entry.get("kind") == "payload" for entry in pc.loads or ())
-    if pc.armature is None and pc.payload == 0.0 and not changes:
-        return robot
-    model = pin.Model(robot.model)
-    if pc.armature is not None:
-        model.armature = joint_vector("plant.armature", pc.armature, robot.nq)
-    if pc.payload > 0.0:
-        joint, inertia = payload(model, robot.task_frame, pc.payload)
-        model.inertias[joint] = model.inertias[joint] + inertia
-    true = PinocchioModel(model, robot.task_frame, robot.task, robot.name)
-    true.urdf_text = robot.urdf_text
-    return true
-
-
-def build_engine(config: ExperimentConfig, plant: Plant, substeps: int) -> None:
-    """Give the plant MuJoCo as its engine (``plant.engine = "mujoco"``), built and audited."""
-    if config.plant.engine != "mujoco":
-        return
-    from .plant.mujoco_engine import build_mujoco_plant
-
-    pc, true = config.plant, plant.model
-    assert isinstance(true, PinocchioModel)  # build_plant's true_model
-    assert plant.loads is not None  # Plant sets an empty one
-    if plant.loads.wrenches or plant.loads.payloads:
-        kind = "wrench" if plant.loads.wrenches else "payload"
-        raise ConfigError(
-            "plant.loads",
-            f"a {kind!r} load has no MuJoCo twin yet: use plant.engine = 'pinocchio' (step and impulse "
-            "loads run on both engines)",
-        )
-    load = None
-    if pc.payload > 0.0:  # on the body of the task frame's joint, where Pinocchio's true model has it
-        joint, inertia = payload(true.model, true.task_frame, pc.payload)
-        load = (true.model.names[joint], inertia)
-    plant.engine = build_mujoco_plant(
-        true,
-        plant,
-        config.simulation.control_period,
-        substeps,
-        pc.mujoco_integrator,
-        true.model.armature,
-        pc.stiction,
-        load,
-    )
-
-
-def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsModel:
-    """The controller's model: closed form with beta-hat, p-hat, or the robot's own (perturbed) model;
-    the true model itself for computed-torque control.
-    """
-    nc = config.nominal
-    if config.controller.kind == "computed-torque":  # the true model, armature included
-        exact = true_model(config, robot)
-        return PinocchioModel(exact.model, robot.task_frame, robot.task, robot.name)
-    if nominal_kind(config) == "urdf":
-        if nc.perturbed:
-            model = perturb_inertias(
-                robot.model, nc.mass_scale, nc.inertia_scale, nc.relative_error, nc.com_error, nc.seed
-            )
-            if nc.factors is not None:
-                model = _with_factors(model, nc.factors)
-        else:
-            model = robot.model  # the same Pinocchio model (read-only), with its own Data
-        return PinocchioModel(model, robot.task_frame, robot.task, robot.name)
-    if robot.task != "planar":
-        raise ConfigError("nominal.kind", "'closed-form' is the planar three-link model; use 'urdf'")
-    true = ThreeLinkParameters.from_pinocchio(robot.model, robot.task_frame)
-    beta = true.beta if nc.beta is None else tuple(joint_vector("nominal.beta", nc.beta, 3))
-    p = true.p if nc.p is None else tuple(joint_vector("nominal.p", nc.p, 3))
-    if nc.relative_error:
-        drawn = 1 + np.random.default_rng(nc.seed).uniform(
-            -nc.relative_error, nc.relative_error, CLOSED_FORM_FACTORS
-        )
-        beta, p = tuple(np.multiply(beta, drawn[:3])), tuple(np.multiply(p, drawn[3:]))
-    if nc.factors is not None:
-        given = _padded(
-            "nominal.factors",
-            nc.factors,
-            CLOSED_FORM_FACTORS,
-            f"the closed-form model has {CLOSED_FORM_FACTORS} parameters (beta_1..3, p_1..3); got "
-            f"{len(nc.factors)} factors",
-        )
-        beta, p = tuple(np.multiply(beta, given[:3])), tuple(np.multiply(p, given[3:]))
-    return ThreeLinkPlanarModel(
-        ThreeLinkParameters(beta, p, true.lengths, true.gamma, true.gravity),
-        joint_names=robot.joint_names,
-    )
-
-
-CLOSED_FORM_FACTORS = 6
-"""Entries of ``nominal.factors`` on the closed-form model: beta-hat_1..3, p-hat_1..3."""
-
-
-def nominal_factor_count(config: ExperimentConfig) -> int:
-    """The entries of ``nominal.factors`` for this experiment's nominal model: the closed form's
-    beta-hat and p-hat, or two per body with mass of the robot's model (masses, then inertias),
-    which ``nominal.relative_error`` draws its factors for.
-    """
-    if nominal_kind(config) != "urdf":
-        return CLOSED_FORM_FACTORS
-    rc = config.robot
-    model = load_robot(rc.source, rc.task_frame, rc.task, None, rc.locked_joints, rc.chain).model
-    return 2 * len(bodies_with_mass(model))
-
-
-def _padded(path: str, factors: list[float], size: int, refusal: str) -> list[float]:
-    """A list of factors (``nominal.factors``, per-joint scales) with the entries not given as 1;
-    more than ``size`` is refused, the key ``path`` named with ``refusal``.
-    """
-    if len(factors) > size:
-        raise ConfigError(path, refusal)
-    return list(factors) + [1.0] * (size - len(factors))
-
-
-def _with_factors(model: pin.Model, factors: list[float]) -> pin.Model:
-    """The model with each body's mass and rotational inertia (about its centre of mass) times its
-    factor of ``nominal.factors``: the masses first, then the inertias, bodies with mass in order.
-    """
-    bodies = bodies_with_mass(model)
-    factors = _padded(
-        "nominal.factors",
-        factors,
-        2 * len(bodies),
-        f"the URDF model has {len(bodies)} bodies with mass: {2 * len(bodies)} factors, masses then "
-        f"inertias; got {len(factors)} factors",
-    )
-    out = pin.Model(model)
-    for i, j in enumerate(bodies):
-        body = model.inertias[j]
-        out.inertias[j] = pin.Inertia(
-            body.mass * factors[i],
-            np.asarray(body.lever),
-            np.asarray(body.inertia) * factors[len(bodies) + i],
-        )
-    return out
-
-
-def build_criterion(config: ExperimentConfig, robot: PinocchioModel) -> Criterion | None:
-    """Weighted sum of the named criteria, eq. (4), or None."""
-    sc = config.subtasks
-    names = default_criteria(robot.nq, robot.task) if sc.criteria is None else sc.criteria
-    if not names:
-        return None
-    unknown = [c for c in names if c not in CRITERIA and c != "custom"]
-    if unknown:
-        raise ConfigError("subtasks.criteria", f"unknown {unknown}; valid: {', '.join(CRITERIA)}, custom")
-    criteria = [
-        user_parts.build_criterion(sc.criterion_class or "", sc.criterion_params, robot)
-        if name == "custom"
-        else CRITERION_KINDS[name].build(config, robot)
-        for name in names
-    ]
-    return WeightedCriteria(criteria, sc.weights, sc.C)
-
-
-def build_basis(config: ExperimentConfig, robot: PinocchioModel, m: int) -> AdditiveRBFBasis:
-    """phi(s) over [q, q'] (joint limits, +-velocity_range) or [e, e'] (+-error_range)."""
-    nn = config.nn
-    low, high = input_box(
-        nn.basis_input, robot.lower_limits, robot.upper_limits, nn.velocity_range, nn.error_range, m
-    )
-    return AdditiveRBFBasis(low, high, nn.centers, nn.width, nn.bias)
-
-
-def build_nominal_friction(config: ExperimentConfig, n: int) -> Friction:
-    """F-hat as the nominal section declares it, compensated with controller.coulomb_smoothing."""
-    return Friction(
-        joint_vector("nominal.viscous_friction", config.nominal.viscous_friction, n, np.zeros(n)),
-        joint_vector("nominal.coulomb_friction", config.nominal.coulomb_friction, n, np.zeros(n)),
-        config.controller.coulomb_smoothing,
-    )
-
-
-def build_context(
-    config: ExperimentConfig,
-    robot: PinocchioModel,
-    nominal: DynamicsModel,
-    trajectory: Trajectory,
-    criterion: Criterion | None,
-    plant: Plant,
-    q0: np.ndarray,
-) -> ControllerContext:
-    """What a controller is built from (:class:`ControllerContext`): never the true plant's model."""
-    c = config.controller
-    return ControllerContext(
-        nominal=nominal,
-        trajectory=trajectory,
-        criterion=criterion,
-        period=config.simulation.control_period,
-        torque_limits=None if plant.torque_limit is None else plant.torque_limit.copy(),
-        q0=q0.copy(),
-        lower_limits=robot.lower_limits.copy(),
-        upper_limits=robot.upper_limits.copy(),
-        nominal_friction=build_nominal_friction(config, robot.nq),
-        null_space_gain=c.k,
-        pseudo_inverse=DampedPseudoInverse(c.pinv_threshold, c.pinv_max_damping),
-    )
-
-
-def build_controller(
-    config: ExperimentConfig,
-    robot: PinocchioModel,
-    nominal: DynamicsModel,
-    trajectory: Trajectory,
-    criterion: Criterion | None,
-    true_friction: Friction | None,
-    context: ControllerContext,
-) -> Controller:
-    """The control law named by controller.kind (computed-torque takes ``true_friction`` as F-hat;
-    a custom law is built from ``context``, and the PD's null-space damping sized from it).
-    """
-    c = config.controller
-    if c.kind == "custom":
-        return build_custom(c.class_ or "", c.params, context)
-    law = registered_law(c.kind)
-    if law is not None:
-        return law.build(context, c.params)
-    pinv = DampedPseudoInverse(c.pinv_threshold, c.pinv_max_damping)
-    if c.kind == "pd":
-        Kd = np.diag(c.pd_Kd)
-        damping = c.pd_null_damping
-        if damping is None:
-            damping = sized_null_damping(nominal, context.q0, Kd, context.period)
-        return TaskSpacePD(nominal, trajectory, np.diag(c.pd_Kp), Kd, damping, pinv)
-    Kp, Kv = np.diag(c.Kp), np.diag(c.Kv)
-    compensator: NNCompensator | SlidingModeCompensator | None = None
-    if c.kind == "nn":
-        nn = config.nn
-        compensator = NNCompensator(
-            Kp,
-            Kv,
-            build_basis(config, robot, trajectory.m),
-            nn.basis_input,
-            nn.F,
-            nn.gamma,
-            nn.eps0,
-            nn.eps_min,
-            nn.sigma,
-            nn.law,
-        )
-    elif c.kind == "sliding-mode":
-        compensator = SlidingModeCompensator(Kp, Kv, c.sliding_gain, c.sliding_boundary)
-    if c.kind == "computed-torque":
-        if true_friction is None:
-            raise ValueError("computed-torque needs the true friction")
-        nominal_friction = Friction(true_friction.viscous, true_friction.coulomb, c.coulomb_smoothing)
-    else:
-        nominal_friction = build_nominal_friction(config, robot.nq)
-    return TaskSpaceController(
-        nominal, trajectory, Kp, Kv, c.k, criterion, nominal_friction, compensator, pinv
-    )
 
 
 def initial_state(

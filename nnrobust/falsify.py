@@ -101,7 +101,7 @@ def searchable(sweep, base) -> tuple[Any, str]:
     """
     import copy
 
-    from .experiment import nominal_factor_count
+    from .model.nominal import nominal_factor_count
 
     spec = sweep.vary.get("nominal.relative_error")
     if spec is None:

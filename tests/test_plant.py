@@ -207,7 +207,7 @@ def test_a_payload_is_a_sphere_at_the_task_frame_in_the_true_plant_only(preset):
     gravity exactly m g through Jv; the controller's nominal model is unchanged."""
     import pinocchio as pin
 
-    from nnrobust.experiment import PAYLOAD_RADIUS
+    from nnrobust.plant.build import PAYLOAD_RADIUS
     from nnrobust.presets import load_preset
 
     base = load_preset(preset)

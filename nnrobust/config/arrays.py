@@ -22,3 +22,12 @@ def joint_vector(path: str, values, n: int, default: np.ndarray | None = None) -
 def per_joint(path: str, values: list[float], n: int) -> np.ndarray:
     """One value for every joint, or one per joint."""
     return np.full(n, float(values[0])) if len(values) == 1 else joint_vector(path, values, n)
+
+
+def padded(path: str, factors: list[float], size: int, refusal: str) -> list[float]:
+    """A list of factors (``nominal.factors``, per-joint scales) with the entries not given as 1;
+    more than ``size`` is refused, the key ``path`` named with ``refusal``.
+    """
+    if len(factors) > size:
+        raise ConfigError(path, refusal)
+    return list(factors) + [1.0] * (size - len(factors))

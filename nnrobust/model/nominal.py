@@ -1,0 +1,102 @@
+"""How an experiment builds the controller's nominal model from ``[nominal]``: the paper's closed
+form with beta-hat and p-hat, or the robot's own Pinocchio model (perturbed, or scaled by
+``nominal.factors``), or the true model for computed-torque control.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from ..config import ExperimentConfig, nominal_kind
+from ..config.arrays import joint_vector, padded
+from ..exceptions import ConfigError
+from .base import DynamicsModel
+from .loading import load_robot
+from .perturbation import bodies_with_mass, perturb_inertias
+from .pinocchio_model import PinocchioModel
+from .three_link import ThreeLinkParameters, ThreeLinkPlanarModel
+
+
+def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsModel:
+    """The controller's model: closed form with beta-hat, p-hat, or the robot's own (perturbed) model;
+    the true model itself for computed-torque control.
+    """
+    from ..plant.build import true_model
+
+    nc = config.nominal
+    if config.controller.kind == "computed-torque":  # the true model, armature included
+        exact = true_model(config, robot)
+        return PinocchioModel(exact.model, robot.task_frame, robot.task, robot.name)
+    if nominal_kind(config) == "urdf":
+        if nc.perturbed:
+            model = perturb_inertias(
+                robot.model, nc.mass_scale, nc.inertia_scale, nc.relative_error, nc.com_error, nc.seed
+            )
+            if nc.factors is not None:
+                model = _with_factors(model, nc.factors)
+        else:
+            model = robot.model  # the same Pinocchio model (read-only), with its own Data
+        return PinocchioModel(model, robot.task_frame, robot.task, robot.name)
+    if robot.task != "planar":
+        raise ConfigError("nominal.kind", "'closed-form' is the planar three-link model; use 'urdf'")
+    true = ThreeLinkParameters.from_pinocchio(robot.model, robot.task_frame)
+    beta = true.beta if nc.beta is None else tuple(joint_vector("nominal.beta", nc.beta, 3))
+    p = true.p if nc.p is None else tuple(joint_vector("nominal.p", nc.p, 3))
+    if nc.relative_error:
+        drawn = 1 + np.random.default_rng(nc.seed).uniform(
+            -nc.relative_error, nc.relative_error, CLOSED_FORM_FACTORS
+        )
+        beta, p = tuple(np.multiply(beta, drawn[:3])), tuple(np.multiply(p, drawn[3:]))
+    if nc.factors is not None:
+        given = padded(
+            "nominal.factors",
+            nc.factors,
+            CLOSED_FORM_FACTORS,
+            f"the closed-form model has {CLOSED_FORM_FACTORS} parameters (beta_1..3, p_1..3); got "
+            f"{len(nc.factors)} factors",
+        )
+        beta, p = tuple(np.multiply(beta, given[:3])), tuple(np.multiply(p, given[3:]))
+    return ThreeLinkPlanarModel(
+        ThreeLinkParameters(beta, p, true.lengths, true.gamma, true.gravity),
+        joint_names=robot.joint_names,
+    )
+
+
+CLOSED_FORM_FACTORS = 6
+"""Entries of ``nominal.factors`` on the closed-form model: beta-hat_1..3, p-hat_1..3."""
+
+
+def nominal_factor_count(config: ExperimentConfig) -> int:
+    """The entries of ``nominal.factors`` for this experiment's nominal model: the closed form's
+    beta-hat and p-hat, or two per body with mass of the robot's model (masses, then inertias),
+    which ``nominal.relative_error`` draws its factors for.
+    """
+    if nominal_kind(config) != "urdf":
+        return CLOSED_FORM_FACTORS
+    rc = config.robot
+    model = load_robot(rc.source, rc.task_frame, rc.task, None, rc.locked_joints, rc.chain).model
+    return 2 * len(bodies_with_mass(model))
+
+
+def _with_factors(model: pin.Model, factors: list[float]) -> pin.Model:
+    """The model with each body's mass and rotational inertia (about its centre of mass) times its
+    factor of ``nominal.factors``: the masses first, then the inertias, bodies with mass in order.
+    """
+    bodies = bodies_with_mass(model)
+    factors = padded(
+        "nominal.factors",
+        factors,
+        2 * len(bodies),
+        f"the URDF model has {len(bodies)} bodies with mass: {2 * len(bodies)} factors, masses then "
+        f"inertias; got {len(factors)} factors",
+    )
+    out = pin.Model(model)
+    for i, j in enumerate(bodies):
+        body = model.inertias[j]
+        out.inertias[j] = pin.Inertia(
+            body.mass * factors[i],
+            np.asarray(body.lever),
+            np.asarray(body.inertia) * factors[len(bodies) + i],
+        )
+    return out

@@ -1,0 +1,206 @@
+"""How an experiment builds its plant from ``[plant]`` and ``[sensing]``: the true robot (armature,
+payload), friction, disturbance (its declaration, nnrobust/plant/disturbance.py), actuator
+limits, joint stops, sensors, delay, loads, and MuJoCo as the engine when asked.
+"""
+
+from __future__ import annotations
+
+import functools
+from collections.abc import Callable
+
+import numpy as np
+import pinocchio as pin
+
+from .. import user_parts
+from ..config import ExperimentConfig
+from ..config.arrays import joint_vector, padded, per_joint
+from ..exceptions import ConfigError
+from ..ik import finite_limits
+from ..model import PinocchioModel
+from .disturbance import DISTURBANCE_KINDS, Disturbance, ScaledDisturbance, SinusoidalDisturbance
+from .friction import Friction
+from .limits import JointStops
+from .loads import ExternalLoads, parse_loads
+from .plant import Plant
+from .scaling import scaled_friction, torque_scale, usable
+from .sensing import Sensor
+
+
+def build_torque_limits(config: ExperimentConfig, robot: PinocchioModel) -> np.ndarray | None:
+    """Effort limit per joint [N m or N] (inf where the URDF has none), or None (ideal actuators)."""
+    limits = config.plant.torque_limits
+    if limits == "none":
+        return None
+    if limits == "urdf":
+        effort = robot.effort_limits
+        return np.where(usable(effort), effort, np.inf)
+    return joint_vector("plant.torque_limits", limits, robot.nq)
+
+
+def build_stops(
+    config: ExperimentConfig, robot: PinocchioModel, tau_ref: Callable[[], np.ndarray] | None = None
+) -> JointStops | None:
+    """Hard stops at the URDF's position limits, stiffness relative to each joint's torque scale
+    (``tau_ref()``, default :func:`torque_scale`).
+    """
+    pc = config.plant
+    if not pc.joint_stops:
+        return None
+    lower, upper = finite_limits(robot.lower_limits), finite_limits(robot.upper_limits)
+    scale = torque_scale(robot) if tau_ref is None else tau_ref()
+    return JointStops(lower, upper, pc.joint_stop_stiffness * scale, pc.joint_stop_damping)
+
+
+def build_sensor(config: ExperimentConfig, n: int) -> Sensor:
+    """Noise and quantisation of the measurements, one value for all joints or one per joint."""
+    se = config.sensing
+    return Sensor(
+        per_joint("sensing.position_noise", se.position_noise, n),
+        per_joint("sensing.velocity_noise", se.velocity_noise, n),
+        per_joint("sensing.encoder_resolution", se.encoder_resolution, n),
+        se.seed,
+    )
+
+
+def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
+    """True model, friction (URDF or scaled to the robot, unless given), disturbance, actuator
+    limits, joint stops, sensors and delay.
+    """
+    n, pc = robot.nq, config.plant
+    tau_ref = functools.cache(lambda: torque_scale(robot))  # once (with its warning), if asked for
+    base = (
+        scaled_friction(robot, pc.viscous_level, pc.coulomb_level, tau_ref())
+        if pc.friction == "scaled"
+        else Friction(robot.viscous_friction, robot.coulomb_friction)
+    )
+    scale = pc.friction_scale * _joint_scales("plant.joint_friction_scales", pc.joint_friction_scales, n)
+    coulomb = scale * joint_vector("plant.coulomb_friction", pc.coulomb_friction, n, base.coulomb)
+    friction = Friction(
+        scale * joint_vector("plant.viscous_friction", pc.viscous_friction, n, base.viscous),
+        coulomb,
+        static=pc.stiction * coulomb,
+    )
+    kind = pc.disturbance
+    disturbance: Disturbance
+    if kind == "auto":  # the paper's tau_d belongs to the paper's arm
+        kind = "paper" if config.robot.source == "three_link_planar" else "scaled"
+    if kind == "custom":
+        disturbance = user_parts.build_disturbance(pc.disturbance_class or "", pc.disturbance_params, robot)
+    else:
+        disturbance = DISTURBANCE_KINDS[kind].build(config, robot, tau_ref)
+    rows = pc.disturbance_scale * _joint_scales(
+        "plant.joint_disturbance_scales", pc.joint_disturbance_scales, n
+    )
+    if not isinstance(disturbance, SinusoidalDisturbance):
+        for key, value, default in (
+            ("disturbance_omega_scale", pc.disturbance_omega_scale, 1.0),
+            ("disturbance_phase_shift", pc.disturbance_phase_shift, 0.0),
+        ):
+            if value != default:
+                raise ConfigError(f"plant.{key}", "acts on sinusoids; a custom disturbance has none")
+        if np.any(rows != 1.0):
+            disturbance = ScaledDisturbance(disturbance, rows)
+    elif np.any(rows != 1.0) or pc.disturbance_omega_scale != 1.0 or pc.disturbance_phase_shift != 0.0:
+        disturbance = SinusoidalDisturbance(
+            disturbance.amplitude * rows[:, None],
+            disturbance.omega * pc.disturbance_omega_scale,
+            disturbance.phase + pc.disturbance_phase_shift,
+        )
+    true = true_model(config, robot)
+    loads = parse_loads(pc.loads, config.simulation.control_period, n)
+    return Plant(
+        true,
+        friction,
+        disturbance,
+        build_torque_limits(config, robot),
+        build_stops(config, robot, tau_ref),
+        build_sensor(config, n),
+        config.sensing.delay,
+        loads=loads,
+        payload_inertias=payload_inertias(true, loads),
+    )
+
+
+def payload_inertias(true: PinocchioModel, loads: ExternalLoads) -> tuple[pin.Inertia, ...]:
+    """The inertia of the joint that carries the task frame after each payload change of
+    ``[[plant.loads]]`` (the sphere of ``plant.payload`` with that mass, added to the joint's own),
+    and last its inertia before any change.
+    """
+    if not loads.payloads:
+        return ()
+    joint = true.model.frames[true.frame_id].parentJoint
+    before = pin.Inertia(true.model.inertias[joint])
+    after = [before + payload(true.model, true.task_frame, c.mass)[1] for c in loads.payloads]
+    return (*after, before)
+
+
+def _joint_scales(path: str, scales: list[float] | None, n: int) -> np.ndarray:
+    """One factor per joint, the entries not given 1; more entries than joints are refused."""
+    if scales is None:
+        return np.ones(n)
+    return np.array(padded(path, scales, n, f"has {len(scales)} entries; the robot has {n} joints"))
+
+
+PAYLOAD_RADIUS = 0.02
+"""[m] ``plant.payload`` is a solid sphere of this radius on the task frame's origin."""
+
+
+def payload(model: pin.Model, task_frame: str, mass: float) -> tuple[int, pin.Inertia]:
+    """``plant.payload``: the joint that carries it (the task frame's parent) and its inertia in
+    that joint's frame, a solid sphere of PAYLOAD_RADIUS centred on the task frame's origin.
+    """
+    frame = model.frames[model.getFrameId(task_frame)]
+    sphere = np.eye(3) * 0.4 * mass * PAYLOAD_RADIUS**2
+    return frame.parentJoint, pin.Inertia(mass, frame.placement.translation, sphere)
+
+
+def true_model(config: ExperimentConfig, robot: PinocchioModel) -> PinocchioModel:
+    """The true robot's dynamics: the robot with ``plant.armature`` on the diagonal of M and
+    ``plant.payload`` carried by the task frame's joint (a copy, also when a payload change of
+    ``[[plant.loads]]`` will alter it; the nominal model knows neither).
+    """
+    pc = config.plant
+    changes = any(entry.get("kind") == "payload" for entry in pc.loads or ())
+    if pc.armature is None and pc.payload == 0.0 and not changes:
+        return robot
+    model = pin.Model(robot.model)
+    if pc.armature is not None:
+        model.armature = joint_vector("plant.armature", pc.armature, robot.nq)
+    if pc.payload > 0.0:
+        joint, inertia = payload(model, robot.task_frame, pc.payload)
+        model.inertias[joint] = model.inertias[joint] + inertia
+    true = PinocchioModel(model, robot.task_frame, robot.task, robot.name)
+    true.urdf_text = robot.urdf_text
+    return true
+
+
+def build_engine(config: ExperimentConfig, plant: Plant, substeps: int) -> None:
+    """Give the plant MuJoCo as its engine (``plant.engine = "mujoco"``), built and audited."""
+    if config.plant.engine != "mujoco":
+        return
+    from .mujoco_engine import build_mujoco_plant
+
+    pc, true = config.plant, plant.model
+    assert isinstance(true, PinocchioModel)  # build_plant's true_model
+    assert plant.loads is not None  # Plant sets an empty one
+    if plant.loads.wrenches or plant.loads.payloads:
+        kind = "wrench" if plant.loads.wrenches else "payload"
+        raise ConfigError(
+            "plant.loads",
+            f"a {kind!r} load has no MuJoCo twin yet: use plant.engine = 'pinocchio' (step and impulse "
+            "loads run on both engines)",
+        )
+    load = None
+    if pc.payload > 0.0:  # on the body of the task frame's joint, where Pinocchio's true model has it
+        joint, inertia = payload(true.model, true.task_frame, pc.payload)
+        load = (true.model.names[joint], inertia)
+    plant.engine = build_mujoco_plant(
+        true,
+        plant,
+        config.simulation.control_period,
+        substeps,
+        pc.mujoco_integrator,
+        true.model.armature,
+        pc.stiction,
+        load,
+    )

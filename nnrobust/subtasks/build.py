@@ -1,0 +1,37 @@
+"""How an experiment builds its self-motion criterion from ``[subtasks]``: the weighted sum of
+eq. (4) over the declared criteria (nnrobust/subtasks/registry.py) and a user's.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from ..exceptions import ConfigError
+from .base import Criterion, WeightedCriteria
+from .registry import CRITERION_KINDS
+
+if TYPE_CHECKING:  # the package imports this module to find declarations: no import of config here
+    from ..config import ExperimentConfig
+    from ..model import PinocchioModel
+
+
+def build_criterion(config: ExperimentConfig, robot: PinocchioModel) -> Criterion | None:
+    """Weighted sum of the named criteria, eq. (4), or None."""
+    from .. import user_parts
+    from ..config import default_criteria
+
+    sc = config.subtasks
+    names = default_criteria(robot.nq, robot.task) if sc.criteria is None else sc.criteria
+    if not names:
+        return None
+    unknown = [c for c in names if c not in CRITERION_KINDS and c != "custom"]
+    if unknown:
+        valid = ", ".join(sorted(CRITERION_KINDS))
+        raise ConfigError("subtasks.criteria", f"unknown {unknown}; valid: {valid}, custom")
+    criteria = [
+        user_parts.build_criterion(sc.criterion_class or "", sc.criterion_params, robot)
+        if name == "custom"
+        else CRITERION_KINDS[name].build(config, robot)
+        for name in names
+    ]
+    return WeightedCriteria(criteria, sc.weights, sc.C)
