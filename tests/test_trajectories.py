@@ -1,4 +1,4 @@
-"""The quintic point-to-point move and the waypoint spline (nnrobust/trajectories.py): their
+"""The quintic point-to-point move and the waypoint spline (nnrobust/trajectories/piecewise.py): their
 analytic properties, their derivatives against finite differences, the configuration keys, and
 the closed loop on them (compiled equal to Python)."""
 
