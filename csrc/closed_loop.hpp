@@ -27,10 +27,11 @@ struct ThreeLinkSpec {
   Eigen::Vector2d gravity = Eigen::Vector2d::Zero();
 };
 
-// Everything one run needs, filled in by nnrobust/compiled.py from a built experiment. The
-// parameters of the laws, paths and criteria have no defaults here (Python's are the only ones):
-// they start as NaN, so a field the Python side did not fill poisons the run (status "diverged")
-// instead of running silently with a value that disagrees with Python's.
+// Everything one run needs, filled in by nnrobust/compiled.py from a built experiment. There are
+// no defaults here (Python's are the only ones): the laws, robust terms, paths and criteria read
+// their fields by name from the maps below (a missing one is an error naming it), and the numbers
+// listed here start as NaN, so one the Python side did not fill poisons the run (status
+// "diverged") instead of running silently with a value that disagrees with Python's.
 constexpr double unset = std::numeric_limits<double>::quiet_NaN();
 
 struct LoopSpec {
@@ -131,9 +132,9 @@ LoopTrace run_loop(LoadedModel &plant, LoadedModel *nominal, const LoopSpec &spe
                    const ExternalLaw *external = nullptr);
 
 // Each compiled component alone, on one state, for the per-component twin tests
-// (tests/test_twins.py): the law's output and next state (TaskSpaceController / TaskSpacePD
-// .compute), the weighted criterion's gradient on the nominal model and value on the true robot,
-// and the plant's q'' (Plant.acceleration, the loads held from t).
+// (tests/test_twins.py): the law's output, signals and next state (LoopSpec.law's compute), the
+// weighted criterion's gradient on the nominal model and value on the true robot, and the plant's
+// q'' (Plant.acceleration, the loads held from t).
 struct ControlStep {
   Vector tau, z, signals;
 };
