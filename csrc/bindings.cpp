@@ -20,7 +20,6 @@ using nnrobust::LoadedModel;
 using nnrobust::LoopSpec;
 using nnrobust::ModelSpec;
 using nnrobust::LoopTrace;
-using nnrobust::ThreeLinkSpec;
 
 namespace {
 
@@ -43,8 +42,8 @@ bool python_signal_pending() {
 }
 
 LoopTrace run(LoadedModel &plant, const LoopSpec &spec, LoadedModel *nominal) {
-  if (spec.nominal_kind == "pinocchio" && nominal == nullptr)
-    throw std::invalid_argument("nominal_kind 'pinocchio' needs the nominal model");
+  if (spec.nominal == "pinocchio" && nominal == nullptr)
+    throw std::invalid_argument("the nominal model 'pinocchio' needs its model");
   nb::gil_scoped_release released;
   return nnrobust::run_loop(plant, nominal, spec, &python_signal_pending);
 }
@@ -88,8 +87,8 @@ std::vector<LoopTrace> batch(std::vector<LoadedModel *> plants, std::vector<Load
     throw std::invalid_argument("run_batch: plants, nominals and specs must have the same length");
   std::vector<nnrobust::BatchItem> items;
   for (size_t i = 0; i < specs.size(); ++i) {
-    if (specs[i]->nominal_kind == "pinocchio" && nominals[i] == nullptr)
-      throw std::invalid_argument("run_batch: a 'pinocchio' nominal_kind needs its nominal model");
+    if (specs[i]->nominal == "pinocchio" && nominals[i] == nullptr)
+      throw std::invalid_argument("run_batch: the nominal model 'pinocchio' needs its model");
     items.push_back({plants[i], nominals[i], specs[i]});
   }
   nb::gil_scoped_release released;
@@ -122,26 +121,12 @@ NB_MODULE(_loop, m) {
       .def("bias", &LoadedModel::bias, nb::arg("q"), nb::arg("v"), "V_m(q, v) v + G(q) [N m].")
       .def("frame_jacobian", &LoadedModel::frame_jacobian, nb::arg("q"),
            "6 x n Jacobian of the task frame, world-aligned axes.");
-  nb::class_<ThreeLinkSpec>(m, "ThreeLinkSpec", "The closed-form nominal model's parameters.")
-      .def(nb::init<>())
-      .def_rw("beta", &ThreeLinkSpec::beta)
-      .def_rw("p", &ThreeLinkSpec::p)
-      .def_rw("lengths", &ThreeLinkSpec::lengths)
-      .def_rw("gamma", &ThreeLinkSpec::gamma)
-      .def_rw("gravity", &ThreeLinkSpec::gravity);
   nb::class_<LoopSpec> spec(m, "LoopSpec", "Everything one compiled run needs (nnrobust/compiled.py).");
   spec.def(nb::init<>());
 #define FIELD(name) spec.def_rw(#name, &LoopSpec::name)
-  FIELD(period); FIELD(substeps); FIELD(max_step_rotation); FIELD(max_period_substeps);
-  FIELD(steps); FIELD(max_speed); FIELD(q0); FIELD(v0);
-  FIELD(viscous); FIELD(coulomb); FIELD(static_friction); FIELD(dist_amplitude); FIELD(dist_phase); FIELD(dist_omega);
-  FIELD(torque_limit); FIELD(stops); FIELD(stop_lower); FIELD(stop_upper); FIELD(stop_stiffness); FIELD(stop_ring);
-  FIELD(pulse_start); FIELD(pulse_end); FIELD(pulse_torque); FIELD(wrench_start); FIELD(wrench_end); FIELD(wrench);
-  FIELD(payload_start); FIELD(payload_inertia); FIELD(payload_joint);
-  FIELD(stop_alpha); FIELD(position_noise); FIELD(velocity_noise); FIELD(resolution); FIELD(noise_q);
-  FIELD(noise_v); FIELD(delay); FIELD(mj_step); FIELD(mj_model); FIELD(mj_data); FIELD(mj_qpos); FIELD(mj_qvel);
-  FIELD(mj_ctrl); FIELD(mj_qfrc_applied); FIELD(mj_qpos_index); FIELD(mj_dof_index); FIELD(nominal_kind); FIELD(nominal); FIELD(m); FIELD(nominal_viscous);
-  FIELD(nominal_coulomb); FIELD(coulomb_smoothing); FIELD(path); FIELD(path_params); FIELD(pose);
+  FIELD(period); FIELD(substeps); FIELD(max_step_rotation); FIELD(max_period_substeps); FIELD(steps);
+  FIELD(max_speed); FIELD(q0); FIELD(v0); FIELD(plant_params); FIELD(plant_parts); FIELD(nominal);
+  FIELD(nominal_params); FIELD(m); FIELD(nominal_friction); FIELD(path); FIELD(path_params); FIELD(pose);
   FIELD(pose_params); FIELD(law); FIELD(law_params); FIELD(law_signals); FIELD(robust); FIELD(robust_params);
   FIELD(criteria); FIELD(criterion_params); FIELD(criterion_weights); FIELD(pinv_threshold);
   FIELD(pinv_max_damping); FIELD(z0);
@@ -165,7 +150,7 @@ NB_MODULE(_loop, m) {
       .def_ro("refined_periods", &LoopTrace::refined_periods);
   m.def("run_loop", &run, nb::arg("plant"), nb::arg("spec"), nb::arg("nominal").none() = nb::none(),
         "Run the compiled closed loop (GIL released; Ctrl-C and SIGTERM stop it); `nominal` is the "
-        "controller's Pinocchio model when spec.nominal_kind is 'pinocchio'.");
+        "controller's Pinocchio model when spec.nominal is 'pinocchio'.");
   m.def("run_hybrid", &hybrid, nb::arg("plant"), nb::arg("spec"), nb::arg("law"),
         "Run the compiled plant with a Python control law law(t, q, v, z) -> (tau, z_next), called once "
         "per control period (the GIL held); an exception of the law stops the run and is raised.");

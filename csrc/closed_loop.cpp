@@ -9,13 +9,14 @@
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <thread>
 
 #include "controllers.hpp"
 #include "nominal.hpp"
 #include "pin_calls.hpp"
-#include "stick_slip.hpp"
+#include "plant/stick_slip.hpp"
 #include "subtasks/criterion.hpp"
 
 namespace nnrobust {
@@ -44,22 +45,11 @@ void record_kinematics(LoadedModel &m, const LoopSpec &s, const Criteria &criter
 
 // The controller's nominal model: the closed form, or the Pinocchio model `nominal_model`.
 std::unique_ptr<Nominal> make_nominal(const LoopSpec &s, LoadedModel *nominal_model) {
-  if (s.nominal_kind == "closed-form") return std::make_unique<ClosedFormNominal>(s.nominal);
-  if (s.nominal_kind != "pinocchio") throw std::invalid_argument("LoopSpec.nominal_kind: unknown " + s.nominal_kind);
-  if (nominal_model == nullptr) throw std::invalid_argument("nominal_kind 'pinocchio' needs the nominal model");
+  if (s.nominal == "closed-form")
+    return std::make_unique<ClosedFormNominal>(Fields{"LoopSpec.nominal_params: the closed form", s.nominal_params});
+  if (s.nominal != "pinocchio") throw std::invalid_argument("LoopSpec.nominal: unknown nominal model " + s.nominal);
+  if (nominal_model == nullptr) throw std::invalid_argument("the nominal model 'pinocchio' needs its model");
   return std::make_unique<PinocchioNominal>(*nominal_model, s.m);
-}
-
-// simulation.step_rate: the fastest joint's speed, or the ring frequency of a stop a joint is at or
-// would reach within the period, whichever is higher.
-double step_rate(const LoopSpec &s, const Vector &q, const Vector &v) {
-  double rate = v.cwiseAbs().maxCoeff();
-  if (!s.stops || s.stop_ring.size() != q.size()) return rate;
-  for (Eigen::Index i = 0; i < q.size(); ++i) {
-    const double beyond = std::max(q[i] - s.stop_upper[i], s.stop_lower[i] - q[i]);
-    if (beyond + std::abs(v[i]) * s.period > 0.0) rate = std::max(rate, s.stop_ring[i]);
-  }
-  return rate;
 }
 
 // simulation.period_substeps: the plant steps of one control period, cut for its step_rate.
@@ -85,13 +75,17 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
   tr.chain = Rows::Constant(steps, 3 * (model.model.njoints), nan);
   tr.manipulability = Vector::Constant(steps, nan);
   tr.h = tr.manipulability;
-  const std::unique_ptr<Nominal> nominal = make_nominal(s, nominal_model);
-  Controller controller(s, *nominal);
+  const Criteria criteria(s);  // h, recorded on the true robot
+  std::unique_ptr<Nominal> nominal;
+  std::optional<Controller> controller;  // none on the hybrid loop, whose law is `external`
+  if (!external) {
+    nominal = make_nominal(s, nominal_model);
+    controller.emplace(s, *nominal);
+  }
   Plant plant{model, s};
   std::unique_ptr<StickSlipIntegrator> stick_slip;
-  if (plant.any_sticky() && !s.mj_step) stick_slip = std::make_unique<StickSlipIntegrator>(plant, s.v0);
-  const bool noisy = s.noise_q.rows() > 0;
-  Vector q = s.q0, v = s.v0, z = s.z0, tau = Vector::Zero(n);
+  if (plant.any_sticky() && !plant.engine) stick_slip = std::make_unique<StickSlipIntegrator>(plant, s.v0);
+  Vector q = s.q0, v = s.v0, z = s.z0, tau = Vector::Zero(n), qm, vm;
   std::deque<Vector> commands;
   tr.done = steps;
   for (long k = 0; k < steps; ++k) {
@@ -101,15 +95,7 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
       break;
     }
     const double t = static_cast<double>(k) * s.period;
-    Vector qm = q, vm = v;  // Sensor.measure
-    if (noisy) {
-      for (int i = 0; i < n; ++i) {
-        qm[i] = q[i] + s.position_noise[i] * s.noise_q(k, i);
-        vm[i] = v[i] + s.velocity_noise[i] * s.noise_v(k, i);
-        const double r = s.resolution[i];
-        if (r > 0) qm[i] = std::nearbyint(qm[i] / r) * r;
-      }
-    }
+    plant.sensor.measure(k, q, v, qm, vm);
     Output out;
     if (external) {
       out.z = z;
@@ -119,13 +105,12 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
         break;
       }
     } else {
-      out = controller.compute(t, qm, vm, z);
+      out = controller->compute(t, qm, vm, z);
     }
     commands.push_back(out.tau);
-    if (static_cast<int>(commands.size()) > s.delay + 1) commands.pop_front();
+    if (static_cast<int>(commands.size()) > plant.delay + 1) commands.pop_front();
     const Vector tau_cmd = commands.front();
-    tau = tau_cmd;
-    if (s.torque_limit.size()) tau = tau_cmd.cwiseMax(-s.torque_limit).cwiseMin(s.torque_limit);
+    tau = plant.applied_torque(tau_cmd);
     tr.q.row(k) = q;
     tr.dq.row(k) = v;
     tr.tau.row(k) = tau;
@@ -137,7 +122,7 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
                                 " signals; its Python twin declares " + std::to_string(s.law_signals));
       tr.signals.row(k) = out.signals;
     }
-    if (q.allFinite()) record_kinematics(model, s, controller.criteria, q, k, tr);
+    if (q.allFinite()) record_kinematics(model, s, criteria, q, k, tr);
     if (!out.tau.allFinite() || !q.allFinite() || !v.allFinite()) {
       tr.status = "diverged";
       tr.divergence_index = k;
@@ -154,27 +139,11 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
     }
     z = out.z;
     plant.begin_period(t);  // the loads held over this period
-    if (s.mj_step) {  // MujocoPlant.advance: MuJoCo's steps with tau held, -tau_d at each mid-step
-      const double h = s.period / s.substeps;
-      using Step = void (*)(const void *, void *);
-      const auto step = reinterpret_cast<Step>(s.mj_step);
-      auto *ctrl = reinterpret_cast<double *>(s.mj_ctrl);
-      auto *applied = reinterpret_cast<double *>(s.mj_qfrc_applied);
-      const auto *qpos = reinterpret_cast<const double *>(s.mj_qpos);
-      const auto *qvel = reinterpret_cast<const double *>(s.mj_qvel);
-      for (int i = 0; i < n; ++i) ctrl[i] = tau[i];
-      for (int j = 0; j < s.substeps; ++j) {
-        const double mid = t + (j + 0.5) * h;
-        for (int i = 0; i < n; ++i) applied[s.mj_dof_index[i]] = -plant.disturbance(i, mid) + plant.load(i);
-        step(reinterpret_cast<const void *>(s.mj_model), reinterpret_cast<void *>(s.mj_data));
-      }
-      for (int i = 0; i < n; ++i) {
-        q[i] = qpos[s.mj_qpos_index[i]];
-        v[i] = qvel[s.mj_dof_index[i]];
-      }
+    if (plant.engine) {  // MuJoCo steps the plant
+      plant.engine->advance(t, tau, s.period, plant.disturbance, [&](int i) { return plant.load(i); }, q, v);
       continue;
     }
-    const int n_steps = period_substeps(s, step_rate(s, q, v));
+    const int n_steps = period_substeps(s, plant.step_rate(q, v, s.period));
     tr.refined_periods += n_steps != s.substeps;
     const double h = s.period / n_steps;
     if (stick_slip) {  // simulation.simulate with the plant's stick-slip integrator

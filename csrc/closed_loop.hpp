@@ -3,29 +3,21 @@
 // the comments; tests/test_compiled.py holds the two equal.
 #pragma once
 
-#include <cstdint>
 #include <functional>
 #include <limits>
 #include <map>
 #include <string>
 #include <vector>
 
+#include "fields.hpp"
 #include "model.hpp"
 
 namespace nnrobust {
-
-inline double sign(double x) { return (x > 0) - (x < 0); }  // numpy.sign
 
 // Row-major: a step reads or writes one contiguous row of each per-step array (a column-major
 // steps x n array would make every recorded value a cache miss, which dominated the step for
 // long chains).
 using Rows = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
-
-// nnrobust.model.three_link.ThreeLinkPlanarModel: the paper's closed-form nominal model.
-struct ThreeLinkSpec {
-  Eigen::Vector3d beta, p, lengths, gamma;
-  Eigen::Vector2d gravity = Eigen::Vector2d::Zero();
-};
 
 // Everything one run needs, filled in by nnrobust/compiled.py from a built experiment. There are
 // no defaults here (Python's are the only ones): the laws, robust terms, paths and criteria read
@@ -45,58 +37,35 @@ struct LoopSpec {
   long steps = 0;
   double max_speed = 1e3;
   Vector q0, v0;
-  // plant (nnrobust.plant): friction, sinusoidal disturbance, saturation, stops, sensor, delay
-  Vector viscous, coulomb, static_friction;  // static_friction: F_s (> 0: stick-slip joints)
-  Matrix dist_amplitude, dist_phase;  // n x K
-  Vector dist_omega;                  // K
-  Vector torque_limit;                // n (inf: none); empty: ideal actuators
-  bool stops = false;
-  Vector stop_lower, stop_upper, stop_stiffness, stop_ring;  // ring: sqrt(K (M^-1)_ii) at q0 [rad/s]
-  double stop_alpha = 0.0;
-  // [[plant.loads]] (nnrobust/plant/loads.py, Plant.begin_period), switched at control instants:
-  // joint torque pulses u over [start, end), tool wrenches w (world axes at the task frame) over
-  // [start, end), payload changes at start; payload_inertia holds the dynamic parameters
-  // (pin.Inertia.toDynamicParameters) of the joint payload_joint after each change, then before any
-  Vector pulse_start, pulse_end, wrench_start, wrench_end, payload_start;  // P, P, W, W, C
-  Matrix pulse_torque, wrench;                                            // n x P, 6 x W
-  Matrix payload_inertia;                                                 // 10 x (C + 1)
-  int payload_joint = 0;
-  Vector position_noise, velocity_noise, resolution;  // n (zeros: ideal)
-  Rows noise_q, noise_v;                              // steps x n standard normal draws (or empty)
-  int delay = 0;
-  // plant.engine = "mujoco" (nnrobust/plant/mujoco_engine.py, MujocoPlant.advance): MuJoCo steps the
-  // plant. The addresses of its mj_step, mjModel and mjData and of qpos, qvel, ctrl and qfrc_applied
-  // inside the data (the caller keeps them alive for the run, and resets the state to q0, v0);
-  // joint i sits at qpos[mj_qpos_index[i]], qvel[mj_dof_index[i]] and ctrl[i]. No MuJoCo header is
-  // needed: mj_step(const mjModel*, mjData*) is the only call.
-  std::uintptr_t mj_step = 0, mj_model = 0, mj_data = 0;
-  std::uintptr_t mj_qpos = 0, mj_qvel = 0, mj_ctrl = 0, mj_qfrc_applied = 0;
-  std::vector<int> mj_qpos_index, mj_dof_index;
-  // nominal model: "closed-form" (ThreeLinkSpec) or "pinocchio" (a second LoadedModel)
-  std::string nominal_kind = "closed-form";
-  ThreeLinkSpec nominal;
+  // the true robot (nnrobust/plant/, csrc/plant/): Plant.twin_fields, and each of its parts'
+  // (Plant.twin_parts: friction, disturbance, loads, sensor; stops and engine where there are some)
+  Params plant_params;
+  std::map<std::string, Params> plant_parts;
+  // the controller's nominal model, by its Python class's twin: "closed-form" (ThreeLinkSpec from
+  // nominal_params) or "pinocchio" (a second LoadedModel, no fields)
+  std::string nominal;
+  Params nominal_params;
   int m = 2;  // task rows: 2 (planar: x, y), 3 (position) or 6 (pose: position, then rotation)
-  Vector nominal_viscous, nominal_coulomb;
-  double coulomb_smoothing = unset;
+  Params nominal_friction;  // the controller's F-hat (Friction.twin_fields)
   // the desired motion (nnrobust/trajectories/): the position path registered under `path`
   // (csrc/trajectories/) with its fields by name (its Python class's twin_fields), and for a pose
   // task (m = 6) PoseTrajectory's orientation fields
   std::string path;
-  std::map<std::string, Matrix> path_params;
+  Params path_params;
   bool pose = false;
-  std::map<std::string, Matrix> pose_params;
+  Params pose_params;
   // the law registered under `law` (csrc/controllers/, csrc/laws/; "external": the hybrid loop's
   // Python law) with its fields by name (Law.twin_values) and its number of signals; the eq. (9)
   // law's robust term registered under `robust` ("" for u_0 = 0) with its fields
   std::string law;
-  std::map<std::string, Matrix> law_params;
+  Params law_params;
   int law_signals = 0;
   std::string robust;
-  std::map<std::string, Matrix> robust_params;
+  Params robust_params;
   // WeightedCriteria: each criterion's registered name (csrc/subtasks/), its fields by name (its
   // Python declaration's twin_fields) and its weight (already scaled to sum to C)
   std::vector<std::string> criteria;
-  std::vector<std::map<std::string, Matrix>> criterion_params;
+  std::vector<Params> criterion_params;
   Vector criterion_weights;
   double pinv_threshold = unset, pinv_max_damping = unset;
   Vector z0;
@@ -124,9 +93,9 @@ struct LoopTrace {
 using ExternalLaw = std::function<bool(double t, const Vector &q, const Vector &v, const Vector &z, Vector &tau,
                                        Vector &z_next)>;
 
-// Runs the loop; `nominal` is the controller's Pinocchio model (nominal_kind "pinocchio", else
+// Runs the loop; `nominal` is the controller's Pinocchio model (LoopSpec.nominal "pinocchio", else
 // unused); `interrupted()` is polled every few hundred steps (Ctrl-C, SIGTERM). With `external`,
-// that law replaces the compiled controller (spec.law "external") and the run ends with status
+// that law replaces the compiled controller (none is built) and the run ends with status
 // "failed" where it returns false.
 LoopTrace run_loop(LoadedModel &plant, LoadedModel *nominal, const LoopSpec &spec, bool (*interrupted)(),
                    const ExternalLaw *external = nullptr);

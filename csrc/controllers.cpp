@@ -11,7 +11,7 @@
 namespace nnrobust {
 
 Controller::Controller(const LoopSpec &spec, Nominal &model) : s(spec), nominal(model), criteria(spec) {
-  if (spec.law == "external") return;  // the hybrid loop: a Python law, called by the loop itself
+  friction.emplace(Fields{"LoopSpec.nominal_friction: the controller's friction", spec.nominal_friction});
   const auto path_factory = PathRegistry::find(spec.path);
   if (!path_factory) throw std::invalid_argument("LoopSpec.path: unknown path " + spec.path);
   path = path_factory(Fields{"LoopSpec.path_params: the path " + spec.path, spec.path_params});
@@ -80,12 +80,9 @@ Vector Controller::eq9_torque(const Vector &q, const Vector &v, const TaskRefere
 
 // Friction.torque of the controller's F-hat
 Vector Controller::nominal_friction(const Vector &v) const {
-  Vector friction(v.size());
-  for (int i = 0; i < v.size(); ++i) {
-    const double sg = s.coulomb_smoothing <= 0 ? sign(v[i]) : std::clamp(v[i] / s.coulomb_smoothing, -1.0, 1.0);
-    friction[i] = s.nominal_viscous[i] * v[i] + s.nominal_coulomb[i] * sg;
-  }
-  return friction;
+  Vector torque(v.size());
+  for (int i = 0; i < v.size(); ++i) torque[i] = friction->torque(i, v[i]);
+  return torque;
 }
 
 }  // namespace nnrobust

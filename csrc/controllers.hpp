@@ -9,6 +9,7 @@
 #include <optional>
 
 #include "nominal.hpp"
+#include "plant/friction.hpp"
 #include "subtasks/criterion.hpp"
 #include "trajectories/trajectory.hpp"
 
@@ -29,7 +30,8 @@ struct Controller {
   Criteria criteria;
   std::unique_ptr<Path> path;               // LoopSpec.path, from path_params
   std::optional<Orientation> orientation;   // a pose task's (LoopSpec.pose_params)
-  std::unique_ptr<Law> law;                 // LoopSpec.law, from law_params (none: "external")
+  std::unique_ptr<Law> law;                 // LoopSpec.law, from law_params
+  std::optional<Friction> friction;         // the controller's F-hat (LoopSpec.nominal_friction)
 
   // every name resolved here, once: an unknown one is refused (std::invalid_argument)
   Controller(const LoopSpec &spec, Nominal &model);
@@ -41,7 +43,7 @@ struct Controller {
   // TaskSpaceController.compute from u_0 on: the torque of eq. (9) with these gains
   Vector eq9_torque(const Vector &q, const Vector &v, const TaskReference &r, const Matrix &J_pinv, const Vector &u0,
                     const Matrix &Kp, const Matrix &Kv, double k);
-  // Friction.torque of F-hat (nominal_viscous, nominal_coulomb, coulomb_smoothing) at v
+  // Friction.torque of F-hat (LoopSpec.nominal_friction) at v
   Vector nominal_friction(const Vector &v) const;
   // the law's torque, signals and next state at t from the measured (q, v) and the state z
   Output compute(double t, const Vector &q, const Vector &v, const Vector &z);

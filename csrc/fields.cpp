@@ -1,6 +1,7 @@
 #include "fields.hpp"
 
 #include <stdexcept>
+#include <string>
 
 namespace nnrobust {
 
@@ -15,6 +16,14 @@ Vector Fields::vector(const std::string &name) const {
   const Matrix &x = matrix(name);
   if (x.cols() != 1) throw std::invalid_argument(owner + ": the field " + name + " is not a vector");
   return x.col(0);
+}
+
+Vector Fields::vector(const std::string &name, Eigen::Index size) const {
+  Vector x = vector(name);
+  if (x.size() != size)
+    throw std::invalid_argument(owner + ": the field " + name + " has " + std::to_string(x.size()) + " entries, not " +
+                                std::to_string(size));
+  return x;
 }
 
 double Fields::scalar(const std::string &name) const {

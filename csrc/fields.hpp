@@ -10,12 +10,16 @@
 
 namespace nnrobust {
 
+// A component's fields by name, as LoopSpec carries them.
+using Params = std::map<std::string, Matrix>;
+
 struct Fields {
   std::string owner;  // what the fields are of, for errors: "the law slotine-li", "the criterion obstacles"
-  const std::map<std::string, Matrix> &values;
+  const Params &values;
 
   const Matrix &matrix(const std::string &name) const;
   Vector vector(const std::string &name) const;  // a k x 1 field
+  Vector vector(const std::string &name, Eigen::Index size) const;  // a size x 1 field
   double scalar(const std::string &name) const;  // a 1 x 1 field
 };
 

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "closed_loop.hpp"
+#include "fields.hpp"
 
 namespace nnrobust {
 
@@ -12,6 +13,15 @@ using Eigen::Matrix3d;
 using Eigen::Vector2d;
 using Eigen::Vector3d;
 using Matrix23 = Eigen::Matrix<double, 2, 3>;
+
+// nnrobust.model.three_link.ThreeLinkPlanarModel's parameters (its twin_fields).
+struct ThreeLinkSpec {
+  Eigen::Vector3d beta, p, lengths, gamma;
+  Eigen::Vector2d gravity;
+  explicit ThreeLinkSpec(const Fields &f)
+      : beta(f.vector("beta", 3)), p(f.vector("p", 3)), lengths(f.vector("lengths", 3)),
+        gamma(f.vector("gamma", 3)), gravity(f.vector("gravity", 2)) {}
+};
 
 // nnrobust.model.three_link.ThreeLinkPlanarModel: the paper's closed-form nominal model.
 struct ThreeLink {
@@ -48,8 +58,9 @@ struct Nominal {
 };
 
 struct ClosedFormNominal : Nominal {
-  ThreeLink model;
-  explicit ClosedFormNominal(const ThreeLinkSpec &s) : model{s} {}
+  const ThreeLinkSpec spec;
+  ThreeLink model{spec};
+  explicit ClosedFormNominal(const Fields &f) : spec(f) {}
   TaskState task_state(const Vector &q, const Vector &v) override;
   Vector inverse_dynamics(const Vector &q, const Vector &v, const Vector &a) override;
   Vector gravity(const Vector &q) override;

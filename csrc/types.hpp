@@ -6,4 +6,6 @@
 namespace nnrobust {
 using Vector = Eigen::VectorXd;
 using Matrix = Eigen::MatrixXd;
+
+inline double sign(double x) { return (x > 0) - (x < 0); }  // numpy.sign
 }  // namespace nnrobust

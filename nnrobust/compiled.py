@@ -219,30 +219,17 @@ def _criterion_spec(s, setup, f) -> None:
     s.criterion_weights = f(criterion.weights)
 
 
-def _loads_spec(s, plant, f) -> None:
-    """``[[plant.loads]]`` into the spec (Plant.begin_period's data)."""
-    import numpy as np
+def engine_addresses(engine) -> dict:
+    """MuJoCo's addresses (MujocoPlant.addresses) as its compiled twin reads them: each a whole
+    number, exact as a float64 below 2^53 (a user-space address is below 2^48).
+    """
+    from .twins import field_array
 
-    loads = plant.loads
-    if not loads:
-        return
-    n = plant.nq
-    s.pulse_start = f([p.start for p in loads.pulses])
-    s.pulse_end = f([p.end for p in loads.pulses])
-    s.pulse_torque = f(np.array([p.torque for p in loads.pulses]).T.reshape(n, -1))
-    s.wrench_start = f([w.start for w in loads.wrenches])
-    s.wrench_end = f([w.end for w in loads.wrenches])
-    s.wrench = f(np.array([w.wrench for w in loads.wrenches]).T.reshape(6, -1))
-    if loads.payloads:
-        s.payload_start = f([c.start for c in loads.payloads])
-        s.payload_inertia = f(np.array([i.toDynamicParameters() for i in plant.payload_inertias]).T)
-        s.payload_joint = plant.model.model.frames[plant.model.frame_id].parentJoint
-
-
-def _friction_spec(s, friction, f) -> None:
-    """The controller's F-hat into the spec."""
-    s.nominal_viscous, s.nominal_coulomb = f(friction.viscous), f(friction.coulomb)
-    s.coulomb_smoothing = friction.smoothing
+    where = engine.addresses()
+    for name, address in where.items():
+        if not 0 < address < 2**53:
+            raise NNRobustError(f"plant.engine: MuJoCo's {name} address {address:#x} does not fit a float64")
+    return {name: field_array(float(address)) for name, address in where.items()}
 
 
 def loop_spec(setup, duration: float, external: bool = False):
@@ -253,71 +240,46 @@ def loop_spec(setup, duration: float, external: bool = False):
 
     from .config import step_rotation_limit
     from .controllers.registry import registered_law
-    from .model import PinocchioModel
+    from .model import ThreeLinkPlanarModel
     from .plant.friction import Friction
     from .simulation import MAX_PERIOD_SUBSTEPS, MAX_SPEED
     from .trajectories import PoseTrajectory
-    from .twins import twin_values
+    from .twins import twin_parts, twin_values
 
     def f(x):  # the C++ side takes contiguous float64 arrays
         return np.ascontiguousarray(x, dtype=float)
 
     module = _module()
     sim, plant, controller = setup.config.simulation, setup.plant, setup.controller
-    n = plant.nq
     steps = int(round(duration / sim.control_period))
     s = module.LoopSpec()
     s.period, s.substeps, s.steps, s.max_speed = sim.control_period, setup.substeps, steps, MAX_SPEED
     s.max_step_rotation, s.max_period_substeps = step_rotation_limit(setup.config), MAX_PERIOD_SUBSTEPS
     s.q0, s.v0 = f(setup.q0), f(setup.v0)
-    s.viscous, s.coulomb = f(plant.friction.viscous), f(plant.friction.coulomb)
-    s.static_friction = f(np.where(plant.sticky, plant.friction.static, 0.0))
-    s.dist_amplitude, s.dist_phase = f(plant.disturbance.amplitude), f(plant.disturbance.phase)
-    s.dist_omega = f(plant.disturbance.omega)
-    s.torque_limit = f(np.zeros(0) if plant.torque_limit is None else plant.torque_limit)
-    _loads_spec(s, plant, f)
-    if plant.stops is not None:
-        s.stops = True
-        s.stop_lower, s.stop_upper = f(plant.stops.lower), f(plant.stops.upper)
-        s.stop_stiffness, s.stop_alpha = f(plant.stops.stiffness), plant.stops.alpha
-        ring = plant.stops.ring if plant.stops.ring is not None else np.zeros(plant.stops.lower.size)
-        s.stop_ring = f(ring)
-    sensor = plant.sensor
-    s.position_noise, s.velocity_noise = f(sensor.position_noise), f(sensor.velocity_noise)
-    s.resolution = f(sensor.resolution)
-    if not sensor.is_ideal:  # the same draws, in the same order, as Sensor.measure at every step
-        draws = np.random.default_rng(sensor.seed).standard_normal((steps, 2, n))
-        s.noise_q, s.noise_v = f(draws[:, 0, :]), f(draws[:, 1, :])
-    s.delay = plant.delay
+    s.plant_params, parts = twin_values(plant, plant.twin_fields), twin_parts(plant)
+    parts["sensor"].update(plant.sensor.twin_draws(steps))  # the run's draws from the seed
     if plant.engine is not None:  # MuJoCo steps the plant, from (q0, v0)
         plant.engine.reset(setup.q0, setup.v0)
-        where = plant.engine.addresses()
-        s.mj_step, s.mj_model, s.mj_data = where["step"], where["model"], where["data"]
-        s.mj_qpos, s.mj_qvel, s.mj_ctrl = where["qpos"], where["qvel"], where["ctrl"]
-        s.mj_qfrc_applied = where["qfrc_applied"]
-        s.mj_qpos_index = [int(i) for i in plant.engine.qpos_index]
-        s.mj_dof_index = [int(i) for i in plant.engine.dof_index]
+        parts["engine"].update(engine_addresses(plant.engine))
+    s.plant_parts = parts
     s.m = setup.robot.m
     _criterion_spec(s, setup, f)
     if external:  # the hybrid loop: the law is Python's, only its state size matters here
         s.law = "external"
         s.z0 = f(controller.initial_state())
         return s
-    if isinstance(setup.nominal, PinocchioModel):
-        s.nominal_kind = "pinocchio"
-    else:
-        params = setup.nominal.params
-        spec = module.ThreeLinkSpec()
-        spec.beta, spec.p, spec.lengths = f(params.beta), f(params.p), f(params.lengths)
-        spec.gamma, spec.gravity = f(params.gamma), f(params.gravity)
-        s.nominal = spec
+    nominal = setup.nominal
+    s.nominal = nominal.twin
+    if isinstance(nominal, ThreeLinkPlanarModel):
+        s.nominal_params = twin_values(nominal.params, nominal.params.twin_fields)
     path = setup.trajectory
     if isinstance(path, PoseTrajectory):
         s.pose, s.pose_params = True, twin_values(path, path.twin_fields)
         path = path.path
     s.path, s.path_params = path.twin, twin_values(path, path.twin_fields)
     s.pinv_threshold, s.pinv_max_damping = controller.pinv.threshold, controller.pinv.max_damping
-    _friction_spec(s, getattr(controller, "nominal_friction", None) or Friction.none(n), f)
+    friction = getattr(controller, "nominal_friction", None) or Friction.none(plant.nq)
+    s.nominal_friction = twin_values(friction, friction.twin_fields)
     law = registered_law(setup.config.controller.kind)
     if law is not None:  # a registered law's twin and its declared fields
         s.law, s.law_params = law.twin, law.twin_values(controller)
@@ -339,9 +301,7 @@ def _prepared(setup, duration: float):
     spec = loop_spec(setup, duration)
     plant = load_model(setup.plant.model.pinocchio_model, setup.robot.task_frame)
     nominal = (
-        load_model(setup.nominal.model, setup.nominal.task_frame)
-        if spec.nominal_kind == "pinocchio"
-        else None
+        load_model(setup.nominal.model, setup.nominal.task_frame) if spec.nominal == "pinocchio" else None
     )
     return plant, nominal, spec
 

@@ -19,3 +19,11 @@ def field_array(value) -> np.ndarray:
 def twin_values(component, names: Iterable[str]) -> dict[str, np.ndarray]:
     """The attributes ``names`` of a built component, as its twin reads them."""
     return {name: field_array(getattr(component, name)) for name in names}
+
+
+def twin_parts(component) -> dict[str, dict[str, np.ndarray]]:
+    """The fields of each part a component lists in its ``twin_parts``, by the part's attribute
+    name (a part that is None is left out: the twin has none).
+    """
+    parts = {name: getattr(component, name) for name in component.twin_parts}
+    return {name: twin_values(part, part.twin_fields) for name, part in parts.items() if part is not None}

@@ -4,6 +4,8 @@ and the plant's q''. A whole-run comparison (tests/test_compiled.py) can hide a 
 differs only where a run rarely goes; these states are drawn across the joints' ranges.
 """
 
+import copy
+
 import numpy as np
 import pytest
 
@@ -188,14 +190,29 @@ def test_every_declared_criterion_has_a_twin_tested_here_and_reads_its_fields_by
         {"stiction": 1.5},
         {"torque_limits": "none", "joint_stop_stiffness": 300.0},
         {"loads": [{"kind": "wrench", "time": 0.0, "force": [3.0, -2.0, 1.0], "moment": [0.1, 0.0, 0.2]}]},
+        {
+            "loads": [
+                {"kind": "step", "time": 4.0, "torque": "JOINTS"},
+                {"kind": "impulse", "time": 8.0, "duration": 6.0, "impulse": "JOINTS"},
+                {"kind": "payload", "time": 5.0, "mass": 1.5},
+                {"kind": "payload", "time": 12.0, "mass": 0.2},
+            ]
+        },
     ],
-    ids=["as shipped", "stiction", "stiff stops", "tool wrench"],
+    ids=["as shipped", "stiction", "stiff stops", "tool wrench", "steps, impulse and payloads"],
 )
 @pytest.mark.parametrize("preset", ["paper-ellipse", "panda-ellipse"])
 def test_the_plant_derivative_is_its_python_twin(preset, plant):
     """Q'' of the slipping law with friction, disturbance, stops (states beyond the limits
     included) and a held load, at random times and torques."""
-    setup = build(load_preset(preset).replace(simulation={"duration": 0.01}, plant=plant))
+    config = load_preset(preset)
+    n = {"paper-ellipse": 3, "panda-ellipse": 7}[preset]
+    plant = copy.deepcopy(plant)  # the cases are shared by both presets
+    for load in plant.get("loads", []):  # a joint vector of the arm's size
+        for key in ("torque", "impulse"):
+            if load.get(key) == "JOINTS":
+                load[key] = list(np.linspace(-2.0, 3.0, n))
+    setup = build(config.replace(simulation={"duration": 0.01}, plant=plant))
     spec = compiled.loop_spec(setup, 0.01)
     model = compiled.load_model(setup.plant.model.pinocchio_model, setup.robot.task_frame)
     module = compiled._module()
@@ -215,3 +232,29 @@ def test_the_plant_derivative_is_its_python_twin(preset, plant):
             f"{preset}: q'' (limits {lower.round(2)}..{upper.round(2)})",
         )
     assert stopped > 10
+
+
+def test_the_plant_twin_reads_every_part_by_name():
+    """Each part the Python plant lists (Plant.twin_parts) reaches the C++ side under its name with
+    the fields its class declares; a part or a field left out is an error naming it, not a
+    default."""
+    setup = build(load_preset("panda-ellipse").replace(simulation={"duration": 0.01}))
+    spec = compiled.loop_spec(setup, 0.01)
+    plant = setup.plant
+    assert set(spec.plant_params) == set(plant.twin_fields)
+    for name in ("friction", "disturbance", "loads", "sensor", "stops"):
+        assert set(type(getattr(plant, name)).twin_fields) <= set(spec.plant_parts[name]), name
+    model = compiled.load_model(plant.model.pinocchio_model, setup.robot.task_frame)
+    module, q, v, tau = compiled._module(), setup.q0, setup.v0, np.ones(plant.nq)
+    for part, field in (("friction", "static"), ("disturbance", "omega"), ("stops", "ring_frequencies")):
+        parts = {k: dict(p) for k, p in spec.plant_parts.items()}
+        del parts[part][field]
+        spec.plant_parts = parts
+        with pytest.raises(ValueError, match=f"the plant's {part} needs the field {field}"):
+            module.twin_plant_acceleration(model, spec, 0.0, q, v, tau)
+        spec = compiled.loop_spec(setup, 0.01)
+    parts = dict(spec.plant_parts)
+    del parts["sensor"]
+    spec.plant_parts = parts
+    with pytest.raises(ValueError, match="needs the part sensor"):
+        module.twin_plant_acceleration(model, spec, 0.0, q, v, tau)

@@ -26,7 +26,7 @@ struct SlotineLi : Law {
         project(p.scalar("project") != 0.0) {
     pin_model = dynamic_cast<PinocchioNominal *>(&c.nominal);
     if (!pin_model) {
-      const ThreeLinkSpec &s = c.spec.nominal;
+      const ThreeLinkSpec &s = dynamic_cast<ClosedFormNominal &>(c.nominal).spec;
       for (int i = 0; i < 9; ++i) {  // theta = (beta, p, gamma)
         ThreeLinkSpec unit = s;
         unit.beta.setZero();

@@ -40,6 +40,9 @@ class PinocchioModel:
 
     """
 
+    twin = "pinocchio"
+    """Its compiled twin (csrc/nominal.hpp), built from the model itself (compiled.load_model)."""
+
     def __init__(self, model: pin.Model, task_frame: str, task: str = "planar", name: str = ""):
         if task not in TASK_KINDS:
             raise ModelMismatch(f"unknown task kind {task!r}; valid kinds: {', '.join(TASK_KINDS)}")

@@ -38,6 +38,9 @@ class ThreeLinkParameters:
     gamma: tuple[float, ...] = (0.0, 0.0, 0.0)
     gravity: tuple[float, ...] = (0.0, 0.0)
 
+    twin_fields = ("beta", "p", "lengths", "gamma", "gravity")
+    """What the closed form's compiled twin reads (csrc/nominal.hpp, ThreeLinkSpec)."""
+
     @classmethod
     def paper(cls) -> ThreeLinkParameters:
         """The paper's printed values, horizontal plane (G = 0)."""
@@ -135,6 +138,9 @@ class ThreeLinkPlanarModel:
     joint_names: list[str] = field(default_factory=lambda: ["joint1", "joint2", "joint3"])
     pinocchio_model: None = field(default=None, init=False)
     """No Pinocchio model: the closed form is its own (:class:`DynamicsModel`)."""
+
+    twin = "closed-form"
+    """Its compiled twin (csrc/nominal.hpp), built from ``params``' ``twin_fields``."""
 
     def mass(self, q: np.ndarray) -> np.ndarray:
         """M(q) with M11 = b1 + 2 p1 c2 + 2 p2 c23 + 2 p3 c3, ... (docs/errata.md)."""

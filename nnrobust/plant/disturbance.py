@@ -39,6 +39,9 @@ class SinusoidalDisturbance(Disturbance):
     omega: np.ndarray
     phase: np.ndarray
 
+    twin_fields = ("amplitude", "omega", "phase")
+    """What its compiled twin reads (csrc/plant/disturbance.hpp)."""
+
     def __post_init__(self):
         for name in ("amplitude", "omega", "phase"):
             object.__setattr__(self, name, np.atleast_1d(np.asarray(getattr(self, name), float)))

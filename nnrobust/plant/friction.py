@@ -32,6 +32,9 @@ class Friction:
     smoothing: float = 0.0
     static: np.ndarray | None = None
 
+    twin_fields = ("viscous", "coulomb", "static", "smoothing")
+    """What its compiled twin reads (csrc/plant/friction.hpp)."""
+
     def __post_init__(self):
         object.__setattr__(self, "viscous", np.asarray(self.viscous, dtype=float))
         object.__setattr__(self, "coulomb", np.asarray(self.coulomb, dtype=float))

@@ -46,10 +46,18 @@ class JointStops:
     alpha: float = 1.0
     ring: np.ndarray | None = None
 
+    twin_fields = ("lower", "upper", "stiffness", "alpha", "ring_frequencies")
+    """What its compiled twin reads (csrc/plant/limits.hpp)."""
+
     def __post_init__(self):
         for name in ("lower", "upper", "stiffness", "ring"):
             if getattr(self, name) is not None:
                 object.__setattr__(self, name, np.asarray(getattr(self, name), dtype=float))
+
+    @property
+    def ring_frequencies(self) -> np.ndarray:
+        """``ring`` with 0 where it is not known (a stop that does not ring) [rad/s]."""
+        return self.ring if self.ring is not None else np.zeros(self.lower.size)
 
     def ringing(self, q: np.ndarray, v: np.ndarray, period: float) -> float:
         """The highest ring frequency [rad/s] among the joints at their stop, or that would reach

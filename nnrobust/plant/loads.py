@@ -79,8 +79,48 @@ class ExternalLoads:
     def __post_init__(self):
         object.__setattr__(self, "_none", HeldLoads(np.zeros(self.n), None))
 
+    twin_fields = (
+        "pulse_start", "pulse_end", "pulse_torque", "wrench_start", "wrench_end", "wrench", "payload_start"
+    )  # fmt: skip
+    """What its compiled twin reads (csrc/plant/loads.hpp)."""
+
     def __bool__(self) -> bool:
         return bool(self.pulses or self.wrenches or self.payloads)
+
+    @property
+    def pulse_start(self) -> np.ndarray:
+        """Each torque step's or impulse's start [s]."""
+        return np.array([p.start for p in self.pulses], dtype=float)
+
+    @property
+    def pulse_end(self) -> np.ndarray:
+        """Each torque step's or impulse's end [s] (inf: a step)."""
+        return np.array([p.end for p in self.pulses], dtype=float)
+
+    @property
+    def pulse_torque(self) -> np.ndarray:
+        """The pulses' joint torques, one column each: n x P [N m]."""
+        return np.array([p.torque for p in self.pulses], dtype=float).T.reshape(self.n, -1)
+
+    @property
+    def wrench_start(self) -> np.ndarray:
+        """Each tool wrench's start [s]."""
+        return np.array([w.start for w in self.wrenches], dtype=float)
+
+    @property
+    def wrench_end(self) -> np.ndarray:
+        """Each tool wrench's end [s]."""
+        return np.array([w.end for w in self.wrenches], dtype=float)
+
+    @property
+    def wrench(self) -> np.ndarray:
+        """The tool wrenches, one column each: 6 x W [N, N m]."""
+        return np.array([w.wrench for w in self.wrenches], dtype=float).T.reshape(6, -1)
+
+    @property
+    def payload_start(self) -> np.ndarray:
+        """Each payload change's time [s] (sorted)."""
+        return np.array([c.start for c in self.payloads], dtype=float)
 
     def at(self, t: float) -> HeldLoads:
         """The loads held over the control period that starts at t [s]."""

@@ -118,6 +118,9 @@ class MujocoPlant:
     integrator: str
     audit: dict[str, float] = field(default_factory=dict)
 
+    twin_fields = ("qpos_index", "dof_index", "substeps")
+    """What its compiled twin reads (csrc/plant/mujoco_engine.hpp), beside :meth:`addresses`."""
+
     def reset(self, q0: np.ndarray, v0: np.ndarray) -> None:
         """Start a run at (q0, q'0): MuJoCo's state reset, then set (warm starts cleared)."""
         mujoco = import_mujoco()

@@ -58,6 +58,11 @@ class Plant:
     sticky: np.ndarray = field(init=False, repr=False)
     """Joints with dry friction that holds them at rest (F_s > 0): integrated as stick-slip."""
 
+    twin_fields = ("effort_limit", "delay", "payload_joint", "payload_parameters")
+    """What its compiled twin reads (csrc/plant/plant.hpp) beside its parts'."""
+    twin_parts = ("friction", "disturbance", "loads", "sensor", "stops", "engine")
+    """Its parts with a compiled twin (csrc/plant/, each part's ``twin_fields``; None: absent)."""
+
     def __post_init__(self):
         n = self.model.nq
         if self.sensor is None:
@@ -116,6 +121,24 @@ class Plant:
         m = self._pin
         J = pin.computeFrameJacobian(m.model, m.data, q, m.frame_id, pin.LOCAL_WORLD_ALIGNED)
         return held.torque + J.T @ held.wrench
+
+    @property
+    def effort_limit(self) -> np.ndarray:
+        """The actuators' torque limits [N m or N]: ``torque_limit``, inf for ideal actuators."""
+        return np.full(self.nq, np.inf) if self.torque_limit is None else self.torque_limit
+
+    @property
+    def payload_joint(self) -> int:
+        """The joint whose inertia a payload change sets (the task frame's; 0 without changes)."""
+        return self._payload_joint if self.loads and self.loads.payloads else 0
+
+    @property
+    def payload_parameters(self) -> np.ndarray:
+        """``payload_inertias`` as dynamic parameters (pin.Inertia.toDynamicParameters), one
+        column each: 10 x (C + 1), the last before any change (10 x 0 without changes).
+        """
+        columns = [i.toDynamicParameters() for i in self.payload_inertias]
+        return np.array(columns, dtype=float).T.reshape(10, -1)
 
     @property
     def nq(self) -> int:

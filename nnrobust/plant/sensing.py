@@ -29,6 +29,9 @@ class Sensor:
     seed: int = 0
     _rng: np.random.Generator = field(init=False, repr=False)
 
+    twin_fields = ("position_noise", "velocity_noise", "resolution")
+    """What its compiled twin reads (csrc/plant/sensing.hpp), beside :meth:`twin_draws`."""
+
     def __post_init__(self):
         for name in ("position_noise", "velocity_noise", "resolution"):
             value = np.asarray(getattr(self, name), dtype=float)
@@ -45,6 +48,17 @@ class Sensor:
     def ideal(cls, n: int) -> Sensor:
         """Exact measurements of n joints."""
         return cls(np.zeros(n), np.zeros(n), np.zeros(n))
+
+    def twin_draws(self, steps: int) -> dict[str, np.ndarray]:
+        """The standard normal draws :meth:`measure` makes over ``steps`` control periods from the
+        seed, in its order, for the compiled twin: ``noise_q`` and ``noise_v``, n x steps (n x 0
+        for an ideal sensor, which draws nothing).
+        """
+        n = self.position_noise.size
+        if self.is_ideal:
+            return {"noise_q": np.zeros((n, 0)), "noise_v": np.zeros((n, 0))}
+        draws = np.random.default_rng(self.seed).standard_normal((steps, 2, n))
+        return {"noise_q": draws[:, 0, :].T.copy(), "noise_v": draws[:, 1, :].T.copy()}
 
     @property
     def is_ideal(self) -> bool:

@@ -126,7 +126,7 @@ class StickSlipIntegrator {
     if (nh == 0) return g;
     Vector hold;
     plant_.constrained_acceleration(t, q, v, tau, md, hold);
-    for (int i = 0; i < nh; ++i) g[ns + i] = 1.0 - std::abs(hold[i]) / plant_.s.static_friction[held[i]];
+    for (int i = 0; i < nh; ++i) g[ns + i] = 1.0 - std::abs(hold[i]) / plant_.friction.stiction[held[i]];
     return g;
   }
 
@@ -148,8 +148,8 @@ class StickSlipIntegrator {
     Vector c(k), stat(k), coul(k);
     for (int i = 0; i < k; ++i) {
       c[i] = Minv_r[rest[i]];
-      stat[i] = plant_.s.static_friction[rest[i]];
-      coul[i] = plant_.s.coulomb[rest[i]];
+      stat[i] = plant_.friction.stiction[rest[i]];
+      coul[i] = plant_.friction.coulomb[rest[i]];
       for (int j = 0; j < k; ++j) W(i, j) = Minv(rest[i], rest[j]);
     }
     Vector f;
