@@ -81,6 +81,39 @@ def test_checking_a_configuration_changes_nothing_and_integration_step_is_subste
         assert np.array_equal(by_step.q, by_count.q)
 
 
+@pytest.mark.parametrize(
+    ("task", "changes", "m"),
+    [("planar", {}, 2), ("pose", {"robot": {"source": "panda", "task_frame": "panda_hand_tcp"}}, 6)],
+)
+def test_validate_leaves_its_input_and_resolve_returns_the_full_copy(task, changes, m):
+    """A gain given once for every task coordinate passes validate unchanged; resolve returns a
+    copy with it written out m times (the input untouched), and resolving again changes nothing.
+    Eq. (17)'s Kv^2 > Kp is checked on every coordinate of the broadcast gains."""
+    import copy
+
+    from nnrobust.config import resolve, task_rows, validate
+
+    config = ExperimentConfig()
+    config.robot.task = task
+    for section, values in changes.items():
+        for key, value in values.items():
+            setattr(getattr(config, section), key, value)
+    if task == "pose":
+        config.trajectory.center = [0.45, 0.0, 0.45]
+        config.trajectory.axis_a, config.trajectory.axis_b = [0.1, 0.0, 0.0], [0.0, 0.1, 0.0]
+    before = copy.deepcopy(config)
+    validate(config)
+    assert config == before and config.controller.Kp == [10.0]
+    full = resolve(config)
+    assert config == before
+    assert task_rows(config) == m
+    c = full.controller
+    assert (c.Kp, c.Kv, c.pd_Kp, c.pd_Kd) == ([10.0] * m, [4.0] * m, [400.0] * m, [40.0] * m)
+    assert resolve(full) == full
+    with pytest.raises(ConfigError, match="controller.Kv.*Kv\\^2 = 9 must exceed Kp = 10"):
+        from_dict({"controller": {"Kp": [10.0], "Kv": [4.0, 3.0]}})
+
+
 def test_config_errors_name_the_key(tmp_path):
     """Unknown keys suggest the closest one; Kv^2 <= Kp is refused with the reason."""
     with pytest.raises(ConfigError, match="did you mean 'duration'"):

@@ -1,6 +1,7 @@
-"""Experiment configuration, in three rooms: :mod:`.schema` (the typed sections and what a
+"""Experiment configuration, in four rooms: :mod:`.schema` (the typed sections and what a
 configuration implies), :mod:`.toml_io` (experiment files in and out, with overrides and
-provenance) and :mod:`.checks` (checks that only check). Everything is importable from here.
+provenance), :mod:`.checks` (checks that only check) and :mod:`.resolve` (the normalised copy
+of a checked configuration). Everything is importable from here.
 """
 
 from ..trajectories.piecewise import MAX_WAYPOINTS, MIN_MOVE_TIME  # the paths' own limits
@@ -24,6 +25,7 @@ from .checks import (
     inert_reason,
     validate,
 )
+from .resolve import resolve
 from .schema import (
     CONTROLLER_KINDS,
     EQ9_KINDS,
@@ -49,6 +51,7 @@ from .schema import (
     path_key,
     shipped_laws,
     step_rotation_limit,
+    task_rows,
 )
 from .toml_io import (
     MAX_BASE_DEPTH,
@@ -123,8 +126,10 @@ __all__ = [
     "path_key",
     "provenance_header",
     "read_text_file",
+    "resolve",
     "shipped_laws",
     "step_rotation_limit",
+    "task_rows",
     "user_classes",
     "user_files",
     "validate",

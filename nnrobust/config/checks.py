@@ -13,6 +13,7 @@ from ..model.tasks import TASK_KINDS
 from ..plant.disturbance import DISTURBANCE_KINDS
 from ..plant.mujoco_engine import ENGINES, MUJOCO_INTEGRATORS
 from ..trajectories import PATH_KINDS
+from .resolve import GAIN_KEYS, full_gain
 from .schema import (
     EQ9_KINDS,
     MAX_PATH_EXTENT,
@@ -116,22 +117,24 @@ def _check_trajectory(config: ExperimentConfig) -> tuple[int, str]:
 
 
 def _check_gains(c: ControllerConfig, m: int, where: str) -> None:
-    """Kp, Kv, pd_Kp, pd_Kd: one value for all m task coordinates (repeated here) or m, positive."""
-    for name in ("Kp", "Kv", "pd_Kp", "pd_Kd"):
+    """Kp, Kv, pd_Kp, pd_Kd: one value for all m task coordinates or m, positive; Kv^2 > Kp on
+    each coordinate for the kinds of eq. (9).
+    """
+    for name in GAIN_KEYS:
         values = getattr(c, name)
-        if len(values) == 1:  # one value for every task coordinate
-            setattr(c, name, values * m)
-        elif len(values) != m:
+        if len(values) not in (1, m):
             raise ConfigError(
                 f"controller.{name}", f"has {len(values)} entries, {where} (or give one value for all)"
             )
-    for path, values in (
-        ("controller.Kp", c.Kp),
-        ("controller.Kv", c.Kv),
-        ("controller.pd_Kp", c.pd_Kp),
-        ("controller.pd_Kd", c.pd_Kd),
-    ):
-        _positive(path, values)
+        _positive(f"controller.{name}", values)
+    pairs = zip(full_gain(c.Kp, m), full_gain(c.Kv, m))
+    for kp, kv in pairs if c.kind in EQ9_KINDS else ():  # pd and custom laws do not use them
+        if kv * kv <= kp:
+            raise ConfigError(
+                "controller.Kv",
+                f"Kv^2 = {kv * kv:g} must exceed Kp = {kp:g}: Q = diag(2 Kp^2, 2 Kv^2 - 2 Kp) of "
+                "eq. (17) must be positive definite for the Lyapunov function y^T P y to decrease",
+            )
 
 
 def inert_keys(config: ExperimentConfig) -> dict[str, str]:
@@ -337,7 +340,9 @@ FILLED_LISTS = {
 
 
 def validate(config: ExperimentConfig) -> None:
-    """Check values that a type alone does not constrain (robot-independent checks)."""
+    """Check values that a type alone does not constrain (robot-independent checks). It changes
+    nothing: :func:`nnrobust.config.resolve` returns the normalised copy.
+    """
     c, nn, sim = config.controller, config.nn, config.simulation
     if not NAME_PATTERN.fullmatch(config.name) or ".." in config.name:
         raise ConfigError(
@@ -389,13 +394,6 @@ def validate(config: ExperimentConfig) -> None:
         m, where = _check_trajectory(config)
     _check_gains(c, m, where)
     _check_user_classes(config)
-    for kp, kv in zip(c.Kp, c.Kv) if c.kind in EQ9_KINDS else ():  # pd and custom laws do not use them
-        if kv * kv <= kp:
-            raise ConfigError(
-                "controller.Kv",
-                f"Kv^2 = {kv * kv:g} must exceed Kp = {kp:g}: Q = diag(2 Kp^2, 2 Kv^2 - 2 Kp) of "
-                "eq. (17) must be positive definite for the Lyapunov function y^T P y to decrease",
-            )
     _non_negative("controller.k", c.k)
     if c.pd_null_damping is not None:
         _non_negative("controller.pd_null_damping", c.pd_null_damping)

@@ -597,6 +597,19 @@ def nominal_kind(config: ExperimentConfig) -> str:
     return kind
 
 
+def task_rows(config: ExperimentConfig) -> int:
+    """m, the task coordinates a configuration implies: 6 on a pose task, else the entries of its
+    path's points (a custom trajectory: the task's, 2 planar or 3 position).
+    """
+    from ..model.tasks import TASK_KINDS
+
+    if config.robot.task == "pose":
+        return 6
+    if config.trajectory.kind == "custom":
+        return TASK_KINDS.get(config.robot.task, 2)
+    return config.trajectory.dimension
+
+
 def default_criteria(n: int, task: str) -> list[str]:
     """``subtasks.criteria`` when it is not given: the paper's eq. (19) on a three-joint planar
     arm, else manipulability and joint-limit avoidance (joint limits alone on a pose task, where

@@ -19,6 +19,7 @@ from pathlib import Path
 
 from ..exceptions import ConfigError
 from .checks import FILLED_LISTS, INDEXED, validate
+from .resolve import resolve
 from .schema import KEY_ALIASES, USER_PARTS, ExperimentConfig, _field_names, _user_part
 
 
@@ -121,10 +122,12 @@ def _section_from_dict(cls, data: dict, path: str):
 
 
 def from_dict(data: dict) -> ExperimentConfig:
-    """Build and validate a configuration from nested dicts (as read from TOML)."""
+    """A configuration from nested dicts (as read from TOML): built, validated and resolved
+    (:func:`.resolve.resolve`).
+    """
     config = _section_from_dict(ExperimentConfig, data, "")
     validate(config)
-    return config
+    return resolve(config)
 
 
 MAX_TOML_BYTES = 1_000_000
