@@ -639,6 +639,21 @@ def registered_laws() -> str:
     return "\n".join(lines) + "\n\nMade from the laws' declarations (`nnrobust/controllers/laws/`).\n"
 
 
+def paper_kinds() -> str:
+    """The paper's kinds of controller.kind, from their declarations."""
+    from nnrobust.controllers.registry import PAPER_KINDS, paper_kinds
+
+    lines = [
+        "| `controller.kind` | u0 | nominal model and friction | its own keys |",
+        "|---|---|---|---|",
+    ]
+    for name in paper_kinds():
+        kind = PAPER_KINDS[name]
+        keys = ", ".join(f"`{k}`" for k in kind.keys) or "-"
+        lines.append(f"| `{name}` | {kind.u0} | {kind.nominal} | {keys} |")
+    return "\n".join(lines) + "\n\nMade from the kinds' declarations (`PaperKind`, nnrobust/controllers/).\n"
+
+
 def disturbance_kinds() -> str:
     """The shipped disturbances of plant.disturbance, from their declarations."""
     from nnrobust.plant.disturbance import DISTURBANCE_KINDS
@@ -671,6 +686,7 @@ def path_kinds() -> str:
 
 RENDERERS = {
     "registered-laws": registered_laws,
+    "paper-kinds": paper_kinds,
     "path-kinds": path_kinds,
     "disturbance-kinds": disturbance_kinds,
     "falsify-paper-factors": _falsified("falsify_paper_factors"),

@@ -1155,7 +1155,7 @@ TUNE_CASES = [
         "tune: an unknown controller",
         lambda d: _tune(d, "paper-ellipse", ["lqr"], 10),
         ex.ConfigError,
-        "--controllers: 'lqr' is not one of nn, no-u0, computed-torque, sliding-mode, pd, ",
+        "--controllers: 'lqr' is not one of nn, sliding-mode, no-u0, computed-torque, pd, ",
     ),
     Case(
         "tune: a class without a search space",
@@ -1508,7 +1508,7 @@ API_CASES = [
         "Python API: controller.kind changed to 'lqr' after loading",
         lambda d: _mutated(lambda c: setattr(c.controller, "kind", "lqr")),
         ex.ConfigError,
-        "controller.kind: 'lqr' is not one of nn, no-u0",
+        "controller.kind: 'lqr' is not one of nn, sliding-mode, no-u0",
     ),
     Case(
         "Python API: a section replaced by None after loading",

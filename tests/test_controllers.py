@@ -257,3 +257,54 @@ def test_the_pd_null_damping_is_sized_from_the_arm():
     assert (round(expected, 1), round(panda.controller.null_damping, 1)) == (2.2, 1.3)  # docs/controller.md
     config = apply_overrides(config, {"controller.pd_null_damping": 0.25})
     assert build(config).controller.null_damping == 0.25
+
+
+def test_one_of_the_papers_kinds_is_one_declaration(monkeypatch):
+    """A kind declared beside its code (PaperKind) is a valid controller.kind, built by its own
+    builder, reads its keys while the other kinds' stay inert, and brings its robust term's search
+    coordinates to the tuner: nothing else names it."""
+    from nnrobust.config import controller_kinds, inert_keys
+    from nnrobust.controllers.registry import PAPER_KINDS, PaperKind
+    from nnrobust.controllers.sliding_mode import SlidingModeCompensator
+    from nnrobust.controllers.task_space import eq9_law
+    from nnrobust.experiment import run_experiment
+    from nnrobust.presets import load_preset
+    from nnrobust.tune.space import Param, arm_scales, search_space, tunable
+
+    built = []
+
+    def builder(parts):
+        c = parts.config.controller
+        built.append(parts.config.controller.kind)
+        return eq9_law(parts, SlidingModeCompensator(np.diag(c.Kp), np.diag(c.Kv), 2.0 * c.sliding_gain, 0.1))
+
+    kind = PaperKind(
+        "double-sliding",
+        "the sliding-mode term at twice its gain",
+        "the experiment's",
+        builder,
+        keys=("controller.sliding_gain",),
+        search=lambda scales: [Param("controller.sliding_gain", 1.0, 10.0, "m/s^2", weak="low")],
+    )
+    monkeypatch.setitem(PAPER_KINDS, kind.name, kind)
+    assert kind.name in controller_kinds() and kind.name in tunable()
+    config = load_preset("paper-ellipse").replace(
+        controller={"kind": "double-sliding"}, simulation={"duration": 0.05}
+    )
+    inert = inert_keys(config)
+    assert "controller.sliding_gain" not in inert and "controller.sliding_boundary" in inert
+    assert "nn." in inert and "controller.Kp" not in inert
+    setup = build(config)
+    assert built == ["double-sliding"]
+    assert setup.controller.compensator.gain == 2.0 * config.controller.sliding_gain
+    space = search_space("double-sliding", arm_scales(setup))
+    assert [p.name for p in space.params] == [
+        "bandwidth",
+        "damping_ratio",
+        "controller.k",
+        "controller.sliding_gain",
+    ]
+    result = run_experiment(config)
+    assert result.status == "completed" and result.backend == "compiled"  # its twin is eq. (9)'s
+    sliding = run_experiment(config.replace(controller={"kind": "sliding-mode"}))
+    assert not np.array_equal(result.tau, sliding.tau)  # the doubled gain acts

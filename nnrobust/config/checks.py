@@ -15,7 +15,6 @@ from ..plant.mujoco_engine import ENGINES, MUJOCO_INTEGRATORS
 from ..trajectories import PATH_KINDS
 from .resolve import GAIN_KEYS, full_gain
 from .schema import (
-    EQ9_KINDS,
     MAX_PATH_EXTENT,
     MAX_PATH_RATE,
     TRAJECTORY_KINDS,
@@ -26,6 +25,7 @@ from .schema import (
     _user_part,
     controller_kinds,
     default_criteria,
+    is_eq9,
     nominal_kind,
     path_key,
 )
@@ -128,7 +128,7 @@ def _check_gains(c: ControllerConfig, m: int, where: str) -> None:
             )
         _positive(f"controller.{name}", values)
     pairs = zip(full_gain(c.Kp, m), full_gain(c.Kv, m))
-    for kp, kv in pairs if c.kind in EQ9_KINDS else ():  # pd and custom laws do not use them
+    for kp, kv in pairs if is_eq9(c.kind) else ():  # pd and custom laws do not use them
         if kv * kv <= kp:
             raise ConfigError(
                 "controller.Kv",
@@ -154,25 +154,22 @@ def inert_keys(config: ExperimentConfig) -> dict[str, str]:
         for key in keys:
             inert.setdefault(key, why)
 
-    from ..controllers.registry import registered_law
+    from ..controllers.registry import PAPER_KINDS, registered_law
 
     kind = f"controller.kind = {c.kind!r}"
     if registered_law(c.kind) is not None:  # its own parameters; it may read subtasks and nominal
         mark(["controller.Kp", "controller.Kv", "controller.k"], f"{kind} is not eq. (9)")
-    elif c.kind not in EQ9_KINDS:
+    elif not is_eq9(c.kind):
         mark(["controller.Kp", "controller.Kv", "controller.k", "subtasks."], f"{kind} is not eq. (9)")
         mark(["controller.coulomb_smoothing", "nominal.viscous_friction", "nominal.coulomb_friction"], kind)
-    if c.kind != "nn":
-        mark(["nn."], kind)
-    if c.kind != "sliding-mode":
-        mark(["controller.sliding_gain", "controller.sliding_boundary"], kind)
-    if c.kind != "pd":
-        mark(["controller.pd_Kp", "controller.pd_Kd", "controller.pd_null_damping"], kind)
-    if c.kind == "computed-torque":
-        mark(["nominal."], "computed torque uses the true model")
+    own = PAPER_KINDS[c.kind].keys if c.kind in PAPER_KINDS else ()
+    for declared in PAPER_KINDS.values():  # the other kinds' own keys, unless this one reads them
+        mark([key for key in declared.keys if key not in own], kind)
+    for key, why in PAPER_KINDS[c.kind].ignores if c.kind in PAPER_KINDS else ():
+        mark([key], why)
     if c.kind == "custom":
         mark(["controller.pinv_threshold", "controller.pinv_max_damping"], kind)
-    if c.kind in EQ9_KINDS and c.k == 0:
+    if is_eq9(c.kind) and c.k == 0:
         mark(["subtasks."], "controller.k = 0 (no self-motion)")
     if nominal_kind(config) == "urdf":
         mark(["nominal.beta", "nominal.p"], "nominal.kind = 'urdf' (beta and p are the closed form's)")

@@ -13,6 +13,7 @@ import typing
 from dataclasses import dataclass, field
 
 from ..controllers.nn_compensator import DEFAULTS as NN_DEFAULTS
+from ..controllers.registry import PAPER_KINDS, paper_kinds
 from ..simulation import MAX_STEP_ROTATION
 from ..trajectories import PATH_KINDS
 
@@ -333,19 +334,20 @@ class ControllerConfig:
     params: dict | None = None
 
 
-CONTROLLER_KINDS = ("nn", "no-u0", "computed-torque", "sliding-mode", "pd")
-"""The built-in values of ``controller.kind`` set by flat keys; the registered laws
-(:func:`controller_kinds`) take ``[controller.params]``, and ``custom`` names a user's class
-(``controller.class``)."""
+CONTROLLER_KINDS = paper_kinds()
+"""The paper's kinds, the built-in values of ``controller.kind`` set by flat keys, as their modules
+declare them (:class:`nnrobust.controllers.registry.PaperKind`), when nnrobust was imported; the
+registered laws (:func:`controller_kinds`) take ``[controller.params]``, and ``custom`` names a
+user's class (``controller.class``)."""
 
 
 def shipped_laws() -> tuple[str, ...]:
-    """The laws nnrobust ships: the built-in kinds and the registered laws
-    (nnrobust/controllers/laws/).
+    """The laws nnrobust ships: the paper's kinds and the registered laws
+    (nnrobust/controllers/laws/), as declared now.
     """
     from ..controllers.registry import law_names
 
-    return (*CONTROLLER_KINDS, *law_names())
+    return (*paper_kinds(), *law_names())
 
 
 def controller_kinds() -> tuple[str, ...]:
@@ -353,8 +355,16 @@ def controller_kinds() -> tuple[str, ...]:
     return (*shipped_laws(), "custom")
 
 
-EQ9_KINDS = ("nn", "no-u0", "computed-torque", "sliding-mode")
-"""The kinds that are the task-space law of eq. (9), whose Kp and Kv eq. (17) constrains."""
+EQ9_KINDS = tuple(name for name, kind in PAPER_KINDS.items() if kind.eq9)
+"""The kinds that are the task-space law of eq. (9), whose Kp and Kv eq. (17) constrains (when
+nnrobust was imported; :func:`is_eq9` asks the declarations)."""
+
+
+def is_eq9(kind: str) -> bool:
+    """Whether ``controller.kind`` is one of the paper's kinds that is eq. (9)'s law."""
+    declared = PAPER_KINDS.get(kind)
+    return declared is not None and declared.eq9
+
 
 KEY_ALIASES = {"class": "class_"}
 """TOML keys that are Python keywords, and the field each is stored in."""

@@ -1,14 +1,16 @@
-"""How an experiment builds its controller from ``[controller]`` and ``[nn]``: the paper's laws
-(eq. 9 with its robust terms, the PD), a registered law (nnrobust/controllers/laws/) or a user's
-class, each from the :class:`ControllerContext` it is handed.
+"""How an experiment builds its controller from ``[controller]`` and ``[nn]``: one of the paper's
+kinds (eq. 9 with its robust terms, the PD; each declared beside its code, :class:`PaperKind`), a
+registered law (nnrobust/controllers/laws/) or a user's class, each from the
+:class:`ControllerContext` it is handed.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..config import ExperimentConfig
+from ..config import ExperimentConfig, controller_kinds
 from ..config.arrays import joint_vector
+from ..exceptions import ConfigError
 from ..model import DynamicsModel, PinocchioModel
 from ..plant import Friction, Plant
 from ..subtasks.base import Criterion
@@ -16,11 +18,8 @@ from ..trajectories import Trajectory
 from .base import Controller, ControllerContext
 from .basis import AdditiveRBFBasis, input_box
 from .custom import build_custom
-from .nn_compensator import NNCompensator
 from .pseudoinverse import DampedPseudoInverse
-from .registry import registered_law
-from .sliding_mode import SlidingModeCompensator
-from .task_space import TaskSpaceController, TaskSpacePD, sized_null_damping
+from .registry import KindParts, paper_kind, registered_law
 
 
 def build_basis(config: ExperimentConfig, robot: PinocchioModel, m: int) -> AdditiveRBFBasis:
@@ -76,8 +75,9 @@ def build_controller(
     true_friction: Friction | None,
     context: ControllerContext,
 ) -> Controller:
-    """The control law named by controller.kind (computed-torque takes ``true_friction`` as F-hat;
-    a custom law is built from ``context``, and the PD's null-space damping sized from it).
+    """The control law named by controller.kind: a user's class or a registered law built from
+    ``context``, or one of the paper's kinds by its declared builder (computed torque takes
+    ``true_friction`` as F-hat).
     """
     c = config.controller
     if c.kind == "custom":
@@ -85,37 +85,7 @@ def build_controller(
     law = registered_law(c.kind)
     if law is not None:
         return law.build(context, c.params)
-    pinv = DampedPseudoInverse(c.pinv_threshold, c.pinv_max_damping)
-    if c.kind == "pd":
-        Kd = np.diag(c.pd_Kd)
-        damping = c.pd_null_damping
-        if damping is None:
-            damping = sized_null_damping(nominal, context.q0, Kd, context.period)
-        return TaskSpacePD(nominal, trajectory, np.diag(c.pd_Kp), Kd, damping, pinv)
-    Kp, Kv = np.diag(c.Kp), np.diag(c.Kv)
-    compensator: NNCompensator | SlidingModeCompensator | None = None
-    if c.kind == "nn":
-        nn = config.nn
-        compensator = NNCompensator(
-            Kp,
-            Kv,
-            build_basis(config, robot, trajectory.m),
-            nn.basis_input,
-            nn.F,
-            nn.gamma,
-            nn.eps0,
-            nn.eps_min,
-            nn.sigma,
-            nn.law,
-        )
-    elif c.kind == "sliding-mode":
-        compensator = SlidingModeCompensator(Kp, Kv, c.sliding_gain, c.sliding_boundary)
-    if c.kind == "computed-torque":
-        if true_friction is None:
-            raise ValueError("computed-torque needs the true friction")
-        nominal_friction = Friction(true_friction.viscous, true_friction.coulomb, c.coulomb_smoothing)
-    else:
-        nominal_friction = build_nominal_friction(config, robot.nq)
-    return TaskSpaceController(
-        nominal, trajectory, Kp, Kv, c.k, criterion, nominal_friction, compensator, pinv
-    )
+    kind = paper_kind(c.kind)
+    if kind is None:  # validate refuses it first
+        raise ConfigError("controller.kind", f"{c.kind!r} is not one of {', '.join(controller_kinds())}")
+    return kind.build(KindParts(config, robot, nominal, trajectory, criterion, true_friction, context))

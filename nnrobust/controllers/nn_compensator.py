@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .basis import AdditiveRBFBasis
+from .registry import KindParts, PaperKind, declare_kind
 
 U0_LAWS = ("corrected", "printed")
 """u_0 = -rho^2 w / (rho |w| + eps) (corrected, default) or -rho w / (rho |w| + eps) (printed)."""
@@ -213,3 +214,56 @@ class NNCompensator:
         u0, rho = self.u0(q, v, y, z)
         signals = {"rho_hat": rho, "eps": float(z[self.L]), "z_norm": float(np.linalg.norm(z[: self.L]))}
         return u0, self.advance(q, v, y, z, period), signals
+
+
+def _build(parts: KindParts):
+    """Eq. (9) with the NN compensator of ``[nn]``."""
+    from .build import build_basis
+    from .task_space import eq9_law
+
+    c, nn = parts.config.controller, parts.config.nn
+    basis = build_basis(parts.config, parts.robot, parts.trajectory.m)
+    term = NNCompensator(
+        np.diag(c.Kp),
+        np.diag(c.Kv),
+        basis,
+        nn.basis_input,
+        nn.F,
+        nn.gamma,
+        nn.eps0,
+        nn.eps_min,
+        nn.sigma,
+        nn.law,
+    )
+    return eq9_law(parts, term)
+
+
+def _search(scales: dict) -> list:
+    """The tuner's coordinates of the NN term (nnrobust/tune/space.py): F, the leakage rate F
+    sigma from 1 % over the run to one control period, and the eps floor up to the arm's task
+    acceleration.
+    """
+    from ..tune.space import Param
+
+    D, T, a = scales["duration"], scales["period"], scales["task_acceleration"]
+    return [
+        Param("nn.F", 1e-2, 1e3, "-", weak="low"),
+        Param(
+            "leakage_rate",
+            0.01 / D,
+            1.0 / T,
+            "1/s",
+            weak="high",
+            low_reason=f"run length: F sigma D = 0.01, {0.01 / D:.3g} 1/s",
+            high_reason=f"sampling: F sigma T = 1, {1.0 / T:.4g} 1/s",
+        ),
+        Param("nn.eps_min", 1e-5 * a, a, "m/s^2", weak="high"),
+    ]
+
+
+declare_kind(
+    PaperKind(
+        "nn", "the NN compensator, eq. (15)", "the experiment's (the paper's p̂, f̂_d)", _build, keys=("nn.",),
+        search=_search,
+    )
+)  # fmt: skip

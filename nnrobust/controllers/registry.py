@@ -1,4 +1,13 @@
-"""The registry of control laws declared beside their code (docs/extending.md).
+"""The registries of control laws declared beside their code (docs/extending.md).
+
+The paper's law and its baselines (``nn``, ``no-u0``, ``computed-torque``, ``sliding-mode``,
+``pd``) are :class:`PaperKind` declarations in the modules that hold their code: each says what its
+robust term and nominal model are, whether it is eq. (9), the configuration keys it alone reads,
+its builder and its robust term's search coordinates. ``controller.kind``'s built-in choices, the
+keys a configuration leaves inert, the controller builder, the tuner's search spaces and
+docs/controller.md's table of them derive from those declarations. Their numbers are the flat keys
+of ``[controller]`` and ``[nn]`` (nnrobust/config/schema.py), as the paper's experiment files
+have them.
 
 A registered law is a :class:`nnrobust.Controller` built as ``Class(context, **params)`` from an
 experiment's ``controller.kind = NAME`` and ``[controller.params]``. Its module declares, once,
@@ -16,6 +25,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from importlib import import_module
+from typing import Any
 
 import numpy as np
 
@@ -166,6 +176,76 @@ class Law:
         from ..twins import twin_values
 
         return twin_values(controller, self.twin_fields)
+
+
+@dataclass(frozen=True)
+class KindParts:
+    """What a :class:`PaperKind` is built from: the configuration, the robot, the controller's
+    nominal model, the trajectory, the weighted criterion (or None), the true robot's friction
+    (computed torque's F-hat) and the :class:`~nnrobust.controllers.ControllerContext`.
+    """
+
+    config: Any
+    robot: Any
+    nominal: Any
+    trajectory: Any
+    criterion: Any
+    true_friction: Any
+    context: Any
+
+
+@dataclass(frozen=True)
+class PaperKind:
+    """One of the paper's law and its baselines, declared beside its code.
+
+    Attributes:
+        name: the value of ``controller.kind``.
+        u0: its robust term u_0, one line for the docs.
+        nominal: the nominal model and friction it uses, one line for the docs.
+        build: ``build(parts: KindParts) -> Controller``.
+        eq9: whether it is eq. (9)'s task-space law (it reads ``controller.Kp``, ``Kv``, ``k``,
+            the subtasks and the nominal friction; eq. (17)'s Kv^2 > Kp is checked).
+        keys: its own configuration keys, beyond eq. (9)'s (``section.key``, or ``section.`` for
+            a whole section): inert under a kind that does not declare them too.
+        ignores: (key, why) of keys that it leaves inert although eq. (9) reads them.
+        search: ``search(scales) -> [tune.space.Param, ...]``, its robust term's search coordinates
+            beside the gains (None: the gains alone).
+
+    """
+
+    name: str
+    u0: str
+    nominal: str
+    build: Callable[[KindParts], Any]
+    eq9: bool = True
+    keys: tuple[str, ...] = ()
+    ignores: tuple[tuple[str, str], ...] = ()
+    search: Callable[[dict], list] | None = None
+
+
+PAPER_KINDS: dict[str, PaperKind] = {}
+"""The paper's kinds by name, in declaration order (filled when nnrobust.controllers is imported)."""
+
+
+def declare_kind(kind: PaperKind) -> PaperKind:
+    """Add one of the paper's kinds (its module calls this once, at import)."""
+    if kind.name in PAPER_KINDS and PAPER_KINDS[kind.name] is not kind:
+        raise ValueError(f"a controller kind named {kind.name!r} is already declared")
+    PAPER_KINDS[kind.name] = kind
+    return kind
+
+
+def paper_kinds() -> tuple[str, ...]:
+    """The names of the paper's kinds (``nn``, ``no-u0``, ...), in declaration order."""
+    from . import nn_compensator, sliding_mode, task_space  # noqa: F401  (their declarations)
+
+    return tuple(PAPER_KINDS)
+
+
+def paper_kind(name: str) -> PaperKind | None:
+    """The declaration of the paper's kind ``name``, or None."""
+    paper_kinds()
+    return PAPER_KINDS.get(name)
 
 
 LAWS: dict[str, Law] = {}

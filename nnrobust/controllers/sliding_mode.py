@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .nn_compensator import error_dynamics, lyapunov_P
+from .registry import KindParts, PaperKind, declare_kind
 
 
 @dataclass
@@ -53,3 +54,38 @@ class SlidingModeCompensator:
         """(u_0, z, signals)."""
         w = self.BtP @ y
         return -self.gain * w / max(float(np.linalg.norm(w)), self.boundary), z, {}
+
+
+def _build(parts: KindParts):
+    """Eq. (9) with the sliding-mode term of ``controller.sliding_gain`` and ``sliding_boundary``."""
+    from .task_space import eq9_law
+
+    c = parts.config.controller
+    return eq9_law(
+        parts, SlidingModeCompensator(np.diag(c.Kp), np.diag(c.Kv), c.sliding_gain, c.sliding_boundary)
+    )
+
+
+def _search(scales: dict) -> list:
+    """The tuner's coordinates of the sliding-mode term: K and Phi, scaled by the arm's task
+    acceleration a (nnrobust/tune/space.py).
+    """
+    from ..tune.space import Param
+
+    a = scales["task_acceleration"]
+    return [
+        Param("controller.sliding_gain", 1e-3 * a, 10 * a, "m/s^2", weak="low"),
+        Param("controller.sliding_boundary", 1e-5 * a, a, "m/s^2", weak="high"),
+    ]
+
+
+declare_kind(
+    PaperKind(
+        "sliding-mode",
+        "−K ω / max(‖ω‖, Φ): fixed gain K (`sliding_gain`), boundary layer Φ (`sliding_boundary`)",
+        "the experiment's",
+        _build,
+        keys=("controller.sliding_gain", "controller.sliding_boundary"),
+        search=_search,
+    )
+)

@@ -12,6 +12,7 @@ from ..subtasks.base import Criterion
 from ..trajectories import Trajectory
 from .base import Controller, ControlOutput
 from .pseudoinverse import DampedPseudoInverse, project_null_space
+from .registry import KindParts, PaperKind, declare_kind
 
 
 class RobustTerm(Protocol):
@@ -182,3 +183,71 @@ class TaskSpacePD(Controller):
         tau = J.T @ (-self.Kp @ e - self.Kd @ de) + self.nominal.gravity(q)
         tau -= self.null_damping * project_null_space(J, J.T @ inv, v)
         return ControlOutput(tau, {"damping": lam2})
+
+
+def eq9_law(
+    parts: KindParts, term: RobustTerm | None = None, friction: Friction | None = None
+) -> TaskSpaceController:
+    """Eq. (9) as ``[controller]`` sets it (Kp, Kv, k, the pseudo-inverse) with the robust term
+    ``term`` (None: u_0 = 0) and F-hat ``friction`` (None: the nominal section's).
+    """
+    from .build import build_nominal_friction
+
+    c = parts.config.controller
+    return TaskSpaceController(
+        parts.nominal,
+        parts.trajectory,
+        np.diag(c.Kp),
+        np.diag(c.Kv),
+        c.k,
+        parts.criterion,
+        friction or build_nominal_friction(parts.config, parts.robot.nq),
+        term,
+        DampedPseudoInverse(c.pinv_threshold, c.pinv_max_damping),
+    )
+
+
+def _computed_torque(parts: KindParts) -> TaskSpaceController:
+    """Eq. (9) with u_0 = 0 and the true friction as F-hat (the experiment makes the nominal model
+    the true one).
+    """
+    true = parts.true_friction
+    if true is None:
+        raise ValueError("computed-torque needs the true friction")
+    smoothing = parts.config.controller.coulomb_smoothing
+    return eq9_law(parts, friction=Friction(true.viscous, true.coulomb, smoothing))
+
+
+def _pd(parts: KindParts) -> TaskSpacePD:
+    """The PD of ``controller.pd_Kp``, ``pd_Kd`` and ``pd_null_damping`` (sized from the arm at
+    q(0) when unset).
+    """
+    c, context = parts.config.controller, parts.context
+    Kd = np.diag(c.pd_Kd)
+    damping = c.pd_null_damping
+    if damping is None:
+        damping = sized_null_damping(parts.nominal, context.q0, Kd, context.period)
+    pinv = DampedPseudoInverse(c.pinv_threshold, c.pinv_max_damping)
+    return TaskSpacePD(parts.nominal, parts.trajectory, np.diag(c.pd_Kp), Kd, damping, pinv)
+
+
+declare_kind(PaperKind("no-u0", "0", "the experiment's", eq9_law))
+declare_kind(
+    PaperKind(
+        "computed-torque",
+        "0",
+        "the true robot's model and friction: what perfect model knowledge buys",
+        _computed_torque,
+        ignores=(("nominal.", "computed torque uses the true model"),),
+    )
+)
+declare_kind(
+    PaperKind(
+        "pd",
+        "task-space PD with gravity compensation and null-space damping (no eq. 9)",
+        "Ĝ only",
+        _pd,
+        eq9=False,
+        keys=("controller.pd_Kp", "controller.pd_Kd", "controller.pd_null_damping"),
+    )
+)

@@ -26,17 +26,15 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-TUNABLE = ("nn", "no-u0", "computed-torque", "sliding-mode", "pd")
-"""The built-in kinds, each with a search space."""
-
 
 def tunable() -> tuple[str, ...]:
-    """The shipped laws with a search space: the built-in kinds and the registered laws that
-    declare search bounds (nnrobust/controllers/laws/).
+    """The shipped laws with a search space: the paper's kinds (their gains, and their robust
+    terms' declared coordinates) and the registered laws that declare search bounds
+    (nnrobust/controllers/laws/).
     """
-    from ..controllers.registry import LAWS, law_names
+    from ..controllers.registry import LAWS, law_names, paper_kinds
 
-    return (*TUNABLE, *(n for n in law_names() if any(p.search for p in LAWS[n].params)))
+    return (*paper_kinds(), *(n for n in law_names() if any(p.search for p in LAWS[n].params)))
 
 
 EDGE = 0.03
@@ -192,7 +190,7 @@ def bandwidth_range(scales: dict) -> tuple[float, float]:
 
 def search_space(controller: str, scales: dict[str, float]) -> SearchSpace:
     """The search space of a controller on an arm (see the module docstring)."""
-    from ..controllers.registry import registered_law
+    from ..controllers.registry import paper_kind, registered_law
 
     if controller not in tunable():
         raise ValueError(
@@ -214,10 +212,11 @@ def search_space(controller: str, scales: dict[str, float]) -> SearchSpace:
         return SearchSpace(controller, tuple(params), custom=True)
     T = scales["period"]
     w_low, w_high = bandwidth_range(scales)
-    a = scales["task_acceleration"]
     sampling = f"sampling: w (1/2 + delay) T = 1, {w_high:.4g} rad/s"
     params = [Param("bandwidth", w_low, w_high, "rad/s", high_reason=sampling)]
-    if controller == "pd":
+    kind = paper_kind(controller)
+    assert kind is not None  # tunable() lists only the paper's kinds and the registered laws
+    if not kind.eq9:  # the PD: its damping ratio, and the null-space damping from the arm
         params.append(Param("damping_ratio", 0.2, 5.0, "-"))
         m = scales["joint_inertia"]
         params.append(Param("controller.pd_null_damping", m * w_low, m * w_high, "N m s/rad"))
@@ -226,26 +225,8 @@ def search_space(controller: str, scales: dict[str, float]) -> SearchSpace:
         params.append(
             Param("controller.k", 0.1, 1.0 / T, "1/s", high_reason=f"sampling: k T <= 1, {1.0 / T:.4g} 1/s")
         )
-    if controller == "nn":
-        D = scales["duration"]
-        params += [
-            Param("nn.F", 1e-2, 1e3, "-", weak="low"),
-            Param(
-                "leakage_rate",
-                0.01 / D,
-                1.0 / T,
-                "1/s",
-                weak="high",
-                low_reason=f"run length: F sigma D = 0.01, {0.01 / D:.3g} 1/s",
-                high_reason=f"sampling: F sigma T = 1, {1.0 / T:.4g} 1/s",
-            ),
-            Param("nn.eps_min", 1e-5 * a, a, "m/s^2", weak="high"),
-        ]
-    elif controller == "sliding-mode":
-        params += [
-            Param("controller.sliding_gain", 1e-3 * a, 10 * a, "m/s^2", weak="low"),
-            Param("controller.sliding_boundary", 1e-5 * a, a, "m/s^2", weak="high"),
-        ]
+    if kind.search is not None:  # its robust term's coordinates, as its module declares them
+        params += kind.search(scales)
     return SearchSpace(controller, tuple(params), scales["task_inertia"])
 
 
