@@ -622,21 +622,41 @@ def registered_laws() -> str:
     ]
     for name in law_names():
         for p in LAWS[name].params:
-            size = {"1": "", "2": " (2 entries)", "n": " (per joint)", "m": " (per task row)"}[p.size]
-            valid = (
-                " or ".join(f"`{c}`" for c in p.choices)
-                if p.choices
-                else ("true or false" if isinstance(p.default, bool) else f"[{p.low:g}, {p.high:g}]{size}")
-            )
-            shown = f"{p.default:.4g}" if isinstance(p.default, float) else str(p.default)
-            default = "sized by the law" if p.default is None else f"`{shown}`"
             search = (
                 ""
                 if p.search is None
                 else ("from the arm" if callable(p.search) else f"{p.search[0]:g} to {p.search[1]:g}")
             )
-            lines.append(f"| `{name}` | `{p.name}`: {p.doc} | {p.unit} | {default} | {valid} | {search} |")
+            lines.append(f"| `{name}` | {_param_cells(p, 'sized by the law')} | {search} |")
     return "\n".join(lines) + "\n\nMade from the laws' declarations (`nnrobust/controllers/laws/`).\n"
+
+
+def _param_cells(p, unset: str) -> str:
+    """A declared parameter's cells: `name`: doc | unit | default | valid values."""
+    size = {"1": "", "2": " (2 entries)", "n": " (per joint)", "m": " (per task row)"}[p.size]
+    valid = (
+        " or ".join(f"`{c}`" for c in p.choices)
+        if p.choices
+        else ("true or false" if isinstance(p.default, bool) else f"{p.range}{size}")
+    )
+    one = isinstance(p.default, tuple) and len(p.default) == 1  # one value for every row
+    value = p.default[0] if one else p.default
+    shown = f"{value:.4g}" if isinstance(value, float) else str(value)
+    default = unset if p.default is None else f"`{shown}`"
+    return f"`{p.name}`: {p.doc} | {p.unit} | {default} | {valid}"
+
+
+def paper_kind_keys() -> str:
+    """The paper's kinds' own keys, from their declarations."""
+    from nnrobust.controllers.registry import PAPER_KINDS, paper_kinds
+
+    lines = ["| `controller.kind` | key | unit | default | valid values |", "|---|---|---|---|---|"]
+    for name in paper_kinds():
+        lines += [f"| `{name}` | {_param_cells(p, 'sized from the arm')} |" for p in PAPER_KINDS[name].params]
+    return (
+        "\n".join(lines)
+        + "\n\nMade from the kinds' declarations (`PaperKind.params`, nnrobust/controllers/).\n"
+    )
 
 
 def paper_kinds() -> str:
@@ -687,6 +707,7 @@ def path_kinds() -> str:
 RENDERERS = {
     "registered-laws": registered_laws,
     "paper-kinds": paper_kinds,
+    "paper-kind-keys": paper_kind_keys,
     "path-kinds": path_kinds,
     "disturbance-kinds": disturbance_kinds,
     "falsify-paper-factors": _falsified("falsify_paper_factors"),

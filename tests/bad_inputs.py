@@ -616,7 +616,7 @@ CONFIG_CASES = [
         "unknown choice",
         lambda d: _toml(d, "[nn]\nlaw = 'fast'\n"),
         ex.ConfigError,
-        "nn.law: 'fast' is not one of corrected, printed",
+        "nn.law: expected one of 'corrected', 'printed', got 'fast'",
     ),
     Case(
         "gain vector of the wrong length",
@@ -860,7 +860,7 @@ CONFIG_CASES = [
         "basis of a million centres",
         lambda d: _toml(d, "[nn]\ncenters = 1000000\n"),
         ex.ConfigError,
-        "nn.centers: 1000000 centres per input; at most 1000",
+        "nn.centers: 1000000 is outside [1, 1000]",
     ),
     Case(
         "run that needs more memory than simulation.memory_limit",
@@ -1496,7 +1496,7 @@ API_CASES = [
         "nn.error_range of 1e-300 (the loops would disagree)",
         lambda d: _toml(d, f"{PAPER}[nn]\nbasis_input = 'error'\nerror_range = [1e-300, 1e-300]\n"),
         ex.ConfigError,
-        "nn.error_range: [1e-300, 1e-300] is outside [1e-09, 1e+09]",
+        "nn.error_range: 1e-300 is outside [1e-09, 1e+09] m, m/s",
     ),
     Case(
         "gains of 1e300 (the loops would disagree)",

@@ -308,3 +308,27 @@ def test_one_of_the_papers_kinds_is_one_declaration(monkeypatch):
     assert result.status == "completed" and result.backend == "compiled"  # its twin is eq. (9)'s
     sliding = run_experiment(config.replace(controller={"kind": "sliding-mode"}))
     assert not np.array_equal(result.tau, sliding.tau)  # the doubled gain acts
+
+
+def test_the_papers_kinds_keys_are_defaulted_and_checked_by_their_declarations(monkeypatch):
+    """Every key a kind declares is a field of the configuration with the declared default; its
+    range is the declaration's (narrowing a declared range in a test refuses a value the
+    shipped one accepts, with the key and the range named)."""
+    import dataclasses
+
+    from nnrobust.config import from_dict
+    from nnrobust.controllers.registry import PAPER_KINDS, declared_default
+    from nnrobust.exceptions import ConfigError
+
+    config = ExperimentConfig()
+    declared = [p for kind in PAPER_KINDS.values() for p in kind.params]
+    assert len(declared) >= 17
+    for p in declared:
+        section, field = p.name.split(".")
+        assert getattr(getattr(config, section), field) == declared_default(p.name), p.name
+    assert from_dict({"controller": {"sliding_gain": 50.0}}).controller.sliding_gain == 50.0
+    kind = PAPER_KINDS["sliding-mode"]
+    narrowed = tuple(dataclasses.replace(p, high=40.0) if p.name.endswith("gain") else p for p in kind.params)
+    monkeypatch.setitem(PAPER_KINDS, "sliding-mode", dataclasses.replace(kind, params=narrowed))
+    with pytest.raises(ConfigError, match=r"controller.sliding_gain: 50 is outside \(0, 40\] m/s\^2"):
+        from_dict({"controller": {"sliding_gain": 50.0}})

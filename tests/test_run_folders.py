@@ -387,7 +387,7 @@ def test_runs_too_large_for_memory_are_refused_before_they_start(capsys, tmp_pat
     assert "raise memory_limit" in _one_error_line(capsys)
     for key, value, fragment in (
         ("simulation.substeps", "100000", "at most 10000"),
-        ("nn.centers", "100000", "at most 1000"),
+        ("nn.centers", "100000", "outside [1, 1000]"),
         ("simulation.control_period", "1e-12", "steps; at most"),
     ):
         assert _run(tmp_path / "x", "--set", f"{key}={value}") == 2

@@ -277,7 +277,7 @@ controllers = ["nn"]
 """
     path = _sweep_file(tmp_path, text=text)
     spec = load_sweep(path)
-    with pytest.raises(ConfigError, match=r"vary: nn.eps_min: must be >= 0.*sample 1"):
+    with pytest.raises(ConfigError, match=r"vary: nn.eps_min: -1 is outside \[0, inf\].*sample 1"):
         plan(spec)
     assert main(["sweep", str(path), "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err.strip().splitlines()

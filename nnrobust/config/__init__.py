@@ -4,14 +4,13 @@ provenance), :mod:`.checks` (checks that only check) and :mod:`.resolve` (the no
 of a checked configuration). Everything is importable from here.
 """
 
+from ..numeric_limits import MAX_CENTERS, MAX_GAIN, RANGE_LIMITS
 from ..trajectories.piecewise import MAX_WAYPOINTS, MIN_MOVE_TIME  # the paths' own limits
 from .checks import (
     CLASS_PATTERN,
     FILLED_LISTS,
     INDEXED,
-    MAX_CENTERS,
     MAX_FACTOR,
-    MAX_GAIN,
     MAX_PAYLOAD,
     MAX_PHYSICAL,
     MAX_PINV,
@@ -20,7 +19,6 @@ from .checks import (
     MAX_SUBSTEPS,
     MIN_STEP_ROTATION,
     NAME_PATTERN,
-    RANGE_LIMITS,
     inert_keys,
     inert_reason,
     validate,

@@ -10,6 +10,7 @@ import re
 
 from ..exceptions import ConfigError
 from ..model.tasks import TASK_KINDS
+from ..numeric_limits import MAX_GAIN
 from ..plant.disturbance import DISTURBANCE_KINDS
 from ..plant.mujoco_engine import ENGINES, MUJOCO_INTEGRATORS
 from ..trajectories import PATH_KINDS
@@ -79,7 +80,6 @@ def _positive(path: str, values) -> None:
 
 MAX_SUBSTEPS = 10_000
 MAX_STEPS = 1e9
-MAX_CENTERS = 1000
 """Bounds that no sensible experiment reaches; the memory estimate (experiment.check_memory)
 refuses most oversized runs long before them."""
 
@@ -266,33 +266,30 @@ def _check_user_classes(config: ExperimentConfig) -> None:
             raise ConfigError(class_key, f'{spec!r} is not "file.py:Class" nor "package.module:Class"')
 
 
-MAX_GAIN = 1e12
-"""Largest gain or adaptation rate accepted: beyond it a 1 ms sampled loop is numerically
-meaningless, and the two loops' rounding would tell different stories."""
+def _check_declared(config: ExperimentConfig, m: int) -> None:
+    """The paper's kinds' own keys against their declarations (range, size, whole number, choice;
+    nnrobust/controllers/registry.py, PaperKind.params), whichever kind runs; an unset key that
+    the kind sizes itself (``default`` None) is not checked.
+    """
+    from ..controllers.registry import PAPER_KINDS
 
-RANGE_LIMITS = (1e-9, 1e9)
-"""Accepted span of the NN basis ranges (velocity_range, error_range): a Gaussian of width 1e-300
-underflows to 0/0 in one loop and not the other."""
+    for kind in PAPER_KINDS.values():
+        for p in kind.params:
+            section, field = p.name.split(".")
+            value = getattr(getattr(config, section), field)
+            if not (value is None and p.default is None):
+                p.check(value, None, m, p.name)
 
 
 def _within_range(config: ExperimentConfig) -> None:
-    """Values both loops compute the same way: gains up to :data:`MAX_GAIN`, basis ranges within
-    :data:`RANGE_LIMITS`; beyond, a refusal rather than two different runs.
+    """Values both loops compute the same way: eq. (9)'s gains up to :data:`MAX_GAIN` (the
+    kinds' own keys have their declared ranges); beyond, a refusal rather than two different runs.
     """
-    c, nn = config.controller, config.nn
+    c = config.controller
     for key, values in (
         ("controller.Kp", c.Kp),
         ("controller.Kv", c.Kv),
-        ("controller.pd_Kp", c.pd_Kp),
-        ("controller.pd_Kd", c.pd_Kd),
         ("controller.k", [c.k]),
-        ("controller.pd_null_damping", [c.pd_null_damping or 0.0]),
-        ("controller.sliding_gain", [c.sliding_gain]),
-        ("controller.sliding_boundary", [c.sliding_boundary]),
-        ("nn.F", [nn.F]),
-        ("nn.gamma", [nn.gamma]),
-        ("nn.sigma", [nn.sigma]),
-        ("nn.eps0", [nn.eps0]),
     ):
         if any(abs(v) > MAX_GAIN for v in values):
             shown = values if len(values) > 1 else values[0]
@@ -300,11 +297,6 @@ def _within_range(config: ExperimentConfig) -> None:
                 key,
                 f"{shown} is beyond {MAX_GAIN:g}; no sampled loop at a realistic period uses such a value",
             )
-    low, high = RANGE_LIMITS
-    for key, values in (("nn.error_range", nn.error_range), ("nn.velocity_range", [nn.velocity_range])):
-        if any(not low <= v <= high for v in values):
-            shown = values if len(values) > 1 else values[0]
-            raise ConfigError(key, f"{shown} is outside [{low:g}, {high:g}]")
 
 
 MAX_PAYLOAD = 1000.0
@@ -366,8 +358,6 @@ def validate(config: ExperimentConfig) -> None:
         "plant.engine": (config.plant.engine, ENGINES),
         "plant.mujoco_integrator": (config.plant.mujoco_integrator, MUJOCO_INTEGRATORS),
         "controller.kind": (c.kind, controller_kinds()),
-        "nn.law": (nn.law, ("corrected", "printed")),
-        "nn.basis_input": (nn.basis_input, ("joint", "error")),
         "simulation.integrator": (sim.integrator, ("rk4", "solve_ivp")),
         "simulation.backend": (sim.backend, ("auto", "compiled", "hybrid", "python")),
         "trajectory.kind": (config.trajectory.kind, TRAJECTORY_KINDS),
@@ -390,26 +380,15 @@ def validate(config: ExperimentConfig) -> None:
     else:
         m, where = _check_trajectory(config)
     _check_gains(c, m, where)
+    _check_declared(config, m)
     _check_user_classes(config)
     _non_negative("controller.k", c.k)
-    if c.pd_null_damping is not None:
-        _non_negative("controller.pd_null_damping", c.pd_null_damping)
     for key in ("pinv_threshold", "pinv_max_damping"):
         if not 0 < getattr(c, key) <= MAX_PINV:
             raise ConfigError(
                 f"controller.{key}", f"must be in (0, {MAX_PINV:g}] m/rad, got {getattr(c, key):g}"
             )
-    _positive("nn.F", nn.F)
-    _positive("nn.eps0", nn.eps0)
-    _positive("nn.centers", nn.centers)
-    low, high = RANGE_LIMITS
-    if not low <= nn.width <= high:  # 1e-308 makes the basis 0/0: the two loops would disagree
-        raise ConfigError("nn.width", f"{nn.width:g} is outside [{low:g}, {high:g}]")
-    _positive("nn.velocity_range", nn.velocity_range)
-    _positive("nn.error_range", nn.error_range)
     _within_range(config)
-    for key, number in (("nn.gamma", nn.gamma), ("nn.eps_min", nn.eps_min), ("nn.sigma", nn.sigma)):
-        _non_negative(key, number)
     if nn.eps_min > nn.eps0:
         raise ConfigError("nn.eps_min", f"the floor {nn.eps_min} must not exceed nn.eps0 = {nn.eps0}")
     nc, pc = config.nominal, config.plant
@@ -517,8 +496,6 @@ def validate(config: ExperimentConfig) -> None:
             "computed from a measurement would reach the actuators",
         )
     _non_negative("controller.coulomb_smoothing", c.coulomb_smoothing)
-    _positive("controller.sliding_gain", c.sliding_gain)
-    _positive("controller.sliding_boundary", c.sliding_boundary)
     for key, number in (
         ("plant.viscous_level", pc.viscous_level),
         ("plant.coulomb_level", pc.coulomb_level),
@@ -606,8 +583,6 @@ def validate(config: ExperimentConfig) -> None:
             f"{sim.duration:g} s at a control period of "
             f"{sim.control_period:g} s is {steps:.3g} steps; at most {MAX_STEPS:.0e}",
         )
-    if nn.centers > MAX_CENTERS:
-        raise ConfigError("nn.centers", f"{nn.centers} centres per input; at most {MAX_CENTERS}")
     _positive("simulation.memory_limit", sim.memory_limit)
     if config.plant.disturbance == "sinusoid" and (
         config.plant.disturbance_amplitude is None or config.plant.disturbance_omega is None

@@ -12,8 +12,7 @@ import math
 import typing
 from dataclasses import dataclass, field
 
-from ..controllers.nn_compensator import DEFAULTS as NN_DEFAULTS
-from ..controllers.registry import PAPER_KINDS, paper_kinds
+from ..controllers.registry import PAPER_KINDS, declared_default, paper_kinds
 from ..simulation import MAX_STEP_ROTATION
 from ..trajectories import PATH_KINDS
 
@@ -299,17 +298,13 @@ class ControllerConfig:
         k: self-motion gain of eq. (3) [1/s].
         pinv_threshold: smallest singular value of J below which J+ is damped [m/rad].
         pinv_max_damping: damping at a singularity [m/rad].
-        pd_Kp, pd_Kd: task stiffness [N/m] and damping [N s/m] of the PD baseline (m entries or
-            one for all; N m/rad and N m s/rad for the orientation rows of a pose).
-        pd_null_damping: null-space joint damping D of the PD baseline [N m s/rad]; unset (the
-            default): sized from the arm at q(0), so that the self-motion decays at the task
-            damping's rate and at most at half the sampling rate
-            (:func:`nnrobust.controllers.task_space.sized_null_damping`).
+        pd_Kp, pd_Kd, pd_null_damping: the PD baseline's, as ``pd`` declares them
+            (nnrobust/controllers/task_space.py; docs/controller.md's key reference).
         coulomb_smoothing: v_s [rad/s]: the controller compensates Coulomb friction with
             sat(q' / v_s) instead of sgn(q') (0, the default: the exact sgn of the sampled
             velocity; see docs/plant.md for what that does near zero speed).
-        sliding_gain: K of the sliding-mode u_0 [m/s^2].
-        sliding_boundary: boundary-layer width Phi of the sliding-mode u_0 [m/s^2].
+        sliding_gain, sliding_boundary: the sliding-mode u_0's, as ``sliding-mode`` declares them
+            (nnrobust/controllers/sliding_mode.py; docs/controller.md's key reference).
         class_: for ``kind = "custom"``, the controller class (TOML key ``class``):
             ``"file.py:Class"`` (a path relative to the experiment file) or ``"package.module:Class"``,
             a subclass of :class:`nnrobust.Controller` (docs/extending.md).
@@ -324,12 +319,12 @@ class ControllerConfig:
     k: float = 10.0
     pinv_threshold: float = 0.02
     pinv_max_damping: float = 0.02
-    pd_Kp: list[float] = field(default_factory=lambda: [400.0])
-    pd_Kd: list[float] = field(default_factory=lambda: [40.0])
-    pd_null_damping: float | None = None
+    pd_Kp: list[float] = field(default_factory=lambda: declared_default("controller.pd_Kp"))
+    pd_Kd: list[float] = field(default_factory=lambda: declared_default("controller.pd_Kd"))
+    pd_null_damping: float | None = declared_default("controller.pd_null_damping")
     coulomb_smoothing: float = 0.0
-    sliding_gain: float = 20.0
-    sliding_boundary: float = 0.5
+    sliding_gain: float = declared_default("controller.sliding_gain")
+    sliding_boundary: float = declared_default("controller.sliding_boundary")
     class_: str | None = None
     params: dict | None = None
 
@@ -372,39 +367,23 @@ KEY_ALIASES = {"class": "class_"}
 
 @dataclass
 class NNConfig:
-    """The NN robust compensator, eqs. (15)-(17) (docs/controller.md).
-
-    Attributes:
-        law: ``corrected`` (u_0 = -rho^2 w / (rho |w| + eps)) or ``printed`` (-rho w / (...)).
-        F: adaptation gain.
-        gamma: decay rate of eps [1/s].
-        eps0: eps(0) > 0.
-        eps_min: eps floor (0 = the paper's vanishing boundary layer).
-        sigma: sigma-modification leakage (0 = the paper's law; the default keeps a sampled
-            controller bounded, docs/controller.md).
-        basis_input: ``joint`` (s = [q, q']) or ``error`` (s = [e, e']).
-        centers: Gaussian centres per input coordinate.
-        width: Gaussian width as a multiple of the centre spacing.
-        bias: include a constant unit.
-        velocity_range: q' centres span [-velocity_range, velocity_range] [rad/s]; q centres
-            span the joint limits.
-        error_range: e and e' centres span [-error_range[0], error_range[0]] [m] and
-            [-error_range[1], error_range[1]] [m/s].
-
+    """The NN robust compensator, eqs. (15)-(17): its keys, their units, defaults and ranges as
+    the ``nn`` kind declares them (nnrobust/controllers/nn_compensator.py; docs/controller.md's
+    key reference).
     """
 
-    law: str = "corrected"
-    F: float = NN_DEFAULTS["F"]
-    gamma: float = NN_DEFAULTS["gamma"]
-    eps0: float = NN_DEFAULTS["eps0"]
-    eps_min: float = NN_DEFAULTS["eps_min"]
-    sigma: float = NN_DEFAULTS["sigma"]
-    basis_input: str = "joint"
-    centers: int = 5
-    width: float = 1.0
-    bias: bool = True
-    velocity_range: float = 3.0
-    error_range: list[float] = field(default_factory=lambda: [0.05, 0.5])
+    law: str = declared_default("nn.law")
+    F: float = declared_default("nn.F")
+    gamma: float = declared_default("nn.gamma")
+    eps0: float = declared_default("nn.eps0")
+    eps_min: float = declared_default("nn.eps_min")
+    sigma: float = declared_default("nn.sigma")
+    basis_input: str = declared_default("nn.basis_input")
+    centers: int = declared_default("nn.centers")
+    width: float = declared_default("nn.width")
+    bias: bool = declared_default("nn.bias")
+    velocity_range: float = declared_default("nn.velocity_range")
+    error_range: list[float] = field(default_factory=lambda: declared_default("nn.error_range"))
 
 
 @dataclass

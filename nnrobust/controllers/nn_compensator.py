@@ -6,8 +6,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..numeric_limits import MAX_CENTERS, MAX_GAIN, RANGE_LIMITS
 from .basis import AdditiveRBFBasis
-from .registry import KindParts, PaperKind, declare_kind
+from .registry import KindParts, LawParam, PaperKind, declare_kind
 
 U0_LAWS = ("corrected", "printed")
 """u_0 = -rho^2 w / (rho |w| + eps) (corrected, default) or -rho w / (rho |w| + eps) (printed)."""
@@ -261,9 +262,33 @@ def _search(scales: dict) -> list:
     ]
 
 
+_LOW, _HIGH = RANGE_LIMITS
+
 declare_kind(
     PaperKind(
         "nn", "the NN compensator, eq. (15)", "the experiment's (the paper's p̂, f̂_d)", _build, keys=("nn.",),
         search=_search,
+        params=(
+            LawParam("nn.law", "corrected", "-", "u_0 = -ρ̂² ω / (ρ̂ ‖ω‖ + ε) (`corrected`) or -ρ̂ ω / (...) "
+                     "(`printed`, the paper's eq. 15 as printed)", choices=U0_LAWS),
+            LawParam("nn.F", DEFAULTS["F"], "-", "adaptation gain F", low=0.0, low_open=True, high=MAX_GAIN),
+            LawParam("nn.gamma", DEFAULTS["gamma"], "1/s", "decay rate γ of ε", low=0.0, high=MAX_GAIN),
+            LawParam("nn.eps0", DEFAULTS["eps0"], "m/s^2", "ε(0)", low=0.0, low_open=True, high=MAX_GAIN),
+            LawParam("nn.eps_min", DEFAULTS["eps_min"], "m/s^2", "floor of ε (0: the paper's vanishing "
+                     "boundary layer; at most nn.eps0)", low=0.0),
+            LawParam("nn.sigma", DEFAULTS["sigma"], "-", "σ-modification leakage (0: the paper's law)",
+                     low=0.0, high=MAX_GAIN),
+            LawParam("nn.basis_input", "joint", "-", "s = [q, q'] (`joint`) or [e, e'] (`error`)",
+                     choices=BASIS_INPUTS),
+            LawParam("nn.centers", 5, "-", "Gaussian centres per input coordinate", low=1, high=MAX_CENTERS,
+                     integer=True),
+            LawParam("nn.width", 1.0, "-", "Gaussian width as a multiple of the centre spacing", low=_LOW,
+                     high=_HIGH),
+            LawParam("nn.bias", True, "-", "include a constant unit"),
+            LawParam("nn.velocity_range", 3.0, "rad/s", "q' centres span ±velocity_range (q's span the "
+                     "joint limits)", low=_LOW, high=_HIGH),
+            LawParam("nn.error_range", (0.05, 0.5), "m, m/s", "e and e' centres span ±error_range",
+                     low=_LOW, high=_HIGH, size="2"),
+        ),
     )
 )  # fmt: skip

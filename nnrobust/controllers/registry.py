@@ -42,7 +42,7 @@ class LawParam:
             says).
         unit: its unit ("-" for none).
         doc: one line on what it is.
-        low, high: the closed range of every entry (numbers).
+        low, high: the range of every entry (numbers), closed unless ``low_open``.
         size: ``"1"`` (a number), ``"2"`` (two numbers), ``"m"`` (one or one per task
             coordinate) or ``"n"`` (one or one per joint).
         integer: the number must be whole.
@@ -52,6 +52,7 @@ class LawParam:
         low_reason, high_reason: why a search bound is physical (the tuner never widens it), or "".
         weak: for a knob of a robust or adaptive term, the end (``low`` or ``high``) at which the
             term does least (the tuner's check that the term earns its place); "" for gains.
+        low_open: the range excludes ``low`` (a positive gain: (0, high]).
 
     """
 
@@ -68,6 +69,12 @@ class LawParam:
     low_reason: str = ""
     high_reason: str = ""
     weak: str = ""
+    low_open: bool = False
+
+    @property
+    def range(self) -> str:
+        """The accepted range as text: ``[0, 1e+12]``, ``(0, 1e+12]``."""
+        return f"{'(' if self.low_open else '['}{self.low:g}, {self.high:g}]"
 
     def check(self, value, n: int | None, m: int, key: str):
         """The value checked and normalised (a float, a vector of its size, a bool or a string)."""
@@ -91,13 +98,13 @@ class LawParam:
             raise ConfigError(key, f"needs 2 entries, got {arr.size}")
         if size is not None and arr.size not in (1, size):
             raise ConfigError(key, f"needs 1 or {size} entries ({self.size} = {size}), got {arr.size}")
-        bad = ~np.isfinite(arr) | (arr < self.low) | (arr > self.high)
+        below = (arr <= self.low) if self.low_open else (arr < self.low)
+        bad = ~np.isfinite(arr) | below | (arr > self.high)
         if bad.any():
-            raise ConfigError(
-                key,
-                f"{float(arr[np.flatnonzero(bad)[0]]):g} is outside "
-                f"[{self.low:g}, {self.high:g}] [{self.unit}]",
-            )
+            first = float(arr[np.flatnonzero(bad)[0]])
+            shown = str(int(first)) if self.integer and np.isfinite(first) else f"{first:g}"
+            unit = "" if self.unit == "-" else f" {self.unit}"
+            raise ConfigError(key, f"{shown} is outside {self.range}{unit}")
         if self.size == "1":
             return float(arr[0])
         return np.full(size or 1, arr[0]) if arr.size == 1 else arr
@@ -210,6 +217,9 @@ class PaperKind:
         ignores: (key, why) of keys that it leaves inert although eq. (9) reads them.
         search: ``search(scales) -> [tune.space.Param, ...]``, its robust term's search coordinates
             beside the gains (None: the gains alone).
+        params: its own keys' declarations (a :class:`LawParam` named by the key,
+            ``section.field``): the configuration's defaults, its checks and docs/controller.md's
+            key reference read them.
 
     """
 
@@ -221,6 +231,7 @@ class PaperKind:
     keys: tuple[str, ...] = ()
     ignores: tuple[tuple[str, str], ...] = ()
     search: Callable[[dict], list] | None = None
+    params: tuple[LawParam, ...] = ()
 
 
 PAPER_KINDS: dict[str, PaperKind] = {}
@@ -240,6 +251,24 @@ def paper_kinds() -> tuple[str, ...]:
     from . import nn_compensator, sliding_mode, task_space  # noqa: F401  (their declarations)
 
     return tuple(PAPER_KINDS)
+
+
+def declared_key(key: str) -> LawParam:
+    """The declaration of one of the paper's kinds' own keys (``section.field``)."""
+    paper_kinds()
+    for kind in PAPER_KINDS.values():
+        for p in kind.params:
+            if p.name == key:
+                return p
+    raise KeyError(f"no kind declares the key {key!r}")
+
+
+def declared_default(key: str) -> Any:
+    """The declared default of one of the paper's kinds' own keys, as the configuration holds it
+    (a list for a vector).
+    """
+    default = declared_key(key).default
+    return list(default) if isinstance(default, tuple) else default
 
 
 def paper_kind(name: str) -> PaperKind | None:

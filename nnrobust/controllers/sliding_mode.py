@@ -6,8 +6,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..numeric_limits import MAX_GAIN
 from .nn_compensator import error_dynamics, lyapunov_P
-from .registry import KindParts, PaperKind, declare_kind
+from .registry import KindParts, LawParam, PaperKind, declare_kind
 
 
 @dataclass
@@ -87,5 +88,25 @@ declare_kind(
         _build,
         keys=("controller.sliding_gain", "controller.sliding_boundary"),
         search=_search,
+        params=(
+            LawParam(
+                "controller.sliding_gain",
+                20.0,
+                "m/s^2",
+                "fixed gain K",
+                low=0.0,
+                low_open=True,
+                high=MAX_GAIN,
+            ),
+            LawParam(
+                "controller.sliding_boundary",
+                0.5,
+                "m/s^2",
+                "boundary-layer width Φ",
+                low=0.0,
+                low_open=True,
+                high=MAX_GAIN,
+            ),
+        ),
     )
 )

@@ -7,12 +7,13 @@ from typing import Protocol
 import numpy as np
 
 from ..model.base import DynamicsModel
+from ..numeric_limits import MAX_GAIN
 from ..plant.friction import Friction
 from ..subtasks.base import Criterion
 from ..trajectories import Trajectory
 from .base import Controller, ControlOutput
 from .pseudoinverse import DampedPseudoInverse, project_null_space
-from .registry import KindParts, PaperKind, declare_kind
+from .registry import KindParts, LawParam, PaperKind, declare_kind
 
 
 class RobustTerm(Protocol):
@@ -249,5 +250,35 @@ declare_kind(
         _pd,
         eq9=False,
         keys=("controller.pd_Kp", "controller.pd_Kd", "controller.pd_null_damping"),
+        params=(
+            LawParam(
+                "controller.pd_Kp",
+                (400.0,),
+                "N/m",
+                "task stiffness (N m/rad on a pose's orientation rows)",
+                low=0.0,
+                low_open=True,
+                high=MAX_GAIN,
+                size="m",
+            ),
+            LawParam(
+                "controller.pd_Kd",
+                (40.0,),
+                "N s/m",
+                "task damping (N m s/rad on a pose's orientation rows)",
+                low=0.0,
+                low_open=True,
+                high=MAX_GAIN,
+                size="m",
+            ),
+            LawParam(
+                "controller.pd_null_damping",
+                None,
+                "N m s/rad",
+                "null-space joint damping D; unset: sized from the arm at q(0)",
+                low=0.0,
+                high=MAX_GAIN,
+            ),
+        ),
     )
 )

@@ -1,0 +1,16 @@
+"""The largest (or smallest) values a configuration may give where both loops must compute the
+same thing: beyond them a sampled loop is numerically meaningless, or one loop's rounding tells
+a different story from the other's. The configuration checks and the components' declarations
+(nnrobust/controllers/registry.py) read them from here.
+"""
+
+MAX_GAIN = 1e12
+"""Largest gain or adaptation rate accepted: beyond it a 1 ms sampled loop is numerically
+meaningless, and the two loops' rounding would tell different stories."""
+
+RANGE_LIMITS = (1e-9, 1e9)
+"""Accepted span of the NN basis ranges (velocity_range, error_range) and width: a Gaussian of
+width 1e-300 underflows to 0/0 in one loop and not the other."""
+
+MAX_CENTERS = 1000
+"""Most Gaussian centres per input coordinate of the NN basis (``nn.centers``)."""
