@@ -647,15 +647,18 @@ def _param_cells(p, unset: str) -> str:
 
 
 def paper_kind_keys() -> str:
-    """The paper's kinds' own keys, from their declarations."""
-    from nnrobust.controllers.registry import PAPER_KINDS, paper_kinds
+    """The keys the paper's kinds read, from their declarations (the shared ones, then each
+    kind's own)."""
+    from nnrobust.controllers.registry import PAPER_KINDS, SHARED_KEYS, paper_kinds
 
-    lines = ["| `controller.kind` | key | unit | default | valid values |", "|---|---|---|---|---|"]
+    lines = ["| read by | key | unit | default | valid values |", "|---|---|---|---|---|"]
+    for shared in SHARED_KEYS:
+        lines += [f"| {shared.owner} ({shared.readers}) | {_param_cells(p, '-')} |" for p in shared.params]
     for name in paper_kinds():
         lines += [f"| `{name}` | {_param_cells(p, 'sized from the arm')} |" for p in PAPER_KINDS[name].params]
-    return (
-        "\n".join(lines)
-        + "\n\nMade from the kinds' declarations (`PaperKind.params`, nnrobust/controllers/).\n"
+    return "\n".join(lines) + (
+        "\n\nMade from the declarations (`SharedKeys` in task_space.py and pseudoinverse.py, "
+        "`PaperKind.params`; nnrobust/controllers/).\n"
     )
 
 

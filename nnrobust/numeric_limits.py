@@ -12,5 +12,9 @@ RANGE_LIMITS = (1e-9, 1e9)
 """Accepted span of the NN basis ranges (velocity_range, error_range) and width: a Gaussian of
 width 1e-300 underflows to 0/0 in one loop and not the other."""
 
+MAX_PINV = 1e3
+"""Largest ``controller.pinv_threshold`` and ``pinv_max_damping`` [m/rad]: a task Jacobian's
+singular values are metres per radian."""
+
 MAX_CENTERS = 1000
 """Most Gaussian centres per input coordinate of the NN basis (``nn.centers``)."""

@@ -317,12 +317,13 @@ def test_the_papers_kinds_keys_are_defaulted_and_checked_by_their_declarations(m
     import dataclasses
 
     from nnrobust.config import from_dict
-    from nnrobust.controllers.registry import PAPER_KINDS, declared_default
+    from nnrobust.controllers.registry import PAPER_KINDS, declared_default, declared_params
     from nnrobust.exceptions import ConfigError
 
     config = ExperimentConfig()
-    declared = [p for kind in PAPER_KINDS.values() for p in kind.params]
-    assert len(declared) >= 17
+    declared = declared_params()
+    names = {f"{s}.{f.name}" for s in ("controller", "nn") for f in dataclasses.fields(getattr(config, s))}
+    assert names - {p.name for p in declared} == {"controller.kind", "controller.class_", "controller.params"}
     for p in declared:
         section, field = p.name.split(".")
         assert getattr(getattr(config, section), field) == declared_default(p.name), p.name

@@ -4,7 +4,7 @@ provenance), :mod:`.checks` (checks that only check) and :mod:`.resolve` (the no
 of a checked configuration). Everything is importable from here.
 """
 
-from ..numeric_limits import MAX_CENTERS, MAX_GAIN, RANGE_LIMITS
+from ..numeric_limits import MAX_CENTERS, MAX_GAIN, MAX_PINV, RANGE_LIMITS
 from ..trajectories.piecewise import MAX_WAYPOINTS, MIN_MOVE_TIME  # the paths' own limits
 from .checks import (
     CLASS_PATTERN,
@@ -13,7 +13,6 @@ from .checks import (
     MAX_FACTOR,
     MAX_PAYLOAD,
     MAX_PHYSICAL,
-    MAX_PINV,
     MAX_STEPS,
     MAX_STOP_STIFFNESS,
     MAX_SUBSTEPS,

@@ -10,7 +10,6 @@ import re
 
 from ..exceptions import ConfigError
 from ..model.tasks import TASK_KINDS
-from ..numeric_limits import MAX_GAIN
 from ..plant.disturbance import DISTURBANCE_KINDS
 from ..plant.mujoco_engine import ENGINES, MUJOCO_INTEGRATORS
 from ..trajectories import PATH_KINDS
@@ -117,8 +116,8 @@ def _check_trajectory(config: ExperimentConfig) -> tuple[int, str]:
 
 
 def _check_gains(c: ControllerConfig, m: int, where: str) -> None:
-    """Kp, Kv, pd_Kp, pd_Kd: one value for all m task coordinates or m, positive; Kv^2 > Kp on
-    each coordinate for the kinds of eq. (9).
+    """Kp, Kv, pd_Kp, pd_Kd: one value for all m task coordinates or m (their ranges are
+    declared); Kv^2 > Kp on each coordinate for the kinds of eq. (9).
     """
     for name in GAIN_KEYS:
         values = getattr(c, name)
@@ -126,7 +125,6 @@ def _check_gains(c: ControllerConfig, m: int, where: str) -> None:
             raise ConfigError(
                 f"controller.{name}", f"has {len(values)} entries, {where} (or give one value for all)"
             )
-        _positive(f"controller.{name}", values)
     pairs = zip(full_gain(c.Kp, m), full_gain(c.Kv, m))
     for kp, kv in pairs if is_eq9(c.kind) else ():  # pd and custom laws do not use them
         if kv * kv <= kp:
@@ -267,36 +265,17 @@ def _check_user_classes(config: ExperimentConfig) -> None:
 
 
 def _check_declared(config: ExperimentConfig, m: int) -> None:
-    """The paper's kinds' own keys against their declarations (range, size, whole number, choice;
-    nnrobust/controllers/registry.py, PaperKind.params), whichever kind runs; an unset key that
-    the kind sizes itself (``default`` None) is not checked.
+    """The keys the paper's kinds read against their declarations (range, size, whole number,
+    choice; nnrobust/controllers/registry.py: each kind's own, eq. (9)'s and the pseudo-inverse's),
+    whichever kind runs; an unset key that the kind sizes itself (``default`` None) is not checked.
     """
-    from ..controllers.registry import PAPER_KINDS
+    from ..controllers.registry import declared_params
 
-    for kind in PAPER_KINDS.values():
-        for p in kind.params:
-            section, field = p.name.split(".")
-            value = getattr(getattr(config, section), field)
-            if not (value is None and p.default is None):
-                p.check(value, None, m, p.name)
-
-
-def _within_range(config: ExperimentConfig) -> None:
-    """Values both loops compute the same way: eq. (9)'s gains up to :data:`MAX_GAIN` (the
-    kinds' own keys have their declared ranges); beyond, a refusal rather than two different runs.
-    """
-    c = config.controller
-    for key, values in (
-        ("controller.Kp", c.Kp),
-        ("controller.Kv", c.Kv),
-        ("controller.k", [c.k]),
-    ):
-        if any(abs(v) > MAX_GAIN for v in values):
-            shown = values if len(values) > 1 else values[0]
-            raise ConfigError(
-                key,
-                f"{shown} is beyond {MAX_GAIN:g}; no sampled loop at a realistic period uses such a value",
-            )
+    for p in declared_params():
+        section, field = p.name.split(".")
+        value = getattr(getattr(config, section), field)
+        if not (value is None and p.default is None):
+            p.check(value, None, m, p.name)
 
 
 MAX_PAYLOAD = 1000.0
@@ -313,9 +292,6 @@ plant is so stiff that no plant step resolves it (a 1e10 friction scale asked fo
 per period)."""
 MAX_STOP_STIFFNESS = 1e6
 """Largest ``plant.joint_stop_stiffness`` [1/rad] (the default is 100)."""
-MAX_PINV = 1e3
-"""Largest ``controller.pinv_threshold`` and ``pinv_max_damping`` [m/rad]: a task Jacobian's
-singular values are metres per radian."""
 
 INDEXED = re.compile(r"^([a-z_]+)\.([A-Za-z_]+)\[(\d{1,4})\]$")
 """``section.field[i]``: one entry of a list-valued key (``nominal.factors[2]``)."""
@@ -382,13 +358,6 @@ def validate(config: ExperimentConfig) -> None:
     _check_gains(c, m, where)
     _check_declared(config, m)
     _check_user_classes(config)
-    _non_negative("controller.k", c.k)
-    for key in ("pinv_threshold", "pinv_max_damping"):
-        if not 0 < getattr(c, key) <= MAX_PINV:
-            raise ConfigError(
-                f"controller.{key}", f"must be in (0, {MAX_PINV:g}] m/rad, got {getattr(c, key):g}"
-            )
-    _within_range(config)
     if nn.eps_min > nn.eps0:
         raise ConfigError("nn.eps_min", f"the floor {nn.eps_min} must not exceed nn.eps0 = {nn.eps0}")
     nc, pc = config.nominal, config.plant
@@ -495,7 +464,6 @@ def validate(config: ExperimentConfig) -> None:
             f"{se.delay} control periods is the whole run ({sim.duration:g} s) or more: no command "
             "computed from a measurement would reach the actuators",
         )
-    _non_negative("controller.coulomb_smoothing", c.coulomb_smoothing)
     for key, number in (
         ("plant.viscous_level", pc.viscous_level),
         ("plant.coulomb_level", pc.coulomb_level),

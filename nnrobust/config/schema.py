@@ -293,18 +293,16 @@ class ControllerConfig:
             ``computed-torque`` (eq. 9 with u_0 = 0 and the true model and friction as nominal:
             what perfect model knowledge buys), ``sliding-mode`` (eq. 9 with a fixed-gain
             boundary-layer sliding-mode u_0) or ``pd``.
-        Kp, Kv: diagonals of the task gains [1/s^2, 1/s], m entries or one for all;
-            Kv^2 > Kp is required by eq. (17).
-        k: self-motion gain of eq. (3) [1/s].
-        pinv_threshold: smallest singular value of J below which J+ is damped [m/rad].
-        pinv_max_damping: damping at a singularity [m/rad].
+        Kp, Kv, k, coulomb_smoothing: eq. (9)'s gains [1/s^2, 1/s] (m entries or one for all;
+            Kv^2 > Kp is required by eq. (17)), self-motion gain [1/s] and F-hat's sign smoothing
+            [rad/s], as nnrobust/controllers/task_space.py declares them.
+        pinv_threshold, pinv_max_damping: the damped pseudo-inverse's [m/rad], as
+            nnrobust/controllers/pseudoinverse.py declares them.
         pd_Kp, pd_Kd, pd_null_damping: the PD baseline's, as ``pd`` declares them
-            (nnrobust/controllers/task_space.py; docs/controller.md's key reference).
-        coulomb_smoothing: v_s [rad/s]: the controller compensates Coulomb friction with
-            sat(q' / v_s) instead of sgn(q') (0, the default: the exact sgn of the sampled
-            velocity; see docs/plant.md for what that does near zero speed).
+            (nnrobust/controllers/task_space.py).
         sliding_gain, sliding_boundary: the sliding-mode u_0's, as ``sliding-mode`` declares them
-            (nnrobust/controllers/sliding_mode.py; docs/controller.md's key reference).
+            (nnrobust/controllers/sliding_mode.py). docs/controller.md's key reference lists every
+            declared key with its unit, default and valid values.
         class_: for ``kind = "custom"``, the controller class (TOML key ``class``):
             ``"file.py:Class"`` (a path relative to the experiment file) or ``"package.module:Class"``,
             a subclass of :class:`nnrobust.Controller` (docs/extending.md).
@@ -314,15 +312,15 @@ class ControllerConfig:
     """
 
     kind: str = "nn"
-    Kp: list[float] = field(default_factory=lambda: [10.0])
-    Kv: list[float] = field(default_factory=lambda: [4.0])
-    k: float = 10.0
-    pinv_threshold: float = 0.02
-    pinv_max_damping: float = 0.02
+    Kp: list[float] = field(default_factory=lambda: declared_default("controller.Kp"))
+    Kv: list[float] = field(default_factory=lambda: declared_default("controller.Kv"))
+    k: float = declared_default("controller.k")
+    pinv_threshold: float = declared_default("controller.pinv_threshold")
+    pinv_max_damping: float = declared_default("controller.pinv_max_damping")
     pd_Kp: list[float] = field(default_factory=lambda: declared_default("controller.pd_Kp"))
     pd_Kd: list[float] = field(default_factory=lambda: declared_default("controller.pd_Kd"))
     pd_null_damping: float | None = declared_default("controller.pd_null_damping")
-    coulomb_smoothing: float = 0.0
+    coulomb_smoothing: float = declared_default("controller.coulomb_smoothing")
     sliding_gain: float = declared_default("controller.sliding_gain")
     sliding_boundary: float = declared_default("controller.sliding_boundary")
     class_: str | None = None

@@ -6,6 +6,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..numeric_limits import MAX_PINV
+from .registry import LawParam, SharedKeys, declare_shared
+
 
 @dataclass(frozen=True)
 class DampedPseudoInverse:
@@ -47,3 +50,23 @@ class DampedPseudoInverse:
 def project_null_space(J: np.ndarray, J_pinv: np.ndarray, z: np.ndarray) -> np.ndarray:
     """(I - J+ J) z computed as z - J+ (J z): O(n m), no n x n matrix."""
     return z - J_pinv @ (J @ z)
+
+
+KEYS = declare_shared(
+    SharedKeys(
+        "the damped pseudo-inverse",
+        "every shipped law",
+        (
+            LawParam(
+                "controller.pinv_threshold", 0.02, "m/rad",
+                "smallest singular value of J below which J+ is damped", low=0.0, low_open=True,
+                high=MAX_PINV,
+            ),
+            LawParam(
+                "controller.pinv_max_damping", 0.02, "m/rad", "damping at a singularity", low=0.0,
+                low_open=True, high=MAX_PINV,
+            ),
+        ),
+    )
+)  # fmt: skip
+"""Its keys in an experiment file (``[controller]``)."""

@@ -234,6 +234,42 @@ class PaperKind:
     params: tuple[LawParam, ...] = ()
 
 
+@dataclass(frozen=True)
+class SharedKeys:
+    """Keys that several of the paper's kinds read, declared beside the code that reads them
+    (eq. (9)'s gains in task_space.py, the pseudo-inverse's in pseudoinverse.py).
+
+    Attributes:
+        owner: what reads them, for the docs ("eq. (9)").
+        readers: which kinds read them, for the docs.
+        params: their declarations (a :class:`LawParam` named by the key, ``section.field``).
+
+    """
+
+    owner: str
+    readers: str
+    params: tuple[LawParam, ...]
+
+
+SHARED_KEYS: list[SharedKeys] = []
+"""The shared keys' declarations, filled when nnrobust.controllers is imported."""
+
+
+def declare_shared(keys: SharedKeys) -> SharedKeys:
+    """Add a declaration of shared keys (its module calls this once, at import)."""
+    if keys not in SHARED_KEYS:
+        SHARED_KEYS.append(keys)
+    return keys
+
+
+def declared_params() -> list[LawParam]:
+    """Every key the paper's kinds declare: the shared ones, then each kind's own."""
+    paper_kinds()
+    return [p for shared in SHARED_KEYS for p in shared.params] + [
+        p for kind in PAPER_KINDS.values() for p in kind.params
+    ]
+
+
 PAPER_KINDS: dict[str, PaperKind] = {}
 """The paper's kinds by name, in declaration order (filled when nnrobust.controllers is imported)."""
 
@@ -254,18 +290,16 @@ def paper_kinds() -> tuple[str, ...]:
 
 
 def declared_key(key: str) -> LawParam:
-    """The declaration of one of the paper's kinds' own keys (``section.field``)."""
-    paper_kinds()
-    for kind in PAPER_KINDS.values():
-        for p in kind.params:
-            if p.name == key:
-                return p
+    """The declaration of one of the keys the paper's kinds read (``section.field``)."""
+    for p in declared_params():
+        if p.name == key:
+            return p
     raise KeyError(f"no kind declares the key {key!r}")
 
 
 def declared_default(key: str) -> Any:
-    """The declared default of one of the paper's kinds' own keys, as the configuration holds it
-    (a list for a vector).
+    """The declared default of one of the keys the paper's kinds read, as the configuration holds
+    it (a list for a vector).
     """
     default = declared_key(key).default
     return list(default) if isinstance(default, tuple) else default

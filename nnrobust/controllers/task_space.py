@@ -13,7 +13,7 @@ from ..subtasks.base import Criterion
 from ..trajectories import Trajectory
 from .base import Controller, ControlOutput
 from .pseudoinverse import DampedPseudoInverse, project_null_space
-from .registry import KindParts, LawParam, PaperKind, declare_kind
+from .registry import KindParts, LawParam, PaperKind, SharedKeys, declare_kind, declare_shared
 
 
 class RobustTerm(Protocol):
@@ -232,6 +232,27 @@ def _pd(parts: KindParts) -> TaskSpacePD:
     return TaskSpacePD(parts.nominal, parts.trajectory, np.diag(c.pd_Kp), Kd, damping, pinv)
 
 
+declare_shared(
+    SharedKeys(
+        "eq. (9)",
+        "nn, sliding-mode, no-u0, computed-torque",
+        (
+            LawParam(
+                "controller.Kp", (10.0,), "1/s^2", "task stiffness K_p (eq. 17 needs K_v^2 > K_p)", low=0.0,
+                low_open=True, high=MAX_GAIN, size="m",
+            ),
+            LawParam(
+                "controller.Kv", (4.0,), "1/s", "task damping K_v", low=0.0, low_open=True, high=MAX_GAIN,
+                size="m",
+            ),
+            LawParam("controller.k", 10.0, "1/s", "self-motion gain k of eq. (3)", low=0.0, high=MAX_GAIN),
+            LawParam(
+                "controller.coulomb_smoothing", 0.0, "rad/s", "v_s: F-hat's Coulomb part uses sat(q' / v_s) "
+                "(0: the exact sgn of the sampled velocity; docs/plant.md)", low=0.0,
+            ),
+        ),
+    )
+)  # fmt: skip
 declare_kind(PaperKind("no-u0", "0", "the experiment's", eq9_law))
 declare_kind(
     PaperKind(
