@@ -1,11 +1,13 @@
-// The controller's nominal models on the C++ side: the twins of nnrobust/model (three_link.py's
-// closed form and pinocchio_model.py), behind one interface the controller calls.
+// The controller's nominal models on the C++ side: the interface the controller calls (the twin of
+// nnrobust/model/base.py's DynamicsModel) and the twins of nnrobust/model/three_link.py and
+// pinocchio_model.py, defined in csrc/model/three_link.cpp and pinocchio_model.cpp.
 #pragma once
 
 #include <vector>
 
 #include "closed_loop.hpp"
 #include "fields.hpp"
+#include "subtasks/manipulability.hpp"
 
 namespace nnrobust {
 
@@ -42,9 +44,6 @@ struct TaskState {
   Matrix J6;         // the whole 6 x n frame Jacobian, world-aligned (Pinocchio models only)
 };
 
-// det and adjugate of J J^T, shared by both nominal models and the recording
-double det_small(const Matrix &A);      // manipulability.det: closed form for m <= 3, else LU
-Matrix adjugate_small(const Matrix &A);  // manipulability.adjugate for m <= 3
 
 struct Nominal {
   virtual ~Nominal() = default;

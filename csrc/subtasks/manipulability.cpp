@@ -2,8 +2,34 @@
 #include <cmath>
 
 #include "criterion.hpp"
+#include "manipulability.hpp"
 
 namespace nnrobust {
+
+// manipulability.det and manipulability.adjugate (manipulability.hpp)
+double det_small(const Matrix &A) {
+  if (A.rows() == 1) return A(0, 0);
+  if (A.rows() == 2) return A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0);
+  if (A.rows() > 3) return A.determinant();
+  const Eigen::Vector3d a0 = A.col(0), a1 = A.col(1), a2 = A.col(2);
+  return a0.dot(a1.cross(a2));
+}
+
+Matrix adjugate_small(const Matrix &A) {
+  Matrix adj(A.rows(), A.cols());
+  if (A.rows() == 1) {
+    adj(0, 0) = 1.0;
+  } else if (A.rows() == 2) {
+    adj << A(1, 1), -A(0, 1), -A(1, 0), A(0, 0);
+  } else {
+    const Eigen::Vector3d a0 = A.col(0), a1 = A.col(1), a2 = A.col(2);
+    adj.row(0) = a1.cross(a2).transpose();
+    adj.row(1) = a2.cross(a0).transpose();
+    adj.row(2) = a0.cross(a1).transpose();
+  }
+  return adj;
+}
+
 namespace {
 
 // h = 0.5 det(J J^T)

@@ -1,13 +1,11 @@
-#include "nominal.hpp"
-
-#include <algorithm>
+// The closed-form nominal model: the twin of nnrobust/model/three_link.py (ThreeLinkPlanarModel),
+// the paper's matrices with the errata's corrections, behind the Nominal interface (nominal.hpp).
 #include <cmath>
 
-#include "pin_calls.hpp"
+#include "../nominal.hpp"
 
 namespace nnrobust {
 
-// ---- ThreeLinkPlanarModel (nnrobust/model/three_link.py) ----------------------------------------
 Matrix3d ThreeLink::mass(const Vector3d &q) const {
   const double c2 = std::cos(q[1]), c3 = std::cos(q[2]), c23 = std::cos(q[1] + q[2]);
   const double m11 = s.beta[0] + 2 * s.p[0] * c2 + 2 * s.p[1] * c23 + 2 * s.p[2] * c3;
@@ -61,31 +59,7 @@ Matrix23 ThreeLink::jacobian_tail(const Vector3d &q) const {
   return tail;
 }
 
-// ---- manipulability.det and adjugate -------------------------------------------------------------
-double det_small(const Matrix &A) {
-  if (A.rows() == 1) return A(0, 0);
-  if (A.rows() == 2) return A(0, 0) * A(1, 1) - A(0, 1) * A(1, 0);
-  if (A.rows() > 3) return A.determinant();
-  const Vector3d a0 = A.col(0), a1 = A.col(1), a2 = A.col(2);
-  return a0.dot(a1.cross(a2));
-}
-
-Matrix adjugate_small(const Matrix &A) {
-  Matrix adj(A.rows(), A.cols());
-  if (A.rows() == 1) {
-    adj(0, 0) = 1.0;
-  } else if (A.rows() == 2) {
-    adj << A(1, 1), -A(0, 1), -A(1, 0), A(0, 0);
-  } else {
-    const Vector3d a0 = A.col(0), a1 = A.col(1), a2 = A.col(2);
-    adj.row(0) = a1.cross(a2).transpose();
-    adj.row(1) = a2.cross(a0).transpose();
-    adj.row(2) = a0.cross(a1).transpose();
-  }
-  return adj;
-}
-
-// ---- the closed-form nominal model ----------------------------------------------------------------
+// ClosedFormNominal: ThreeLink behind the Nominal interface
 TaskState ClosedFormNominal::task_state(const Vector &q, const Vector &v) {
   Vector2d x, jdot_v;
   Matrix23 J;
@@ -130,77 +104,6 @@ void ClosedFormNominal::chain(const Vector &q, Matrix &points, std::vector<Matri
         jacobians[j](1, k) += model.s.lengths[i] * std::cos(theta[i]);
       }
   }
-}
-
-// ---- PinocchioModel (nnrobust/model/pinocchio_model.py) ------------------------------------------
-TaskState PinocchioNominal::task_state(const Vector &q, const Vector &v) {
-  pin::forwardKinematics(m.model, m.data, q, v, Vector::Zero(m.model.nv));
-  pin::computeJointJacobians(m.model, m.data);
-  const auto &placement = pin::updateFramePlacement(m.model, m.data, m.frame);
-  const auto acc = pin::getFrameClassicalAcceleration(m.model, m.data, m.frame, pinocchio::LOCAL_WORLD_ALIGNED);
-  TaskState ts;
-  pin::Matrix6x J6 = pin::Matrix6x::Zero(6, m.model.nv);
-  pin::getFrameJacobian(m.model, m.data, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, J6);
-  ts.J6 = J6;
-  ts.x = placement.translation().head(std::min(rows, 3));
-  ts.jdot_v = acc.toVector().head(rows);
-  ts.J = ts.J6.topRows(rows);
-  ts.R = placement.rotation();
-  return ts;
-}
-
-Vector PinocchioNominal::inverse_dynamics(const Vector &q, const Vector &v, const Vector &a) {
-  return pin::rnea(m.model, m.data, q, v, a);
-}
-
-Vector PinocchioNominal::gravity(const Vector &q) { return pin::computeGeneralizedGravity(m.model, m.data, q); }
-
-// grad_k = 2 (<u_k, P_k> + <w_k, S_k>), docs/equations.md "Manipulability gradient", from the
-// frame Jacobian the task state already holds (no second kinematics pass)
-Vector PinocchioNominal::det_gradient(const Vector &, const TaskState &ts) {
-  const Matrix &J6 = ts.J6;
-  const Matrix &J = ts.J;
-  Matrix W6 = Matrix::Zero(6, J6.cols());
-  W6.topRows(rows) = adjugate_small(J * J.transpose()) * J;
-  const int n = static_cast<int>(J6.cols());
-  Vector grad(n);
-  Vector3d prefix = Vector3d::Zero(), suffix = Vector3d::Zero();
-  std::vector<Vector3d> after(n);
-  for (int l = 0; l < n; ++l) {
-    const Vector3d u = J6.col(l).head<3>(), w = J6.col(l).tail<3>();
-    after[l] = u.cross(Vector3d(W6.col(l).head<3>())) + w.cross(Vector3d(W6.col(l).tail<3>()));
-  }
-  std::vector<Vector3d> suffixes(n);
-  for (int l = n - 1; l >= 0; --l) {
-    suffix += after[l];
-    suffixes[l] = suffix;
-  }
-  for (int k = 0; k < n; ++k) {
-    const Vector3d u = J6.col(k).head<3>(), w = J6.col(k).tail<3>();
-    grad[k] = 2.0 * (u.dot(prefix) + w.dot(suffixes[k]));
-    prefix += Vector3d(W6.col(k).head<3>()).cross(w);
-  }
-  return grad;
-}
-
-// PinocchioModel.chain_points / chain_jacobians
-void PinocchioNominal::chain(const Vector &q, Matrix &points, std::vector<Matrix> &jacobians) {
-  const int joints = m.model.njoints - 1, n = m.model.nv;
-  pin::computeJointJacobians(m.model, m.data, q);
-  pin::updateFramePlacement(m.model, m.data, m.frame);
-  points.resize(joints + 1, 3);
-  jacobians.assign(joints + 1, Matrix::Zero(3, n));
-  pin::Matrix6x J = pin::Matrix6x::Zero(6, n);
-  for (int j = 1; j <= joints; ++j) {
-    points.row(j - 1) = m.data.oMi[j].translation().transpose();
-    J.setZero();
-    pin::getJointJacobian(m.model, m.data, j, pinocchio::LOCAL_WORLD_ALIGNED, J);
-    jacobians[j - 1] = J.topRows(3);
-  }
-  points.row(joints) = m.data.oMf[m.frame].translation().transpose();
-  J.setZero();
-  pin::getFrameJacobian(m.model, m.data, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, J);
-  jacobians[joints] = J.topRows(3);
 }
 
 }  // namespace nnrobust
