@@ -90,6 +90,7 @@ class Plant:
         if self.loads is None:
             self.loads = ExternalLoads(n)
         self.held: HeldLoads = self.loads.at(0.0)
+        self._carried: int | None = None  # payload changes whose inertia the model holds
         if self.loads.wrenches or self.loads.payloads:
             if not isinstance(self.model, PinocchioModel):
                 raise ValueError("plant.loads: a wrench or a payload change needs a Pinocchio model")
@@ -109,8 +110,10 @@ class Plant:
         held = loads.at(t)
         if loads.payloads:
             carried = sum(c.start <= t for c in loads.payloads)  # changes so far (sorted)
-            inertia = self.payload_inertias[carried - 1]  # [-1]: none yet
-            self._pin.model.inertias[self._payload_joint] = inertia
+            if carried != self._carried:  # set when it changes, not every period
+                inertia = self.payload_inertias[carried - 1]  # [-1]: none yet
+                self._pin.model.inertias[self._payload_joint] = inertia
+                self._carried = carried
         self.held = held
 
     def load_torque(self, q: np.ndarray) -> np.ndarray:
