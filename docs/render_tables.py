@@ -653,7 +653,9 @@ def paper_kind_keys() -> str:
 
     lines = ["| read by | key | unit | default | valid values |", "|---|---|---|---|---|"]
     for shared in SHARED_KEYS:
-        lines += [f"| {shared.owner} ({shared.readers}) | {_param_cells(p, '-')} |" for p in shared.params]
+        lines += [
+            f"| {shared.owner} ({shared.reader_names()}) | {_param_cells(p, '-')} |" for p in shared.params
+        ]
     for name in paper_kinds():
         lines += [f"| `{name}` | {_param_cells(p, 'sized from the arm')} |" for p in PAPER_KINDS[name].params]
     return "\n".join(lines) + (

@@ -304,6 +304,13 @@ def test_one_of_the_papers_kinds_is_one_declaration(monkeypatch):
         "controller.k",
         "controller.sliding_gain",
     ]
+    values = {"bandwidth": 3.0, "damping_ratio": 1.0, "controller.k": 1.0, "controller.sliding_gain": 2.0}
+    assert space.overrides(values)["controller.Kp"] == [9.0]
+    pd_copy = PaperKind("pd-copy", "like pd", "Ĝ only", PAPER_KINDS["pd"].build, eq9=False)
+    monkeypatch.setitem(PAPER_KINDS, pd_copy.name, pd_copy)  # not eq. (9): the PD's gains are searched
+    pd_space = search_space("pd-copy", arm_scales(setup))
+    pd_values = {"bandwidth": 3.0, "damping_ratio": 1.0, "controller.pd_null_damping": 1.0}
+    assert {"controller.pd_Kp", "controller.pd_Kd"} <= set(pd_space.overrides(pd_values))
     result = run_experiment(config)
     assert result.status == "completed" and result.backend == "compiled"  # its twin is eq. (9)'s
     sliding = run_experiment(config.replace(controller={"kind": "sliding-mode"}))

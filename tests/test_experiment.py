@@ -112,6 +112,9 @@ def test_validate_leaves_its_input_and_resolve_returns_the_full_copy(task, chang
     assert resolve(full) == full
     with pytest.raises(ConfigError, match="controller.Kv.*Kv\\^2 = 9 must exceed Kp = 10"):
         from_dict({"controller": {"Kp": [10.0], "Kv": [4.0, 3.0]}})
+    for kv in (-1.0, -4.0):  # out of range is said before eq. (17), whatever the size
+        with pytest.raises(ConfigError, match=f"controller.Kv: {kv:g} is outside"):
+            from_dict({"controller": {"Kv": [kv]}})
 
 
 def test_config_errors_name_the_key(tmp_path):

@@ -115,9 +115,9 @@ def _check_trajectory(config: ExperimentConfig) -> tuple[int, str]:
     return 6, "the pose task has m = 6"
 
 
-def _check_gains(c: ControllerConfig, m: int, where: str) -> None:
+def _check_gain_sizes(c: ControllerConfig, m: int, where: str) -> None:
     """Kp, Kv, pd_Kp, pd_Kd: one value for all m task coordinates or m (their ranges are
-    declared); Kv^2 > Kp on each coordinate for the kinds of eq. (9).
+    declared and checked next).
     """
     for name in GAIN_KEYS:
         values = getattr(c, name)
@@ -125,6 +125,10 @@ def _check_gains(c: ControllerConfig, m: int, where: str) -> None:
             raise ConfigError(
                 f"controller.{name}", f"has {len(values)} entries, {where} (or give one value for all)"
             )
+
+
+def _check_eq17(c: ControllerConfig, m: int) -> None:
+    """Kv^2 > Kp on each task coordinate for the kinds of eq. (9) (gains already in range)."""
     pairs = zip(full_gain(c.Kp, m), full_gain(c.Kv, m))
     for kp, kv in pairs if is_eq9(c.kind) else ():  # pd and custom laws do not use them
         if kv * kv <= kp:
@@ -355,8 +359,9 @@ def validate(config: ExperimentConfig) -> None:
         )
     else:
         m, where = _check_trajectory(config)
-    _check_gains(c, m, where)
+    _check_gain_sizes(c, m, where)
     _check_declared(config, m)
+    _check_eq17(c, m)
     _check_user_classes(config)
     if nn.eps_min > nn.eps0:
         raise ConfigError("nn.eps_min", f"the floor {nn.eps_min} must not exceed nn.eps0 = {nn.eps0}")

@@ -55,7 +55,6 @@ def project_null_space(J: np.ndarray, J_pinv: np.ndarray, z: np.ndarray) -> np.n
 KEYS = declare_shared(
     SharedKeys(
         "the damped pseudo-inverse",
-        "every shipped law",
         (
             LawParam(
                 "controller.pinv_threshold", 0.02, "m/rad",
@@ -67,6 +66,7 @@ KEYS = declare_shared(
                 low_open=True, high=MAX_PINV,
             ),
         ),
+        readers="every shipped law",
     )
 )  # fmt: skip
 """Its keys in an experiment file (``[controller]``)."""

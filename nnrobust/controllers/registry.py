@@ -241,14 +241,20 @@ class SharedKeys:
 
     Attributes:
         owner: what reads them, for the docs ("eq. (9)").
-        readers: which kinds read them, for the docs.
         params: their declarations (a :class:`LawParam` named by the key, ``section.field``).
+        readers: which laws read them, for the docs; None: the kinds of eq. (9), as declared.
 
     """
 
     owner: str
-    readers: str
     params: tuple[LawParam, ...]
+    readers: str | None = None
+
+    def reader_names(self) -> str:
+        """``readers``, or the declared kinds of eq. (9)."""
+        if self.readers is not None:
+            return self.readers
+        return ", ".join(name for name in paper_kinds() if PAPER_KINDS[name].eq9)
 
 
 SHARED_KEYS: list[SharedKeys] = []

@@ -235,7 +235,6 @@ def _pd(parts: KindParts) -> TaskSpacePD:
 declare_shared(
     SharedKeys(
         "eq. (9)",
-        "nn, sliding-mode, no-u0, computed-torque",
         (
             LawParam(
                 "controller.Kp", (10.0,), "1/s^2", "task stiffness K_p (eq. 17 needs K_v^2 > K_p)", low=0.0,

@@ -19,7 +19,7 @@ At an event (and at every new command) the joints at rest choose their modes (``
 the set-valued law itself: with M q'' = r - f, the friction of the joints at rest minimises
 1/2 (r - f)^T M^-1 (r - f) over |f_i| <= F_s,i (a box-constrained QP in the Delassus matrix,
 solved exactly by ``box_qp``), so a joint is held exactly when static friction can hold it
-with the others doing what they do. csrc/stick_slip.hpp is the compiled twin, step for step.
+with the others doing what they do. csrc/plant/stick_slip.hpp is the compiled twin, step for step.
 """
 
 from __future__ import annotations

@@ -76,6 +76,7 @@ class SearchSpace:
     params: tuple[Param, ...]
     task_inertia: float = 1.0  # lambda [kg] (the PD's gains)
     custom: bool = False  # a user's class: every coordinate is a controller.params key
+    eq9: bool = True  # its gains are eq. (9)'s Kp, Kv (else the PD's pd_Kp, pd_Kd)
 
     def param(self, name: str) -> Param:
         """The coordinate called ``name``."""
@@ -101,7 +102,7 @@ class SearchSpace:
         if self.custom:
             return out
         w, z = values["bandwidth"], values["damping_ratio"]
-        if self.controller == "pd":
+        if not self.eq9:  # the PD's stiffness and damping, scaled by the task inertia
             lam = self.task_inertia
             out.update({"controller.pd_Kp": [lam * w * w], "controller.pd_Kd": [2 * z * lam * w]})
         else:
@@ -227,7 +228,7 @@ def search_space(controller: str, scales: dict[str, float]) -> SearchSpace:
         )
     if kind.search is not None:  # its robust term's coordinates, as its module declares them
         params += kind.search(scales)
-    return SearchSpace(controller, tuple(params), scales["task_inertia"])
+    return SearchSpace(controller, tuple(params), scales["task_inertia"], eq9=kind.eq9)
 
 
 def custom_space(name: str, cls: type) -> SearchSpace:
