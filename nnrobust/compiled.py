@@ -114,7 +114,6 @@ def twin_refusal(setup) -> str:
     sensor noise, quantisation, delay), integrated by RK4.
     """
     from .controllers.registry import registered_law
-    from .model import PinocchioModel, ThreeLinkPlanarModel
     from .trajectories import PoseTrajectory
 
     config, controller = setup.config, setup.controller
@@ -131,7 +130,7 @@ def twin_refusal(setup) -> str:
             (law.twin if law is not None else own_twin(controller)) is not None,
             f"controller.kind {config.controller.kind!r}",
         ),
-        (isinstance(setup.nominal, (ThreeLinkPlanarModel, PinocchioModel)), "the nominal model"),
+        (own_twin(setup.nominal) is not None, "the nominal model"),
         (own_twin(path) is not None, "the trajectory"),
         (law is not None or term is None or own_twin(term) is not None, "a custom robust term"),
     ]

@@ -189,12 +189,11 @@ class TaskSpacePD(Controller):
 def eq9_law(
     parts: KindParts, term: RobustTerm | None = None, friction: Friction | None = None
 ) -> TaskSpaceController:
-    """Eq. (9) as ``[controller]`` sets it (Kp, Kv, k, the pseudo-inverse) with the robust term
-    ``term`` (None: u_0 = 0) and F-hat ``friction`` (None: the nominal section's).
+    """Eq. (9) as ``[controller]`` sets it (Kp, Kv, k; the context's pseudo-inverse) with the
+    robust term ``term`` (None: u_0 = 0) and F-hat ``friction`` (None: the context's, the nominal
+    section's).
     """
-    from .build import build_nominal_friction
-
-    c = parts.config.controller
+    c, context = parts.config.controller, parts.context
     return TaskSpaceController(
         parts.nominal,
         parts.trajectory,
@@ -202,9 +201,9 @@ def eq9_law(
         np.diag(c.Kv),
         c.k,
         parts.criterion,
-        friction or build_nominal_friction(parts.config, parts.robot.nq),
+        friction or context.nominal_friction,
         term,
-        DampedPseudoInverse(c.pinv_threshold, c.pinv_max_damping),
+        context.pseudo_inverse,
     )
 
 
@@ -228,8 +227,7 @@ def _pd(parts: KindParts) -> TaskSpacePD:
     damping = c.pd_null_damping
     if damping is None:
         damping = sized_null_damping(parts.nominal, context.q0, Kd, context.period)
-    pinv = DampedPseudoInverse(c.pinv_threshold, c.pinv_max_damping)
-    return TaskSpacePD(parts.nominal, parts.trajectory, np.diag(c.pd_Kp), Kd, damping, pinv)
+    return TaskSpacePD(parts.nominal, parts.trajectory, np.diag(c.pd_Kp), Kd, damping, context.pseudo_inverse)
 
 
 declare_shared(
