@@ -10,8 +10,9 @@
 
 namespace nnrobust {
 
-Controller::Controller(const LoopSpec &spec, Nominal &model) : s(spec), nominal(model), criteria(spec) {
-  friction.emplace(Fields{"LoopSpec.nominal_friction: the controller's friction", spec.nominal_friction});
+Controller::Controller(const LoopSpec &spec, Nominal &model)
+    : s(spec), nominal(model), criteria(spec),
+      friction(Fields{"LoopSpec.nominal_friction: the controller's friction", spec.nominal_friction}) {
   const auto path_factory = PathRegistry::find(spec.path);
   if (!path_factory) throw std::invalid_argument("LoopSpec.path: unknown path " + spec.path);
   path = path_factory(Fields{"LoopSpec.path_params: the path " + spec.path, spec.path_params});
@@ -81,7 +82,7 @@ Vector Controller::eq9_torque(const Vector &q, const Vector &v, const TaskRefere
 // Friction.torque of the controller's F-hat
 Vector Controller::nominal_friction(const Vector &v) const {
   Vector torque(v.size());
-  for (int i = 0; i < v.size(); ++i) torque[i] = friction->torque(i, v[i]);
+  for (int i = 0; i < v.size(); ++i) torque[i] = friction.torque(i, v[i]);
   return torque;
 }
 

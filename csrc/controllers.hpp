@@ -31,7 +31,7 @@ struct Controller {
   std::unique_ptr<Path> path;               // LoopSpec.path, from path_params
   std::optional<Orientation> orientation;   // a pose task's (LoopSpec.pose_params)
   std::unique_ptr<Law> law;                 // LoopSpec.law, from law_params
-  std::optional<Friction> friction;         // the controller's F-hat (LoopSpec.nominal_friction)
+  Friction friction;                        // the controller's F-hat (LoopSpec.nominal_friction)
 
   // every name resolved here, once: an unknown one is refused (std::invalid_argument)
   Controller(const LoopSpec &spec, Nominal &model);
