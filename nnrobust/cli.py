@@ -81,15 +81,18 @@ def format_table(rows: list[tuple[str, dict]]) -> str:
     return "\n".join(lines)
 
 
-def _load_target(target: str):
+def _load_target(target: str, overrides: dict | None = None):
+    """A preset or an experiment file, with ``overrides`` (dotted keys) set in its own values
+    (:func:`nnrobust.config.load_config`): as if the file had been edited so.
+    """
     from .config import load_config
-    from .presets import load_preset, preset_names
+    from .presets import preset_names, preset_path
 
     path = Path(target)
     if path.suffix == ".toml" or path.exists():
-        return load_config(path)
+        return load_config(path, overrides)
     if target in preset_names():
-        return load_preset(target)
+        return load_config(preset_path(target), overrides)
     raise NNRobustError(
         f"{target!r} is neither a TOML file nor a preset; presets: {', '.join(preset_names())}"
     )
@@ -161,35 +164,32 @@ def controller_change(choice: str) -> dict:
 
 def cmd_run(args) -> int:
     """Run a preset or an experiment file and write its run folder."""
-    config = _load_target(args.target)
-    changes: dict = {}
+    from .config import parse_override
+
+    changes: dict = {}  # the flags' keys and --set's, set in the file's values before it resolves
     if args.controller:
-        changes["controller"] = controller_change(args.controller)
+        changes.update({f"controller.{k}": v for k, v in controller_change(args.controller).items()})
     if args.duration is not None:
-        changes.setdefault("simulation", {})["duration"] = args.duration
+        changes["simulation.duration"] = args.duration
     if args.backend:
-        changes.setdefault("simulation", {})["backend"] = args.backend
+        changes["simulation.backend"] = args.backend
     if args.view:  # the live view follows the run step by step: the Python loop
         if args.backend and args.backend != "python":
             raise ConfigError(
                 "--backend", f"--view follows the run on the Python loop; drop --backend {args.backend}"
             )
-        changes.setdefault("simulation", {})["backend"] = "python"
-    if changes:
-        config = config.replace(**changes)
-    if args.set:
-        from .config import apply_overrides, parse_override
-
-        overrides = dict(parse_override(item) for item in args.set)
-        for flag, given, keys in (
-            ("--controller", args.controller, ("controller.kind", "controller.class")),
-            ("--duration", args.duration is not None, ("simulation.duration",)),
-            ("--backend", args.backend or args.view, ("simulation.backend",)),
-        ):
-            both = [key for key in keys if key in overrides]
-            if given and both:
-                raise ConfigError(both[0], f"given twice, by {flag} and by --set; give it once")
-        config = apply_overrides(config, overrides)
+        changes["simulation.backend"] = "python"
+    overrides = dict(parse_override(item) for item in args.set or ())
+    for flag, given, keys in (
+        ("--controller", args.controller, ("controller.kind", "controller.class")),
+        ("--duration", args.duration is not None, ("simulation.duration",)),
+        ("--backend", args.backend or args.view, ("simulation.backend",)),
+    ):
+        both = [key for key in keys if key in overrides]
+        if given and both:
+            raise ConfigError(both[0], f"given twice, by {flag} and by --set; give it once")
+    config = _load_target(args.target, {**changes, **overrides})
+    if overrides:
         from .config import inert_reason
 
         for key in overrides:

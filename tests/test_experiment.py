@@ -338,3 +338,81 @@ def test_run_warns_about_a_set_key_that_changes_nothing(tmp_path):
             [*args, "--duration", "0.05", "--no-plots", "--no-animation", "--out", str(tmp_path / "r")]
         )
     assert code == 0
+
+
+def _readme_panda() -> str:
+    """The README's my-panda.toml (its first TOML block)."""
+    import re
+
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    return re.findall(r"```toml\n(.*?)```", readme, flags=re.S)[0]
+
+
+def _preset_text(name: str) -> str:
+    from nnrobust.presets import preset_path
+
+    return preset_path(name).read_text()
+
+
+SET_CASES = {  # an experiment file, a --set, and the same change made by editing the file
+    "README panda, one-value gains, pose task": (
+        _readme_panda,
+        "robot.task=pose",
+        ('task = "position"', 'task = "pose"'),
+    ),
+    "planar file, one gain for both coordinates": (
+        lambda: _preset_text("paper-ellipse"),
+        "controller.Kp=[12.0]",
+        ("Kp = [10.0, 10.0]", "Kp = [12.0]"),
+    ),
+    "a law's parameter (controller.params.NAME)": (
+        lambda: 'base = "panda-ellipse"\n[controller]\nkind = "slotine-li"\nparams = {gamma = 3.0}\n',
+        "controller.params.leakage=0.2",
+        ("{gamma = 3.0}", "{gamma = 3.0, leakage = 0.2}"),
+    ),
+    "one entry of a list (nominal.factors[4])": (
+        lambda: _preset_text("paper-ellipse"),
+        "nominal.factors[4]=1.3",
+        ("[nominal]\n", "[nominal]\nfactors = [1.0, 1.0, 1.0, 1.0, 1.3]\n"),
+    ),
+}
+
+
+@pytest.mark.parametrize("case", SET_CASES)
+def test_a_set_gives_the_configuration_of_the_edited_file(case, tmp_path):
+    """`run FILE --set KEY=VALUE` is FILE edited so: the override is set in the file's own values,
+    before a gain given once is written out m times (it was set in the resolved copy, where the
+    README's Kp = [25.0] had become 3 entries, and robot.task=pose was refused for them)."""
+    from nnrobust.cli import _load_target
+    from nnrobust.config import parse_override
+
+    text, override, (old, new) = SET_CASES[case]
+    given, edited = tmp_path / "given.toml", tmp_path / "edited.toml"
+    given.write_text(text())
+    assert old in given.read_text()
+    edited.write_text(given.read_text().replace(old, new, 1))
+    overridden = _load_target(str(given), dict([parse_override(override)]))
+    assert overridden == load_config(edited)
+    assert overridden.to_toml() == load_config(edited).to_toml()
+
+
+def test_the_readmes_panda_runs_with_a_pose_task_set(tmp_path, capsys):
+    """The command of issue 34: `nnrobust run my-panda.toml --set robot.task=pose` runs (it said
+    `controller.Kp: has 3 entries`), and its config.toml is the file edited to a pose task with
+    six gains of 25."""
+    experiment = tmp_path / "my-panda.toml"
+    experiment.write_text(_readme_panda())
+    out = tmp_path / "out"
+    words = ["run", str(experiment), "--set", "robot.task=pose", "--set", "simulation.duration=0.05"]
+    assert main([*words, "--out", str(out), "--quiet", "--no-plots", "--no-animation"]) == 0, (
+        capsys.readouterr().err
+    )
+    ran = load_config(out / "config.toml")
+    assert ran.robot.task == "pose" and ran.controller.Kp == [25.0] * 6 and ran.controller.Kv == [10.0] * 6
+    edited = tmp_path / "edited.toml"
+    edited.write_text(
+        experiment.read_text()
+        .replace('task = "position"', 'task = "pose"')
+        .replace("duration = 8.0", "duration = 0.05")
+    )
+    assert ran == load_config(edited)

@@ -5,6 +5,7 @@ configuration names (a base preset, user classes) and their digests, and ``--set
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import difflib
 import functools
@@ -165,18 +166,29 @@ def parse_toml(text: str, where: str) -> dict:
         raise ConfigError(where, "invalid TOML: nested too deeply") from err
 
 
-def load_config(path: str | Path) -> ExperimentConfig:
+def load_config(path: str | Path, overrides: dict | None = None) -> ExperimentConfig:
     """Read and validate a TOML experiment file. A relative URDF path in ``robot.source`` is read
     from the file's folder; a run folder's config.toml that recorded its URDF's SHA-256
     (:func:`provenance_header`) warns when that URDF has changed since.
+
+    ``overrides`` (dotted keys, as ``run --set`` gives them) are set in the file's own values,
+    before one-value gains are written out in full (:func:`.resolve.resolve`): the configuration is
+    the one the file would give edited so (``robot.task = "pose"`` on a file with ``Kp = [25.0]``
+    gives six gains of 25). An error is said to be the file's only when the file alone has it.
     """
     path = Path(path)
     text = read_text_file(path, what="experiment file")
     data = _file_data(path, text)
+    edited = copy.deepcopy(data) if overrides else data
+    for key, value in (overrides or {}).items():
+        set_dotted(edited, key, value)
     try:
-        config = from_dict(data)
+        config = from_dict(edited)
     except ConfigError as err:
-        raise ConfigError(f"{path}: {err.key}", str(err).split(": ", 1)[1]) from err
+        own = _error_of(data) if overrides else err
+        if own is None:  # the file alone is sound: the overrides made the error
+            raise
+        raise ConfigError(f"{path}: {own.key}", str(own).split(": ", 1)[1]) from own
     from ..model.loading import urdf_digest
 
     checks = [("robot's URDF", RECORDED_DIGEST, config.robot.source, urdf_digest)]
@@ -200,6 +212,15 @@ def load_config(path: str | Path) -> ExperimentConfig:
     return config
 
 
+def _error_of(data: dict) -> ConfigError | None:
+    """The error an experiment's tables give, or None."""
+    try:
+        from_dict(data)
+    except ConfigError as err:
+        return err
+    return None
+
+
 RECORDED_DIGEST = re.compile(r"^# urdf sha256: ([0-9a-f]{64})$", re.MULTILINE)
 
 
@@ -208,10 +229,9 @@ MAX_BASE_DEPTH = 8
 
 
 def _file_data(path: Path, text: str, depth: int = 0) -> dict:
-    """An experiment file's table with its relative paths (robot.source, the classes of
-    :data:`USER_PARTS`) made
-    absolute from the file's folder, merged over its ``base`` (a preset name or an experiment
-    file): the file's keys win, section by section.
+    """An experiment file's table with its relative paths (robot.source, robot.mesh_folders, the
+    classes of :data:`USER_PARTS`) made absolute from the file's folder, merged over its ``base``
+    (a preset name or an experiment file): the file's keys win, section by section.
     """
     data = parse_toml(text, str(path))
     folder = path.resolve().parent
@@ -229,6 +249,11 @@ def _file_data(path: Path, text: str, depth: int = 0) -> dict:
                 "relative path in an experiment file is read from the file's folder)",
             )
         robot["source"] = str(resolved)
+    if isinstance(robot, dict) and isinstance(robot.get("mesh_folders"), list):
+        robot["mesh_folders"] = [
+            str((folder / entry).resolve()) if isinstance(entry, str) and entry.strip() else entry
+            for entry in robot["mesh_folders"]
+        ]
     from ..user_code import class_file
 
     for section, key, _, _ in USER_PARTS.values():
@@ -414,23 +439,35 @@ def check_dotted_key(key: str) -> None:
 def apply_overrides(config: ExperimentConfig, overrides: dict) -> ExperimentConfig:
     """A copy of ``config`` with dotted keys set (``{"simulation.duration": 20.0}``), validated like
     an experiment file.
+
+    The keys are set in the resolved configuration, whose one-value gains already have one entry
+    per task coordinate: to change the task's size m (``robot.task``, the path's dimension) and
+    keep a gain given once, set the keys in the file's values instead
+    (``load_config(path, overrides)``).
     """
     data = config.to_dict()
     for key, value in overrides.items():
-        check_dotted_key(key)
-        parts = key.split(".")
-        indexed = INDEXED.match(key)
-        if indexed:
-            section, field_name, index = indexed.groups()
-            _set_entry(data.setdefault(section, {}), section, field_name, int(index), value)
-        elif len(parts) == 1:
-            data[parts[0]] = value
-        elif len(parts) == 3:  # controller.params.NAME
-            section = data.setdefault(parts[0], {})
-            section[parts[1]] = {**(section.get(parts[1]) or {}), parts[2]: value}
-        else:
-            data.setdefault(parts[0], {})[parts[1]] = value
+        set_dotted(data, key, value)
     return from_dict(data)
+
+
+def set_dotted(data: dict, key: str, value) -> None:
+    """Set a dotted key (``section.field``, ``section.field[i]``, ``controller.params.NAME`` or a
+    top-level ``name``) in an experiment's nested tables, checked against the schema first.
+    """
+    check_dotted_key(key)
+    parts = key.split(".")
+    indexed = INDEXED.match(key)
+    if indexed:
+        section, field_name, index = indexed.groups()
+        _set_entry(data.setdefault(section, {}), section, field_name, int(index), value)
+    elif len(parts) == 1:
+        data[parts[0]] = value
+    elif len(parts) == 3:  # controller.params.NAME
+        table = data.setdefault(parts[0], {})
+        table[parts[1]] = {**(table.get(parts[1]) or {}), parts[2]: value}
+    else:
+        data.setdefault(parts[0], {})[parts[1]] = value
 
 
 def _set_entry(table: dict, section: str, field_name: str, index: int, value) -> None:
