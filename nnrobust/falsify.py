@@ -584,6 +584,8 @@ def _run_falsify(
     total = len(searches) * spec.budget
     started = time.monotonic()
     with signals_as_interrupt(), _client(workers, scheduler) as client:
+        if progress:  # before any work: what the folder already holds of this search
+            progress(sum((c, s) in searches and i < spec.budget for c, s, i in done), total)
         drive = _Driver(client, folder, done, sweep, base_toml, properties, progress)
         drive(searches, dict.fromkeys(searches, box), rows, total)
         margins = _margins(spec, sweep, box, rows, drive) if spec.margin else None

@@ -350,3 +350,29 @@ def test_a_case_of_a_tuned_comparison_gives_its_seed_zero_settings(tmp_path):
     plain.write_text(json.dumps({"controllers": {"nn": {"best": {"params": {}}}}}))
     with pytest.raises(ConfigError, match="not a tuned comparison: drop #x"):
         tuned_settings(f"{plain}#x", ["nn"])
+
+
+def test_the_header_counts_what_the_folder_held_before_the_search(tmp_path, capsys):
+    """The first line says how many simulations the folder already held, before any is run: 0 in an
+    empty folder (it said "4 of 8", counting the first batch it had just run), all of them when
+    the same command runs again, and what is left of a history that lost a part."""
+    sweep = tmp_path / "fz.toml"
+    sweep.write_text(SWEEP.replace("= 3.0", "= 0.5"))
+    out = tmp_path / "out"
+    words = ["falsify", str(sweep), "--controllers", "nn", "--require", "rms_error<=0.02"]
+    words += ["--budget", "4", "--workers", "2", "--out", str(out)]
+
+    def header() -> str:
+        assert main(words) == 0
+        lines = [line for line in capsys.readouterr().err.splitlines() if "already done" in line]
+        assert len(lines) == 1, lines
+        return lines[0].rpartition("; ")[2]
+
+    assert header() == "0 of 8 already done"
+    assert header() == "8 of 8 already done"
+    parts = sorted((out / "history").glob("part-*.parquet"))
+    import pandas as pd
+
+    kept = len(pd.read_parquet(out / "history")) - len(pd.read_parquet(parts[0]))
+    parts[0].unlink()
+    assert header() == f"{kept} of 8 already done"
