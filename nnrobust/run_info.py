@@ -16,8 +16,9 @@ class RunInfo:
     Attributes:
         name: the experiment's name.
         controller: the controller's label (its kind, or a custom class's name).
-        robot_source, locked_joints, chain: the robot as configured (``robot.source``,
-            ``robot.locked_joints``, ``robot.chain``), from which the viewer loads its visuals.
+        robot_source, locked_joints, chain, mesh_folders: the robot as configured
+            (``robot.source``, ``robot.locked_joints``, ``robot.chain``, ``robot.mesh_folders``),
+            from which the viewer loads its visuals.
         task_frame: the frame whose position (or pose) is the task, as configured (None: the
             default rule).
         task: ``planar``, ``position`` or ``pose``.
@@ -33,6 +34,7 @@ class RunInfo:
     robot_source: str = ""
     locked_joints: tuple[str, ...] | None = None
     chain: tuple[str, ...] | None = None
+    mesh_folders: tuple[str, ...] | None = None
     task_frame: str | None = None
     task: str = "planar"
     trajectory: dict = field(default_factory=dict)
@@ -64,6 +66,7 @@ class RunInfo:
             robot_source=str(rc.source),
             locked_joints=None if rc.locked_joints is None else tuple(rc.locked_joints),
             chain=None if rc.chain is None else tuple(rc.chain),
+            mesh_folders=None if rc.mesh_folders is None else tuple(rc.mesh_folders),
             task_frame=rc.task_frame,
             task=rc.task,
             trajectory=json.loads(json.dumps(asdict(config.trajectory))),
@@ -133,6 +136,7 @@ TYPES = {
     "robot_source": "str",
     "locked_joints": "strs?",
     "chain": "strs?",
+    "mesh_folders": "strs?",
     "task_frame": "str?",
     "task": "str",
     "trajectory": "dict",

@@ -15,7 +15,12 @@ from pathlib import Path
 from typing import Callable
 
 from nnrobust import exceptions as ex
-from nnrobust.model.urdf_check import InertiaAssumptionWarning
+from nnrobust.model.urdf_check import (
+    InertiaAssumptionWarning,
+    MeshOutsideFoldersWarning,
+    MissingMeshWarning,
+    UndeclaredPrefixWarning,
+)
 from nnrobust.run_folder import RunFolderError
 
 ARM = """<?xml version="1.0"?>
@@ -71,6 +76,12 @@ def _first_axis_then(element: str) -> str:
     return arm().replace('<axis xyz="0 0 1"/>', f'<axis xyz="0 0 1"/>{element}', 1)
 
 
+PREFIXED = arm(
+    extra='<gazebo:plugin name="ros2_control"><parameters>x.yaml</parameters></gazebo:plugin>'
+).replace('effort="10"', 'drake:acceleration="2.5" effort="10"')
+"""The arm as projects publish URDFs: attributes and elements of prefixes no xmlns declares."""
+
+
 BILLION_LAUGHS = """<?xml version="1.0"?>
 <!DOCTYPE lolz [<!ENTITY lol "lol"><!ENTITY lol2 "&lol;&lol;&lol;&lol;&lol;&lol;&lol;&lol;">
 <!ENTITY lol3 "&lol2;&lol2;&lol2;&lol2;&lol2;&lol2;&lol2;&lol2;">]>
@@ -93,6 +104,12 @@ def _load(text_or_path, **kwargs):
     from nnrobust import load_robot
 
     return lambda: load_robot(text_or_path, **kwargs)
+
+
+def _visual(text_or_path, **kwargs):
+    from nnrobust.model.loading import load_visual_model
+
+    return lambda: load_visual_model(text_or_path, **kwargs)
 
 
 def _working_in(folder: Path, action):
@@ -388,8 +405,8 @@ URDF_CASES = [
     ),
     Case("file larger than 20 MB", lambda d: _load(_huge(d)), ex.UrdfRefused, "larger than the 20 MB"),
     Case(
-        "package:// mesh that escapes the allowed folders",
-        lambda d: _load(
+        "package:// mesh that escapes the allowed folders (simulates; the viewer leaves it out)",
+        lambda d: _visual(
             _file(
                 d,
                 "escape.urdf",
@@ -398,31 +415,35 @@ URDF_CASES = [
                 ),
             )
         ),
-        ex.UnsafePath,
-        "outside the allowed folders",
+        None,
+        "1 visual mesh lies outside the folders meshes are read from (first: "
+        "'package://../../../../etc/passwd'); the run's dynamics do not need it",
+        warns=MeshOutsideFoldersWarning,
     ),
     Case(
         "URDF text with a mesh outside the working folder (read and embedded before)",
         lambda d: _working_in(
-            d, _load(arm(visual='<visual><geometry><mesh filename="/etc/passwd"/></geometry></visual>'))
+            d, _visual(arm(visual='<visual><geometry><mesh filename="/etc/passwd"/></geometry></visual>'))
         ),
-        ex.UnsafePath,
-        "mesh '/etc/passwd' resolves to /etc/passwd, outside the allowed folders",
+        None,
+        "1 visual mesh lies outside the folders meshes are read from (first: '/etc/passwd')",
+        warns=MeshOutsideFoldersWarning,
     ),
     Case(
         "URDF text with a file:// mesh outside the working folder",
         lambda d: _working_in(
             d,
-            _load(
+            _visual(
                 arm(visual='<visual><geometry><mesh filename="file:///etc/hostname"/></geometry></visual>')
             ),
         ),
-        ex.UnsafePath,
-        "outside the allowed folders",
+        None,
+        "the viewer draws it only from folders listed in robot.mesh_folders",
+        warns=MeshOutsideFoldersWarning,
     ),
     Case(
         "mesh fetched over the network",
-        lambda d: _load(
+        lambda d: _visual(
             _file(
                 d,
                 "http.urdf",
@@ -431,12 +452,13 @@ URDF_CASES = [
                 ),
             )
         ),
-        ex.UnsafePath,
-        "only package:// and file paths",
+        None,
+        "a URL: only package:// and file paths are read",
+        warns=MeshOutsideFoldersWarning,
     ),
     Case(
-        "visual mesh file missing (warns, still simulates)",
-        lambda d: _load(
+        "visual mesh file missing (simulates; the viewer leaves it out)",
+        lambda d: _visual(
             _file(
                 d,
                 "nomesh.urdf",
@@ -445,7 +467,21 @@ URDF_CASES = [
         ),
         None,
         "not found",
-        warns=Warning,
+        warns=MissingMeshWarning,
+    ),
+    Case(
+        "undeclared XML namespace prefixes (drake:, gazebo:, as projects publish them)",
+        lambda d: _load(_file(d, "prefixed.urdf", PREFIXED)),
+        None,
+        "prefixed.urdf: undeclared XML namespace prefixes drake, gazebo: their elements and attributes "
+        "are ignored",
+        warns=UndeclaredPrefixWarning,
+    ),
+    Case(
+        "undeclared prefix, and a mismatched tag further on",
+        lambda d: _load(_file(d, "prefixed.urdf", PREFIXED.replace("</gazebo:plugin>", "</plugin>"))),
+        ex.UrdfSyntaxError,
+        "prefixed.urdf: malformed XML at line 12, column 71: mismatched tag",
     ),
     Case(
         "task frame that does not exist",
@@ -729,6 +765,13 @@ CONFIG_CASES = [
         lambda d: _toml(d, "[robot]\ngravity = [0.0, -9.81]\n"),
         ex.ConfigError,
         "robot.gravity: needs 3 entries",
+    ),
+    Case(
+        "mesh folder that is the filesystem root",
+        lambda d: _toml(d, '[robot]\nmesh_folders = ["meshes", "../../../../../../../../../.."]\n'),
+        ex.ConfigError,
+        "robot.mesh_folders: '/' is not a folder to read meshes from: name the folders that hold the "
+        'URDF\'s meshes (e.g. ["../meshes"]), never the filesystem root',
     ),
     Case(
         "400-digit integer",

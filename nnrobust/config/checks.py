@@ -6,6 +6,7 @@ and which keys a configuration leaves inert. Nothing here changes a configuratio
 from __future__ import annotations
 
 import math
+import os
 import re
 
 from ..exceptions import ConfigError
@@ -327,6 +328,13 @@ def validate(config: ExperimentConfig) -> None:
         )
     if config.robot.chain is not None and len(config.robot.chain) != 2:
         raise ConfigError("robot.chain", f"needs 2 frame names, [base, tip], got {config.robot.chain}")
+    for folder in config.robot.mesh_folders or ():
+        if not folder.strip() or os.path.abspath(folder) == os.path.abspath(os.sep):
+            raise ConfigError(
+                "robot.mesh_folders",
+                f"{folder!r} is not a folder to read meshes from: name the folders that hold the "
+                'URDF\'s meshes (e.g. ["../meshes"]), never the filesystem root',
+            )
     choices = {
         "robot.task": (config.robot.task, tuple(TASK_KINDS)),
         "nominal.kind": (config.nominal.kind, ("auto", "closed-form", "urdf")),

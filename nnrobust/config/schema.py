@@ -32,6 +32,9 @@ class RobotConfig:
             default chain, and grippers, fingers and mimic joints; ``[]`` locks nothing).
         chain: ``[base frame, tip frame]``: the arm is the joints between them, every other
             joint is locked; the tip is the default task frame.
+        mesh_folders: folders the viewer may also read visual meshes from, besides the URDF's
+            folder and the one above it (relative paths from the experiment file's folder);
+            the dynamics never read a mesh (docs/robots.md, "Meshes").
 
     """
 
@@ -41,6 +44,7 @@ class RobotConfig:
     gravity: list[float] | None = None
     locked_joints: list[str] | None = None
     chain: list[str] | None = None
+    mesh_folders: list[str] | None = None
 
 
 @dataclass

@@ -27,6 +27,8 @@ from .pinocchio_model import MAX_JOINTS, PinocchioModel
 from .planar_chain import PLANAR_CHAIN_NAME, planar_chain_urdf
 from .urdf_check import (
     check_urdf,
+    listed_mesh_folders,
+    mesh_roots,
     mimic_joints,
     read_urdf_file,
     resolved_visuals,
@@ -151,7 +153,10 @@ def _build(source: str, locked_joints=None, chain=None, say_notes: bool = True) 
     if not generated:
         user = frozenset(locked_joints or ())
         explicit = locked_joints is not None and chain is None
-        text = check_urdf(text, name, base, locked=user if explicit else user | mimic)
+        with warnings.catch_warnings():
+            if not say_notes:  # said when the robot was loaded for its dynamics
+                warnings.simplefilter("ignore")
+            text = check_urdf(text, name, locked=user if explicit else user | mimic)
     model = _parsed(name, "invalid URDF", lambda: pin.buildModelFromXML(text))
     if model.nq == 0 and model.njoints <= 1:
         raise ModelMismatch(f"{name}: the URDF has no movable joint (only fixed joints)")
@@ -239,36 +244,42 @@ def _reduced(built: _Built, locked: list[str], visual: pin.GeometryModel | None 
 
 
 def load_visual_model(
-    source: str | Path, locked_joints: list[str] | None = None, chain: Sequence[str] | None = None
+    source: str | Path,
+    locked_joints: list[str] | None = None,
+    chain: Sequence[str] | None = None,
+    mesh_folders: Sequence[str | Path] = (),
 ) -> tuple[pin.Model, pin.GeometryModel]:
     """The kinematic model and the visual geometry (meshes and primitives) of an arm, for viewers.
 
-    Same sources, joint locking and chain as :func:`load_robot`. Mesh files are found by the mesh
-    rules of :func:`~nnrobust.model.urdf_check.mesh_roots` (next to a URDF file, in the working
-    folder for a URDF given as text, and in ROS_PACKAGE_PATH); a visual whose mesh is missing is
-    left out, the rest of the robot is drawn.
+    Same sources, joint locking and chain as :func:`load_robot`. Mesh files are read only from
+    the folders of :func:`~nnrobust.model.urdf_check.mesh_roots` (next to a URDF file, in the
+    working folder for a URDF given as text, in ROS_PACKAGE_PATH, and in ``mesh_folders``:
+    ``robot.mesh_folders``); a visual whose mesh lies elsewhere or is missing is left out (one
+    warning each), the rest of the robot is drawn.
     """
     source = str(source)
     built = _build(source, locked_joints, chain, say_notes=False)
     locked, _ = _locks(built, source, locked_joints, chain)
-    return _reduced(built, locked, _visual_geometry(built, source))
+    return _reduced(built, locked, _visual_geometry(built, source, mesh_folders))
 
 
-def _visual_geometry(built: _Built, source: str) -> pin.GeometryModel:
+def _visual_geometry(
+    built: _Built, source: str, mesh_folders: Sequence[str | Path] = ()
+) -> pin.GeometryModel:
     """The visual geometry of a parsed robot. Mesh files are left for the viewer to read: the
     parser sees each mesh as a point (it would otherwise build a collision structure of every
     mesh, unused by a viewer), and the objects get the files back afterwards.
     """
     example = built.example
-    roots: list[Path] | None = None
     base: Path | None
     if example is not None:
         if example.urdf is None:  # built by example-robot-data's own code
             return example_visual_model(example)
         text, base = read_urdf_file(example.urdf), example.urdf.parent
-        roots = [Path(d) for d in example.package_dirs]
+        roots = [Path(d).resolve() for d in example.package_dirs] + listed_mesh_folders(mesh_folders)
     else:
         text, base = built.text or "", built.base
+        roots = mesh_roots(base, mesh_folders)
     if not PLANAR_CHAIN_NAME.match(source):
         text = resolved_visuals(text, built.name, base, roots)
     text, meshes = visual_meshes_set_aside(text)

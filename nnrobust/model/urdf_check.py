@@ -11,14 +11,15 @@ import math
 import os
 import warnings
 import xml.etree.ElementTree as ET
+from collections.abc import Sequence
 from pathlib import Path
+from xml.parsers import expat
 
 import numpy as np
 
 from ..exceptions import (
     InvalidInertia,
     KinematicCycle,
-    UnsafePath,
     UrdfRefused,
     UrdfStructureError,
     UrdfSyntaxError,
@@ -35,6 +36,20 @@ class MissingMeshWarning(UserWarning):
     """A visual mesh file does not exist: the robot simulates, the viewer leaves the part out."""
 
 
+class MeshOutsideFoldersWarning(UserWarning):
+    """A visual mesh lies outside the folders meshes are read from: the viewer leaves it out."""
+
+
+class UndeclaredPrefixWarning(UserWarning):
+    """A URDF uses XML namespace prefixes it never declares (``drake:``, ``gazebo:``): their
+    elements and attributes are read as foreign extensions, which a URDF reader ignores.
+    """
+
+
+UNDECLARED_NAMESPACE = "urn:nnrobust:undeclared:"
+"""Namespace given to an undeclared prefix P (``urn:nnrobust:undeclared:P``)."""
+
+
 def read_urdf_file(path: str | Path) -> str:
     """The text of a URDF file, refused when it is too large or not UTF-8."""
     path = Path(path)
@@ -47,6 +62,88 @@ def read_urdf_file(path: str | Path) -> str:
         return path.read_bytes().decode("utf-8")
     except UnicodeDecodeError as err:
         raise UrdfSyntaxError(str(path), f"not UTF-8 text (byte {err.start})") from err
+
+
+def _malformed(source: str, line: int, column: int, reason: str) -> UrdfSyntaxError:
+    """The one error of XML that is not well-formed (``column`` counted from 0, as expat does)."""
+    return UrdfSyntaxError(source, f"malformed XML at line {line}, column {column + 1}: {reason}")
+
+
+def _undeclared_prefixes(data: bytes, source: str) -> tuple[list[str], int]:
+    """The namespace prefixes that element and attribute names use where no ``xmlns:`` declares
+    them, in order of first use, and the byte offset just after the root element's name. Read by
+    expat without namespace processing (an ExpatError when the XML is malformed otherwise too).
+    """
+    parser = expat.ParserCreate("utf-8")
+    scopes: list[frozenset[str]] = [frozenset({"xml"})]
+    found: dict[str, None] = {}
+    root_name_end, elements = [-1], [0]
+
+    def start(name: str, attributes: dict[str, str]) -> None:
+        if len(scopes) == 1:
+            root_name_end[0] = parser.CurrentByteIndex + 1 + len(name.encode("utf-8"))
+        elements[0] += 1
+        if elements[0] > MAX_ELEMENTS:
+            raise UrdfRefused(source, f"more than {MAX_ELEMENTS} XML elements")
+        scope = scopes[-1] | {key[len("xmlns:") :] for key in attributes if key.startswith("xmlns:")}
+        scopes.append(scope)
+        for qualified in (name, *attributes):
+            prefix, colon, _ = qualified.partition(":")
+            if colon and prefix != "xmlns" and prefix not in scope:
+                found.setdefault(prefix)
+
+    parser.StartElementHandler = start
+    parser.EndElementHandler = lambda name: scopes.pop()
+    parser.Parse(data, True)
+    return list(found), root_name_end[0]
+
+
+def parse_urdf_xml(text: str, source: str) -> tuple[ET.Element, str, list[str]]:
+    """The parsed XML of a URDF, the text parsed and the undeclared namespace prefixes it uses.
+
+    Projects publish URDFs with foreign attributes and elements whose prefix no ``xmlns:``
+    declares (``<limit drake:acceleration="2.5" .../>``, ``<gazebo:plugin>``, ``xacro:``
+    leftovers); Pinocchio, ROS and Drake read them and skip what they do not know. Such a text
+    is parsed again with each of these prefixes declared on the root element
+    (``xmlns:drake="urn:nnrobust:undeclared:drake"``, on the root's own line: line numbers stay),
+    and that text is returned; anything else that is not well-formed is refused, naming the
+    first place that is. DTD and entity declarations are refused before any parse.
+    """
+    if "<!DOCTYPE" in text or "<!ENTITY" in text:
+        raise UrdfRefused(
+            source,
+            "DTD or entity declarations (<!DOCTYPE, <!ENTITY) are not "
+            "allowed in a URDF; they are never needed and can expand without bound",
+        )
+    try:
+        return ET.fromstring(text), text, []
+    except ET.ParseError as err:
+        line, column = err.position
+        first = _malformed(source, line, column, str(err).split(":")[0])
+        if err.code != expat.errors.codes[expat.errors.XML_ERROR_UNBOUND_PREFIX]:
+            raise first from err
+    data = text.encode("utf-8")
+    try:
+        prefixes, at = _undeclared_prefixes(data, source)
+    except expat.ExpatError as err:  # malformed further on, whatever the prefixes
+        raise _malformed(source, err.lineno, err.offset, expat.ErrorString(err.code)) from err
+    if not prefixes or at < 0:
+        raise first
+    declarations = "".join(f' xmlns:{p}="{UNDECLARED_NAMESPACE}{p}"' for p in prefixes)
+    declared = (data[:at] + declarations.encode("utf-8") + data[at:]).decode("utf-8")
+    try:
+        return ET.fromstring(declared), declared, prefixes
+    except ET.ParseError as err:
+        line, column = err.position
+        raise _malformed(source, line, column, str(err).split(":")[0]) from err
+
+
+def _shown(tag: str) -> str:
+    """An element's name as written in the file (``{urn:nnrobust:undeclared:P}x`` is ``P:x``)."""
+    if tag.startswith("{" + UNDECLARED_NAMESPACE):
+        prefix, _, name = tag[len(UNDECLARED_NAMESPACE) + 1 :].partition("}")
+        return f"{prefix}:{name}"
+    return tag
 
 
 def _number_list(text: str | None, count: int, where: str, source: str) -> list[float]:
@@ -325,8 +422,8 @@ def _check_joint(joint: ET.Element, name: str, source: str, locked: frozenset[st
 def mimic_joints(text: str) -> frozenset[str]:
     """Names of the joints that carry a <mimic> (none when the text is not XML: the check says why)."""
     try:
-        root = ET.fromstring(text)
-    except ET.ParseError:
+        root = parse_urdf_xml(text, "")[0]
+    except (UrdfSyntaxError, UrdfRefused):
         return frozenset()
     return frozenset(
         j.get("name", "") for j in root.iter("joint") if j.find("mimic") is not None and j.get("name")
@@ -369,22 +466,39 @@ def _check_mass_moves(
             )
 
 
-def mesh_roots(base: Path | None) -> list[Path]:
-    """Folders a URDF may take meshes from (docs/robots.md, "Meshes").
+def mesh_roots(base: Path | None, folders: Sequence[str | Path] = ()) -> list[Path]:
+    """Folders a URDF's visual meshes may be read from (docs/robots.md, "Meshes").
 
     A URDF file in ``base``: its own folder and the one above it, so that
     ``package://<pkg>/meshes/x.stl`` finds ``<pkg>/meshes/x.stl`` for ``<pkg>/urdf/robot.urdf``.
     A URDF given as text (``base`` None): the working folder. In both cases also every folder of
-    ``ROS_PACKAGE_PATH`` (``package://<pkg>/...`` is ``<folder>/<pkg>/...``). The filesystem root
-    is never one of them.
+    ``ROS_PACKAGE_PATH`` (``package://<pkg>/...`` is ``<folder>/<pkg>/...``) and every folder of
+    ``folders`` (``robot.mesh_folders``, relative ones from the working folder). The filesystem
+    root is never one of them.
     """
     own = [Path.cwd().resolve()] if base is None else [Path(base).resolve(), Path(base).resolve().parent]
     ros = [Path(p).resolve() for p in os.environ.get("ROS_PACKAGE_PATH", "").split(os.pathsep) if p]
-    return [p for p in dict.fromkeys(own + ros) if p != Path(p.anchor)]
+    return [p for p in dict.fromkeys(own + ros + listed_mesh_folders(folders)) if p != Path(p.anchor)]
 
 
-def _resolve_mesh(uri: str, base: Path | None, roots: list[Path], source: str) -> Path | None:
-    """The file a mesh URI names (maybe missing), or None when it cannot be located at all."""
+def listed_mesh_folders(folders: Sequence[str | Path]) -> list[Path]:
+    """The folders of ``robot.mesh_folders``, resolved (relative ones from the working folder),
+    without the filesystem root.
+    """
+    resolved = [Path(f).resolve() for f in folders if str(f)]
+    return [p for p in resolved if p != Path(p.anchor)]
+
+
+def _inside(path: Path, roots: list[Path]) -> bool:
+    return any(path == r or r in path.parents for r in roots)
+
+
+def _resolve_mesh(uri: str, base: Path | None, roots: list[Path]) -> tuple[Path | None, str]:
+    """Where a mesh URI leads: (the file inside ``roots``, maybe missing, ""), or (None, why it
+    is not read: a URL, or a path outside ``roots``). Nothing outside ``roots`` is opened: a
+    candidate is placed by its text first (``..`` folded), and only one inside a root is
+    resolved on disk, where a symbolic link may still lead out.
+    """
     if uri.startswith("package://"):
         relative = uri[len("package://") :].lstrip("/")  # package:///pkg/... as Pinocchio reads it
         tail = relative.split("/", 1)[1] if "/" in relative else relative
@@ -392,45 +506,32 @@ def _resolve_mesh(uri: str, base: Path | None, roots: list[Path], source: str) -
     elif uri.startswith("file://"):
         candidates = [Path(uri[len("file://") :])]
     elif "://" in uri:
-        raise UnsafePath(source, f"mesh {uri!r}: only package:// and file paths are read")
+        return None, "a URL: only package:// and file paths are read"
     elif os.path.isabs(uri):
         candidates = [Path(uri)]
     else:
         candidates = [(base if base is not None else Path.cwd()) / uri]
-    if not roots:
-        raise UnsafePath(
-            source, f"mesh {uri!r}: no folder may be read (the working folder is the filesystem root)"
-        )
-    allowed = [r.resolve() for r in roots]
-    found = None
+    inside = []
     for candidate in candidates:
-        real = candidate.resolve()
-        if not any(real == r or r in real.parents for r in allowed):
-            raise UnsafePath(
-                source,
-                f"mesh {uri!r} resolves to {real}, outside the allowed folders {[str(r) for r in allowed]}",
-            )
-        if found is None and real.is_file():
-            found = real
-    return found or candidates[0].resolve()
+        if _inside(Path(os.path.normpath(os.path.abspath(candidate))), roots):
+            real = candidate.resolve()
+            if _inside(real, roots):
+                inside.append(real)
+    if not inside:
+        return None, ""
+    return next((path for path in inside if path.is_file()), inside[0]), ""
 
 
-def check_urdf(
-    text: str,
-    source: str,
-    base: Path | None = None,
-    roots: list[Path] | None = None,
-    locked: frozenset[str] = frozenset(),
-) -> str:
-    """Refuse a URDF that Pinocchio would mis-read; warn about missing visual meshes; return the
-    text to parse: the URDF itself, or with the inertial assumptions of real exports written in
-    (:func:`_check_inertias`, said in one warning).
+def check_urdf(text: str, source: str, locked: frozenset[str] = frozenset()) -> str:
+    """Refuse a URDF that Pinocchio would mis-read; return the text to parse: the URDF itself,
+    with its undeclared namespace prefixes declared (:func:`parse_urdf_xml`) and the inertial
+    assumptions of real exports written in (:func:`_check_inertias`), each said in one warning.
+    Meshes are not looked at: the dynamics never need them (:func:`resolved_visuals` does, for
+    the viewer).
 
     Args:
         text: the URDF XML.
         source: file name or ``<urdf string>``, for messages.
-        base: folder of the URDF file (None for a string).
-        roots: folders mesh paths may resolve into (default: :func:`mesh_roots` of ``base``).
         locked: joints that will be locked (a mimic joint must be one of them).
 
     """
@@ -438,23 +539,19 @@ def check_urdf(
         raise UrdfRefused(
             source, f"{len(text) / 1e6:.1f} MB is larger than the {MAX_URDF_BYTES / 1e6:g} MB a URDF may have"
         )
-    if "<!DOCTYPE" in text or "<!ENTITY" in text:
-        raise UrdfRefused(
-            source,
-            "DTD or entity declarations (<!DOCTYPE, <!ENTITY) are not "
-            "allowed in a URDF; they are never needed and can expand without bound",
-        )
-    try:
-        root = ET.fromstring(text)
-    except ET.ParseError as err:
-        line, column = err.position
-        raise UrdfSyntaxError(
-            source, f"malformed XML at line {line}, column {column + 1}: {str(err).split(':')[0]}"
-        ) from err
+    root, text, prefixes = parse_urdf_xml(text, source)
     if sum(1 for _ in root.iter()) > MAX_ELEMENTS:
         raise UrdfRefused(source, f"more than {MAX_ELEMENTS} XML elements")
     if root.tag != "robot":
-        raise UrdfStructureError(source, f"the root element is <{root.tag}>, a URDF needs <robot>")
+        raise UrdfStructureError(source, f"the root element is <{_shown(root.tag)}>, a URDF needs <robot>")
+    if prefixes:
+        several = len(prefixes) > 1
+        warnings.warn(
+            f"{source}: undeclared XML namespace prefix{'es' if several else ''} {', '.join(prefixes)}: "
+            f"{'their' if several else 'its'} elements and attributes are ignored",
+            UndeclaredPrefixWarning,
+            stacklevel=3,
+        )
 
     links = _by_name(root, "link", source)
     if not links:
@@ -494,40 +591,55 @@ def check_urdf(
     for name, joint in joints.items():
         _check_joint(joint, name, source, locked)
     _check_mass_moves(joints, parent_of, masses, source)
-
-    visual_meshes = {id(m) for visual in root.iter("visual") for m in visual.iter("mesh")}
-    allowed = roots if roots is not None else mesh_roots(base)
-    for mesh in root.iter("mesh"):
-        uri = mesh.get("filename", "")
-        path = _resolve_mesh(uri, base, allowed, source)
-        if path is not None and not path.is_file():
-            where = "visual" if id(mesh) in visual_meshes else "collision"
-            warnings.warn(
-                f"{source}: {where} mesh {uri!r} not found ({path}); the robot simulates, "
-                "the viewer leaves that part out",
-                MissingMeshWarning,
-                stacklevel=3,
-            )
     return _repaired(root, massless, flipped) or text
 
 
 def resolved_visuals(
     text: str, source: str, base: Path | None = None, roots: list[Path] | None = None
 ) -> str:
-    """The URDF with every visual mesh's filename replaced by the file it resolves to under the
-    mesh rules (:func:`mesh_roots`, or ``roots``), and every visual whose mesh is missing removed,
-    so that the geometry parser reads no other file and one missing mesh costs only its own part.
+    """The URDF with every visual mesh's filename replaced by the file it resolves to inside the
+    folders meshes are read from (:func:`mesh_roots`, or ``roots``), and every other visual
+    removed (its mesh outside them, a URL, or missing), so that the geometry parser and the
+    viewer read no other file and such a mesh costs only its own part. One warning says how
+    many lie outside, one how many are missing.
     """
-    root = ET.fromstring(text)
+    root = parse_urdf_xml(text, source)[0]
     roots = mesh_roots(base) if roots is None else roots
+    outside: list[tuple[str, str]] = []  # (URI, why not read)
+    missing: list[tuple[str, Path]] = []  # (URI, the file it names)
     for link in root.iter("link"):
         for visual in list(link.findall("visual")):
             for mesh in visual.iter("mesh"):
-                path = _resolve_mesh(mesh.get("filename", ""), base, roots, source)
+                uri = mesh.get("filename", "")
+                path, why = _resolve_mesh(uri, base, roots)
                 if path is None or not path.is_file():
+                    if path is None:
+                        outside.append((uri, why))
+                    else:
+                        missing.append((uri, path))
                     link.remove(visual)
                     break
                 mesh.set("filename", str(path))
+    if outside:
+        n, (uri, why) = len(outside), outside[0]
+        folders = "the URDF's folder, the one above it" if base is not None else "the working folder"
+        warnings.warn(
+            f"{source}: {n} visual mesh{'es lie' if n > 1 else ' lies'} outside the folders meshes "
+            f"are read from (first: {uri!r}{'; ' + why if why else ''}); the run's dynamics do not "
+            f"need {'them' if n > 1 else 'it'}; the viewer draws {'them' if n > 1 else 'it'} only "
+            f"from folders listed in robot.mesh_folders (besides {folders} and ROS_PACKAGE_PATH)",
+            MeshOutsideFoldersWarning,
+            stacklevel=3,
+        )
+    if missing:
+        n, (uri, path) = len(missing), missing[0]
+        what = (
+            f"visual mesh {uri!r} not found ({path}); the robot simulates, the viewer leaves that part out"
+            if n == 1
+            else f"{n} visual meshes not found (first: {uri!r}, {path}); the robot simulates, the "
+            "viewer leaves those parts out"
+        )
+        warnings.warn(f"{source}: {what}", MissingMeshWarning, stacklevel=3)
     return ET.tostring(root, encoding="unicode")
 
 

@@ -210,7 +210,7 @@ class RunScene:
 
     Args:
         vis: a meshcat Visualizer (live, or on a :class:`SceneRecorder`).
-        info: the run's robot (source, locked joints, chain): a :class:`RunInfo`.
+        info: the run's robot (source, locked joints, chain, mesh folders): a :class:`RunInfo`.
 
     """
 
@@ -218,7 +218,7 @@ class RunScene:
         MeshcatVisualizer = meshcat_visualizer_class()  # noqa: N806 - a class
 
         locked = None if info.locked_joints is None else list(info.locked_joints)
-        model, visual = load_visual_model(info.robot_source, locked, info.chain)
+        model, visual = load_visual_model(info.robot_source, locked, info.chain, info.mesh_folders or ())
         self.vis = vis
         self.robot = MeshcatVisualizer(model, None, visual)
         with warnings.catch_warnings():
