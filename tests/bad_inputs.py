@@ -1379,6 +1379,16 @@ PART_CASES = [
         "NotATrajectory is not a subclass of nnrobust.Trajectory",
     ),
     Case(
+        "custom trajectory: cannot be copied for the controller",
+        lambda d: _part(
+            d,
+            '[trajectory]\nkind = "custom"\nclass = "parts.py:Locked"\n'
+            "params = {center = [0.30, 0.40], a = [0.20, 0.0], b = [0.0, 0.10]}",
+        ),
+        ex.ConfigError,
+        "trajectory.class: Locked cannot be copied for the controller (TypeError: cannot pickle",
+    ),
+    Case(
         "custom criterion: no class",
         lambda d: _part(d, '[subtasks]\ncriteria = ["custom"]\nweights = [1.0]'),
         ex.ConfigError,

@@ -72,6 +72,34 @@ def test_the_context_holds_the_nominal_model_never_the_true_one(tmp_path):
     )
 
 
+UNPERTURBED = {"kind": "urdf", "relative_error": 0.0, "com_error": 0.0, "p": None, "beta": None}
+
+
+@pytest.mark.parametrize("preset", ["paper-ellipse", "panda-ellipse"])
+@pytest.mark.parametrize("backend", ["python", "hybrid"])
+def test_a_law_cannot_reach_the_plant_or_the_record_through_its_context(preset, backend):
+    """A law that scales its (unperturbed URDF) nominal model's inertias in place, or writes into
+    its trajectory's and criterion's arrays, changes neither the true plant nor the recorded x_d,
+    e and h: every run applying zero torque is the same, bit for bit."""
+    if backend == "hybrid" and not compiled.available():
+        pytest.skip(compiled.unavailable_reason())
+    base = load_preset(preset).replace(nominal=UNPERTURBED, simulation={"duration": 0.3, "backend": backend})
+    runs = {
+        cls: run_experiment(base.replace(controller={"kind": "custom", "class": f"{LAWS}:{cls}"}))
+        for cls in ("Counter", "AdaptsItsModel", "MovesTheReference")
+    }
+    reference = runs.pop("Counter")
+    for cls, run in runs.items():
+        for name in ("q", "dq", "x", "x_d", "e"):
+            np.testing.assert_array_equal(
+                getattr(run, name), getattr(reference, name), err_msg=f"{cls} {name}"
+            )
+        np.testing.assert_array_equal(run.signals["h"], reference.signals["h"], err_msg=cls)
+    setup = build(base.replace(controller={"kind": "custom", "class": f"{LAWS}:Counter"}))
+    assert setup.nominal.pinocchio_model is not setup.plant.model.pinocchio_model
+    assert setup.controller_context.trajectory is not setup.trajectory
+
+
 def test_a_run_records_its_class_and_reruns_bit_for_bit_from_elsewhere(tmp_path, monkeypatch):
     experiment = _experiment(tmp_path, "Counter")
     run = tmp_path / "run"

@@ -62,7 +62,9 @@ class ControllerContext:
     """What an experiment hands a controller's constructor: ``Class(context, **params)``.
 
     Everything here is what a real controller may know: the nominal model (never the true
-    plant), the desired motion, the sampling period and the actuators' limits.
+    plant), the desired motion, the sampling period and the actuators' limits. All of it is the
+    controller's own copy: a law may change it (adapt its model in place) without reaching the
+    true plant or the recorded x_d, e and h.
 
     Attributes:
         nominal: the controller's model of the arm (:class:`nnrobust.DynamicsModel`: ``mass``,

@@ -6,6 +6,8 @@ registered law (nnrobust/controllers/laws/) or a user's class, each from the
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
 from ..config import ExperimentConfig, controller_kinds
@@ -49,12 +51,17 @@ def build_context(
     plant: Plant,
     q0: np.ndarray,
 ) -> ControllerContext:
-    """What a controller is built from (:class:`ControllerContext`): never the true plant's model."""
+    """What a controller is built from (:class:`ControllerContext`): never the true plant's model,
+    and nothing the plant or the record reads. The nominal model is the controller's own
+    (:func:`nnrobust.model.nominal.build_nominal`); the trajectory and the criterion are copies,
+    so that a law writing into them changes neither the recorded x_d, e and h nor the run.
+    """
     c = config.controller
+    trajectory_key = "trajectory.class" if config.trajectory.kind == "custom" else "trajectory.kind"
     return ControllerContext(
         nominal=nominal,
-        trajectory=trajectory,
-        criterion=criterion,
+        trajectory=_own_copy(trajectory, trajectory_key),
+        criterion=_own_copy(criterion, "subtasks.criterion_class"),
         period=config.simulation.control_period,
         torque_limits=None if plant.torque_limit is None else plant.torque_limit.copy(),
         q0=q0.copy(),
@@ -64,6 +71,21 @@ def build_context(
         null_space_gain=c.k,
         pseudo_inverse=DampedPseudoInverse(c.pinv_threshold, c.pinv_max_damping),
     )
+
+
+def _own_copy(part, key: str):
+    """A deep copy of a part for the controller, or one line naming the key of a part that
+    cannot be copied (a user's class holding a lock, an open file, ...).
+    """
+    try:
+        return copy.deepcopy(part)
+    except Exception as err:
+        raise ConfigError(
+            key,
+            f"{type(part).__name__} cannot be copied for the controller ({type(err).__name__}: {err}); "
+            "a controller is given its own copy (copy.deepcopy) so that it cannot change the run or "
+            "its record: hold nothing that cannot be copied, or define __deepcopy__",
+        ) from err
 
 
 def build_controller(

@@ -20,14 +20,15 @@ from .three_link import ThreeLinkParameters, ThreeLinkPlanarModel
 
 def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsModel:
     """The controller's model: closed form with beta-hat, p-hat, or the robot's own (perturbed) model;
-    the true model itself for computed-torque control.
+    the true model itself for computed-torque control. Always a ``pin.Model`` of its own, never the
+    true plant's: a law that adapts its model in place changes only its own.
     """
     from ..plant.build import true_model
 
     nc = config.nominal
     if config.controller.kind == "computed-torque":  # the true model, armature included
         exact = true_model(config, robot)
-        return PinocchioModel(exact.model, robot.task_frame, robot.task, robot.name)
+        return PinocchioModel(pin.Model(exact.model), robot.task_frame, robot.task, robot.name)
     if nominal_kind(config) == "urdf":
         if nc.perturbed:
             model = perturb_inertias(
@@ -36,7 +37,7 @@ def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsMo
             if nc.factors is not None:
                 model = _with_factors(model, nc.factors)
         else:
-            model = robot.model  # the same Pinocchio model (read-only), with its own Data
+            model = pin.Model(robot.model)  # a copy: the plant's stays out of the controller's reach
         return PinocchioModel(model, robot.task_frame, robot.task, robot.name)
     if robot.task != "planar":
         raise ConfigError("nominal.kind", "'closed-form' is the planar three-link model; use 'urdf'")

@@ -78,3 +78,46 @@ class Abstract(Controller):
 
 class NotAController:
     pass
+
+
+class AdaptsItsModel(Counter):
+    """An adaptive law's natural move: it scales its nominal model's inertias in place (tau = 0)."""
+
+    def __init__(self, context):
+        super().__init__(context)
+        self.model = context.nominal.pinocchio_model
+
+    def compute(self, t, q, v, z, period=0.0):
+        if t == 0.0:
+            for j in range(1, self.model.njoints):
+                body = self.model.inertias[j]
+                self.model.inertias[j] = type(body)(3.0 * body.mass, body.lever, 3.0 * body.inertia)
+        return super().compute(t, q, v, z, period)
+
+
+def _shift_arrays(part, by, seen):
+    """Add ``by`` to every float array inside ``part`` (its attributes, lists and tuples), in place."""
+    if id(part) in seen:
+        return
+    seen.add(id(part))
+    if isinstance(part, np.ndarray) and part.dtype == float:
+        part += by
+    elif isinstance(part, (list, tuple)):
+        for item in part:
+            _shift_arrays(item, by, seen)
+    elif hasattr(part, "__dict__"):
+        for item in vars(part).values():
+            _shift_arrays(item, by, seen)
+
+
+class MovesTheReference(Counter):
+    """Writes into every array of its trajectory and criterion (tau = 0)."""
+
+    def __init__(self, context):
+        super().__init__(context)
+        self.parts = (context.trajectory, context.criterion)
+
+    def compute(self, t, q, v, z, period=0.0):
+        if t == 0.0:
+            _shift_arrays(self.parts, 0.2, set())
+        return super().compute(t, q, v, z, period)

@@ -61,3 +61,13 @@ class WrongSize(nnrobust.Disturbance):
 
 class NotATrajectory:
     """Has no business in trajectory.class."""
+
+
+class Locked(Ellipse):
+    """The ellipse, holding a lock: it cannot be copied for the controller."""
+
+    def __init__(self, robot, center, a, b, omega=1.0):
+        import threading
+
+        super().__init__(robot, center, a, b, omega)
+        self.lock = threading.Lock()
