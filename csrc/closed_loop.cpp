@@ -139,8 +139,13 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
     }
     z = out.z;
     plant.begin_period(t);  // the loads held over this period
-    if (plant.engine) {  // MuJoCo steps the plant
-      plant.engine->advance(t, tau, s.period, plant.disturbance, [&](int i) { return plant.load(i); }, q, v);
+    if (plant.engine) {  // MuJoCo steps the plant; a state or torque it discarded ends the run
+      if (!plant.engine->advance(t, tau, s.period, plant.disturbance, [&](int i) { return plant.load(i); }, q, v)) {
+        tr.status = "diverged";
+        tr.divergence_index = k;
+        tr.done = k + 1;
+        break;
+      }
       continue;
     }
     const int n_steps = period_substeps(s, plant.step_rate(q, v, s.period));

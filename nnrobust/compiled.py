@@ -321,8 +321,10 @@ def _trace(setup, spec, out):
     message = ""
     if out.status == "diverged":
         k = out.divergence_index
+        engine = setup.plant.engine  # MuJoCo, which resets a bad state it finds
         if out.divergence_joint < 0:
-            message = f"non-finite state or torque at t = {t[k]:.4f} s"
+            failure = engine.failure(t[k]) if engine is not None else ""
+            message = failure or f"non-finite state or torque at t = {t[k]:.4f} s"
         else:
             message = speed_message(setup.plant.model, np.asarray(out.dq)[k], spec.max_speed, t[k])
     elif out.status == "interrupted":

@@ -245,6 +245,10 @@ def simulate(
                 z = out.state
             if engine is not None:
                 X = np.concatenate(engine.advance(t, tau, control_period, plant.held.torque))
+                failure = engine.failure(t)  # a state or torque MuJoCo discarded: the run ends
+                if failure:
+                    status, message, done = "diverged", failure, k + 1
+                    break
                 continue
             n_steps = (
                 int(

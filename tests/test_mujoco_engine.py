@@ -172,6 +172,43 @@ def test_paper_ellipse_on_mujoco_same_on_both_loops_and_within_3x_of_pinocchio(t
     assert runs["pinocchio", "compiled"].metrics()["engine_audit"] is None
 
 
+@pytest.mark.parametrize("backend", ["compiled", "python"])
+@pytest.mark.parametrize(
+    "case, rows, words",
+    [
+        (
+            {"plant": {"loads": [{"kind": "impulse", "time": 0.5, "impulse": [1e9, 0.0, 0.0]}]}},
+            501,
+            "MuJoCo's bad acceleration (mjWARN_BADQACC: non-finite or above 1e10 at joint 'joint1') at "
+            "t = 0.5000 s; MuJoCo resets the state to q = 0, so the run ends here",
+        ),
+        (
+            {
+                "controller": {"kind": "no-u0", "Kp": [1e12, 1e12], "Kv": [1.1e6, 1.1e6]},
+                "plant": {"torque_limits": "none"},
+            },
+            76,
+            "MuJoCo's bad control (mjWARN_BADCTRL: non-finite or above 1e10 at joint 'joint1') at "
+            "t = 0.0750 s; MuJoCo applies zero torque instead, so the run ends here",
+        ),
+    ],
+    ids=["impulse-1e9", "Kp-1e12-unlimited"],
+)
+def test_a_state_or_torque_mujoco_discards_ends_the_run_as_diverged(backend, case, rows, words):
+    """MuJoCo answers a huge acceleration by resetting q to 0, and a huge torque by applying none,
+    each with a warning only; both loops read the warning after every step and end the run there
+    as diverged, naming it (these runs were reported completed, 390 mm RMS)."""
+    sections = {key: dict(value) for key, value in case.items()}
+    sections["plant"]["engine"] = "mujoco"
+    config = load_preset("paper-ellipse").replace(
+        **sections, simulation={"duration": 1.0, "backend": backend}
+    )
+    result = run_experiment(config)
+    assert (result.status, result.backend, result.t.size) == ("diverged", backend, rows)
+    assert words in result.message, result.message
+    assert np.all(np.isfinite(result.q))  # the state MuJoCo reset to never reaches the record
+
+
 def test_panda_on_mujoco_tracks_as_on_pinocchio():
     config = load_preset("panda-ellipse")
     config.simulation.duration = 3.0

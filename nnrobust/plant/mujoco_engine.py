@@ -22,11 +22,18 @@ The disturbance tau_d(t) enters as ``qfrc_applied`` = -tau_d at the middle of ea
 Before a run is trusted its compiled model is audited (:func:`audit`): M(q), the bias
 V_m(q, q') q' + G(q) and G(q) of MuJoCo against Pinocchio's at random states; a model that
 differs by more than :data:`AUDIT_TOLERANCE` is refused with the term and the joint named.
+
+A state that blows up does not reach the loop as NaN: MuJoCo answers a non-finite or huge
+position, velocity or acceleration with a warning and resets the state to the model's q = 0, and
+a huge torque command by applying none. Both loops read those warnings after every step and end
+the run there as diverged (:meth:`MujocoPlant.failure`), as the Pinocchio plant's non-finite
+state does.
 """
 
 from __future__ import annotations
 
 import ctypes
+import functools
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -49,6 +56,16 @@ CONSTRAINT_TIME_CONSTANT = 2e-3
 plant steps, MuJoCo's stability advice). Fixed, so that a finer step converges to the same
 model. MuJoCo's default, 0.02 s, lets a joint held below its Coulomb level creep ten times
 faster (docs/engines.md)."""
+
+
+BAD_STATE_WARNINGS = {
+    "mjWARN_BADQPOS": ("position", "resets the state to q = 0"),
+    "mjWARN_BADQVEL": ("velocity", "resets the state to q = 0"),
+    "mjWARN_BADQACC": ("acceleration", "resets the state to q = 0"),
+    "mjWARN_BADCTRL": ("control", "applies zero torque instead"),
+}
+"""MuJoCo's warnings on a value non-finite or above its mjMAXVAL (1e10): what it found bad and
+what it does then, which would go on silently from a state or a torque other than the loop's."""
 
 
 def constraint_time_constant(h: float) -> float:
@@ -138,17 +155,48 @@ class MujocoPlant:
         mujoco = import_mujoco()
         d, h = self.data, period / self.substeps
         d.ctrl[:] = tau
+        warned, bad = d.warning.number, _bad_state_warnings()
         for i in range(self.substeps):
             d.qfrc_applied[self.dof_index] = -self.disturbance(t + (i + 0.5) * h)
             if load is not None:
                 d.qfrc_applied[self.dof_index] += load
             mujoco.mj_step(self.model, d)
+            if any(warned[w] for w in bad):  # MuJoCo reset the state or zeroed tau: the run ends
+                break
         return d.qpos[self.qpos_index].copy(), d.qvel[self.dof_index].copy()
+
+    def failure(self, t: float) -> str:
+        """Why the run cannot go on ("" when it can): a bad state or command MuJoCo warned of since
+        :meth:`reset` (:data:`BAD_STATE_WARNINGS`), with the joint, for a run stopped in the
+        control period from ``t`` [s].
+        """
+        warned = self.data.warning
+        counts = warned.number
+        for w, (name, (what, then)) in zip(_bad_state_warnings(), BAD_STATE_WARNINGS.items()):
+            if counts[w]:
+                return (
+                    f"MuJoCo's bad {what} ({name}: non-finite or above 1e10 at joint "
+                    f"{self._joint_of(what, int(warned.lastinfo[w]))!r}) at t = {t:.4f} s; MuJoCo "
+                    f"{then}, so the run ends here"
+                )
+        return ""
+
+    def _joint_of(self, what: str, index: int) -> str:
+        """The joint of the qpos address, dof or actuator that MuJoCo's warning names."""
+        m = self.model
+        if what == "position":
+            joints = np.flatnonzero(m.jnt_qposadr == index)
+        elif what == "control":
+            joints = m.actuator_trnid[index : index + 1, 0] if 0 <= index < m.nu else []
+        else:
+            joints = m.dof_jntid[index : index + 1] if 0 <= index < m.nv else []
+        return m.joint(int(joints[0])).name if len(joints) else "?"
 
     def addresses(self) -> dict[str, int]:
         """Raw addresses for the compiled loop, which calls MuJoCo's ``mj_step`` itself: the
         function (from the library the ``mujoco`` module loaded), the model, the data, and the
-        qpos, qvel, ctrl and qfrc_applied arrays inside the data (they live as long as it does).
+        qpos, qvel, ctrl and qfrc_applied arrays inside the data (they live as long as it does),
+        and the counts of the warnings on which MuJoCo resets the state (:data:`BAD_STATE_WARNINGS`).
         """
         mujoco = import_mujoco()
         folder = Path(mujoco.__file__).parent
@@ -165,6 +213,11 @@ class MujocoPlant:
             )
         step = ctypes.cast(ctypes.CDLL(str(libraries[0])).mj_step, ctypes.c_void_p).value
         d = self.data
+        counts = d.warning.number  # a strided view of mjData's warning[i].number
+        warned = {
+            f"warned_{what}": counts.ctypes.data + w * counts.strides[0]
+            for w, (what, _) in zip(_bad_state_warnings(), BAD_STATE_WARNINGS.values())
+        }
         return {
             "step": int(step or 0),
             "model": int(self.model._address),
@@ -173,7 +226,15 @@ class MujocoPlant:
             "qvel": d.qvel.ctypes.data,
             "ctrl": d.ctrl.ctypes.data,
             "qfrc_applied": d.qfrc_applied.ctypes.data,
+            **warned,
         }
+
+
+@functools.cache
+def _bad_state_warnings() -> tuple[int, ...]:
+    """The indices in mjData's warning array of :data:`BAD_STATE_WARNINGS`, in its order."""
+    mujoco = import_mujoco()
+    return tuple(int(getattr(mujoco.mjtWarning, name)) for name in BAD_STATE_WARNINGS)
 
 
 def _spec(mujoco, robot, name: str):
