@@ -13,6 +13,8 @@ The search, per controller, at one budget of simulations on a Dask cluster:
 1. a scrambled Sobol sequence over the box (a quarter of the budget, a power of two);
 2. CMA-ES (the ``cma`` package) from the best point found, in batches the size of the worker
    pool, restarted with a doubled population (IPOP) when it converges, until the budget is spent;
+   a box of one coordinate, which CMA-ES does not search, gets a zooming grid instead
+   (:meth:`_Search._ask_line`);
 3. as the reported baseline, the same budget of uniform random points.
 
 The history is written as Parquet parts as it grows; running the same command into the same
@@ -251,10 +253,18 @@ def evaluate(sweep, base_toml: str, controller: str, values: dict, properties: l
     }
 
 
+LINE_START = 0.3
+"""Half-width of a one-coordinate search's first grid, in the unit box (CMA-ES's sigma_0)."""
+
+LINE_TOLERANCE = 1e-9
+"""Half-width in the unit box below which a one-coordinate search has converged and restarts."""
+
+
 class _Search:
-    """One controller's search (Sobol, then CMA-ES with IPOP restarts) or its random baseline,
-    asking batches and told the results; deterministic given the seed, so a resumed search asks
-    the same points again and takes their results from the history.
+    """One controller's search (Sobol, then CMA-ES with IPOP restarts; a zooming grid in a box
+    of one coordinate) or its random baseline, asking batches and told the results;
+    deterministic given the seed, so a resumed search asks the same points again and takes their
+    results from the history.
     """
 
     def __init__(self, dims: int, budget: int, seed: int, random: bool):
@@ -266,6 +276,7 @@ class _Search:
         self._pending: list[np.ndarray] = []
         self.popsize = max(4 + int(3 * math.log(dims)), 4)
         self.restarts = 0
+        self.line: tuple[float, np.ndarray, float] | None = None  # one coordinate: (f, centre, half-width)
         if random:
             self.start: list[np.ndarray] = []
         else:
@@ -288,10 +299,34 @@ class _Search:
             points = [
                 ("sobol", self.start.pop(0)) for _ in range(min(count, len(self.start), self.remaining))
             ]
+        elif self.dims == 1:
+            points = [("line", u) for u in self._ask_line()]
         else:
             points = [("cma", u) for u in self._ask_cma()]
         self.asked += len(points)
         return points
+
+    def _ask_line(self) -> list[np.ndarray]:
+        """One coordinate (CMA-ES needs two; cma 3 refuses one, cma 4 fails in ``tell``): a grid
+        of the population's size over [c - w, c + w] within [0, 1], about the best point c of
+        this start; each batch zooms to the grid's spacing about the new best (its neighbours
+        bracket a minimum), nearest points first. Converged (w < LINE_TOLERANCE): restarted from
+        a random point with a doubled population, as IPOP restarts CMA-ES.
+        """
+        if self.line is None or self.line[2] < LINE_TOLERANCE:
+            if self.line is not None:
+                self.restarts += 1
+                self.popsize *= 2
+            if self.best is not None and self.restarts == 0:
+                self.line = (self.best[0], self.best[1], LINE_START)
+            else:
+                self.line = (math.inf, self.rng.random(1), LINE_START)
+        _, centre, width = self.line
+        low, high = max(0.0, float(centre[0]) - width), min(1.0, float(centre[0]) + width)
+        grid = np.linspace(low, high, self.popsize)
+        grid = grid[np.argsort(np.abs(grid - centre[0]), kind="stable")]  # a budget cut keeps the nearest
+        self._pending = [np.array([x]) for x in grid][: self.remaining]
+        return self._pending
 
     def _ask_cma(self) -> list[np.ndarray]:
         import cma
@@ -319,6 +354,11 @@ class _Search:
         for (_, u), f in zip(points, objectives):
             if self.best is None or f < self.best[0]:
                 self.best = (f, np.asarray(u))
+        line_points = [(f, u) for (phase, u), f in zip(points, objectives) if phase == "line"]
+        if line_points and self.line is not None:
+            f, u = min([(self.line[0], self.line[1]), *line_points], key=lambda p: p[0])
+            grid = [float(p[0]) for _, p in line_points]
+            self.line = (f, np.asarray(u), (max(grid) - min(grid)) / max(len(grid) - 1, 1))
         cma_points = [(u, f) for (phase, u), f in zip(points, objectives) if phase == "cma"]
         if cma_points and self.es is not None:
             us, fs = zip(*cma_points)

@@ -376,3 +376,38 @@ def test_the_header_counts_what_the_folder_held_before_the_search(tmp_path, caps
     kept = len(pd.read_parquet(out / "history")) - len(pd.read_parquet(parts[0]))
     parts[0].unlink()
     assert header() == f"{kept} of 8 already done"
+
+
+def test_one_coordinate_is_searched_by_a_zooming_grid_without_cma(monkeypatch):
+    """CMA-ES does not search one coordinate (cma 3 refuses it; cma 4 failed in ``tell``: "not
+    yet initialized (dimension needed)"): after the Sobol start, a grid zooms on the minimum of a
+    toy objective, restarts once converged, spends the budget exactly and never builds CMA-ES."""
+    import cma
+
+    from nnrobust.falsify import _Search
+
+    def refused(*args, **kwargs):
+        raise ValueError("Optimization in 1-D is not supported (code was never tested)")
+
+    monkeypatch.setattr(cma, "CMAEvolutionStrategy", refused)
+    search, asked = _Search(1, 300, seed=3, random=False), []
+    while search.remaining > 0:
+        points = search.ask(4)
+        asked += [phase for phase, _ in points]
+        search.tell(points, [float((u[0] - 0.371) ** 2) for _, u in points])
+    assert len(asked) == 300 and set(asked) == {"sobol", "line"} and search.restarts >= 1
+    assert abs(search.best[1][0] - 0.371) < 1e-6
+
+
+def test_a_box_of_one_coordinate_is_falsified_at_a_tiny_budget(tmp_path, capsys):
+    """The disturbance scale alone, budget 8: the search runs to its end (it crashed in CMA-ES),
+    the worst plant at the top of the range, the falsifier and its baseline 8 simulations each."""
+    sweep = tmp_path / "one.toml"
+    sweep.write_text(
+        'name = "one"\nbase = "paper-ellipse"\ncontrollers = ["no-u0"]\nseed = 4\n'
+        '[set]\n"simulation.duration" = 0.5\n[vary]\n"plant.disturbance_scale" = {uniform = [0.5, 2.0]}\n'
+    )
+    spec = FalsifySpec(str(sweep), ["no-u0"], ["rms_error<=0.05"], 8, seed=1)
+    entry = run_falsify(spec, tmp_path / "out", workers=2)["controllers"]["no-u0"]
+    assert entry["simulations"] == entry["random_baseline"]["simulations"] == 8
+    assert entry["worst"]["values"]["plant.disturbance_scale"] > 1.9
