@@ -133,16 +133,18 @@ def searchable(sweep, base) -> tuple[Any, str]:
 
 
 def _searched_sweep(spec: FalsifySpec):
-    """(the sweep as searched, its base experiment, what :func:`searchable` says): the target's
-    sweep with the controllers (tuned where asked), its seeded model error made searchable.
+    """(the sweep as searched, its base's own values with its [set], what :func:`searchable`
+    says): the target's sweep with the controllers (tuned where asked), its seeded model error
+    made searchable (its [set] then holds ``nominal.relative_error = 0``, which the values take).
     """
-    from .sweep.spec import base_config, load_sweep
+    from .sweep.spec import base_config, base_values, load_sweep
     from .tune.engine import _with_controllers
 
     sweep = _with_controllers(load_sweep(spec.target), spec.controllers, spec.tuned)
-    base = base_config(sweep)
-    searched, note = searchable(sweep, base)
-    return searched, base, note
+    searched, note = searchable(sweep, base_config(sweep))
+    if searched is not sweep:
+        base_config(searched)  # its [set] (relative_error 0) checked on the base
+    return searched, base_values(searched), note
 
 
 def box_of(spec) -> Box:
@@ -230,15 +232,13 @@ def _objective(margins: dict[str, float]) -> float:
     return max(least, FLOOR) if math.isfinite(least) else FLOOR
 
 
-def evaluate(sweep, base_toml: str, controller: str, values: dict, properties: list[Property]) -> dict:
-    """One run at one point of the box (on a worker): its margins and the metrics they read."""
-    import tomllib
-
-    from .config import from_dict
+def evaluate(sweep, base: dict, controller: str, values: dict, properties: list[Property]) -> dict:
+    """One run at one point of the box (on a worker): its margins and the metrics they read;
+    ``base``: the base's own values (:func:`nnrobust.sweep.spec.base_values`).
+    """
     from .experiment import run_experiment
     from .sweep.spec import Sample, experiment, sample_seed
 
-    base = from_dict(tomllib.loads(base_toml))
     sample = Sample(-1, values, sample_seed(sweep.seed, 0))
     try:
         metrics = run_experiment(experiment(sweep, base, sample, controller)).metrics()
@@ -374,11 +374,12 @@ class _Driver:
     appending the new ones to it.
     """
 
-    def __init__(self, client, folder: Path, done: dict, sweep, base_toml: str, properties, progress):
+    def __init__(self, client, folder: Path, done: dict, sweep, base: dict, properties, progress):
         self.client, self.folder, self.done = client, folder, done
-        self.base_toml, self.properties, self.progress = base_toml, properties, progress
+        self.properties, self.progress = properties, progress
         self.workers = max(len(client.scheduler_info().get("workers", {})), 1)
         self.sweep = client.scatter(sweep, broadcast=True)  # sent to every worker once
+        [self.base] = client.scatter([base], broadcast=True)  # one future (a dict would be one per key)
         self.finished = 0  # simulations of the calls before (the progress bar counts on)
 
     def __call__(self, searches: dict, boxes: dict, rows: dict, total: int, stop_at_violation=False):
@@ -399,7 +400,7 @@ class _Driver:
                         futures[(key, index)] = self.client.submit(
                             evaluate,
                             self.sweep,
-                            self.base_toml,
+                            self.base,
                             key[0],
                             boxes[key].values(u),
                             self.properties,
@@ -609,7 +610,6 @@ def _run_falsify(
     folder = Path(folder)
     prepare_folder(spec, folder, overwrite)
     done = _history(folder)
-    base_toml = base.to_toml()
     searches = {
         (name, kind): _Search(
             len(box.keys),
@@ -626,7 +626,7 @@ def _run_falsify(
     with signals_as_interrupt(), _client(workers, scheduler) as client:
         if progress:  # before any work: what the folder already holds of this search
             progress(sum((c, s) in searches and i < spec.budget for c, s, i in done), total)
-        drive = _Driver(client, folder, done, sweep, base_toml, properties, progress)
+        drive = _Driver(client, folder, done, sweep, base, properties, progress)
         drive(searches, dict.fromkeys(searches, box), rows, total)
         margins = _margins(spec, sweep, box, rows, drive) if spec.margin else None
     seconds = time.monotonic() - started

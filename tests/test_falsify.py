@@ -215,6 +215,25 @@ def test_a_seeded_relative_error_is_searched_as_the_factors_it_draws():
         searchable(both, base_config(both))
 
 
+def test_the_searched_factors_replace_the_bases_seeded_model_error(tmp_path):
+    """A base with a seeded model error (panda-ellipse: relative_error = 0.2) whose box varies it:
+    each point runs with relative_error 0, as the printed command sets it, the searched factors
+    alone drawing the model (the base's 0.2 was drawn on top of them: [set] took no part)."""
+    from nnrobust.falsify import _searched_sweep
+    from nnrobust.sweep.spec import Sample, experiment, rerun_command
+
+    path = tmp_path / "p.toml"
+    path.write_text(
+        'name = "p"\nbase = "panda-ellipse"\ncontrollers = ["nn"]\n'
+        '[vary]\n"nominal.relative_error" = {uniform = [0.0, 0.2]}\n'
+    )
+    sweep, base, _ = _searched_sweep(FalsifySpec(str(path), ["nn"], ["rms_error<=0.05"], 4))
+    values = dict.fromkeys(box_of(sweep).keys, 1.1)
+    config = experiment(sweep, base, Sample(-1, values, 1), "nn")
+    assert config.nominal.relative_error == 0.0 and config.nominal.factors[0] == 1.1
+    assert "nominal.relative_error=0.0" in rerun_command(sweep, Sample(-1, values, 1), "nn")
+
+
 def test_per_joint_plant_keys_are_coordinates_of_the_box():
     """One joint's friction scale and the disturbance's frequency, searched as box coordinates:
     each point builds the plant it names."""

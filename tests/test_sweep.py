@@ -456,7 +456,7 @@ def test_a_sample_that_raises_is_a_row_and_the_sweep_goes_on(monkeypatch):
     its type and message; the other rows run."""
     import nnrobust.experiment
     from nnrobust.sweep.engine import run_rows
-    from nnrobust.sweep.spec import base_config
+    from nnrobust.sweep.spec import base_values
 
     spec = parse_sweep(
         {
@@ -476,7 +476,7 @@ def test_a_sample_that_raises_is_a_row_and_the_sweep_goes_on(monkeypatch):
         return real(config, *args, **kwargs)
 
     monkeypatch.setattr(nnrobust.experiment, "run_experiment", flaky)
-    rows = run_rows(spec, base_config(spec).to_toml(), [(0, "nn"), (1, "nn")])
+    rows = run_rows(spec, base_values(spec), [(0, "nn"), (1, "nn")])
     assert [r["status"] for r in rows] == ["error", "completed"]
     assert rows[0]["message"] == "ZeroDivisionError: a defect"
 
@@ -653,3 +653,34 @@ samples = 1
     )
     with pytest.raises(ConfigError, match="a table entry is"):
         load_sweep(nn_params)
+
+
+@pytest.mark.parametrize("table", ["set", "vary"])
+def test_a_set_or_varied_key_gives_the_configuration_of_the_edited_file(table, tmp_path):
+    """Issue 34, item 9: [set] and [vary] keys are set in the base file's own values, as an edit of
+    the file would set them. The README's panda (Kp = [25.0], a position task) with robot.task =
+    "pose" gives six gains of 25; it said `controller.Kp: has 3 entries` (the keys were set in the
+    resolved base, whose one-value gains were already written out three times)."""
+    from nnrobust.config import load_config
+    from nnrobust.sweep.spec import base_config, base_values, draw, experiment
+
+    from .test_experiment import _readme_panda
+
+    base = tmp_path / "my-panda.toml"
+    base.write_text(_readme_panda())
+    edited = tmp_path / "edited.toml"
+    edited.write_text(
+        base.read_text().replace('task = "position"', 'task = "pose"') + "[sensing]\nseed = 3\n"
+    )
+    task = '"robot.task" = "pose"' if table == "set" else '[vary]\n"robot.task" = ["pose"]'
+    seeds = '"nominal.seed" = 7\n"sensing.seed" = 3\n'  # the seeds a sample would otherwise draw
+    path = _sweep_file(
+        tmp_path,
+        text=f'name = "p"\nbase = "my-panda.toml"\ncontrollers = ["nn"]\n[set]\n{seeds}{task}\n',
+    )
+    spec = load_sweep(path)
+    plan(spec)  # every row validated
+    config = experiment(spec, base_values(spec), draw(spec, 0), "nn")
+    assert config == load_config(edited) and config.controller.Kp == [25.0] * 6
+    if table == "set":
+        assert base_config(spec) == load_config(edited)

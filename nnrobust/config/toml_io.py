@@ -228,11 +228,23 @@ MAX_BASE_DEPTH = 8
 """Experiment files that start from one another (``base = "file.toml"``), at most this deep."""
 
 
-def _file_data(path: Path, text: str, depth: int = 0) -> dict:
+def file_values(path: str | Path, read: list[Path] | None = None) -> dict:
+    """An experiment file's own values, not yet validated nor resolved: its tables merged over its
+    ``base`` chain, relative paths made absolute (what ``load_config(path, overrides)`` sets its
+    keys in). ``read``, if given, gets every file read: the file, then its bases.
+    """
+    path = Path(path)
+    return _file_data(path, read_text_file(path, what="experiment file"), read=read)
+
+
+def _file_data(path: Path, text: str, depth: int = 0, read: list[Path] | None = None) -> dict:
     """An experiment file's table with its relative paths (robot.source, robot.mesh_folders, the
     classes of :data:`USER_PARTS`) made absolute from the file's folder, merged over its ``base``
-    (a preset name or an experiment file): the file's keys win, section by section.
+    (a preset name or an experiment file): the file's keys win, section by section. Each file
+    read is appended to ``read`` (if given).
     """
+    if read is not None:
+        read.append(path.resolve())
     data = parse_toml(text, str(path))
     folder = path.resolve().parent
     robot = data.get("robot")
@@ -283,7 +295,7 @@ def _file_data(path: Path, text: str, depth: int = 0) -> dict:
             base_path = preset_path(base)
         except ConfigError as err:
             raise ConfigError(f"{path}: base", str(err).split(": ", 1)[1]) from err
-    merged = _file_data(base_path, read_text_file(base_path, what="experiment file"), depth + 1)
+    merged = _file_data(base_path, read_text_file(base_path, what="experiment file"), depth + 1, read)
     for key, value in data.items():
         if isinstance(value, dict) and isinstance(merged.get(key), dict):
             merged[key] = {**merged[key], **value}

@@ -19,7 +19,7 @@ from pathlib import Path
 
 from ..exceptions import NNRobustError
 from ..signals import signals_as_interrupt
-from .spec import SweepSpec, base_config, draw, experiment
+from .spec import SweepSpec, base_config, base_values, draw, experiment
 
 RESULTS = "results"
 MARKER = "sweep.toml"
@@ -42,22 +42,19 @@ def _require_engine():
 SKIP_METRICS = ("rms_torque_per_joint", "singular_episodes", "message", "joint_limit_joint")
 
 
-def run_rows(spec: SweepSpec, base_toml: str, jobs: list[tuple[int, str]]) -> list[dict]:
+def run_rows(spec: SweepSpec, base: dict, jobs: list[tuple[int, str]]) -> list[dict]:
     """Run (sample id, controller) jobs; one metrics row each.
 
-    The worker rebuilds each experiment from the sweep and the base experiment's TOML (so a remote
-    worker needs no file of the client's). A run that cannot be built (the sample's trajectory
-    leaves the workspace, say) is a row with status ``refused`` and its message; a diverged run
-    is a row with status ``diverged``; an unexpected exception (a defect) a row with status
-    ``error``, its type and message, so that one sample never aborts a sweep.
+    The worker rebuilds each experiment from the sweep and the base experiment's own values
+    (:func:`~.spec.base_values`, so a remote worker needs no experiment file of the client's). A
+    run that cannot be built (the sample's trajectory leaves the workspace, say) is a row with
+    status ``refused`` and its message; a diverged run is a row with status ``diverged``; an
+    unexpected exception (a defect) a row with status ``error``, its type and message, so that
+    one sample never aborts a sweep.
     """
-    import tomllib
-
-    from ..config import from_dict
     from ..exceptions import NNRobustError as LibraryError
     from ..experiment import run_experiment
 
-    base = from_dict(tomllib.loads(base_toml))
     rows = []
     for sample_id, controller in jobs:
         start = time.perf_counter()
@@ -305,13 +302,15 @@ def _client(workers: int | None, scheduler: str | None):
         cluster.close()
 
 
-def plan(spec: SweepSpec) -> tuple[str, list[tuple[int, str]]]:
-    """The base experiment's TOML and every (sample, controller) job, each experiment validated
+def plan(spec: SweepSpec) -> tuple[dict, list[tuple[int, str]]]:
+    """The base experiment's own values (:func:`~.spec.base_values`) and every (sample,
+    controller) job, each experiment validated
     first: a value the schema refuses is a one-line error naming the key and the sample, before
     anything runs. Jobs are (id, controller) pairs, so the client's memory does not grow with the
     experiments, which the workers rebuild.
     """
-    base = base_config(spec)
+    base_config(spec)  # the base file and [set], refused as the file's or as [set]'s
+    base = base_values(spec)
     for sample_id in _first_checked(spec):  # each distinct grid value's first sample, at once
         for controller in spec.controllers:
             experiment(spec, base, draw(spec, sample_id), controller)
@@ -321,7 +320,7 @@ def plan(spec: SweepSpec) -> tuple[str, list[tuple[int, str]]]:
         for controller in spec.controllers:
             experiment(spec, base, sample, controller)  # validates; not kept
             jobs.append((sample_id, controller))
-    return base.to_toml(), jobs
+    return base, jobs
 
 
 def _first_checked(spec: SweepSpec) -> list[int]:
@@ -369,19 +368,19 @@ def run_sweep(
     """
     _require_engine()
     folder = Path(folder)
-    base_toml, jobs = plan(spec)  # every experiment validated before anything is written or run
+    base, jobs = plan(spec)  # every experiment validated before anything is written or run
     from ..study_folder import held
 
     with held(folder):  # one sweep at a time into a folder: never a row twice
         return _run_sweep(
-            spec, folder, base_toml, jobs, workers, scheduler, overwrite, progress, seconds_per_job, stop
+            spec, folder, base, jobs, workers, scheduler, overwrite, progress, seconds_per_job, stop
         )
 
 
 def _run_sweep(
     spec: SweepSpec,
     folder: Path,
-    base_toml: str,
+    base: dict,
     jobs: list,
     workers,
     scheduler,
@@ -422,7 +421,7 @@ def _run_sweep(
         else:
             chunks = [jobs[i : i + size] for i in range(0, len(jobs), size)]
         spec_future = client.scatter(spec, broadcast=True)
-        base_future = client.scatter(base_toml, broadcast=True)
+        [base_future] = client.scatter([base], broadcast=True)  # one future (a dict would be one per key)
         futures = [
             client.submit(run_rows, spec_future, base_future, chunk, pure=False, retries=2)
             for chunk in chunks

@@ -18,7 +18,6 @@ import numpy as np
 
 from ..config import (
     ExperimentConfig,
-    apply_overrides,
     check_dotted_key,
     dump_toml,
     parse_toml,
@@ -364,25 +363,49 @@ def load_sweep(path: str | Path) -> SweepSpec:
     return spec
 
 
-def base_config(spec: SweepSpec) -> ExperimentConfig:
-    """The base experiment with the fixed overrides of [set]."""
-    from ..config import load_config
-    from ..presets import load_preset, preset_names
+def base_path(spec: SweepSpec) -> Path:
+    """The file of the sweep's base: an experiment file, or a preset's file."""
+    from ..presets import preset_names, preset_path
 
     if spec.base.endswith(".toml"):
-        config = load_config(spec.base)
-    elif spec.base in preset_names():
-        config = load_preset(spec.base)
-    else:
-        raise ConfigError(
-            "base",
-            f"{spec.base!r} is neither an experiment file (.toml) nor a preset; "
-            f"presets: {', '.join(preset_names())}",
-        )
+        return Path(spec.base)
+    if spec.base in preset_names():
+        return preset_path(spec.base)
+    raise ConfigError(
+        "base",
+        f"{spec.base!r} is neither an experiment file (.toml) nor a preset; "
+        f"presets: {', '.join(preset_names())}",
+    )
+
+
+def base_config(spec: SweepSpec) -> ExperimentConfig:
+    """The base experiment with the fixed overrides of [set]: the configuration the base file
+    edited so gives (``load_config(path, set)``: the keys set in the file's own values, before a
+    gain given once is written out m times).
+    """
+    from ..config import load_config
+
+    path = base_path(spec)
     try:
-        return apply_overrides(config, spec.set)
+        return load_config(path, spec.set)
     except ConfigError as err:
+        if err.key.startswith(f"{path}: "):  # the base file's own error
+            raise
         raise ConfigError(f"set: {err.key}", str(err).split(": ", 1)[1]) from err
+
+
+def base_values(spec: SweepSpec) -> dict:
+    """The base file's own values with [set]'s keys set in them, not yet validated nor resolved:
+    what each row's keys are set in (:func:`experiment`), as an edit of the file would set them.
+    A plain dict, sent to the workers (which need no file of the client's but the classes and
+    URDFs it names).
+    """
+    from ..config.toml_io import file_values, set_dotted
+
+    data = file_values(base_path(spec))
+    for key, value in spec.set.items():
+        set_dotted(data, key, value)
+    return data
 
 
 def sample_seed(seed: int, sample_id: int) -> int:
@@ -415,15 +438,35 @@ SEEDED_KEYS = ("nominal.seed", "sensing.seed")
 model error draw and sensor noise, the same for every controller (common random numbers)."""
 
 
-def experiment(spec: SweepSpec, base: ExperimentConfig, sample: Sample, controller: str) -> ExperimentConfig:
-    """The experiment of one (sample, controller) row, validated."""
+def experiment(
+    spec: SweepSpec,
+    base: dict | ExperimentConfig,
+    sample: Sample,
+    controller: str,
+    settings: dict | None = None,
+) -> ExperimentConfig:
+    """The experiment of one (sample, controller) row, validated: the sample's seeds and values,
+    the controller's keys and ``settings`` (a tuner's, dotted keys) set in ``base``, the base's own
+    values (:func:`base_values`), then validated and resolved once: the configuration the base
+    file edited so gives. A ``base`` given as a configuration takes them in its resolved values,
+    where a gain given once already has an entry per task coordinate.
+    """
+    import copy
+
+    from ..config import from_dict
+    from ..config.toml_io import set_dotted
+
     overrides = {
         key: sample.seed % 2**31 for key in SEEDED_KEYS if key not in spec.set and key not in spec.vary
     }
     overrides.update(sample.values)
     overrides.update(controller_overrides(spec, controller))
+    overrides.update(settings or {})
+    data = copy.deepcopy(base) if isinstance(base, dict) else base.to_dict()
     try:
-        return apply_overrides(base, overrides)
+        for key, value in overrides.items():
+            set_dotted(data, key, value)
+        return from_dict(data)
     except ConfigError as err:
         values = ", ".join(f"{k} = {v!r}" for k, v in sample.values.items())
         raise ConfigError(

@@ -263,17 +263,16 @@ def _with_controllers(sweep, names: list[str], tuned: dict | None = None):
 # ---- on the workers ------------------------------------------------------------------------------
 
 
-def evaluate(sweep, base_toml: str, controller: str, overrides: dict, sample_id: int) -> dict:
-    """One simulation of a setting on one sample: its metrics (or the reason it failed)."""
-    import tomllib
-
-    from ..config import apply_overrides, from_dict
+def evaluate(sweep, base: dict, controller: str, overrides: dict, sample_id: int) -> dict:
+    """One simulation of a setting on one sample: its metrics (or the reason it failed). The
+    setting's keys are set with the sample's in the base's own values
+    (:func:`nnrobust.sweep.spec.experiment`), as an edit of the file would set them.
+    """
     from ..experiment import run_experiment
     from ..sweep.spec import draw, experiment
 
-    base = from_dict(tomllib.loads(base_toml))
     try:
-        config = apply_overrides(experiment(sweep, base, draw(sweep, sample_id), controller), overrides)
+        config = experiment(sweep, base, draw(sweep, sample_id), controller, overrides)
         metrics = run_experiment(config).metrics()
     except NNRobustError as err:
         return {"status": "refused", "message": str(err)[:300]}
@@ -541,7 +540,7 @@ def _run_tune(
     spec: TuneSpec, folder: Path, workers: int | None, scheduler: str | None, overwrite: bool, progress
 ) -> dict:
     from ..sweep.engine import _client, _require_engine
-    from ..sweep.spec import base_config, draw, experiment
+    from ..sweep.spec import base_config, base_values, draw, experiment
 
     _require_engine()
     try:
@@ -550,8 +549,8 @@ def _run_tune(
         raise NNRobustError(f"tuning needs Optuna ({err}); pip install 'nnrobust[tune]'") from err
     folder = Path(folder)
     sweep = sweep_of(spec)
-    base = base_config(sweep)
-    from ..config import apply_overrides
+    base_config(sweep)  # the base file and [set], refused as the file's or as [set]'s
+    base = base_values(sweep)
     from ..controllers.base import Controller
     from ..experiment import build
     from ..user_code import load_class
@@ -564,11 +563,8 @@ def _run_tune(
         entry = sweep.entries.get(name, {"kind": name})
         if "class" in entry:  # its declared space; built once at the space's centre
             space = custom_space(name, load_class(entry["class"], Controller, "controller.class"))
-            build(
-                apply_overrides(
-                    first, space.overrides({p.name: math.sqrt(p.low * p.high) for p in space.params})
-                )
-            )
+            centre = space.overrides({p.name: math.sqrt(p.low * p.high) for p in space.params})
+            build(experiment(sweep, base, draw(sweep, 0), name, centre))
         else:
             space = search_space(entry["kind"], arm_scales(build(first)))
         controllers[name] = _Controller(spec, name, space, index)
@@ -576,12 +572,12 @@ def _run_tune(
     for row in _read_trials(folder):  # resume: replay the history, widening as it did
         if row["controller"] in controllers:
             controllers[row["controller"]].record(row)
-    base_toml = base.to_toml()
     train = list(range(spec.train_samples))
     total = spec.trials * len(controllers) * spec.train_samples
     with signals_as_interrupt(), _client(workers, scheduler) as client:
         n_workers = max(len(client.scheduler_info().get("workers", {})), 1)
         sweep_future = client.scatter(sweep, broadcast=True)
+        [base_future] = client.scatter([base], broadcast=True)  # one future (a dict would be one per key)
         batch = max(1, math.ceil(n_workers / spec.train_samples))
 
         def done_count():
@@ -596,7 +592,7 @@ def _run_tune(
                     client.submit(
                         evaluate,
                         sweep_future,
-                        base_toml,
+                        base_future,
                         c.law(phase),
                         c.overrides(values, phase),
                         s,
@@ -616,7 +612,7 @@ def _run_tune(
             _write_trials(folder, [row for _, row in finished])
             if progress:
                 progress(done_count(), total)
-        summary = _summary(spec, sweep, controllers, client, sweep_future, base_toml)
+        summary = _summary(spec, sweep, controllers, client, sweep_future, base_future)
     _write_json(folder / "summary.json", summary)
     plot_pareto(summary, folder)
     return summary
@@ -649,7 +645,7 @@ def _pareto(rows: list[dict]) -> list[dict]:
     return sorted(out, key=lambda r: r["objectives"][0])
 
 
-def _summary(spec, sweep, controllers, client, sweep_future, base_toml) -> dict:
+def _summary(spec, sweep, controllers, client, sweep_future, base_future) -> dict:
     from ..sweep.spec import draw
 
     held_out = list(range(spec.train_samples, spec.train_samples + spec.validation))
@@ -690,7 +686,7 @@ def _summary(spec, sweep, controllers, client, sweep_future, base_toml) -> dict:
             entry["note"] = "no setting met the constraints"
         else:
             runs = [
-                client.submit(evaluate, sweep_future, base_toml, name, best["params"], s, pure=False)
+                client.submit(evaluate, sweep_future, base_future, name, best["params"], s, pure=False)
                 for s in held_out
             ]
             validation = judge(spec, [f.result() for f in runs])[2] if held_out else {}
