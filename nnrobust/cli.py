@@ -417,7 +417,7 @@ def _sweep_claim(args, spec) -> tuple[list, tuple[float, float] | None]:
     the claim before anything runs.
     """
     from .exceptions import ConfigError
-    from .properties import check_claim, run_properties, samples_needed
+    from .properties import check_claim, confidence_text, run_properties, samples_needed
 
     properties = run_properties(args.require)
     if (args.epsilon is None) != (args.beta is None):
@@ -438,7 +438,7 @@ def _sweep_claim(args, spec) -> tuple[list, tuple[float, float] | None]:
         cell = " per grid point" if spec.grid_keys else ""
         raise ConfigError(
             "samples",
-            f"P(fail) <= {args.epsilon:g} with confidence {1 - args.beta:g} needs "
+            f"P(fail) <= {args.epsilon:g} with confidence {confidence_text(args.beta)} needs "
             f"N >= {needed} samples{cell} with at most {args.failures} failures; the sweep "
             f"draws {spec.samples}: raise samples, or --allow-small to report the bound anyway",
         )

@@ -106,25 +106,81 @@ def run_properties(texts: list[str]) -> list[Property]:
 # ---- certificates -------------------------------------------------------------------------------
 
 
+MAX_PLANNED_SAMPLES = 1_000_000
+"""The most samples a claim may need: a sweep has at most this many rows
+(:data:`nnrobust.sweep.spec.MAX_ROWS`), so a claim that needs more can never be made."""
+
+MIN_BETA = 1e-9
+"""The least ``--beta``: closer to 1, the confidence 1 - beta rounds in double precision and the
+bound Beta^-1(1 - beta; ...) with it."""
+
+
 def samples_needed(epsilon: float, beta: float, failures: int = 0) -> int:
     """The fewest samples N from which ``failures`` failures prove P(fail) <= epsilon with
-    confidence 1 - beta: the smallest N with BinomCDF(failures; N, epsilon) <= beta (for no
-    failure, N >= ln(1/beta) / ln(1/(1 - epsilon)): 59 for epsilon = beta = 5 %).
+    confidence 1 - beta: the smallest N whose Clopper-Pearson bound (:func:`clopper_pearson_upper`,
+    the one the certificate computes) is at most epsilon, i.e. BinomCDF(failures; N, epsilon)
+    <= beta (for no failure, N >= ln(1/beta) / ln(1/(1 - epsilon)): 59 for epsilon = beta = 5 %).
+    Found by bisection; a claim that needs more than :data:`MAX_PLANNED_SAMPLES` is refused
+    with the least epsilon that many samples could prove.
     """
-    from scipy.stats import binom
-
     check_claim(epsilon, beta, failures)
-    n = max(failures + 1, math.ceil(math.log(beta) / math.log(1 - epsilon)))
-    while binom.cdf(failures, n, epsilon) > beta:
-        n += 1
-    return n
+    high = MAX_PLANNED_SAMPLES
+    if clopper_pearson_upper(failures, high, beta) > epsilon:
+        least = clopper_pearson_upper(failures, high, beta)
+        fewer = f" and up to {failures} failures" if failures else ""
+        raise ConfigError(
+            "--epsilon",
+            f"P(fail) <= {epsilon:g} with confidence {confidence_text(beta)}{fewer} needs more than "
+            f"{high:,} samples, more rows than a sweep may have; give --epsilon >= {_up(least)}"
+            + (" or fewer --failures" if failures else ""),
+        )
+    low = failures  # the bound is 1 at N = failures: not enough
+    while high - low > 1:  # invariant: low is not enough, high is
+        middle = (low + high) // 2
+        if clopper_pearson_upper(failures, middle, beta) <= epsilon:
+            high = middle
+        else:
+            low = middle
+    return high
+
+
+def _up(x: float) -> str:
+    """``x`` to three significant digits, rounded up (a least value that still holds)."""
+    digits = 2 - math.floor(math.log10(x))
+    return f"{math.ceil(x * 10**digits) / 10**digits:.3g}"
+
+
+def confidence_text(beta: float) -> str:
+    """1 - beta as text that never rounds to 1: ``0.95``, or ``1 - 1e-08``."""
+    text = f"{1 - beta:g}"
+    return text if float(text) < 1 else f"1 - {beta:g}"
 
 
 def check_claim(epsilon: float, beta: float, failures: int = 0) -> None:
-    """One-line errors for a claim no sample size can make."""
+    """One-line errors for a claim no sample size can make, or one that would say nothing:
+    P(fail) <= epsilon above one half, or a confidence 1 - beta below one half or closer to 1
+    than 1 - :data:`MIN_BETA`.
+    """
     for flag, value in (("--epsilon", epsilon), ("--beta", beta)):
         if not (isinstance(value, (int, float)) and 0 < value < 1):
             raise ConfigError(flag, f"must be a probability in (0, 1), got {value}")
+    if epsilon > 0.5:
+        raise ConfigError(
+            "--epsilon",
+            f"P(fail) <= {epsilon!r} says next to nothing (failing more often than not is allowed); "
+            "give at most 0.5",
+        )
+    if beta > 0.5:
+        raise ConfigError(
+            "--beta",
+            f"{beta!r} is a confidence 1 - BETA below one half, which proves nothing; give at most 0.5",
+        )
+    if beta < MIN_BETA:
+        raise ConfigError(
+            "--beta",
+            f"{beta:g} asks a confidence closer to 1 than double precision can bound (1 - BETA "
+            f"rounds); give at least {MIN_BETA:g}",
+        )
     if not (isinstance(failures, int) and 0 <= failures <= 10_000):
         raise ConfigError("--failures", f"must be an integer in [0, 10000], got {failures}")
 
@@ -270,14 +326,15 @@ def format_certificates(certified: dict[str, dict]) -> list[str]:
             verdict = "holds" if c["holds"] else "not shown"
             lines.append(
                 f"{controller}{where}: P({c['property']} fails) <= {c['p_upper']:.3g} with "
-                f"confidence {1 - c['beta']:g} (N = {c['N']}, k = {c['k']}); P(fail) <= "
+                f"confidence {confidence_text(c['beta'])} (N = {c['N']}, k = {c['k']}); P(fail) <= "
                 f"{c['epsilon']:g}: {verdict}"
             )
         for b in entry["quantile_bounds"]:
             if b["bound"] is not None:
                 side = "<=" if b["side"] == "upper" else ">="
                 lines.append(
-                    f"{controller}: with confidence {b['confidence']:g}, {100 * b['quantile']:g} % "
+                    f"{controller}: with confidence {confidence_text(1 - b['confidence'])}, "
+                    f"{100 * b['quantile']:g} % "
                     f"of plants give {b['metric']} {side} {b['bound']:.4g} (Wilks, N = {b['N']})"
                 )
     return lines

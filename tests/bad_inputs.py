@@ -1641,6 +1641,30 @@ PROPERTY_CASES = [
         ex.ConfigError,
         "--failures: must be an integer in [0, 10000]",
     ),
+    Case(
+        "--epsilon of 1e-300",
+        lambda d: _claim(1e-300, 0.05),
+        ex.ConfigError,
+        "--epsilon: P(fail) <= 1e-300 with confidence 0.95 needs more than 1,000,000 samples",
+    ),
+    Case(
+        "--epsilon 1e-6 with --failures 10000",
+        lambda d: _claim(1e-6, 0.05, 10_000),
+        ex.ConfigError,
+        "give --epsilon >= 0.0102 or fewer --failures",
+    ),
+    Case(
+        "--epsilon of 0.9999999",
+        lambda d: _claim(0.9999999, 0.05),
+        ex.ConfigError,
+        "--epsilon: P(fail) <= 0.9999999 says next to nothing",
+    ),
+    Case(
+        "--beta of 1e-300",
+        lambda d: _claim(0.05, 1e-300),
+        ex.ConfigError,
+        "--beta: 1e-300 asks a confidence closer to 1 than double precision can bound",
+    ),
 ]
 
 

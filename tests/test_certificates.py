@@ -28,6 +28,74 @@ def test_the_sample_sizes_are_the_exact_binomial_ones():
     assert samples_needed(0.05, 0.05, 1) == 93
 
 
+def test_planning_is_a_bisection_that_agrees_with_the_certificate():
+    """The planned N is the least whose Clopper-Pearson bound, computed as the certificate computes
+    it, is at most epsilon; 10000 failures plan at once (N counted up one at a time: 23 s here, and
+    for hours at epsilon = 1e-6)."""
+    import time
+
+    start = time.perf_counter()
+    n = samples_needed(0.05, 0.05, 10_000)
+    assert time.perf_counter() - start < 1.0
+    assert clopper_pearson_upper(10_000, n, 0.05) <= 0.05 < clopper_pearson_upper(10_000, n - 1, 0.05)
+    assert binom.cdf(10_000, n, 0.05) <= 0.05 < binom.cdf(10_000, n - 1, 0.05)
+    assert samples_needed(0.01, 1e-9, 100) == 17301  # a confidence of 1 - 1e-9 is computed, not rounded
+
+
+@pytest.mark.parametrize(
+    "claim, words",
+    [
+        (
+            (1e-6, 0.05, 10_000),
+            "--epsilon: P(fail) <= 1e-06 with confidence 0.95 and up to 10000 failures needs more "
+            "than 1,000,000 samples, more rows than a sweep may have; give --epsilon >= 0.0102 or "
+            "fewer --failures",
+        ),
+        (
+            (1e-300, 0.05, 0),
+            "needs more than 1,000,000 samples, more rows than a sweep may have; give --epsilon >= 3e-06",
+        ),
+        ((0.9999999, 1e-300, 0), "--epsilon: P(fail) <= 0.9999999 says next to nothing"),
+        ((0.05, 1e-300, 0), "--beta: 1e-300 asks a confidence closer to 1 than double precision can bound"),
+        ((0.05, 0.9, 0), "--beta: 0.9 is a confidence 1 - BETA below one half, which proves nothing"),
+    ],
+)
+def test_a_claim_no_sweep_can_make_or_that_says_nothing_is_refused(claim, words):
+    """Absurd sample sizes (epsilon 1e-300 raised ZeroDivisionError; 1e-6 with 10000 failures counted
+    for hours) and vacuous claims ("P(fail) <= 1 with confidence 1" was printed) are one line each,
+    naming the option and what would be valid."""
+    with pytest.raises(ConfigError) as err:
+        samples_needed(*claim)
+    assert words in str(err.value) and "\n" not in str(err.value)
+
+
+def test_the_sweep_command_refuses_such_a_claim_in_one_line(tmp_path, capsys):
+    from nnrobust.cli import main
+
+    sweep = tmp_path / "s.toml"
+    sweep.write_text('name = "c"\nbase = "paper-ellipse"\ncontrollers = ["nn"]\nsamples = 6\n')
+    require = ["--require", "rms_error<=0.05", "--out", str(tmp_path / "out")]
+    for claim in (
+        ["--epsilon", "1e-300", "--beta", "0.05"],
+        ["--epsilon", "1e-6", "--beta", "0.05", "--failures", "10000"],
+    ):
+        assert main(["sweep", str(sweep), *require, *claim]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith("nnrobust: error: --epsilon: P(fail) <= "), err
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_confidence_never_prints_as_certainty():
+    from nnrobust.properties import confidence_text
+
+    assert [confidence_text(b) for b in (0.05, 1e-6, 5e-7, 1e-9)] == [
+        "0.95",
+        "0.999999",
+        "1 - 5e-07",
+        "1 - 1e-09",
+    ]
+
+
 def test_the_clopper_pearson_bound_is_the_beta_quantile():
     """k = 0 has the closed form 1 - beta^(1/N); k > 0 is Beta^-1(1 - beta; k + 1, N - k), and the
     bound makes the observed k (or fewer) exactly beta-likely."""
