@@ -6,6 +6,7 @@ repository root), which writes docs/bad-inputs.md from the messages actually rai
 
 from __future__ import annotations
 
+import datetime
 import json
 import os
 import re
@@ -501,6 +502,23 @@ PAPER = 'base = "paper-ellipse"\n'
 """An experiment file's first line: start from the paper's case (b)."""
 
 CONFIG_CASES = [
+    Case(
+        "a TOML date-time in controller.params",
+        lambda d: _toml(
+            d,
+            'base = "paper-ellipse"\n[controller]\nkind = "custom"\nclass = "laws.py:Eq9"\n'
+            "params = {Kp = 10.0, Kv = 4.0, when = 1979-05-27T07:32:00Z}\n",
+        ),
+        ex.ConfigError,
+        "experiment.toml: controller.params.when: is a TOML date-time (1979-05-27T07:32:00+00:00), "
+        'which no key takes; to pass text, quote it: "1979-05-27T07:32:00+00:00"',
+    ),
+    Case(
+        "a TOML date for a number",
+        lambda d: _toml(d, 'base = "paper-ellipse"\n[simulation]\nduration = 1979-05-27\n'),
+        ex.ConfigError,
+        "experiment.toml: simulation.duration: is a TOML date (1979-05-27), which no key takes",
+    ),
     Case(
         "a point-to-point move of 1e-300 s",
         lambda d: _toml(
@@ -1490,7 +1508,41 @@ SCHEDULER_CASES = [
     ),
 ]
 
+
+def _set(text: str):
+    def check():
+        from nnrobust.config import parse_override
+
+        return parse_override(text)
+
+    return check
+
+
 API_CASES = [
+    Case(
+        "--set: a TOML date-time",
+        lambda d: _set("controller.params.when=1979-05-27T07:32:00Z"),
+        ex.ConfigError,
+        "--set controller.params.when: is a TOML date-time (1979-05-27T07:32:00+00:00), which no key takes",
+    ),
+    Case(
+        "--set: a TOML time in a list",
+        lambda d: _set("controller.params.times=[1.0, 07:32:00]"),
+        ex.ConfigError,
+        "--set controller.params.times[1]: is a TOML time (07:32:00), which no key takes",
+    ),
+    Case(
+        "Python API: a datetime in controller.params",
+        lambda d: _build(
+            controller={
+                "kind": "custom",
+                "class": "laws.py:Eq9",
+                "params": {"when": datetime.date(1979, 5, 27)},
+            }
+        ),
+        ex.ConfigError,
+        "controller.params.when: is a TOML date (1979-05-27), which no key takes",
+    ),
     Case(
         "a friction scale of 1e10 (a plant no step resolves)",
         lambda d: _toml(d, f"{PAPER}[plant]\nfriction_scale = 1e10\n"),
@@ -1794,6 +1846,12 @@ FALSIFY_CASES = [
         lambda d: _falsify(budget=0),
         ex.ConfigError,
         "--budget: must be an integer in [4, 100000], got 0",
+    ),
+    Case(
+        "sweep file: a TOML date in a law's params",
+        lambda d: _entry_sweep(d, '{name = "mine", class = "laws.py:Eq9", params = {when = 1979-05-27}}'),
+        ex.ConfigError,
+        "s.toml: controllers[1].params.when: is a TOML date (1979-05-27), which no key takes",
     ),
     Case(
         "falsify: a budget of 10^9",

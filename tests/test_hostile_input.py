@@ -228,6 +228,28 @@ def test_a_mistyped_set_key_gets_the_suggestion_a_file_gets(capsys):
     assert "controller.zzz: unknown key. Valid keys:" in capsys.readouterr().err
 
 
+def test_a_toml_date_in_set_is_refused_before_anything_runs(tmp_path, capsys):
+    """A TOML date-time given to a custom law's parameter was simulated, then lost the run when
+    config.toml was written (TypeError: cannot write datetime to TOML); now one line, nothing run."""
+    laws = Path(__file__).parent / "controllers" / "eq9_again.py"
+    words = [
+        "run",
+        "paper-ellipse",
+        "--set",
+        "controller.kind=custom",
+        "--set",
+        f"controller.class={laws}:NeedsGain",
+    ]
+    words += ["--set", "controller.params.gain=1.0", "--set", "controller.params.limit=1979-05-27T07:32:00Z"]
+    assert main([*words, "--set", "simulation.duration=0.1", "--out", str(tmp_path / "run"), "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [
+        "nnrobust: error: --set controller.params.limit: is a TOML date-time (1979-05-27T07:32:00+00:00), "
+        'which no key takes; to pass text, quote it: "1979-05-27T07:32:00+00:00"'
+    ]
+    assert not (tmp_path / "run").exists()
+
+
 def test_quiet_prints_no_warning(tmp_path, capsys):
     """--quiet is "print nothing but errors": the xarm6 URDF's inertia warning is not printed (the
     run's own warnings stay in metrics.json)."""

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import datetime
 import difflib
 import functools
 import math
@@ -83,6 +84,7 @@ def _check_type(path: str, value, annotation):
     if annotation is dict:  # free keyword arguments (controller.params): names checked, values kept
         if not isinstance(value, dict):
             raise ConfigError(path, f"expected a table, got {type(value).__name__} {value!r}")
+        refuse_dates(value, path)
         for key in value:
             if not key.isidentifier():
                 raise ConfigError(
@@ -157,13 +159,45 @@ def read_text_file(path: str | Path, limit: int = MAX_TOML_BYTES, what: str = "f
 
 
 def parse_toml(text: str, where: str) -> dict:
-    """tomllib.loads with one-line errors (also for tables nested too deep to parse)."""
+    """tomllib.loads with one-line errors (also for tables nested too deep to parse), refusing
+    TOML dates and times (:func:`refuse_dates`).
+    """
     try:
-        return tomllib.loads(text)
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise ConfigError(where, f"invalid TOML: {err}") from err
     except RecursionError as err:
         raise ConfigError(where, "invalid TOML: nested too deeply") from err
+    refuse_dates(data, "", f"{where}: ")
+    return data
+
+
+TOML_DATES = {datetime.datetime: "date-time", datetime.date: "date", datetime.time: "time"}
+"""TOML's date and time values (tomllib's types), which no key of an experiment, a sweep or a
+tuning takes."""
+
+
+def refuse_dates(value, path: str, where: str = "") -> None:
+    """Refuse a TOML date, time or date-time anywhere in ``value`` (tables and arrays), naming its
+    key ``path`` (after ``where``: a file, ``--set``): no key takes one, and a free table
+    (``controller.params``) that kept it would run, then lose the run when config.toml is written.
+    """
+    kind = TOML_DATES.get(type(value))
+    if kind is not None:
+        text = value.isoformat()
+        raise ConfigError(
+            f"{where}{path or 'value'}",
+            f'is a TOML {kind} ({text}), which no key takes; to pass text, quote it: "{text}"',
+        )
+    try:
+        if isinstance(value, dict):
+            for key, item in value.items():
+                refuse_dates(item, f"{path}.{key}" if path else str(key), where)
+        elif isinstance(value, list):
+            for i, item in enumerate(value):
+                refuse_dates(item, f"{path}[{i}]", where)
+    except RecursionError as err:
+        raise ConfigError(f"{where}{path or 'value'}", "nested too deeply") from err
 
 
 def load_config(path: str | Path, overrides: dict | None = None) -> ExperimentConfig:
@@ -518,5 +552,6 @@ def parse_override(text: str) -> tuple[str, object]:
         value = raw.strip()
     except RecursionError as err:
         raise ConfigError(f"--set {key}", "the value is nested too deeply") from err
+    refuse_dates(value, key, "--set ")
     check_dotted_key(key)
     return key, value
