@@ -194,10 +194,13 @@ def test_paper_ellipse_on_mujoco_same_on_both_loops_and_within_3x_of_pinocchio(t
     ],
     ids=["impulse-1e9", "Kp-1e12-unlimited"],
 )
-def test_a_state_or_torque_mujoco_discards_ends_the_run_as_diverged(backend, case, rows, words):
+def test_a_state_or_torque_mujoco_discards_ends_the_run_as_diverged(
+    backend, case, rows, words, tmp_path, monkeypatch
+):
     """MuJoCo answers a huge acceleration by resetting q to 0, and a huge torque by applying none,
     each with a warning only; both loops read the warning after every step and end the run there
     as diverged, naming it (these runs were reported completed, 390 mm RMS)."""
+    monkeypatch.chdir(tmp_path)  # MuJoCo appends its warnings to MUJOCO_LOG.TXT in the working folder
     sections = {key: dict(value) for key, value in case.items()}
     sections["plant"]["engine"] = "mujoco"
     config = load_preset("paper-ellipse").replace(
