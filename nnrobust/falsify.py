@@ -244,7 +244,7 @@ def evaluate(sweep, base: dict, controller: str, values: dict, properties: list[
         metrics = run_experiment(experiment(sweep, base, sample, controller)).metrics()
     except NNRobustError as err:
         metrics = {"status": "refused", "message": str(err)[:300]}
-    keep = {p.metric for p in properties} | {"status", "rms_error_after_2s", "rms_torque"}
+    keep = {p.metric for p in properties} | {"status", "message", "rms_error_after_2s", "rms_torque"}
     margins = {p.text: p.margin(metrics) for p in properties}
     return {
         "metrics": {k: metrics.get(k) for k in sorted(keep)},
@@ -591,7 +591,7 @@ def _run_falsify(
     spec: FalsifySpec, folder: Path, workers, scheduler, overwrite: bool, progress, claim: tuple[float, float]
 ) -> dict:
     from .properties import run_properties
-    from .sweep.engine import _client, _require_engine
+    from .sweep.engine import _client, _require_engine, check_controllers
     from .sweep.spec import Sample, experiment, rerun_command, sample_seed
 
     _require_engine()
@@ -607,6 +607,7 @@ def _run_falsify(
     for name in sweep.controllers:  # every controller's experiment validated before anything runs
         for corner in (np.zeros(len(box.keys)), np.ones(len(box.keys))):
             experiment(sweep, base, Sample(-1, box.values(corner), sample_seed(sweep.seed, 0)), name)
+    check_controllers(sweep, base, box.values(np.full(len(box.keys), 0.5)))  # each built, its first step run
     folder = Path(folder)
     prepare_folder(spec, folder, overwrite)
     done = _history(folder)

@@ -1790,6 +1790,30 @@ def _damaged_parts(folder: Path, damage: str):
     return check
 
 
+def _cannot_run(folder: Path, command: str, entry: str):
+    """A sweep or a search of a controller that can never run (refused before anything runs)."""
+
+    def run():
+        from nnrobust.falsify import FalsifySpec, run_falsify
+        from nnrobust.sweep import load_sweep, run_sweep
+
+        (folder / "laws.py").write_text(LAWS.read_text())
+        path = _file(
+            folder,
+            "s.toml",
+            f'name = "s"\nbase = "paper-ellipse"\ncontrollers = [{{name = "mine", {entry}}}]\n'
+            '[set]\n"simulation.duration" = 0.2\n'
+            '[vary]\n"plant.disturbance_scale" = {uniform = [0.5, 2.0]}\n',
+        )
+        if command == "sweep":
+            return run_sweep(load_sweep(path), folder / "out", workers=1)
+        return run_falsify(
+            FalsifySpec(str(path), ["mine"], ["rms_error<=0.05"], 4), folder / "out", workers=1
+        )
+
+    return run
+
+
 FALSIFY_CASES = [
     Case(
         "resume: a Parquet part damaged after it was written (sweep, tune, falsify)",
@@ -1876,6 +1900,18 @@ FALSIFY_CASES = [
         lambda d: _box(d, '"nn.sigma" = {normal = [0.1, 0.02]}\n'),
         ex.ConfigError,
         "vary.nn.sigma: falsify searches uniform and loguniform ranges, not normal",
+    ),
+    Case(
+        "sweep: a controller whose first torque has the wrong shape",
+        lambda d: _cannot_run(d, "sweep", 'class = "laws.py:WrongShape"'),
+        ex.ConfigError,
+        "controllers: mine: cannot run: WrongShape.compute returned a torque of shape (4,) at t = 0 s",
+    ),
+    Case(
+        "falsify: a controller whose constructor raises",
+        lambda d: _cannot_run(d, "falsify", 'class = "laws.py:NeedsGain", params = {gain = -1.0}'),
+        ex.ConfigError,
+        "controllers: mine: cannot run: controller.params: NeedsGain(context, **params) raised ValueError",
     ),
 ]
 

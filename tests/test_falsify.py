@@ -430,3 +430,34 @@ def test_a_box_of_one_coordinate_is_falsified_at_a_tiny_budget(tmp_path, capsys)
     entry = run_falsify(spec, tmp_path / "out", workers=2)["controllers"]["no-u0"]
     assert entry["simulations"] == entry["random_baseline"]["simulations"] == 8
     assert entry["worst"]["values"]["plant.disturbance_scale"] > 1.9
+
+
+def test_a_controller_that_cannot_run_is_refused_and_a_refused_run_keeps_its_message(tmp_path):
+    """Issue 35, item 4: a controller whose first step returns a torque of the wrong shape is one
+    line before any simulation (it was "FALSIFIED in 4 simulations; least margin -inf", with a
+    certificate from k = N); a run refused later (a law that raises at t = 0.011 s) is a row whose
+    metrics keep the refusal's message (they kept its status alone)."""
+    import shutil
+
+    from nnrobust.falsify import _searched_sweep, evaluate
+    from nnrobust.properties import run_properties
+
+    shutil.copy(Path(__file__).parent / "controllers" / "eq9_again.py", tmp_path / "laws.py")
+    sweep = tmp_path / "laws.toml"
+    sweep.write_text(
+        'name = "laws"\nbase = "paper-ellipse"\ncontrollers = [{name = "shape", class = '
+        '"laws.py:WrongShape"}, {name = "late", class = "laws.py:Raises"}]\n[set]\n'
+        '"simulation.duration" = 0.2\n[vary]\n"plant.disturbance_scale" = {uniform = [0.5, 2.0]}\n'
+    )
+    spec = FalsifySpec(str(sweep), ["shape"], ["rms_error<=0.05"], 4)
+    with pytest.raises(
+        ConfigError, match=r"controllers: shape: cannot run: WrongShape.compute returned a torque"
+    ):
+        run_falsify(spec, tmp_path / "out", workers=1)
+    assert not (tmp_path / "out").exists()
+    searched, base, _ = _searched_sweep(FalsifySpec(str(sweep), ["late"], ["rms_error<=0.05"], 4))
+    row = evaluate(
+        searched, base, "late", {"plant.disturbance_scale": 1.0}, run_properties(["rms_error<=0.05"])
+    )
+    assert row["metrics"]["status"] == "refused" and row["objective"] < 0
+    assert "Raises.compute raised at t = 0.011 s: IndexError" in row["metrics"]["message"]

@@ -684,3 +684,51 @@ def test_a_set_or_varied_key_gives_the_configuration_of_the_edited_file(table, t
     assert config == load_config(edited) and config.controller.Kp == [25.0] * 6
     if table == "set":
         assert base_config(spec) == load_config(edited)
+
+
+UNBUILDABLE = {  # a controllers entry that can never run, and what the refusal says
+    "a class file that is not there": ('class = "nope.py:Eq9"', "nope.py' is not a file"),
+    "a constructor that raises": (
+        'class = "laws.py:NeedsGain", params = {gain = -1.0}',
+        "ValueError: gain must be >= 0, got -1.0",
+    ),
+    "a torque of the wrong shape": (
+        'class = "laws.py:WrongShape"',
+        "WrongShape.compute returned a torque of shape (4,) at t = 0 s; the arm has 3 joints",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", UNBUILDABLE)
+def test_a_controller_that_cannot_run_is_refused_before_any_sample(case, tmp_path, capsys):
+    """Issue 35, item 4: each controller is built on the base experiment and its first control
+    step run before any sample: one that never can is one line naming it, and no folder is
+    written (every one of its rows was "refused", rc 0)."""
+    import shutil
+    from pathlib import Path
+
+    shutil.copy(Path(__file__).parent / "controllers" / "eq9_again.py", tmp_path / "laws.py")
+    entry, message = UNBUILDABLE[case]
+    path = _sweep_file(
+        tmp_path,
+        text=f'name = "b"\nbase = "paper-ellipse"\ncontrollers = ["no-u0", {{name = "mine", {entry}}}]\n'
+        'samples = 2\n[set]\n"simulation.duration" = 0.2\n',
+    )
+    with pytest.raises(ConfigError, match="controllers: mine: cannot run: ") as info:
+        run_sweep(load_sweep(path), tmp_path / "out", workers=1)
+    assert message in str(info.value) and not (tmp_path / "out").exists()
+    assert main(["sweep", str(path), "--out", str(tmp_path / "out"), "--workers", "1"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0] and not (tmp_path / "out").exists()
+
+
+def test_a_controller_runs_where_the_experiment_itself_cannot_be_built(tmp_path):
+    """The check blames a controller only when the shipped no-u0 runs where it does not: a base
+    that only the samples make valid (its duration over the memory limit, each sample's within it)
+    is left to the rows, which run."""
+    (tmp_path / "long.toml").write_text('base = "paper-ellipse"\n[simulation]\nduration = 1e5\n')
+    path = _sweep_file(
+        tmp_path,
+        text='name = "b"\nbase = "long.toml"\ncontrollers = ["nn"]\n[vary]\n"simulation.duration" = [0.2]\n',
+    )
+    assert run_sweep(load_sweep(path), tmp_path / "out", workers=1)["computed"] == 1

@@ -17,7 +17,8 @@ import uuid
 from contextlib import contextmanager
 from pathlib import Path
 
-from ..exceptions import NNRobustError
+from ..config import ExperimentConfig
+from ..exceptions import ConfigError, NNRobustError
 from ..signals import signals_as_interrupt
 from .spec import SweepSpec, base_config, base_values, draw, experiment
 
@@ -304,10 +305,9 @@ def _client(workers: int | None, scheduler: str | None):
 
 def plan(spec: SweepSpec) -> tuple[dict, list[tuple[int, str]]]:
     """The base experiment's own values (:func:`~.spec.base_values`) and every (sample,
-    controller) job, each experiment validated
-    first: a value the schema refuses is a one-line error naming the key and the sample, before
-    anything runs. Jobs are (id, controller) pairs, so the client's memory does not grow with the
-    experiments, which the workers rebuild.
+    controller) job, each experiment validated first: a value the schema refuses is a one-line
+    error naming the key and the sample, before anything runs. Jobs are (id, controller) pairs,
+    so the client's memory does not grow with the experiments, which the workers rebuild.
     """
     base_config(spec)  # the base file and [set], refused as the file's or as [set]'s
     base = base_values(spec)
@@ -321,6 +321,59 @@ def plan(spec: SweepSpec) -> tuple[dict, list[tuple[int, str]]]:
             experiment(spec, base, sample, controller)  # validates; not kept
             jobs.append((sample_id, controller))
     return base, jobs
+
+
+def first_step(config: ExperimentConfig):
+    """The experiment built (:func:`nnrobust.experiment.build`) and its controller's first control
+    step run at q(0), v(0), its output checked as the loop checks it (a torque per joint, declared
+    signals, a state of z's size); returns the Setup. What fails is the builder's or the loop's
+    one-line error, as a run would raise it (a user's exception located in their file).
+    """
+    import numpy as np
+
+    from ..controllers.custom import check_output, failed
+    from ..experiment import build
+
+    setup = build(config)
+    controller = setup.controller
+    try:
+        z = np.asarray(controller.initial_state(), dtype=float)
+        out = controller.compute(
+            0.0, setup.q0.copy(), setup.v0.copy(), z, setup.config.simulation.control_period
+        )
+    except NNRobustError:
+        raise
+    except Exception as err:
+        raise failed(controller, err, 0.0) from err
+    check_output(controller, out, setup.robot.nq, z.size, 0.0)
+    return setup
+
+
+REFERENCE = "no-u0"
+"""The shipped law a controller that cannot run is compared with: if it runs on the same
+experiment, the controller is at fault (:func:`check_controllers`)."""
+
+
+def check_controllers(spec: SweepSpec, base: dict, values: dict | None = None) -> None:
+    """Refuse, before any sample runs, a controller that can never run: each is built on the base
+    experiment (with ``values``, falsify's centre of the box) and its first control step run
+    (:func:`first_step`). A missing class file, a constructor that raises or a torque of the wrong
+    shape is one line naming the controller, with the builder's message. Where the shipped
+    :data:`REFERENCE` law fails there too, the experiment is at fault, not the controller, and its
+    rows say why (a base that only the samples make valid, say).
+    """
+    from .spec import Sample, sample_seed
+
+    sample = Sample(-1, dict(values or {}), sample_seed(spec.seed, 0))
+    for name in spec.controllers:
+        try:
+            first_step(experiment(spec, base, sample, name))
+        except NNRobustError as err:
+            try:
+                first_step(experiment(spec, base, sample, REFERENCE))
+            except NNRobustError:
+                continue  # the experiment itself fails: every row will say so
+            raise ConfigError(f"controllers: {name}", f"cannot run: {err}") from err
 
 
 def _first_checked(spec: SweepSpec) -> list[int]:
@@ -369,6 +422,7 @@ def run_sweep(
     _require_engine()
     folder = Path(folder)
     base, jobs = plan(spec)  # every experiment validated before anything is written or run
+    check_controllers(spec, base)  # and every controller built, its first step run
     from ..study_folder import held
 
     with held(folder):  # one sweep at a time into a folder: never a row twice

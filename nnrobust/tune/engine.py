@@ -539,7 +539,7 @@ def run_tune(
 def _run_tune(
     spec: TuneSpec, folder: Path, workers: int | None, scheduler: str | None, overwrite: bool, progress
 ) -> dict:
-    from ..sweep.engine import _client, _require_engine
+    from ..sweep.engine import _client, _require_engine, first_step
     from ..sweep.spec import base_config, base_values, draw, experiment
 
     _require_engine()
@@ -552,7 +552,6 @@ def _run_tune(
     base_config(sweep)  # the base file and [set], refused as the file's or as [set]'s
     base = base_values(sweep)
     from ..controllers.base import Controller
-    from ..experiment import build
     from ..user_code import load_class
 
     controllers = {}
@@ -561,12 +560,12 @@ def _run_tune(
             experiment(sweep, base, draw(sweep, sample_id), name)
         first = experiment(sweep, base, draw(sweep, 0), name)
         entry = sweep.entries.get(name, {"kind": name})
-        if "class" in entry:  # its declared space; built once at the space's centre
+        if "class" in entry:  # its declared space; built, its first step run, at the space's centre
             space = custom_space(name, load_class(entry["class"], Controller, "controller.class"))
             centre = space.overrides({p.name: math.sqrt(p.low * p.high) for p in space.params})
-            build(experiment(sweep, base, draw(sweep, 0), name, centre))
+            first_step(experiment(sweep, base, draw(sweep, 0), name, centre))
         else:
-            space = search_space(entry["kind"], arm_scales(build(first)))
+            space = search_space(entry["kind"], arm_scales(first_step(first)))
         controllers[name] = _Controller(spec, name, space, index)
     prepare_folder(spec, folder, overwrite)
     for row in _read_trials(folder):  # resume: replay the history, widening as it did
