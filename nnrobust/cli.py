@@ -471,9 +471,10 @@ def cmd_falsify(args) -> int:
     controllers = [c.strip() for c in args.controllers.split(",") if c.strip()]
     tuned = None
     if args.tuned:
+        from .sweep import load_sweep
         from .tune.engine import tuned_settings
 
-        tuned = tuned_settings(args.tuned, controllers)
+        tuned = tuned_settings(args.tuned, controllers, load_sweep(args.sweep).vary)
     spec = FalsifySpec(args.sweep, controllers, args.require, args.budget, args.seed, args.margin, tuned)
     progress, started = _simulations_bar(
         args.quiet,

@@ -138,9 +138,11 @@ def _searched_sweep(spec: FalsifySpec):
     made searchable (its [set] then holds ``nominal.relative_error = 0``, which the values take).
     """
     from .sweep.spec import base_config, base_values, load_sweep
-    from .tune.engine import _with_controllers
+    from .tune.engine import _with_controllers, check_tuned
 
-    sweep = _with_controllers(load_sweep(spec.target), spec.controllers, spec.tuned)
+    target = load_sweep(spec.target)
+    check_tuned(spec.tuned or {}, target.vary)  # the law's own keys, none the box varies
+    sweep = _with_controllers(target, spec.controllers, spec.tuned)
     searched, note = searchable(sweep, base_config(sweep))
     if searched is not sweep:
         base_config(searched)  # its [set] (relative_error 0) checked on the base

@@ -1765,11 +1765,11 @@ def _entry_sweep(folder: Path, entry: str, tables: str = ""):
     return check
 
 
-def _tuned(folder: Path, summary: str, names: list[str]):
+def _tuned(folder: Path, summary: str, names: list[str], varied=()):
     def check():
         from nnrobust.tune.engine import tuned_settings
 
-        return tuned_settings(_file(folder, "summary.json", summary), names)
+        return tuned_settings(_file(folder, "summary.json", summary), names, varied)
 
     return check
 
@@ -1858,6 +1858,25 @@ FALSIFY_CASES = [
         lambda d: _tuned(d, '{"controllers": {"nn": {"best": null}}}', ["nn"]),
         ex.ConfigError,
         "--tuned: ",
+    ),
+    Case(
+        "falsify --tuned: a setting of the plant, not of the law",
+        lambda d: _tuned(
+            d, '{"controllers": {"pd": {"best": {"params": {"plant.disturbance_scale": 0.0}}}}}', ["pd"]
+        ),
+        ex.ConfigError,
+        "summary.json sets 'plant.disturbance_scale' for pd, which is not a key pd reads itself",
+    ),
+    Case(
+        "falsify --tuned: a key the box varies",
+        lambda d: _tuned(
+            d,
+            '{"controllers": {"pd": {"best": {"params": {"controller.pd_Kp": [900.0]}}}}}',
+            ["pd"],
+            ["controller.pd_Kp"],
+        ),
+        ex.ConfigError,
+        "summary.json sets 'controller.pd_Kp' for pd, which the box varies",
     ),
     Case(
         "falsify --tuned: a file that is not a tuning's summary",

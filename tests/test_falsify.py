@@ -461,3 +461,37 @@ def test_a_controller_that_cannot_run_is_refused_and_a_refused_run_keeps_its_mes
     )
     assert row["metrics"]["status"] == "refused" and row["objective"] < 0
     assert "Raises.compute raised at t = 0.011 s: IndexError" in row["metrics"]["message"]
+
+
+@pytest.mark.parametrize(
+    "settings, words",
+    [
+        (
+            {"pd": {"controller.pd_Kp": [2000.0], "plant.disturbance_scale": 0.0}},
+            "sets 'plant.disturbance_scale' for pd, which is not a key pd reads itself",
+        ),
+        ({"no-u0": {"controller.kind": "pd"}}, "sets 'controller.kind' for no-u0, which is not a key"),
+        ({"nn": {"controller.pd_Kp": [2000.0]}}, "sets 'controller.pd_Kp' for nn, which is not a key"),
+        (
+            {"pd": {"controller.pd_null_damping": 0.7}},
+            "sets 'controller.pd_null_damping' for pd, which the box",
+        ),
+    ],
+)
+def test_tuned_settings_set_only_the_laws_own_keys_and_none_the_box_varies(settings, words, tmp_path, capsys):
+    """Issue 35, item 3: --tuned applied every key of the summary after the box's values, so
+    "plant.disturbance_scale": 0.0 ran every point undisturbed while the summary claimed the box,
+    and {"controller.kind": "pd"} ran the PD as no-u0-tuned. A tuned setting may set only keys its
+    law declares, and none the box varies: one line naming the key and the file, nothing run."""
+    sweep = tmp_path / "fz.toml"
+    sweep.write_text(SWEEP + '"controller.pd_null_damping" = {uniform = [0.5, 1.0]}\n')
+    summary = tmp_path / "summary.json"
+    summary.write_text(json.dumps({"controllers": {n: {"best": {"params": p}} for n, p in settings.items()}}))
+    (name,) = settings
+    words_ = ["falsify", str(sweep), "--controllers", name, "--require", "rms_error<=0.02", "--budget", "4"]
+    assert main([*words_, "--tuned", str(summary), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"--tuned: {summary} {words}" in err[0], err
+    assert not (tmp_path / "out").exists()
+    with pytest.raises(ConfigError, match=f"--tuned: --tuned {words}"):  # the API checks them too
+        run_falsify(FalsifySpec(str(sweep), [name], ["rms_error<=0.02"], 4, tuned=settings), tmp_path / "out")

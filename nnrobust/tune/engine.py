@@ -179,10 +179,41 @@ TUNED_FILE_BYTES = 50_000_000
 """The largest tuning summary or tuned comparison --tuned reads (the shipped comparison is 1.2 MB)."""
 
 
-def tuned_settings(path: str | Path, names: list[str]) -> dict[str, dict]:
+def check_tuned(tuned: dict[str, dict], varied=(), where: str = "--tuned") -> None:
+    """Refuse a tuned setting (law -> dotted-key settings) that sets a key the law does not read
+    itself (:func:`.space.own_keys`: a plant's, the controller's kind, another law's), or a key
+    the box varies (``varied``, dotted keys): it would run every point of the box at that value
+    while the summary claims the box. ``where`` names the settings' file in the message.
+    """
+    import re
+
+    from .space import own_keys
+
+    box = {re.sub(r"\[\d+\]$", "", str(k)) for k in varied}
+    for name, settings in tuned.items():
+        keys, prefixes = own_keys(name)
+        for key in settings:
+            plain = re.sub(r"\[\d+\]$", "", str(key))
+            if plain not in keys and not plain.startswith(prefixes):
+                own = ", ".join([*sorted(keys), *(f"{p}*" for p in prefixes)])
+                raise ConfigError(
+                    "--tuned",
+                    f"{where} sets {key!r} for {name}, which is not a key {name} reads itself; a tuned "
+                    f"setting may set only the law's own keys ({own})",
+                )
+            if plain in box:
+                raise ConfigError(
+                    "--tuned",
+                    f"{where} sets {key!r} for {name}, which the box varies: a tuned setting may not "
+                    "fix a coordinate of the box (drop it from [vary], or tune without it)",
+                )
+
+
+def tuned_settings(path: str | Path, names: list[str], varied=()) -> dict[str, dict]:
     """Each named built-in law's best setting in a tuning's summary (``DIR`` or its summary.json),
     or in one case of a tuned comparison (benchmarks/tuned_comparison.py's JSON, its seed-0
-    tuning) named as ``FILE#CASE/SENSING``: name -> its dotted-key overrides.
+    tuning) named as ``FILE#CASE/SENSING``: name -> its dotted-key overrides, each a key the law
+    reads itself and none of ``varied``, the box's keys (:func:`check_tuned`).
     """
     from ..config import read_text_file
 
@@ -221,7 +252,10 @@ def tuned_settings(path: str | Path, names: list[str]) -> dict[str, dict]:
                 "--tuned",
                 f"{file} has no best setting for {name!r} (it tuned {', '.join(entries) or 'nothing'})",
             )
+        if not isinstance(best, dict) or not isinstance(best.get("params"), dict):
+            raise ConfigError("--tuned", f"{file}: the best setting of {name!r} has no table of params")
         out[name] = dict(best["params"])
+    check_tuned(out, varied, str(file))
     return out
 
 

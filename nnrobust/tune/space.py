@@ -37,6 +37,27 @@ def tunable() -> tuple[str, ...]:
     return (*paper_kinds(), *(n for n in law_names() if any(p.search for p in LAWS[n].params)))
 
 
+def own_keys(name: str) -> tuple[frozenset[str], tuple[str, ...]]:
+    """The configuration keys the shipped law ``name`` reads itself, as its declaration gives them:
+    (keys, prefixes). A paper kind's: eq. (9)'s shared gains where it is eq. (9), and its own
+    keys (``section.field``, or ``section.`` for a whole section, a prefix); a registered law's:
+    ``controller.params.NAME`` of each parameter it declares. What a tuned setting of the law may
+    set (``falsify --tuned``); its search coordinates (:func:`search_space`) are among them.
+    """
+    from ..controllers.registry import SHARED_KEYS, paper_kind, registered_law
+
+    law = registered_law(name)
+    if law is not None:
+        return frozenset(f"controller.params.{p.name}" for p in law.params), ()
+    kind = paper_kind(name)
+    if kind is None:
+        return frozenset(), ()
+    keys = {p.name for p in kind.params} | {k for k in kind.keys if not k.endswith(".")}
+    if kind.eq9:  # eq. (9)'s gains: the shared keys whose readers are the kinds of eq. (9)
+        keys |= {p.name for shared in SHARED_KEYS if shared.readers is None for p in shared.params}
+    return frozenset(keys), tuple(k for k in kind.keys if k.endswith("."))
+
+
 EDGE = 0.03
 """A value within this fraction of its log range from a bound is "at the bound"."""
 
