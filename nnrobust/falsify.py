@@ -28,7 +28,6 @@ import json
 import math
 import os
 import time
-import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -376,8 +375,8 @@ class _Driver:
     appending the new ones to it.
     """
 
-    def __init__(self, client, folder: Path, done: dict, sweep, base: dict, properties, progress):
-        self.client, self.folder, self.done = client, folder, done
+    def __init__(self, client, folder: Path, done: dict, sweep, base: dict, properties, progress, key: str):
+        self.client, self.folder, self.done, self.key = client, folder, done, key
         self.properties, self.progress = properties, progress
         self.workers = max(len(client.scheduler_info().get("workers", {})), 1)
         self.sweep = client.scatter(sweep, broadcast=True)  # sent to every worker once
@@ -431,7 +430,7 @@ class _Driver:
                 if stop_at_violation and any(r["objective"] < 0 for r in rows[key]):
                     searches[key].budget = searches[key].asked  # a violation is all the margin needs
             if new:
-                _write_history(self.folder, new)
+                _write_history(self.folder, new, self.key)
             if self.progress:
                 self.progress(self.finished + sum(len(rows[key]) for key in searches), planned)
         self.finished += sum(len(rows[key]) for key in searches)
@@ -520,16 +519,30 @@ def _margins(spec: FalsifySpec, sweep, box: Box, rows: dict, drive: _Driver) -> 
     return out
 
 
-def _history(folder: Path) -> dict[tuple[str, str, int], dict]:
-    """The rows simulated so far, by (controller, search, index)."""
-    from .study_folder import read_parts
+HISTORY_IDS = ("controller", "search", "index")
+"""The columns of the history that name a row."""
 
-    rows = [json.loads(r) for t in read_parts(folder / HISTORY, ["row"]) for r in t.column("row").to_pylist()]
+
+def _history(folder: Path, key: str | None) -> dict[tuple[str, str, int], dict]:
+    """The rows simulated so far, by (controller, search, index); each part checked against
+    ``key`` (the search's inputs; None: those the folder's marker records) and no row twice.
+    """
+    from .study_folder import read_parts, recorded_inputs
+
+    if key is None:
+        recorded = recorded_inputs(folder, "falsify")
+        key = recorded.key if recorded is not None else None
+    tables = read_parts(folder / HISTORY, [*HISTORY_IDS, "row"], key, HISTORY_IDS)
+    rows = [json.loads(r) for t in tables for r in t.column("row").to_pylist()]
     return {(r["controller"], r["search"], r["index"]): r for r in rows}
 
 
-def _write_history(folder: Path, rows: list[dict]) -> None:
+def _write_history(folder: Path, rows: list[dict], key: str) -> None:
+    """One Parquet part of history rows, tied to the search's inputs (``key``)."""
     import pandas as pd
+    import pyarrow as pa
+
+    from .study_folder import write_part
 
     flat = [
         {
@@ -543,15 +556,28 @@ def _write_history(folder: Path, rows: list[dict]) -> None:
         }
         for r in rows
     ]
-    path = folder / HISTORY / f"part-{uuid.uuid4().hex[:12]}.parquet"
-    tmp = path.with_name(f".{path.name}.partial")
-    pd.DataFrame(flat).to_parquet(tmp, index=False)
-    os.replace(tmp, path)
+    write_part(folder / HISTORY, pa.Table.from_pandas(pd.DataFrame(flat), preserve_index=False), key)
 
 
-def prepare_folder(spec: FalsifySpec, folder: Path, overwrite: bool) -> None:
-    """Create DIR or accept it for resuming; a different search is refused unless ``overwrite``,
-    which replaces only what a search wrote (:mod:`nnrobust.study_folder`).
+def search_inputs(spec: FalsifySpec, sweep):
+    """What the search's rows are computed from (:func:`nnrobust.sweep.spec.study_inputs`): the
+    box and the base as searched, the controllers with their tuned settings, and the options.
+    """
+    from .sweep.spec import study_inputs
+
+    options = {
+        "--require": json.dumps(spec.require),
+        "--budget": str(spec.budget),
+        "--seed": str(spec.seed),
+        "--margin": str(spec.margin),
+    }
+    return study_inputs(sweep, options)
+
+
+def prepare_folder(spec: FalsifySpec, folder: Path, overwrite: bool, inputs) -> None:
+    """Create DIR or accept it for resuming the same search on the same ``inputs``
+    (:func:`search_inputs`); one of other inputs is refused, naming what changed, unless
+    ``overwrite``, which replaces only what a search wrote (:mod:`nnrobust.study_folder`).
     """
     from .study_folder import prepare
 
@@ -564,7 +590,7 @@ def prepare_folder(spec: FalsifySpec, folder: Path, overwrite: bool) -> None:
         "convergence.svg",
         WORST,
     )
-    prepare(folder, "falsify", spec.to_toml(), outputs, overwrite, "search", HISTORY, MARKER)
+    prepare(folder, "falsify", spec.to_toml(), outputs, overwrite, "search", HISTORY, MARKER, inputs)
 
 
 def run_falsify(
@@ -611,8 +637,9 @@ def _run_falsify(
             experiment(sweep, base, Sample(-1, box.values(corner), sample_seed(sweep.seed, 0)), name)
     check_controllers(sweep, base, box.values(np.full(len(box.keys), 0.5)))  # each built, its first step run
     folder = Path(folder)
-    prepare_folder(spec, folder, overwrite)
-    done = _history(folder)
+    inputs = search_inputs(spec, sweep)
+    prepare_folder(spec, folder, overwrite, inputs)
+    done = _history(folder, inputs.key)
     searches = {
         (name, kind): _Search(
             len(box.keys),
@@ -629,7 +656,7 @@ def _run_falsify(
     with signals_as_interrupt(), _client(workers, scheduler) as client:
         if progress:  # before any work: what the folder already holds of this search
             progress(sum((c, s) in searches and i < spec.budget for c, s, i in done), total)
-        drive = _Driver(client, folder, done, sweep, base, properties, progress)
+        drive = _Driver(client, folder, done, sweep, base, properties, progress, inputs.key)
         drive(searches, dict.fromkeys(searches, box), rows, total)
         margins = _margins(spec, sweep, box, rows, drive) if spec.margin else None
     seconds = time.monotonic() - started
@@ -729,7 +756,7 @@ def keep_worst(spec: FalsifySpec, summary: dict, folder: str | Path, count: int 
     from .sweep.spec import Sample, experiment, sample_seed
 
     sweep, base, _ = _searched_sweep(spec)
-    history = _history(Path(folder)) if count > 1 else {}
+    history = _history(Path(folder), None) if count > 1 else {}
     written = []
     for name, entry in summary["controllers"].items():
         plants = [entry["worst"]["values"]]

@@ -1814,6 +1814,39 @@ def _cannot_run(folder: Path, command: str, entry: str):
     return run
 
 
+def _resumed(folder: Path, change: str):
+    """A sweep folder prepared for its inputs with one part of rows, then resumed after ``change``:
+    its base experiment edited, or its part changed after it was written."""
+
+    def check():
+        import pyarrow as pa
+        import pyarrow.parquet as pq
+
+        from nnrobust.study_folder import prepare, read_parts, write_part
+        from nnrobust.sweep import load_sweep
+        from nnrobust.sweep.spec import study_inputs
+
+        base = _file(folder, "base.toml", 'base = "paper-ellipse"\n[simulation]\nduration = 0.3\n')
+        sweep = _file(folder, "s.toml", 'name = "s"\nbase = "base.toml"\ncontrollers = ["nn"]\n')
+        study = folder / f"resumed-{change}"
+        names = ("results", "sweep.toml")
+        inputs = study_inputs(load_sweep(sweep))
+        prepare(study, "sweep", "", names, False, "sweep", *names, inputs)
+        rows = pa.table({"sample": [0], "controller": ["nn"], "rms_error": [0.1]})
+        part = write_part(study / "results", rows, inputs.key)
+        if change == "base":
+            base.write_text(base.read_text().replace("0.3", "0.4"))
+            return prepare(study, "sweep", "", names, False, "sweep", *names, study_inputs(load_sweep(sweep)))
+        part.unlink()  # its bytes changed in place: the SHA-256 its name records no longer holds
+        pq.write_table(
+            rows.set_column(2, "rms_error", pa.array([0.0])),
+            part.with_name(f"part-{'0' * 12}-{'0' * 32}.parquet"),
+        )
+        return read_parts(study / "results", key=inputs.key, ids=("sample", "controller"))
+
+    return check
+
+
 FALSIFY_CASES = [
     Case(
         "resume: a Parquet part damaged after it was written (sweep, tune, falsify)",
@@ -1921,6 +1954,18 @@ FALSIFY_CASES = [
         "vary.nn.sigma: falsify searches uniform and loguniform ranges, not normal",
     ),
     Case(
+        "resume (sweep, tune, falsify): an input edited since the rows were computed",
+        lambda d: _resumed(d, "base"),
+        ex.NNRobustError,
+        "resumed-base holds a different sweep: the base experiment, ",
+    ),
+    Case(
+        "resume (sweep, tune, falsify): a part changed after it was written",
+        lambda d: _resumed(d, "part"),
+        ex.NNRobustError,
+        "was changed after it was written, or not written by this study",
+    ),
+    Case(
         "sweep: a controller whose first torque has the wrong shape",
         lambda d: _cannot_run(d, "sweep", 'class = "laws.py:WrongShape"'),
         ex.ConfigError,
@@ -1993,9 +2038,15 @@ def render_table(folder: Path) -> str:
         "  untouched and the new arrays are saved to the temporary folder if they fit there; the",
         "  message says where.",
         "- **Study folders** of `sweep`, `tune` and `falsify` (`nnrobust/study_folder.py`) carry a hidden",
-        "  marker, `.nnrobust-sweep` (`-tune`, `-falsify`), with the resolved study: a user's own",
-        "  `sweep.toml` never makes a folder one. They are locked while a command writes them (two",
-        "  sweeps into one folder: the second is refused at once, never a row twice). `--overwrite`",
+        "  marker, `.nnrobust-sweep` (`-tune`, `-falsify`), with what their rows are computed from, by",
+        "  content: the options that change results, nnrobust's version and the SHA-256 of every file",
+        "  read (the base experiment and the files it starts from, the URDF, user classes); a user's own",
+        "  `sweep.toml` never makes a folder one. A resume on anything else is refused, naming what",
+        "  changed; the same content resumes wherever it has moved. Each Parquet part records that",
+        "  digest and is named by the SHA-256 of its bytes, so a part copied from another run, a row",
+        "  twice, or a part changed after it was written is refused by name, never counted. They are",
+        "  locked while a command writes them (two sweeps into one folder: the second is refused at",
+        "  once, never a row twice). `--overwrite`",
         "  removes only what the command wrote (results/, plots/, worst/, summary.json, ...), never",
         "  the folder or a file of the user's, and the working folder or its ancestors are refused as",
         "  `--out`. A sample that raises inside a sweep is a row with status `error`; the sweep goes on.",

@@ -495,3 +495,54 @@ def test_tuned_settings_set_only_the_laws_own_keys_and_none_the_box_varies(setti
     assert not (tmp_path / "out").exists()
     with pytest.raises(ConfigError, match=f"--tuned: --tuned {words}"):  # the API checks them too
         run_falsify(FalsifySpec(str(sweep), [name], ["rms_error<=0.02"], 4, tuned=settings), tmp_path / "out")
+
+
+def test_a_search_resumes_only_on_the_inputs_it_was_computed_from(tmp_path, capsys):
+    """Issue 35, item 1, as the issue ran it: the box's range edited after a search, then the same
+    command: it said "16 of 16 already done" and reported a worst plant outside the new box. Now
+    an edited box, class file or base experiment is one line naming what changed; the same
+    content resumes, from a moved folder too, with nothing simulated again."""
+    import shutil
+
+    study = tmp_path / "study"
+    study.mkdir()
+    shutil.copy(Path(__file__).parent / "controllers" / "eq9_again.py", study / "laws.py")
+    (study / "base.toml").write_text('base = "paper-ellipse"\n[simulation]\nduration = 0.3\n')
+    (study / "box.toml").write_text(
+        'name = "box"\nbase = "base.toml"\ncontrollers = [{name = "eq9", class = "laws.py:Eq9", '
+        'params = {Kp = 10.0, Kv = 4.0}}]\n[vary]\n"plant.disturbance_scale" = {uniform = [0.5, 2.0]}\n'
+    )
+
+    def search(where) -> tuple[int, list[str]]:
+        capsys.readouterr()
+        words = ["falsify", str(where / "box.toml"), "--controllers", "eq9", "--require", "rms_error<=0.05"]
+        code = main([*words, "--budget", "4", "--workers", "2", "--out", str(where / "f")])
+        return code, capsys.readouterr().err.strip().splitlines()
+
+    assert search(study)[0] == 0
+    for name, old, new, words in (
+        (
+            "box.toml",
+            "[0.5, 2.0]",
+            "[5.0, 6.0]",
+            "[vary] plant.disturbance_scale was {{uniform = [0.5, 2.0]}}, now {{uniform = [5.0, 6.0]}}",
+        ),
+        (
+            "laws.py",
+            "import numpy",
+            "# edited\nimport numpy",
+            "the class file of controller eq9, {}, has changed",
+        ),
+        ("base.toml", "duration = 0.3", "duration = 0.31", "the base experiment, {}, has changed"),
+    ):
+        text = (study / name).read_text()
+        (study / name).write_text(text.replace(old, new, 1))
+        code, err = search(study)
+        expected = f"{study / 'f'} holds a different search: {words.format((study / name).resolve())}"
+        assert code == 2 and len(err) == 1 and expected in err[0] and "pass --overwrite" in err[0], err
+        (study / name).write_text(text)
+    parts = sorted(p.name for p in (study / "f" / "history").glob("part-*.parquet"))
+    shutil.move(study, tmp_path / "moved")
+    code, err = search(tmp_path / "moved")
+    assert code == 0 and any(line.endswith("8 of 8 already done") for line in err), err
+    assert sorted(p.name for p in (tmp_path / "moved" / "f" / "history").glob("part-*.parquet")) == parts

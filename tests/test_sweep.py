@@ -307,7 +307,10 @@ def test_cli_sweep_writes_results_summary_and_rerun_commands(tmp_path, capsys):
     assert set(by_scale) == {"0.5", "2.0"}
     rows = frame[(frame["controller"] == "nn") & (frame["plant.disturbance_scale"] == 2.0)]
     assert np.isclose(by_scale["2.0"]["median"], rows["rms_error_after_2s"].median())
-    assert (out / "sweep.toml").read_text() == load_sweep(path).to_toml()
+    written = (out / "sweep.toml").read_text()  # the resolved sweep, under the digests of its files
+    assert (
+        written.endswith(load_sweep(path).to_toml()) and "\n# the robot's URDF: three_link_planar " in written
+    )
     plots = sorted(p.name for p in (out / "plots").glob("*.png"))
     assert plots == [
         "error_cdf.png",
@@ -732,3 +735,63 @@ def test_a_controller_runs_where_the_experiment_itself_cannot_be_built(tmp_path)
         text='name = "b"\nbase = "long.toml"\ncontrollers = ["nn"]\n[vary]\n"simulation.duration" = [0.2]\n',
     )
     assert run_sweep(load_sweep(path), tmp_path / "out", workers=1)["computed"] == 1
+
+
+def test_a_changed_input_is_named_and_a_copied_or_changed_part_is_refused(tmp_path, capsys):
+    """Issue 35, item 1: every row is tied to the SHA-256 of what it was computed from. An edited
+    URDF, base experiment or sweep value is refused on resume in one line naming it (the old rows
+    were reported as results of the new inputs, rc 0); the same content resumes, from a moved
+    folder too. A part copied from a sweep of other inputs, a second copy of a row, and a part
+    changed after it was written are refused by name (a copied part was counted: 30 rows for 12
+    samples)."""
+    import shutil
+    from pathlib import Path
+
+    import pandas as pd
+
+    study = tmp_path / "study"
+    study.mkdir()
+    shutil.copy(Path(__file__).parents[1] / "urdf" / "three_link_planar.urdf", study / "arm.urdf")
+    (study / "exp.toml").write_text(
+        'base = "paper-ellipse"\n[robot]\nsource = "arm.urdf"\n[simulation]\nduration = 0.2\n'
+    )
+    (study / "s.toml").write_text('name = "s"\nbase = "exp.toml"\ncontrollers = ["nn"]\nsamples = 2\n')
+
+    def sweep_into(folder: Path, sweep: Path) -> tuple[int, list[str]]:
+        capsys.readouterr()
+        code = main(["sweep", str(sweep), "--out", str(folder), "--workers", "1", "--quiet"])
+        return code, capsys.readouterr().err.strip().splitlines()
+
+    out = study / "out"
+    assert sweep_into(out, study / "s.toml")[0] == 0
+    for name, old, new, words in (
+        ("arm.urdf", "</robot>", "</robot>\n<!-- edited -->", "the robot's URDF, {}, has changed"),
+        ("exp.toml", "duration = 0.2", "duration = 0.25", "the base experiment, {}, has changed"),
+        ("s.toml", "samples = 2", "samples = 2\nseed = 5", "seed was 0, now 5"),
+    ):
+        text = (study / name).read_text()
+        (study / name).write_text(text.replace(old, new))
+        code, err = sweep_into(out, study / "s.toml")
+        expected = f"{out} holds a different sweep: {words.format((study / name).resolve())}"
+        assert code == 2 and len(err) == 1 and expected in err[0] and "; pass --overwrite" in err[0], err
+        (study / name).write_text(text)
+    shutil.move(study, tmp_path / "moved")  # the same content elsewhere: resumes
+    study, out = tmp_path / "moved", tmp_path / "moved" / "out"
+    assert run_sweep(load_sweep(study / "s.toml"), out, workers=1)["computed"] == 0
+    (study / "o.toml").write_text((study / "s.toml").read_text() + "seed = 5\n")
+    assert sweep_into(study / "other", study / "o.toml")[0] == 0
+    part = sorted((out / "results").glob("part-*.parquet"))[0]
+    for copy, words in (
+        (sorted((study / "other" / "results").glob("part-*.parquet"))[0], "was computed from other inputs"),
+        (part, "holds the row of sample"),  # a second copy of this sweep's own part
+    ):
+        copied = out / "results" / f"part-000000000000-{copy.name.rpartition('-')[2]}"
+        shutil.copy(copy, copied)
+        code, err = sweep_into(out, study / "s.toml")
+        assert code == 2 and len(err) == 1 and words in err[0], err
+        copied.unlink()
+    frame = pd.read_parquet(part)
+    frame["rms_error_after_2s"] = 0.0  # a better result, written in place
+    frame.to_parquet(part)
+    code, err = sweep_into(out, study / "s.toml")
+    assert code == 2 and f"{part} was changed after it was written" in err[0], err

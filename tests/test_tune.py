@@ -395,3 +395,36 @@ def test_a_registered_law_is_tuned_in_the_space_it_declares(short_experiment, tm
         for s in (0, 1)
     ]
     assert np.mean(runs) == pytest.approx(best["train"]["rms_error_after_2s"], rel=1e-9)
+
+
+def test_a_moved_tuning_resumes_and_trials_copied_in_or_changed_are_refused(
+    tuned, short_experiment, tmp_path
+):
+    """Issue 35, item 1: another tuning's trials copied into the folder were counted (8
+    simulations for a budget of 4), and a trial row changed in place became the reported best.
+    A copy of the folder elsewhere resumes with nothing run again; a part of another tuning, or a
+    part changed after it was written, is refused by name."""
+    import shutil
+
+    import pandas as pd
+
+    spec, out, summary = tuned
+    copy = tmp_path / "copy"
+    shutil.copytree(out, copy)
+    again = run_tune(spec, copy, workers=1)
+    assert again["controllers"]["pd"]["best"]["params"] == summary["controllers"]["pd"]["best"]["params"]
+    parts = sorted((copy / "trials").glob("part-*.parquet"))
+    assert [p.name for p in parts] == sorted(p.name for p in (out / "trials").glob("part-*.parquet"))
+    run_tune(TuneSpec(str(short_experiment), ["pd"], 2, validation=0, seed=9), tmp_path / "other", workers=1)
+    foreign = sorted((tmp_path / "other" / "trials").glob("part-*.parquet"))[0]
+    shutil.copy(foreign, copy / "trials" / foreign.name)
+    with pytest.raises(NNRobustError, match=f"{foreign.name} was computed from other inputs"):
+        run_tune(spec, copy, workers=1)
+    (copy / "trials" / foreign.name).unlink()
+    frame = pd.read_parquet(parts[0])
+    rows = [json.loads(r) for r in frame["row"]]
+    rows[0]["train"]["rms_error_after_2s"] = 1e-9  # the best there is, written in place
+    frame["row"] = [json.dumps(r) for r in rows]
+    frame.to_parquet(parts[0])
+    with pytest.raises(NNRobustError, match=f"{parts[0].name} was changed after it was written"):
+        run_tune(spec, copy, workers=1)

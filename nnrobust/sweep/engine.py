@@ -13,14 +13,13 @@ import math
 import os
 import sys
 import time
-import uuid
 from contextlib import contextmanager
 from pathlib import Path
 
 from ..config import ExperimentConfig
 from ..exceptions import ConfigError, NNRobustError
 from ..signals import signals_as_interrupt
-from .spec import SweepSpec, base_config, base_values, draw, experiment
+from .spec import SweepSpec, base_config, base_values, draw, experiment, study_inputs
 
 RESULTS = "results"
 MARKER = "sweep.toml"
@@ -78,15 +77,20 @@ def run_rows(spec: SweepSpec, base: dict, jobs: list[tuple[int, str]]) -> list[d
 # ---- on the client -------------------------------------------------------------------------------
 
 
-def _done_rows(folder: Path) -> set[tuple[int, str]]:
+def _done_rows(folder: Path, key: str) -> set[tuple[int, str]]:
+    """The (sample, controller) rows the folder holds, each part checked against ``key`` (the
+    sweep's inputs) and no row twice (:func:`nnrobust.study_folder.read_parts`).
+    """
     from ..study_folder import read_parts
 
     done: set[tuple[int, str]] = set()
-    for table in read_parts(folder / RESULTS, ["sample", "controller"]):
+    for table in read_parts(folder / RESULTS, ["sample", "controller"], key, IDS):
         done.update(zip(table.column("sample").to_pylist(), table.column("controller").to_pylist()))
     return done
 
 
+IDS = ("sample", "controller")
+"""The columns that name a row."""
 FLAGS = ("runaway", "rho_hat_growing", "subtask_degraded")
 TEXTS = ("status", "backend", "message")
 
@@ -133,10 +137,13 @@ def _toml_text(value) -> str:
     return dump_toml({"v": value}).split(" = ", 1)[1].strip()
 
 
-def _write_part(folder: Path, rows: list[dict], table_schema) -> Path:
-    """One Parquet part, written to a hidden file and renamed into place."""
+def _write_part(folder: Path, rows: list[dict], table_schema, key: str) -> Path:
+    """One Parquet part, tied to the sweep's inputs (``key``) and written whole
+    (:func:`nnrobust.study_folder.write_part`).
+    """
     import pyarrow as pa
-    import pyarrow.parquet as pq
+
+    from ..study_folder import write_part
 
     columns = {name: [row.get(name) for row in rows] for name in table_schema.names}
     for field in table_schema:  # a varied value of another type than its column's: its TOML text
@@ -144,26 +151,22 @@ def _write_part(folder: Path, rows: list[dict], table_schema) -> Path:
             columns[field.name] = [
                 v if v is None or isinstance(v, str) else _toml_text(v) for v in columns[field.name]
             ]
-    table = pa.Table.from_pydict(columns, schema=table_schema)
-    path = folder / RESULTS / f"part-{uuid.uuid4().hex[:12]}.parquet"
-    tmp = path.with_name(f".{path.name}.partial")
-    pq.write_table(table, tmp)
-    os.replace(tmp, path)
-    return path
+    return write_part(folder / RESULTS, pa.Table.from_pydict(columns, schema=table_schema), key)
 
 
 OUTPUTS = (RESULTS, MARKER, "summary.json", "plots", "worst")
 """What a sweep writes in its folder: all --overwrite ever removes."""
 
 
-def prepare_folder(spec: SweepSpec, folder: Path, overwrite: bool) -> None:
-    """Create DIR or accept it for resuming; refuse a changed sweep unless ``overwrite``, which
-    replaces only what a sweep wrote (:mod:`nnrobust.study_folder`). DIR/sweep.toml is the
-    resolved sweep, for the reader.
+def prepare_folder(spec: SweepSpec, folder: Path, overwrite: bool, inputs) -> None:
+    """Create DIR or accept it for resuming the same sweep on the same ``inputs``
+    (:func:`~.spec.study_inputs`); refuse one of other inputs, naming what changed, unless
+    ``overwrite``, which replaces only what a sweep wrote (:mod:`nnrobust.study_folder`).
+    DIR/sweep.toml is the resolved sweep with its inputs' digests, for the reader.
     """
     from ..study_folder import prepare
 
-    prepare(folder, "sweep", spec.to_toml(), OUTPUTS, overwrite, "sweep", RESULTS, MARKER)
+    prepare(folder, "sweep", spec.to_toml(), OUTPUTS, overwrite, "sweep", RESULTS, MARKER, inputs)
 
 
 LOOPBACK_HTTP = "127.0.0.1:0"
@@ -423,11 +426,12 @@ def run_sweep(
     folder = Path(folder)
     base, jobs = plan(spec)  # every experiment validated before anything is written or run
     check_controllers(spec, base)  # and every controller built, its first step run
+    inputs = study_inputs(spec)  # what every row is computed from, by content
     from ..study_folder import held
 
     with held(folder):  # one sweep at a time into a folder: never a row twice
         return _run_sweep(
-            spec, folder, base, jobs, workers, scheduler, overwrite, progress, seconds_per_job, stop
+            spec, folder, base, jobs, workers, scheduler, overwrite, progress, seconds_per_job, stop, inputs
         )
 
 
@@ -442,9 +446,11 @@ def _run_sweep(
     progress,
     seconds_per_job: float,
     stop=None,
+    inputs=None,
 ) -> dict:
-    prepare_folder(spec, folder, overwrite)
-    done = _done_rows(folder)
+    inputs = inputs if inputs is not None else study_inputs(spec)
+    prepare_folder(spec, folder, overwrite, inputs)
+    done = _done_rows(folder, inputs.key)
     jobs = [job for job in jobs if job not in done]
     total = spec.size * len(spec.controllers)
     skipped = total - len(jobs)
@@ -452,7 +458,7 @@ def _run_sweep(
     def group(job) -> tuple[str, int]:
         return job[1], job[0] // spec.samples
 
-    records = read_results(folder).to_dict("records") if stop and done else []
+    records = read_results(folder, inputs.key).to_dict("records") if stop and done else []
     stopped = stop(records) if stop else set()
     dropped = [job for job in jobs if group(job) in stopped]
     jobs = [job for job in jobs if group(job) not in stopped]
@@ -492,7 +498,7 @@ def _run_sweep(
                 continue
             rows = future.result()
             future.release()  # the worker may drop the chunk's rows
-            _write_part(folder, rows, table_schema)
+            _write_part(folder, rows, table_schema, inputs.key)
             written += len(rows)
             parts += 1
             if stop:
@@ -508,13 +514,18 @@ def _run_sweep(
     return {"computed": written, "skipped": skipped, "parts": parts, "stopped": len(dropped)}
 
 
-def read_results(folder: str | Path):
-    """The sweep's rows as a pandas DataFrame (every part)."""
+def read_results(folder: str | Path, key: str | None = None):
+    """The sweep's rows as a pandas DataFrame (every part), each part checked against ``key``
+    (default: the inputs its folder's marker records) and no row twice.
+    """
     import pandas as pd
 
-    from ..study_folder import read_parts
+    from ..study_folder import read_parts, recorded_inputs
 
-    tables = read_parts(Path(folder) / RESULTS)
+    if key is None:
+        recorded = recorded_inputs(Path(folder), "sweep")
+        key = recorded.key if recorded is not None else None
+    tables = read_parts(Path(folder) / RESULTS, key=key, ids=IDS if key is not None else ())
     return pd.concat([t.to_pandas() for t in tables], ignore_index=True) if tables else pd.DataFrame()
 
 

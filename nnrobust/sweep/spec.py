@@ -408,6 +408,57 @@ def base_values(spec: SweepSpec) -> dict:
     return data
 
 
+def study_inputs(spec: SweepSpec, options: dict[str, str] | None = None):
+    """What a study of this sweep computes its rows from (:class:`nnrobust.study_folder.Inputs`):
+    the sweep's values (a preset base, the controllers with their entries, samples, seed, [set]
+    and [vary]) and the command's ``options``, with the SHA-256 of every file they read: the base
+    experiment and the files it starts from, the robot's URDF, the user classes of the base and
+    of the controllers entries, and the files a [vary] value names. Paths are never part of it:
+    a class entry is recorded by its class, its file by digest.
+    """
+    from ..config import user_files
+    from ..config.toml_io import file_values
+    from ..model.loading import urdf_digest
+    from ..study_folder import Inputs, file_sha256, package_version
+    from ..user_code import class_file
+
+    entries = []
+    for name in spec.controllers:
+        entry = dict(spec.entries.get(name, {}))
+        if "class" in entry:
+            entry["class"] = entry["class"].rpartition(":")[2]
+        entries.append({"name": name, **entry} if entry else name)
+    values = {"base": spec.base} if not spec.base.endswith(".toml") else {}
+    values.update(controllers=_inline(entries), samples=str(spec.samples), seed=str(spec.seed))
+    values.update({f"[set] {k}": _inline(v) for k, v in spec.set.items()})
+    values.update({f"[vary] {k}": _inline(v) for k, v in spec.vary.items()})
+    values.update(options or {})
+    read: list[Path] = []
+    file_values(base_path(spec), read)
+    files: dict[str, tuple[str, str]] = {}
+    for level, path in enumerate(read):
+        role = "the base experiment" if level == 0 else f"the experiment file the base starts from ({level})"
+        files[role] = (str(path), file_sha256(path))
+    config = base_config(spec)
+    source = config.robot.source
+    digest = urdf_digest(source)
+    if digest:
+        files["the robot's URDF"] = (source if not source.lstrip().startswith("<") else "(inline)", digest)
+    for part, class_path in user_files(config).items():
+        files[f"the {part} class file"] = (class_path, file_sha256(class_path))
+    for name, entry in spec.entries.items():
+        where = class_file(entry["class"]) if "class" in entry else None
+        if where is not None:
+            files[f"the class file of controller {name}"] = (str(where), file_sha256(where))
+    for key, value in spec.vary.items():
+        choices = value if isinstance(value, list) else value.get("choice", [])
+        for text in (v for v in choices if isinstance(v, str)):
+            where = class_file(text) if ":" in text else Path(text)
+            if where is not None and where.is_file():
+                files[f"the file of [vary] {key} = {text}"] = (str(where), file_sha256(where))
+    return Inputs(values, files, package_version())
+
+
 def sample_seed(seed: int, sample_id: int) -> int:
     """The seed of one sample: independent of how samples are chunked or resumed."""
     return int(np.random.default_rng([seed, sample_id]).integers(2**62))

@@ -22,7 +22,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import uuid
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
@@ -338,18 +337,29 @@ def judge(spec: TuneSpec, runs: list[dict]) -> tuple[tuple[float, ...], list[flo
     return tuple(numbers[k] for k in OBJECTIVES), constraints, mean
 
 
-def _read_trials(folder: Path) -> list[dict]:
+TRIAL_IDS = ("controller", "trial")
+"""The columns of the trials that name a row."""
+
+
+def _read_trials(folder: Path, key: str) -> list[dict]:
+    """The trials the folder holds, each part checked against ``key`` (the tuning's inputs) and
+    no trial twice (:func:`nnrobust.study_folder.read_parts`).
+    """
     from ..study_folder import read_parts
 
-    rows = [json.loads(r) for t in read_parts(folder / TRIALS, ["row"]) for r in t.column("row").to_pylist()]
+    tables = read_parts(folder / TRIALS, [*TRIAL_IDS, "row"], key, TRIAL_IDS)
+    rows = [json.loads(r) for t in tables for r in t.column("row").to_pylist()]
     return sorted(rows, key=lambda r: (r["controller"], r["trial"]))
 
 
-def _write_trials(folder: Path, rows: list[dict]) -> None:
-    """One Parquet part (written to a hidden file and renamed into place): flat columns for
-    pandas, and the whole row as JSON for resuming.
+def _write_trials(folder: Path, rows: list[dict], key: str) -> None:
+    """One Parquet part, tied to the tuning's inputs (``key``) and written whole: flat columns
+    for pandas, and the whole row as JSON for resuming.
     """
     import pandas as pd
+    import pyarrow as pa
+
+    from ..study_folder import write_part
 
     flat = []
     for r in rows:
@@ -362,21 +372,36 @@ def _write_trials(folder: Path, rows: list[dict]) -> None:
             "row": json.dumps(r),
         }
         flat.append(item)
-    path = folder / TRIALS / f"part-{uuid.uuid4().hex[:12]}.parquet"
-    tmp = path.with_name(f".{path.name}.partial")
-    pd.DataFrame(flat).to_parquet(tmp, index=False)
-    os.replace(tmp, path)
+    write_part(folder / TRIALS, pa.Table.from_pandas(pd.DataFrame(flat), preserve_index=False), key)
 
 
-def prepare_folder(spec: TuneSpec, folder: Path, overwrite: bool) -> None:
-    """Create DIR or accept it for resuming; a different tuning is refused unless ``overwrite``,
-    which replaces only what a tuning wrote (:mod:`nnrobust.study_folder`). DIR/tune.toml is the
-    resolved tuning, for the reader.
+def tuning_inputs(spec: TuneSpec, sweep):
+    """What the tuning's trials are computed from (:func:`nnrobust.sweep.spec.study_inputs`): the
+    uncertainty set and its base, the controllers, and the options.
+    """
+    from ..sweep.spec import study_inputs
+
+    options = {
+        "--budget": str(spec.budget),
+        "--train-samples": str(spec.train_samples),
+        "--validation": str(spec.validation),
+        "--max-rms-torque": repr(spec.max_rms_torque),
+        "--max-saturated": repr(spec.max_saturated),
+        "--seed": str(spec.seed),
+    }
+    return study_inputs(sweep, options)
+
+
+def prepare_folder(spec: TuneSpec, folder: Path, overwrite: bool, inputs) -> None:
+    """Create DIR or accept it for resuming the same tuning on the same ``inputs``
+    (:func:`tuning_inputs`); one of other inputs is refused, naming what changed, unless
+    ``overwrite``, which replaces only what a tuning wrote (:mod:`nnrobust.study_folder`).
+    DIR/tune.toml is the resolved tuning with its inputs' digests, for the reader.
     """
     from ..study_folder import prepare
 
     outputs = (TRIALS, MARKER, "summary.json", "pareto.png", "pareto.svg")
-    prepare(folder, "tune", spec.to_toml(), outputs, overwrite, "tuning", TRIALS, MARKER)
+    prepare(folder, "tune", spec.to_toml(), outputs, overwrite, "tuning", TRIALS, MARKER, inputs)
 
 
 class _Controller:
@@ -601,8 +626,9 @@ def _run_tune(
         else:
             space = search_space(entry["kind"], arm_scales(first_step(first)))
         controllers[name] = _Controller(spec, name, space, index)
-    prepare_folder(spec, folder, overwrite)
-    for row in _read_trials(folder):  # resume: replay the history, widening as it did
+    inputs = tuning_inputs(spec, sweep)
+    prepare_folder(spec, folder, overwrite, inputs)
+    for row in _read_trials(folder, inputs.key):  # resume: replay the history, widening as it did
         if row["controller"] in controllers:
             controllers[row["controller"]].record(row)
     train = list(range(spec.train_samples))
@@ -642,7 +668,7 @@ def _run_tune(
             ]
             for c, row in finished:  # after every tell: recording may widen a space (a new study)
                 c.record(row)
-            _write_trials(folder, [row for _, row in finished])
+            _write_trials(folder, [row for _, row in finished], inputs.key)
             if progress:
                 progress(done_count(), total)
         summary = _summary(spec, sweep, controllers, client, sweep_future, base_future)
