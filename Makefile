@@ -19,7 +19,8 @@ $(VENV)/.build-deps: pyproject.toml $(BIN)/activate
 	  | xargs $(BIN)/pip install --quiet
 	touch $@
 
-SOURCES := CMakeLists.txt $(wildcard csrc/*.hpp csrc/*.cpp csrc/laws/*.hpp csrc/laws/*.cpp)
+# Every C++ file under csrc/ (any depth): an edit anywhere rebuilds the extension.
+SOURCES := CMakeLists.txt $(shell find csrc -name '*.hpp' -o -name '*.cpp')
 
 $(VENV)/.installed: pyproject.toml $(SOURCES) $(VENV)/.build-deps
 	CMAKE_BUILD_PARALLEL_LEVEL=2 $(BIN)/pip install --quiet --no-build-isolation -e .
@@ -70,6 +71,7 @@ docs-data: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/nn_options.py --json $(DATA)/nn_options.json
 	$(BIN)/python benchmarks/subtask.py --json $(DATA)/subtask.json
 	$(BIN)/python benchmarks/arm_presets.py --json $(DATA)/arm_presets.json
+	$(BIN)/python benchmarks/torque_speed.py --json $(DATA)/torque_speed.json
 	rm -rf $(OUT)/tuned $(OUT)/tune-noisy $(OUT)/falsify-paper-factors $(OUT)/falsify-panda-factors \
 	  $(OUT)/falsify-tuned $(OUT)/paper-robustness $(OUT)/panda-robustness
 	$(BIN)/python benchmarks/tuned_comparison.py --json $(DATA)/tuned_comparison.json --figure docs/img/tuned_comparison.png

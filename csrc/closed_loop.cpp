@@ -110,7 +110,7 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
     commands.push_back(out.tau);
     if (static_cast<int>(commands.size()) > plant.delay + 1) commands.pop_front();
     const Vector tau_cmd = commands.front();
-    tau = plant.applied_torque(tau_cmd);
+    tau = plant.applied_torque(tau_cmd, v);
     tr.q.row(k) = q;
     tr.dq.row(k) = v;
     tr.tau.row(k) = tau;

@@ -129,8 +129,8 @@ def subtask() -> str:
     return _markdown(
         [
             ("variant", "l", _text("variant")),
-            ("h(0)", "r", lambda r: f"{r['h_start']:.4f}"),
-            ("h(20 s)", "r", lambda r: f"{r['h_end']:.4f}"),
+            ("h two laps before the end", "r", lambda r: f"{r['h_start']:.4f}"),
+            ("h at 20 s", "r", lambda r: f"{r['h_end']:.4f}"),
             ERROR,
             TORQUE,
         ],
@@ -153,6 +153,22 @@ def arm_presets() -> str:
         ],
         _data("arm_presets")["rows"],
         "python benchmarks/arm_presets.py --json docs/data/arm_presets.json",
+    )
+
+
+def torque_speed() -> str:
+    return _markdown(
+        [
+            ("preset", "l", _text("preset")),
+            ("envelope", "l", _text("envelope")),
+            ("RMS error, t ≥ 2 s [mm]", "r", lambda r: _mm(r["rms_error_after_2s"])),
+            SATURATED,
+            ("peak speed / limit", "r", _g3("max_speed_ratio")),
+            WARNINGS,
+        ],
+        _data("torque_speed")["rows"],
+        "python benchmarks/torque_speed.py --json docs/data/torque_speed.json",
+        chaos_note=False,
     )
 
 
@@ -453,6 +469,14 @@ def _study(name: str):
             ]
             table += "\nMedian (95th percentile) RMS error, t ≥ 2 s [mm], at each value of the grid:\n\n"
             table += _markdown(columns, entries)
+        kinds = sorted({k for e in entries for k in e.get("warnings_by_kind", {})})
+        if kinds:
+            table += "\nRuns on which each warning fired (docs/plant.md#verdicts-in-metricsjson):\n\n"
+            table += _markdown(
+                [("controller", "l", _text("controller"))]
+                + [(k, "r", lambda e, k=k: str(e["warnings_by_kind"].get(k, 0))) for k in kinds],
+                entries,
+            )
         return table + (
             f"\n{summary['samples']} samples; errors are RMS over t ≥ 2 s. Made by "
             f"`nnrobust sweep {name} --out out/{name}` (summary.json).\n"
@@ -722,6 +746,7 @@ RENDERERS = {
     "engine-gap-presets": engine_gap_presets,
     "engine-gap-tuned": engine_gap_tuned,
     "arm-presets": arm_presets,
+    "torque-speed": torque_speed,
     "paper-robustness": _study("paper-robustness"),
     "panda-robustness": _study("panda-robustness"),
     "paper-reproduction": paper_reproduction,

@@ -41,7 +41,7 @@ HEADERS = (
     "rms e [mm]",
     "rms e t>=2s [mm]",
     "max e [mm]",
-    "rms tau [N m]",
+    "rms |tau| [N m]",
     "chatter [N m]",
     "saturated [%]",
     "rho-hat end",

@@ -520,6 +520,8 @@ def run_experiment(config: ExperimentConfig, progress=None, setup: Setup | None 
         wall,
         setup.plant.torque_limit,
         setup.substeps,
+        setup.plant.speed_limit,
+        setup.plant.torque_speed_knee,
     )
     result.backend = backend
     engine = setup.plant.engine

@@ -458,6 +458,33 @@ def _nn_figure(result: Result):
     return fig
 
 
+PAPER_SIGNALS = ("h", "manipulability", "rho_hat", "eps", "z_norm", "damping")
+"""Signals of the paper's laws: drawn in the subtask and nn figures, or summarised in the metrics
+(``damping``: singular_fraction and singular_episodes; ``z_norm``: final_rho_hat's weights).
+Every other signal (a registered or user law's ``signal_names``) is drawn by :func:`_signals_figure`."""
+
+MAX_SIGNAL_PANELS = 8
+"""At most this many signals in the signals figure (the rest are named in its title)."""
+
+
+def _signals_figure(result: Result):
+    """The controller's other recorded signals (a shipped law's or a user's ``signal_names``),
+    one panel each; None where there are none.
+    """
+    names = [k for k in result.signals if k not in PAPER_SIGNALS]
+    if not names:
+        return None
+    shown = names[:MAX_SIGNAL_PANELS]
+    fig, axes = plt.subplots(len(shown), 1, figsize=(7, 1.2 + 1.3 * len(shown)), sharex=True, squeeze=False)
+    for ax, name in zip(axes[:, 0], shown):
+        _series(ax.plot, result.t, np.asarray(result.signals[name], dtype=float), lw=0.9)
+        ax.set_ylabel(name, fontsize=8)
+    axes[-1, 0].set_xlabel("t [s]")
+    rest = f" ({len(names) - len(shown)} more in result.npz: {', '.join(names[len(shown) :])})"
+    fig.suptitle("Controller signals" + (rest if len(names) > len(shown) else ""), fontsize=10)
+    return fig
+
+
 FIGURES = {
     "path": _path_figure,
     "errors": _errors_figure,
@@ -466,6 +493,7 @@ FIGURES = {
     "subtask": _subtask_figure,
     "snapshots": _snapshots_figure,
     "nn": _nn_figure,
+    "signals": _signals_figure,
 }
 """The figures of a run, by file name; a figure function returns None when the run lacks its data."""
 

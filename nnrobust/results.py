@@ -11,6 +11,8 @@ import numpy as np
 
 from . import verdicts
 from .model.tasks import display_coordinates
+from .plant.limits import available_torque
+from .plant.scaling import usable
 from .run_info import RunInfo
 from .simulation import period_substeps
 from .subtasks.manipulability import det
@@ -23,11 +25,18 @@ METRIC_UNITS = {
     "rms_orientation_error": "rad",
     "rms_orientation_error_after_2s": "rad",
     "max_orientation_error": "rad",
-    "rms_torque": "N m",
-    "max_torque": "N m",
-    "max_torque_cmd": "N m",
+    "rms_torque": "N m (the norm of the torque vector; N for a prismatic joint's entry)",
+    "max_torque": "N m (N for a prismatic joint)",
+    "max_torque_cmd": "N m (N for a prismatic joint)",
     "saturated_fraction": "-",
     "max_torque_ratio": "-",
+    "max_applied_torque_ratio": "-",
+    "rms_torque_ratio": "-",
+    "speed_limit_fraction": "-",
+    "max_speed_ratio": "-",
+    "path_size": "m",
+    "tracking_error_ratio": "-",
+    "h_start_time": "s",
     "max_joint_limit_violation": "rad (m for a prismatic joint)",
     "rms_error_early": "m",
     "rms_error_last_fifth": "m",
@@ -78,6 +87,11 @@ class Result:
         chain: world positions of the joint origins and the task frame, N x (n + 1) x 3 [m]
             (for stick figures and the viewer).
         torque_limit: effort limit per joint [N m] (inf: none), or None for ideal actuators.
+        velocity_limit: the URDF's velocity limit per joint [rad/s or m/s] (inf: none), or None
+            (the speed verdict).
+        envelope_speed_limit: the velocity limits of the plant's torque-speed envelope (inf:
+            none), or None: the plant had no envelope (``plant.torque_speed``).
+        torque_speed_knee: the envelope's knee (-1: none).
         lower_limit, upper_limit: joint position limits [rad or m], or None.
         prismatic: whether each joint is prismatic (units m, m/s, N), or None (all revolute).
         backend: which loop simulated it: ``python``, ``compiled`` or ``hybrid``.
@@ -115,6 +129,9 @@ class Result:
     lower_limit: np.ndarray | None = None
     upper_limit: np.ndarray | None = None
     prismatic: np.ndarray | None = None
+    velocity_limit: np.ndarray | None = None
+    envelope_speed_limit: np.ndarray | None = None
+    torque_speed_knee: float = -1.0
     backend: str = "python"
     plant_step: float = float("nan")
     friction_events: int = 0
@@ -136,6 +153,8 @@ class Result:
         wall_seconds: float,
         torque_limit: np.ndarray | None = None,
         substeps: int = 1,
+        envelope_speed_limit: np.ndarray | None = None,
+        torque_speed_knee: float = -1.0,
     ) -> Result:
         """Add task-space quantities (true kinematics) and the criterion to a simulation trace
         (those the loop recorded already are taken as they are).
@@ -193,7 +212,22 @@ class Result:
             refined_periods=trace.refined_periods,
             step_rotation=step_rotation(trace.dq, config, substeps) if config is not None else float("nan"),
             info=RunInfo.from_config(config, trace.q.shape[1]) if config is not None else None,
+            velocity_limit=velocity_limits(robot),
+            envelope_speed_limit=envelope_speed_limit,
+            torque_speed_knee=torque_speed_knee,
         )
+
+    def available_torque(self) -> np.ndarray | None:
+        """The torque each actuator could give at each step, in the direction of its command [N m]
+        (N x n): the effort limit, cut at speed by the torque-speed envelope; None: ideal actuators.
+        """
+        if self.torque_limit is None:
+            return None
+        limit = np.broadcast_to(self.torque_limit, self.tau.shape)
+        if self.torque_speed_knee < 0.0 or self.envelope_speed_limit is None:
+            return limit
+        tau_cmd = self.tau if self.tau_cmd is None else self.tau_cmd
+        return available_torque(limit, tau_cmd, self.dq, self.envelope_speed_limit, self.torque_speed_knee)
 
     def experiment(self):
         """The :class:`~nnrobust.config.ExperimentConfig` that produced the run (from ``config``)."""
@@ -225,7 +259,14 @@ class Result:
 
         rho = self.signals.get("rho_hat")
         tau_cmd = self.tau if self.tau_cmd is None else self.tau_cmd
-        saturated, torque_ratio = verdicts.saturation(tau_cmd, self.torque_limit)
+        saturated = verdicts.saturation(self.tau, self.available_torque())
+        limit = self.torque_limit
+        torque_ratio, _ = verdicts.ratio_to_limit(tau_cmd, limit)
+        applied_ratio, _ = verdicts.ratio_to_limit(self.tau, limit)
+        rms_per_joint = np.sqrt(np.mean(self.tau**2, axis=0)) if self.tau.size else np.zeros(0)
+        rms_ratio, _ = verdicts.ratio_to_limit(rms_per_joint[None, :], limit) if self.tau.size else (None, -1)
+        over_speed, speed_ratio, speed_joint = verdicts.speed_over_limit(self.dq, self.velocity_limit)
+        size = verdicts.path_size(self.x_d)
         lower, upper = self.lower_limit, self.upper_limit
         violation, violating = (
             verdicts.joint_limit_violation(self.q, lower, upper)
@@ -234,7 +275,11 @@ class Result:
         )
         runaway, rms_early, rms_late = verdicts.runaway(self.t, err)
         growing, rho_middle, rho_late = verdicts.rho_growing(self.t, rho)
-        degraded, h_start, h_end = verdicts.subtask_loss(self.signals.get("h"))
+        tracking = rms(err[late] ** 2) / size if late.any() else None
+        degraded, h_start, h_end, h_start_time = verdicts.subtask_loss(
+            self.t, self.signals.get("h"), self.x_d
+        )
+        degraded = degraded and not (tracking is not None and tracking > verdicts.TRACKING_LOST)
         damping = self.signals.get("damping")
         damped = np.asarray(damping) > 0 if damping is not None else np.zeros(0, dtype=bool)
         simulated = float(self.t[-1] - self.t[0] + (self.t[1] - self.t[0])) if self.t.size > 1 else 0.0
@@ -245,11 +290,19 @@ class Result:
             "max_error": float(err.max()) if err.size else float("nan"),
             "final_error": float(err[-1]) if err.size else float("nan"),
             "rms_torque": rms(tau_norm2),
-            "rms_torque_per_joint": np.sqrt(np.mean(self.tau**2, axis=0)).tolist(),
+            "rms_torque_per_joint": rms_per_joint.tolist(),
+            "max_torque_per_joint": np.abs(self.tau).max(axis=0).tolist() if self.tau.size else [],
             "max_torque": float(np.abs(self.tau).max()) if self.tau.size else float("nan"),
             "max_torque_cmd": float(np.abs(tau_cmd).max()) if tau_cmd.size else float("nan"),
             "saturated_fraction": saturated,
-            "max_torque_ratio": torque_ratio,
+            "max_torque_ratio": torque_ratio if torque_ratio is not None else 0.0,
+            "max_applied_torque_ratio": applied_ratio,
+            "rms_torque_ratio": rms_ratio,
+            "speed_limit_fraction": over_speed,
+            "max_speed_ratio": speed_ratio,
+            "speed_limit_joint": speed_joint,
+            "path_size": size,
+            "tracking_error_ratio": tracking,
             "max_joint_limit_violation": violation,
             "joint_limit_joint": violating,
             "torque_chatter": rms(dtau**2),
@@ -265,6 +318,7 @@ class Result:
             "runaway": runaway,
             "h_start": h_start,
             "h_end": h_end,
+            "h_start_time": h_start_time,
             "subtask_degraded": degraded,
             "singular_fraction": float(np.mean(damped)) if damped.size else 0.0,
             "singular_episodes": singular_episodes(self.t, damped),
@@ -281,6 +335,7 @@ class Result:
             "realtime_factor": simulated / self.wall_seconds if self.wall_seconds > 0 else None,
             "plant_engine": self.plant_engine,
             "engine_audit": self.engine_audit,
+            "torque_speed_knee": self.torque_speed_knee,
         }
         if turn is not None:
             out["rms_orientation_error"] = rms(turn**2)
@@ -315,13 +370,15 @@ class Result:
             ("rms_error", "RMS error", 1e3, "mm"),
             ("rms_error_after_2s", "RMS error, t >= 2 s", 1e3, "mm"),
             ("max_error", "max error", 1e3, "mm"),
-            ("rms_torque", "RMS torque", 1.0, "N m"),
+            ("rms_torque", "RMS torque norm", 1.0, "N m"),
+            ("rms_torque_ratio", "RMS torque / limit, worst joint", 1.0, ""),
+            ("max_speed_ratio", "peak speed / limit", 1.0, ""),
             ("torque_chatter", "chatter", 1.0, "N m"),
             ("saturated_fraction", "saturated steps", 100.0, "%"),
         ):
             value = m.get(key)
             if value is not None:
-                rows.append((label, f"{scale * value:.4g} {unit}"))
+                rows.append((label, f"{scale * value:.4g} {unit}".rstrip()))
         rows += [("warning", w) for w in m.get("warnings", [])]
         return rows
 
@@ -396,6 +453,9 @@ class Result:
             lower_limit=optional["lower_limit"],
             upper_limit=optional["upper_limit"],
             prismatic=optional["prismatic"],
+            velocity_limit=optional["velocity_limit"],
+            envelope_speed_limit=optional["envelope_speed_limit"],
+            torque_speed_knee=metrics.get("torque_speed_knee", -1.0),
             backend=metrics.get("backend", "python"),
             plant_step=metrics.get("plant_step", float("nan")),
             friction_events=metrics.get("friction_events", 0),
@@ -429,6 +489,17 @@ def _stored_info(arrays: dict, config: str, n: int) -> RunInfo | None:
         return None
 
 
+def velocity_limits(robot) -> np.ndarray | None:
+    """The robot's velocity limits [rad/s or m/s], inf where its URDF gives none (or a placeholder);
+    None for a model without them (the closed-form arm).
+    """
+    speed = getattr(robot, "velocity_limits", None)
+    if speed is None:
+        return None
+    speed = np.asarray(speed, dtype=float)
+    return np.where(usable(speed), speed, np.inf)
+
+
 def step_rotation(dq: np.ndarray, config, substeps: int) -> float:
     """The most a joint turned in one plant step [rad or m]: per control period, the larger of the
     fastest joint's speeds at its two ends times the step the period used
@@ -445,7 +516,16 @@ def step_rotation(dq: np.ndarray, config, substeps: int) -> float:
     return float(np.max(ends * sim.control_period / steps))
 
 
-OPTIONAL_ARRAYS = ("chain", "tau_cmd", "torque_limit", "lower_limit", "upper_limit", "prismatic")
+OPTIONAL_ARRAYS = (
+    "chain",
+    "tau_cmd",
+    "torque_limit",
+    "lower_limit",
+    "upper_limit",
+    "prismatic",
+    "velocity_limit",
+    "envelope_speed_limit",
+)
 """Arrays of result.npz that older run folders or hand-made Results may lack."""
 
 MAX_EPISODES = 20

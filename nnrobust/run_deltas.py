@@ -16,12 +16,14 @@ DELTA_METRICS = (
     ("max_error", "max error [mm]", 1e3),
     ("final_error", "final error [mm]", 1e3),
     ("rms_orientation_error_after_2s", "RMS rot t>=2s [mrad]", 1e3),
-    ("rms_torque", "RMS torque [N m]", 1.0),
-    ("max_torque", "max torque [N m]", 1.0),
+    ("rms_torque", "RMS torque norm [N m]", 1.0),
+    ("max_torque", "largest joint torque [N m]", 1.0),
     ("torque_chatter", "chatter [N m]", 1.0),
     ("saturated_fraction", "saturated [%]", 100.0),
     ("max_joint_limit_violation", "past a limit [rad]", 1.0),
     ("max_joint_speed", "max speed [rad/s]", 1.0),
+    ("max_speed_ratio", "max speed / limit", 1.0),
+    ("rms_torque_ratio", "RMS torque / limit, worst joint", 1.0),
 )
 """(metric, label with unit, scale) of the delta table."""
 

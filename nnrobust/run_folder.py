@@ -202,7 +202,7 @@ def _place(tmp: Path, folder: Path) -> None:
         os.replace(tmp, folder)  # onto nothing, or an empty folder
 
 
-FIGURE_NAMES = ("path", "errors", "joints", "torques", "subtask", "snapshots", "nn")
+FIGURE_NAMES = ("path", "errors", "joints", "torques", "subtask", "snapshots", "nn", "signals")
 """The figures of a run (nnrobust.plots.FIGURES, named here so that matplotlib is not imported)."""
 
 FIGURE_WEIGHTS = {
@@ -213,6 +213,7 @@ FIGURE_WEIGHTS = {
     "subtask": 0.9,
     "snapshots": 1.0,
     "nn": 1.2,
+    "signals": 1.0,
 }
 """Relative cost of drawing each figure (measured on the Panda's run: the 3-D path costs most)."""
 

@@ -224,7 +224,7 @@ def simulate(
                 check_output(controller, out, n, z.size, t)
             commands.append(out.tau)
             tau_cmd = commands[0]  # computed d periods ago (the first command until then)
-            tau = plant.applied_torque(tau_cmd)
+            tau = plant.applied_torque(tau_cmd, v)
             plant.begin_period(t)  # the loads held over this period (nnrobust.plant.loads)
             q_rec[k], v_rec[k], tau_rec[k], cmd_rec[k], z_rec[k] = q, v, tau, tau_cmd, z
             try:

@@ -1,4 +1,5 @@
-"""Honest verdicts on a run: saturation, joint-limit violation, parameter drift and runaway error.
+"""Honest verdicts on a run: saturation, speed and joint limits, lost tracking, parameter drift,
+runaway error and a degraded subtask.
 
 Each check turns the recorded arrays into a number for metrics.json and, past a documented
 threshold, a one-line warning that the command line prints (docs/plant.md#verdicts).
@@ -11,7 +12,21 @@ import math
 import numpy as np
 
 SATURATION_WARNING = 0.01
-"""Fraction of control steps with a saturated command above which a run gets a warning."""
+"""Fraction of control steps with a saturated actuator above which a run gets a warning."""
+
+AT_LIMIT = 1e-6
+"""An actuator is saturated when its applied torque is within this fraction of the torque it can
+give (so a law that clips its own command at the limit is counted too)."""
+
+TRACKING_LOST = 0.1
+"""Tracking is lost when the RMS error after 2 s exceeds this fraction of the path's size."""
+
+PATH_SIZE_FLOOR = 0.05
+"""[m] The path's size is at least this (a set point has none of its own)."""
+
+SAME_POINT = 0.005
+"""Two instants are at the same point of the path when their desired positions are closer than
+this fraction of the path's size (the subtask verdict compares h there)."""
 
 RUNAWAY_RATIO = 3.0
 """Runaway: RMS error over the last fifth above this times the RMS over [2 s, 40 %] ..."""
@@ -34,16 +49,51 @@ on the step (docs/plant.md). The speed-adaptive step keeps it below simulation.m
 (0.02) at each period's start; the warning fires where a period's speed outgrew that."""
 
 SUBTASK_LOSS = 0.05
-"""The subtask degrades: h at the end below h at the start by more than this fraction of
-max(|h(0)|, spread of h over the run)."""
+"""The subtask degrades: at the end of the run h is lower than it was at the same point of the path
+after 2 s by more than this fraction of max(|h| there, spread of h after 2 s)."""
 
 
-def saturation(tau_cmd: np.ndarray, limit: np.ndarray | None) -> tuple[float, float]:
-    """(fraction of steps where some joint's command exceeds its limit, max |tau_cmd| / limit)."""
-    if limit is None or tau_cmd.size == 0 or not np.any(np.isfinite(limit)):
-        return 0.0, 0.0
-    ratio = np.abs(tau_cmd) / limit
-    return float(np.mean(np.any(ratio > 1.0, axis=1))), float(np.max(ratio))
+def saturation(tau: np.ndarray, available: np.ndarray | None) -> float:
+    """Fraction of steps where some joint's applied torque ``tau`` is at the torque its actuator
+    can give (``available``, N x n or n; within :data:`AT_LIMIT`): the actuator gives all it has,
+    whether it cut the command or the law asked for exactly that much.
+    """
+    if available is None or tau.size == 0:
+        return 0.0
+    at_limit = np.abs(tau) >= (1.0 - AT_LIMIT) * available
+    return float(np.mean(np.any(at_limit & np.isfinite(available), axis=1)))
+
+
+def ratio_to_limit(value: np.ndarray, limit: np.ndarray | None) -> tuple[float | None, int]:
+    """(max over samples and joints of |value| / limit, that joint; -1 if none) over the joints
+    with a finite limit; (None, -1) where no joint has one.
+    """
+    if limit is None or value.size == 0 or not np.any(np.isfinite(limit)):
+        return None, -1
+    ratio = np.abs(value) / limit
+    worst = np.max(ratio.reshape(-1, limit.size), axis=0)
+    i = int(np.argmax(worst))
+    return float(worst[i]), i
+
+
+def speed_over_limit(dq: np.ndarray, limit: np.ndarray | None) -> tuple[float, float | None, int]:
+    """(fraction of steps where some joint moves faster than its velocity limit, the peak
+    |q'_i| / limit_i, that joint; -1 if no joint has a limit).
+    """
+    peak, joint = ratio_to_limit(dq, limit)
+    if peak is None or limit is None:
+        return 0.0, None, -1
+    return float(np.mean(np.any(np.abs(dq) > limit, axis=1))), peak, joint
+
+
+def path_size(x_d: np.ndarray) -> float:
+    """The desired path's size: the diagonal of its positions' bounding box, at least
+    :data:`PATH_SIZE_FLOOR` [m].
+    """
+    if x_d.size == 0:
+        return PATH_SIZE_FLOOR
+    p = x_d[:, :3]
+    return max(float(np.linalg.norm(np.ptp(p, axis=0))), PATH_SIZE_FLOOR)
 
 
 def joint_limit_violation(q: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> tuple[float, int]:
@@ -80,22 +130,57 @@ def rho_growing(t: np.ndarray, rho: np.ndarray | None) -> tuple[bool, float, flo
     return late > RHO_GROWTH * middle and late > RHO_MIN, middle, late
 
 
-def subtask_loss(h: np.ndarray | None) -> tuple[bool, float, float]:
-    """(the criterion ends lower than it started, h(0), h at the end)."""
-    if h is None or h.size < 2 or not np.all(np.isfinite(h[[0, -1]])):
-        return False, float("nan"), float("nan")
-    scale = max(abs(float(h[0])), float(np.nanmax(h) - np.nanmin(h)), 1e-12)
-    return float(h[-1]) < float(h[0]) - SUBTASK_LOSS * scale, float(h[0]), float(h[-1])
+def subtask_loss(t: np.ndarray, h: np.ndarray | None, x_d: np.ndarray) -> tuple[bool, float, float, float]:
+    """(the criterion ends lower than at the same point of the path earlier, h there, h at the
+    end, the time it was there [s]).
+
+    h depends on where the task is, so h at the end is compared with h at the first instant after
+    2 s whose desired position is within :data:`SAME_POINT` of the path's size of the final one (a
+    periodic path comes back to it; a point-to-point path is there from its arrival). Without such
+    an instant (a path that never returns, a run shorter than 2 s) there is no verdict; nor on a
+    run that lost the path (Result.metrics: the arm is not at the point the comparison assumes).
+    """
+    nan = float("nan")
+    if h is None or h.size < 2 or not np.isfinite(h[-1]):
+        return False, nan, nan, nan
+    late = np.flatnonzero(t >= 2.0)
+    if late.size < 2:
+        return False, nan, nan, nan
+    p = x_d[:, :3]
+    near = np.linalg.norm(p[late[:-1]] - p[-1], axis=1) <= SAME_POINT * path_size(x_d)
+    if not near.any():
+        return False, nan, nan, nan
+    k = int(late[np.argmax(near)])
+    if not np.isfinite(h[k]):
+        return False, nan, nan, nan
+    spread = h[late][np.isfinite(h[late])]
+    scale = max(abs(float(h[k])), float(np.ptp(spread)) if spread.size else 0.0, 1e-12)
+    return float(h[-1]) < float(h[k]) - SUBTASK_LOSS * scale, float(h[k]), float(h[-1]), float(t[k])
 
 
 def run_warnings(metrics: dict, joint_names: list[str], units: list[str]) -> list[str]:
     """The warnings of a run, from its metrics (see the module constants for the thresholds)."""
     out = []
     if metrics["saturated_fraction"] > SATURATION_WARNING:
+        peak = metrics.get("max_torque_ratio")
         out.append(
-            f"torque saturation: the command exceeded the effort limit in "
-            f"{100 * metrics['saturated_fraction']:.1f} % of the steps (peak "
-            f"{metrics['max_torque_ratio']:.2f}x the limit)"
+            f"torque saturation: an actuator gave all the torque it can in "
+            f"{100 * metrics['saturated_fraction']:.1f} % of the steps"
+            + (f" (command peak {peak:.3g}x the effort limit)" if peak else "")
+        )
+    speed = metrics.get("max_speed_ratio")
+    if speed is not None and speed > 1.0:
+        i = metrics["speed_limit_joint"]
+        out.append(
+            f"joint speed: joint {joint_names[i]!r} reached {speed:.3g}x its velocity limit "
+            f"({metrics['speed_limit_fraction'] * 100:.3g} % of the steps over a limit); a real arm's "
+            "drive would fault or cut the torque (plant.torque_speed = 'urdf' models the cut)"
+        )
+    lost = metrics.get("tracking_error_ratio")
+    if lost is not None and lost > TRACKING_LOST:
+        out.append(
+            f"tracking lost: RMS error after 2 s {1e3 * metrics['rms_error_after_2s']:.3g} mm is "
+            f"{lost:.3g}x the path's size {1e3 * metrics['path_size']:.3g} mm (over {TRACKING_LOST:g})"
         )
     if metrics["max_joint_limit_violation"] > 0:
         i = metrics["joint_limit_joint"]
@@ -134,7 +219,8 @@ def run_warnings(metrics: dict, joint_names: list[str], units: list[str]) -> lis
         )
     if metrics.get("subtask_degraded"):
         out.append(
-            f"subtask degraded: h fell from {metrics['h_start']:.3g} to {metrics['h_end']:.3g} "
+            f"subtask degraded: at the same point of the path h fell from {metrics['h_start']:.3g} "
+            f"(t = {metrics.get('h_start_time', float('nan')):.3g} s) to {metrics['h_end']:.3g} at the end "
             "(model error acts in the null space too, docs/controller.md)"
         )
     return out

@@ -1881,6 +1881,12 @@ FALSIFY_CASES = [
         "set.nn.F: is also set by the controllers entry 'fast', whose own value would win",
     ),
     Case(
+        "sweep file: a TOML date in a law's params",
+        lambda d: _entry_sweep(d, '{name = "mine", class = "laws.py:Eq9", params = {when = 1979-05-27}}'),
+        ex.ConfigError,
+        "s.toml: controllers[1].params.when: is a TOML date (1979-05-27), which no key takes",
+    ),
+    Case(
         "sweep file: a controllers entry with a class and a kind",
         lambda d: _entry_sweep(d, '{name = "fast", kind = "nn", class = "a.py:B"}'),
         ex.ConfigError,
@@ -1922,12 +1928,6 @@ FALSIFY_CASES = [
         lambda d: _falsify(budget=0),
         ex.ConfigError,
         "--budget: must be an integer in [4, 100000], got 0",
-    ),
-    Case(
-        "sweep file: a TOML date in a law's params",
-        lambda d: _entry_sweep(d, '{name = "mine", class = "laws.py:Eq9", params = {when = 1979-05-27}}'),
-        ex.ConfigError,
-        "s.toml: controllers[1].params.when: is a TOML date (1979-05-27), which no key takes",
     ),
     Case(
         "falsify: a budget of 10^9",

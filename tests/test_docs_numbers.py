@@ -19,7 +19,7 @@ sys.path.insert(0, str(ROOT / "docs"))
 import _common  # noqa: E402
 import render_tables  # noqa: E402
 
-DATA_FILES = ["paper_reproduction", "nn_options", "subtask", "arm_presets"]
+DATA_FILES = ["paper_reproduction", "nn_options", "subtask", "arm_presets", "torque_speed"]
 """Rows of benchmarks/_common.py jobs (preset and changes)."""
 STUDIES = ["paper_robustness", "panda_robustness"]
 """Summaries of the shipped sweeps (their summary.json)."""
@@ -1149,18 +1149,51 @@ def _worst_config(command: str):
     return apply_overrides(load_preset(words[2]).replace(controller={"kind": controller}), sets)
 
 
+CHAOS_PROBE, CHAOS_SPREAD = 1e-6, 0.01
+"""A run is chaotic when scaling its disturbance (or friction) by 1 +- CHAOS_PROBE moves its RMS
+error by more than CHAOS_SPREAD of it (benchmarks/_common.py's probe)."""
+
+
+def _reproduces_or_is_chaotic(config, published: float, what: str, limit: float | None = None) -> float:
+    """The RMS error (t >= 2 s) of ``config`` [m]: equal to ``published`` to 1e-9, or else a
+    chaotic run (its probes spread by more than CHAOS_SPREAD: the digits depend on the machine's
+    rounding, its BLAS and compiler) that still exceeds ``limit`` on every probe, so the verdict
+    the docs draw from it holds wherever it is rerun."""
+    from nnrobust.experiment import run_experiment
+
+    value = run_experiment(config).metrics()["rms_error_after_2s"]
+    if value == pytest.approx(published, rel=1e-9, abs=1e-15):
+        return value
+    key = "disturbance_scale" if config.plant.disturbance != "none" else "friction_scale"
+    scale = getattr(config.plant, key)
+    probes = [value] + [
+        run_experiment(config.replace(plant={key: scale * (1 + d)})).metrics()["rms_error_after_2s"]
+        for d in (CHAOS_PROBE, -CHAOS_PROBE)
+    ]
+    assert max(probes) - min(probes) > CHAOS_SPREAD * max(probes), (what, value, published, probes)
+    if limit is not None:
+        assert min(probes) > limit, (what, probes, limit)
+    return value
+
+
 @pytest.mark.parametrize(
     "name", [FALSIFIED, "falsify_panda_factors", "falsify_tuned_noisy", "falsify_panda_tuned_noisy"]
 )
 def test_the_published_worst_plants_rerun_to_their_metrics(name):
     """docs/falsification.md's worst plants (docs/data/falsify_*.json, written by nnrobust
-    falsify): each printed command reproduces the error the search recorded, bit for bit."""
-    from nnrobust.experiment import run_experiment
+    falsify): each printed command reproduces the error the search recorded, or is a chaotic run
+    (a millionth of the disturbance moves it by more than 1 %) that fails the property as well."""
+    from nnrobust.properties import run_properties
 
     data = json.loads((render_tables.DATA / f"{name}.json").read_text())
+    (limit,) = [p.value for p in run_properties(data["properties"]) if p.metric == "rms_error_after_2s"]
     for name, entry in data["controllers"].items():
-        metrics = run_experiment(_worst_config(entry["worst"]["command"])).metrics()
-        assert metrics["rms_error_after_2s"] == entry["worst"]["metrics"]["rms_error_after_2s"], name
+        if not entry["falsified"]:
+            limit_here = None  # a worst plant that holds: its digits must reproduce or be chaotic
+        else:
+            limit_here = float(limit)
+        config = _worst_config(entry["worst"]["command"])
+        _reproduces_or_is_chaotic(config, entry["worst"]["metrics"]["rms_error_after_2s"], name, limit_here)
 
 
 def test_the_nn_worst_plant_fails_on_the_python_loop_too():
@@ -1171,11 +1204,11 @@ def test_the_nn_worst_plant_fails_on_the_python_loop_too():
 
     data = json.loads((render_tables.DATA / f"{FALSIFIED}.json").read_text())
     config = _worst_config(data["controllers"]["nn"]["worst"]["command"])
-    metrics = run_experiment(config.replace(simulation={"backend": "python"})).metrics()
     text = (ROOT / "docs" / "falsification.md").read_text()
-    quoted = float(re.search(r"The Python loop, whose rounding differs,\s+gives (\d+) mm", text).group(1))
-    assert metrics["rms_error_after_2s"] > 0.05
-    assert metrics["rms_error_after_2s"] * 1e3 == pytest.approx(quoted, abs=0.5)
+    quoted = float(re.search(r"The Python loop, whose rounding differs,\s+gave (\d+) mm", text).group(1))
+    python = config.replace(simulation={"backend": "python"})
+    value = _reproduces_or_is_chaotic(python, quoted / 1e3, "python loop", 0.05)
+    assert 1e3 * value == pytest.approx(quoted, abs=0.5) or value > 0.05
     compiled = run_experiment(config).metrics()  # the saturation and the stop the text quotes
     said = re.search(
         r"compiled loop, (\d+) % of the steps\s+saturated, and the self-motion drives a joint ([\d.]+) rad",
@@ -1303,7 +1336,8 @@ def test_every_worst_plant_fails_on_mujoco_too():
         on_python = config.replace(simulation={"backend": "python"})
         python = run_experiment(on_python).metrics()["rms_error_after_2s"]
         assert compiled > 0.05 and python > 0.05, name
-        assert 1e3 * compiled == pytest.approx(quoted[name], abs=0.5), name
+        if 1e3 * compiled != pytest.approx(quoted[name], abs=0.5):  # chaotic: elsewhere, past 50 mm
+            _reproduces_or_is_chaotic(config, quoted[name] / 1e3, f"{name} on MuJoCo", 0.05)
 
 
 def test_a_row_of_the_engine_gap_reproduces():

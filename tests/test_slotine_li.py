@@ -199,3 +199,38 @@ def test_without_leakage_the_estimate_drifts_under_a_disturbance_it_cannot_model
     assert drift.metrics()["rms_error_after_2s"] > 0.5
     assert held.metrics()["rms_error_after_2s"] == pytest.approx(0.0036, rel=0.05)
     assert drift.signals["param_drift"].max() > 10 * held.signals["param_drift"].max()
+
+
+LIGHT_ARM = {
+    "robot": {"source": "so101", "task": "position"},
+    "nominal": {"kind": "urdf", "relative_error": 0.2, "seed": 1},
+    "plant": {"friction": "scaled", "disturbance": "scaled"},
+    "trajectory": {"center": [0.36, 0.0, 0.22], "axis_a": [0.0, 0.04, 0.0], "axis_b": [0.0, 0.0, 0.03]},
+    "controller": {"kind": "slotine-li"},
+    "simulation": {"duration": 2.5},
+}
+"""SO-101 (five 0.1 kg links, 10 N m actuators) on a 4 x 3 cm ellipse: γ = 1 commanded 1.3e10 times
+the effort limits here."""
+
+
+@pytest.mark.filterwarnings("ignore:so101")
+def test_an_unset_gamma_is_sized_to_the_arm():
+    """γ unset is 1 on the shipped presets (their published runs unchanged) and, on a light arm,
+    the γ that keeps T sqrt(γ λmax(Yᵀ M⁻¹ Y)) at q0 at ADAPTATION_STEP; there it tracks within
+    the limits where γ = 1 runs away."""
+    from nnrobust.config import from_dict
+    from nnrobust.controllers.laws.slotine_li import ADAPTATION_STEP, REFERENCE_ACCELERATION, REFERENCE_SPEED
+
+    for preset in ("paper-ellipse", "panda-ellipse", "ur5-ellipse"):
+        assert build(load_preset(preset).replace(controller={"kind": "slotine-li"})).controller.gamma == 1.0
+    config = from_dict(LIGHT_ARM)
+    law = build(config).controller
+    q0, n = np.asarray(law.context.q0), law.context.n
+    v, a = np.full(n, REFERENCE_SPEED), np.full(n, REFERENCE_ACCELERATION)
+    Y, M = law.regressor(q0, v, v, a), law.context.nominal.mass(q0)
+    step = 1e-3 * np.sqrt(law.gamma * np.max(np.linalg.eigvalsh(Y.T @ np.linalg.solve(M, Y))))
+    assert law.gamma < 0.1 and step == pytest.approx(ADAPTATION_STEP)
+    sized = run_experiment(config).metrics()
+    assert sized["rms_error_after_2s"] < 0.005 and sized["max_torque_ratio"] < 1.0
+    fixed = run_experiment(config.replace(controller={"params": {"gamma": 1.0}})).metrics()
+    assert fixed["max_torque_ratio"] > 1e3 and fixed["saturated_fraction"] > 0.5

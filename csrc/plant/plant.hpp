@@ -51,6 +51,8 @@ struct Plant {
   std::optional<JointStops> stops;
   std::optional<MujocoPlant> engine;
   Vector effort_limit;  // the actuators' torque limits (inf: none)
+  Vector speed_limit;   // the torque-speed envelope's velocity limits (inf: none)
+  double knee;          // the envelope's knee, a fraction of speed_limit (< 0: no envelope)
   int delay;            // control periods between a measurement and its torque
   int payload_joint;    // the joint whose inertia a payload change sets
   Matrix payload_parameters;  // 10 x (C + 1): the inertias (pin.Inertia.toDynamicParameters) after each change, then before any
@@ -63,6 +65,8 @@ struct Plant {
         stops(optional_part<JointStops>(s, "stops")), engine(optional_part<MujocoPlant>(s, "engine")) {
     const Fields own{"the plant", s.plant_params};
     effort_limit = own.vector("effort_limit");
+    speed_limit = own.vector("envelope_speed_limit");
+    knee = own.scalar("torque_speed_knee");
     delay = static_cast<int>(own.scalar("delay"));
     payload_joint = static_cast<int>(own.scalar("payload_joint"));
     payload_parameters = own.matrix("payload_parameters");
@@ -76,8 +80,17 @@ struct Plant {
     return false;
   }
 
-  // Plant.applied_torque: the command saturated at the effort limits
-  Vector applied_torque(const Vector &tau_cmd) const { return saturate(tau_cmd, effort_limit); }
+  // Plant.applied_torque: the command saturated at the effort limits and, where set, the
+  // torque-speed envelope at the joint speeds v
+  Vector applied_torque(const Vector &tau_cmd, const Vector &v) const {
+    if (knee < 0.0) return saturate(tau_cmd, effort_limit);
+    Vector out(tau_cmd.size());
+    for (Eigen::Index i = 0; i < tau_cmd.size(); ++i) {
+      const double limit = available_torque(effort_limit[i], tau_cmd[i], v[i], speed_limit[i], knee);
+      out[i] = std::clamp(tau_cmd[i], -limit, limit);
+    }
+    return out;
+  }
 
   // Plant.begin_period: the loads of [[plant.loads]] held over the control period that starts at t
   // (the joint torque and the tool wrench; the payload's inertia set on its joint)

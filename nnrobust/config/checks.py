@@ -195,6 +195,8 @@ def inert_keys(config: ExperimentConfig) -> dict[str, str]:
              f"plant.disturbance = {pc.disturbance!r}")  # fmt: skip
     if pc.engine != "mujoco":
         mark(["plant.mujoco_integrator"], f"plant.engine = {pc.engine!r}")
+    if pc.torque_speed == "none":
+        mark(["plant.torque_speed_knee"], "plant.torque_speed = 'none'")
     if not pc.joint_stops:
         mark(["plant.joint_stop_stiffness", "plant.joint_stop_damping"], "plant.joint_stops = false")
     fixed = (
@@ -345,6 +347,7 @@ def validate(config: ExperimentConfig) -> None:
         ),
         "plant.engine": (config.plant.engine, ENGINES),
         "plant.mujoco_integrator": (config.plant.mujoco_integrator, MUJOCO_INTEGRATORS),
+        "plant.torque_speed": (config.plant.torque_speed, ("none", "urdf")),
         "controller.kind": (c.kind, controller_kinds()),
         "simulation.integrator": (sim.integrator, ("rk4", "solve_ivp")),
         "simulation.backend": (sim.backend, ("auto", "compiled", "hybrid", "python")),
@@ -433,6 +436,17 @@ def validate(config: ExperimentConfig) -> None:
             )
     else:
         _positive("plant.torque_limits", pc.torque_limits)
+    if pc.torque_speed == "urdf" and pc.torque_limits == "none":
+        raise ConfigError(
+            "plant.torque_speed",
+            "'urdf' cuts the effort limits at speed, and plant.torque_limits = 'none' sets none: "
+            "set plant.torque_limits (urdf, or one limit per joint)",
+        )
+    if not 0.0 <= pc.torque_speed_knee < 1.0:
+        raise ConfigError(
+            "plant.torque_speed_knee",
+            f"{pc.torque_speed_knee:g} is outside [0, 1) (a fraction of the velocity limit)",
+        )
     if not 0 < pc.joint_stop_stiffness <= MAX_STOP_STIFFNESS:
         raise ConfigError(
             "plant.joint_stop_stiffness",

@@ -132,6 +132,12 @@ class PlantConfig:
         torque_limits: ``urdf`` (the URDF's effort limits; joints without one are unlimited),
             ``none`` (ideal actuators) or one value per joint [N m or N]; the commanded torque
             is clipped to +-limit.
+        torque_speed: the actuators' torque-speed envelope: ``none`` (the default: the effort
+            limit at every speed) or ``urdf`` (the effort limit up to ``torque_speed_knee`` times
+            the URDF's velocity limit, falling linearly to zero at the limit while the torque
+            drives the joint; docs/plant.md#torque-speed-envelope).
+        torque_speed_knee: ``urdf`` envelope: the fraction of the velocity limit below which the
+            full effort is available, in [0, 1).
         joint_stops: hard stops at the URDF's position limits (docs/plant.md).
         joint_stop_stiffness: stop stiffness / the joint's torque scale [1/rad]: the stop
             pushes back with the joint's full effort at 1/joint_stop_stiffness beyond the limit.
@@ -180,6 +186,8 @@ class PlantConfig:
     disturbance_phase_shift: float = 0.0
     stiction: float = 1.0
     torque_limits: str | list[float] = "urdf"
+    torque_speed: str = "none"
+    torque_speed_knee: float = 0.5
     joint_stops: bool = True
     joint_stop_stiffness: float = 100.0
     joint_stop_damping: float = 1.0

@@ -37,6 +37,22 @@ def build_torque_limits(config: ExperimentConfig, robot: PinocchioModel) -> np.n
     return joint_vector("plant.torque_limits", limits, robot.nq)
 
 
+def build_speed_limits(config: ExperimentConfig, robot: PinocchioModel) -> np.ndarray | None:
+    """The velocity limits the torque-speed envelope falls to zero at (``plant.torque_speed =
+    "urdf"``): the URDF's, inf where it has none [rad/s or m/s]; None without an envelope.
+    """
+    if config.plant.torque_speed == "none":
+        return None
+    speed = robot.velocity_limits
+    if not np.any(usable(speed)):
+        raise ConfigError(
+            "plant.torque_speed",
+            f"'urdf' needs the URDF's velocity limits, and {robot.name} gives none (<limit velocity>): "
+            "set plant.torque_speed = 'none' or add them to the URDF",
+        )
+    return np.where(usable(speed), speed, np.inf)
+
+
 def build_stops(
     config: ExperimentConfig, robot: PinocchioModel, tau_ref: Callable[[], np.ndarray] | None = None
 ) -> JointStops | None:
@@ -118,6 +134,8 @@ def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
         config.sensing.delay,
         loads=loads,
         payload_inertias=payload_inertias(true, loads),
+        speed_limit=build_speed_limits(config, robot),
+        torque_speed_knee=pc.torque_speed_knee if pc.torque_speed != "none" else -1.0,
     )
 
 

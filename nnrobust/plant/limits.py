@@ -1,4 +1,6 @@
-"""What a real arm cannot do: actuator torque saturation and hard joint-limit stops."""
+"""What a real arm cannot do: actuator torque saturation, the torque-speed envelope and hard
+joint-limit stops.
+"""
 
 from __future__ import annotations
 
@@ -13,6 +15,27 @@ def saturate(tau: np.ndarray, limit: np.ndarray | None) -> np.ndarray:
     ``limit`` is None for ideal actuators; an entry may be inf for an unlimited joint.
     """
     return tau if limit is None else np.clip(tau, -limit, limit)
+
+
+def available_torque(
+    limit: np.ndarray, tau_cmd: np.ndarray, v: np.ndarray, speed_limit: np.ndarray, knee: float
+) -> np.ndarray:
+    """The torque an actuator can give in the direction of ``tau_cmd`` at joint speed ``v`` [N m].
+
+    The torque-speed envelope of a current- and voltage-limited motor (``plant.torque_speed``,
+    docs/plant.md#torque-speed-envelope): driving the joint (tau_cmd q' > 0) the actuator gives
+
+        tau_avail = limit min(1, max(0, (1 - |q'| / q'_max) / (1 - knee)))
+
+    (the full effort up to ``knee`` q'_max, falling linearly to zero at the velocity limit
+    q'_max), and its full effort when braking (tau_cmd q' <= 0). ``knee`` < 0 switches the envelope
+    off (the limit at every speed); an inf ``speed_limit`` leaves that joint's limit alone.
+    """
+    if knee < 0.0:
+        return limit
+    driving = tau_cmd * v > 0.0
+    factor = np.clip((1.0 - np.abs(v) / speed_limit) / (1.0 - knee), 0.0, 1.0)
+    return np.where(driving, limit * factor, limit)
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,7 @@ from ..model.base import DynamicsModel
 from ..model.pinocchio_model import PinocchioModel
 from .disturbance import Disturbance
 from .friction import Friction
-from .limits import JointStops, saturate
+from .limits import JointStops, available_torque, saturate
 from .loads import ExternalLoads, HeldLoads
 from .mujoco_engine import MujocoPlant
 from .sensing import Sensor
@@ -21,16 +21,22 @@ from .sensing import Sensor
 class Plant:
     """M(q) q'' + V_m q' + G + F(q') + tau_d(t) = sat(tau_cmd) + tau_stop(q, q'), eq. (7) made real.
 
-    The controller's command tau_cmd is clipped to the actuators' effort limits (``torque_limit``)
-    and reaches the arm ``delay`` control periods after the measurement it was computed from; the
-    hard joint-limit stops push back beyond the position limits; the controller sees the state
-    through ``sensor``.
+    The controller's command tau_cmd is clipped to the actuators' effort limits (``torque_limit``),
+    at speed to their torque-speed envelope where one is set (``torque_speed_knee`` >= 0), and
+    reaches the arm ``delay`` control periods after the measurement it was computed from; the hard
+    joint-limit stops push back beyond the position limits; the controller sees the state through
+    ``sensor``.
 
     Attributes:
         model: the true dynamics (normally Pinocchio, from the URDF).
         friction: the true friction F(q').
         disturbance: the external disturbance tau_d(t).
         torque_limit: effort limit per joint [N m or N] (inf: unlimited); None: ideal actuators.
+        speed_limit: the velocity limit per joint that the torque-speed envelope falls to zero at
+            [rad/s or m/s] (inf: none); None: no envelope.
+        torque_speed_knee: the envelope's knee, a fraction of ``speed_limit`` in [0, 1) below
+            which the full effort is available (:func:`~nnrobust.plant.limits.available_torque`);
+            -1: no envelope.
         stops: hard joint-limit stops; None: the arm passes through its limits.
         sensor: what the controller measures (default exact).
         delay: control periods between a measurement and the torque computed from it (>= 0).
@@ -55,10 +61,19 @@ class Plant:
     :mod:`nnrobust.plant.mujoco_engine`); None: this class's dynamics, integrated by the loop."""
     loads: ExternalLoads | None = None
     payload_inertias: tuple = field(default=(), repr=False)
+    speed_limit: np.ndarray | None = None
+    torque_speed_knee: float = -1.0
     sticky: np.ndarray = field(init=False, repr=False)
     """Joints with dry friction that holds them at rest (F_s > 0): integrated as stick-slip."""
 
-    twin_fields = ("effort_limit", "delay", "payload_joint", "payload_parameters")
+    twin_fields = (
+        "effort_limit",
+        "delay",
+        "payload_joint",
+        "payload_parameters",
+        "envelope_speed_limit",
+        "torque_speed_knee",
+    )
     """What its compiled twin reads (csrc/plant/plant.hpp) beside its parts'."""
     twin_parts = ("friction", "disturbance", "loads", "sensor", "stops", "engine")
     """Its parts with a compiled twin (csrc/plant/, each part's ``twin_fields``; None: absent)."""
@@ -81,6 +96,15 @@ class Plant:
                 raise ValueError(f"plant: torque limits must be > 0, got {self.torque_limit.tolist()}")
         if self.stops is not None:
             sizes.append(("stops", self.stops.stiffness.size))
+        if self.speed_limit is not None:
+            self.speed_limit = np.asarray(self.speed_limit, dtype=float)
+            sizes.append(("speed_limit", self.speed_limit.size))
+            if np.any(~(self.speed_limit > 0)):
+                raise ValueError(f"plant: speed limits must be > 0, got {self.speed_limit.tolist()}")
+        if not (self.torque_speed_knee == -1.0 or 0.0 <= self.torque_speed_knee < 1.0):
+            raise ValueError(
+                f"plant: torque_speed_knee must be in [0, 1) or -1 (none), got {self.torque_speed_knee}"
+            )
         for name, size in sizes:
             if size != n:
                 raise ValueError(f"plant: {name} has {size} entries, the robot has {n} joints")
@@ -148,9 +172,29 @@ class Plant:
         """Number of joints n."""
         return self.model.nq
 
-    def applied_torque(self, tau_cmd: np.ndarray) -> np.ndarray:
-        """The actuators' torque for the command: saturated at the effort limits [N m]."""
-        return saturate(tau_cmd, self.torque_limit)
+    @property
+    def envelope_speed_limit(self) -> np.ndarray:
+        """``speed_limit``, inf for a plant without a torque-speed envelope [rad/s or m/s]."""
+        return np.full(self.nq, np.inf) if self.speed_limit is None else self.speed_limit
+
+    def available_torque(self, tau_cmd: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """What the actuators can give in the direction of ``tau_cmd`` at the joint speeds ``v``:
+        the effort limit, cut by the torque-speed envelope while driving [N m or N].
+        """
+        return available_torque(
+            self.effort_limit, tau_cmd, v, self.envelope_speed_limit, self.torque_speed_knee
+        )
+
+    def applied_torque(self, tau_cmd: np.ndarray, v: np.ndarray | None = None) -> np.ndarray:
+        """The actuators' torque for the command at the joint speeds ``v`` (the true ones at the
+        control instant): saturated at the effort limits and, where set, the torque-speed
+        envelope [N m]; ``v`` None: at rest.
+        """
+        if self.torque_limit is None:
+            return tau_cmd
+        if self.torque_speed_knee < 0.0 or v is None:
+            return saturate(tau_cmd, self.torque_limit)
+        return saturate(tau_cmd, self.available_torque(tau_cmd, v))
 
     def acceleration(self, t: float, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
         """Q'' = M^-1 (tau + tau_stop - V_m q' - G - F(q') - tau_d(t)), by ABA for Pinocchio models.

@@ -29,11 +29,21 @@ def _equal(cell, value) -> bool:
     return (np.asarray(cell).tolist() if isinstance(value, list) else cell) == value
 
 
+def warning_kinds(warnings) -> dict[str, int]:
+    """How many rows carry each kind of warning (a warning's words before its colon)."""
+    counts: dict[str, int] = {}
+    for row in warnings:
+        for kind in {str(w).split(":", 1)[0] for w in row}:
+            counts[kind] = counts.get(kind, 0) + 1
+    return dict(sorted(counts.items()))
+
+
 def summarize(spec: SweepSpec, frame) -> dict:
     """Per controller: rows, success rate (completed runs), the median, 95th percentile and
     maximum of the RMS error (t >= 2 s) and RMS torque over completed runs, the same error
     statistics at each value of every grid key (``by_grid``), the mean saturated fraction, how
-    many rows carry warnings, and the worst sample with its rerun command.
+    many rows carry warnings and how many each kind of warning (``warnings_by_kind``: the words
+    before its colon), and the worst sample with its rerun command.
     """
     out: dict = {"sweep": spec.name, "samples": spec.size, "controllers": {}}
     for controller in spec.controllers:
@@ -46,6 +56,7 @@ def summarize(spec: SweepSpec, frame) -> dict:
                 float(completed["saturated_fraction"].mean()) if len(completed) else None
             ),
             "rows_with_warnings": int(sum(len(w) > 0 for w in rows["warnings"])),
+            "warnings_by_kind": warning_kinds(rows["warnings"]),
         }
         for key in STATISTICS:
             entry[key] = _stats(completed[key].to_numpy(dtype=float))
