@@ -1504,7 +1504,7 @@ SCHEDULER_CASES = [
         "--scheduler tcp://127.0.0.1:1: cannot connect (Connection refused)",
     ),
     Case(
-        "--workers -1", lambda d: _workers(-1), ex.NNRobustError, "--workers -1: give 1 to 1024 local worker"
+        "--workers -1", lambda d: _workers(-1), ex.NNRobustError, "--workers -1: give at least 1 local worker"
     ),
 ]
 

@@ -795,3 +795,27 @@ def test_a_changed_input_is_named_and_a_copied_or_changed_part_is_refused(tmp_pa
     frame.to_parquet(part)
     code, err = sweep_into(out, study / "s.toml")
     assert code == 2 and f"{part} was changed after it was written" in err[0], err
+
+
+def test_local_workers_are_bounded_by_the_machines_cpus_and_memory(monkeypatch):
+    """--workers beyond 4 per CPU, or beyond what the available memory holds at 0.5 GB each, is
+    refused before any process starts, naming the bound and why (1024 were accepted on 2 cores:
+    6 GB of processes in 38 s)."""
+    from nnrobust import forked
+    from nnrobust.sweep import engine
+
+    monkeypatch.setattr(forked, "available_cpus", lambda: 2)
+    monkeypatch.setattr(engine, "_available_memory", lambda: 24e9)
+    assert engine.max_local_workers() == (8, "2 CPUs, at most 4 workers each")
+    monkeypatch.setattr(engine, "_available_memory", lambda: 2.2e9)
+    assert engine.max_local_workers() == (4, "2.2 GB of memory available, 0.5 GB per worker")
+    started = []
+    monkeypatch.setattr(engine, "local_cluster", lambda *a, **k: started.append(a))
+    with pytest.raises(
+        NNRobustError,
+        match=r"--workers 1024: give 1 to 4 local worker processes on this "
+        r"machine \(2.2 GB of memory available, 0.5 GB per worker\); for more, start a cluster",
+    ):
+        with engine._client(1024, None):
+            pass
+    assert started == []

@@ -175,8 +175,42 @@ dashboard (dask/distributed#7207, #8136), on port 8787 of the cluster's host; he
 loopback port, so that it neither takes 8787 nor listens beyond this machine."""
 
 
-MAX_WORKERS = 1024
-"""Most local worker processes (--workers)."""
+WORKERS_PER_CPU = 4
+"""Most local worker processes per CPU this process may use: each is single-threaded, so more
+only add memory and task switching."""
+
+WORKER_MEMORY = 0.5e9
+"""[bytes] What a local worker process may take (Pinocchio, numpy and a run's arrays: about
+0.14 GB idle, more while it holds a long run): --workers is bounded by the memory available
+divided by this."""
+
+
+def max_local_workers() -> tuple[int, str]:
+    """(the most local worker processes this machine takes for --workers, why): WORKERS_PER_CPU per
+    CPU this process may use, and no more than the available memory holds at WORKER_MEMORY each.
+    """
+    from ..forked import available_cpus
+
+    cpus = available_cpus()
+    by_cpu = WORKERS_PER_CPU * cpus
+    memory = _available_memory()
+    by_memory = max(1, int(memory // WORKER_MEMORY)) if memory is not None else by_cpu
+    if by_memory < by_cpu:
+        return by_memory, f"{memory / 1e9:.1f} GB of memory available, {WORKER_MEMORY / 1e9:g} GB per worker"
+    return by_cpu, f"{cpus} CPUs, at most {WORKERS_PER_CPU} workers each"
+
+
+def _available_memory() -> float | None:
+    """MemAvailable of /proc/meminfo [bytes], or None where there is none (not Linux)."""
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024.0
+    except OSError:
+        return None
+    return None
+
 
 PROBE_SECONDS = 5.0
 """How long a scheduler has to accept the connection and send its handshake."""
@@ -295,8 +329,15 @@ def _client(workers: int | None, scheduler: str | None):
         finally:
             client.close()
         return
-    if workers is not None and not (isinstance(workers, int) and 1 <= workers <= MAX_WORKERS):
-        raise NNRobustError(f"--workers {workers}: give 1 to {MAX_WORKERS} local worker processes")
+    if workers is not None:
+        if not (isinstance(workers, int) and workers >= 1):
+            raise NNRobustError(f"--workers {workers}: give at least 1 local worker process")
+        most, why = max_local_workers()
+        if workers > most:
+            raise NNRobustError(
+                f"--workers {workers}: give 1 to {most} local worker processes on this machine ({why}); "
+                "for more, start a cluster and pass --scheduler"
+            )
     cluster = local_cluster(workers or os.cpu_count() or 1, silence_logs=logging.ERROR)
     client = Client(cluster)
     try:
