@@ -194,7 +194,9 @@ def max_local_workers() -> tuple[int, str]:
     cpus = available_cpus()
     by_cpu = WORKERS_PER_CPU * cpus
     memory = _available_memory()
-    by_memory = max(1, int(memory // WORKER_MEMORY)) if memory is not None else by_cpu
+    if memory is None:
+        return by_cpu, f"{cpus} CPUs, at most {WORKERS_PER_CPU} workers each"
+    by_memory = max(1, int(memory // WORKER_MEMORY))
     if by_memory < by_cpu:
         return by_memory, f"{memory / 1e9:.1f} GB of memory available, {WORKER_MEMORY / 1e9:g} GB per worker"
     return by_cpu, f"{cpus} CPUs, at most {WORKERS_PER_CPU} workers each"
