@@ -384,7 +384,7 @@ class _HybridLaw:
             out = controller.compute(t, q, v, z, self.period)
         except KeyboardInterrupt:  # Ctrl-C, SIGTERM: the run stops, marked interrupted, and keeps its steps
             return None
-        except Exception as err:
+        except (Exception, SystemExit) as err:  # a law may not end the process
             if isinstance(err, NNRobustError):
                 raise
             raise self._custom.failed(controller, err, t) from err

@@ -216,7 +216,7 @@ def simulate(
                 out = controller.compute(t, q_m, v_m, z, control_period)
             except (KeyboardInterrupt, NNRobustError):
                 raise
-            except Exception as err:
+            except (Exception, SystemExit) as err:  # a law may not end the process
                 if user_code:
                     raise failed(controller, err, t) from err
                 raise

@@ -1369,6 +1369,12 @@ CUSTOM_CASES = [
         ex.ControllerError,
         "Raises.compute raised at t = 0.011 s: IndexError: list index out of range (laws.py, line",
     ),
+    Case(
+        "custom: compute ends the process (sys.exit)",
+        lambda d: _custom_run(d, "Exits"),
+        ex.ControllerError,
+        "Exits.compute raised at t = 0.011 s: SystemExit: 0 (laws.py, line",
+    ),
 ]
 
 

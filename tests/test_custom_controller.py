@@ -200,6 +200,27 @@ def test_a_controller_that_breaks_the_contract_while_running_is_named(tmp_path, 
     assert words in str(err.value), str(err.value)
 
 
+@pytest.mark.parametrize("backend", ["python", "hybrid"])
+def test_a_law_that_ends_the_process_is_a_named_error_not_a_silent_success(tmp_path, backend):
+    """sys.exit(0) inside compute made `nnrobust run` exit 0 with no message and no run folder:
+    it is a ControllerError on both loops that run user code, and the command fails saying so."""
+    import subprocess
+    import sys
+
+    config = load_config(_experiment(tmp_path, "Exits", extra=f'backend = "{backend}"\n'))
+    with pytest.raises(
+        ControllerError, match=r"Exits.compute raised at t = 0.011 s: SystemExit: 0 \(laws.py"
+    ):
+        run_experiment(config)
+    if backend == "python":
+        done = subprocess.run(
+            [sys.executable, "-m", "nnrobust.cli", "run", str(tmp_path / "experiment.toml"), "--out",
+             str(tmp_path / "run"), "--no-plots", "--no-animation"],
+            capture_output=True, text=True, timeout=300,
+        )  # fmt: skip
+        assert done.returncode != 0 and "a control law may not end the process" in done.stderr, done.stderr
+
+
 def test_class_and_params_belong_to_custom_and_custom_needs_a_class():
     config = load_preset("paper-ellipse")
     with pytest.raises(ConfigError, match="controller.class: is read only with kind = 'custom'"):
