@@ -34,6 +34,7 @@ METRIC_UNITS = {
     "rms_torque_ratio": "-",
     "speed_limit_fraction": "-",
     "max_speed_ratio": "-",
+    "joints_over_speed_limit": "count",
     "path_size": "m",
     "tracking_error_ratio": "-",
     "h_start_time": "s",
@@ -265,7 +266,9 @@ class Result:
         applied_ratio, _ = verdicts.ratio_to_limit(self.tau, limit)
         rms_per_joint = np.sqrt(np.mean(self.tau**2, axis=0)) if self.tau.size else np.zeros(0)
         rms_ratio, _ = verdicts.ratio_to_limit(rms_per_joint[None, :], limit) if self.tau.size else (None, -1)
-        over_speed, speed_ratio, speed_joint = verdicts.speed_over_limit(self.dq, self.velocity_limit)
+        over_speed, speed_ratio, speed_joint, joints_over = verdicts.speed_over_limit(
+            self.dq, self.velocity_limit
+        )
         size = verdicts.path_size(self.x_d)
         lower, upper = self.lower_limit, self.upper_limit
         violation, violating = (
@@ -301,6 +304,7 @@ class Result:
             "speed_limit_fraction": over_speed,
             "max_speed_ratio": speed_ratio,
             "speed_limit_joint": speed_joint,
+            "joints_over_speed_limit": joints_over,
             "path_size": size,
             "tracking_error_ratio": tracking,
             "max_joint_limit_violation": violation,

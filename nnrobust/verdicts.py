@@ -76,14 +76,16 @@ def ratio_to_limit(value: np.ndarray, limit: np.ndarray | None) -> tuple[float |
     return float(worst[i]), i
 
 
-def speed_over_limit(dq: np.ndarray, limit: np.ndarray | None) -> tuple[float, float | None, int]:
+def speed_over_limit(dq: np.ndarray, limit: np.ndarray | None) -> tuple[float | None, float | None, int, int]:
     """(fraction of steps where some joint moves faster than its velocity limit, the peak
-    |q'_i| / limit_i, that joint; -1 if no joint has a limit).
+    |q'_i| / limit_i, that joint, how many joints exceed their limits); (None, None, -1, 0) where
+    no joint's limit is known.
     """
     peak, joint = ratio_to_limit(dq, limit)
     if peak is None or limit is None:
-        return 0.0, None, -1
-    return float(np.mean(np.any(np.abs(dq) > limit, axis=1))), peak, joint
+        return None, None, -1, 0
+    over = np.abs(dq) > limit
+    return float(np.mean(np.any(over, axis=1))), peak, joint, int(np.sum(np.any(over, axis=0)))
 
 
 def path_size(x_d: np.ndarray) -> float:
@@ -130,30 +132,44 @@ def rho_growing(t: np.ndarray, rho: np.ndarray | None) -> tuple[bool, float, flo
     return late > RHO_GROWTH * middle and late > RHO_MIN, middle, late
 
 
+SUBTASK_WINDOW = 1.0
+"""[s] The subtask verdict compares h at least this long before the end of the run."""
+
+
 def subtask_loss(t: np.ndarray, h: np.ndarray | None, x_d: np.ndarray) -> tuple[bool, float, float, float]:
     """(the criterion ends lower than at the same point of the path earlier, h there, h at the
     end, the time it was there [s]).
 
-    h depends on where the task is, so h at the end is compared with h at the first instant after
-    2 s whose desired position is within :data:`SAME_POINT` of the path's size of the final one (a
-    periodic path comes back to it; a point-to-point path is there from its arrival). Without such
-    an instant (a path that never returns, a run shorter than 2 s) there is no verdict; nor on a
-    run that lost the path (Result.metrics: the arm is not at the point the comparison assumes).
+    h depends on where the task is, so h at the end is compared with h at an earlier instant t*
+    (t* >= 2 s, at least :data:`SUBTASK_WINDOW` before the end) at the same point of the path:
+    the first instant whose desired position is within :data:`SAME_POINT` of the path's size of
+    the final one and after which the path left that point and came back (a periodic path), or
+    where the path holds still until the end (a point-to-point or waypoint path's last hold).
+    Without such an instant (a path that never returns, a run shorter than one lap) there is no
+    verdict (NaN); nor on a run that lost the path (Result.metrics: the arm is not at the point
+    the comparison assumes).
     """
     nan = float("nan")
+    none = (False, nan, nan, nan)
     if h is None or h.size < 2 or not np.isfinite(h[-1]):
-        return False, nan, nan, nan
-    late = np.flatnonzero(t >= 2.0)
-    if late.size < 2:
-        return False, nan, nan, nan
+        return none
     p = x_d[:, :3]
-    near = np.linalg.norm(p[late[:-1]] - p[-1], axis=1) <= SAME_POINT * path_size(x_d)
-    if not near.any():
-        return False, nan, nan, nan
-    k = int(late[np.argmax(near)])
+    far = np.linalg.norm(p - p[-1], axis=1) > SAME_POINT * path_size(x_d)
+    allowed = (t >= 2.0) & (t <= t[-1] - SUBTASK_WINDOW)
+    if far.any():
+        last_away = int(np.flatnonzero(far)[-1])  # the path's last time away from the final point
+        back = np.flatnonzero(allowed & ~far & (np.arange(t.size) < last_away))
+        hold = np.flatnonzero(allowed & (np.arange(t.size) > last_away))
+        candidates = back if back.size else hold
+    else:  # a set point
+        candidates = np.flatnonzero(allowed)
+    if not candidates.size:
+        return none
+    k = int(candidates[0])
     if not np.isfinite(h[k]):
-        return False, nan, nan, nan
-    spread = h[late][np.isfinite(h[late])]
+        return none
+    late = h[t >= 2.0]
+    spread = late[np.isfinite(late)]
     scale = max(abs(float(h[k])), float(np.ptp(spread)) if spread.size else 0.0, 1e-12)
     return float(h[-1]) < float(h[k]) - SUBTASK_LOSS * scale, float(h[k]), float(h[-1]), float(t[k])
 
@@ -163,24 +179,33 @@ def run_warnings(metrics: dict, joint_names: list[str], units: list[str]) -> lis
     out = []
     if metrics["saturated_fraction"] > SATURATION_WARNING:
         peak = metrics.get("max_torque_ratio")
+        envelope = " (its effort limit, cut at speed by the torque-speed envelope)"
         out.append(
-            f"torque saturation: an actuator gave all the torque it can in "
+            f"torque saturation: an actuator gave all the torque it can"
+            f"{envelope if metrics.get('torque_speed_knee', -1.0) >= 0 else ''} in "
             f"{100 * metrics['saturated_fraction']:.1f} % of the steps"
             + (f" (command peak {peak:.3g}x the effort limit)" if peak else "")
         )
     speed = metrics.get("max_speed_ratio")
     if speed is not None and speed > 1.0:
         i = metrics["speed_limit_joint"]
+        joints = metrics.get("joints_over_speed_limit", 1)
+        hint = (
+            ""
+            if metrics.get("torque_speed_knee", -1.0) >= 0
+            else " (plant.torque_speed = 'urdf' models the cut)"
+        )
         out.append(
-            f"joint speed: joint {joint_names[i]!r} reached {speed:.3g}x its velocity limit "
-            f"({metrics['speed_limit_fraction'] * 100:.3g} % of the steps over a limit); a real arm's "
-            "drive would fault or cut the torque (plant.torque_speed = 'urdf' models the cut)"
+            f"joint speed: joint {joint_names[i]!r} reached {speed:.3g}x its velocity limit; "
+            f"{joints} joint{'s' if joints != 1 else ''} over a limit in "
+            f"{metrics['speed_limit_fraction'] * 100:.3g} % of the steps. A real arm's drive would fault "
+            f"or cut the torque{hint}"
         )
     lost = metrics.get("tracking_error_ratio")
     if lost is not None and lost > TRACKING_LOST:
         out.append(
             f"tracking lost: RMS error after 2 s {1e3 * metrics['rms_error_after_2s']:.3g} mm is "
-            f"{lost:.3g}x the path's size {1e3 * metrics['path_size']:.3g} mm (over {TRACKING_LOST:g})"
+            f"{lost:.3g}x the path's size {1e3 * metrics['path_size']:.3g} mm (threshold {TRACKING_LOST:g})"
         )
     if metrics["max_joint_limit_violation"] > 0:
         i = metrics["joint_limit_joint"]

@@ -13,9 +13,10 @@ namespace nnrobust {
 inline Vector saturate(const Vector &tau, const Vector &limit) { return tau.cwiseMax(-limit).cwiseMin(limit); }
 
 // available_torque, joint i: the effort limit, cut while driving (tau_cmd q' > 0) by the
-// torque-speed envelope limit min(1, max(0, (1 - |q'| / q'_max) / (1 - knee))); knee < 0: none
+// torque-speed envelope limit min(1, max(0, (1 - |q'| / q'_max) / (1 - knee))); knee < 0 or an
+// unlimited actuator: none
 inline double available_torque(double limit, double tau_cmd, double v, double speed_limit, double knee) {
-  if (knee < 0.0 || !(tau_cmd * v > 0.0)) return limit;
+  if (knee < 0.0 || !(tau_cmd * v > 0.0) || !std::isfinite(limit)) return limit;
   const double factor = (1.0 - std::abs(v) / speed_limit) / (1.0 - knee);
   return limit * std::clamp(factor, 0.0, 1.0);
 }

@@ -61,7 +61,8 @@ def undeclared(controller: Controller, signals: dict) -> None:
 
 def failed(controller: Controller, err: BaseException, t: float) -> ControllerError:
     """An exception raised inside a controller's compute, located (a SystemExit too: a law may not
-    end the process, which would lose the run and exit as if it had succeeded)."""
+    end the process, which would lose the run and exit as if it had succeeded).
+    """
     said = f"{type(controller).__name__}.compute raised at t = {t:g} s: {located(err)}"
     if isinstance(err, SystemExit):
         said += "; a control law may not end the process"

@@ -29,13 +29,15 @@ def available_torque(
 
     (the full effort up to ``knee`` q'_max, falling linearly to zero at the velocity limit
     q'_max), and its full effort when braking (tau_cmd q' <= 0). ``knee`` < 0 switches the envelope
-    off (the limit at every speed); an inf ``speed_limit`` leaves that joint's limit alone.
+    off (the limit at every speed); an inf ``speed_limit`` or ``limit`` leaves that joint's limit
+    alone (an unlimited actuator stays unlimited).
     """
     if knee < 0.0:
         return limit
     driving = tau_cmd * v > 0.0
     factor = np.clip((1.0 - np.abs(v) / speed_limit) / (1.0 - knee), 0.0, 1.0)
-    return np.where(driving, limit * factor, limit)
+    finite = np.isfinite(limit)
+    return np.where(driving & finite, np.where(finite, limit, 0.0) * factor, limit)
 
 
 @dataclass(frozen=True)

@@ -41,8 +41,8 @@ K_D_STEP_WARN = 1.0
 
 ADAPTATION_STEP = 0.5
 """T sqrt(γ λ_max(Yᵀ M̂⁻¹ Y)) at q(0) and the reference motion: the step of the coupled s-θ̂ loop
-that an unset γ is kept under (light arms; the default γ = 1 is far under it on the shipped
-presets: 0.19 on the paper's arm, 0.25 on the Panda, 0.29 on the UR5)."""
+that an unset γ is kept under (light arms; γ = 1 is under it on the paper's arm, 0.19, the Panda,
+0.25, and the UR5, 0.29; planar7-ellipse gets 0.059)."""
 
 REFERENCE_SPEED, REFERENCE_ACCELERATION = 1.0, 10.0
 """[rad/s, rad/s²] The reference motion of every joint at which Y sizes γ (q' = q'_r, q''_r)."""
@@ -238,7 +238,8 @@ _PARAMS = (
         "gamma",
         None,
         "-",
-        "adaptation gain Γ = γ I; unset: 1, or less where T √(γ λmax(Yᵀ M̂⁻¹ Y)) > 0.5 at q0",
+        "adaptation gain Γ = γ I; unset: 1, or less where T √(γ λmax(Yᵀ M̂⁻¹ Y)) > 0.5 at q0 "
+        "(Y at 1 rad/s, 10 rad/s² on every joint)",
         0.0,
         1e6,
         search=(1e-3, 1e2),
