@@ -12,7 +12,7 @@ import numpy as np
 from . import verdicts
 from .model.tasks import display_coordinates
 from .plant.limits import available_torque
-from .plant.scaling import usable
+from .plant.scaling import limits_or_inf
 from .run_info import RunInfo
 from .simulation import period_substeps
 from .subtasks.manipulability import det
@@ -498,10 +498,7 @@ def velocity_limits(robot) -> np.ndarray | None:
     None for a model without them (the closed-form arm).
     """
     speed = getattr(robot, "velocity_limits", None)
-    if speed is None:
-        return None
-    speed = np.asarray(speed, dtype=float)
-    return np.where(usable(speed), speed, np.inf)
+    return None if speed is None else limits_or_inf(speed)
 
 
 def step_rotation(dq: np.ndarray, config, substeps: int) -> float:

@@ -22,7 +22,7 @@ from .friction import Friction
 from .limits import JointStops
 from .loads import ExternalLoads, parse_loads
 from .plant import Plant
-from .scaling import scaled_friction, torque_scale, usable
+from .scaling import limits_or_inf, scaled_friction, torque_scale, usable
 from .sensing import Sensor
 
 
@@ -32,8 +32,7 @@ def build_torque_limits(config: ExperimentConfig, robot: PinocchioModel) -> np.n
     if limits == "none":
         return None
     if limits == "urdf":
-        effort = robot.effort_limits
-        return np.where(usable(effort), effort, np.inf)
+        return limits_or_inf(robot.effort_limits)
     return joint_vector("plant.torque_limits", limits, robot.nq)
 
 
@@ -50,7 +49,7 @@ def build_speed_limits(config: ExperimentConfig, robot: PinocchioModel) -> np.nd
             f"'urdf' needs the URDF's velocity limits, and {robot.name} gives none (<limit velocity>): "
             "set plant.torque_speed = 'none' or add them to the URDF",
         )
-    return np.where(usable(speed), speed, np.inf)
+    return limits_or_inf(speed)
 
 
 def build_stops(

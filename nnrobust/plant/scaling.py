@@ -25,6 +25,12 @@ def usable(values: np.ndarray) -> np.ndarray:
     return np.isfinite(values) & (values > 0) & (values < 1e6)
 
 
+def limits_or_inf(values: np.ndarray) -> np.ndarray:
+    """URDF limits with inf where :func:`usable` says there is none (no limit)."""
+    values = np.asarray(values, dtype=float)
+    return np.where(usable(values), values, np.inf)
+
+
 def torque_needed(robot: PinocchioModel, q: np.ndarray) -> np.ndarray:
     """M_ii(q) * 10 rad/s^2 + |G_i(q)| [N m]: what each joint needs to move the arm at q."""
     return np.diag(robot.mass(q)) * REFERENCE_ACCELERATION + np.abs(robot.gravity(q))
