@@ -409,7 +409,23 @@ def cmd_sweep(args) -> int:
             f"{out}/results (pandas.read_parquet), summary in {out}/summary.json",
             file=sys.stderr,
         )
-    return 0
+    return _broken_rows(frame)
+
+
+def _broken_rows(frame) -> int:
+    """1 (and a line on stderr) when a row ended with status ``crashed`` (its worker died) or
+    ``error`` (a defect): such a sweep is not a result to cite; 0 otherwise.
+    """
+    broken = frame[frame["status"].isin(["crashed", "error"])]
+    if not len(broken):
+        return 0
+    first = broken.iloc[0]
+    print(
+        f"nnrobust: {len(broken)} rows ended without a result ({', '.join(sorted(set(broken['status'])))}); "
+        f"first: sample {first['sample']}, {first['controller']}: {one_line(str(first['message']))}",
+        file=sys.stderr,
+    )
+    return 1
 
 
 def _sweep_claim(args, spec) -> tuple[list, tuple[float, float] | None]:
@@ -499,10 +515,16 @@ def cmd_falsify(args) -> int:
         for name, entry in summary["controllers"].items():
             worst, baseline = entry["worst"], entry["random_baseline"]
             verdict = "FALSIFIED" if entry["falsified"] else "not falsified"
+            status = worst["metrics"].get("status", "completed")
+            ended = (
+                f" (the run ended {status}: {one_line(str(worst['metrics'].get('message', '')))})"
+                if status != "completed"
+                else ""
+            )
             print(
                 f"{name}: {verdict} in {entry['simulations']} simulations; least margin "
-                f"{worst['margin']:.4g} (random search: {baseline['worst']['margin']:.4g}); worst plant: "
-                f"{worst['command']}"
+                f"{worst['margin']:.4g}{ended} (random search: {baseline['worst']['margin']:.4g}); "
+                f"worst plant: {worst['command']}"
             )
         if summary.get("searched_as"):
             print(f"searched: {summary['searched_as']}")

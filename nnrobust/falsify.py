@@ -245,6 +245,13 @@ def evaluate(sweep, base: dict, controller: str, values: dict, properties: list[
         metrics = run_experiment(experiment(sweep, base, sample, controller)).metrics()
     except NNRobustError as err:
         metrics = {"status": "refused", "message": str(err)[:300]}
+    except BaseException as err:  # a defect, or user code raising SystemExit or BaseException
+        metrics = {"status": "error", "message": f"{type(err).__name__}: {err}"[:300]}
+    return judged(metrics, properties)
+
+
+def judged(metrics: dict, properties: list[Property]) -> dict:
+    """A run's margins under ``properties`` and the metrics they read."""
     keep = {p.metric for p in properties} | {"status", "message", "rms_error_after_2s", "rms_torque"}
     margins = {p.text: p.margin(metrics) for p in properties}
     return {
@@ -379,9 +386,23 @@ class _Driver:
         self.client, self.folder, self.done, self.key = client, folder, done, key
         self.properties, self.progress = properties, progress
         self.workers = max(len(client.scheduler_info().get("workers", {})), 1)
-        self.sweep = client.scatter(sweep, broadcast=True)  # sent to every worker once
-        [self.base] = client.scatter([base], broadcast=True)  # one future (a dict would be one per key)
+        from .sweep.engine import shared
+
+        self.sweep, self.base = shared(client, sweep), shared(client, base)  # sent to each worker once
         self.finished = 0  # simulations of the calls before (the progress bar counts on)
+
+    def _simulate(self, tasks: list[tuple]) -> list[dict]:
+        """Each (function, *arguments) task's result; one that ends its worker, run again alone,
+        is a run with status ``crashed`` (:func:`nnrobust.sweep.engine.gather_alone_on_crash`).
+        """
+        from .sweep.engine import CRASHED, gather_alone_on_crash
+
+        futures = [self.client.submit(*task, pure=False) for task in tasks]
+        return gather_alone_on_crash(
+            futures,
+            lambda i: self.client.submit(*tasks[i], pure=False),
+            lambda reason: judged({"status": CRASHED, "message": reason}, self.properties),
+        )
 
     def __call__(self, searches: dict, boxes: dict, rows: dict, total: int, stop_at_violation=False):
         """Run every search to the end of its budget (or to its first violation); ``total``: the
@@ -392,27 +413,26 @@ class _Driver:
             asked = {
                 key: search.ask(self.workers) for key, search in searches.items() if search.remaining > 0
             }
-            futures = {}
+            tasks: dict[tuple, tuple] = {}
             for key, points in asked.items():
                 for offset, (_, u) in enumerate(points):
                     index = len(rows[key]) + offset
                     cached = self.done.get((*key, index))
                     if cached is None or not np.allclose(cached["u"], u, atol=1e-12):
-                        futures[(key, index)] = self.client.submit(
+                        tasks[(key, index)] = (
                             evaluate,
                             self.sweep,
                             self.base,
                             key[0],
                             boxes[key].values(u),
                             self.properties,
-                            pure=False,
-                            retries=1,
                         )
+            results = dict(zip(tasks, self._simulate(list(tasks.values()))))
             new = []
             for key, points in asked.items():
                 for phase, u in points:
                     index = len(rows[key])
-                    if (key, index) in futures:
+                    if (key, index) in results:
                         row = {
                             "controller": key[0],
                             "search": key[1],
@@ -420,7 +440,7 @@ class _Driver:
                             "phase": phase,
                             "u": [float(x) for x in u],
                             "values": boxes[key].values(u),
-                            **futures[(key, index)].result(),
+                            **results[(key, index)],
                         }
                         new.append(row)
                     else:

@@ -3,7 +3,9 @@ back to the client, one Parquet part per finished chunk, written atomically.
 
 Resuming is reading the parts: a row whose (sample, controller) is in a part is never run again.
 A worker killed mid-chunk costs that chunk only: dask runs it again on another worker, and the
-client writes a chunk's rows once, when its result arrives.
+client writes a chunk's rows once, when its result arrives. A chunk that kills two workers
+(user code calling ``os._exit``, a segfault) is split into its rows, each then run alone on the
+cluster, and a row that still kills its worker is a row with status ``crashed``: never a hole.
 """
 
 from __future__ import annotations
@@ -64,7 +66,7 @@ def run_rows(spec: SweepSpec, base: dict, jobs: list[tuple[int, str]]) -> list[d
             metrics = run_experiment(experiment(spec, base, sample, controller)).metrics()
         except LibraryError as err:
             row.update(status="refused", message=str(err)[:500], warnings=[])
-        except Exception as err:  # a defect, not the sample's fault: the row says so, the sweep goes on
+        except BaseException as err:  # a defect (or user code raising SystemExit, BaseException): a row
             row.update(status="error", message=f"{type(err).__name__}: {err}"[:500], warnings=[])
         else:
             row.update({k: v for k, v in metrics.items() if k not in SKIP_METRICS})
@@ -293,6 +295,9 @@ QUIET_CLUSTER = {
     "distributed.worker.profile.enabled": False,
     "distributed.admin.system-monitor.interval": "2s",
     "distributed.worker.memory.monitor-interval": "500ms",
+    # A task on 2 workers that died is failed (KilledWorker) rather than tried on 4: one kill -9
+    # is survived, and user code that ends its process costs 2 worker restarts, not 4.
+    "distributed.scheduler.allowed-failures": 1,
 }
 """Dask settings of the local cluster that `nnrobust sweep`, tune and falsify start; set them in
 the dask configuration of a cluster of your own (benchmarks/sweep_throughput.py measures them)."""
@@ -340,7 +345,7 @@ def _client(workers: int | None, scheduler: str | None):
                 f"--workers {workers}: give 1 to {most} local worker processes on this machine ({why}); "
                 "for more, start a cluster and pass --scheduler"
             )
-    cluster = local_cluster(workers or os.cpu_count() or 1, silence_logs=logging.ERROR)
+    cluster = local_cluster(workers or os.cpu_count() or 1, silence_logs=logging.CRITICAL)
     client = Client(cluster)
     try:
         yield client
@@ -447,6 +452,79 @@ def chunk_size(jobs: int, workers: int, seconds_per_job: float) -> int:
     return max(1, min(by_time, by_balance))
 
 
+CRASHED = "crashed"
+"""The status of a row (or simulation) whose worker process died running it twice."""
+
+
+def _same(value):
+    return value
+
+
+def shared(client, value):
+    """A future holding ``value`` for many tasks. It is a task of its own, not scattered data:
+    when the worker holding it dies, the scheduler computes it again, where scattered data would
+    be lost and every task needing it cancelled.
+    """
+    return client.submit(_same, value, pure=False)
+
+
+def crash_reason(future) -> str | None:
+    """None when ``future`` finished; else one line on why it did not: its worker died running it
+    (user code that ends its process: ``os._exit``, a segfault) or the cluster cancelled it.
+    """
+    try:
+        future.result()
+    except Exception as err:  # KilledWorker, CancelledError: the task code itself catches its errors
+        name = type(err).__name__
+        if name == "KilledWorker":
+            return (
+                "the worker process died twice running it (os._exit, a segfault or the OS killing it; "
+                "nnrobust's own errors are rows, never a dead worker)"
+            )
+        return f"the cluster lost it ({name}: {str(err)[:200]})"
+    return None
+
+
+def gather_alone_on_crash(futures: list, again, crashed) -> list:
+    """Each future's result, waiting for all. A future whose worker died (:func:`crash_reason`) is
+    submitted again by ``again(i)`` and waited for alone, once every other has finished (a task
+    queued on a dying worker counts that death too: alone, its result does not depend on its
+    neighbours); when it kills its worker again its result is ``crashed(reason)``.
+    """
+    from distributed import wait
+
+    wait(futures)
+    out = []
+    for i, future in enumerate(futures):
+        if crash_reason(future) is None:
+            out.append(future.result())
+            continue
+        retry = again(i)
+        reason = crash_reason(retry)
+        out.append(crashed(reason) if reason else retry.result())
+    return out
+
+
+def crashed_rows(spec: SweepSpec, jobs: list[tuple[int, str]], reason: str) -> list[dict]:
+    """The rows of ``jobs``, each with status ``crashed`` and ``reason``."""
+    rows = []
+    for sample_id, controller in jobs:
+        sample = draw(spec, sample_id)
+        rows.append(
+            {
+                "sample": sample_id,
+                "controller": controller,
+                **sample.values,
+                "seed": sample.seed,
+                "status": CRASHED,
+                "message": reason,
+                "warnings": [],
+                "task_seconds": 0.0,
+            }
+        )
+    return rows
+
+
 def run_sweep(
     spec: SweepSpec,
     folder: str | Path,
@@ -523,27 +601,27 @@ def _run_sweep(
             chunks = [chunk for _, chunk in by_group]
         else:
             chunks = [jobs[i : i + size] for i in range(0, len(jobs), size)]
-        spec_future = client.scatter(spec, broadcast=True)
-        [base_future] = client.scatter([base], broadcast=True)  # one future (a dict would be one per key)
-        futures = [
-            client.submit(run_rows, spec_future, base_future, chunk, pure=False, retries=2)
-            for chunk in chunks
-        ]
+        spec_future, base_future = shared(client, spec), shared(client, base)
+        futures = [client.submit(run_rows, spec_future, base_future, chunk, pure=False) for chunk in chunks]
         chunk_of = {f.key: chunk for f, chunk in zip(futures, chunks)}
         if progress:
             progress(skipped, total)
         pending = as_completed(futures)
         unfinished = {f.key: f for f in futures}
         del futures  # as_completed holds them until they finish; each is released once written
+        suspects: list[tuple[int, str]] = []  # rows of chunks whose workers died
         for future in pending:
             unfinished.pop(future.key, None)
-            if future.cancelled():
+            chunk = chunk_of.pop(future.key)
+            if future.cancelled() and stop and group(chunk[0]) in stopped:
+                continue
+            if crash_reason(future):  # one of its rows, or a neighbour on its worker, ended the worker
+                suspects += chunk
                 continue
             rows = future.result()
             future.release()  # the worker may drop the chunk's rows
+            written, parts = written + len(rows), parts + 1
             _write_part(folder, rows, table_schema, inputs.key)
-            written += len(rows)
-            parts += 1
             if stop:
                 records += rows
                 newly = stop(records) - stopped
@@ -552,6 +630,23 @@ def _run_sweep(
                     cancel = [f for key, f in unfinished.items() if group(chunk_of[key][0]) in newly]
                     client.cancel(cancel)
                     dropped += [job for f in cancel for job in chunk_of[f.key]]
+            if progress:
+                progress(skipped + written + len(dropped), total)
+        # Each suspect row alone on the cluster: a worker's death then has one cause. (A task queued
+        # on a worker that dies counts that death too, so a row beside a crashing one is innocent
+        # until it runs alone.) Deterministic: the crashing rows are the same whatever the timing.
+        for job in suspects:
+            if stop and group(job) in stopped:
+                dropped.append(job)
+                continue
+            future = client.submit(run_rows, spec_future, base_future, [job], pure=False)
+            reason = crash_reason(future)
+            rows = crashed_rows(spec, [job], reason) if reason else future.result()
+            written, parts = written + len(rows), parts + 1
+            _write_part(folder, rows, table_schema, inputs.key)
+            if stop:
+                records += rows
+                stopped |= stop(records)
             if progress:
                 progress(skipped + written + len(dropped), total)
     return {"computed": written, "skipped": skipped, "parts": parts, "stopped": len(dropped)}

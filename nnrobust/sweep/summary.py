@@ -39,8 +39,8 @@ def warning_kinds(warnings) -> dict[str, int]:
 
 
 def summarize(spec: SweepSpec, frame) -> dict:
-    """Per controller: rows, success rate (completed runs), the median, 95th percentile and
-    maximum of the RMS error (t >= 2 s) and RMS torque over completed runs, the same error
+    """Per controller: rows, how many of each status, success rate (completed runs), the median,
+    95th percentile and maximum of the RMS error (t >= 2 s) and RMS torque over completed runs, the same error
     statistics at each value of every grid key (``by_grid``), the mean saturated fraction, how
     many rows carry warnings and how many each kind of warning (``warnings_by_kind``: the words
     before its colon), and the worst sample with its rerun command.
@@ -51,6 +51,7 @@ def summarize(spec: SweepSpec, frame) -> dict:
         completed = rows[rows["status"] == "completed"]
         entry: dict[str, object] = {
             "rows": int(len(rows)),
+            "statuses": {str(k): int(v) for k, v in rows["status"].value_counts().sort_index().items()},
             "success_rate": float(len(completed) / len(rows)) if len(rows) else None,
             "saturated_fraction_mean": (
                 float(completed["saturated_fraction"].mean()) if len(completed) else None

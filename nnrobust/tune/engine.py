@@ -53,6 +53,9 @@ CONSTRAINTS = (
 FAILED = (1.0, 1e4, 1e4)
 """Objective values of a setting whose run failed (diverged, refused): worse than any real one."""
 
+SETTLED_AFTER = 2.0
+"""Seconds after which the objective's RMS error is measured (``rms_error_after_2s``)."""
+
 MARKER = "tune.toml"
 TRIALS = "trials"
 WIDEN_FROM = 0.5
@@ -309,6 +312,8 @@ def evaluate(sweep, base: dict, controller: str, overrides: dict, sample_id: int
         metrics = run_experiment(config).metrics()
     except NNRobustError as err:
         return {"status": "refused", "message": str(err)[:300]}
+    except BaseException as err:  # a defect, or user code raising SystemExit or BaseException
+        return {"status": "error", "message": f"{type(err).__name__}: {err}"[:300]}
     keep = (*OBJECTIVES, "status", "saturated_fraction", "runaway", "max_joint_limit_violation")
     return {k: metrics.get(k) for k in keep}
 
@@ -316,10 +321,25 @@ def evaluate(sweep, base: dict, controller: str, overrides: dict, sample_id: int
 # ---- on the client -------------------------------------------------------------------------------
 
 
+def _simulate(client, tasks: list[tuple]) -> list[dict]:
+    """Run each (function, *arguments) task on the cluster: its result, or status ``crashed`` when
+    it ends its worker (:func:`nnrobust.sweep.engine.gather_alone_on_crash`).
+    """
+    from ..sweep.engine import CRASHED, gather_alone_on_crash
+
+    futures = [client.submit(*task, pure=False) for task in tasks]
+    return gather_alone_on_crash(
+        futures,
+        lambda i: client.submit(*tasks[i], pure=False),
+        lambda reason: {"status": CRASHED, "message": reason},
+    )
+
+
 def judge(spec: TuneSpec, runs: list[dict]) -> tuple[tuple[float, ...], list[float], dict]:
     """(objectives, constraints <= 0 when met, the mean metrics) of one setting's runs."""
     completed = all(r.get("status") == "completed" for r in runs)
-    if not completed:
+    finite = all(r.get(k) is not None and math.isfinite(float(r[k])) for r in runs for k in OBJECTIVES)
+    if not completed or not finite:
         return FAILED, [1.0] * len(CONSTRAINTS), {"status": "failed"}
     numbers = {k: float(np.mean([r[k] for r in runs])) for k in OBJECTIVES}
     saturated = float(max(r["saturated_fraction"] for r in runs))
@@ -335,6 +355,30 @@ def judge(spec: TuneSpec, runs: list[dict]) -> tuple[tuple[float, ...], list[flo
     torque = numbers["rms_torque"] - spec.max_rms_torque if math.isfinite(spec.max_rms_torque) else -1.0
     constraints = [torque, saturated - spec.max_saturated, 1.0 if runaway else -1.0, violation, -1.0]
     return tuple(numbers[k] for k in OBJECTIVES), constraints, mean
+
+
+def why_none(rows: list[dict]) -> str:
+    """Why no setting of ``rows`` (trials-table rows) was feasible: how many runs ended with each
+    status other than completed, with its first message, and how many settings broke each
+    constraint.
+    """
+    failed: Counter = Counter()
+    first: dict[str, str] = {}
+    for run in (run for row in rows for run in row["runs"]):
+        status = str(run.get("status"))
+        if status != "completed":
+            failed[status] += 1
+            first.setdefault(status, str(run.get("message", "")))
+    broken: Counter = Counter(
+        name
+        for row in rows
+        if row["train"].get("status") == "completed"
+        for name, value in zip(CONSTRAINTS, row["constraints"])
+        if value > 0
+    )
+    parts = [f"{n} runs {status} (first: {first[status][:200]})" for status, n in sorted(failed.items())]
+    parts += [f"{n} settings {name.replace('_', ' ')}" for name, n in sorted(broken.items())]
+    return "; ".join(parts) or "no setting was tried"
 
 
 TRIAL_IDS = ("controller", "trial")
@@ -598,7 +642,7 @@ def run_tune(
 def _run_tune(
     spec: TuneSpec, folder: Path, workers: int | None, scheduler: str | None, overwrite: bool, progress
 ) -> dict:
-    from ..sweep.engine import _client, _require_engine, first_step
+    from ..sweep.engine import _client, _require_engine, first_step, shared
     from ..sweep.spec import base_config, base_values, draw, experiment
 
     _require_engine()
@@ -618,6 +662,12 @@ def _run_tune(
         for sample_id in range(sweep.samples):
             experiment(sweep, base, draw(sweep, sample_id), name)
         first = experiment(sweep, base, draw(sweep, 0), name)
+        if first.simulation.duration <= SETTLED_AFTER:
+            raise ConfigError(
+                "simulation.duration",
+                f"{first.simulation.duration:g} s: tuning minimises the RMS error after "
+                f"{SETTLED_AFTER:g} s, so runs must last longer",
+            )
         entry = sweep.entries.get(name, {"kind": name})
         if "class" in entry:  # its declared space; built, its first step run, at the space's centre
             space = custom_space(name, load_class(entry["class"], Controller, "controller.class"))
@@ -635,8 +685,7 @@ def _run_tune(
     total = spec.trials * len(controllers) * spec.train_samples
     with signals_as_interrupt(), _client(workers, scheduler) as client:
         n_workers = max(len(client.scheduler_info().get("workers", {})), 1)
-        sweep_future = client.scatter(sweep, broadcast=True)
-        [base_future] = client.scatter([base], broadcast=True)  # one future (a dict would be one per key)
+        sweep_future, base_future = shared(client, sweep), shared(client, base)
         batch = max(1, math.ceil(n_workers / spec.train_samples))
 
         def done_count():
@@ -646,25 +695,16 @@ def _run_tune(
             progress(done_count(), total)
         while any(c.remaining > 0 for c in controllers.values()):
             asked = [(c, *item) for c in controllers.values() for item in c.ask(batch)]
-            futures = [
-                [
-                    client.submit(
-                        evaluate,
-                        sweep_future,
-                        base_future,
-                        c.law(phase),
-                        c.overrides(values, phase),
-                        s,
-                        pure=False,
-                        retries=1,
-                    )
-                    for s in train
-                ]
+            tasks = [
+                (evaluate, sweep_future, base_future, c.law(phase), c.overrides(values, phase), s)
                 for c, _, values, phase in asked
+                for s in train
             ]
+            flat = _simulate(client, tasks)
+            by_setting = [flat[i * len(train) : (i + 1) * len(train)] for i in range(len(asked))]
             finished = [
-                (c, c.tell(trial, values, phase, [f.result() for f in runs]))
-                for (c, trial, values, phase), runs in zip(asked, futures)
+                (c, c.tell(trial, values, phase, runs))
+                for (c, trial, values, phase), runs in zip(asked, by_setting)
             ]
             for c, row in finished:  # after every tell: recording may widen a space (a new study)
                 c.record(row)
@@ -742,13 +782,12 @@ def _summary(spec, sweep, controllers, client, sweep_future, base_future) -> dic
         }
         if best is None:
             entry["best"] = None
-            entry["note"] = "no setting met the constraints"
+            entry["note"] = f"no setting met the constraints: {why_none(c.rows)}"
         else:
-            runs = [
-                client.submit(evaluate, sweep_future, base_future, name, best["params"], s, pure=False)
-                for s in held_out
-            ]
-            validation = judge(spec, [f.result() for f in runs])[2] if held_out else {}
+            runs = _simulate(
+                client, [(evaluate, sweep_future, base_future, name, best["params"], s) for s in held_out]
+            )
+            validation = judge(spec, runs)[2] if held_out else {}
             entry["best"] = {
                 "params": best["params"],
                 "search": best["search"],

@@ -128,3 +128,27 @@ class MovesTheReference(Counter):
         if t == 0.0:
             _shift_arrays(self.parts, 0.2, set())
         return super().compute(t, q, v, z, period)
+
+
+class EndsItsProcess(Controller):
+    """tau = 0 until t > ``after`` s, then ``os._exit`` (a law that ends its process: a segfault in
+    a C extension does the same to a dask worker)."""
+
+    search_space = {"after": (0.1, 100.0, "s")}
+
+    def __init__(self, context, after=0.3):
+        self.n, self.after = context.n, after
+
+    def compute(self, t, q, v, z, period=0.0):
+        if t > self.after:
+            import os
+
+            os._exit(3)
+        return ControlOutput(np.zeros(self.n))
+
+
+class RaisesBaseException(EndsItsProcess):
+    def compute(self, t, q, v, z, period=0.0):
+        if t > self.after:
+            raise BaseException("not an Exception")
+        return ControlOutput(np.zeros(self.n))

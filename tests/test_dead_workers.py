@@ -1,0 +1,90 @@
+"""User code that ends its dask worker (``os._exit``, a segfault) or raises what is not an
+Exception: every row is still there with its status, the built-in law's rows included, and the
+command says so with a non-zero exit; tune and falsify name the crash instead of a traceback.
+A task queued on a dying worker counts that death too, so each suspect runs again alone: the
+crashing rows are the same whatever the timing."""
+
+import json
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("distributed")
+pytest.importorskip("pyarrow")
+
+from nnrobust.cli import main  # noqa: E402
+from nnrobust.sweep import read_results  # noqa: E402
+
+LAWS = Path(__file__).parent / "controllers" / "eq9_again.py"
+
+SWEEP = """
+name = "dead"
+base = "paper-ellipse"
+controllers = ["no-u0", {{name = "mine", class = "{laws}:{cls}"}}]
+samples = 3
+[set]
+"simulation.duration" = 2.2
+[vary]
+"plant.disturbance_scale" = {{uniform = [0.5, 2.0]}}
+"""
+
+
+@pytest.mark.parametrize(
+    "cls, status, message",
+    [
+        ("EndsItsProcess", "crashed", "the worker process died twice running it"),
+        ("RaisesBaseException", "error", "BaseException: not an Exception"),
+    ],
+)
+def test_a_law_that_ends_its_worker_is_a_row_never_a_hole(cls, status, message, tmp_path, capsys):
+    path = tmp_path / "sweep.toml"
+    path.write_text(SWEEP.format(laws=LAWS, cls=cls))
+    out = tmp_path / "out"
+    assert main(["sweep", str(path), "--out", str(out), "--workers", "2", "--quiet"]) == 1
+
+    frame = read_results(out)
+    assert sorted(zip(frame["controller"], frame["sample"])) == sorted(
+        (c, s) for c in ("mine", "no-u0") for s in range(3)
+    )
+    by = dict(zip(zip(frame["controller"], frame["sample"]), zip(frame["status"], frame["message"])))
+    for s in range(3):
+        assert by[("no-u0", s)][0] == "completed"  # its neighbours on the dying workers are innocent
+        assert by[("mine", s)][0] == status and message in by[("mine", s)][1]
+    err = capsys.readouterr().err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["controllers"]["mine"]["statuses"] == {status: 3}
+    # resuming computes nothing: the crashed rows are rows
+    assert main(["sweep", str(path), "--out", str(out), "--workers", "2", "--quiet"]) == 1
+    assert "3 rows ended without a result" in capsys.readouterr().err + err
+
+
+def test_tune_and_falsify_name_a_crash_and_go_on(tmp_path, capsys):
+    box = tmp_path / "box.toml"
+    box.write_text(SWEEP.format(laws=LAWS, cls="EndsItsProcess").replace('"no-u0", ', "").replace("3", "1"))
+    law = f"{LAWS}:EndsItsProcess"
+    # every setting of the space crashes before 2.2 s, or lasts: the crashed ones fail
+    code = main(
+        ["tune", str(box), "--controllers", law, "--budget", "4", "--validation", "0"]
+        + ["--workers", "2", "--out", str(tmp_path / "tune"), "--quiet"]
+    )
+    assert code == 0
+    rows = read_results_of_trials(tmp_path / "tune")
+    crashed = [run for row in rows for run in row["runs"] if run["status"] == "crashed"]
+    lasted = [row for row in rows if row["params"]["controller.params.after"] > 2.2]
+    assert crashed and len(crashed) == len(rows) - len(lasted)
+    assert (
+        main(
+            ["falsify", str(box), "--controllers", law, "--require", "rms_error_after_2s<=1"]
+            + ["--budget", "4", "--workers", "2", "--out", str(tmp_path / "f")]
+        )
+        == 0
+    )
+    out = capsys.readouterr().out
+    assert "EndsItsProcess: FALSIFIED" in out and "the run ended crashed: the worker process died" in out
+
+
+def read_results_of_trials(folder):
+    from nnrobust.study_folder import recorded_inputs
+    from nnrobust.tune.engine import _read_trials
+
+    return _read_trials(folder, recorded_inputs(folder, "tune").key)
