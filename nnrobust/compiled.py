@@ -388,17 +388,13 @@ class _HybridLaw:
             if isinstance(err, NNRobustError):
                 raise
             raise self._custom.failed(controller, err, t) from err
-        if k == 0:
-            self._custom.check_output(controller, out, self.n, z.size, t)
+        # checked at every step (a list of ints is a valid torque: the loop is given float64)
+        tau, given, state = self._custom.checked_output(controller, out, self.n, z.size, t)
         signals = self.signals
-        try:
-            for name, value in out.signals.items():
-                signals[name][k] = value
-        except KeyError:
-            self._custom.undeclared(controller, out.signals)
-            raise
+        for name, value in given.items():
+            signals[name][k] = value
         self.k = k + 1
-        return out.tau, z if out.state is None else out.state
+        return tau, z if state is None else state
 
 
 def simulate_hybrid(setup, duration: float):

@@ -359,6 +359,7 @@ def build(config: ExperimentConfig) -> Setup:
     build_engine(config, plant, substeps)
     context = build_context(config, robot, nominal, trajectory, criterion, plant, q0)
     controller = build_controller(config, robot, nominal, trajectory, criterion, plant.friction, context)
+    check_memory(config, robot.nq, robot.m, controller)  # with the law's own state and signals
     check_workspace(config, robot, trajectory, q0)
     return Setup(config, robot, plant, nominal, trajectory, criterion, controller, q0, v0, context, substeps)
 
@@ -394,18 +395,36 @@ MODEL_COPIES = 6
 loop's copies of both, with their kinematics."""
 
 
-def memory_estimate(config: ExperimentConfig, n: int, m: int) -> float:
+def memory_estimate(
+    config: ExperimentConfig, n: int, m: int, state_size: int | None = None, signals: int = 8
+) -> float:
     """Bytes a run takes: its recorded arrays, times 3 for the copies made while the result is
     assembled and written (per control step q, q', tau, tau_cmd (4n), the chain (3(n + 1)),
-    x, x_d, e (3 x 6 at most), the compensator state (1 + inputs x centres + 1), sensor draws (2n)
-    and a few signals, in float64), plus :data:`MODEL_COPIES` Pinocchio models with their data,
-    which grow as n^3 (:data:`DATA_BYTES_PER_CUBED_JOINT`).
+    x, x_d, e (3 x 6 at most), the controller's state (``state_size``; before the controller is
+    built, the compensator's 1 + inputs x centres + 1), sensor draws (2n) and its ``signals``, in
+    float64), plus :data:`MODEL_COPIES` Pinocchio models with their data, which grow as n^3
+    (:data:`DATA_BYTES_PER_CUBED_JOINT`).
     """
     sim, nn = config.simulation, config.nn
     steps = sim.duration / sim.control_period
-    inputs = 2 * n if nn.basis_input == "joint" else 2 * m
-    per_step = 4 * n + 3 * (n + 1) + 18 + (2 + inputs * nn.centers) + 2 * n + 8
+    if state_size is None:
+        inputs = 2 * n if nn.basis_input == "joint" else 2 * m
+        state_size = 2 + inputs * nn.centers
+    per_step = 4 * n + 3 * (n + 1) + 18 + state_size + 2 * n + signals
     return 3 * 8 * steps * per_step + MODEL_COPIES * DATA_BYTES_PER_CUBED_JOINT * n**3
+
+
+def controller_size(controller: Controller) -> tuple[int, int]:
+    """(state size, number of signals) a controller records per step; its ``state_size`` must be
+    a whole number >= 0 (it is read before any state is allocated).
+    """
+    size = getattr(controller, "state_size", 0)
+    if isinstance(size, bool) or not isinstance(size, (int, np.integer)) or size < 0:
+        raise ConfigError(
+            "controller.class",
+            f"{type(controller).__name__}.state_size must be a whole number >= 0, got {size!r}",
+        )
+    return int(size), len(controller.signal_names)
 
 
 def available_memory() -> float | None:
@@ -420,16 +439,23 @@ def available_memory() -> float | None:
     return None
 
 
-def check_memory(config: ExperimentConfig, n: int, m: int) -> None:
+def check_memory(config: ExperimentConfig, n: int, m: int, controller: Controller | None = None) -> None:
     """Refuse, before anything runs, a run whose estimated memory (:func:`memory_estimate`) would
     not fit simulation.memory_limit, or the memory the machine has available, whichever is less
-    (a limit set higher than the machine cannot keep the kernel from killing the run).
+    (a limit set higher than the machine cannot keep the kernel from killing the run). Called
+    again once the controller is built, with its own state size and signals (a user's law may
+    declare any).
     """
-    need = memory_estimate(config, n, m) / 1e9
     sim = config.simulation
+    if controller is None:
+        need, law = memory_estimate(config, n, m) / 1e9, ""
+    else:
+        state, signals = controller_size(controller)
+        need = memory_estimate(config, n, m, state, signals) / 1e9
+        law = f", a state of {state} and {signals} signals per step"
     what = (
         f"this run needs about {need:.3g} GB ({sim.duration:g} s at {sim.control_period:g} s per step, "
-        f"{n} joints)"
+        f"{n} joints{law})"
     )
     if need > sim.memory_limit:
         raise ConfigError(
@@ -545,6 +571,12 @@ def likely_cause(setup: Setup, trace) -> str:
     """A guess at why a run diverged, from its last finite state (for the divergence message)."""
     finite = np.flatnonzero(np.all(np.isfinite(trace.q), axis=1) & np.all(np.isfinite(trace.dq), axis=1))
     q = trace.q[finite[-1]] if finite.size else setup.q0
+    last = trace.tau_cmd[-1] if trace.tau_cmd.size else np.zeros(0)
+    if finite.size == len(trace.t) and not np.all(np.isfinite(last)):
+        return (
+            f"cause: {type(setup.controller).__name__}.compute returned a non-finite torque "
+            f"{last.tolist()} from a finite state (check the law's gains, divisions and state)"
+        )
     robot, config, names = setup.robot, setup.config, setup.robot.joint_names
     if setup.criterion is not None and config.controller.k > 0:
         grad = config.controller.k * np.abs(setup.criterion.gradient(robot, q))

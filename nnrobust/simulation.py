@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .controllers.base import Controller
-from .controllers.custom import check_output, failed, undeclared
+from .controllers.custom import checked_output, failed, undeclared
 from .exceptions import NNRobustError
 from .plant.plant import Plant
 from .plant.stick_slip import StickSlipIntegrator, rk4_flow
@@ -220,20 +220,22 @@ def simulate(
                 if user_code:
                     raise failed(controller, err, t) from err
                 raise
-            if k == 0:
-                check_output(controller, out, n, z.size, t)
-            commands.append(out.tau)
+            if user_code:  # checked at every step: a late wrong output is named, never broadcast
+                command, signals, state = checked_output(controller, out, n, z.size, t)
+            else:
+                command, signals, state = out.tau, out.signals, out.state
+            commands.append(command)
             tau_cmd = commands[0]  # computed d periods ago (the first command until then)
             tau = plant.applied_torque(tau_cmd, v)
             plant.begin_period(t)  # the loads held over this period (nnrobust.plant.loads)
             q_rec[k], v_rec[k], tau_rec[k], cmd_rec[k], z_rec[k] = q, v, tau, tau_cmd, z
             try:
-                for name, value in out.signals.items():
+                for name, value in signals.items():
                     sig_rec[name][k] = value
             except KeyError:
-                undeclared(controller, out.signals)
+                undeclared(controller, signals)
                 raise
-            if not (np.all(np.isfinite(out.tau)) and np.all(np.isfinite(X))):
+            if not (np.all(np.isfinite(command)) and np.all(np.isfinite(X))):
                 status, message, done = "diverged", f"non-finite state or torque at t = {t:.4f} s", k + 1
                 break
             if np.max(np.abs(v)) > max_speed:
@@ -241,8 +243,8 @@ def simulate(
                 break
             if progress is not None and k % progress_every == 0:
                 progress(t, q)
-            if out.state is not None:
-                z = out.state
+            if state is not None:
+                z = state
             if engine is not None:
                 X = np.concatenate(engine.advance(t, tau, control_period, plant.held.torque))
                 failure = engine.failure(t)  # a state or torque MuJoCo discarded: the run ends

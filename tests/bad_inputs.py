@@ -1271,13 +1271,13 @@ TUNE_CASES = [
 LAWS = Path(__file__).parent / "controllers" / "eq9_again.py"
 
 
-def _custom(folder: Path, cls: str, params: str = "") -> ReadConfig:
+def _custom(folder: Path, cls: str, params: str = "", duration: float = 0.1) -> ReadConfig:
     """An experiment file with a custom controller from a copy of tests/controllers/eq9_again.py."""
     (folder / "laws.py").write_text(LAWS.read_text())
     return _toml(
         folder,
         f'base = "paper-ellipse"\n[controller]\nkind = "custom"\nclass = "laws.py:{cls}"\n'
-        f"{params}\n[simulation]\nduration = 0.1\n",
+        f"{params}\n[simulation]\nduration = {duration}\n",
     )
 
 
@@ -1290,8 +1290,12 @@ class RunExperiment(ReadConfig):
         return run_experiment(super().__call__())
 
 
-def _custom_run(folder: Path, cls: str, params: str = "") -> RunExperiment:
-    return RunExperiment(_custom(folder, cls, params).path)
+def _custom_run(folder: Path, cls: str, params: str = "", duration: float = 0.1) -> RunExperiment:
+    return RunExperiment(_custom(folder, cls, params, duration).path)
+
+
+def _late(breach: str) -> str:
+    return f'[controller.params]\nbreach = "{breach}"'
 
 
 CUSTOM_CASES = [
@@ -1374,6 +1378,37 @@ CUSTOM_CASES = [
         lambda d: _custom_run(d, "Exits"),
         ex.ControllerError,
         "Exits.compute raised at t = 0.011 s: SystemExit: 0 (laws.py, line",
+    ),
+    Case(
+        "custom: a scalar torque after the first step",
+        lambda d: _custom_run(d, "LateBreach", _late("scalar")),
+        ex.ControllerError,
+        "LateBreach.compute returned a torque of shape () at t = 0.051 s; the arm has 3 joints",
+    ),
+    Case(
+        "custom: a tuple instead of a ControlOutput after the first step",
+        lambda d: _custom_run(d, "LateBreach", _late("tuple")),
+        ex.ControllerError,
+        "LateBreach.compute must return a ControlOutput, got tuple at t = 0.051 s",
+    ),
+    Case(
+        "custom: a signal that is not a number after the first step",
+        lambda d: _custom_run(d, "LateBreach", _late("signal")),
+        ex.ControllerError,
+        "LateBreach.compute returned signal 'elapsed' = 'soon' at t = 0.051 s; a signal is one number",
+    ),
+    Case(
+        "custom: a state whose record passes simulation.memory_limit",
+        lambda d: _custom_run(d, "BigState", duration=20.0),
+        ex.ConfigError,
+        "simulation.memory_limit: this run needs about 96 GB (20 s at 0.001 s per step, 3 joints, a state "
+        "of 200000 and 1 signals per step)",
+    ),
+    Case(
+        "custom: a state no run could hold",
+        lambda d: _custom_run(d, "HugeState"),
+        ex.ConfigError,
+        "controller.class: HugeState.state_size must be a whole number in [0, 1e+07], got 1000000000",
     ),
 ]
 

@@ -201,6 +201,56 @@ def test_a_controller_that_breaks_the_contract_while_running_is_named(tmp_path, 
 
 
 @pytest.mark.parametrize("backend", ["python", "hybrid"])
+@pytest.mark.parametrize(
+    "breach, words",
+    [
+        ("ints", None),
+        ("strided", None),
+        ("scalar", "LateBreach.compute returned a torque of shape () at t = 0.051 s; the arm has 3 joints"),
+        ("size", "LateBreach.compute returned a torque of shape (2,) at t = 0.051 s; the arm has 3 joints"),
+        ("tuple", "LateBreach.compute must return a ControlOutput, got tuple at t = 0.051 s"),
+        ("words", "LateBreach.compute returned a torque that is not numbers at t = 0.051 s: ['a', 'a', 'a']"),
+        ("signal", "LateBreach.compute returned signal 'elapsed' = 'soon' at t = 0.051 s; a signal is one"),
+        ("state", "LateBreach.compute returned a state of shape (3,) at t = 0.051 s; initial_state() has 1"),
+    ],
+)
+def test_the_contract_is_checked_at_every_step_on_both_loops(tmp_path, backend, breach, words):
+    """A wrong output after the first step is named (the class, what it returned, when) on both
+    loops that run user code; a list of ints and a strided view are valid torques on both, and
+    give the run of a float array."""
+    if backend == "hybrid" and not compiled.available():
+        pytest.skip("the compiled extension is not built")
+    params = f'[controller.params]\nbreach = "{breach}"\n'
+    config = load_config(_experiment(tmp_path, "LateBreach", params, f'backend = "{backend}"\n', 0.1))
+    if words is None:
+        result = run_experiment(config)
+        assert result.status == "completed"
+        reference = run_experiment(
+            load_config(_experiment(tmp_path, "Counter", "", f'backend = "{backend}"\n', 0.1))
+        )
+        np.testing.assert_array_equal(result.q, reference.q)
+        return
+    with pytest.raises(ControllerError) as err:
+        run_experiment(config)
+    assert words in str(err.value), str(err.value)
+
+
+@pytest.mark.parametrize("backend", ["python", "hybrid"])
+def test_a_non_finite_torque_from_a_finite_state_is_the_laws_not_the_gains(tmp_path, backend):
+    if backend == "hybrid" and not compiled.available():
+        pytest.skip("the compiled extension is not built")
+    params = '[controller.params]\nbreach = "nan"\n'
+    result = run_experiment(
+        load_config(_experiment(tmp_path, "LateBreach", params, f'backend = "{backend}"\n', 0.1))
+    )
+    assert result.status == "diverged"
+    assert "cause: LateBreach.compute returned a non-finite torque [nan, nan, nan] from a finite state" in (
+        result.message
+    ), result.message
+    assert "unstable for these gains" not in result.message
+
+
+@pytest.mark.parametrize("backend", ["python", "hybrid"])
 def test_a_law_that_ends_the_process_is_a_named_error_not_a_silent_success(tmp_path, backend):
     """sys.exit(0) inside compute made `nnrobust run` exit 0 with no message and no run folder:
     it is a ControllerError on both loops that run user code, and the command fails saying so."""

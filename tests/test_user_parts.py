@@ -81,6 +81,39 @@ def test_a_criterion_written_again_is_joint_centering(tmp_path):
     np.testing.assert_allclose(mine.signals["h"], builtin.signals["h"], rtol=0, atol=1e-12)
 
 
+@pytest.mark.parametrize(
+    "body, base, message",
+    [
+        (
+            ELLIPSE.replace("Ellipse", "LateNaNEllipse"),
+            "paper-ellipse",
+            "trajectory.class: LateNaNEllipse(0.05",
+        ),
+        (
+            '[plant]\ndisturbance = "custom"\ndisturbance_class = "parts.py:LateNaNDisturbance"\n',
+            "paper-ellipse",
+            "plant.disturbance_class: LateNaNDisturbance(0.05",
+        ),
+        (
+            '[subtasks]\ncriteria = ["custom"]\nweights = [1.0]\n'
+            'criterion_class = "parts.py:LateNaNCentering"\n',
+            "panda-ellipse",
+            "subtasks.criterion_class: LateNaNCentering.gradient(model, q) returned a non-finite value",
+        ),
+    ],
+    ids=["trajectory", "disturbance", "criterion"],
+)
+def test_a_part_that_breaks_its_contract_later_is_named_not_blamed_on_the_gains(
+    tmp_path, body, base, message
+):
+    """A NaN from a user's part after its first call is a one-line error naming its key, its
+    class and (for a function of time) when; the run is not reported diverged with the gains
+    blamed."""
+    with pytest.raises(ConfigError) as err:
+        run_experiment(load_config(_experiment(tmp_path, body, base, 0.2)))
+    assert message in str(err.value), str(err.value)
+
+
 def test_user_parts_are_recorded_and_rerun_from_another_folder(tmp_path, monkeypatch):
     """config.toml records each part's file and SHA-256; run again from elsewhere, the same run."""
     body = ELLIPSE + '[plant]\ndisturbance = "custom"\ndisturbance_class = "parts.py:PaperDisturbance"\n'

@@ -82,7 +82,8 @@ def _own_copy(part, key: str):
     except Exception as err:
         raise ConfigError(
             key,
-            f"{type(part).__name__} cannot be copied for the controller ({type(err).__name__}: {err}); "
+            f"{type(getattr(part, 'inner', part)).__name__} cannot be copied for the controller "
+            f"({type(err).__name__}: {err}); "
             "a controller is given its own copy (copy.deepcopy) so that it cannot change the run or "
             "its record: hold nothing that cannot be copied, or define __deepcopy__",
         ) from err

@@ -9,9 +9,13 @@ import numpy as np
 
 from ..exceptions import ConfigError, ControllerError
 from ..user_code import construct, located
-from .base import Controller, ControllerContext
+from .base import Controller, ControllerContext, ControlOutput
 
 KEY = "controller.class"
+
+MAX_STATE = 10**7
+"""The most entries a user's controller state may have (80 MB a vector; the record of a run holds
+one per control step, bounded by simulation.memory_limit)."""
 
 
 def build_custom(spec: str, params: dict | None, context: ControllerContext) -> Controller:
@@ -21,6 +25,11 @@ def build_custom(spec: str, params: dict | None, context: ControllerContext) -> 
     names = controller.signal_names
     if isinstance(names, str) or not all(isinstance(s, str) for s in names):
         raise ConfigError(KEY, f"{cls.__name__}.signal_names must be a tuple of names, got {names!r}")
+    size = controller.state_size
+    if isinstance(size, bool) or not isinstance(size, (int, np.integer)) or not 0 <= size <= MAX_STATE:
+        raise ConfigError(
+            KEY, f"{cls.__name__}.state_size must be a whole number in [0, {MAX_STATE:.0e}], got {size!r}"
+        )
     try:
         z0 = np.asarray(controller.initial_state(), dtype=float)
     except Exception as err:
@@ -30,22 +39,69 @@ def build_custom(spec: str, params: dict | None, context: ControllerContext) -> 
     return controller
 
 
-def check_output(controller: Controller, out, n: int, state_size: int, t: float) -> None:
-    """The first output of a controller: a torque per joint, declared signals, a state of z's size."""
-    name = type(controller).__name__
-    tau = np.asarray(getattr(out, "tau", None), dtype=float) if hasattr(out, "tau") else None
-    if tau is None:
-        raise ControllerError(f"{name}.compute must return a ControlOutput, got {type(out).__name__}")
+def checked_output(controller: Controller, out, n: int, state_size: int, t: float):
+    """(tau, signals, state) of one output of a user's controller, checked at every control step:
+    a :class:`ControlOutput` whose torque is n numbers (a list of ints will do), whose signals are
+    declared numbers and whose state is None or z's size. Anything else is a ControllerError that
+    names the class, what it returned and when (never a traceback from deep in the loop, never a
+    scalar torque broadcast to every joint).
+    """
+    if not isinstance(out, ControlOutput):
+        got = type(out).__name__
+        raise ControllerError(
+            f"{_name(controller)}.compute must return a ControlOutput, got {got} at t = {t:g} s"
+        )
+    tau = out.tau
+    if type(tau) is not np.ndarray or tau.dtype != np.float64:
+        tau = _numbers(controller, tau, "a torque", t)
     if tau.shape != (n,):
         raise ControllerError(
-            f"{name}.compute returned a torque of shape {tau.shape} at t = {t:g} s; the arm has {n} joints"
+            f"{_name(controller)}.compute returned a torque of shape {tau.shape} at t = {t:g} s; "
+            f"the arm has {n} joints"
         )
-    undeclared(controller, out.signals)
-    if out.state is not None and np.shape(out.state) != (state_size,):
+    signals = out.signals
+    if signals:
+        if not isinstance(signals, dict):
+            raise ControllerError(
+                f"{_name(controller)}.compute returned signals as {type(signals).__name__} at t = {t:g} s; "
+                "give a dict of name -> number"
+            )
+        undeclared(controller, signals)
+        for key, value in signals.items():
+            if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+                raise ControllerError(
+                    f"{_name(controller)}.compute returned signal {key!r} = {_shown(value)} at t = {t:g} s; "
+                    "a signal is one number"
+                )
+    state = out.state
+    if state is not None:
+        if type(state) is not np.ndarray or state.dtype != np.float64:
+            state = _numbers(controller, state, "a state", t)
+        if state.shape != (state_size,):
+            raise ControllerError(
+                f"{_name(controller)}.compute returned a state of shape {state.shape} at t = {t:g} s; "
+                f"initial_state() has {state_size} entries"
+            )
+    return tau, signals, state
+
+
+def _name(controller: Controller) -> str:
+    return type(controller).__name__
+
+
+def _shown(value) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _numbers(controller: Controller, value, what: str, t: float) -> np.ndarray:
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as err:
         raise ControllerError(
-            f"{name}.compute returned a state of shape {np.shape(out.state)}; "
-            f"initial_state() has {state_size} entries"
-        )
+            f"{_name(controller)}.compute returned {what} that is not numbers at t = {t:g} s: "
+            f"{_shown(value)} ({err})"
+        ) from err
 
 
 def undeclared(controller: Controller, signals: dict) -> None:

@@ -382,7 +382,7 @@ def first_step(config: ExperimentConfig):
     """
     import numpy as np
 
-    from ..controllers.custom import check_output, failed
+    from ..controllers.custom import checked_output, failed
     from ..experiment import build
 
     setup = build(config)
@@ -396,7 +396,7 @@ def first_step(config: ExperimentConfig):
         raise
     except Exception as err:
         raise failed(controller, err, 0.0) from err
-    check_output(controller, out, setup.robot.nq, z.size, 0.0)
+    checked_output(controller, out, setup.robot.nq, z.size, 0.0)
     return setup
 
 

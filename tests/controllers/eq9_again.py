@@ -152,3 +152,49 @@ class RaisesBaseException(EndsItsProcess):
         if t > self.after:
             raise BaseException("not an Exception")
         return ControlOutput(np.zeros(self.n))
+
+
+class LateBreach(Counter):
+    """A stateful law whose output breaks the contract after t = 0.05 s in the way ``breach``
+    names (``"ints"`` and ``"strided"`` are valid outputs: a list of ints, a strided view)."""
+
+    def __init__(self, context, breach):
+        super().__init__(context)
+        self.breach = breach
+
+    def compute(self, t, q, v, z, period=0.0):
+        out = super().compute(t, q, v, z, period)
+        if t <= 0.05:
+            return out
+        n, breach = self.n, self.breach
+        if breach == "ints":
+            return ControlOutput([0] * n, out.signals, out.state)
+        if breach == "strided":
+            return ControlOutput(np.zeros(2 * n)[::2], out.signals, out.state)
+        if breach == "scalar":
+            return ControlOutput(0.0, out.signals, out.state)
+        if breach == "size":
+            return ControlOutput(np.zeros(n - 1), out.signals, out.state)
+        if breach == "tuple":
+            return (out.tau, out.signals, out.state)
+        if breach == "words":
+            return ControlOutput(["a"] * n, out.signals, out.state)
+        if breach == "signal":
+            return ControlOutput(out.tau, {"elapsed": "soon"}, out.state)
+        if breach == "nan":
+            return ControlOutput(np.full(n, np.nan), out.signals, out.state)
+        if breach == "state":
+            return ControlOutput(out.tau, out.signals, np.zeros(3))
+        raise ValueError(breach)
+
+
+class BigState(Counter):
+    """A state of 200 000 entries: 20 s of it at 1 ms is 96 GB of record."""
+
+    state_size = 200_000
+
+
+class HugeState(Counter):
+    """A state no run could hold (8 GB a vector)."""
+
+    state_size = 10**9

@@ -71,3 +71,31 @@ class Locked(Ellipse):
 
         super().__init__(robot, center, a, b, omega)
         self.lock = threading.Lock()
+
+
+class LateNaNEllipse(Ellipse):
+    """The ellipse, whose x_d'' turns NaN after t = 0.05 s."""
+
+    def __call__(self, t):
+        x, dx, ddx = super().__call__(t)
+        return x, dx, ddx * (math.nan if t > 0.05 else 1.0)
+
+
+class LateNaNDisturbance(PaperDisturbance):
+    """The paper's tau_d, NaN on the second joint after t = 0.05 s."""
+
+    def __call__(self, t):
+        tau = super().__call__(t)
+        if t > 0.05:
+            tau[1] = math.nan
+        return tau
+
+
+class LateNaNCentering(Centering):
+    """Joint centering whose gradient turns NaN from its 20th call on."""
+
+    calls = 0
+
+    def gradient(self, model, q):
+        self.calls += 1
+        return super().gradient(model, q) * (math.nan if self.calls >= 20 else 1.0)
