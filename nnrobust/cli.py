@@ -339,6 +339,11 @@ def cmd_sweep(args) -> int:
     from .sweep.summary import format_summary, keep_worst, plot_sweep, summarize, write_summary
 
     spec = load_sweep(args.sweep)
+    if args.tuned:  # each controller at its best setting of a tuning, as NAME-tuned
+        from .tune.engine import _with_controllers, tuned_settings
+
+        tuned = tuned_settings(args.tuned, spec.controllers, spec.vary, spec.entries)
+        spec = _with_controllers(spec, spec.controllers, tuned)
     out = Path(args.out)
     properties, claim = _sweep_claim(args, spec)
 
@@ -490,7 +495,8 @@ def cmd_falsify(args) -> int:
         from .sweep import load_sweep
         from .tune.engine import tuned_settings
 
-        tuned = tuned_settings(args.tuned, controllers, load_sweep(args.sweep).vary)
+        box = load_sweep(args.sweep)
+        tuned = tuned_settings(args.tuned, controllers, box.vary, box.entries)
     spec = FalsifySpec(args.sweep, controllers, args.require, args.budget, args.seed, args.margin, tuned)
     progress, started = _simulations_bar(
         args.quiet,
@@ -944,6 +950,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="write full run folders (with animation) of the K worst samples of each "
         "controller into DIR/worst/",
     )
+    sweep.add_argument(
+        "--tuned",
+        metavar="DIR",
+        help="run each controller at its best setting in this tuning (nnrobust tune's DIR or its "
+        "summary.json, or FILE#CASE/SENSING of a tuned comparison), as NAME-tuned; every law takes "
+        "them: shipped, registered, custom entries",
+    )
     sweep.add_argument("--quiet", action="store_true", help="print nothing but errors")
     sweep.add_argument(
         "--require",
@@ -1012,7 +1025,8 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="DIR",
         help="run each listed law at its best setting in this tuning (nnrobust tune's DIR or its "
         "summary.json, or one case of a tuned comparison as FILE#CASE/SENSING, e.g. "
-        "'docs/data/tuned_comparison.json#Panda ellipse/noisy'), as NAME-tuned",
+        "'docs/data/tuned_comparison.json#Panda ellipse/noisy'), as NAME-tuned; every law takes "
+        "them: shipped, registered, file.py:Class, a sweep file's entries",
     )
     falsify.add_argument(
         "--out",

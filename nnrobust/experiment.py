@@ -571,12 +571,6 @@ def likely_cause(setup: Setup, trace) -> str:
     """A guess at why a run diverged, from its last finite state (for the divergence message)."""
     finite = np.flatnonzero(np.all(np.isfinite(trace.q), axis=1) & np.all(np.isfinite(trace.dq), axis=1))
     q = trace.q[finite[-1]] if finite.size else setup.q0
-    last = trace.tau_cmd[-1] if trace.tau_cmd.size else np.zeros(0)
-    if finite.size == len(trace.t) and not np.all(np.isfinite(last)):
-        return (
-            f"cause: {type(setup.controller).__name__}.compute returned a non-finite torque "
-            f"{last.tolist()} from a finite state (check the law's gains, divisions and state)"
-        )
     robot, config, names = setup.robot, setup.config, setup.robot.joint_names
     if setup.criterion is not None and config.controller.k > 0:
         grad = config.controller.k * np.abs(setup.criterion.gradient(robot, q))
@@ -593,6 +587,12 @@ def likely_cause(setup: Setup, trace) -> str:
             f"likely cause: an implausible effort limit ({effort[i]:.3g} on joint {names[i]!r}, over "
             f"{PLAUSIBLE_EFFORT_RATIO:g}x what the arm needs), so torque saturation does not bound the "
             "command; set plant.torque_limits or the URDF's effort"
+        )
+    last = trace.tau_cmd[-1] if trace.tau_cmd.size else np.zeros(0)
+    if finite.size == len(trace.t) and not np.all(np.isfinite(last)):
+        return (
+            f"cause: {type(setup.controller).__name__}.compute returned a non-finite torque "
+            f"{last.tolist()} from a finite state (check the law's gains, divisions and state)"
         )
     if setup.plant.torque_limit is None:
         peak = float(np.nanmax(np.abs(trace.tau_cmd))) if trace.tau_cmd.size else float("nan")

@@ -140,7 +140,7 @@ def _searched_sweep(spec: FalsifySpec):
     from .tune.engine import _with_controllers, check_tuned
 
     target = load_sweep(spec.target)
-    check_tuned(spec.tuned or {}, target.vary)  # the law's own keys, none the box varies
+    check_tuned(spec.tuned or {}, target.vary, entries=target.entries)  # the law's own keys, none varied
     sweep = _with_controllers(target, spec.controllers, spec.tuned)
     searched, note = searchable(sweep, base_config(sweep))
     if searched is not sweep:

@@ -546,3 +546,24 @@ def test_a_search_resumes_only_on_the_inputs_it_was_computed_from(tmp_path, caps
     code, err = search(tmp_path / "moved")
     assert code == 0 and any(line.endswith("8 of 8 already done") for line in err), err
     assert sorted(p.name for p in (tmp_path / "moved" / "f" / "history").glob("part-*.parquet")) == parts
+
+
+def test_a_custom_laws_tuned_settings_are_falsified_as_a_shipped_laws(tmp_path, monkeypatch):
+    """--tuned takes a class given as file.py:Class (found in the summary under its class name):
+    it runs as CLASS-tuned at exactly the tuned params, which its worst plant's command carries."""
+    import shlex
+    import shutil
+
+    shutil.copy(Path(__file__).parent / "controllers" / "eq9_again.py", tmp_path / "laws.py")
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "fz.toml").write_text(SWEEP)
+    tuning = tmp_path / "tuning"
+    tuning.mkdir()
+    settings = {"controller.params.Kp": 400.0, "controller.params.Kv": 40.0}
+    (tuning / "summary.json").write_text(json.dumps({"controllers": {"Eq9": {"best": {"params": settings}}}}))
+    argv = ["falsify", "fz.toml", "--require", "rms_error<=0.02", "--budget", "4", "--quiet"]
+    assert main([*argv, "--controllers", "laws.py:Eq9", "--tuned", "tuning", "--out", "out"]) == 0
+    found = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert list(found["controllers"]) == ["Eq9-tuned"]
+    words = shlex.split(found["controllers"]["Eq9-tuned"]["worst"]["command"])
+    assert "controller.params.Kp=400.0" in words and "controller.params.Kv=40.0" in words

@@ -819,3 +819,72 @@ def test_local_workers_are_bounded_by_the_machines_cpus_and_memory(monkeypatch):
         with engine._client(1024, None):
             pass
     assert started == []
+
+
+def test_tuned_settings_of_every_kind_of_law_flow_into_a_sweep(tmp_path, capsys):
+    """sweep --tuned DIR: a custom class entry, a registered law and a shipped kind each run at
+    their best setting of a tuning, as NAME-tuned; the rows' rerun commands carry exactly those
+    settings and rerun to the row. A key that is not the law's own is refused naming --tuned."""
+    import json
+    import shlex
+    import shutil
+    from pathlib import Path
+
+    shutil.copy(Path(__file__).parent / "controllers" / "eq9_again.py", tmp_path / "laws.py")
+    path = _sweep_file(
+        tmp_path,
+        text="""
+name = "tuned"
+base = "paper-ellipse"
+controllers = ["no-u0", "slotine-li", {name = "eq9", class = "laws.py:Eq9", params = {Kp = 10.0, Kv = 4.0}}]
+samples = 2
+[set]
+"simulation.duration" = 2.2
+[vary]
+"plant.disturbance_scale" = {uniform = [0.5, 2.0]}
+""",
+    )
+    best = {
+        "no-u0": {"controller.Kp": [400.0], "controller.Kv": [40.0]},
+        "slotine-li": {"controller.params.K_D": 5.0},
+        "eq9": {"controller.params.Kp": 400.0, "controller.params.Kv": 40.0},
+    }
+    tuning = tmp_path / "tuning"
+    tuning.mkdir()
+    (tuning / "summary.json").write_text(
+        json.dumps({"controllers": {k: {"best": {"params": v}} for k, v in best.items()}})
+    )
+    out = tmp_path / "out"
+    assert (
+        main(["sweep", str(path), "--out", str(out), "--workers", "2", "--tuned", str(tuning), "--quiet"])
+        == 0
+    )
+    frame = read_results(out)
+    assert set(frame["controller"]) == {"no-u0-tuned", "slotine-li-tuned", "eq9-tuned"}
+    summary = json.loads((out / "summary.json").read_text())
+    mine = shlex.split(summary["controllers"]["eq9-tuned"]["worst"]["command"])
+    assert "controller.params.Kp=400.0" in mine and "controller.params.Kv=40.0" in mine
+    shipped = shlex.split(summary["controllers"]["no-u0-tuned"]["worst"]["command"])
+    assert "controller.Kp=[400.0]" in shipped
+    quiet = ["--quiet", "--no-plots", "--no-animation"]
+    assert main([*mine[1:], "--out", str(tmp_path / "again"), *quiet]) == 0
+    again = json.loads((tmp_path / "again" / "metrics.json").read_text())
+    worst = summary["controllers"]["eq9-tuned"]["worst"]
+    assert again["rms_error_after_2s"] == pytest.approx(worst["rms_error_after_2s"], rel=1e-12)
+    # the tuned custom law equals eq. (9) at the same gains: the same rows as the shipped law's
+    rows = frame.sort_values("sample")
+    np.testing.assert_allclose(
+        rows[rows["controller"] == "eq9-tuned"]["rms_error_after_2s"].to_numpy(),
+        rows[rows["controller"] == "no-u0-tuned"]["rms_error_after_2s"].to_numpy(),
+        rtol=1e-6,
+    )
+    capsys.readouterr()
+    best["eq9"]["plant.disturbance_scale"] = 0.0
+    (tuning / "summary.json").write_text(
+        json.dumps({"controllers": {k: {"best": {"params": v}} for k, v in best.items()}})
+    )
+    assert main(["sweep", str(path), "--out", str(tmp_path / "x"), "--tuned", str(tuning), "--quiet"]) == 2
+    assert (
+        "sets 'plant.disturbance_scale' for eq9, which is not a key eq9 reads itself"
+        in capsys.readouterr().err
+    )

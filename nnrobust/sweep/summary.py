@@ -43,7 +43,8 @@ def summarize(spec: SweepSpec, frame) -> dict:
     95th percentile and maximum of the RMS error (t >= 2 s) and RMS torque over completed runs, the same error
     statistics at each value of every grid key (``by_grid``), the mean saturated fraction, how
     many rows carry warnings and how many each kind of warning (``warnings_by_kind``: the words
-    before its colon), and the worst sample with its rerun command.
+    before its colon), and the worst sample with its rerun command; and ``paired``, every pair of
+    controllers compared sample by sample (:func:`nnrobust.paired.compare`).
     """
     out: dict = {"sweep": spec.name, "samples": spec.size, "controllers": {}}
     for controller in spec.controllers:
@@ -83,6 +84,10 @@ def summarize(spec: SweepSpec, frame) -> dict:
                 "command": rerun_command(spec, sample, controller),
             }
         out["controllers"][controller] = entry
+    if len(spec.controllers) > 1:  # every pair on the same samples (nnrobust.paired)
+        from ..paired import all_pairs
+
+        out["paired"] = all_pairs(frame, list(spec.controllers))
     return out
 
 
@@ -114,6 +119,11 @@ def format_summary(summary: dict) -> str:
             f"{mm(err['p95']):>11s} {mm(err['max']):>11s} {nm(tau['median']):>11s} "
             f"{nm(tau['p95']):>9s} {sat:>6s}"
         )
+    if summary.get("paired"):
+        from ..paired import format_pair
+
+        lines.append("paired on the same samples, RMS error after 2 s (A - B; 95 % interval; sign test):")
+        lines += [f"  {format_pair(entry)}" for entry in summary["paired"]]
     return "\n".join(lines)
 
 

@@ -181,11 +181,33 @@ TUNED_FILE_BYTES = 50_000_000
 """The largest tuning summary or tuned comparison --tuned reads (the shipped comparison is 1.2 MB)."""
 
 
-def check_tuned(tuned: dict[str, dict], varied=(), where: str = "--tuned") -> None:
-    """Refuse a tuned setting (law -> dotted-key settings) that sets a key the law does not read
-    itself (:func:`.space.own_keys`: a plant's, the controller's kind, another law's), or a key
-    the box varies (``varied``, dotted keys): it would run every point of the box at that value
-    while the summary claims the box. ``where`` names the settings' file in the message.
+def law_of(name: str, entries: dict | None = None) -> str:
+    """The law a controller name runs, as :func:`.space.own_keys` knows it: a shipped kind or
+    registered law by its name, a sweep file's entry by its kind (or ``custom``), a class given as
+    file.py:Class as ``custom``.
+    """
+    entry = (entries or {}).get(name)
+    if entry is not None:
+        return entry.get("kind", "custom")
+    return "custom" if CLASS_PATTERN.fullmatch(name) else name
+
+
+def summary_name(name: str) -> str:
+    """The name a controller has in a tuning's summary: a class given as file.py:Class by its class
+    name, any other by the name given (:func:`_with_controllers`).
+    """
+    return name.rpartition(":")[2] if CLASS_PATTERN.fullmatch(name) else name
+
+
+def check_tuned(
+    tuned: dict[str, dict], varied=(), where: str = "--tuned", entries: dict | None = None
+) -> None:
+    """Refuse a tuned setting (controller name -> dotted-key settings) that sets a key the law
+    does not read itself (:func:`.space.own_keys`: a plant's, the controller's kind, another
+    law's; a custom law's are its ``controller.params.*``), or a key the box varies (``varied``,
+    dotted keys): it would run every point of the box at that value while the summary claims the
+    box. ``where`` names the settings' file in the message; ``entries``: the sweep file's table
+    entries, by name.
     """
     import re
 
@@ -193,7 +215,7 @@ def check_tuned(tuned: dict[str, dict], varied=(), where: str = "--tuned") -> No
 
     box = {re.sub(r"\[\d+\]$", "", str(k)) for k in varied}
     for name, settings in tuned.items():
-        keys, prefixes = own_keys(name)
+        keys, prefixes = own_keys(law_of(name, entries))
         for key in settings:
             plain = re.sub(r"\[\d+\]$", "", str(key))
             if plain not in keys and not plain.startswith(prefixes):
@@ -211,11 +233,15 @@ def check_tuned(tuned: dict[str, dict], varied=(), where: str = "--tuned") -> No
                 )
 
 
-def tuned_settings(path: str | Path, names: list[str], varied=()) -> dict[str, dict]:
-    """Each named built-in law's best setting in a tuning's summary (``DIR`` or its summary.json),
+def tuned_settings(
+    path: str | Path, names: list[str], varied=(), entries: dict | None = None
+) -> dict[str, dict]:
+    """Each named controller's best setting in a tuning's summary (``DIR`` or its summary.json),
     or in one case of a tuned comparison (benchmarks/tuned_comparison.py's JSON, its seed-0
     tuning) named as ``FILE#CASE/SENSING``: name -> its dotted-key overrides, each a key the law
-    reads itself and none of ``varied``, the box's keys (:func:`check_tuned`).
+    reads itself and none of ``varied``, the box's keys (:func:`check_tuned`). Every law takes
+    them: a shipped kind, a registered law, a class as file.py:Class (found under its class name)
+    and a sweep file's entry (``entries``, by name).
     """
     from ..config import read_text_file
 
@@ -236,29 +262,51 @@ def tuned_settings(path: str | Path, names: list[str], varied=()) -> dict[str, d
         summary = cases[case].get("summary")
     elif case:
         raise ConfigError("--tuned", f"{file} is one tuning, not a tuned comparison: drop #{case}")
-    entries = summary.get("controllers") if isinstance(summary, dict) else None
-    if not isinstance(entries, dict) or not all(isinstance(e, dict) for e in entries.values()):
+    table = summary.get("controllers") if isinstance(summary, dict) else None
+    if not isinstance(table, dict) or not all(isinstance(e, dict) for e in table.values()):
         raise ConfigError(
             "--tuned",
             f"{file} is not a tuning's summary.json (no controllers table; nnrobust tune writes one)",
         )
+    tuned = summary["controllers"]
     out = {}
     for name in names:
-        if name not in tunable():
-            raise ConfigError(
-                "--tuned", f"{name!r}: only the shipped laws ({', '.join(tunable())}) take tuned settings"
-            )
-        best = (entries.get(name) or {}).get("best")
+        best = (tuned.get(summary_name(name)) or {}).get("best")
         if not best:
             raise ConfigError(
                 "--tuned",
-                f"{file} has no best setting for {name!r} (it tuned {', '.join(entries) or 'nothing'})",
+                f"{file} has no best setting for {summary_name(name)!r} (it tuned "
+                f"{', '.join(tuned) or 'nothing'})",
             )
         if not isinstance(best, dict) or not isinstance(best.get("params"), dict):
             raise ConfigError("--tuned", f"{file}: the best setting of {name!r} has no table of params")
         out[name] = dict(best["params"])
-    check_tuned(out, varied, str(file))
+    check_tuned(out, varied, str(file), entries)
     return out
+
+
+def tuned_entry(name: str, settings: dict, entries: dict) -> dict:
+    """The sweep entry that runs controller ``name`` at its tuned dotted-key ``settings``: a shipped
+    kind or registered law as ``{kind, set}``; a custom law (file.py:Class, or a sweep entry of a
+    class) as ``{class, params}`` with the settings' ``controller.params.*`` over its own params; a
+    sweep entry of a kind with the settings over its own.
+    """
+    from ..user_code import class_file
+
+    entry = entries.get(name)
+    if entry is None and CLASS_PATTERN.fullmatch(name):
+        path = class_file(name)
+        entry = {
+            "class": f"{path.resolve()}:{summary_name(name)}" if path is not None else name,
+            "params": {},
+        }
+    if entry is None:
+        return {"kind": name, "set": dict(settings)}
+    if "class" in entry:
+        prefix = "controller.params."
+        params = {k[len(prefix) :]: v for k, v in settings.items() if k.startswith(prefix)}
+        return {"class": entry["class"], "params": {**(entry.get("params") or {}), **params}}
+    return {**entry, "set": {**(entry.get("set") or {}), **settings}}
 
 
 def _with_controllers(sweep, names: list[str], tuned: dict | None = None):
@@ -272,8 +320,9 @@ def _with_controllers(sweep, names: list[str], tuned: dict | None = None):
     entries, controllers = {}, []
     for name in names:
         if tuned and name in tuned:
-            entries[f"{name}-tuned"] = {"kind": name, "set": dict(tuned[name])}
-            controllers.append(f"{name}-tuned")
+            tuned_name = f"{summary_name(name)}-tuned"
+            entries[tuned_name] = tuned_entry(name, tuned[name], sweep.entries)
+            controllers.append(tuned_name)
         elif name in tunable():
             controllers.append(name)
         elif name in sweep.entries:

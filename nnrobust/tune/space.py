@@ -41,11 +41,14 @@ def own_keys(name: str) -> tuple[frozenset[str], tuple[str, ...]]:
     """The configuration keys the shipped law ``name`` reads itself, as its declaration gives them:
     (keys, prefixes). A paper kind's: eq. (9)'s shared gains where it is eq. (9), and its own
     keys (``section.field``, or ``section.`` for a whole section, a prefix); a registered law's:
-    ``controller.params.NAME`` of each parameter it declares. What a tuned setting of the law may
+    ``controller.params.NAME`` of each parameter it declares; ``custom`` (a user's class): every
+    ``controller.params.`` key, a prefix. What a tuned setting of the law may
     set (``falsify --tuned``); its search coordinates (:func:`search_space`) are among them.
     """
     from ..controllers.registry import SHARED_KEYS, paper_kind, registered_law
 
+    if name == "custom":  # a user's class: the parameters its constructor takes
+        return frozenset(), ("controller.params.",)
     law = registered_law(name)
     if law is not None:
         return frozenset(f"controller.params.{p.name}" for p in law.params), ()
