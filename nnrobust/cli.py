@@ -485,6 +485,50 @@ def _simulations_bar(quiet: bool, first_line):
     return progress, started
 
 
+def cmd_study(args) -> int:
+    """Run (or resume) a study: tune, validate, certify and falsify every case, then the report."""
+    import time
+
+    from .study import load_study, run_study
+    from .study.report import table_rows
+
+    spec = load_study(args.study)
+    start = time.monotonic()
+
+    def say(line: str) -> None:
+        if not args.quiet:
+            print(f"\rstudy {spec.name} [{time.monotonic() - start:.0f} s] {line}".ljust(60), file=sys.stderr)
+
+    def progress(done: int, total: int) -> None:
+        if not args.quiet:
+            _bar(done, total, f"of this stage, {time.monotonic() - start:.0f} s in all")
+
+    report = _resumable(
+        lambda: run_study(spec, args.out, args.workers, args.scheduler, args.overwrite, say, progress),
+        f"study interrupted; each stage keeps what it computed under {args.out}/cases",
+    )
+    if report is None:
+        return 130
+    if not args.quiet:
+        print(file=sys.stderr)
+        for row in table_rows(report):
+            print(
+                f"{row['case']:24s} {row['controller']:18s} median {_number(row['median_mm'])} mm, "
+                f"p95 {_number(row['p95_mm'])} mm, P(fail) <= {_number(row['p_fail_upper'])}, "
+                f"falsified: {_number(row['falsified'])}, least margin {_number(row['least_margin'])}"
+            )
+        print(f"report in {args.out}/report.html and {args.out}/report.json", file=sys.stderr)
+    return 0
+
+
+def _number(value) -> str:
+    if value is None:
+        return "-"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    return f"{value:.4g}"
+
+
 def cmd_falsify(args) -> int:
     """Search each controller's worst plant in the sweep file's box, at one budget."""
     from .falsify import FalsifySpec, run_falsify
@@ -1069,6 +1113,26 @@ def build_parser() -> argparse.ArgumentParser:
     )
     falsify.add_argument("--quiet", action="store_true", help="print nothing but errors")
     falsify.set_defaults(func=cmd_falsify)
+
+    study = sub.add_parser(
+        "study",
+        help="one study file -> one report: tune, validate, certify, falsify",
+        description="Run a study file's cases and controllers through every stage in order: tune "
+        "(each optimiser seed), validate every seed's setting on fresh draws and keep the best, "
+        "certify the kept settings on draws the selection never saw (with paired comparisons), and "
+        "falsify them; each stage is the sweep, tune or falsify command's own engine and folder. "
+        "Writes DIR/report.html, report.json, tables/ and figures/. Re-running the same command "
+        "resumes (docs/study.md).",
+    )
+    study.add_argument("study", help="study file (TOML)")
+    study.add_argument("--out", required=True, help="study folder (cases/, report.json, report.html)")
+    study.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
+    study.add_argument("--scheduler", help="address of an existing dask scheduler, e.g. tcp://host:8786")
+    study.add_argument(
+        "--overwrite", action="store_true", help="replace what a different study wrote in --out"
+    )
+    study.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    study.set_defaults(func=cmd_study)
 
     tune = sub.add_parser(
         "tune",

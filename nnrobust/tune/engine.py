@@ -286,8 +286,9 @@ def tuned_settings(
 
 
 def tuned_entry(name: str, settings: dict, entries: dict) -> dict:
-    """The sweep entry that runs controller ``name`` at its tuned dotted-key ``settings``: a shipped
-    kind or registered law as ``{kind, set}``; a custom law (file.py:Class, or a sweep entry of a
+    """The sweep entry that runs controller ``name`` at its tuned dotted-key ``settings``, as a
+    sweep file would write it: a shipped kind as ``{kind, set}``, a registered law's
+    ``controller.params.*`` as its ``params``; a custom law (file.py:Class, or a sweep entry of a
     class) as ``{class, params}`` with the settings' ``controller.params.*`` over its own params; a
     sweep entry of a kind with the settings over its own.
     """
@@ -300,13 +301,15 @@ def tuned_entry(name: str, settings: dict, entries: dict) -> dict:
             "class": f"{path.resolve()}:{summary_name(name)}" if path is not None else name,
             "params": {},
         }
+    prefix = "controller.params."
+    params = {k[len(prefix) :]: v for k, v in settings.items() if k.startswith(prefix)}
+    rest = {k: v for k, v in settings.items() if not k.startswith(prefix)}
     if entry is None:
-        return {"kind": name, "set": dict(settings)}
+        entry = {"kind": name, "set": {}}
     if "class" in entry:
-        prefix = "controller.params."
-        params = {k[len(prefix) :]: v for k, v in settings.items() if k.startswith(prefix)}
         return {"class": entry["class"], "params": {**(entry.get("params") or {}), **params}}
-    return {**entry, "set": {**(entry.get("set") or {}), **settings}}
+    own = {**(entry.get("params") or {}), **params}
+    return {**entry, "set": {**(entry.get("set") or {}), **rest}, **({"params": own} if own else {})}
 
 
 def _with_controllers(sweep, names: list[str], tuned: dict | None = None):

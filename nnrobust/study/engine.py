@@ -1,0 +1,356 @@
+"""Running a study: for each case, the stages in order, each the existing command's own engine
+writing its own folder (docs/study.md).
+
+1. **tune**, once per optimiser seed (``nnrobust tune``'s engine, ``cases/C/tune-seedS/``);
+2. **validate**: every (controller, seed) setting on fresh draws of the uncertainty set
+   (``nnrobust sweep``'s engine, ``cases/C/validate/``); each controller keeps the seed with the
+   least median error there;
+3. **certify**: the kept settings on other fresh draws, as many as the claim needs (a sweep,
+   ``cases/C/certify/``): certificates, statistics and paired comparisons on draws the
+   selection never saw;
+4. **falsify**: the kept settings searched for their worst plant (``nnrobust falsify``'s
+   engine, ``cases/C/falsify/``).
+
+Every stage resumes (its engine does) and refuses inputs that changed since its rows were
+computed; a finished study reruns to "nothing to do". One local cluster serves every stage.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from pathlib import Path
+
+from ..exceptions import ConfigError, NNRobustError
+from .spec import StudySpec
+
+MARKER = "study.toml"
+VALIDATION_SEED = 1_000_003
+"""Added to the study's seed for the validation draws (the tunings draw from seed + s, s < 20)."""
+CERTIFY_SEED = 2_000_003
+"""Added to the study's seed for the certification draws: independent of training and validation."""
+STAGES = ("tune", "validate", "certify", "falsify")
+
+
+def _write_if_changed(path: Path, text: str) -> None:
+    """Write ``text`` atomically unless the file already holds it (a stage's input file: an
+    unchanged rewrite keeps its resume).
+    """
+    if path.is_file() and path.read_text() == text:
+        return
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
+    with os.fdopen(fd, "w") as f:
+        f.write(text)
+    os.replace(tmp, path)
+
+
+def seed_name(controller: str, seed: int) -> str:
+    """The validation entry of one (controller, optimiser seed) setting."""
+    return f"{controller}-seed{seed}"
+
+
+def kept_name(controller: str) -> str:
+    """The certification and falsification entry of a controller's kept setting."""
+    return f"{controller}-tuned"
+
+
+def prepare(spec: StudySpec, folder: Path, overwrite: bool) -> None:
+    """The study folder: new, or one of this study (its marker holds the same study file), or
+    replaced with ``overwrite``; its stages then refuse their own changed inputs.
+    """
+    from ..study_folder import check_place
+
+    check_place(folder)
+    marker = folder / MARKER
+    text = spec.path.read_text()
+    if marker.is_file() and marker.read_text() != text and not overwrite:
+        raise NNRobustError(
+            f"{folder} holds another study (its {MARKER} differs from {spec.path}); give another "
+            "--out, or --overwrite to run this study there"
+        )
+    folder.mkdir(parents=True, exist_ok=True)
+    _write_if_changed(marker, text)
+
+
+def _check_controllers(spec: StudySpec) -> None:
+    """Every controller built and its first step run on every case, and every tuned one with a
+    search space, before any stage runs (a refusal names the controller and the case).
+    """
+    from ..sweep.engine import check_controllers
+    from ..sweep.spec import base_values
+    from ..tune.space import custom_space, tunable
+
+    for case in spec.cases:
+        sweep = spec.case_sweep(case)
+        try:
+            check_controllers(sweep, base_values(sweep))
+        except ConfigError as err:
+            raise ConfigError(
+                f"{spec.path}: case {spec.case_name(case)}: {err.key}", str(err).split(": ", 1)[1]
+            ) from err
+    for name in spec.controllers:
+        if name in spec.fixed:
+            continue
+        entry = spec.entries.get(name)
+        if entry is None and name not in tunable():
+            raise ConfigError(
+                f"{spec.path}: controllers",
+                f"{name!r} has no search space to tune; set tune = false in its entry",
+            )
+        if entry is not None and "class" in entry:
+            from ..controllers.base import Controller
+            from ..user_code import load_class
+
+            custom_space(name, load_class(entry["class"], Controller, "controller.class"))
+
+
+def run_study(
+    spec: StudySpec,
+    folder: str | Path,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    overwrite: bool = False,
+    say=None,
+    progress=None,
+) -> dict:
+    """Run (or resume) every stage of every case into ``folder``; returns the report (also
+    DIR/report.json, report.html and tables/). ``say(line)`` is told each stage as it starts and
+    ends; ``progress(done, total)`` each stage engine's progress.
+    """
+    say = say or (lambda line: None)
+    folder = Path(folder).resolve()  # the report's commands name absolute paths
+    _check_controllers(spec)
+    prepare(spec, folder, overwrite)
+    with _SharedCluster(workers, scheduler) as address:
+        cases = {}
+        for case in spec.cases:
+            cases[spec.case_name(case)] = _run_case(spec, case, folder, address, overwrite, say, progress)
+    from .report import write_report
+
+    return write_report(spec, folder, cases)
+
+
+class _SharedCluster:
+    """One local cluster for every stage (or the given scheduler): its address."""
+
+    def __init__(self, workers, scheduler):
+        self.workers, self.scheduler, self.cluster = workers, scheduler, None
+
+    def __enter__(self) -> str:
+        if self.scheduler:
+            return self.scheduler
+        import logging
+
+        from ..sweep.engine import local_cluster, max_local_workers
+
+        workers = self.workers or os.cpu_count() or 1
+        most, why = max_local_workers()
+        if not (isinstance(workers, int) and 1 <= workers <= most):
+            raise NNRobustError(f"--workers {workers}: give 1 to {most} local worker processes ({why})")
+        self.cluster = local_cluster(workers, silence_logs=logging.CRITICAL)
+        return self.cluster.scheduler_address
+
+    def __exit__(self, *exc):
+        if self.cluster is not None:
+            self.cluster.close()
+        return False
+
+
+def _run_case(spec: StudySpec, case: str, folder: Path, address: str, overwrite: bool, say, progress) -> dict:
+    from ..falsify import FalsifySpec, run_falsify
+    from ..sweep.engine import read_results, run_sweep
+    from ..sweep.spec import load_sweep
+    from ..tune.engine import TuneSpec, run_tune
+
+    name = spec.case_name(case)
+    here = folder / "cases" / name
+    sweep = spec.case_sweep(case)
+    case_file = here / "case.toml"
+    _write_if_changed(case_file, sweep.to_toml())
+    b = spec.budgets
+    tuned = [c for c in spec.controllers if c not in spec.fixed]
+    out: dict = {"case": case, "stages": {}}
+
+    # 1. tune, once per optimiser seed
+    tunings = {}
+    for s in range(b["seeds"]):
+        if not tuned:
+            break
+        say(f"{name}: tune, seed {s} of {b['seeds']}: {', '.join(tuned)}, {b['tune']} simulations each")
+        tune_spec = TuneSpec(
+            str(case_file),
+            list(tuned),
+            b["tune"],
+            train_samples=b["train_samples"],
+            validation=0,
+            max_rms_torque=b["max_rms_torque"],
+            max_saturated=b["max_saturated"],
+            seed=spec.seed + s,
+        )
+        tunings[s] = run_tune(
+            tune_spec, here / f"tune-seed{s}", scheduler=address, overwrite=overwrite, progress=progress
+        )
+    out["stages"]["tune"] = "finished"
+    out["tunings"] = {s: str(here / f"tune-seed{s}") for s in tunings}
+
+    # 2. validate every (controller, seed) on fresh draws; keep each controller's best seed
+    from ..tune.engine import tuned_entry
+
+    entries: dict = {}
+    names: list[str] = []
+    setting_of: dict[str, tuple[str, int | None, dict]] = {}  # validation row -> (controller, seed, settings)
+    for c in spec.controllers:
+        if c in spec.fixed:
+            names.append(c)
+            if c in spec.entries:
+                entries[c] = spec.entries[c]
+            setting_of[c] = (c, None, {})
+            continue
+        for s, summary in tunings.items():
+            best = summary["controllers"].get(c, {}).get("best")
+            if not best:
+                continue
+            label = seed_name(c, s)
+            entries[label] = tuned_entry(c, best["params"], spec.entries)
+            names.append(label)
+            setting_of[label] = (c, s, dict(best["params"]))
+    if not names:
+        raise NNRobustError(f"{name}: no controller has a setting that met the tuning's constraints")
+    validate = sweep_of(spec, case, names, entries, b["validation"], spec.seed + VALIDATION_SEED)
+    validate_file = here / "validate.toml"
+    _write_if_changed(validate_file, validate.to_toml())
+    say(f"{name}: validate {len(names)} settings on {b['validation']} fresh draws")
+    run_sweep(
+        load_sweep(validate_file),
+        here / "validate",
+        scheduler=address,
+        overwrite=overwrite,
+        progress=progress,
+    )
+    frame = read_results(here / "validate")
+    kept, per_seed = _select(spec, frame, setting_of)
+    out["stages"]["validate"] = "finished"
+    out["kept"], out["per_seed"] = kept, per_seed
+    out["validation_rows"] = str(here / "validate" / "results")
+
+    # 3. certify the kept settings on draws the selection never saw
+    from ..properties import run_properties, samples_needed
+
+    certify_names, certify_entries, settings = [], {}, {}
+    for c, entry in kept.items():
+        label = c if c in spec.fixed else kept_name(c)
+        certify_names.append(label)
+        if c in spec.fixed:
+            if c in spec.entries:
+                certify_entries[c] = spec.entries[c]
+        else:
+            certify_entries[label] = tuned_entry(c, entry["settings"], spec.entries)
+            settings[c] = entry["settings"]
+    n = samples_needed(b["epsilon"], b["beta"])
+    certify = sweep_of(spec, case, certify_names, certify_entries, n, spec.seed + CERTIFY_SEED)
+    certify_file = here / "certify.toml"
+    _write_if_changed(certify_file, certify.to_toml())
+    say(
+        f"{name}: certify {len(certify_names)} controllers on {n} fresh draws "
+        f"(epsilon {b['epsilon']:g}, beta {b['beta']:g})"
+    )
+    certify_spec = load_sweep(certify_file)
+    run_sweep(certify_spec, here / "certify", scheduler=address, overwrite=overwrite, progress=progress)
+    from ..properties import certify as certify_rows
+    from ..sweep.summary import summarize, write_summary
+
+    rows = read_results(here / "certify")
+    summary = summarize(certify_spec, rows)
+    certificates = certify_rows(certify_spec, rows, run_properties(spec.require), b["epsilon"], b["beta"])
+    for label, entry in certificates.items():
+        summary["controllers"][label].update(entry)
+    write_summary(here / "certify", summary)
+    out["stages"]["certify"] = "finished"
+    out["certify"] = summary
+    out["held_out"] = _varies(rows)
+
+    # 4. falsify the kept settings
+    say(f"{name}: falsify {len(kept)} controllers, {b['falsify']} simulations each (and as many random)")
+    falsify_spec = FalsifySpec(
+        str(case_file),
+        [c for c in kept],
+        list(spec.require),
+        b["falsify"],
+        seed=spec.seed,
+        margin=b["margin"],
+        tuned={c: s for c, s in settings.items()} or None,
+    )
+    if spec.vary:
+        out["falsify"] = run_falsify(
+            falsify_spec, here / "falsify", scheduler=address, overwrite=overwrite, progress=progress,
+            claim=(b["epsilon"], b["beta"]),
+        )  # fmt: skip
+        out["stages"]["falsify"] = "finished"
+    else:
+        out["stages"]["falsify"] = "skipped: the study has no [vary] box to search"
+    return out
+
+
+def sweep_of(spec: StudySpec, case: str, names: list[str], entries: dict, samples: int, seed: int):
+    """A sweep of ``names`` (with their ``entries``) on ``samples`` draws of the case's box."""
+    from ..sweep.spec import SweepSpec
+
+    return SweepSpec(
+        name=f"{spec.name}-{spec.case_name(case)}",
+        base=case,
+        controllers=list(names),
+        samples=samples,
+        seed=seed,
+        set=dict(spec.set),
+        vary=dict(spec.vary),
+        entries={k: v for k, v in entries.items() if k in names},
+    )
+
+
+def _select(spec: StudySpec, frame, setting_of: dict) -> tuple[dict, dict]:
+    """Each controller's kept setting: the seed whose validation rows have the least median RMS
+    error after 2 s (a run that did not complete counts as +inf; ties: the lower seed); and every
+    seed's validation statistics.
+    """
+    import numpy as np
+
+    from ..paired import _values
+
+    per_seed: dict[str, list] = {}
+    for label, (c, seed, settings) in setting_of.items():
+        values = np.array(list(_values(frame[frame["controller"] == label], "rms_error_after_2s").values()))
+        per_seed.setdefault(c, []).append(
+            {
+                "seed": seed,
+                "settings": settings,
+                "median_error": float(np.median(values)) if values.size else float("inf"),
+                "rows": int(values.size),
+                "completed": int(np.isfinite(values).sum()),
+            }
+        )
+    kept = {
+        c: min(entries, key=lambda e: (e["median_error"], e["seed"] if e["seed"] is not None else -1))
+        for c, entries in per_seed.items()
+    }
+    return kept, per_seed
+
+
+def _varies(frame) -> bool:
+    """Whether the rows of a sweep differ from draw to draw: a case with no randomness (no box,
+    no noise) gives every draw the same plant, so "held-out" draws are the training plant.
+    """
+    import numpy as np
+
+    for _, rows in frame.groupby("controller"):
+        values = rows["rms_error_after_2s"].to_numpy(dtype=float)
+        values = values[np.isfinite(values)]
+        if values.size > 1 and np.ptp(values) > 0:
+            return True
+    return False
+
+
+def read_report(folder: str | Path) -> dict:
+    """DIR/report.json."""
+    return json.loads((Path(folder) / "report.json").read_text())

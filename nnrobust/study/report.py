@@ -1,0 +1,377 @@
+"""A study's report: ``report.json`` (the numbers, under the schema of docs/study.md),
+``report.html`` (one self-contained file: tables, figures inside, the reproducibility appendix),
+``tables/`` (CSV and LaTeX booktabs) and ``figures/`` (PNG, SVG, PDF), all from the stages'
+own folders.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+import json
+import math
+import platform
+from pathlib import Path
+
+from ..results import write_json_atomic
+from .spec import StudySpec
+
+SCHEMA = "nnrobust-study-report/1"
+
+
+def _versions() -> dict:
+    import numpy
+    import pinocchio
+    import scipy
+
+    from .. import __version__
+
+    return {
+        "nnrobust": __version__,
+        "python": platform.python_version(),
+        "pinocchio": pinocchio.__version__,
+        "numpy": numpy.__version__,
+        "scipy": scipy.__version__,
+        "platform": platform.platform(),
+    }
+
+
+def _inputs(spec: StudySpec) -> dict:
+    """SHA-256 of every input file: the study file, and per case what its rows are computed from
+    (the experiment files, the URDF, the custom classes: :func:`nnrobust.sweep.spec.study_inputs`).
+    """
+    from ..study_folder import file_sha256
+    from ..sweep.spec import study_inputs
+
+    out = {str(spec.path): file_sha256(spec.path)}
+    for case in spec.cases:
+        for path, digest in study_inputs(spec.case_sweep(case)).files.values():
+            out[path] = digest
+    return out
+
+
+def _commands(spec: StudySpec, folder: Path, name: str, case: dict) -> dict:
+    """The command that recomputes each stage's numbers from its own folder's input file."""
+    here = folder / "cases" / name
+    b = spec.budgets
+    tuned = [c for c in spec.controllers if c not in spec.fixed]
+    out = {}
+    for s, path in case.get("tunings", {}).items():
+        out[f"tune seed {s}"] = (
+            f"nnrobust tune {here / 'case.toml'} --controllers {','.join(tuned)} --budget {b['tune']} "
+            f"--train-samples {b['train_samples']} --validation 0 --seed {spec.seed + int(s)}"
+            + (f" --max-rms-torque {b['max_rms_torque']:g}" if math.isfinite(b["max_rms_torque"]) else "")
+            + (f" --max-saturated {b['max_saturated']:g}" if b["max_saturated"] < 1 else "")
+            + f" --out {path}"
+        )
+    out["validate"] = f"nnrobust sweep {here / 'validate.toml'} --out {here / 'validate'}"
+    require = " ".join(f"--require '{r}'" for r in spec.require)
+    out["certify"] = (
+        f"nnrobust sweep {here / 'certify.toml'} {require} --epsilon {b['epsilon']:g} --beta {b['beta']:g} "
+        f"--out {here / 'certify'}"
+    )
+    if case["stages"].get("falsify") == "finished":
+        kept = ",".join(case["kept"])
+        out["falsify"] = (
+            f"nnrobust falsify {here / 'case.toml'} --controllers {kept} {require} --budget {b['falsify']} "
+            f"--seed {spec.seed} --tuned {here / 'kept.json'} --epsilon {b['epsilon']:g} --beta {b['beta']:g}"
+            + (" --margin" if b["margin"] else "")
+            + f" --out {here / 'falsify'}"
+        )
+    return out
+
+
+def _controller_entry(spec: StudySpec, case: dict, c: str) -> dict:
+    label = c if c in spec.fixed else f"{c}-tuned"
+    certify = case["certify"]["controllers"].get(label, {})
+    kept = case["kept"].get(c)
+    per_seed = case["per_seed"].get(c, [])
+    medians = [e["median_error"] for e in per_seed if math.isfinite(e["median_error"])]
+    entry: dict = {
+        "label": label,
+        "tuned": None
+        if c in spec.fixed
+        else {
+            "seeds": per_seed,
+            "kept_seed": kept["seed"] if kept else None,
+            "settings": kept["settings"] if kept else None,
+            "seed_spread": [min(medians), max(medians)] if medians else None,
+            "at_bound": _at_bound(case, c, kept),
+        },
+        "fixed": c in spec.fixed,
+        "validation": {
+            "median_error": kept["median_error"],
+            "rows": kept["rows"],
+            "completed": kept["completed"],
+        }
+        if kept
+        else None,
+        "statistics": {
+            k: certify.get(k)
+            for k in ("rows", "success_rate", "statuses", "rms_error_after_2s", "rms_torque")
+        },
+        "certificates": certify.get("certificates", []),
+        "quantile_bounds": certify.get("quantile_bounds", []),
+        "warnings": certify.get("warnings_by_kind", {}),
+    }
+    falsified = (case.get("falsify") or {}).get("controllers", {})
+    found = falsified.get(label) or falsified.get(c)
+    if found:
+        entry["worst"] = {
+            "falsified": found["falsified"],
+            "simulations": found["simulations"],
+            "margin": found["worst"]["margin"],
+            "metrics": found["worst"]["metrics"],
+            "command": found["worst"]["command"],
+        }
+    margins = (case.get("falsify") or {}).get("margin", {})
+    if label in margins or c in margins:
+        entry["margin"] = margins.get(label) or margins.get(c)
+    return entry
+
+
+def _at_bound(case: dict, c: str, kept) -> dict | None:
+    if not kept or kept["seed"] is None:
+        return None
+    path = case["tunings"].get(kept["seed"])
+    summary = json.loads((Path(path) / "summary.json").read_text()) if path else {}
+    best = summary.get("controllers", {}).get(c, {}).get("best") or {}
+    return best.get("at_bound")
+
+
+def build_report(spec: StudySpec, folder: Path, cases: dict) -> dict:
+    """report.json's content (docs/study.md's schema)."""
+    report: dict = {
+        "schema": SCHEMA,
+        "study": spec.name,
+        "description": spec.description,
+        "versions": _versions(),
+        "inputs": _inputs(spec),
+        "require": spec.require,
+        "budgets": {
+            k: (None if isinstance(v, float) and math.isinf(v) else v) for k, v in spec.budgets.items()
+        },
+        "cases": {},
+    }
+    for name, case in cases.items():
+        label_of = {(c if c in spec.fixed else f"{c}-tuned"): c for c in spec.controllers}
+        paired = [
+            {**p, "a": label_of.get(p["a"], p["a"]), "b": label_of.get(p["b"], p["b"])}
+            for p in case["certify"].get("paired", [])
+        ]
+        report["cases"][name] = {
+            "case": case["case"],
+            "stages": case["stages"],
+            "held_out": case["held_out"],
+            "validated_on": "fresh draws of the uncertainty set, independent of the training draws"
+            if case["held_out"]
+            else "the training plant: the case has no randomness (every draw is the same plant)",
+            "controllers": {
+                c: _controller_entry(spec, case, c) for c in spec.controllers if c in case["kept"]
+            },
+            "not_kept": [c for c in spec.controllers if c not in case["kept"]],
+            "paired": paired,
+            "commands": _commands(spec, folder, name, case),
+        }
+    return report
+
+
+TABLE_COLUMNS = (
+    ("case", "case"),
+    ("controller", "controller"),
+    ("median_mm", "median e [mm]"),
+    ("p95_mm", "p95 e [mm]"),
+    ("success", "completed %"),
+    ("p_fail_upper", "P(fail) <="),
+    ("falsified", "falsified"),
+    ("least_margin", "least margin"),
+    ("kept_seed", "kept seed"),
+    ("seed_spread_mm", "seeds' medians [mm]"),
+)
+
+
+def table_rows(report: dict) -> list[dict]:
+    """One row per (case, controller): the certification draws' error statistics, the
+    certificate's bound, the falsification's verdict and the seeds' spread.
+    """
+    rows = []
+    for name, case in report["cases"].items():
+        for c, e in case["controllers"].items():
+            err = e["statistics"].get("rms_error_after_2s") or {}
+            certs = e["certificates"]
+            spread = (e["tuned"] or {}).get("seed_spread")
+            rows.append(
+                {
+                    "case": name,
+                    "controller": c,
+                    "median_mm": None if err.get("median") is None else 1e3 * err["median"],
+                    "p95_mm": None if err.get("p95") is None else 1e3 * err["p95"],
+                    "success": None
+                    if e["statistics"].get("success_rate") is None
+                    else 100 * e["statistics"]["success_rate"],
+                    "p_fail_upper": max((c_["p_upper"] for c_ in certs), default=None),
+                    "falsified": (e.get("worst") or {}).get("falsified"),
+                    "least_margin": (e.get("worst") or {}).get("margin"),
+                    "kept_seed": (e["tuned"] or {}).get("kept_seed"),
+                    "seed_spread_mm": None if not spread else f"{1e3 * spread[0]:.4g}-{1e3 * spread[1]:.4g}",
+                }
+            )
+    return rows
+
+
+def _cell(value) -> str:
+    if value is None:
+        return "-"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, float):
+        return f"{value:.4g}"
+    return str(value)
+
+
+def write_tables(report: dict, folder: Path) -> list[Path]:
+    """tables/summary.csv and tables/summary.tex (booktabs)."""
+    import csv
+
+    rows = table_rows(report)
+    out = folder / "tables"
+    out.mkdir(parents=True, exist_ok=True)
+    buffer = io.StringIO()
+    writer = csv.writer(buffer)
+    writer.writerow([key for key, _ in TABLE_COLUMNS])
+    for row in rows:
+        writer.writerow(["" if row[k] is None else row[k] for k, _ in TABLE_COLUMNS])
+    (out / "summary.csv").write_text(buffer.getvalue())
+
+    def tex(text: str) -> str:
+        for a, b in (("\\", r"\textbackslash{}"), ("&", r"\&"), ("%", r"\%"), ("_", r"\_"), ("#", r"\#")):
+            text = text.replace(a, b)
+        return text
+
+    lines = [
+        r"\begin{tabular}{" + "l" * 2 + "r" * (len(TABLE_COLUMNS) - 2) + "}",
+        r"\toprule",
+        " & ".join(tex(head) for _, head in TABLE_COLUMNS) + r" \\",
+        r"\midrule",
+        *(" & ".join(tex(_cell(row[k])) for k, _ in TABLE_COLUMNS) + r" \\" for row in rows),
+        r"\bottomrule",
+        r"\end{tabular}",
+    ]
+    (out / "summary.tex").write_text("\n".join(lines) + "\n")
+    return [out / "summary.csv", out / "summary.tex"]
+
+
+def _figure(name: str, case: dict, folder: Path) -> str:
+    """The certification draws' error CDF per controller: saved as PNG, SVG and PDF, and returned
+    as a base64 PNG for the HTML.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+    import pandas as pd
+
+    frame = pd.read_parquet(folder / "cases" / name / "certify" / "results")
+    fig, ax = plt.subplots(figsize=(6, 3.6))
+    for label, rows in frame.groupby("controller", sort=False):
+        done = rows[rows["status"] == "completed"]
+        e = np.sort(1e3 * done["rms_error_after_2s"].to_numpy(dtype=float))
+        e = e[np.isfinite(e)]
+        if e.size:
+            ax.step(e, np.arange(1, e.size + 1) / len(rows), where="post", label=str(label))
+    ax.set_xscale("log")
+    ax.set_xlabel("RMS task error, t >= 2 s [mm]")
+    ax.set_ylabel("fraction of draws")
+    ax.set_title(f"{name}: certification draws")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    out = folder / "figures"
+    out.mkdir(parents=True, exist_ok=True)
+    for ext in ("png", "svg", "pdf"):
+        fig.savefig(out / f"{name}-error-cdf.{ext}", dpi=120)
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=100)
+    plt.close(fig)
+    return base64.b64encode(buffer.getvalue()).decode()
+
+
+def write_html(report: dict, folder: Path, figures: dict[str, str]) -> Path:
+    """report.html: one file, no network, figures inside as data URIs."""
+    e = html.escape
+    parts = [
+        "<!DOCTYPE html><html><head><meta charset='utf-8'>",
+        f"<title>{e(report['study'])}: nnrobust study</title>",
+        "<style>body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}"
+        "table{border-collapse:collapse;margin:1em 0}td,th{border-bottom:1px solid #ccc;padding:3px 8px;"
+        "text-align:right}td:first-child,th:first-child,td:nth-child(2){text-align:left}"
+        "code{font-size:85%;word-break:break-all}.note{color:#555}</style></head><body>",
+        f"<h1>{e(report['study'])}</h1><p>{e(report['description'])}</p>",
+        f"<p>Required: {', '.join(f'<code>{e(r)}</code>' for r in report['require'])}. "
+        f"Budgets: {e(json.dumps(report['budgets']))}.</p>",
+        "<h2>Summary</h2><table><tr>" + "".join(f"<th>{e(head)}</th>" for _, head in TABLE_COLUMNS) + "</tr>",
+    ]
+    for row in table_rows(report):
+        parts.append("<tr>" + "".join(f"<td>{e(_cell(row[k]))}</td>" for k, _ in TABLE_COLUMNS) + "</tr>")
+    parts.append("</table>")
+    for name, case in report["cases"].items():
+        parts.append(f"<h2>Case {e(name)}</h2><p class='note'>Validated on {e(case['validated_on'])}.</p>")
+        if name in figures:
+            parts.append(f"<img alt='error CDF of {e(name)}' src='data:image/png;base64,{figures[name]}'>")
+        if case["not_kept"]:
+            parts.append(f"<p>No setting met the tuning's constraints: {e(', '.join(case['not_kept']))}.</p>")
+        if case["paired"]:
+            from ..paired import format_pair
+
+            parts.append("<h3>Paired comparisons (certification draws)</h3><ul>")
+            parts += [f"<li>{e(format_pair(p))}</li>" for p in case["paired"]]
+            parts.append(f"</ul><p class='note'>Method: {e(case['paired'][0]['method'])}.</p>")
+        parts.append("<h3>Certificates</h3><ul>")
+        for c, entry in case["controllers"].items():
+            for cert in entry["certificates"]:
+                parts.append(
+                    f"<li>{e(c)}: P(<code>{e(cert['property'])}</code> fails) &le; {cert['p_upper']:.4g} "
+                    "with "
+                    f"confidence {1 - cert['beta']:.4g} (N = {cert['N']}, k = {cert['k']}; "
+                    f"{e(cert['method'])})</li>"
+                )
+        parts.append("</ul><h3>Worst plants found</h3><ul>")
+        for c, entry in case["controllers"].items():
+            if "worst" in entry:
+                w = entry["worst"]
+                verdict = "FALSIFIED" if w["falsified"] else "not falsified"
+                parts.append(
+                    f"<li>{e(c)}: {verdict} in {w['simulations']} simulations, least margin "
+                    f"{w['margin']:.4g}: "
+                    f"<code>{e(w['command'])}</code></li>"
+                )
+        parts.append("</ul><h3>Commands</h3><ul>")
+        parts += [f"<li>{e(k)}: <code>{e(v)}</code></li>" for k, v in case["commands"].items()]
+        parts.append("</ul>")
+    parts.append("<h2>Reproducibility</h2><h3>Versions</h3><ul>")
+    parts += [f"<li>{e(k)}: {e(str(v))}</li>" for k, v in report["versions"].items()]
+    parts.append("</ul><h3>Inputs (SHA-256)</h3><ul>")
+    parts += [f"<li><code>{e(d)}</code> {e(p)}</li>" for p, d in report["inputs"].items()]
+    parts.append("</ul></body></html>")
+    path = folder / "report.html"
+    tmp = path.with_name(".report.html.partial")
+    tmp.write_text("\n".join(parts))
+    tmp.replace(path)
+    return path
+
+
+def write_report(spec: StudySpec, folder: Path, cases: dict) -> dict:
+    """report.json, tables/, figures/ and report.html; returns the report."""
+    for name, case in cases.items():  # the kept settings, as --tuned reads them (the falsify command)
+        kept = {
+            c: {"best": {"params": k["settings"]}} for c, k in case["kept"].items() if c not in spec.fixed
+        }
+        write_json_atomic(folder / "cases" / name / "kept.json", {"controllers": kept})
+    report = build_report(spec, folder, cases)
+    write_json_atomic(folder / "report.json", report)
+    write_tables(report, folder)
+    figures = {name: _figure(name, case, folder) for name, case in cases.items()}
+    write_html(report, folder, figures)
+    return report

@@ -1,0 +1,267 @@
+"""Study files: the cases, controllers, uncertainty set, required properties and budgets of one
+study (docs/study.md), checked before any stage runs.
+
+A study file is TOML::
+
+    name = "small"
+    cases = ["paper-ellipse-noisy"]       # presets or experiment files (from the study's folder)
+    controllers = ["nn", "pd", {name = "taskpd", class = "laws.py:TaskPD"}]
+    require = ["rms_error_after_2s<=0.005"]
+    seed = 0
+    [set]                                 # fixed overrides, every case
+    "simulation.duration" = 3.0
+    [vary]                                # the uncertainty set: distributions
+    "plant.disturbance_scale" = {uniform = [0.5, 2.0]}
+    [budgets]
+    tune = 12          # simulations per controller, case and seed (training)
+    seeds = 2          # optimiser seeds
+    ...
+
+Each case becomes a sweep file (its ``[set]`` and ``[vary]`` the study's), so every stage is the
+existing command's own engine on that file.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..config import parse_toml, read_text_file
+from ..exceptions import ConfigError
+from ..sweep.spec import NAME, SweepSpec, parse_sweep
+
+KEYS = ("name", "description", "cases", "controllers", "require", "seed", "set", "vary", "budgets")
+
+BUDGET_KEYS = {
+    "tune": "simulations per controller, case and optimiser seed (training)",
+    "seeds": "optimiser seeds per controller and case",
+    "train_samples": "draws of the uncertainty set each tuning setting runs on",
+    "validation": "fresh draws each (controller, seed) is validated on (selects the seed)",
+    "epsilon": "the certified claim: P(a property fails) <= epsilon ...",
+    "beta": "... with confidence 1 - beta (Clopper-Pearson, on draws the selection never saw)",
+    "falsify": "falsification budget per controller and case (and as many random draws)",
+    "margin": "search how far the box may grow before a property fails (true/false)",
+    "max_rms_torque": "tuning constraint: RMS torque <= this [N m]",
+    "max_saturated": "tuning constraint: saturated fraction of the steps <= this",
+}
+"""The keys of [budgets], each with what it means."""
+
+DEFAULT_BUDGETS = {
+    "tune": 40,
+    "seeds": 3,
+    "train_samples": 2,
+    "validation": 20,
+    "epsilon": 0.1,
+    "beta": 0.05,
+    "falsify": 40,
+    "margin": False,
+    "max_rms_torque": math.inf,
+    "max_saturated": 1.0,
+}
+
+ENTRY_TUNE = "tune"
+"""The key of a controllers entry that, set to false, runs it at its own settings untuned."""
+
+
+@dataclass
+class StudySpec:
+    """A parsed, validated study file.
+
+    Attributes:
+        name: the study's name (1-40 letters, digits, '_' or '-').
+        path: the study file.
+        cases: presets or experiment files (absolute), each a case.
+        controllers: the controllers' names (a built-in kind or registered law, or a table entry's
+            name), in the study's order.
+        entries: table entries by name, as a sweep file's (``tune = false`` removed).
+        fixed: names run at their own settings, untuned.
+        require: the ``--require`` properties of the certification and the falsification.
+        seed: the study's seed (tuning seeds, validation, certification draws derive from it).
+        set, vary: the fixed overrides and the uncertainty set (distributions).
+        budgets: :data:`BUDGET_KEYS` with their values.
+
+    """
+
+    name: str
+    path: Path
+    cases: list[str]
+    controllers: list[str]
+    entries: dict
+    fixed: list[str]
+    require: list[str]
+    seed: int = 0
+    set: dict = field(default_factory=dict)
+    vary: dict = field(default_factory=dict)
+    budgets: dict = field(default_factory=lambda: dict(DEFAULT_BUDGETS))
+    description: str = ""
+
+    def case_name(self, case: str) -> str:
+        """A case's folder name: the preset, or the experiment file's stem."""
+        return Path(case).stem if case.endswith(".toml") else case
+
+    def case_sweep(self, case: str) -> SweepSpec:
+        """The case as a sweep (its controllers and the study's [set] and [vary])."""
+        return SweepSpec(
+            name=f"{self.name}-{self.case_name(case)}",
+            base=case,
+            controllers=list(self.controllers),
+            samples=1,
+            seed=self.seed,
+            set=dict(self.set),
+            vary=dict(self.vary),
+            entries={k: dict(v) for k, v in self.entries.items()},
+        )
+
+
+def _suggest(key: str, valid) -> str:
+    close = difflib.get_close_matches(key, list(valid), n=1)
+    return f"; did you mean {close[0]!r}?" if close else ""
+
+
+def _budgets(data, where: str) -> dict:
+    if not isinstance(data, dict):
+        raise ConfigError(f"{where}: budgets", "expected a table")
+    out: dict = dict(DEFAULT_BUDGETS)
+    for key, value in data.items():
+        if key not in BUDGET_KEYS:
+            raise ConfigError(
+                f"{where}: budgets.{key}",
+                f"unknown key{_suggest(key, BUDGET_KEYS)} Valid: {', '.join(BUDGET_KEYS)}",
+            )
+        out[key] = value
+    whole = {"tune": (2, 100_000), "seeds": (1, 20), "train_samples": (1, 1000), "validation": (2, 10_000),
+             "falsify": (4, 100_000)}  # fmt: skip
+    for key, (low, high) in whole.items():
+        value = out[key]
+        if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+            raise ConfigError(
+                f"{where}: budgets.{key}", f"expected an integer in [{low}, {high}], got {value!r}"
+            )
+    for key in ("epsilon", "beta"):
+        value = out[key]
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < 1:
+            raise ConfigError(f"{where}: budgets.{key}", f"expected a number in (0, 1), got {value!r}")
+    if not isinstance(out["margin"], bool):
+        raise ConfigError(f"{where}: budgets.margin", f"expected true or false, got {out['margin']!r}")
+    for key in ("max_rms_torque", "max_saturated"):
+        value = out[key]
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
+            raise ConfigError(f"{where}: budgets.{key}", f"expected a number > 0, got {value!r}")
+    if out["max_saturated"] > 1:
+        raise ConfigError(
+            f"{where}: budgets.max_saturated", f"expected a fraction in (0, 1], got {out['max_saturated']!r}"
+        )
+    return out
+
+
+def parse_study(data: dict, path: Path) -> StudySpec:
+    """Validate a study table (as read from TOML); every error names the file and its key."""
+    where = str(path)
+    for key in data:
+        if key not in KEYS:
+            raise ConfigError(f"{where}: {key}", f"unknown key{_suggest(key, KEYS)} Valid: {', '.join(KEYS)}")
+    for key in ("name", "cases", "controllers"):
+        if key not in data:
+            raise ConfigError(f"{where}: {key}", "missing")
+    name = data["name"]
+    if not isinstance(name, str) or not NAME.fullmatch(name):
+        raise ConfigError(f"{where}: name", f"must be 1-40 letters, digits, '_' or '-', got {name!r}")
+    cases = data["cases"]
+    if not isinstance(cases, list) or not cases or not all(isinstance(c, str) for c in cases):
+        raise ConfigError(f"{where}: cases", f"expected a list of presets or experiment files, got {cases!r}")
+    resolved = []
+    for case in cases:
+        if case.endswith(".toml"):
+            file = (path.parent / case).resolve()
+            if not file.is_file():
+                raise ConfigError(f"{where}: cases", f"{case!r} is not a file (read from {path.parent})")
+            case = str(file)
+        resolved.append(case)
+    stems = [Path(c).stem if c.endswith(".toml") else c for c in resolved]
+    if len(set(stems)) != len(stems):
+        raise ConfigError(f"{where}: cases", f"names a case twice: {', '.join(stems)}")
+    fixed: list[str] = []
+    controllers = data["controllers"]
+    if isinstance(controllers, list):
+        controllers = [dict(c) if isinstance(c, dict) else c for c in controllers]
+        for c in controllers:
+            if isinstance(c, dict) and ENTRY_TUNE in c:
+                if not isinstance(c[ENTRY_TUNE], bool):
+                    raise ConfigError(f"{where}: controllers", f"an entry's tune is true or false, got {c!r}")
+                if not c.pop(ENTRY_TUNE):
+                    fixed.append(str(c.get("name")))
+    require = data.get("require", [])
+    if not isinstance(require, list) or not require or not all(isinstance(r, str) for r in require):
+        raise ConfigError(
+            f"{where}: require",
+            f"expected a list of properties, e.g. ['rms_error_after_2s<=0.005'], got {require!r}",
+        )
+    from ..properties import run_properties
+
+    try:
+        run_properties(require)
+    except ConfigError as err:
+        raise ConfigError(f"{where}: require", str(err)) from err
+    vary = data.get("vary", {})
+    if isinstance(vary, dict):
+        grid = [k for k, v in vary.items() if isinstance(v, list)]
+        if grid:
+            raise ConfigError(
+                f"{where}: vary.{grid[0]}",
+                "a study's uncertainty set is distributions (the draws of tuning, validation and "
+                "certification); give {uniform = [a, b]}, {loguniform = ...}, {normal = ...} or "
+                "{choice = [...]}",
+            )
+    # the sweep file's own checks: controllers, [set], [vary], seed
+    sweep = parse_sweep(
+        {
+            "name": name,
+            "base": resolved[0],
+            "controllers": controllers,
+            "seed": data.get("seed", 0),
+            **({"set": data["set"]} if "set" in data else {}),
+            **({"vary": vary} if "vary" in data else {}),
+        },
+        where,
+    )
+    _resolve_classes(sweep.entries, path)
+    description = data.get("description", "")
+    if not isinstance(description, str):
+        raise ConfigError(f"{where}: description", "expected a string")
+    return StudySpec(
+        name,
+        path,
+        resolved,
+        sweep.controllers,
+        sweep.entries,
+        fixed,
+        list(require),
+        sweep.seed,
+        sweep.set,
+        sweep.vary,
+        _budgets(data.get("budgets", {}), where),
+        description,
+    )
+
+
+def _resolve_classes(entries: dict, path: Path) -> None:
+    """A controller class file is read from the study file's folder."""
+    from ..user_code import class_file
+
+    for entry in entries.values():
+        if "class" not in entry:
+            continue
+        file, cls = class_file(entry["class"]), entry["class"].rpartition(":")[2]
+        if file is not None and not file.is_absolute():
+            entry["class"] = f"{(path.parent / file).resolve()}:{cls}"
+
+
+def load_study(path: str | Path) -> StudySpec:
+    """Read and validate a study file."""
+    path = Path(path)
+    if not path.is_file():
+        raise ConfigError(str(path), "is not a file (a study file, TOML: docs/study.md)")
+    data = parse_toml(read_text_file(path, what="study file"), str(path))
+    return parse_study(data, path.resolve())

@@ -1,0 +1,184 @@
+"""nnrobust study: one study file through tune (two seeds), validation, certification and
+falsification into one report, with a custom law no one here wrote beside the shipped nn and pd;
+its tuned settings are exactly those its sweep and falsification ran, a rerun computes nothing,
+every replay command recomputes its stage, and a case without randomness says it was validated
+on the training plant."""
+
+import json
+import shlex
+import shutil
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("distributed")
+pytest.importorskip("optuna")
+pytest.importorskip("cma")
+
+from nnrobust.cli import main  # noqa: E402
+from nnrobust.study import load_study, run_study  # noqa: E402
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+CUT = {"tune": 4, "seeds": 2, "train_samples": 1, "validation": 2, "epsilon": 0.5, "beta": 0.2,
+       "falsify": 4, "margin": "false"}  # fmt: skip
+"""examples/study.toml's budgets, cut down for the suite."""
+
+
+def _cut(text: str) -> str:
+    import re
+
+    text = re.sub(r'"simulation.duration" = [0-9.]+', '"simulation.duration" = 2.5', text)
+    text = re.sub(r'"plant.friction_scale" = .*\n', "", text)
+    for key, value in CUT.items():
+        text = re.sub(rf"^{key} = .*$", f"{key} = {value}", text, flags=re.M)
+    return text
+
+
+STUDY = _cut((EXAMPLES / "study.toml").read_text()).replace("custom_controller.py:TaskPD", "laws.py:TaskPD")
+
+
+def _parts(folder: Path) -> list[str]:
+    return sorted(str(p.relative_to(folder)) for p in folder.rglob("part-*.parquet"))
+
+
+@pytest.fixture(scope="module")
+def study(tmp_path_factory):
+    here = tmp_path_factory.mktemp("study")
+    shutil.copy(EXAMPLES / "custom_controller.py", here / "laws.py")
+    (here / "study.toml").write_text(STUDY)
+    out = here / "out"
+    assert main(["study", str(here / "study.toml"), "--out", str(out), "--workers", "2", "--quiet"]) == 0
+    return here, out, json.loads((out / "report.json").read_text())
+
+
+def test_the_report_holds_every_stage_for_every_controller(study):
+    here, out, report = study
+    assert report["schema"] == "nnrobust-study-report/1"
+    case = report["cases"]["paper-ellipse-noisy"]
+    assert case["stages"] == {s: "finished" for s in ("tune", "validate", "certify", "falsify")}
+    assert case["held_out"] and case["validated_on"].startswith("fresh draws")
+    assert set(case["controllers"]) == {"nn", "pd", "taskpd"}
+    for name, entry in case["controllers"].items():
+        assert [s["seed"] for s in entry["tuned"]["seeds"]] == [0, 1], name
+        assert (
+            entry["tuned"]["kept_seed"]
+            == min(entry["tuned"]["seeds"], key=lambda s: s["median_error"])["seed"]
+        )
+        assert entry["certificates"] and entry["certificates"][0]["N"] == 3  # ceil(ln(1/0.2) / ln(1/0.5)) = 3
+        assert "command" in entry["worst"] and isinstance(entry["worst"]["falsified"], bool)
+    assert [(p["a"], p["b"]) for p in case["paired"]] == [("nn", "pd"), ("nn", "taskpd"), ("pd", "taskpd")]
+    assert str(here / "study.toml") in report["inputs"]
+    assert any(p.endswith("laws.py") for p in report["inputs"])
+    for name in ("summary.csv", "summary.tex"):
+        assert (out / "tables" / name).read_text().count("paper-ellipse-noisy") == 3
+    assert "\\toprule" in (out / "tables" / "summary.tex").read_text()
+    for ext in ("png", "svg", "pdf"):
+        assert (out / "figures" / f"paper-ellipse-noisy-error-cdf.{ext}").stat().st_size > 1000
+    page = (out / "report.html").read_text()
+    assert "data:image/png;base64," in page and "http://" not in page and "https://" not in page
+
+
+def test_the_custom_laws_tuned_settings_are_the_ones_every_stage_ran(study):
+    _, out, report = study
+    here = out / "cases" / "paper-ellipse-noisy"
+    kept = report["cases"]["paper-ellipse-noisy"]["controllers"]["taskpd"]["tuned"]["settings"]
+    seed = report["cases"]["paper-ellipse-noisy"]["controllers"]["taskpd"]["tuned"]["kept_seed"]
+    tuned = json.loads((here / f"tune-seed{seed}" / "summary.json").read_text())
+    assert tuned["controllers"]["taskpd"]["best"]["params"] == kept
+    params = {k.removeprefix("controller.params."): v for k, v in kept.items()}
+    from nnrobust.config import parse_toml
+
+    certify = parse_toml((here / "certify.toml").read_text(), "certify.toml")
+    entry = next(c for c in certify["controllers"] if isinstance(c, dict) and c["name"] == "taskpd-tuned")
+    assert entry["params"] == params
+    falsify = parse_toml((here / "falsify" / "falsify.toml").read_text(), "falsify.toml")
+    assert falsify["tuned"]["taskpd"] == kept
+    worst = shlex.split(report["cases"]["paper-ellipse-noisy"]["controllers"]["taskpd"]["worst"]["command"])
+    for key, value in params.items():
+        assert f"controller.params.{key}={value!r}" in worst
+
+
+def test_a_rerun_computes_nothing_and_each_replay_command_recomputes_its_stage(study, capsys):
+    here, out, report = study
+    before = _parts(out)
+    assert main(["study", str(here / "study.toml"), "--out", str(out), "--workers", "2", "--quiet"]) == 0
+    assert _parts(out) == before
+    assert json.loads((out / "report.json").read_text())["cases"] == report["cases"]
+    commands = report["cases"]["paper-ellipse-noisy"]["commands"]
+    assert set(commands) == {"tune seed 0", "tune seed 1", "validate", "certify", "falsify"}
+    for name in ("validate", "certify", "falsify", "tune seed 1"):
+        words = shlex.split(commands[name])
+        assert main([*words[1:], "--workers", "2", "--quiet"]) == 0, name
+    assert _parts(out) == before  # the stage folders took every command as their own: nothing new
+
+
+def test_a_case_without_randomness_says_it_was_validated_on_the_training_plant(tmp_path):
+    (tmp_path / "study.toml").write_text(
+        STUDY.replace('cases = ["paper-ellipse-noisy"]', 'cases = ["paper-ellipse"]')
+        .replace('"plant.disturbance_scale" = {uniform = [0.5, 2.0]}', "")
+        .replace(', {name = "taskpd", class = "laws.py:TaskPD"}', "")
+        .replace("seeds = 2", "seeds = 1")
+    )
+    report = run_study(load_study(tmp_path / "study.toml"), tmp_path / "out", workers=2)
+    case = report["cases"]["paper-ellipse"]
+    assert not case["held_out"]
+    assert case["validated_on"].startswith("the training plant")
+    assert case["stages"]["falsify"].startswith("skipped")
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (("[budgets]", "[budget]"), "budget: unknown key; did you mean 'budgets'?"),
+        (("tune = 4", "tunes = 4"), "budgets.tunes: unknown key; did you mean 'tune'?"),
+        (("seeds = 2", "seeds = 0"), "budgets.seeds: expected an integer in [1, 20], got 0"),
+        (("{uniform = [0.5, 2.0]}", "[0.5, 2.0]"), "a study's uncertainty set is distributions"),
+        (("<=0.002", "<=0.002 mm"), "require"),
+        (("laws.py:TaskPD", "laws.py:TaskPDD"), "has no 'TaskPDD'; did you mean 'TaskPD'?"),
+    ],
+)
+def test_a_bad_study_is_one_line_naming_the_key_before_any_stage(change, message, tmp_path, capsys):
+    shutil.copy(EXAMPLES / "custom_controller.py", tmp_path / "laws.py")
+    (tmp_path / "study.toml").write_text(STUDY.replace(*change))
+    assert main(["study", str(tmp_path / "study.toml"), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1, err
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_controller_that_cannot_run_is_refused_before_any_stage(tmp_path, capsys):
+    shutil.copy(Path(__file__).parent / "controllers" / "eq9_again.py", tmp_path / "laws.py")
+    (tmp_path / "study.toml").write_text(STUDY.replace("laws.py:TaskPD", "laws.py:WrongShape"))
+    assert main(["study", str(tmp_path / "study.toml"), "--out", str(tmp_path / "out")]) == 2
+    assert "returned a torque of shape (4,)" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+
+
+def test_the_report_opens_in_a_browser_without_a_console_error(study, tmp_path):
+    from tests.test_viewer import _chromium, console_errors
+
+    browser = _chromium()
+    if browser is None:
+        pytest.skip("Chromium is not installed (make test installs Debian's chromium where it can)")
+    _, out, _ = study
+    assert console_errors(browser, out / "report.html", tmp_path) == []
+
+
+def test_validation_and_certification_draws_are_ones_the_earlier_stages_never_saw(study):
+    """Held out means held out: the tunings' training draws, the validation draws (which select
+    the seed) and the certification draws are three disjoint sets of plants."""
+    from nnrobust.sweep import read_results
+
+    _, out, _ = study
+    here = out / "cases" / "paper-ellipse-noisy"
+    key = "plant.disturbance_scale"
+    training = {
+        s[key]
+        for seed in (0, 1)
+        for s in json.loads((here / f"tune-seed{seed}" / "summary.json").read_text())["train_samples"]
+    }
+    validation = set(read_results(here / "validate")[key])
+    certification = set(read_results(here / "certify")[key])
+    assert training and validation and certification
+    assert not training & validation and not training & certification and not validation & certification
