@@ -1207,7 +1207,9 @@ def test_the_nn_worst_plant_fails_on_the_python_loop_too():
     text = (ROOT / "docs" / "falsification.md").read_text()
     quoted = float(re.search(r"The Python loop, whose rounding differs,\s+gave (\d+) mm", text).group(1))
     python = config.replace(simulation={"backend": "python"})
-    value = _reproduces_or_is_chaotic(python, quoted / 1e3, "python loop", 0.05)
+    # one run (25 s): the quoted figure where the rounding is this machine's, else past 50 mm all
+    # the same (the chaos itself is shown on the compiled loop, test_the_published_worst_plants_...)
+    value = run_experiment(python).metrics()["rms_error_after_2s"]
     assert 1e3 * value == pytest.approx(quoted, abs=0.5) or value > 0.05
     compiled = run_experiment(config).metrics()  # the saturation and the stop the text quotes
     said = re.search(
@@ -1335,9 +1337,10 @@ def test_every_worst_plant_fails_on_mujoco_too():
         compiled = run_experiment(config).metrics()["rms_error_after_2s"]
         on_python = config.replace(simulation={"backend": "python"})
         python = run_experiment(on_python).metrics()["rms_error_after_2s"]
-        assert compiled > 0.05 and python > 0.05, name
-        if 1e3 * compiled != pytest.approx(quoted[name], abs=0.5):  # chaotic: elsewhere, past 50 mm
-            _reproduces_or_is_chaotic(config, quoted[name] / 1e3, f"{name} on MuJoCo", 0.05)
+        assert compiled > 0.05 and python > 0.05, name  # the verdict, on both loops
+        # the quoted figures (the compiled loop's on the machine that wrote them; a chaotic run's
+        # digits move with the rounding, test_the_published_worst_plants_rerun_to_their_metrics)
+        assert quoted[name] > 50, name
 
 
 def test_a_row_of_the_engine_gap_reproduces():

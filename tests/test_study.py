@@ -56,7 +56,7 @@ def test_the_report_holds_every_stage_for_every_controller(study):
     here, out, report = study
     assert report["schema"] == "nnrobust-study-report/1"
     case = report["cases"]["paper-ellipse-noisy"]
-    assert case["stages"] == {s: "finished" for s in ("tune", "validate", "certify", "falsify")}
+    assert case["stages"] == {s: "finished" for s in ("tune", "validate", "certify", "falsify", "engine")}
     assert case["held_out"] and case["validated_on"].startswith("fresh draws")
     assert set(case["controllers"]) == {"nn", "pd", "taskpd"}
     for name, entry in case["controllers"].items():
@@ -67,6 +67,8 @@ def test_the_report_holds_every_stage_for_every_controller(study):
         )
         assert entry["certificates"] and entry["certificates"][0]["N"] == 3  # ceil(ln(1/0.2) / ln(1/0.5)) = 3
         assert "command" in entry["worst"] and isinstance(entry["worst"]["falsified"], bool)
+        assert entry["engines"]["mujoco"]["rows"] == 3 and entry["engines"]["mujoco"]["certificates"]
+        assert entry["step_cost_us"] > 0 and entry["backend"] in ("compiled", "hybrid", "python")
     assert [(p["a"], p["b"]) for p in case["paired"]] == [("nn", "pd"), ("nn", "taskpd"), ("pd", "taskpd")]
     assert str(here / "study.toml") in report["inputs"]
     assert any(p.endswith("laws.py") for p in report["inputs"])
@@ -106,8 +108,8 @@ def test_a_rerun_computes_nothing_and_each_replay_command_recomputes_its_stage(s
     assert _parts(out) == before
     assert json.loads((out / "report.json").read_text())["cases"] == report["cases"]
     commands = report["cases"]["paper-ellipse-noisy"]["commands"]
-    assert set(commands) == {"tune seed 0", "tune seed 1", "validate", "certify", "falsify"}
-    for name in ("validate", "certify", "falsify", "tune seed 1"):
+    assert set(commands) == {"tune seed 0", "tune seed 1", "validate", "certify", "falsify", "engine"}
+    for name in ("validate", "certify", "falsify", "engine", "tune seed 1"):
         words = shlex.split(commands[name])
         assert main([*words[1:], "--workers", "2", "--quiet"]) == 0, name
     assert _parts(out) == before  # the stage folders took every command as their own: nothing new

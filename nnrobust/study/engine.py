@@ -9,7 +9,12 @@ writing its own folder (docs/study.md).
    ``cases/C/certify/``): certificates, statistics and paired comparisons on draws the
    selection never saw;
 4. **falsify**: the kept settings searched for their worst plant (``nnrobust falsify``'s
-   engine, ``cases/C/falsify/``).
+   engine, ``cases/C/falsify/``);
+5. **engine** (with ``second_engine = true``): the certification draws again with MuJoCo as
+   the plant (a sweep, ``cases/C/certify-mujoco/``), its statistics and certificates beside.
+
+The step cost of each controller is read off the certification rows (their ``wall_seconds``
+over the steps of a run, the loop alone, on the backend each ran on).
 
 Every stage resumes (its engine does) and refuses inputs that changed since its rows were
 computed; a finished study reruns to "nothing to do". One local cluster serves every stage.
@@ -30,7 +35,7 @@ VALIDATION_SEED = 1_000_003
 """Added to the study's seed for the validation draws (the tunings draw from seed + s, s < 20)."""
 CERTIFY_SEED = 2_000_003
 """Added to the study's seed for the certification draws: independent of training and validation."""
-STAGES = ("tune", "validate", "certify", "falsify")
+STAGES = ("tune", "validate", "certify", "falsify", "engine")
 
 
 def _write_if_changed(path: Path, text: str) -> None:
@@ -270,6 +275,7 @@ def _run_case(spec: StudySpec, case: str, folder: Path, address: str, overwrite:
     out["stages"]["certify"] = "finished"
     out["certify"] = summary
     out["held_out"] = _varies(rows)
+    out["step_cost"] = step_cost(certify_spec, rows)
 
     # 4. falsify the kept settings
     say(f"{name}: falsify {len(kept)} controllers, {b['falsify']} simulations each (and as many random)")
@@ -290,6 +296,54 @@ def _run_case(spec: StudySpec, case: str, folder: Path, address: str, overwrite:
         out["stages"]["falsify"] = "finished"
     else:
         out["stages"]["falsify"] = "skipped: the study has no [vary] box to search"
+
+    # 5. the certification draws again on the second engine
+    if not b["second_engine"]:
+        out["stages"]["engine"] = "skipped: second_engine = false"
+        return out
+    try:
+        import mujoco  # noqa: F401
+    except ImportError:
+        out["stages"]["engine"] = "skipped: MuJoCo is not installed (pip install 'nnrobust[mujoco]')"
+        return out
+    again = load_sweep(certify_file)
+    again.set["plant.engine"] = "mujoco"
+    engine_file = here / "certify-mujoco.toml"
+    _write_if_changed(engine_file, again.to_toml())
+    say(f"{name}: the certification draws again with MuJoCo as the plant")
+    engine_spec = load_sweep(engine_file)
+    run_sweep(engine_spec, here / "certify-mujoco", scheduler=address, overwrite=overwrite, progress=progress)
+    rows = read_results(here / "certify-mujoco")
+    summary = summarize(engine_spec, rows)
+    certificates = certify_rows(engine_spec, rows, run_properties(spec.require), b["epsilon"], b["beta"])
+    for label, entry in certificates.items():
+        summary["controllers"][label].update(entry)
+    write_summary(here / "certify-mujoco", summary)
+    out["engine"] = summary
+    out["stages"]["engine"] = "finished"
+    return out
+
+
+def step_cost(sweep, rows) -> dict:
+    """Per controller: the median of its runs' loop time (``wall_seconds``) over the control steps
+    of a run [us per step], the backend it ran on and the runs it is read from.
+    """
+    import numpy as np
+
+    from ..sweep.spec import base_config
+
+    sim = base_config(sweep).simulation
+    steps = sim.duration / sim.control_period
+    out = {}
+    for label, group in rows.groupby("controller", sort=False):
+        done = group[group["status"] == "completed"]
+        seconds = done["wall_seconds"].to_numpy(dtype=float)
+        seconds = seconds[np.isfinite(seconds)]
+        out[str(label)] = {
+            "step_cost_us": float(1e6 * np.median(seconds) / steps) if seconds.size else None,
+            "backend": str(done["backend"].mode().iloc[0]) if len(done) else None,
+            "runs": int(seconds.size),
+        }
     return out
 
 

@@ -71,6 +71,11 @@ def _commands(spec: StudySpec, folder: Path, name: str, case: dict) -> dict:
         f"nnrobust sweep {here / 'certify.toml'} {require} --epsilon {b['epsilon']:g} --beta {b['beta']:g} "
         f"--out {here / 'certify'}"
     )
+    if case["stages"].get("engine") == "finished":
+        out["engine"] = (
+            f"nnrobust sweep {here / 'certify-mujoco.toml'} {require} --epsilon {b['epsilon']:g} "
+            f"--beta {b['beta']:g} --out {here / 'certify-mujoco'}"
+        )
     if case["stages"].get("falsify") == "finished":
         kept = ",".join(case["kept"])
         out["falsify"] = (
@@ -115,6 +120,19 @@ def _controller_entry(spec: StudySpec, case: dict, c: str) -> dict:
         "quantile_bounds": certify.get("quantile_bounds", []),
         "warnings": certify.get("warnings_by_kind", {}),
     }
+    cost = case.get("step_cost", {}).get(label, {})
+    entry["step_cost_us"], entry["backend"] = cost.get("step_cost_us"), cost.get("backend")
+    engines = {"pinocchio": entry["statistics"]}
+    second = (case.get("engine") or {}).get("controllers", {}).get(label)
+    if second:
+        engines["mujoco"] = {
+            **{
+                k: second.get(k)
+                for k in ("rows", "success_rate", "statuses", "rms_error_after_2s", "rms_torque")
+            },
+            "certificates": second.get("certificates", []),
+        }
+    entry["engines"] = engines
     falsified = (case.get("falsify") or {}).get("controllers", {})
     found = falsified.get(label) or falsified.get(c)
     if found:
@@ -188,6 +206,8 @@ TABLE_COLUMNS = (
     ("least_margin", "least margin"),
     ("kept_seed", "kept seed"),
     ("seed_spread_mm", "seeds' medians [mm]"),
+    ("mujoco_median_mm", "MuJoCo median e [mm]"),
+    ("step_cost_us", "us / step"),
 )
 
 
@@ -215,9 +235,16 @@ def table_rows(report: dict) -> list[dict]:
                     "least_margin": (e.get("worst") or {}).get("margin"),
                     "kept_seed": (e["tuned"] or {}).get("kept_seed"),
                     "seed_spread_mm": None if not spread else f"{1e3 * spread[0]:.4g}-{1e3 * spread[1]:.4g}",
+                    "mujoco_median_mm": _median_mm(e["engines"].get("mujoco")),
+                    "step_cost_us": e["step_cost_us"],
                 }
             )
     return rows
+
+
+def _median_mm(stats: dict | None) -> float | None:
+    median = ((stats or {}).get("rms_error_after_2s") or {}).get("median")
+    return None if median is None else 1e3 * median
 
 
 def _cell(value) -> str:

@@ -45,6 +45,7 @@ BUDGET_KEYS = {
     "margin": "search how far the box may grow before a property fails (true/false)",
     "max_rms_torque": "tuning constraint: RMS torque <= this [N m]",
     "max_saturated": "tuning constraint: saturated fraction of the steps <= this",
+    "second_engine": "run the certification draws again with MuJoCo as the plant (true/false)",
 }
 """The keys of [budgets], each with what it means."""
 
@@ -59,6 +60,7 @@ DEFAULT_BUDGETS = {
     "margin": False,
     "max_rms_torque": math.inf,
     "max_saturated": 1.0,
+    "second_engine": False,
 }
 
 ENTRY_TUNE = "tune"
@@ -143,8 +145,9 @@ def _budgets(data, where: str) -> dict:
         value = out[key]
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < 1:
             raise ConfigError(f"{where}: budgets.{key}", f"expected a number in (0, 1), got {value!r}")
-    if not isinstance(out["margin"], bool):
-        raise ConfigError(f"{where}: budgets.margin", f"expected true or false, got {out['margin']!r}")
+    for key in ("margin", "second_engine"):
+        if not isinstance(out[key], bool):
+            raise ConfigError(f"{where}: budgets.{key}", f"expected true or false, got {out[key]!r}")
     for key in ("max_rms_torque", "max_saturated"):
         value = out[key]
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
