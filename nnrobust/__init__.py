@@ -32,6 +32,10 @@ _EXPORTS = {
     "run_tune": ".tune",
     "FalsifySpec": ".falsify",
     "run_falsify": ".falsify",
+    "load_study": ".study",
+    "run_study": ".study",
+    # a sweep's, tuning's, falsification's or study's summary, shown as HTML in Jupyter
+    "load_summary": ".display",
     # the contract of a controller of your own (docs/extending.md)
     "Controller": ".controllers",
     "ControlOutput": ".controllers",

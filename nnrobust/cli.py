@@ -517,6 +517,9 @@ def cmd_study(args) -> int:
                 f"p95 {_number(row['p95_mm'])} mm, P(fail) <= {_number(row['p_fail_upper'])}, "
                 f"falsified: {_number(row['falsified'])}, least margin {_number(row['least_margin'])}"
             )
+        for name, case in report["cases"].items():
+            for controller, reason in case["not_kept"].items():
+                print(f"{name:24s} {controller:18s} no setting to validate: {reason}")
         print(f"report in {args.out}/report.html and {args.out}/report.json", file=sys.stderr)
     return 0
 

@@ -694,7 +694,9 @@ def _run_falsify(
     write_json_atomic(folder / "summary.json", summary)
     _write_csv(folder, summary)
     plot_convergence({k: v for k, v in rows.items() if k[1] in ("falsifier", "random")}, folder)
-    return summary
+    from .display import FalsifySummary
+
+    return FalsifySummary(summary)
 
 
 def _summary(spec, sweep, box, properties, rows, seconds, rerun_command, Sample, sample_seed) -> dict:

@@ -148,12 +148,22 @@ def format_pair(entry: dict, scale: float = 1e3, unit: str = "mm") -> str:
     a, b, n = entry["a"], entry["b"], entry["n"]
     if not n:
         return f"{a} vs {b}: no sample with a result for both"
+
+    def num(value) -> str:  # null in a report: not finite (runs that did not complete)
+        return "inf" if value is None else f"{scale * value:.4g}"
+
     low, high = entry["interval"]
     verdict = "significant" if entry["significant"] else "not significant"
     wilcoxon = "" if entry["wilcoxon_p"] is None else f", Wilcoxon p = {entry['wilcoxon_p']:.3g}"
     ties = f" ({entry['ties']} ties)" if entry["ties"] else ""
+    infinite = (
+        " (a run that did not complete counts as +inf)"
+        if None in (entry["median_difference"], low, high)
+        or not all(math.isfinite(v) for v in (entry["median_difference"], low, high))
+        else ""
+    )
     return (
-        f"{a} - {b}: median {scale * entry['median_difference']:.4g} {unit} "
-        f"[{scale * low:.4g}, {scale * high:.4g}]; {a} better on {entry['a_better']} of {n}{ties}; "
-        f"sign test p = {entry['sign_p']:.3g}{wilcoxon} ({verdict})"
+        f"{a} - {b}: median {num(entry['median_difference'])} {unit} [{num(low)}, {num(high)}]{infinite}; "
+        f"{a} better on {entry['a_better']} of {n}{ties}; sign test p = {entry['sign_p']:.3g}{wilcoxon} "
+        f"({verdict})"
     )

@@ -138,6 +138,10 @@ def test_a_case_without_randomness_says_it_was_validated_on_the_training_plant(t
         (("{uniform = [0.5, 2.0]}", "[0.5, 2.0]"), "a study's uncertainty set is distributions"),
         (("<=0.002", "<=0.002 mm"), "require"),
         (("laws.py:TaskPD", "laws.py:TaskPDD"), "has no 'TaskPDD'; did you mean 'TaskPD'?"),
+        (
+            ('class = "laws.py:TaskPD"', 'class = "laws.py:TaskPD", tuen = false'),
+            "tuen: unknown key; did you mean 'tune'?",
+        ),
     ],
 )
 def test_a_bad_study_is_one_line_naming_the_key_before_any_stage(change, message, tmp_path, capsys):
@@ -184,3 +188,86 @@ def test_validation_and_certification_draws_are_ones_the_earlier_stages_never_sa
     certification = set(read_results(here / "certify")[key])
     assert training and validation and certification
     assert not training & validation and not training & certification and not validation & certification
+
+
+def test_every_summary_displays_as_html_in_a_notebook(study):
+    """load_summary reads a sweep's, a tuning's, a falsification's and a study's folder; each is the
+    summary's own dict and renders as one HTML table naming every controller (Jupyter calls
+    _repr_html_)."""
+    from html.parser import HTMLParser
+
+    import nnrobust
+
+    _, out, report = study
+    here = out / "cases" / "paper-ellipse-noisy"
+    shown = {
+        "SweepSummary": (here / "validate", ["nn-seed0", "pd-seed1", "taskpd-seed0"]),
+        "TuneSummary": (here / "tune-seed0", ["nn", "pd", "taskpd"]),
+        "FalsifySummary": (here / "falsify", ["nn-tuned", "pd-tuned", "taskpd-tuned", "falsified"]),
+        "StudyReport": (out, ["nn", "pd", "taskpd", "validated on fresh draws"]),
+    }
+    for kind, (folder, names) in shown.items():
+        summary = nnrobust.load_summary(folder)
+        assert type(summary).__name__ == kind
+        assert summary == json.loads(
+            (folder / ("report.json" if kind == "StudyReport" else "summary.json")).read_text()
+        )
+        page = summary._repr_html_()
+        HTMLParser().feed(page)
+        assert page.count("<table>") == 1 and page.count("</table>") == 1, kind
+        for name in names:
+            assert name in page, (kind, name)
+    with pytest.raises(
+        nnrobust.NNRobustError, match="holds no finished sweep, tuning, falsification or study"
+    ):
+        nnrobust.load_summary(here)
+
+
+def test_a_law_that_fails_says_why_in_the_report_and_the_report_is_standard_json(tmp_path, capsys):
+    """A tuned law whose every run raises is not silently dropped: the report, its page and the
+    command say why (its exception, located). A law run untuned that fails keeps its rows' first
+    message. report.json holds no Infinity (a margin of -inf is null beside the status)."""
+    shutil.copy(Path(__file__).parent / "controllers" / "eq9_again.py", tmp_path / "laws.py")
+    text = STUDY.replace(
+        '{name = "taskpd", class = "laws.py:TaskPD"}',
+        '{name = "late", class = "laws.py:RaisesLate", tune = false}, {name = "latet", class = "laws.py:RaisesLate"}',
+    ).replace('"nn", ', "")
+    (tmp_path / "study.toml").write_text(text)
+    out = tmp_path / "out"
+    assert main(["study", str(tmp_path / "study.toml"), "--out", str(out), "--workers", "2"]) == 0
+    said = capsys.readouterr()
+    raw = (out / "report.json").read_text()
+    report = json.loads(raw, parse_constant=lambda c: pytest.fail(f"report.json holds {c}"))
+    case = report["cases"]["paper-ellipse-noisy"]
+    assert (
+        "RaisesLate.compute raised at t = 1.001 s: RuntimeError: boom after 1 s" in case["not_kept"]["latet"]
+    )
+    assert "latet" in said.out and "no setting to validate" in said.out
+    failed = case["controllers"]["late"]["failures"]
+    assert (
+        failed["refused"]["runs"] == 3
+        and "RuntimeError: boom after 1 s" in failed["refused"]["first_message"]
+    )
+    assert case["controllers"]["late"]["worst"]["margin"] is None  # -inf: the runs did not complete
+    page = (out / "report.html").read_text()
+    assert "latet: no setting to validate" in page and "boom after 1 s" in page
+
+
+def test_a_law_without_a_search_space_is_refused_naming_the_way_out(tmp_path, capsys):
+    shutil.copy(Path(__file__).parent / "controllers" / "eq9_again.py", tmp_path / "laws.py")
+    (tmp_path / "study.toml").write_text(STUDY.replace("laws.py:TaskPD", "laws.py:Counter"))
+    assert main(["study", str(tmp_path / "study.toml"), "--out", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err
+    assert "controllers.taskpd: Counter declares no search space" in err and "tune = false" in err, err
+
+
+def test_a_changed_study_is_refused_naming_what_changed(study, tmp_path, capsys):
+    here, out, _ = study
+    copy = tmp_path / "copy"
+    shutil.copytree(out, copy)
+    (tmp_path / "study.toml").write_text(
+        (here / "study.toml").read_text().replace("validation = 2", "validation = 3")
+    )
+    shutil.copy(here / "laws.py", tmp_path / "laws.py")
+    assert main(["study", str(tmp_path / "study.toml"), "--out", str(copy), "--quiet"]) == 2
+    assert "changed since its rows were computed: budgets.validation 2 -> 3" in capsys.readouterr().err

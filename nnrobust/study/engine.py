@@ -71,12 +71,36 @@ def prepare(spec: StudySpec, folder: Path, overwrite: bool) -> None:
     marker = folder / MARKER
     text = spec.path.read_text()
     if marker.is_file() and marker.read_text() != text and not overwrite:
-        raise NNRobustError(
-            f"{folder} holds another study (its {MARKER} differs from {spec.path}); give another "
-            "--out, or --overwrite to run this study there"
-        )
+        changed = _changed(marker.read_text(), text)
+        if changed:  # (a comment or the layout alone changes nothing)
+            raise NNRobustError(
+                f"{folder} holds another study (changed since its rows were computed: {changed}); give "
+                f"another --out, or --overwrite to run {spec.path} there"
+            )
     folder.mkdir(parents=True, exist_ok=True)
     _write_if_changed(marker, text)
+
+
+def _changed(old: str, new: str) -> str:
+    """The keys whose values differ between two study files, in words ('' when none does)."""
+    from ..config import parse_toml
+
+    def flat(text: str) -> dict:
+        try:
+            data = parse_toml(text, "study")
+        except ConfigError:
+            return {"(the file)": text}
+        out = {}
+        for key, value in data.items():
+            if isinstance(value, dict):
+                out.update({f"{key}.{k}": v for k, v in value.items()})
+            else:
+                out[key] = value
+        return out
+
+    a, b = flat(old), flat(new)
+    keys = sorted(k for k in a.keys() | b.keys() if a.get(k) != b.get(k))
+    return ", ".join(f"{k} {a.get(k, 'unset')!r} -> {b.get(k, 'unset')!r}" for k in keys[:5])
 
 
 def _check_controllers(spec: StudySpec) -> None:
@@ -108,7 +132,14 @@ def _check_controllers(spec: StudySpec) -> None:
             from ..controllers.base import Controller
             from ..user_code import load_class
 
-            custom_space(name, load_class(entry["class"], Controller, "controller.class"))
+            try:
+                custom_space(name, load_class(entry["class"], Controller, "controller.class"))
+            except ConfigError as err:
+                said = str(err).split(": ", 1)[1]
+                raise ConfigError(
+                    f"{spec.path}: controllers.{name}",
+                    f"{said}; or run it untuned: tune = false in its entry",
+                ) from err
 
 
 def run_study(
@@ -221,8 +252,20 @@ def _run_case(spec: StudySpec, case: str, folder: Path, address: str, overwrite:
             entries[label] = tuned_entry(c, best["params"], spec.entries)
             names.append(label)
             setting_of[label] = (c, s, dict(best["params"]))
+    out["not_kept"] = {
+        c: "; ".join(
+            f"seed {s}: {summary['controllers'].get(c, {}).get('note', 'no best setting')}"
+            for s, summary in tunings.items()
+        )
+        for c in tuned
+        if not any(setting_of.get(seed_name(c, s)) for s in tunings)
+    }
+    for c, reason in out["not_kept"].items():
+        say(f"{name}: {c} has no setting to validate: {reason}")
     if not names:
-        raise NNRobustError(f"{name}: no controller has a setting that met the tuning's constraints")
+        raise NNRobustError(
+            f"{name}: no controller has a setting to validate ({'; '.join(out['not_kept'].values())})"
+        )
     validate = sweep_of(spec, case, names, entries, b["validation"], spec.seed + VALIDATION_SEED)
     validate_file = here / "validate.toml"
     _write_if_changed(validate_file, validate.to_toml())
@@ -235,6 +278,10 @@ def _run_case(spec: StudySpec, case: str, folder: Path, address: str, overwrite:
         progress=progress,
     )
     frame = read_results(here / "validate")
+    from ..sweep.summary import summarize, write_summary
+
+    validate_spec = load_sweep(validate_file)
+    write_summary(here / "validate", summarize(validate_spec, frame))
     kept, per_seed = _select(spec, frame, setting_of)
     out["stages"]["validate"] = "finished"
     out["kept"], out["per_seed"] = kept, per_seed
@@ -264,7 +311,6 @@ def _run_case(spec: StudySpec, case: str, folder: Path, address: str, overwrite:
     certify_spec = load_sweep(certify_file)
     run_sweep(certify_spec, here / "certify", scheduler=address, overwrite=overwrite, progress=progress)
     from ..properties import certify as certify_rows
-    from ..sweep.summary import summarize, write_summary
 
     rows = read_results(here / "certify")
     summary = summarize(certify_spec, rows)
@@ -276,6 +322,7 @@ def _run_case(spec: StudySpec, case: str, folder: Path, address: str, overwrite:
     out["certify"] = summary
     out["held_out"] = _varies(rows)
     out["step_cost"] = step_cost(certify_spec, rows)
+    out["failures"] = failures(rows)
 
     # 4. falsify the kept settings
     say(f"{name}: falsify {len(kept)} controllers, {b['falsify']} simulations each (and as many random)")
@@ -321,6 +368,20 @@ def _run_case(spec: StudySpec, case: str, folder: Path, address: str, overwrite:
     write_summary(here / "certify-mujoco", summary)
     out["engine"] = summary
     out["stages"]["engine"] = "finished"
+    return out
+
+
+def failures(rows) -> dict:
+    """Per controller: each status other than completed, how many runs ended so and the first
+    one's message (why a law lost its certificate, in its own words).
+    """
+    out: dict = {}
+    for label, group in rows.groupby("controller", sort=False):
+        failed = group[group["status"] != "completed"].sort_values("sample")
+        out[str(label)] = {
+            str(status): {"runs": int(len(g)), "first_message": str(g["message"].iloc[0])[:300]}
+            for status, g in failed.groupby("status")
+        }
     return out
 
 
@@ -406,5 +467,7 @@ def _varies(frame) -> bool:
 
 
 def read_report(folder: str | Path) -> dict:
-    """DIR/report.json."""
-    return json.loads((Path(folder) / "report.json").read_text())
+    """DIR/report.json (shown as HTML in Jupyter)."""
+    from ..display import StudyReport
+
+    return StudyReport(json.loads((Path(folder) / "report.json").read_text()))

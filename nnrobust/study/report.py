@@ -119,6 +119,7 @@ def _controller_entry(spec: StudySpec, case: dict, c: str) -> dict:
         "certificates": certify.get("certificates", []),
         "quantile_bounds": certify.get("quantile_bounds", []),
         "warnings": certify.get("warnings_by_kind", {}),
+        "failures": case.get("failures", {}).get(label, {}),
     }
     cost = case.get("step_cost", {}).get(label, {})
     entry["step_cost_us"], entry["backend"] = cost.get("step_cost_us"), cost.get("backend")
@@ -188,7 +189,7 @@ def build_report(spec: StudySpec, folder: Path, cases: dict) -> dict:
             "controllers": {
                 c: _controller_entry(spec, case, c) for c in spec.controllers if c in case["kept"]
             },
-            "not_kept": [c for c in spec.controllers if c not in case["kept"]],
+            "not_kept": case.get("not_kept", {}),
             "paired": paired,
             "commands": _commands(spec, folder, name, case),
         }
@@ -274,7 +275,7 @@ def write_tables(report: dict, folder: Path) -> list[Path]:
     def tex(text: str) -> str:
         for a, b in (("\\", r"\textbackslash{}"), ("&", r"\&"), ("%", r"\%"), ("_", r"\_"), ("#", r"\#")):
             text = text.replace(a, b)
-        return text
+        return text.replace("<=", r"$\le$").replace("us / step", r"$\mu$s / step")
 
     lines = [
         r"\begin{tabular}{" + "l" * 2 + "r" * (len(TABLE_COLUMNS) - 2) + "}",
@@ -347,8 +348,44 @@ def write_html(report: dict, folder: Path, figures: dict[str, str]) -> Path:
         parts.append(f"<h2>Case {e(name)}</h2><p class='note'>Validated on {e(case['validated_on'])}.</p>")
         if name in figures:
             parts.append(f"<img alt='error CDF of {e(name)}' src='data:image/png;base64,{figures[name]}'>")
-        if case["not_kept"]:
-            parts.append(f"<p>No setting met the tuning's constraints: {e(', '.join(case['not_kept']))}.</p>")
+        stages = ", ".join(f"{k}: {v}" for k, v in case["stages"].items())
+        parts.append(f"<p class='note'>Stages: {e(stages)}.</p>")
+        for c, reason in case["not_kept"].items():
+            parts.append(f"<p><b>{e(c)}: no setting to validate.</b> {e(reason)}</p>")
+        parts.append(
+            "<h3>Kept settings</h3><table><tr><th>controller</th><th>kept seed</th><th>setting</th>"
+            "<th>seeds' validation medians [mm]</th><th>on a bound</th></tr>"
+        )
+        for c, entry in case["controllers"].items():
+            tuned = entry["tuned"] or {}
+            setting = ", ".join(f"{k} = {_cell(v)}" for k, v in (tuned.get("settings") or {}).items())
+            medians = ", ".join(
+                f"seed {s['seed']}: {_cell(None if s['median_error'] is None else 1e3 * s['median_error'])}"
+                for s in tuned.get("seeds", [])
+            )
+            bound = (
+                ", ".join(
+                    f"{b['param']} at its {b['side']} bound {_cell(b['bound'])}"
+                    + (f" ({b['physical']})" if b.get("physical") else "")
+                    for b in tuned.get("at_bound") or []
+                )
+                or "-"
+            )
+            parts.append(
+                f"<tr><td>{e(c)}</td><td>{e(_cell(tuned.get('kept_seed')))}</td>"
+                f"<td>{e(setting or ('its own settings (tune = false)' if entry['fixed'] else '-'))}</td>"
+                f"<td>{e(medians or '-')}</td><td>{e(bound)}</td></tr>"
+            )
+        parts.append("</table>")
+        for c, entry in case["controllers"].items():
+            for status, failed in entry["failures"].items():
+                parts.append(
+                    f"<p><b>{e(c)}: {failed['runs']} certification runs {e(status)}</b>, the first: "
+                    f"{e(failed['first_message'])}</p>"
+                )
+            if entry["warnings"]:
+                fired = ", ".join(f"{k} ({n} runs)" for k, n in entry["warnings"].items())
+                parts.append(f"<p>{e(c)}: warnings on the certification draws: {e(fired)}.</p>")
         if case["paired"]:
             from ..paired import format_pair
 
@@ -369,9 +406,14 @@ def write_html(report: dict, folder: Path, figures: dict[str, str]) -> Path:
             if "worst" in entry:
                 w = entry["worst"]
                 verdict = "FALSIFIED" if w["falsified"] else "not falsified"
+                status = (w.get("metrics") or {}).get("status", "completed")
+                margin = (
+                    _cell(w["margin"])
+                    if w["margin"] is not None
+                    else f"-inf (the run ended {status}: {(w.get('metrics') or {}).get('message', '')})"
+                )
                 parts.append(
-                    f"<li>{e(c)}: {verdict} in {w['simulations']} simulations, least margin "
-                    f"{w['margin']:.4g}: "
+                    f"<li>{e(c)}: {verdict} in {w['simulations']} simulations, least margin {e(margin)}: "
                     f"<code>{e(w['command'])}</code></li>"
                 )
         parts.append("</ul><h3>Commands</h3><ul>")
@@ -389,6 +431,19 @@ def write_html(report: dict, folder: Path, figures: dict[str, str]) -> Path:
     return path
 
 
+def finite(value):
+    """``value`` with every non-finite float as null, so that report.json is standard JSON (a
+    margin of -inf, a run that did not complete, is null beside the status that says why).
+    """
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: finite(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [finite(v) for v in value]
+    return value
+
+
 def write_report(spec: StudySpec, folder: Path, cases: dict) -> dict:
     """report.json, tables/, figures/ and report.html; returns the report."""
     for name, case in cases.items():  # the kept settings, as --tuned reads them (the falsify command)
@@ -397,8 +452,11 @@ def write_report(spec: StudySpec, folder: Path, cases: dict) -> dict:
         }
         write_json_atomic(folder / "cases" / name / "kept.json", {"controllers": kept})
     report = build_report(spec, folder, cases)
+    report = finite(report)
     write_json_atomic(folder / "report.json", report)
     write_tables(report, folder)
     figures = {name: _figure(name, case, folder) for name, case in cases.items()}
     write_html(report, folder, figures)
-    return report
+    from ..display import StudyReport
+
+    return StudyReport(report)

@@ -188,8 +188,17 @@ def parse_study(data: dict, path: Path) -> StudySpec:
     fixed: list[str] = []
     controllers = data["controllers"]
     if isinstance(controllers, list):
+        from ..sweep.spec import ENTRY_KEYS
+
         controllers = [dict(c) if isinstance(c, dict) else c for c in controllers]
-        for c in controllers:
+        for i, c in enumerate(controllers):
+            for key in c if isinstance(c, dict) else ():
+                if key not in (*ENTRY_KEYS, ENTRY_TUNE):
+                    valid = (*ENTRY_KEYS, ENTRY_TUNE)
+                    raise ConfigError(
+                        f"{where}: controllers[{i}].{key}",
+                        f"unknown key{_suggest(key, valid)} Valid: {', '.join(valid)}",
+                    )
             if isinstance(c, dict) and ENTRY_TUNE in c:
                 if not isinstance(c[ENTRY_TUNE], bool):
                     raise ConfigError(f"{where}: controllers", f"an entry's tune is true or false, got {c!r}")

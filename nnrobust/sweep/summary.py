@@ -88,7 +88,9 @@ def summarize(spec: SweepSpec, frame) -> dict:
         from ..paired import all_pairs
 
         out["paired"] = all_pairs(frame, list(spec.controllers))
-    return out
+    from ..display import SweepSummary
+
+    return SweepSummary(out)
 
 
 def write_summary(folder: str | Path, summary: dict) -> Path:

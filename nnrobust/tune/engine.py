@@ -766,7 +766,9 @@ def _run_tune(
         summary = _summary(spec, sweep, controllers, client, sweep_future, base_future)
     _write_json(folder / "summary.json", summary)
     plot_pareto(summary, folder)
-    return summary
+    from ..display import TuneSummary
+
+    return TuneSummary(summary)
 
 
 def error_torque_front(pareto: list[dict]) -> list[tuple[float, float]]:

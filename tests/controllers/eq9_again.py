@@ -198,3 +198,17 @@ class HugeState(Counter):
     """A state no run could hold (8 GB a vector)."""
 
     state_size = 10**9
+
+
+class RaisesLate(Controller):
+    """tau = 0 until t = 1 s, then an exception: every run fails, after its first step passed."""
+
+    search_space = {"gain": (0.1, 10.0, "1")}
+
+    def __init__(self, context, gain=1.0):
+        self.n = context.n
+
+    def compute(self, t, q, v, z, period=0.0):
+        if t > 1.0:
+            raise RuntimeError("boom after 1 s")
+        return ControlOutput(np.zeros(self.n))
