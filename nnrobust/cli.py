@@ -66,12 +66,15 @@ def format_table(rows: list[tuple[str, dict]]) -> str:
         row = []
         for key, scale in columns:
             if key == "run":
-                row.append(name)
-            elif scale is None:
-                row.append(str(metrics.get(key, "pinocchio" if key == "plant_engine" else "")))
+                row.append(one_line(name, 60))
+            elif scale is None:  # text from a received folder: one line, no control characters
+                row.append(one_line(str(metrics.get(key, "pinocchio" if key == "plant_engine" else "")), 60))
             else:
                 value = metrics.get(key)
-                row.append("-" if value is None else f"{value * scale:.4g}")
+                number = isinstance(value, (int, float)) and not isinstance(value, bool)
+                row.append(
+                    "-" if value is None else f"{value * scale:.4g}" if number else one_line(str(value), 20)
+                )
         cells.append(row)
     widths = [max(len(r[i]) for r in cells) for i in range(len(headers))]
     lines = [
@@ -340,10 +343,11 @@ def cmd_sweep(args) -> int:
 
     spec = load_sweep(args.sweep)
     if args.tuned:  # each controller at its best setting of a tuning, as NAME-tuned
-        from .tune.engine import _with_controllers, tuned_settings
+        from .tune.engine import _with_controllers, check_tuned_values, tuned_settings
 
         tuned = tuned_settings(args.tuned, spec.controllers, spec.vary, spec.entries)
         spec = _with_controllers(spec, spec.controllers, tuned)
+        check_tuned_values(spec, tuned)
     out = Path(args.out)
     properties, claim = _sweep_claim(args, spec)
 
@@ -819,7 +823,7 @@ def cmd_compare(args) -> int:
 
     properties = run_properties(args.require or [])
     if len(rows) > 1:
-        print(f"\nchanges from {rows[0][0]}:")
+        print(f"\nchanges from {one_line(rows[0][0], 60)}:")
         print(delta_table(rows))
         changed = verdict_changes(rows, properties)
         print(
@@ -828,8 +832,8 @@ def cmd_compare(args) -> int:
             else "\nno verdict changes"
             + (f" ({', '.join(p.text for p in properties)} and the warnings)" if properties else "")
         )
-        for line in changed:
-            print(f"  {line}")
+        for line in changed:  # names and values from received folders: no control characters
+            print(f"  {one_line(line)}")
 
     for warning in comparison_warnings(results):
         print(f"warning: {one_line(warning)}", file=sys.stderr)

@@ -137,11 +137,12 @@ def _searched_sweep(spec: FalsifySpec):
     made searchable (its [set] then holds ``nominal.relative_error = 0``, which the values take).
     """
     from .sweep.spec import base_config, base_values, load_sweep
-    from .tune.engine import _with_controllers, check_tuned
+    from .tune.engine import _with_controllers, check_tuned, check_tuned_values
 
     target = load_sweep(spec.target)
     check_tuned(spec.tuned or {}, target.vary, entries=target.entries)  # the law's own keys, none varied
     sweep = _with_controllers(target, spec.controllers, spec.tuned)
+    check_tuned_values(sweep, spec.tuned or {})
     searched, note = searchable(sweep, base_config(sweep))
     if searched is not sweep:
         base_config(searched)  # its [set] (relative_error 0) checked on the base

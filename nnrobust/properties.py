@@ -91,6 +91,10 @@ def parse(text: str, metrics: list[str] | tuple[str, ...], flags: tuple[str, ...
     return Property(metric, op, value)
 
 
+MACHINE_METRICS = ("wall_seconds",)
+"""Metrics no property may read: they depend on the machine's load, not on the run."""
+
+
 def run_properties(texts: list[str]) -> list[Property]:
     """The properties of ``--require`` over the metrics a run records (metrics.json)."""
     from .results import METRIC_UNITS
@@ -98,6 +102,13 @@ def run_properties(texts: list[str]) -> list[Property]:
 
     numeric = tuple(m for m in METRIC_UNITS if m != "singular_episodes")
     properties = [parse(t, numeric, FLAGS) for t in texts]
+    for p in properties:
+        if p.metric in MACHINE_METRICS:
+            raise ConfigError(
+                f"--require {p.text!r}",
+                f"{p.metric} measures the machine and its load, not the controller: the same run passes "
+                "or fails with what else the machine runs (benchmarks/ measure speed)",
+            )
     if len({p.text for p in properties}) != len(properties):
         raise ConfigError("--require", "names a property twice")
     return properties

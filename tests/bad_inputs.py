@@ -1405,6 +1405,18 @@ CUSTOM_CASES = [
         "of 200000 and 1 signals per step)",
     ),
     Case(
+        "custom: a signal named like one every run records",
+        lambda d: _custom_run(d, "NamesH"),
+        ex.ConfigError,
+        "controller.class: NamesH.signal_names: 'h' is a signal every run records itself (h, manipulability)",
+    ),
+    Case(
+        "custom: a signal name that is a path",
+        lambda d: _custom_run(d, "NamesAPath"),
+        ex.ConfigError,
+        "controller.class: NamesAPath.signal_names: '../../../evil' is not a signal name",
+    ),
+    Case(
         "custom: a state no run could hold",
         lambda d: _custom_run(d, "HugeState"),
         ex.ConfigError,
@@ -1458,6 +1470,18 @@ PART_CASES = [
         lambda d: _part(d, '[[plant.loads]]\nkind = "step"\ntime = 0.0105\ntorque = [1.0, 0.0, 0.0]'),
         ex.ConfigError,
         "plant.loads[0].time: 0.0105 s is not a whole number (>= 0) of control periods",
+    ),
+    Case(
+        "load: a time of 1e308 s",
+        lambda d: _part(d, '[[plant.loads]]\nkind = "step"\ntime = 1e308\ntorque = [1.0, 0.0, 0.0]'),
+        ex.ConfigError,
+        "plant.loads[0].time: 1e+308 s is more than 1e+12 control periods (0.001 s)",
+    ),
+    Case(
+        "load: starting after the run ends",
+        lambda d: _part(d, '[[plant.loads]]\nkind = "step"\ntime = 5.0\ntorque = [1.0, 0.0, 0.0]'),
+        ex.ConfigError,
+        "plant.loads[0].time: 5 s is not before the run ends (simulation.duration = 0.1 s): the load would",
     ),
     Case(
         "load: torque for the wrong arm",
@@ -1687,6 +1711,14 @@ API_CASES = [
         "simulation.substeps: must be positive, got 0",
     ),
     Case(
+        "Python API: load_robot with an empty task frame",
+        lambda d: (
+            lambda: __import__("nnrobust").load_robot(__import__("nnrobust").paper_arm_urdf(), task_frame="")
+        ),
+        ex.RobotLoadError,
+        "task_frame needs a frame's name (or None for the default rule), got ''",
+    ),
+    Case(
         "Python API: write_run given something else than a Result",
         lambda d: lambda: __import__("nnrobust").write_run(d / "run", 3),
         RunFolderError,
@@ -1695,6 +1727,12 @@ API_CASES = [
 ]
 
 PROPERTY_CASES = [
+    Case(
+        "--require: a property of the machine, not the run",
+        lambda d: _require("wall_seconds<=0.01"),
+        ex.ConfigError,
+        "wall_seconds measures the machine and its load, not the controller",
+    ),
     Case(
         "--require: not an expression",
         lambda d: _require("rms_error < 0.05 mm"),

@@ -567,3 +567,17 @@ def test_a_custom_laws_tuned_settings_are_falsified_as_a_shipped_laws(tmp_path, 
     assert list(found["controllers"]) == ["Eq9-tuned"]
     words = shlex.split(found["controllers"]["Eq9-tuned"]["worst"]["command"])
     assert "controller.params.Kp=400.0" in words and "controller.params.Kv=40.0" in words
+
+
+def test_a_bad_tuned_value_is_blamed_on_the_tuned_setting_not_a_sample(tmp_path, capsys):
+    (tmp_path / "fz.toml").write_text(SWEEP)
+    tuning = tmp_path / "tuning"
+    tuning.mkdir()
+    (tuning / "summary.json").write_text(
+        json.dumps({"controllers": {"pd": {"best": {"params": {"controller.pd_Kp": "x"}}}}})
+    )
+    argv = ["falsify", str(tmp_path / "fz.toml"), "--require", "rms_error<=0.02", "--budget", "4"]
+    assert main([*argv, "--controllers", "pd", "--tuned", str(tuning), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert "--tuned: the tuned setting of pd: controller.pd_Kp: expected a list, got str 'x'" in err, err
+    assert "sample" not in err

@@ -270,3 +270,25 @@ def test_quiet_prints_no_warning(tmp_path, capsys):
         )
     assert not [w for w in caught if "inertial data" in str(w.message)]
     assert capsys.readouterr().err == ""
+
+
+def test_compare_prints_no_control_characters_from_a_received_folder(tmp_path, capsys):
+    """A metrics.json whose texts carry terminal escapes (a received run folder) is printed with
+    them escaped: the table and the verdict changes are plain text."""
+    import json
+
+    from nnrobust.cli import main
+
+    for name in ("a", "b"):
+        assert main(["run", "paper-ellipse", "--duration", "0.3", "--out", str(tmp_path / name),
+                     "--quiet", "--no-plots", "--no-animation"]) == 0  # fmt: skip
+    path = tmp_path / "a" / "metrics.json"
+    metrics = json.loads(path.read_text())
+    metrics["status"] = "completed\x1b[2J\x1b[31mEVIL"
+    metrics["warnings"] = ["joint speed: \x1b[31mred"]
+    path.write_text(json.dumps(metrics))
+    capsys.readouterr()
+    assert main(["compare", str(tmp_path / "a"), str(tmp_path / "b")]) == 0
+    out = capsys.readouterr()
+    assert "\x1b" not in out.out + out.err
+    assert "completed\\x1b[2J" in out.out

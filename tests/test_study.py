@@ -99,6 +99,12 @@ def test_the_custom_laws_tuned_settings_are_the_ones_every_stage_ran(study):
     worst = shlex.split(report["cases"]["paper-ellipse-noisy"]["controllers"]["taskpd"]["worst"]["command"])
     for key, value in params.items():
         assert f"controller.params.{key}={value!r}" in worst
+    # the worst plant's command reruns to the metrics the report quotes
+    rerun = out.parent / "rerun"
+    assert main([*worst[1:], "--out", str(rerun), "--quiet", "--no-plots", "--no-animation"]) == 0
+    quoted = report["cases"]["paper-ellipse-noisy"]["controllers"]["taskpd"]["worst"]["metrics"]
+    again = json.loads((rerun / "metrics.json").read_text())
+    assert again["rms_error_after_2s"] == quoted["rms_error_after_2s"]
 
 
 def test_a_rerun_computes_nothing_and_each_replay_command_recomputes_its_stage(study, capsys):
@@ -230,7 +236,8 @@ def test_a_law_that_fails_says_why_in_the_report_and_the_report_is_standard_json
     shutil.copy(Path(__file__).parent / "controllers" / "eq9_again.py", tmp_path / "laws.py")
     text = STUDY.replace(
         '{name = "taskpd", class = "laws.py:TaskPD"}',
-        '{name = "late", class = "laws.py:RaisesLate", tune = false}, {name = "latet", class = "laws.py:RaisesLate"}',
+        '{name = "late", class = "laws.py:RaisesLate", tune = false}, '
+        '{name = "latet", class = "laws.py:RaisesLate"}',
     ).replace('"nn", ', "")
     (tmp_path / "study.toml").write_text(text)
     out = tmp_path / "out"

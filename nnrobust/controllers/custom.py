@@ -5,6 +5,8 @@ checked against the contract before and at its first step.
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
 from ..exceptions import ConfigError, ControllerError
@@ -12,6 +14,12 @@ from ..user_code import construct, located
 from .base import Controller, ControllerContext, ControlOutput
 
 KEY = "controller.class"
+
+SIGNAL_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,63}")
+"""A signal's name: it becomes an array's name in result.npz (``signal_NAME``) and a plot title."""
+
+RESERVED_SIGNALS = ("h", "manipulability")
+"""The signals every run records itself (nnrobust.results.Result.from_trace)."""
 
 MAX_STATE = 10**7
 """The most entries a user's controller state may have (80 MB a vector; the record of a run holds
@@ -25,6 +33,21 @@ def build_custom(spec: str, params: dict | None, context: ControllerContext) -> 
     names = controller.signal_names
     if isinstance(names, str) or not all(isinstance(s, str) for s in names):
         raise ConfigError(KEY, f"{cls.__name__}.signal_names must be a tuple of names, got {names!r}")
+    for name in names:
+        if not SIGNAL_NAME.fullmatch(name):
+            raise ConfigError(
+                KEY,
+                f"{cls.__name__}.signal_names: {name[:40]!r} is not a signal name (1-64 letters, digits "
+                "or '_', not starting with a digit: it names an array of result.npz)",
+            )
+        if name in RESERVED_SIGNALS:
+            raise ConfigError(
+                KEY,
+                f"{cls.__name__}.signal_names: {name!r} is a signal every run records itself "
+                f"({', '.join(RESERVED_SIGNALS)}); name yours otherwise",
+            )
+    if len(set(names)) != len(names):
+        raise ConfigError(KEY, f"{cls.__name__}.signal_names names a signal twice: {names!r}")
     size = controller.state_size
     if isinstance(size, bool) or not isinstance(size, (int, np.integer)) or not 0 <= size <= MAX_STATE:
         raise ConfigError(

@@ -143,13 +143,15 @@ class Law:
         given = dict(params or {})
         unknown = [k for k in given if self.param(k) is None]
         if unknown:
-            from ..config import _suggest
+            import difflib
 
+            names = [p.name for p in self.params]
+            close = difflib.get_close_matches(unknown[0], names, n=1)
             raise ConfigError(
                 f"controller.params.{unknown[0]}",
                 f"{self.name} has no parameter {unknown[0]!r}"
-                f"{_suggest(unknown[0], [p.name for p in self.params])}; its parameters: "
-                f"{', '.join(p.name for p in self.params)}",
+                + (f"; did you mean {close[0]!r}?" if close else ".")
+                + f" Its parameters: {', '.join(names)}",
             )
         out = {}
         for p in self.params:

@@ -360,6 +360,10 @@ def load_robot(
 
     """
     source = str(source)
+    if task_frame is not None and (not isinstance(task_frame, str) or not task_frame.strip()):
+        raise RobotLoadError(
+            source, f"task_frame needs a frame's name (or None for the default rule), got {task_frame!r}"
+        )
     if chain is not None and (isinstance(chain, str) or len(chain) != 2):
         raise RobotLoadError(source, f"chain needs 2 frame names, (base, tip), got {chain!r}")
     if gravity is not None:

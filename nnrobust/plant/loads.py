@@ -149,11 +149,17 @@ _TOLERANCE = 1e-9
 """Relative tolerance of "a whole number of control periods"."""
 
 
+MAX_PERIODS = 1e12
+"""The most control periods a load's time or duration may span (a run has at most about 10^9 steps)."""
+
+
 def _periods(path: str, value, period: float, positive: bool) -> float:
     """A time [s] that is a whole number of control periods (loads switch at control instants)."""
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
         raise ConfigError(path, f"expected a finite number of seconds, got {value!r}")
     count = value / period
+    if not abs(count) <= MAX_PERIODS:
+        raise ConfigError(path, f"{value:g} s is more than {MAX_PERIODS:.0e} control periods ({period:g} s)")
     if (value <= 0 if positive else value < 0) or abs(count - round(count)) > _TOLERANCE * max(1.0, count):
         lower, upper = np.floor(count) * period, np.ceil(count) * period
         sign = "> 0" if positive else ">= 0"
@@ -177,11 +183,14 @@ def _vector(path: str, value, size: int | None, unit: str, per_joint: bool) -> n
     return np.asarray(value, dtype=float)
 
 
-def parse_loads(entries: list[dict] | None, period: float, n: int | None = None) -> ExternalLoads:
+def parse_loads(
+    entries: list[dict] | None, period: float, n: int | None = None, duration: float | None = None
+) -> ExternalLoads:
     """``[[plant.loads]]`` read and checked: every refusal names the entry and key.
 
     ``n``: the number of joints (None: the joint vectors' lengths are not checked yet; the
-    configuration is checked before the robot is loaded).
+    configuration is checked before the robot is loaded). ``duration``: the run's [s]; a load
+    starting at or after its end would never act, and is refused.
     """
     from ..config import MAX_PAYLOAD
 
@@ -200,6 +209,12 @@ def parse_loads(entries: list[dict] | None, period: float, n: int | None = None)
         if "time" not in entry:
             raise ConfigError(f"{where}.time", f"a {kind!r} load needs the time it starts [s]")
         start = _periods(f"{where}.time", entry["time"], period, positive=False)
+        if duration is not None and start >= duration:
+            raise ConfigError(
+                f"{where}.time",
+                f"{start:g} s is not before the run ends (simulation.duration = {duration:g} s): the load "
+                "would never act",
+            )
         default = period if kind == "impulse" else np.inf
         duration = (
             default

@@ -14,6 +14,8 @@ import math
 import platform
 from pathlib import Path
 
+import numpy as np
+
 from ..results import write_json_atomic
 from .spec import StudySpec
 
@@ -102,6 +104,7 @@ def _controller_entry(spec: StudySpec, case: dict, c: str) -> dict:
             "kept_seed": kept["seed"] if kept else None,
             "settings": kept["settings"] if kept else None,
             "seed_spread": [min(medians), max(medians)] if medians else None,
+            "seed_median": float(np.median(medians)) if medians else None,
             "at_bound": _at_bound(case, c, kept),
         },
         "fixed": c in spec.fixed,

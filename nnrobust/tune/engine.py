@@ -251,6 +251,8 @@ def tuned_settings(
         summary = json.loads(read_text_file(file, limit=TUNED_FILE_BYTES, what="tuning summary"))
     except ValueError as err:
         raise ConfigError("--tuned", f"{file} is not JSON ({err})") from err
+    except RecursionError as err:
+        raise ConfigError("--tuned", f"{file} nests too deeply to be a tuning's summary") from err
     if isinstance(summary, dict) and isinstance(summary.get("cases"), list):  # a tuned comparison
         cases = {f"{c.get('case')}/{c.get('sensing')}": c for c in summary["cases"] if isinstance(c, dict)}
         if case not in cases:
@@ -310,6 +312,21 @@ def tuned_entry(name: str, settings: dict, entries: dict) -> dict:
         return {"class": entry["class"], "params": {**(entry.get("params") or {}), **params}}
     own = {**(entry.get("params") or {}), **params}
     return {**entry, "set": {**(entry.get("set") or {}), **rest}, **({"params": own} if own else {})}
+
+
+def check_tuned_values(sweep, tuned: dict, where: str = "--tuned") -> None:
+    """Each tuned setting's values checked as the experiment reads them (on the sweep's first
+    sample), a refusal naming --tuned, the law and the key, not a sample of the box.
+    """
+    from ..sweep.spec import base_values, draw, experiment
+
+    base = base_values(sweep)
+    for name in tuned:
+        try:
+            experiment(sweep, base, draw(sweep, 0), f"{summary_name(name)}-tuned")
+        except ConfigError as err:
+            said = str(err).removeprefix("vary: ").split(" (sample ")[0]
+            raise ConfigError(where, f"the tuned setting of {name}: {said}") from err
 
 
 def _with_controllers(sweep, names: list[str], tuned: dict | None = None):

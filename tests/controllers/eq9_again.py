@@ -212,3 +212,15 @@ class RaisesLate(Controller):
         if t > 1.0:
             raise RuntimeError("boom after 1 s")
         return ControlOutput(np.zeros(self.n))
+
+
+class NamesH(Counter):
+    """Declares a signal named like one every run records (h)."""
+
+    signal_names = ("elapsed", "h")
+
+
+class NamesAPath(Counter):
+    """Declares a signal whose name is a path."""
+
+    signal_names = ("elapsed", "../../../evil")
