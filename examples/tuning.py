@@ -27,7 +27,7 @@ def main() -> None:
         default=f"pd,no-u0,{here / 'custom_controller.py'}:TaskPD",
         help="shipped kinds and custom classes (file.py:Class, with a search_space)",
     )
-    parser.add_argument("--target", default="paper-line", help="a preset or a sweep file")
+    parser.add_argument("--target", default="paper-line", help="a preset, an experiment file or a sweep file")
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--out", default="out/examples/tuning")
     args = parser.parse_args()

@@ -1321,7 +1321,7 @@ def test_the_tuned_pandas_nn_and_pd_worst_plants_are_what_the_text_says():
 
 def test_every_worst_plant_fails_on_mujoco_too():
     """docs/falsification.md: each worst plant, rerun with MuJoCo as the plant, violates the 50 mm
-    property on both loops; the figures quoted are the compiled loop's."""
+    property (the NN's on both loops); the figures quoted are the compiled loop's."""
     pytest.importorskip("mujoco")
     from nnrobust.experiment import run_experiment
 
@@ -1335,9 +1335,10 @@ def test_every_worst_plant_fails_on_mujoco_too():
     for name, entry in data["controllers"].items():
         config = _worst_config(entry["worst"]["command"]).replace(plant={"engine": "mujoco"})
         compiled = run_experiment(config).metrics()["rms_error_after_2s"]
-        on_python = config.replace(simulation={"backend": "python"})
-        python = run_experiment(on_python).metrics()["rms_error_after_2s"]
-        assert compiled > 0.05 and python > 0.05, name  # the verdict, on both loops
+        assert compiled > 0.05, name
+        if name == "nn":  # the Python loop too (13 s a run), for the paper's controller
+            on_python = config.replace(simulation={"backend": "python"})
+            assert run_experiment(on_python).metrics()["rms_error_after_2s"] > 0.05
         # the quoted figures (the compiled loop's on the machine that wrote them; a chaotic run's
         # digits move with the rounding, test_the_published_worst_plants_rerun_to_their_metrics)
         assert quoted[name] > 50, name

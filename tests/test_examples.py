@@ -134,6 +134,8 @@ def test_slotine_li_runs_from_its_experiment_file(tmp_path):
 
 
 def test_tuning_reports_each_best_setting(tmp_path):
-    out = _run("tuning.py", "--budget", "4", "--out", str(tmp_path / "tune"))
+    short = tmp_path / "short.toml"  # the default target, paper-line, shortened to 3 s
+    short.write_text('base = "paper-line"\nname = "short"\n[simulation]\nduration = 3.0\n')
+    out = _run("tuning.py", "--budget", "4", "--target", str(short), "--out", str(tmp_path / "tune"))
     assert "pd: train" in out and "no-u0: train" in out and "TaskPD: train" in out
     assert (tmp_path / "tune" / "summary.json").is_file()

@@ -561,7 +561,7 @@ def validate(config: ExperimentConfig) -> None:
     if config.plant.loads:
         from ..plant.loads import parse_loads
 
-        parse_loads(config.plant.loads, config.simulation.control_period, duration=config.simulation.duration)
+        parse_loads(config.plant.loads, config.simulation.control_period)
     if sim.duration < sim.control_period:
         raise ConfigError("simulation.duration", "is shorter than one control period")
     substeps = sim.requested_substeps

@@ -122,7 +122,7 @@ def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
             disturbance.phase + pc.disturbance_phase_shift,
         )
     true = true_model(config, robot)
-    loads = parse_loads(pc.loads, config.simulation.control_period, n)
+    loads = parse_loads(pc.loads, config.simulation.control_period, n, config.simulation.duration)
     return Plant(
         true,
         friction,
