@@ -288,7 +288,7 @@ def _run_case(spec: StudySpec, case: str, folder: Path, address: str, overwrite:
     out["validation_rows"] = str(here / "validate" / "results")
 
     # 3. certify the kept settings on draws the selection never saw
-    from ..properties import run_properties, samples_needed
+    from ..properties import samples_needed
 
     certify_names, certify_entries, settings = [], {}, {}
     for c, entry in kept.items():
@@ -309,15 +309,7 @@ def _run_case(spec: StudySpec, case: str, folder: Path, address: str, overwrite:
         f"(epsilon {b['epsilon']:g}, beta {b['beta']:g})"
     )
     certify_spec = load_sweep(certify_file)
-    run_sweep(certify_spec, here / "certify", scheduler=address, overwrite=overwrite, progress=progress)
-    from ..properties import certify as certify_rows
-
-    rows = read_results(here / "certify")
-    summary = summarize(certify_spec, rows)
-    certificates = certify_rows(certify_spec, rows, run_properties(spec.require), b["epsilon"], b["beta"])
-    for label, entry in certificates.items():
-        summary["controllers"][label].update(entry)
-    write_summary(here / "certify", summary)
+    summary, rows = _certified(spec, certify_spec, here / "certify", address, overwrite, progress)
     out["stages"]["certify"] = "finished"
     out["certify"] = summary
     out["held_out"] = _varies(rows)
@@ -358,17 +350,29 @@ def _run_case(spec: StudySpec, case: str, folder: Path, address: str, overwrite:
     engine_file = here / "certify-mujoco.toml"
     _write_if_changed(engine_file, again.to_toml())
     say(f"{name}: the certification draws again with MuJoCo as the plant")
-    engine_spec = load_sweep(engine_file)
-    run_sweep(engine_spec, here / "certify-mujoco", scheduler=address, overwrite=overwrite, progress=progress)
-    rows = read_results(here / "certify-mujoco")
-    summary = summarize(engine_spec, rows)
-    certificates = certify_rows(engine_spec, rows, run_properties(spec.require), b["epsilon"], b["beta"])
-    for label, entry in certificates.items():
-        summary["controllers"][label].update(entry)
-    write_summary(here / "certify-mujoco", summary)
-    out["engine"] = summary
+    out["engine"], _ = _certified(
+        spec, load_sweep(engine_file), here / "certify-mujoco", address, overwrite, progress
+    )
     out["stages"]["engine"] = "finished"
     return out
+
+
+def _certified(spec: StudySpec, sweep, folder: Path, address: str, overwrite: bool, progress):
+    """(summary, rows) of a certification sweep run into ``folder``: its statistics, paired
+    comparisons and a certificate per property (the study's epsilon and beta), summary.json written.
+    """
+    from ..properties import certify, run_properties
+    from ..sweep.engine import read_results, run_sweep
+    from ..sweep.summary import summarize, write_summary
+
+    run_sweep(sweep, folder, scheduler=address, overwrite=overwrite, progress=progress)
+    rows = read_results(folder)
+    summary = summarize(sweep, rows)
+    b = spec.budgets
+    for label, entry in certify(sweep, rows, run_properties(spec.require), b["epsilon"], b["beta"]).items():
+        summary["controllers"][label].update(entry)
+    write_summary(folder, summary)
+    return summary, rows
 
 
 def failures(rows) -> dict:
