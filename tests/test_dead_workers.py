@@ -88,3 +88,28 @@ def read_results_of_trials(folder):
     from nnrobust.tune.engine import _read_trials
 
     return _read_trials(folder, recorded_inputs(folder, "tune").key)
+
+
+def test_a_cluster_left_without_workers_is_one_error_not_a_hang(monkeypatch):
+    """Every worker dead and none restarted: waiting for a result raises, naming why, after
+    NO_WORKER_SECONDS (1 s here) instead of waiting forever."""
+    import time
+
+    from distributed import Client
+
+    from nnrobust.exceptions import NNRobustError
+    from nnrobust.sweep import engine
+
+    monkeypatch.setattr(engine, "NO_WORKER_SECONDS", 1.0)
+    cluster = engine.local_cluster(1)
+    client = Client(cluster)
+    try:
+        future = client.submit(time.sleep, 60, pure=False)
+        cluster.scale(0)
+        start = time.monotonic()
+        with pytest.raises(NNRobustError, match="the cluster has had no worker for 1 s"):
+            engine.crash_reason(future)
+        assert time.monotonic() - start < 60
+    finally:
+        client.close()
+        cluster.close()

@@ -468,10 +468,42 @@ def shared(client, value):
     return client.submit(_same, value, pure=False)
 
 
+NO_WORKER_SECONDS = 120.0
+"""How long a cluster may have no worker at all before the command stops waiting for it."""
+
+
+def wait_alive(futures: list) -> None:
+    """``distributed.wait(futures)``, or one error instead of a hang when the cluster has had no
+    worker for :data:`NO_WORKER_SECONDS` (every worker process dead and none restarted: user code
+    that ends its process, under a load that makes the nanny give up restarting it).
+    """
+    from distributed import wait
+
+    if not futures:
+        return
+    client = futures[0].client
+    since = None
+    while True:
+        try:
+            wait(futures, timeout=5)
+            return
+        except TimeoutError:
+            pass
+        alive = len(client.scheduler_info().get("workers", {}))
+        now = time.monotonic()
+        since = None if alive else since or now
+        if since is not None and now - since > NO_WORKER_SECONDS:
+            raise NNRobustError(
+                f"the cluster has had no worker for {NO_WORKER_SECONDS:g} s (every worker process died "
+                "and none was restarted); what was computed is kept: run the command again to resume"
+            )
+
+
 def crash_reason(future) -> str | None:
     """None when ``future`` finished; else one line on why it did not: its worker died running it
     (user code that ends its process: ``os._exit``, a segfault) or the cluster cancelled it.
     """
+    wait_alive([future])
     try:
         future.result()
     except Exception as err:  # KilledWorker, CancelledError: the task code itself catches its errors
@@ -491,9 +523,7 @@ def gather_alone_on_crash(futures: list, again, crashed) -> list:
     queued on a dying worker counts that death too: alone, its result does not depend on its
     neighbours); when it kills its worker again its result is ``crashed(reason)``.
     """
-    from distributed import wait
-
-    wait(futures)
+    wait_alive(futures)
     out = []
     for i, future in enumerate(futures):
         if crash_reason(future) is None:
