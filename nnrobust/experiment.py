@@ -414,19 +414,6 @@ def memory_estimate(
     return 3 * 8 * steps * per_step + MODEL_COPIES * DATA_BYTES_PER_CUBED_JOINT * n**3
 
 
-def controller_size(controller: Controller) -> tuple[int, int]:
-    """(state size, number of signals) a controller records per step; its ``state_size`` must be
-    a whole number >= 0 (it is read before any state is allocated).
-    """
-    size = getattr(controller, "state_size", 0)
-    if isinstance(size, bool) or not isinstance(size, (int, np.integer)) or size < 0:
-        raise ConfigError(
-            "controller.class",
-            f"{type(controller).__name__}.state_size must be a whole number >= 0, got {size!r}",
-        )
-    return int(size), len(controller.signal_names)
-
-
 def available_memory() -> float | None:
     """Bytes the machine has available now (Linux's MemAvailable), or None where unknown."""
     try:
@@ -450,7 +437,8 @@ def check_memory(config: ExperimentConfig, n: int, m: int, controller: Controlle
     if controller is None:
         need, law = memory_estimate(config, n, m) / 1e9, ""
     else:
-        state, signals = controller_size(controller)
+        # (a user's state_size was checked when it was built: nnrobust.controllers.custom)
+        state, signals = int(controller.state_size), len(controller.signal_names)
         need = memory_estimate(config, n, m, state, signals) / 1e9
         law = f", a state of {state} and {signals} signals per step"
     what = (

@@ -394,16 +394,12 @@ class _Driver:
 
     def _simulate(self, tasks: list[tuple]) -> list[dict]:
         """Each (function, *arguments) task's result; one that ends its worker, run again alone,
-        is a run with status ``crashed`` (:func:`nnrobust.sweep.engine.gather_alone_on_crash`).
+        is a run with status ``crashed`` (:func:`nnrobust.sweep.engine.run_tasks`).
         """
-        from .sweep.engine import CRASHED, gather_alone_on_crash
+        from .sweep.engine import CRASHED, run_tasks
 
-        futures = [self.client.submit(*task, pure=False) for task in tasks]
-        return gather_alone_on_crash(
-            futures,
-            lambda i: self.client.submit(*tasks[i], pure=False),
-            lambda reason: judged({"status": CRASHED, "message": reason}, self.properties),
-        )
+        crashed = {"status": CRASHED}
+        return run_tasks(self.client, tasks, lambda why: judged({**crashed, "message": why}, self.properties))
 
     def __call__(self, searches: dict, boxes: dict, rows: dict, total: int, stop_at_violation=False):
         """Run every search to the end of its budget (or to its first violation); ``total``: the

@@ -56,7 +56,10 @@ class CheckedTrajectory(Trajectory):
 
     def __call__(self, t: float):
         """The inner class's (x_d, x_d', x_d''), checked."""
-        what = f"{self._name}({t:g})"
+        return self.checked(t, f"{self._name}({t:g})")
+
+    def checked(self, t: float, what: str):
+        """(x_d, x_d', x_d'') at t, each m finite numbers, or one line naming ``what``."""
         out = _call(self.KEY, what, self.inner, t)
         if not (isinstance(out, tuple) and len(out) == 3):
             raise ConfigError(self.KEY, f"{what} must return (x_d, x_d', x_d''), got {type(out).__name__}")
@@ -84,7 +87,10 @@ class CheckedDisturbance(Disturbance):
 
     def __call__(self, t: float) -> np.ndarray:
         """The inner class's tau_d(t), checked."""
-        what = f"{self._name}({t:g})"
+        return self.checked(t, f"{self._name}({t:g})")
+
+    def checked(self, t: float, what: str) -> np.ndarray:
+        """tau_d(t), n finite numbers, or one line naming ``what``."""
         return _vector(self.KEY, what, _call(self.KEY, what, self.inner, t), self.n)
 
     def __getattr__(self, name: str):
@@ -130,42 +136,32 @@ def build_trajectory(spec: str, params: dict | None, robot: PinocchioModel, task
     """``trajectory.kind = "custom"``: the class's trajectory, with m and x_d(0), x_d'(0), x_d''(0)
     of the task's size.
     """
-    key = "trajectory.class"
+    key = CheckedTrajectory.KEY
     trajectory = construct(spec, params, Trajectory, key, "trajectory.params", robot, "robot")
     name, m = type(trajectory).__name__, TASK_KINDS[task]
     if getattr(trajectory, "m", None) != m:
         raise ConfigError(key, f"{name}.m is {getattr(trajectory, 'm', None)!r}; the {task} task has m = {m}")
-    out = _call(key, f"{name}(0.0)", trajectory, 0.0)
-    if not (isinstance(out, tuple) and len(out) == 3):
-        raise ConfigError(key, f"{name}(t) must return (x_d, x_d', x_d''), got {type(out).__name__}")
-    for value, what in zip(out, ("x_d", "x_d'", "x_d''")):
-        _vector(key, f"{name}(0.0)'s {what}", value, m)
-    return CheckedTrajectory(trajectory)
+    checked = CheckedTrajectory(trajectory)
+    checked.checked(0.0, f"{name}(0.0)")  # before anything runs, as at every call
+    return checked
 
 
 def build_disturbance(spec: str, params: dict | None, robot: PinocchioModel) -> Disturbance:
     """``plant.disturbance = "custom"``: the class's tau_d, one finite torque per joint at t = 0."""
-    key = "plant.disturbance_class"
+    key = CheckedDisturbance.KEY
     disturbance = construct(spec, params, Disturbance, key, "plant.disturbance_params", robot, "robot")
-    name = type(disturbance).__name__
-    _vector(key, f"{name}(0.0)", _call(key, f"{name}(0.0)", disturbance, 0.0), robot.nq)
-    return CheckedDisturbance(disturbance, robot.nq)
+    checked = CheckedDisturbance(disturbance, robot.nq)
+    checked.checked(0.0, f"{type(disturbance).__name__}(0.0)")  # before anything runs, as at every call
+    return checked
 
 
 def build_criterion(spec: str, params: dict | None, robot: PinocchioModel) -> Criterion:
     """A ``custom`` entry of ``subtasks.criteria``: h(q) a finite number and dh/dq one entry per
     joint, at the middle of the joints' range.
     """
-    key = "subtasks.criterion_class"
+    key = CheckedCriterion.KEY
     criterion = construct(spec, params, Criterion, key, "subtasks.criterion_params", robot, "robot")
-    name, q = type(criterion).__name__, robot.mid_configuration
-    value = _call(key, f"{name}.value", criterion.value, robot, q)
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.floating)) or not np.isfinite(value):
-        raise ConfigError(key, f"{name}.value(model, q) must return a finite number, got {value!r}")
-    _vector(
-        key,
-        f"{name}.gradient(model, q)",
-        _call(key, f"{name}.gradient", criterion.gradient, robot, q),
-        robot.nq,
-    )
-    return CheckedCriterion(criterion, robot.nq)
+    checked = CheckedCriterion(criterion, robot.nq)
+    checked.value(robot, robot.mid_configuration)  # before anything runs, as at every call
+    checked.gradient(robot, robot.mid_configuration)
+    return checked

@@ -35,7 +35,6 @@ VALIDATION_SEED = 1_000_003
 """Added to the study's seed for the validation draws (the tunings draw from seed + s, s < 20)."""
 CERTIFY_SEED = 2_000_003
 """Added to the study's seed for the certification draws: independent of training and validation."""
-STAGES = ("tune", "validate", "certify", "falsify", "engine")
 
 
 def _write_if_changed(path: Path, text: str) -> None:
@@ -177,15 +176,9 @@ class _SharedCluster:
     def __enter__(self) -> str:
         if self.scheduler:
             return self.scheduler
-        import logging
+        from ..sweep.engine import checked_local_cluster
 
-        from ..sweep.engine import local_cluster, max_local_workers
-
-        workers = self.workers or os.cpu_count() or 1
-        most, why = max_local_workers()
-        if not (isinstance(workers, int) and 1 <= workers <= most):
-            raise NNRobustError(f"--workers {workers}: give 1 to {most} local worker processes ({why})")
-        self.cluster = local_cluster(workers, silence_logs=logging.CRITICAL)
+        self.cluster = checked_local_cluster(self.workers)  # as sweep, tune and falsify start theirs
         return self.cluster.scheduler_address
 
     def __exit__(self, *exc):
@@ -236,13 +229,14 @@ def _run_case(spec: StudySpec, case: str, folder: Path, address: str, overwrite:
 
     entries: dict = {}
     names: list[str] = []
-    setting_of: dict[str, tuple[str, int | None, dict]] = {}  # validation row -> (controller, seed, settings)
+    # validation row -> (controller, seed, settings, the coordinates on a bound of its space)
+    setting_of: dict[str, tuple[str, int | None, dict, list]] = {}
     for c in spec.controllers:
         if c in spec.fixed:
             names.append(c)
             if c in spec.entries:
                 entries[c] = spec.entries[c]
-            setting_of[c] = (c, None, {})
+            setting_of[c] = (c, None, {}, [])
             continue
         for s, summary in tunings.items():
             best = summary["controllers"].get(c, {}).get("best")
@@ -251,7 +245,7 @@ def _run_case(spec: StudySpec, case: str, folder: Path, address: str, overwrite:
             label = seed_name(c, s)
             entries[label] = tuned_entry(c, best["params"], spec.entries)
             names.append(label)
-            setting_of[label] = (c, s, dict(best["params"]))
+            setting_of[label] = (c, s, dict(best["params"]), best.get("at_bound") or [])
     out["not_kept"] = {
         c: "; ".join(
             f"seed {s}: {summary['controllers'].get(c, {}).get('note', 'no best setting')}"
@@ -270,22 +264,15 @@ def _run_case(spec: StudySpec, case: str, folder: Path, address: str, overwrite:
     validate_file = here / "validate.toml"
     _write_if_changed(validate_file, validate.to_toml())
     say(f"{name}: validate {len(names)} settings on {b['validation']} fresh draws")
-    run_sweep(
-        load_sweep(validate_file),
-        here / "validate",
-        scheduler=address,
-        overwrite=overwrite,
-        progress=progress,
-    )
+    validate_spec = load_sweep(validate_file)
+    run_sweep(validate_spec, here / "validate", scheduler=address, overwrite=overwrite, progress=progress)
     frame = read_results(here / "validate")
     from ..sweep.summary import summarize, write_summary
 
-    validate_spec = load_sweep(validate_file)
     write_summary(here / "validate", summarize(validate_spec, frame))
     kept, per_seed = _select(spec, frame, setting_of)
     out["stages"]["validate"] = "finished"
     out["kept"], out["per_seed"] = kept, per_seed
-    out["validation_rows"] = str(here / "validate" / "results")
 
     # 3. certify the kept settings on draws the selection never saw
     from ..properties import samples_needed
@@ -320,12 +307,12 @@ def _run_case(spec: StudySpec, case: str, folder: Path, address: str, overwrite:
     say(f"{name}: falsify {len(kept)} controllers, {b['falsify']} simulations each (and as many random)")
     falsify_spec = FalsifySpec(
         str(case_file),
-        [c for c in kept],
+        list(kept),
         list(spec.require),
         b["falsify"],
         seed=spec.seed,
         margin=b["margin"],
-        tuned={c: s for c, s in settings.items()} or None,
+        tuned=settings or None,
     )
     if spec.vary:
         out["falsify"] = run_falsify(
@@ -438,12 +425,13 @@ def _select(spec: StudySpec, frame, setting_of: dict) -> tuple[dict, dict]:
     from ..paired import _values
 
     per_seed: dict[str, list] = {}
-    for label, (c, seed, settings) in setting_of.items():
+    for label, (c, seed, settings, at_bound) in setting_of.items():
         values = np.array(list(_values(frame[frame["controller"] == label], "rms_error_after_2s").values()))
         per_seed.setdefault(c, []).append(
             {
                 "seed": seed,
                 "settings": settings,
+                "at_bound": at_bound,
                 "median_error": float(np.median(values)) if values.size else float("inf"),
                 "rows": int(values.size),
                 "completed": int(np.isfinite(values).sum()),

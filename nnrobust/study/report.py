@@ -105,7 +105,7 @@ def _controller_entry(spec: StudySpec, case: dict, c: str) -> dict:
             "settings": kept["settings"] if kept else None,
             "seed_spread": [min(medians), max(medians)] if medians else None,
             "seed_median": float(np.median(medians)) if medians else None,
-            "at_bound": _at_bound(case, c, kept),
+            "at_bound": kept["at_bound"] if kept else None,
         },
         "fixed": c in spec.fixed,
         "validation": {
@@ -151,15 +151,6 @@ def _controller_entry(spec: StudySpec, case: dict, c: str) -> dict:
     if label in margins or c in margins:
         entry["margin"] = margins.get(label) or margins.get(c)
     return entry
-
-
-def _at_bound(case: dict, c: str, kept) -> dict | None:
-    if not kept or kept["seed"] is None:
-        return None
-    path = case["tunings"].get(kept["seed"])
-    summary = json.loads((Path(path) / "summary.json").read_text()) if path else {}
-    best = summary.get("controllers", {}).get(c, {}).get("best") or {}
-    return best.get("at_bound")
 
 
 def build_report(spec: StudySpec, folder: Path, cases: dict) -> dict:

@@ -44,6 +44,11 @@ def _require_engine():
 SKIP_METRICS = ("rms_torque_per_joint", "singular_episodes", "message", "joint_limit_joint")
 
 
+def _row_head(sample, controller: str) -> dict:
+    """What names a row: its sample, controller, varied values and seed."""
+    return {"sample": sample.id, "controller": controller, **sample.values, "seed": sample.seed}
+
+
 def run_rows(spec: SweepSpec, base: dict, jobs: list[tuple[int, str]]) -> list[dict]:
     """Run (sample id, controller) jobs; one metrics row each.
 
@@ -61,7 +66,7 @@ def run_rows(spec: SweepSpec, base: dict, jobs: list[tuple[int, str]]) -> list[d
     for sample_id, controller in jobs:
         start = time.perf_counter()
         sample = draw(spec, sample_id)
-        row = {"sample": sample_id, "controller": controller, **sample.values, "seed": sample.seed}
+        row = _row_head(sample, controller)
         try:
             metrics = run_experiment(experiment(spec, base, sample, controller)).metrics()
         except LibraryError as err:
@@ -321,6 +326,22 @@ def local_cluster(workers: int, **options):
         )
 
 
+def checked_local_cluster(workers: int | None):
+    """The :func:`local_cluster` of ``--workers`` (None: one per core), a number refused in one
+    line when it is not 1 to what this machine's cores and memory allow.
+    """
+    if workers is not None:
+        if not (isinstance(workers, int) and workers >= 1):
+            raise NNRobustError(f"--workers {workers}: give at least 1 local worker process")
+        most, why = max_local_workers()
+        if workers > most:
+            raise NNRobustError(
+                f"--workers {workers}: give 1 to {most} local worker processes on this machine ({why}); "
+                "for more, start a cluster and pass --scheduler"
+            )
+    return local_cluster(workers or os.cpu_count() or 1, silence_logs=logging.CRITICAL)
+
+
 @contextmanager
 def _client(workers: int | None, scheduler: str | None):
     """A client of an existing scheduler, or of a LocalCluster on 127.0.0.1 (its HTTP server on a
@@ -336,16 +357,7 @@ def _client(workers: int | None, scheduler: str | None):
         finally:
             client.close()
         return
-    if workers is not None:
-        if not (isinstance(workers, int) and workers >= 1):
-            raise NNRobustError(f"--workers {workers}: give at least 1 local worker process")
-        most, why = max_local_workers()
-        if workers > most:
-            raise NNRobustError(
-                f"--workers {workers}: give 1 to {most} local worker processes on this machine ({why}); "
-                "for more, start a cluster and pass --scheduler"
-            )
-    cluster = local_cluster(workers or os.cpu_count() or 1, silence_logs=logging.CRITICAL)
+    cluster = checked_local_cluster(workers)
     client = Client(cluster)
     try:
         yield client
@@ -479,7 +491,7 @@ def wait_alive(futures: list) -> None:
     """
     from distributed import wait
 
-    if not futures:
+    if all(f.done() for f in futures):
         return
     client = futures[0].client
     since = None
@@ -517,19 +529,21 @@ def crash_reason(future) -> str | None:
     return None
 
 
-def gather_alone_on_crash(futures: list, again, crashed) -> list:
-    """Each future's result, waiting for all. A future whose worker died (:func:`crash_reason`) is
-    submitted again by ``again(i)`` and waited for alone, once every other has finished (a task
-    queued on a dying worker counts that death too: alone, its result does not depend on its
-    neighbours); when it kills its worker again its result is ``crashed(reason)``.
+def run_tasks(client, tasks: list[tuple], crashed) -> list:
+    """Each (function, *arguments) task's result, run on the cluster and waited for together. A
+    task whose worker died (:func:`crash_reason`) is submitted again and waited for alone, once
+    every other has finished (a task queued on a dying worker counts that death too: alone, its
+    result does not depend on its neighbours); when it kills its worker again its result is
+    ``crashed(reason)``.
     """
+    futures = [client.submit(*task, pure=False) for task in tasks]
     wait_alive(futures)
     out = []
-    for i, future in enumerate(futures):
+    for task, future in zip(tasks, futures):
         if crash_reason(future) is None:
             out.append(future.result())
             continue
-        retry = again(i)
+        retry = client.submit(*task, pure=False)
         reason = crash_reason(retry)
         out.append(crashed(reason) if reason else retry.result())
     return out
@@ -537,22 +551,16 @@ def gather_alone_on_crash(futures: list, again, crashed) -> list:
 
 def crashed_rows(spec: SweepSpec, jobs: list[tuple[int, str]], reason: str) -> list[dict]:
     """The rows of ``jobs``, each with status ``crashed`` and ``reason``."""
-    rows = []
-    for sample_id, controller in jobs:
-        sample = draw(spec, sample_id)
-        rows.append(
-            {
-                "sample": sample_id,
-                "controller": controller,
-                **sample.values,
-                "seed": sample.seed,
-                "status": CRASHED,
-                "message": reason,
-                "warnings": [],
-                "task_seconds": 0.0,
-            }
-        )
-    return rows
+    return [
+        {
+            **_row_head(draw(spec, sample_id), controller),
+            "status": CRASHED,
+            "message": reason,
+            "warnings": [],
+            "task_seconds": 0.0,
+        }
+        for sample_id, controller in jobs
+    ]
 
 
 def run_sweep(

@@ -264,13 +264,12 @@ def tuned_settings(
         summary = cases[case].get("summary")
     elif case:
         raise ConfigError("--tuned", f"{file} is one tuning, not a tuned comparison: drop #{case}")
-    table = summary.get("controllers") if isinstance(summary, dict) else None
-    if not isinstance(table, dict) or not all(isinstance(e, dict) for e in table.values()):
+    tuned = summary.get("controllers") if isinstance(summary, dict) else None
+    if not isinstance(tuned, dict) or not all(isinstance(e, dict) for e in tuned.values()):
         raise ConfigError(
             "--tuned",
             f"{file} is not a tuning's summary.json (no controllers table; nnrobust tune writes one)",
         )
-    tuned = summary["controllers"]
     out = {}
     for name in names:
         best = (tuned.get(summary_name(name)) or {}).get("best")
@@ -392,16 +391,11 @@ def evaluate(sweep, base: dict, controller: str, overrides: dict, sample_id: int
 
 def _simulate(client, tasks: list[tuple]) -> list[dict]:
     """Run each (function, *arguments) task on the cluster: its result, or status ``crashed`` when
-    it ends its worker (:func:`nnrobust.sweep.engine.gather_alone_on_crash`).
+    it ends its worker (:func:`nnrobust.sweep.engine.run_tasks`).
     """
-    from ..sweep.engine import CRASHED, gather_alone_on_crash
+    from ..sweep.engine import CRASHED, run_tasks
 
-    futures = [client.submit(*task, pure=False) for task in tasks]
-    return gather_alone_on_crash(
-        futures,
-        lambda i: client.submit(*tasks[i], pure=False),
-        lambda reason: {"status": CRASHED, "message": reason},
-    )
+    return run_tasks(client, tasks, lambda reason: {"status": CRASHED, "message": reason})
 
 
 def judge(spec: TuneSpec, runs: list[dict]) -> tuple[tuple[float, ...], list[float], dict]:
