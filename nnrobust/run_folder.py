@@ -67,6 +67,17 @@ def _status_of(folder: Path) -> str:
     return ""
 
 
+def folder_path(folder: object) -> Path:
+    """``folder`` as a Path, if it is a str or a path-like of text with no NUL character."""
+    if not isinstance(folder, (str, os.PathLike)) or isinstance(os.fspath(folder), bytes):
+        raise RunFolderError(
+            f"the run folder needs a str or pathlib.Path, got {type(folder).__name__} {repr(folder)[:80]}"
+        )
+    if "\0" in os.fspath(folder):
+        raise RunFolderError(f"the run folder {os.fspath(folder)[:80]!r} has a NUL character; no folder can")
+    return Path(folder)
+
+
 def check_out_folder(folder: str | Path, overwrite: bool) -> Path:
     """Check, before anything is simulated, that ``folder`` can take a run; returns it.
 
@@ -74,7 +85,7 @@ def check_out_folder(folder: str | Path, overwrite: bool) -> Path:
     link, the working folder or an ancestor of it, a non-empty folder that is not a run folder,
     a parent that cannot be created or written).
     """
-    folder = Path(folder)
+    folder = folder_path(folder)
     if folder.name in ("", ".", ".."):
         raise RunFolderError(f"{folder}: name the run folder itself (e.g. out/my-run), not '.' or '..'")
     if folder.is_symlink():
@@ -369,6 +380,7 @@ def write_run(
     """
     from .results import Result
 
+    folder_path(folder)
     if not isinstance(result, Result):
         raise RunFolderError(
             f"write_run needs a Result (what run_experiment returns), got {type(result).__name__}"

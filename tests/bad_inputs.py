@@ -525,7 +525,22 @@ CONFIG_CASES = [
             d, f"{PAPER}[trajectory]\nkind = 'point_to_point'\ngoal = [0.3, 0.4]\nmove_time = 1e-300\n"
         ),
         ex.ConfigError,
-        "trajectory.move_time: must be at least 0.001 s, got 1e-300",
+        "trajectory.move_time: must be in [0.001, 1e+09] s, got 1e-300",
+    ),
+    Case(
+        "a point-to-point move of 1e300 s (its quintic overflowed)",
+        lambda d: _toml(
+            d, f"{PAPER}[trajectory]\nkind = 'point_to_point'\ngoal = [0.3, 0.4]\nmove_time = 1e300\n"
+        ),
+        ex.ConfigError,
+        "trajectory.move_time: must be in [0.001, 1e+09] s, got 1e+300",
+    ),
+    Case(
+        "a rotation axis of [1e-320, 0, 0] (no length to normalise)",
+        lambda d: _toml(d, 'base = "panda-pose"\n[trajectory]\nrotation_axis = [1e-320, 0.0, 0.0]\n'),
+        ex.ConfigError,
+        "trajectory.rotation_axis: [9.99989e-321, 0, 0] is too short to give a direction "
+        "(length below 1e-09)",
     ),
     Case(
         "waypoint times 1e-300 s apart",
@@ -1723,6 +1738,38 @@ API_CASES = [
         "task_frame needs a frame's name (or None for the default rule), got ''",
     ),
     Case(
+        "Python API: load_robot with a chain of ints",
+        lambda d: _load("three_link_planar", chain=[1, 2]),
+        ex.RobotLoadError,
+        "chain needs 2 frame names, (base, tip), got list [1, 2]",
+    ),
+    Case(
+        "Python API: load_robot with a chain of 3",
+        lambda d: _load("three_link_planar", chain=3),
+        ex.RobotLoadError,
+        "chain needs 2 frame names, (base, tip), got int 3",
+    ),
+    Case(
+        "Python API: load_robot with locked_joints of ints",
+        lambda d: _load("three_link_planar", locked_joints=[1, 2]),
+        ex.RobotLoadError,
+        "locked_joints needs a list of joint names ([] locks nothing, None the default rule), "
+        "got list [1, 2]",
+    ),
+    Case(
+        "Python API: load_robot with locked_joints one name, not a list",
+        lambda d: _load("three_link_planar", locked_joints="joint1"),
+        ex.RobotLoadError,
+        "locked_joints needs a list of joint names ([] locks nothing, None the default rule), "
+        "got str 'joint1'",
+    ),
+    Case(
+        "Python API: write_run given a bytes path",
+        lambda d: lambda: __import__("nnrobust").write_run(bytes(d / "run"), 3),
+        RunFolderError,
+        "the run folder needs a str or pathlib.Path, got bytes b'",
+    ),
+    Case(
         "Python API: write_run given something else than a Result",
         lambda d: lambda: __import__("nnrobust").write_run(d / "run", 3),
         RunFolderError,
@@ -2023,6 +2070,20 @@ FALSIFY_CASES = [
         lambda d: _falsify(require=[]),
         ex.ConfigError,
         "--require: falsify needs at least one property to falsify",
+    ),
+    Case(
+        "sweep file: a uniform range of [-1e308, 1e308] (numpy overflowed)",
+        lambda d: _box(d, '"plant.disturbance_scale" = {uniform = [-1e308, 1e308]}\n'),
+        ex.ConfigError,
+        "vary.plant.disturbance_scale.uniform: [-1e+308, 1e+308] is wider than a double holds "
+        "(b - a overflows)",
+    ),
+    Case(
+        "sweep file: a normal of standard deviation 1e307",
+        lambda d: _box(d, '"plant.disturbance_scale" = {normal = [1.0, 1e307]}\n'),
+        ex.ConfigError,
+        "vary.plant.disturbance_scale.normal: [1, 1e+307]: draws 40 standard deviations out would "
+        "overflow a double",
     ),
     Case(
         "falsify: an empty box",

@@ -79,6 +79,9 @@ def _positive(path: str, values) -> None:
 
 
 MAX_SUBSTEPS = 10_000
+MIN_AXIS_NORM = 1e-9
+"""Shortest ``trajectory.rotation_axis`` accepted: its direction is its only meaning, and a
+vector of 1e-320 has a length that squares to 0 (no direction to normalise to)."""
 MAX_STEPS = 1e9
 """Bounds that no sensible experiment reaches; the memory estimate (experiment.check_memory)
 refuses most oversized runs long before them."""
@@ -113,6 +116,13 @@ def _check_trajectory(config: ExperimentConfig) -> tuple[int, str]:
             raise ConfigError(path, f"needs 3 entries, got {len(values)}")
     if not any(tc.rotation_axis):
         raise ConfigError("trajectory.rotation_axis", "must be a non-zero vector")
+    if math.hypot(*tc.rotation_axis) < MIN_AXIS_NORM:
+        raise ConfigError(
+            "trajectory.rotation_axis",
+            f"[{', '.join(f'{v:.6g}' for v in tc.rotation_axis)}] is too short to give a direction "
+            f"(length below {MIN_AXIS_NORM:g}); the axis is normalised, so give it at unit scale, "
+            "e.g. [1, 0, 0]",
+        )
     return 6, "the pose task has m = 6"
 
 

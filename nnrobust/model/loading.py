@@ -258,6 +258,7 @@ def load_visual_model(
     warning each), the rest of the robot is drawn.
     """
     source = str(source)
+    _check_names(source, locked_joints, chain)
     built = _build(source, locked_joints, chain, say_notes=False)
     locked, _ = _locks(built, source, locked_joints, chain)
     return _reduced(built, locked, _visual_geometry(built, source, mesh_folders))
@@ -330,6 +331,29 @@ MAX_GRAVITY = 1e3
 """Largest gravity component accepted [m/s^2] (100 g)."""
 
 
+def _check_names(source: str, locked_joints: object, chain: object) -> None:
+    """``chain`` is None or 2 frame names, ``locked_joints`` None or a list of joint names."""
+
+    def names(value: object) -> bool:
+        return isinstance(value, (list, tuple)) and all(isinstance(x, str) and x.strip() for x in value)
+
+    if chain is not None and not (names(chain) and len(chain) == 2):  # type: ignore[arg-type]
+        raise RobotLoadError(source, f"chain needs 2 frame names, (base, tip), got {_shown(chain)}")
+    if locked_joints is not None and not names(locked_joints):
+        raise RobotLoadError(
+            source,
+            f"locked_joints needs a list of joint names ([] locks nothing, None the default rule), "
+            f"got {_shown(locked_joints)}",
+        )
+
+
+def _shown(value: object) -> str:
+    """A value as a message shows it: its repr, at most 80 characters, with its type."""
+    text = repr(value)
+    text = text if len(text) <= 80 else text[:77] + "..."
+    return f"{type(value).__name__} {text}"
+
+
 def load_robot(
     source: str | Path,
     task_frame: str | None = None,
@@ -364,8 +388,7 @@ def load_robot(
         raise RobotLoadError(
             source, f"task_frame needs a frame's name (or None for the default rule), got {task_frame!r}"
         )
-    if chain is not None and (isinstance(chain, str) or len(chain) != 2):
-        raise RobotLoadError(source, f"chain needs 2 frame names, (base, tip), got {chain!r}")
+    _check_names(source, locked_joints, chain)
     if gravity is not None:
         entries = list(gravity) if isinstance(gravity, (list, tuple, np.ndarray)) else []
         if len(entries) != 3 or not all(

@@ -158,6 +158,12 @@ def _check_distribution(key: str, table: dict) -> None:
         raise ConfigError(path, f"needs 0 < a, got {a:g}")
     if kind == "normal" and b < 0:
         raise ConfigError(path, f"needs a standard deviation >= 0, got {b:g}")
+    if kind == "uniform" and not math.isfinite(b - a):
+        raise ConfigError(path, f"[{a:.6g}, {b:.6g}] is wider than a double holds (b - a overflows)")
+    if kind == "normal" and not math.isfinite(abs(a) + 40.0 * b):
+        raise ConfigError(
+            path, f"[{a:.6g}, {b:.6g}]: draws 40 standard deviations out would overflow a double"
+        )
 
 
 ENTRY_KEYS = ("name", "class", "params", "kind", "set")

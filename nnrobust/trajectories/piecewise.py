@@ -20,6 +20,9 @@ MIN_MOVE_TIME = 1e-3
 """Shortest point-to-point move or waypoint interval [s]: a quintic over less than a millisecond
 asks for more than any actuator gives, and below about 1e-60 s its coefficients overflow."""
 
+MAX_MOVE_TIME = 1e9
+"""Longest point-to-point move [s] (32 years): above about 1e61 s the quintic's T^5 overflows."""
+
 
 @dataclass(frozen=True)
 class PiecewisePolynomialPath(Trajectory):
@@ -132,8 +135,11 @@ def _check_point_to_point(tc) -> None:
         raise ConfigError(
             "trajectory.start", f"has {len(tc.start)} entries, trajectory.goal has {len(tc.goal)}"
         )
-    if not tc.move_time >= MIN_MOVE_TIME:
-        raise ConfigError("trajectory.move_time", f"must be at least {MIN_MOVE_TIME:g} s, got {tc.move_time}")
+    if not MIN_MOVE_TIME <= tc.move_time <= MAX_MOVE_TIME:
+        raise ConfigError(
+            "trajectory.move_time",
+            f"must be in [{MIN_MOVE_TIME:g}, {MAX_MOVE_TIME:g}] s, got {tc.move_time:.6g}",
+        )
 
 
 def _build_point_to_point(config, robot) -> PiecewisePolynomialPath:
