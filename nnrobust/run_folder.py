@@ -461,6 +461,46 @@ def _regular(path: Path, folder: Path) -> None:
         raise RunFolderError(f"{folder}: {path.name} is {kind}; a run folder holds regular files")
 
 
+def _check_member(archive: zipfile.ZipFile, info: zipfile.ZipInfo, folder: Path) -> None:
+    """An array of result.npz holds the bytes its header claims, of a dtype without Python
+    objects: a crafted header claiming 80 TB would otherwise be allocated before it is read.
+    """
+    import numpy as np
+
+    if not info.filename.endswith(".npy"):
+        return
+    damaged = f"{folder}: a damaged run folder (result.npz: {info.filename}"
+    with archive.open(info) as fh:
+        try:
+            version = np.lib.format.read_magic(fh)
+            if version == (1, 0):
+                shape, _, dtype = np.lib.format.read_array_header_1_0(fh)
+            elif version == (2, 0):
+                shape, _, dtype = np.lib.format.read_array_header_2_0(fh)
+            else:
+                raise ValueError(f"format version {version[0]}.{version[1]}; a run's arrays are 1.0 or 2.0")
+        except Exception as err:  # numpy parses the header with Python's tokenizer: any of its errors
+            raise RunFolderError(
+                f"{damaged} has no readable array header: {type(err).__name__}: {str(err)[:200]})"
+            ) from err
+        header = fh.tell()
+    if dtype.hasobject:
+        raise RunFolderError(f"{damaged} holds Python objects, which are never unpickled)")
+    shown = str(tuple(shape))
+    shown = shown if len(shown) <= 60 else shown[:57] + "..."
+    if any(int(size) < 0 for size in shape):
+        raise RunFolderError(f"{damaged}'s header claims shape {shown}, with a negative size)")
+    claimed = dtype.itemsize
+    for size in shape:
+        claimed *= int(size)
+    held = info.file_size - header
+    if claimed > held:
+        raise RunFolderError(
+            f"{damaged}'s header claims shape {shown} of {dtype}, {claimed / 1e9:.3g} GB, "
+            f"but holds {held} bytes)"
+        )
+
+
 def check_run_folder(folder: Path) -> None:
     """Validate a run folder received from anywhere, before anything reads it: regular files of
     bounded size, a result.npz that expands to at most :data:`MAX_RESULT_BYTES`, metrics.json a
@@ -483,6 +523,9 @@ def check_run_folder(folder: Path) -> None:
     try:
         with zipfile.ZipFile(folder / "result.npz") as archive:
             expanded = sum(info.file_size for info in archive.infolist())
+            if expanded <= MAX_RESULT_BYTES:
+                for info in archive.infolist():
+                    _check_member(archive, info, folder)
     except (zipfile.BadZipFile, OSError) as err:
         raise RunFolderError(
             f"{folder}: a damaged run folder (result.npz is not an .npz archive: {err})"

@@ -1019,6 +1019,20 @@ def _damaged_run(folder: Path, damage: str):
         entry = data.rindex(b"PK\x01\x02")  # the central directory record; its size field at +24
         data[entry + 24 : entry + 28] = (0xFFFFFFF0).to_bytes(4, "little")
         (run / "result.npz").write_bytes(bytes(data))
+    elif damage == "claims":  # t.npy's header claims 10^13 samples (80 TB); 64 bytes follow it
+        import io
+        import zipfile
+
+        header = io.BytesIO()
+        np.lib.format.write_array_header_1_0(
+            header, {"descr": "<f8", "fortran_order": False, "shape": (10**13,)}
+        )
+        with zipfile.ZipFile(run / "result.npz") as archive:
+            members = {name: archive.read(name) for name in archive.namelist()}
+        members["t.npy"] = header.getvalue() + bytes(64)
+        with zipfile.ZipFile(run / "result.npz", "w") as archive:
+            for name, data in members.items():
+                archive.writestr(name, data)
     elif damage == "shape":
         arrays = dict(np.load(run / "result.npz"))
         arrays["q"] = arrays["q"][:-1]
@@ -1122,7 +1136,7 @@ RUN_FOLDER_CASES = [
         "object array in result.npz (would need unpickling)",
         lambda d: _damaged_run(d, "pickled"),
         RunFolderError,
-        "Object arrays cannot be loaded when allow_pickle=False",
+        "a damaged run folder (result.npz: t.npy holds Python objects, which are never unpickled)",
     ),
     Case(
         "a received run whose config.toml is a FIFO",
@@ -1147,6 +1161,13 @@ RUN_FOLDER_CASES = [
         lambda d: _damaged_run(d, "shape"),
         RunFolderError,
         "a damaged run folder (result.npz: q has shape",
+    ),
+    Case(
+        "an array header claiming 80 TB (numpy would allocate it before reading)",
+        lambda d: _damaged_run(d, "claims"),
+        RunFolderError,
+        "a damaged run folder (result.npz: t.npy's header claims shape (10000000000000,) of float64, "
+        "8e+04 GB, but holds 64 bytes)",
     ),
     Case(
         "t saved as text",
