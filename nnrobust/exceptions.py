@@ -2,15 +2,42 @@
 
 from __future__ import annotations
 
+import re
+from decimal import Decimal
+
 MAX_MESSAGE = 1000
 """Characters of a message at most: longer ones keep their start and end, the middle elided."""
 
 
+LONG_NUMBER = re.compile(r"(?<![\w.+])(?<!\w-)(\d[\d_]*(?:\.\d+)?(?:[eE][-+]?\d+)?)(?![\w.])")
+"""A number written out in a message (not part of a name, a path or a digest)."""
+
+MAX_DIGITS = 20
+"""Digits of a number a message shows as written: longer ones (a 300-digit integer given for a
+value) are shown to 6 significant digits, as %.6g shows them."""
+
+
+def _shortened(match: re.Match) -> str:
+    text = match.group(1)
+    digits = sum(c.isdigit() for c in text.split("e")[0].split("E")[0])
+    if digits <= MAX_DIGITS:
+        return text
+    try:
+        mantissa, e, exponent = format(Decimal(text.replace("_", "")), ".6g").partition("e")
+    except ArithmeticError:  # an exponent beyond what Decimal holds
+        return text[:8] + f"... ({len(text)} characters)"
+    if "." in mantissa:
+        mantissa = mantissa.rstrip("0").rstrip(".")
+    return mantissa + e + exponent
+
+
 def one_line(text: str, limit: int = MAX_MESSAGE) -> str:
     r"""A message fit for one terminal line: control characters escaped (a newline shows as \n),
-    at most ``limit`` characters with the middle elided.
+    numbers of more than 20 digits shown to 6 significant digits, at most ``limit`` characters
+    with the middle elided.
     """
     text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+    text = LONG_NUMBER.sub(_shortened, text)
     if len(text) > limit:
         head, tail = limit - limit // 5 - 40, limit // 5
         text = f"{text[:head]} ... [{len(text) - head - tail} characters elided] ... {text[-tail:]}"

@@ -18,3 +18,19 @@ singular values are metres per radian."""
 
 MAX_CENTERS = 1000
 """Most Gaussian centres per input coordinate of the NN basis (``nn.centers``)."""
+
+
+def finite_number(value: object) -> bool:
+    """Whether ``value`` is a real number that is finite as a float: not a bool, not NaN or
+    infinite, not an integer too large for a float (10**400 raises OverflowError in
+    ``math.isfinite`` and TypeError in ``np.isfinite``).
+    """
+    import math
+    import numbers
+
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        return False
+    try:
+        return math.isfinite(value)
+    except OverflowError:
+        return False

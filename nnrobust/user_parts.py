@@ -19,6 +19,7 @@ import numpy as np
 from .exceptions import ConfigError
 from .model.pinocchio_model import PinocchioModel
 from .model.tasks import TASK_KINDS
+from .numeric_limits import finite_number
 from .plant.disturbance import Disturbance
 from .subtasks.base import Criterion
 from .trajectories import Trajectory
@@ -110,11 +111,7 @@ class CheckedCriterion(Criterion):
     def value(self, model, q: np.ndarray) -> float:
         """The inner class's h(q), checked."""
         value = _call(self.KEY, f"{self._name}.value", self.inner.value, model, q)
-        if (
-            isinstance(value, bool)
-            or not isinstance(value, (int, float, np.floating))
-            or not np.isfinite(value)
-        ):
+        if not isinstance(value, (int, float, np.floating)) or not finite_number(value):
             raise ConfigError(
                 self.KEY,
                 f"{self._name}.value(model, q) must return a finite number, got {value!r} at q = {q}",

@@ -528,6 +528,13 @@ CONFIG_CASES = [
         "trajectory.move_time: must be in [0.001, 1e+09] s, got 1e-300",
     ),
     Case(
+        "an integer of 5000 digits (Python reads at most 4300)",
+        lambda d: _toml(d, f"{PAPER}[plant]\npayload = {'9' * 5000}\n"),
+        ex.ConfigError,
+        "experiment.toml: invalid TOML: an integer of 5000 digits (at most 4300 are read, and no key "
+        "takes one of more than 19)",
+    ),
+    Case(
         "a point-to-point move of 1e300 s (its quintic overflowed)",
         lambda d: _toml(
             d, f"{PAPER}[trajectory]\nkind = 'point_to_point'\ngoal = [0.3, 0.4]\nmove_time = 1e300\n"
@@ -1514,6 +1521,12 @@ PART_CASES = [
         "plant.loads[0].time: 1e+308 s is more than 1e+12 control periods (0.001 s)",
     ),
     Case(
+        "load: a time of a 300-digit integer (np.isfinite raised TypeError)",
+        lambda d: _part(d, f'[[plant.loads]]\nkind = "step"\ntime = {"9" * 300}\ntorque = [1.0, 0.0, 0.0]'),
+        ex.ConfigError,
+        "plant.loads[0].time: 1e+300 s is more than 1e+12 control periods (0.001 s)",
+    ),
+    Case(
         "load: starting after the run ends",
         lambda d: _part(d, '[[plant.loads]]\nkind = "step"\ntime = 5.0\ntorque = [1.0, 0.0, 0.0]'),
         None,
@@ -2098,6 +2111,27 @@ FALSIFY_CASES = [
         ex.ConfigError,
         "vary.plant.disturbance_scale.uniform: [-1e+308, 1e+308] is wider than a double holds "
         "(b - a overflows)",
+    ),
+    Case(
+        "sweep file: a uniform range ending at a 400-digit integer (math.isfinite overflowed)",
+        lambda d: _box(d, f'"plant.disturbance_scale" = {{uniform = [0.5, {"9" * 400}]}}\n'),
+        ex.ConfigError,
+        "vary.plant.disturbance_scale.uniform: expected a finite number of sensible size, got an "
+        "integer of 400 digits",
+    ),
+    Case(
+        "sweep file: samples = a 300-digit integer (echoed as %.6g)",
+        lambda d: (
+            lambda: __import__("nnrobust.sweep", fromlist=["load_sweep"]).load_sweep(
+                _file(
+                    d,
+                    "s.toml",
+                    f'name = "s"\nbase = "paper-ellipse"\ncontrollers = ["nn"]\nsamples = {"9" * 300}\n',
+                )
+            )
+        ),
+        ex.ConfigError,
+        "s.toml: samples: expected an integer >= 1, got 1e+300",
     ),
     Case(
         "sweep file: a normal of standard deviation 1e307",

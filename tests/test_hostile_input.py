@@ -292,3 +292,19 @@ def test_compare_prints_no_control_characters_from_a_received_folder(tmp_path, c
     out = capsys.readouterr()
     assert "\x1b" not in out.out + out.err
     assert "completed\\x1b[2J" in out.out
+
+
+def test_long_numbers_in_messages_are_shown_to_six_digits(capsys):
+    """A 300-digit integer given for a value was echoed whole into errors and warnings; every
+    message line shows numbers of more than 20 digits as %.6g does (names, paths and digests
+    that hold digits are left as they are)."""
+    from nnrobust.cli import _warning_line
+    from nnrobust.exceptions import ConfigError, one_line
+
+    assert one_line(f"got {'9' * 300} and -{'1' * 30}") == "got 1e+300 and -1.11111e+29"
+    assert one_line(f"x = 0.{'0' * 300}1, y = 0.30000000000000004") == "x = 1e-301, y = 0.30000000000000004"
+    kept = f"part-{'0' * 32}.parquet sha {'1' * 64}ab run_{'2' * 25}"
+    assert one_line(kept) == kept
+    assert str(ConfigError("samples", f"got {'9' * 300}")) == "samples: got 1e+300"
+    _warning_line(UserWarning(f"value {'7' * 300}"), UserWarning, "f", 1)
+    assert capsys.readouterr().err == "warning: value 7.77778e+299\n"

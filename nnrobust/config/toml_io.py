@@ -13,6 +13,7 @@ import functools
 import math
 import os
 import re
+import sys
 import tomllib
 import types
 import typing
@@ -158,6 +159,17 @@ def read_text_file(path: str | Path, limit: int = MAX_TOML_BYTES, what: str = "f
         raise ConfigError(str(path), "not a UTF-8 text file") from err
 
 
+def _too_long(err: ValueError) -> str:
+    """The error of tomllib for an integer Python will not read (more than 4300 digits), in words."""
+    digits = re.search(r"value has (\d+) digits", str(err))
+    if not digits:
+        return f"{type(err).__name__}: {err}"
+    return (
+        f"an integer of {digits.group(1)} digits (at most {sys.get_int_max_str_digits()} are "
+        "read, and no key takes one of more than 19)"
+    )
+
+
 def parse_toml(text: str, where: str) -> dict:
     """tomllib.loads with one-line errors (also for tables nested too deep to parse), refusing
     TOML dates and times (:func:`refuse_dates`).
@@ -168,6 +180,8 @@ def parse_toml(text: str, where: str) -> dict:
         raise ConfigError(where, f"invalid TOML: {err}") from err
     except RecursionError as err:
         raise ConfigError(where, "invalid TOML: nested too deeply") from err
+    except ValueError as err:  # Python refuses to read an integer of more than 4300 digits
+        raise ConfigError(where, f"invalid TOML: {_too_long(err)}") from err
     refuse_dates(data, "", f"{where}: ")
     return data
 
@@ -552,6 +566,8 @@ def parse_override(text: str) -> tuple[str, object]:
         value = raw.strip()
     except RecursionError as err:
         raise ConfigError(f"--set {key}", "the value is nested too deeply") from err
+    except ValueError as err:
+        raise ConfigError(f"--set {key}", _too_long(err)) from err
     refuse_dates(value, key, "--set ")
     check_dotted_key(key)
     return key, value

@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..exceptions import ConfigError
+from ..numeric_limits import finite_number
 
 LOAD_KINDS = ("step", "impulse", "wrench", "payload")
 """The values of a ``[[plant.loads]]`` entry's ``kind``."""
@@ -155,7 +156,7 @@ MAX_PERIODS = 1e12
 
 def _periods(path: str, value, period: float, positive: bool) -> float:
     """A time [s] that is a whole number of control periods (loads switch at control instants)."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not np.isfinite(value):
+    if not (isinstance(value, (int, float)) and finite_number(value)):
         raise ConfigError(path, f"expected a finite number of seconds, got {value!r}")
     count = value / period
     if not abs(count) <= MAX_PERIODS:
@@ -174,7 +175,7 @@ def _periods(path: str, value, period: float, positive: bool) -> float:
 
 def _vector(path: str, value, size: int | None, unit: str, per_joint: bool) -> np.ndarray:
     if not isinstance(value, list) or not all(
-        isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v) for v in value
+        isinstance(v, (int, float)) and finite_number(v) for v in value
     ):
         raise ConfigError(path, f"expected a list of finite numbers [{unit}], got {value!r}")
     if size is not None and len(value) != size:

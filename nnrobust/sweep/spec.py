@@ -26,6 +26,7 @@ from ..config import (
 )
 from ..controllers.registry import registered_law
 from ..exceptions import ConfigError
+from ..numeric_limits import finite_number
 
 DISTRIBUTIONS = ("uniform", "normal", "loguniform", "choice")
 """The tables a [vary] key may hold: {uniform = [a, b]}, {normal = [mu, sd]},
@@ -131,7 +132,12 @@ class Sample:
 
 
 def _number(path: str, value) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+    if isinstance(value, int) and not isinstance(value, bool) and abs(value) >= 2**63:
+        digits = len(str(abs(value)))
+        raise ConfigError(
+            path, f"expected a finite number of sensible size, got an integer of {digits} digits"
+        )
+    if not (isinstance(value, (int, float)) and finite_number(value)):
         raise ConfigError(path, f"expected a finite number, got {value!r}")
     return float(value)
 
