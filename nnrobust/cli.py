@@ -703,7 +703,7 @@ def cmd_bench(args) -> int:
     unknown = [n for n in names if n not in available]
     if unknown:
         raise NNRobustError(f"unknown benchmarks {unknown}; available: {', '.join(available)}")
-    out = Path(args.out)
+    out = _bench_folder(Path(args.out), names)
     code = 0
     for name in names:
         print(f"== {name}", flush=True)
@@ -716,6 +716,27 @@ def cmd_bench(args) -> int:
             _stop_group(child)
             raise
     return 1 if code else 0
+
+
+def _bench_folder(out: Path, names: list[str]) -> Path:
+    """The --out folder of ``bench``, checked (and made) before any benchmark runs: each one
+    writes ``<name>.json`` into it, after minutes of work that a file in its place would lose.
+    """
+    if out.exists() and not out.is_dir():
+        raise NNRobustError(
+            f"--out {out}: exists and is not a folder; bench writes one <name>.json per benchmark "
+            "into a folder (e.g. --out out/bench)"
+        )
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise NNRobustError(f"--out {out}: cannot make the folder ({err.strerror or err})") from err
+    if not os.access(out, os.W_OK | os.X_OK):
+        raise NNRobustError(f"--out {out}: the folder is not writable")
+    taken = [f"{name}.json" for name in names if (out / f"{name}.json").is_dir()]
+    if taken:
+        raise NNRobustError(f"--out {out}: {', '.join(taken)} is a folder; the benchmark writes a file there")
+    return out
 
 
 def _stop_group(child, grace: float = 10.0) -> None:

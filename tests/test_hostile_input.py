@@ -308,3 +308,24 @@ def test_long_numbers_in_messages_are_shown_to_six_digits(capsys):
     assert str(ConfigError("samples", f"got {'9' * 300}")) == "samples: got 1e+300"
     _warning_line(UserWarning(f"value {'7' * 300}"), UserWarning, "f", 1)
     assert capsys.readouterr().err == "warning: value 7.77778e+299\n"
+
+
+def test_bench_refuses_an_out_that_is_a_file_before_any_benchmark(tmp_path, capsys, monkeypatch):
+    """bench --out FILE ran 91 s of benchmark, then ended in a traceback writing its JSON."""
+    import subprocess
+
+    def no_benchmark(*args, **kwargs):
+        raise AssertionError("a benchmark ran before --out was checked")
+
+    monkeypatch.setattr(subprocess, "Popen", no_benchmark)
+    (tmp_path / "file").write_text("")
+    (tmp_path / "folder" / "step_scaling.json").mkdir(parents=True)
+    for out, words in (
+        ("file", "exists and is not a folder; bench writes one <name>.json per benchmark"),
+        ("file/sub", "cannot make the folder (Not a directory)"),
+        ("folder", "step_scaling.json is a folder; the benchmark writes a file there"),
+    ):
+        assert main(["bench", "step_scaling", "--out", str(tmp_path / out)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith(f"nnrobust: error: --out {tmp_path / out}: "), err
+        assert words in err[0], err
