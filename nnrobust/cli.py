@@ -325,12 +325,15 @@ def _bar(done: int, total: int, text: str) -> None:
     )
 
 
-def _resumable(work, kept: str):
-    """work()'s result, or None after Ctrl-C with one line saying what was kept and how to resume."""
+def _resumable(work, kept):
+    """work()'s result, or None after Ctrl-C with one line saying what was kept (``kept``, or
+    what ``kept()`` says then) and how to resume.
+    """
     try:
         return work()
     except KeyboardInterrupt:
-        print(f"\nnnrobust: {kept}; run the same command again to resume", file=sys.stderr)
+        said = kept() if callable(kept) else kept
+        print(f"\nnnrobust: {said}; run the same command again to resume", file=sys.stderr)
         return None
 
 
@@ -370,6 +373,26 @@ def cmd_sweep(args) -> int:
         _bar(done, total, f"rows, {rate:.2f}/s, ETA {eta}")
 
     started: list[float] = []
+    checking_since = time.monotonic()
+    checking_shown: list[bool] = []
+
+    def checking(done, total):  # 10^6 rows take minutes to validate: said after a second
+        if args.quiet:
+            return
+        elapsed = time.monotonic() - checking_since
+        if not checking_shown and elapsed < 1.0:
+            return
+        if not checking_shown:
+            checking_shown.append(True)
+            print(
+                f"sweep {spec.name}: checking the experiments of {total} rows before any of them runs",
+                file=sys.stderr,
+            )
+        eta = f"{elapsed * (total - done) / done:.0f} s" if done else "?"
+        _bar(done, total, f"rows checked, ETA {eta}")
+        if done == total:
+            print(file=sys.stderr)
+
     stop = None
     if args.stop_early:
         from .exceptions import ConfigError
@@ -381,8 +404,14 @@ def cmd_sweep(args) -> int:
             )
         stop = lambda records: refuted_groups(spec, records, properties, *claim)  # noqa: E731
     counts = _resumable(
-        lambda: run_sweep(spec, out, args.workers, args.scheduler, args.overwrite, progress, stop=stop),
-        f"sweep interrupted; the rows written so far are in {out}/results",
+        lambda: run_sweep(
+            spec, out, args.workers, args.scheduler, args.overwrite, progress, stop=stop, checking=checking
+        ),
+        lambda: (
+            f"sweep interrupted; the rows written so far are in {out}/results"
+            if (out / "results").is_dir()
+            else "sweep interrupted before any row was written"
+        ),
     )
     if counts is None:
         return 130

@@ -888,3 +888,56 @@ samples = 2
         "sets 'plant.disturbance_scale' for eq9, which is not a key eq9 reads itself"
         in capsys.readouterr().err
     )
+
+
+def test_a_million_row_grid_is_planned_in_seconds_and_a_long_check_shows_progress(monkeypatch):
+    """Round 3: 10^6 valid rows printed nothing for 100 s while each row's experiment was checked.
+    Rows that differ only by their seeds are one check (a grid point's samples need no draw), and
+    ``checking(done, total)`` reports a long check as it goes."""
+    from nnrobust.sweep import engine
+
+    grid = parse_sweep(
+        {
+            "name": "million",
+            "base": "paper-ellipse",
+            "controllers": ["nn", "pd"],
+            "samples": 100_000,
+            "vary": {"plant.disturbance_scale": [0.5, 1.0, 2.0, 3.0, 4.0]},
+        }
+    )
+    checked = []
+    experiment = engine.experiment
+    monkeypatch.setattr(engine, "experiment", lambda *a: checked.append(a[2].id) or experiment(*a))
+    start = time.perf_counter()
+    _, jobs = plan(grid)
+    assert len(jobs) == 1_000_000 and jobs[-1] == (499_999, "pd")
+    assert len(checked) <= 2 * 2 * 5 and time.perf_counter() - start < 30
+    drawn = parse_sweep(
+        {
+            "name": "drawn",
+            "base": "paper-ellipse",
+            "controllers": ["nn"],
+            "samples": 25,
+            "vary": {"plant.disturbance_scale": {"uniform": [0.5, 2.0]}},
+        }
+    )
+    monkeypatch.setattr(engine, "CHECK_REPORT_ROWS", 10)
+    calls: list = []
+    plan(drawn, lambda done, total: calls.append((done, total)))
+    assert calls == [(10, 25), (20, 25), (25, 25)]
+
+
+def test_the_command_line_shows_a_long_check_and_an_interrupt_during_it(tmp_path, monkeypatch, capsys):
+    import nnrobust.sweep
+
+    def slow_check(spec, out, *args, checking=None, **kwargs):
+        time.sleep(1.05)  # the line is shown once the check has taken a second
+        checking(1000, 1_000_000)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(nnrobust.sweep, "run_sweep", slow_check)
+    assert main(["sweep", str(_sweep_file(tmp_path)), "--out", str(tmp_path / "out")]) == 130
+    err = capsys.readouterr().err
+    assert "sweep tiny: checking the experiments of 1000000 rows before any of them runs" in err
+    assert "1000/1000000 rows checked, ETA" in err
+    assert "sweep interrupted before any row was written; run the same command again" in err

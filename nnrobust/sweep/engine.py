@@ -366,23 +366,48 @@ def _client(workers: int | None, scheduler: str | None):
         cluster.close()
 
 
-def plan(spec: SweepSpec) -> tuple[dict, list[tuple[int, str]]]:
+CHECK_REPORT_ROWS = 1000
+"""Rows checked between two calls of :func:`plan`'s ``checking`` (a row takes about a
+millisecond: 10^6 rows are minutes of checking, which the command line shows)."""
+
+
+def plan(spec: SweepSpec, checking=None) -> tuple[dict, list[tuple[int, str]]]:
     """The base experiment's own values (:func:`~.spec.base_values`) and every (sample,
-    controller) job, each experiment validated first: a value the schema refuses is a one-line
-    error naming the key and the sample, before anything runs. Jobs are (id, controller) pairs,
+    controller) job, each row's experiment validated first (once per distinct set of varied
+    values: rows that differ only by their seeds are one check): a value the schema refuses is a
+    one-line error naming the key and the sample, before anything runs. Jobs are (id, controller) pairs,
     so the client's memory does not grow with the experiments, which the workers rebuild.
+    ``checking(done, total)``, if given, is called every :data:`CHECK_REPORT_ROWS` rows checked
+    and once at the end.
     """
     base_config(spec)  # the base file and [set], refused as the file's or as [set]'s
     base = base_values(spec)
     for sample_id in _first_checked(spec):  # each distinct grid value's first sample, at once
         for controller in spec.controllers:
             experiment(spec, base, draw(spec, sample_id), controller)
-    jobs = []
+    jobs: list[tuple[int, str]] = []
+    total = spec.size * len(spec.controllers)
+    # Rows of the same varied values differ only by their seeds (nominal.seed, sensing.seed: any
+    # draw is valid), so a grid point's or a choice's values are checked once, not once a sample
+    # (a grid point's samples need no draw at all without a random key).
+    repeats = all("choice" in spec.vary[key] for key in spec.random_keys)
+    checked: set[tuple[str, str]] = set()
+    reported = 0
     for sample_id in range(spec.size):
-        sample = draw(spec, sample_id)
-        for controller in spec.controllers:
-            experiment(spec, base, sample, controller)  # validates; not kept
-            jobs.append((sample_id, controller))
+        if spec.random_keys or sample_id % spec.samples == 0:
+            sample = draw(spec, sample_id)
+            values = repr(sorted(sample.values.items())) if repeats else ""
+            for controller in spec.controllers:
+                if not repeats or (controller, values) not in checked:
+                    experiment(spec, base, sample, controller)  # validates; not kept
+                    if repeats:
+                        checked.add((controller, values))
+        jobs.extend((sample_id, controller) for controller in spec.controllers)
+        if checking is not None and len(jobs) - reported >= CHECK_REPORT_ROWS:
+            reported = len(jobs)
+            checking(reported, total)
+    if checking is not None:
+        checking(len(jobs), total)
     return base, jobs
 
 
@@ -572,18 +597,20 @@ def run_sweep(
     progress=None,
     seconds_per_job: float = 0.5,
     stop=None,
+    checking=None,
 ) -> dict:
     """Run (or resume) a sweep into ``folder``; returns {"computed": rows, "skipped": rows,
     "parts": n, "stopped": rows not run}.
 
-    ``progress(done, total)`` is called as chunks finish. ``stop(records)``, given every row
+    ``checking(done, total)`` is called as the rows' experiments are validated, before anything
+    runs (:func:`plan`); ``progress(done, total)`` as chunks finish. ``stop(records)``, given every row
     written so far (dicts), returns the (controller, grid cell) groups whose remaining rows need
     not run (sequential stopping, :func:`nnrobust.properties.refuted_groups`): their chunks are
     then cancelled, and a resumed sweep skips them.
     """
     _require_engine()
     folder = Path(folder)
-    base, jobs = plan(spec)  # every experiment validated before anything is written or run
+    base, jobs = plan(spec, checking)  # every experiment validated before anything is written or run
     check_controllers(spec, base)  # and every controller built, its first step run
     inputs = study_inputs(spec)  # what every row is computed from, by content
     from ..study_folder import held
