@@ -1,18 +1,25 @@
 // nnrobust._loop: the one binding module of the compiled backend (docs/compiled.md).
 #include <nanobind/eigen/dense.h>
 #include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
 #include <nanobind/stl/map.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/vector.h>
 
 #include <Python.h>
 
+#include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <exception>
+#include <functional>
+#include <mutex>
+#include <thread>
 #include <stdexcept>
 #include <string>
 
 #include "closed_loop.hpp"
+#include "controllers.hpp"
 #include "model.hpp"
 
 namespace nb = nanobind;
@@ -95,6 +102,142 @@ std::vector<LoopTrace> batch(std::vector<LoadedModel *> plants, std::vector<Load
   return nnrobust::run_batch(items, threads, &python_signal_pending);
 }
 
+
+// The learning environment's loop (nnrobust/learning/): one SteppedLoop per episode, driven one
+// control period at a time by an action. ACTION_TORQUE: the action is the command; ACTION_RESIDUAL:
+// it is added to the compiled law's command (the law's state and signals advance as in a run).
+enum ActionMode { ACTION_TORQUE = 0, ACTION_RESIDUAL = 1 };
+
+using nnrobust::SteppedLoop;
+using RowsRef = nb::ndarray<double, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
+using Flags = nb::ndarray<bool, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
+
+// One period of `loop` under `action` (n entries); false when the run has ended.
+bool step_action(SteppedLoop &loop, const double *action, int mode, int n, int signals) {
+  nnrobust::Output out;
+  const Eigen::Map<const nnrobust::Vector> a(action, n);
+  if (mode == ACTION_RESIDUAL) {
+    out = loop.control();
+    out.tau += a;
+  } else {
+    out.tau = a;
+    out.z = loop.state();
+    out.signals = nnrobust::Vector::Constant(signals, std::numeric_limits<double>::quiet_NaN());
+  }
+  return loop.advance(out);
+}
+
+// A persistent pool of C++ threads for the vector environment: run(count, job) calls job(i) for
+// i < count on the pool and the calling thread (GIL released by the caller), and rethrows the
+// first exception. Threads wait on a condition variable between calls, so a call costs a wake-up,
+// not a thread start.
+class StepPool {
+ public:
+  explicit StepPool(int threads) {
+    for (int w = 1; w < std::max(1, threads); ++w) workers_.emplace_back([this] { serve(); });
+  }
+  ~StepPool() {
+    {
+      const std::lock_guard<std::mutex> hold(lock_);
+      stop_ = true;
+    }
+    start_.notify_all();
+    for (auto &w : workers_) w.join();
+  }
+  int threads() const { return static_cast<int>(workers_.size()) + 1; }
+
+  void run(size_t count, const std::function<void(size_t)> &job) {
+    {
+      const std::lock_guard<std::mutex> hold(lock_);
+      job_ = &job;
+      count_ = count;
+      next_ = 0;
+      busy_ = static_cast<int>(workers_.size());
+      failure_ = nullptr;
+      ++generation_;
+    }
+    start_.notify_all();
+    work();
+    std::unique_lock<std::mutex> hold(lock_);
+    done_.wait(hold, [this] { return busy_ == 0; });
+    job_ = nullptr;
+    if (failure_) std::rethrow_exception(failure_);
+  }
+
+ private:
+  void work() {
+    for (size_t i = next_++; i < count_; i = next_++) {
+      try {
+        (*job_)(i);
+      } catch (...) {
+        const std::lock_guard<std::mutex> hold(lock_);
+        if (!failure_) failure_ = std::current_exception();
+      }
+    }
+  }
+  void serve() {
+    long seen = 0;
+    for (;;) {
+      {
+        std::unique_lock<std::mutex> hold(lock_);
+        start_.wait(hold, [&] { return stop_ || generation_ != seen; });
+        if (stop_) return;
+        seen = generation_;
+      }
+      work();
+      {
+        const std::lock_guard<std::mutex> hold(lock_);
+        --busy_;
+      }
+      done_.notify_one();
+    }
+  }
+
+  std::vector<std::thread> workers_;
+  std::mutex lock_;
+  std::condition_variable start_, done_;
+  const std::function<void(size_t)> *job_ = nullptr;
+  size_t count_ = 0;
+  std::atomic<size_t> next_{0};
+  int busy_ = 0;
+  long generation_ = 0;
+  bool stop_ = false;
+  std::exception_ptr failure_;
+};
+
+// The vector environment's step: loop i takes actions[i] (mode as step_action), then writes its
+// next observation to observations[i], its applied torque to applied[i] and whether it runs on to
+// running[i]; a loop that ended keeps its row of observations. GIL released, on the pool.
+void step_loops(StepPool &pool, std::vector<SteppedLoop *> loops, RowsRef actions, int mode, RowsRef observations,
+                RowsRef applied, Flags running) {
+  const size_t count = loops.size();
+  if (actions.shape(0) != count || observations.shape(0) != count || applied.shape(0) != count ||
+      running.shape(0) != count)
+    throw std::invalid_argument("step_loops: actions, observations, applied and running need one row per loop");
+  for (size_t i = 0; i < count; ++i) {
+    if (loops[i] == nullptr) throw std::invalid_argument("step_loops: loop " + std::to_string(i) + " is None");
+    const SteppedLoop &loop = *loops[i];
+    if (static_cast<long>(actions.shape(1)) != loop.measured_q().size() ||
+        static_cast<long>(applied.shape(1)) != loop.measured_q().size() ||
+        static_cast<int>(observations.shape(1)) != loop.observation_size())
+      throw std::invalid_argument("step_loops: loop " + std::to_string(i) + " needs actions of " +
+                                  std::to_string(loop.measured_q().size()) + " and observations of " +
+                                  std::to_string(loop.observation_size()) + " entries");
+    if (!loop.running()) throw std::invalid_argument("step_loops: loop " + std::to_string(i) + " has ended");
+  }
+  double *a = actions.data(), *obs = observations.data(), *tau = applied.data();
+  bool *alive = running.data();
+  const size_t na = actions.shape(1), no = observations.shape(1);
+  const std::function<void(size_t)> job = [&](size_t i) {
+    SteppedLoop &loop = *loops[i];
+    const int n = static_cast<int>(na);
+    alive[i] = step_action(loop, a + i * na, mode, n, loop.signal_count());
+    Eigen::Map<nnrobust::Vector>(tau + i * na, n) = loop.applied_torque();
+    if (alive[i]) loop.observe(obs + i * no);
+  };
+  nb::gil_scoped_release released;
+  pool.run(count, job);
+}
 }  // namespace
 
 NB_MODULE(_loop, m) {
@@ -157,6 +300,51 @@ NB_MODULE(_loop, m) {
   m.def("run_batch", &batch, nb::arg("plants"), nb::arg("nominals"), nb::arg("specs"), nb::arg("threads"),
         "Run several loops on C++ threads with the GIL released (one model pair per run; None "
         "nominals for the closed form); Ctrl-C and SIGTERM stop them all.");
+  // the learning environment's loop (nnrobust/learning/)
+  nb::class_<SteppedLoop>(m, "SteppedLoop",
+                          "The closed loop one control period at a time (the learning environment).")
+      .def(nb::init<LoadedModel &, LoadedModel *, const LoopSpec &, bool>(), nb::arg("plant"),
+           nb::arg("nominal").none(), nb::arg("spec"), nb::arg("with_law"), nb::keep_alive<1, 2>(),
+           nb::keep_alive<1, 3>(), nb::keep_alive<1, 4>())
+      .def_prop_ro("running", &SteppedLoop::running)
+      .def_prop_ro("step", &SteppedLoop::step)
+      .def_prop_ro("time", &SteppedLoop::time)
+      .def_prop_ro("observation_size", &SteppedLoop::observation_size)
+      .def_prop_ro("measured_q", &SteppedLoop::measured_q)
+      .def_prop_ro("measured_v", &SteppedLoop::measured_v)
+      .def_prop_ro("applied_torque", &SteppedLoop::applied_torque)
+      .def_prop_ro("status", [](const SteppedLoop &l) { return l.trace().status; })
+      .def(
+          "observe",
+          [](const SteppedLoop &l) {
+            nnrobust::Vector obs(l.observation_size());
+            l.observe(obs.data());
+            return obs;
+          },
+          "The observation at the current control instant (docs/learning.md).")
+      .def(
+          "act",
+          [](SteppedLoop &l, const nnrobust::Vector &action, int mode) {
+            if (action.size() != l.measured_q().size())
+              throw std::invalid_argument("SteppedLoop.act: the action needs " +
+                                          std::to_string(l.measured_q().size()) + " entries, got " +
+                                          std::to_string(action.size()));
+            if (!l.running()) throw std::invalid_argument("SteppedLoop.act: the run has ended (" + l.trace().status + ")");
+            return step_action(l, action.data(), mode, static_cast<int>(action.size()), l.signal_count());
+          },
+          nb::arg("action"), nb::arg("mode"),
+          "One control period: mode 0 applies `action` as the command, mode 1 adds it to the compiled "
+          "law's; False when the run has ended.")
+      .def("end", &SteppedLoop::end, nb::arg("status"), "Stop the run here, marked `status`.")
+      .def("finish", &SteppedLoop::finish, "The run's trace (call once, at the end).");
+  nb::class_<StepPool>(m, "StepPool", "A persistent pool of C++ threads stepping loops (the vector environment).")
+      .def(nb::init<int>(), nb::arg("threads"))
+      .def_prop_ro("threads", &StepPool::threads);
+  m.def("step_loops", &step_loops, nb::arg("pool"), nb::arg("loops"), nb::arg("actions"), nb::arg("mode"),
+        nb::arg("observations"), nb::arg("applied"), nb::arg("running"),
+        "One control period of every loop on the pool's threads (GIL released): loop i takes actions[i] "
+        "(mode 0: the command, 1: added to the compiled law's) and writes its next observation, its "
+        "applied torque and whether it runs on.");
   // each compiled component alone, for the twin tests (tests/test_twins.py)
   nb::class_<nnrobust::ControlStep>(m, "ControlStep", "One compiled control step's output.")
       .def_ro("tau", &nnrobust::ControlStep::tau)

@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "controllers.hpp"
+#include "laws/law.hpp"
 #include "nominal.hpp"
 #include "pin_calls.hpp"
 #include "plant/stick_slip.hpp"
@@ -60,116 +61,166 @@ int period_substeps(const LoopSpec &s, double speed) {
 
 }  // namespace
 
-LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpec &s, bool (*interrupted)(),
-                   const ExternalLaw *external) {
+SteppedLoop::SteppedLoop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpec &s, bool with_law)
+    : model_(model), s_(s), criteria_(std::make_unique<Criteria>(s)) {
   const int n = model.model.nv;
   const long steps = s.steps;
-  LoopTrace tr;
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  tr.q = Rows::Constant(steps, n, nan);
-  tr.dq = tr.q;
-  tr.tau = tr.q;
-  tr.tau_cmd = tr.q;
-  tr.z = Rows::Constant(steps, s.z0.size(), nan);
-  tr.signals = Rows::Constant(steps, s.law_signals, nan);
-  tr.chain = Rows::Constant(steps, 3 * (model.model.njoints), nan);
-  tr.manipulability = Vector::Constant(steps, nan);
-  tr.h = tr.manipulability;
-  const Criteria criteria(s);  // h, recorded on the true robot
-  std::unique_ptr<Nominal> nominal;
-  std::optional<Controller> controller;  // none on the hybrid loop, whose law is `external`
-  if (!external) {
-    nominal = make_nominal(s, nominal_model);
-    controller.emplace(s, *nominal);
+  tr_.q = Rows::Constant(steps, n, nan);
+  tr_.dq = tr_.q;
+  tr_.tau = tr_.q;
+  tr_.tau_cmd = tr_.q;
+  tr_.z = Rows::Constant(steps, s.z0.size(), nan);
+  tr_.signals = Rows::Constant(steps, s.law_signals, nan);
+  tr_.chain = Rows::Constant(steps, 3 * (model.model.njoints), nan);
+  tr_.manipulability = Vector::Constant(steps, nan);
+  tr_.h = tr_.manipulability;
+  tr_.done = steps;
+  if (with_law) {  // none on the hybrid loop, whose law is Python's
+    nominal_ = make_nominal(s, nominal_model);
+    controller_ = std::make_unique<Controller>(s, *nominal_);
   }
-  Plant plant{model, s};
-  std::unique_ptr<StickSlipIntegrator> stick_slip;
-  if (plant.any_sticky() && !plant.engine) stick_slip = std::make_unique<StickSlipIntegrator>(plant, s.v0);
-  Vector q = s.q0, v = s.v0, z = s.z0, tau = Vector::Zero(n), qm, vm;
-  std::deque<Vector> commands;
-  tr.done = steps;
-  for (long k = 0; k < steps; ++k) {
+  plant_ = std::make_unique<Plant>(model, s);
+  if (plant_->any_sticky() && !plant_->engine) stick_slip_ = std::make_unique<StickSlipIntegrator>(*plant_, s.v0);
+  q_ = s.q0;
+  v_ = s.v0;
+  z_ = s.z0;
+  tau_ = Vector::Zero(n);
+  if (steps > 0) plant_->sensor.measure(0, q_, v_, qm_, vm_);
+}
+
+SteppedLoop::~SteppedLoop() = default;
+
+Output SteppedLoop::control() {
+  if (!controller_) throw std::logic_error("SteppedLoop::control: this loop was built without its law");
+  return controller_->compute(time(), qm_, vm_, z_);
+}
+
+void SteppedLoop::observe(double *obs) const {
+  if (!controller_) throw std::logic_error("SteppedLoop::observe: this loop was built without its law");
+  const int n = model_.model.nv;
+  const TaskReference r = controller_->reference(time(), qm_, vm_);
+  const Eigen::Index p = r.ts.x.size();  // the position rows: 2 planar, 3 spatial
+  Eigen::Map<Vector> out(obs, observation_size());
+  out.segment(0, n) = qm_;
+  out.segment(n, n) = vm_;
+  out.segment(2 * n, p) = r.ts.x - r.e.head(p);  // p_d = x - e: the desired position
+  const Eigen::Index m = r.e.size();
+  out.segment(2 * n + p, m) = r.e;
+  out.segment(2 * n + p + m, m) = r.de;
+  out.segment(2 * n + p + 2 * m, m) = r.dxd;
+  out.segment(2 * n + p + 3 * m, m) = r.ddxd;
+}
+
+int SteppedLoop::observation_size() const {
+  const int n = model_.model.nv, m = s_.m;
+  return 2 * n + std::min(m, 3) + 4 * m;
+}
+
+void SteppedLoop::end(const std::string &status) {
+  tr_.status = status;
+  tr_.done = k_;
+}
+
+bool SteppedLoop::advance(const Output &out) {
+  if (!running()) throw std::logic_error("SteppedLoop::advance: the run has ended (" + tr_.status + ")");
+  const long k = k_;
+  const double t = time();
+  Plant &plant = *plant_;
+  Vector &q = q_, &v = v_;
+  commands_.push_back(out.tau);
+  if (static_cast<int>(commands_.size()) > plant.delay + 1) commands_.pop_front();
+  const Vector tau_cmd = commands_.front();
+  tau_ = plant.applied_torque(tau_cmd, v);
+  const Vector &tau = tau_;
+  tr_.q.row(k) = q;
+  tr_.dq.row(k) = v;
+  tr_.tau.row(k) = tau;
+  tr_.tau_cmd.row(k) = tau_cmd;
+  if (z_.size()) tr_.z.row(k) = z_;
+  if (controller_) {
+    if (out.signals.size() != s_.law_signals)
+      throw std::length_error("the law " + s_.law + " returned " + std::to_string(out.signals.size()) +
+                              " signals; its Python twin declares " + std::to_string(s_.law_signals));
+    tr_.signals.row(k) = out.signals;
+  }
+  if (q.allFinite()) record_kinematics(model_, s_, *criteria_, q, k, tr_);
+  ++k_;
+  if (!out.tau.allFinite() || !q.allFinite() || !v.allFinite()) {
+    tr_.status = "diverged";
+    tr_.divergence_index = k;
+    tr_.done = k + 1;
+    return false;
+  }
+  Eigen::Index worst;
+  if (v.cwiseAbs().maxCoeff(&worst) > s_.max_speed) {
+    tr_.status = "diverged";
+    tr_.divergence_index = k;
+    tr_.divergence_joint = static_cast<int>(worst);
+    tr_.done = k + 1;
+    return false;
+  }
+  z_ = out.z;
+  plant.begin_period(t);  // the loads held over this period
+  if (plant.engine) {  // MuJoCo steps the plant; a state or torque it discarded ends the run
+    if (!plant.engine->advance(t, tau, s_.period, plant.disturbance, [&](int i) { return plant.load(i); }, q, v)) {
+      tr_.status = "diverged";
+      tr_.divergence_index = k;
+      tr_.done = k + 1;
+      return false;
+    }
+  } else {
+    const int n_steps = period_substeps(s_, plant.step_rate(q, v, s_.period));
+    tr_.refined_periods += n_steps != s_.substeps;
+    const double h = s_.period / n_steps;
+    if (stick_slip_) {  // simulation.simulate with the plant's stick-slip integrator
+      for (int i = 0; i < n_steps; ++i) stick_slip_->advance(t + i * h, q, v, tau, h, i == 0);
+    } else {
+      for (int i = 0; i < n_steps; ++i) {  // simulation._rk4_step with the torque held
+        const double ti = t + i * h;
+        const Vector k1q = v, k1v = plant.acceleration(ti, q, v, tau);
+        const Vector k2q = v + 0.5 * h * k1v, k2v = plant.acceleration(ti + 0.5 * h, q + 0.5 * h * k1q, k2q, tau);
+        const Vector k3q = v + 0.5 * h * k2v, k3v = plant.acceleration(ti + 0.5 * h, q + 0.5 * h * k2q, k3q, tau);
+        const Vector k4q = v + h * k3v, k4v = plant.acceleration(ti + h, q + h * k3q, k4q, tau);
+        q = q + (h / 6.0) * (k1q + 2.0 * k2q + 2.0 * k3q + k4q);
+        v = v + (h / 6.0) * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+      }
+    }
+  }
+  if (k_ < s_.steps) plant.sensor.measure(k_, q, v, qm_, vm_);  // the next instant's measurement
+  return k_ < s_.steps;
+}
+
+LoopTrace SteppedLoop::finish() {
+  if (stick_slip_) {
+    tr_.friction_events = stick_slip_->events_count();
+    tr_.unresolved_events = stick_slip_->unresolved();
+  }
+  return std::move(tr_);
+}
+
+LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpec &s, bool (*interrupted)(),
+                   const ExternalLaw *external) {
+  SteppedLoop loop(model, nominal_model, s, external == nullptr);
+  while (loop.running()) {
+    const long k = loop.step();
     if (interrupted && k % 256 == 0 && k > 0 && interrupted()) {
-      tr.status = "interrupted";
-      tr.done = k;
+      loop.end("interrupted");
       break;
     }
-    const double t = static_cast<double>(k) * s.period;
-    plant.sensor.measure(k, q, v, qm, vm);
     Output out;
     if (external) {
-      out.z = z;
-      if (!(*external)(t, qm, vm, z, out.tau, out.z)) {
-        tr.status = "failed";
-        tr.done = k;
+      out.z = loop.state();
+      if (!(*external)(loop.time(), loop.measured_q(), loop.measured_v(), loop.state(), out.tau, out.z)) {
+        loop.end("failed");
         break;
       }
     } else {
-      out = controller->compute(t, qm, vm, z);
+      out = loop.control();
     }
-    commands.push_back(out.tau);
-    if (static_cast<int>(commands.size()) > plant.delay + 1) commands.pop_front();
-    const Vector tau_cmd = commands.front();
-    tau = plant.applied_torque(tau_cmd, v);
-    tr.q.row(k) = q;
-    tr.dq.row(k) = v;
-    tr.tau.row(k) = tau;
-    tr.tau_cmd.row(k) = tau_cmd;
-    if (z.size()) tr.z.row(k) = z;
-    if (!external) {
-      if (out.signals.size() != s.law_signals)
-        throw std::length_error("the law " + s.law + " returned " + std::to_string(out.signals.size()) +
-                                " signals; its Python twin declares " + std::to_string(s.law_signals));
-      tr.signals.row(k) = out.signals;
-    }
-    if (q.allFinite()) record_kinematics(model, s, criteria, q, k, tr);
-    if (!out.tau.allFinite() || !q.allFinite() || !v.allFinite()) {
-      tr.status = "diverged";
-      tr.divergence_index = k;
-      tr.done = k + 1;
-      break;
-    }
-    Eigen::Index worst;
-    if (v.cwiseAbs().maxCoeff(&worst) > s.max_speed) {
-      tr.status = "diverged";
-      tr.divergence_index = k;
-      tr.divergence_joint = static_cast<int>(worst);
-      tr.done = k + 1;
-      break;
-    }
-    z = out.z;
-    plant.begin_period(t);  // the loads held over this period
-    if (plant.engine) {  // MuJoCo steps the plant; a state or torque it discarded ends the run
-      if (!plant.engine->advance(t, tau, s.period, plant.disturbance, [&](int i) { return plant.load(i); }, q, v)) {
-        tr.status = "diverged";
-        tr.divergence_index = k;
-        tr.done = k + 1;
-        break;
-      }
-      continue;
-    }
-    const int n_steps = period_substeps(s, plant.step_rate(q, v, s.period));
-    tr.refined_periods += n_steps != s.substeps;
-    const double h = s.period / n_steps;
-    if (stick_slip) {  // simulation.simulate with the plant's stick-slip integrator
-      for (int i = 0; i < n_steps; ++i) stick_slip->advance(t + i * h, q, v, tau, h, i == 0);
-      continue;
-    }
-    for (int i = 0; i < n_steps; ++i) {  // simulation._rk4_step with the torque held
-      const double ti = t + i * h;
-      const Vector k1q = v, k1v = plant.acceleration(ti, q, v, tau);
-      const Vector k2q = v + 0.5 * h * k1v, k2v = plant.acceleration(ti + 0.5 * h, q + 0.5 * h * k1q, k2q, tau);
-      const Vector k3q = v + 0.5 * h * k2v, k3v = plant.acceleration(ti + 0.5 * h, q + 0.5 * h * k2q, k3q, tau);
-      const Vector k4q = v + h * k3v, k4v = plant.acceleration(ti + h, q + h * k3q, k4q, tau);
-      q = q + (h / 6.0) * (k1q + 2.0 * k2q + 2.0 * k3q + k4q);
-      v = v + (h / 6.0) * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
-    }
+    loop.advance(out);
   }
-  if (stick_slip) {
-    tr.friction_events = stick_slip->events_count();
-    tr.unresolved_events = stick_slip->unresolved();
-  }
-  return tr;
+  return loop.finish();
 }
 
 ControlStep twin_control(LoadedModel *nominal_model, const LoopSpec &s, double t, const Vector &q, const Vector &v,

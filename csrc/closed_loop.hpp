@@ -3,7 +3,9 @@
 // the comments; tests/test_compiled.py holds the two equal.
 #pragma once
 
+#include <deque>
 #include <functional>
+#include <memory>
 #include <limits>
 #include <map>
 #include <string>
@@ -92,6 +94,64 @@ struct LoopTrace {
 // and z_next (z's size) and returns false to stop the run (the caller keeps the error).
 using ExternalLaw = std::function<bool(double t, const Vector &q, const Vector &v, const Vector &z, Vector &tau,
                                        Vector &z_next)>;
+
+struct Output;
+struct Controller;
+struct Nominal;
+struct Plant;
+class StickSlipIntegrator;
+struct Criteria;
+
+// The closed loop one control period at a time: what run_loop steps through, and what the
+// learning environment (nnrobust/learning/) drives from outside. At each control instant t_k the
+// loop holds the sensor's measurement; advance() takes the command computed from it (by the
+// compiled law, control(), or by anything else), applies it after the plant's delay, records
+// step k and integrates the plant over the period. With `with_law` the compiled controller (its
+// nominal model, path and law) is built: control() and observe() need it.
+class SteppedLoop {
+ public:
+  SteppedLoop(LoadedModel &plant, LoadedModel *nominal, const LoopSpec &spec, bool with_law);
+  ~SteppedLoop();
+  SteppedLoop(const SteppedLoop &) = delete;
+  SteppedLoop &operator=(const SteppedLoop &) = delete;
+
+  bool running() const { return k_ < s_.steps && tr_.status == "completed"; }
+  long step() const { return k_; }
+  double time() const { return static_cast<double>(k_) * s_.period; }
+  const Vector &measured_q() const { return qm_; }
+  const Vector &measured_v() const { return vm_; }
+  const Vector &state() const { return z_; }
+  const Vector &applied_torque() const { return tau_; }  // the torque applied over the last period
+  const LoopTrace &trace() const { return tr_; }
+  int signal_count() const { return s_.law_signals; }
+  // the compiled law's output at the current instant from the measurement and the state
+  Output control();
+  // the learning environment's observation (docs/learning.md): the measured q, q', the desired
+  // position p_d, the task error e and e' (from the nominal model at the measured state), x_d'
+  // and x_d''; observation_size() = 2 n + min(m, 3) + 4 m entries written to `obs`
+  void observe(double *obs) const;
+  int observation_size() const;
+  // one control period with `out` computed at the current instant; false when the run has ended
+  // (completed, or diverged: trace().status)
+  bool advance(const Output &out);
+  // stop the run here with `status` ("interrupted", "failed")
+  void end(const std::string &status);
+  // the trace (moved out: call once, at the end)
+  LoopTrace finish();
+
+ private:
+  LoadedModel &model_;
+  const LoopSpec &s_;
+  std::unique_ptr<Criteria> criteria_;
+  std::unique_ptr<Nominal> nominal_;
+  std::unique_ptr<Controller> controller_;
+  std::unique_ptr<Plant> plant_;
+  std::unique_ptr<StickSlipIntegrator> stick_slip_;
+  LoopTrace tr_;
+  Vector q_, v_, z_, tau_, qm_, vm_;
+  std::deque<Vector> commands_;
+  long k_ = 0;
+};
 
 // Runs the loop; `nominal` is the controller's Pinocchio model (LoopSpec.nominal "pinocchio", else
 // unused); `interrupted()` is polled every few hundred steps (Ctrl-C, SIGTERM). With `external`,

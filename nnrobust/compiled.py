@@ -415,6 +415,19 @@ def simulate_hybrid(setup, duration: float):
     return trace
 
 
+def stepped_loop(setup, duration: float):
+    """A built experiment's compiled loop one control period at a time, with its compiled law
+    (the learning environment's: nnrobust.learning); returns (SteppedLoop, LoopSpec).
+    """
+    plant, nominal, spec = _prepared(setup, duration)
+    return _module().SteppedLoop(plant, nominal, spec, True), spec
+
+
+def stepped_trace(setup, spec, loop):
+    """The Trace of a SteppedLoop's run so far (what simulation.simulate returns); call once."""
+    return _trace(setup, spec, loop.finish())
+
+
 def simulate_batch(setups: list, durations: list[float] | None = None, threads: int | None = None) -> list:
     """Run several built experiments on the compiled loop, on C++ threads with the GIL released
     (default: one per core); returns their Traces in order. Each run has its own copy of its

@@ -523,6 +523,14 @@ def run_experiment(config: ExperimentConfig, progress=None, setup: Setup | None 
     wall = time.perf_counter() - start
     if backend != "python" and progress is not None and trace.t.size:
         progress(float(trace.t[-1]), trace.q[-1])
+    return result_of(setup, trace, wall, backend)
+
+
+def result_of(setup: Setup, trace, wall: float, backend: str) -> Result:
+    """The Result of a built experiment's trace (the run's, or a learning episode's), simulated
+    in ``wall`` seconds on ``backend``: task-space quantities, verdicts and provenance.
+    """
+    config = setup.config
     if trace.status == "diverged":
         trace.message += "; " + likely_cause(setup, trace)
     result = Result.from_trace(

@@ -1,0 +1,351 @@
+"""A Gymnasium environment for any experiment: the honest plant, one control period a step.
+
+Each episode is one run of the experiment on the compiled loop (``SteppedLoop``,
+csrc/closed_loop.cpp): the same plant, sensors, delay, effort limits and verdicts as
+``nnrobust run``. Episode k is sample k of a sweep (:func:`nnrobust.sweep.spec.draw`): its
+``[vary]`` box (domain randomisation) and its seeds for the nominal model's error and the sensor
+noise, so an episode is reproducible and is the same plant a sweep row with that sample runs.
+docs/learning.md documents the observation, the actions, the reward and the info dict.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, fields
+from pathlib import Path
+
+import numpy as np
+
+from ..exceptions import ConfigError, NNRobustError
+from .observation import ObservationLayout
+
+try:
+    import gymnasium as gym
+except ImportError as err:  # pragma: no cover - the extra is missing
+    raise NNRobustError("the learning environment needs Gymnasium: pip install 'nnrobust[learning]'") from err
+
+ACTION_MODES = {"torque": 0, "residual": 1}
+"""What an action is: ``torque``, the command itself, a ⊙ τ_max; ``residual``, added to the base
+law's command (eq. 9 with or without u_0, the PD, any compiled law), scale · a ⊙ τ_max."""
+
+ENV_VERSION = 1
+"""Version of the environment's interface (observation, actions, reward, info): registered ids
+end in ``-v1``."""
+
+
+@dataclass(frozen=True)
+class Reward:
+    """The reward per control period (docs/learning.md#reward), all weights ≥ 0.
+
+    r_k = - error · |e_p| / L - effort · mean_i (τ_i / τ_max,i)² - limits · (joints beyond a
+    position or speed limit) / n, and - runaway once when the run diverges (the episode then
+    terminates).
+
+    |e_p| is the position part of the measured task error [m] (the observation's ``e``), L the
+    path's size (its bounding-box diagonal, at least 5 cm, as the ``tracking lost`` verdict), τ
+    the torque applied over the period and τ_max the effort limits. The limits are the URDF's;
+    a joint beyond a position limit is at its stop.
+    """
+
+    error: float = 1.0
+    effort: float = 0.01
+    limits: float = 0.1
+    runaway: float = 100.0
+
+    def __post_init__(self):
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if isinstance(value, bool) or not isinstance(value, int | float) or not 0 <= value < math.inf:
+                raise ConfigError(f"reward.{f.name}", f"expected a finite weight >= 0, got {value!r}")
+
+
+def _source_spec(experiment, vary: dict | None, seed: int, controller: str | None):
+    """(SweepSpec, the base law's row name) of an environment's source: a sweep file (its base,
+    [set] and [vary]), or a preset / experiment file with an optional ``vary`` box.
+    """
+    from ..config.schema import shipped_laws
+    from ..presets import preset_names
+    from ..sweep.spec import load_sweep, parse_sweep
+
+    text = str(experiment)
+    if controller is not None and controller not in shipped_laws():
+        raise ConfigError(
+            "controller",
+            f"{controller!r}: the base law supplies the observation's model and the residual's torque on "
+            f"the compiled loop, so it is one of {', '.join(shipped_laws())}",
+        )
+    is_sweep = text.endswith(".toml") and Path(text).is_file() and _is_sweep_file(Path(text))
+    if is_sweep:
+        if vary:
+            raise ConfigError(
+                "vary", f"{text} is a sweep file: its [vary] box is the episodes' uncertainty set"
+            )
+        spec = load_sweep(text)
+        spec.seed = seed
+    else:
+        if not (text in preset_names() or (text.endswith(".toml") and Path(text).is_file())):
+            raise ConfigError(
+                "experiment",
+                f"{text!r} is neither a preset, an experiment file nor a sweep file; presets: "
+                f"{', '.join(preset_names())}",
+            )
+        from ..config import load_config
+
+        kind = load_config(Path(text) if text.endswith(".toml") else _preset(text)).controller.kind
+        if controller is None and kind not in shipped_laws():
+            raise ConfigError(
+                "controller",
+                f"{text}'s law ({kind}) has no compiled twin, and the base law supplies the observation's "
+                f"model and the residual's torque on the compiled loop: give controller = one of "
+                f"{', '.join(shipped_laws())}",
+            )
+        spec = parse_sweep(
+            {
+                "name": "env",
+                "base": str(Path(text).resolve()) if text.endswith(".toml") else text,
+                "controllers": [controller or kind],
+                "seed": seed,
+                "vary": dict(vary or {}),
+            },
+            "experiment",
+        )
+    law = controller or spec.controllers[0]
+    if law not in spec.controllers:
+        raise ConfigError(
+            "controller", f"{law!r} is not one of the sweep's controllers: {', '.join(spec.controllers)}"
+        )
+    return spec, law
+
+
+def _preset(name: str) -> Path:
+    from ..presets import preset_path
+
+    return preset_path(name)
+
+
+def _is_sweep_file(path: Path) -> bool:
+    import tomllib
+
+    try:
+        return "controllers" in tomllib.loads(path.read_text(encoding="utf-8"))  # a sweep lists its laws
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return False  # load_config names what is wrong with it
+
+
+class Episodes:
+    """The episodes of an environment: episode k is sample k of the source's sweep, built and
+    loaded on the compiled loop. Shared by :class:`ArmEnv` and the vector environment.
+    """
+
+    def __init__(self, experiment, *, action: str, vary, seed: int, controller, residual_scale, duration):
+        from .. import compiled
+
+        if not compiled.available():
+            raise NNRobustError(
+                f"the learning environment runs on the compiled loop: {compiled.unavailable_reason()}"
+            )
+        if action not in ACTION_MODES:
+            raise ConfigError("action", f"{action!r} is not one of {', '.join(ACTION_MODES)}")
+        if isinstance(residual_scale, bool) or not (
+            isinstance(residual_scale, int | float) and residual_scale > 0
+        ):
+            raise ConfigError("residual_scale", f"expected a number > 0, got {residual_scale!r}")
+        if duration is not None and (
+            isinstance(duration, bool) or not isinstance(duration, int | float) or not 0 < duration < math.inf
+        ):
+            raise ConfigError("duration", f"expected a duration > 0 [s], got {duration!r}")
+        from ..sweep.spec import base_values
+
+        self.spec, self.law = _source_spec(experiment, vary, seed, controller)
+        self.base = base_values(self.spec)
+        own = self.base.get("controller", {})
+        if isinstance(own, dict) and own.get("kind") != self.law:  # another law than the file's
+            for key in ("class", "params"):  # the file's law's own settings: not the base law's
+                own.pop(key, None)
+        self.action, self.mode = action, ACTION_MODES[action]
+        self.residual_scale, self.duration = float(residual_scale), duration
+        self.setup, self.loop, self.loop_spec = None, None, None
+        first = self.build(0)  # the shapes, limits and period every episode shares
+        robot = first.robot
+        self.n, self.m = robot.nq, robot.m
+        self.layout = ObservationLayout(self.n, self.m)
+        limit = first.plant.torque_limit
+        if limit is None or not np.all(np.isfinite(limit)):
+            raise ConfigError(
+                "plant.torque_limit",
+                "the actions are scaled by the effort limits: every joint needs one (set plant.torque_limit "
+                "or give the URDF's <limit effort=...>)",
+            )
+        self.torque_limit = np.asarray(limit, dtype=float)
+        self.action_scale = self.torque_limit * (self.residual_scale if self.mode == 1 else 1.0)
+        self.speed_limit = np.asarray(robot.velocity_limits, dtype=float)
+        self.lower, self.upper = (
+            np.asarray(a, dtype=float) for a in (robot.lower_limits, robot.upper_limits)
+        )
+        self.period = first.config.simulation.control_period
+        self._first: tuple | None = ((self.spec.seed, 0), first)
+
+    def build(self, episode: int):
+        """The built experiment of ``episode`` (sample ``episode`` of the sweep, or of its grid)."""
+        from ..experiment import build
+        from ..sweep.spec import draw, experiment
+
+        spec = self.spec
+        index = episode % spec.size if spec.grid_keys else episode
+        sample = draw(spec, index)
+        config = experiment(spec, self.base, sample, self.law)
+        if self.duration is not None:
+            config.simulation.duration = float(self.duration)
+        return build(config)
+
+    def start(self, episode: int):
+        """A new episode's (setup, loop, spec, path size): the compiled loop at t = 0."""
+        from .. import compiled
+        from ..verdicts import path_size
+
+        first, self._first = self._first, None  # built by __init__: episode 0 of the first seed
+        setup = (
+            first[1] if first is not None and first[0] == (self.spec.seed, episode) else self.build(episode)
+        )
+        sim = setup.config.simulation
+        try:
+            loop, spec = compiled.stepped_loop(setup, sim.duration)
+        except NNRobustError as err:
+            raise NNRobustError(
+                f"the learning environment's base law {self.law!r} needs a compiled twin "
+                f"(a shipped or registered law): {err}"
+            ) from err
+        steps = int(round(sim.duration / sim.control_period))
+        size = path_size(setup.trajectory.position(np.arange(steps) * sim.control_period))
+        return setup, loop, spec, size
+
+    def torque(self, action: np.ndarray) -> np.ndarray:
+        """The action in N m: a ⊙ τ_max (torque) or scale · a ⊙ τ_max (residual), a clipped to [-1, 1]."""
+        return np.clip(np.asarray(action, dtype=float), -1.0, 1.0) * self.action_scale
+
+    def reward(self, weights: Reward, obs: np.ndarray, applied: np.ndarray, size) -> np.ndarray:
+        """r_k of :class:`Reward` for observations ``obs`` (rows) and applied torques (rows)."""
+        s = self.layout.slices()
+        e = obs[..., s["e"]][..., : min(self.m, 3)]
+        q, dq = obs[..., s["q"]], obs[..., s["dq"]]
+        effort = np.mean((applied / self.torque_limit) ** 2, axis=-1)
+        beyond = (q < self.lower) | (q > self.upper) | (np.abs(dq) > self.speed_limit)
+        return -(
+            weights.error * np.linalg.norm(e, axis=-1) / size
+            + weights.effort * effort
+            + weights.limits * np.mean(beyond, axis=-1)
+        )
+
+    def info(self, setup, spec, loop, episode: int, wall: float) -> dict:
+        """The info of an episode's last step: its sample, status and verdicts (the run's metrics
+        and warnings, as ``nnrobust run`` reports them).
+        """
+        from .. import compiled
+        from ..experiment import result_of
+
+        result = result_of(setup, compiled.stepped_trace(setup, spec, loop), wall, "compiled")
+        metrics = result.metrics()
+        return {
+            "episode": episode,
+            "status": metrics["status"],
+            "metrics": metrics,
+            "warnings": metrics["warnings"],
+        }
+
+
+class ArmEnv(gym.Env):
+    """One experiment as a Gymnasium environment (docs/learning.md).
+
+    Args:
+        experiment: a preset name, an experiment file, or a sweep file (its base, [set] and
+            [vary] box, and its controllers: ``controller`` picks the base law, default the first).
+        action: ``"torque"`` (the command is a ⊙ τ_max) or ``"residual"`` (scale · a ⊙ τ_max added
+            to the base law's command); a ∈ [-1, 1]^n.
+        vary: for a preset or an experiment file, a sweep's [vary] table: each reset draws the
+            episode's plant from it (``{"nominal.mass_scale": {"uniform": [0.8, 1.2]}}``).
+        seed: the sweep seed of the episodes until ``reset(seed=...)`` sets another.
+        controller: the base law's kind (``nn``, ``no-u0``, ``pd``, ``slotine-li``, ...; default
+            the experiment's); it supplies the nominal model and path the observation uses.
+        residual_scale: the residual's bound as a fraction of the effort limits.
+        duration: the episode's length [s] (default the experiment's simulation.duration).
+        reward: the reward's weights.
+        verdicts: compute the run's metrics and warnings at the end of each episode (info).
+
+    """
+
+    metadata = {"render_modes": []}
+
+    def __init__(
+        self,
+        experiment: str | Path = "paper-ellipse",
+        *,
+        action: str = "torque",
+        vary: dict | None = None,
+        seed: int = 0,
+        controller: str | None = None,
+        residual_scale: float = 0.1,
+        duration: float | None = None,
+        reward: Reward | None = None,
+        verdicts: bool = True,
+    ):
+        self.episodes = Episodes(
+            experiment,
+            action=action,
+            vary=vary,
+            seed=seed,
+            controller=controller,
+            residual_scale=residual_scale,
+            duration=duration,
+        )
+        self.weights = reward if reward is not None else Reward()
+        self.verdicts = verdicts
+        n, size = self.episodes.n, self.episodes.layout.size
+        self.action_space = gym.spaces.Box(-1.0, 1.0, (n,), dtype=np.float32)
+        self.observation_space = gym.spaces.Box(-np.inf, np.inf, (size,), dtype=np.float64)
+        self.episode = -1
+        self.setup = self.loop = self.loop_spec = None
+        self._size = 1.0
+        self._obs = np.zeros(size)
+        self._started = 0.0
+
+    @property
+    def layout(self) -> ObservationLayout:
+        """The observation's fields (docs/learning.md#observation)."""
+        return self.episodes.layout
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """Start the next episode (sample ``episode`` of the sweep); ``seed`` restarts the
+        count at episode 0 of the sweep with that seed.
+        """
+        super().reset(seed=seed)
+        if seed is not None:
+            self.episodes.spec.seed = int(seed)
+            self.episode = -1
+        self.episode += 1
+        self.setup, loop, self.loop_spec, self._size = self.episodes.start(self.episode)
+        self.loop = loop
+        self._obs = loop.observe()
+        self._started = time.perf_counter()
+        return self._obs.copy(), {"episode": self.episode}
+
+    def step(self, action):
+        """One control period; see docs/learning.md for the reward and the info."""
+        loop = self.loop
+        if loop is None or not loop.running:
+            raise NNRobustError("ArmEnv.step: call reset() first (the episode has ended)")
+        episodes = self.episodes
+        running = loop.act(episodes.torque(action), episodes.mode)
+        applied = np.asarray(loop.applied_torque)
+        if running:
+            self._obs = loop.observe()
+        diverged = loop.status == "diverged"
+        reward = float(episodes.reward(self.weights, self._obs, applied, self._size))
+        if diverged:
+            reward -= self.weights.runaway
+        ended = not running
+        info: dict = {"episode": self.episode}
+        if ended and self.verdicts:
+            wall = time.perf_counter() - self._started
+            info = episodes.info(self.setup, self.loop_spec, loop, self.episode, wall)
+        return self._obs.copy(), reward, diverged, ended and not diverged, info

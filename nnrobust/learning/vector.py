@@ -1,0 +1,155 @@
+"""The vector environment: N episodes stepped together on the compiled loop's C++ threads.
+
+One ``step`` advances every running episode by one control period on a persistent pool of C++
+threads with the GIL released (``step_loops``, csrc/bindings.cpp); the observations, applied
+torques and rewards come back as arrays. Sub-environment j runs episodes j, j + N, j + 2N, ...
+of the source's sweep, so the batch covers the uncertainty set without repeating a plant. An
+episode that ends is restarted at the next ``step`` (Gymnasium's next-step autoreset: that
+step's action for it is ignored and it returns the new episode's first observation).
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..exceptions import ConfigError, NNRobustError
+from .env import Episodes, Reward, gym
+
+
+class ArmVectorEnv(gym.vector.VectorEnv):
+    """``num_envs`` episodes of one experiment on the compiled loop's threads (docs/learning.md).
+
+    Takes :class:`~nnrobust.learning.env.ArmEnv`'s arguments, and ``num_envs`` and ``threads``
+    (C++ threads stepping the episodes; default one per core).
+    """
+
+    metadata = {"autoreset_mode": gym.vector.AutoresetMode.NEXT_STEP}
+
+    def __init__(
+        self,
+        experiment: str | Path = "paper-ellipse",
+        num_envs: int = 8,
+        *,
+        action: str = "torque",
+        vary: dict | None = None,
+        seed: int = 0,
+        controller: str | None = None,
+        residual_scale: float = 0.1,
+        duration: float | None = None,
+        reward: Reward | None = None,
+        verdicts: bool = True,
+        threads: int | None = None,
+    ):
+        from .. import compiled
+
+        if isinstance(num_envs, bool) or not isinstance(num_envs, int) or not 1 <= num_envs <= 4096:
+            raise ConfigError("num_envs", f"expected an integer in [1, 4096], got {num_envs!r}")
+        threads = threads or os.cpu_count() or 1
+        if isinstance(threads, bool) or not isinstance(threads, int) or not 1 <= threads <= 256:
+            raise ConfigError("threads", f"expected an integer in [1, 256], got {threads!r}")
+        self.episodes = Episodes(
+            experiment,
+            action=action,
+            vary=vary,
+            seed=seed,
+            controller=controller,
+            residual_scale=residual_scale,
+            duration=duration,
+        )
+        self.weights = reward if reward is not None else Reward()
+        self.verdicts = verdicts
+        self.num_envs = num_envs
+        n, size = self.episodes.n, self.episodes.layout.size
+        self.single_action_space = gym.spaces.Box(-1.0, 1.0, (n,), dtype=np.float32)
+        self.single_observation_space = gym.spaces.Box(-np.inf, np.inf, (size,), dtype=np.float64)
+        self.action_space = gym.vector.utils.batch_space(self.single_action_space, num_envs)
+        self.observation_space = gym.vector.utils.batch_space(self.single_observation_space, num_envs)
+        self._pool = compiled._module().StepPool(threads)
+        self._runs: list = [None] * num_envs  # (setup, loop, spec, path size, episode, start time)
+        self._obs = np.zeros((num_envs, size))
+        self._applied = np.zeros((num_envs, n))
+        self._running = np.zeros(num_envs, dtype=bool)
+        self._ended = np.zeros(num_envs, dtype=bool)
+        self._sizes = np.ones(num_envs)
+        self._count = 0  # episodes started since the last seeded reset
+
+    @property
+    def layout(self):
+        """The observation's fields (docs/learning.md#observation)."""
+        return self.episodes.layout
+
+    def _start(self, j: int) -> None:
+        """Sub-environment j's next episode."""
+        episode = self._count
+        self._count += 1
+        setup, loop, spec, size = self.episodes.start(episode)
+        self._runs[j] = (setup, loop, spec, episode, time.perf_counter())
+        self._obs[j] = loop.observe()
+        self._sizes[j] = size
+        self._running[j], self._ended[j] = True, False
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """Start a new episode in every sub-environment; ``seed`` restarts at episode 0 of the
+        sweep with that seed (sub-environment j then runs episode j).
+        """
+        super().reset(seed=seed)
+        if seed is not None:
+            self.episodes.spec.seed = int(seed)
+            self._count = 0
+        for j in range(self.num_envs):
+            self._start(j)
+        episodes = np.array([run[3] for run in self._runs])
+        return self._obs.copy(), {"episode": episodes, "_episode": np.ones(self.num_envs, dtype=bool)}
+
+    def step(self, actions):
+        """One control period of every running episode; an episode that ended at the previous
+        step restarts now (next-step autoreset).
+        """
+        N = self.num_envs
+        if self._runs[0] is None:
+            raise NNRobustError("ArmVectorEnv.step: call reset() first")
+        actions = np.asarray(actions, dtype=float)
+        if actions.shape != (N, self.episodes.n):
+            raise ConfigError("actions", f"expected shape ({N}, {self.episodes.n}), got {actions.shape}")
+        rewards = np.zeros(N)
+        terminated = np.zeros(N, dtype=bool)
+        truncated = np.zeros(N, dtype=bool)
+        infos: dict = {}
+        restart = np.flatnonzero(self._ended)
+        for j in restart:
+            self._start(int(j))
+        stepping = np.ones(N, dtype=bool)
+        stepping[restart] = False
+        torque = np.ascontiguousarray(self.episodes.torque(actions))
+        index = np.flatnonzero(stepping)
+        if index.size:
+            loops = [self._runs[j][1] for j in index]
+            full = index.size == N
+            obs = self._obs if full else np.ascontiguousarray(self._obs[index])
+            applied = self._applied if full else np.zeros((index.size, self.episodes.n))
+            running = np.zeros(index.size, dtype=bool)
+            from .. import compiled
+
+            tau = torque if full else np.ascontiguousarray(torque[index])
+            compiled._module().step_loops(self._pool, loops, tau, self.episodes.mode, obs, applied, running)
+            if not full:
+                self._obs[index], self._applied[index] = obs, applied
+            rewards[index] = self.episodes.reward(
+                self.weights, self._obs[index], self._applied[index], self._sizes[index]
+            )
+            ended = index[~running]
+            for j in ended:
+                setup, loop, spec, episode, started = self._runs[j]
+                diverged = loop.status == "diverged"
+                terminated[j], truncated[j] = diverged, not diverged
+                if diverged:
+                    rewards[j] -= self.weights.runaway
+                self._ended[j] = True
+                if self.verdicts:
+                    info = self.episodes.info(setup, spec, loop, episode, time.perf_counter() - started)
+                    infos = self._add_info(infos, info, int(j))
+        return self._obs.copy(), rewards, terminated, truncated, infos
