@@ -663,6 +663,8 @@ def _param_cells(p, unset: str) -> str:
         if p.choices
         else ("true or false" if isinstance(p.default, bool) else f"{p.range}{size}")
     )
+    if getattr(p, "path", False):  # a file's path: no default, no range
+        return f"`{p.name}`: {p.doc} | {p.unit} | required | a file (relative: from the experiment file)"
     one = isinstance(p.default, tuple) and len(p.default) == 1  # one value for every row
     value = p.default[0] if one else p.default
     shown = f"{value:.4g}" if isinstance(value, float) else str(value)

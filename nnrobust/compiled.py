@@ -428,6 +428,49 @@ def stepped_trace(setup, spec, loop):
     return _trace(setup, spec, loop.finish())
 
 
+def is_policy(controller) -> bool:
+    """Whether a controller is a learned policy (``controller.kind = "policy"``)."""
+    from .controllers.laws.policy import PolicyLaw
+
+    return isinstance(controller, PolicyLaw)
+
+
+def simulate_policy(setup, duration: float):
+    """Run a built experiment whose law is a learned policy on the compiled loop: its base law's
+    loop driven one period at a time (the observation and the base law's command in C++, the
+    policy's inference in Python; the Python loop's PolicyLaw is the reference). The same Trace
+    as simulation.simulate, with the signal ``inference_time`` [s].
+    """
+    import dataclasses
+
+    import numpy as np
+
+    from .signals import check_interrupt
+
+    policy = setup.controller
+    config = setup.config.replace(controller={"kind": policy.base_kind, "params": None})
+    base = dataclasses.replace(setup, config=config, controller=policy.base)
+    refusal = twin_refusal(base)
+    if refusal:
+        raise NNRobustError(f"simulation.backend = 'hybrid': the policy's base law: {refusal}")
+    loop, spec = stepped_loop(base, duration)
+    mode, scale, run = (1 if policy.action == "residual" else 0), policy.scale, policy.policy
+    seconds = np.full(spec.steps, np.nan)
+    k = 0
+    try:
+        while loop.running:
+            check_interrupt()
+            a = run(loop.observe(), loop.time)
+            seconds[k] = run.seconds
+            loop.act(np.clip(a, -1.0, 1.0) * scale, mode)
+            k += 1
+    except KeyboardInterrupt:
+        loop.end("interrupted")
+    trace = _trace(base, spec, loop.finish())
+    trace.signals["inference_time"] = seconds[: trace.t.size]
+    return trace
+
+
 def simulate_batch(setups: list, durations: list[float] | None = None, threads: int | None = None) -> list:
     """Run several built experiments on the compiled loop, on C++ threads with the GIL released
     (default: one per core); returns their Traces in order. Each run has its own copy of its

@@ -504,9 +504,12 @@ def run_experiment(config: ExperimentConfig, progress=None, setup: Setup | None 
 
         trace = simulate_compiled(setup, sim.duration)
     elif backend == "hybrid":
-        from .compiled import simulate_hybrid
+        from .compiled import is_policy, simulate_hybrid, simulate_policy
 
-        trace = simulate_hybrid(setup, sim.duration)
+        if is_policy(setup.controller):  # the base law compiled, the inference in Python
+            trace = simulate_policy(setup, sim.duration)
+        else:
+            trace = simulate_hybrid(setup, sim.duration)
     else:
         trace = simulate(
             setup.plant,

@@ -316,6 +316,11 @@ def _file_data(path: Path, text: str, depth: int = 0, read: list[Path] | None = 
         ]
     from ..user_code import class_file
 
+    controller = data.get("controller")
+    if isinstance(controller, dict):  # a policy's ONNX file, read from the file's folder
+        policy = policy_file(controller.get("kind"), controller.get("params"))
+        if policy is not None and not Path(policy).is_absolute():
+            controller["params"]["file"] = str((folder / policy).resolve())
     for section, key, _, _ in USER_PARTS.values():
         table = data.get(section)
         if isinstance(table, dict) and isinstance(table.get(key), str):
@@ -365,7 +370,18 @@ def user_files(config: ExperimentConfig) -> dict[str, str]:
     from ..user_code import class_file
 
     paths = {part: class_file(spec) for part, spec in user_classes(config).items()}
-    return {part: str(path) for part, path in paths.items() if path is not None}
+    out = {part: str(path) for part, path in paths.items() if path is not None}
+    policy = policy_file(config.controller.kind, config.controller.params)
+    if policy is not None:
+        out["policy"] = policy
+    return out
+
+
+def policy_file(kind, params) -> str | None:
+    """The ONNX file of a learned policy's ``controller.params.file`` (``kind = "policy"``), or None."""
+    if kind == "policy" and isinstance(params, dict) and isinstance(params.get("file"), str):
+        return params["file"]
+    return None
 
 
 def _file_digest(source: str) -> str:

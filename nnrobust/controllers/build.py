@@ -107,7 +107,19 @@ def build_controller(
         return build_custom(c.class_ or "", c.params, context)
     law = registered_law(c.kind)
     if law is not None:
-        return law.build(context, c.params)
+        built = law.build(context, c.params)
+        base = getattr(built, "base_kind", None)
+        if base is not None:  # a law on another (a residual policy): that kind as this experiment builds it
+            built.base = build_controller(
+                config.replace(controller={"kind": base, "params": None}),
+                robot,
+                nominal,
+                trajectory,
+                criterion,
+                true_friction,
+                context,
+            )
+        return built
     kind = paper_kind(c.kind)
     if kind is None:  # validate refuses it first
         raise ConfigError("controller.kind", f"{c.kind!r} is not one of {', '.join(controller_kinds())}")

@@ -53,6 +53,8 @@ class LawParam:
         weak: for a knob of a robust or adaptive term, the end (``low`` or ``high``) at which the
             term does least (the tuner's check that the term earns its place); "" for gains.
         low_open: the range excludes ``low`` (a positive gain: (0, high]).
+        path: a text naming a file (read from the experiment file's folder when relative, its
+            SHA-256 recorded with the run).
 
     """
 
@@ -70,6 +72,7 @@ class LawParam:
     high_reason: str = ""
     weak: str = ""
     low_open: bool = False
+    path: bool = False
 
     @property
     def range(self) -> str:
@@ -78,6 +81,10 @@ class LawParam:
 
     def check(self, value, n: int | None, m: int, key: str):
         """The value checked and normalised (a float, a vector of its size, a bool or a string)."""
+        if self.path:
+            if not isinstance(value, str) or not value.strip():
+                raise ConfigError(key, f"expected the path of a file, got {value!r}")
+            return value
         if self.choices:
             if value not in self.choices:
                 raise ConfigError(key, f"expected one of {', '.join(map(repr, self.choices))}, got {value!r}")

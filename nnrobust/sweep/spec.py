@@ -24,6 +24,7 @@ from ..config import (
     read_text_file,
     shipped_laws,
 )
+from ..config.toml_io import policy_file
 from ..controllers.registry import registered_law
 from ..exceptions import ConfigError
 from ..numeric_limits import finite_number
@@ -366,6 +367,10 @@ def load_sweep(path: str | Path) -> SweepSpec:
         spec.base = str((path.parent / base).resolve())
     from ..user_code import class_file
 
+    for entry in spec.entries.values():  # a policy's ONNX file is read from the sweep file's folder
+        policy = policy_file(entry.get("kind"), entry.get("params"))
+        if policy is not None and not Path(policy).is_absolute():
+            entry["params"]["file"] = str((path.parent / policy).resolve())
     for entry in spec.entries.values():  # a controller file is read from the sweep file's folder
         if "class" not in entry:
             continue
@@ -462,6 +467,9 @@ def study_inputs(spec: SweepSpec, options: dict[str, str] | None = None):
         where = class_file(entry["class"]) if "class" in entry else None
         if where is not None:
             files[f"the class file of controller {name}"] = (str(where), file_sha256(where))
+        policy = policy_file(entry.get("kind"), entry.get("params"))
+        if policy is not None and Path(policy).is_file():
+            files[f"the policy file of controller {name}"] = (policy, file_sha256(policy))
     for key, value in spec.vary.items():
         choices = value if isinstance(value, list) else value.get("choice", [])
         for text in (v for v in choices if isinstance(v, str)):

@@ -1,0 +1,224 @@
+"""A learned policy as a control law (``controller.kind = "policy"``; docs/learning.md).
+
+At each control instant the policy maps the observation of :mod:`nnrobust.learning.observation`
+(the measured q, q', the desired motion and the task error on the nominal model) to an action
+a ∈ [-1, 1]^n, exactly as the learning environment gives it:
+
+- ``action = "torque"``: τ = clip(a, -1, 1) ⊙ τ_max;
+- ``action = "residual"``: τ = τ_base + s · clip(a, -1, 1) ⊙ τ_max, with τ_base the command of
+  the ``base`` law (eq. 9 with or without u_0, the PD, any shipped law) built as the experiment
+  builds that kind, and s = ``residual_scale``.
+
+The policy is an ONNX file run by onnxruntime on the CPU (one thread). Its one input takes the
+observation ([d] or [batch, d], float32 or float64) and its first output gives a ([n] or
+[batch, n]); a file whose shapes do not match the arm, that is not a model, or that needs an
+operator onnxruntime cannot run is refused in one line naming the file. The run records the
+file's SHA-256 (config.toml's provenance) and each step's inference time (signal
+``inference_time``).
+
+With the compiled loop available, a run of this law is a compiled run of its base law driven one
+period at a time (``SteppedLoop``): the observation and the base law's command are computed in
+C++, only the inference in Python (nnrobust/compiled.py, ``simulate_policy``). This module is
+its Python reference (the Python loop), and tests/test_policy.py holds the two equal.
+"""
+
+from __future__ import annotations
+
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ...exceptions import ConfigError, ControllerError
+from ..base import Controller, ControllerContext, ControlOutput
+from ..registry import Law, LawParam, register_law
+
+ACTIONS = ("torque", "residual")
+
+
+def _session(path: Path):
+    """An onnxruntime session on one CPU thread, or one line naming the file and what is wrong."""
+    try:
+        import onnxruntime as ort
+    except ImportError as err:
+        raise ConfigError(
+            "controller.params.file", "a policy runs on onnxruntime: pip install 'nnrobust[learning]'"
+        ) from err
+    options = ort.SessionOptions()
+    options.intra_op_num_threads = options.inter_op_num_threads = 1
+    options.log_severity_level = 3  # errors only: a refusal below says what is wrong
+    try:
+        return ort.InferenceSession(str(path), sess_options=options, providers=["CPUExecutionProvider"])
+    except Exception as err:  # onnxruntime's own errors: not a model, an unknown operator, ...
+        said = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
+        raise ConfigError(
+            "controller.params.file", f"{path} is not an ONNX model onnxruntime can run ({said[:300]})"
+        ) from err
+
+
+def _fits(shape, size: int) -> bool:
+    """Whether an ONNX shape is [size] or [batch, size] (a free batch dimension, or 1)."""
+    dims = list(shape or [])
+    if len(dims) == 2:
+        batch, last = dims
+        return (batch in (1, None) or isinstance(batch, str)) and last == size
+    return len(dims) == 1 and dims[0] == size
+
+
+class OnnxPolicy:
+    """An ONNX file as a function observation (d entries) -> action (n entries), checked."""
+
+    def __init__(self, file: str | Path, d: int, n: int):
+        path = Path(file)
+        if not path.is_file():
+            raise ConfigError("controller.params.file", f"{str(file)!r} is not a file")
+        self.path, self.d, self.n = path, d, n
+        self.session = _session(path)
+        inputs, outputs = self.session.get_inputs(), self.session.get_outputs()
+        if len(inputs) != 1:
+            names = ", ".join(i.name for i in inputs)
+            raise ConfigError(
+                "controller.params.file", f"{path} takes {len(inputs)} inputs ({names}); a policy takes one"
+            )
+        given, out = inputs[0], outputs[0]
+        types = {"tensor(float)": np.float32, "tensor(double)": np.float64}
+        if given.type not in types or not _fits(given.shape, d):
+            raise ConfigError(
+                "controller.params.file",
+                f"{path}: its input {given.name!r} is {given.type} {given.shape}; the observation is "
+                f"float32 or float64 [{d}] or [batch, {d}] (docs/learning.md#observation)",
+            )
+        if out.type not in types or not _fits(out.shape, n):
+            raise ConfigError(
+                "controller.params.file",
+                f"{path}: its output {out.name!r} is {out.type} {out.shape}; the action is [{n}] or "
+                f"[batch, {n}] (one entry per joint)",
+            )
+        self.input, self.dtype = given.name, types[given.type]
+        self.batched = len(given.shape) == 2
+        self.output = out.name
+        self.seconds = 0.0  # the last call's inference time
+
+    def __call__(self, obs: np.ndarray, t: float) -> np.ndarray:
+        """The action at ``t`` (float64, n entries); a NaN or a wrong shape is a ControllerError."""
+        x = np.asarray(obs, dtype=self.dtype)
+        start = time.perf_counter()
+        try:
+            (a,) = self.session.run([self.output], {self.input: x[None, :] if self.batched else x})
+        except Exception as err:
+            raise ControllerError(f"the policy {self.path} failed at t = {t:g} s: {err}") from err
+        self.seconds = time.perf_counter() - start
+        a = np.asarray(a, dtype=float).reshape(-1)
+        if a.size != self.n:
+            raise ControllerError(
+                f"the policy {self.path} returned {a.size} actions at t = {t:g} s; "
+                f"the arm has {self.n} joints"
+            )
+        if not np.all(np.isfinite(a)):
+            raise ControllerError(f"the policy {self.path} returned a non-finite action at t = {t:g} s: {a}")
+        return a
+
+
+class PolicyLaw(Controller):
+    """A learned policy (an ONNX file) in torque or residual mode (module docstring).
+
+    Args:
+        context: what the experiment hands a controller.
+        file: the ONNX file (a relative path in an experiment file is read from its folder).
+        action: ``"torque"`` or ``"residual"``.
+        base: the law whose command a residual is added to; in torque mode it is built but
+            never computed (the compiled loop observes through it).
+        residual_scale: s, the residual's bound as a fraction of the effort limits.
+
+    """
+
+    def __init__(
+        self,
+        context: ControllerContext,
+        file: str | None = None,
+        action: str = "torque",
+        base: str = "pd",
+        residual_scale: float = 0.1,
+    ):
+        from ...learning.observation import ObservationLayout
+
+        if file is None:
+            raise ConfigError("controller.params.file", "missing: the policy's ONNX file")
+        limits = context.torque_limits
+        if limits is None or not np.all(np.isfinite(limits)):
+            raise ConfigError(
+                "plant.torque_limit",
+                "a policy's action is scaled by the effort limits: every joint needs one",
+            )
+        if base == "policy":
+            raise ConfigError("controller.params.base", "a policy's base law cannot be a policy")
+        self.layout = ObservationLayout(context.n, context.m)
+        self.policy = OnnxPolicy(file, self.layout.size, context.n)
+        self.action, self.base_kind = action, base
+        self.scale = np.asarray(limits, dtype=float) * (residual_scale if action == "residual" else 1.0)
+        self.nominal, self.trajectory = context.nominal, context.trajectory
+        self.base: Controller | None = None  # built by the experiment as it builds that kind
+
+    @property
+    def state_size(self) -> int:  # type: ignore[override]
+        """The base law's state (a residual policy advances it as the base law's run would)."""
+        return self.base.state_size if self.base is not None else 0
+
+    @property
+    def signal_names(self) -> tuple[str, ...]:  # type: ignore[override]
+        """The base law's signals (NaN in torque mode), then ``inference_time`` [s]."""
+        return (*(self.base.signal_names if self.base is not None else ()), "inference_time")
+
+    def initial_state(self) -> np.ndarray:
+        """The base law's z(0)."""
+        return self.base.initial_state() if self.base is not None else np.zeros(0)
+
+    def compute(
+        self, t: float, q: np.ndarray, v: np.ndarray, z: np.ndarray, period: float = 0.0
+    ) -> ControlOutput:
+        """The command from the observation at t (torque or residual mode)."""
+        from ...learning.observation import observation
+
+        a = self.policy(observation(self.nominal, self.trajectory, t, q, v), t)
+        tau = np.clip(a, -1.0, 1.0) * self.scale
+        base = self.base
+        names = base.signal_names if base is not None else ()
+        if self.action == "residual" and base is not None:
+            out = base.compute(t, q, v, z, period)
+            signals = dict(out.signals)
+            signals["inference_time"] = self.policy.seconds
+            return ControlOutput(out.tau + tau, signals, out.state)
+        signals = dict.fromkeys(names, float("nan"))
+        signals["inference_time"] = self.policy.seconds
+        return ControlOutput(tau, signals, None)
+
+
+LAW = register_law(
+    Law(
+        "policy",
+        PolicyLaw,
+        "a learned policy from an ONNX file, as the command or a residual on a shipped law "
+        "(docs/learning.md)",
+        (
+            LawParam("file", None, "-", "the policy's ONNX file (docs/learning.md#policy-files)", path=True),
+            LawParam("action", "torque", "-", "the action is the command or a residual", choices=ACTIONS),
+            LawParam(
+                "base",
+                "pd",
+                "-",
+                "the law a residual is added to (the experiment's settings of that kind)",
+                choices=("nn", "sliding-mode", "no-u0", "computed-torque", "pd", "rbf-nn", "slotine-li"),
+            ),
+            LawParam(
+                "residual_scale",
+                0.1,
+                "-",
+                "the residual's bound as a fraction of the effort limits",
+                0.0,
+                10.0,
+                low_open=True,
+                search=(0.01, 1.0),
+            ),
+        ),
+    )
+)

@@ -1,0 +1,148 @@
+"""A learned policy as a controller (controller.kind = "policy", docs/learning.md): ONNX files
+built from the documented layout alone run through ``run``; the compiled path equals the Python
+reference; a zero policy is exactly the run of a law returning zeros, or of its base law; bad
+files and bad outputs are one line naming the file.
+"""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from nnrobust import compiled
+from nnrobust.cli import main
+from nnrobust.config import load_config
+from nnrobust.exceptions import ConfigError, ControllerError
+from nnrobust.experiment import build, run_experiment
+from nnrobust.learning import ObservationLayout
+from nnrobust.presets import load_preset
+
+pytest.importorskip("onnxruntime")
+pytest.importorskip("onnx")
+
+from .policies import linear_policy, nan_policy, unknown_operator_policy  # noqa: E402
+
+COUNTER = Path(__file__).parent / "controllers" / "eq9_again.py"
+PAPER = ObservationLayout(3, 2)
+needs_compiled = pytest.mark.skipif(not compiled.available(), reason=compiled.unavailable_reason())
+
+
+def _config(preset, file, duration=0.2, backend="auto", **params):
+    return load_preset(preset).replace(
+        controller={"kind": "policy", "params": {"file": str(file), **params}},
+        simulation={"duration": duration, "backend": backend},
+    )
+
+
+def _weights(layout: ObservationLayout, seed=0, scale=0.3):
+    rng = np.random.default_rng(seed)
+    s = layout.slices()
+    W = np.zeros((layout.size, layout.n))
+    W[s["e"].start : s["e"].start + 2, :] = rng.normal(0, scale, (2, layout.n))  # a little feedback on e
+    return W
+
+
+@needs_compiled
+def test_a_zero_torque_policy_is_a_custom_law_returning_zeros(tmp_path):
+    file = linear_policy(tmp_path / "zero.onnx", 3 * 2 + 2 + 4 * 2, 3)
+    mine = run_experiment(_config("paper-ellipse", file))
+    zeros = run_experiment(
+        load_preset("paper-ellipse").replace(
+            controller={"kind": "custom", "class": f"{COUNTER}:Counter"},
+            simulation={"duration": 0.2, "backend": "hybrid"},
+        )
+    )
+    assert mine.backend == "hybrid"
+    np.testing.assert_array_equal(mine.q, zeros.q)
+    np.testing.assert_array_equal(mine.tau, zeros.tau)
+    assert np.all(np.isfinite(mine.signals["inference_time"]))
+
+
+@needs_compiled
+@pytest.mark.parametrize("base", ["nn", "pd"])
+def test_a_zero_residual_policy_is_its_base_laws_compiled_run(tmp_path, base):
+    file = linear_policy(tmp_path / "zero.onnx", PAPER.size, 3)
+    mine = run_experiment(_config("paper-ellipse", file, action="residual", base=base))
+    theirs = run_experiment(
+        load_preset("paper-ellipse").replace(controller={"kind": base}, simulation={"duration": 0.2})
+    )
+    assert theirs.backend == "compiled"
+    np.testing.assert_array_equal(mine.tau, theirs.tau)
+    for name in theirs.signals:
+        np.testing.assert_array_equal(mine.signals[name], theirs.signals[name])
+
+
+@needs_compiled
+@pytest.mark.parametrize(
+    ("preset", "layout", "action"),
+    [("paper-ellipse", PAPER, "residual"), ("panda-ellipse", ObservationLayout(7, 3), "torque")],
+)
+def test_the_compiled_policy_run_equals_the_python_reference(tmp_path, preset, layout, action):
+    """The same policy (feedback on e) through the compiled path and the Python loop's PolicyLaw:
+    one implementation of the observation, the action and the base law."""
+    file = linear_policy(tmp_path / "p.onnx", layout.size, layout.n, _weights(layout), dtype=np.float64)
+    fast = run_experiment(_config(preset, file, duration=0.3, action=action, residual_scale=0.2))
+    slow = run_experiment(
+        _config(preset, file, duration=0.3, backend="python", action=action, residual_scale=0.2)
+    )
+    assert (fast.backend, slow.backend) == ("hybrid", "python")
+    assert np.abs(fast.tau).max() > 0
+    np.testing.assert_allclose(fast.q, slow.q, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(fast.tau, slow.tau, rtol=1e-7, atol=1e-7)
+
+
+def test_files_that_cannot_be_a_policy_are_refused_naming_the_file(tmp_path):
+    cases = {
+        "missing.onnx": None,
+        "garbage.onnx": lambda p: p.write_bytes(b"\x00not a model\xff" * 10),
+        "small.onnx": lambda p: linear_policy(p, PAPER.size - 1, 3),
+        "wide.onnx": lambda p: linear_policy(p, PAPER.size, 4),
+        "dream.onnx": lambda p: unknown_operator_policy(p, PAPER.size, 3),
+    }
+    said = {}
+    for name, make in cases.items():
+        path = tmp_path / name
+        if make:
+            make(path)
+        with pytest.raises(ConfigError) as err:
+            build(_config("paper-ellipse", path))
+        said[name] = str(err.value)
+        assert "controller.params.file" in said[name] and name in said[name]
+    assert "is not a file" in said["missing.onnx"]
+    assert "not an ONNX model" in said["garbage.onnx"] and "not an ONNX model" in said["dream.onnx"]
+    assert f"[batch, {PAPER.size}]" in said["small.onnx"] and "[batch, 3]" in said["wide.onnx"]
+    with pytest.raises(ConfigError, match="controller.params.file: missing"):
+        build(load_preset("paper-ellipse").replace(controller={"kind": "policy"}))
+
+
+@pytest.mark.parametrize("backend", ["auto", "python"])
+def test_a_policy_returning_nan_is_a_named_error(tmp_path, backend):
+    if backend == "auto" and not compiled.available():
+        pytest.skip(compiled.unavailable_reason())
+    file = nan_policy(tmp_path / "nan.onnx", PAPER.size, 3)
+    with pytest.raises(ControllerError, match=r"nan.onnx returned a non-finite action at t = 0 s"):
+        run_experiment(_config("paper-ellipse", file, backend=backend))
+
+
+@needs_compiled
+def test_a_policy_run_records_its_file_and_reruns_from_its_folder(tmp_path, capsys):
+    """An experiment file naming the policy by a relative path runs from anywhere; the run's
+    config.toml records the file's SHA-256 and reruns to the same numbers."""
+    import hashlib
+
+    folder = tmp_path / "study"
+    folder.mkdir()
+    linear_policy(folder / "policy.onnx", PAPER.size, 3, _weights(PAPER), dtype=np.float64)
+    (folder / "mine.toml").write_text(
+        'base = "paper-ellipse"\n[controller]\nkind = "policy"\n'
+        '[controller.params]\nfile = "policy.onnx"\naction = "residual"\nbase = "nn"\n'
+        "[simulation]\nduration = 0.3\n"
+    )
+    out = tmp_path / "run"
+    assert main(["run", str(folder / "mine.toml"), "--out", str(out), "--no-plots"]) == 0
+    text = (out / "config.toml").read_text()
+    digest = hashlib.sha256((folder / "policy.onnx").read_bytes()).hexdigest()
+    assert f"# policy sha256: {digest}" in text
+    again = run_experiment(load_config(out / "config.toml"))
+    first = run_experiment(load_config(folder / "mine.toml"))
+    np.testing.assert_array_equal(again.tau, first.tau)
