@@ -20,6 +20,7 @@
 
 #include "closed_loop.hpp"
 #include "controllers.hpp"
+#include "learning.hpp"
 #include "model.hpp"
 
 namespace nb = nanobind;
@@ -103,140 +104,37 @@ std::vector<LoopTrace> batch(std::vector<LoadedModel *> plants, std::vector<Load
 }
 
 
-// The learning environment's loop (nnrobust/learning/): one SteppedLoop per episode, driven one
-// control period at a time by an action. ACTION_TORQUE: the action is the command; ACTION_RESIDUAL:
-// it is added to the compiled law's command (the law's state and signals advance as in a run).
-enum ActionMode { ACTION_TORQUE = 0, ACTION_RESIDUAL = 1 };
-
+// The learning environment (nnrobust/learning/, csrc/learning.hpp): the vector environment's
+// step on the pool, GIL released. Arrays are C-contiguous with one row per loop.
 using nnrobust::SteppedLoop;
-using RowsRef = nb::ndarray<double, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
-using Flags = nb::ndarray<bool, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
+template <typename T>
+using RowsOf = nb::ndarray<T, nb::ndim<2>, nb::c_contig, nb::device::cpu>;
+template <typename T>
+using ColumnOf = nb::ndarray<T, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
 
-// One period of `loop` under `action` (n entries); false when the run has ended.
-bool step_action(SteppedLoop &loop, const double *action, int mode, int n, int signals) {
-  nnrobust::Output out;
-  const Eigen::Map<const nnrobust::Vector> a(action, n);
-  if (mode == ACTION_RESIDUAL) {
-    out = loop.control();
-    out.tau += a;
-  } else {
-    out.tau = a;
-    out.z = loop.state();
-    out.signals = nnrobust::Vector::Constant(signals, std::numeric_limits<double>::quiet_NaN());
-  }
-  return loop.advance(out);
-}
-
-// A persistent pool of C++ threads for the vector environment: run(count, job) calls job(i) for
-// i < count on the pool and the calling thread (GIL released by the caller), and rethrows the
-// first exception. Threads wait on a condition variable between calls, so a call costs a wake-up,
-// not a thread start.
-class StepPool {
- public:
-  explicit StepPool(int threads) {
-    for (int w = 1; w < std::max(1, threads); ++w) workers_.emplace_back([this] { serve(); });
-  }
-  ~StepPool() {
-    {
-      const std::lock_guard<std::mutex> hold(lock_);
-      stop_ = true;
-    }
-    start_.notify_all();
-    for (auto &w : workers_) w.join();
-  }
-  int threads() const { return static_cast<int>(workers_.size()) + 1; }
-
-  void run(size_t count, const std::function<void(size_t)> &job) {
-    {
-      const std::lock_guard<std::mutex> hold(lock_);
-      job_ = &job;
-      count_ = count;
-      next_ = 0;
-      busy_ = static_cast<int>(workers_.size());
-      failure_ = nullptr;
-      ++generation_;
-    }
-    start_.notify_all();
-    work();
-    std::unique_lock<std::mutex> hold(lock_);
-    done_.wait(hold, [this] { return busy_ == 0; });
-    job_ = nullptr;
-    if (failure_) std::rethrow_exception(failure_);
-  }
-
- private:
-  void work() {
-    for (size_t i = next_++; i < count_; i = next_++) {
-      try {
-        (*job_)(i);
-      } catch (...) {
-        const std::lock_guard<std::mutex> hold(lock_);
-        if (!failure_) failure_ = std::current_exception();
-      }
-    }
-  }
-  void serve() {
-    long seen = 0;
-    for (;;) {
-      {
-        std::unique_lock<std::mutex> hold(lock_);
-        start_.wait(hold, [&] { return stop_ || generation_ != seen; });
-        if (stop_) return;
-        seen = generation_;
-      }
-      work();
-      {
-        const std::lock_guard<std::mutex> hold(lock_);
-        --busy_;
-      }
-      done_.notify_one();
-    }
-  }
-
-  std::vector<std::thread> workers_;
-  std::mutex lock_;
-  std::condition_variable start_, done_;
-  const std::function<void(size_t)> *job_ = nullptr;
-  size_t count_ = 0;
-  std::atomic<size_t> next_{0};
-  int busy_ = 0;
-  long generation_ = 0;
-  bool stop_ = false;
-  std::exception_ptr failure_;
-};
-
-// The vector environment's step: loop i takes actions[i] (mode as step_action), then writes its
-// next observation to observations[i], its applied torque to applied[i] and whether it runs on to
-// running[i]; a loop that ended keeps its row of observations. GIL released, on the pool.
-void step_loops(StepPool &pool, std::vector<SteppedLoop *> loops, RowsRef actions, int mode, RowsRef observations,
-                RowsRef applied, Flags running) {
+void step_loops(nnrobust::StepPool &pool, std::vector<SteppedLoop *> loops, const nnrobust::RewardSpec &spec,
+                RowsOf<const double> actions, ColumnOf<const double> sizes, RowsOf<double> observations,
+                RowsOf<double> applied, ColumnOf<double> rewards, ColumnOf<bool> running) {
   const size_t count = loops.size();
   if (actions.shape(0) != count || observations.shape(0) != count || applied.shape(0) != count ||
-      running.shape(0) != count)
-    throw std::invalid_argument("step_loops: actions, observations, applied and running need one row per loop");
+      rewards.shape(0) != count || running.shape(0) != count || sizes.shape(0) != count)
+    throw std::invalid_argument("step_loops: every array needs one row per loop");
+  const size_t n = static_cast<size_t>(spec.action_scale.size());
   for (size_t i = 0; i < count; ++i) {
     if (loops[i] == nullptr) throw std::invalid_argument("step_loops: loop " + std::to_string(i) + " is None");
     const SteppedLoop &loop = *loops[i];
-    if (static_cast<long>(actions.shape(1)) != loop.measured_q().size() ||
-        static_cast<long>(applied.shape(1)) != loop.measured_q().size() ||
-        static_cast<int>(observations.shape(1)) != loop.observation_size())
+    if (static_cast<size_t>(loop.measured_q().size()) != n || actions.shape(1) != n || applied.shape(1) != n ||
+        static_cast<int>(observations.shape(1)) != loop.observation_size() || spec.torque_limit.size() != n ||
+        spec.lower.size() != n || spec.upper.size() != n || spec.speed_limit.size() != n)
       throw std::invalid_argument("step_loops: loop " + std::to_string(i) + " needs actions of " +
                                   std::to_string(loop.measured_q().size()) + " and observations of " +
-                                  std::to_string(loop.observation_size()) + " entries");
+                                  std::to_string(loop.observation_size()) + " entries, and limits of its joints");
     if (!loop.running()) throw std::invalid_argument("step_loops: loop " + std::to_string(i) + " has ended");
   }
-  double *a = actions.data(), *obs = observations.data(), *tau = applied.data();
-  bool *alive = running.data();
-  const size_t na = actions.shape(1), no = observations.shape(1);
-  const std::function<void(size_t)> job = [&](size_t i) {
-    SteppedLoop &loop = *loops[i];
-    const int n = static_cast<int>(na);
-    alive[i] = step_action(loop, a + i * na, mode, n, loop.signal_count());
-    Eigen::Map<nnrobust::Vector>(tau + i * na, n) = loop.applied_torque();
-    if (alive[i]) loop.observe(obs + i * no);
-  };
+  const nnrobust::StepRows rows{actions.data(), observations.data(), applied.data(), rewards.data(),
+                                running.data(), sizes.data(),        n,              observations.shape(1)};
   nb::gil_scoped_release released;
-  pool.run(count, job);
+  nnrobust::step_loops(pool, loops, spec, rows);
 }
 }  // namespace
 
@@ -324,27 +222,33 @@ NB_MODULE(_loop, m) {
           "The observation at the current control instant (docs/learning.md).")
       .def(
           "act",
-          [](SteppedLoop &l, const nnrobust::Vector &action, int mode) {
-            if (action.size() != l.measured_q().size())
-              throw std::invalid_argument("SteppedLoop.act: the action needs " +
+          [](SteppedLoop &l, const nnrobust::Vector &command, int mode) {
+            if (command.size() != l.measured_q().size())
+              throw std::invalid_argument("SteppedLoop.act: the command needs " +
                                           std::to_string(l.measured_q().size()) + " entries, got " +
-                                          std::to_string(action.size()));
+                                          std::to_string(command.size()));
             if (!l.running()) throw std::invalid_argument("SteppedLoop.act: the run has ended (" + l.trace().status + ")");
-            return step_action(l, action.data(), mode, static_cast<int>(action.size()), l.signal_count());
+            return nnrobust::apply_command(l, command, mode);
           },
-          nb::arg("action"), nb::arg("mode"),
-          "One control period: mode 0 applies `action` as the command, mode 1 adds it to the compiled "
-          "law's; False when the run has ended.")
+          nb::arg("command"), nb::arg("mode"),
+          "One control period: mode 0 applies `command` [N m], mode 1 adds it to the compiled law's; "
+          "False when the run has ended.")
       .def("end", &SteppedLoop::end, nb::arg("status"), "Stop the run here, marked `status`.")
       .def("finish", &SteppedLoop::finish, "The run's trace (call once, at the end).");
-  nb::class_<StepPool>(m, "StepPool", "A persistent pool of C++ threads stepping loops (the vector environment).")
+  nb::class_<nnrobust::StepPool>(m, "StepPool", "A persistent pool of C++ threads stepping loops.")
       .def(nb::init<int>(), nb::arg("threads"))
-      .def_prop_ro("threads", &StepPool::threads);
-  m.def("step_loops", &step_loops, nb::arg("pool"), nb::arg("loops"), nb::arg("actions"), nb::arg("mode"),
-        nb::arg("observations"), nb::arg("applied"), nb::arg("running"),
-        "One control period of every loop on the pool's threads (GIL released): loop i takes actions[i] "
-        "(mode 0: the command, 1: added to the compiled law's) and writes its next observation, its "
-        "applied torque and whether it runs on.");
+      .def_prop_ro("threads", &nnrobust::StepPool::threads);
+  nb::class_<nnrobust::RewardSpec> reward(m, "RewardSpec", "The reward's weights and the arm's limits.");
+  reward.def(nb::init<>());
+#define FIELD(name) reward.def_rw(#name, &nnrobust::RewardSpec::name)
+  FIELD(error); FIELD(effort); FIELD(limits); FIELD(torque_limit); FIELD(lower); FIELD(upper);
+  FIELD(speed_limit); FIELD(action_scale); FIELD(mode);
+#undef FIELD
+  m.def("step_loops", &step_loops, nb::arg("pool"), nb::arg("loops"), nb::arg("spec"), nb::arg("actions"),
+        nb::arg("sizes"), nb::arg("observations"), nb::arg("applied"), nb::arg("rewards"), nb::arg("running"),
+        "One control period of every loop on the pool's threads (GIL released): loop i takes the raw "
+        "action actions[i] (clipped to [-1, 1], scaled by spec.action_scale, as spec.mode says) and "
+        "writes its next observation, applied torque, reward and whether it runs on.");
   // each compiled component alone, for the twin tests (tests/test_twins.py)
   nb::class_<nnrobust::ControlStep>(m, "ControlStep", "One compiled control step's output.")
       .def_ro("tau", &nnrobust::ControlStep::tau)

@@ -124,6 +124,7 @@ class SteppedLoop {
   const Vector &applied_torque() const { return tau_; }  // the torque applied over the last period
   const LoopTrace &trace() const { return tr_; }
   int signal_count() const { return s_.law_signals; }
+  int task_rows() const { return s_.m; }
   // the compiled law's output at the current instant from the measurement and the state
   Output control();
   // the learning environment's observation (docs/learning.md): the measured q, q', the desired

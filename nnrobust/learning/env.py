@@ -220,22 +220,16 @@ class Episodes:
         size = path_size(setup.trajectory.position(np.arange(steps) * sim.control_period))
         return setup, loop, spec, size
 
-    def torque(self, action: np.ndarray) -> np.ndarray:
-        """The action in N m: a ⊙ τ_max (torque) or scale · a ⊙ τ_max (residual), a clipped to [-1, 1]."""
-        return np.clip(np.asarray(action, dtype=float), -1.0, 1.0) * self.action_scale
+    def reward_spec(self, weights: Reward):
+        """The compiled loop's RewardSpec: the weights, the limits and the action's scale."""
+        from .. import compiled
 
-    def reward(self, weights: Reward, obs: np.ndarray, applied: np.ndarray, size) -> np.ndarray:
-        """r_k of :class:`Reward` for observations ``obs`` (rows) and applied torques (rows)."""
-        s = self.layout.slices()
-        e = obs[..., s["e"]][..., : min(self.m, 3)]
-        q, dq = obs[..., s["q"]], obs[..., s["dq"]]
-        effort = np.mean((applied / self.torque_limit) ** 2, axis=-1)
-        beyond = (q < self.lower) | (q > self.upper) | (np.abs(dq) > self.speed_limit)
-        return -(
-            weights.error * np.linalg.norm(e, axis=-1) / size
-            + weights.effort * effort
-            + weights.limits * np.mean(beyond, axis=-1)
-        )
+        spec = compiled._module().RewardSpec()
+        spec.error, spec.effort, spec.limits = weights.error, weights.effort, weights.limits
+        spec.torque_limit, spec.speed_limit = self.torque_limit, self.speed_limit
+        spec.lower, spec.upper = self.lower, self.upper
+        spec.action_scale, spec.mode = self.action_scale, self.mode
+        return spec
 
     def info(self, setup, spec, loop, episode: int, wall: float) -> dict:
         """The info of an episode's last step: its sample, status and verdicts (the run's metrics
@@ -305,9 +299,18 @@ class ArmEnv(gym.Env):
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, (size,), dtype=np.float64)
         self.episode = -1
         self.setup = self.loop = self.loop_spec = None
-        self._size = 1.0
-        self._obs = np.zeros(size)
         self._started = 0.0
+        from .. import compiled
+
+        # one row of the vector environment's arrays, stepped by the same compiled function
+        self._pool = compiled._module().StepPool(1)
+        self._reward = self.episodes.reward_spec(self.weights)
+        self._size = np.ones(1)
+        self._obs = np.zeros((1, size))
+        self._action = np.zeros((1, n))
+        self._applied = np.zeros((1, n))
+        self._rewards = np.zeros(1)
+        self._running = np.zeros(1, dtype=bool)
 
     @property
     def layout(self) -> ObservationLayout:
@@ -323,29 +326,36 @@ class ArmEnv(gym.Env):
             self.episodes.spec.seed = int(seed)
             self.episode = -1
         self.episode += 1
-        self.setup, loop, self.loop_spec, self._size = self.episodes.start(self.episode)
+        self.setup, loop, self.loop_spec, self._size[0] = self.episodes.start(self.episode)
         self.loop = loop
-        self._obs = loop.observe()
+        self._obs[0] = loop.observe()
         self._started = time.perf_counter()
-        return self._obs.copy(), {"episode": self.episode}
+        return self._obs[0].copy(), {"episode": self.episode}
 
     def step(self, action):
         """One control period; see docs/learning.md for the reward and the info."""
         loop = self.loop
         if loop is None or not loop.running:
             raise NNRobustError("ArmEnv.step: call reset() first (the episode has ended)")
-        episodes = self.episodes
-        running = loop.act(episodes.torque(action), episodes.mode)
-        applied = np.asarray(loop.applied_torque)
-        if running:
-            self._obs = loop.observe()
+        from .. import compiled
+
+        self._action[0] = action
+        compiled._module().step_loops(
+            self._pool,
+            [loop],
+            self._reward,
+            self._action,
+            self._size,
+            self._obs,
+            self._applied,
+            self._rewards,
+            self._running,
+        )
         diverged = loop.status == "diverged"
-        reward = float(episodes.reward(self.weights, self._obs, applied, self._size))
-        if diverged:
-            reward -= self.weights.runaway
-        ended = not running
+        reward = float(self._rewards[0]) - (self.weights.runaway if diverged else 0.0)
+        ended = not self._running[0]
         info: dict = {"episode": self.episode}
         if ended and self.verdicts:
             wall = time.perf_counter() - self._started
-            info = episodes.info(self.setup, self.loop_spec, loop, self.episode, wall)
-        return self._obs.copy(), reward, diverged, ended and not diverged, info
+            info = self.episodes.info(self.setup, self.loop_spec, loop, self.episode, wall)
+        return self._obs[0].copy(), reward, diverged, bool(ended and not diverged), info

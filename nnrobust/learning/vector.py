@@ -69,12 +69,16 @@ class ArmVectorEnv(gym.vector.VectorEnv):
         self.action_space = gym.vector.utils.batch_space(self.single_action_space, num_envs)
         self.observation_space = gym.vector.utils.batch_space(self.single_observation_space, num_envs)
         self._pool = compiled._module().StepPool(threads)
+        self._reward = self.episodes.reward_spec(self.weights)
+        self._rewards = np.zeros(num_envs)
+        self._loops: list = [None] * num_envs
         self._runs: list = [None] * num_envs  # (setup, loop, spec, path size, episode, start time)
         self._obs = np.zeros((num_envs, size))
         self._applied = np.zeros((num_envs, n))
         self._running = np.zeros(num_envs, dtype=bool)
         self._ended = np.zeros(num_envs, dtype=bool)
         self._sizes = np.ones(num_envs)
+        self._every = np.arange(num_envs)
         self._count = 0  # episodes started since the last seeded reset
 
     @property
@@ -88,6 +92,7 @@ class ArmVectorEnv(gym.vector.VectorEnv):
         self._count += 1
         setup, loop, spec, size = self.episodes.start(episode)
         self._runs[j] = (setup, loop, spec, episode, time.perf_counter())
+        self._loops[j] = loop
         self._obs[j] = loop.observe()
         self._sizes[j] = size
         self._running[j], self._ended[j] = True, False
@@ -109,47 +114,43 @@ class ArmVectorEnv(gym.vector.VectorEnv):
         """One control period of every running episode; an episode that ended at the previous
         step restarts now (next-step autoreset).
         """
+        from .. import compiled
+
         N = self.num_envs
         if self._runs[0] is None:
             raise NNRobustError("ArmVectorEnv.step: call reset() first")
-        actions = np.asarray(actions, dtype=float)
+        actions = np.ascontiguousarray(actions, dtype=float)
         if actions.shape != (N, self.episodes.n):
             raise ConfigError("actions", f"expected shape ({N}, {self.episodes.n}), got {actions.shape}")
-        rewards = np.zeros(N)
         terminated = np.zeros(N, dtype=bool)
         truncated = np.zeros(N, dtype=bool)
         infos: dict = {}
-        restart = np.flatnonzero(self._ended)
+        restart = np.flatnonzero(self._ended) if self._ended.any() else ()
         for j in restart:
             self._start(int(j))
-        stepping = np.ones(N, dtype=bool)
-        stepping[restart] = False
-        torque = np.ascontiguousarray(self.episodes.torque(actions))
-        index = np.flatnonzero(stepping)
-        if index.size:
-            loops = [self._runs[j][1] for j in index]
-            full = index.size == N
-            obs = self._obs if full else np.ascontiguousarray(self._obs[index])
-            applied = self._applied if full else np.zeros((index.size, self.episodes.n))
-            running = np.zeros(index.size, dtype=bool)
-            from .. import compiled
-
-            tau = torque if full else np.ascontiguousarray(torque[index])
-            compiled._module().step_loops(self._pool, loops, tau, self.episodes.mode, obs, applied, running)
-            if not full:
-                self._obs[index], self._applied[index] = obs, applied
-            rewards[index] = self.episodes.reward(
-                self.weights, self._obs[index], self._applied[index], self._sizes[index]
-            )
-            ended = index[~running]
-            for j in ended:
-                setup, loop, spec, episode, started = self._runs[j]
-                diverged = loop.status == "diverged"
-                terminated[j], truncated[j] = diverged, not diverged
-                if diverged:
-                    rewards[j] -= self.weights.runaway
-                self._ended[j] = True
-                if self.verdicts:
-                    info = self.episodes.info(setup, spec, loop, episode, time.perf_counter() - started)
-                    infos = self._add_info(infos, info, int(j))
+        step = compiled._module().step_loops
+        if len(restart) == 0:  # every episode runs on: the arrays are stepped in place
+            index = self._every
+            step(self._pool, self._loops, self._reward, actions, self._sizes, self._obs,
+                 self._applied, self._rewards, self._running)  # fmt: skip
+            rewards, running = self._rewards.copy(), self._running
+        else:  # the restarted ones return their first observation and a zero reward
+            index = np.flatnonzero(~np.isin(np.arange(N), restart))
+            rewards = np.zeros(N)
+            obs, applied = self._obs[index], self._applied[index]
+            done, running = np.zeros(index.size), np.zeros(index.size, dtype=bool)
+            step(self._pool, [self._loops[j] for j in index], self._reward,
+                 np.ascontiguousarray(actions[index]), np.ascontiguousarray(self._sizes[index]), obs,
+                 applied, done, running)  # fmt: skip
+            self._obs[index], self._applied[index], rewards[index] = obs, applied, done
+        for j in index[~running]:
+            setup, loop, spec, episode, started = self._runs[j]
+            diverged = loop.status == "diverged"
+            terminated[j], truncated[j] = diverged, not diverged
+            if diverged:
+                rewards[j] -= self.weights.runaway
+            self._ended[j] = True
+            if self.verdicts:
+                info = self.episodes.info(setup, spec, loop, episode, time.perf_counter() - started)
+                infos = self._add_info(infos, info, int(j))
         return self._obs.copy(), rewards, terminated, truncated, infos

@@ -1,0 +1,108 @@
+"""The learning environment's speed: env-steps per second of the vector environment against the
+compiled loop's own steps per second (simulate_batch) on the same arm, and a single environment's
+step overhead over the compiled plant step.
+
+    python benchmarks/learning_env.py --json docs/data/learning_env.json [--envs 32] [--seconds 2]
+
+For each arm (the paper's, the Panda), in one process, interleaved:
+- ``batch``: simulate_batch of ``envs`` runs of ``seconds`` simulated time each, one C++ thread
+  per core: the loop's steps per second (build excluded);
+- ``vector``: ArmVectorEnv(num_envs=envs) stepped with a zero residual (the trivial policy: the
+  base law's own command) for the same number of periods, episode ends and restarts included;
+- ``single``: ArmEnv stepped likewise, one episode; its time per step minus the compiled loop's
+  time per step (batch on one thread) is the environment's overhead per step.
+The base law is each preset's own. Ratios are within one run of this script.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from nnrobust.compiled import simulate_batch
+from nnrobust.experiment import build
+from nnrobust.learning.env import ArmEnv
+from nnrobust.learning.vector import ArmVectorEnv
+from nnrobust.presets import load_preset
+from nnrobust.results import write_json_atomic
+
+ARMS = ("paper-ellipse", "panda-ellipse")
+
+
+def batch_rate(preset: str, envs: int, seconds: float, threads: int) -> float:
+    """Steps per second of simulate_batch over ``envs`` runs (builds excluded)."""
+    setups = [build(load_preset(preset).replace(simulation={"duration": seconds})) for _ in range(envs)]
+    start = time.perf_counter()
+    traces = simulate_batch(setups, threads=threads)
+    wall = time.perf_counter() - start
+    return sum(t.t.size for t in traces) / wall
+
+
+def vector_rate(preset: str, envs: int, seconds: float) -> float:
+    """Env-steps per second of the vector environment under a zero residual."""
+    vec = ArmVectorEnv(preset, envs, action="residual", duration=seconds, verdicts=False)
+    vec.reset(seed=0)
+    steps = int(round(seconds / vec.episodes.period))
+    zeros = np.zeros((envs, vec.episodes.n), dtype=np.float32)
+    start = time.perf_counter()
+    for _ in range(steps):
+        vec.step(zeros)
+    wall = time.perf_counter() - start
+    return envs * steps / wall
+
+
+def single_step(preset: str, seconds: float) -> float:
+    """Seconds per step of one environment under a zero residual."""
+    env = ArmEnv(preset, action="residual", duration=seconds, verdicts=False)
+    env.reset(seed=0)
+    steps = int(round(seconds / env.episodes.period)) - 1
+    zeros = np.zeros(env.episodes.n, dtype=np.float32)
+    start = time.perf_counter()
+    for _ in range(steps):
+        env.step(zeros)
+    return (time.perf_counter() - start) / steps
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--json", help="write the results as JSON to this file")
+    parser.add_argument("--envs", type=int, default=32)
+    parser.add_argument("--seconds", type=float, default=2.0)
+    parser.add_argument("--threads", type=int, default=2)
+    args = parser.parse_args()
+    rows = []
+    for preset in ARMS:
+        batch_rate(preset, 2, 0.2, args.threads)  # warm-up: imports, caches
+        batch = batch_rate(preset, args.envs, args.seconds, args.threads)
+        vector = vector_rate(preset, args.envs, args.seconds)
+        loop_step = 1.0 / batch_rate(preset, 4, args.seconds, 1)
+        single = single_step(preset, args.seconds)
+        rows.append(
+            {
+                "preset": preset,
+                "envs": args.envs,
+                "threads": args.threads,
+                "batch_steps_per_second": batch,
+                "vector_steps_per_second": vector,
+                "vector_over_batch": vector / batch,
+                "loop_step_us": 1e6 * loop_step,
+                "single_env_step_us": 1e6 * single,
+                "single_env_overhead_us": 1e6 * (single - loop_step),
+            }
+        )
+    print(f"{'arm':15s} {'batch steps/s':>14s} {'vector steps/s':>15s} {'ratio':>6s} "
+          f"{'loop µs':>8s} {'env µs':>8s} {'overhead µs':>12s}")  # fmt: skip
+    for r in rows:
+        print(
+            f"{r['preset']:15s} {r['batch_steps_per_second']:14.0f} {r['vector_steps_per_second']:15.0f} "
+            f"{r['vector_over_batch']:6.2f} {r['loop_step_us']:8.1f} {r['single_env_step_us']:8.1f} "
+            f"{r['single_env_overhead_us']:12.1f}"
+        )
+    if args.json:
+        write_json_atomic(args.json, {"rows": rows})
+
+
+if __name__ == "__main__":
+    main()
