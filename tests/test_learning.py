@@ -225,3 +225,39 @@ def test_registered_ids_make_the_environment():
     )
     obs, _ = vec.reset(seed=0)
     assert obs.shape == (2, 16)
+
+
+def test_es_training_writes_a_policy_that_runs_as_the_environment_scored_it(tmp_path):
+    """A tiny CMA-ES training (the path docs/learning.md documents): its ONNX file, run as a
+    controller on episode 0's plant, gives the run the environment's rollout of the same weights
+    gave (float32 inference against float64: close, not equal)."""
+    from nnrobust.learning.es import Network, train
+
+    out = tmp_path / "policy.onnx"
+    record = train("paper-ellipse", out, action="residual", controller="no-u0", duration=0.2,
+                   population=4, episodes=2, generations=2, hidden=4, threads=2, progress=None)  # fmt: skip
+    assert out.is_file() and (tmp_path / "policy.onnx.json").is_file()
+    assert record["simulations"] == 2 * 4 * 2 + 2 and len(record["history"]) == 2
+    assert record["layout"] == ObservationLayout(3, 2).describe()
+    # the exported weights, scored by the environment (numpy) and run as a controller (ONNX)
+    import onnx
+    from onnx import numpy_helper
+
+    weights = {t.name: numpy_helper.to_array(t).astype(float) for t in onnx.load(str(out)).graph.initializer}
+    net = Network(16, 3, 4, weights["mean"], weights["scale"])
+    net.theta = np.concatenate([weights[k].ravel() for k in ("W0", "b0", "W1", "b1")])
+    env = ArmEnv("paper-ellipse", action="residual", controller="no-u0", duration=0.2)
+    obs, _ = env.reset(seed=0)
+    tau, ended = [], False
+    while not ended:
+        obs, _, terminated, truncated, info = env.step(net.act(net.theta[None], obs[None, None])[0, 0])
+        tau.append(np.array(env.loop.applied_torque))
+        ended = terminated or truncated
+    spec = env.episodes.spec
+    config = experiment(spec, env.episodes.base, draw(spec, 0), "no-u0").replace(
+        controller={"kind": "policy", "params": {"file": str(out), "action": "residual", "base": "no-u0"}},
+        simulation={"duration": 0.2},
+    )
+    run = run_experiment(config)
+    np.testing.assert_allclose(run.tau, np.array(tau), rtol=1e-4, atol=1e-4 * float(np.abs(tau).max()))
+    assert run.metrics()["rms_error"] == pytest.approx(info["metrics"]["rms_error"], rel=1e-4)

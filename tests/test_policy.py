@@ -146,3 +146,33 @@ def test_a_policy_run_records_its_file_and_reruns_from_its_folder(tmp_path, caps
     again = run_experiment(load_config(out / "config.toml"))
     first = run_experiment(load_config(folder / "mine.toml"))
     np.testing.assert_array_equal(again.tau, first.tau)
+
+
+@needs_compiled
+def test_a_policy_entry_runs_in_a_sweep_on_the_same_plants(tmp_path):
+    """A sweep file names a policy by a path relative to itself; a zero residual on eq. (9) gives,
+    sample for sample (common random numbers), exactly eq. (9)'s own rows; the file's SHA-256
+    is among the sweep's inputs."""
+    pytest.importorskip("distributed")
+    from nnrobust.sweep import load_sweep, read_results, run_sweep
+
+    linear_policy(tmp_path / "zero.onnx", PAPER.size, 3)
+    (tmp_path / "sweep.toml").write_text(
+        'name = "learned"\nbase = "paper-ellipse"\nsamples = 3\nseed = 5\n'
+        'controllers = ["no-u0", {name = "zero-residual", kind = "policy", '
+        'params = {file = "zero.onnx", action = "residual", base = "no-u0"}}]\n'
+        '[set]\n"simulation.duration" = 0.3\n'
+        '[vary]\n"plant.disturbance_scale" = {uniform = [0.5, 2.0]}\n'
+    )
+    spec = load_sweep(tmp_path / "sweep.toml")
+    run_sweep(spec, tmp_path / "out", workers=1)
+    frame = read_results(tmp_path / "out").sort_values(["controller", "sample"])
+    mine = frame[frame["controller"] == "zero-residual"]
+    theirs = frame[frame["controller"] == "no-u0"]
+    assert list(mine["status"]) == ["completed"] * 3
+    np.testing.assert_array_equal(mine["rms_error"].to_numpy(), theirs["rms_error"].to_numpy())
+    import hashlib
+
+    digest = hashlib.sha256((tmp_path / "zero.onnx").read_bytes()).hexdigest()
+    recorded = (tmp_path / "out" / "sweep.toml").read_text()
+    assert f"# the policy file of controller zero-residual: {tmp_path / 'zero.onnx'} {digest}" in recorded

@@ -139,6 +139,7 @@ class Episodes:
     """
 
     def __init__(self, experiment, *, action: str, vary, seed: int, controller, residual_scale, duration):
+        """See :class:`ArmEnv` for the arguments."""
         from .. import compiled
 
         if not compiled.available():
@@ -184,7 +185,8 @@ class Episodes:
             np.asarray(a, dtype=float) for a in (robot.lower_limits, robot.upper_limits)
         )
         self.period = first.config.simulation.control_period
-        self._first: tuple | None = ((self.spec.seed, 0), first)
+        self.cache = 64  # built episodes kept: candidates of a training generation share plants
+        self._built: dict = {(self.spec.seed, 0): first}
 
     def build(self, episode: int):
         """The built experiment of ``episode`` (sample ``episode`` of the sweep, or of its grid)."""
@@ -204,10 +206,13 @@ class Episodes:
         from .. import compiled
         from ..verdicts import path_size
 
-        first, self._first = self._first, None  # built by __init__: episode 0 of the first seed
-        setup = (
-            first[1] if first is not None and first[0] == (self.spec.seed, episode) else self.build(episode)
-        )
+        key = (self.spec.seed, episode)
+        setup = self._built.get(key)
+        if setup is None or setup.plant.engine is not None:  # a MuJoCo plant steps its own data
+            setup = self.build(episode)
+            self._built[key] = setup
+            while len(self._built) > self.cache:  # the oldest first
+                self._built.pop(next(iter(self._built)))
         sim = setup.config.simulation
         try:
             loop, spec = compiled.stepped_loop(setup, sim.duration)

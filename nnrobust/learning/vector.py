@@ -86,10 +86,11 @@ class ArmVectorEnv(gym.vector.VectorEnv):
         """The observation's fields (docs/learning.md#observation)."""
         return self.episodes.layout
 
-    def _start(self, j: int) -> None:
-        """Sub-environment j's next episode."""
-        episode = self._count
-        self._count += 1
+    def _start(self, j: int, episode: int | None = None) -> None:
+        """Sub-environment j's next episode (or ``episode``)."""
+        if episode is None:
+            episode = self._count
+            self._count += 1
         setup, loop, spec, size = self.episodes.start(episode)
         self._runs[j] = (setup, loop, spec, episode, time.perf_counter())
         self._loops[j] = loop
@@ -99,14 +100,25 @@ class ArmVectorEnv(gym.vector.VectorEnv):
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         """Start a new episode in every sub-environment; ``seed`` restarts at episode 0 of the
-        sweep with that seed (sub-environment j then runs episode j).
+        sweep with that seed (sub-environment j then runs episode j). ``options={"episodes":
+        [k_0, ..., k_N-1]}`` starts sub-environment j at episode k_j instead (several may share
+        one: a training generation's candidates on the same plants); later episodes continue
+        after the largest.
         """
         super().reset(seed=seed)
         if seed is not None:
             self.episodes.spec.seed = int(seed)
             self._count = 0
+        chosen = (options or {}).get("episodes")
+        if chosen is not None:
+            chosen = [int(k) for k in chosen]
+            if len(chosen) != self.num_envs or min(chosen) < 0:
+                raise ConfigError(
+                    "options.episodes", f"expected {self.num_envs} episode numbers >= 0, got {len(chosen)}"
+                )
+            self._count = max(self._count, max(chosen) + 1)
         for j in range(self.num_envs):
-            self._start(j)
+            self._start(j, None if chosen is None else chosen[j])
         episodes = np.array([run[3] for run in self._runs])
         return self._obs.copy(), {"episode": episodes, "_episode": np.ones(self.num_envs, dtype=bool)}
 
