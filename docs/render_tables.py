@@ -647,7 +647,7 @@ def registered_laws() -> str:
     for name in law_names():
         for p in LAWS[name].params:
             search = (
-                ""
+                f"no: {p.fixed_reason}"
                 if p.search is None
                 else ("from the arm" if callable(p.search) else f"{p.search[0]:g} to {p.search[1]:g}")
             )
@@ -677,16 +677,24 @@ def paper_kind_keys() -> str:
     kind's own)."""
     from nnrobust.controllers.registry import PAPER_KINDS, SHARED_KEYS, paper_kinds
 
-    lines = ["| read by | key | unit | default | valid values |", "|---|---|---|---|---|"]
+    lines = [
+        "| read by | key | unit | default | valid values | not searched by `tune`, because |",
+        "|---|---|---|---|---|---|",
+    ]
     for shared in SHARED_KEYS:
         lines += [
-            f"| {shared.owner} ({shared.reader_names()}) | {_param_cells(p, '-')} |" for p in shared.params
+            f"| {shared.owner} ({shared.reader_names()}) | {_param_cells(p, '-')} | {p.fixed_reason} |"
+            for p in shared.params
         ]
     for name in paper_kinds():
-        lines += [f"| `{name}` | {_param_cells(p, 'sized from the arm')} |" for p in PAPER_KINDS[name].params]
+        lines += [
+            f"| `{name}` | {_param_cells(p, 'sized from the arm')} | {p.fixed_reason} |"
+            for p in PAPER_KINDS[name].params
+        ]
     return "\n".join(lines) + (
         "\n\nMade from the declarations (`SharedKeys` in task_space.py and pseudoinverse.py, "
-        "`PaperKind.params`; nnrobust/controllers/).\n"
+        "`PaperKind.params`; nnrobust/controllers/). A key with no reason is searched, or set from "
+        "a searched coordinate (docs/tuning.md).\n"
     )
 
 

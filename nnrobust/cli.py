@@ -649,16 +649,20 @@ def format_margin(name: str, margin: dict) -> str:
 
 def format_tuning(summary: dict) -> str:
     """Each controller's best setting under the constraints: errors on the training and the
-    held-out samples, torque, chatter, and the bounds it sits on.
+    held-out samples, torque, chatter, the bounds it sits on, and the keys it does not search
+    with why.
     """
+    from .tune.space import fixed_text
+
     lines = [
         f"{'controller':14s} {'train e [mm]':>12s} {'held-out e [mm]':>15s} {'rms tau':>8s} "
         f"{'chatter':>8s}  setting"
     ]
     for name, entry in summary["controllers"].items():
         best = entry["best"]
+        fixed = [f"{'':14s} not searched, {line}" for line in fixed_text(entry.get("fixed", {}).items())]
         if best is None:
-            lines.append(f"{name:14s} {entry['note']}")
+            lines += [f"{name:14s} {entry['note']}", *fixed]
             continue
         held_out = best["validation"].get("rms_error_after_2s")
         settings = ", ".join(
@@ -674,6 +678,7 @@ def format_tuning(summary: dict) -> str:
                 f"{'':14s} at the {b['side']} bound of {b['param']} ({b['bound']:.4g})"
                 + (f": {b['physical']}" if b["physical"] else "")
             )
+        lines += fixed
     return "\n".join(lines)
 
 

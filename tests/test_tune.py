@@ -356,8 +356,10 @@ def test_a_custom_class_is_tuned_in_the_space_it_declares(short_experiment, tmp_
 
 
 def test_a_registered_law_is_tuned_in_the_space_it_declares(short_experiment, tmp_path):
-    """slotine-li declares Lambda (up to the sampling limit, never widened), K_D_step, and the
-    adaptation's gamma and leakage (weakest at gamma's low and leakage's high end): the tuner
+    """slotine-li declares Lambda (up to the sampling limit, never widened), K_D_step (up to the
+    law's own limit 1, never widened), the adaptation's gamma and leakage (weakest at gamma's low
+    and leakage's high end) and the null-space damping k_n (issue 37: held at 1 it capped
+    K_D_step near 0.5, its null-space step K_D_step (1 + k_n) at 1): the tuner
     searches exactly those at the shared budget, runs the law itself with its adaptation at the
     weakest in the gain phase (not no-u0, which takes no such parameters), and its best setting
     reruns to its training metrics."""
@@ -369,8 +371,10 @@ def test_a_registered_law_is_tuned_in_the_space_it_declares(short_experiment, tm
 
     scales = arm_scales(build(load_preset("paper-ellipse-noisy")))
     space = search_space("slotine-li", scales)
-    names = ["Lambda", "K_D_step", "gamma", "leakage"]
+    names = ["Lambda", "K_D_step", "gamma", "leakage", "null_damping"]
     assert [p.name for p in space.params] == [f"controller.params.{n}" for n in names]
+    assert space.param("controller.params.K_D_step").reason("high").startswith("sampling")
+    assert space.param("controller.params.null_damping").reason("low")
     assert space.param("controller.params.Lambda").high == pytest.approx(
         1 / ((0.5 + scales["delay"]) * scales["period"])
     )
@@ -395,6 +399,91 @@ def test_a_registered_law_is_tuned_in_the_space_it_declares(short_experiment, tm
         for s in (0, 1)
     ]
     assert np.mean(runs) == pytest.approx(best["train"]["rms_error_after_2s"], rel=1e-9)
+
+
+def _every_shipped_law():
+    from nnrobust.controllers.registry import law_names, paper_kinds
+
+    return (*paper_kinds(), *law_names())
+
+
+@pytest.mark.parametrize("name", _every_shipped_law())
+def test_every_parameter_of_a_shipped_law_is_searched_or_held_with_a_reason(name, scales):
+    """Fair by declaration (issue 37, item 4): every key a shipped or registered law reads is a
+    search coordinate (or set from one: K_p from the bandwidth, nn.sigma from the leakage rate)
+    or is held at the experiment's value for a reason its declaration states; a registered law's
+    search bounds lie in its declared range, so widening one never asks what the law refuses."""
+    from nnrobust.controllers.registry import SHARED_KEYS, registered_law
+    from nnrobust.tune.space import own_keys, tunable
+
+    assert name in tunable(), f"{name} declares nothing to search"
+    space = search_space(name, scales)
+    keys, _ = own_keys(name)
+    shared = {p.name for s in SHARED_KEYS if s.readers is not None for p in s.params}
+    searched, fixed = space.searched_keys(), dict(space.fixed)
+    assert searched <= keys, searched - keys
+    assert searched | set(fixed) == keys | shared, (keys | shared) - searched - set(fixed)
+    assert not searched & set(fixed)
+    unstated = [k for k, why in fixed.items() if not why.strip()]
+    assert not unstated, f"{name} holds {unstated} without a reason (LawParam.fixed)"
+    law = registered_law(name)
+    for p in law.params if law else ():
+        if p.search is not None:
+            low, high = p.search(scales) if callable(p.search) else p.search
+            assert p.low <= low < high <= p.high, (p.name, low, high, p.range)
+    if name == "policy":  # the learned policy: its file, action and base are the experiment's
+        assert {fixed[f"controller.params.{k}"] for k in ("file", "action", "base")} == {
+            "chosen by the experiment"
+        }
+        assert "controller.params.residual_scale" in searched
+
+
+def test_a_bound_on_the_end_of_a_laws_range_is_physical_and_never_widened(scales):
+    """K_D_step's search ends where the law refuses a larger step (1): a best setting there is
+    reported on a physical bound, and no widening asks 10 (which the law would refuse)."""
+    from dataclasses import replace
+
+    space = search_space("slotine-li", scales)
+    step = space.param("controller.params.K_D_step")
+    values = {p.name: math.sqrt(p.low * p.high) for p in space.params}
+    values[step.name] = step.high
+    wider, moved = space.widened(values)
+    assert not moved and wider.param(step.name).high == 1.0
+    (bound,) = space.at_bound(values)
+    assert bound["param"] == step.name and bound["physical"]
+    # a declared reason aside, the range alone stops a widening: leakage's 10 moves to 100, 1000, no further
+    leak = replace(space.param("controller.params.leakage"), high=1e3)
+    assert leak.reason("high") == "the law's range ends at 1000"
+
+
+def test_a_custom_class_says_which_of_its_parameters_it_does_not_search():
+    """A user's class searches its search_space; its other constructor parameters are listed as
+    held, the reason being its author's choice."""
+    from nnrobust.tune.space import custom_space
+
+    class Law:
+        search_space = {"Kp": (1.0, 1e5, "1/s^2")}
+
+        def __init__(self, context, Kp, Kv=4.0, *, law="corrected"):
+            pass
+
+    space = custom_space("mine", Law)
+    assert dict(space.fixed) == {
+        f"controller.params.{k}": "not in Law.search_space: its author's choice" for k in ("Kv", "law")
+    }
+    assert [p.name for p in space.params] == ["controller.params.Kp"]
+
+
+def test_the_tuning_prints_what_it_does_not_search_and_why(scales):
+    """nnrobust tune's table lists, under each controller, the keys it holds grouped by reason."""
+    from nnrobust.cli import format_tuning
+
+    space = search_space("slotine-li", scales)
+    text = format_tuning(
+        {"controllers": {"slotine-li": {"best": None, "note": "none", "fixed": dict(space.fixed)}}}
+    )
+    assert "not searched, chosen by the experiment: controller.params.project" in text
+    assert "controller.params.criterion_gain" in text and "controller.params.null_damping" not in text
 
 
 def test_a_moved_tuning_resumes_and_trials_copied_in_or_changed_are_refused(

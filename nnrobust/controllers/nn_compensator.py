@@ -263,6 +263,8 @@ def _search(scales: dict) -> list:
 
 
 _LOW, _HIGH = RANGE_LIMITS
+BASIS = "the network's structure, the experiment's (rbf-nn's basis has the same defaults)"
+"""Why the tuner holds the basis' keys: the network's structure, not a gain (docs/controller.md)."""
 
 declare_kind(
     PaperKind(
@@ -272,7 +274,8 @@ declare_kind(
             LawParam("nn.law", "corrected", "-", "u_0 = -ρ̂² ω / (ρ̂ ‖ω‖ + ε) (`corrected`) or -ρ̂ ω / (...) "
                      "(`printed`, the paper's eq. 15 as printed)", choices=U0_LAWS),
             LawParam("nn.F", DEFAULTS["F"], "-", "adaptation gain F", low=0.0, low_open=True, high=MAX_GAIN),
-            LawParam("nn.gamma", DEFAULTS["gamma"], "1/s", "decay rate γ of ε", low=0.0, high=MAX_GAIN),
+            LawParam("nn.gamma", DEFAULTS["gamma"], "1/s", "decay rate γ of ε", low=0.0, high=MAX_GAIN,
+                     fixed="inert in a tuning: ε(0) is held at its floor nn.eps_min, so ε never decays"),
             LawParam("nn.eps0", DEFAULTS["eps0"], "m/s^2", "ε(0)", low=0.0, low_open=True, high=MAX_GAIN),
             LawParam("nn.eps_min", DEFAULTS["eps_min"], "m/s^2", "floor of ε (0: the paper's vanishing "
                      "boundary layer; at most nn.eps0)", low=0.0),
@@ -281,14 +284,14 @@ declare_kind(
             LawParam("nn.basis_input", "joint", "-", "s = [q, q'] (`joint`) or [e, e'] (`error`)",
                      choices=BASIS_INPUTS),
             LawParam("nn.centers", 5, "-", "Gaussian centres per input coordinate", low=1, high=MAX_CENTERS,
-                     integer=True),
+                     integer=True, fixed=BASIS),
             LawParam("nn.width", 1.0, "-", "Gaussian width as a multiple of the centre spacing", low=_LOW,
-                     high=_HIGH),
+                     high=_HIGH, fixed=BASIS),
             LawParam("nn.bias", True, "-", "include a constant unit"),
             LawParam("nn.velocity_range", 3.0, "rad/s", "q' centres span ±velocity_range (q's span the "
-                     "joint limits)", low=_LOW, high=_HIGH),
+                     "joint limits)", low=_LOW, high=_HIGH, fixed=BASIS),
             LawParam("nn.error_range", (0.05, 0.5), "m, m/s", "e and e' centres span ±error_range",
-                     low=_LOW, high=_HIGH, size="2"),
+                     low=_LOW, high=_HIGH, size="2", fixed=BASIS),
         ),
     )
 )  # fmt: skip

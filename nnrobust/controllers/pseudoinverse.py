@@ -52,6 +52,9 @@ def project_null_space(J: np.ndarray, J_pinv: np.ndarray, z: np.ndarray) -> np.n
     return z - J_pinv @ (J @ z)
 
 
+SAME_PSEUDO_INVERSE = "the experiment's damped pseudo-inverse, the same for every law"
+"""Why the tuner holds the pseudo-inverse's keys: every law shares it, so no law gets its own."""
+
 KEYS = declare_shared(
     SharedKeys(
         "the damped pseudo-inverse",
@@ -59,11 +62,11 @@ KEYS = declare_shared(
             LawParam(
                 "controller.pinv_threshold", 0.02, "m/rad",
                 "smallest singular value of J below which J+ is damped", low=0.0, low_open=True,
-                high=MAX_PINV,
+                high=MAX_PINV, fixed=SAME_PSEUDO_INVERSE,
             ),
             LawParam(
                 "controller.pinv_max_damping", 0.02, "m/rad", "damping at a singularity", low=0.0,
-                low_open=True, high=MAX_PINV,
+                low_open=True, high=MAX_PINV, fixed=SAME_PSEUDO_INVERSE,
             ),
         ),
         readers="every shipped law",

@@ -31,6 +31,9 @@ import numpy as np
 
 from ..exceptions import ConfigError
 
+CHOSEN = "chosen by the experiment"
+"""Why a text, file or true/false parameter is never searched: it picks a structure, not a level."""
+
 
 @dataclass(frozen=True)
 class LawParam:
@@ -50,6 +53,11 @@ class LawParam:
         search: (low, high) of the tuner's log-uniform search, or a function of the arm's scales
             (:func:`nnrobust.tune.arm_scales`) returning them; None: not searched.
         low_reason, high_reason: why a search bound is physical (the tuner never widens it), or "".
+            A search bound at the end of the range is physical by that alone: the tuner never
+            widens a bound past the parameter's range.
+        fixed: why the tuner does not search it (it runs at the experiment's value), for a
+            parameter without ``search``; "" for a searched one. A text, file or true/false
+            parameter needs none: it is chosen by the experiment (:attr:`fixed_reason`).
         weak: for a knob of a robust or adaptive term, the end (``low`` or ``high``) at which the
             term does least (the tuner's check that the term earns its place); "" for gains.
         low_open: the range excludes ``low`` (a positive gain: (0, high]).
@@ -70,9 +78,23 @@ class LawParam:
     search: tuple[float, float] | Callable[[dict], tuple[float, float]] | None = None
     low_reason: str = ""
     high_reason: str = ""
+    fixed: str = ""
     weak: str = ""
     low_open: bool = False
     path: bool = False
+
+    @property
+    def fixed_reason(self) -> str:
+        """Why the tuner holds it at the experiment's value: ``fixed``, or :data:`CHOSEN` for a
+        text, file or true/false parameter (a structure, not a level to search); "" for a
+        searched parameter, and for a number that declares no reason (tests/test_tune.py
+        fails on one).
+        """
+        if self.search is not None:
+            return ""
+        if self.fixed:
+            return self.fixed
+        return CHOSEN if self.path or self.choices or isinstance(self.default, bool) else ""
 
     @property
     def range(self) -> str:

@@ -246,6 +246,7 @@ declare_shared(
             LawParam(
                 "controller.coulomb_smoothing", 0.0, "rad/s", "v_s: F-hat's Coulomb part uses sat(q' / v_s) "
                 "(0: the exact sgn of the sampled velocity; docs/plant.md)", low=0.0,
+                fixed="part of the nominal model F-hat, the experiment's, as p-hat and f-hat_d are",
             ),
         ),
     )

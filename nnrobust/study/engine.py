@@ -223,6 +223,12 @@ def _run_case(spec: StudySpec, case: str, folder: Path, address: str, overwrite:
         )
     out["stages"]["tune"] = "finished"
     out["tunings"] = {s: str(here / f"tune-seed{s}") for s in tunings}
+    # the keys each tuned law does not search, with why (the same for every seed)
+    out["fixed"] = {
+        c: entry.get("fixed", {})
+        for summary in tunings.values()
+        for c, entry in summary["controllers"].items()
+    }
 
     # 2. validate every (controller, seed) on fresh draws; keep each controller's best seed
     from ..tune.engine import tuned_entry

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..results import write_json_atomic
+from ..tune.space import fixed_text
 from .spec import StudySpec
 
 SCHEMA = "nnrobust-study-report/1"
@@ -106,6 +107,7 @@ def _controller_entry(spec: StudySpec, case: dict, c: str) -> dict:
             "seed_spread": [min(medians), max(medians)] if medians else None,
             "seed_median": float(np.median(medians)) if medians else None,
             "at_bound": kept["at_bound"] if kept else None,
+            "fixed": case.get("fixed", {}).get(c, {}),
         },
         "fixed": c in spec.fixed,
         "validation": {
@@ -348,7 +350,7 @@ def write_html(report: dict, folder: Path, figures: dict[str, str]) -> Path:
             parts.append(f"<p><b>{e(c)}: no setting to validate.</b> {e(reason)}</p>")
         parts.append(
             "<h3>Kept settings</h3><table><tr><th>controller</th><th>kept seed</th><th>setting</th>"
-            "<th>seeds' validation medians [mm]</th><th>on a bound</th></tr>"
+            "<th>seeds' validation medians [mm]</th><th>on a bound</th><th>not searched, and why</th></tr>"
         )
         for c, entry in case["controllers"].items():
             tuned = entry["tuned"] or {}
@@ -365,10 +367,11 @@ def write_html(report: dict, folder: Path, figures: dict[str, str]) -> Path:
                 )
                 or "-"
             )
+            held = "; ".join(fixed_text((tuned.get("fixed") or {}).items())) or "-"
             parts.append(
                 f"<tr><td>{e(c)}</td><td>{e(_cell(tuned.get('kept_seed')))}</td>"
                 f"<td>{e(setting or ('its own settings (tune = false)' if entry['fixed'] else '-'))}</td>"
-                f"<td>{e(medians or '-')}</td><td>{e(bound)}</td></tr>"
+                f"<td>{e(medians or '-')}</td><td>{e(bound)}</td><td>{e(held)}</td></tr>"
             )
         parts.append("</table>")
         for c, entry in case["controllers"].items():

@@ -839,6 +839,7 @@ def _summary(spec, sweep, controllers, client, sweep_future, base_future) -> dic
         entry: dict = {
             "simulations": len(c.rows) * spec.train_samples,
             "space": c.space.to_dict(),
+            "fixed": dict(c.space.fixed),
             "pareto": [
                 {"params": r["params"], "search": r["search"], "train": r["train"]}
                 for r in _pareto([r for r in c.rows if r["phase"] == "all"])

@@ -76,6 +76,8 @@ class Param:
         low_reason, high_reason: why a bound is physical (never widened), or "".
         weak: for a robust term's knob, the end (``low`` or ``high``) at which the term does least;
             "" for the gains.
+        range_low, range_high: the values the law accepts (a registered law's declared range):
+            a bound is never widened past them, and one on them is physical.
 
     """
 
@@ -86,6 +88,16 @@ class Param:
     low_reason: str = ""
     high_reason: str = ""
     weak: str = ""
+    range_low: float = 0.0
+    range_high: float = math.inf
+
+    def reason(self, side: str) -> str:
+        """Why the bound on ``side`` is physical (never widened), or ""."""
+        if side == "low":
+            end = self.low <= self.range_low
+            return self.low_reason or (f"the law's range ends at {self.low:g}" if end else "")
+        end = self.high >= self.range_high
+        return self.high_reason or (f"the law's range ends at {self.high:g}" if end else "")
 
     def position(self, value: float) -> float:
         """Where value sits in [low, high], 0 to 1 on the log scale."""
@@ -101,6 +113,7 @@ class SearchSpace:
     task_inertia: float = 1.0  # lambda [kg] (the PD's gains)
     custom: bool = False  # a user's class: every coordinate is a controller.params key
     eq9: bool = True  # its gains are eq. (9)'s Kp, Kv (else the PD's pd_Kp, pd_Kd)
+    fixed: tuple[tuple[str, str], ...] = ()  # (key, why) of each key of the law not searched
 
     def param(self, name: str) -> Param:
         """The coordinate called ``name``."""
@@ -143,9 +156,9 @@ class SearchSpace:
         for p in self.params:
             pos = p.position(values[p.name])
             if pos < EDGE:
-                out.append({"param": p.name, "side": "low", "bound": p.low, "physical": p.low_reason})
+                out.append({"param": p.name, "side": "low", "bound": p.low, "physical": p.reason("low")})
             elif pos > 1 - EDGE:
-                out.append({"param": p.name, "side": "high", "bound": p.high, "physical": p.high_reason})
+                out.append({"param": p.name, "side": "high", "bound": p.high, "physical": p.reason("high")})
         return out
 
     def widened(self, values: dict[str, float], skip=None) -> tuple[SearchSpace, list[dict]]:
@@ -155,11 +168,14 @@ class SearchSpace:
         params, moved = [], []
         for p in self.params:
             pos = p.position(values[p.name])
-            side = "low" if pos < EDGE and not p.low_reason else ""
-            side = "high" if pos > 1 - EDGE and not p.high_reason else side
+            side = "low" if pos < EDGE and not p.reason("low") else ""
+            side = "high" if pos > 1 - EDGE and not p.reason("high") else side
             if side and not (skip and skip(p.name, side)):
                 old = p.low if side == "low" else p.high
-                p = replace(p, low=p.low / 10) if side == "low" else replace(p, high=p.high * 10)
+                if side == "low":
+                    p = replace(p, low=max(p.low / 10, p.range_low))
+                else:
+                    p = replace(p, high=min(p.high * 10, p.range_high))
                 moved.append(
                     {"param": p.name, "side": side, "old": old, "bound": p.low if side == "low" else p.high}
                 )
@@ -173,11 +189,17 @@ class SearchSpace:
                 "low": p.low,
                 "high": p.high,
                 "unit": p.unit,
-                "low_reason": p.low_reason,
-                "high_reason": p.high_reason,
+                "low_reason": p.reason("low"),
+                "high_reason": p.reason("high"),
             }
             for p in self.params
         }
+
+    def searched_keys(self) -> frozenset[str]:
+        """The configuration keys a setting of this space sets (``controller.Kp`` for the
+        bandwidth, ``nn.sigma`` for the leakage rate, ...).
+        """
+        return frozenset(self.overrides({p.name: math.sqrt(p.low * p.high) for p in self.params}))
 
 
 def arm_scales(setup) -> dict[str, float]:
@@ -232,9 +254,11 @@ def search_space(controller: str, scales: dict[str, float]) -> SearchSpace:
                 Param(
                     f"controller.params.{p.name}", float(low), float(high), p.unit,
                     low_reason=p.low_reason, high_reason=p.high_reason, weak=p.weak,
+                    range_low=max(p.low, 0.0), range_high=p.high,
                 )
             )  # fmt: skip
-        return SearchSpace(controller, tuple(params), custom=True)
+        space = SearchSpace(controller, tuple(params), custom=True)
+        return replace(space, fixed=_fixed(controller, space))
     T = scales["period"]
     w_low, w_high = bandwidth_range(scales)
     sampling = f"sampling: w (1/2 + delay) T = 1, {w_high:.4g} rad/s"
@@ -252,7 +276,40 @@ def search_space(controller: str, scales: dict[str, float]) -> SearchSpace:
         )
     if kind.search is not None:  # its robust term's coordinates, as its module declares them
         params += kind.search(scales)
-    return SearchSpace(controller, tuple(params), scales["task_inertia"], eq9=kind.eq9)
+    space = SearchSpace(controller, tuple(params), scales["task_inertia"], eq9=kind.eq9)
+    return replace(space, fixed=_fixed(controller, space))
+
+
+def _fixed(controller: str, space: SearchSpace) -> tuple[tuple[str, str], ...]:
+    """(key, why) of every key the shipped law ``controller`` reads that ``space`` does not
+    search: its own keys (:func:`own_keys`) and the keys every shipped law shares (the
+    pseudo-inverse's), each with its declaration's :attr:`~nnrobust.controllers.registry.LawParam.
+    fixed_reason` ("" where none is declared: tests/test_tune.py fails on one).
+    """
+    from ..controllers.registry import SHARED_KEYS, declared_key, registered_law
+
+    keys, _ = own_keys(controller)
+    shared = [p.name for s in SHARED_KEYS if s.readers is not None for p in s.params]
+    searched = space.searched_keys()
+    law = registered_law(controller)
+    out = []
+    for key in [*sorted(keys), *shared]:
+        if key in searched:
+            continue
+        if law is not None and key.startswith("controller.params."):
+            declared = law.param(key.removeprefix("controller.params."))
+        else:
+            declared = declared_key(key)
+        out.append((key, declared.fixed_reason if declared is not None else ""))
+    return tuple(out)
+
+
+def fixed_text(fixed) -> list[str]:
+    """The held keys as lines, those of one reason together: ``why: key, key``."""
+    by_reason: dict[str, list[str]] = {}
+    for key, why in fixed:
+        by_reason.setdefault(why or "no reason declared", []).append(key)
+    return [f"{why}: {', '.join(keys)}" for why, keys in by_reason.items()]
 
 
 def custom_space(name: str, cls: type) -> SearchSpace:
@@ -287,4 +344,23 @@ def custom_space(name: str, cls: type) -> SearchSpace:
             )
         unit = str(bounds[2]) if len(bounds) == 3 else "-"
         params.append(Param(f"controller.params.{param}", float(bounds[0]), float(bounds[1]), unit))
-    return SearchSpace(name, tuple(params), custom=True)
+    fixed = tuple(
+        (f"controller.params.{param}", f"not in {cls.__name__}.search_space: its author's choice")
+        for param in _constructor_params(cls)
+        if param not in declared
+    )
+    return SearchSpace(name, tuple(params), custom=True, fixed=fixed)
+
+
+def _constructor_params(cls: type) -> list[str]:
+    """The named parameters of ``cls(context, ...)`` after the context."""
+    import inspect
+
+    try:
+        signature = inspect.signature(cls)
+    except (TypeError, ValueError):
+        return []
+    named = [
+        p.name for p in signature.parameters.values() if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)
+    ]
+    return named[1:]  # after the context

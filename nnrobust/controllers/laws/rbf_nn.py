@@ -112,6 +112,9 @@ def _null_gain(scales: dict) -> tuple[float, float]:
     return 0.1, 1.0 / scales["period"]
 
 
+BASIS = "the network's structure, the experiment's (the same defaults as the NN compensator's, nn.*)"
+"""Why the tuner holds the basis' parameters: the network's structure, not a gain."""
+
 _PARAMS = (
     LawParam(
         "bandwidth", math.sqrt(10.0), "rad/s", "ω: K_p = ω² I", 1e-6, 1e6, search=bandwidth_range,
@@ -128,12 +131,20 @@ _PARAMS = (
     LawParam("F", 30.0, "-", "adaptation gain", 0.0, 1e6, search=(1e-2, 1e4), weak="low"),
     LawParam("kappa", 0.1, "-", "e-modification κ", 0.0, 1e6, search=(1e-4, 10.0), weak="high"),
     LawParam("k_z", 1.0, "-", "robustifying gain k_z", 0.0, 1e6, search=(1e-4, 10.0), weak="low"),
-    LawParam("W_B", 1.0, "m/s^2", "bound on the ideal weights' norm in the robustifying term", 0.0, 1e6),
+    LawParam(
+        "W_B", 1.0, "m/s^2", "bound on the ideal weights' norm in the robustifying term", 0.0, 1e6,
+        fixed="the theory's prior bound; the robustifying term's level k_z (|W| + W_B) is searched by k_z",
+    ),
     LawParam("basis_input", "joint", "-", "s = [q, q'] or [e, e']", choices=("joint", "error")),
-    LawParam("centers", 5, "-", "Gaussian centres per input coordinate", 1.0, 1000.0, integer=True),
-    LawParam("width", 1.0, "-", "Gaussian width as a multiple of the centre spacing", 1e-9, 1e9),
-    LawParam("velocity_range", 3.0, "rad/s", "q' centres span ±velocity_range", 1e-9, 1e9),
-    LawParam("error_range", (0.05, 0.5), "m, m/s", "e and e' centres span ±error_range", 1e-9, 1e9, size="2"),
+    LawParam(
+        "centers", 5, "-", "Gaussian centres per input coordinate", 1.0, 1000.0, integer=True, fixed=BASIS
+    ),
+    LawParam("width", 1.0, "-", "Gaussian width as a multiple of the centre spacing", 1e-9, 1e9, fixed=BASIS),
+    LawParam("velocity_range", 3.0, "rad/s", "q' centres span ±velocity_range", 1e-9, 1e9, fixed=BASIS),
+    LawParam(
+        "error_range", (0.05, 0.5), "m, m/s", "e and e' centres span ±error_range", 1e-9, 1e9, size="2",
+        fixed=BASIS,
+    ),
 )  # fmt: skip
 
 LAW = register_law(

@@ -263,6 +263,7 @@ _PARAMS = (
         0.0,
         1e6,
         "n",
+        fixed="unset: sized by K_D_step, which is searched (a diagonal K_D is the experiment's alternative)",
     ),
     LawParam(
         "K_D_step",
@@ -272,6 +273,7 @@ _PARAMS = (
         1e-6,
         1.0,
         search=(0.01, 1.0),
+        high_reason="sampling: T λ(M̂⁻¹ K_D) = 1, beyond which the law refuses a K_D",
     ),
     LawParam(
         "gamma",
@@ -287,8 +289,26 @@ _PARAMS = (
     LawParam(
         "leakage", 0.0, "1/s", "σ-modification towards θ̂(0)", 0.0, 1e3, search=(1e-3, 10.0), weak="high"
     ),
-    LawParam("null_damping", 1.0, "1/s", "k_n: null-space velocity damping inside q'_r", 0.0, 1e3),
-    LawParam("criterion_gain", 0.0, "-", "k_h: ascent of the self-motion criterion in q'_r", 0.0, 1e3),
+    LawParam(
+        "null_damping",
+        1.0,
+        "-",
+        "k_n: null-space velocity damping inside q'_r (the null-space part of s is (1 + k_n) N q', "
+        "its sampled step K_D_step (1 + k_n))",
+        0.0,
+        1e3,
+        search=(1e-3, 1e2),
+        low_reason="1 + k_n within 0.1 % of k_n = 0",
+    ),
+    LawParam(
+        "criterion_gain",
+        0.0,
+        "-",
+        "k_h: ascent of the self-motion criterion in q'_r",
+        0.0,
+        1e3,
+        fixed="the subtask's weight, the experiment's: no tuning objective scores the self-motion criterion",
+    ),
     LawParam("regressor", "exact", "-", "C(q, q') q'_r, or C(q, q'_r) q'_r", choices=("exact", "approx")),
     LawParam("project", True, "-", "keep θ̂ physically consistent (Pinocchio), or in its box (closed form)"),
     LawParam(
@@ -298,6 +318,7 @@ _PARAMS = (
         "closed form: project keeps each of θ̂'s β, p, γ within this factor of θ̂(0)",
         1.0,
         1e6,
+        fixed="the experiment's prior on the parameters, as its nominal model is (not a gain)",
     ),
 )
 
