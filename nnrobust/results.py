@@ -53,6 +53,8 @@ METRIC_UNITS = {
     "simulated_seconds": "s",
     "wall_seconds": "s",
     "realtime_factor": "-",
+    "max_inference_time": "s",
+    "inference_over_period": "-",
     "max_joint_speed": "rad/s (m/s for a prismatic joint)",
     "plant_step": "s",
     "friction_events": "count",
@@ -345,6 +347,11 @@ class Result:
             out["rms_orientation_error"] = rms(turn**2)
             out["rms_orientation_error_after_2s"] = rms(turn[late] ** 2)
             out["max_orientation_error"] = float(turn.max()) if turn.size else float("nan")
+        inference = self.signals.get("inference_time")  # a learned policy's (controllers/laws/policy.py)
+        if inference is not None and self.t.size > 1:
+            seconds = np.asarray(inference, dtype=float)
+            out["max_inference_time"] = float(np.nanmax(seconds)) if np.isfinite(seconds).any() else None
+            out["inference_over_period"] = float(np.mean(seconds > self.t[1] - self.t[0]))
         if self.message:
             out["message"] = self.message
         units = (

@@ -201,6 +201,13 @@ def run_warnings(metrics: dict, joint_names: list[str], units: list[str]) -> lis
             f"{metrics['speed_limit_fraction'] * 100:.3g} % of the steps. A real arm's drive would fault "
             f"or cut the torque{hint}"
         )
+    late = metrics.get("inference_over_period")
+    if late:
+        out.append(
+            f"deadline missed: the policy's inference took longer than the control period in "
+            f"{100 * late:.3g} % of the steps (up to {1e6 * metrics['max_inference_time']:.3g} µs); a real "
+            "controller would miss those deadlines (the simulation waited for it)"
+        )
     lost = metrics.get("tracking_error_ratio")
     if lost is not None and lost > TRACKING_LOST:
         out.append(

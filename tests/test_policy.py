@@ -176,3 +176,26 @@ def test_a_policy_entry_runs_in_a_sweep_on_the_same_plants(tmp_path):
     digest = hashlib.sha256((tmp_path / "zero.onnx").read_bytes()).hexdigest()
     recorded = (tmp_path / "out" / "sweep.toml").read_text()
     assert f"# the policy file of controller zero-residual: {tmp_path / 'zero.onnx'} {digest}" in recorded
+
+
+@needs_compiled
+def test_an_inference_longer_than_the_period_is_a_verdict(tmp_path, monkeypatch):
+    """Each step's inference time is recorded; a step that took longer than the period is
+    counted and warned about (the run itself goes on: the simulation waits)."""
+    from nnrobust.controllers.laws import policy
+
+    file = linear_policy(tmp_path / "zero.onnx", PAPER.size, 3)
+    calls = {"n": 0}
+    real = policy.OnnxPolicy.__call__
+
+    def slow_every_tenth(self, obs, t):  # the measured time of every tenth call: 2 periods
+        a = real(self, obs, t)
+        calls["n"] += 1
+        self.seconds = 2e-3 if calls["n"] % 10 == 0 else 1e-6
+        return a
+
+    monkeypatch.setattr(policy.OnnxPolicy, "__call__", slow_every_tenth)
+    metrics = run_experiment(_config("paper-ellipse", file, duration=0.2)).metrics()
+    assert metrics["inference_over_period"] == pytest.approx(0.1)
+    assert metrics["max_inference_time"] == 2e-3
+    assert any(w.startswith("deadline missed") and "10 % of the steps" in w for w in metrics["warnings"])

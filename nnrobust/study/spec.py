@@ -30,7 +30,7 @@ from pathlib import Path
 
 from ..config import parse_toml, read_text_file
 from ..exceptions import ConfigError
-from ..sweep.spec import NAME, SweepSpec, parse_sweep
+from ..sweep.spec import NAME, SweepSpec, parse_sweep, resolve_entry_files
 
 KEYS = ("name", "description", "cases", "controllers", "require", "seed", "set", "vary", "budgets")
 
@@ -238,7 +238,7 @@ def parse_study(data: dict, path: Path) -> StudySpec:
         },
         where,
     )
-    _resolve_classes(sweep.entries, path)
+    resolve_entry_files(sweep.entries, path.parent)  # class and policy files: from the study's folder
     description = data.get("description", "")
     if not isinstance(description, str):
         raise ConfigError(f"{where}: description", "expected a string")
@@ -256,18 +256,6 @@ def parse_study(data: dict, path: Path) -> StudySpec:
         _budgets(data.get("budgets", {}), where),
         description,
     )
-
-
-def _resolve_classes(entries: dict, path: Path) -> None:
-    """A controller class file is read from the study file's folder."""
-    from ..user_code import class_file
-
-    for entry in entries.values():
-        if "class" not in entry:
-            continue
-        file, cls = class_file(entry["class"]), entry["class"].rpartition(":")[2]
-        if file is not None and not file.is_absolute():
-            entry["class"] = f"{(path.parent / file).resolve()}:{cls}"
 
 
 def load_study(path: str | Path) -> StudySpec:

@@ -365,19 +365,26 @@ def load_sweep(path: str | Path) -> SweepSpec:
     base = Path(spec.base)
     if base.suffix == ".toml" and not base.is_absolute():
         spec.base = str((path.parent / base).resolve())
+
+    resolve_entry_files(spec.entries, path.parent)
+    return spec
+
+
+def resolve_entry_files(entries: dict, folder: Path) -> None:
+    """A controllers entry's class file and policy file, given by relative paths, are read from
+    ``folder`` (the sweep or study file's).
+    """
     from ..user_code import class_file
 
-    for entry in spec.entries.values():  # a policy's ONNX file is read from the sweep file's folder
+    for entry in entries.values():
         policy = policy_file(entry.get("kind"), entry.get("params"))
         if policy is not None and not Path(policy).is_absolute():
-            entry["params"]["file"] = str((path.parent / policy).resolve())
-    for entry in spec.entries.values():  # a controller file is read from the sweep file's folder
+            entry["params"]["file"] = str((folder / policy).resolve())
         if "class" not in entry:
             continue
         where, name = class_file(entry["class"]), entry["class"].rpartition(":")[2]
         if where is not None and not where.is_absolute():
-            entry["class"] = f"{(path.parent / where).resolve()}:{name}"
-    return spec
+            entry["class"] = f"{(folder / where).resolve()}:{name}"
 
 
 def base_path(spec: SweepSpec) -> Path:
