@@ -199,3 +199,23 @@ def test_an_inference_longer_than_the_period_is_a_verdict(tmp_path, monkeypatch)
     assert metrics["inference_over_period"] == pytest.approx(0.1)
     assert metrics["max_inference_time"] == 2e-3
     assert any(w.startswith("deadline missed") and "10 % of the steps" in w for w in metrics["warnings"])
+
+
+@needs_compiled
+def test_tune_searches_a_residual_policys_scale(tmp_path):
+    """``nnrobust tune`` on an experiment whose law is a policy searches residual_scale in its
+    declared bounds and holds the file, the action and the base law, saying why."""
+    pytest.importorskip("optuna")
+    import json
+
+    linear_policy(tmp_path / "p.onnx", PAPER.size, 3, _weights(PAPER), dtype=np.float64)
+    (tmp_path / "exp.toml").write_text(
+        'base = "paper-ellipse"\n[controller]\nkind = "policy"\n[controller.params]\nfile = "p.onnx"\n'
+        'action = "residual"\nbase = "no-u0"\n[simulation]\nduration = 2.5\n'
+    )
+    out = tmp_path / "out"
+    argv = ["tune", str(tmp_path / "exp.toml"), "--controllers", "policy", "--budget", "4", "--workers", "1"]
+    assert main([*argv, "--out", str(out)]) == 0
+    best = json.loads((out / "summary.json").read_text())["controllers"]["policy"]["best"]
+    assert set(best["params"]) == {"controller.params.residual_scale"}
+    assert 0.01 <= best["params"]["controller.params.residual_scale"] <= 1.0
