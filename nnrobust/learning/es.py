@@ -17,6 +17,7 @@ import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -153,23 +154,18 @@ def train(
         if isinstance(value, bool) or not isinstance(value, int) or value < low:
             raise ConfigError(name, f"expected an integer >= {low}, got {value!r}")
     start = time.perf_counter()
-    vec = ArmVectorEnv(
-        experiment,
-        population * episodes,
-        action=action,
-        vary=vary,
-        seed=seed,
-        controller=controller,
-        residual_scale=residual_scale,
-        duration=duration,
-        verdicts=False,
-        threads=threads,
-    )
+    settings: dict[str, Any] = {
+        "action": action,
+        "vary": vary,
+        "controller": controller,
+        "duration": duration,
+        "residual_scale": residual_scale,
+        "verdicts": False,
+        "threads": threads,
+    }
+    vec = ArmVectorEnv(experiment, population * episodes, seed=seed, **settings)
+    stats = ArmVectorEnv(experiment, episodes, seed=seed + 1, **settings)  # mu and sigma: other plants
     n, d = vec.episodes.n, vec.episodes.layout.size
-    stats = ArmVectorEnv(
-        experiment, episodes, action=action, vary=vary, seed=seed + 1, controller=controller,
-        residual_scale=residual_scale, duration=duration, verdicts=False, threads=threads,
-    )  # fmt: skip
     mean, scale = observation_statistics(stats, episodes)
     net = Network(d, n, hidden, mean, scale)
     es = cma.CMAEvolutionStrategy(
