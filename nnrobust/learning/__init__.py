@@ -3,7 +3,7 @@ sees, a Gymnasium environment for any experiment, and its vector form on the com
 threads. The environment needs the ``learning`` extra (Gymnasium).
 """
 
-from .observation import OBSERVATION_VERSION, ObservationLayout, observation
+from ..controllers.observation import OBSERVATION_VERSION, ObservationLayout, observation
 
 __all__ = ["OBSERVATION_VERSION", "ObservationLayout", "observation"]
 

@@ -17,8 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..controllers.observation import ObservationLayout
 from ..exceptions import ConfigError, NNRobustError
-from .observation import ObservationLayout
 
 try:
     import gymnasium as gym

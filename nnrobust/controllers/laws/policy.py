@@ -1,6 +1,6 @@
 """A learned policy as a control law (``controller.kind = "policy"``; docs/learning.md).
 
-At each control instant the policy maps the observation of :mod:`nnrobust.learning.observation`
+At each control instant the policy maps the observation of :mod:`nnrobust.controllers.observation`
 (the measured q, q', the desired motion and the task error on the nominal model) to an action
 a ∈ [-1, 1]^n, exactly as the learning environment gives it:
 
@@ -143,7 +143,7 @@ class PolicyLaw(Controller):
         base: str = "pd",
         residual_scale: float = 0.1,
     ):
-        from ...learning.observation import ObservationLayout
+        from ..observation import ObservationLayout
 
         if file is None:
             raise ConfigError("controller.params.file", "missing: the policy's ONNX file")
@@ -180,7 +180,7 @@ class PolicyLaw(Controller):
         self, t: float, q: np.ndarray, v: np.ndarray, z: np.ndarray, period: float = 0.0
     ) -> ControlOutput:
         """The command from the observation at t (torque or residual mode)."""
-        from ...learning.observation import observation
+        from ..observation import observation
 
         a = self.policy(observation(self.nominal, self.trajectory, t, q, v), t)
         tau = np.clip(a, -1.0, 1.0) * self.scale
