@@ -29,6 +29,7 @@ DOCUMENTS = (
     "docs/robustness.md",
     "docs/engines.md",
     "docs/falsification.md",
+    "docs/learning.md",
 )
 TABLE = re.compile(r"(<!-- table: (?P<name>[\w-]+) -->\n)(?P<body>.*?)(<!-- /table -->)", re.S)
 
@@ -485,6 +486,46 @@ def _study(name: str):
     return render
 
 
+def example_study() -> str:
+    """examples/study.toml's report (docs/data/example_study.json, report.json with the repository's
+    path taken out): each controller's validation, certificate, worst plant and MuJoCo figures."""
+    report = _data("example_study")
+    ((case, entry),) = report["cases"].items()
+    rows = [{"controller": name, **e} for name, e in entry["controllers"].items()]
+    require = ", ".join(f"`{r}`" for r in report["require"])
+    seeds = report["budgets"]["seeds"]
+
+    def stat(e, key="rms_error_after_2s", which="median", engine=None):
+        block = e["engines"][engine] if engine else e["statistics"]
+        value = block[key][which]
+        return "–" if value is None else f"{1e3 * value:.3g}"
+
+    table = _markdown(
+        [
+            ("controller", "l", _text("controller")),
+            (
+                "settings",
+                "l",
+                lambda e: "fixed (trained offline)" if e.get("fixed") else f"tuned, best of {seeds} seeds",
+            ),
+            ("median error [mm]", "r", lambda e: stat(e)),
+            ("p95 [mm]", "r", lambda e: stat(e, which="p95")),
+            ("P(fail) ≤", "r", lambda e: f"{e['certificates'][0]['p_upper']:.3g}"),
+            ("worst plant [mm]", "r", lambda e: f"{1e3 * e['worst']['metrics']['rms_error_after_2s']:.3g}"),
+            ("least margin", "r", lambda e: f"{e['worst']['margin']:.3g}"),
+            ("MuJoCo median [mm]", "r", lambda e: stat(e, engine="mujoco")),
+        ],
+        rows,
+    )
+    n = rows[0]["certificates"][0]["N"]
+    return table + (
+        f"\n{case}, {n} certification draws of the box per controller; errors are RMS over t ≥ 2 s; "
+        f"P(fail) is the certificate's upper bound for {require} at 95 % confidence; the worst plant "
+        f"and the margin are the falsifier's ({report['budgets']['falsify']} simulations). Made by "
+        "`nnrobust study examples/study.toml --out out/study` (report.json).\n"
+    )
+
+
 def _gap_cell(variant: str):
     """A variant's RMS error t >= 2 s [mm] and, for MuJoCo, its change from Pinocchio's in %."""
 
@@ -768,6 +809,7 @@ RENDERERS = {
     "tuned-headline": tuned_headline,
     "tuned-settings": tuned_settings,
     "tuned-verdicts": tuned_verdicts,
+    "example-study": example_study,
 }
 
 

@@ -34,6 +34,7 @@ OTHERS = [
     "engine_gap",
     "adaptive_step",
     "tune_noisy_case_b",
+    "example_study",
 ]
 """Data files with a re-run test of their own below."""
 
@@ -379,6 +380,15 @@ def _worst_seed(case, controller, sensing="noisy"):
 
 
 PF = "falsify_panda_factors"
+
+
+def _example_median(controller: str):
+    """A controller's median RMS error (t >= 2 s) in the example study's report [m]."""
+    return lambda d: d["cases"]["paper-ellipse-noisy"]["controllers"][controller]["statistics"][
+        "rms_error_after_2s"
+    ]["median"]
+
+
 PT = "falsify_panda_tuned_noisy"
 
 QUOTED_FIGURES: list[tuple] = [
@@ -1108,6 +1118,22 @@ QUOTED_FIGURES: list[tuple] = [
         _ratio_to(PANDA_ARM, "nn", "sliding-mode", "ideal"),
         1.0,
     ),
+    (
+        "README.md",
+        r"median errors of ([\d.]+) mm \(a residual",
+        "example_study",
+        _example_median("learned-residual"),
+        1e3,
+    ),
+    (
+        "README.md",
+        r"and ([\d.]+) mm\n\(a torque policy\)",
+        "example_study",
+        _example_median("learned-torque"),
+        1e3,
+    ),
+    ("README.md", r"against the NN's ([\d.]+) mm", "example_study", _example_median("nn"), 1e3),
+    ("README.md", r"\(`examples/train_policy.py`, (\d+) simulated seconds", "example_study", None, 1.0),
 ]
 """Figures quoted in prose, each checked against its data file (within half a unit of the last
 printed digit, or 2 %)."""
@@ -1375,3 +1401,25 @@ def test_the_engine_gap_claims_of_the_docs_hold_in_its_data():
 
     assert len(ranking("pinocchio")) == 6 and ranking("mujoco") == ranking("pinocchio")
     assert ranking("implicitfast") != ranking("pinocchio")
+
+
+def test_the_example_studys_learned_worst_plant_reruns_and_the_budget_is_the_records():
+    """The learned residual's worst plant, rerun from its printed command, gives its metric; the
+    simulated seconds the README quotes are the shipped policies' training records'."""
+    import re
+    import shlex
+
+    from nnrobust.experiment import run_experiment
+
+    entry = json.loads((render_tables.DATA / "example_study.json").read_text())["cases"][
+        "paper-ellipse-noisy"
+    ]
+    worst = entry["controllers"]["learned-residual"]["worst"]
+    command = worst["command"].replace("examples/policies/", f"{ROOT}/examples/policies/")
+    assert shlex.split(command)[:2] == ["nnrobust", "run"]
+    value = run_experiment(_worst_config(command)).metrics()["rms_error_after_2s"]
+    assert value == pytest.approx(worst["metrics"]["rms_error_after_2s"], rel=1e-6)
+    quoted = int(re.search(r"(\d+) simulated seconds each", (ROOT / "README.md").read_text()).group(1))
+    for name in ("residual", "torque"):
+        record = json.loads((ROOT / "examples" / "policies" / f"{name}.onnx.json").read_text())
+        assert record["simulated_seconds"] == quoted

@@ -35,7 +35,11 @@ def _cut(text: str) -> str:
     return text
 
 
-STUDY = _cut((EXAMPLES / "study.toml").read_text()).replace("custom_controller.py:TaskPD", "laws.py:TaskPD")
+STUDY = (
+    _cut((EXAMPLES / "study.toml").read_text())
+    .replace("custom_controller.py:TaskPD", "laws.py:TaskPD")
+    .replace('file = "policies/', f'file = "{EXAMPLES}/policies/')
+)
 
 
 def _parts(folder: Path) -> list[str]:
