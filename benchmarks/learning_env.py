@@ -10,14 +10,19 @@ For each arm (the paper's, the Panda), in one process, interleaved:
 - ``vector``: ArmVectorEnv(num_envs=envs) stepped with a zero residual (the trivial policy: the
   base law's own command) for the same number of periods, episode ends and restarts included;
 - ``single``: ArmEnv stepped likewise, one episode; its time per step minus the compiled loop's
-  time per step (batch on one thread) is the environment's overhead per step.
+  time per step (batch on one thread) is the environment's overhead per step;
+- ``policy``: a zero residual ONNX policy on the preset's law as ``controller.kind = "policy"``
+  (the hybrid path: the base law compiled, the inference in Python) against the base law's own
+  compiled run: the policy's time per step beyond the base law's step and its own inference.
 The base law is each preset's own. Ratios are within one run of this script.
 """
 
 from __future__ import annotations
 
 import argparse
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -65,6 +70,53 @@ def single_step(preset: str, seconds: float) -> float:
     return (time.perf_counter() - start) / steps
 
 
+def policy_overhead(preset: str, seconds: float, folder: Path) -> dict:
+    """(µs per step) of a zero residual policy's run beyond its base law's compiled run, less the
+    inference time it recorded; and the inference's mean CPU time."""
+    from nnrobust.experiment import run_experiment
+    from nnrobust.learning import ObservationLayout
+
+    base = load_preset(preset).replace(simulation={"duration": seconds})
+    setup = build(base)
+    layout = ObservationLayout(setup.robot.nq, setup.robot.m)
+    file = zero_policy(folder / f"{preset}.onnx", layout.size, layout.n)
+    own = run_experiment(base)
+    mine = run_experiment(
+        base.replace(
+            controller={
+                "kind": "policy",
+                "params": {"file": str(file), "action": "residual", "base": base.controller.kind},
+            }
+        )
+    )
+    steps = own.t.size
+    inference = float(np.nansum(mine.signals["inference_time"]))
+    return {
+        "base_step_us": 1e6 * own.wall_seconds / steps,
+        "policy_step_us": 1e6 * mine.wall_seconds / steps,
+        "inference_us": 1e6 * inference / steps,
+        "overhead_us": 1e6 * (mine.wall_seconds - own.wall_seconds - inference) / steps,
+    }
+
+
+def zero_policy(path: Path, d: int, n: int) -> Path:
+    """a = tanh(obs 0 + 0): the trivial policy, as an ONNX file."""
+    import onnx
+    from onnx import TensorProto, helper, numpy_helper
+
+    graph = helper.make_graph(
+        [helper.make_node("MatMul", ["obs", "W"], ["h"]), helper.make_node("Tanh", ["h"], ["action"])],
+        "zero",
+        [helper.make_tensor_value_info("obs", TensorProto.FLOAT, ["batch", d])],
+        [helper.make_tensor_value_info("action", TensorProto.FLOAT, ["batch", n])],
+        [numpy_helper.from_array(np.zeros((d, n), np.float32), "W")],
+    )
+    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)])
+    model.ir_version = 8
+    onnx.save(model, str(path))
+    return path
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--json", help="write the results as JSON to this file")
@@ -79,6 +131,8 @@ def main() -> None:
         vector = vector_rate(preset, args.envs, args.seconds)
         loop_step = 1.0 / batch_rate(preset, 4, args.seconds, 1)
         single = single_step(preset, args.seconds)
+        with tempfile.TemporaryDirectory() as folder:
+            policy = policy_overhead(preset, args.seconds, Path(folder))
         rows.append(
             {
                 "preset": preset,
@@ -90,6 +144,7 @@ def main() -> None:
                 "loop_step_us": 1e6 * loop_step,
                 "single_env_step_us": 1e6 * single,
                 "single_env_overhead_us": 1e6 * (single - loop_step),
+                "policy": policy,
             }
         )
     print(f"{'arm':15s} {'batch steps/s':>14s} {'vector steps/s':>15s} {'ratio':>6s} "
@@ -99,6 +154,13 @@ def main() -> None:
             f"{r['preset']:15s} {r['batch_steps_per_second']:14.0f} {r['vector_steps_per_second']:15.0f} "
             f"{r['vector_over_batch']:6.2f} {r['loop_step_us']:8.1f} {r['single_env_step_us']:8.1f} "
             f"{r['single_env_overhead_us']:12.1f}"
+        )
+    print(f"\n{'arm':15s} {'law µs':>8s} {'policy µs':>10s} {'inference µs':>13s} {'overhead µs':>12s}")
+    for r in rows:
+        p = r["policy"]
+        print(
+            f"{r['preset']:15s} {p['base_step_us']:8.1f} {p['policy_step_us']:10.1f} "
+            f"{p['inference_us']:13.1f} {p['overhead_us']:12.1f}"
         )
     if args.json:
         write_json_atomic(args.json, {"rows": rows})

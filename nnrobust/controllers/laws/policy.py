@@ -14,8 +14,7 @@ observation ([d] or [batch, d], float32 or float64) and its first output gives a
 [batch, n]); a file whose shapes do not match the arm, that is not a model, or that needs an
 operator onnxruntime cannot run is refused in one line naming the file. The run records the
 file's SHA-256 (config.toml's provenance) and each step's inference time (signal
-``inference_time``: the CPU time of the call on its thread, so that a loaded machine's
-preemption does not count as the network's cost).
+``inference_time``: the call's wall time, as a real-time loop sees it, preemption included).
 
 With the compiled loop available, a run of this law is a compiled run of its base law driven one
 period at a time (``SteppedLoop``): the observation and the base law's command are computed in
@@ -98,19 +97,18 @@ class OnnxPolicy:
         self.input, self.dtype = given.name, types[given.type]
         self.batched = len(given.shape) == 2
         self.output = out.name
-        self.seconds = 0.0  # the last call's inference time: CPU time of this thread, not wall time
-        # (onnxruntime runs on the calling thread with one intra-op thread; a machine's load or
-        # preemption is not the network's cost)
+        self.seconds = 0.0  # the last call's wall time, as a real-time loop would see it (the
+        # thread's CPU time costs a system call of microseconds a step on this kind of machine)
 
     def __call__(self, obs: np.ndarray, t: float) -> np.ndarray:
         """The action at ``t`` (float64, n entries); a NaN or a wrong shape is a ControllerError."""
         x = np.asarray(obs, dtype=self.dtype)
-        start = time.thread_time()
+        start = time.perf_counter()
         try:
             (a,) = self.session.run([self.output], {self.input: x[None, :] if self.batched else x})
         except Exception as err:
             raise ControllerError(f"the policy {self.path} failed at t = {t:g} s: {err}") from err
-        self.seconds = time.thread_time() - start
+        self.seconds = time.perf_counter() - start
         a = np.asarray(a, dtype=float).reshape(-1)
         if a.size != self.n:
             raise ControllerError(
