@@ -380,7 +380,7 @@ def cmd_sweep(args) -> int:
         if args.quiet:
             return
         elapsed = time.monotonic() - checking_since
-        if not checking_shown and elapsed < 1.0:
+        if not checking_shown and (elapsed < 1.0 or done == total):  # quick: nothing to show
             return
         if not checking_shown:
             checking_shown.append(True)

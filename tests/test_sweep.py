@@ -941,3 +941,46 @@ def test_the_command_line_shows_a_long_check_and_an_interrupt_during_it(tmp_path
     assert "sweep tiny: checking the experiments of 1000000 rows before any of them runs" in err
     assert "1000/1000000 rows checked, ETA" in err
     assert "sweep interrupted before any row was written; run the same command again" in err
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGHUP])
+def test_a_stop_signal_to_the_process_group_prints_no_worker_traceback(sig, tmp_path):
+    """Ctrl-C (SIGINT to the terminal's foreground group) or a hang-up reached every dask worker,
+    each of which printed a KeyboardInterrupt traceback (a killed resource tracker a dozen more).
+    The workers never receive them now: the client stops, closes the cluster and says what was
+    kept, in one line; no process of the group is left."""
+    import subprocess
+    import sys
+
+    path = _sweep_file(tmp_path, duration=20.0)
+    command = [sys.executable, "-m", "nnrobust.cli", "sweep", str(path), "--out", str(tmp_path / "out")]
+    child = subprocess.Popen(
+        [*command, "--workers", "2"], stderr=subprocess.PIPE, text=True, start_new_session=True
+    )
+    try:
+        deadline = time.monotonic() + 120
+        header = ""
+        while "rows already done" not in header and time.monotonic() < deadline:
+            header += child.stderr.readline()  # the cluster is up and the rows are running
+        time.sleep(1.0)
+        os.killpg(child.pid, sig)
+        err = header + child.stderr.read()
+        assert child.wait(60) == 130
+    finally:
+        if child.poll() is None:
+            os.killpg(child.pid, signal.SIGKILL)
+    assert "Traceback" not in err and "KeyboardInterrupt" not in err, err
+    assert err.rstrip().endswith("run the same command again to resume"), err
+    deadline = time.monotonic() + 20  # no worker or tracker of the group is left
+    while time.monotonic() < deadline:
+        try:
+            os.killpg(child.pid, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.2)
+    else:
+        raise AssertionError(
+            subprocess.run(
+                ["ps", "-o", "pid,cmd", "-g", str(child.pid)], capture_output=True, text=True
+            ).stdout
+        )

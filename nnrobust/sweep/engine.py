@@ -13,14 +13,16 @@ from __future__ import annotations
 import logging
 import math
 import os
+import signal
 import sys
+import threading
 import time
 from contextlib import contextmanager
 from pathlib import Path
 
 from ..config import ExperimentConfig
 from ..exceptions import ConfigError, NNRobustError
-from ..signals import signals_as_interrupt
+from ..signals import STOP_SIGNALS, check_interrupt, signals_as_interrupt
 from .spec import SweepSpec, base_config, base_values, draw, experiment, study_inputs
 
 RESULTS = "results"
@@ -308,22 +310,70 @@ QUIET_CLUSTER = {
 the dask configuration of a cluster of your own (benchmarks/sweep_throughput.py measures them)."""
 
 
+QUIET_WORKER = "import signal\nsignal.signal(signal.SIGINT, signal.SIG_IGN)\n"
+"""The script each local worker process preloads: it ignores SIGINT. Text, not a module of
+nnrobust: importing the package before the worker registers made each restart slower, enough
+for dask to give up on a worker that user code keeps ending (its lost-worker-timeout)."""
+
+
 def local_cluster(workers: int, **options):
     """A dask LocalCluster of ``workers`` single-threaded worker processes on 127.0.0.1 (its HTTP
     server on a free loopback port), with :data:`QUIET_CLUSTER`'s settings.
+
+    A Ctrl-C or a hang-up sent to the terminal's process group is the client's alone (it stops
+    and closes the cluster); received by the workers, each printed a traceback (and the resource
+    tracker, killed by SIGHUP, a dozen more). The processes started here, and dask's threads that
+    later restart workers, inherit both signals blocked and never receive them (multiprocessing's
+    resource tracker unblocks SIGINT in the thread that starts it, so it is started first); each
+    worker also preloads :data:`QUIET_WORKER`, which ignores SIGINT. A stop signal that arrives
+    while the cluster starts is held (raised inside, it left a half-started cluster and a
+    traceback at exit) and raised once the cluster is up.
     """
+    from multiprocessing import resource_tracker
+
     import dask
     from distributed import LocalCluster
 
-    with dask.config.set(QUIET_CLUSTER):
-        return LocalCluster(
-            n_workers=workers,
-            threads_per_worker=1,
-            processes=True,
-            host="127.0.0.1",
-            dashboard_address=LOOPBACK_HTTP,
-            **options,
-        )
+    main = threading.current_thread() is threading.main_thread()
+    arrived: list[int] = []
+    previous = (
+        {sig: signal.signal(sig, lambda signum, frame: arrived.append(signum)) for sig in STOP_SIGNALS}
+        if main
+        else {}
+    )
+    group = {signal.SIGINT, signal.SIGHUP}
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, group)
+
+    def restore():
+        signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        for sig in dict.fromkeys(arrived):
+            signal.raise_signal(sig)
+
+    try:
+        resource_tracker.ensure_running()
+        signal.pthread_sigmask(signal.SIG_BLOCK, group)
+        with dask.config.set(QUIET_CLUSTER):
+            cluster = LocalCluster(
+                n_workers=workers,
+                threads_per_worker=1,
+                processes=True,
+                host="127.0.0.1",
+                dashboard_address=LOOPBACK_HTTP,
+                preload=[QUIET_WORKER],
+                **options,
+            )
+    except BaseException:
+        restore()
+        raise
+    try:
+        restore()
+        check_interrupt()
+        return cluster
+    except BaseException:
+        cluster.close()
+        raise
 
 
 def checked_local_cluster(workers: int | None):
