@@ -984,3 +984,48 @@ def test_a_stop_signal_to_the_process_group_prints_no_worker_traceback(sig, tmp_
                 ["ps", "-o", "pid,cmd", "-g", str(child.pid)], capture_output=True, text=True
             ).stdout
         )
+
+
+BLOCK_NNROBUST = """
+import sys
+class _NoNnrobust:
+    def find_spec(self, name, path=None, target=None):
+        if name == "nnrobust" or name.startswith("nnrobust."):
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+sys.meta_path.insert(0, _NoNnrobust())
+"""
+"""A worker's preload: nnrobust cannot be imported there (a worker of another environment)."""
+
+
+def test_a_worker_without_nnrobust_is_one_line_naming_it(tmp_path, monkeypatch, capsys):
+    """Round 3: a worker of the user's cluster without nnrobust died on its first task (a
+    traceback in its log) and the sweep waited for a worker that never came."""
+    from distributed import LocalCluster
+
+    from nnrobust.sweep import engine
+
+    path = _sweep_file(tmp_path, duration=0.2)
+    with LocalCluster(
+        n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None,
+        preload=[BLOCK_NNROBUST],
+    ) as cluster:  # fmt: skip
+        address = cluster.scheduler_address
+        start = time.monotonic()
+        assert main(["sweep", str(path), "--out", str(tmp_path / "out"), "--scheduler", address]) == 2
+        assert time.monotonic() - start < 60
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and err[0].startswith(f"nnrobust: error: --scheduler {address}: worker tcp://")
+        assert (
+            "cannot import nnrobust: ModuleNotFoundError: No module named 'nnrobust'; install nnrobust"
+            in err[0]
+        )
+    with LocalCluster(
+        n_workers=1, threads_per_worker=1, processes=False, protocol="tcp://", host="127.0.0.1",
+        dashboard_address=None,
+    ) as cluster:  # fmt: skip
+        monkeypatch.setattr(engine, "WORKER_PROBE", "'0.0.1'")  # a worker of another version
+        assert (
+            main(["sweep", str(path), "--out", str(tmp_path / "v"), "--scheduler", cluster.scheduler_address])
+            == 2
+        )
+        assert "has nnrobust 0.0.1, this command" in capsys.readouterr().err

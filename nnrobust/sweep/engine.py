@@ -392,6 +392,34 @@ def checked_local_cluster(workers: int | None):
     return local_cluster(workers or os.cpu_count() or 1, silence_logs=logging.CRITICAL)
 
 
+WORKER_PROBE = "__import__('nnrobust').__version__"
+"""What each worker of a cluster of the user's evaluates first: nnrobust's version, which needs
+the package (and what it imports) installed where the worker runs."""
+
+
+def check_workers(client, address: str) -> None:
+    """Every worker of the scheduler at ``address`` imports nnrobust, of this version: a worker
+    without it died on the first task it was sent (the task's pickle names nnrobust's functions)
+    and the command waited for a worker that never came; now one line names the worker and
+    what it lacks. The probe is a builtin's call, which any Python worker can unpickle.
+    """
+    import nnrobust
+
+    answers = client.run(eval, WORKER_PROBE, on_error="return")
+    for worker, answer in sorted(answers.items()):
+        if isinstance(answer, BaseException):
+            hint = f"; install nnrobust {nnrobust.__version__} where the workers run"
+            raise NNRobustError(
+                f"--scheduler {address}: worker {worker} cannot import nnrobust: "
+                f"{type(answer).__name__}: {str(answer)[:200]}{hint * isinstance(answer, ImportError)}"
+            )
+        if answer != nnrobust.__version__:
+            raise NNRobustError(
+                f"--scheduler {address}: worker {worker} has nnrobust {str(answer)[:40]}, this command "
+                f"{nnrobust.__version__}; give the workers the same version (results depend on it)"
+            )
+
+
 @contextmanager
 def _client(workers: int | None, scheduler: str | None):
     """A client of an existing scheduler, or of a LocalCluster on 127.0.0.1 (its HTTP server on a
@@ -403,6 +431,7 @@ def _client(workers: int | None, scheduler: str | None):
     if scheduler:
         client = Client(check_scheduler(scheduler), timeout="20s")
         try:
+            check_workers(client, scheduler)
             yield client
         finally:
             client.close()
