@@ -40,6 +40,8 @@ STUDY = (
     .replace("custom_controller.py:TaskPD", "laws.py:TaskPD")
     .replace('file = "policies/', f'file = "{EXAMPLES}/policies/')
 )
+STUDY_CORE = "".join(line for line in STUDY.splitlines(keepends=True) if "learned-" not in line)
+"""The study without its learned rows (the tests of one stage's behaviour)."""
 
 
 def _parts(folder: Path) -> list[str]:
@@ -62,22 +64,33 @@ def test_the_report_holds_every_stage_for_every_controller(study):
     case = report["cases"]["paper-ellipse-noisy"]
     assert case["stages"] == {s: "finished" for s in ("tune", "validate", "certify", "falsify", "engine")}
     assert case["held_out"] and case["validated_on"].startswith("fresh draws")
-    assert set(case["controllers"]) == {"nn", "pd", "taskpd"}
+    learned = {"learned-residual", "learned-torque"}  # trained offline: tune = false
+    assert set(case["controllers"]) == {"nn", "pd", "taskpd"} | learned
     for name, entry in case["controllers"].items():
-        assert [s["seed"] for s in entry["tuned"]["seeds"]] == [0, 1], name
-        assert (
-            entry["tuned"]["kept_seed"]
-            == min(entry["tuned"]["seeds"], key=lambda s: s["median_error"])["seed"]
-        )
+        if name in learned:
+            assert entry["fixed"] and entry["tuned"] is None and entry["backend"] == "hybrid"
+        else:
+            assert [s["seed"] for s in entry["tuned"]["seeds"]] == [0, 1], name
+            assert (
+                entry["tuned"]["kept_seed"]
+                == min(entry["tuned"]["seeds"], key=lambda s: s["median_error"])["seed"]
+            )
         assert entry["certificates"] and entry["certificates"][0]["N"] == 3  # ceil(ln(1/0.2) / ln(1/0.5)) = 3
         assert "command" in entry["worst"] and isinstance(entry["worst"]["falsified"], bool)
         assert entry["engines"]["mujoco"]["rows"] == 3 and entry["engines"]["mujoco"]["certificates"]
         assert entry["step_cost_us"] > 0 and entry["backend"] in ("compiled", "hybrid", "python")
-    assert [(p["a"], p["b"]) for p in case["paired"]] == [("nn", "pd"), ("nn", "taskpd"), ("pd", "taskpd")]
+    names = ["nn", "pd", "taskpd", "learned-residual", "learned-torque"]
+    assert [(p["a"], p["b"]) for p in case["paired"]] == [
+        (a, b) for i, a in enumerate(names) for b in names[i + 1 :]
+    ]
     assert str(here / "study.toml") in report["inputs"]
     assert any(p.endswith("laws.py") for p in report["inputs"])
+    assert {p for p in report["inputs"] if p.endswith(".onnx")} == {
+        str(EXAMPLES / "policies" / "residual.onnx"),
+        str(EXAMPLES / "policies" / "torque.onnx"),
+    }
     for name in ("summary.csv", "summary.tex"):
-        assert (out / "tables" / name).read_text().count("paper-ellipse-noisy") == 3
+        assert (out / "tables" / name).read_text().count("paper-ellipse-noisy") == 5
     assert "\\toprule" in (out / "tables" / "summary.tex").read_text()
     for ext in ("png", "svg", "pdf"):
         assert (out / "figures" / f"paper-ellipse-noisy-error-cdf.{ext}").stat().st_size > 1000
@@ -127,9 +140,9 @@ def test_a_rerun_computes_nothing_and_each_replay_command_recomputes_its_stage(s
 
 def test_a_case_without_randomness_says_it_was_validated_on_the_training_plant(tmp_path):
     (tmp_path / "study.toml").write_text(
-        STUDY.replace('cases = ["paper-ellipse-noisy"]', 'cases = ["paper-ellipse"]')
+        STUDY_CORE.replace('cases = ["paper-ellipse-noisy"]', 'cases = ["paper-ellipse"]')
         .replace('"plant.disturbance_scale" = {uniform = [0.5, 2.0]}', "")
-        .replace(', {name = "taskpd", class = "laws.py:TaskPD"}', "")
+        .replace('    {name = "taskpd", class = "laws.py:TaskPD"},\n', "")
         .replace("seeds = 2", "seeds = 1")
     )
     report = run_study(load_study(tmp_path / "study.toml"), tmp_path / "out", workers=2)
@@ -238,11 +251,11 @@ def test_a_law_that_fails_says_why_in_the_report_and_the_report_is_standard_json
     command say why (its exception, located). A law run untuned that fails keeps its rows' first
     message. report.json holds no Infinity (a margin of -inf is null beside the status)."""
     shutil.copy(Path(__file__).parent / "controllers" / "eq9_again.py", tmp_path / "laws.py")
-    text = STUDY.replace(
+    text = STUDY_CORE.replace(
         '{name = "taskpd", class = "laws.py:TaskPD"}',
         '{name = "late", class = "laws.py:RaisesLate", tune = false}, '
         '{name = "latet", class = "laws.py:RaisesLate"}',
-    ).replace('"nn", ', "")
+    ).replace('    "nn",\n', "")
     (tmp_path / "study.toml").write_text(text)
     out = tmp_path / "out"
     assert main(["study", str(tmp_path / "study.toml"), "--out", str(out), "--workers", "2"]) == 0

@@ -444,8 +444,9 @@ def finite(value):
 def write_report(spec: StudySpec, folder: Path, cases: dict) -> dict:
     """report.json, tables/, figures/ and report.html; returns the report."""
     for name, case in cases.items():  # the kept settings, as --tuned reads them (the falsify command)
-        kept = {
-            c: {"best": {"params": k["settings"]}} for c, k in case["kept"].items() if c not in spec.fixed
+        kept = {  # a fixed controller runs at its own settings: --tuned leaves it untuned
+            c: {"fixed": True} if c in spec.fixed else {"best": {"params": k["settings"]}}
+            for c, k in case["kept"].items()
         }
         write_json_atomic(folder / "cases" / name / "kept.json", {"controllers": kept})
     report = build_report(spec, folder, cases)

@@ -272,6 +272,8 @@ def tuned_settings(
         )
     out = {}
     for name in names:
+        if (tuned.get(summary_name(name)) or {}).get("fixed") is True:  # a study's untuned controller
+            continue
         best = (tuned.get(summary_name(name)) or {}).get("best")
         if not best:
             raise ConfigError(
