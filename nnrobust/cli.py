@@ -89,16 +89,14 @@ def _load_target(target: str, overrides: dict | None = None):
     (:func:`nnrobust.config.load_config`): as if the file had been edited so.
     """
     from .config import load_config
-    from .presets import preset_names, preset_path
+    from .presets import preset_names, preset_path, presets_hint
 
     path = Path(target)
     if path.suffix == ".toml" or path.exists():
         return load_config(path, overrides)
     if target in preset_names():
         return load_config(preset_path(target), overrides)
-    raise NNRobustError(
-        f"{target!r} is neither a TOML file nor a preset; presets: {', '.join(preset_names())}"
-    )
+    raise NNRobustError(f"{target!r} is neither a TOML file nor a preset; {presets_hint(target)}")
 
 
 def _live_view(args, config, setup):

@@ -100,6 +100,7 @@ class ConfigError(NNRobustError):
 
     def __init__(self, key: str, message: str):
         self.key = key
+        self.message = message  # what follows the key (a key may itself hold ": ")
         super().__init__(f"{key}: {message}")
 
 

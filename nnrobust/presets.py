@@ -15,12 +15,20 @@ def preset_names() -> list[str]:
     return sorted(p.stem for p in PRESET_DIR.glob("*.toml"))
 
 
+def presets_hint(name: object) -> str:
+    """'did you mean X? ' for a name close to a preset's (a typo), then the presets."""
+    import difflib
+
+    names = preset_names()
+    close = difflib.get_close_matches(name, names, n=1) if isinstance(name, str) else []
+    return (f"did you mean {close[0]!r}? " if close else "") + f"presets: {', '.join(names)}"
+
+
 def preset_path(name: str) -> Path:
     """The TOML file of a preset."""
-    path = PRESET_DIR / f"{name}.toml"
-    if not path.is_file():
-        raise ConfigError("preset", f"unknown preset {name!r}; presets: {', '.join(preset_names())}")
-    return path
+    if name not in preset_names():
+        raise ConfigError("preset", f"unknown preset {name!r}; {presets_hint(name)}")
+    return PRESET_DIR / f"{name}.toml"
 
 
 def load_preset(name: str) -> ExperimentConfig:

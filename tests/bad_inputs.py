@@ -528,6 +528,12 @@ CONFIG_CASES = [
         "trajectory.move_time: must be in [0.001, 1e+09] s, got 1e-300",
     ),
     Case(
+        "a base preset with a typo",
+        lambda d: _toml(d, 'base = "paper-elipse"\n'),
+        ex.ConfigError,
+        "experiment.toml: base: unknown preset 'paper-elipse'; did you mean 'paper-ellipse'? presets: ",
+    ),
+    Case(
         "an integer of 5000 digits (Python reads at most 4300)",
         lambda d: _toml(d, f"{PAPER}[plant]\npayload = {'9' * 5000}\n"),
         ex.ConfigError,
@@ -1978,6 +1984,30 @@ def _cannot_run(folder: Path, command: str, entry: str):
     return run
 
 
+def _study_cannot_run(folder: Path):
+    """A study with a law whose constructor raises: refused before any stage, its name said once
+    (it was "controllers: mine: mine: cannot run")."""
+
+    def check():
+        from nnrobust.study import load_study
+        from nnrobust.study.engine import _check_controllers
+
+        (folder / "laws.py").write_text(LAWS.read_text())
+        path = _file(
+            folder,
+            "study.toml",
+            'name = "x"\ncases = ["paper-ellipse"]\nrequire = ["rms_error<=0.05"]\n'
+            'controllers = ["pd", {name = "mine", class = "laws.py:NeedsGain", params = {gain = -1.0}, '
+            "tune = false}]\n"
+            '[set]\n"simulation.duration" = 0.2\n[vary]\n"plant.disturbance_scale" = {uniform = [0.5, 2.0]}\n'
+            "[budgets]\ntune = 4\nseeds = 1\ntrain_samples = 1\nvalidation = 2\nepsilon = 0.5\nbeta = 0.2\n"
+            "falsify = 4\n",
+        )
+        return _check_controllers(load_study(path))
+
+    return check
+
+
 def _resumed(folder: Path, change: str):
     """A sweep folder prepared for its inputs with one part of rows, then resumed after ``change``:
     its base experiment edited, or its part changed after it was written."""
@@ -2175,6 +2205,13 @@ FALSIFY_CASES = [
         lambda d: _cannot_run(d, "falsify", 'class = "laws.py:NeedsGain", params = {gain = -1.0}'),
         ex.ConfigError,
         "controllers: mine: cannot run: controller.params: NeedsGain(context, **params) raised ValueError",
+    ),
+    Case(
+        "study: a controller whose constructor raises (its name once)",
+        _study_cannot_run,
+        ex.ConfigError,
+        "study.toml: case paper-ellipse: controllers: mine: cannot run: controller.params: "
+        "NeedsGain(context, **params) raised ValueError",
     ),
 ]
 

@@ -329,3 +329,18 @@ def test_bench_refuses_an_out_that_is_a_file_before_any_benchmark(tmp_path, caps
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and err[0].startswith(f"nnrobust: error: --out {tmp_path / out}: "), err
         assert words in err[0], err
+
+
+def test_a_preset_typo_gets_a_suggestion_on_every_command(tmp_path, capsys):
+    """run, sweep and tune named the presets but not the one a typo was close to."""
+    sweep = tmp_path / "s.toml"
+    sweep.write_text('name = "s"\nbase = "paper-elipse"\ncontrollers = ["pd"]\n')
+    for words in (
+        ["run", "paper-elipse"],
+        ["sweep", str(sweep), "--out", str(tmp_path / "s")],
+        ["tune", "paper-elipse", "--controllers", "pd", "--budget", "4", "--out", str(tmp_path / "t")],
+    ):
+        assert main(words) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "'paper-elipse' is neither" in err[0], err
+        assert "; did you mean 'paper-ellipse'? presets: panda-ellipse" in err[0], err

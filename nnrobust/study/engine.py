@@ -115,9 +115,7 @@ def _check_controllers(spec: StudySpec) -> None:
         try:
             check_controllers(sweep, base_values(sweep))
         except ConfigError as err:
-            raise ConfigError(
-                f"{spec.path}: case {spec.case_name(case)}: {err.key}", str(err).split(": ", 1)[1]
-            ) from err
+            raise ConfigError(f"{spec.path}: case {spec.case_name(case)}: {err.key}", err.message) from err
     for name in spec.controllers:
         if name in spec.fixed:
             continue

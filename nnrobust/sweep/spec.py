@@ -389,16 +389,14 @@ def resolve_entry_files(entries: dict, folder: Path) -> None:
 
 def base_path(spec: SweepSpec) -> Path:
     """The file of the sweep's base: an experiment file, or a preset's file."""
-    from ..presets import preset_names, preset_path
+    from ..presets import preset_names, preset_path, presets_hint
 
     if spec.base.endswith(".toml"):
         return Path(spec.base)
     if spec.base in preset_names():
         return preset_path(spec.base)
     raise ConfigError(
-        "base",
-        f"{spec.base!r} is neither an experiment file (.toml) nor a preset; "
-        f"presets: {', '.join(preset_names())}",
+        "base", f"{spec.base!r} is neither an experiment file (.toml) nor a preset; {presets_hint(spec.base)}"
     )
 
 
