@@ -385,6 +385,14 @@ def write_run(
         raise RunFolderError(
             f"write_run needs a Result (what run_experiment returns), got {type(result).__name__}"
         )
+    try:
+        metrics = result.metrics()
+    except (KeyError, ValueError, IndexError, TypeError, AttributeError) as err:
+        raise RunFolderError(
+            f"write_run: this Result cannot be summarised ({type(err).__name__}: {str(err)[:200]}); "
+            "give it the Result run_experiment returns (one made by hand lacks what a run records, "
+            "such as its h and manipulability signals)"
+        ) from err
     folder = check_out_folder(folder, overwrite)
     if result.status != "completed" and is_run_folder(folder) and _status_of(folder) == "completed":
         kept = folder
@@ -398,7 +406,7 @@ def write_run(
     placed = False
     try:
         with signals_deferred():  # a finished simulation is saved whole, then Ctrl-C is honoured
-            _write_core(tmp, result, result.metrics())
+            _write_core(tmp, result, metrics)
             _place(tmp, folder)
             placed = True
     except KeyboardInterrupt:  # delivered as the save ended: the folder is whole, its extras pending

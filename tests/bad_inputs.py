@@ -1639,6 +1639,21 @@ def _set(text: str):
     return check
 
 
+def _hand_made_result(folder: Path):
+    def write():
+        import numpy as np
+
+        from nnrobust import write_run
+        from nnrobust.results import Result
+
+        zeros = np.zeros((3, 2))
+        made = Result(t=np.zeros(3), q=zeros, dq=zeros, tau=zeros, x=zeros, x_d=zeros, e=zeros,
+                      signals={}, status="completed", message="", config="")  # fmt: skip
+        return write_run(folder / "run", made, plots=False, animation=False)
+
+    return write
+
+
 API_CASES = [
     Case(
         "--set: a TOML date-time",
@@ -1808,6 +1823,13 @@ API_CASES = [
         lambda d: lambda: __import__("nnrobust").write_run(bytes(d / "run"), 3),
         RunFolderError,
         "the run folder needs a str or pathlib.Path, got bytes b'",
+    ),
+    Case(
+        "Python API: write_run given a hand-made Result (no signals)",
+        lambda d: _hand_made_result(d),
+        RunFolderError,
+        "write_run: this Result cannot be summarised (KeyError: 'manipulability'); give it the Result "
+        "run_experiment returns",
     ),
     Case(
         "Python API: write_run given something else than a Result",
