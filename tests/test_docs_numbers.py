@@ -1133,7 +1133,8 @@ QUOTED_FIGURES: list[tuple] = [
         1e3,
     ),
     ("README.md", r"against the NN's ([\d.]+) mm", "example_study", _example_median("nn"), 1e3),
-    ("README.md", r"\(`examples/train_policy.py`, (\d+) simulated seconds", None, None, 1.0),  # the records: below
+    # the README's training budget: test_the_example_studys_learned_worst_plant_reruns_... checks it
+    ("README.md", r"\(`examples/train_policy.py`, (\d+) simulated seconds", None, None, 1.0),
 ]
 """Figures quoted in prose, each checked against its data file (within half a unit of the last
 printed digit, or 2 %)."""
