@@ -33,6 +33,7 @@ def test_every_example_is_tested():
         "slotine_li.toml",
         "controllers/slotine_li.py",
         "study.toml",  # tests/test_study.py, its budgets cut down
+        "train_policy.py",
     }
     assert {str(p.relative_to(EXAMPLES)) for p in EXAMPLES.rglob("*.py")} | {
         p.name for p in EXAMPLES.glob("*.toml")
@@ -139,3 +140,15 @@ def test_tuning_reports_each_best_setting(tmp_path):
     out = _run("tuning.py", "--budget", "4", "--target", str(short), "--out", str(tmp_path / "tune"))
     assert "pd: train" in out and "no-u0: train" in out and "TaskPD: train" in out
     assert (tmp_path / "tune" / "summary.json").is_file()
+
+
+@pytest.mark.skipif(not compiled.available(), reason=compiled.unavailable_reason())
+def test_train_policy_writes_a_policy_and_its_record(tmp_path):
+    pytest.importorskip("gymnasium")
+    pytest.importorskip("onnx")
+    out = _run(
+        "train_policy.py", "--only", "residual", "--generations", "1", "--population", "2",
+        "--episodes", "1", "--duration", "0.2", "--out", str(tmp_path),
+    )  # fmt: skip
+    assert "residual: 3 simulations of 0.2 s" in out
+    assert (tmp_path / "residual.onnx").stat().st_size > 0 and (tmp_path / "residual.onnx.json").is_file()
