@@ -113,3 +113,25 @@ def test_a_cluster_left_without_workers_is_one_error_not_a_hang(monkeypatch):
     finally:
         client.close()
         cluster.close()
+
+
+def test_a_local_cluster_whose_nannies_gave_up_gets_new_workers(monkeypatch):
+    """A nanny that stopped restarting its worker (closed here by hand, as dask's nanny does when
+    its worker dies while it is starting) is replaced after REVIVE_SECONDS: the task runs."""
+    from distributed import Client
+
+    from nnrobust.sweep import engine
+
+    monkeypatch.setattr(engine, "REVIVE_SECONDS", 1.0)
+    cluster = engine.local_cluster(1)
+    client = Client(cluster)
+    try:
+        (nanny,) = cluster.workers.values()
+        cluster.sync(nanny.close)
+        assert client.scheduler_info()["workers"] == {} and len(cluster.worker_spec) == 1
+        future = client.submit(sum, [1, 2], pure=False)
+        assert engine.crash_reason(future) is None and future.result() == 3
+        assert len(client.scheduler_info()["workers"]) == 1
+    finally:
+        client.close()
+        cluster.close()

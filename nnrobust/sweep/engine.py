@@ -587,18 +587,44 @@ def shared(client, value):
 NO_WORKER_SECONDS = 120.0
 """How long a cluster may have no worker at all before the command stops waiting for it."""
 
+REVIVE_SECONDS = 20.0
+"""How long a local cluster may have no worker before its dead workers are replaced."""
+
+
+def revive(cluster) -> None:
+    """Give a local ``cluster`` with no live worker a new nanny and worker process per worker.
+
+    When a worker's process ends (user code calling ``os._exit``, a segfault), its nanny starts
+    another; when that takes longer than dask's ``lost-worker-timeout`` (15 s: a loaded 2-core
+    machine, a worker that dies again while it starts), the cluster closes the nanny for good
+    and the worker is never replaced. The cluster keeps the worker's spec: closing what is left of
+    its nannies and scaling to that spec starts each again.
+    """
+
+    async def close_all():
+        for name in list(cluster.workers):
+            nanny = cluster.workers.pop(name)
+            await nanny.close(timeout=10)
+
+    cluster.sync(close_all)
+    cluster.scale(len(cluster.worker_spec))
+
 
 def wait_alive(futures: list) -> None:
     """``distributed.wait(futures)``, or one error instead of a hang when the cluster has had no
     worker for :data:`NO_WORKER_SECONDS` (every worker process dead and none restarted: user code
-    that ends its process, under a load that makes the nanny give up restarting it).
+    that ends its process, under a load that makes the nanny give up restarting it). A local
+    cluster of this command's with no worker for :data:`REVIVE_SECONDS` is given new workers
+    (:func:`revive`) first.
     """
     from distributed import wait
 
     if all(f.done() for f in futures):
         return
     client = futures[0].client
+    cluster = getattr(client, "cluster", None)
     since = None
+    revived = False
     while True:
         try:
             wait(futures, timeout=5)
@@ -608,7 +634,12 @@ def wait_alive(futures: list) -> None:
         alive = len(client.scheduler_info().get("workers", {}))
         now = time.monotonic()
         since = None if alive else since or now
-        if since is not None and now - since > NO_WORKER_SECONDS:
+        if since is None:
+            revived = False
+        elif cluster is not None and not revived and now - since > REVIVE_SECONDS:
+            revive(cluster)
+            revived = True
+        elif now - since > NO_WORKER_SECONDS:
             raise NNRobustError(
                 f"the cluster has had no worker for {NO_WORKER_SECONDS:g} s (every worker process died "
                 "and none was restarted); what was computed is kept: run the command again to resume"
