@@ -1424,3 +1424,25 @@ def test_the_example_studys_learned_worst_plant_reruns_and_the_budget_is_the_rec
     for name in ("residual", "torque"):
         record = json.loads((ROOT / "examples" / "policies" / f"{name}.onnx.json").read_text())
         assert record["simulated_seconds"] == quoted
+
+
+def _docs_data_commands() -> list[list[str]]:
+    """The commands of `make docs-data`, each as its arguments, with the Makefile's variables
+    given their default values and the options that only choose how it runs (--quiet,
+    --overwrite) left out."""
+    import shlex
+
+    text = (ROOT / "Makefile").read_text()
+    recipe = text[text.index("docs-data:") :].split("\n\n")[0].replace("\\\n", " ")
+    out = []
+    for line in recipe.splitlines()[1:]:
+        line = line.strip().replace("$(BIN)/", "").replace("$(DATA)", "docs/data").replace("$(OUT)", "out")
+        out.append([word for word in shlex.split(line) if word not in ("--quiet", "--overwrite")])
+    return out
+
+
+@pytest.mark.parametrize("name", sorted(render_tables.FALSIFY_COMMANDS))
+def test_make_docs_data_runs_the_command_each_falsification_table_names(name):
+    import shlex
+
+    assert shlex.split(render_tables.FALSIFY_COMMANDS[name]) in _docs_data_commands()
