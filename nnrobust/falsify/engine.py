@@ -34,9 +34,9 @@ from typing import Any
 
 import numpy as np
 
-from .exceptions import ConfigError, NNRobustError
-from .properties import Property
-from .signals import signals_as_interrupt
+from ..exceptions import ConfigError, NNRobustError
+from ..properties import Property
+from ..signals import signals_as_interrupt
 
 MAX_SCALE = 8.0
 """The largest scale of the box the robustness margin tries (``--margin``)."""
@@ -102,7 +102,7 @@ def searchable(sweep, base) -> tuple[Any, str]:
     """
     import copy
 
-    from .model.nominal import nominal_factor_count
+    from ..model.nominal import nominal_factor_count
 
     spec = sweep.vary.get("nominal.relative_error")
     if spec is None:
@@ -136,8 +136,8 @@ def _searched_sweep(spec: FalsifySpec):
     says): the target's sweep with the controllers (tuned where asked), its seeded model error
     made searchable (its [set] then holds ``nominal.relative_error = 0``, which the values take).
     """
-    from .sweep.spec import base_config, base_values, load_sweep
-    from .tune.engine import _with_controllers, check_tuned, check_tuned_values
+    from ..sweep.spec import base_config, base_values, load_sweep
+    from ..tune.engine import _with_controllers, check_tuned, check_tuned_values
 
     target = load_sweep(spec.target)
     check_tuned(spec.tuned or {}, target.vary, entries=target.entries)  # the law's own keys, none varied
@@ -214,7 +214,7 @@ class FalsifySpec:
 
     def to_toml(self) -> str:
         """The resolved search (DIR/falsify.toml): a different one is refused in the same folder."""
-        from .config import dump_toml
+        from ..config import dump_toml
 
         return dump_toml(
             {
@@ -238,8 +238,8 @@ def evaluate(sweep, base: dict, controller: str, values: dict, properties: list[
     """One run at one point of the box (on a worker): its margins and the metrics they read;
     ``base``: the base's own values (:func:`nnrobust.sweep.spec.base_values`).
     """
-    from .experiment import run_experiment
-    from .sweep.spec import Sample, experiment, sample_seed
+    from ..experiment import run_experiment
+    from ..sweep.spec import Sample, experiment, sample_seed
 
     sample = Sample(-1, values, sample_seed(sweep.seed, 0))
     try:
@@ -387,7 +387,7 @@ class _Driver:
         self.client, self.folder, self.done, self.key = client, folder, done, key
         self.properties, self.progress = properties, progress
         self.workers = max(len(client.scheduler_info().get("workers", {})), 1)
-        from .sweep.engine import shared
+        from ..sweep.engine import shared
 
         self.sweep, self.base = shared(client, sweep), shared(client, base)  # sent to each worker once
         self.finished = 0  # simulations of the calls before (the progress bar counts on)
@@ -396,7 +396,7 @@ class _Driver:
         """Each (function, *arguments) task's result; one that ends its worker, run again alone,
         is a run with status ``crashed`` (:func:`nnrobust.sweep.engine.run_tasks`).
         """
-        from .sweep.engine import CRASHED, run_tasks
+        from ..sweep.engine import CRASHED, run_tasks
 
         crashed = {"status": CRASHED}
         return run_tasks(self.client, tasks, lambda why: judged({**crashed, "message": why}, self.properties))
@@ -500,7 +500,7 @@ def _margins(spec: FalsifySpec, sweep, box: Box, rows: dict, drive: _Driver) -> 
     then by bisection, each scale searched at ``spec.margin_budget`` simulations and stopped at
     its first violation. Where the box itself is violated, the centre (s = 0) is tried first.
     """
-    from .sweep.spec import Sample, rerun_command, sample_seed
+    from ..sweep.spec import Sample, rerun_command, sample_seed
 
     brackets = {name: _Bracket(box.largest_scale()) for name in sweep.controllers}
     for name, bracket in brackets.items():
@@ -544,7 +544,7 @@ def _history(folder: Path, key: str | None) -> dict[tuple[str, str, int], dict]:
     """The rows simulated so far, by (controller, search, index); each part checked against
     ``key`` (the search's inputs; None: those the folder's marker records) and no row twice.
     """
-    from .study_folder import read_parts, recorded_inputs
+    from ..study_folder import read_parts, recorded_inputs
 
     if key is None:
         recorded = recorded_inputs(folder, "falsify")
@@ -559,7 +559,7 @@ def _write_history(folder: Path, rows: list[dict], key: str) -> None:
     import pandas as pd
     import pyarrow as pa
 
-    from .study_folder import write_part
+    from ..study_folder import write_part
 
     flat = [
         {
@@ -580,7 +580,7 @@ def search_inputs(spec: FalsifySpec, sweep):
     """What the search's rows are computed from (:func:`nnrobust.sweep.spec.study_inputs`): the
     box and the base as searched, the controllers with their tuned settings, and the options.
     """
-    from .sweep.spec import study_inputs
+    from ..sweep.spec import study_inputs
 
     options = {
         "--require": json.dumps(spec.require),
@@ -596,7 +596,7 @@ def prepare_folder(spec: FalsifySpec, folder: Path, overwrite: bool, inputs) -> 
     (:func:`search_inputs`); one of other inputs is refused, naming what changed, unless
     ``overwrite``, which replaces only what a search wrote (:mod:`nnrobust.study_folder`).
     """
-    from .study_folder import prepare
+    from ..study_folder import prepare
 
     outputs = (
         HISTORY,
@@ -624,8 +624,8 @@ def run_falsify(
     the search. ``claim`` = (epsilon, beta): the random baseline's runs, independent draws of the
     box, certify P(a property fails) <= epsilon with confidence 1 - beta (:func:`certify_box`).
     """
-    from .properties import check_claim
-    from .study_folder import held
+    from ..properties import check_claim
+    from ..study_folder import held
 
     check_claim(*claim)
     with held(Path(folder)):
@@ -635,9 +635,9 @@ def run_falsify(
 def _run_falsify(
     spec: FalsifySpec, folder: Path, workers, scheduler, overwrite: bool, progress, claim: tuple[float, float]
 ) -> dict:
-    from .properties import run_properties
-    from .sweep.engine import _client, _require_engine, check_controllers
-    from .sweep.spec import Sample, experiment, rerun_command, sample_seed
+    from ..properties import run_properties
+    from ..sweep.engine import _client, _require_engine, check_controllers
+    from ..sweep.spec import Sample, experiment, rerun_command, sample_seed
 
     _require_engine()
     try:
@@ -686,12 +686,12 @@ def _run_falsify(
         )
     if margins is not None:
         summary["margin"] = margins
-    from .results import write_json_atomic
+    from ..results import write_json_atomic
 
     write_json_atomic(folder / "summary.json", summary)
     _write_csv(folder, summary)
     plot_convergence({k: v for k, v in rows.items() if k[1] in ("falsifier", "random")}, folder)
-    from .display import FalsifySummary
+    from ..display import FalsifySummary
 
     return FalsifySummary(summary)
 
@@ -743,7 +743,7 @@ def certify_box(
     """
     import hashlib
 
-    from .properties import certify_runs
+    from ..properties import certify_runs
 
     described = repr(
         [(k, float(lo), float(hi), bool(g)) for k, lo, hi, g in zip(box.keys, box.low, box.high, box.log)]
@@ -770,9 +770,9 @@ def keep_worst(spec: FalsifySpec, summary: dict, folder: str | Path, count: int 
     run its printed command makes), DIR/worst/CONTROLLER-2, -3, ... for the next distinct ones,
     from the search's history in order of their least margin.
     """
-    from .experiment import run_experiment
-    from .run_folder import write_run
-    from .sweep.spec import Sample, experiment, sample_seed
+    from ..experiment import run_experiment
+    from ..run_folder import write_run
+    from ..sweep.spec import Sample, experiment, sample_seed
 
     sweep, base, _ = _searched_sweep(spec)
     history = _history(Path(folder), None) if count > 1 else {}
@@ -815,7 +815,7 @@ def plot_convergence(rows: dict, folder: Path) -> None:
     """DIR/convergence.png and .svg: the least margin found against simulations, per controller,
     for the falsifier and its random baseline.
     """
-    from .plots import _save, legend_outside, plt
+    from ..plots import _save, legend_outside, plt
 
     fig, ax = plt.subplots(figsize=(7, 4))
     for i, (name, kind) in enumerate(sorted(rows)):
