@@ -219,7 +219,7 @@ def test_the_searched_factors_replace_the_bases_seeded_model_error(tmp_path):
     """A base with a seeded model error (panda-ellipse: relative_error = 0.2) whose box varies it:
     each point runs with relative_error 0, as the printed command sets it, the searched factors
     alone drawing the model (the base's 0.2 was drawn on top of them: [set] took no part)."""
-    from nnrobust.falsify.engine import _searched_sweep
+    from nnrobust.falsify.spec import _searched_sweep
     from nnrobust.sweep.spec import Sample, experiment, rerun_command
 
     path = tmp_path / "p.toml"
@@ -403,7 +403,7 @@ def test_one_coordinate_is_searched_by_a_zooming_grid_without_cma(monkeypatch):
     toy objective, restarts once converged, spends the budget exactly and never builds CMA-ES."""
     import cma
 
-    from nnrobust.falsify.engine import _Search
+    from nnrobust.falsify.search import _Search
 
     def refused(*args, **kwargs):
         raise ValueError("Optimization in 1-D is not supported (code was never tested)")
@@ -439,7 +439,8 @@ def test_a_controller_that_cannot_run_is_refused_and_a_refused_run_keeps_its_mes
     metrics keep the refusal's message (they kept its status alone)."""
     import shutil
 
-    from nnrobust.falsify.engine import _searched_sweep, evaluate
+    from nnrobust.falsify import evaluate
+    from nnrobust.falsify.spec import _searched_sweep
     from nnrobust.properties import run_properties
 
     shutil.copy(Path(__file__).parent / "controllers" / "eq9_again.py", tmp_path / "laws.py")

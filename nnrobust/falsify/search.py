@@ -1,0 +1,296 @@
+"""The search: per controller, a Sobol start then CMA-ES with IPOP restarts (a zooming grid in a
+box of one coordinate), or the random baseline (:class:`_Search`); the batches run on the cluster
+(:class:`_Driver`); and the robustness margin's doubling and bisection on the box's scale
+(:func:`_margins`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .history import _write_history, evaluate, judged
+from .spec import Box, FalsifySpec
+
+MARGIN_STEPS = 7
+"""Scales the margin's search tries after the box itself (doubling, then bisection)."""
+MARGIN_TOLERANCE = 0.1
+"""The margin's bisection stops when its bracket is narrower than this fraction of its top."""
+
+
+LINE_START = 0.3
+"""Half-width of a one-coordinate search's first grid, in the unit box (CMA-ES's sigma_0)."""
+
+LINE_TOLERANCE = 1e-9
+"""Half-width in the unit box below which a one-coordinate search has converged and restarts."""
+
+
+class _Search:
+    """One controller's search (Sobol, then CMA-ES with IPOP restarts; a zooming grid in a box
+    of one coordinate) or its random baseline, asking batches and told the results;
+    deterministic given the seed, so a resumed search asks the same points again and takes their
+    results from the history.
+    """
+
+    def __init__(self, dims: int, budget: int, seed: int, random: bool):
+        self.dims, self.budget, self.seed, self.random = dims, budget, seed, random
+        self.asked = 0
+        self.best: tuple[float, np.ndarray] | None = None
+        self.rng = np.random.default_rng(seed)
+        self.es: Any = None  # a cma.CMAEvolutionStrategy once the Sobol start is spent
+        self._pending: list[np.ndarray] = []
+        self.popsize = max(4 + int(3 * math.log(dims)), 4)
+        self.restarts = 0
+        self.line: tuple[float, np.ndarray, float] | None = None  # one coordinate: (f, centre, half-width)
+        if random:
+            self.start: list[np.ndarray] = []
+        else:
+            from scipy.stats import qmc
+
+            m = max(1, int(math.log2(max(2, budget // 4))))
+            self.start = list(qmc.Sobol(dims, scramble=True, seed=seed).random_base2(m))
+
+    @property
+    def remaining(self) -> int:
+        return self.budget - self.asked
+
+    def ask(self, count: int) -> list[tuple[str, np.ndarray]]:
+        """Points (phase, u) to simulate next: up to ``count`` random or Sobol points, or CMA-ES's
+        whole population (it learns only from a whole one); never past the budget.
+        """
+        if self.random:
+            points = [("random", self.rng.random(self.dims)) for _ in range(min(count, self.remaining))]
+        elif self.start:
+            points = [
+                ("sobol", self.start.pop(0)) for _ in range(min(count, len(self.start), self.remaining))
+            ]
+        elif self.dims == 1:
+            points = [("line", u) for u in self._ask_line()]
+        else:
+            points = [("cma", u) for u in self._ask_cma()]
+        self.asked += len(points)
+        return points
+
+    def _ask_line(self) -> list[np.ndarray]:
+        """One coordinate (CMA-ES needs two; cma 3 refuses one, cma 4 fails in ``tell``): a grid
+        of the population's size over [c - w, c + w] within [0, 1], about the best point c of
+        this start; each batch zooms to the grid's spacing about the new best (its neighbours
+        bracket a minimum), nearest points first. Converged (w < LINE_TOLERANCE): restarted from
+        a random point with a doubled population, as IPOP restarts CMA-ES.
+        """
+        if self.line is None or self.line[2] < LINE_TOLERANCE:
+            if self.line is not None:
+                self.restarts += 1
+                self.popsize *= 2
+            if self.best is not None and self.restarts == 0:
+                self.line = (self.best[0], self.best[1], LINE_START)
+            else:
+                self.line = (math.inf, self.rng.random(1), LINE_START)
+        _, centre, width = self.line
+        low, high = max(0.0, float(centre[0]) - width), min(1.0, float(centre[0]) + width)
+        grid = np.linspace(low, high, self.popsize)
+        grid = grid[np.argsort(np.abs(grid - centre[0]), kind="stable")]  # a budget cut keeps the nearest
+        self._pending = [np.array([x]) for x in grid][: self.remaining]
+        return self._pending
+
+    def _ask_cma(self) -> list[np.ndarray]:
+        import cma
+
+        if self.es is None or self.es.stop():
+            if self.es is not None:  # converged: restart with a doubled population (IPOP)
+                self.restarts += 1
+                self.popsize *= 2
+            x0 = self.best[1] if self.best is not None and self.restarts == 0 else self.rng.random(self.dims)
+            self.es = cma.CMAEvolutionStrategy(
+                list(x0),
+                0.3,
+                {
+                    "bounds": [0, 1],
+                    "popsize": self.popsize,
+                    "verbose": -9,
+                    "seed": self.seed + 1 + self.restarts,
+                },
+            )
+        self._pending = [np.clip(np.asarray(x), 0, 1) for x in self.es.ask()][: self.remaining]
+        return self._pending
+
+    def tell(self, points: list[tuple[str, np.ndarray]], objectives: list[float]) -> None:
+        """Results of the last batch, in its order."""
+        for (_, u), f in zip(points, objectives):
+            if self.best is None or f < self.best[0]:
+                self.best = (f, np.asarray(u))
+        line_points = [(f, u) for (phase, u), f in zip(points, objectives) if phase == "line"]
+        if line_points and self.line is not None:
+            f, u = min([(self.line[0], self.line[1]), *line_points], key=lambda p: p[0])
+            grid = [float(p[0]) for _, p in line_points]
+            self.line = (f, np.asarray(u), (max(grid) - min(grid)) / max(len(grid) - 1, 1))
+        cma_points = [(u, f) for (phase, u), f in zip(points, objectives) if phase == "cma"]
+        if cma_points and self.es is not None:
+            us, fs = zip(*cma_points)
+            if len(us) == self.es.popsize:
+                self.es.tell(list(us), list(fs))
+            else:  # the budget cut the population short: the search ends here
+                self.es = None
+
+
+class _Driver:
+    """Runs searches on the cluster in batches the size of the worker pool, taking the points
+    already simulated from the history (a resumed search asks the same points again) and
+    appending the new ones to it.
+    """
+
+    def __init__(self, client, folder: Path, done: dict, sweep, base: dict, properties, progress, key: str):
+        self.client, self.folder, self.done, self.key = client, folder, done, key
+        self.properties, self.progress = properties, progress
+        self.workers = max(len(client.scheduler_info().get("workers", {})), 1)
+        from ..sweep.engine import shared
+
+        self.sweep, self.base = shared(client, sweep), shared(client, base)  # sent to each worker once
+        self.finished = 0  # simulations of the calls before (the progress bar counts on)
+
+    def _simulate(self, tasks: list[tuple]) -> list[dict]:
+        """Each (function, *arguments) task's result; one that ends its worker, run again alone,
+        is a run with status ``crashed`` (:func:`nnrobust.sweep.engine.run_tasks`).
+        """
+        from ..sweep.engine import CRASHED, run_tasks
+
+        crashed = {"status": CRASHED}
+        return run_tasks(self.client, tasks, lambda why: judged({**crashed, "message": why}, self.properties))
+
+    def __call__(self, searches: dict, boxes: dict, rows: dict, total: int, stop_at_violation=False):
+        """Run every search to the end of its budget (or to its first violation); ``total``: the
+        simulations this call plans, for the progress bar.
+        """
+        planned = self.finished + total
+        while any(s.remaining > 0 for s in searches.values()):
+            asked = {
+                key: search.ask(self.workers) for key, search in searches.items() if search.remaining > 0
+            }
+            tasks: dict[tuple, tuple] = {}
+            for key, points in asked.items():
+                for offset, (_, u) in enumerate(points):
+                    index = len(rows[key]) + offset
+                    cached = self.done.get((*key, index))
+                    if cached is None or not np.allclose(cached["u"], u, atol=1e-12):
+                        tasks[(key, index)] = (
+                            evaluate,
+                            self.sweep,
+                            self.base,
+                            key[0],
+                            boxes[key].values(u),
+                            self.properties,
+                        )
+            results = dict(zip(tasks, self._simulate(list(tasks.values()))))
+            new = []
+            for key, points in asked.items():
+                for phase, u in points:
+                    index = len(rows[key])
+                    if (key, index) in results:
+                        row = {
+                            "controller": key[0],
+                            "search": key[1],
+                            "index": index,
+                            "phase": phase,
+                            "u": [float(x) for x in u],
+                            "values": boxes[key].values(u),
+                            **results[(key, index)],
+                        }
+                        new.append(row)
+                    else:
+                        row = self.done[(*key, index)]
+                    rows[key].append(row)
+                searches[key].tell(points, [r["objective"] for r in rows[key][-len(points) :]])
+                if stop_at_violation and any(r["objective"] < 0 for r in rows[key]):
+                    searches[key].budget = searches[key].asked  # a violation is all the margin needs
+            if new:
+                _write_history(self.folder, new, self.key)
+            if self.progress:
+                self.progress(self.finished + sum(len(rows[key]) for key in searches), planned)
+        self.finished += sum(len(rows[key]) for key in searches)
+
+
+@dataclass
+class _Bracket:
+    """One controller's margin search: the largest scale without a violation found (``low``), the
+    least with one (``high``), the scale to search next, and what each scale gave.
+    """
+
+    cap: float
+    low: float | None = None
+    high: float | None = None
+    next: float | None = None
+    plant: dict | None = None
+    steps: list[dict] = field(default_factory=list)
+
+    def record(self, scale: float, history: list[dict]) -> None:
+        """The search at ``scale`` ended: narrow the bracket and choose the next scale (doubling
+        until a violation, the centre once one is found, then bisection to MARGIN_TOLERANCE).
+        """
+        worst = min(history, key=lambda r: r["objective"])
+        violated = worst["objective"] < 0
+        self.steps.append(
+            {
+                "scale": scale,
+                "falsified": violated,
+                "simulations": len(history),
+                "least_margin": worst["objective"],
+            }
+        )
+        if violated:
+            self.high, self.plant = scale, worst
+        else:
+            self.low = scale
+        if self.high is None:  # not violated yet: double, up to the cap
+            self.next = None if scale >= self.cap else min(2 * scale, self.cap)
+        elif self.low is None:  # violated: does the centre of the box (the nominal plant) hold?
+            self.next = None if scale == 0.0 else 0.0
+        elif self.high - self.low <= MARGIN_TOLERANCE * self.high:
+            self.next = None
+        else:
+            self.next = 0.5 * (self.low + self.high)
+
+
+def _margins(spec: FalsifySpec, sweep, box: Box, rows: dict, drive: _Driver) -> dict:
+    """The robustness margin of each controller: the box scaled by s about its centre, s searched
+    by doubling from the box itself (s = 1, the main search) up to :meth:`Box.largest_scale`,
+    then by bisection, each scale searched at ``spec.margin_budget`` simulations and stopped at
+    its first violation. Where the box itself is violated, the centre (s = 0) is tried first.
+    """
+    from ..sweep.spec import Sample, rerun_command, sample_seed
+
+    brackets = {name: _Bracket(box.largest_scale()) for name in sweep.controllers}
+    for name, bracket in brackets.items():
+        bracket.record(1.0, rows[(name, "falsifier")])
+    for step in range(MARGIN_STEPS):
+        active = [(name, b.next) for name, b in brackets.items() if b.next is not None]
+        if not active:
+            break
+        searches, boxes = {}, {}
+        for i, (name, scale) in enumerate(active):
+            key = (name, f"margin {scale:.6g}")
+            budget = 1 if scale == 0.0 else spec.margin_budget
+            searches[key] = _Search(len(box.keys), budget, spec.seed + 104729 * (step + 1) + 7919 * i, False)
+            boxes[key] = box.scaled(scale)
+            rows[key] = []
+        drive(searches, boxes, rows, sum(s.budget for s in searches.values()), stop_at_violation=True)
+        for (name, scale), key in zip(active, searches):
+            brackets[name].record(scale, rows[key])
+    out = {}
+    for name, b in brackets.items():
+        plant = None
+        if b.plant is not None:
+            command = rerun_command(sweep, Sample(-1, b.plant["values"], sample_seed(sweep.seed, 0)), name)
+            plant = {"values": b.plant["values"], "margins": b.plant["margins"], "command": command}
+        out[name] = {
+            "holds_up_to": b.low if b.low is not None else 0.0,
+            "violated_at": b.high,
+            "largest_scale": b.cap,
+            "simulations": sum(x["simulations"] for x in b.steps[1:]),
+            "steps": b.steps,
+            "violating_plant": plant,
+        }
+    return out

@@ -1,0 +1,153 @@
+"""What a search found: the summary (DIR/summary.json), the random baseline's certificate, the
+ARCH-COMP CSV, the convergence plot, and the worst plants rerun as run folders (``--keep-worst``).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from ..properties import Property
+from .history import _history
+from .spec import Box, FalsifySpec, _searched_sweep
+
+
+def _summary(spec, sweep, box, properties, rows, seconds, rerun_command, Sample, sample_seed) -> dict:
+    out = {
+        "target": spec.target,
+        "budget": spec.budget,
+        "seed": spec.seed,
+        "properties": [p.text for p in properties],
+        "box": {
+            k: {"low": float(lo), "high": float(hi), "log": bool(g)}
+            for k, lo, hi, g in zip(box.keys, box.low, box.high, box.log)
+        },
+        "seconds": seconds,
+        "controllers": {},
+    }
+    for name in sweep.controllers:
+        entry = {}
+        for kind in ("falsifier", "random"):
+            history = rows[(name, kind)]
+            worst = min(history, key=lambda r: r["objective"])
+            least = min(worst["margins"].values())
+            sample = Sample(-1, worst["values"], sample_seed(sweep.seed, 0))
+            entry[kind] = {
+                "falsified": bool(least < 0 or any(not p.holds({**worst["metrics"]}) for p in properties)),
+                "simulations": len(history),
+                "first_violation": next((i + 1 for i, r in enumerate(history) if r["objective"] < 0), None),
+                "worst": {
+                    "values": worst["values"],
+                    "metrics": worst["metrics"],
+                    "margins": worst["margins"],
+                    "margin": least,
+                    "command": rerun_command(sweep, sample, name),
+                },
+            }
+        out["controllers"][name] = {**entry.pop("falsifier"), "random_baseline": entry["random"]}
+    return out
+
+
+def certify_box(
+    sweep, box: Box, properties: list[Property], history: list[dict], epsilon: float, beta: float
+):
+    """What the random baseline's runs prove: its points are independent uniform draws of the box
+    (log-uniform on loguniform keys, a grid's range uniformly), so its N runs with k failures give
+    each property's one-sided Clopper-Pearson bound on P(fail) over that distribution, and Wilks'
+    bound on its metric (:func:`nnrobust.properties.certify_runs`). The falsifier's own points
+    were chosen by a search and never count.
+    """
+    import hashlib
+
+    from ..properties import certify_runs
+
+    described = repr(
+        [(k, float(lo), float(hi), bool(g)) for k, lo, hi, g in zip(box.keys, box.low, box.high, box.log)]
+    ) + repr((sorted(sweep.set.items()), sweep.seed))
+    distribution = hashlib.sha256(described.encode()).hexdigest()
+    certificates, bounds = certify_runs([r["metrics"] for r in history], properties, epsilon, beta)
+    for entry in certificates:
+        entry["distribution"] = distribution
+        entry["method"] = (
+            "one-sided Clopper-Pearson (exact binomial) bound on P(fail) from the random baseline's "
+            "runs: independent uniform draws of the box (log-uniform on loguniform keys), each run at "
+            "the sweep's first sample seed; the falsifier's points never count"
+        )
+    return {"certificates": certificates, "quantile_bounds": bounds}
+
+
+WORST = "worst"
+"""Sub-folder of the worst plants' run folders (``--keep-worst``)."""
+
+
+def keep_worst(spec: FalsifySpec, summary: dict, folder: str | Path, count: int = 1) -> list[Path]:
+    """The ``count`` worst plants the search found for each controller, rerun on this machine as
+    full run folders (arrays, metrics, plots, animation): DIR/worst/CONTROLLER for the worst (the
+    run its printed command makes), DIR/worst/CONTROLLER-2, -3, ... for the next distinct ones,
+    from the search's history in order of their least margin.
+    """
+    from ..experiment import run_experiment
+    from ..run_folder import write_run
+    from ..sweep.spec import Sample, experiment, sample_seed
+
+    sweep, base, _ = _searched_sweep(spec)
+    history = _history(Path(folder), None) if count > 1 else {}
+    written = []
+    for name, entry in summary["controllers"].items():
+        plants = [entry["worst"]["values"]]
+        ranked = sorted(
+            (r for (c, search, _), r in history.items() if c == name and search == "falsifier"),
+            key=lambda r: r["objective"],
+        )
+        for row in ranked:
+            if len(plants) >= count:
+                break
+            if row["values"] not in plants:
+                plants.append(row["values"])
+        for rank, values in enumerate(plants, start=1):
+            config = experiment(sweep, base, Sample(-1, values, sample_seed(sweep.seed, 0)), name)
+            target = Path(folder) / WORST / (name if rank == 1 else f"{name}-{rank}")
+            written.append(write_run(target, run_experiment(config), overwrite=True))
+    return written
+
+
+def _write_csv(folder: Path, summary: dict) -> None:
+    """DIR/falsification.csv in the ARCH-COMP falsification format: one row per controller and
+    property (system, property, falsified, simulations, time, robustness).
+    """
+    lines = ["system,property,falsified,simulations,time,robustness"]
+    for name, entry in summary["controllers"].items():
+        for prop, margin in entry["worst"]["margins"].items():
+            lines.append(
+                f'{name},"{prop}",{"yes" if margin < 0 else "no"},{entry["simulations"]},'
+                f"{summary['seconds']:.1f},{margin:.6g}"
+            )
+    tmp = folder / ".falsification.csv.partial"
+    tmp.write_text("\n".join(lines) + "\n")
+    os.replace(tmp, folder / "falsification.csv")
+
+
+def plot_convergence(rows: dict, folder: Path) -> None:
+    """DIR/convergence.png and .svg: the least margin found against simulations, per controller,
+    for the falsifier and its random baseline.
+    """
+    from ..plots import _save, legend_outside, plt
+
+    fig, ax = plt.subplots(figsize=(7, 4))
+    for i, (name, kind) in enumerate(sorted(rows)):
+        objective = np.minimum.accumulate([r["objective"] for r in rows[(name, kind)]])
+        ax.plot(
+            np.arange(1, objective.size + 1),
+            objective,
+            color=f"C{sorted({n for n, _ in rows}).index(name)}",
+            ls="-" if kind == "falsifier" else ":",
+            label=f"{name} ({kind})",
+        )
+    ax.axhline(0.0, color="k", lw=0.8)
+    ax.set_xlabel("simulations")
+    ax.set_ylabel("least margin found (< 0: falsified)")
+    ax.set_yscale("symlog", linthresh=0.01)
+    legend_outside(ax)
+    _save(fig, folder, "convergence")
