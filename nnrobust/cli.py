@@ -1030,8 +1030,10 @@ def build_parser() -> argparse.ArgumentParser:
     _viewer_options(view)
     view.set_defaults(func=cmd_view)
 
+    many = _many_run_options()
     sweep = sub.add_parser(
         "sweep",
+        parents=[many],
         help="run a robustness sweep (Monte Carlo over the uncertainty set)",
         description="Run one experiment over many samples of model error, friction, "
         "disturbance, gains or seeds with several controllers, on dask.distributed: "
@@ -1041,8 +1043,6 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sweep.add_argument("sweep", help=f"sweep file (TOML), or a shipped study: {', '.join(shipped_sweeps())}")
     sweep.add_argument("--out", required=True, help="sweep folder (results/, sweep.toml, summary.json)")
-    sweep.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
-    sweep.add_argument("--scheduler", help="address of an existing dask scheduler, e.g. tcp://host:8786")
     sweep.add_argument(
         "--overwrite", action="store_true", help="replace the results of a different sweep in --out"
     )
@@ -1061,7 +1061,6 @@ def build_parser() -> argparse.ArgumentParser:
         "summary.json, or FILE#CASE/SENSING of a tuned comparison), as NAME-tuned; every law takes "
         "them: shipped, registered, custom entries",
     )
-    sweep.add_argument("--quiet", action="store_true", help="print nothing but errors")
     sweep.add_argument(
         "--require",
         action="append",
@@ -1095,6 +1094,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     falsify = sub.add_parser(
         "falsify",
+        parents=[many],
         help="search the worst plant of an uncertainty box",
         description="Search the sweep file's [vary] box (uniform and loguniform ranges) "
         "for the plant on which each controller most violates the --require properties: "
@@ -1137,8 +1137,6 @@ def build_parser() -> argparse.ArgumentParser:
         required=True,
         help="folder (falsify.toml, history/, summary.json, falsification.csv, convergence.png)",
     )
-    falsify.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
-    falsify.add_argument("--scheduler", help="address of an existing dask scheduler")
     falsify.add_argument("--overwrite", action="store_true", help="replace a different search in --out")
     falsify.add_argument(
         "--keep-worst",
@@ -1171,11 +1169,11 @@ def build_parser() -> argparse.ArgumentParser:
         default=0.05,
         help="... with confidence 1 - BETA (default 0.05; one-sided Clopper-Pearson)",
     )
-    falsify.add_argument("--quiet", action="store_true", help="print nothing but errors")
     falsify.set_defaults(func=cmd_falsify)
 
     study = sub.add_parser(
         "study",
+        parents=[many],
         help="one study file -> one report: tune, validate, certify, falsify",
         description="Run a study file's cases and controllers through every stage in order: tune "
         "(each optimiser seed), validate every seed's setting on fresh draws and keep the best, "
@@ -1186,16 +1184,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     study.add_argument("study", help="study file (TOML)")
     study.add_argument("--out", required=True, help="study folder (cases/, report.json, report.html)")
-    study.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
-    study.add_argument("--scheduler", help="address of an existing dask scheduler, e.g. tcp://host:8786")
     study.add_argument(
         "--overwrite", action="store_true", help="replace what a different study wrote in --out"
     )
-    study.add_argument("--quiet", action="store_true", help="print nothing but errors")
     study.set_defaults(func=cmd_study)
 
     tune = sub.add_parser(
         "tune",
+        parents=[many],
         help="tune controllers at an equal budget of simulations",
         description="Tune each controller with the same optimiser (Optuna's TPE, "
         "minimising the RMS error after 2 s under the constraints; torque and chatter are "
@@ -1242,10 +1238,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="held-out samples each best setting is checked on (default 4)",
     )
     tune.add_argument("--seed", type=int, default=0, help="seed of the optimiser and the samples")
-    tune.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
-    tune.add_argument("--scheduler", help="address of an existing dask scheduler, e.g. tcp://host:8786")
     tune.add_argument("--overwrite", action="store_true", help="replace a different tuning in --out")
-    tune.add_argument("--quiet", action="store_true", help="print nothing but errors")
     tune.set_defaults(func=cmd_tune)
 
     bench = sub.add_parser(
@@ -1258,6 +1251,18 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--out", default="out/bench", help="folder for the JSON files")
     bench.set_defaults(func=cmd_bench)
     return parser
+
+
+def _many_run_options() -> argparse.ArgumentParser:
+    """The parent parser of the commands that run many simulations on dask.distributed (sweep,
+    falsify, study, tune): the options they share, declared once (shown under their own heading).
+    """
+    parent = argparse.ArgumentParser(add_help=False)
+    options = parent.add_argument_group("cluster and console")
+    options.add_argument("--workers", type=int, help="local worker processes (default: one per core)")
+    options.add_argument("--scheduler", help="address of an existing dask scheduler, e.g. tcp://host:8786")
+    options.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    return parent
 
 
 def _viewer_options(parser) -> None:
