@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 OUT ?= out
 
-.PHONY: run test lint bench docs-data mutations clean
+.PHONY: run test lint bench docs-data mutations clean FORCE
 
 $(BIN)/activate:
 	$(PYTHON) -m venv $(VENV)
@@ -22,7 +22,14 @@ $(VENV)/.build-deps: pyproject.toml $(BIN)/activate
 # Every C++ file under csrc/ (any depth): an edit anywhere rebuilds the extension.
 SOURCES := CMakeLists.txt $(shell find csrc -name '*.hpp' -o -name '*.cpp')
 
-$(VENV)/.installed: pyproject.toml $(SOURCES) $(VENV)/.build-deps
+# The editable install knows the package's modules by the list it saw when it was made: a module
+# added, moved or removed since needs a reinstall (seconds; nothing recompiles). This stamp changes
+# only when that list does.
+MODULES := $(sort $(shell find nnrobust -name '*.py'))
+$(VENV)/.modules: FORCE | $(BIN)/activate
+	@echo "$(MODULES)" | cmp -s - $@ || echo "$(MODULES)" > $@
+
+$(VENV)/.installed: pyproject.toml $(SOURCES) $(VENV)/.build-deps $(VENV)/.modules
 	CMAKE_BUILD_PARALLEL_LEVEL=2 $(BIN)/pip install --quiet --no-build-isolation -e .
 	touch $@
 
