@@ -119,20 +119,24 @@ void step_loops(nnrobust::StepPool &pool, std::vector<SteppedLoop *> loops, cons
   if (actions.shape(0) != count || observations.shape(0) != count || applied.shape(0) != count ||
       rewards.shape(0) != count || running.shape(0) != count || sizes.shape(0) != count)
     throw std::invalid_argument("step_loops: every array needs one row per loop");
-  const size_t n = static_cast<size_t>(spec.action_scale.size());
+  const size_t na = static_cast<size_t>(spec.action_scale.size());
+  const size_t n = static_cast<size_t>(spec.torque_limit.size());
+  if (spec.mode == nnrobust::ACTION_GAINS ? na != 2 : na != n)
+    throw std::invalid_argument("step_loops: spec.action_scale needs " + std::string(spec.mode == nnrobust::ACTION_GAINS ? "2" : "one per joint") + " entries");
   for (size_t i = 0; i < count; ++i) {
     if (loops[i] == nullptr) throw std::invalid_argument("step_loops: loop " + std::to_string(i) + " is None");
     const SteppedLoop &loop = *loops[i];
-    if (static_cast<size_t>(loop.measured_q().size()) != n || actions.shape(1) != n || applied.shape(1) != n ||
+    if (static_cast<size_t>(loop.measured_q().size()) != n || actions.shape(1) != na || applied.shape(1) != n ||
         static_cast<int>(observations.shape(1)) != loop.observation_size() || spec.torque_limit.size() != n ||
         spec.lower.size() != n || spec.upper.size() != n || spec.speed_limit.size() != n)
       throw std::invalid_argument("step_loops: loop " + std::to_string(i) + " needs actions of " +
-                                  std::to_string(loop.measured_q().size()) + " and observations of " +
+                                  std::to_string(na) + ", torques of " + std::to_string(loop.measured_q().size()) + " and observations of " +
                                   std::to_string(loop.observation_size()) + " entries, and limits of its joints");
     if (!loop.running()) throw std::invalid_argument("step_loops: loop " + std::to_string(i) + " has ended");
   }
   const nnrobust::StepRows rows{actions.data(), observations.data(), applied.data(), rewards.data(),
-                                running.data(), sizes.data(),        n,              observations.shape(1)};
+                                running.data(), sizes.data(),        na,             observations.shape(1),
+                                n};
   nb::gil_scoped_release released;
   nnrobust::step_loops(pool, loops, spec, rows);
 }
@@ -223,16 +227,17 @@ NB_MODULE(_loop, m) {
       .def(
           "act",
           [](SteppedLoop &l, const nnrobust::Vector &command, int mode) {
-            if (command.size() != l.measured_q().size())
-              throw std::invalid_argument("SteppedLoop.act: the command needs " +
-                                          std::to_string(l.measured_q().size()) + " entries, got " +
-                                          std::to_string(command.size()));
+            const Eigen::Index size = mode == nnrobust::ACTION_GAINS ? 2 : l.measured_q().size();
+            if (command.size() != size)
+              throw std::invalid_argument("SteppedLoop.act: the command needs " + std::to_string(size) +
+                                          " entries, got " + std::to_string(command.size()));
             if (!l.running()) throw std::invalid_argument("SteppedLoop.act: the run has ended (" + l.trace().status + ")");
             return nnrobust::apply_command(l, command, mode);
           },
           nb::arg("command"), nb::arg("mode"),
-          "One control period: mode 0 applies `command` [N m], mode 1 adds it to the compiled law's; "
-          "False when the run has ended.")
+          "One control period: mode 0 applies `command` [N m], mode 1 adds it to the compiled law's, mode 2 "
+          "multiplies the law's position and velocity gains by exp(command) (2 entries); False when the run "
+          "has ended.")
       .def("end", &SteppedLoop::end, nb::arg("status"), "Stop the run here, marked `status`.")
       .def("finish", &SteppedLoop::finish, "The run's trace (call once, at the end).");
   nb::class_<nnrobust::StepPool>(m, "StepPool", "A persistent pool of C++ threads stepping loops.")

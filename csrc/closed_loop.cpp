@@ -96,6 +96,11 @@ Output SteppedLoop::control() {
   return controller_->compute(time(), qm_, vm_, z_);
 }
 
+bool SteppedLoop::scale_gains(double position, double velocity) {
+  if (!controller_) throw std::logic_error("SteppedLoop::scale_gains: this loop was built without its law");
+  return controller_->law->scale_gains(position, velocity);
+}
+
 void SteppedLoop::observe(double *obs) const {
   if (!controller_) throw std::logic_error("SteppedLoop::observe: this loop was built without its law");
   const int n = model_.model.nv;

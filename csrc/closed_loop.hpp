@@ -127,6 +127,8 @@ class SteppedLoop {
   int task_rows() const { return s_.m; }
   // the compiled law's output at the current instant from the measurement and the state
   Output control();
+  // Law::scale_gains of the compiled law (false: it has no position and velocity gains)
+  bool scale_gains(double position, double velocity);
   // the learning environment's observation (docs/learning.md): the measured q, q', the desired
   // position p_d, the task error e and e' (from the nominal model at the measured state), x_d'
   // and x_d''; observation_size() = 2 n + min(m, 3) + 4 m entries written to `obs`

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 #include "controllers.hpp"
 
@@ -17,7 +18,11 @@ bool step_action(SteppedLoop &loop, const double *a, const RewardSpec &spec) {
 
 bool apply_command(SteppedLoop &loop, const Vector &command, int mode) {
   Output out;
-  if (mode == ACTION_RESIDUAL) {
+  if (mode == ACTION_GAINS) {
+    if (command.size() != 2 || !loop.scale_gains(std::exp(command[0]), std::exp(command[1])))
+      throw std::invalid_argument("gains mode: the law needs position and velocity gains and the action 2 entries");
+    out = loop.control();
+  } else if (mode == ACTION_RESIDUAL) {
     out = loop.control();
     out.tau += command;
   } else {
@@ -109,12 +114,12 @@ void StepPool::serve() {
 }
 
 void step_loops(StepPool &pool, const std::vector<SteppedLoop *> &loops, const RewardSpec &spec, const StepRows &rows) {
-  const size_t na = rows.action_size, no = rows.observation_size, count = loops.size();
+  const size_t na = rows.action_size, no = rows.observation_size, nj = rows.joints, count = loops.size();
   const auto one = [&](size_t i) {
     SteppedLoop &loop = *loops[i];
     rows.running[i] = step_action(loop, rows.actions + i * na, spec);
     const Vector &applied = loop.applied_torque();
-    Eigen::Map<Vector>(rows.applied + i * na, static_cast<Eigen::Index>(na)) = applied;
+    Eigen::Map<Vector>(rows.applied + i * nj, static_cast<Eigen::Index>(nj)) = applied;
     if (rows.running[i]) loop.observe(rows.observations + i * no);
     rows.rewards[i] = period_reward(spec, rows.observations + i * no, applied, rows.sizes[i], loop.task_rows());
   };

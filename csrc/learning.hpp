@@ -16,24 +16,26 @@
 
 namespace nnrobust {
 
-// What an action is (nnrobust.learning.env.ACTION_MODES): the command, or a residual added to the
-// compiled law's command (the law's state and signals advance as in a run).
-enum ActionMode { ACTION_TORQUE = 0, ACTION_RESIDUAL = 1 };
+// What an action is (nnrobust.learning.env.ACTION_MODES): the command, a residual added to the
+// compiled law's command (the law's state and signals advance as in a run), or the logarithms of
+// the factors on the compiled law's position and velocity gains for the period (Law::scale_gains).
+enum ActionMode { ACTION_TORQUE = 0, ACTION_RESIDUAL = 1, ACTION_GAINS = 2 };
 
 // The reward's weights and the arm's limits (nnrobust.learning.env.Reward and Episodes):
 // r = -(error |e_p| / L + effort mean((tau / tau_max)^2) + limits mean(beyond a limit)).
 struct RewardSpec {
   double error = 1.0, effort = 0.01, limits = 0.1;
   Vector torque_limit, lower, upper, speed_limit;
-  Vector action_scale;  // tau_max (torque) or s tau_max (residual): the command is clip(a) .* scale
+  Vector action_scale;  // tau_max (torque), s tau_max (residual) or ln G (gains): the command is clip(a) .* scale
   int mode = ACTION_TORQUE;
 };
 
-// One period of `loop` with `command` [N m] applied as `mode` says; false when the run has ended.
+// One period of `loop` with `command` applied as `mode` says ([N m] for torque and residual; the
+// two gain factors' logarithms for gains); false when the run has ended.
 bool apply_command(SteppedLoop &loop, const Vector &command, int mode);
 
-// One period of `loop` under the raw action `a` (n entries, clipped to [-1, 1] and scaled by
-// spec.action_scale); false when the run has ended.
+// One period of `loop` under the raw action `a` (spec.action_scale's size: n, or 2 for gains;
+// clipped to [-1, 1] and scaled by spec.action_scale); false when the run has ended.
 bool step_action(SteppedLoop &loop, const double *a, const RewardSpec &spec);
 
 // The reward of the period just stepped, from the next observation `obs` (the observed error and
@@ -78,7 +80,7 @@ struct StepRows {
   double *observations, *applied, *rewards;
   bool *running;
   const double *sizes;  // each loop's path size L
-  size_t action_size, observation_size;
+  size_t action_size, observation_size, joints;
 };
 
 // One period of every loop on the pool (the vector environment's step; the single environment's

@@ -454,7 +454,7 @@ def simulate_policy(setup, duration: float):
     if refusal:
         raise NNRobustError(f"simulation.backend = 'hybrid': the policy's base law: {refusal}")
     loop, spec = stepped_loop(base, duration)
-    mode, scale, run = (1 if policy.action == "residual" else 0), policy.scale, policy.policy
+    mode, scale, run = policy.mode, policy.scale, policy.policy
     seconds = np.full(spec.steps, np.nan)
     k = 0
     try:

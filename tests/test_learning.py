@@ -30,7 +30,7 @@ BOX = {"nominal.relative_error": {"uniform": [0.0, 0.3]}, "plant.disturbance_sca
 
 
 @pytest.mark.parametrize("preset", ["paper-ellipse", "panda-ellipse"])
-@pytest.mark.parametrize("action", ["torque", "residual"])
+@pytest.mark.parametrize("action", ["torque", "residual", "gains"])
 def test_gymnasium_checker_passes(preset, action):
     """Gymnasium's checker passes; its only remarks are on the observation's infinite bounds
     (measured speeds and errors have no physical bound the environment could promise)."""
@@ -92,6 +92,35 @@ def test_a_zero_residual_is_the_base_law_compiled_run(law):
     np.testing.assert_array_equal(tau, run.tau)
     assert info["metrics"]["rms_error"] == run.metrics()["rms_error"]
     assert info["status"] == "completed"
+
+
+@pytest.mark.parametrize(("law", "keys"), [("no-u0", ("Kp", "Kv")), ("pd", ("pd_Kp", "pd_Kd"))])
+@pytest.mark.parametrize("action", [(0.0, 0.0), (-1.0, 1.0), (0.5, 0.25)])
+def test_a_constant_gains_action_is_the_base_law_with_its_gains_scaled(law, keys, action):
+    """Gains mode with a constant action a is the compiled run of the base law whose experiment
+    sets its position gain times G^a_0 and its damping gain times G^a_1 (the PD's null-space
+    damping, sized from K_d when unset, held at the law's own)."""
+    G = 3.0
+    env = ArmEnv("paper-ellipse", action="gains", controller=law, vary=BOX, duration=0.3, gain_range=G)
+    assert env.action_space.shape == (2,)
+    tau, info = _applied(env, np.array(action))
+    spec = env.episodes.spec
+    config = experiment(spec, env.episodes.base, draw(spec, 0), law)
+    own = config.controller
+    scaled = {key: [g * G**a for g in getattr(own, key)] for key, a in zip(keys, action)}
+    if law == "pd":
+        scaled["pd_null_damping"] = env.setup.controller.null_damping
+    config = config.replace(simulation={"duration": 0.3, "backend": "compiled"}, controller=scaled)
+    run = run_experiment(config)
+    np.testing.assert_allclose(tau, run.tau, rtol=1e-12, atol=1e-12)
+    assert info["metrics"]["rms_error"] == pytest.approx(run.metrics()["rms_error"], rel=1e-10)
+    if action == (0.0, 0.0):  # exactly the base law's own run
+        np.testing.assert_array_equal(tau, run.tau)
+
+
+def test_gains_mode_refuses_a_law_without_position_and_velocity_gains():
+    with pytest.raises(ConfigError, match="'slotine-li' has no position and velocity gains"):
+        ArmEnv("paper-ellipse", action="gains", controller="slotine-li", duration=0.1)
 
 
 def test_a_zero_torque_is_a_custom_law_returning_zeros_on_the_hybrid_loop():

@@ -75,12 +75,18 @@ def test_a_zero_residual_policy_is_its_base_laws_compiled_run(tmp_path, base):
 @needs_compiled
 @pytest.mark.parametrize(
     ("preset", "layout", "action"),
-    [("paper-ellipse", PAPER, "residual"), ("panda-ellipse", ObservationLayout(7, 3), "torque")],
+    [
+        ("paper-ellipse", PAPER, "residual"),
+        ("panda-ellipse", ObservationLayout(7, 3), "torque"),
+        ("paper-ellipse", PAPER, "gains"),
+    ],
 )
 def test_the_compiled_policy_run_equals_the_python_reference(tmp_path, preset, layout, action):
     """The same policy (feedback on e) through the compiled path and the Python loop's PolicyLaw:
     one implementation of the observation, the action and the base law."""
-    file = linear_policy(tmp_path / "p.onnx", layout.size, layout.n, _weights(layout), dtype=np.float64)
+    n = 2 if action == "gains" else layout.n
+    W = _weights(layout, scale=30.0 if action == "gains" else 0.3)[:, :n]
+    file = linear_policy(tmp_path / "p.onnx", layout.size, n, W, dtype=np.float64)
     fast = run_experiment(_config(preset, file, duration=0.3, action=action, residual_scale=0.2))
     slow = run_experiment(
         _config(preset, file, duration=0.3, backend="python", action=action, residual_scale=0.2)
@@ -89,6 +95,15 @@ def test_the_compiled_policy_run_equals_the_python_reference(tmp_path, preset, l
     assert np.abs(fast.tau).max() > 0
     np.testing.assert_allclose(fast.q, slow.q, rtol=0, atol=1e-9)
     np.testing.assert_allclose(fast.tau, slow.tau, rtol=1e-7, atol=1e-7)
+
+
+def test_a_gains_policy_needs_a_base_law_with_gains_and_two_outputs(tmp_path):
+    two = linear_policy(tmp_path / "two.onnx", PAPER.size, 2)
+    with pytest.raises(ConfigError, match="params.base: 'slotine-li' has no position and velocity gains"):
+        build(_config("paper-ellipse", two, action="gains", base="slotine-li"))
+    three = linear_policy(tmp_path / "three.onnx", PAPER.size, 3)
+    with pytest.raises(ConfigError, match=r"three.onnx: its output 'action' .* the action is \[2\]"):
+        build(_config("paper-ellipse", three, action="gains", base="pd"))
 
 
 def test_files_that_cannot_be_a_policy_are_refused_naming_the_file(tmp_path):

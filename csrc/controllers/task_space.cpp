@@ -11,11 +11,12 @@ namespace {
 struct TaskSpace : Law {
   LawContext c;
   Matrix Kp, Kv;
+  const Matrix Kp_own, Kv_own;  // the law's own gains (scale_gains multiplies these)
   double k;
   std::unique_ptr<RobustTerm> robust;  // none: u_0 = 0
 
   TaskSpace(const LawParams &p, LawContext &context)
-      : c(context), Kp(p.matrix("Kp")), Kv(p.matrix("Kv")), k(p.scalar("k")) {
+      : c(context), Kp(p.matrix("Kp")), Kv(p.matrix("Kv")), Kp_own(Kp), Kv_own(Kv), k(p.scalar("k")) {
     const std::string &name = c.spec.robust;
     if (name.empty()) return;
     const auto factory = RobustTermRegistry::find(name);
@@ -39,15 +40,33 @@ struct TaskSpace : Law {
     out.signals << signals, lam2;
     return out;
   }
+
+  bool scale_gains(double position, double velocity) override {
+    Kp = position * Kp_own;
+    Kv = velocity * Kv_own;
+    return true;
+  }
 };
 
 struct TaskSpacePD : Law {
   LawContext c;
   Matrix Kp, Kd;
+  const Matrix Kp_own, Kd_own;  // the law's own gains (scale_gains multiplies these)
   double null_damping;
 
   TaskSpacePD(const LawParams &p, LawContext &context)
-      : c(context), Kp(p.matrix("Kp")), Kd(p.matrix("Kd")), null_damping(p.scalar("null_damping")) {}
+      : c(context),
+        Kp(p.matrix("Kp")),
+        Kd(p.matrix("Kd")),
+        Kp_own(Kp),
+        Kd_own(Kd),
+        null_damping(p.scalar("null_damping")) {}
+
+  bool scale_gains(double position, double velocity) override {
+    Kp = position * Kp_own;
+    Kd = velocity * Kd_own;
+    return true;
+  }
 
   // TaskSpacePD.compute: J^T (-Kp e - Kd e') + G-hat - D (I - J+J) q'
   Output compute(double t, const Vector &q, const Vector &v, const Vector &z) override {

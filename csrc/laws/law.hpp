@@ -37,6 +37,14 @@ struct Law {
   virtual ~Law() = default;
   // the torque, the signals (in the Python law's signal_names order) and the next state at t
   virtual Output compute(double t, const Vector &q, const Vector &v, const Vector &z) = 0;
+  // The learning environment's gains mode (nnrobust/controllers/laws/policy.py): from the next
+  // compute on, the law's position and velocity gains are its own times `position` and
+  // `velocity`. False for a law without such a pair of gains.
+  virtual bool scale_gains(double position, double velocity) {
+    (void)position;
+    (void)velocity;
+    return false;
+  }
 };
 
 // The laws by the name their Python twin declares (Law.twin, or the controller class's twin)

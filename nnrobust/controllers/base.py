@@ -50,6 +50,13 @@ class Controller(ABC):
         """z(0)."""
         return np.zeros(self.state_size)
 
+    def scale_gains(self, position: float, velocity: float) -> bool:
+        """From the next :meth:`compute` on, the law's position and velocity gains are its own
+        times ``position`` and ``velocity`` (a policy's ``gains`` action, docs/learning.md);
+        False for a law without such a pair of gains (this default).
+        """
+        return False
+
     @abstractmethod
     def compute(
         self, t: float, q: np.ndarray, v: np.ndarray, z: np.ndarray, period: float = 0.0

@@ -77,6 +77,7 @@ class TaskSpaceController(Controller):
         self.trajectory = trajectory
         self.Kp = np.asarray(Kp, dtype=float)
         self.Kv = np.asarray(Kv, dtype=float)
+        self._own_gains = (self.Kp, self.Kv)
         self.k = float(k)
         self.criterion = criterion
         self.nominal_friction = nominal_friction or Friction.none(nominal.nq)
@@ -88,6 +89,12 @@ class TaskSpaceController(Controller):
     def initial_state(self) -> np.ndarray:
         """Compensator state [Z, eps], or nothing."""
         return self.compensator.initial_state() if self.compensator else np.zeros(0)
+
+    def scale_gains(self, position: float, velocity: float) -> bool:
+        """K_p and K_v are the law's own times ``position`` and ``velocity`` from now on."""
+        Kp, Kv = self._own_gains
+        self.Kp, self.Kv = position * Kp, velocity * Kv
+        return True
 
     def _error(self, t: float, x: np.ndarray, J: np.ndarray, v: np.ndarray):
         xd, dxd, ddxd = self.trajectory(t)
@@ -170,8 +177,15 @@ class TaskSpacePD(Controller):
         self.trajectory = trajectory
         self.Kp = np.asarray(Kp, dtype=float)
         self.Kd = np.asarray(Kd, dtype=float)
+        self._own_gains = (self.Kp, self.Kd)
         self.null_damping = float(null_damping)
         self.pinv = pinv or DampedPseudoInverse()
+
+    def scale_gains(self, position: float, velocity: float) -> bool:
+        """K_p and K_d are the law's own times ``position`` and ``velocity`` from now on."""
+        Kp, Kd = self._own_gains
+        self.Kp, self.Kd = position * Kp, velocity * Kd
+        return True
 
     def compute(
         self, t: float, q: np.ndarray, v: np.ndarray, z: np.ndarray, period: float = 0.0

@@ -25,9 +25,11 @@ try:
 except ImportError as err:  # pragma: no cover - the extra is missing
     raise NNRobustError("the learning environment needs Gymnasium: pip install 'nnrobust[learning]'") from err
 
-ACTION_MODES = {"torque": 0, "residual": 1}
+ACTION_MODES = {"torque": 0, "residual": 1, "gains": 2}
 """What an action is: ``torque``, the command itself, a ⊙ τ_max; ``residual``, added to the base
-law's command (eq. 9 with or without u_0, the PD, any compiled law), scale · a ⊙ τ_max."""
+law's command (eq. 9 with or without u_0, the PD, any compiled law), scale · a ⊙ τ_max; ``gains``,
+two entries: the base law's position and velocity gains (K_p, K_v of eq. 9; K_p, K_d of the PD)
+times G^a_0 and G^a_1 over the period, G = ``gain_range``."""
 
 ENV_VERSION = 1
 """Version of the environment's interface (observation, actions, reward, info): registered ids
@@ -138,7 +140,9 @@ class Episodes:
     loaded on the compiled loop. Shared by :class:`ArmEnv` and the vector environment.
     """
 
-    def __init__(self, experiment, *, action: str, vary, seed: int, controller, residual_scale, duration):
+    def __init__(
+        self, experiment, *, action: str, vary, seed: int, controller, residual_scale, duration, gain_range
+    ):
         """See :class:`ArmEnv` for the arguments."""
         from .. import compiled
 
@@ -152,6 +156,10 @@ class Episodes:
             isinstance(residual_scale, int | float) and residual_scale > 0
         ):
             raise ConfigError("residual_scale", f"expected a number > 0, got {residual_scale!r}")
+        if isinstance(gain_range, bool) or not (
+            isinstance(gain_range, int | float) and 1 < gain_range < math.inf
+        ):
+            raise ConfigError("gain_range", f"expected a factor > 1, got {gain_range!r}")
         if duration is not None and (
             isinstance(duration, bool) or not isinstance(duration, int | float) or not 0 < duration < math.inf
         ):
@@ -166,6 +174,7 @@ class Episodes:
                 own.pop(key, None)
         self.action, self.mode = action, ACTION_MODES[action]
         self.residual_scale, self.duration = float(residual_scale), duration
+        self.gain_range = float(gain_range)
         self.setup, self.loop, self.loop_spec = None, None, None
         first = self.build(0)  # the shapes, limits and period every episode shares
         robot = first.robot
@@ -179,7 +188,19 @@ class Episodes:
                 "or give the URDF's <limit effort=...>)",
             )
         self.torque_limit = np.asarray(limit, dtype=float)
-        self.action_scale = self.torque_limit * (self.residual_scale if self.mode == 1 else 1.0)
+        if action == "gains":
+            from ..controllers.laws.policy import GAIN_ACTIONS
+
+            if not first.controller.scale_gains(1.0, 1.0):
+                raise ConfigError(
+                    "controller",
+                    f"{self.law!r} has no position and velocity gains an action can set; in gains mode the "
+                    "base law is an eq. (9) law (nn, no-u0, sliding-mode, computed-torque, rbf-nn) or pd",
+                )
+            self.action_scale = np.full(GAIN_ACTIONS, math.log(self.gain_range))  # a -> G^a
+        else:
+            self.action_scale = self.torque_limit * (self.residual_scale if self.mode == 1 else 1.0)
+        self.action_size = self.action_scale.size
         self.speed_limit = np.asarray(robot.velocity_limits, dtype=float)
         self.lower, self.upper = (
             np.asarray(a, dtype=float) for a in (robot.lower_limits, robot.upper_limits)
@@ -267,6 +288,8 @@ class ArmEnv(gym.Env):
         controller: the base law's kind (``nn``, ``no-u0``, ``pd``, ``slotine-li``, ...; default
             the experiment's); it supplies the nominal model and path the observation uses.
         residual_scale: the residual's bound as a fraction of the effort limits.
+        gain_range: G: in ``gains`` mode the action a ∈ [-1, 1]^2 multiplies the base law's
+            position and velocity gains by G^a_0 and G^a_1.
         duration: the episode's length [s] (default the experiment's simulation.duration).
         reward: the reward's weights.
         verdicts: compute the run's metrics and warnings at the end of each episode (info).
@@ -287,6 +310,7 @@ class ArmEnv(gym.Env):
         duration: float | None = None,
         reward: Reward | None = None,
         verdicts: bool = True,
+        gain_range: float = 4.0,
     ):
         self.episodes = Episodes(
             experiment,
@@ -296,11 +320,12 @@ class ArmEnv(gym.Env):
             controller=controller,
             residual_scale=residual_scale,
             duration=duration,
+            gain_range=gain_range,
         )
         self.weights = reward if reward is not None else Reward()
         self.verdicts = verdicts
         n, size = self.episodes.n, self.episodes.layout.size
-        self.action_space = gym.spaces.Box(-1.0, 1.0, (n,), dtype=np.float32)
+        self.action_space = gym.spaces.Box(-1.0, 1.0, (self.episodes.action_size,), dtype=np.float32)
         self.observation_space = gym.spaces.Box(-np.inf, np.inf, (size,), dtype=np.float64)
         self.episode = -1
         self.setup = self.loop = self.loop_spec = None
@@ -312,7 +337,7 @@ class ArmEnv(gym.Env):
         self._reward = self.episodes.reward_spec(self.weights)
         self._size = np.ones(1)
         self._obs = np.zeros((1, size))
-        self._action = np.zeros((1, n))
+        self._action = np.zeros((1, self.episodes.action_size))
         self._applied = np.zeros((1, n))
         self._rewards = np.zeros(1)
         self._running = np.zeros(1, dtype=bool)

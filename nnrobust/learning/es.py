@@ -110,7 +110,7 @@ def observation_statistics(vec, episodes: int) -> tuple[np.ndarray, np.ndarray]:
     """
     obs, _ = vec.reset(seed=vec.episodes.spec.seed)
     seen = [obs]
-    zeros = np.zeros((vec.num_envs, vec.episodes.n))
+    zeros = np.zeros((vec.num_envs, vec.episodes.action_size))
     while True:
         obs, _, terminated, truncated, _ = vec.step(zeros)
         if (terminated | truncated).any():
@@ -136,6 +136,7 @@ def train(
     sigma: float = 0.1,
     seed: int = 0,
     residual_scale: float = 0.1,
+    gain_range: float = 4.0,
     threads: int | None = None,
     progress=print,
 ) -> dict:
@@ -160,12 +161,13 @@ def train(
         "controller": controller,
         "duration": duration,
         "residual_scale": residual_scale,
+        "gain_range": gain_range,
         "verdicts": False,
         "threads": threads,
     }
     vec = ArmVectorEnv(experiment, population * episodes, seed=seed, **settings)
     stats = ArmVectorEnv(experiment, episodes, seed=seed + 1, **settings)  # mu and sigma: other plants
-    n, d = vec.episodes.n, vec.episodes.layout.size
+    n, d = vec.episodes.action_size, vec.episodes.layout.size
     mean, scale = observation_statistics(stats, episodes)
     net = Network(d, n, hidden, mean, scale)
     es = cma.CMAEvolutionStrategy(
@@ -191,6 +193,7 @@ def train(
         "action": action,
         "controller": vec.episodes.law,
         "residual_scale": residual_scale,
+        "gain_range": gain_range,
         "vary": vary or {},
         "duration": duration,
         "hidden": hidden,

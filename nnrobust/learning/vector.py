@@ -43,6 +43,7 @@ class ArmVectorEnv(gym.vector.VectorEnv):
         reward: Reward | None = None,
         verdicts: bool = True,
         threads: int | None = None,
+        gain_range: float = 4.0,
     ):
         from .. import compiled
 
@@ -59,12 +60,13 @@ class ArmVectorEnv(gym.vector.VectorEnv):
             controller=controller,
             residual_scale=residual_scale,
             duration=duration,
+            gain_range=gain_range,
         )
         self.weights = reward if reward is not None else Reward()
         self.verdicts = verdicts
         self.num_envs = num_envs
         n, size = self.episodes.n, self.episodes.layout.size
-        self.single_action_space = gym.spaces.Box(-1.0, 1.0, (n,), dtype=np.float32)
+        self.single_action_space = gym.spaces.Box(-1.0, 1.0, (self.episodes.action_size,), dtype=np.float32)
         self.single_observation_space = gym.spaces.Box(-np.inf, np.inf, (size,), dtype=np.float64)
         self.action_space = gym.vector.utils.batch_space(self.single_action_space, num_envs)
         self.observation_space = gym.vector.utils.batch_space(self.single_observation_space, num_envs)
@@ -132,8 +134,9 @@ class ArmVectorEnv(gym.vector.VectorEnv):
         if self._runs[0] is None:
             raise NNRobustError("ArmVectorEnv.step: call reset() first")
         actions = np.ascontiguousarray(actions, dtype=float)
-        if actions.shape != (N, self.episodes.n):
-            raise ConfigError("actions", f"expected shape ({N}, {self.episodes.n}), got {actions.shape}")
+        if actions.shape != (N, self.episodes.action_size):
+            size = self.episodes.action_size
+            raise ConfigError("actions", f"expected shape ({N}, {size}), got {actions.shape}")
         terminated = np.zeros(N, dtype=bool)
         truncated = np.zeros(N, dtype=bool)
         infos: dict = {}

@@ -7,7 +7,11 @@ a ∈ [-1, 1]^n, exactly as the learning environment gives it:
 - ``action = "torque"``: τ = clip(a, -1, 1) ⊙ τ_max;
 - ``action = "residual"``: τ = τ_base + s · clip(a, -1, 1) ⊙ τ_max, with τ_base the command of
   the ``base`` law (eq. 9 with or without u_0, the PD, any shipped law) built as the experiment
-  builds that kind, and s = ``residual_scale``.
+  builds that kind, and s = ``residual_scale``;
+- ``action = "gains"``: a ∈ [-1, 1]^2 and τ is the ``base`` law's command with its position and
+  velocity gains (K_p and K_v of eq. 9, K_p and K_d of the PD) multiplied by G^clip(a_0) and
+  G^clip(a_1) for the period, G = ``gain_range``. The robust term's own numbers (the NN's P of
+  eq. 16) stay those of the law's own gains.
 
 The policy is an ONNX file run by onnxruntime on the CPU (one thread). Its one input takes the
 observation ([d] or [batch, d], float32 or float64) and its first output gives a ([n] or
@@ -24,6 +28,7 @@ its Python reference (the Python loop), and tests/test_policy.py holds the two e
 
 from __future__ import annotations
 
+import math
 import time
 from pathlib import Path
 
@@ -33,7 +38,10 @@ from ...exceptions import ConfigError, ControllerError
 from ..base import Controller, ControllerContext, ControlOutput
 from ..registry import Law, LawParam, register_law
 
-ACTIONS = ("torque", "residual")
+ACTIONS = ("torque", "residual", "gains")
+"""The action modes, in the order of the compiled loop's ActionMode (csrc/learning.hpp)."""
+GAIN_ACTIONS = 2
+"""The size of a ``gains`` action: the factors' exponents on the position and velocity gains."""
 
 
 def _session(path: Path):
@@ -68,7 +76,7 @@ def _fits(shape, size: int) -> bool:
 class OnnxPolicy:
     """An ONNX file as a function observation (d entries) -> action (n entries), checked."""
 
-    def __init__(self, file: str | Path, d: int, n: int):
+    def __init__(self, file: str | Path, d: int, n: int, entries: str = "one entry per joint"):
         path = Path(file)
         if not path.is_file():
             raise ConfigError("controller.params.file", f"{str(file)!r} is not a file")
@@ -92,7 +100,7 @@ class OnnxPolicy:
             raise ConfigError(
                 "controller.params.file",
                 f"{path}: its output {out.name!r} is {out.type} {out.shape}; the action is [{n}] or "
-                f"[batch, {n}] (one entry per joint)",
+                f"[batch, {n}] ({entries})",
             )
         self.input, self.dtype = given.name, types[given.type]
         self.batched = len(given.shape) == 2
@@ -113,7 +121,7 @@ class OnnxPolicy:
         if a.size != self.n:
             raise ControllerError(
                 f"the policy {self.path} returned {a.size} actions at t = {t:g} s; "
-                f"the arm has {self.n} joints"
+                f"its action has {self.n} entries"
             )
         if not np.all(np.isfinite(a)):
             raise ControllerError(f"the policy {self.path} returned a non-finite action at t = {t:g} s: {a}")
@@ -121,15 +129,16 @@ class OnnxPolicy:
 
 
 class PolicyLaw(Controller):
-    """A learned policy (an ONNX file) in torque or residual mode (module docstring).
+    """A learned policy (an ONNX file) in torque, residual or gains mode (module docstring).
 
     Args:
         context: what the experiment hands a controller.
         file: the ONNX file (a relative path in an experiment file is read from its folder).
-        action: ``"torque"`` or ``"residual"``.
-        base: the law whose command a residual is added to; in torque mode it is built but
-            never computed (the compiled loop observes through it).
+        action: ``"torque"``, ``"residual"`` or ``"gains"``.
+        base: the law whose command a residual is added to, or whose gains the policy sets; in
+            torque mode it is built but never computed (the compiled loop observes through it).
         residual_scale: s, the residual's bound as a fraction of the effort limits.
+        gain_range: G, the largest factor on a gain (and 1/G the smallest) in gains mode.
 
     """
 
@@ -140,6 +149,7 @@ class PolicyLaw(Controller):
         action: str = "torque",
         base: str = "pd",
         residual_scale: float = 0.1,
+        gain_range: float = 4.0,
     ):
         from ..observation import ObservationLayout
 
@@ -154,11 +164,34 @@ class PolicyLaw(Controller):
         if base == "policy":
             raise ConfigError("controller.params.base", "a policy's base law cannot be a policy")
         self.layout = ObservationLayout(context.n, context.m)
-        self.policy = OnnxPolicy(file, self.layout.size, context.n)
-        self.action, self.base_kind = action, base
-        self.scale = np.asarray(limits, dtype=float) * (residual_scale if action == "residual" else 1.0)
+        gains = action == "gains"
+        self.policy = (
+            OnnxPolicy(file, self.layout.size, GAIN_ACTIONS, "gains mode: the factors' exponents on K_p, K_v")
+            if gains
+            else OnnxPolicy(file, self.layout.size, context.n)
+        )
+        self.action, self.mode, self.base_kind = action, ACTIONS.index(action), base
+        if gains:  # the exponents' scale: factor = exp(clip(a) ln G) = G^clip(a)
+            self.scale = np.full(GAIN_ACTIONS, math.log(gain_range))
+        else:
+            self.scale = np.asarray(limits, dtype=float) * (residual_scale if action == "residual" else 1.0)
         self.nominal, self.trajectory = context.nominal, context.trajectory
-        self.base: Controller | None = None  # built by the experiment as it builds that kind
+        self._base: Controller | None = None
+
+    @property
+    def base(self) -> Controller | None:
+        """The base law, built by the experiment as it builds that kind."""
+        return self._base
+
+    @base.setter
+    def base(self, law: Controller | None) -> None:
+        if law is not None and self.action == "gains" and not law.scale_gains(1.0, 1.0):
+            raise ConfigError(
+                "controller.params.base",
+                f"{self.base_kind!r} has no position and velocity gains a policy can set; in gains mode the "
+                "base is an eq. (9) law (nn, no-u0, sliding-mode, computed-torque, rbf-nn) or pd",
+            )
+        self._base = law
 
     @property
     def state_size(self) -> int:  # type: ignore[override]
@@ -181,17 +214,20 @@ class PolicyLaw(Controller):
         from ..observation import observation
 
         a = self.policy(observation(self.nominal, self.trajectory, t, q, v), t)
-        tau = np.clip(a, -1.0, 1.0) * self.scale
+        command = np.clip(a, -1.0, 1.0) * self.scale
         base = self.base
         names = base.signal_names if base is not None else ()
-        if self.action == "residual" and base is not None:
+        if self.action == "gains" and base is not None:
+            base.scale_gains(math.exp(command[0]), math.exp(command[1]))
+        if self.action != "torque" and base is not None:
             out = base.compute(t, q, v, z, period)
             signals = dict(out.signals)
             signals["inference_time"] = self.policy.seconds
-            return ControlOutput(out.tau + tau, signals, out.state)
+            tau = out.tau + command if self.action == "residual" else out.tau
+            return ControlOutput(tau, signals, out.state)
         signals = dict.fromkeys(names, float("nan"))
         signals["inference_time"] = self.policy.seconds
-        return ControlOutput(tau, signals, None)
+        return ControlOutput(command, signals, None)
 
 
 LAW = register_law(
@@ -202,12 +238,18 @@ LAW = register_law(
         "(docs/learning.md)",
         (
             LawParam("file", None, "-", "the policy's ONNX file (docs/learning.md#policy-files)", path=True),
-            LawParam("action", "torque", "-", "the action is the command or a residual", choices=ACTIONS),
+            LawParam(
+                "action",
+                "torque",
+                "-",
+                "the action is the command, a residual on the base law, or the base law's gains",
+                choices=ACTIONS,
+            ),
             LawParam(
                 "base",
                 "pd",
                 "-",
-                "the law a residual is added to (the experiment's settings of that kind)",
+                "the law a residual is added to, or whose gains are set (with the experiment's settings)",
                 choices=("nn", "sliding-mode", "no-u0", "computed-torque", "pd", "rbf-nn", "slotine-li"),
             ),
             LawParam(
@@ -219,6 +261,16 @@ LAW = register_law(
                 10.0,
                 low_open=True,
                 search=(0.01, 1.0),
+            ),
+            LawParam(
+                "gain_range",
+                4.0,
+                "-",
+                "G: in gains mode each gain is the base law's times a factor in [1/G, G]",
+                1.0,
+                100.0,
+                low_open=True,
+                fixed="the range the policy was trained with: its actions are exponents of G",
             ),
         ),
     )
