@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .config.arrays import joint_vector
+from .arrays import joint_vector
 from .controllers.pseudoinverse import DampedPseudoInverse
 from .exceptions import ConfigError
 from .model.base import DynamicsModel

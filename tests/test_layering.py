@@ -28,8 +28,8 @@ FLOORS = {
     "loop": ("simulation",),
     "rooms": ("controllers", "plant", "subtasks", "trajectories", "user_parts", "user_code"),
     "model": ("model", "ik"),
-    "leaf": ("exceptions", "numeric_limits", "progress", "signals", "forked", "twins", "_loop",
-             "_floor_loop"),
+    "leaf": ("exceptions", "numeric_limits", "arrays", "search_coordinates", "progress", "signals",
+             "forked", "twins", "_loop", "_floor_loop"),
 }  # fmt: skip
 ORDER = list(FLOORS)[::-1]  # leaf first
 FLOOR_OF = {unit: ORDER.index(floor) for floor, units in FLOORS.items() for unit in units}
@@ -37,16 +37,14 @@ ALLOWED = {("results", "plots")}
 
 KNOWN = {
     # (importing unit, imported unit): places. The rooms' builders take the whole configuration
-    # and a law reads the tuner's Param (issue 36 removes these room by room).
-    ("controllers", "config"): 2,
-    ("controllers", "tune"): 4,
-    ("model", "config"): 2,
+    # (issue 36 removes these room by room).
+    ("controllers", "config"): 1,
+    ("model", "config"): 1,
     ("model", "plant"): 1,
     ("model", "subtasks"): 1,
-    ("plant", "config"): 3,
+    ("plant", "config"): 2,
     ("subtasks", "config"): 1,
     ("trajectories", "config"): 1,
-    ("ik", "config"): 1,
     ("ik", "controllers"): 1,
     ("config", "presets"): 1,
     ("properties", "sweep"): 1,  # the flag metrics (sweep.engine.FLAGS) belong in verdicts

@@ -10,8 +10,8 @@ import copy
 
 import numpy as np
 
+from ..arrays import joint_vector
 from ..config import ExperimentConfig, controller_kinds
-from ..config.arrays import joint_vector
 from ..exceptions import ConfigError
 from ..model import DynamicsModel, PinocchioModel
 from ..plant import Friction, Plant

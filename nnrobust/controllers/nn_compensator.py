@@ -244,7 +244,7 @@ def _search(scales: dict) -> list:
     sigma from 1 % over the run to one control period, and the eps floor up to the arm's task
     acceleration.
     """
-    from ..tune.space import Param
+    from ..search_coordinates import Param
 
     D, T, a = scales["duration"], scales["period"], scales["task_acceleration"]
     return [

@@ -246,7 +246,7 @@ class PaperKind:
         keys: its own configuration keys, beyond eq. (9)'s (``section.key``, or ``section.`` for
             a whole section): inert under a kind that does not declare them too.
         ignores: (key, why) of keys that it leaves inert although eq. (9) reads them.
-        search: ``search(scales) -> [tune.space.Param, ...]``, its robust term's search coordinates
+        search: ``search(scales) -> [search_coordinates.Param, ...]``, its robust term's search coordinates
             beside the gains (None: the gains alone).
         params: its own keys' declarations (a :class:`LawParam` named by the key,
             ``section.field``): the configuration's defaults, its checks and docs/controller.md's

@@ -71,7 +71,7 @@ def _search(scales: dict) -> list:
     """The tuner's coordinates of the sliding-mode term: K and Phi, scaled by the arm's task
     acceleration a (nnrobust/tune/space.py).
     """
-    from ..tune.space import Param
+    from ..search_coordinates import Param
 
     a = scales["task_acceleration"]
     return [

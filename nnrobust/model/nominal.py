@@ -8,8 +8,8 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from ..arrays import joint_vector, padded
 from ..config import ExperimentConfig, nominal_kind
-from ..config.arrays import joint_vector, padded
 from ..exceptions import ConfigError
 from .base import DynamicsModel
 from .loading import load_robot

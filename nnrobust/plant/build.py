@@ -12,8 +12,8 @@ import numpy as np
 import pinocchio as pin
 
 from .. import user_parts
+from ..arrays import joint_vector, padded, per_joint
 from ..config import ExperimentConfig
-from ..config.arrays import joint_vector, padded, per_joint
 from ..exceptions import ConfigError
 from ..ik import finite_limits
 from ..model import PinocchioModel

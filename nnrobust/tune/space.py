@@ -26,6 +26,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ..search_coordinates import Param, bandwidth_range
+
 
 def tunable() -> tuple[str, ...]:
     """The shipped laws with a search space: the paper's kinds (their gains, and their robust
@@ -63,45 +65,6 @@ def own_keys(name: str) -> tuple[frozenset[str], tuple[str, ...]]:
 
 EDGE = 0.03
 """A value within this fraction of its log range from a bound is "at the bound"."""
-
-
-@dataclass(frozen=True)
-class Param:
-    """One search coordinate: log-uniform on [low, high].
-
-    Attributes:
-        name: the coordinate's name (``bandwidth``, ``damping_ratio`` or a dotted config key).
-        low, high: its bounds.
-        unit: its unit.
-        low_reason, high_reason: why a bound is physical (never widened), or "".
-        weak: for a robust term's knob, the end (``low`` or ``high``) at which the term does least;
-            "" for the gains.
-        range_low, range_high: the values the law accepts (a registered law's declared range):
-            a bound is never widened past them, and one on them is physical.
-
-    """
-
-    name: str
-    low: float
-    high: float
-    unit: str
-    low_reason: str = ""
-    high_reason: str = ""
-    weak: str = ""
-    range_low: float = 0.0
-    range_high: float = math.inf
-
-    def reason(self, side: str) -> str:
-        """Why the bound on ``side`` is physical (never widened), or ""."""
-        if side == "low":
-            end = self.low <= self.range_low
-            return self.low_reason or (f"the law's range ends at {self.low:g}" if end else "")
-        end = self.high >= self.range_high
-        return self.high_reason or (f"the law's range ends at {self.high:g}" if end else "")
-
-    def position(self, value: float) -> float:
-        """Where value sits in [low, high], 0 to 1 on the log scale."""
-        return (math.log(value) - math.log(self.low)) / (math.log(self.high) - math.log(self.low))
 
 
 @dataclass(frozen=True)
@@ -226,13 +189,6 @@ def arm_scales(setup) -> dict[str, float]:
         "task_acceleration": acceleration,
         "joint_inertia": float(np.mean(np.diag(M))),
     }
-
-
-def bandwidth_range(scales: dict) -> tuple[float, float]:
-    """A loop bandwidth's search range [rad/s]: from one oscillation per run to the sampling limit
-    w (1/2 + d) T = 1 (period T, delay d periods).
-    """
-    return 2 * math.pi / scales["duration"], 1.0 / ((0.5 + scales["delay"]) * scales["period"])
 
 
 def search_space(controller: str, scales: dict[str, float]) -> SearchSpace:

@@ -32,7 +32,7 @@ import numpy as np
 import pinocchio as pin
 
 from ...exceptions import ConfigError
-from ...tune.space import bandwidth_range
+from ...search_coordinates import bandwidth_range
 from ..base import Controller, ControllerContext, ControlOutput
 from ..registry import Law, LawParam, register_law
 

@@ -1,10 +1,12 @@
-"""Configuration values as arrays sized to the robot, each size error naming its key."""
+"""Configuration values as arrays sized to the robot, each size error naming its key (a leaf
+module: every room that reads a per-joint key uses it).
+"""
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..exceptions import ConfigError
+from .exceptions import ConfigError
 
 
 def joint_vector(path: str, values, n: int, default: np.ndarray | None = None) -> np.ndarray:
