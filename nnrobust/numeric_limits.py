@@ -34,3 +34,7 @@ def finite_number(value: object) -> bool:
         return math.isfinite(value)
     except OverflowError:
         return False
+
+
+MAX_PAYLOAD = 1000.0
+"""Largest ``plant.payload`` and payload load [kg]."""

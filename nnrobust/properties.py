@@ -98,7 +98,7 @@ MACHINE_METRICS = ("wall_seconds",)
 def run_properties(texts: list[str]) -> list[Property]:
     """The properties of ``--require`` over the metrics a run records (metrics.json)."""
     from .results import METRIC_UNITS
-    from .sweep.engine import FLAGS
+    from .verdicts import FLAGS
 
     numeric = tuple(m for m in METRIC_UNITS if m != "singular_episodes")
     properties = [parse(t, numeric, FLAGS) for t in texts]

@@ -11,6 +11,9 @@ import math
 
 import numpy as np
 
+FLAGS = ("runaway", "rho_hat_growing", "subtask_degraded")
+"""The verdicts that are true or false (a row's boolean columns; a property may require one)."""
+
 SATURATION_WARNING = 0.01
 """Fraction of control steps with a saturated actuator above which a run gets a warning."""
 

@@ -42,12 +42,11 @@ KNOWN = {
     ("model", "config"): 1,
     ("model", "plant"): 1,
     ("model", "subtasks"): 1,
-    ("plant", "config"): 2,
+    ("plant", "config"): 1,
     ("subtasks", "config"): 1,
     ("trajectories", "config"): 1,
     ("ik", "controllers"): 1,
     ("config", "presets"): 1,
-    ("properties", "sweep"): 1,  # the flag metrics (sweep.engine.FLAGS) belong in verdicts
     ("sweep", "__init__"): 1,  # nnrobust.__version__, to check a remote worker's
 }
 

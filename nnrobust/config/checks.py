@@ -11,6 +11,7 @@ import re
 
 from ..exceptions import ConfigError
 from ..model.tasks import TASK_KINDS
+from ..numeric_limits import MAX_PAYLOAD
 from ..plant.disturbance import DISTURBANCE_KINDS
 from ..plant.mujoco_engine import ENGINES, MUJOCO_INTEGRATORS
 from ..trajectories import PATH_KINDS
@@ -295,8 +296,6 @@ def _check_declared(config: ExperimentConfig, m: int) -> None:
             p.check(value, None, m, p.name)
 
 
-MAX_PAYLOAD = 1000.0
-"""Largest ``plant.payload`` [kg]."""
 MAX_FACTOR = 100.0
 """Largest factor on a nominal inertial parameter (``nominal.factors``) or on the plant's friction
 or disturbance (``plant.friction_scale``, ...)."""

@@ -193,7 +193,7 @@ def parse_loads(
     configuration is checked before the robot is loaded). ``duration``: the run's [s]; a load
     starting at or after its end never acts, and a warning says so.
     """
-    from ..config import MAX_PAYLOAD
+    from ..numeric_limits import MAX_PAYLOAD
 
     pulses, wrenches, payloads = [], [], []
     for i, entry in enumerate(entries or ()):

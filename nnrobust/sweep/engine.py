@@ -23,6 +23,7 @@ from pathlib import Path
 from ..config import ExperimentConfig
 from ..exceptions import ConfigError, NNRobustError
 from ..signals import STOP_SIGNALS, check_interrupt, signals_as_interrupt
+from ..verdicts import FLAGS
 from .spec import SweepSpec, base_config, base_values, draw, experiment, study_inputs
 
 RESULTS = "results"
@@ -100,7 +101,6 @@ def _done_rows(folder: Path, key: str) -> set[tuple[int, str]]:
 
 IDS = ("sample", "controller")
 """The columns that name a row."""
-FLAGS = ("runaway", "rho_hat_growing", "subtask_degraded")
 TEXTS = ("status", "backend", "message")
 
 
