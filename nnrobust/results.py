@@ -15,7 +15,7 @@ from .plant.limits import available_torque
 from .plant.scaling import limits_or_inf
 from .run_info import RunInfo
 from .simulation import period_substeps
-from .subtasks.manipulability import det
+from .small_linalg import det
 
 METRIC_UNITS = {
     "rms_error": "m",

@@ -28,8 +28,9 @@ FLOORS = {
     "loop": ("simulation",),
     "rooms": ("controllers", "plant", "subtasks", "trajectories", "user_parts", "user_code"),
     "model": ("model", "ik"),
-    "leaf": ("exceptions", "numeric_limits", "arrays", "search_coordinates", "progress", "signals",
-             "forked", "twins", "_loop", "_floor_loop"),
+    "leaf": ("exceptions", "numeric_limits", "arrays", "search_coordinates", "small_linalg",
+             "progress", "signals",
+             "forked", "twins", "shipped_files", "_loop", "_floor_loop"),
 }  # fmt: skip
 ORDER = list(FLOORS)[::-1]  # leaf first
 FLOOR_OF = {unit: ORDER.index(floor) for floor, units in FLOORS.items() for unit in units}
@@ -41,7 +42,6 @@ KNOWN = {
     ("controllers", "config"): 1,
     ("model", "config"): 1,
     ("model", "plant"): 1,
-    ("model", "subtasks"): 1,
     ("plant", "config"): 1,
     ("subtasks", "config"): 1,
     ("trajectories", "config"): 1,

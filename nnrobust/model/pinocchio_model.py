@@ -8,6 +8,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import FrameNotFound, ModelMismatch
+from ..small_linalg import adjugate, det
 from .tasks import TASK_KINDS, pose_vector
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
@@ -191,8 +192,6 @@ class PinocchioModel:
         the suffix sum S_k = sum_{l>=k} (u_l x Wu_l + w_l x Ww_l). Joints off the frame's branch
         have zero columns and get zero.
         """
-        from ..subtasks.manipulability import adjugate, det
-
         J6 = pin.computeFrameJacobian(self.model, self.data, q, self.frame_id, _LWA)
         J = J6[self._rows]
         A = J @ J.T
