@@ -21,7 +21,6 @@ import pinocchio as pin
 from .config import (
     MAX_SUBSTEPS,
     ExperimentConfig,
-    path_key,
     provenance_header,
     step_rotation_limit,
 )
@@ -52,7 +51,7 @@ from .results import Result
 from .simulation import simulate
 from .subtasks import Criterion
 from .subtasks.build import build_criterion
-from .trajectories import Trajectory
+from .trajectories import Trajectory, path_key
 from .trajectories.build import build_trajectory
 
 

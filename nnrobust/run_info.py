@@ -47,9 +47,9 @@ class RunInfo:
         """The analysis view of an :class:`~nnrobust.config.ExperimentConfig`; ``n`` (the arm's
         joints) picks the default criteria when ``subtasks.criteria`` is unset.
         """
-        from .config import controller_label, default_criteria
+        from .config import controller_label
         from .model.tasks import TASK_KINDS
-        from .subtasks import criterion_unit
+        from .subtasks import criterion_unit, default_criteria
 
         rc, sub = config.robot, config.subtasks
         m = TASK_KINDS[rc.task]

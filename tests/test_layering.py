@@ -43,8 +43,6 @@ KNOWN = {
     ("model", "config"): 1,
     ("model", "plant"): 1,
     ("plant", "config"): 1,
-    ("subtasks", "config"): 1,
-    ("trajectories", "config"): 1,
     ("ik", "controllers"): 1,
     ("config", "presets"): 1,
     ("sweep", "__init__"): 1,  # nnrobust.__version__, to check a remote worker's

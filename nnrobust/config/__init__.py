@@ -5,7 +5,9 @@ of a checked configuration). Everything is importable from here.
 """
 
 from ..numeric_limits import MAX_CENTERS, MAX_GAIN, MAX_PINV, RANGE_LIMITS
+from ..subtasks.registry import default_criteria  # the rooms' own rules, re-exported
 from ..trajectories.piecewise import MAX_WAYPOINTS, MIN_MOVE_TIME  # the paths' own limits
+from ..trajectories.registry import path_key
 from .checks import (
     CLASS_PATTERN,
     FILLED_LISTS,
@@ -43,10 +45,8 @@ from .schema import (
     TrajectoryConfig,
     controller_kinds,
     controller_label,
-    default_criteria,
     is_eq9,
     nominal_kind,
-    path_key,
     shipped_laws,
     step_rotation_limit,
     task_rows,

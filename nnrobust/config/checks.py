@@ -14,7 +14,8 @@ from ..model.tasks import TASK_KINDS
 from ..numeric_limits import MAX_PAYLOAD
 from ..plant.disturbance import DISTURBANCE_KINDS
 from ..plant.mujoco_engine import ENGINES, MUJOCO_INTEGRATORS
-from ..trajectories import PATH_KINDS
+from ..subtasks.registry import default_criteria
+from ..trajectories import PATH_KINDS, path_key
 from .resolve import GAIN_KEYS, full_gain
 from .schema import (
     MAX_PATH_EXTENT,
@@ -26,10 +27,8 @@ from .schema import (
     TrajectoryConfig,
     _user_part,
     controller_kinds,
-    default_criteria,
     is_eq9,
     nominal_kind,
-    path_key,
 )
 
 

@@ -609,22 +609,6 @@ def task_rows(config: ExperimentConfig) -> int:
     return config.trajectory.dimension
 
 
-def default_criteria(n: int, task: str) -> list[str]:
-    """``subtasks.criteria`` when it is not given: the paper's eq. (19) on a three-joint planar
-    arm, else manipulability and joint-limit avoidance (joint limits alone on a pose task, where
-    the manipulability of a 6 x n Jacobian mixes metres and radians).
-    """
-    if n == 3 and task == "planar":
-        return ["paper"]
-    return ["joint_limits"] if task == "pose" else ["manipulability", "joint_limits"]
-
-
-def path_key(tc: TrajectoryConfig) -> str:
-    """The key that places the path: center, goal, waypoints (or class, for a user's)."""
-    kind = PATH_KINDS.get(tc.kind)
-    return kind.keys[0] if kind is not None else "class" if tc.kind == "custom" else "center"
-
-
 _FIELD_NAMES: dict[typing.Any, list[str]] = {}
 
 

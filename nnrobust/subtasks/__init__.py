@@ -8,7 +8,7 @@ from .joint_limits import JointCentering, JointLimitAvoidance
 from .joint_smoothness import PAPER_SMOOTHNESS, JointSmoothness, PaperCriterion
 from .manipulability import HalfDetManipulability, Manipulability
 from .obstacles import SphereObstacles
-from .registry import CRITERION_KINDS, CriterionKind, criterion_unit, kind_of
+from .registry import CRITERION_KINDS, CriterionKind, criterion_unit, default_criteria, kind_of
 
 for _module in _pkgutil.iter_modules(__path__):  # every module declares its criteria at import
     _import_module(f"{__name__}.{_module.name}")
@@ -32,5 +32,6 @@ __all__ = [
     "SphereObstacles",
     "WeightedCriteria",
     "criterion_unit",
+    "default_criteria",
     "kind_of",
 ]

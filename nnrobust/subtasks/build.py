@@ -18,7 +18,7 @@ if TYPE_CHECKING:  # the package imports this module to find declarations: no im
 def build_criterion(config: ExperimentConfig, robot: PinocchioModel) -> Criterion | None:
     """Weighted sum of the named criteria, eq. (4), or None."""
     from .. import user_parts
-    from ..config import default_criteria
+    from .registry import default_criteria
 
     sc = config.subtasks
     names = default_criteria(robot.nq, robot.task) if sc.criteria is None else sc.criteria

@@ -67,3 +67,13 @@ def criterion_unit(name: str, m: int) -> str:
     """The unit of the criterion ``name`` for a task of size m ("mixed" for a user's)."""
     kind = CRITERION_KINDS.get(name)
     return kind.unit(m) if kind is not None else "mixed"
+
+
+def default_criteria(n: int, task: str) -> list[str]:
+    """``subtasks.criteria`` when it is not given: the paper's eq. (19) on a three-joint planar
+    arm, else manipulability and joint-limit avoidance (joint limits alone on a pose task, where
+    the manipulability of a 6 x n Jacobian mixes metres and radians).
+    """
+    if n == 3 and task == "planar":
+        return ["paper"]
+    return ["joint_limits"] if task == "pose" else ["manipulability", "joint_limits"]

@@ -6,7 +6,7 @@ from .base import Trajectory
 from .ellipse import EllipseTrajectory
 from .piecewise import PiecewisePolynomialPath, quintic_point_to_point, spline_through
 from .pose import PoseTrajectory, PositionPath
-from .registry import PATH_KINDS, PathKind
+from .registry import PATH_KINDS, PathKind, path_key
 
 __all__ = [
     "PATH_KINDS",
@@ -16,6 +16,7 @@ __all__ = [
     "PoseTrajectory",
     "PositionPath",
     "Trajectory",
+    "path_key",
     "quintic_point_to_point",
     "spline_through",
 ]

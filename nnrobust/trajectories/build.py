@@ -10,7 +10,7 @@ import pinocchio as pin
 
 from .base import Trajectory
 from .pose import PoseTrajectory, PositionPath
-from .registry import PATH_KINDS
+from .registry import PATH_KINDS, path_key
 
 
 def build_path(config, robot) -> PositionPath:
@@ -23,7 +23,6 @@ def build_trajectory(config, robot) -> Trajectory:
     or a user's trajectory (``kind = "custom"``).
     """
     from .. import user_parts
-    from ..config import path_key
     from ..ik import reach, seed_configuration
     from ..model import PinocchioModel
     from ..model.tasks import split_pose

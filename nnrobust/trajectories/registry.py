@@ -48,3 +48,11 @@ def declare(*kinds: PathKind) -> None:
     for kind in kinds:
         assert kind.name not in PATH_KINDS, kind.name
         PATH_KINDS[kind.name] = kind
+
+
+def path_key(trajectory) -> str:
+    """The key of a ``[trajectory]`` section that places the path: center, goal, waypoints (or
+    class, for a user's).
+    """
+    kind = PATH_KINDS.get(trajectory.kind)
+    return kind.keys[0] if kind is not None else "class" if trajectory.kind == "custom" else "center"
