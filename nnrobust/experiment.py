@@ -21,6 +21,7 @@ import pinocchio as pin
 from .config import (
     MAX_SUBSTEPS,
     ExperimentConfig,
+    nominal_kind,
     provenance_header,
     step_rotation_limit,
 )
@@ -37,7 +38,7 @@ from .model import (
     PinocchioModel,
     load_robot,
 )
-from .model.nominal import build_nominal
+from .model.nominal import build_nominal_model
 from .model.tasks import pose_vector, split_pose
 from .plant import (
     Plant,
@@ -45,6 +46,7 @@ from .plant import (
 from .plant.build import (
     build_engine,
     build_plant,
+    true_model,
 )
 from .plant.scaling import PLAUSIBLE_EFFORT_RATIO, implausible_efforts
 from .results import Result
@@ -310,6 +312,15 @@ def check_stiffness(config: ExperimentConfig, plant: Plant, q0: np.ndarray, subs
 
 def _substeps_needed(period: float, rate: float) -> int:
     return int(np.ceil(period * rate / RK4_STABLE_STEP))
+
+
+def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsModel:
+    """The controller's nominal model of ``config``: ``[nominal]``'s model of the resolved kind, or
+    the true model (armature and payload included) for computed-torque control
+    (:func:`nnrobust.model.nominal.build_nominal_model`).
+    """
+    exact = true_model(config, robot).model if config.controller.kind == "computed-torque" else None
+    return build_nominal_model(config.nominal, robot, nominal_kind(config), exact)
 
 
 def build(config: ExperimentConfig) -> Setup:

@@ -40,8 +40,6 @@ KNOWN = {
     # (importing unit, imported unit): places. The rooms' builders take the whole configuration
     # (issue 36 removes these room by room).
     ("controllers", "config"): 1,
-    ("model", "config"): 1,
-    ("model", "plant"): 1,
     ("plant", "config"): 1,
     ("ik", "controllers"): 1,
     ("config", "presets"): 1,

@@ -71,6 +71,7 @@ def searchable(sweep, base) -> tuple[Any, str]:
     """
     import copy
 
+    from ..config import nominal_kind
     from ..model.nominal import nominal_factor_count
 
     spec = sweep.vary.get("nominal.relative_error")
@@ -87,7 +88,7 @@ def searchable(sweep, base) -> tuple[Any, str]:
     top = float(max(values))
     if not 0 < top < 1:
         raise ConfigError("vary.nominal.relative_error", f"needs a largest value in (0, 1), got {top}")
-    count = nominal_factor_count(base)
+    count = nominal_factor_count(nominal_kind(base), base.robot)
     out = copy.deepcopy(sweep)
     del out.vary["nominal.relative_error"]
     for i in range(count):

@@ -1,15 +1,18 @@
-"""How an experiment builds the controller's nominal model from ``[nominal]``: the paper's closed
-form with beta-hat and p-hat, or the robot's own Pinocchio model (perturbed, or scaled by
-``nominal.factors``), or the true model for computed-torque control.
+"""The controller's nominal model built from the ``[nominal]`` section: the paper's closed form
+with beta-hat and p-hat, or the robot's own Pinocchio model (perturbed, or scaled by
+``nominal.factors``), or the true model for computed-torque control. The builder takes its own
+section and what the composition root (:func:`nnrobust.experiment.build`) decides: the resolved
+kind and, for computed torque, the true model.
 """
 
 from __future__ import annotations
+
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 
 from ..arrays import joint_vector, padded
-from ..config import ExperimentConfig, nominal_kind
 from ..exceptions import ConfigError
 from .base import DynamicsModel
 from .loading import load_robot
@@ -17,19 +20,22 @@ from .perturbation import bodies_with_mass, perturb_inertias
 from .pinocchio_model import PinocchioModel
 from .three_link import ThreeLinkParameters, ThreeLinkPlanarModel
 
+if TYPE_CHECKING:
+    from ..config import NominalConfig, RobotConfig
 
-def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsModel:
-    """The controller's model: closed form with beta-hat, p-hat, or the robot's own (perturbed) model;
-    the true model itself for computed-torque control. Always a ``pin.Model`` of its own, never the
-    true plant's: a law that adapts its model in place changes only its own.
+
+def build_nominal_model(
+    nc: NominalConfig, robot: PinocchioModel, kind: str, exact: pin.Model | None = None
+) -> DynamicsModel:
+    """The controller's model from ``[nominal]`` (``nc``) of ``kind`` (``nominal.kind`` resolved:
+    ``closed-form`` or ``urdf``): closed form with beta-hat, p-hat, or the robot's own (perturbed)
+    model; a copy of ``exact``, the true model, when given (computed-torque control). Always a
+    ``pin.Model`` of its own, never the true plant's: a law that adapts its model in place changes
+    only its own.
     """
-    from ..plant.build import true_model
-
-    nc = config.nominal
-    if config.controller.kind == "computed-torque":  # the true model, armature included
-        exact = true_model(config, robot)
-        return PinocchioModel(pin.Model(exact.model), robot.task_frame, robot.task, robot.name)
-    if nominal_kind(config) == "urdf":
+    if exact is not None:  # the true model, armature included
+        return PinocchioModel(pin.Model(exact), robot.task_frame, robot.task, robot.name)
+    if kind == "urdf":
         if nc.perturbed:
             model = perturb_inertias(
                 robot.model, nc.mass_scale, nc.inertia_scale, nc.relative_error, nc.com_error, nc.seed
@@ -68,14 +74,14 @@ CLOSED_FORM_FACTORS = 6
 """Entries of ``nominal.factors`` on the closed-form model: beta-hat_1..3, p-hat_1..3."""
 
 
-def nominal_factor_count(config: ExperimentConfig) -> int:
-    """The entries of ``nominal.factors`` for this experiment's nominal model: the closed form's
-    beta-hat and p-hat, or two per body with mass of the robot's model (masses, then inertias),
-    which ``nominal.relative_error`` draws its factors for.
+def nominal_factor_count(kind: str, rc: RobotConfig) -> int:
+    """The entries of ``nominal.factors`` for a nominal model of ``kind`` (``nominal.kind``
+    resolved) of the ``[robot]`` section ``rc``: the closed form's beta-hat and p-hat, or two per
+    body with mass of the robot's model (masses, then inertias), which ``nominal.relative_error``
+    draws its factors for.
     """
-    if nominal_kind(config) != "urdf":
+    if kind != "urdf":
         return CLOSED_FORM_FACTORS
-    rc = config.robot
     model = load_robot(rc.source, rc.task_frame, rc.task, None, rc.locked_joints, rc.chain).model
     return 2 * len(bodies_with_mass(model))
 
