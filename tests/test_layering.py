@@ -39,8 +39,6 @@ ALLOWED = {("results", "plots")}
 KNOWN = {
     # (importing unit, imported unit): places. The rooms' builders take the whole configuration
     # (issue 36 removes these room by room).
-    ("controllers", "config"): 1,
-    ("plant", "config"): 1,
     ("ik", "controllers"): 1,
     ("config", "presets"): 1,
     ("sweep", "__init__"): 1,  # nnrobust.__version__, to check a remote worker's

@@ -4,8 +4,9 @@ provenance), :mod:`.checks` (checks that only check) and :mod:`.resolve` (the no
 of a checked configuration). Everything is importable from here.
 """
 
+from ..controllers.registry import controller_kinds, shipped_laws  # the rooms' own rules, re-exported
 from ..numeric_limits import MAX_CENTERS, MAX_GAIN, MAX_PINV, RANGE_LIMITS
-from ..subtasks.registry import default_criteria  # the rooms' own rules, re-exported
+from ..subtasks.registry import default_criteria
 from ..trajectories.piecewise import MAX_WAYPOINTS, MIN_MOVE_TIME  # the paths' own limits
 from ..trajectories.registry import path_key
 from .checks import (
@@ -43,11 +44,9 @@ from .schema import (
     SimulationConfig,
     SubtaskConfig,
     TrajectoryConfig,
-    controller_kinds,
     controller_label,
     is_eq9,
     nominal_kind,
-    shipped_laws,
     step_rotation_limit,
     task_rows,
 )

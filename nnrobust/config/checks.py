@@ -9,6 +9,7 @@ import math
 import os
 import re
 
+from ..controllers.registry import controller_kinds
 from ..exceptions import ConfigError
 from ..model.tasks import TASK_KINDS
 from ..numeric_limits import MAX_PAYLOAD
@@ -26,7 +27,6 @@ from .schema import (
     ExperimentConfig,
     TrajectoryConfig,
     _user_part,
-    controller_kinds,
     is_eq9,
     nominal_kind,
 )

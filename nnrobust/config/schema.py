@@ -346,20 +346,6 @@ registered laws (:func:`controller_kinds`) take ``[controller.params]``, and ``c
 user's class (``controller.class``)."""
 
 
-def shipped_laws() -> tuple[str, ...]:
-    """The laws nnrobust ships: the paper's kinds and the registered laws
-    (nnrobust/controllers/laws/), as declared now.
-    """
-    from ..controllers.registry import law_names
-
-    return (*paper_kinds(), *law_names())
-
-
-def controller_kinds() -> tuple[str, ...]:
-    """Every valid ``controller.kind``: the shipped laws and ``custom``."""
-    return (*shipped_laws(), "custom")
-
-
 EQ9_KINDS = tuple(name for name, kind in PAPER_KINDS.items() if kind.eq9)
 """The kinds that are the task-space law of eq. (9), whose Kp and Kv eq. (17) constrains (when
 nnrobust was imported; :func:`is_eq9` asks the declarations)."""

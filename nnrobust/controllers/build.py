@@ -7,11 +7,11 @@ registered law (nnrobust/controllers/laws/) or a user's class, each from the
 from __future__ import annotations
 
 import copy
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..arrays import joint_vector
-from ..config import ExperimentConfig, controller_kinds
 from ..exceptions import ConfigError
 from ..model import DynamicsModel, PinocchioModel
 from ..plant import Friction, Plant
@@ -21,7 +21,10 @@ from .base import Controller, ControllerContext
 from .basis import AdditiveRBFBasis, input_box
 from .custom import build_custom
 from .pseudoinverse import DampedPseudoInverse
-from .registry import KindParts, paper_kind, registered_law
+from .registry import KindParts, controller_kinds, paper_kind, registered_law
+
+if TYPE_CHECKING:
+    from ..config import ExperimentConfig
 
 
 def build_basis(config: ExperimentConfig, robot: PinocchioModel, m: int) -> AdditiveRBFBasis:

@@ -326,6 +326,18 @@ def paper_kinds() -> tuple[str, ...]:
     return tuple(PAPER_KINDS)
 
 
+def shipped_laws() -> tuple[str, ...]:
+    """The laws nnrobust ships: the paper's kinds and the registered laws
+    (nnrobust/controllers/laws/), as declared now.
+    """
+    return (*paper_kinds(), *law_names())
+
+
+def controller_kinds() -> tuple[str, ...]:
+    """Every valid ``controller.kind``: the shipped laws and ``custom``."""
+    return (*shipped_laws(), "custom")
+
+
 def declared_key(key: str) -> LawParam:
     """The declaration of one of the keys the paper's kinds read (``section.field``)."""
     for p in declared_params():

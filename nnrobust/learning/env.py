@@ -66,7 +66,7 @@ def _source_spec(experiment, vary: dict | None, seed: int, controller: str | Non
     """(SweepSpec, the base law's row name) of an environment's source: a sweep file (its base,
     [set] and [vary]), or a preset / experiment file with an optional ``vary`` box.
     """
-    from ..config.schema import shipped_laws
+    from ..controllers.registry import shipped_laws
     from ..presets import preset_names
     from ..sweep.spec import load_sweep, parse_sweep
 

@@ -7,13 +7,13 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
 
 from .. import user_parts
 from ..arrays import joint_vector, padded, per_joint
-from ..config import ExperimentConfig
 from ..exceptions import ConfigError
 from ..ik import finite_limits
 from ..model import PinocchioModel
@@ -24,6 +24,9 @@ from .loads import ExternalLoads, parse_loads
 from .plant import Plant
 from .scaling import limits_or_inf, scaled_friction, torque_scale, usable
 from .sensing import Sensor
+
+if TYPE_CHECKING:
+    from ..config import ExperimentConfig
 
 
 def build_torque_limits(config: ExperimentConfig, robot: PinocchioModel) -> np.ndarray | None:
