@@ -115,3 +115,21 @@ def test_no_import_goes_up_a_floor_beyond_the_known_ones():
     assert not over, f"more places than known: {over}"
     gone = sorted(pair for pair in KNOWN if pair not in found)
     assert not gone, f"fixed, so remove from KNOWN: {gone}"
+
+
+def test_the_architecture_page_lists_the_floors_the_test_enforces():
+    """docs/architecture.md's table of floors names every unit of FLOORS on its floor, in order
+    (the package face stands for ``__init__`` and ``__main__``; C++ modules are not listed)."""
+    import re
+
+    text = (PACKAGE.parent / "docs" / "architecture.md").read_text(encoding="utf-8")
+    table = text[text.index("| floor | units |") :].split("\n\n")[0].splitlines()[2:]
+    written = {}
+    for row in table:
+        floor, units = (cell.strip() for cell in row.strip("|").split("|"))
+        written[floor] = {u.strip("/") for u in re.findall(r"`([^`]+)`", units)}
+        if "the package face" in units:
+            written[floor] |= {"__init__", "__main__"}
+    assert list(written) == list(FLOORS)
+    for floor, units in FLOORS.items():
+        assert written[floor] == {u for u in units if not u.startswith("_loop") and u != "_floor_loop"}, floor
