@@ -34,18 +34,32 @@ def file_digest(path: str | Path) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
+TRAVELS_ALONE = (
+    "; only the class file travels to a worker of --scheduler: a module it imports must be "
+    "installed there, not a file beside it (docs/robustness.md#a-cluster-without-shared-files)"
+)
+"""What an import error of a class file sent to a worker adds (:mod:`nnrobust.shipped_files`)."""
+
+
 def _import_file(path: Path, key: str):
-    if not path.is_file():
+    """The module of a class file, imported once per content. A file the running task brought
+    with it (:func:`~nnrobust.shipped_files.local`) is read from its copy, still named by
+    ``path``.
+    """
+    from .shipped_files import local, shipped
+
+    source = local(path)
+    if not source.is_file():
         raise ConfigError(
             key,
             f"{str(path)!r} is not a file (a relative path in an experiment file is read "
             "from the file's folder)",
         )
-    digest = file_digest(path)
+    digest = file_digest(source)
     name = f"nnrobust_user_{''.join(c if c.isalnum() else '_' for c in path.stem)}_{digest[:16]}"
     if name in sys.modules:
         return sys.modules[name]
-    spec = importlib.util.spec_from_file_location(name, path)
+    spec = importlib.util.spec_from_file_location(name, source)
     if spec is None or spec.loader is None:
         raise ConfigError(key, f"{str(path)!r} cannot be imported as Python")
     module = importlib.util.module_from_spec(spec)
@@ -54,7 +68,8 @@ def _import_file(path: Path, key: str):
         spec.loader.exec_module(module)
     except Exception as err:
         del sys.modules[name]
-        raise ConfigError(key, f"importing {path} raised {located(err, path)}") from err
+        hint = TRAVELS_ALONE if isinstance(err, ImportError) and shipped(path) else ""
+        raise ConfigError(key, f"importing {path} raised {located(err, path)}{hint}") from err
     return module
 
 

@@ -19,6 +19,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..exceptions import ModelMismatch, RobotLoadError
+from ..shipped_files import local
 from .chains import chain_between, default_chain
 from .continuous_joints import with_revolute_continuous_joints
 from .example_robots import ExampleRobot, example_robot, is_example_robot, robot_names
@@ -85,10 +86,10 @@ def _resolve(source: str) -> tuple[str, str]:
             raise RobotLoadError(shown, f"a generated planar chain has 1 to {MAX_JOINTS} links")
         return "xml", planar_chain_urdf(n)
     path = urdf_dir() / _SHIPPED[source] if source in _SHIPPED else Path(source)
-    if path.suffix.lower() == ".urdf" or path.exists():
-        if not path.is_file():
+    if path.suffix.lower() == ".urdf" or local(path).exists():
+        if not local(path).is_file():
             raise RobotLoadError(str(path), "no such file")
-        return "file", str(path)
+        return "file", str(path)  # named by the client's path, read from its copy if it travelled
     return "erd", source
 
 
@@ -314,7 +315,7 @@ def urdf_digest(source: str) -> str:
             return ""
         data = robot.urdf.read_bytes()
     elif kind == "file":
-        data = Path(value).read_bytes()
+        data = local(value).read_bytes()
     else:
         data = value.encode("utf-8")
     return hashlib.sha256(data).hexdigest()

@@ -24,6 +24,7 @@ from ..exceptions import (
     UrdfStructureError,
     UrdfSyntaxError,
 )
+from ..shipped_files import local
 
 MAX_URDF_BYTES = 20_000_000
 """Largest URDF read [bytes]; real arms are well under 1 MB."""
@@ -51,15 +52,18 @@ UNDECLARED_NAMESPACE = "urn:nnrobust:undeclared:"
 
 
 def read_urdf_file(path: str | Path) -> str:
-    """The text of a URDF file, refused when it is too large or not UTF-8."""
+    """The text of a URDF file, refused when it is too large or not UTF-8; read from its copy when
+    the running task brought it with it (:func:`nnrobust.shipped_files.local`).
+    """
     path = Path(path)
-    size = path.stat().st_size
+    source = local(path)
+    size = source.stat().st_size
     if size > MAX_URDF_BYTES:
         raise UrdfRefused(
             str(path), f"{size / 1e6:.1f} MB is larger than the {MAX_URDF_BYTES / 1e6:g} MB a URDF may have"
         )
     try:
-        return path.read_bytes().decode("utf-8")
+        return source.read_bytes().decode("utf-8")
     except UnicodeDecodeError as err:
         raise UrdfSyntaxError(str(path), f"not UTF-8 text (byte {err.start})") from err
 

@@ -45,7 +45,12 @@ GAIN_ACTIONS = 2
 
 
 def _session(path: Path):
-    """An onnxruntime session on one CPU thread, or one line naming the file and what is wrong."""
+    """An onnxruntime session on one CPU thread, or one line naming the file and what is wrong.
+    A file the running task brought with it is read from its copy
+    (:func:`nnrobust.shipped_files.local`), still named by ``path``.
+    """
+    from ...shipped_files import local
+
     try:
         import onnxruntime as ort
     except ImportError as err:
@@ -56,7 +61,9 @@ def _session(path: Path):
     options.intra_op_num_threads = options.inter_op_num_threads = 1
     options.log_severity_level = 3  # errors only: a refusal below says what is wrong
     try:
-        return ort.InferenceSession(str(path), sess_options=options, providers=["CPUExecutionProvider"])
+        return ort.InferenceSession(
+            str(local(path)), sess_options=options, providers=["CPUExecutionProvider"]
+        )
     except Exception as err:  # onnxruntime's own errors: not a model, an unknown operator, ...
         said = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
         raise ConfigError(
@@ -77,8 +84,10 @@ class OnnxPolicy:
     """An ONNX file as a function observation (d entries) -> action (n entries), checked."""
 
     def __init__(self, file: str | Path, d: int, n: int, entries: str = "one entry per joint"):
+        from ...shipped_files import local
+
         path = Path(file)
-        if not path.is_file():
+        if not local(path).is_file():
             raise ConfigError("controller.params.file", f"{str(file)!r} is not a file")
         self.path, self.d, self.n = path, d, n
         self.session = _session(path)
