@@ -60,25 +60,37 @@ def run_falsify(
     overwrite: bool = False,
     progress=None,
     claim: tuple[float, float] = (0.05, 0.05),
+    ship_files: bool | None = None,
 ) -> dict:
     """Search each controller's worst plant and its random baseline; returns the summary (also
     DIR/summary.json, DIR/falsification.csv and DIR/convergence.png). The folder is locked for
     the search. ``claim`` = (epsilon, beta): the random baseline's runs, independent draws of the
     box, certify P(a property fails) <= epsilon with confidence 1 - beta (:func:`certify_box`).
+    ``ship_files``: send the files the runs read with the tasks
+    (:func:`nnrobust.sweep.engine.ships_files`; default: on a ``scheduler`` of the user's).
     """
     from ..properties import check_claim
     from ..study_folder import held
+    from ..sweep.engine import ships_files
 
     check_claim(*claim)
+    ship = ships_files(ship_files, scheduler)
     with held(Path(folder)):
-        return _run_falsify(spec, Path(folder), workers, scheduler, overwrite, progress, claim)
+        return _run_falsify(spec, Path(folder), workers, scheduler, overwrite, progress, claim, ship)
 
 
 def _run_falsify(
-    spec: FalsifySpec, folder: Path, workers, scheduler, overwrite: bool, progress, claim: tuple[float, float]
+    spec: FalsifySpec,
+    folder: Path,
+    workers,
+    scheduler,
+    overwrite: bool,
+    progress,
+    claim: tuple[float, float],
+    ship: bool = False,
 ) -> dict:
     from ..properties import run_properties
-    from ..sweep.engine import _client, _require_engine, check_controllers
+    from ..sweep.engine import _client, _require_engine, check_controllers, shipped_files
     from ..sweep.spec import Sample, experiment, rerun_command, sample_seed
 
     _require_engine()
@@ -115,7 +127,8 @@ def _run_falsify(
     with signals_as_interrupt(), _client(workers, scheduler) as client:
         if progress:  # before any work: what the folder already holds of this search
             progress(sum((c, s) in searches and i < spec.budget for c, s, i in done), total)
-        drive = _Driver(client, folder, done, sweep, base, properties, progress, inputs.key)
+        files = shipped_files(client, inputs, ship)
+        drive = _Driver(client, folder, done, sweep, base, properties, progress, inputs.key, files)
         drive(searches, dict.fromkeys(searches, box), rows, total)
         margins = _margins(spec, sweep, box, rows, drive) if spec.margin else None
     seconds = time.monotonic() - started

@@ -143,8 +143,11 @@ class _Driver:
     appending the new ones to it.
     """
 
-    def __init__(self, client, folder: Path, done: dict, sweep, base: dict, properties, progress, key: str):
+    def __init__(
+        self, client, folder: Path, done: dict, sweep, base: dict, properties, progress, key: str, files=None
+    ):
         self.client, self.folder, self.done, self.key = client, folder, done, key
+        self.files = files  # the files sent with the tasks (nnrobust.sweep.engine.shipped_files), or None
         self.properties, self.progress = properties, progress
         self.workers = max(len(client.scheduler_info().get("workers", {})), 1)
         from ..sweep.engine import shared
@@ -159,7 +162,9 @@ class _Driver:
         from ..sweep.engine import CRASHED, run_tasks
 
         crashed = {"status": CRASHED}
-        return run_tasks(self.client, tasks, lambda why: judged({**crashed, "message": why}, self.properties))
+        return run_tasks(
+            self.client, tasks, lambda why: judged({**crashed, "message": why}, self.properties), self.files
+        )
 
     def __call__(self, searches: dict, boxes: dict, rows: dict, total: int, stop_at_violation=False):
         """Run every search to the end of its budget (or to its first violation); ``total``: the

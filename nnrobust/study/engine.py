@@ -156,10 +156,13 @@ def run_study(
     folder = Path(folder).resolve()  # the report's commands name absolute paths
     _check_controllers(spec)
     prepare(spec, folder, overwrite)
+    ship = scheduler is not None  # a cluster of the user's may not see the study's files: they travel
     with _SharedCluster(workers, scheduler) as address:
         cases = {}
         for case in spec.cases:
-            cases[spec.case_name(case)] = _run_case(spec, case, folder, address, overwrite, say, progress)
+            cases[spec.case_name(case)] = _run_case(
+                spec, case, folder, address, overwrite, say, progress, ship
+            )
     from .report import write_report
 
     return write_report(spec, folder, cases)
@@ -185,7 +188,19 @@ class _SharedCluster:
         return False
 
 
-def _run_case(spec: StudySpec, case: str, folder: Path, address: str, overwrite: bool, say, progress) -> dict:
+def _run_case(
+    spec: StudySpec,
+    case: str,
+    folder: Path,
+    address: str,
+    overwrite: bool,
+    say,
+    progress,
+    ship: bool = False,
+) -> dict:
+    """Every stage of one case on the cluster at ``address``; ``ship``: the files the runs read
+    travel with the tasks (:func:`nnrobust.sweep.engine.ships_files`).
+    """
     from ..falsify import FalsifySpec, run_falsify
     from ..sweep.engine import read_results, run_sweep
     from ..sweep.spec import load_sweep
@@ -217,7 +232,12 @@ def _run_case(spec: StudySpec, case: str, folder: Path, address: str, overwrite:
             seed=spec.seed + s,
         )
         tunings[s] = run_tune(
-            tune_spec, here / f"tune-seed{s}", scheduler=address, overwrite=overwrite, progress=progress
+            tune_spec,
+            here / f"tune-seed{s}",
+            scheduler=address,
+            overwrite=overwrite,
+            progress=progress,
+            ship_files=ship,
         )
     out["stages"]["tune"] = "finished"
     out["tunings"] = {s: str(here / f"tune-seed{s}") for s in tunings}
@@ -269,7 +289,14 @@ def _run_case(spec: StudySpec, case: str, folder: Path, address: str, overwrite:
     _write_if_changed(validate_file, validate.to_toml())
     say(f"{name}: validate {len(names)} settings on {b['validation']} fresh draws")
     validate_spec = load_sweep(validate_file)
-    run_sweep(validate_spec, here / "validate", scheduler=address, overwrite=overwrite, progress=progress)
+    run_sweep(
+        validate_spec,
+        here / "validate",
+        scheduler=address,
+        overwrite=overwrite,
+        progress=progress,
+        ship_files=ship,
+    )
     frame = read_results(here / "validate")
     from ..sweep.summary import summarize, write_summary
 
@@ -300,7 +327,7 @@ def _run_case(spec: StudySpec, case: str, folder: Path, address: str, overwrite:
         f"(epsilon {b['epsilon']:g}, beta {b['beta']:g})"
     )
     certify_spec = load_sweep(certify_file)
-    summary, rows = _certified(spec, certify_spec, here / "certify", address, overwrite, progress)
+    summary, rows = _certified(spec, certify_spec, here / "certify", address, overwrite, progress, ship)
     out["stages"]["certify"] = "finished"
     out["certify"] = summary
     out["held_out"] = _varies(rows)
@@ -321,7 +348,7 @@ def _run_case(spec: StudySpec, case: str, folder: Path, address: str, overwrite:
     if spec.vary:
         out["falsify"] = run_falsify(
             falsify_spec, here / "falsify", scheduler=address, overwrite=overwrite, progress=progress,
-            claim=(b["epsilon"], b["beta"]),
+            claim=(b["epsilon"], b["beta"]), ship_files=ship,
         )  # fmt: skip
         out["stages"]["falsify"] = "finished"
     else:
@@ -342,13 +369,15 @@ def _run_case(spec: StudySpec, case: str, folder: Path, address: str, overwrite:
     _write_if_changed(engine_file, again.to_toml())
     say(f"{name}: the certification draws again with MuJoCo as the plant")
     out["engine"], _ = _certified(
-        spec, load_sweep(engine_file), here / "certify-mujoco", address, overwrite, progress
+        spec, load_sweep(engine_file), here / "certify-mujoco", address, overwrite, progress, ship
     )
     out["stages"]["engine"] = "finished"
     return out
 
 
-def _certified(spec: StudySpec, sweep, folder: Path, address: str, overwrite: bool, progress):
+def _certified(
+    spec: StudySpec, sweep, folder: Path, address: str, overwrite: bool, progress, ship: bool = False
+):
     """(summary, rows) of a certification sweep run into ``folder``: its statistics, paired
     comparisons and a certificate per property (the study's epsilon and beta), summary.json written.
     """
@@ -356,7 +385,7 @@ def _certified(spec: StudySpec, sweep, folder: Path, address: str, overwrite: bo
     from ..sweep.engine import read_results, run_sweep
     from ..sweep.summary import summarize, write_summary
 
-    run_sweep(sweep, folder, scheduler=address, overwrite=overwrite, progress=progress)
+    run_sweep(sweep, folder, scheduler=address, overwrite=overwrite, progress=progress, ship_files=ship)
     rows = read_results(folder)
     summary = summarize(sweep, rows)
     b = spec.budgets

@@ -6,6 +6,8 @@ A worker killed mid-chunk costs that chunk only: dask runs it again on another w
 client writes a chunk's rows once, when its result arrives. A chunk that kills two workers
 (user code calling ``os._exit``, a segfault) is split into its rows, each then run alone on the
 cluster, and a row that still kills its worker is a row with status ``crashed``: never a hole.
+On a cluster of the user's (``--scheduler``), the files the rows read travel with the tasks
+(:func:`shipped_files`, :mod:`nnrobust.shipped_files`): its workers need none of the client's.
 """
 
 from __future__ import annotations
@@ -56,7 +58,8 @@ def run_rows(spec: SweepSpec, base: dict, jobs: list[tuple[int, str]]) -> list[d
     """Run (sample id, controller) jobs; one metrics row each.
 
     The worker rebuilds each experiment from the sweep and the base experiment's own values
-    (:func:`~.spec.base_values`, so a remote worker needs no experiment file of the client's). A
+    (:func:`~.spec.base_values`, so a remote worker needs no experiment file of the client's; the
+    files the runs read come with the task on a cluster of the user's: :func:`shipped_files`). A
     run that cannot be built (the sample's trajectory leaves the workspace, say) is a row with
     status ``refused`` and its message; a diverged run is a row with status ``diverged``; an
     unexpected exception (a defect) a row with status ``error``, its type and message, so that
@@ -584,6 +587,38 @@ def shared(client, value):
     return client.submit(_same, value, pure=False)
 
 
+def shipped_files(client, inputs, ship: bool):
+    """The files the rows are computed from (``inputs``: :func:`~.spec.study_inputs`), read once
+    and checked against their SHA-256 (:func:`nnrobust.shipped_files.bundle_of`), as a
+    :func:`shared` future for the tasks of a cluster that may not see them (``ship``); None for
+    a cluster of this command's, whose workers read the client's files.
+    """
+    if not ship:
+        return None
+    from ..shipped_files import bundle_of
+
+    return shared(client, bundle_of(inputs.files.values()))
+
+
+def submit(client, files, function, *args):
+    """The future of ``function(*args)`` on the cluster; with ``files`` (:func:`shipped_files`),
+    run within them on the worker (:func:`nnrobust.shipped_files.run_within`).
+    """
+    if files is None:
+        return client.submit(function, *args, pure=False)
+    from ..shipped_files import run_within
+
+    return client.submit(run_within, files, function, *args, pure=False)
+
+
+def ships_files(ship_files: bool | None, scheduler: str | None) -> bool:
+    """Whether a command sends the files its rows read with its tasks: as ``ship_files`` says, by
+    default when it runs on a cluster it did not start (``scheduler``), whose workers may not see
+    the client's files (docs/robustness.md#a-cluster-without-shared-files).
+    """
+    return bool(scheduler) if ship_files is None else ship_files
+
+
 NO_WORKER_SECONDS = 120.0
 """How long a cluster may have no worker at all before the command stops waiting for it."""
 
@@ -653,6 +688,8 @@ def crash_reason(future) -> str | None:
     wait_alive([future])
     try:
         future.result()
+    except NNRobustError:  # raised on purpose around the task code: its files refused (shipped_files)
+        raise
     except Exception as err:  # KilledWorker, CancelledError: the task code itself catches its errors
         name = type(err).__name__
         if name == "KilledWorker":
@@ -664,21 +701,21 @@ def crash_reason(future) -> str | None:
     return None
 
 
-def run_tasks(client, tasks: list[tuple], crashed) -> list:
-    """Each (function, *arguments) task's result, run on the cluster and waited for together. A
-    task whose worker died (:func:`crash_reason`) is submitted again and waited for alone, once
-    every other has finished (a task queued on a dying worker counts that death too: alone, its
-    result does not depend on its neighbours); when it kills its worker again its result is
-    ``crashed(reason)``.
+def run_tasks(client, tasks: list[tuple], crashed, files=None) -> list:
+    """Each (function, *arguments) task's result, run on the cluster (within ``files``:
+    :func:`submit`) and waited for together. A task whose worker died (:func:`crash_reason`) is
+    submitted again and waited for alone, once every other has finished (a task queued on a
+    dying worker counts that death too: alone, its result does not depend on its neighbours);
+    when it kills its worker again its result is ``crashed(reason)``.
     """
-    futures = [client.submit(*task, pure=False) for task in tasks]
+    futures = [submit(client, files, *task) for task in tasks]
     wait_alive(futures)
     out = []
     for task, future in zip(tasks, futures):
         if crash_reason(future) is None:
             out.append(future.result())
             continue
-        retry = client.submit(*task, pure=False)
+        retry = submit(client, files, *task)
         reason = crash_reason(retry)
         out.append(crashed(reason) if reason else retry.result())
     return out
@@ -708,9 +745,13 @@ def run_sweep(
     seconds_per_job: float = 0.5,
     stop=None,
     checking=None,
+    ship_files: bool | None = None,
 ) -> dict:
     """Run (or resume) a sweep into ``folder``; returns {"computed": rows, "skipped": rows,
     "parts": n, "stopped": rows not run}.
+
+    ``ship_files``: send the files the rows read with the tasks (:func:`ships_files`; default:
+    on a ``scheduler`` of the user's).
 
     ``checking(done, total)`` is called as the rows' experiments are validated, before anything
     runs (:func:`plan`); ``progress(done, total)`` as chunks finish. ``stop(records)``, given every row
@@ -727,7 +768,18 @@ def run_sweep(
 
     with held(folder):  # one sweep at a time into a folder: never a row twice
         return _run_sweep(
-            spec, folder, base, jobs, workers, scheduler, overwrite, progress, seconds_per_job, stop, inputs
+            spec,
+            folder,
+            base,
+            jobs,
+            workers,
+            scheduler,
+            overwrite,
+            progress,
+            seconds_per_job,
+            stop,
+            inputs,
+            ships_files(ship_files, scheduler),
         )
 
 
@@ -743,6 +795,7 @@ def _run_sweep(
     seconds_per_job: float,
     stop=None,
     inputs=None,
+    ship: bool = False,
 ) -> dict:
     inputs = inputs if inputs is not None else study_inputs(spec)
     prepare_folder(spec, folder, overwrite, inputs)
@@ -777,7 +830,8 @@ def _run_sweep(
         else:
             chunks = [jobs[i : i + size] for i in range(0, len(jobs), size)]
         spec_future, base_future = shared(client, spec), shared(client, base)
-        futures = [client.submit(run_rows, spec_future, base_future, chunk, pure=False) for chunk in chunks]
+        files = shipped_files(client, inputs, ship)
+        futures = [submit(client, files, run_rows, spec_future, base_future, chunk) for chunk in chunks]
         chunk_of = {f.key: chunk for f, chunk in zip(futures, chunks)}
         if progress:
             progress(skipped, total)
@@ -814,7 +868,7 @@ def _run_sweep(
             if stop and group(job) in stopped:
                 dropped.append(job)
                 continue
-            future = client.submit(run_rows, spec_future, base_future, [job], pure=False)
+            future = submit(client, files, run_rows, spec_future, base_future, [job])
             reason = crash_reason(future)
             rows = crashed_rows(spec, [job], reason) if reason else future.result()
             written, parts = written + len(rows), parts + 1

@@ -391,13 +391,14 @@ def evaluate(sweep, base: dict, controller: str, overrides: dict, sample_id: int
 # ---- on the client -------------------------------------------------------------------------------
 
 
-def _simulate(client, tasks: list[tuple]) -> list[dict]:
-    """Run each (function, *arguments) task on the cluster: its result, or status ``crashed`` when
-    it ends its worker (:func:`nnrobust.sweep.engine.run_tasks`).
+def _simulate(client, tasks: list[tuple], files=None) -> list[dict]:
+    """Run each (function, *arguments) task on the cluster (within ``files``, the files sent with
+    the tasks: :func:`nnrobust.sweep.engine.shipped_files`): its result, or status ``crashed``
+    when it ends its worker (:func:`nnrobust.sweep.engine.run_tasks`).
     """
     from ..sweep.engine import CRASHED, run_tasks
 
-    return run_tasks(client, tasks, lambda reason: {"status": CRASHED, "message": reason})
+    return run_tasks(client, tasks, lambda reason: {"status": CRASHED, "message": reason}, files)
 
 
 def judge(spec: TuneSpec, runs: list[dict]) -> tuple[tuple[float, ...], list[float], dict]:
@@ -692,22 +693,32 @@ def run_tune(
     scheduler: str | None = None,
     overwrite: bool = False,
     progress=None,
+    ship_files: bool | None = None,
 ) -> dict:
     """Run (or resume) a tuning into ``folder``; returns the summary (also DIR/summary.json).
 
     ``progress(done, total)`` is called as settings finish (done and total count simulations).
-    The folder is locked for the run.
+    The folder is locked for the run. ``ship_files``: send the files the runs read with the
+    tasks (:func:`nnrobust.sweep.engine.ships_files`; default: on a ``scheduler`` of the user's).
     """
     from ..study_folder import held
+    from ..sweep.engine import ships_files
 
+    ship = ships_files(ship_files, scheduler)
     with held(Path(folder)):
-        return _run_tune(spec, Path(folder), workers, scheduler, overwrite, progress)
+        return _run_tune(spec, Path(folder), workers, scheduler, overwrite, progress, ship)
 
 
 def _run_tune(
-    spec: TuneSpec, folder: Path, workers: int | None, scheduler: str | None, overwrite: bool, progress
+    spec: TuneSpec,
+    folder: Path,
+    workers: int | None,
+    scheduler: str | None,
+    overwrite: bool,
+    progress,
+    ship: bool = False,
 ) -> dict:
-    from ..sweep.engine import _client, _require_engine, first_step, shared
+    from ..sweep.engine import _client, _require_engine, first_step, shared, shipped_files
     from ..sweep.spec import base_config, base_values, draw, experiment
 
     _require_engine()
@@ -751,6 +762,7 @@ def _run_tune(
     with signals_as_interrupt(), _client(workers, scheduler) as client:
         n_workers = max(len(client.scheduler_info().get("workers", {})), 1)
         sweep_future, base_future = shared(client, sweep), shared(client, base)
+        files = shipped_files(client, inputs, ship)
         batch = max(1, math.ceil(n_workers / spec.train_samples))
 
         def done_count():
@@ -765,7 +777,7 @@ def _run_tune(
                 for c, _, values, phase in asked
                 for s in train
             ]
-            flat = _simulate(client, tasks)
+            flat = _simulate(client, tasks, files)
             by_setting = [flat[i * len(train) : (i + 1) * len(train)] for i in range(len(asked))]
             finished = [
                 (c, c.tell(trial, values, phase, runs))
@@ -776,7 +788,7 @@ def _run_tune(
             _write_trials(folder, [row for _, row in finished], inputs.key)
             if progress:
                 progress(done_count(), total)
-        summary = _summary(spec, sweep, controllers, client, sweep_future, base_future)
+        summary = _summary(spec, sweep, controllers, client, sweep_future, base_future, files)
     _write_json(folder / "summary.json", summary)
     plot_pareto(summary, folder)
     from ..display import TuneSummary
@@ -811,7 +823,7 @@ def _pareto(rows: list[dict]) -> list[dict]:
     return sorted(out, key=lambda r: r["objectives"][0])
 
 
-def _summary(spec, sweep, controllers, client, sweep_future, base_future) -> dict:
+def _summary(spec, sweep, controllers, client, sweep_future, base_future, files=None) -> dict:
     from ..sweep.spec import draw
 
     held_out = list(range(spec.train_samples, spec.train_samples + spec.validation))
@@ -853,7 +865,9 @@ def _summary(spec, sweep, controllers, client, sweep_future, base_future) -> dic
             entry["note"] = f"no setting met the constraints: {why_none(c.rows)}"
         else:
             runs = _simulate(
-                client, [(evaluate, sweep_future, base_future, name, best["params"], s) for s in held_out]
+                client,
+                [(evaluate, sweep_future, base_future, name, best["params"], s) for s in held_out],
+                files,
             )
             validation = judge(spec, runs)[2] if held_out else {}
             entry["best"] = {
