@@ -6,7 +6,7 @@
 #include <nanobind/eigen/dense.h>
 #include <nanobind/nanobind.h>
 
-#include "../csrc/model.hpp"
+#include "../csrc/model/model.hpp"
 #include "../csrc/pin_calls.hpp"
 
 namespace nnrobust {

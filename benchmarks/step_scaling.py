@@ -14,7 +14,7 @@ way. One control step is the controller's output (which advances the adaptive la
 RK4 step of the plant (four ABA calls). The exponent is the least-squares slope of log(step time)
 against log(n) for n >= 15, for the Python loop and the compiled loop, timed in turn at each size.
 The compiled loop is timed alone (run_loop); its set-up per run is not a step cost and is printed
-apart: the loop's spec and the C++ copies of the plant and nominal models (csrc/model.cpp), whose
+apart: the loop's spec and the C++ copies of the plant and nominal models (csrc/model/model.cpp), whose
 cost is mostly Pinocchio's Data constructor, steep in n (the Python loop builds the same Data).
 
 The self-motion gain is k = 2 here, not the preset's 10: with k = 10 the 300-link chain's

@@ -21,7 +21,7 @@
 #include "closed_loop.hpp"
 #include "controllers.hpp"
 #include "learning.hpp"
-#include "model.hpp"
+#include "model/model.hpp"
 
 namespace nb = nanobind;
 using nnrobust::LoadedModel;

@@ -14,8 +14,8 @@
 #include <thread>
 
 #include "controllers.hpp"
-#include "laws/law.hpp"
-#include "nominal.hpp"
+#include "controllers/laws/law.hpp"
+#include "model/nominal.hpp"
 #include "pin_calls.hpp"
 #include "plant/stick_slip.hpp"
 #include "subtasks/criterion.hpp"

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "fields.hpp"
-#include "model.hpp"
+#include "model/model.hpp"
 
 namespace nnrobust {
 
@@ -56,7 +56,7 @@ struct LoopSpec {
   Params path_params;
   bool pose = false;
   Params pose_params;
-  // the law registered under `law` (csrc/controllers/, csrc/laws/; "external": the hybrid loop's
+  // the law registered under `law` (csrc/controllers/, csrc/controllers/laws/; "external": the hybrid loop's
   // Python law) with its fields by name (Law.twin_values) and its number of signals; the eq. (9)
   // law's robust term registered under `robust` ("" for u_0 = 0) with its fields
   std::string law;

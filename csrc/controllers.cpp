@@ -6,7 +6,7 @@
 #include <Eigen/Eigenvalues>
 #include <pinocchio/spatial/explog.hpp>
 
-#include "laws/law.hpp"
+#include "controllers/laws/law.hpp"
 
 namespace nnrobust {
 

@@ -1,14 +1,14 @@
 // The parts every control law on the C++ side shares (the twins of nnrobust/controllers/ and
 // nnrobust/trajectories/): the desired motion and the task error, the damped pseudo-inverse, the
 // torque of eq. (9) and the nominal friction. The law itself is a registered component
-// (csrc/controllers/, csrc/laws/) named by LoopSpec.law and built from LoopSpec.law_params.
+// (csrc/controllers/, csrc/controllers/laws/) named by LoopSpec.law and built from LoopSpec.law_params.
 #pragma once
 
 #include <cmath>
 #include <memory>
 #include <optional>
 
-#include "nominal.hpp"
+#include "model/nominal.hpp"
 #include "plant/friction.hpp"
 #include "subtasks/criterion.hpp"
 #include "trajectories/trajectory.hpp"

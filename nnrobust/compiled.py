@@ -56,13 +56,13 @@ COMPILED_JOINTS = frozenset(
         "RevoluteUnaligned", "PrismaticUnaligned", "RevoluteUnboundedUnaligned",
     )
 )  # fmt: skip
-"""Joint types the C++ side rebuilds (csrc/model.cpp): every joint of a fixed-base arm's URDF."""
+"""Joint types the C++ side rebuilds (csrc/model/model.cpp): every joint of a fixed-base arm's URDF."""
 
 
 def model_spec(model: pin.Model, frame: str):
     """A Pinocchio model as the numbers its dynamics and kinematics read (joint types, parents,
     placements, inertias, armature, gravity, the task frame): the C++ side rebuilds exactly this
-    model from them (csrc/model.cpp).
+    model from them (csrc/model/model.cpp).
     """
     import numpy as np
 

@@ -1,5 +1,5 @@
 """The shipped function-approximating RBF network (nnrobust/controllers/laws/rbf_nn.py,
-csrc/laws/rbf_nn.cpp): it learns a known uncertainty (an exact nominal model, no friction and a
+csrc/controllers/laws/rbf_nn.cpp): it learns a known uncertainty (an exact nominal model, no friction and a
 constant joint torque τ_ext, so η = J M⁻¹ τ_ext), its update is the exact solution of
 Ŵ' = F (φ wᵀ − κ ‖w‖ Ŵ) over a period, its compiled twin step by step and over a run, and its
 configuration errors.

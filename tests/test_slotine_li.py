@@ -1,4 +1,4 @@
-"""The shipped Slotine–Li law (nnrobust/controllers/laws/slotine_li.py, csrc/laws/slotine_li.cpp):
+"""The shipped Slotine–Li law (nnrobust/controllers/laws/slotine_li.py, csrc/controllers/laws/slotine_li.cpp):
 its regressor against the model's own dynamics (the Christoffel Coriolis matrix: C q' = the
 model's bias, M' − 2C skew-symmetric by finite differences), its compiled twin step by step, a
 controller written independently from the documented contract (examples/controllers/), what

@@ -2,7 +2,7 @@
 // robust term LoopSpec.robust built from LoopSpec.robust_params, or u_0 = 0) and TaskSpacePD.
 #include <stdexcept>
 
-#include "../laws/law.hpp"
+#include "laws/law.hpp"
 #include "robust_term.hpp"
 
 namespace nnrobust {

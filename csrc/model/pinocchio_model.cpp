@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "../nominal.hpp"
+#include "nominal.hpp"
 #include "../pin_calls.hpp"
 
 namespace nnrobust {

@@ -2,7 +2,7 @@
 // the paper's matrices with the errata's corrections, behind the Nominal interface (nominal.hpp).
 #include <cmath>
 
-#include "../nominal.hpp"
+#include "nominal.hpp"
 
 namespace nnrobust {
 

@@ -2,7 +2,7 @@
 
 #include <stdexcept>
 
-#include "../nominal.hpp"
+#include "../model/nominal.hpp"
 
 namespace nnrobust {
 

@@ -16,7 +16,7 @@ its class and its compiled twin; every module of nnrobust/controllers/laws/ is i
 them. The configuration checks, ``nnrobust run --help``, the tuner's search space, the docs' key
 reference (docs/controller.md, written by docs/render_tables.py) and the compiled loop's spec
 are derived from that declaration, so adding a law touches its Python file, its C++ twin
-(csrc/laws/) and its tests.
+(csrc/controllers/laws/) and its tests.
 """
 
 from __future__ import annotations
@@ -148,7 +148,7 @@ class Law:
         cls: the :class:`nnrobust.Controller` subclass, built as ``cls(context, **params)``.
         summary: one line for the CLI help and the docs.
         params: its parameters, in the constructor's order.
-        twin: the name its compiled twin registers under in csrc/laws/ (None: Python only).
+        twin: the name its compiled twin registers under in csrc/controllers/laws/ (None: Python only).
         twin_fields: the attributes of a built controller the twin reads (each a number, a
             vector or a matrix), by name: the one list of what crosses to C++.
 
@@ -209,7 +209,7 @@ class Law:
 
     def twin_values(self, controller) -> dict[str, np.ndarray]:
         """The twin's fields of a built controller, each as a 2-D float array (a number 1 x 1,
-        a vector k x 1): what the compiled law reads by name (csrc/laws/law.hpp).
+        a vector k x 1): what the compiled law reads by name (csrc/controllers/laws/law.hpp).
         """
         from ..twins import twin_values
 

@@ -42,7 +42,7 @@ class PinocchioModel:
     """
 
     twin = "pinocchio"
-    """Its compiled twin (csrc/nominal.hpp), built from the model itself (compiled.load_model)."""
+    """Its compiled twin (csrc/model/nominal.hpp), built from the model itself (compiled.load_model)."""
 
     def __init__(self, model: pin.Model, task_frame: str, task: str = "planar", name: str = ""):
         if task not in TASK_KINDS:

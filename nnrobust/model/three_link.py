@@ -39,7 +39,7 @@ class ThreeLinkParameters:
     gravity: tuple[float, ...] = (0.0, 0.0)
 
     twin_fields = ("beta", "p", "lengths", "gamma", "gravity")
-    """What the closed form's compiled twin reads (csrc/nominal.hpp, ThreeLinkSpec)."""
+    """What the closed form's compiled twin reads (csrc/model/nominal.hpp, ThreeLinkSpec)."""
 
     @classmethod
     def paper(cls) -> ThreeLinkParameters:
@@ -140,7 +140,7 @@ class ThreeLinkPlanarModel:
     """No Pinocchio model: the closed form is its own (:class:`DynamicsModel`)."""
 
     twin = "closed-form"
-    """Its compiled twin (csrc/nominal.hpp), built from ``params``' ``twin_fields``."""
+    """Its compiled twin (csrc/model/nominal.hpp), built from ``params``' ``twin_fields``."""
 
     def mass(self, q: np.ndarray) -> np.ndarray:
         """M(q) with M11 = b1 + 2 p1 c2 + 2 p2 c23 + 2 p3 c3, ... (docs/errata.md)."""

@@ -1,5 +1,5 @@
 """A function-approximating adaptive RBF network in eq. (9) (``controller.kind = "rbf-nn"``;
-compiled twin csrc/laws/rbf_nn.cpp; docs/controller.md), after Lewis, Jagannathan and Yeşildirek:
+compiled twin csrc/controllers/laws/rbf_nn.cpp; docs/controller.md), after Lewis, Jagannathan and Yeşildirek:
 the network learns the uncertainty η itself, where the paper's network learns a bound on |η|.
 
 The task-space law of eq. (9) leaves the error system y' = A y + B (u₀ + η), y = [e, ė] (eq. 13).

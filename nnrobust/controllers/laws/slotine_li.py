@@ -1,5 +1,5 @@
 """Task-space Slotine–Li adaptive control of a redundant arm (``controller.kind = "slotine-li"``;
-compiled twin csrc/laws/slotine_li.cpp; docs/controller.md).
+compiled twin csrc/controllers/laws/slotine_li.cpp; docs/controller.md).
 
 With J⁺ the experiment's damped pseudo-inverse and N = I − J⁺J:
 

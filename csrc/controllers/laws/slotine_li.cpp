@@ -3,8 +3,8 @@
 #include <Eigen/Eigenvalues>
 #include <pinocchio/algorithm/regressor.hpp>
 
-#include "../nominal.hpp"
-#include "../pin_calls.hpp"
+#include "../../model/nominal.hpp"
+#include "../../pin_calls.hpp"
 #include "law.hpp"
 
 namespace nnrobust {

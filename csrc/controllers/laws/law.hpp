@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "../controllers.hpp"
-#include "../fields.hpp"
-#include "../registry.hpp"
+#include "../../controllers.hpp"
+#include "../../fields.hpp"
+#include "../../registry.hpp"
 
 namespace nnrobust {
 

@@ -2,7 +2,7 @@
 
 #include <stdexcept>
 
-#include "pin_calls.hpp"
+#include "../pin_calls.hpp"
 
 namespace nnrobust {
 

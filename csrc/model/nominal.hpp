@@ -5,9 +5,9 @@
 
 #include <vector>
 
-#include "closed_loop.hpp"
-#include "fields.hpp"
-#include "subtasks/manipulability.hpp"
+#include "../closed_loop.hpp"
+#include "../fields.hpp"
+#include "../subtasks/manipulability.hpp"
 
 namespace nnrobust {
 
