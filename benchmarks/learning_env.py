@@ -14,6 +14,12 @@ For each arm (the paper's, the Panda), in one process, interleaved:
 - ``policy``: a zero residual ONNX policy on the preset's law as ``controller.kind = "policy"``
   (the hybrid path: the base law compiled, the inference in Python) against the base law's own
   compiled run: the policy's time per step beyond the base law's step and its own inference.
+  Each is a marginal cost: the wall time of a run of 3 ``seconds`` less that of a run of
+  ``seconds``, over the steps between them, so what a run costs once (building the loop, the
+  network's first call) is not spread over its steps. ``glue`` is the same hybrid run with the
+  network replaced by a Python function returning zeros: the loop's own cost of handing each
+  step to Python. What remains (``interference``) is the base law's and the network's steps
+  slowing each other when they alternate on one core (caches, branch predictors).
 The base law is each preset's own. Ratios are within one run of this script.
 """
 
@@ -71,31 +77,69 @@ def single_step(preset: str, seconds: float) -> float:
 
 
 def policy_overhead(preset: str, seconds: float, folder: Path) -> dict:
-    """(µs per step) of a zero residual policy's run beyond its base law's compiled run, less the
-    inference time it recorded; and the inference's mean CPU time."""
+    """(µs per step, marginal: runs of 3 ``seconds`` less runs of ``seconds``) of a zero residual
+    policy's run beyond its base law's compiled run, less the inference time it recorded; and the
+    inference's mean wall time."""
     from nnrobust.experiment import run_experiment
     from nnrobust.learning import ObservationLayout
 
-    base = load_preset(preset).replace(simulation={"duration": seconds})
+    base = load_preset(preset)
     setup = build(base)
     layout = ObservationLayout(setup.robot.nq, setup.robot.m)
     file = zero_policy(folder / f"{preset}.onnx", layout.size, layout.n)
-    own = run_experiment(base)
-    mine = run_experiment(
-        base.replace(
-            controller={
-                "kind": "policy",
-                "params": {"file": str(file), "action": "residual", "base": base.controller.kind},
-            }
+    policy = {
+        "kind": "policy",
+        "params": {"file": str(file), "action": "residual", "base": base.controller.kind},
+    }
+    runs = {
+        (law, duration): run_experiment(
+            base.replace(simulation={"duration": duration}, controller=policy if law == "policy" else {})
         )
-    )
-    steps = own.t.size
-    inference = float(np.nansum(mine.signals["inference_time"]))
+        for duration in (seconds, 3 * seconds)
+        for law in ("base", "policy")
+    }
+    from nnrobust.controllers.laws import policy as module
+
+    real = module.OnnxPolicy.on_buffer
+
+    def no_network(self, obs):
+        zeros = np.zeros(self.n)
+
+        def call(t):
+            self.seconds = 0.0
+            return zeros
+
+        return call
+
+    module.OnnxPolicy.on_buffer = no_network  # type: ignore[method-assign]
+    try:
+        for duration in (seconds, 3 * seconds):
+            runs[("glue", duration)] = run_experiment(
+                base.replace(simulation={"duration": duration}, controller=policy)
+            )
+    finally:
+        module.OnnxPolicy.on_buffer = real  # type: ignore[method-assign]
+
+    def marginal(law: str) -> tuple[float, float]:
+        short, long = runs[(law, seconds)], runs[(law, 3 * seconds)]
+        steps = long.t.size - short.t.size
+        inference = 0.0
+        if law == "policy":
+            inference = float(
+                np.nansum(long.signals["inference_time"]) - np.nansum(short.signals["inference_time"])
+            )
+        return (long.wall_seconds - short.wall_seconds) / steps, inference / steps
+
+    law_step, _ = marginal("base")
+    policy_step, inference = marginal("policy")
+    glue_step, _ = marginal("glue")
     return {
-        "base_step_us": 1e6 * own.wall_seconds / steps,
-        "policy_step_us": 1e6 * mine.wall_seconds / steps,
-        "inference_us": 1e6 * inference / steps,
-        "overhead_us": 1e6 * (mine.wall_seconds - own.wall_seconds - inference) / steps,
+        "base_step_us": 1e6 * law_step,
+        "policy_step_us": 1e6 * policy_step,
+        "inference_us": 1e6 * inference,
+        "overhead_us": 1e6 * (policy_step - law_step - inference),
+        "glue_us": 1e6 * (glue_step - law_step),
+        "interference_us": 1e6 * (policy_step - glue_step - inference),
     }
 
 
@@ -155,12 +199,16 @@ def main() -> None:
             f"{r['vector_over_batch']:6.2f} {r['loop_step_us']:8.1f} {r['single_env_step_us']:8.1f} "
             f"{r['single_env_overhead_us']:12.1f}"
         )
-    print(f"\n{'arm':15s} {'law µs':>8s} {'policy µs':>10s} {'inference µs':>13s} {'overhead µs':>12s}")
+    print(
+        f"\n{'arm':15s} {'law µs':>8s} {'policy µs':>10s} {'inference µs':>13s} {'overhead µs':>12s} "
+        f"{'glue µs':>8s} {'interference µs':>16s}"
+    )
     for r in rows:
         p = r["policy"]
         print(
             f"{r['preset']:15s} {p['base_step_us']:8.1f} {p['policy_step_us']:10.1f} "
-            f"{p['inference_us']:13.1f} {p['overhead_us']:12.1f}"
+            f"{p['inference_us']:13.1f} {p['overhead_us']:12.1f} {p['glue_us']:8.1f} "
+            f"{p['interference_us']:16.1f}"
         )
     if args.json:
         write_json_atomic(args.json, {"rows": rows})

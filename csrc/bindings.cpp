@@ -225,6 +225,29 @@ NB_MODULE(_loop, m) {
           },
           "The observation at the current control instant (docs/learning.md).")
       .def(
+          "observe_into",
+          [](const SteppedLoop &l, ColumnOf<double> out) {
+            if (static_cast<int>(out.shape(0)) != l.observation_size())
+              throw std::invalid_argument("SteppedLoop.observe_into: needs an array of " +
+                                          std::to_string(l.observation_size()) + " entries");
+            l.observe(out.data());
+          },
+          nb::arg("out"), "Write the observation at the current control instant into `out` (float64, in place).")
+      .def(
+          "act_action",
+          [](SteppedLoop &l, const nnrobust::Vector &action, const nnrobust::Vector &scale, int mode) {
+            if (action.size() != scale.size())
+              throw std::invalid_argument("SteppedLoop.act_action: the action needs " + std::to_string(scale.size()) +
+                                          " entries, got " + std::to_string(action.size()));
+            if (!l.running()) throw std::invalid_argument("SteppedLoop.act_action: the run has ended (" + l.trace().status + ")");
+            if (!action.allFinite()) return -1;
+            return nnrobust::apply_command(l, action.cwiseMax(-1.0).cwiseMin(1.0).cwiseProduct(scale), mode) ? 1 : 0;
+          },
+          nb::arg("action"), nb::arg("scale"), nb::arg("mode"),
+          "One control period under a policy's raw action: clipped to [-1, 1], times `scale`, applied as "
+          "`mode` says (act's modes). 1: the run goes on, 0: it has ended, -1: the action is not finite "
+          "(nothing applied).")
+      .def(
           "act",
           [](SteppedLoop &l, const nnrobust::Vector &command, int mode) {
             const Eigen::Index size = mode == nnrobust::ACTION_GAINS ? 2 : l.measured_q().size();

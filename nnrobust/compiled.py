@@ -453,16 +453,25 @@ def simulate_policy(setup, duration: float):
     refusal = twin_refusal(base)
     if refusal:
         raise NNRobustError(f"simulation.backend = 'hybrid': the policy's base law: {refusal}")
+    from .exceptions import ControllerError
+
     loop, spec = stepped_loop(base, duration)
-    mode, scale, run = policy.mode, policy.scale, policy.policy
+    mode, scale, network = policy.mode, np.asarray(policy.scale, dtype=float), policy.policy
+    obs = np.empty(policy.layout.size)
+    run = network.on_buffer(obs)
     seconds = np.full(spec.steps, np.nan)
-    k = 0
+    observe, act = loop.observe_into, loop.act_action
+    k, going = 0, loop.running
     try:
-        while loop.running:
+        while going:  # the observation, the clip and the scaling in C++: only the network here
             check_interrupt()
-            a = run(loop.observe(), loop.time)
-            seconds[k] = run.seconds
-            loop.act(np.clip(a, -1.0, 1.0) * scale, mode)
+            observe(obs)
+            a = run(k * spec.period)
+            seconds[k] = network.seconds
+            status = act(a, scale, mode)
+            if status < 0:
+                raise ControllerError(network.non_finite(a, loop.time))
+            going = status > 0
             k += 1
     except KeyboardInterrupt:
         loop.end("interrupted")

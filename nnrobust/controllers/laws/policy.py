@@ -133,8 +133,43 @@ class OnnxPolicy:
                 f"its action has {self.n} entries"
             )
         if not np.all(np.isfinite(a)):
-            raise ControllerError(f"the policy {self.path} returned a non-finite action at t = {t:g} s: {a}")
+            raise ControllerError(self.non_finite(a, t))
         return a
+
+    def non_finite(self, a: np.ndarray, t: float) -> str:
+        """The message of a non-finite action ``a`` at ``t``."""
+        values = np.asarray(a).reshape(-1)
+        return f"the policy {self.path} returned a non-finite action at t = {t:g} s: {values}"
+
+    def on_buffer(self, obs: np.ndarray):
+        """A function of t that runs the policy on what the float64 array ``obs`` holds when it
+        is called (the compiled loop writes it in place) and returns the raw action (n entries
+        of the network's type), the call's wall time in :attr:`seconds`: the hybrid loop's step,
+        with no array made per call. The caller checks that the values are finite.
+        """
+        run, names = self.session.run, [self.output]
+        given = obs if self.dtype == np.float64 else np.empty(obs.shape, self.dtype)
+        feed = {self.input: given[None, :] if self.batched else given}
+        convert = given is not obs
+        clock = time.perf_counter
+
+        def call(t: float) -> np.ndarray:
+            if convert:
+                given[:] = obs
+            start = clock()
+            try:
+                (a,) = run(names, feed)
+            except Exception as err:
+                raise ControllerError(f"the policy {self.path} failed at t = {t:g} s: {err}") from err
+            self.seconds = clock() - start
+            if a.size != self.n:
+                raise ControllerError(
+                    f"the policy {self.path} returned {a.size} actions at t = {t:g} s; "
+                    f"its action has {self.n} entries"
+                )
+            return a.reshape(-1)
+
+        return call
 
 
 class PolicyLaw(Controller):
