@@ -123,9 +123,10 @@ void step_loops(StepPool &pool, const std::vector<SteppedLoop *> &loops, const R
     if (rows.running[i]) loop.observe(rows.observations + i * no);
     rows.rewards[i] = period_reward(spec, rows.observations + i * no, applied, rows.sizes[i], loop.task_rows());
   };
-  // one contiguous block of loops per thread: a loop's step takes microseconds, so handing out
-  // loops one by one would cost as much in contention as it saves in balance
-  const size_t blocks = std::min<size_t>(count, static_cast<size_t>(pool.threads()));
+  // contiguous blocks of loops, BLOCKS_PER_THREAD per thread: a loop's step takes microseconds, so
+  // handing out loops one by one would cost as much in contention as it saves in balance, and one
+  // block per thread left a thread that woke late with nothing to do while the caller did it all
+  const size_t blocks = std::min<size_t>(count, BLOCKS_PER_THREAD * static_cast<size_t>(pool.threads()));
   const std::function<void(size_t)> job = [&](size_t b) {
     for (size_t i = b * count / blocks; i < (b + 1) * count / blocks; ++i) one(i);
   };

@@ -83,6 +83,9 @@ struct StepRows {
   size_t action_size, observation_size, joints;
 };
 
+// How many blocks of loops step_loops hands out per thread of its pool.
+constexpr size_t BLOCKS_PER_THREAD = 4;
+
 // One period of every loop on the pool (the vector environment's step; the single environment's
 // with one loop).
 void step_loops(StepPool &pool, const std::vector<SteppedLoop *> &loops, const RewardSpec &spec, const StepRows &rows);
