@@ -243,6 +243,23 @@ def test_every_controller_gets_the_same_budget_samples_and_constraints(tuned):
     assert (out / "pareto.png").stat().st_size > 10_000
 
 
+def test_a_tuning_is_the_same_on_one_worker_and_on_two(short_experiment, tmp_path):
+    """The settings asked each round do not depend on the cluster: one training sample (where
+    the batch was the number of workers) gives the same trials and best on 1 and 2 workers."""
+    from nnrobust.study_folder import recorded_inputs
+    from nnrobust.tune.engine import _read_trials
+
+    spec = TuneSpec(str(short_experiment), ["pd"], 6, train_samples=1, validation=1, seed=1)
+    best, asked = [], []
+    for workers in (1, 2):
+        folder = tmp_path / f"on-{workers}"
+        best.append(run_tune(spec, folder, workers=workers)["controllers"]["pd"]["best"]["params"])
+        rows = _read_trials(folder, recorded_inputs(folder, "tune").key)
+        asked.append([row["params"] for row in sorted(rows, key=lambda row: row["trial"])])
+    assert asked[0] == asked[1] and len(asked[0]) == 6
+    assert best[0] == best[1]
+
+
 def test_a_best_setting_reruns_to_its_training_metrics(tuned):
     """The summary's params are the overrides the runs used: rerunning sample 0 gives its row."""
     from nnrobust.config import apply_overrides

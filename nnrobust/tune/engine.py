@@ -6,9 +6,10 @@ torque, saturated fraction, no runaway, no stop hit, a completed run): the best 
 constraints is what is compared. RMS torque and chatter are recorded for every setting, and each
 controller's Pareto front (error, torque, chatter) is drawn from all the settings it tried (a
 multi-objective search spread its budget along the low-gain end of that front and, at 120
-simulations, left the NN at 22 mm where a hand search found 0.13 mm). It asks for a batch of
-settings per controller; their simulations run on the sweep's Dask cluster
-(one task per setting and training sample) and are told back. Every finished trial is appended
+simulations, left the NN at 22 mm where a hand search found 0.13 mm). Each round asks every
+controller for a batch of settings (:data:`ROUND_SIMULATIONS`, whatever the cluster's size, so a
+tuning's results do not depend on how many workers ran it); their simulations run on the sweep's
+Dask cluster (one task per setting and training sample) and are told back. Every finished trial is appended
 to DIR/trials as a Parquet part, so an interrupted tuning resumes from what it wrote: the studies
 are rebuilt from the rows. From half the budget on, whenever the best setting sits on a bound of
 its space that is not physical, that bound moves out a decade and the next setting tried is a
@@ -364,6 +365,13 @@ def _with_controllers(sweep, names: list[str], tuned: dict | None = None):
         raise ConfigError("--controllers", f"names a controller twice: {', '.join(controllers)}")
     sweep.controllers, sweep.entries = controllers, entries
     return sweep
+
+
+ROUND_SIMULATIONS = 2
+"""Simulations per controller per round of the optimiser (a batch of settings, each on every
+training sample): fixed, so that the settings asked, and the results, are the same on any number
+of workers (they were sized to the cluster, so one worker and two tuned differently). Every
+controller's batch runs in the same round: 6 controllers on 2 samples are 12 tasks a round."""
 
 
 # ---- on the workers ------------------------------------------------------------------------------
@@ -760,10 +768,9 @@ def _run_tune(
     train = list(range(spec.train_samples))
     total = spec.trials * len(controllers) * spec.train_samples
     with signals_as_interrupt(), _client(workers, scheduler) as client:
-        n_workers = max(len(client.scheduler_info().get("workers", {})), 1)
         sweep_future, base_future = shared(client, sweep), shared(client, base)
         files = shipped_files(client, inputs, ship)
-        batch = max(1, math.ceil(n_workers / spec.train_samples))
+        batch = max(1, math.ceil(ROUND_SIMULATIONS / spec.train_samples))
 
         def done_count():
             return sum(len(c.rows) for c in controllers.values()) * spec.train_samples
