@@ -582,3 +582,16 @@ def test_a_bad_tuned_value_is_blamed_on_the_tuned_setting_not_a_sample(tmp_path,
     err = capsys.readouterr().err
     assert "--tuned: the tuned setting of pd: controller.pd_Kp: expected a list, got str 'x'" in err, err
     assert "sample" not in err
+
+
+def test_a_search_is_the_same_on_one_worker_and_on_two(tmp_path):
+    """The points asked do not depend on the cluster: the search, its random baseline and the
+    margin's bracket give the same summary on 1 and 2 workers (the time aside)."""
+    sweep = tmp_path / "w.toml"
+    sweep.write_text(SWEEP.replace('"simulation.duration" = 3.0', '"simulation.duration" = 0.4'))
+    spec = FalsifySpec(str(sweep), ["nn"], ["max_error<=0.002"], 12, seed=1, margin=True)
+    one, two = (run_falsify(spec, tmp_path / f"on-{w}", workers=w) for w in (1, 2))
+    for summary in (one, two):
+        summary.pop("seconds")
+    assert json.dumps(one, sort_keys=True, default=float) == json.dumps(two, sort_keys=True, default=float)
+    assert one["margin"]["nn"]["steps"] and one["controllers"]["nn"]["simulations"] == 12
