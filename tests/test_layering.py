@@ -28,7 +28,7 @@ FLOORS = {
     "loop": ("simulation",),
     "rooms": ("controllers", "plant", "subtasks", "trajectories", "user_parts", "user_code"),
     "model": ("model", "ik"),
-    "leaf": ("exceptions", "numeric_limits", "arrays", "search_coordinates", "small_linalg",
+    "leaf": ("exceptions", "numeric_limits", "arrays", "search_coordinates", "small_linalg", "kinds",
              "progress", "signals",
              "forked", "twins", "shipped_files", "_loop", "_floor_loop"),
 }  # fmt: skip

@@ -24,12 +24,12 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from importlib import import_module
 from typing import Any
 
 import numpy as np
 
 from ..exceptions import ConfigError
+from ..kinds import Kinds
 
 CHOSEN = "chosen by the experiment"
 """Why a text, file or true/false parameter is never searched: it picks a structure, not a level."""
@@ -307,15 +307,13 @@ def declared_params() -> list[LawParam]:
     ]
 
 
-PAPER_KINDS: dict[str, PaperKind] = {}
+PAPER_KINDS: Kinds[PaperKind] = Kinds("controller kind")
 """The paper's kinds by name, in declaration order (filled when nnrobust.controllers is imported)."""
 
 
 def declare_kind(kind: PaperKind) -> PaperKind:
     """Add one of the paper's kinds (its module calls this once, at import)."""
-    if kind.name in PAPER_KINDS and PAPER_KINDS[kind.name] is not kind:
-        raise ValueError(f"a controller kind named {kind.name!r} is already declared")
-    PAPER_KINDS[kind.name] = kind
+    PAPER_KINDS.declare(kind)
     return kind
 
 
@@ -360,38 +358,23 @@ def paper_kind(name: str) -> PaperKind | None:
     return PAPER_KINDS.get(name)
 
 
-LAWS: dict[str, Law] = {}
+LAWS: Kinds[Law] = Kinds("control law")
 """The registered laws by name, filled as their modules are imported (:func:`registered_law`
 imports every module of nnrobust/controllers/laws/ once)."""
-
-_DISCOVERED: list[bool] = []
 
 
 def register_law(law: Law) -> Law:
     """Add a law to the registry (its module calls this once, at import)."""
-    if law.name in LAWS and LAWS[law.name].cls is not law.cls:
-        raise ValueError(f"a control law named {law.name!r} is already registered")
-    LAWS[law.name] = law
+    LAWS.declare(law)
     return law
 
 
-def _discover() -> None:
-    """Import every module of nnrobust/controllers/laws/: each registers its law."""
-    import pkgutil
-
-    from . import laws
-
-    for module in pkgutil.iter_modules(laws.__path__):
-        import_module(f"{laws.__name__}.{module.name}")
-
-
 def registered_law(name: str) -> Law | None:
-    """The registered law named ``name`` (``controller.kind``), or None. The laws' modules are
-    imported on the first call; a failed import is raised, and tried again on the next call.
+    """The registered law named ``name`` (``controller.kind``), or None (the laws' package,
+    imported with the room, has declared every law: nnrobust.kinds).
     """
-    if not _DISCOVERED:
-        _discover()
-        _DISCOVERED.append(True)
+    from . import laws  # noqa: F401  (imported with nnrobust.controllers: a no-op here)
+
     return LAWS.get(name)
 
 

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 
 from ..exceptions import ConfigError
+from ..kinds import Kinds
 
 
 class Disturbance(ABC):
@@ -110,15 +111,11 @@ class DisturbanceKind:
     build: Callable[[Any, Any, Callable[[], np.ndarray]], Disturbance]
 
 
-DISTURBANCE_KINDS: dict[str, DisturbanceKind] = {}
+DISTURBANCE_KINDS: Kinds[DisturbanceKind] = Kinds("disturbance")
 """The shipped disturbances by name (``auto`` and ``custom`` are choices of the experiment)."""
 
-
-def declare_disturbance(*kinds: DisturbanceKind) -> None:
-    """Register disturbances (in the module that builds them)."""
-    for kind in kinds:
-        assert kind.name not in DISTURBANCE_KINDS, kind.name
-        DISTURBANCE_KINDS[kind.name] = kind
+declare_disturbance = DISTURBANCE_KINDS.declare
+"""Register disturbances (in the module that builds them)."""
 
 
 def _paper(config, robot, tau_ref) -> SinusoidalDisturbance:

@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from ..kinds import Kinds
 from .base import Criterion
 
 
@@ -47,15 +48,11 @@ class CriterionKind:
         return {key: field_array(value) for key, value in self.twin_fields(criterion).items()}
 
 
-CRITERION_KINDS: dict[str, CriterionKind] = {}
+CRITERION_KINDS: Kinds[CriterionKind] = Kinds("criterion")
 """The shipped criteria by name, in the order their modules declare them."""
 
-
-def declare(*kinds: CriterionKind) -> None:
-    """Register criteria (at the end of the module that defines their classes)."""
-    for kind in kinds:
-        assert kind.name not in CRITERION_KINDS, kind.name
-        CRITERION_KINDS[kind.name] = kind
+declare = CRITERION_KINDS.declare
+"""Register criteria (at the end of the module that defines their classes)."""
 
 
 def kind_of(criterion: Criterion) -> CriterionKind | None:

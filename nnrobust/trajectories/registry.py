@@ -11,6 +11,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+from ..kinds import Kinds
 from .base import Trajectory
 
 
@@ -39,15 +40,11 @@ class PathKind:
     build: Callable[[Any, Any], Trajectory]
 
 
-PATH_KINDS: dict[str, PathKind] = {}
+PATH_KINDS: Kinds[PathKind] = Kinds("path")
 """The shipped paths by name, in the order their modules declare them."""
 
-
-def declare(*kinds: PathKind) -> None:
-    """Register paths (in the module that defines their class)."""
-    for kind in kinds:
-        assert kind.name not in PATH_KINDS, kind.name
-        PATH_KINDS[kind.name] = kind
+declare = PATH_KINDS.declare
+"""Register paths (in the module that defines their class)."""
 
 
 def path_key(trajectory) -> str:
