@@ -243,6 +243,25 @@ def test_bad_loads_are_refused_by_key(entry, key, message):
     assert err.value.key == key and message in str(err.value)
 
 
+def test_only_a_load_starting_after_the_run_is_said_never_to_act():
+    """Each load's start is compared with the run's end, not with the load before it's duration:
+    an impulse (one period long) made a later step inside the run 'never act', and a step to the
+    end of the run hid a later load that starts after it."""
+    import warnings
+
+    impulse = {"kind": "impulse", "time": 0.01, "impulse": [0.0, 0.01, 0.0]}
+    step = {"kind": "step", "time": 0.01, "torque": [0.0, 0.1, 0.0]}
+    inside = {"kind": "step", "time": 0.05, "torque": [0.0, 1.0, 0.0]}
+    after = {"kind": "step", "time": 5.0, "torque": [0.0, 1.0, 0.0]}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        setup = build(_config(duration=0.1, loads=[impulse, inside]))
+    assert [p.start for p in setup.plant.loads.pulses] == [0.01, 0.05]
+    with pytest.warns(UserWarning, match=r"plant\.loads\[1\]\.time: 5 s is not before the run ends") as seen:
+        build(_config(duration=0.1, loads=[step, after]))
+    assert len([w for w in seen if "never acts" in str(w.message)]) == 1
+
+
 def test_wrench_and_payload_have_no_mujoco_twin_yet():
     pytest.importorskip("mujoco")
     loads = [{"kind": "wrench", "time": 0.0, "force": [1.0, 0.0, 0.0]}]

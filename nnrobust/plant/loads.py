@@ -219,19 +219,19 @@ def parse_loads(
                 stacklevel=2,
             )
         default = period if kind == "impulse" else np.inf
-        duration = (
+        lasts = (  # the load's own duration, not the run's
             default
             if "duration" not in entry
             else _periods(f"{where}.duration", entry["duration"], period, True)
         )
-        end = start + duration
+        end = start + lasts
         if kind in ("step", "impulse"):
             key = _KEYS[kind][0]
             if key not in entry:
                 raise ConfigError(f"{where}.{key}", f"a {kind!r} load needs one value per joint")
             unit = "N m" if kind == "step" else "N m s"
             value = _vector(f"{where}.{key}", entry[key], n, unit, per_joint=True)
-            pulses.append(TorquePulse(start, end, value if kind == "step" else value / duration))
+            pulses.append(TorquePulse(start, end, value if kind == "step" else value / lasts))
         elif kind == "wrench":
             if "force" not in entry and "moment" not in entry:
                 raise ConfigError(
