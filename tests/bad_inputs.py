@@ -1485,6 +1485,17 @@ def _part(folder: Path, body: str) -> RunExperiment:
     )
 
 
+def _effort_zero(folder: Path) -> RunExperiment:
+    """The paper's arm with joint1's effort limit written as 0, run with the URDF's limits."""
+    from nnrobust import paper_arm_urdf
+
+    urdf = Path(paper_arm_urdf()).read_text().replace('effort="60"', 'effort="0"', 1)
+    _file(folder, "arm.urdf", urdf)
+    return RunExperiment(
+        _toml(folder, f'{PAPER}[robot]\nsource = "arm.urdf"\n[simulation]\nduration = 0.1\n').path
+    )
+
+
 PART_CASES = [
     Case(
         "custom disturbance: wrong size",
@@ -1537,6 +1548,13 @@ PART_CASES = [
         lambda d: _part(d, '[[plant.loads]]\nkind = "step"\ntime = 5.0\ntorque = [1.0, 0.0, 0.0]'),
         None,
         "plant.loads[0].time: 5 s is not before the run ends (simulation.duration = 0.1 s): the load never",
+        UserWarning,
+    ),
+    Case(
+        "URDF <limit effort=\"0\"> under plant.torque_limits = 'urdf' (taken as unlimited, silently)",
+        lambda d: _effort_zero(d),
+        None,
+        'gives <limit effort="0">, read as no effort limit (as a joint without one)',
         UserWarning,
     ),
     Case(

@@ -1,5 +1,7 @@
 """The honest plant: torque saturation, joint stops, sensing and delay."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -60,6 +62,26 @@ def test_a_paper_run_stays_within_the_effort_limits(preset):
     assert np.all(np.abs(result.tau) <= limit + 1e-12)
     over = np.any(np.abs(result.tau_cmd) > limit, axis=1)
     assert result.metrics()["saturated_fraction"] == pytest.approx(np.mean(over))
+
+
+@pytest.mark.parametrize("engine", ["pinocchio", "mujoco"])
+def test_an_effort_limit_of_zero_is_said_to_be_no_limit(tmp_path, engine):
+    """<limit effort="0"> is read as no limit, as a joint without one (a limit of 0 would hold the
+    joint still), on both engines; it was silent, and now a warning names the joint."""
+    from nnrobust import paper_arm_urdf
+
+    urdf = tmp_path / "arm.urdf"
+    urdf.write_text(Path(paper_arm_urdf()).read_text().replace('effort="60"', 'effort="0"', 1))
+    if engine == "mujoco":
+        pytest.importorskip("mujoco")
+    config = load_preset("paper-ellipse").replace(
+        robot={"source": str(urdf)}, plant={"engine": engine}, simulation={"duration": 0.05}
+    )
+    with pytest.warns(
+        UserWarning, match=r"joint 'joint1' of .*arm\.urdf gives <limit effort=\"0\">, read as"
+    ):
+        setup = build(config)
+    np.testing.assert_array_equal(setup.plant.torque_limit, [np.inf, 40.0, 20.0])
 
 
 def _stop_run(alpha, duration=0.4, period=5e-5, ring=False):

@@ -35,6 +35,18 @@ def build_torque_limits(config: ExperimentConfig, robot: PinocchioModel) -> np.n
     if limits == "none":
         return None
     if limits == "urdf":
+        zero = [name for name, e in zip(robot.joint_names, robot.effort_limits) if e == 0]
+        if zero:  # a limit of 0 would hold the joint still; URDFs write it for "none": said, not silent
+            import warnings
+
+            several = len(zero) > 1
+            joints = f"joint{'s' if several else ''} {', '.join(map(repr, zero))}"
+            warnings.warn(
+                f"plant.torque_limits = 'urdf': {joints} of {robot.name} {'give' if several else 'gives'} "
+                '<limit effort="0">, read as no effort limit (as a joint without one); give '
+                f"plant.torque_limits to limit {'them' if several else 'it'}",
+                stacklevel=2,
+            )
         return limits_or_inf(robot.effort_limits)
     return joint_vector("plant.torque_limits", limits, robot.nq)
 
