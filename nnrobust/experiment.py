@@ -576,6 +576,41 @@ def result_of(setup: Setup, trace, wall: float, backend: str) -> Result:
     return result
 
 
+LOAD_BLAME_PERIODS = 10
+"""A run diverging within this many control periods after a load starts blames the load."""
+
+
+def _numbers(value) -> str:
+    """A number or a list of them, each to 3 significant digits: ``[1e+09, 0, 0]``."""
+    values = np.atleast_1d(np.asarray(value, dtype=float))
+    text = ", ".join(f"{v:.3g}" for v in values)
+    return text if np.ndim(value) == 0 else f"[{text}]"
+
+
+def _load_just_before(config: ExperimentConfig, end: float) -> str:
+    """The ``[[plant.loads]]`` entry that started at most :data:`LOAD_BLAME_PERIODS` control
+    periods before ``end`` (the run's last time), described with its size; "" if none did.
+    """
+    period = config.simulation.control_period
+    values = {"step": ("torque", "N m"), "impulse": ("impulse", "N m s"), "payload": ("mass", "kg")}
+    for i, entry in reversed(list(enumerate(config.plant.loads or ()))):
+        start = float(entry["time"])
+        if not 0.0 <= end - start <= LOAD_BLAME_PERIODS * period:
+            continue
+        kind = entry["kind"]
+        if kind == "wrench":
+            units = {"force": "N", "moment": "N m"}
+            size = " and ".join(f"{k} {_numbers(entry[k])} {u}" for k, u in units.items() if k in entry)
+        else:
+            key, unit = values[kind]
+            size = f"{_numbers(entry[key])} {unit}"
+        ago = round((end - start) / period)
+        periods = f"{ago} control period{'' if ago == 1 else 's'}"
+        when = "as it started" if ago < 1 else f"{periods} after it started"
+        return f"plant.loads[{i}], the {kind} of {size} at t = {start:g} s: the run diverged {when}"
+    return ""
+
+
 def likely_cause(setup: Setup, trace) -> str:
     """A guess at why a run diverged, from its last finite state (for the divergence message)."""
     finite = np.flatnonzero(np.all(np.isfinite(trace.q), axis=1) & np.all(np.isfinite(trace.dq), axis=1))
@@ -603,6 +638,9 @@ def likely_cause(setup: Setup, trace) -> str:
             f"cause: {type(setup.controller).__name__}.compute returned a non-finite torque "
             f"{last.tolist()} from a finite state (check the law's gains, divisions and state)"
         )
+    load = _load_just_before(config, float(trace.t[-1]) if len(trace.t) else 0.0)
+    if load:
+        return f"likely cause: {load}"
     if setup.plant.torque_limit is None:
         peak = float(np.nanmax(np.abs(trace.tau_cmd))) if trace.tau_cmd.size else float("nan")
         return (

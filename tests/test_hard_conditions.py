@@ -154,3 +154,30 @@ def test_divergence_cause_names_an_implausible_effort_limit(tmp_path):
         setup = build(config)  # the scaled friction and disturbance do not take it at face value
     message = likely_cause(setup, _fake_trace(setup.q0, 3))
     assert "implausible effort limit (5e+04 on joint 'joint1'" in message
+
+
+@pytest.mark.parametrize("backend", ["python", "compiled"])
+def test_a_run_that_diverges_as_a_huge_load_starts_blames_the_load_not_the_gains(backend):
+    """A 1e9 N m s impulse at 0.1 s makes any law diverge: the divergence names that load and its
+    size (it blamed "the closed loop is unstable for these gains"); a load that started long
+    before a divergence is not blamed."""
+    from nnrobust import compiled
+    from nnrobust.experiment import _load_just_before
+
+    if backend == "compiled" and not compiled.available():
+        pytest.skip(compiled.unavailable_reason())
+    impulse = {"kind": "impulse", "time": 0.1, "impulse": [1e9, 0.0, 0.0]}
+    config = load_preset("paper-ellipse").replace(
+        plant={"loads": [impulse]}, simulation={"duration": 0.3, "backend": backend}
+    )
+    result = run_experiment(config)
+    assert result.status == "diverged"
+    assert (
+        "likely cause: plant.loads[0], the impulse of [1e+09, 0, 0] N m s at t = 0.1 s: the run "
+        "diverged 1 control period after it started" in result.message
+    ), result.message
+    assert "gains" not in result.message
+    step = {"kind": "step", "time": 0.01, "torque": [0.0, 0.1, 0.0]}
+    early = config.replace(plant={"loads": [step]})
+    assert _load_just_before(early, 0.5) == ""
+    assert _load_just_before(early, 0.015).startswith("plant.loads[0], the step of [0, 0.1, 0] N m")
