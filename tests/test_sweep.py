@@ -821,6 +821,36 @@ def test_local_workers_are_bounded_by_the_machines_cpus_and_memory(monkeypatch):
     assert started == []
 
 
+@pytest.mark.parametrize("command", ["sweep", "tune", "falsify", "study"])
+def test_too_many_local_workers_are_refused_before_the_folder_is_made(command, tmp_path, capsys, monkeypatch):
+    """--workers beyond the machine's bound is one line, and no folder is left behind: tune,
+    falsify and study had made theirs (its marker, tune.toml, an empty history) and a sweep its
+    marker before the cluster refused the number."""
+    from pathlib import Path
+
+    from nnrobust.sweep import engine
+
+    monkeypatch.setattr(engine, "max_local_workers", lambda: (8, "2 CPUs, at most 4 workers each"))
+    box = tmp_path / "box.toml"
+    box.write_text(
+        'name = "box"\nbase = "paper-ellipse"\ncontrollers = ["pd"]\nsamples = 2\n'
+        '[set]\n"simulation.duration" = 2.2\n[vary]\n"plant.disturbance_scale" = {uniform = [0.5, 2.0]}\n'
+    )
+    study = Path(__file__).resolve().parents[1] / "examples" / "study.toml"
+    out = tmp_path / "out"
+    argv = {
+        "sweep": ["sweep", str(box)],
+        "tune": ["tune", "paper-ellipse", "--controllers", "pd", "--budget", "4"],
+        "falsify": ["falsify", str(box), "--controllers", "pd", "--require", "rms_error<=1", "--budget", "4"],
+        "study": ["study", str(study)],
+    }[command]
+    capsys.readouterr()
+    assert main([*argv, "--out", str(out), "--workers", "1024", "--quiet"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("nnrobust: error: --workers 1024: give 1 to 8 local"), err
+    assert not out.exists()
+
+
 def test_tuned_settings_of_every_kind_of_law_flow_into_a_sweep(tmp_path, capsys):
     """sweep --tuned DIR: a custom class entry, a registered law and a shipped kind each run at
     their best setting of a tuning, as NAME-tuned; the rows' rerun commands carry exactly those

@@ -71,9 +71,10 @@ def run_falsify(
     """
     from ..properties import check_claim
     from ..study_folder import held
-    from ..sweep.engine import ships_files
+    from ..sweep.engine import check_local_workers, ships_files
 
     check_claim(*claim)
+    check_local_workers(workers, scheduler)  # before the folder is made
     ship = ships_files(ship_files, scheduler)
     with held(Path(folder)):
         return _run_falsify(spec, Path(folder), workers, scheduler, overwrite, progress, claim, ship)

@@ -155,6 +155,9 @@ def run_study(
     say = say or (lambda line: None)
     folder = Path(folder).resolve()  # the report's commands name absolute paths
     _check_controllers(spec)
+    from ..sweep.engine import check_local_workers
+
+    check_local_workers(workers, scheduler)  # before the folder is made
     prepare(spec, folder, overwrite)
     ship = scheduler is not None  # a cluster of the user's may not see the study's files: they travel
     with _SharedCluster(workers, scheduler) as address:

@@ -379,19 +379,28 @@ def local_cluster(workers: int, **options):
         raise
 
 
-def checked_local_cluster(workers: int | None):
-    """The :func:`local_cluster` of ``--workers`` (None: one per core), a number refused in one
-    line when it is not 1 to what this machine's cores and memory allow.
+def check_local_workers(workers: int | None, scheduler: str | None = None) -> None:
+    """``--workers`` refused in one line when it is not 1 to what this machine's cores and
+    memory allow, for a local cluster (a ``scheduler`` of the user's has its own workers).
+    Sweep, tune, falsify and study call it before they write anything into their folder.
     """
-    if workers is not None:
-        if not (isinstance(workers, int) and workers >= 1):
-            raise NNRobustError(f"--workers {workers}: give at least 1 local worker process")
-        most, why = max_local_workers()
-        if workers > most:
-            raise NNRobustError(
-                f"--workers {workers}: give 1 to {most} local worker processes on this machine ({why}); "
-                "for more, start a cluster and pass --scheduler"
-            )
+    if workers is None or scheduler:
+        return
+    if not (isinstance(workers, int) and workers >= 1):
+        raise NNRobustError(f"--workers {workers}: give at least 1 local worker process")
+    most, why = max_local_workers()
+    if workers > most:
+        raise NNRobustError(
+            f"--workers {workers}: give 1 to {most} local worker processes on this machine ({why}); "
+            "for more, start a cluster and pass --scheduler"
+        )
+
+
+def checked_local_cluster(workers: int | None):
+    """The :func:`local_cluster` of ``--workers`` (None: one per core), checked by
+    :func:`check_local_workers`.
+    """
+    check_local_workers(workers)
     return local_cluster(workers or os.cpu_count() or 1, silence_logs=logging.CRITICAL)
 
 
@@ -760,6 +769,7 @@ def run_sweep(
     then cancelled, and a resumed sweep skips them.
     """
     _require_engine()
+    check_local_workers(workers, scheduler)  # before the rows are planned and the folder made
     folder = Path(folder)
     base, jobs = plan(spec, checking)  # every experiment validated before anything is written or run
     check_controllers(spec, base)  # and every controller built, its first step run

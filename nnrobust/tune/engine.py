@@ -710,8 +710,9 @@ def run_tune(
     tasks (:func:`nnrobust.sweep.engine.ships_files`; default: on a ``scheduler`` of the user's).
     """
     from ..study_folder import held
-    from ..sweep.engine import ships_files
+    from ..sweep.engine import check_local_workers, ships_files
 
+    check_local_workers(workers, scheduler)  # before the folder is made
     ship = ships_files(ship_files, scheduler)
     with held(Path(folder)):
         return _run_tune(spec, Path(folder), workers, scheduler, overwrite, progress, ship)
