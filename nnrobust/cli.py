@@ -720,6 +720,18 @@ def cmd_tune(args) -> int:
             f"in {out}/pareto.png",
             file=sys.stderr,
         )
+    never = [
+        name
+        for name, entry in summary["controllers"].items()
+        if entry["simulations"] and entry.get("runs_without_result") == entry["simulations"]
+    ]
+    if never:  # as a sweep whose rows ended without a result: the command did not do its work
+        print(
+            f"nnrobust: {', '.join(never)}: every run ended without a result (refused, raised or crashed): "
+            f"see {out}/summary.json",
+            file=sys.stderr,
+        )
+        return 1
     return 0
 
 

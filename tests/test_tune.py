@@ -534,3 +534,20 @@ def test_a_moved_tuning_resumes_and_trials_copied_in_or_changed_are_refused(
     frame.to_parquet(parts[0])
     with pytest.raises(NNRobustError, match=f"{parts[0].name} was changed after it was written"):
         run_tune(spec, copy, workers=1)
+
+
+def test_a_tuning_where_a_law_never_gave_a_result_exits_1(short_experiment, tmp_path, capsys):
+    """Every run of the law raised (after its first step passed the up-front check): the tuning
+    says so and exits 1, as a sweep whose rows ended without a result does; no-u0 beside it is
+    tuned as usual."""
+    from pathlib import Path
+
+    from nnrobust.cli import main
+
+    law = f"{Path(__file__).parent / 'controllers' / 'eq9_again.py'}:RaisesLate"
+    argv = ["tune", str(short_experiment), "--controllers", f"no-u0,{law}", "--budget", "4"]
+    assert main([*argv, "--validation", "0", "--workers", "1", "--out", str(tmp_path / "t"), "--quiet"]) == 1
+    assert "RaisesLate: every run ended without a result" in capsys.readouterr().err
+    summary = json.loads((tmp_path / "t" / "summary.json").read_text())
+    assert summary["controllers"]["RaisesLate"]["runs_without_result"] == 4
+    assert summary["controllers"]["no-u0"]["runs_without_result"] == 0

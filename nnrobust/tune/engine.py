@@ -431,6 +431,11 @@ def judge(spec: TuneSpec, runs: list[dict]) -> tuple[tuple[float, ...], list[flo
     return tuple(numbers[k] for k in OBJECTIVES), constraints, mean
 
 
+WITHOUT_RESULT = ("refused", "error", "crashed")
+"""The statuses of a run that produced no result (its law was refused, raised, or ended its
+worker): a tuning in which every run of a law ended so exits 1 (``nnrobust tune``)."""
+
+
 def why_none(rows: list[dict]) -> str:
     """Why no setting of ``rows`` (trials-table rows) was feasible: how many runs ended with each
     status other than completed, with its first message, and how many settings broke each
@@ -868,6 +873,9 @@ def _summary(spec, sweep, controllers, client, sweep_future, base_future, files=
             ],
             "gain_phase_simulations": c.gain_trials * spec.train_samples,
         }
+        entry["runs_without_result"] = sum(
+            run.get("status") in WITHOUT_RESULT for row in c.rows for run in row["runs"]
+        )
         if best is None:
             entry["best"] = None
             entry["note"] = f"no setting met the constraints: {why_none(c.rows)}"
