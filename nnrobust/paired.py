@@ -18,7 +18,9 @@ distributions. For N samples with a result for both:
 
 A run that did not complete (diverged, refused, crashed) has no metric: it counts as worse than
 any completed run (+inf), so a controller that diverges where the other does not loses that
-pair; a pair where neither completed is a tie.
+pair; a pair where neither completed is a tie. A completed run whose metric is not defined (NaN:
+``rms_error_after_2s`` of a run shorter than 2 s) leaves its pair out, counted in ``undefined``:
+it is neither better nor worse.
 """
 
 from __future__ import annotations
@@ -43,11 +45,15 @@ METHOD = (
 
 
 def _values(rows, metric: str) -> dict[int, float]:
-    """Sample -> the metric, +inf where the run did not complete."""
+    """Sample -> the metric: +inf where the run did not complete, NaN where it completed with the
+    metric undefined.
+    """
     out = {}
     for sample, status, value in zip(rows["sample"], rows["status"], rows[metric]):
-        finite = status == "completed" and value is not None and not math.isnan(float(value))
-        out[int(sample)] = float(value) if finite else math.inf
+        if status != "completed":
+            out[int(sample)] = math.inf
+        else:
+            out[int(sample)] = math.nan if value is None else float(value)
     return out
 
 
@@ -95,9 +101,10 @@ def compare(
 
     va = _values(frame[frame["controller"] == a], metric)
     vb = _values(frame[frame["controller"] == b], metric)
-    samples = sorted(set(va) & set(vb))
-    x = np.array([va[s] for s in samples])
-    y = np.array([vb[s] for s in samples])
+    common = sorted(set(va) & set(vb))
+    samples = [s for s in common if not (math.isnan(va[s]) or math.isnan(vb[s]))]
+    x = np.array([va[s] for s in samples], dtype=float)
+    y = np.array([vb[s] for s in samples], dtype=float)
     with np.errstate(invalid="ignore"):
         d = x - y
     d[np.isinf(x) & np.isinf(y)] = 0.0  # neither completed: a tie
@@ -107,6 +114,7 @@ def compare(
         "b": b,
         "metric": metric,
         "n": n,
+        "undefined": len(common) - n,
         "method": METHOD.format(confidence=100 * (1 - alpha), resamples=resamples, seed=seed),
     }
     if n == 0:

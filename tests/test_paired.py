@@ -75,6 +75,16 @@ def test_a_run_that_did_not_complete_loses_its_pair_and_two_are_a_tie():
     assert entry["wilcoxon_p"] is None  # a difference is infinite
 
 
+def test_a_completed_run_whose_metric_is_undefined_leaves_its_pair_out():
+    """A run shorter than 2 s completes with rms_error_after_2s NaN: against a crash it is no
+    tie and no win, the pair is left out and counted as undefined."""
+    a, b = [math.nan, math.nan, 0.001], [math.nan, math.nan, 0.002]
+    entry = compare(_frame(a, b, status_b=["crashed", "completed", "completed"]), "A", "B")
+    assert (entry["n"], entry["undefined"], entry["a_better"], entry["ties"]) == (1, 2, 1, 0)
+    none = compare(_frame(a[:2], b[:2], status_b=["crashed", "completed"]), "A", "B")
+    assert (none["n"], none["undefined"], none["median_difference"]) == (0, 2, None)
+
+
 def test_every_pair_once_in_order():
     frame = pd.concat([_frame([1.0, 2.0], [2.0, 3.0]), _frame([1.0, 2.0], [2.0, 3.0]).assign(
         controller=lambda f: f["controller"].map({"A": "C", "B": "D"}))])  # fmt: skip
