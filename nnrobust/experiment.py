@@ -48,6 +48,7 @@ from .plant.build import (
     build_plant,
     true_model,
 )
+from .plant.loads import LOAD_KEYS, LOAD_UNITS
 from .plant.scaling import PLAUSIBLE_EFFORT_RATIO, implausible_efforts
 from .results import Result
 from .simulation import simulate
@@ -592,18 +593,14 @@ def _load_just_before(config: ExperimentConfig, end: float) -> str:
     periods before ``end`` (the run's last time), described with its size; "" if none did.
     """
     period = config.simulation.control_period
-    values = {"step": ("torque", "N m"), "impulse": ("impulse", "N m s"), "payload": ("mass", "kg")}
     for i, entry in reversed(list(enumerate(config.plant.loads or ()))):
         start = float(entry["time"])
         if not 0.0 <= end - start <= LOAD_BLAME_PERIODS * period:
             continue
         kind = entry["kind"]
-        if kind == "wrench":
-            units = {"force": "N", "moment": "N m"}
-            size = " and ".join(f"{k} {_numbers(entry[k])} {u}" for k, u in units.items() if k in entry)
-        else:
-            key, unit = values[kind]
-            size = f"{_numbers(entry[key])} {unit}"
+        keys = LOAD_KEYS[kind]
+        sizes = [(key, f"{_numbers(entry[key])} {LOAD_UNITS[key]}") for key in keys if key in entry]
+        size = sizes[0][1] if len(keys) == 1 else " and ".join(f"{key} {text}" for key, text in sizes)
         ago = round((end - start) / period)
         periods = f"{ago} control period{'' if ago == 1 else 's'}"
         when = "as it started" if ago < 1 else f"{periods} after it started"

@@ -138,13 +138,16 @@ class ExternalLoads:
         return HeldLoads(torque, wrench)
 
 
-_KEYS = {
+LOAD_KEYS = {
     "step": ("torque",),
     "impulse": ("impulse",),
     "wrench": ("force", "moment"),
     "payload": ("mass",),
 }
 """The keys of each kind beside ``kind``, ``time`` and ``duration`` (payload: no duration)."""
+
+LOAD_UNITS = {"torque": "N m", "impulse": "N m s", "force": "N", "moment": "N m", "mass": "kg"}
+"""The unit of each of those keys."""
 
 _TOLERANCE = 1e-9
 """Relative tolerance of "a whole number of control periods"."""
@@ -201,7 +204,7 @@ def parse_loads(
         kind = entry.get("kind")
         if kind not in LOAD_KINDS:
             raise ConfigError(f"{where}.kind", f"{kind!r} is not one of {', '.join(LOAD_KINDS)}")
-        valid = ("kind", "time", *(() if kind == "payload" else ("duration",)), *_KEYS[kind])
+        valid = ("kind", "time", *(() if kind == "payload" else ("duration",)), *LOAD_KEYS[kind])
         for key in entry:
             if key not in valid:
                 raise ConfigError(
@@ -226,19 +229,20 @@ def parse_loads(
         )
         end = start + lasts
         if kind in ("step", "impulse"):
-            key = _KEYS[kind][0]
+            key = LOAD_KEYS[kind][0]
             if key not in entry:
                 raise ConfigError(f"{where}.{key}", f"a {kind!r} load needs one value per joint")
-            unit = "N m" if kind == "step" else "N m s"
-            value = _vector(f"{where}.{key}", entry[key], n, unit, per_joint=True)
+            value = _vector(f"{where}.{key}", entry[key], n, LOAD_UNITS[key], per_joint=True)
             pulses.append(TorquePulse(start, end, value if kind == "step" else value / lasts))
         elif kind == "wrench":
             if "force" not in entry and "moment" not in entry:
                 raise ConfigError(
                     f"{where}.force", "a 'wrench' load needs force [N] and/or moment [N m] (3 each)"
                 )
-            force = _vector(f"{where}.force", entry.get("force", [0.0] * 3), 3, "N", per_joint=False)
-            moment = _vector(f"{where}.moment", entry.get("moment", [0.0] * 3), 3, "N m", per_joint=False)
+            force, moment = (
+                _vector(f"{where}.{key}", entry.get(key, [0.0] * 3), 3, LOAD_UNITS[key], per_joint=False)
+                for key in LOAD_KEYS["wrench"]
+            )
             wrenches.append(ToolWrench(start, end, np.concatenate([force, moment])))
         else:
             mass = entry.get("mass")
