@@ -156,10 +156,11 @@ class Episodes:
             isinstance(residual_scale, int | float) and residual_scale > 0
         ):
             raise ConfigError("residual_scale", f"expected a number > 0, got {residual_scale!r}")
-        if isinstance(gain_range, bool) or not (
-            isinstance(gain_range, int | float) and 1 < gain_range < math.inf
-        ):
-            raise ConfigError("gain_range", f"expected a factor > 1, got {gain_range!r}")
+        from ..controllers.laws.policy import LAW as POLICY
+
+        # the range a policy law accepts: a policy trained here runs as controller.kind = "policy"
+        (declared,) = (p for p in POLICY.params if p.name == "gain_range")
+        gain_range = declared.check(gain_range, None, 1, "gain_range")
         if duration is not None and (
             isinstance(duration, bool) or not isinstance(duration, int | float) or not 0 < duration < math.inf
         ):
@@ -188,18 +189,11 @@ class Episodes:
                 "or give the URDF's <limit effort=...>)",
             )
         self.torque_limit = np.asarray(limit, dtype=float)
-        if action == "gains":
-            from ..controllers.laws.policy import GAIN_ACTIONS
+        from ..controllers.laws.policy import action_scale, no_gains
 
-            if not first.controller.scale_gains(1.0, 1.0):
-                raise ConfigError(
-                    "controller",
-                    f"{self.law!r} has no position and velocity gains an action can set; in gains mode the "
-                    "base law is an eq. (9) law (nn, no-u0, sliding-mode, computed-torque, rbf-nn) or pd",
-                )
-            self.action_scale = np.full(GAIN_ACTIONS, math.log(self.gain_range))  # a -> G^a
-        else:
-            self.action_scale = self.torque_limit * (self.residual_scale if self.mode == 1 else 1.0)
+        if action == "gains" and not first.controller.scale_gains(1.0, 1.0):
+            raise ConfigError("controller", no_gains(self.law))
+        self.action_scale = action_scale(action, self.torque_limit, self.residual_scale, self.gain_range)
         self.action_size = self.action_scale.size
         self.speed_limit = np.asarray(robot.velocity_limits, dtype=float)
         self.lower, self.upper = (

@@ -44,6 +44,24 @@ GAIN_ACTIONS = 2
 """The size of a ``gains`` action: the factors' exponents on the position and velocity gains."""
 
 
+def action_scale(action: str, limits, residual_scale: float, gain_range: float) -> np.ndarray:
+    """What a clipped action a ∈ [-1, 1] is multiplied by: τ_max (``torque``), s · τ_max
+    (``residual``), or ln G for each of the two exponents (``gains``: a factor exp(a ln G) = G^a).
+    The law and the learning environment (nnrobust.learning.env) share it.
+    """
+    if action == "gains":
+        return np.full(GAIN_ACTIONS, math.log(gain_range))
+    return np.asarray(limits, dtype=float) * (residual_scale if action == "residual" else 1.0)
+
+
+def no_gains(kind: str) -> str:
+    """Why a law of ``kind`` cannot be the base of a gains action."""
+    return (
+        f"{kind!r} has no position and velocity gains an action can set; in gains mode the base law is "
+        "an eq. (9) law (nn, no-u0, sliding-mode, computed-torque, rbf-nn) or pd"
+    )
+
+
 def _session(path: Path):
     """An onnxruntime session on one CPU thread, or one line naming the file and what is wrong.
     A file the running task brought with it is read from its copy
@@ -117,21 +135,27 @@ class OnnxPolicy:
         self.seconds = 0.0  # the last call's wall time, as a real-time loop would see it (the
         # thread's CPU time costs a system call of microseconds a step on this kind of machine)
 
-    def __call__(self, obs: np.ndarray, t: float) -> np.ndarray:
-        """The action at ``t`` (float64, n entries); a NaN or a wrong shape is a ControllerError."""
-        x = np.asarray(obs, dtype=self.dtype)
+    def _run(self, feed: dict, t: float) -> np.ndarray:
+        """The network's raw action on ``feed`` at ``t`` (n entries of its type), the call's wall
+        time in :attr:`seconds`; a failed call or an action of another size is a ControllerError.
+        """
         start = time.perf_counter()
         try:
-            (a,) = self.session.run([self.output], {self.input: x[None, :] if self.batched else x})
+            (a,) = self.session.run([self.output], feed)
         except Exception as err:
             raise ControllerError(f"the policy {self.path} failed at t = {t:g} s: {err}") from err
         self.seconds = time.perf_counter() - start
-        a = np.asarray(a, dtype=float).reshape(-1)
         if a.size != self.n:
             raise ControllerError(
                 f"the policy {self.path} returned {a.size} actions at t = {t:g} s; "
                 f"its action has {self.n} entries"
             )
+        return a.reshape(-1)
+
+    def __call__(self, obs: np.ndarray, t: float) -> np.ndarray:
+        """The action at ``t`` (float64, n entries); a NaN or a wrong shape is a ControllerError."""
+        x = np.asarray(obs, dtype=self.dtype)
+        a = self._run({self.input: x[None, :] if self.batched else x}, t).astype(float)
         if not np.all(np.isfinite(a)):
             raise ControllerError(self.non_finite(a, t))
         return a
@@ -147,27 +171,14 @@ class OnnxPolicy:
         of the network's type), the call's wall time in :attr:`seconds`: the hybrid loop's step,
         with no array made per call. The caller checks that the values are finite.
         """
-        run, names = self.session.run, [self.output]
         given = obs if self.dtype == np.float64 else np.empty(obs.shape, self.dtype)
         feed = {self.input: given[None, :] if self.batched else given}
         convert = given is not obs
-        clock = time.perf_counter
 
         def call(t: float) -> np.ndarray:
             if convert:
                 given[:] = obs
-            start = clock()
-            try:
-                (a,) = run(names, feed)
-            except Exception as err:
-                raise ControllerError(f"the policy {self.path} failed at t = {t:g} s: {err}") from err
-            self.seconds = clock() - start
-            if a.size != self.n:
-                raise ControllerError(
-                    f"the policy {self.path} returned {a.size} actions at t = {t:g} s; "
-                    f"its action has {self.n} entries"
-                )
-            return a.reshape(-1)
+            return self._run(feed, t)
 
         return call
 
@@ -215,10 +226,7 @@ class PolicyLaw(Controller):
             else OnnxPolicy(file, self.layout.size, context.n)
         )
         self.action, self.mode, self.base_kind = action, ACTIONS.index(action), base
-        if gains:  # the exponents' scale: factor = exp(clip(a) ln G) = G^clip(a)
-            self.scale = np.full(GAIN_ACTIONS, math.log(gain_range))
-        else:
-            self.scale = np.asarray(limits, dtype=float) * (residual_scale if action == "residual" else 1.0)
+        self.scale = action_scale(action, limits, residual_scale, gain_range)
         self.nominal, self.trajectory = context.nominal, context.trajectory
         self._base: Controller | None = None
 
@@ -230,11 +238,7 @@ class PolicyLaw(Controller):
     @base.setter
     def base(self, law: Controller | None) -> None:
         if law is not None and self.action == "gains" and not law.scale_gains(1.0, 1.0):
-            raise ConfigError(
-                "controller.params.base",
-                f"{self.base_kind!r} has no position and velocity gains a policy can set; in gains mode the "
-                "base is an eq. (9) law (nn, no-u0, sliding-mode, computed-torque, rbf-nn) or pd",
-            )
+            raise ConfigError("controller.params.base", no_gains(self.base_kind))
         self._base = law
 
     @property
