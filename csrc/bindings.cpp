@@ -241,7 +241,7 @@ NB_MODULE(_loop, m) {
                                           " entries, got " + std::to_string(action.size()));
             if (!l.running()) throw std::invalid_argument("SteppedLoop.act_action: the run has ended (" + l.trace().status + ")");
             if (!action.allFinite()) return -1;
-            return nnrobust::apply_command(l, action.cwiseMax(-1.0).cwiseMin(1.0).cwiseProduct(scale), mode) ? 1 : 0;
+            return nnrobust::step_action(l, action.data(), scale, mode) ? 1 : 0;
           },
           nb::arg("action"), nb::arg("scale"), nb::arg("mode"),
           "One control period under a policy's raw action: clipped to [-1, 1], times `scale`, applied as "

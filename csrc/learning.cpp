@@ -10,10 +10,9 @@
 
 namespace nnrobust {
 
-bool step_action(SteppedLoop &loop, const double *a, const RewardSpec &spec) {
-  const Eigen::Index n = spec.action_scale.size();
-  const Vector command = Eigen::Map<const Vector>(a, n).cwiseMax(-1.0).cwiseMin(1.0).cwiseProduct(spec.action_scale);
-  return apply_command(loop, command, spec.mode);
+bool step_action(SteppedLoop &loop, const double *a, const Vector &scale, int mode) {
+  const Vector command = Eigen::Map<const Vector>(a, scale.size()).cwiseMax(-1.0).cwiseMin(1.0).cwiseProduct(scale);
+  return apply_command(loop, command, mode);
 }
 
 bool apply_command(SteppedLoop &loop, const Vector &command, int mode) {
@@ -117,7 +116,7 @@ void step_loops(StepPool &pool, const std::vector<SteppedLoop *> &loops, const R
   const size_t na = rows.action_size, no = rows.observation_size, nj = rows.joints, count = loops.size();
   const auto one = [&](size_t i) {
     SteppedLoop &loop = *loops[i];
-    rows.running[i] = step_action(loop, rows.actions + i * na, spec);
+    rows.running[i] = step_action(loop, rows.actions + i * na, spec.action_scale, spec.mode);
     const Vector &applied = loop.applied_torque();
     Eigen::Map<Vector>(rows.applied + i * nj, static_cast<Eigen::Index>(nj)) = applied;
     if (rows.running[i]) loop.observe(rows.observations + i * no);

@@ -34,9 +34,9 @@ struct RewardSpec {
 // two gain factors' logarithms for gains); false when the run has ended.
 bool apply_command(SteppedLoop &loop, const Vector &command, int mode);
 
-// One period of `loop` under the raw action `a` (spec.action_scale's size: n, or 2 for gains;
-// clipped to [-1, 1] and scaled by spec.action_scale); false when the run has ended.
-bool step_action(SteppedLoop &loop, const double *a, const RewardSpec &spec);
+// One period of `loop` under the raw action `a` (scale's size: n, or 2 for gains), clipped to
+// [-1, 1], times `scale` and applied as `mode` says; false when the run has ended.
+bool step_action(SteppedLoop &loop, const double *a, const Vector &scale, int mode);
 
 // The reward of the period just stepped, from the next observation `obs` (the observed error and
 // the measured state) and the applied torque; `size` is the path's size L.
