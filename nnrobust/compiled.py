@@ -11,7 +11,7 @@ import importlib
 
 import pinocchio as pin
 
-from .exceptions import NNRobustError
+from .exceptions import ControllerError, NNRobustError
 
 _MODULE = None
 _REASON = ""
@@ -453,8 +453,6 @@ def simulate_policy(setup, duration: float):
     refusal = twin_refusal(base)
     if refusal:
         raise NNRobustError(f"simulation.backend = 'hybrid': the policy's base law: {refusal}")
-    from .exceptions import ControllerError
-
     loop, spec = stepped_loop(base, duration)
     mode, scale, network = policy.mode, np.asarray(policy.scale, dtype=float), policy.policy
     obs = np.empty(policy.layout.size)

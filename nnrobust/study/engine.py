@@ -155,11 +155,11 @@ def run_study(
     say = say or (lambda line: None)
     folder = Path(folder).resolve()  # the report's commands name absolute paths
     _check_controllers(spec)
-    from ..sweep.engine import check_local_workers
+    from ..sweep.engine import check_local_workers, ships_files
 
     check_local_workers(workers, scheduler)  # before the folder is made
     prepare(spec, folder, overwrite)
-    ship = scheduler is not None  # a cluster of the user's may not see the study's files: they travel
+    ship = ships_files(None, scheduler)  # the stages run on the study's own cluster: decided here
     with _SharedCluster(workers, scheduler) as address:
         cases = {}
         for case in spec.cases:
