@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..controllers.laws.policy import ACTIONS
 from ..controllers.observation import ObservationLayout
 from ..exceptions import ConfigError, NNRobustError
 
@@ -25,8 +26,9 @@ try:
 except ImportError as err:  # pragma: no cover - the extra is missing
     raise NNRobustError("the learning environment needs Gymnasium: pip install 'nnrobust[learning]'") from err
 
-ACTION_MODES = {"torque": 0, "residual": 1, "gains": 2}
-"""What an action is: ``torque``, the command itself, a ⊙ τ_max; ``residual``, added to the base
+ACTION_MODES = {name: mode for mode, name in enumerate(ACTIONS)}
+"""The policy law's action modes by their number on the compiled loop (csrc/learning.hpp's
+ActionMode). What an action is: ``torque``, the command itself, a ⊙ τ_max; ``residual``, added to the base
 law's command (eq. 9 with or without u_0, the PD, any compiled law), scale · a ⊙ τ_max; ``gains``,
 two entries: the base law's position and velocity gains (K_p, K_v of eq. 9; K_p, K_d of the PD)
 times G^a_0 and G^a_1 over the period, G = ``gain_range``."""
