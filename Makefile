@@ -20,7 +20,7 @@ $(VENV)/.build-deps: pyproject.toml $(BIN)/activate
 	touch $@
 
 # Every C++ file under csrc/ (any depth): an edit anywhere rebuilds the extension.
-SOURCES := CMakeLists.txt $(shell find csrc -name '*.hpp' -o -name '*.cpp')
+SOURCES := CMakeLists.txt $(shell find csrc -name '*.hpp' -o -name '*.h' -o -name '*.cpp')
 
 # The editable install knows the package's modules by the list it saw when it was made: a module
 # added, moved or removed since needs a reinstall (seconds; nothing recompiles). This stamp changes

@@ -261,6 +261,15 @@ NB_MODULE(_loop, m) {
           "One control period: mode 0 applies `command` [N m], mode 1 adds it to the compiled law's, mode 2 "
           "multiplies the law's position and velocity gains by exp(command) (2 entries); False when the run "
           "has ended.")
+      .def(
+          "control",
+          [](SteppedLoop &l) {
+            if (!l.running()) throw std::invalid_argument("SteppedLoop.control: the run has ended (" + l.trace().status + ")");
+            const nnrobust::Output out = l.control();
+            return nnrobust::ControlStep{out.tau, out.z, out.signals};
+          },
+          "The compiled law's output at the current instant from the measurement and the state (nothing "
+          "applied): what an exported law returns there (docs/export.md).")
       .def("end", &SteppedLoop::end, nb::arg("status"), "Stop the run here, marked `status`.")
       .def("finish", &SteppedLoop::finish, "The run's trace (call once, at the end).");
   nb::class_<nnrobust::StepPool>(m, "StepPool", "A persistent pool of C++ threads stepping loops.")

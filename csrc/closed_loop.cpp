@@ -44,15 +44,6 @@ void record_kinematics(LoadedModel &m, const LoopSpec &s, const Criteria &criter
   }
 }
 
-// The controller's nominal model: the closed form, or the Pinocchio model `nominal_model`.
-std::unique_ptr<Nominal> make_nominal(const LoopSpec &s, LoadedModel *nominal_model) {
-  if (s.nominal == "closed-form")
-    return std::make_unique<ClosedFormNominal>(Fields{"LoopSpec.nominal_params: the closed form", s.nominal_params});
-  if (s.nominal != "pinocchio") throw std::invalid_argument("LoopSpec.nominal: unknown nominal model " + s.nominal);
-  if (nominal_model == nullptr) throw std::invalid_argument("the nominal model 'pinocchio' needs its model");
-  return std::make_unique<PinocchioNominal>(*nominal_model, s.m);
-}
-
 // simulation.period_substeps: the plant steps of one control period, cut for its step_rate.
 int period_substeps(const LoopSpec &s, double speed) {
   const double needed = std::ceil(s.period * speed / s.max_step_rotation);

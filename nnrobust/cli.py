@@ -294,6 +294,29 @@ def cmd_plot(args) -> int:
     return code
 
 
+def cmd_export(args) -> int:
+    """Export the controller of a preset, experiment file or run folder as a C library."""
+    from .config import parse_override
+    from .export import export_law
+
+    target = Path(args.target)
+    if target.is_dir():
+        if not (target / "config.toml").is_file():
+            raise NNRobustError(f"{target}: not a run folder (config.toml is missing)")
+        target = target / "config.toml"
+    overrides = dict(parse_override(item) for item in args.set or ())
+    config = _load_target(str(target), overrides)
+    info = export_law(config, args.out, overwrite=args.overwrite, build=not args.no_build)
+    if not args.quiet:
+        built = "lib/libnnrobust_law.so" if info["built"] else "sources only (--no-build)"
+        print(
+            f"exported {info['controller']} of {info['experiment']} ({info['joints']} joints, law "
+            f"{info['law']}) to {args.out}/: {built}; docs/export.md shows how to call it",
+            file=sys.stderr,
+        )
+    return 0
+
+
 def cmd_view(args) -> int:
     """Replay a run folder in the meshcat viewer."""
     from .viewer import draw_run, start_viewer
@@ -1182,6 +1205,29 @@ def build_parser() -> argparse.ArgumentParser:
         help="... with confidence 1 - BETA (default 0.05; one-sided Clopper-Pearson)",
     )
     falsify.set_defaults(func=cmd_falsify)
+
+    export = sub.add_parser(
+        "export",
+        help="export a controller as a C library (no Python at run time)",
+        description="Write the compiled twin of an experiment's controller (a preset, an experiment "
+        "file or a run folder's config.toml) as a shared library with a C header and a CMake "
+        "package: nnrobust_law_create(), nnrobust_law_step(law, t, q, v, tau), "
+        "nnrobust_law_destroy() (docs/export.md).",
+    )
+    export.add_argument("target", help="preset name, experiment file (TOML) or run folder")
+    export.add_argument("--out", required=True, help="folder to write (include/, lib/, example/, ...)")
+    export.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY=VALUE",
+        help="set one key of the experiment (dotted, TOML value); repeatable",
+    )
+    export.add_argument("--overwrite", action="store_true", help="replace an earlier export in --out")
+    export.add_argument(
+        "--no-build", action="store_true", help="write the sources without compiling libnnrobust_law"
+    )
+    export.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    export.set_defaults(func=cmd_export)
 
     study = sub.add_parser(
         "study",

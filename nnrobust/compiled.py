@@ -113,11 +113,21 @@ def twin_refusal(setup) -> str:
     pose tasks); and the whole plant (friction, sinusoidal disturbance, saturation, stops,
     sensor noise, quantisation, delay), integrated by RK4.
     """
+    return _plant_refusal(setup) or law_refusal(setup)
+
+
+def law_refusal(setup) -> str:
+    """Why this experiment's controller (its law, robust term, nominal model, path and criteria)
+    has no compiled twin ("" when it has one): the part of :func:`twin_refusal` an exported law
+    needs (nnrobust.export).
+    """
     from .controllers.registry import registered_law
     from .trajectories import PoseTrajectory
 
+    if not available():
+        return unavailable_reason()
     config, controller = setup.config, setup.controller
-    refusal = _plant_refusal(setup)
+    refusal = _criterion_refusal(setup)
     if refusal:
         return refusal
     if is_custom(controller):
@@ -157,18 +167,30 @@ def _plant_refusal(setup) -> str:
     :func:`twin_refusal` that the hybrid loop needs too (plant, integrator, task, criterion).
     """
     from .plant.disturbance import SinusoidalDisturbance
-    from .subtasks import WeightedCriteria
 
     if not available():
         return unavailable_reason()
-    config, criterion = setup.config, setup.criterion
+    config = setup.config
     kinds = {j.shortname() for j in setup.plant.model.pinocchio_model.joints[1:]}
     checks = [
         (kinds <= COMPILED_JOINTS, f"a joint of type {min(kinds - COMPILED_JOINTS, default='')}"),
         (isinstance(setup.plant.disturbance, SinusoidalDisturbance), "a custom disturbance"),
         (config.simulation.integrator == "rk4", f"the integrator {config.simulation.integrator!r}"),
-        (setup.robot.task in ("planar", "position", "pose"), f"a {setup.robot.task!r} task"),
         (setup.plant.friction.smoothing <= 0, "a smoothed plant friction"),
+    ]
+    for ok, what in checks:
+        if not ok:
+            return f"{what} has no compiled twin yet"
+    return _criterion_refusal(setup)
+
+
+def _criterion_refusal(setup) -> str:
+    """Why the task or the weighted criterion has no compiled twin ("" when both have one)."""
+    from .subtasks import WeightedCriteria
+
+    criterion = setup.criterion
+    checks = [
+        (setup.robot.task in ("planar", "position", "pose"), f"a {setup.robot.task!r} task"),
         (
             criterion is None
             or (
@@ -238,11 +260,7 @@ def loop_spec(setup, duration: float, external: bool = False):
     import numpy as np
 
     from .config import step_rotation_limit
-    from .controllers.registry import registered_law
-    from .model import ThreeLinkPlanarModel
-    from .plant.friction import Friction
     from .simulation import MAX_PERIOD_SUBSTEPS, MAX_SPEED
-    from .trajectories import PoseTrajectory
     from .twins import twin_parts, twin_values
 
     def f(x):  # the C++ side takes contiguous float64 arrays
@@ -267,6 +285,21 @@ def loop_spec(setup, duration: float, external: bool = False):
         s.law = "external"
         s.z0 = f(controller.initial_state())
         return s
+    _law_spec(s, setup, f)
+    return s
+
+
+def _law_spec(s, setup, f) -> None:
+    """The controller into the spec: its nominal model, desired motion, pseudo-inverse, friction
+    estimate, law (with its robust term) and initial state.
+    """
+    from .controllers.registry import registered_law
+    from .model import ThreeLinkPlanarModel
+    from .plant.friction import Friction
+    from .trajectories import PoseTrajectory
+    from .twins import twin_values
+
+    plant, controller = setup.plant, setup.controller
     nominal = setup.nominal
     s.nominal = nominal.twin
     if isinstance(nominal, ThreeLinkPlanarModel):
@@ -289,7 +322,28 @@ def loop_spec(setup, duration: float, external: bool = False):
             s.robust, s.robust_params = term.twin, twin_values(term, term.twin_fields)
     s.law_signals = len(controller.signal_names)
     s.z0 = f(controller.initial_state())
-    return s
+
+
+def law_spec(setup):
+    """The compiled controller of a built experiment alone, as an exported law runs it
+    (nnrobust.export): (LoopSpec with the controller's and criteria's fields, the nominal
+    Pinocchio model's ModelSpec or None for the closed form). Refused without a twin.
+    """
+    import numpy as np
+
+    refusal = law_refusal(setup)
+    if refusal:
+        raise NNRobustError(f"this controller cannot be exported: {refusal}")
+
+    def f(x):
+        return np.ascontiguousarray(x, dtype=float)
+
+    s = _module().LoopSpec()
+    s.period, s.m = setup.config.simulation.control_period, setup.robot.m
+    _criterion_spec(s, setup, f)
+    _law_spec(s, setup, f)
+    model = model_spec(setup.nominal.model, setup.nominal.task_frame) if s.nominal == "pinocchio" else None
+    return s, model
 
 
 def _prepared(setup, duration: float):

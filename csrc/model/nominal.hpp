@@ -3,6 +3,7 @@
 // pinocchio_model.py, defined in csrc/model/three_link.cpp and pinocchio_model.cpp.
 #pragma once
 
+#include <memory>
 #include <vector>
 
 #include "../closed_loop.hpp"
@@ -78,5 +79,9 @@ struct PinocchioNominal : Nominal {
   Vector det_gradient(const Vector &q, const TaskState &ts) override;
   void chain(const Vector &q, Matrix &points, std::vector<Matrix> &jacobians) override;
 };
+
+// The controller's nominal model LoopSpec.nominal names: the closed form (from nominal_params) or
+// the Pinocchio model `nominal_model` ("pinocchio"); an unknown name is refused.
+std::unique_ptr<Nominal> make_nominal(const LoopSpec &s, LoadedModel *nominal_model);
 
 }  // namespace nnrobust

@@ -3,11 +3,21 @@
 // interface (nominal.hpp).
 #include <algorithm>
 #include <cmath>
+#include <memory>
+#include <stdexcept>
 
 #include "nominal.hpp"
 #include "../pin_calls.hpp"
 
 namespace nnrobust {
+
+std::unique_ptr<Nominal> make_nominal(const LoopSpec &s, LoadedModel *nominal_model) {
+  if (s.nominal == "closed-form")
+    return std::make_unique<ClosedFormNominal>(Fields{"LoopSpec.nominal_params: the closed form", s.nominal_params});
+  if (s.nominal != "pinocchio") throw std::invalid_argument("LoopSpec.nominal: unknown nominal model " + s.nominal);
+  if (nominal_model == nullptr) throw std::invalid_argument("the nominal model 'pinocchio' needs its model");
+  return std::make_unique<PinocchioNominal>(*nominal_model, s.m);
+}
 
 TaskState PinocchioNominal::task_state(const Vector &q, const Vector &v) {
   pin::forwardKinematics(m.model, m.data, q, v, Vector::Zero(m.model.nv));

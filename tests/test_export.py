@@ -1,0 +1,198 @@
+"""An exported law (nnrobust/export.py, csrc/export/; docs/export.md) against the compiled loop it
+came from: a C program linked to the export, fed the measured states of a compiled run (at each
+control instant, what the loop's sensor gave its law), returns the torques the loop's law
+commanded there, bit for bit; several law objects are
+independent; bad descriptions and folders are refused with a message that names what is wrong.
+"""
+
+import ctypes
+import json
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from nnrobust import compiled
+from nnrobust.cli import main
+from nnrobust.exceptions import NNRobustError
+from nnrobust.experiment import build
+from nnrobust.export import description, export_law, recorded_steps
+from nnrobust.presets import load_preset
+
+pytestmark = [
+    pytest.mark.skipif(not compiled.available(), reason=compiled.unavailable_reason()),
+    pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler"),
+]
+
+CASES = {
+    # the NN compensator (state: the adaptive weights) on the closed-form nominal model, noisy sensor
+    "paper arm, NN, noisy": ("paper-ellipse-noisy", {}),
+    # a registered law on a perturbed Pinocchio nominal model (spatial task, criteria)
+    "Panda, slotine-li": ("panda-ellipse", {"controller": {"kind": "slotine-li"}}),
+    # a pose task (orientation error through log3), PD
+    "Panda pose, PD": ("panda-pose", {"controller": {"kind": "pd"}}),
+}
+DURATION = 0.3
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _config(name):
+    preset, changes = CASES[name]
+    return load_preset(preset).replace(simulation={"duration": DURATION}, **changes)
+
+
+def _compiled_run(config):
+    return recorded_steps(config, DURATION)
+
+
+def _compile_replay(folder):
+    program = folder / "replay"
+    subprocess.run(
+        ["cc", "-O2", "-I", folder / "include", folder / "example" / "replay.c", "-L", folder / "lib",
+         "-lnnrobust_law", "-lnnrobust_core", f"-Wl,-rpath,{folder / 'lib'}", "-o", program],
+        check=True, capture_output=True, timeout=300,
+    )  # fmt: skip
+    return program
+
+
+def _replay(program, inputs, *args):
+    text = "\n".join(" ".join(repr(float(x)) for x in row) for row in inputs) + "\n"
+    done = subprocess.run(
+        [program, *args], input=text, capture_output=True, text=True, timeout=300, check=True
+    )
+    return np.array([[float(x) for x in line.split()] for line in done.stdout.splitlines()])
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_a_c_program_replays_the_compiled_loops_torques(name, tmp_path):
+    config = _config(name)
+    inputs, torques = _compiled_run(config)
+    info = export_law(config, tmp_path / "law")
+    assert info["joints"] == torques.shape[1] and info["built"]
+    program = _compile_replay(tmp_path / "law")
+    ours = _replay(program, inputs)
+    assert ours.shape == torques.shape
+    np.testing.assert_allclose(ours, torques, rtol=0, atol=1e-12)
+    # the same law read from its description file at run time
+    again = _replay(program, inputs, tmp_path / "law" / "law.description")
+    np.testing.assert_array_equal(again, ours)
+
+
+def _library(folder):
+    core = ctypes.CDLL(str(folder / "lib" / "libnnrobust_core.so"))
+    law = ctypes.CDLL(str(folder / "lib" / "libnnrobust_law.so"))
+    law.nnrobust_law_create.restype = ctypes.c_void_p
+    law.nnrobust_law_create_from.restype = ctypes.c_void_p
+    law.nnrobust_law_create_from.argtypes = [ctypes.c_char_p]
+    law.nnrobust_law_last_error.restype = ctypes.c_char_p
+    law.nnrobust_law_dof.argtypes = [ctypes.c_void_p]
+    law.nnrobust_law_reset.argtypes = [ctypes.c_void_p]
+    law.nnrobust_law_destroy.argtypes = [ctypes.c_void_p]
+    law.nnrobust_law_period.argtypes = [ctypes.c_void_p]
+    law.nnrobust_law_period.restype = ctypes.c_double
+    double_p = ctypes.POINTER(ctypes.c_double)
+    law.nnrobust_law_step.argtypes = [ctypes.c_void_p, ctypes.c_double, double_p, double_p, double_p]
+    return law, core
+
+
+def _step(lib, handle, row, n):
+    q = np.ascontiguousarray(row[1 : 1 + n])
+    v = np.ascontiguousarray(row[1 + n :])
+    tau = np.zeros(n)
+    p = ctypes.POINTER(ctypes.c_double)
+    status = lib.nnrobust_law_step(
+        handle, row[0], q.ctypes.data_as(p), v.ctypes.data_as(p), tau.ctypes.data_as(p)
+    )
+    return status, tau
+
+
+def test_law_objects_are_independent_and_reset_restarts_one(tmp_path):
+    """Two objects stepped in turn on different runs each give their own run's torques (no
+    shared state); reset brings one back to its initial adaptive weights."""
+    config = _config("paper arm, NN, noisy")
+    inputs, torques = _compiled_run(config)
+    other_inputs, other_torques = _compiled_run(config.replace(sensing={"seed": 7}))
+    export_law(config, tmp_path / "law")
+    lib, _ = _library(tmp_path / "law")
+    a, b = lib.nnrobust_law_create(), lib.nnrobust_law_create()
+    assert a and b and lib.nnrobust_law_dof(a) == 3
+    assert lib.nnrobust_law_period(a) == config.simulation.control_period
+    n = 3
+    for k in range(len(inputs)):
+        status_a, tau_a = _step(lib, a, inputs[k], n)
+        status_b, tau_b = _step(lib, b, other_inputs[k], n)
+        assert status_a == status_b == 0
+        np.testing.assert_array_equal(tau_a, torques[k])
+        np.testing.assert_array_equal(tau_b, other_torques[k])
+    assert not np.array_equal(torques[-1], other_torques[-1])  # the runs did differ
+    lib.nnrobust_law_reset(a)
+    for k in range(5):
+        np.testing.assert_array_equal(_step(lib, a, inputs[k], n)[1], torques[k])
+    lib.nnrobust_law_destroy(a)
+    lib.nnrobust_law_destroy(b)
+
+
+def test_a_bad_description_is_refused_with_the_line_it_names(tmp_path):
+    config = _config("paper arm, NN, noisy")
+    export_law(config, tmp_path / "law")
+    lib, _ = _library(tmp_path / "law")
+    text = (tmp_path / "law" / "law.description").read_text()
+    cases = {
+        "nnrobust-law 2\n": "first line",
+        text.replace("str law =task_space\n", "str law =no-such-law\n"): "unknown law no-such-law",
+        text.replace("int m 2", "int m two"): "two is not an integer",
+        text + "mat law_params/Kp 2 2 0x1p0\n": "ends too soon",
+        text + "num frobnicate 0x1p0\n": "unknown num entry frobnicate",
+        "\n".join(line for line in text.splitlines() if not line.startswith("mat law_params/Kp")): "Kp",
+    }
+    for bad, expected in cases.items():
+        assert lib.nnrobust_law_create_from(bad.encode()) is None
+        assert expected in lib.nnrobust_law_last_error().decode(), expected
+    assert lib.nnrobust_law_create_from(None) is None
+
+
+def test_the_description_carries_every_number_exactly():
+    """Each number is written in C's hexadecimal notation, which float.fromhex (and strtod) read
+    back to the same float64: the nominal model's and the law's fields, inf and nan included."""
+    setup = build(_config("Panda, slotine-li"))
+    spec, model = compiled.law_spec(setup)
+    text = description(spec, model, 7)
+    assert text.startswith("nnrobust-law 1\n")
+    for line in text.splitlines()[1:]:
+        kind, key, *values = line.split()
+        if kind == "mat":
+            rows, cols, *numbers = values
+            assert len(numbers) == int(rows) * int(cols), key
+            [float.fromhex(x) for x in numbers]
+    inertias = next(line for line in text.splitlines() if line.startswith("mat model/inertias "))
+    numbers = np.array([float.fromhex(x) for x in inertias.split()[4:]]).reshape(-1, 13)
+    np.testing.assert_array_equal(numbers, model.inertias)
+
+
+def test_the_cli_exports_and_refuses_what_it_cannot(tmp_path, capsys):
+    out = tmp_path / "law"
+    assert main(["export", "paper-ellipse", "--out", str(out), "--set", "simulation.duration=1.0"]) == 0
+    info = json.loads((out / "export.json").read_text())
+    assert (info["law"], info["robust_term"]) == ("task_space", "nn_compensator")
+    assert info["files"]["lib/libnnrobust_law.so"] and "config.toml" in info["files"]
+    assert (out / "lib" / "libpinocchio_default.so").is_file()  # standalone: Pinocchio travels along
+    capsys.readouterr()
+    assert main(["export", "paper-ellipse", "--out", str(out)]) == 2
+    assert "pass --overwrite" in capsys.readouterr().err
+    assert main(["export", "paper-ellipse", "--out", str(out), "--overwrite", "--quiet"]) == 0
+    (tmp_path / "mine").mkdir()
+    (tmp_path / "mine" / "notes.txt").write_text("keep")
+    assert main(["export", "paper-ellipse", "--out", str(tmp_path / "mine"), "--overwrite"]) == 2
+    assert "not an export" in capsys.readouterr().err
+    assert (tmp_path / "mine" / "notes.txt").read_text() == "keep"
+
+
+def test_a_custom_controller_is_refused(tmp_path):
+    config = load_preset("paper-ellipse").replace(
+        controller={"kind": "custom", "class": f"{ROOT / 'examples' / 'custom_controller.py'}:TaskPD"}
+    )
+    with pytest.raises(NNRobustError, match="cannot be exported: a custom controller"):
+        export_law(config, tmp_path / "law")
+    assert not (tmp_path / "law").exists()
