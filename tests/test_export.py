@@ -1,7 +1,7 @@
 """An exported law (nnrobust/export.py, csrc/export/; docs/export.md) against the compiled loop it
 came from: a C program linked to the export, fed the measured states of a compiled run (at each
 control instant, what the loop's sensor gave its law), returns the torques the loop's law
-commanded there, bit for bit; several law objects are
+commanded there, bit for bit, without one heap allocation in a step; several law objects are
 independent; bad descriptions and folders are refused with a message that names what is wrong.
 """
 
@@ -196,3 +196,31 @@ def test_a_custom_controller_is_refused(tmp_path):
     with pytest.raises(NNRobustError, match="cannot be exported: a custom controller"):
         export_law(config, tmp_path / "law")
     assert not (tmp_path / "law").exists()
+
+
+@pytest.mark.parametrize("name", list(CASES))
+def test_a_step_never_calls_the_system_allocator(name, tmp_path):
+    """benchmarks/export_step.c wraps glibc's malloc family for the whole process (Pinocchio's
+    libraries included) and counts every call made during the steps, none during create."""
+    config = _config(name)
+    inputs, _ = _compiled_run(config)
+    folder = tmp_path / "law"
+    export_law(config, folder)
+    data = tmp_path / "inputs.bin"
+    np.ascontiguousarray(inputs, dtype=np.float64).tofile(data)
+    program = tmp_path / "export_step"
+    subprocess.run(
+        ["cc", "-O2", "-I", folder / "include", ROOT / "benchmarks" / "export_step.c", "-L", folder / "lib",
+         "-lnnrobust_law", "-lnnrobust_core", f"-Wl,-rpath,{folder / 'lib'}", "-o", program],
+        check=True, capture_output=True, timeout=300,
+    )  # fmt: skip
+    done = subprocess.run([program, data, "2"], capture_output=True, text=True, timeout=300, check=True)
+    steps, allocations = (int(x) for x in done.stdout.split()[:2])
+    assert steps == 2 * len(inputs) and allocations == 0
+    lib, _ = _library(folder)
+    lib.nnrobust_law_heap_requests.argtypes = [ctypes.c_void_p]
+    handle = lib.nnrobust_law_create()
+    for row in inputs[:20]:
+        assert _step(lib, handle, row, (inputs.shape[1] - 1) // 2)[0] == 0
+    assert lib.nnrobust_law_heap_requests(handle) == 0  # nothing overflowed the arena
+    lib.nnrobust_law_destroy(handle)

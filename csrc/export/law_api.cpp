@@ -17,6 +17,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <exception>
 #include <memory>
 #include <sstream>
@@ -26,6 +27,7 @@
 
 #include "../controllers.hpp"
 #include "../model/nominal.hpp"
+#include "arena.hpp"
 
 namespace {
 
@@ -33,7 +35,18 @@ using nnrobust::Matrix;
 using nnrobust::Params;
 using nnrobust::Vector;
 
-thread_local std::string last_error;
+// Why the last create or step of this thread failed: a fixed buffer, so that reporting an error
+// inside a step allocates nothing.
+thread_local char last_error[1024] = "";
+
+void set_error(const char *message) {
+  std::strncpy(last_error, message, sizeof(last_error) - 1);
+  last_error[sizeof(last_error) - 1] = '\0';
+}
+
+// The bytes each law reserves for its step's temporaries (the largest step measured, Slotine-Li on
+// the Panda, takes a few kB; benchmarks/export_step.py prints the high-water mark).
+constexpr std::size_t arena_bytes = std::size_t{1} << 20;
 
 // A string as export.py writes it: '=' then its percent-encoding (urllib.parse.quote)
 std::string decoded(const std::string &s) {
@@ -101,6 +114,7 @@ std::vector<std::string> split(const std::string &key) {
 }  // namespace
 
 struct nnrobust_law {
+  nnrobust::Arena arena{arena_bytes};  // first: destroyed last
   nnrobust::LoopSpec spec;
   nnrobust::ModelSpec model_spec;
   bool has_model = false;
@@ -252,13 +266,13 @@ struct nnrobust_law {
 extern "C" {
 
 nnrobust_law *nnrobust_law_create_from(const char *description) {
-  last_error.clear();
+  last_error[0] = '\0';
   try {
     return new nnrobust_law(description);
   } catch (const std::exception &err) {
-    last_error = err.what();
+    set_error(err.what());
   } catch (...) {
-    last_error = "unknown error";
+    set_error("unknown error");
   }
   return nullptr;
 }
@@ -269,23 +283,25 @@ double nnrobust_law_period(const nnrobust_law *law) { return law ? law->spec.per
 
 int nnrobust_law_step(nnrobust_law *law, double t, const double *q, const double *v, double *tau_out) {
   if (law == nullptr || q == nullptr || v == nullptr || tau_out == nullptr) {
-    last_error = "nnrobust_law_step: a NULL argument";
+    set_error("nnrobust_law_step: a NULL argument");
     return -1;
   }
+  const int n = law->n;
+  law->q = Eigen::Map<const Vector>(q, n);
+  law->v = Eigen::Map<const Vector>(v, n);
+  nnrobust::ArenaScope scope(law->arena);  // every temporary of this step comes from the arena
   try {
-    const int n = law->n;
-    law->q = Eigen::Map<const Vector>(q, n);
-    law->v = Eigen::Map<const Vector>(v, n);
     const nnrobust::Output out = law->controller->compute(t, law->q, law->v, law->z);
-    if (out.tau.size() != n) throw std::length_error("the law returned " + std::to_string(out.tau.size()) + " torques");
+    if (out.tau.size() != n) throw std::length_error("the law returned a torque of the wrong size");
     Eigen::Map<Vector>(tau_out, n) = out.tau;
     if (!out.tau.allFinite()) return 1;
-    law->z = out.z;
+    if (out.z.size() != law->z.size()) throw std::length_error("the law returned a state of the wrong size");
+    law->z = out.z;  // the same size: copied into the law's own storage
     return 0;
   } catch (const std::exception &err) {
-    last_error = err.what();
+    set_error(err.what());
   } catch (...) {
-    last_error = "unknown error";
+    set_error("unknown error");
   }
   return -1;
 }
@@ -294,8 +310,13 @@ void nnrobust_law_reset(nnrobust_law *law) {
   if (law) law->z = law->spec.z0;
 }
 
+long nnrobust_law_heap_requests(const nnrobust_law *law) {
+  if (law == nullptr) return -1;
+  return nnrobust::arena_wrapped() ? law->arena.overflows : -1;
+}
+
 void nnrobust_law_destroy(nnrobust_law *law) { delete law; }
 
-const char *nnrobust_law_last_error(void) { return last_error.c_str(); }
+const char *nnrobust_law_last_error(void) { return last_error; }
 
 }  // extern "C"

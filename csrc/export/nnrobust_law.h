@@ -46,6 +46,12 @@ NNROBUST_LAW_API double nnrobust_law_period(const nnrobust_law *law);
 NNROBUST_LAW_API int nnrobust_law_step(nnrobust_law *law, double t, const double *q, const double *v,
                                        double *tau_out);
 
+/* The allocations of this law's steps so far that did not fit its arena and went to the system
+ * allocator (0 in the cases tests/test_export.py steps); -1 where the library was built without
+ * the arena (a linker without --wrap): its steps then allocate from the heap. A step takes its
+ * temporaries from a block the law reserves at create, so it never calls malloc or operator new. */
+NNROBUST_LAW_API long nnrobust_law_heap_requests(const nnrobust_law *law);
+
 /* The law's state back to its initial value (the adaptive weights to their start). */
 NNROBUST_LAW_API void nnrobust_law_reset(nnrobust_law *law);
 
