@@ -305,7 +305,15 @@ def cmd_export(args) -> int:
             raise NNRobustError(f"{target}: not a run folder (config.toml is missing)")
         target = target / "config.toml"
     overrides = dict(parse_override(item) for item in args.set or ())
+    if args.controller:
+        overrides["controller.kind"] = args.controller
     config = _load_target(str(target), overrides)
+    if args.tuned:  # the tuning's best setting of this controller, over the experiment's
+        from .tune.engine import tuned_settings
+
+        kind = config.controller.kind
+        settings = tuned_settings(args.tuned, [kind])
+        config = _load_target(str(target), {**overrides, **settings.get(kind, {})})
     info = export_law(config, args.out, overwrite=args.overwrite, build=not args.no_build)
     if not args.quiet:
         built = "lib/libnnrobust_law.so" if info["built"] else "sources only (--no-build)"
@@ -1221,6 +1229,13 @@ def build_parser() -> argparse.ArgumentParser:
         action="append",
         metavar="KEY=VALUE",
         help="set one key of the experiment (dotted, TOML value); repeatable",
+    )
+    export.add_argument("--controller", help="the controller to export (controller.kind), e.g. slotine-li")
+    export.add_argument(
+        "--tuned",
+        metavar="DIR|FILE[#CASE/SENSING]",
+        help="export the controller at its best setting in this tuning (nnrobust tune's folder or "
+        "summary.json, or a tuned comparison's case), as sweep and falsify take it",
     )
     export.add_argument("--overwrite", action="store_true", help="replace an earlier export in --out")
     export.add_argument(

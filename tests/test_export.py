@@ -224,3 +224,22 @@ def test_a_step_never_calls_the_system_allocator(name, tmp_path):
         assert _step(lib, handle, row, (inputs.shape[1] - 1) // 2)[0] == 0
     assert lib.nnrobust_law_heap_requests(handle) == 0  # nothing overflowed the arena
     lib.nnrobust_law_destroy(handle)
+
+
+def test_a_tuned_law_exports_at_its_tuned_setting_and_replays(tmp_path):
+    """--tuned takes a tuning's summary as sweep and falsify do: the export runs the best setting
+    (its config.toml has it), and replays the compiled run of that setting."""
+    from nnrobust.config import load_config
+
+    summary = ROOT / "docs" / "data" / "tune_noisy_case_b.json"
+    best = json.loads(summary.read_text())["controllers"]["slotine-li"]["best"]["params"]
+    out = tmp_path / "law"
+    argv = ["export", "paper-ellipse-noisy", "--controller", "slotine-li", "--tuned", str(summary)]
+    assert main([*argv, "--out", str(out), "--quiet"]) == 0
+    config = load_config(out / "config.toml")
+    assert config.controller.kind == "slotine-li"
+    assert config.controller.params["Lambda"] == best["controller.params.Lambda"]
+    config = config.replace(simulation={"duration": DURATION})
+    inputs, torques = _compiled_run(config)
+    ours = _replay(_compile_replay(out), inputs)
+    np.testing.assert_allclose(ours, torques, rtol=0, atol=1e-12)
