@@ -3,6 +3,7 @@
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 #include <nanobind/stl/map.h>
+#include <nanobind/stl/pair.h>
 #include <nanobind/stl/string.h>
 #include <nanobind/stl/vector.h>
 
@@ -22,6 +23,7 @@
 #include "controllers.hpp"
 #include "learning.hpp"
 #include "model/model.hpp"
+#include "serve/virtual_robot.hpp"
 
 namespace nb = nanobind;
 using nnrobust::LoadedModel;
@@ -286,6 +288,45 @@ NB_MODULE(_loop, m) {
         "One control period of every loop on the pool's threads (GIL released): loop i takes the raw "
         "action actions[i] (clipped to [-1, 1], scaled by spec.action_scale, as spec.mode says) and "
         "writes its next observation, applied torque, reward and whether it runs on.");
+  // the virtual robot (nnrobust/serve/, csrc/serve/)
+  nb::class_<nnrobust::ServeReport>(m, "ServeReport", "What a served run's timing and protocol did.")
+      .def_ro("periods", &nnrobust::ServeReport::periods)
+      .def_ro("accepted", &nnrobust::ServeReport::accepted)
+      .def_ro("misses", &nnrobust::ServeReport::misses)
+      .def_ro("rejected", &nnrobust::ServeReport::rejected)
+      .def_ro("events", &nnrobust::ServeReport::events)
+      .def_ro("latency", &nnrobust::ServeReport::latency)
+      .def_ro("lateness", &nnrobust::ServeReport::lateness)
+      .def_ro("stopped", &nnrobust::ServeReport::stopped)
+      .def_ro("connected", &nnrobust::ServeReport::connected)
+      .def_ro("scheduling", &nnrobust::ServeReport::scheduling);
+  nb::class_<nnrobust::VirtualRobot>(m, "VirtualRobot",
+                                     "The compiled plant paced by the wall clock, served over UDP (docs/serve.md).")
+      .def(
+          "__init__",
+          [](nnrobust::VirtualRobot *self, LoadedModel &plant, const LoopSpec &spec, const std::string &host, int port,
+             double wait_seconds, int watchdog, bool realtime, bool lockstep) {
+            nnrobust::ServeOptions options;
+            options.realtime = realtime;
+            options.lockstep = lockstep;
+            options.host = host;
+            options.port = port;
+            options.wait_seconds = wait_seconds;
+            options.watchdog = watchdog;
+            new (self) nnrobust::VirtualRobot(plant, spec, options);
+          },
+          nb::arg("plant"), nb::arg("spec"), nb::arg("host"), nb::arg("port"), nb::arg("wait_seconds"),
+          nb::arg("watchdog"), nb::arg("realtime"), nb::arg("lockstep"), nb::keep_alive<1, 2>(),
+          nb::keep_alive<1, 3>())
+      .def_prop_ro("port", &nnrobust::VirtualRobot::port)
+      .def(
+          "run",
+          [](nnrobust::VirtualRobot &robot) {
+            nb::gil_scoped_release released;
+            return robot.run(&python_signal_pending);
+          },
+          "Wait for a controller's HELLO, then run the experiment in real time (GIL released).")
+      .def("finish", &nnrobust::VirtualRobot::finish, "The run's trace (call once, after run).");
   // each compiled component alone, for the twin tests (tests/test_twins.py)
   nb::class_<nnrobust::ControlStep>(m, "ControlStep", "One compiled control step's output.")
       .def_ro("tau", &nnrobust::ControlStep::tau)

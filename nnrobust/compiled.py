@@ -331,6 +331,11 @@ def law_spec(setup):
     """
     import numpy as np
 
+    if is_custom(setup.controller):
+        raise NNRobustError(
+            f"this controller cannot be exported: a custom controller ({type(setup.controller).__name__}) "
+            "is Python code, with no C++ twin to export"
+        )
     refusal = law_refusal(setup)
     if refusal:
         raise NNRobustError(f"this controller cannot be exported: {refusal}")

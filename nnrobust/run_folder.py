@@ -36,7 +36,9 @@ from .signals import signals_deferred
 MARKER = ".nnrobust-run"
 """The file that makes a folder a run folder (JSON: format, status, extras)."""
 
-RUN_FILES = frozenset({MARKER, "config.toml", "result.npz", "metrics.json", "plots", "animation.html"})
+RUN_FILES = frozenset(
+    {MARKER, "config.toml", "result.npz", "metrics.json", "plots", "animation.html", "timing.json"}
+)
 """Everything a run writes: a folder holding only these is a run folder even without the marker
 (run folders written before the marker existed)."""
 

@@ -243,3 +243,35 @@ def test_a_tuned_law_exports_at_its_tuned_setting_and_replays(tmp_path):
     inputs, torques = _compiled_run(config)
     ours = _replay(_compile_replay(out), inputs)
     np.testing.assert_allclose(ours, torques, rtol=0, atol=1e-12)
+
+
+def test_set_wins_over_tuned_and_other_tunings_and_inert_keys_are_said(tmp_path, capsys):
+    summary = str(ROOT / "docs" / "data" / "tune_noisy_case_b.json")
+    out = tmp_path / "law"
+    argv = ["export", "paper-ellipse-noisy", "--controller", "slotine-li", "--tuned", summary]
+    assert main([*argv, "--set", "controller.params.Lambda=5.0", "--out", str(out), "--quiet"]) == 0
+    from nnrobust.config import load_config
+
+    assert load_config(out / "config.toml").controller.params["Lambda"] == 5.0
+    capsys.readouterr()
+    argv = [
+        "export",
+        "paper-ellipse",
+        "--controller",
+        "slotine-li",
+        "--tuned",
+        summary,
+        "--set",
+        "controller.Kp=[1.0]",
+    ]
+    with pytest.warns(UserWarning) as said:
+        assert main([*argv, "--out", str(tmp_path / "other")]) == 0
+    text = " ".join(str(w.message) for w in said)
+    assert "that tuning was of paper-ellipse-noisy, not paper-ellipse" in text
+    assert "--set controller.Kp changes nothing here" in text
+
+
+def test_a_python_class_named_by_controller_is_refused_with_the_reason(tmp_path, capsys):
+    law = f"{ROOT / 'examples' / 'custom_controller.py'}:TaskPD"
+    assert main(["export", "paper-ellipse", "--controller", law, "--out", str(tmp_path / "law")]) == 2
+    assert "is Python code, with no C++ twin to export" in capsys.readouterr().err

@@ -20,7 +20,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "nnrobust"
 
 FLOORS = {
     "tool": ("cli", "__init__", "__main__"),
-    "studies": ("sweep", "tune", "falsify", "study", "learning", "display", "export"),
+    "studies": ("sweep", "tune", "falsify", "study", "learning", "display", "export", "serve"),
     "run folders": ("run_folder", "run_deltas", "plots", "viewer", "study_folder", "properties", "paired"),
     "experiment": ("experiment", "presets"),
     "compiled/results": ("compiled", "results", "run_info", "verdicts"),

@@ -13,10 +13,13 @@ The folder it writes::
 
     include/nnrobust_law.h            the C API
     lib/libnnrobust_law.so            the law (its description) -> libnnrobust_core.so -> Pinocchio
+    bin/replay, bin/drive             the examples, built
     lib/cmake/nnrobust_law/           find_package(nnrobust_law): target nnrobust_law::nnrobust_law
     src/law_data.c                    the source of libnnrobust_law (the description as a string)
     law.description                   the description itself (nnrobust_law_create_from reads it)
-    example/                          a C program that replays measured states through the law
+    include/protocol.h                the virtual robot's protocol (nnrobust serve, docs/serve.md)
+    example/                          replay.c: measured states in, torques out; drive.c: the
+                                      controller of a virtual robot
     config.toml, export.json          the experiment it came from; what was written, with SHA-256s
 """
 
@@ -150,16 +153,19 @@ def core_library() -> Path:
     return core
 
 
-def c_header() -> Path:
-    """The exported law's C header: installed with the package, or csrc/export/ in a checkout."""
+def c_header(name: str = "nnrobust_law.h") -> Path:
+    """A header an export ships (the law's C API, nnrobust_law.h; the virtual robot's protocol,
+    protocol.h): installed with the package, or in csrc/ in a checkout.
+    """
     package = Path(__file__).resolve().parent.parent
     for candidate in (
-        package / "include" / "nnrobust_law.h",
-        package.parent / "csrc" / "export" / "nnrobust_law.h",
+        package / "include" / name,
+        package.parent / "csrc" / "export" / name,
+        package.parent / "csrc" / "serve" / name,
     ):
         if candidate.is_file():
             return candidate
-    raise NNRobustError(f"nnrobust_law.h is missing (looked in {package / 'include'}); reinstall nnrobust")
+    raise NNRobustError(f"{name} is missing (looked in {package / 'include'}); reinstall nnrobust")
 
 
 def bundled_libraries(core: Path) -> dict[str, Path]:
@@ -232,11 +238,13 @@ set(nnrobust_law_FOUND TRUE)
 """
 
 EXAMPLE_CMAKE = """cmake_minimum_required(VERSION 3.18)
-project(nnrobust_law_replay LANGUAGES C)
+project(nnrobust_law_examples LANGUAGES C)
 # cmake -S example -B build -DCMAKE_PREFIX_PATH=<the export folder>
 find_package(nnrobust_law REQUIRED)
-add_executable(replay replay.c)
+add_executable(replay replay.c)  # measured states in, torques out
 target_link_libraries(replay PRIVATE nnrobust_law::nnrobust_law)
+add_executable(drive drive.c)  # the controller of a virtual robot (nnrobust serve)
+target_link_libraries(drive PRIVATE nnrobust_law::nnrobust_law)
 """
 
 
@@ -249,13 +257,17 @@ def _c_literal(text: str) -> str:
     return "\n".join(out) or '    ""'
 
 
-def example_source() -> str:
-    """The example program shipped with an export (example/replay.c)."""
-    return (Path(__file__).resolve().parent / "replay.c").read_text(encoding="utf-8")
+def example_source(name: str) -> str:
+    """An example program shipped with an export: replay.c (states in, torques out) or drive.c
+    (the controller of a virtual robot, docs/serve.md).
+    """
+    return (Path(__file__).resolve().parent / name).read_text(encoding="utf-8")
 
 
 def build_law_library(folder: Path, compiler: str) -> None:
-    """Compile src/law_data.c into lib/libnnrobust_law.so against lib/libnnrobust_core.so."""
+    """Compile src/law_data.c into lib/libnnrobust_law.so against lib/libnnrobust_core.so, and
+    the example programs into bin/ (their run path: ../lib, wherever the folder is moved).
+    """
     command = [
         *compiler.split(),
         "-O2",
@@ -273,12 +285,25 @@ def build_law_library(folder: Path, compiler: str) -> None:
         "-o",
         str(folder / "lib" / "libnnrobust_law.so"),
     ]
+    _compile(command, compiler, "src/law_data.c")
+    (folder / "bin").mkdir(exist_ok=True)
+    for program in ("replay", "drive"):  # the examples, built: bin/replay, bin/drive
+        source = str(folder / "example" / f"{program}.c")
+        _compile(
+            [*compiler.split(), "-O2", "-I", str(folder / "include"), source, "-L", str(folder / "lib"),
+             "-lnnrobust_law", "-lnnrobust_core", "-Wl,-rpath,$ORIGIN/../lib",
+             "-o", str(folder / "bin" / program)],
+            compiler, f"example/{program}.c",
+        )  # fmt: skip
+
+
+def _compile(command: list[str], compiler: str, what: str) -> None:
     try:
         done = subprocess.run(command, capture_output=True, text=True, timeout=600)
     except (OSError, subprocess.SubprocessError) as err:
         raise NNRobustError(f"export: {compiler} could not be run ({err})") from err
     if done.returncode != 0:
-        raise NNRobustError(f"export: {compiler} failed on src/law_data.c:\n{done.stderr.strip()}")
+        raise NNRobustError(f"export: {compiler} failed on {what}:\n{done.stderr.strip()}")
 
 
 def recorded_steps(config, duration: float | None = None):
@@ -351,7 +376,9 @@ def export_law(config, out: str | Path, *, overwrite: bool = False, build: bool 
         (tmp / "lib" / "cmake" / "nnrobust_law" / "nnrobust_law-config.cmake").write_text(
             CMAKE_CONFIG, encoding="utf-8"
         )
-        (tmp / "example" / "replay.c").write_text(example_source(), encoding="utf-8")
+        shutil.copyfile(c_header("protocol.h"), tmp / "include" / "protocol.h")
+        for example in ("replay.c", "drive.c"):
+            (tmp / "example" / example).write_text(example_source(example), encoding="utf-8")
         (tmp / "example" / "CMakeLists.txt").write_text(EXAMPLE_CMAKE, encoding="utf-8")
         (tmp / "config.toml").write_text(config.to_toml(), encoding="utf-8")
         if build:

@@ -289,6 +289,25 @@ def tuned_settings(
     return out
 
 
+def tuned_target(path: str | Path) -> str:
+    """The experiment a tuning tuned on (its summary's ``target``; a tuned comparison's case's),
+    "" when the file does not say (read after :func:`tuned_settings` accepted it).
+    """
+    from ..config import read_text_file
+
+    text, _, case = str(path).partition("#")
+    file = Path(text) / "summary.json" if Path(text).is_dir() else Path(text)
+    try:
+        summary = json.loads(read_text_file(file, limit=TUNED_FILE_BYTES, what="tuning summary"))
+    except (ValueError, RecursionError, ConfigError):
+        return ""
+    if isinstance(summary, dict) and isinstance(summary.get("cases"), list):
+        cases = {f"{c.get('case')}/{c.get('sensing')}": c for c in summary["cases"] if isinstance(c, dict)}
+        summary = (cases.get(case) or {}).get("summary")
+    target = summary.get("target") if isinstance(summary, dict) else None
+    return target if isinstance(target, str) else ""
+
+
 def tuned_entry(name: str, settings: dict, entries: dict) -> dict:
     """The sweep entry that runs controller ``name`` at its tuned dotted-key ``settings``, as a
     sweep file would write it: a shipped kind as ``{kind, set}``, a registered law's
