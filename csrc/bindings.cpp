@@ -8,6 +8,7 @@
 #include <nanobind/stl/vector.h>
 
 #include <Python.h>
+#include <dlfcn.h>
 
 #include <atomic>
 #include <chrono>
@@ -21,6 +22,7 @@
 
 #include "closed_loop.hpp"
 #include "controllers.hpp"
+#include "controllers/laws/law.hpp"
 #include "learning.hpp"
 #include "model/model.hpp"
 #include "serve/virtual_robot.hpp"
@@ -88,6 +90,44 @@ LoopTrace hybrid(LoadedModel &plant, const LoopSpec &spec, nb::callable law) {
   if (failure) std::rethrow_exception(failure);
   if (trace.status == "failed") trace.status = "interrupted";
   return trace;
+}
+
+// A user's law compiled apart (nnrobust/native_law.py): its library loaded, its factory registered
+// as the law `name`. The library's calls into the extension (Controller's, Fields') resolve
+// against this module, made global once; its three NNROBUST_USER_LAW functions are looked up.
+std::map<std::string, int (*)(int)> &native_states() {
+  static std::map<std::string, int (*)(int)> states;
+  return states;
+}
+
+std::string load_law_library(const std::string &path, const std::string &cls, const std::string &name) {
+  static bool global = false;
+  if (!global) {
+    Dl_info self;
+    if (dladdr(reinterpret_cast<void *>(&python_signal_pending), &self) == 0 || self.dli_fname == nullptr ||
+        dlopen(self.dli_fname, RTLD_NOW | RTLD_NOLOAD | RTLD_GLOBAL) == nullptr)
+      throw std::runtime_error("the compiled loop could not offer its symbols to a law library");
+    global = true;
+  }
+  void *library = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
+  if (library == nullptr) throw std::runtime_error(std::string("loading ") + path + ": " + dlerror());
+  using Make = nnrobust::Law *(*)(const nnrobust::LawParams &, nnrobust::LawContext &);
+  const auto make = reinterpret_cast<Make>(dlsym(library, ("nnrobust_law_factory_" + cls).c_str()));
+  const auto signals = reinterpret_cast<const char *(*)()>(dlsym(library, ("nnrobust_law_signals_" + cls).c_str()));
+  const auto state = reinterpret_cast<int (*)(int)>(dlsym(library, ("nnrobust_law_state_" + cls).c_str()));
+  if (make == nullptr || signals == nullptr || state == nullptr)
+    throw std::invalid_argument("it has no NNROBUST_USER_LAW(" + cls + ", signals, state size) at global scope");
+  nnrobust::LawRegistry::add(name, [make](const nnrobust::LawParams &p, nnrobust::LawContext &c) {
+    return std::unique_ptr<nnrobust::Law>(make(p, c));
+  });
+  native_states()[name] = state;
+  return signals();
+}
+
+int native_law_state(const std::string &name, int n) {
+  const auto it = native_states().find(name);
+  if (it == native_states().end()) throw std::invalid_argument("no law library registered " + name);
+  return it->second(n);
 }
 
 // A batch: the models and specs stay owned by Python (kept alive by the call's arguments).
@@ -288,6 +328,11 @@ NB_MODULE(_loop, m) {
         "One control period of every loop on the pool's threads (GIL released): loop i takes the raw "
         "action actions[i] (clipped to [-1, 1], scaled by spec.action_scale, as spec.mode says) and "
         "writes its next observation, applied torque, reward and whether it runs on.");
+  m.def("load_law_library", &load_law_library, nb::arg("path"), nb::arg("cls"), nb::arg("name"),
+        "Load a user's law compiled apart and register it as the law `name`; returns its signal names "
+        "(comma-separated).");
+  m.def("native_law_state", &native_law_state, nb::arg("name"), nb::arg("n"),
+        "The state size of the law library registered as `name`, for n joints.");
   // the virtual robot (nnrobust/serve/, csrc/serve/)
   nb::class_<nnrobust::ServeReport>(m, "ServeReport", "What a served run's timing and protocol did.")
       .def_ro("periods", &nnrobust::ServeReport::periods)

@@ -120,6 +120,10 @@ void SteppedLoop::end(const std::string &status) {
 
 bool SteppedLoop::advance(const Output &out) {
   if (!running()) throw std::logic_error("SteppedLoop::advance: the run has ended (" + tr_.status + ")");
+  if (out.tau.size() != q_.size() || out.z.size() != z_.size())  // a law compiled apart may get them wrong
+    throw std::length_error("the law " + s_.law + " returned " + std::to_string(out.tau.size()) + " torques and a " +
+                            "state of " + std::to_string(out.z.size()) + " (needs " + std::to_string(q_.size()) +
+                            " and " + std::to_string(z_.size()) + ")");
   const long k = k_;
   const double t = time();
   Plant &plant = *plant_;

@@ -24,7 +24,7 @@ struct Output {
 struct Law;
 struct TaskReference;
 
-struct Controller {
+struct NNROBUST_API Controller {
   const LoopSpec &s;
   Nominal &nominal;
   Criteria criteria;

@@ -13,7 +13,7 @@ namespace nnrobust {
 // A component's fields by name, as LoopSpec carries them.
 using Params = std::map<std::string, Matrix>;
 
-struct Fields {
+struct NNROBUST_API Fields {
   std::string owner;  // what the fields are of, for errors: "the law slotine-li", "the criterion obstacles"
   const Params &values;
 

@@ -3,6 +3,7 @@
 // it, so nothing else names it. Names are resolved once, when a run is built, never in the loop.
 #pragma once
 
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -12,9 +13,10 @@ namespace nnrobust {
 // The factories of the components derived from `Base`, each built from `Args...`.
 template <class Base, class... Args>
 struct Registry {
-  using Factory = std::unique_ptr<Base> (*)(Args...);
+  // a function (the shipped components') or a closure over a law compiled apart (bindings.cpp)
+  using Factory = std::function<std::unique_ptr<Base>(Args...)>;
 
-  static bool add(const char *name, Factory factory) {
+  static bool add(const std::string &name, Factory factory) {
     table()[name] = factory;
     return true;
   }

@@ -3,6 +3,14 @@
 
 #include <Eigen/Dense>
 
+// The parts a law compiled apart (a user's .cpp, docs/extending.md) calls in the extension: exported
+// from it; everything else stays hidden.
+#if defined(__GNUC__)
+#define NNROBUST_API __attribute__((visibility("default")))
+#else
+#define NNROBUST_API
+#endif
+
 namespace nnrobust {
 using Vector = Eigen::VectorXd;
 using Matrix = Eigen::MatrixXd;

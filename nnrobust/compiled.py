@@ -130,7 +130,7 @@ def law_refusal(setup) -> str:
     refusal = _criterion_refusal(setup)
     if refusal:
         return refusal
-    if is_custom(controller):
+    if is_custom(controller) and not getattr(type(controller), "native", None):
         return f"a custom controller ({type(controller).__name__}) runs in Python: --backend hybrid or python"
     law = registered_law(config.controller.kind)
     path = setup.trajectory.path if type(setup.trajectory) is PoseTrajectory else setup.trajectory
@@ -331,6 +331,11 @@ def law_spec(setup):
     """
     import numpy as np
 
+    if getattr(type(setup.controller), "native", None):
+        raise NNRobustError(
+            f"this controller cannot be exported yet: {type(setup.controller).__name__} is a law in C++ "
+            "compiled apart, which libnnrobust_core does not load"
+        )
     if is_custom(setup.controller):
         raise NNRobustError(
             f"this controller cannot be exported: a custom controller ({type(setup.controller).__name__}) "

@@ -24,7 +24,7 @@ from .exceptions import ConfigError, NNRobustError
 def class_file(spec: str) -> Path | None:
     """The file a class value names (``file.py:Class``), or None for a module path."""
     where = spec.rpartition(":")[0]
-    if where.endswith(".py") or "/" in where or "\\" in where:
+    if where.endswith((".py", ".cpp", ".cc", ".cxx")) or "/" in where or "\\" in where:
         return Path(where)
     return None
 
@@ -90,6 +90,18 @@ def load_class(spec: str, base: type, key: str) -> type:
     if not where or not name:
         raise ConfigError(key, f'{spec!r}: give "file.py:Class" or "package.module:Class"')
     path = class_file(spec)
+    if path is not None and Path(path).suffix in (".cpp", ".cc", ".cxx"):  # a law in C++
+        from .native_law import load_native_class
+        from .shipped_files import local
+
+        source = local(path)
+        if not source.is_file():
+            raise ConfigError(
+                key,
+                f"{str(path)!r} is not a file (a relative path in an experiment file is read "
+                "from the file's folder)",
+            )
+        return load_native_class(path, source, name, base, key)
     if path is not None:
         module = _import_file(path, key)
     else:

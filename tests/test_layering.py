@@ -26,7 +26,7 @@ FLOORS = {
     "compiled/results": ("compiled", "results", "run_info", "verdicts"),
     "config": ("config",),
     "loop": ("simulation",),
-    "rooms": ("controllers", "plant", "subtasks", "trajectories", "user_parts", "user_code"),
+    "rooms": ("controllers", "plant", "subtasks", "trajectories", "user_parts", "user_code", "native_law"),
     "model": ("model", "ik"),
     "leaf": ("exceptions", "numeric_limits", "arrays", "search_coordinates", "small_linalg", "kinds",
              "progress", "signals",

@@ -515,6 +515,16 @@ def first_step(config: ExperimentConfig):
 
     setup = build(config)
     controller = setup.controller
+    if getattr(type(controller), "native", None):  # a law in C++: its first step on the compiled loop
+        from ..compiled import simulate_compiled
+
+        try:
+            simulate_compiled(setup, setup.config.simulation.control_period)
+        except NNRobustError:
+            raise
+        except Exception as err:
+            raise failed(controller, err, 0.0) from err
+        return setup
     try:
         z = np.asarray(controller.initial_state(), dtype=float)
         out = controller.compute(

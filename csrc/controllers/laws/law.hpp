@@ -58,3 +58,19 @@ using LawRegistry = Registry<Law, const LawParams &, LawContext &>;
       name, [](const ::nnrobust::LawParams &p, ::nnrobust::LawContext &c) -> std::unique_ptr<::nnrobust::Law> { \
         return std::make_unique<Class>(p, c);                                                                \
       })
+
+// A user's law compiled apart (docs/extending.md#a-law-in-c): one .cpp file that defines `Class`
+// (a Law, constructed as Class(const LawParams &, LawContext &)) and names it here, at global
+// scope, with its signals (comma-separated names, "" for none) and its state size (an expression
+// of n, the joint count; the state starts at zero). nnrobust compiles the file on first use and
+// calls these three functions of it.
+#define NNROBUST_USER_LAW(Class, signals, state_size)                                                     \
+  extern "C" NNROBUST_API ::nnrobust::Law *nnrobust_law_factory_##Class(const ::nnrobust::LawParams &p, \
+                                                                          ::nnrobust::LawContext &c) {   \
+    return new Class(p, c);                                                                             \
+  }                                                                                                      \
+  extern "C" NNROBUST_API const char *nnrobust_law_signals_##Class(void) { return signals; }            \
+  extern "C" NNROBUST_API int nnrobust_law_state_##Class(int n) {                                       \
+    (void)n;                                                                                             \
+    return (state_size);                                                                                 \
+  }

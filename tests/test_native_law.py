@@ -1,0 +1,141 @@
+"""A user's law in C++ (nnrobust/native_law.py; docs/extending.md#a-law-in-c): one .cpp file named
+like a Python class is compiled on first use (cached by SHA-256), loaded into the compiled loop
+and run there; with its Python twin (examples/custom_controller.py's TaskPD) it gives the same
+run; a broken file gets the compiler's own lines.
+"""
+
+import os
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from nnrobust import compiled
+from nnrobust.exceptions import ConfigError
+from nnrobust.experiment import build, run_experiment
+from nnrobust.presets import load_preset
+
+pytestmark = [
+    pytest.mark.skipif(not compiled.available(), reason=compiled.unavailable_reason()),
+    pytest.mark.skipif(shutil.which("c++") is None, reason="no C++ compiler"),
+]
+
+ROOT = Path(__file__).resolve().parent.parent
+CPP = ROOT / "examples" / "controllers" / "task_pd.cpp"
+PY = ROOT / "examples" / "custom_controller.py"
+PARAMS = {"Kp": 100.0, "Kd": 20.0, "damping": 5.0}
+
+
+@pytest.fixture(scope="module", autouse=True)
+def law_cache(tmp_path_factory):
+    """One compile of the example for the session, in a cache of its own (shared by the test
+    processes: the first compiles, the others wait for it)."""
+    base = tmp_path_factory.getbasetemp()
+    cache = (base.parent if base.name.startswith("popen-gw") else base) / "law-cache"
+    old = os.environ.get("NNROBUST_CACHE")
+    os.environ["NNROBUST_CACHE"] = str(cache)
+    yield cache
+    if old is None:
+        del os.environ["NNROBUST_CACHE"]
+    else:
+        os.environ["NNROBUST_CACHE"] = old
+
+
+def _config(preset, cls, **simulation):
+    return load_preset(preset).replace(
+        simulation={"duration": 1.0, **simulation},
+        controller={"kind": "custom", "class": cls, "params": PARAMS},
+    )
+
+
+@pytest.mark.parametrize("preset", ["paper-ellipse-noisy", "panda-ellipse"])
+def test_the_cpp_law_runs_compiled_and_is_its_python_twin(preset):
+    ours = run_experiment(_config(preset, f"{CPP}:TaskPD"))
+    theirs = run_experiment(_config(preset, f"{PY}:TaskPD"))
+    assert ours.backend == "compiled" and theirs.backend == "hybrid"
+    assert ours.status == theirs.status == "completed"
+    scale = max(1.0, float(np.abs(theirs.tau_cmd).max()))
+    np.testing.assert_allclose(ours.tau_cmd, theirs.tau_cmd, rtol=0, atol=1e-9 * scale)
+    np.testing.assert_allclose(ours.q, theirs.q, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(ours.signals["effort"], theirs.signals["effort"], rtol=1e-9)
+    # what ran is recorded: the file's SHA-256 in the run's configuration
+    from nnrobust.user_code import file_digest
+
+    assert f"sha256: {file_digest(CPP)}" in ours.config
+
+
+def test_the_library_is_cached_by_content(law_cache, tmp_path):
+    build(_config("paper-ellipse", f"{CPP}:TaskPD"))
+    before = {p: p.stat().st_mtime_ns for p in (law_cache / "laws").glob("task_pd-*.so")}
+    build(_config("paper-ellipse", f"{CPP}:TaskPD"))  # no second compile
+    assert {p: p.stat().st_mtime_ns for p in (law_cache / "laws").glob("task_pd-*.so")} == before
+    edited = tmp_path / "task_pd.cpp"
+    edited.write_text(CPP.read_text().replace("tau.norm()", "2.0 * tau.norm()"))
+    setup = build(_config("paper-ellipse", f"{edited}:TaskPD"))  # an edit is a new library
+    assert len(set((law_cache / "laws").glob("task_pd-*.so")) - set(before)) == 1
+    assert (
+        type(setup.controller).twin != type(build(_config("paper-ellipse", f"{CPP}:TaskPD")).controller).twin
+    )
+
+
+def test_a_compile_error_shows_the_compilers_lines(tmp_path):
+    broken = tmp_path / "broken.cpp"
+    broken.write_text(
+        '#include "nnrobust/law.hpp"\nstruct Broken : nnrobust::Law {\n  int x = undefined_name;\n};\n'
+    )
+    with pytest.raises(
+        ConfigError, match=r"(?s)compiling .*broken\.cpp failed:.*broken\.cpp:3:.*undefined_name"
+    ):
+        build(_config("paper-ellipse", f"{broken}:Broken"))
+
+
+def test_a_file_without_the_registration_is_refused(tmp_path):
+    bare = tmp_path / "bare.cpp"
+    bare.write_text(CPP.read_text().replace('NNROBUST_USER_LAW(TaskPD, "effort", 0)', ""))
+    with pytest.raises(ConfigError, match=r"no NNROBUST_USER_LAW\(TaskPD, signals, state size\)"):
+        build(_config("paper-ellipse", f"{bare}:TaskPD"))
+
+
+def test_the_python_loop_refuses_it_with_the_reason():
+    with pytest.raises(Exception, match="is a law in C\\+\\+: it runs on the compiled loop"):
+        run_experiment(_config("paper-ellipse", f"{CPP}:TaskPD", backend="python", duration=0.01))
+
+
+def test_a_cpp_law_joins_a_sweep_and_its_rows_are_the_python_twins(tmp_path, monkeypatch):
+    """A controllers entry with a .cpp class: the file travels with the tasks, each Dask worker
+    loads the library (compiled once on this machine), its rows run on the compiled loop and equal
+    its Python twin's rows."""
+    pytest.importorskip("distributed")
+    import json
+
+    from nnrobust.cli import main
+    from nnrobust.sweep import read_results
+
+    shutil.copy(CPP, tmp_path / "task_pd.cpp")
+    shutil.copy(PY, tmp_path / "task_pd.py")
+    (tmp_path / "sweep.toml").write_text(
+        """
+name = "cpp"
+base = "paper-ellipse"
+controllers = [
+  {name = "cpp", class = "task_pd.cpp:TaskPD", params = {Kp = 100.0, Kd = 20.0, damping = 5.0}},
+  {name = "py", class = "task_pd.py:TaskPD", params = {Kp = 100.0, Kd = 20.0, damping = 5.0}},
+]
+samples = 2
+[set]
+"simulation.duration" = 2.2
+[vary]
+"plant.disturbance_scale" = {uniform = [0.5, 2.0]}
+"""
+    )
+    monkeypatch.chdir(tmp_path)
+    assert main(["sweep", "sweep.toml", "--out", "out", "--workers", "2", "--quiet"]) == 0
+    frame = read_results(tmp_path / "out").sort_values(["controller", "sample"])
+    cpp, py = frame[frame["controller"] == "cpp"], frame[frame["controller"] == "py"]
+    assert list(cpp["status"]) == list(py["status"]) == ["completed"] * 2
+    np.testing.assert_allclose(
+        cpp["rms_error_after_2s"].to_numpy(), py["rms_error_after_2s"].to_numpy(), rtol=1e-6
+    )
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert set(summary["controllers"]) == {"cpp", "py"}
