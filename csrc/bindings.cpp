@@ -100,7 +100,8 @@ std::map<std::string, int (*)(int)> &native_states() {
   return states;
 }
 
-std::string load_law_library(const std::string &path, const std::string &cls, const std::string &name) {
+std::pair<std::string, std::string> load_law_library(const std::string &path, const std::string &cls,
+                                                     const std::string &name) {
   static bool global = false;
   if (!global) {
     Dl_info self;
@@ -121,7 +122,8 @@ std::string load_law_library(const std::string &path, const std::string &cls, co
     return std::unique_ptr<nnrobust::Law>(make(p, c));
   });
   native_states()[name] = state;
-  return signals();
+  const auto space = reinterpret_cast<const char *(*)()>(dlsym(library, ("nnrobust_law_space_" + cls).c_str()));
+  return {signals(), space ? space() : ""};
 }
 
 int native_law_state(const std::string &name, int n) {
@@ -330,7 +332,7 @@ NB_MODULE(_loop, m) {
         "writes its next observation, applied torque, reward and whether it runs on.");
   m.def("load_law_library", &load_law_library, nb::arg("path"), nb::arg("cls"), nb::arg("name"),
         "Load a user's law compiled apart and register it as the law `name`; returns its signal names "
-        "(comma-separated).");
+        "and its search space as declared (comma-separated; \"\" when it declares none).");
   m.def("native_law_state", &native_law_state, nb::arg("name"), nb::arg("n"),
         "The state size of the law library registered as `name`, for n joints.");
   // the virtual robot (nnrobust/serve/, csrc/serve/)

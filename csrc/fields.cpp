@@ -8,7 +8,9 @@ namespace nnrobust {
 const Matrix &Fields::matrix(const std::string &name) const {
   const auto it = values.find(name);
   if (it == values.end())
-    throw std::invalid_argument(owner + " needs the field " + name + " (declare it in its Python twin's twin_fields)");
+    throw std::invalid_argument(owner + " needs the field " + name +
+                                " (a law in C++: give controller.params." + name +
+                                "; a shipped component: declare it in its Python twin's twin_fields)");
   return it->second;
 }
 

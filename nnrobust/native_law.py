@@ -31,8 +31,8 @@ SOURCE_SUFFIXES = (".cpp", ".cc", ".cxx")
 COMPILER_LINES = 40
 """The most compiler lines an error shows."""
 
-_loaded: dict[str, tuple[str, tuple[str, ...]]] = {}
-"""Library path -> (registered law name, signal names) of the laws loaded in this process."""
+_loaded: dict[str, tuple[str, tuple[str, ...], dict]] = {}
+"""Library path -> (registered law name, signal names, search space) of the laws loaded here."""
 
 
 def is_source(path: str | Path) -> bool:
@@ -189,12 +189,37 @@ def load_native_class(path: Path, source: Path, name: str, base: type, key: str)
     if str(library) not in _loaded:
         twin = f"cpp:{name}:{digest[:16]}"
         try:
-            signals = _loop.load_law_library(str(library), name, twin)
+            signals, space = _loop.load_law_library(str(library), name, twin)
         except (RuntimeError, ValueError) as err:
             raise ConfigError(key, f"{path}: {err}") from err
-        _loaded[str(library)] = (twin, tuple(s.strip() for s in signals.split(",") if s.strip()))
-    twin, signal_names = _loaded[str(library)]
-    return _python_face(base, name, twin, signal_names, digest, path)
+        names = tuple(s.strip() for s in signals.split(",") if s.strip())
+        _loaded[str(library)] = (twin, names, declared_space(space, name, path, key))
+    twin, signal_names, search_space = _loaded[str(library)]
+    face = _python_face(base, name, twin, signal_names, digest, path)
+    if search_space:
+        face.search_space = search_space  # type: ignore[attr-defined]
+    return face
+
+
+def declared_space(text: str, name: str, path: Path, key: str) -> dict:
+    """NNROBUST_USER_LAW_SPACE's "name=low:high[:unit], ..." as a Python law's search_space
+    ({param: (low, high, unit)}); the tuner checks the bounds (nnrobust.tune.space.custom_space).
+    """
+    space = {}
+    for entry in (e.strip() for e in text.split(",")):
+        if not entry:
+            continue
+        param, _, bounds = entry.partition("=")
+        parts = bounds.split(":")
+        try:
+            if not param.strip().isidentifier() or len(parts) not in (2, 3):
+                raise ValueError
+            space[param.strip()] = (float(parts[0]), float(parts[1]), *(p.strip() for p in parts[2:]))
+        except ValueError:
+            raise ConfigError(
+                key, f"{path}: NNROBUST_USER_LAW_SPACE({name}, ...): {entry!r} is not name=low:high[:unit]"
+            ) from None
+    return space
 
 
 def _python_face(base: type, name: str, twin: str, signal_names: tuple, digest: str, path: Path) -> type:

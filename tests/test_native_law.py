@@ -139,3 +139,74 @@ samples = 2
     )
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert set(summary["controllers"]) == {"cpp", "py"}
+
+
+def test_a_cpp_law_is_tuned_in_the_space_it_declares(tmp_path):
+    """--controllers takes file.cpp:Class: the space its NNROBUST_USER_LAW_SPACE declares is
+    searched, and its best setting reruns (on the compiled loop) to its training metrics."""
+    pytest.importorskip("optuna")
+    from nnrobust.config import apply_overrides
+    from nnrobust.sweep.spec import base_config, draw, experiment
+    from nnrobust.tune import TuneSpec, run_tune
+    from nnrobust.tune.engine import sweep_of
+
+    short = tmp_path / "short.toml"
+    short.write_text(load_preset("paper-ellipse-noisy").replace(simulation={"duration": 2.5}).to_toml())
+    spec = TuneSpec(str(short), [f"{CPP}:TaskPD"], 8, train_samples=2, validation=1, seed=5)
+    summary = run_tune(spec, tmp_path / "out", workers=2)
+    entry = summary["controllers"]["TaskPD"]
+    names = {"controller.params.Kp", "controller.params.Kd", "controller.params.damping"}
+    assert set(entry["space"]) == names
+    assert (
+        entry["space"]["controller.params.Kp"]["low"] == 10.0
+        and entry["space"]["controller.params.Kd"]["unit"] == "1/s"
+    )
+    best = entry["best"]
+    assert best is not None and set(best["params"]) == names
+    sweep = sweep_of(spec)
+    runs = [
+        run_experiment(
+            apply_overrides(experiment(sweep, base_config(sweep), draw(sweep, s), "TaskPD"), best["params"])
+        )
+        for s in (0, 1)
+    ]
+    assert {r.backend for r in runs} == {"compiled"}
+    mean = np.mean([r.metrics()["rms_error_after_2s"] for r in runs])
+    assert mean == pytest.approx(best["train"]["rms_error_after_2s"], rel=1e-9)
+
+
+def test_a_bad_space_declaration_names_the_entry(tmp_path):
+    bad = tmp_path / "bad_space.cpp"
+    bad.write_text(CPP.read_text().replace("Kp=10:1e5:1/s^2", "Kp=ten:1e5"))
+    with pytest.raises(ConfigError, match=r"NNROBUST_USER_LAW_SPACE\(TaskPD, \.\.\.\): 'Kp=ten:1e5' is not"):
+        build(_config("paper-ellipse", f"{bad}:TaskPD"))
+
+
+def test_a_cpp_law_is_falsified_and_its_worst_plant_reruns(tmp_path):
+    """falsify --controllers file.cpp:Class searches the box for the C++ law like any other; the
+    worst plant's command reruns it (on the compiled loop) to the same metric."""
+    pytest.importorskip("cma")
+    import json
+    import shlex
+
+    from nnrobust.cli import main
+    from nnrobust.falsify import FalsifySpec, run_falsify
+
+    sweep = tmp_path / "fz.toml"
+    sweep.write_text(
+        f'name = "fz"\nbase = "paper-ellipse"\nseed = 4\n'
+        f'controllers = [{{name = "cpp", class = "{CPP}:TaskPD", '
+        "params = {Kp = 100.0, Kd = 20.0, damping = 5.0}}]\n"
+        '[set]\n"simulation.duration" = 2.5\n[vary]\n"plant.disturbance_scale" = {uniform = [0.0, 4.0]}\n'
+    )
+    spec = FalsifySpec(str(sweep), ["cpp"], ["rms_error<=0.02"], 8, seed=1)
+    summary = run_falsify(spec, tmp_path / "out", workers=2)
+    entry = summary["controllers"]["cpp"]
+    assert entry["simulations"] == 8
+    words = shlex.split(entry["worst"]["command"])
+    assert (
+        main([*words[1:], "--out", str(tmp_path / "again"), "--quiet", "--no-plots", "--no-animation"]) == 0
+    )
+    again = json.loads((tmp_path / "again" / "metrics.json").read_text())
+    assert again["backend"] == "compiled"
+    assert again["rms_error"] == entry["worst"]["metrics"]["rms_error"]

@@ -39,3 +39,5 @@ struct TaskPD : nnrobust::Law {
 };
 
 NNROBUST_USER_LAW(TaskPD, "effort", 0)
+// what `nnrobust tune` searches (as the Python TaskPD's search_space)
+NNROBUST_USER_LAW_SPACE(TaskPD, "Kp=10:1e5:1/s^2, Kd=1:1e3:1/s, damping=0.1:100:1/s")

@@ -74,3 +74,9 @@ using LawRegistry = Registry<Law, const LawParams &, LawContext &>;
     (void)n;                                                                                             \
     return (state_size);                                                                                 \
   }
+
+// Optional, after NNROBUST_USER_LAW: the parameters `nnrobust tune` searches for `Class`, as
+// "name=low:high[:unit]" entries separated by commas, each searched log-uniformly between
+// 0 < low < high (a Python law's search_space; docs/extending.md#tuning-it).
+#define NNROBUST_USER_LAW_SPACE(Class, space) \
+  extern "C" NNROBUST_API const char *nnrobust_law_space_##Class(void) { return space; }
