@@ -1,5 +1,6 @@
 // SlotineLi (nnrobust/controllers/laws/slotine_li.py): task-space Slotine–Li adaptive control,
-// Y(q, q', q'_r, q''_r) theta-hat - K_D s, theta-hat advanced by explicit Euler over the period.
+// Y(q, q', q'_r, q''_r) theta-hat - K_D s (K_D unset: K_D_step / T M-hat(q)), theta-hat advanced by
+// explicit Euler over the period and projected (pseudo-inertias floored; the closed form's box).
 #include <Eigen/Eigenvalues>
 #include <pinocchio/algorithm/regressor.hpp>
 
@@ -12,15 +13,16 @@ namespace {
 
 struct SlotineLi : Law {
   LawContext c;
-  Vector Lambda, K_D, theta0, armature, pseudo_floor;
-  double gamma, leakage, null_damping, criterion_gain;
+  Vector Lambda, K_D, theta0, armature, pseudo_floor, lower, upper;
+  double K_D_mass, gamma, leakage, null_damping, criterion_gain;
   bool exact, project;
   PinocchioNominal *pin_model = nullptr;  // else the closed form, one unit model per column of Y
   std::vector<ThreeLinkSpec> unit_specs;
 
   SlotineLi(const LawParams &p, LawContext &context)
       : c(context), Lambda(p.vector("Lambda")), K_D(p.vector("K_D")), theta0(p.vector("theta0")),
-        armature(p.vector("armature")), pseudo_floor(p.vector("pseudo_floor")), gamma(p.scalar("gamma")),
+        armature(p.vector("armature")), pseudo_floor(p.vector("pseudo_floor")), lower(p.vector("lower")),
+        upper(p.vector("upper")), K_D_mass(p.scalar("K_D_mass")), gamma(p.scalar("gamma")),
         leakage(p.scalar("leakage")), null_damping(p.scalar("null_damping")),
         criterion_gain(p.scalar("criterion_gain")), exact(p.scalar("exact") != 0.0),
         project(p.scalar("project") != 0.0) {
@@ -108,6 +110,7 @@ struct SlotineLi : Law {
 
   // SlotineLi.projected
   Vector projected(const Vector &theta) const {
+    if (!pin_model) return theta.cwiseMax(lower).cwiseMin(upper);  // the closed form's box
     Vector out = theta;
     for (int k = 0, i = 0; i < theta.size(); ++k, i += 10) {
       const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> eig(pseudo_inertia(theta.segment(i, 10)));
@@ -134,7 +137,10 @@ struct SlotineLi : Law {
     const Vector s = v - v_r;
     const Matrix Y = regressor(q, v, v_r, a_r);
     Output out;
-    out.tau = Y * z + armature.cwiseProduct(a_r) - K_D.cwiseProduct(s) + c.shared.nominal_friction(v);
+    Vector damping = K_D.cwiseProduct(s);  // SlotineLi.damping: K_D s, or K_D_step / T M-hat(q) s
+    if (K_D_mass != 0.0)
+      damping += K_D_mass * (c.nominal.inverse_dynamics(q, Vector::Zero(q.size()), s) - c.nominal.gravity(q));
+    out.tau = Y * z + armature.cwiseProduct(a_r) - damping + c.shared.nominal_friction(v);
     out.z = z + c.spec.period * (-gamma * (Y.transpose() * s) - leakage * (z - theta0));
     if (project) out.z = projected(out.z);
     out.signals.resize(3);

@@ -18,7 +18,18 @@ parameters per joint (``Inertia.toDynamicParameters``) and Y comes from three ca
 and, with ``project``, each link's 4×4 pseudo-inertia is kept positive definite after every
 step (its eigenvalues clipped at 1e-5 × the link's nominal mass), so that θ̂ stays physical. On
 the paper's closed-form arm θ = (β₁, β₂, β₃, p₁, p₂, p₃, γ₁, γ₂, γ₃), in which M, C and G are
-linear (docs/errata.md); column i of Y is that arm's M q̈_r + C q̇_r + G with θ = e_i.
+linear (docs/errata.md); column i of Y is that arm's M q̈_r + C q̇_r + G with θ = e_i. There
+``project`` keeps each parameter within a factor ``bound`` of its nominal value (a box, onto which
+clipping is the projection in Γ = γ I's metric), so that M̂ cannot grow without limit.
+
+Sized from the arm when unset: K_D(q) = (K_D_step / T) M̂(q), the nominal's own mass matrix at the
+measured q (M̂(q) s by RNEA), so that every mode of the sampled s-loop has T λ(M̂⁻¹ K_D) = K_D_step;
+γ by :meth:`SlotineLi.sized_gamma`. A diagonal K_D ∝ diag M̂(q0) with only its fastest mode at
+K_D_step (the former default) left the slowest 6 (UR5) to 4900 (planar7) times slower; friction
+and disturbance then held s at about 2 rad/s on planar7-ellipse, the adaptation integrated it
+until M̂ was 10-20 times M in one direction, and the sampled M̂ Λ J⁺ ė term ran away (planar7 at
+2.9 s, panda-pose at 0.4 s). Sensor noise in both Y (through Λ ė) and s biases the gradient
+towards larger inertias (γ Λ nᵀ ∂M/∂θ n > 0): the box bounds that drift on the closed form.
 
 Deliberate approximations: q̈_r uses J̇ q̇ (not J̇ q̇_r) and drops the derivatives of J⁺ outside
 the task and of the null-space term, so q̈_r is exact in the task directions only.
@@ -37,7 +48,7 @@ from ..base import Controller, ControllerContext, ControlOutput
 from ..registry import Law, LawParam, register_law
 
 K_D_STEP_WARN = 1.0
-"""T λ_max(M̂⁻¹ K_D) at q(0) beyond which the sampled s-loop goes unstable."""
+"""T λ_max(M̂⁻¹ K_D) at q(0) of a given K_D beyond which the sampled s-loop goes unstable."""
 
 ADAPTATION_STEP = 0.5
 """T sqrt(γ λ_max(Yᵀ M̂⁻¹ Y)) at q(0) and the reference motion: the step of the coupled s-θ̂ loop
@@ -49,6 +60,9 @@ REFERENCE_SPEED, REFERENCE_ACCELERATION = 1.0, 10.0
 
 PSEUDO_FLOOR = 1e-5
 """A link's pseudo-inertia eigenvalues are kept above this fraction of its nominal mass [m²]."""
+
+BOUND = 2.0
+"""The closed form's box: each of θ̂'s parameters within this factor of its nominal value."""
 
 
 def pseudo_inertia(pi: np.ndarray) -> np.ndarray:
@@ -87,6 +101,7 @@ class SlotineLi(Controller):
         criterion_gain=0.0,
         regressor="exact",
         project=True,
+        bound=BOUND,
     ):
         ctx = self.context = context
         nominal, n, m = ctx.nominal, ctx.n, ctx.m
@@ -118,16 +133,10 @@ class SlotineLi(Controller):
                 self.units.append(ThreeLinkPlanarModel(unit))
             self.armature = np.zeros(n)
             self.pseudo_floor = np.zeros(0)
-            project = False
         M0 = np.asarray(nominal.mass(np.asarray(ctx.q0, dtype=float)), dtype=float)
-        if K_D is None:  # K_D proportional to diag M(q0), T lambda_max(M^-1 K_D) = K_D_step
-            shape = np.diag(M0).copy()
-            K_D = (
-                shape
-                * K_D_step
-                / (ctx.period * np.max(np.linalg.eigvals(np.linalg.solve(M0, np.diag(shape))).real))
-            )
-        self.K_D = np.broadcast_to(np.asarray(K_D, dtype=float), (n,)).copy()
+        # K_D unset: K_D(q) = K_D_step / T · M̂(q), every mode of the s-loop at T λ(M̂⁻¹ K_D) = K_D_step
+        self.K_D_mass = float(K_D_step) / ctx.period if K_D is None else 0.0
+        self.K_D = np.broadcast_to(np.asarray(0.0 if K_D is None else K_D, dtype=float), (n,)).copy()
         step = ctx.period * np.max(np.linalg.eigvals(np.linalg.solve(M0, np.diag(self.K_D))).real)
         if step > K_D_STEP_WARN:
             raise ConfigError(
@@ -138,6 +147,8 @@ class SlotineLi(Controller):
         self.leakage = float(leakage)
         self.null_damping, self.criterion_gain = float(null_damping), float(criterion_gain)
         self.exact, self.project = float(regressor == "exact"), float(bool(project))
+        self.lower = np.minimum(self.theta0 / bound, self.theta0 * bound)  # the closed form's box
+        self.upper = np.maximum(self.theta0 / bound, self.theta0 * bound)
         self.state_size = self.theta0.size
         self._zero, self._eye = np.zeros(n), np.eye(n)
         self.gamma = (
@@ -155,6 +166,14 @@ class SlotineLi(Controller):
         rate = float(np.max(np.linalg.eigvalsh(Y.T @ np.linalg.solve(M0, Y))))
         step = self.context.period * np.sqrt(max(rate, 0.0))
         return 1.0 if step <= ADAPTATION_STEP else (ADAPTATION_STEP / step) ** 2
+
+    def damping(self, q, s) -> np.ndarray:
+        """K_D s: the given diagonal K_D, or K_D_step / T · M̂(q) s (as M̂(q) s + G − G by RNEA)."""
+        out = self.K_D * s
+        if self.K_D_mass:
+            nominal = self.context.nominal
+            out = out + self.K_D_mass * (nominal.inverse_dynamics(q, self._zero, s) - nominal.gravity(q))
+        return out
 
     def initial_state(self) -> np.ndarray:
         """θ̂(0): the nominal model's parameters."""
@@ -184,7 +203,11 @@ class SlotineLi(Controller):
         )
 
     def projected(self, theta: np.ndarray) -> np.ndarray:
-        """θ̂ with every link's pseudo-inertia eigenvalues clipped at its floor."""
+        """θ̂ with every link's pseudo-inertia eigenvalues clipped at its floor (closed form: θ̂
+        clipped to its box, θ̂(0) / bound to θ̂(0) bound).
+        """
+        if hasattr(self, "units"):
+            return np.clip(theta, self.lower, self.upper)
         out = theta.copy()
         for k, i in enumerate(range(0, theta.size, 10)):
             w, V = np.linalg.eigh(pseudo_inertia(theta[i : i + 10]))
@@ -208,7 +231,7 @@ class SlotineLi(Controller):
         a_r = J_pinv @ (ddx_d - self.Lambda * de - jdot_v)
         s = v - v_r
         Y = self.regressor(q, v, v_r, a_r)
-        tau = Y @ theta + self.armature * a_r - self.K_D * s + self.nominal_friction.torque(v)
+        tau = Y @ theta + self.armature * a_r - self.damping(q, s) + self.nominal_friction.torque(v)
         theta_next = theta + period * (-self.gamma * (Y.T @ s) - self.leakage * (theta - self.theta0))
         if self.project:
             theta_next = self.projected(theta_next)
@@ -236,17 +259,17 @@ _PARAMS = (
         "K_D",
         None,
         "N m s/rad",
-        "damping of s; unset: ∝ diag M̂(q0), sized by K_D_step",
+        "damping of s (diagonal); unset: K_D_step / T · M̂(q), at every q",
         0.0,
         1e6,
         "n",
-        fixed="unset: sized by K_D_step, which is searched (a K_D of its own is the experiment's)",
+        fixed="unset: sized by K_D_step, which is searched (a diagonal K_D is the experiment's alternative)",
     ),
     LawParam(
         "K_D_step",
         0.3,
         "-",
-        "T λmax(M̂⁻¹ K_D) at q0 when K_D is unset",
+        "T λ(M̂⁻¹ K_D) of every mode of s when K_D is unset",
         1e-6,
         1.0,
         search=(0.01, 1.0),
@@ -287,7 +310,16 @@ _PARAMS = (
         fixed="the subtask's weight, the experiment's: no tuning objective scores the self-motion criterion",
     ),
     LawParam("regressor", "exact", "-", "C(q, q') q'_r, or C(q, q'_r) q'_r", choices=("exact", "approx")),
-    LawParam("project", True, "-", "keep θ̂ physically consistent (Pinocchio models)"),
+    LawParam("project", True, "-", "keep θ̂ physically consistent (Pinocchio), or in its box (closed form)"),
+    LawParam(
+        "bound",
+        BOUND,
+        "-",
+        "closed form: project keeps each of θ̂'s β, p, γ within this factor of θ̂(0)",
+        1.0,
+        1e6,
+        fixed="the experiment's prior on the parameters, as its nominal model is (not a gain)",
+    ),
 )
 
 LAW = register_law(
@@ -301,6 +333,7 @@ LAW = register_law(
         twin_fields=(
             "Lambda",
             "K_D",
+            "K_D_mass",
             "gamma",
             "leakage",
             "null_damping",
@@ -310,6 +343,8 @@ LAW = register_law(
             "theta0",
             "armature",
             "pseudo_floor",
+            "lower",
+            "upper",
         ),  # fmt: skip
     )
 )
