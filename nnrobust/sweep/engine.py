@@ -720,12 +720,27 @@ def crash_reason(future) -> str | None:
     return None
 
 
+def run_alone(client, files, *task):
+    """(future, None) for a task run alone, or (None, reason) when it ended its worker on each of
+    two such runs: under load a death a crashing neighbour caused a moment before (a worker dead
+    and not yet noticed) can still be counted against a task once, not twice.
+    """
+    reason = None
+    for _ in range(2):
+        future = submit(client, files, *task)
+        reason = crash_reason(future)
+        if reason is None:
+            return future, None
+    return None, reason
+
+
 def run_tasks(client, tasks: list[tuple], crashed, files=None) -> list:
     """Each (function, *arguments) task's result, run on the cluster (within ``files``:
     :func:`submit`) and waited for together. A task whose worker died (:func:`crash_reason`) is
     submitted again and waited for alone, once every other has finished (a task queued on a
     dying worker counts that death too: alone, its result does not depend on its neighbours);
-    when it kills its worker again its result is ``crashed(reason)``.
+    when it kills its worker on each run alone (:func:`run_alone`) its result is
+    ``crashed(reason)``.
     """
     futures = [submit(client, files, *task) for task in tasks]
     wait_alive(futures)
@@ -734,9 +749,8 @@ def run_tasks(client, tasks: list[tuple], crashed, files=None) -> list:
         if crash_reason(future) is None:
             out.append(future.result())
             continue
-        retry = submit(client, files, *task)
-        reason = crash_reason(retry)
-        out.append(crashed(reason) if reason else retry.result())
+        retry, reason = run_alone(client, files, *task)
+        out.append(crashed(reason) if retry is None else retry.result())
     return out
 
 
@@ -881,16 +895,16 @@ def _run_sweep(
                     dropped += [job for f in cancel for job in chunk_of[f.key]]
             if progress:
                 progress(skipped + written + len(dropped), total)
-        # Each suspect row alone on the cluster: a worker's death then has one cause. (A task queued
-        # on a worker that dies counts that death too, so a row beside a crashing one is innocent
-        # until it runs alone.) Deterministic: the crashing rows are the same whatever the timing.
+        # Each suspect row alone on the cluster, twice before it is called crashed: a
+        # worker's death then has one cause. (A task queued on a worker that dies counts that death
+        # too, so a row beside a crashing one is innocent until it runs alone.) Deterministic: the
+        # crashing rows are the same whatever the timing and the load.
         for job in suspects:
             if stop and group(job) in stopped:
                 dropped.append(job)
                 continue
-            future = submit(client, files, run_rows, spec_future, base_future, [job])
-            reason = crash_reason(future)
-            rows = crashed_rows(spec, [job], reason) if reason else future.result()
+            future, reason = run_alone(client, files, run_rows, spec_future, base_future, [job])
+            rows = crashed_rows(spec, [job], reason) if future is None else future.result()
             written, parts = written + len(rows), parts + 1
             _write_part(folder, rows, table_schema, inputs.key)
             if stop:
