@@ -41,12 +41,11 @@ TRAVELS_ALONE = (
 """What an import error of a class file sent to a worker adds (:mod:`nnrobust.shipped_files`)."""
 
 
-def _import_file(path: Path, key: str):
-    """The module of a class file, imported once per content. A file the running task brought
-    with it (:func:`~nnrobust.shipped_files.local`) is read from its copy, still named by
-    ``path``.
+def _source(path: Path, key: str) -> Path:
+    """The file a class value names, or the copy of it the running task brought with it
+    (:func:`~nnrobust.shipped_files.local`); refused when there is none.
     """
-    from .shipped_files import local, shipped
+    from .shipped_files import local
 
     source = local(path)
     if not source.is_file():
@@ -55,6 +54,17 @@ def _import_file(path: Path, key: str):
             f"{str(path)!r} is not a file (a relative path in an experiment file is read "
             "from the file's folder)",
         )
+    return source
+
+
+def _import_file(path: Path, key: str):
+    """The module of a class file, imported once per content. A file the running task brought
+    with it (:func:`~nnrobust.shipped_files.local`) is read from its copy, still named by
+    ``path``.
+    """
+    from .shipped_files import shipped
+
+    source = _source(path, key)
     digest = file_digest(source)
     name = f"nnrobust_user_{''.join(c if c.isalnum() else '_' for c in path.stem)}_{digest[:16]}"
     if name in sys.modules:
@@ -92,16 +102,8 @@ def load_class(spec: str, base: type, key: str) -> type:
     path = class_file(spec)
     if path is not None and Path(path).suffix in (".cpp", ".cc", ".cxx"):  # a law in C++
         from .native_law import load_native_class
-        from .shipped_files import local
 
-        source = local(path)
-        if not source.is_file():
-            raise ConfigError(
-                key,
-                f"{str(path)!r} is not a file (a relative path in an experiment file is read "
-                "from the file's folder)",
-            )
-        return load_native_class(path, source, name, base, key)
+        return load_native_class(path, _source(path, key), name, base, key)
     if path is not None:
         module = _import_file(path, key)
     else:
