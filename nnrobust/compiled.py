@@ -253,19 +253,22 @@ def engine_addresses(engine) -> dict:
     return {name: field_array(float(address)) for name, address in where.items()}
 
 
+def contiguous(x):
+    """``x`` as the C++ side takes an array: contiguous float64."""
+    import numpy as np
+
+    return np.ascontiguousarray(x, dtype=float)
+
+
 def loop_spec(setup, duration: float, external: bool = False):
     """The compiled loop's description of a built experiment (every array it needs); with
     ``external``, of its plant alone (the hybrid loop: the controller is called in Python).
     """
-    import numpy as np
-
     from .config import step_rotation_limit
     from .simulation import MAX_PERIOD_SUBSTEPS, MAX_SPEED
     from .twins import twin_parts, twin_values
 
-    def f(x):  # the C++ side takes contiguous float64 arrays
-        return np.ascontiguousarray(x, dtype=float)
-
+    f = contiguous
     module = _module()
     sim, plant, controller = setup.config.simulation, setup.plant, setup.controller
     steps = int(round(duration / sim.control_period))
@@ -329,8 +332,6 @@ def law_spec(setup):
     (nnrobust.export): (LoopSpec with the controller's and criteria's fields, the nominal
     Pinocchio model's ModelSpec or None for the closed form). Refused without a twin.
     """
-    import numpy as np
-
     if getattr(type(setup.controller), "native", None):
         raise NNRobustError(
             f"this controller cannot be exported yet: {type(setup.controller).__name__} is a law in C++ "
@@ -345,9 +346,7 @@ def law_spec(setup):
     if refusal:
         raise NNRobustError(f"this controller cannot be exported: {refusal}")
 
-    def f(x):
-        return np.ascontiguousarray(x, dtype=float)
-
+    f = contiguous
     s = _module().LoopSpec()
     s.period, s.m = setup.config.simulation.control_period, setup.robot.m
     _criterion_spec(s, setup, f)
