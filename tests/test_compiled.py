@@ -172,7 +172,7 @@ def test_compiled_loop_equals_the_python_loop(preset, kind):
 
 
 @needs_extension
-@pytest.mark.parametrize("preset", ["paper-ellipse", "paper-line"])
+@pytest.mark.parametrize("preset", ["paper-ellipse"])
 def test_compiled_metrics_match_over_a_full_run(preset):
     """Over the full 20 s the metrics agree within 1 %, and metrics.json says which loop ran."""
     from nnrobust.experiment import run_experiment
@@ -228,7 +228,7 @@ def test_the_speed_adaptive_step_is_the_same_on_both_loops(preset):
     """With simulation.max_step_rotation small enough to cut most periods (10 µrad: above 0.01 rad/s),
     both loops cut the same periods into the same steps: the arrays agree to 1e-8, the counts
     exactly (stick-slip events located inside the cut steps included)."""
-    py, cc = _both_backends(preset, 0.5, simulation={"max_step_rotation": 1e-5})
+    py, cc = _both_backends(preset, 0.2, simulation={"max_step_rotation": 1e-5})
     assert cc.status == py.status == "completed"
     assert cc.refined_periods == py.refined_periods > 100
     assert cc.friction_events == py.friction_events

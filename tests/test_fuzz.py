@@ -206,7 +206,7 @@ def test_mutated_experiment_files(seed, tmp_path_factory):
     _check_outcome(folder, {"e.toml"}, code, stderr)
 
 
-@pytest.mark.parametrize("seed", range(6))
+@pytest.mark.parametrize("seed", range(3))
 def test_a_signal_at_a_random_instant(seed, tmp_path):
     """SIGINT, SIGTERM or SIGHUP at a random instant of `run --overwrite` over a completed run
     (during import, the simulation or the writing of outputs): afterwards the folder is the

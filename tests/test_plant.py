@@ -74,7 +74,7 @@ def test_energy_balance_with_torque_and_disturbance(coulomb):
     robot = paper_robot()
     plant = Plant(robot, Friction(robot.viscous_friction, np.full(3, coulomb)), SinusoidalDisturbance.paper())
     tau = np.array([2.0, -1.0, 0.5])
-    trace = simulate(plant, ConstantTorque(tau), Q0, V0, 2.0, control_period=1e-4)
+    trace = simulate(plant, ConstantTorque(tau), Q0, V0, 1.0, control_period=1e-4)
     E = energies(plant, trace)
     power = np.array(
         [v @ (tau - plant.friction.torque(v) - plant.disturbance(t)) for t, v in zip(trace.t, trace.dq)]

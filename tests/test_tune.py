@@ -351,9 +351,7 @@ def test_a_custom_class_is_tuned_in_the_space_it_declares(short_experiment, tmp_
     from nnrobust.sweep.spec import base_config, draw, experiment
 
     laws = Path(__file__).parent / "controllers" / "eq9_again.py"
-    spec = TuneSpec(
-        str(short_experiment), ["no-u0", f"{laws}:Eq9"], 12, train_samples=2, validation=1, seed=5
-    )
+    spec = TuneSpec(str(short_experiment), ["no-u0", f"{laws}:Eq9"], 6, train_samples=2, validation=1, seed=5)
     summary = run_tune(spec, tmp_path / "out", workers=2)
     assert set(summary["controllers"]) == {"no-u0", "Eq9"}
     entry = summary["controllers"]["Eq9"]
