@@ -1308,7 +1308,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="set one key of the experiment (dotted, TOML value); repeatable",
     )
     export.add_argument(
-        "--controller", help="the controller to export: a kind, e.g. slotine-li (a FILE.py:CLASS has no twin)"
+        "--controller",
+        help="the controller to export: a kind, e.g. slotine-li, or a law in C++ as FILE.cpp:CLASS "
+        "(a FILE.py:CLASS has no twin)",
     )
     export.add_argument(
         "--tuned",

@@ -332,12 +332,7 @@ def law_spec(setup):
     (nnrobust.export): (LoopSpec with the controller's and criteria's fields, the nominal
     Pinocchio model's ModelSpec or None for the closed form). Refused without a twin.
     """
-    if getattr(type(setup.controller), "native", None):
-        raise NNRobustError(
-            f"this controller cannot be exported yet: {type(setup.controller).__name__} is a law in C++ "
-            "compiled apart, which libnnrobust_core does not load"
-        )
-    if is_custom(setup.controller):
+    if is_custom(setup.controller) and not getattr(type(setup.controller), "native", None):
         raise NNRobustError(
             f"this controller cannot be exported: a custom controller ({type(setup.controller).__name__}) "
             "is Python code, with no C++ twin to export"

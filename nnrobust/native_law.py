@@ -106,8 +106,10 @@ def _toolchain(cxx: str, info: dict[str, str]) -> str:
     return digest.hexdigest()
 
 
-def command(source: Path, output: Path) -> list[str]:
-    """The compile command of a law's library."""
+def command(source: Path, output: Path, link: list[str] | None = None) -> list[str]:
+    """The compile command of a law's library, linked with ``link`` (by default the pin wheel's
+    Pinocchio; an export links its own copies, nnrobust.export).
+    """
     info = build_info()
     prefix = cmeel_prefix()
     definitions = [f"-D{d}" for d in info.get("definitions", "").split(";") if d]
@@ -130,10 +132,11 @@ def command(source: Path, output: Path) -> list[str]:
         "-isystem",
         str(prefix / "include"),
         str(source),
-        "-L",
-        str(prefix / "lib"),
-        "-lpinocchio_default",
-        f"-Wl,-rpath,{prefix / 'lib'}",
+        *(
+            ["-L", str(prefix / "lib"), "-lpinocchio_default", f"-Wl,-rpath,{prefix / 'lib'}"]
+            if link is None
+            else link
+        ),
         "-o",
         str(output),
     ]
@@ -196,6 +199,7 @@ def load_native_class(path: Path, source: Path, name: str, base: type, key: str)
         _loaded[str(library)] = (twin, names, declared_space(space, name, path, key))
     twin, signal_names, search_space = _loaded[str(library)]
     face = _python_face(base, name, twin, signal_names, digest, path)
+    face.native_source = source.resolve()  # type: ignore[attr-defined]  # what an export compiles
     if search_space:
         face.search_space = search_space  # type: ignore[attr-defined]
     return face

@@ -6,10 +6,13 @@ independent; bad descriptions and folders are refused with a message that names 
 """
 
 import ctypes
+import hashlib
 import json
 import shutil
 import subprocess
+import sys
 from pathlib import Path
+from urllib.parse import quote
 
 import numpy as np
 import pytest
@@ -275,3 +278,81 @@ def test_a_python_class_named_by_controller_is_refused_with_the_reason(tmp_path,
     law = f"{ROOT / 'examples' / 'custom_controller.py'}:TaskPD"
     assert main(["export", "paper-ellipse", "--controller", law, "--out", str(tmp_path / "law")]) == 2
     assert "is Python code, with no C++ twin to export" in capsys.readouterr().err
+
+
+LEAKY = """
+// A law that keeps memory its step allocated: its member is sized in compute, not in its constructor.
+struct Leaky : nnrobust::Law {
+  Vector kept;
+  Leaky(const LawParams &, LawContext &) {}
+  Output compute(double, const Vector &q, const Vector &, const Vector &z) override {
+    kept = 2.0 * q;  // allocates on the first step, from the step's arena
+    return {Vector::Zero(q.size()), z, Vector()};
+  }
+};
+NNROBUST_USER_LAW(Leaky, "", 0)
+"""
+
+
+@pytest.mark.skipif(shutil.which("c++") is None, reason="no C++ compiler")
+def test_a_law_in_cpp_exports_with_its_file_and_replays(tmp_path):
+    """A user's law in one C++ file (examples/controllers/task_pd.cpp, named as controller.class)
+    is compiled into the export's libnnrobust_law with its source; a C program replays the compiled
+    loop's torques bit for bit, with no allocation in a step (the user's code allocates from the
+    law's arena too). A law whose step keeps memory it allocated gets -1 and the reason."""
+    source = tmp_path / "task_pd.cpp"
+    source.write_text((ROOT / "examples" / "controllers" / "task_pd.cpp").read_text() + LEAKY)
+    params = {"Kp": 100.0, "Kd": 20.0, "damping": 5.0}
+    config = load_preset("panda-ellipse").replace(
+        simulation={"duration": DURATION},
+        controller={"kind": "custom", "class": f"{source}:TaskPD", "params": params},
+    )
+    inputs, torques = _compiled_run(config)
+    folder = tmp_path / "law"
+    info = export_law(config, folder)
+    assert info["law"].startswith("cpp:TaskPD:") and info["law_source"] == "src/task_pd.cpp"
+    assert (folder / "src" / "task_pd.cpp").read_bytes() == source.read_bytes()
+    assert info["files"]["src/task_pd.cpp"] == hashlib.sha256(source.read_bytes()).hexdigest()
+    np.testing.assert_array_equal(_replay(_compile_replay(folder), inputs), torques)
+    # no allocation in a step, the user's code included (benchmarks/export_step.c's hook)
+    data = tmp_path / "inputs.bin"
+    np.ascontiguousarray(inputs, dtype=np.float64).tofile(data)
+    program = tmp_path / "export_step"
+    subprocess.run(
+        ["cc", "-O2", "-I", folder / "include", ROOT / "benchmarks" / "export_step.c", "-L", folder / "lib",
+         "-lnnrobust_law", "-lnnrobust_core", f"-Wl,-rpath,{folder / 'lib'}", "-o", program],
+        check=True, capture_output=True, timeout=300,
+    )  # fmt: skip
+    done = subprocess.run([program, data, "1"], capture_output=True, text=True, timeout=300, check=True)
+    assert [int(x) for x in done.stdout.split()[:2]] == [len(inputs), 0]
+    # in a process of its own, as a program uses it (this one holds the compiled loop, whose
+    # symbols a law library loaded here would bind to): the description alone does not carry the
+    # code, and Leaky, registered by hand, keeps its step's memory: both are refused with the reason
+    leaky = (
+        (folder / "law.description")
+        .read_text()
+        .replace(f"str law ={quote(info['law'], safe='')}", "str law =cpp%3ALeaky%3Atest")
+    )
+    (tmp_path / "leaky.description").write_text(leaky)
+    script = f"""
+import ctypes
+lib = ctypes.CDLL({str(folder / "lib" / "libnnrobust_law.so")!r})
+lib.nnrobust_law_create_from.restype = ctypes.c_void_p
+lib.nnrobust_law_last_error.restype = ctypes.c_char_p
+lib.nnrobust_law_add_native.argtypes = [ctypes.c_char_p, ctypes.c_void_p]
+lib.nnrobust_law_step.argtypes = [ctypes.c_void_p, ctypes.c_double] + [ctypes.POINTER(ctypes.c_double)] * 3
+print(lib.nnrobust_law_create_from({(folder / "law.description").read_bytes()!r}))
+print(lib.nnrobust_law_last_error().decode())
+factory = ctypes.cast(lib.nnrobust_law_factory_Leaky, ctypes.c_void_p)
+print(lib.nnrobust_law_add_native(b"cpp:Leaky:test", factory))
+handle = lib.nnrobust_law_create_from({leaky.encode()!r})
+x = (ctypes.c_double * 7)()
+print(lib.nnrobust_law_step(handle, 0.0, x, x, x))
+print(lib.nnrobust_law_last_error().decode())
+"""
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
+    lines = done.stdout.splitlines()
+    assert done.returncode == 0 and len(lines) == 5, done.stderr
+    assert lines[0] == "None" and "is a user's law in C++: create it with nnrobust_law_create" in lines[1]
+    assert lines[2] == "0" and lines[3] == "-1"
+    assert "the step kept 1 block(s) of memory it allocated" in lines[4]

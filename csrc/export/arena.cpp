@@ -37,6 +37,7 @@ void *Arena::take(std::size_t size, std::size_t alignment) {
   std::memcpy(block - sizeof(std::size_t), &size, sizeof(std::size_t));
   next_ = block + size;
   if (next_ > high_) high_ = next_;
+  ++live_;
   return block;
 }
 
@@ -57,6 +58,10 @@ ArenaScope::~ArenaScope() { current = previous_; }
 
 #if defined(NNROBUST_WRAP_ALLOCATOR)
 using nnrobust::current;
+
+// The wrappers are exported: an exported law in C++ of a user's (nnrobust/export/) is linked with
+// the same --wrap options against them, so its step allocates from the same arena.
+#pragma GCC visibility push(default)
 
 extern "C" {
 void *__real_malloc(std::size_t);
@@ -86,9 +91,16 @@ void *__wrap_calloc(std::size_t count, std::size_t size) {
   return __real_calloc(count, size);
 }
 
+// Whether `p` is a block of the current arena: freeing one only counts it (the arena takes its
+// blocks back whole, at the next step).
+static bool taken_back(void *p) {
+  if (p == nullptr || current == nullptr || !current->holds(p)) return false;
+  current->give_back();
+  return true;
+}
+
 void __wrap_free(void *p) {
-  if (p == nullptr || (current && current->holds(p))) return;  // the arena takes its blocks back whole
-  __real_free(p);
+  if (p != nullptr && !taken_back(p)) __real_free(p);
 }
 
 void *__wrap_realloc(void *old, std::size_t size) {
@@ -96,6 +108,7 @@ void *__wrap_realloc(void *old, std::size_t size) {
     void *p = from_arena(size, 16);
     if (p == nullptr) p = __real_malloc(size);
     if (p) std::memcpy(p, old, std::min(size, current->size_of(old)));
+    if (p) current->give_back();  // the old block is freed
     return p;
   }
   if (old == nullptr) return __wrap_malloc(size);
@@ -146,33 +159,32 @@ void *__wrap__ZnamSt11align_val_t(std::size_t size, std::align_val_t alignment) 
   void *p = from_arena(size, static_cast<std::size_t>(alignment));
   return p ? p : __real__ZnamSt11align_val_t(size, alignment);
 }
-#define NNROBUST_HELD(p) ((p) != nullptr && current && current->holds(p))
 void __wrap__ZdlPv(void *p) {
-  if (!NNROBUST_HELD(p)) __real__ZdlPv(p);
+  if (p != nullptr && !taken_back(p)) __real__ZdlPv(p);
 }
 void __wrap__ZdaPv(void *p) {
-  if (!NNROBUST_HELD(p)) __real__ZdaPv(p);
+  if (p != nullptr && !taken_back(p)) __real__ZdaPv(p);
 }
 void __wrap__ZdlPvm(void *p, std::size_t n) {
-  if (!NNROBUST_HELD(p)) __real__ZdlPvm(p, n);
+  if (p != nullptr && !taken_back(p)) __real__ZdlPvm(p, n);
 }
 void __wrap__ZdaPvm(void *p, std::size_t n) {
-  if (!NNROBUST_HELD(p)) __real__ZdaPvm(p, n);
+  if (p != nullptr && !taken_back(p)) __real__ZdaPvm(p, n);
 }
 void __wrap__ZdlPvSt11align_val_t(void *p, std::align_val_t a) {
-  if (!NNROBUST_HELD(p)) __real__ZdlPvSt11align_val_t(p, a);
+  if (p != nullptr && !taken_back(p)) __real__ZdlPvSt11align_val_t(p, a);
 }
 void __wrap__ZdaPvSt11align_val_t(void *p, std::align_val_t a) {
-  if (!NNROBUST_HELD(p)) __real__ZdaPvSt11align_val_t(p, a);
+  if (p != nullptr && !taken_back(p)) __real__ZdaPvSt11align_val_t(p, a);
 }
 void __wrap__ZdlPvmSt11align_val_t(void *p, std::size_t n, std::align_val_t a) {
-  if (!NNROBUST_HELD(p)) __real__ZdlPvmSt11align_val_t(p, n, a);
+  if (p != nullptr && !taken_back(p)) __real__ZdlPvmSt11align_val_t(p, n, a);
 }
 void __wrap__ZdaPvmSt11align_val_t(void *p, std::size_t n, std::align_val_t a) {
-  if (!NNROBUST_HELD(p)) __real__ZdaPvmSt11align_val_t(p, n, a);
+  if (p != nullptr && !taken_back(p)) __real__ZdaPvmSt11align_val_t(p, n, a);
 }
-#undef NNROBUST_HELD
 }  // extern "C"
+#pragma GCC visibility pop
 
 bool nnrobust::arena_wrapped() { return true; }
 #else

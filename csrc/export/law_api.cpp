@@ -16,16 +16,19 @@
 #include "nnrobust_law.h"
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <memory>
+#include <mutex>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "../controllers.hpp"
+#include "../controllers/laws/law.hpp"
 #include "../model/nominal.hpp"
 #include "arena.hpp"
 
@@ -47,6 +50,10 @@ void set_error(const char *message) {
 // The bytes each law reserves for its step's temporaries (the largest step measured, Slotine-Li on
 // the Panda, takes a few kB; benchmarks/export_step.py prints the high-water mark).
 constexpr std::size_t arena_bytes = std::size_t{1} << 20;
+
+// The law registry is a plain map: adding a user's law (nnrobust_law_add_native) and building a
+// controller (which looks its law up) take this lock, so laws may be created on several threads.
+std::mutex registry_lock;
 
 // A string as export.py writes it: '=' then its percent-encoding (urllib.parse.quote)
 std::string decoded(const std::string &s) {
@@ -128,6 +135,11 @@ struct nnrobust_law {
     read(description);
     if (n <= 0) throw std::invalid_argument("the description gives no number of joints (int n)");
     if (has_model) model = std::make_unique<nnrobust::LoadedModel>(model_spec);
+    if (spec.law.rfind("cpp:", 0) == 0 && !nnrobust::LawRegistry::find(spec.law))
+      throw std::invalid_argument("the law " + spec.law +
+                                  " is a user's law in C++: create it with nnrobust_law_create of its export's "
+                                  "libnnrobust_law (which registers it), or register it with "
+                                  "nnrobust_law_add_native first");
     nominal = nnrobust::make_nominal(spec, model.get());
     controller = std::make_unique<nnrobust::Controller>(spec, *nominal);
     q.resize(n);
@@ -265,9 +277,32 @@ struct nnrobust_law {
 
 extern "C" {
 
+int nnrobust_law_add_native(const char *name, nnrobust_law_function factory) {
+  last_error[0] = '\0';
+  if (name == nullptr || factory == nullptr) {
+    set_error("nnrobust_law_add_native: a NULL argument");
+    return -1;
+  }
+  // the function NNROBUST_USER_LAW defines (csrc/controllers/laws/law.hpp), by its address
+  using Make = nnrobust::Law *(*)(const nnrobust::LawParams &, nnrobust::LawContext &);
+  const auto make = reinterpret_cast<Make>(factory);
+  try {
+    std::lock_guard<std::mutex> lock(registry_lock);
+    if (!nnrobust::LawRegistry::find(name))
+      nnrobust::LawRegistry::add(name, [make](const nnrobust::LawParams &p, nnrobust::LawContext &c) {
+        return std::unique_ptr<nnrobust::Law>(make(p, c));
+      });
+    return 0;
+  } catch (const std::exception &err) {
+    set_error(err.what());
+  }
+  return -1;
+}
+
 nnrobust_law *nnrobust_law_create_from(const char *description) {
   last_error[0] = '\0';
   try {
+    std::lock_guard<std::mutex> lock(registry_lock);
     return new nnrobust_law(description);
   } catch (const std::exception &err) {
     set_error(err.what());
@@ -291,13 +326,28 @@ int nnrobust_law_step(nnrobust_law *law, double t, const double *q, const double
   law->v = Eigen::Map<const Vector>(v, n);
   nnrobust::ArenaScope scope(law->arena);  // every temporary of this step comes from the arena
   try {
-    const nnrobust::Output out = law->controller->compute(t, law->q, law->v, law->z);
-    if (out.tau.size() != n) throw std::length_error("the law returned a torque of the wrong size");
-    Eigen::Map<Vector>(tau_out, n) = out.tau;
-    if (!out.tau.allFinite()) return 1;
-    if (out.z.size() != law->z.size()) throw std::length_error("the law returned a state of the wrong size");
-    law->z = out.z;  // the same size: copied into the law's own storage
-    return 0;
+    int status = 0;
+    {
+      const nnrobust::Output out = law->controller->compute(t, law->q, law->v, law->z);
+      if (out.tau.size() != n) throw std::length_error("the law returned a torque of the wrong size");
+      Eigen::Map<Vector>(tau_out, n) = out.tau;
+      if (!out.tau.allFinite()) {
+        status = 1;
+      } else {
+        if (out.z.size() != law->z.size()) throw std::length_error("the law returned a state of the wrong size");
+        law->z = out.z;  // the same size: copied into the law's own storage
+      }
+    }  // every temporary freed
+    if (law->arena.live() != 0) {  // the next step would hand that memory out again
+      char message[256];
+      std::snprintf(message, sizeof(message),
+                    "the step kept %ld block(s) of memory it allocated: a law must allocate what it keeps "
+                    "from one step to the next in its constructor",
+                    law->arena.live());
+      set_error(message);
+      return -1;
+    }
+    return status;
   } catch (const std::exception &err) {
     set_error(err.what());
   } catch (...) {

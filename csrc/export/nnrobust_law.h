@@ -32,6 +32,13 @@ NNROBUST_LAW_API nnrobust_law *nnrobust_law_create(void);
  * libnnrobust_core). NULL on failure: nnrobust_law_last_error() says why. Allocates. */
 NNROBUST_LAW_API nnrobust_law *nnrobust_law_create_from(const char *description);
 
+/* A law in C++ of a user's (NNROBUST_USER_LAW, docs/extending.md#a-law-in-c) is compiled into
+ * its export's libnnrobust_law, whose nnrobust_law_create registers it with this call first: its
+ * factory (the function NNROBUST_USER_LAW defines, by its address) under the name the description
+ * gives. 0 on success, -1 on an error (nnrobust_law_last_error()). */
+typedef void (*nnrobust_law_function)(void);
+NNROBUST_LAW_API int nnrobust_law_add_native(const char *name, nnrobust_law_function factory);
+
 /* The number of joints n: the entries of q, v and tau. */
 NNROBUST_LAW_API int nnrobust_law_dof(const nnrobust_law *law);
 
@@ -42,7 +49,8 @@ NNROBUST_LAW_API double nnrobust_law_period(const nnrobust_law *law);
  * positions q [rad or m] and velocities v (n entries each): writes the commanded torques into
  * tau_out (n entries, N m or N) and advances the law's state. Returns 0 on success, 1 when the
  * torque is not finite (the caller should apply its safe reaction; the state is not advanced),
- * -1 on an error (nnrobust_law_last_error()). */
+ * -1 on an error (nnrobust_law_last_error()), among them a step that kept memory it allocated
+ * (which the next step would hand out again). */
 NNROBUST_LAW_API int nnrobust_law_step(nnrobust_law *law, double t, const double *q, const double *v,
                                        double *tau_out);
 

@@ -219,6 +219,23 @@ static const char description[] =
 NNROBUST_LAW_API nnrobust_law *nnrobust_law_create(void) {{ return nnrobust_law_create_from(description); }}
 """
 
+NATIVE_LAW_DATA = """/* The law exported by `nnrobust export` from {name}: its description (law.description)
+ * and the user's law {cls} of src/{source}, compiled together into libnnrobust_law (docs/export.md).
+ * Generated; do not edit. */
+#include "nnrobust_law.h"
+
+static const char description[] =
+{literal};
+
+/* the factory NNROBUST_USER_LAW({cls}, ...) defines in src/{source} (its address only) */
+extern void nnrobust_law_factory_{cls}(void);
+
+NNROBUST_LAW_API nnrobust_law *nnrobust_law_create(void) {{
+  if (nnrobust_law_add_native("{twin}", nnrobust_law_factory_{cls}) != 0) return 0;
+  return nnrobust_law_create_from(description);
+}}
+"""
+
 CMAKE_CONFIG = """# find_package(nnrobust_law): the law exported by `nnrobust export` (docs/export.md) as
 # the imported target nnrobust_law::nnrobust_law (its header, libnnrobust_law, libnnrobust_core).
 get_filename_component(_nnrobust_law_prefix "${CMAKE_CURRENT_LIST_DIR}/../../.." ABSOLUTE)
@@ -264,28 +281,19 @@ def example_source(name: str) -> str:
     return (Path(__file__).resolve().parent / name).read_text(encoding="utf-8")
 
 
-def build_law_library(folder: Path, compiler: str) -> None:
-    """Compile src/law_data.c into lib/libnnrobust_law.so against lib/libnnrobust_core.so, and
-    the example programs into bin/ (their run path: ../lib, wherever the folder is moved).
+def build_law_library(folder: Path, compiler: str, native: str | None = None) -> None:
+    """Compile src/law_data.c into lib/libnnrobust_law.so against lib/libnnrobust_core.so (with
+    the user's law src/``native`` for a law in C++), and the example programs into bin/ (their run
+    path: ../lib, wherever the folder is moved).
     """
-    command = [
-        *compiler.split(),
-        "-O2",
-        "-fPIC",
-        "-shared",
-        "-fvisibility=hidden",
-        "-I",
-        str(folder / "include"),
-        str(folder / "src" / "law_data.c"),
-        "-L",
-        str(folder / "lib"),
-        "-lnnrobust_core",
-        "-Wl,-soname,libnnrobust_law.so",
-        "-Wl,-rpath,$ORIGIN",
-        "-o",
-        str(folder / "lib" / "libnnrobust_law.so"),
-    ]
-    _compile(command, compiler, "src/law_data.c")
+    lib = folder / "lib"
+    link = ["-L", str(lib), "-lnnrobust_core", "-Wl,-soname,libnnrobust_law.so", "-Wl,-rpath,$ORIGIN"]
+    data = ["-I", str(folder / "include"), str(folder / "src" / "law_data.c")]
+    if native is None:
+        command = [*compiler.split(), "-O2", "-fPIC", "-shared", "-fvisibility=hidden", *data, *link]
+        _compile([*command, "-o", str(lib / "libnnrobust_law.so")], compiler, "src/law_data.c")
+    else:
+        _build_native(folder, compiler, native, data, link)
     (folder / "bin").mkdir(exist_ok=True)
     for program in ("replay", "drive"):  # the examples, built: bin/replay, bin/drive
         source = str(folder / "example" / f"{program}.c")
@@ -295,6 +303,31 @@ def build_law_library(folder: Path, compiler: str) -> None:
              "-o", str(folder / "bin" / program)],
             compiler, f"example/{program}.c",
         )  # fmt: skip
+
+
+def _build_native(folder: Path, compiler: str, native: str, data: list[str], link: list[str]) -> None:
+    """libnnrobust_law of a law in C++: law_data.c and the user's file src/``native``, compiled
+    as the compiled loop compiles it (nnrobust.native_law.command) and linked against the core,
+    the Pinocchio library the export ships, and the core's allocator wrappers (the same --wrap
+    options as the core: the user's step allocates from the law's arena too).
+    """
+    from ..native_law import build_info, command
+
+    wrapped = [f"-Wl,--wrap={name}" for name in build_info().get("wrapped", "").split(";") if name]
+    pinocchio = sorted((folder / "lib").glob("libpinocchio_default.so*"))
+    with tempfile.TemporaryDirectory() as scratch:
+        data_object = Path(scratch) / "law_data.o"
+        _compile(
+            [*compiler.split(), "-O2", "-fPIC", "-c", *data, "-o", str(data_object)],
+            compiler,
+            "src/law_data.c",
+        )
+        cxx = command(
+            folder / "src" / native,
+            folder / "lib" / "libnnrobust_law.so",
+            [str(data_object), *link, *map(str, pinocchio[:1]), *wrapped],
+        )
+        _compile(cxx, cxx[0], f"src/{native}")
 
 
 def _compile(command: list[str], compiler: str, what: str) -> None:
@@ -349,6 +382,7 @@ def export_law(config, out: str | Path, *, overwrite: bool = False, build: bool 
     compiler = c_compiler() if build else ""
     setup = build_setup(config)
     spec, model = law_spec(setup)
+    native = getattr(type(setup.controller), "native_source", None)  # a law in C++ of the user's
     n = int(setup.plant.nq)
     label = controller_label(config)
     text = description(
@@ -367,9 +401,15 @@ def export_law(config, out: str | Path, *, overwrite: bool = False, build: bool 
             (tmp / sub).mkdir(parents=True)
         shutil.copyfile(c_header(), tmp / "include" / "nnrobust_law.h")
         (tmp / "law.description").write_text(text, encoding="utf-8")
-        (tmp / "src" / "law_data.c").write_text(
-            LAW_DATA.format(name=config.name, literal=_c_literal(text)), encoding="utf-8"
-        )
+        if native is None:
+            law_data = LAW_DATA.format(name=config.name, literal=_c_literal(text))
+        else:
+            shutil.copyfile(native, tmp / "src" / native.name)
+            law_data = NATIVE_LAW_DATA.format(
+                name=config.name, literal=_c_literal(text), cls=type(setup.controller).__name__,
+                source=native.name, twin=spec.law,
+            )  # fmt: skip
+        (tmp / "src" / "law_data.c").write_text(law_data, encoding="utf-8")
         shutil.copyfile(core, tmp / "lib" / "libnnrobust_core.so")
         for name, path in bundled_libraries(core).items():
             shutil.copyfile(path, tmp / "lib" / name)
@@ -382,13 +422,14 @@ def export_law(config, out: str | Path, *, overwrite: bool = False, build: bool 
         (tmp / "example" / "CMakeLists.txt").write_text(EXAMPLE_CMAKE, encoding="utf-8")
         (tmp / "config.toml").write_text(config.to_toml(), encoding="utf-8")
         if build:
-            build_law_library(tmp, compiler)
+            build_law_library(tmp, compiler, None if native is None else native.name)
         info = {
             "format": "nnrobust-export 1",
             "nnrobust": __version__,
             "experiment": config.name,
             "controller": label,
             "law": spec.law,
+            "law_source": None if native is None else f"src/{native.name}",
             "robust_term": spec.robust,
             "nominal_model": spec.nominal,
             "joints": n,
