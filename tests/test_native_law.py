@@ -221,3 +221,43 @@ def test_a_cpp_law_is_falsified_and_its_worst_plant_reruns(tmp_path):
     again = json.loads((tmp_path / "again" / "metrics.json").read_text())
     assert again["backend"] == "compiled"
     assert again["rms_error"] == entry["worst"]["metrics"]["rms_error"]
+
+
+def test_a_study_takes_a_cpp_law_through_every_stage(tmp_path):
+    """A study with the C++ law beside the shipped pd: tuned, validated, certified, falsified and
+    rerun on the second engine like any law, on the compiled loop, its file's SHA-256 among the
+    report's inputs."""
+    pytest.importorskip("distributed")
+    pytest.importorskip("optuna")
+    pytest.importorskip("cma")
+    import importlib.util
+    import json
+
+    from nnrobust.cli import main
+    from nnrobust.user_code import file_digest
+
+    mujoco = importlib.util.find_spec("mujoco") is not None
+    shutil.copy(CPP, tmp_path / "task_pd.cpp")
+    (tmp_path / "study.toml").write_text(
+        'name = "cpp"\ncases = ["paper-ellipse-noisy"]\n'
+        'controllers = ["pd", {name = "taskpd-cpp", class = "task_pd.cpp:TaskPD", '
+        "params = {Kp = 100.0, Kd = 20.0, damping = 5.0}}]\n"
+        'require = ["rms_error_after_2s<=0.002"]\n'
+        '[set]\n"simulation.duration" = 2.5\n'
+        '[vary]\n"plant.disturbance_scale" = {uniform = [0.5, 2.0]}\n'
+        "[budgets]\ntune = 4\nseeds = 1\ntrain_samples = 1\nvalidation = 2\nepsilon = 0.5\nbeta = 0.2\n"
+        f"falsify = 4\nmargin = false\nsecond_engine = {str(mujoco).lower()}\n"
+    )
+    out = tmp_path / "out"
+    assert main(["study", str(tmp_path / "study.toml"), "--out", str(out), "--workers", "2", "--quiet"]) == 0
+    report = json.loads((out / "report.json").read_text())
+    case = report["cases"]["paper-ellipse-noisy"]
+    stages = ("tune", "validate", "certify", "falsify") + (("engine",) if mujoco else ())
+    assert all(case["stages"][s] == "finished" for s in stages), case["stages"]
+    entry = case["controllers"]["taskpd-cpp"]
+    assert entry["backend"] == "compiled" and entry["step_cost_us"] > 0
+    assert entry["tuned"]["seeds"] and entry["certificates"] and "command" in entry["worst"]
+    assert set(entry["tuned"]["settings"]) == {f"controller.params.{k}" for k in PARAMS}  # its declared space
+    if mujoco:
+        assert entry["engines"]["mujoco"]["rows"] == 3
+    assert report["inputs"][str(tmp_path / "task_pd.cpp")] == file_digest(CPP)
