@@ -5,11 +5,12 @@ with both cores loaded by other processes.
     python benchmarks/export_step.py --json docs/data/export_step.json [--seconds 5] [--repeats 5]
 
 For each arm: a compiled run of the preset (``seconds`` of simulated time) is recorded as the law
-sees it (nnrobust.export.recorded_steps), the preset's controller is exported, and
-benchmarks/export_step.c (linked to the export, with allocation-counting wrappers around glibc's
-malloc family) steps the law through the recorded states ``repeats`` times, timing each step with
-CLOCK_MONOTONIC. "loaded" runs the same with two busy-looping processes on the machine; "rt" adds
-SCHED_FIFO priority 80 (chrt) where the machine allows it, else the row says it was not allowed.
+sees it (nnrobust.export.recorded_steps), the preset's controller is exported, and the export's
+bin/time_step (example/time_step.c, with allocation-counting wrappers around glibc's malloc
+family; nnrobust.export.time_steps) steps the law through the recorded states ``repeats`` times,
+timing each step with CLOCK_MONOTONIC. "loaded" runs the same with two busy-looping processes on
+the machine; "rt" adds SCHED_FIFO priority 80 (chrt) where the machine allows it, else the row
+says it was not allowed.
 The allocation count covers the steps only (never create).
 """
 
@@ -22,43 +23,11 @@ import sys
 import tempfile
 from pathlib import Path
 
-import numpy as np
-
-from nnrobust.export import export_law, recorded_steps
+from nnrobust.export import export_law, recorded_steps, time_steps
 from nnrobust.presets import load_preset
 from nnrobust.results import write_json_atomic
 
 ARMS = ("paper-ellipse", "panda-ellipse")
-HERE = Path(__file__).resolve().parent
-
-
-def compile_bench(folder: Path) -> Path:
-    program = folder / "export_step"
-    subprocess.run(
-        ["cc", "-O2", "-I", folder / "include", HERE / "export_step.c", "-L", folder / "lib",
-         "-lnnrobust_law", "-lnnrobust_core", f"-Wl,-rpath,{folder / 'lib'}", "-o", program],
-        check=True, capture_output=True, timeout=300,
-    )  # fmt: skip
-    return program
-
-
-def measure(program: Path, inputs: Path, repeats: int, prefix: list[str]) -> dict | None:
-    done = subprocess.run(
-        [*prefix, program, inputs, str(repeats)], capture_output=True, text=True, timeout=3600
-    )
-    if done.returncode != 0:
-        if prefix:
-            return None  # chrt refused (no permission for real-time scheduling)
-        raise RuntimeError(done.stderr)
-    steps, allocations, *times = (int(x) for x in done.stdout.split())
-    ns = np.array(times, dtype=float)
-    return {
-        "steps": steps,
-        "allocations_per_step": allocations / steps,
-        "p50_us": float(np.percentile(ns, 50)) / 1e3,
-        "p99_us": float(np.percentile(ns, 99)) / 1e3,
-        "max_us": float(ns.max()) / 1e3,
-    }
 
 
 def busy_loops(count: int) -> list[subprocess.Popen]:
@@ -77,16 +46,13 @@ def main() -> None:
         for arm in ARMS:
             config = load_preset(arm).replace(simulation={"duration": args.seconds})
             inputs, _ = recorded_steps(config)
-            data = Path(tmp) / f"{arm}.bin"
-            np.ascontiguousarray(inputs, dtype=np.float64).tofile(data)
             folder = Path(tmp) / arm
             export_law(config, folder)
-            program = compile_bench(folder)
             for load in ("idle", "loaded"):
                 busy = busy_loops(2) if load == "loaded" else []
                 try:
                     for scheduling, prefix in (("normal", []), ("rt", [chrt, "-f", "80"] if chrt else None)):
-                        row = measure(program, data, args.repeats, prefix) if prefix is not None else None
+                        row = time_steps(folder, inputs, args.repeats, prefix) if prefix is not None else None
                         if row is None and scheduling == "rt":
                             rows.append({"arm": arm, "load": load, "scheduling": "rt", "allowed": False})
                             continue

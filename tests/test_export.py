@@ -21,7 +21,7 @@ from nnrobust import compiled
 from nnrobust.cli import main
 from nnrobust.exceptions import NNRobustError
 from nnrobust.experiment import build
-from nnrobust.export import description, export_law, recorded_steps
+from nnrobust.export import description, export_law, recorded_steps, time_steps
 from nnrobust.presets import load_preset
 
 pytestmark = [
@@ -203,23 +203,16 @@ def test_a_custom_controller_is_refused(tmp_path):
 
 @pytest.mark.parametrize("name", list(CASES))
 def test_a_step_never_calls_the_system_allocator(name, tmp_path):
-    """benchmarks/export_step.c wraps glibc's malloc family for the whole process (Pinocchio's
-    libraries included) and counts every call made during the steps, none during create."""
+    """The export's bin/time_step (example/time_step.c) wraps glibc's malloc family for the whole
+    process (Pinocchio's libraries included) and counts every call made during the steps, none
+    during create."""
     config = _config(name)
     inputs, _ = _compiled_run(config)
     folder = tmp_path / "law"
     export_law(config, folder)
-    data = tmp_path / "inputs.bin"
-    np.ascontiguousarray(inputs, dtype=np.float64).tofile(data)
-    program = tmp_path / "export_step"
-    subprocess.run(
-        ["cc", "-O2", "-I", folder / "include", ROOT / "benchmarks" / "export_step.c", "-L", folder / "lib",
-         "-lnnrobust_law", "-lnnrobust_core", f"-Wl,-rpath,{folder / 'lib'}", "-o", program],
-        check=True, capture_output=True, timeout=300,
-    )  # fmt: skip
-    done = subprocess.run([program, data, "2"], capture_output=True, text=True, timeout=300, check=True)
-    steps, allocations = (int(x) for x in done.stdout.split()[:2])
-    assert steps == 2 * len(inputs) and allocations == 0
+    timed = time_steps(folder, inputs, repeats=2)  # the export's bin/time_step
+    assert timed["steps"] == 2 * len(inputs) and timed["allocations_per_step"] == 0
+    assert 0 < timed["p50_us"] <= timed["p99_us"] <= timed["max_us"]
     lib, _ = _library(folder)
     lib.nnrobust_law_heap_requests.argtypes = [ctypes.c_void_p]
     handle = lib.nnrobust_law_create()
@@ -314,17 +307,9 @@ def test_a_law_in_cpp_exports_with_its_file_and_replays(tmp_path):
     assert (folder / "src" / "task_pd.cpp").read_bytes() == source.read_bytes()
     assert info["files"]["src/task_pd.cpp"] == hashlib.sha256(source.read_bytes()).hexdigest()
     np.testing.assert_array_equal(_replay(_compile_replay(folder), inputs), torques)
-    # no allocation in a step, the user's code included (benchmarks/export_step.c's hook)
-    data = tmp_path / "inputs.bin"
-    np.ascontiguousarray(inputs, dtype=np.float64).tofile(data)
-    program = tmp_path / "export_step"
-    subprocess.run(
-        ["cc", "-O2", "-I", folder / "include", ROOT / "benchmarks" / "export_step.c", "-L", folder / "lib",
-         "-lnnrobust_law", "-lnnrobust_core", f"-Wl,-rpath,{folder / 'lib'}", "-o", program],
-        check=True, capture_output=True, timeout=300,
-    )  # fmt: skip
-    done = subprocess.run([program, data, "1"], capture_output=True, text=True, timeout=300, check=True)
-    assert [int(x) for x in done.stdout.split()[:2]] == [len(inputs), 0]
+    # no allocation in a step, the user's code included (the hook of the export's bin/time_step)
+    timed = time_steps(folder, inputs, repeats=1)
+    assert (timed["steps"], timed["allocations_per_step"]) == (len(inputs), 0)
     # in a process of its own, as a program uses it (this one holds the compiled loop, whose
     # symbols a law library loaded here would bind to): the description alone does not carry the
     # code, and Leaky, registered by hand, keeps its step's memory: both are refused with the reason

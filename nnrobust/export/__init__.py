@@ -262,6 +262,8 @@ add_executable(replay replay.c)  # measured states in, torques out
 target_link_libraries(replay PRIVATE nnrobust_law::nnrobust_law)
 add_executable(drive drive.c)  # the controller of a virtual robot (nnrobust serve)
 target_link_libraries(drive PRIVATE nnrobust_law::nnrobust_law)
+add_executable(time_step time_step.c)  # the step timed, its heap allocations counted
+target_link_libraries(time_step PRIVATE nnrobust_law::nnrobust_law)
 """
 
 
@@ -274,9 +276,14 @@ def _c_literal(text: str) -> str:
     return "\n".join(out) or '    ""'
 
 
+EXAMPLES = ("replay", "drive", "time_step")
+"""The example programs an export ships (example/NAME.c) and builds (bin/NAME)."""
+
+
 def example_source(name: str) -> str:
-    """An example program shipped with an export: replay.c (states in, torques out) or drive.c
-    (the controller of a virtual robot, docs/serve.md).
+    """An example program shipped with an export: replay.c (states in, torques out), drive.c
+    (the controller of a virtual robot, docs/serve.md) or time_step.c (the step timed, its heap
+    allocations counted).
     """
     return (Path(__file__).resolve().parent / name).read_text(encoding="utf-8")
 
@@ -295,7 +302,7 @@ def build_law_library(folder: Path, compiler: str, native: str | None = None) ->
     else:
         _build_native(folder, compiler, native, data, link)
     (folder / "bin").mkdir(exist_ok=True)
-    for program in ("replay", "drive"):  # the examples, built: bin/replay, bin/drive
+    for program in EXAMPLES:  # the examples, built: bin/replay, bin/drive, bin/time_step
         source = str(folder / "example" / f"{program}.c")
         _compile(
             [*compiler.split(), "-O2", "-I", str(folder / "include"), source, "-L", str(folder / "lib"),
@@ -417,8 +424,8 @@ def export_law(config, out: str | Path, *, overwrite: bool = False, build: bool 
             CMAKE_CONFIG, encoding="utf-8"
         )
         shutil.copyfile(c_header("protocol.h"), tmp / "include" / "protocol.h")
-        for example in ("replay.c", "drive.c"):
-            (tmp / "example" / example).write_text(example_source(example), encoding="utf-8")
+        for example in EXAMPLES:
+            (tmp / "example" / f"{example}.c").write_text(example_source(f"{example}.c"), encoding="utf-8")
         (tmp / "example" / "CMakeLists.txt").write_text(EXAMPLE_CMAKE, encoding="utf-8")
         (tmp / "config.toml").write_text(config.to_toml(), encoding="utf-8")
         if build:
@@ -453,3 +460,39 @@ def export_law(config, out: str | Path, *, overwrite: bool = False, build: bool 
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return info
+
+
+def time_steps(folder: str | Path, inputs, repeats: int = 3, prefix: list[str] | tuple = ()) -> dict | None:
+    """The exported law of ``folder`` stepped through ``inputs`` (rows t, q, v: recorded_steps)
+    ``repeats`` times by its bin/time_step, out of Python: steps, heap allocations per step (every
+    call to the malloc family in the process during the steps) and the step's time p50, p99 and
+    max [us]. ``prefix`` runs it under another command (``chrt -f 80``); None when that command
+    refuses (no permission for real-time scheduling).
+    """
+    import numpy as np
+
+    program = Path(folder) / "bin" / "time_step"
+    if not program.is_file():
+        raise NNRobustError(f"{program} is missing: export without --no-build to time the law")
+    with tempfile.TemporaryDirectory() as scratch:
+        data = Path(scratch) / "inputs.bin"
+        np.ascontiguousarray(inputs, dtype=np.float64).tofile(data)
+        try:
+            done = subprocess.run(
+                [*prefix, str(program), str(data), str(repeats)], capture_output=True, text=True, timeout=3600
+            )
+        except (OSError, subprocess.SubprocessError) as err:
+            raise NNRobustError(f"{program} could not be run ({err})") from err
+    if done.returncode != 0:
+        if prefix:
+            return None
+        raise NNRobustError(f"{program} failed: {done.stderr.strip()}")
+    steps, allocations, *times = (int(x) for x in done.stdout.split())
+    ns = np.array(times, dtype=float)
+    return {
+        "steps": steps,
+        "allocations_per_step": allocations / steps,
+        "p50_us": float(np.percentile(ns, 50)) / 1e3,
+        "p99_us": float(np.percentile(ns, 99)) / 1e3,
+        "max_us": float(ns.max()) / 1e3,
+    }

@@ -1,6 +1,8 @@
-/* The exported law's step, timed, with its heap allocations counted (benchmarks/export_step.py).
+/* The exported law's step, timed, with its heap allocations counted: an example shipped with every
+ * export (bin/time_step; nnrobust.export.time_steps, benchmarks/export_step.py, the study's
+ * realtime stage).
  *
- *     export_step INPUTS REPEATS
+ *     time_step INPUTS REPEATS
  *
  * INPUTS is a binary file of rows (t, q_1..q_n, v_1..v_n) in float64, a compiled run's measured
  * states. The law steps through them REPEATS times (reset between passes); each step is timed
@@ -56,12 +58,12 @@ static int by_value(const void *a, const void *b) {
 
 int main(int argc, char **argv) {
   if (argc != 3) {
-    fprintf(stderr, "usage: export_step INPUTS REPEATS\n");
+    fprintf(stderr, "usage: time_step INPUTS REPEATS\n");
     return 2;
   }
   nnrobust_law *law = nnrobust_law_create();
   if (!law) {
-    fprintf(stderr, "export_step: %s\n", nnrobust_law_last_error());
+    fprintf(stderr, "time_step: %s\n", nnrobust_law_last_error());
     return 2;
   }
   const int n = nnrobust_law_dof(law);
@@ -88,7 +90,7 @@ int main(int argc, char **argv) {
       counting = 0;
       clock_gettime(CLOCK_MONOTONIC, &b);
       if (status < 0) {
-        fprintf(stderr, "export_step: %s\n", nnrobust_law_last_error());
+        fprintf(stderr, "time_step: %s\n", nnrobust_law_last_error());
         return 1;
       }
       times[k++] = (b.tv_sec - a.tv_sec) * 1000000000L + (b.tv_nsec - a.tv_nsec);
