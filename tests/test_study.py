@@ -62,7 +62,8 @@ def test_the_report_holds_every_stage_for_every_controller(study):
     here, out, report = study
     assert report["schema"] == "nnrobust-study-report/1"
     case = report["cases"]["paper-ellipse-noisy"]
-    assert case["stages"] == {s: "finished" for s in ("tune", "validate", "certify", "falsify", "engine")}
+    stages = ("tune", "validate", "certify", "falsify", "realtime", "engine")
+    assert case["stages"] == {s: "finished" for s in stages}
     assert case["held_out"] and case["validated_on"].startswith("fresh draws")
     learned = {"learned-residual", "learned-torque"}  # trained offline: tune = false
     assert set(case["controllers"]) == {"nn", "pd", "taskpd"} | learned
@@ -79,6 +80,17 @@ def test_the_report_holds_every_stage_for_every_controller(study):
         assert "command" in entry["worst"] and isinstance(entry["worst"]["falsified"], bool)
         assert entry["engines"]["mujoco"]["rows"] == 3 and entry["engines"]["mujoco"]["certificates"]
         assert entry["step_cost_us"] > 0 and entry["backend"] in ("compiled", "hybrid", "python")
+        # out of Python: the shipped laws export and are timed; Python code and policies say why not
+        timing = entry["realtime"]
+        if name in ("nn", "pd"):
+            assert timing["exported"] and timing["allocations_per_step"] == 0, timing
+            assert 0 < timing["p50_us"] <= timing["p99_us"] <= timing["max_us"]
+            assert timing["p99_share"] == pytest.approx(timing["p99_us"] / 1000.0)
+            assert (
+                out / "cases" / "paper-ellipse-noisy" / "realtime" / f"{name}-tuned" / "law" / "bin"
+            ).is_dir()
+        else:
+            assert not timing["exported"] and "cannot be exported" in timing["reason"], timing
     names = ["nn", "pd", "taskpd", "learned-residual", "learned-torque"]
     assert [(p["a"], p["b"]) for p in case["paired"]] == [
         (a, b) for i, a in enumerate(names) for b in names[i + 1 :]

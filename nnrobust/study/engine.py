@@ -10,7 +10,10 @@ writing its own folder (docs/study.md).
    selection never saw;
 4. **falsify**: the kept settings searched for their worst plant (``nnrobust falsify``'s
    engine, ``cases/C/falsify/``);
-5. **engine** (with ``second_engine = true``): the certification draws again with MuJoCo as
+5. **realtime** (with ``realtime = true``): each kept law exported (``nnrobust export``'s
+   engine, ``cases/C/realtime/LABEL/law/``) at its setting on the first certification draw, and
+   its step timed out of Python on that run's measured states (the export's ``bin/time_step``);
+6. **engine** (with ``second_engine = true``): the certification draws again with MuJoCo as
    the plant (a sweep, ``cases/C/certify-mujoco/``), its statistics and certificates beside.
 
 The step cost of each controller is read off the certification rows (their ``wall_seconds``
@@ -357,7 +360,15 @@ def _run_case(
     else:
         out["stages"]["falsify"] = "skipped: the study has no [vary] box to search"
 
-    # 5. the certification draws again on the second engine
+    # 5. the kept laws exported and timed out of Python
+    if b["realtime"]:
+        say(f"{name}: export the kept laws and time their steps out of Python")
+        out["realtime"] = realtime(certify_spec, certify_names, here / "realtime")
+        out["stages"]["realtime"] = "finished"
+    else:
+        out["stages"]["realtime"] = "skipped: realtime = false"
+
+    # 6. the certification draws again on the second engine
     if not b["second_engine"]:
         out["stages"]["engine"] = "skipped: second_engine = false"
         return out
@@ -432,6 +443,54 @@ def step_cost(sweep, rows) -> dict:
             "backend": str(done["backend"].mode().iloc[0]) if len(done) else None,
             "runs": int(seconds.size),
         }
+    return out
+
+
+REALTIME_REPEATS = 3
+"""Passes of the timed step through the recorded run (the realtime stage)."""
+
+
+def realtime(sweep, labels: list[str], folder: Path) -> dict:
+    """Per controller (its entry ``label`` of the certification sweep): its law exported at its
+    setting on the sweep's first draw into ``folder/LABEL/law`` and stepped out of Python through
+    that run's measured states (nnrobust.export.time_steps): the step's p50, p99 and max [us],
+    heap allocations per step, the control period and p99 over it (the share of the period the law
+    takes); or why it has no export (a Python law, a learned policy, no C compiler). Stored in
+    ``folder/LABEL/timing.json`` with the SHA-256 of the experiment it timed: a rerun reads it.
+    """
+    import hashlib
+
+    from ..export import export_law, recorded_steps, time_steps
+    from ..results import write_json_atomic
+    from ..sweep.spec import base_config, draw, experiment
+
+    base, first = base_config(sweep), draw(sweep, 0)
+    out = {}
+    for label in labels:
+        config = experiment(sweep, base, first, label)
+        key = hashlib.sha256(config.to_toml().encode()).hexdigest()
+        stored = folder / label / "timing.json"
+        if stored.is_file():
+            data = json.loads(stored.read_text())
+            if data.get("experiment_sha256") == key:
+                out[label] = data["timing"]
+                continue
+        try:
+            export_law(config, folder / label / "law", overwrite=True)
+        except NNRobustError as err:
+            timing: dict = {"exported": False, "reason": str(err)}
+        else:
+            inputs, _ = recorded_steps(config)
+            timed = time_steps(folder / label / "law", inputs, REALTIME_REPEATS) or {}
+            period_us = 1e6 * config.simulation.control_period
+            timing = {
+                "exported": True,
+                **timed,
+                "period_us": period_us,
+                "p99_share": timed["p99_us"] / period_us,
+            }
+        write_json_atomic(stored, {"experiment_sha256": key, "timing": timing})
+        out[label] = timing
     return out
 
 

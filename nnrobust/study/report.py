@@ -128,6 +128,7 @@ def _controller_entry(spec: StudySpec, case: dict, c: str) -> dict:
     }
     cost = case.get("step_cost", {}).get(label, {})
     entry["step_cost_us"], entry["backend"] = cost.get("step_cost_us"), cost.get("backend")
+    entry["realtime"] = (case.get("realtime") or {}).get(label)
     engines = {"pinocchio": entry["statistics"]}
     second = (case.get("engine") or {}).get("controllers", {}).get(label)
     if second:
@@ -205,6 +206,7 @@ TABLE_COLUMNS = (
     ("seed_spread_mm", "seeds' medians [mm]"),
     ("mujoco_median_mm", "MuJoCo median e [mm]"),
     ("step_cost_us", "us / step"),
+    ("export_p99_us", "exported p99 [us]"),
 )
 
 
@@ -234,6 +236,7 @@ def table_rows(report: dict) -> list[dict]:
                     "seed_spread_mm": None if not spread else f"{1e3 * spread[0]:.4g}-{1e3 * spread[1]:.4g}",
                     "mujoco_median_mm": _median_mm(e["engines"].get("mujoco")),
                     "step_cost_us": e["step_cost_us"],
+                    "export_p99_us": (e.get("realtime") or {}).get("p99_us"),
                 }
             )
     return rows
@@ -412,6 +415,19 @@ def write_html(report: dict, folder: Path, figures: dict[str, str]) -> Path:
                 parts.append(
                     f"<li>{e(c)}: {verdict} in {w['simulations']} simulations, least margin {e(margin)}: "
                     f"<code>{e(w['command'])}</code></li>"
+                )
+        timed = {c: entry["realtime"] for c, entry in case["controllers"].items() if entry.get("realtime")}
+        if timed:
+            parts.append("</ul><h3>Out of Python (the exported law's step)</h3><ul>")
+            for c, r in timed.items():
+                parts.append(
+                    f"<li>{e(c)}: p50 {_cell(r['p50_us'])} us, p99 {_cell(r['p99_us'])} us, max "
+                    f"{_cell(r['max_us'])} us over {r['steps']} steps: p99 is "
+                    f"{_cell(100 * r['p99_share'])} % of the {_cell(r['period_us'])} us period; "
+                    f"{_cell(r['allocations_per_step'])} heap "
+                    "allocations per step</li>"
+                    if r.get("exported")
+                    else f"<li>{e(c)}: no export ({e(r.get('reason', ''))})</li>"
                 )
         parts.append("</ul><h3>Commands</h3><ul>")
         parts += [f"<li>{e(k)}: <code>{e(v)}</code></li>" for k, v in case["commands"].items()]

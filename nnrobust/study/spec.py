@@ -46,6 +46,7 @@ BUDGET_KEYS = {
     "max_rms_torque": "tuning constraint: RMS torque <= this [N m]",
     "max_saturated": "tuning constraint: saturated fraction of the steps <= this",
     "second_engine": "run the certification draws again with MuJoCo as the plant (true/false)",
+    "realtime": "export each kept law and time its step out of Python (true/false)",
 }
 """The keys of [budgets], each with what it means."""
 
@@ -61,6 +62,7 @@ DEFAULT_BUDGETS = {
     "max_rms_torque": math.inf,
     "max_saturated": 1.0,
     "second_engine": False,
+    "realtime": False,
 }
 
 ENTRY_TUNE = "tune"
@@ -145,7 +147,7 @@ def _budgets(data, where: str) -> dict:
         value = out[key]
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < 1:
             raise ConfigError(f"{where}: budgets.{key}", f"expected a number in (0, 1), got {value!r}")
-    for key in ("margin", "second_engine"):
+    for key in ("margin", "second_engine", "realtime"):
         if not isinstance(out[key], bool):
             raise ConfigError(f"{where}: budgets.{key}", f"expected true or false, got {out[key]!r}")
     for key in ("max_rms_torque", "max_saturated"):
