@@ -481,14 +481,14 @@ def realtime(sweep, labels: list[str], folder: Path) -> dict:
             timing: dict = {"exported": False, "reason": str(err)}
         else:
             inputs, _ = recorded_steps(config)
-            timed = time_steps(folder / label / "law", inputs, REALTIME_REPEATS) or {}
+            try:  # a step that fails out of Python (one that keeps memory it allocated) says why
+                timed = time_steps(folder / label / "law", inputs, REALTIME_REPEATS) or {}
+            except NNRobustError as err:
+                timed = {"reason": str(err)}
             period_us = 1e6 * config.simulation.control_period
-            timing = {
-                "exported": True,
-                **timed,
-                "period_us": period_us,
-                "p99_share": timed["p99_us"] / period_us,
-            }
+            timing = {"exported": True, **timed, "period_us": period_us}
+            if "p99_us" in timed:
+                timing["p99_share"] = timed["p99_us"] / period_us
         write_json_atomic(stored, {"experiment_sha256": key, "timing": timing})
         out[label] = timing
     return out

@@ -426,8 +426,9 @@ def write_html(report: dict, folder: Path, figures: dict[str, str]) -> Path:
                     f"{_cell(100 * r['p99_share'])} % of the {_cell(r['period_us'])} us period; "
                     f"{_cell(r['allocations_per_step'])} heap "
                     "allocations per step</li>"
-                    if r.get("exported")
-                    else f"<li>{e(c)}: no export ({e(r.get('reason', ''))})</li>"
+                    if "p99_us" in r
+                    else f"<li>{e(c)}: {'not timed' if r.get('exported') else 'no export'} "
+                    f"({e(r.get('reason', ''))})</li>"
                 )
         parts.append("</ul><h3>Commands</h3><ul>")
         parts += [f"<li>{e(k)}: <code>{e(v)}</code></li>" for k, v in case["commands"].items()]
