@@ -20,7 +20,9 @@ For each arm (the paper's, the Panda), in one process, interleaved:
   network replaced by a Python function returning zeros: the loop's own cost of handing each
   step to Python. What remains (``interference``) is the base law's and the network's steps
   slowing each other when they alternate on one core (caches, branch predictors).
-The base law is each preset's own. Ratios are within one run of this script.
+The base law is each preset's own. Ratios are within one run of this script: ``batch`` and
+``vector`` alternate ``repeats`` times, and the ratio is the median of the pairs' ratios (the
+machine's speed drifts by tens of percent between runs; the range is printed beside).
 """
 
 from __future__ import annotations
@@ -167,12 +169,21 @@ def main() -> None:
     parser.add_argument("--envs", type=int, default=32)
     parser.add_argument("--seconds", type=float, default=2.0)
     parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--repeats", type=int, default=5, help="batch/vector pairs, interleaved")
     args = parser.parse_args()
     rows = []
     for preset in ARMS:
         batch_rate(preset, 2, 0.2, args.threads)  # warm-up: imports, caches
-        batch = batch_rate(preset, args.envs, args.seconds, args.threads)
-        vector = vector_rate(preset, args.envs, args.seconds)
+        pairs = [
+            (
+                batch_rate(preset, args.envs, args.seconds, args.threads),
+                vector_rate(preset, args.envs, args.seconds),
+            )
+            for _ in range(args.repeats)
+        ]
+        batch = float(np.median([b for b, _ in pairs]))
+        vector = float(np.median([v for _, v in pairs]))
+        ratios = sorted(v / b for b, v in pairs)
         loop_step = 1.0 / batch_rate(preset, 4, args.seconds, 1)
         single = single_step(preset, args.seconds)
         with tempfile.TemporaryDirectory() as folder:
@@ -184,20 +195,23 @@ def main() -> None:
                 "threads": args.threads,
                 "batch_steps_per_second": batch,
                 "vector_steps_per_second": vector,
-                "vector_over_batch": vector / batch,
+                "vector_over_batch": float(np.median(ratios)),  # of the interleaved pairs
+                "vector_over_batch_range": [ratios[0], ratios[-1]],
+                "repeats": args.repeats,
                 "loop_step_us": 1e6 * loop_step,
                 "single_env_step_us": 1e6 * single,
                 "single_env_overhead_us": 1e6 * (single - loop_step),
                 "policy": policy,
             }
         )
-    print(f"{'arm':15s} {'batch steps/s':>14s} {'vector steps/s':>15s} {'ratio':>6s} "
+    print(f"{'arm':15s} {'batch steps/s':>14s} {'vector steps/s':>15s} {'ratio':>6s} {'(range)':>11s} "
           f"{'loop µs':>8s} {'env µs':>8s} {'overhead µs':>12s}")  # fmt: skip
     for r in rows:
+        low, high = r["vector_over_batch_range"]
         print(
             f"{r['preset']:15s} {r['batch_steps_per_second']:14.0f} {r['vector_steps_per_second']:15.0f} "
-            f"{r['vector_over_batch']:6.2f} {r['loop_step_us']:8.1f} {r['single_env_step_us']:8.1f} "
-            f"{r['single_env_overhead_us']:12.1f}"
+            f"{r['vector_over_batch']:6.2f} {f'({low:.2f}-{high:.2f})':>11s} {r['loop_step_us']:8.1f} "
+            f"{r['single_env_step_us']:8.1f} {r['single_env_overhead_us']:12.1f}"
         )
     print(
         f"\n{'arm':15s} {'law µs':>8s} {'policy µs':>10s} {'inference µs':>13s} {'overhead µs':>12s} "

@@ -35,7 +35,21 @@ Matrix Controller::pinv_factor(const Matrix &J, double &lam2) const {
   return (JJt + lam2 * Matrix::Identity(J.rows(), J.rows())).inverse();
 }
 
+TaskReference Controller::reference_kept(double t, const Vector &q, const Vector &v) const {
+  TaskReference r = reference(t, q, v);
+  kept_ = std::make_unique<TaskReference>(r);
+  kept_t_ = t;
+  kept_q_ = q;
+  kept_v_ = v;
+  return r;
+}
+
 TaskReference Controller::reference(double t, const Vector &q, const Vector &v) const {
+  if (kept_) {  // observed at this (t, q, v) just before: the same numbers (the nominal model's
+                // data too: nothing ran on it since)
+    std::unique_ptr<TaskReference> kept = std::move(kept_);
+    if (t == kept_t_ && q == kept_q_ && v == kept_v_) return std::move(*kept);
+  }
   TaskReference r{nominal.task_state(q, v), {}, {}, {}, {}};
   const TaskState &ts = r.ts;
   Vector pd, dpd, ddpd;

@@ -40,6 +40,9 @@ struct NNROBUST_API Controller {
   Matrix pinv_factor(const Matrix &J, double &lam2) const;
   // the task state and error at t (PoseTrajectory and tasks.task_error for a pose)
   TaskReference reference(double t, const Vector &q, const Vector &v) const;
+  // reference(t, q, v), kept for the law's next compute at the same (t, q, v): a learning
+  // environment observes the reference the law then computes again (SteppedLoop::observe)
+  TaskReference reference_kept(double t, const Vector &q, const Vector &v) const;
   // TaskSpaceController.compute from u_0 on: the torque of eq. (9) with these gains
   Vector eq9_torque(const Vector &q, const Vector &v, const TaskReference &r, const Matrix &J_pinv, const Vector &u0,
                     const Matrix &Kp, const Matrix &Kv, double k);
@@ -47,6 +50,12 @@ struct NNROBUST_API Controller {
   Vector nominal_friction(const Vector &v) const;
   // the law's torque, signals and next state at t from the measured (q, v) and the state z
   Output compute(double t, const Vector &q, const Vector &v, const Vector &z);
+
+ private:
+  // what reference_kept computed last, and where: taken by the next reference call there
+  mutable std::unique_ptr<TaskReference> kept_;
+  mutable double kept_t_ = 0.0;
+  mutable Vector kept_q_, kept_v_;
 };
 
 }  // namespace nnrobust

@@ -37,6 +37,9 @@ OTHERS = [
     "example_study",
 ]
 """Data files with a re-run test of their own below."""
+TIMINGS = ["learning_env"]
+"""Timings of this machine quoted in prose: QUOTED_FIGURES checks each quote against its file (a
+rerun measures the machine it runs on: it gives other numbers, not the same)."""
 
 
 @pytest.mark.parametrize("document", render_tables.DOCUMENTS)
@@ -49,7 +52,7 @@ def test_every_data_file_has_a_table():
     text = "".join((ROOT / d).read_text() for d in render_tables.DOCUMENTS)
     for name, renderer in render_tables.RENDERERS.items():
         assert f"<!-- table: {name} -->" in text, name
-    assert {p.stem for p in render_tables.DATA.glob("*.json")} == set(DATA_FILES + STUDIES + OTHERS)
+    assert {p.stem for p in render_tables.DATA.glob("*.json")} == set(DATA_FILES + STUDIES + OTHERS + TIMINGS)
 
 
 @pytest.mark.parametrize("name", STUDIES)
@@ -1200,6 +1203,34 @@ QUOTED_FIGURES: list[tuple] = [
         1e3,
     ),
     ("README.md", r"against the NN's ([\d.]+) mm", "example_study", _example_median("nn"), 1e3),
+    (
+        "docs/learning.md",
+        r"at ([\d.]+) of the batch's steps per\nsecond on the paper's arm",
+        "learning_env",
+        lambda d: d["rows"][0]["vector_over_batch"],
+        1.0,
+    ),
+    (
+        "docs/learning.md",
+        r"second on the paper's arm and ([\d.]+) on the Panda",
+        "learning_env",
+        lambda d: d["rows"][1]["vector_over_batch"],
+        1.0,
+    ),
+    (
+        "docs/learning.md",
+        r"costs ([\d.]+) µs \(paper arm\)",
+        "learning_env",
+        lambda d: d["rows"][0]["single_env_overhead_us"],
+        1.0,
+    ),
+    (
+        "docs/learning.md",
+        r"and ([\d.]+) µs\n\(Panda\) more",
+        "learning_env",
+        lambda d: d["rows"][1]["single_env_overhead_us"],
+        1.0,
+    ),
     # the README's training budget: test_the_example_studys_learned_worst_plant_reruns_... checks it
     ("README.md", r"\(`examples/train_policy.py`, (\d+) simulated seconds", None, None, 1.0),
 ]

@@ -78,12 +78,22 @@ def _applied(env, action, steps=None):
             return np.array(out), info
 
 
-@pytest.mark.parametrize("law", ["nn", "pd", "slotine-li"])
-def test_a_zero_residual_is_the_base_law_compiled_run(law):
+@pytest.mark.parametrize(
+    "preset, law",
+    [
+        ("paper-ellipse", "nn"),
+        ("paper-ellipse", "pd"),
+        ("paper-ellipse", "slotine-li"),
+        ("panda-ellipse", "slotine-li"),
+    ],
+)
+def test_a_zero_residual_is_the_base_law_compiled_run(preset, law):
     """Residual mode with a = 0 is the base law's own run, bit for bit: the same sample's
-    experiment run by run_experiment on the compiled loop gives the same torques and metrics."""
-    env = ArmEnv("paper-ellipse", action="residual", controller=law, vary=BOX, duration=0.3)
-    tau, info = _applied(env, np.zeros(3))
+    experiment run by run_experiment on the compiled loop gives the same torques and metrics
+    (the environment's observation hands its task reference to the law's next step: the same
+    numbers, the Pinocchio nominal model's data included)."""
+    env = ArmEnv(preset, action="residual", controller=law, vary=BOX, duration=0.3)
+    tau, info = _applied(env, np.zeros(env.episodes.n))
     spec = env.episodes.spec
     config = experiment(spec, env.episodes.base, draw(spec, 0), law).replace(
         simulation={"duration": 0.3, "backend": "compiled"}

@@ -71,6 +71,7 @@ class ArmVectorEnv(gym.vector.VectorEnv):
         self.action_space = gym.vector.utils.batch_space(self.single_action_space, num_envs)
         self.observation_space = gym.vector.utils.batch_space(self.single_observation_space, num_envs)
         self._pool = compiled._module().StepPool(threads)
+        self._step_loops = compiled._module().step_loops
         self._reward = self.episodes.reward_spec(self.weights)
         self._rewards = np.zeros(num_envs)
         self._loops: list = [None] * num_envs
@@ -128,8 +129,6 @@ class ArmVectorEnv(gym.vector.VectorEnv):
         """One control period of every running episode; an episode that ended at the previous
         step restarts now (next-step autoreset).
         """
-        from .. import compiled
-
         N = self.num_envs
         if self._runs[0] is None:
             raise NNRobustError("ArmVectorEnv.step: call reset() first")
@@ -143,7 +142,7 @@ class ArmVectorEnv(gym.vector.VectorEnv):
         restart = np.flatnonzero(self._ended) if self._ended.any() else ()
         for j in restart:
             self._start(int(j))
-        step = compiled._module().step_loops
+        step = self._step_loops
         if len(restart) == 0:  # every episode runs on: the arrays are stepped in place
             index = self._every
             step(self._pool, self._loops, self._reward, actions, self._sizes, self._obs,
@@ -158,7 +157,7 @@ class ArmVectorEnv(gym.vector.VectorEnv):
                  np.ascontiguousarray(actions[index]), np.ascontiguousarray(self._sizes[index]), obs,
                  applied, done, running)  # fmt: skip
             self._obs[index], self._applied[index], rewards[index] = obs, applied, done
-        for j in index[~running]:
+        for j in () if running.all() else index[~running]:
             setup, loop, spec, episode, started = self._runs[j]
             diverged = loop.status == "diverged"
             terminated[j], truncated[j] = diverged, not diverged
