@@ -37,7 +37,7 @@ OTHERS = [
     "example_study",
 ]
 """Data files with a re-run test of their own below."""
-TIMINGS = ["learning_env"]
+TIMINGS = ["learning_env", "study_overhead"]
 """Timings of this machine quoted in prose: QUOTED_FIGURES checks each quote against its file (a
 rerun measures the machine it runs on: it gives other numbers, not the same)."""
 
@@ -383,6 +383,12 @@ def _example_median(controller: str):
 
 
 PT = "falsify_panda_tuned_noisy"
+
+
+def _stage_wall(words: str):
+    """The wall seconds of the study stages whose line holds ``words`` (study_overhead.json)."""
+    return lambda d: sum(seconds for line, seconds in d["stage_wall_seconds"] if words in line)
+
 
 QUOTED_FIGURES: list[tuple] = [
     ("README.md", r"the tuned NN keeps only ([\d.]+)\s+of it", PT, _margin("nn-tuned"), 1.0),
@@ -1229,6 +1235,70 @@ QUOTED_FIGURES: list[tuple] = [
         r"and ([\d.]+) µs\n\(Panda\) more",
         "learning_env",
         lambda d: d["rows"][1]["single_env_overhead_us"],
+        1.0,
+    ),
+    (
+        "docs/study.md",
+        r"the study took ([\d.]+) s of wall time",
+        "study_overhead",
+        lambda d: d["wall_seconds"],
+        1.0,
+    ),
+    (
+        "docs/study.md",
+        r"its\nsimulations (\d+) worker-seconds",
+        "study_overhead",
+        lambda d: sum(v for k, v in d["simulation_seconds"].items() if k != "runs_without_their_own_time"),
+        1.0,
+    ),
+    (
+        "docs/study.md",
+        r"so its cost beyond its simulations is\n([\d.]+) %",
+        "study_overhead",
+        lambda d: d["overhead"],
+        100.0,
+    ),
+    (
+        "docs/study.md",
+        r"falsifications' (\d+) runs",
+        "study_overhead",
+        lambda d: d["simulation_seconds"]["runs_without_their_own_time"],
+        1.0,
+    ),
+    (
+        "docs/study.md",
+        r"writes\nits report in ([\d.]+) s",
+        "study_overhead",
+        lambda d: d["rerun_seconds"],
+        1.0,
+    ),
+    (
+        "docs/study.md",
+        r"\((\d+) s of wall time for \d+ worker",
+        "study_overhead",
+        _stage_wall("falsify"),
+        1.0,
+    ),
+    (
+        "docs/study.md",
+        r"wall time for (\d+) worker-seconds of simulation: its margin",
+        "study_overhead",
+        lambda d: d["simulation_seconds"]["falsify"],
+        1.0,
+    ),  # fmt: skip
+    ("docs/study.md", r"the tunings \((\d+) s for", "study_overhead", _stage_wall("tune"), 1.0),
+    (
+        "docs/study.md",
+        r"the tunings \(\d+ s for (\d+)\)",
+        "study_overhead",
+        lambda d: d["simulation_seconds"]["tune"],
+        1.0,
+    ),
+    (
+        "docs/study.md",
+        r"the realtime stage\) takes (\d+) s",
+        "study_overhead",
+        _stage_wall("export the kept laws"),
         1.0,
     ),
     # the README's training budget: test_the_example_studys_learned_worst_plant_reruns_... checks it
