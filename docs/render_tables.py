@@ -30,6 +30,7 @@ DOCUMENTS = (
     "docs/engines.md",
     "docs/falsification.md",
     "docs/learning.md",
+    "docs/serve.md",
 )
 TABLE = re.compile(r"(<!-- table: (?P<name>[\w-]+) -->\n)(?P<body>.*?)(<!-- /table -->)", re.S)
 
@@ -784,6 +785,40 @@ def path_kinds() -> str:
     return "\n".join(lines) + "\n\nMade from the paths' declarations (`PathKind`, nnrobust/trajectories/).\n"
 
 
+def serve_misses() -> str:
+    """docs/serve.md: the virtual robot at 1 kHz with an export's driver in another process."""
+    data = _data("serve_misses")
+
+    def latency(r):
+        lat = r["latency_us"]
+        return " / ".join(
+            "–" if lat[k] is None else f"{lat[k]:,.0f}".replace(",", " ") for k in ("p50", "p99", "max")
+        )
+
+    return _markdown(
+        [
+            (
+                "arm",
+                "l",
+                lambda r: {"paper-ellipse": "paper arm", "panda-ellipse": "Panda"}.get(r["arm"], r["arm"]),
+            ),
+            ("load", "l", _text("load")),
+            ("scheduling", "l", lambda r: "SCHED_FIFO" if "FIFO" in r["scheduling"] else r["scheduling"]),
+            ("periods", "r", _text("periods")),
+            ("deadline misses", "r", _text("misses")),
+            ("round trip p50 / p99 / max [µs]", "l", latency),
+            ("robot lateness p99 [µs]", "r", lambda r: f"{r['lateness_us']['p99']:.0f}"),
+            (
+                "tracking, served / simulated",
+                "r",
+                lambda r: "–" if r["tracking"] is None else f"{r['tracking']:.4f}",
+            ),
+        ],
+        data["rows"],
+        f"python benchmarks/serve_misses.py --seconds {data['seconds']:g} --json docs/data/serve_misses.json",
+    )
+
+
 RENDERERS = {
     "registered-laws": registered_laws,
     "paper-kinds": paper_kinds,
@@ -810,6 +845,7 @@ RENDERERS = {
     "tuned-settings": tuned_settings,
     "tuned-verdicts": tuned_verdicts,
     "example-study": example_study,
+    "serve-misses": serve_misses,
 }
 
 

@@ -37,7 +37,7 @@ OTHERS = [
     "example_study",
 ]
 """Data files with a re-run test of their own below."""
-TIMINGS = ["learning_env", "study_overhead"]
+TIMINGS = ["learning_env", "study_overhead", "serve_misses"]
 """Timings of this machine quoted in prose: QUOTED_FIGURES checks each quote against its file (a
 rerun measures the machine it runs on: it gives other numbers, not the same)."""
 
@@ -383,6 +383,18 @@ def _example_median(controller: str):
 
 
 PT = "falsify_panda_tuned_noisy"
+
+
+def _serve(arm: str, load: str, fifo: bool, value):
+    """``value`` of the row of serve_misses.json for this arm, load and scheduling."""
+
+    def pick(d):
+        (row,) = [
+            r for r in d["rows"] if (r["arm"], r["load"], "FIFO" in r["scheduling"]) == (arm, load, fifo)
+        ]
+        return value(row)
+
+    return pick
 
 
 def _stage_wall(words: str):
@@ -1301,6 +1313,118 @@ QUOTED_FIGURES: list[tuple] = [
         _stage_wall("export the kept laws"),
         1.0,
     ),
+    (
+        "docs/serve.md",
+        r"with (\d+) missed periods of\s+60 000",
+        "serve_misses",
+        _serve("paper-ellipse", "loaded", False, lambda r: r["misses"]),
+        1.0,
+    ),  # fmt: skip
+    (
+        "docs/serve.md",
+        r"The Panda's tracking moved most where it missed least: (\d+) misses",
+        "serve_misses",
+        _serve("panda-ellipse", "loaded", True, lambda r: r["misses"]),
+        1.0,
+    ),  # fmt: skip
+    (
+        "docs/serve.md",
+        r"both cores busy gave ([\d.]+) % more RMS error",
+        "serve_misses",
+        _serve("panda-ellipse", "loaded", True, lambda r: r["tracking"] - 1),
+        100.0,
+    ),  # fmt: skip
+    (
+        "docs/serve.md",
+        r"while (\d+) misses without it",
+        "serve_misses",
+        _serve("panda-ellipse", "loaded", False, lambda r: r["misses"]),
+        1.0,
+    ),  # fmt: skip
+    (
+        "docs/serve.md",
+        r"gave ([\d.]+) % less\.",
+        "serve_misses",
+        _serve("panda-ellipse", "loaded", False, lambda r: 1 - r["tracking"]),
+        100.0,
+    ),  # fmt: skip
+    (
+        "docs/serve.md",
+        r"cut the misses from \d+ to (\d+) \(paper arm\)",
+        "serve_misses",
+        _serve("paper-ellipse", "loaded", True, lambda r: r["misses"]),
+        1.0,
+    ),  # fmt: skip
+    (
+        "docs/serve.md",
+        r"p99 from ([\d.]+) and [\d.]+ ms",
+        "serve_misses",
+        _serve("paper-ellipse", "loaded", False, lambda r: r["latency_us"]["p99"]),
+        1e-3,
+    ),  # fmt: skip
+    (
+        "docs/serve.md",
+        r"p99 from [\d.]+ and ([\d.]+) ms",
+        "serve_misses",
+        _serve("panda-ellipse", "loaded", False, lambda r: r["latency_us"]["p99"]),
+        1e-3,
+    ),  # fmt: skip
+    (
+        "docs/serve.md",
+        r"ms to ([\d.]+) and [\d.]+ ms\.",
+        "serve_misses",
+        _serve("paper-ellipse", "loaded", True, lambda r: r["latency_us"]["p99"]),
+        1e-3,
+    ),  # fmt: skip
+    (
+        "docs/serve.md",
+        r"ms to [\d.]+ and ([\d.]+) ms\.",
+        "serve_misses",
+        _serve("panda-ellipse", "loaded", True, lambda r: r["latency_us"]["p99"]),
+        1e-3,
+    ),  # fmt: skip
+    (
+        "docs/serve.md",
+        r"\((\d+) to \d+ misses on\s+the paper arm",
+        "serve_misses",
+        _serve("paper-ellipse", "idle", False, lambda r: r["misses"]),
+        1.0,
+    ),  # fmt: skip
+    (
+        "docs/serve.md",
+        r"\(\d+ to (\d+) misses on\s+the paper arm",
+        "serve_misses",
+        _serve("paper-ellipse", "idle", True, lambda r: r["misses"]),
+        1.0,
+    ),  # fmt: skip
+    (
+        "docs/serve.md",
+        r"the paper arm, (\d+) to \d+ on the Panda\)",
+        "serve_misses",
+        _serve("panda-ellipse", "idle", False, lambda r: r["misses"]),
+        1.0,
+    ),  # fmt: skip
+    (
+        "docs/serve.md",
+        r"the paper arm, \d+ to (\d+) on the Panda\)",
+        "serve_misses",
+        _serve("panda-ellipse", "idle", True, lambda r: r["misses"]),
+        1.0,
+    ),  # fmt: skip
+    (
+        "docs/serve.md",
+        r"lateness p99 \(STATE k sent\s+after t_k\) is ([\d.]+) to",
+        "serve_misses",
+        lambda d: min(r["lateness_us"]["p99"] for r in d["rows"]),
+        1e-3,
+    ),  # fmt: skip
+    (
+        "docs/serve.md",
+        r"after t_k\) is [\d.]+ to ([\d.]+) ms",
+        "serve_misses",
+        lambda d: max(r["lateness_us"]["p99"] for r in d["rows"]),
+        1e-3,
+    ),  # fmt: skip
     # the README's training budget: test_the_example_studys_learned_worst_plant_reruns_... checks it
     ("README.md", r"\(`examples/train_policy.py`, (\d+) simulated seconds", None, None, 1.0),
 ]
