@@ -31,7 +31,7 @@ from .controllers import (
     DampedPseudoInverse,
 )
 from .controllers.build import build_context, build_controller
-from .exceptions import ConfigError, ModelMismatch
+from .exceptions import ConfigError, ModelMismatch, NNRobustError
 from .ik import reach, seed_configuration, solve_ik
 from .model import (
     DynamicsModel,
@@ -645,3 +645,41 @@ def likely_cause(setup: Setup, trace) -> str:
             "actuator limits (plant.torque_limits = 'none')"
         )
     return "likely cause: the closed loop is unstable for these gains and this model error"
+
+
+def compare_twins(config, cpp: str, python: str, params: dict | None = None) -> dict:
+    """The twin test of a law given in C++ and in Python (docs/extending.md#a-law-in-c): the
+    experiment ``config`` (an ExperimentConfig) run with ``controller.class = cpp``
+    ("file.cpp:Class", on the compiled loop) and with ``python`` ("file.py:Class", on the hybrid
+    loop), both with ``params`` (default: the experiment's ``controller.params``). Returns the
+    largest differences over the run: ``tau_cmd`` (over the largest commanded torque, at least
+    1), ``q`` [rad or m], and each signal both declare (over its largest magnitude, at least 1),
+    with each run's backend and status. Twins agree to rounding (1e-9 here for
+    examples/controllers/task_pd.cpp and examples/custom_controller.py).
+    """
+    runs = []
+    for cls in (cpp, python):
+        controller: dict = {"kind": "custom", "class": cls}
+        if params is not None:
+            controller["params"] = params
+        runs.append(run_experiment(config.replace(controller=controller)))
+    ours, theirs = runs
+    if ours.tau_cmd is None or theirs.tau_cmd is None or ours.tau_cmd.shape != theirs.tau_cmd.shape:
+        raise NNRobustError(
+            f"the twins' runs differ in length ({ours.status}: {len(ours.t)} steps; {theirs.status}: "
+            f"{len(theirs.t)} steps)"
+        )
+
+    def relative(a, b) -> float:
+        return float(np.max(np.abs(a - b), initial=0.0) / max(1.0, float(np.max(np.abs(b), initial=0.0))))
+
+    return {
+        "backends": (ours.backend, theirs.backend),
+        "statuses": (ours.status, theirs.status),
+        "tau_cmd": relative(ours.tau_cmd, theirs.tau_cmd),
+        "q": float(np.max(np.abs(ours.q - theirs.q), initial=0.0)),
+        "signals": {
+            name: relative(np.asarray(ours.signals[name]), np.asarray(theirs.signals[name]))
+            for name in ours.signals.keys() & theirs.signals.keys()
+        },
+    }

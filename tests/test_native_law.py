@@ -51,7 +51,7 @@ def _config(preset, cls, **simulation):
 
 @pytest.mark.parametrize("preset", ["paper-ellipse-noisy", "panda-ellipse"])
 def test_the_cpp_law_runs_compiled_and_is_its_python_twin(preset, tmp_path):
-    from nnrobust.native_law import compare_twins
+    from nnrobust.experiment import compare_twins
 
     config = load_preset(preset).replace(simulation={"duration": 1.0})
     twins = compare_twins(config, f"{CPP}:TaskPD", f"{PY}:TaskPD", PARAMS)
