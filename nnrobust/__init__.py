@@ -59,19 +59,11 @@ _EXPORTS = {
 __all__ = sorted(_EXPORTS)
 
 
-def _version() -> str:
-    """The one version string, pyproject.toml's as installed (read on first use: it costs 30 ms)."""
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        return version("nnrobust")
-    except PackageNotFoundError:  # a source tree that was never installed
-        return "0+unknown"
-
-
 def __getattr__(name: str):
     if name == "__version__":
-        globals()["__version__"] = value = _version()
+        from .package_version import package_version
+
+        globals()["__version__"] = value = package_version()
         return value
     if name in _EXPORTS:
         value = getattr(importlib.import_module(_EXPORTS[name], __name__), name)

@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 
 from .arrays import joint_vector
-from .controllers.pseudoinverse import DampedPseudoInverse
 from .exceptions import ConfigError
 from .model.base import DynamicsModel
 from .model.pinocchio_model import PinocchioModel
 from .model.tasks import split_pose, task_error
+from .small_linalg import DampedPseudoInverse
 
 
 def solve_ik(

@@ -1,34 +1,13 @@
-"""Shipped experiments: one TOML file each in ``nnrobust/preset_files``."""
+"""Shipped experiments: one TOML file each in ``nnrobust/preset_files`` (found by
+:mod:`nnrobust.config.shipped`), loaded as configurations.
+"""
 
 from __future__ import annotations
 
-from pathlib import Path
-
 from .config import ExperimentConfig, load_config
-from .exceptions import ConfigError
+from .config.shipped import PRESET_DIR, preset_names, preset_path, presets_hint
 
-PRESET_DIR = Path(__file__).resolve().parent / "preset_files"
-
-
-def preset_names() -> list[str]:
-    """Names of the shipped presets."""
-    return sorted(p.stem for p in PRESET_DIR.glob("*.toml"))
-
-
-def presets_hint(name: object) -> str:
-    """'did you mean X? ' for a name close to a preset's (a typo), then the presets."""
-    import difflib
-
-    names = preset_names()
-    close = difflib.get_close_matches(name, names, n=1) if isinstance(name, str) else []
-    return (f"did you mean {close[0]!r}? " if close else "") + f"presets: {', '.join(names)}"
-
-
-def preset_path(name: str) -> Path:
-    """The TOML file of a preset."""
-    if name not in preset_names():
-        raise ConfigError("preset", f"unknown preset {name!r}; {presets_hint(name)}")
-    return PRESET_DIR / f"{name}.toml"
+__all__ = ["PRESET_DIR", "load_preset", "preset_names", "preset_path", "presets_hint"]
 
 
 def load_preset(name: str) -> ExperimentConfig:

@@ -29,19 +29,15 @@ FLOORS = {
     "rooms": ("controllers", "plant", "subtasks", "trajectories", "user_parts", "user_code", "native_law"),
     "model": ("model", "ik"),
     "leaf": ("exceptions", "numeric_limits", "arrays", "search_coordinates", "small_linalg", "kinds",
-             "progress", "signals",
+             "package_version", "progress", "signals",
              "forked", "twins", "shipped_files", "_loop", "_floor_loop"),
 }  # fmt: skip
 ORDER = list(FLOORS)[::-1]  # leaf first
 FLOOR_OF = {unit: ORDER.index(floor) for floor, units in FLOORS.items() for unit in units}
 ALLOWED = {("results", "plots")}
 
-KNOWN = {
-    # (importing unit, imported unit): places. The rooms' builders take the whole configuration
-    # (issue 36 removes these room by room).
-    ("ik", "controllers"): 1,
-    ("config", "presets"): 1,
-    ("sweep", "__init__"): 1,  # nnrobust.__version__, to check a remote worker's
+KNOWN: dict[tuple[str, str], int] = {
+    # (importing unit, imported unit): places. Empty: add none.
 }
 
 

@@ -342,7 +342,7 @@ def _file_data(path: Path, text: str, depth: int = 0, read: list[Path] | None = 
         if not base_path.is_file():
             raise ConfigError(f"{path}: base", f"{base!r} is not a file in {folder}")
     else:
-        from ..presets import preset_path
+        from .shipped import preset_path
 
         try:
             base_path = preset_path(base)

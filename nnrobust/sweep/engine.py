@@ -24,6 +24,7 @@ from pathlib import Path
 
 from ..config import ExperimentConfig
 from ..exceptions import ConfigError, NNRobustError
+from ..package_version import package_version
 from ..signals import STOP_SIGNALS, check_interrupt, signals_as_interrupt
 from ..verdicts import FLAGS
 from .spec import SweepSpec, base_config, base_values, draw, experiment, study_inputs
@@ -415,20 +416,19 @@ def check_workers(client, address: str) -> None:
     and the command waited for a worker that never came; now one line names the worker and
     what it lacks. The probe is a builtin's call, which any Python worker can unpickle.
     """
-    import nnrobust
-
+    version = package_version()
     answers = client.run(eval, WORKER_PROBE, on_error="return")
     for worker, answer in sorted(answers.items()):
         if isinstance(answer, BaseException):
-            hint = f"; install nnrobust {nnrobust.__version__} where the workers run"
+            hint = f"; install nnrobust {version} where the workers run"
             raise NNRobustError(
                 f"--scheduler {address}: worker {worker} cannot import nnrobust: "
                 f"{type(answer).__name__}: {str(answer)[:200]}{hint * isinstance(answer, ImportError)}"
             )
-        if answer != nnrobust.__version__:
+        if answer != version:
             raise NNRobustError(
                 f"--scheduler {address}: worker {worker} has nnrobust {str(answer)[:40]}, this command "
-                f"{nnrobust.__version__}; give the workers the same version (results depend on it)"
+                f"{version}; give the workers the same version (results depend on it)"
             )
 
 
