@@ -21,6 +21,7 @@ import pinocchio as pin
 from .config import (
     MAX_SUBSTEPS,
     ExperimentConfig,
+    disturbance_kind,
     nominal_kind,
     provenance_header,
     step_rotation_limit,
@@ -38,7 +39,7 @@ from .model import (
     PinocchioModel,
     load_robot,
 )
-from .model.nominal import build_nominal_model
+from .model.nominal import build_nominal_model, nominal_friction
 from .model.tasks import pose_vector, split_pose
 from .plant import (
     Plant,
@@ -97,7 +98,7 @@ def initial_state(
     q0 = reach(
         robot,
         target,
-        seed_configuration(config, robot),
+        seed_configuration(sim.q_seed, robot),
         "x_d(0) + offset",
         f"trajectory.{path_key(config.trajectory)}",
     )
@@ -320,7 +321,7 @@ def build_nominal(config: ExperimentConfig, robot: PinocchioModel) -> DynamicsMo
     the true model (armature and payload included) for computed-torque control
     (:func:`nnrobust.model.nominal.build_nominal_model`).
     """
-    exact = true_model(config, robot).model if config.controller.kind == "computed-torque" else None
+    exact = true_model(config.plant, robot).model if config.controller.kind == "computed-torque" else None
     return build_nominal_model(config.nominal, robot, nominal_kind(config), exact)
 
 
@@ -359,17 +360,38 @@ def build(config: ExperimentConfig) -> Setup:
             stacklevel=2,
         )
     check_memory(config, robot.nq, robot.m)
-    trajectory = build_trajectory(config, robot)
-    plant = build_plant(config, robot)
+    sim = config.simulation
+    trajectory = build_trajectory(config.trajectory, robot, sim.q_seed)
+    plant = build_plant(
+        config.plant,
+        config.sensing,
+        robot,
+        disturbance_kind=disturbance_kind(config),
+        period=sim.control_period,
+        duration=sim.duration,
+    )
     nominal = build_nominal(config, robot)
-    criterion = build_criterion(config, robot)
+    criterion = build_criterion(config.subtasks, robot)
     q0, v0 = initial_state(config, robot, trajectory)
     check_mass_matrix(robot, q0)
     substeps = plant_step(config, plant, q0)
     stop_rings(plant, q0)
-    build_engine(config, plant, substeps)
-    context = build_context(config, robot, nominal, trajectory, criterion, plant, q0)
-    controller = build_controller(config, robot, nominal, trajectory, criterion, plant.friction, context)
+    build_engine(config.plant, plant, sim.control_period, substeps)
+    context = build_context(
+        config.controller,
+        robot,
+        nominal,
+        trajectory,
+        criterion,
+        plant,
+        q0,
+        period=sim.control_period,
+        nominal_friction=nominal_friction(config.nominal, robot.nq),
+        trajectory_key="trajectory.class" if config.trajectory.kind == "custom" else "trajectory.kind",
+    )
+    controller = build_controller(
+        config.controller, config.nn, robot, nominal, trajectory, criterion, plant.friction, context
+    )
     check_memory(config, robot.nq, robot.m, controller)  # with the law's own state and signals
     check_workspace(config, robot, trajectory, q0)
     return Setup(config, robot, plant, nominal, trajectory, criterion, controller, q0, v0, context, substeps)

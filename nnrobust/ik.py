@@ -57,10 +57,10 @@ def finite_limits(values: np.ndarray) -> np.ndarray:
     return np.where(np.isfinite(values) & (np.abs(values) < 1e6), values, np.copysign(np.inf, values))
 
 
-def seed_configuration(config, robot: PinocchioModel) -> np.ndarray:
+def seed_configuration(q_seed: list[float] | None, robot: PinocchioModel) -> np.ndarray:
     """``simulation.q_seed`` (default: mid-range), refused outside the joint limits."""
     lower, upper = robot.lower_limits, robot.upper_limits
-    seed = joint_vector("simulation.q_seed", config.simulation.q_seed, robot.nq, robot.mid_configuration)
+    seed = joint_vector("simulation.q_seed", q_seed, robot.nq, robot.mid_configuration)
     outside = np.flatnonzero((seed < lower) | (seed > upper))
     if outside.size:
         i = int(outside[0])

@@ -274,8 +274,8 @@ def test_one_of_the_papers_kinds_is_one_declaration(monkeypatch):
     built = []
 
     def builder(parts):
-        c = parts.config.controller
-        built.append(parts.config.controller.kind)
+        c = parts.controller
+        built.append(parts.controller.kind)
         return eq9_law(parts, SlidingModeCompensator(np.diag(c.Kp), np.diag(c.Kv), 2.0 * c.sliding_gain, 0.1))
 
     kind = PaperKind(

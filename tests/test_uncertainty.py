@@ -100,7 +100,9 @@ def test_configuration_builds_the_perturbed_nominal_and_scaled_plant():
     nominal = build_nominal(config, robot)
     expected = perturb_inertias(robot.model, relative_error=0.2, seed=7)
     assert all(nominal.model.inertias[j] == expected.inertias[j] for j in range(1, robot.model.njoints))
-    plant = build_plant(config, robot)
+    plant = build_plant(
+        config.plant, config.sensing, robot, disturbance_kind="scaled", period=1e-3, duration=1.0
+    )
     np.testing.assert_allclose(plant.friction.coulomb, 0.02 * torque_scale(robot))
 
 

@@ -5,10 +5,15 @@ of a checked configuration). Everything is importable from here.
 """
 
 from ..controllers.registry import controller_kinds, shipped_laws  # the rooms' own rules, re-exported
+from ..controllers.section import CONTROLLER_KINDS, EQ9_KINDS, ControllerConfig, NNConfig, is_eq9
+from ..model.section import NominalConfig, RobotConfig
 from ..numeric_limits import MAX_CENTERS, MAX_GAIN, MAX_PINV, RANGE_LIMITS
+from ..plant.section import PlantConfig, SensingConfig
 from ..subtasks.registry import default_criteria
+from ..subtasks.section import SubtaskConfig
 from ..trajectories.piecewise import MAX_WAYPOINTS, MIN_MOVE_TIME  # the paths' own limits
 from ..trajectories.registry import path_key
+from ..trajectories.section import MAX_PATH_EXTENT, MAX_PATH_RATE, TRAJECTORY_KINDS, TrajectoryConfig
 from .checks import (
     CLASS_PATTERN,
     FILLED_LISTS,
@@ -27,25 +32,12 @@ from .checks import (
 )
 from .resolve import resolve
 from .schema import (
-    CONTROLLER_KINDS,
-    EQ9_KINDS,
     KEY_ALIASES,
-    MAX_PATH_EXTENT,
-    MAX_PATH_RATE,
-    TRAJECTORY_KINDS,
     USER_PARTS,
-    ControllerConfig,
     ExperimentConfig,
-    NNConfig,
-    NominalConfig,
-    PlantConfig,
-    RobotConfig,
-    SensingConfig,
     SimulationConfig,
-    SubtaskConfig,
-    TrajectoryConfig,
     controller_label,
-    is_eq9,
+    disturbance_kind,
     nominal_kind,
     step_rotation_limit,
     task_rows,
@@ -111,6 +103,7 @@ __all__ = [
     "check_dotted_key",
     "controller_kinds",
     "controller_label",
+    "disturbance_kind",
     "default_criteria",
     "dump_toml",
     "from_dict",

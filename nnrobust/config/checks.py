@@ -10,6 +10,7 @@ import os
 import re
 
 from ..controllers.registry import controller_kinds
+from ..controllers.section import ControllerConfig, is_eq9
 from ..exceptions import ConfigError
 from ..model.tasks import TASK_KINDS
 from ..numeric_limits import MAX_PAYLOAD
@@ -17,19 +18,9 @@ from ..plant.disturbance import DISTURBANCE_KINDS
 from ..plant.mujoco_engine import ENGINES, MUJOCO_INTEGRATORS
 from ..subtasks.registry import default_criteria
 from ..trajectories import PATH_KINDS, path_key
+from ..trajectories.section import MAX_PATH_EXTENT, MAX_PATH_RATE, TRAJECTORY_KINDS, TrajectoryConfig
 from .resolve import GAIN_KEYS, full_gain
-from .schema import (
-    MAX_PATH_EXTENT,
-    MAX_PATH_RATE,
-    TRAJECTORY_KINDS,
-    USER_PARTS,
-    ControllerConfig,
-    ExperimentConfig,
-    TrajectoryConfig,
-    _user_part,
-    is_eq9,
-    nominal_kind,
-)
+from .schema import USER_PARTS, ExperimentConfig, _user_part, nominal_kind
 
 
 def _check_extents(tc: TrajectoryConfig) -> None:

@@ -1,17 +1,18 @@
-"""How an experiment builds its controller from ``[controller]`` and ``[nn]``: one of the paper's
-kinds (eq. 9 with its robust terms, the PD; each declared beside its code, :class:`PaperKind`), a
-registered law (nnrobust/controllers/laws/) or a user's class, each from the
-:class:`ControllerContext` it is handed.
+"""How an experiment builds its controller from its own sections, ``[controller]`` and ``[nn]``
+(:mod:`.section`): one of the paper's kinds (eq. 9 with its robust terms, the PD; each declared
+beside its code, :class:`PaperKind`), a registered law (nnrobust/controllers/laws/) or a user's
+class, each from the :class:`ControllerContext` it is handed. What the builders take beyond their
+sections is chosen by the composition root (:func:`nnrobust.experiment.build`): the control
+period, the nominal model and its friction, the trajectory, the criterion, the plant's limits.
 """
 
 from __future__ import annotations
 
 import copy
-from typing import TYPE_CHECKING
+import dataclasses
 
 import numpy as np
 
-from ..arrays import joint_vector
 from ..exceptions import ConfigError
 from ..model import DynamicsModel, PinocchioModel
 from ..plant import Friction, Plant
@@ -22,55 +23,49 @@ from .basis import AdditiveRBFBasis, input_box
 from .custom import build_custom
 from .pseudoinverse import DampedPseudoInverse
 from .registry import KindParts, controller_kinds, paper_kind, registered_law
-
-if TYPE_CHECKING:
-    from ..config import ExperimentConfig
+from .section import ControllerConfig, NNConfig
 
 
-def build_basis(config: ExperimentConfig, robot: PinocchioModel, m: int) -> AdditiveRBFBasis:
+def build_basis(nn: NNConfig, robot: PinocchioModel, m: int) -> AdditiveRBFBasis:
     """phi(s) over [q, q'] (joint limits, +-velocity_range) or [e, e'] (+-error_range)."""
-    nn = config.nn
     low, high = input_box(
         nn.basis_input, robot.lower_limits, robot.upper_limits, nn.velocity_range, nn.error_range, m
     )
     return AdditiveRBFBasis(low, high, nn.centers, nn.width, nn.bias)
 
 
-def build_nominal_friction(config: ExperimentConfig, n: int) -> Friction:
-    """F-hat as the nominal section declares it, compensated with controller.coulomb_smoothing."""
-    return Friction(
-        joint_vector("nominal.viscous_friction", config.nominal.viscous_friction, n, np.zeros(n)),
-        joint_vector("nominal.coulomb_friction", config.nominal.coulomb_friction, n, np.zeros(n)),
-        config.controller.coulomb_smoothing,
-    )
-
-
 def build_context(
-    config: ExperimentConfig,
+    c: ControllerConfig,
     robot: PinocchioModel,
     nominal: DynamicsModel,
     trajectory: Trajectory,
     criterion: Criterion | None,
     plant: Plant,
     q0: np.ndarray,
+    *,
+    period: float,
+    nominal_friction: tuple[np.ndarray, np.ndarray],
+    trajectory_key: str,
 ) -> ControllerContext:
     """What a controller is built from (:class:`ControllerContext`): never the true plant's model,
     and nothing the plant or the record reads. The nominal model is the controller's own
-    (:func:`nnrobust.model.nominal.build_nominal`); the trajectory and the criterion are copies,
-    so that a law writing into them changes neither the recorded x_d, e and h nor the run.
+    (:func:`nnrobust.model.nominal.build_nominal_model`), its friction F-hat (viscous, Coulomb:
+    :func:`nnrobust.model.nominal.nominal_friction`) compensated with
+    ``controller.coulomb_smoothing``; the trajectory and the criterion are copies, so that a law
+    writing into them changes neither the recorded x_d, e and h nor the run (``trajectory_key``:
+    the key an uncopyable trajectory is named by).
     """
-    c = config.controller
-    trajectory_key = "trajectory.class" if config.trajectory.kind == "custom" else "trajectory.kind"
+    viscous, coulomb = nominal_friction
     return ControllerContext(
         nominal=nominal,
         trajectory=_own_copy(trajectory, trajectory_key),
         criterion=_own_copy(criterion, "subtasks.criterion_class"),
-        period=config.simulation.control_period,
+        period=period,
         torque_limits=None if plant.torque_limit is None else plant.torque_limit.copy(),
         q0=q0.copy(),
         lower_limits=robot.lower_limits.copy(),
         upper_limits=robot.upper_limits.copy(),
-        nominal_friction=build_nominal_friction(config, robot.nq),
+        nominal_friction=Friction(viscous, coulomb, c.coulomb_smoothing),
         null_space_gain=c.k,
         pseudo_inverse=DampedPseudoInverse(c.pinv_threshold, c.pinv_max_damping),
     )
@@ -93,7 +88,8 @@ def _own_copy(part, key: str):
 
 
 def build_controller(
-    config: ExperimentConfig,
+    c: ControllerConfig,
+    nn: NNConfig,
     robot: PinocchioModel,
     nominal: DynamicsModel,
     trajectory: Trajectory,
@@ -105,7 +101,6 @@ def build_controller(
     ``context``, or one of the paper's kinds by its declared builder (computed torque takes
     ``true_friction`` as F-hat).
     """
-    c = config.controller
     if c.kind == "custom":
         return build_custom(c.class_ or "", c.params, context)
     law = registered_law(c.kind)
@@ -114,7 +109,8 @@ def build_controller(
         base = getattr(built, "base_kind", None)
         if base is not None:  # a law on another (a residual policy): that kind as this experiment builds it
             built.base = build_controller(
-                config.replace(controller={"kind": base, "params": None}),
+                dataclasses.replace(c, kind=base, params=None),
+                nn,
                 robot,
                 nominal,
                 trajectory,
@@ -126,4 +122,4 @@ def build_controller(
     kind = paper_kind(c.kind)
     if kind is None:  # validate refuses it first
         raise ConfigError("controller.kind", f"{c.kind!r} is not one of {', '.join(controller_kinds())}")
-    return kind.build(KindParts(config, robot, nominal, trajectory, criterion, true_friction, context))
+    return kind.build(KindParts(c, nn, robot, nominal, trajectory, criterion, true_friction, context))

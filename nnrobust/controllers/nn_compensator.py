@@ -222,8 +222,8 @@ def _build(parts: KindParts):
     from .build import build_basis
     from .task_space import eq9_law
 
-    c, nn = parts.config.controller, parts.config.nn
-    basis = build_basis(parts.config, parts.robot, parts.trajectory.m)
+    c, nn = parts.controller, parts.nn
+    basis = build_basis(nn, parts.robot, parts.trajectory.m)
     term = NNCompensator(
         np.diag(c.Kp),
         np.diag(c.Kv),

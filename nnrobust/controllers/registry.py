@@ -218,12 +218,14 @@ class Law:
 
 @dataclass(frozen=True)
 class KindParts:
-    """What a :class:`PaperKind` is built from: the configuration, the robot, the controller's
-    nominal model, the trajectory, the weighted criterion (or None), the true robot's friction
-    (computed torque's F-hat) and the :class:`~nnrobust.controllers.ControllerContext`.
+    """What a :class:`PaperKind` is built from: the ``[controller]`` and ``[nn]`` sections
+    (:mod:`nnrobust.controllers.section`), the robot, the controller's nominal model, the
+    trajectory, the weighted criterion (or None), the true robot's friction (computed torque's
+    F-hat) and the :class:`~nnrobust.controllers.ControllerContext`.
     """
 
-    config: Any
+    controller: Any
+    nn: Any
     robot: Any
     nominal: Any
     trajectory: Any

@@ -61,7 +61,7 @@ def _build(parts: KindParts):
     """Eq. (9) with the sliding-mode term of ``controller.sliding_gain`` and ``sliding_boundary``."""
     from .task_space import eq9_law
 
-    c = parts.config.controller
+    c = parts.controller
     return eq9_law(
         parts, SlidingModeCompensator(np.diag(c.Kp), np.diag(c.Kv), c.sliding_gain, c.sliding_boundary)
     )

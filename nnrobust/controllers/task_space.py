@@ -207,7 +207,7 @@ def eq9_law(
     robust term ``term`` (None: u_0 = 0) and F-hat ``friction`` (None: the context's, the nominal
     section's).
     """
-    c, context = parts.config.controller, parts.context
+    c, context = parts.controller, parts.context
     return TaskSpaceController(
         parts.nominal,
         parts.trajectory,
@@ -228,7 +228,7 @@ def _computed_torque(parts: KindParts) -> TaskSpaceController:
     true = parts.true_friction
     if true is None:
         raise ValueError("computed-torque needs the true friction")
-    smoothing = parts.config.controller.coulomb_smoothing
+    smoothing = parts.controller.coulomb_smoothing
     return eq9_law(parts, friction=Friction(true.viscous, true.coulomb, smoothing))
 
 
@@ -236,7 +236,7 @@ def _pd(parts: KindParts) -> TaskSpacePD:
     """The PD of ``controller.pd_Kp``, ``pd_Kd`` and ``pd_null_damping`` (sized from the arm at
     q(0) when unset).
     """
-    c, context = parts.config.controller, parts.context
+    c, context = parts.controller, parts.context
     Kd = np.diag(c.pd_Kd)
     damping = c.pd_null_damping
     if damping is None:

@@ -7,8 +7,6 @@ kind and, for computed torque, the true model.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 import pinocchio as pin
 
@@ -18,10 +16,8 @@ from .base import DynamicsModel
 from .loading import load_robot
 from .perturbation import bodies_with_mass, perturb_inertias
 from .pinocchio_model import PinocchioModel
+from .section import NominalConfig, RobotConfig
 from .three_link import ThreeLinkParameters, ThreeLinkPlanarModel
-
-if TYPE_CHECKING:
-    from ..config import NominalConfig, RobotConfig
 
 
 def build_nominal_model(
@@ -67,6 +63,16 @@ def build_nominal_model(
     return ThreeLinkPlanarModel(
         ThreeLinkParameters(beta, p, true.lengths, true.gamma, true.gravity),
         joint_names=robot.joint_names,
+    )
+
+
+def nominal_friction(nc: NominalConfig, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """F-hat's viscous [N m s/rad] and Coulomb [N m] coefficients per joint, as ``[nominal]``
+    gives them (zero where not given: friction unmodelled).
+    """
+    return (
+        joint_vector("nominal.viscous_friction", nc.viscous_friction, n, np.zeros(n)),
+        joint_vector("nominal.coulomb_friction", nc.coulomb_friction, n, np.zeros(n)),
     )
 
 

@@ -1,13 +1,15 @@
-"""How an experiment builds its plant from ``[plant]`` and ``[sensing]``: the true robot (armature,
-payload), friction, disturbance (its declaration, nnrobust/plant/disturbance.py), actuator
-limits, joint stops, sensors, delay, loads, and MuJoCo as the engine when asked.
+"""How an experiment builds its plant from its own sections, ``[plant]`` and ``[sensing]``
+(:mod:`.section`): the true robot (armature, payload), friction, disturbance (its declaration,
+nnrobust/plant/disturbance.py), actuator limits, joint stops, sensors, delay, loads, and MuJoCo as
+the engine when asked. What the builders take beyond their sections is chosen by the composition
+root (:func:`nnrobust.experiment.build`): the control period, the duration and the disturbance
+``auto`` resolves to.
 """
 
 from __future__ import annotations
 
 import functools
 from collections.abc import Callable
-from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
@@ -23,15 +25,13 @@ from .limits import JointStops
 from .loads import ExternalLoads, parse_loads
 from .plant import Plant
 from .scaling import limits_or_inf, scaled_friction, torque_scale, usable
+from .section import PlantConfig, SensingConfig
 from .sensing import Sensor
 
-if TYPE_CHECKING:
-    from ..config import ExperimentConfig
 
-
-def build_torque_limits(config: ExperimentConfig, robot: PinocchioModel) -> np.ndarray | None:
+def build_torque_limits(pc: PlantConfig, robot: PinocchioModel) -> np.ndarray | None:
     """Effort limit per joint [N m or N] (inf where the URDF has none), or None (ideal actuators)."""
-    limits = config.plant.torque_limits
+    limits = pc.torque_limits
     if limits == "none":
         return None
     if limits == "urdf":
@@ -51,11 +51,11 @@ def build_torque_limits(config: ExperimentConfig, robot: PinocchioModel) -> np.n
     return joint_vector("plant.torque_limits", limits, robot.nq)
 
 
-def build_speed_limits(config: ExperimentConfig, robot: PinocchioModel) -> np.ndarray | None:
+def build_speed_limits(pc: PlantConfig, robot: PinocchioModel) -> np.ndarray | None:
     """The velocity limits the torque-speed envelope falls to zero at (``plant.torque_speed =
     "urdf"``): the URDF's, inf where it has none [rad/s or m/s]; None without an envelope.
     """
-    if config.plant.torque_speed == "none":
+    if pc.torque_speed == "none":
         return None
     speed = robot.velocity_limits
     if not np.any(usable(speed)):
@@ -68,12 +68,11 @@ def build_speed_limits(config: ExperimentConfig, robot: PinocchioModel) -> np.nd
 
 
 def build_stops(
-    config: ExperimentConfig, robot: PinocchioModel, tau_ref: Callable[[], np.ndarray] | None = None
+    pc: PlantConfig, robot: PinocchioModel, tau_ref: Callable[[], np.ndarray] | None = None
 ) -> JointStops | None:
     """Hard stops at the URDF's position limits, stiffness relative to each joint's torque scale
     (``tau_ref()``, default :func:`torque_scale`).
     """
-    pc = config.plant
     if not pc.joint_stops:
         return None
     lower, upper = finite_limits(robot.lower_limits), finite_limits(robot.upper_limits)
@@ -81,9 +80,8 @@ def build_stops(
     return JointStops(lower, upper, pc.joint_stop_stiffness * scale, pc.joint_stop_damping)
 
 
-def build_sensor(config: ExperimentConfig, n: int) -> Sensor:
+def build_sensor(se: SensingConfig, n: int) -> Sensor:
     """Noise and quantisation of the measurements, one value for all joints or one per joint."""
-    se = config.sensing
     return Sensor(
         per_joint("sensing.position_noise", se.position_noise, n),
         per_joint("sensing.velocity_noise", se.velocity_noise, n),
@@ -92,11 +90,21 @@ def build_sensor(config: ExperimentConfig, n: int) -> Sensor:
     )
 
 
-def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
+def build_plant(
+    pc: PlantConfig,
+    se: SensingConfig,
+    robot: PinocchioModel,
+    *,
+    disturbance_kind: str,
+    period: float,
+    duration: float,
+) -> Plant:
     """True model, friction (URDF or scaled to the robot, unless given), disturbance, actuator
-    limits, joint stops, sensors and delay.
+    limits, joint stops, sensors and delay. ``disturbance_kind`` is ``plant.disturbance`` with
+    ``auto`` resolved; ``period`` and ``duration`` place the loads of ``[[plant.loads]]`` on the
+    control instants.
     """
-    n, pc = robot.nq, config.plant
+    n = robot.nq
     tau_ref = functools.cache(lambda: torque_scale(robot))  # once (with its warning), if asked for
     base = (
         scaled_friction(robot, pc.viscous_level, pc.coulomb_level, tau_ref())
@@ -110,14 +118,11 @@ def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
         coulomb,
         static=pc.stiction * coulomb,
     )
-    kind = pc.disturbance
     disturbance: Disturbance
-    if kind == "auto":  # the paper's tau_d belongs to the paper's arm
-        kind = "paper" if config.robot.source == "three_link_planar" else "scaled"
-    if kind == "custom":
+    if disturbance_kind == "custom":
         disturbance = user_parts.build_disturbance(pc.disturbance_class or "", pc.disturbance_params, robot)
     else:
-        disturbance = DISTURBANCE_KINDS[kind].build(config, robot, tau_ref)
+        disturbance = DISTURBANCE_KINDS[disturbance_kind].build(pc, robot, tau_ref)
     rows = pc.disturbance_scale * _joint_scales(
         "plant.joint_disturbance_scales", pc.joint_disturbance_scales, n
     )
@@ -136,19 +141,19 @@ def build_plant(config: ExperimentConfig, robot: PinocchioModel) -> Plant:
             disturbance.omega * pc.disturbance_omega_scale,
             disturbance.phase + pc.disturbance_phase_shift,
         )
-    true = true_model(config, robot)
-    loads = parse_loads(pc.loads, config.simulation.control_period, n, config.simulation.duration)
+    true = true_model(pc, robot)
+    loads = parse_loads(pc.loads, period, n, duration)
     return Plant(
         true,
         friction,
         disturbance,
-        build_torque_limits(config, robot),
-        build_stops(config, robot, tau_ref),
-        build_sensor(config, n),
-        config.sensing.delay,
+        build_torque_limits(pc, robot),
+        build_stops(pc, robot, tau_ref),
+        build_sensor(se, n),
+        se.delay,
         loads=loads,
         payload_inertias=payload_inertias(true, loads),
-        speed_limit=build_speed_limits(config, robot),
+        speed_limit=build_speed_limits(pc, robot),
         torque_speed_knee=pc.torque_speed_knee if pc.torque_speed != "none" else -1.0,
     )
 
@@ -186,12 +191,11 @@ def payload(model: pin.Model, task_frame: str, mass: float) -> tuple[int, pin.In
     return frame.parentJoint, pin.Inertia(mass, frame.placement.translation, sphere)
 
 
-def true_model(config: ExperimentConfig, robot: PinocchioModel) -> PinocchioModel:
+def true_model(pc: PlantConfig, robot: PinocchioModel) -> PinocchioModel:
     """The true robot's dynamics: the robot with ``plant.armature`` on the diagonal of M and
     ``plant.payload`` carried by the task frame's joint (a copy, also when a payload change of
     ``[[plant.loads]]`` will alter it; the nominal model knows neither).
     """
-    pc = config.plant
     changes = any(entry.get("kind") == "payload" for entry in pc.loads or ())
     if pc.armature is None and pc.payload == 0.0 and not changes:
         return robot
@@ -206,13 +210,15 @@ def true_model(config: ExperimentConfig, robot: PinocchioModel) -> PinocchioMode
     return true
 
 
-def build_engine(config: ExperimentConfig, plant: Plant, substeps: int) -> None:
-    """Give the plant MuJoCo as its engine (``plant.engine = "mujoco"``), built and audited."""
-    if config.plant.engine != "mujoco":
+def build_engine(pc: PlantConfig, plant: Plant, period: float, substeps: int) -> None:
+    """Give the plant MuJoCo as its engine (``plant.engine = "mujoco"``), built and audited, its
+    step the control ``period`` over ``substeps``.
+    """
+    if pc.engine != "mujoco":
         return
     from .mujoco_engine import build_mujoco_plant
 
-    pc, true = config.plant, plant.model
+    true = plant.model
     assert isinstance(true, PinocchioModel)  # build_plant's true_model
     assert plant.loads is not None  # Plant sets an empty one
     if plant.loads.wrenches or plant.loads.payloads:
@@ -229,7 +235,7 @@ def build_engine(config: ExperimentConfig, plant: Plant, substeps: int) -> None:
     plant.engine = build_mujoco_plant(
         true,
         plant,
-        config.simulation.control_period,
+        period,
         substeps,
         pc.mujoco_integrator,
         true.model.armature,

@@ -100,7 +100,7 @@ class ScaledDisturbance(Disturbance):
 @dataclass(frozen=True)
 class DisturbanceKind:
     """A shipped disturbance, declared beside its code: its name in ``plant.disturbance``, one
-    line for the docs and errors, and ``build(config, robot, tau_ref)`` -> the Disturbance
+    line for the docs and errors, and ``build(plant_section, robot, tau_ref)`` -> the Disturbance
     (``tau_ref()`` the robot's torque scale, computed once if asked for; a ConfigError names the
     key at fault). ``plant.disturbance_scale``, the per-joint scales, the frequency scale and the
     phase shift then apply to whatever it builds.
@@ -118,14 +118,13 @@ declare_disturbance = DISTURBANCE_KINDS.declare
 """Register disturbances (in the module that builds them)."""
 
 
-def _paper(config, robot, tau_ref) -> SinusoidalDisturbance:
+def _paper(pc, robot, tau_ref) -> SinusoidalDisturbance:
     if robot.nq != 3:
         raise ConfigError("plant.disturbance", f"'paper' is for 3 joints, the robot has {robot.nq}")
     return SinusoidalDisturbance.paper()
 
 
-def _sinusoid(config, robot, tau_ref) -> SinusoidalDisturbance:
-    pc = config.plant
+def _sinusoid(pc, robot, tau_ref) -> SinusoidalDisturbance:
     amplitude = np.asarray(pc.disturbance_amplitude, dtype=float)
     omega = np.asarray(pc.disturbance_omega, dtype=float)
     phase = (
@@ -145,7 +144,7 @@ def _sinusoid(config, robot, tau_ref) -> SinusoidalDisturbance:
 declare_disturbance(
     DisturbanceKind("paper", "the paper's tau_d of its experiments (three joints)", _paper),
     DisturbanceKind(
-        "none", "no disturbance", lambda config, robot, tau_ref: SinusoidalDisturbance.none(robot.nq)
+        "none", "no disturbance", lambda pc, robot, tau_ref: SinusoidalDisturbance.none(robot.nq)
     ),
     DisturbanceKind(
         "sinusoid",

@@ -120,6 +120,6 @@ declare_disturbance(
     DisturbanceKind(
         "scaled",
         "two harmonics (1 and 2 rad/s) peaking at plant.disturbance_level x each joint's torque scale",
-        lambda config, robot, tau_ref: scaled_disturbance(robot, config.plant.disturbance_level, tau_ref()),
+        lambda pc, robot, tau_ref: scaled_disturbance(robot, pc.disturbance_level, tau_ref()),
     )
 )

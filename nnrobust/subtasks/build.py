@@ -1,5 +1,6 @@
-"""How an experiment builds its self-motion criterion from ``[subtasks]``: the weighted sum of
-eq. (4) over the declared criteria (nnrobust/subtasks/registry.py) and a user's.
+"""How an experiment builds its self-motion criterion from its own section, ``[subtasks]``
+(:mod:`.section`): the weighted sum of eq. (4) over the declared criteria
+(nnrobust/subtasks/registry.py) and a user's.
 """
 
 from __future__ import annotations
@@ -9,18 +10,17 @@ from typing import TYPE_CHECKING
 from ..exceptions import ConfigError
 from .base import Criterion, WeightedCriteria
 from .registry import CRITERION_KINDS
+from .section import SubtaskConfig
 
-if TYPE_CHECKING:  # the package imports this module to find declarations: no import of config here
-    from ..config import ExperimentConfig
+if TYPE_CHECKING:
     from ..model import PinocchioModel
 
 
-def build_criterion(config: ExperimentConfig, robot: PinocchioModel) -> Criterion | None:
+def build_criterion(sc: SubtaskConfig, robot: PinocchioModel) -> Criterion | None:
     """Weighted sum of the named criteria, eq. (4), or None."""
     from .. import user_parts
     from .registry import default_criteria
 
-    sc = config.subtasks
     names = default_criteria(robot.nq, robot.task) if sc.criteria is None else sc.criteria
     if not names:
         return None
@@ -31,7 +31,7 @@ def build_criterion(config: ExperimentConfig, robot: PinocchioModel) -> Criterio
     criteria = [
         user_parts.build_criterion(sc.criterion_class or "", sc.criterion_params, robot)
         if name == "custom"
-        else CRITERION_KINDS[name].build(config, robot)
+        else CRITERION_KINDS[name].build(sc, robot)
         for name in names
     ]
     return WeightedCriteria(criteria, sc.weights, sc.C)

@@ -93,7 +93,7 @@ class JointCentering(Criterion):
 
 
 def _from_limits(name: str, cls):
-    def build(config, robot):
+    def build(sc, robot):
         try:
             return cls(robot.lower_limits, robot.upper_limits)
         except ValueError as err:

@@ -55,7 +55,7 @@ class PaperCriterion(Criterion):
         return sum(term.gradient(model, q) for term in self._terms)
 
 
-def _paper(config, robot) -> PaperCriterion:
+def _paper(sc, robot) -> PaperCriterion:
     if robot.nq != 3:
         raise ConfigError(
             "subtasks.criteria",
@@ -65,8 +65,8 @@ def _paper(config, robot) -> PaperCriterion:
     return PaperCriterion()
 
 
-def _smoothness(config, robot) -> JointSmoothness:
-    c = config.subtasks.smoothness_coefficients or list(PAPER_SMOOTHNESS)
+def _smoothness(sc, robot) -> JointSmoothness:
+    c = sc.smoothness_coefficients or list(PAPER_SMOOTHNESS)
     if len(c) != robot.nq:
         raise ConfigError(
             "subtasks.smoothness_coefficients", f"has {len(c)} entries, the robot has {robot.nq} joints"

@@ -74,8 +74,7 @@ class SphereObstacles(Criterion):
         return np.einsum("skx,sxn->n", wa, Js[:-1]) + np.einsum("skx,sxn->n", wb, Js[1:])
 
 
-def _obstacles(config, robot) -> SphereObstacles:
-    sc = config.subtasks
+def _obstacles(sc, robot) -> SphereObstacles:
     spheres = np.asarray(sc.obstacles, dtype=float)
     return SphereObstacles(spheres[:, :3], spheres[:, 3], sc.obstacle_influence, sc.link_radius)
 

@@ -25,7 +25,8 @@ class CriterionKind:
         cls: its class (how a built criterion is recognised).
         description: one line, with the equation (docs, figure titles).
         unit: its unit for a task of size m (matplotlib text).
-        build: ``build(config, robot)`` -> the criterion (a ConfigError names the key at fault).
+        build: ``build(subtasks_section, robot)`` -> the criterion (a ConfigError names the key at
+            fault).
         twin_fields: ``twin_fields(criterion)`` -> its numbers by name, as the twin reads them
             (2-D arrays; a number is 1 x 1, a vector k x 1); None: no compiled twin.
         det: whether it reads det(J J^T) (its twin is compiled for planar and position tasks).

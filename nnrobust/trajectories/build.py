@@ -1,6 +1,8 @@
-"""How an experiment builds its desired trajectory from ``[trajectory]``: the declared path
-(nnrobust/trajectories/registry.py), with a rocking or held orientation for a pose task, or a
-user's class.
+"""How an experiment builds its desired trajectory from its own section, ``[trajectory]``
+(:mod:`.section`): the declared path (nnrobust/trajectories/registry.py), with a rocking or held
+orientation for a pose task, or a user's class. Beyond its section a builder takes
+``simulation.q_seed``, chosen by the composition root (:func:`nnrobust.experiment.build`): where
+a path without a start, or a pose without an orientation, is read from.
 """
 
 from __future__ import annotations
@@ -11,14 +13,15 @@ import pinocchio as pin
 from .base import Trajectory
 from .pose import PoseTrajectory, PositionPath
 from .registry import PATH_KINDS, path_key
+from .section import TrajectoryConfig
 
 
-def build_path(config, robot) -> PositionPath:
+def build_path(tc: TrajectoryConfig, robot, q_seed: list[float] | None) -> PositionPath:
     """The position path of ``trajectory.kind`` (its declaration's builder)."""
-    return PATH_KINDS[config.trajectory.kind].build(config, robot)  # type: ignore[return-value]
+    return PATH_KINDS[tc.kind].build(tc, robot, q_seed)  # type: ignore[return-value]
 
 
-def build_trajectory(config, robot) -> Trajectory:
+def build_trajectory(tc: TrajectoryConfig, robot, q_seed: list[float] | None) -> Trajectory:
     """The position path (:func:`build_path`), with a rocking or held orientation for a pose task;
     or a user's trajectory (``kind = "custom"``).
     """
@@ -27,17 +30,16 @@ def build_trajectory(config, robot) -> Trajectory:
     from ..model import PinocchioModel
     from ..model.tasks import split_pose
 
-    tc = config.trajectory
     if tc.kind == "custom":
         return user_parts.build_trajectory(tc.class_ or "", tc.params, robot, robot.task)
-    path = build_path(config, robot)
+    path = build_path(tc, robot, q_seed)
     if robot.task != "pose":
         return path
     if tc.orientation_rpy is not None:
         R0 = pin.rpy.rpyToMatrix(*tc.orientation_rpy)
     else:  # the orientation the arm has when its tip is at p_d(0)
         position_task = PinocchioModel(robot.model, robot.task_frame, "position", robot.name)
-        seed = seed_configuration(config, robot)
+        seed = seed_configuration(q_seed, robot)
         q = reach(position_task, path(0.0)[0], seed, "p_d(0)", f"trajectory.{path_key(tc)}")
         R0 = split_pose(robot.task_position(q))[1].copy()
     return PoseTrajectory(

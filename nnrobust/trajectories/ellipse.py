@@ -74,8 +74,7 @@ def _check(tc) -> None:
             raise ConfigError(f"trajectory.{key}", f"has {len(values)} entries, trajectory.center has {size}")
 
 
-def _build(config, robot) -> EllipseTrajectory:
-    tc = config.trajectory
+def _build(tc, robot, q_seed) -> EllipseTrajectory:
     return EllipseTrajectory(
         np.asarray(tc.center, float),
         np.asarray(tc.axis_a, float),

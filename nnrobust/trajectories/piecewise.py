@@ -142,15 +142,14 @@ def _check_point_to_point(tc) -> None:
         )
 
 
-def _build_point_to_point(config, robot) -> PiecewisePolynomialPath:
+def _build_point_to_point(tc, robot, q_seed) -> PiecewisePolynomialPath:
     """From ``start``, or from where the task frame is at ``simulation.q_seed``, to ``goal``."""
     from ..ik import seed_configuration
     from ..model.tasks import split_pose
 
-    tc = config.trajectory
     goal = tc.goal or []
     if tc.start is None:
-        p = robot.task_position(seed_configuration(config, robot))
+        p = robot.task_position(seed_configuration(q_seed, robot))
         start = (split_pose(p)[0] if robot.task == "pose" else p)[: len(goal)]
     else:
         start = np.asarray(tc.start, dtype=float)
@@ -201,6 +200,6 @@ declare(
         "`waypoints` (2 or 3 entries each), `waypoint_times` (strictly increasing from 0)",
         _check_waypoints,
         lambda tc: len(tc.waypoints[0]) if tc.waypoints else len(tc.center),
-        lambda config, robot: spline_through(config.trajectory.waypoints, config.trajectory.waypoint_times),
+        lambda tc, robot, q_seed: spline_through(tc.waypoints, tc.waypoint_times),
     ),
 )

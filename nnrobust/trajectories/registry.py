@@ -27,7 +27,8 @@ class PathKind:
         keys_doc: the keys with their meaning, one line (docs).
         check: ``check(trajectory_config)``: its keys' values (a ConfigError names the key).
         dimension: ``dimension(trajectory_config)``: entries of a path point (2 or 3 are valid).
-        build: ``build(config, robot)`` -> the path.
+        build: ``build(trajectory_section, robot, q_seed)`` -> the path (``q_seed``:
+            ``simulation.q_seed``, where a path that starts where the arm is reads the start).
 
     """
 
@@ -37,7 +38,7 @@ class PathKind:
     keys_doc: str
     check: Callable[[Any], None]
     dimension: Callable[[Any], int]
-    build: Callable[[Any, Any], Trajectory]
+    build: Callable[[Any, Any, Any], Trajectory]
 
 
 PATH_KINDS: Kinds[PathKind] = Kinds("path")

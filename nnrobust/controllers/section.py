@@ -1,0 +1,93 @@
+"""The controllers room's sections of an experiment file: ``[controller]`` and ``[nn]``, their
+defaults read from the kinds' declarations (:mod:`nnrobust.controllers.registry`). Their builder:
+:func:`nnrobust.controllers.build.build_controller`. Imported by the package face after every
+kind is declared.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from .registry import PAPER_KINDS, declared_default, paper_kinds
+
+
+@dataclass
+class ControllerConfig:
+    """Which control law and its gains.
+
+    Attributes:
+        kind: ``nn`` (eq. 9 with the NN compensator), ``no-u0`` (eq. 9 with u_0 = 0),
+            ``computed-torque`` (eq. 9 with u_0 = 0 and the true model and friction as nominal:
+            what perfect model knowledge buys), ``sliding-mode`` (eq. 9 with a fixed-gain
+            boundary-layer sliding-mode u_0) or ``pd``.
+        Kp, Kv, k, coulomb_smoothing: eq. (9)'s gains [1/s^2, 1/s] (m entries or one for all;
+            Kv^2 > Kp is required by eq. (17)), self-motion gain [1/s] and F-hat's sign smoothing
+            [rad/s], as nnrobust/controllers/task_space.py declares them.
+        pinv_threshold, pinv_max_damping: the damped pseudo-inverse's [m/rad], as
+            nnrobust/controllers/pseudoinverse.py declares them.
+        pd_Kp, pd_Kd, pd_null_damping: the PD baseline's, as ``pd`` declares them
+            (nnrobust/controllers/task_space.py).
+        sliding_gain, sliding_boundary: the sliding-mode u_0's, as ``sliding-mode`` declares them
+            (nnrobust/controllers/sliding_mode.py). docs/controller.md's key reference lists every
+            declared key with its unit, default and valid values.
+        class_: for ``kind = "custom"``, the controller class (TOML key ``class``):
+            ``"file.py:Class"`` (a path relative to the experiment file) or ``"package.module:Class"``,
+            a subclass of :class:`nnrobust.Controller` (docs/extending.md).
+        params: for ``kind = "custom"``, the keyword arguments of the class's constructor (TOML
+            table ``[controller.params]``).
+
+    """
+
+    kind: str = "nn"
+    Kp: list[float] = field(default_factory=lambda: declared_default("controller.Kp"))
+    Kv: list[float] = field(default_factory=lambda: declared_default("controller.Kv"))
+    k: float = declared_default("controller.k")
+    pinv_threshold: float = declared_default("controller.pinv_threshold")
+    pinv_max_damping: float = declared_default("controller.pinv_max_damping")
+    pd_Kp: list[float] = field(default_factory=lambda: declared_default("controller.pd_Kp"))
+    pd_Kd: list[float] = field(default_factory=lambda: declared_default("controller.pd_Kd"))
+    pd_null_damping: float | None = declared_default("controller.pd_null_damping")
+    coulomb_smoothing: float = declared_default("controller.coulomb_smoothing")
+    sliding_gain: float = declared_default("controller.sliding_gain")
+    sliding_boundary: float = declared_default("controller.sliding_boundary")
+    class_: str | None = None
+    params: dict | None = None
+
+
+CONTROLLER_KINDS = paper_kinds()
+"""The paper's kinds, the built-in values of ``controller.kind`` set by flat keys, as their modules
+declare them (:class:`nnrobust.controllers.registry.PaperKind`), when nnrobust was imported; the
+registered laws (:func:`controller_kinds`) take ``[controller.params]``, and ``custom`` names a
+user's class (``controller.class``)."""
+
+
+EQ9_KINDS = tuple(name for name, kind in PAPER_KINDS.items() if kind.eq9)
+"""The kinds that are the task-space law of eq. (9), whose Kp and Kv eq. (17) constrains (when
+nnrobust was imported; :func:`is_eq9` asks the declarations)."""
+
+
+def is_eq9(kind: str) -> bool:
+    """Whether ``controller.kind`` is one of the paper's kinds that is eq. (9)'s law."""
+    declared = PAPER_KINDS.get(kind)
+    return declared is not None and declared.eq9
+
+
+@dataclass
+class NNConfig:
+    """The NN robust compensator, eqs. (15)-(17): its keys, their units, defaults and ranges as
+    the ``nn`` kind declares them (nnrobust/controllers/nn_compensator.py; docs/controller.md's
+    key reference).
+    """
+
+    law: str = declared_default("nn.law")
+    F: float = declared_default("nn.F")
+    gamma: float = declared_default("nn.gamma")
+    eps0: float = declared_default("nn.eps0")
+    eps_min: float = declared_default("nn.eps_min")
+    sigma: float = declared_default("nn.sigma")
+    basis_input: str = declared_default("nn.basis_input")
+    centers: int = declared_default("nn.centers")
+    width: float = declared_default("nn.width")
+    bias: bool = declared_default("nn.bias")
+    velocity_range: float = declared_default("nn.velocity_range")
+    error_range: list[float] = field(default_factory=lambda: declared_default("nn.error_range"))
