@@ -38,3 +38,13 @@ def finite_number(value: object) -> bool:
 
 MAX_PAYLOAD = 1000.0
 """Largest ``plant.payload`` and payload load [kg]."""
+
+MAX_FACTOR = 100.0
+"""Largest factor on a nominal inertial parameter (``nominal.factors``) or on the plant's friction
+or disturbance (``plant.friction_scale``, ...)."""
+MAX_PHYSICAL = 1e6
+"""Largest friction coefficient, stop damping or closed-form parameter accepted: beyond it the
+plant is so stiff that no plant step resolves it (a 1e10 friction scale asked for 1.7e8 RK4 steps
+per period)."""
+MAX_STOP_STIFFNESS = 1e6
+"""Largest ``plant.joint_stop_stiffness`` [1/rad] (the default is 100)."""

@@ -29,7 +29,7 @@ FLOORS = {
     "rooms": ("controllers", "plant", "subtasks", "trajectories", "user_parts", "user_code", "native_law"),
     "model": ("model", "ik"),
     "leaf": ("exceptions", "numeric_limits", "arrays", "search_coordinates", "small_linalg", "kinds",
-             "package_version", "progress", "signals",
+             "package_version", "key_checks", "progress", "signals",
              "forked", "twins", "shipped_files", "_loop", "_floor_loop"),
 }  # fmt: skip
 ORDER = list(FLOORS)[::-1]  # leaf first
@@ -129,3 +129,43 @@ def test_the_architecture_page_lists_the_floors_the_test_enforces():
     assert list(written) == list(FLOORS)
     for floor, units in FLOORS.items():
         assert written[floor] == {u for u in units if not u.startswith("_loop") and u != "_floor_loop"}, floor
+
+
+ROOM_FACES = {
+    "model": "from .nominal import build_nominal_model",
+    "plant": "from .build import build_plant",
+    "subtasks": "from .build import build_criterion",
+    "trajectories": "from .build import build_trajectory",
+    "controllers": "from .build import build_controller",
+}
+"""Each room's builder, as its package face would import it."""
+
+SCRATCH_IMPORT = """
+import sys
+sys.meta_path = [f for f in sys.meta_path if "editable" not in type(f).__module__]
+sys.path.insert(0, {scratch!r})
+import {first}
+import nnrobust.config
+import nnrobust
+assert nnrobust.__file__.startswith({scratch!r}), nnrobust.__file__
+print("imported", {first!r})
+"""
+
+
+def test_every_room_face_may_import_its_builder_and_section(tmp_path):
+    """Issue 36: in a scratch copy of the package, every room's package face imports its own
+    builder and section; then importing the configuration (or a room first) still works: no room
+    needs the configuration, so no cycle hides behind the faces' discipline."""
+    import shutil
+    import subprocess
+    import sys
+
+    scratch = tmp_path / "scratch"
+    shutil.copytree(PACKAGE, scratch / "nnrobust", ignore=shutil.ignore_patterns("__pycache__"))
+    for room, line in ROOM_FACES.items():
+        face = scratch / "nnrobust" / room / "__init__.py"
+        face.write_text(face.read_text(encoding="utf-8") + f"\n{line}\nfrom .section import *  # noqa\n")
+    for first in ("nnrobust.config", *(f"nnrobust.{room}" for room in ROOM_FACES)):
+        code = SCRATCH_IMPORT.format(scratch=str(scratch), first=first)
+        done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+        assert done.returncode == 0 and f"imported {first}" in done.stdout, (first, done.stderr[-2000:])

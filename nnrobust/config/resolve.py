@@ -9,15 +9,8 @@ from __future__ import annotations
 
 import copy
 
+from ..controllers.section import GAIN_KEYS, full_gain
 from .schema import ExperimentConfig, task_rows
-
-GAIN_KEYS = ("Kp", "Kv", "pd_Kp", "pd_Kd")
-"""The controller's task gains that take one value for all m coordinates or one per coordinate."""
-
-
-def full_gain(values: list[float], m: int) -> list[float]:
-    """A task gain as m entries: one value repeated for every task coordinate, or as given."""
-    return list(values) * m if len(values) == 1 else list(values)
 
 
 def resolve(config: ExperimentConfig) -> ExperimentConfig:

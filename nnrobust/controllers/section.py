@@ -8,7 +8,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from .registry import PAPER_KINDS, declared_default, paper_kinds
+from ..exceptions import ConfigError
+from ..key_checks import check_choice
+from .registry import (
+    PAPER_KINDS,
+    controller_kinds,
+    declared_default,
+    declared_params,
+    paper_kinds,
+    registered_law,
+)
 
 
 @dataclass
@@ -91,3 +100,77 @@ class NNConfig:
     bias: bool = declared_default("nn.bias")
     velocity_range: float = declared_default("nn.velocity_range")
     error_range: list[float] = field(default_factory=lambda: declared_default("nn.error_range"))
+
+
+GAIN_KEYS = ("Kp", "Kv", "pd_Kp", "pd_Kd")
+"""The controller's task gains that take one value for all m coordinates or one per coordinate."""
+
+
+def full_gain(values: list[float], m: int) -> list[float]:
+    """A task gain as m entries: one value repeated for every task coordinate, or as given."""
+    return list(values) * m if len(values) == 1 else list(values)
+
+
+def check_controller(c: ControllerConfig, nn: NNConfig, m: int, where: str) -> None:
+    """The rules that read only ``[controller]`` and ``[nn]``, for a task of ``m`` coordinates
+    (``where`` says where m comes from, for messages): the kind, the gains' sizes, every declared
+    key against its declaration, eq. (17)'s Kv^2 > Kp, the NN's floor. A law's
+    ``[controller.params]`` are checked with the user's classes. Changes nothing.
+    """
+    check_choice("controller.kind", c.kind, controller_kinds())
+    for name in GAIN_KEYS:
+        values = getattr(c, name)
+        if len(values) not in (1, m):
+            raise ConfigError(
+                f"controller.{name}", f"has {len(values)} entries, {where} (or give one value for all)"
+            )
+    sections = {"controller": c, "nn": nn}
+    for p in declared_params():  # each kind's own keys, eq. (9)'s and the pseudo-inverse's
+        section, field = p.name.split(".")
+        value = getattr(sections[section], field)
+        if not (value is None and p.default is None):  # unset: the kind sizes it itself
+            p.check(value, None, m, p.name)
+    pairs = zip(full_gain(c.Kp, m), full_gain(c.Kv, m))
+    for kp, kv in pairs if is_eq9(c.kind) else ():  # pd and custom laws do not use them
+        if kv * kv <= kp:
+            raise ConfigError(
+                "controller.Kv",
+                f"Kv^2 = {kv * kv:g} must exceed Kp = {kp:g}: Q = diag(2 Kp^2, 2 Kv^2 - 2 Kp) of "
+                "eq. (17) must be positive definite for the Lyapunov function y^T P y to decrease",
+            )
+    if nn.eps_min > nn.eps0:
+        raise ConfigError("nn.eps_min", f"the floor {nn.eps_min} must not exceed nn.eps0 = {nn.eps0}")
+
+
+def inert_controller_keys(c: ControllerConfig, nn: NNConfig) -> dict[str, str]:
+    """The keys the controller's kind does not read (``section.key``, or ``section.`` for a whole
+    section), each with the choice that makes it so: eq. (9)'s gains under another law, the other
+    kinds' own keys, what a kind declares it ignores (:class:`PaperKind`), the NN basis range
+    its input does not use.
+    """
+    inert: dict[str, str] = {}
+
+    def mark(keys, why):
+        for key in keys:
+            inert.setdefault(key, why)
+
+    kind = f"controller.kind = {c.kind!r}"
+    if registered_law(c.kind) is not None:  # its own parameters; it may read subtasks and nominal
+        mark(["controller.Kp", "controller.Kv", "controller.k"], f"{kind} is not eq. (9)")
+    elif not is_eq9(c.kind):
+        mark(["controller.Kp", "controller.Kv", "controller.k", "subtasks."], f"{kind} is not eq. (9)")
+        mark(["controller.coulomb_smoothing", "nominal.viscous_friction", "nominal.coulomb_friction"], kind)
+    own = PAPER_KINDS[c.kind].keys if c.kind in PAPER_KINDS else ()
+    for declared in PAPER_KINDS.values():  # the other kinds' own keys, unless this one reads them
+        mark([key for key in declared.keys if key not in own], kind)
+    for key, why in PAPER_KINDS[c.kind].ignores if c.kind in PAPER_KINDS else ():
+        mark([key], why)
+    if c.kind == "custom":
+        mark(["controller.pinv_threshold", "controller.pinv_max_damping"], kind)
+    if is_eq9(c.kind) and c.k == 0:
+        mark(["subtasks."], "controller.k = 0 (no self-motion)")
+    if c.kind == "nn" and nn.basis_input == "joint":
+        mark(["nn.error_range"], "nn.basis_input = 'joint'")
+    if c.kind == "nn" and nn.basis_input == "error":
+        mark(["nn.velocity_range"], "nn.basis_input = 'error'")
+    return inert

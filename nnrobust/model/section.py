@@ -5,7 +5,14 @@
 
 from __future__ import annotations
 
+import math
+import os
 from dataclasses import dataclass
+
+from ..exceptions import ConfigError
+from ..key_checks import check_choice, require_physical, require_positive, require_seed
+from ..numeric_limits import MAX_FACTOR
+from .tasks import TASK_KINDS
 
 
 @dataclass
@@ -92,3 +99,62 @@ def resolved_nominal_kind(nc: NominalConfig, rc: RobotConfig) -> str:
         paper = rc.source == "three_link_planar" and rc.task == "planar"
         return "closed-form" if paper else "urdf"
     return nc.kind
+
+
+NOMINAL_KINDS = ("auto", "closed-form", "urdf")
+"""The choices of ``nominal.kind``."""
+
+
+def check_model(rc: RobotConfig, nc: NominalConfig) -> None:
+    """The rules that read only ``[robot]`` and ``[nominal]`` (values a type alone does not
+    constrain; the robot itself is checked when it is loaded). Changes nothing.
+    """
+    gravity = rc.gravity
+    if gravity is not None and (len(gravity) != 3 or math.hypot(*gravity) > 1e3):
+        raise ConfigError(
+            "robot.gravity", f"needs 3 entries (x, y, z) [m/s^2] of at most 1000 m/s^2 in all, got {gravity}"
+        )
+    if rc.chain is not None and len(rc.chain) != 2:
+        raise ConfigError("robot.chain", f"needs 2 frame names, [base, tip], got {rc.chain}")
+    for folder in rc.mesh_folders or ():
+        if not folder.strip() or os.path.abspath(folder) == os.path.abspath(os.sep):
+            raise ConfigError(
+                "robot.mesh_folders",
+                f"{folder!r} is not a folder to read meshes from: name the folders that hold the "
+                'URDF\'s meshes (e.g. ["../meshes"]), never the filesystem root',
+            )
+    check_choice("robot.task", rc.task, tuple(TASK_KINDS))
+    check_choice("nominal.kind", nc.kind, NOMINAL_KINDS)
+    require_positive("nominal.mass_scale", nc.mass_scale)
+    require_positive("nominal.inertia_scale", nc.inertia_scale)
+    if not 0 <= nc.relative_error < 1:
+        raise ConfigError(
+            "nominal.relative_error", f"must be in [0, 1) so masses stay positive, got {nc.relative_error}"
+        )
+    if nc.com_error < 0:
+        raise ConfigError("nominal.com_error", f"must be >= 0 [m], got {nc.com_error}")
+    if nc.factors is not None and any(not 0 < f <= MAX_FACTOR for f in nc.factors):
+        raise ConfigError("nominal.factors", f"each factor must be in (0, {MAX_FACTOR:g}], got {nc.factors}")
+    closed_form = resolved_nominal_kind(nc, rc) == "closed-form"
+    if closed_form and (nc.mass_scale, nc.inertia_scale, nc.com_error) != (1, 1, 0):
+        raise ConfigError(
+            "nominal.kind",
+            "mass_scale, inertia_scale and com_error perturb the URDF "
+            "model: set kind = 'urdf' (closed-form takes beta, p and relative_error)",
+        )
+    for key, values, unit in (
+        ("viscous_friction", nc.viscous_friction, "N m s/rad"),
+        ("coulomb_friction", nc.coulomb_friction, "N m"),
+        ("beta", nc.beta, "kg m^2"),
+        ("p", nc.p, "kg m^2"),
+    ):
+        require_physical(f"nominal.{key}", values, unit)
+    require_seed("nominal.seed", nc.seed)
+
+
+def inert_model_keys(rc: RobotConfig, nc: NominalConfig) -> dict[str, str]:
+    """The ``[nominal]`` keys the resolved nominal model does not read, each with the reason."""
+    if resolved_nominal_kind(nc, rc) == "urdf":
+        why = "nominal.kind = 'urdf' (beta and p are the closed form's)"
+        return {"nominal.beta": why, "nominal.p": why}
+    return {}

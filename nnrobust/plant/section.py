@@ -7,6 +7,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from ..exceptions import ConfigError
+from ..key_checks import check_choice, require_non_negative, require_physical, require_positive, require_seed
+from ..numeric_limits import MAX_FACTOR, MAX_PAYLOAD, MAX_PHYSICAL, MAX_STOP_STIFFNESS
+from .disturbance import DISTURBANCE_KINDS
+from .mujoco_engine import ENGINES, MUJOCO_INTEGRATORS
+
 
 @dataclass
 class PlantConfig:
@@ -133,3 +139,126 @@ class SensingConfig:
     encoder_resolution: list[float] = field(default_factory=lambda: [0.0])
     delay: int = 0
     seed: int = 0
+
+
+def check_plant(pc: PlantConfig, se: SensingConfig) -> None:
+    """The rules that read only ``[plant]`` and ``[sensing]`` (values a type alone does not
+    constrain). Changes nothing.
+    """
+    check_choice("plant.friction", pc.friction, ("urdf", "scaled"))
+    check_choice("plant.disturbance", pc.disturbance, ("auto", *sorted(DISTURBANCE_KINDS), "custom"))
+    check_choice("plant.engine", pc.engine, ENGINES)
+    check_choice("plant.mujoco_integrator", pc.mujoco_integrator, MUJOCO_INTEGRATORS)
+    check_choice("plant.torque_speed", pc.torque_speed, ("none", "urdf"))
+    for key in ("disturbance_scale", "friction_scale"):
+        if not 0 <= getattr(pc, key) <= MAX_FACTOR:
+            raise ConfigError(f"plant.{key}", f"must be in [0, {MAX_FACTOR:g}], got {getattr(pc, key):g}")
+    require_physical("plant.viscous_friction", pc.viscous_friction, "N m s/rad")
+    require_physical("plant.coulomb_friction", pc.coulomb_friction, "N m")
+    for key in ("joint_friction_scales", "joint_disturbance_scales"):
+        scales = getattr(pc, key)
+        if scales is not None and any(not 0 <= f <= MAX_FACTOR for f in scales):
+            raise ConfigError(f"plant.{key}", f"each factor must be in [0, {MAX_FACTOR:g}], got {scales}")
+    if not 0 <= pc.payload <= MAX_PAYLOAD:
+        raise ConfigError("plant.payload", f"must be in [0, {MAX_PAYLOAD:g}] kg, got {pc.payload:g}")
+    if not 0 < pc.disturbance_omega_scale <= MAX_FACTOR:
+        raise ConfigError(
+            "plant.disturbance_omega_scale",
+            f"must be in (0, {MAX_FACTOR:g}], got {pc.disturbance_omega_scale:g}",
+        )
+    if abs(pc.disturbance_phase_shift) > 1e3:
+        raise ConfigError(
+            "plant.disturbance_phase_shift",
+            f"{pc.disturbance_phase_shift:g} rad; give it within +-1000 rad (it acts modulo 2 pi)",
+        )
+    if not 1 <= pc.stiction < 1e6:
+        raise ConfigError(
+            "plant.stiction", f"the static / Coulomb friction ratio must be in [1, 1e6), got {pc.stiction}"
+        )
+    if isinstance(pc.torque_limits, str):
+        if pc.torque_limits not in ("urdf", "none"):
+            raise ConfigError(
+                "plant.torque_limits",
+                f"{pc.torque_limits!r} is not one of urdf, none (or give one limit per joint [N m])",
+            )
+    else:
+        require_positive("plant.torque_limits", pc.torque_limits)
+    if pc.torque_speed == "urdf" and pc.torque_limits == "none":
+        raise ConfigError(
+            "plant.torque_speed",
+            "'urdf' cuts the effort limits at speed, and plant.torque_limits = 'none' sets none: "
+            "set plant.torque_limits (urdf, or one limit per joint)",
+        )
+    if not 0.0 <= pc.torque_speed_knee < 1.0:
+        raise ConfigError(
+            "plant.torque_speed_knee",
+            f"{pc.torque_speed_knee:g} is outside [0, 1) (a fraction of the velocity limit)",
+        )
+    if not 0 < pc.joint_stop_stiffness <= MAX_STOP_STIFFNESS:
+        raise ConfigError(
+            "plant.joint_stop_stiffness",
+            f"must be in (0, {MAX_STOP_STIFFNESS:g}] (the stop's stiffness / the joint's torque scale, "
+            f"per rad), got {pc.joint_stop_stiffness:g}",
+        )
+    if not 0 <= pc.joint_stop_damping <= MAX_PHYSICAL:
+        raise ConfigError(
+            "plant.joint_stop_damping",
+            f"must be in [0, {MAX_PHYSICAL:g}] s/rad, got {pc.joint_stop_damping:g}",
+        )
+    if pc.armature is not None and (not pc.armature or any(not 0 <= a < 1e6 for a in pc.armature)):
+        raise ConfigError(
+            "plant.armature",
+            f"needs one value for all joints or one per joint, each in "
+            f"[0, 1e6) [kg m^2 or kg], got {pc.armature}",
+        )
+    for path, values in (
+        ("sensing.position_noise", se.position_noise),
+        ("sensing.velocity_noise", se.velocity_noise),
+        ("sensing.encoder_resolution", se.encoder_resolution),
+    ):
+        if not values or any(v < 0 for v in values):
+            raise ConfigError(
+                path, f"needs one value for all joints or one per joint, each >= 0, got {values}"
+            )
+    require_seed("sensing.seed", se.seed)
+    if se.delay < 0:
+        raise ConfigError("sensing.delay", f"must be >= 0 control periods, got {se.delay}")
+    for key in ("viscous_level", "coulomb_level", "disturbance_level"):
+        require_non_negative(f"plant.{key}", getattr(pc, key))
+    if pc.disturbance == "sinusoid" and (pc.disturbance_amplitude is None or pc.disturbance_omega is None):
+        raise ConfigError(
+            "plant.disturbance_amplitude",
+            "disturbance = 'sinusoid' needs disturbance_amplitude (n x K) and disturbance_omega (K)",
+        )
+
+
+def inert_plant_keys(pc: PlantConfig) -> dict[str, str]:
+    """The ``[plant]`` keys its own choices leave unread (friction levels of a URDF friction, the
+    other disturbances' keys, MuJoCo's integrator on Pinocchio, ...), each with the choice.
+    """
+    inert: dict[str, str] = {}
+
+    def mark(keys, why):
+        for key in keys:
+            inert.setdefault(key, why)
+
+    if pc.friction != "scaled":
+        mark(["plant.viscous_level", "plant.coulomb_level"], f"plant.friction = {pc.friction!r}")
+    if pc.disturbance == "none":
+        mark(
+            ["plant.disturbance_scale", "plant.joint_disturbance_scales", "plant.disturbance_omega_scale",
+             "plant.disturbance_phase_shift", "plant.disturbance_level"],
+            "plant.disturbance = 'none'",
+        )  # fmt: skip
+    if pc.disturbance not in ("scaled", "auto"):
+        mark(["plant.disturbance_level"], f"plant.disturbance = {pc.disturbance!r}")
+    if pc.disturbance != "sinusoid":
+        mark(["plant.disturbance_amplitude", "plant.disturbance_omega", "plant.disturbance_phase"],
+             f"plant.disturbance = {pc.disturbance!r}")  # fmt: skip
+    if pc.engine != "mujoco":
+        mark(["plant.mujoco_integrator"], f"plant.engine = {pc.engine!r}")
+    if pc.torque_speed == "none":
+        mark(["plant.torque_speed_knee"], "plant.torque_speed = 'none'")
+    if not pc.joint_stops:
+        mark(["plant.joint_stop_stiffness", "plant.joint_stop_damping"], "plant.joint_stops = false")
+    return inert

@@ -4,7 +4,12 @@ eq. (4) and their weights. Its builder: :func:`nnrobust.subtasks.build.build_cri
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
+
+from ..exceptions import ConfigError
+from ..key_checks import require_non_negative, require_positive
+from .registry import default_criteria
 
 
 @dataclass
@@ -39,3 +44,47 @@ class SubtaskConfig:
     link_radius: float = 0.0
     criterion_class: str | None = None
     criterion_params: dict | None = None
+
+
+def check_subtasks(sc: SubtaskConfig) -> None:
+    """The rules that read only ``[subtasks]``: eq. (4)'s weights sum to C, the obstacles' spheres
+    (the criteria's names are checked when the criterion is built). Changes nothing.
+    """
+    require_positive("subtasks.C", sc.C)
+    require_positive("subtasks.obstacle_influence", sc.obstacle_influence)
+    require_non_negative("subtasks.link_radius", sc.link_radius)
+    for i, sphere in enumerate(sc.obstacles):
+        if len(sphere) != 4 or sphere[3] < 0:
+            raise ConfigError(f"subtasks.obstacles[{i}]", f"must be [x, y, z, radius >= 0], got {sphere}")
+    if sc.weights is not None and sc.criteria is None:
+        raise ConfigError("subtasks.weights", "weigh criteria that are named: set subtasks.criteria too")
+    if "obstacles" in (sc.criteria or []) and not sc.obstacles:
+        raise ConfigError("subtasks.obstacles", "criterion 'obstacles' needs at least one sphere")
+    if sc.weights is not None:
+        named = sc.criteria or []
+        if len(sc.weights) != len(named):
+            raise ConfigError("subtasks.weights", f"{len(sc.weights)} weights for {len(named)} criteria")
+        require_positive("subtasks.weights", sc.weights)
+        total = sum(sc.weights)
+        if not math.isclose(total, sc.C, rel_tol=1e-9):
+            raise ConfigError(
+                "subtasks.weights",
+                f"sum to {total:g} but subtasks.C = {sc.C:g}; eq. (4) needs sum w_i = C "
+                "(or leave weights out for C / number of criteria each)",
+            )
+
+
+def inert_subtask_keys(sc: SubtaskConfig, task: str) -> dict[str, str]:
+    """The ``[subtasks]`` keys of criteria that are not among the chosen ones (``subtasks.criteria``,
+    or the defaults of a ``task`` task: :func:`nnrobust.subtasks.registry.default_criteria`).
+    """
+    criteria = sc.criteria if sc.criteria is not None else default_criteria(3, task)
+    inert: dict[str, str] = {}
+    if "obstacles" not in criteria:
+        why = "'obstacles' is not in subtasks.criteria"
+        inert |= dict.fromkeys(
+            ["subtasks.obstacles", "subtasks.obstacle_influence", "subtasks.link_radius"], why
+        )
+    if "joint_smoothness" not in criteria:
+        inert["subtasks.smoothness_coefficients"] = "'joint_smoothness' is not in subtasks.criteria"
+    return inert

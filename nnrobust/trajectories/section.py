@@ -4,9 +4,12 @@ defaults and choices. Its builder: :func:`nnrobust.trajectories.build.build_traj
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
-from .registry import PATH_KINDS
+from ..exceptions import ConfigError
+from ..key_checks import check_choice
+from .registry import PATH_KINDS, path_key
 
 
 @dataclass
@@ -83,3 +86,79 @@ MAX_PATH_EXTENT = 1e3
 
 MAX_PATH_RATE = 1e4
 """Largest angular frequency of a path or of its rocking [rad/s]."""
+
+
+def _check_extents(tc: TrajectoryConfig) -> None:
+    """Path points and axes within :data:`MAX_PATH_EXTENT`, rates within :data:`MAX_PATH_RATE`."""
+    vectors = {
+        "center": tc.center,
+        "axis_a": tc.axis_a,
+        "axis_b": tc.axis_b,
+        "start": tc.start,
+        "goal": tc.goal,
+    }
+    for name, values in vectors.items():
+        if values is not None and any(abs(v) > MAX_PATH_EXTENT for v in values):
+            raise ConfigError(f"trajectory.{name}", f"{values} has a coordinate beyond {MAX_PATH_EXTENT:g} m")
+    for i, point in enumerate(tc.waypoints or []):
+        if any(abs(v) > MAX_PATH_EXTENT for v in point):
+            raise ConfigError(
+                f"trajectory.waypoints[{i}]", f"{point} has a coordinate beyond {MAX_PATH_EXTENT:g} m"
+            )
+    for name in ("omega", "rotation_omega"):
+        if abs(getattr(tc, name)) > MAX_PATH_RATE:
+            raise ConfigError(
+                f"trajectory.{name}", f"{getattr(tc, name):g} rad/s is beyond {MAX_PATH_RATE:g} rad/s"
+            )
+    if abs(tc.rotation_amplitude) > math.pi:
+        raise ConfigError(
+            "trajectory.rotation_amplitude",
+            f"{tc.rotation_amplitude:g} rad is more than half a turn; at most pi",
+        )
+
+
+MIN_AXIS_NORM = 1e-9
+"""Shortest ``trajectory.rotation_axis`` accepted: its direction is its only meaning, and a
+vector of 1e-320 has a length that squares to 0 (no direction to normalise to)."""
+
+
+def check_trajectory(tc: TrajectoryConfig) -> None:
+    """The rules that read only ``[trajectory]``: its kind, and a shipped path's keys (their
+    extents, then the path's declared checks) with 2 or 3 entries per point. Changes nothing.
+    """
+    check_choice("trajectory.kind", tc.kind, TRAJECTORY_KINDS)
+    if tc.kind == "custom":
+        return
+    _check_extents(tc)
+    PATH_KINDS[tc.kind].check(tc)
+    if tc.dimension not in (2, 3):
+        raise ConfigError(
+            f"trajectory.{path_key(tc)}",
+            f"path points have 2 (x, y) or 3 (x, y, z) entries, got {tc.dimension}",
+        )
+
+
+def check_orientation(tc: TrajectoryConfig) -> None:
+    """The rules of a pose task's orientation keys (``orientation_rpy``, ``rotation_axis``)."""
+    for path, values in (
+        ("trajectory.orientation_rpy", tc.orientation_rpy),
+        ("trajectory.rotation_axis", tc.rotation_axis),
+    ):
+        if values is not None and len(values) != 3:
+            raise ConfigError(path, f"needs 3 entries, got {len(values)}")
+    if not any(tc.rotation_axis):
+        raise ConfigError("trajectory.rotation_axis", "must be a non-zero vector")
+    if math.hypot(*tc.rotation_axis) < MIN_AXIS_NORM:
+        raise ConfigError(
+            "trajectory.rotation_axis",
+            f"[{', '.join(f'{v:.6g}' for v in tc.rotation_axis)}] is too short to give a direction "
+            f"(length below {MIN_AXIS_NORM:g}); the axis is normalised, so give it at unit scale, "
+            "e.g. [1, 0, 0]",
+        )
+
+
+def inert_trajectory_keys(tc: TrajectoryConfig) -> dict[str, str]:
+    """The ``[trajectory]`` keys of the paths (and of a user's class) other than the chosen one."""
+    path_keys = {name: kind.keys for name, kind in PATH_KINDS.items()} | {"custom": ("class", "params")}
+    why = f"trajectory.kind = {tc.kind!r}"
+    return {f"trajectory.{k}": why for other, keys in path_keys.items() if other != tc.kind for k in keys}
