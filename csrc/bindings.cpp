@@ -214,7 +214,7 @@ NB_MODULE(_loop, m) {
   spec.def(nb::init<>());
 #define FIELD(name) spec.def_rw(#name, &LoopSpec::name)
   FIELD(period); FIELD(substeps); FIELD(max_step_rotation); FIELD(max_period_substeps); FIELD(steps);
-  FIELD(max_speed); FIELD(q0); FIELD(v0); FIELD(plant_params); FIELD(plant_parts); FIELD(nominal);
+  FIELD(max_speed); FIELD(q0); FIELD(v0); FIELD(plant_params); FIELD(plant_parts); FIELD(disturbance); FIELD(nominal);
   FIELD(nominal_params); FIELD(m); FIELD(nominal_friction); FIELD(path); FIELD(path_params); FIELD(pose);
   FIELD(pose_params); FIELD(law); FIELD(law_params); FIELD(law_signals); FIELD(robust); FIELD(robust_params);
   FIELD(criteria); FIELD(criterion_params); FIELD(criterion_weights); FIELD(pinv_threshold);

@@ -163,7 +163,7 @@ bool SteppedLoop::advance(const Output &out) {
   z_ = out.z;
   plant.begin_period(t);  // the loads held over this period
   if (plant.engine) {  // MuJoCo steps the plant; a state or torque it discarded ends the run
-    if (!plant.engine->advance(t, tau, s_.period, plant.disturbance, [&](int i) { return plant.load(i); }, q, v)) {
+    if (!plant.engine->advance(t, tau, s_.period, *plant.disturbance, [&](int i) { return plant.load(i); }, q, v)) {
       tr_.status = "diverged";
       tr_.divergence_index = k;
       tr_.done = k + 1;

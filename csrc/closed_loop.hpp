@@ -40,9 +40,11 @@ struct LoopSpec {
   double max_speed = 1e3;
   Vector q0, v0;
   // the true robot (nnrobust/plant/, csrc/plant/): Plant.twin_fields, and each of its parts'
-  // (Plant.twin_parts: friction, disturbance, loads, sensor; stops and engine where there are some)
+  // (Plant.twin_parts: friction, disturbance, loads, sensor; stops and engine where there are some);
+  // the disturbance is the one registered under `disturbance` (csrc/plant/disturbance.hpp)
   Params plant_params;
   std::map<std::string, Params> plant_parts;
+  std::string disturbance = "sinusoid";
   // the controller's nominal model, by its Python class's twin: "closed-form" (ThreeLinkSpec from
   // nominal_params) or "pinocchio" (a second LoadedModel, no fields)
   std::string nominal;

@@ -166,15 +166,13 @@ def _plant_refusal(setup) -> str:
     """Why the compiled plant cannot simulate this experiment ("" when it can): the part of
     :func:`twin_refusal` that the hybrid loop needs too (plant, integrator, task, criterion).
     """
-    from .plant.disturbance import SinusoidalDisturbance
-
     if not available():
         return unavailable_reason()
     config = setup.config
     kinds = {j.shortname() for j in setup.plant.model.pinocchio_model.joints[1:]}
     checks = [
         (kinds <= COMPILED_JOINTS, f"a joint of type {min(kinds - COMPILED_JOINTS, default='')}"),
-        (isinstance(setup.plant.disturbance, SinusoidalDisturbance), "a custom disturbance"),
+        (own_twin(setup.plant.disturbance) is not None, "a custom disturbance"),
         (config.simulation.integrator == "rk4", f"the integrator {config.simulation.integrator!r}"),
         (setup.plant.friction.smoothing <= 0, "a smoothed plant friction"),
     ]
@@ -281,7 +279,7 @@ def loop_spec(setup, duration: float, external: bool = False):
     if plant.engine is not None:  # MuJoCo steps the plant, from (q0, v0)
         plant.engine.reset(setup.q0, setup.v0)
         parts["engine"].update(engine_addresses(plant.engine))
-    s.plant_parts = parts
+    s.plant_parts, s.disturbance = parts, own_twin(plant.disturbance)
     s.m = setup.robot.m
     _criterion_spec(s, setup, f)
     if external:  # the hybrid loop: the law is Python's, only its state size matters here

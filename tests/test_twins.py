@@ -250,11 +250,51 @@ def test_the_plant_twin_reads_every_part_by_name():
         parts = {k: dict(p) for k, p in spec.plant_parts.items()}
         del parts[part][field]
         spec.plant_parts = parts
-        with pytest.raises(ValueError, match=f"the plant's {part} needs the field {field}"):
+        with pytest.raises(ValueError, match=f"the plant's {part}( sinusoid)? needs the field {field}"):
             module.twin_plant_acceleration(model, spec, 0.0, q, v, tau)
         spec = compiled.loop_spec(setup, 0.01)
+    spec.disturbance = "sinusoidal"  # a disturbance is the one registered under its twin's name
+    with pytest.raises(ValueError, match="unknown disturbance sinusoidal"):
+        module.twin_plant_acceleration(model, spec, 0.0, q, v, tau)
+    spec = compiled.loop_spec(setup, 0.01)
     parts = dict(spec.plant_parts)
     del parts["sensor"]
     spec.plant_parts = parts
     with pytest.raises(ValueError, match="needs the part sensor"):
         module.twin_plant_acceleration(model, spec, 0.0, q, v, tau)
+
+
+DISTURBANCE_CASES = {
+    "sinusoid": {
+        "disturbance_amplitude": [[1.0, 0.5], [0.0, 2.0], [3.0, -1.0]],
+        "disturbance_omega": [2.0, 7.0],
+    },
+    "scaled": {"disturbance_level": 0.3},
+}
+
+
+@pytest.mark.parametrize("kind", ["paper", "none", "sinusoid", "scaled"])
+def test_each_disturbance_kind_is_its_python_twin(kind):
+    """Every shipped plant.disturbance builds a class with a compiled twin (registered in
+    csrc/plant/disturbance.hpp under the class's twin name), whose torque enters q'' as the
+    Python one does, scaled and shifted by the plant's disturbance keys, at random times."""
+    from nnrobust.plant.disturbance import DISTURBANCE_KINDS
+
+    assert set(DISTURBANCE_KINDS) == {"paper", "none", "sinusoid", "scaled"}  # a new kind: add its case
+    plant = {"disturbance": kind, "disturbance_scale": 1.7, "disturbance_phase_shift": 0.4}
+    plant |= DISTURBANCE_CASES.get(kind, {})
+    setup = build(load_preset("paper-ellipse").replace(simulation={"duration": 0.01}, plant=plant))
+    assert compiled.own_twin(setup.plant.disturbance) is not None
+    spec = compiled.loop_spec(setup, 0.01)
+    assert spec.disturbance == compiled.own_twin(setup.plant.disturbance)
+    model = compiled.load_model(setup.plant.model.pinocchio_model, setup.robot.task_frame)
+    module, rng = compiled._module(), np.random.default_rng(5)
+    for t, q, v, _ in _states(setup, 8, seed=6):
+        t = float(t + rng.uniform(0.0, 20.0))
+        tau = rng.uniform(-5.0, 5.0, q.size)
+        setup.plant.begin_period(t)
+        _close(
+            module.twin_plant_acceleration(model, spec, t, q, v, tau),
+            setup.plant.acceleration(t, q, v, tau),
+            f"{kind}: q'' at t = {t:.3f}",
+        )

@@ -1,15 +1,26 @@
-// The external disturbance tau_d(t) of eq. (7): the twin of nnrobust/plant/disturbance.py's
-// SinusoidalDisturbance, built from its twin_fields.
+// The external disturbance tau_d(t) of eq. (7) on the C++ side, the twins of
+// nnrobust/plant/disturbance.py: each is a class registered under its Python class's `twin` name
+// (the name of its plant.disturbance kind) and built from the fields its `twin_fields` list.
 #pragma once
 
 #include <cmath>
 #include <limits>
+#include <memory>
 
 #include "../fields.hpp"
+#include "../registry.hpp"
 
 namespace nnrobust {
 
-struct SinusoidalDisturbance {
+// tau_d(t), one torque per joint (Disturbance.__call__); the plant asks for it at each RK4 stage
+struct Disturbance {
+  virtual ~Disturbance() = default;
+  virtual const Vector &operator()(double t) = 0;
+};
+
+using DisturbanceRegistry = Registry<Disturbance, const Fields &>;
+
+struct SinusoidalDisturbance final : Disturbance {
   Matrix amplitude, phase;  // A, phi: n x K [N m], [rad]
   Vector omega;             // K [rad/s]
 
@@ -21,7 +32,7 @@ struct SinusoidalDisturbance {
 
   // SinusoidalDisturbance.__call__: tau_d,i(t) = sum_k A_ik sin(omega_k t + phi_ik), kept for the
   // last t asked (RK4 asks twice at t + h / 2, and a step's end is the next step's start)
-  const Vector &operator()(double t) {
+  const Vector &operator()(double t) override {
     if (t != t_ || value_.size() != amplitude.rows()) {
       value_.resize(amplitude.rows());
       for (Eigen::Index i = 0; i < value_.size(); ++i) {
@@ -39,4 +50,15 @@ struct SinusoidalDisturbance {
   double t_ = std::numeric_limits<double>::quiet_NaN();
 };
 
+}  // namespace nnrobust
+
+// Registers `Class` (constructed as Class(const Fields &)) under `name`.
+#define NNROBUST_DISTURBANCE(name, Class)                                                              \
+  static const bool nnrobust_registered_##Class = ::nnrobust::DisturbanceRegistry::add(               \
+      name, [](const ::nnrobust::Fields &f) -> std::unique_ptr<::nnrobust::Disturbance> {              \
+        return std::make_unique<Class>(f);                                                             \
+      })
+
+namespace nnrobust {
+NNROBUST_DISTURBANCE("sinusoid", SinusoidalDisturbance);  // the twin of every shipped kind
 }  // namespace nnrobust

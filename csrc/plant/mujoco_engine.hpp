@@ -45,7 +45,7 @@ struct MujocoPlant {
   // acceleration or torque command and reset the state or zeroed the command (the run ends;
   // MujocoPlant.failure names it)
   template <class Load>
-  bool advance(double t, const Vector &tau, double period, SinusoidalDisturbance &disturbance, const Load &load,
+  bool advance(double t, const Vector &tau, double period, Disturbance &disturbance, const Load &load,
                Vector &q, Vector &v) const {
     const int n = static_cast<int>(tau.size());
     const double h = period / substeps;

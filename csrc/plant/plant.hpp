@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -45,7 +46,7 @@ std::optional<Part> optional_part(const LoopSpec &s, const std::string &name) {
 struct Plant {
   LoadedModel &m;
   Friction friction;
-  SinusoidalDisturbance disturbance;
+  std::unique_ptr<Disturbance> disturbance;  // registered under LoopSpec.disturbance
   ExternalLoads loads;
   Sensor sensor;
   std::optional<JointStops> stops;
@@ -59,10 +60,12 @@ struct Plant {
 
   Plant(LoadedModel &model, const LoopSpec &s)
       : m(model), friction(Fields{"the plant's friction", *plant_part(s, "friction")}),
-        disturbance(Fields{"the plant's disturbance", *plant_part(s, "disturbance")}),
         loads(Fields{"the plant's loads", *plant_part(s, "loads")}),
         sensor(Fields{"the plant's sensor", *plant_part(s, "sensor")}),
         stops(optional_part<JointStops>(s, "stops")), engine(optional_part<MujocoPlant>(s, "engine")) {
+    const auto make_disturbance = DisturbanceRegistry::find(s.disturbance);
+    if (!make_disturbance) throw std::invalid_argument("LoopSpec.disturbance: unknown disturbance " + s.disturbance);
+    disturbance = make_disturbance(Fields{"the plant's disturbance " + s.disturbance, *plant_part(s, "disturbance")});
     const Fields own{"the plant", s.plant_params};
     effort_limit = own.vector("effort_limit");
     speed_limit = own.vector("envelope_speed_limit");
@@ -132,7 +135,7 @@ struct Plant {
     const int n = static_cast<int>(q.size());
     net_.resize(n);
     if (has_wrench_) loaded_ = load_ + m.frame_jacobian(q).transpose() * wrench_;
-    const Vector &d = disturbance(t);
+    const Vector &d = (*disturbance)(t);
     for (int i = 0; i < n; ++i) {
       const double dry = sticky(i) ? friction.viscous[i] * v[i] + friction.coulomb[i] * mode[i]
                                    : friction.torque(i, v[i]);

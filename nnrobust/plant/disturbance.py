@@ -40,8 +40,10 @@ class SinusoidalDisturbance(Disturbance):
     omega: np.ndarray
     phase: np.ndarray
 
+    twin = "sinusoid"
+    """Its compiled twin's name (csrc/plant/disturbance.hpp, ``NNROBUST_DISTURBANCE``)."""
     twin_fields = ("amplitude", "omega", "phase")
-    """What its compiled twin reads (csrc/plant/disturbance.hpp)."""
+    """What its compiled twin reads."""
 
     def __post_init__(self):
         for name in ("amplitude", "omega", "phase"):
