@@ -95,7 +95,7 @@ bool SteppedLoop::scale_gains(double position, double velocity) {
 void SteppedLoop::observe(double *obs) const {
   if (!controller_) throw std::logic_error("SteppedLoop::observe: this loop was built without its law");
   const int n = model_.model.nv;
-  const TaskReference r = controller_->reference_kept(time(), qm_, vm_);  // the law's next compute takes it
+  const TaskReference &r = controller_->reference_kept(time(), qm_, vm_);  // the law's next compute takes it
   const Eigen::Index p = r.ts.x.size();  // the position rows: 2 planar, 3 spatial
   Eigen::Map<Vector> out(obs, observation_size());
   out.segment(0, n) = qm_;

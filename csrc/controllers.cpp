@@ -35,20 +35,24 @@ Matrix Controller::pinv_factor(const Matrix &J, double &lam2) const {
   return (JJt + lam2 * Matrix::Identity(J.rows(), J.rows())).inverse();
 }
 
-TaskReference Controller::reference_kept(double t, const Vector &q, const Vector &v) const {
+const TaskReference &Controller::reference_kept(double t, const Vector &q, const Vector &v) const {
   TaskReference r = reference(t, q, v);
-  kept_ = std::make_unique<TaskReference>(r);
+  if (kept_)
+    *kept_ = std::move(r);  // the slot of the last one: its arrays are r's, moved, not copied
+  else
+    kept_ = std::make_unique<TaskReference>(std::move(r));
+  kept_valid_ = true;
   kept_t_ = t;
   kept_q_ = q;
   kept_v_ = v;
-  return r;
+  return *kept_;
 }
 
 TaskReference Controller::reference(double t, const Vector &q, const Vector &v) const {
-  if (kept_) {  // observed at this (t, q, v) just before: the same numbers (the nominal model's
-                // data too: nothing ran on it since)
-    std::unique_ptr<TaskReference> kept = std::move(kept_);
-    if (t == kept_t_ && q == kept_q_ && v == kept_v_) return std::move(*kept);
+  if (kept_valid_) {  // observed at this (t, q, v) just before: the same numbers (the nominal
+                      // model's data too: nothing ran on it since); taken once
+    kept_valid_ = false;
+    if (t == kept_t_ && q == kept_q_ && v == kept_v_) return std::move(*kept_);
   }
   TaskReference r{nominal.task_state(q, v), {}, {}, {}, {}};
   const TaskState &ts = r.ts;

@@ -42,7 +42,7 @@ struct NNROBUST_API Controller {
   TaskReference reference(double t, const Vector &q, const Vector &v) const;
   // reference(t, q, v), kept for the law's next compute at the same (t, q, v): a learning
   // environment observes the reference the law then computes again (SteppedLoop::observe)
-  TaskReference reference_kept(double t, const Vector &q, const Vector &v) const;
+  const TaskReference &reference_kept(double t, const Vector &q, const Vector &v) const;
   // TaskSpaceController.compute from u_0 on: the torque of eq. (9) with these gains
   Vector eq9_torque(const Vector &q, const Vector &v, const TaskReference &r, const Matrix &J_pinv, const Vector &u0,
                     const Matrix &Kp, const Matrix &Kv, double k);
@@ -53,7 +53,8 @@ struct NNROBUST_API Controller {
 
  private:
   // what reference_kept computed last, and where: taken by the next reference call there
-  mutable std::unique_ptr<TaskReference> kept_;
+  mutable std::unique_ptr<TaskReference> kept_;  // one slot, reused
+  mutable bool kept_valid_ = false;
   mutable double kept_t_ = 0.0;
   mutable Vector kept_q_, kept_v_;
 };

@@ -72,8 +72,13 @@ void StepPool::run(size_t count, const std::function<void(size_t)> &job) {
   }
   start_.notify_all();
   work();
+  // the workers finish within microseconds of the caller (the same blocks of work): poll for them
+  // a little before sleeping, since a wake-up from a condition variable can take longer than a step
+  const auto spin_until = std::chrono::steady_clock::now() + std::chrono::microseconds(SPIN_MICROSECONDS);
+  while (busy_.load(std::memory_order_acquire) != 0 && std::chrono::steady_clock::now() < spin_until)
+    std::this_thread::yield();
   std::unique_lock<std::mutex> hold(lock_);
-  done_.wait(hold, [this] { return busy_ == 0; });
+  done_.wait(hold, [this] { return busy_.load(std::memory_order_acquire) == 0; });
   job_ = nullptr;
   if (failure_) std::rethrow_exception(failure_);
 }
@@ -106,7 +111,7 @@ void StepPool::serve() {
     work();
     {
       const std::lock_guard<std::mutex> hold(lock_);
-      --busy_;
+      busy_.fetch_sub(1, std::memory_order_release);
     }
     done_.notify_one();
   }

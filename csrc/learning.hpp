@@ -66,7 +66,7 @@ class StepPool {
   size_t count_ = 0;
   std::atomic<size_t> next_{0};
   std::atomic<long> posted_{0};  // the generation last posted, read while spinning
-  int busy_ = 0;
+  std::atomic<int> busy_{0};  // workers still at the posted step, polled by the caller
   long generation_ = 0;
   bool stop_ = false;
   std::exception_ptr failure_;
