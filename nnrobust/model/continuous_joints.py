@@ -4,7 +4,7 @@ Pinocchio gives a continuous (unbounded revolute) joint two configuration coordi
 (cos θ, sin θ), so that nq > nv. The closed loop, the plant, the criteria and every result
 speak of one angle per joint. A continuous joint is therefore rebuilt as the revolute joint
 about the same axis with no position limit: its kinematics and dynamics are those of the
-unbounded joint at the same angle (tests/test_any_robot.py checks M, the bias forces and the
+unbounded joint at the same angle (tests/model/test_any_robot.py checks M, the bias forces and the
 frame Jacobians at random states), and its angle is not wrapped, so it counts turns.
 """
 

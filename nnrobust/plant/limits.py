@@ -51,7 +51,7 @@ class JointStops:
 
     directed back into the range, and nothing inside it. The spring part K delta stores and
     returns energy, the damping part K alpha delta delta'^2 >= 0 only dissipates, and the clamp at
-    zero only removes a pull, so a stop never adds energy to the arm (tests/test_plant.py). The
+    zero only removes a pull, so a stop never adds energy to the arm (tests/plant/test_plant.py). The
     force is continuous at contact (zero at delta = 0), which keeps RK4 accurate. With
     alpha v_in small the coefficient of restitution is about 1 - (2/3) alpha v_in.
 

@@ -23,7 +23,7 @@ file's SHA-256 (config.toml's provenance) and each step's inference time (signal
 With the compiled loop available, a run of this law is a compiled run of its base law driven one
 period at a time (``SteppedLoop``): the observation and the base law's command are computed in
 C++, only the inference in Python (nnrobust/compiled.py, ``simulate_policy``). This module is
-its Python reference (the Python loop), and tests/test_policy.py holds the two equal.
+its Python reference (the Python loop), and tests/controllers/test_policy.py holds the two equal.
 """
 
 from __future__ import annotations

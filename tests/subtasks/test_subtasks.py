@@ -9,7 +9,7 @@ from nnrobust.subtasks import (
     WeightedCriteria,
 )
 
-from .problems import closed_form_of, finite_difference, paper_robot, random_states
+from ..problems import closed_form_of, finite_difference, paper_robot, random_states
 
 
 @pytest.mark.parametrize(

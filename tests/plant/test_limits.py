@@ -11,7 +11,7 @@ from nnrobust.plant import Friction, JointStops, Plant, Sensor, SinusoidalDistur
 from nnrobust.presets import load_preset
 from nnrobust.simulation import simulate
 
-from .problems import ConstantTorque, paper_robot
+from ..problems import ConstantTorque, paper_robot
 
 
 class Recorder:

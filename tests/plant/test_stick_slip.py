@@ -10,7 +10,7 @@ from nnrobust.plant.stick_slip import settle
 from nnrobust.presets import load_preset
 from nnrobust.simulation import simulate
 
-from .problems import ConstantTorque, paper_robot
+from ..problems import ConstantTorque, paper_robot
 
 FD, FC = 0.3, 0.8
 """Viscous [N m s/rad] and Coulomb [N m] friction of the one-link arm."""

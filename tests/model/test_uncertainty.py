@@ -14,7 +14,7 @@ from nnrobust.model import PinocchioModel
 from nnrobust.model.perturbation import is_physical, perturb_inertias
 from nnrobust.plant import scaled_disturbance, scaled_friction, torque_scale
 
-from .arms import arm, random_configurations
+from ..arms import arm, random_configurations
 
 
 def _perturbed(robot, **kwargs):

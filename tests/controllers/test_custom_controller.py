@@ -20,7 +20,7 @@ from nnrobust.exceptions import ConfigError, ControllerError
 from nnrobust.experiment import build, run_experiment
 from nnrobust.presets import load_preset
 
-LAWS = Path(__file__).parent / "controllers" / "eq9_again.py"
+LAWS = Path(__file__).parents[1] / "controllers" / "eq9_again.py"
 
 
 def _experiment(folder: Path, cls: str, params: str = "", extra: str = "", duration: float = 0.5) -> Path:

@@ -21,7 +21,7 @@ pytestmark = [
     pytest.mark.skipif(shutil.which("c++") is None, reason="no C++ compiler"),
 ]
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 CPP = ROOT / "examples" / "controllers" / "task_pd.cpp"
 PY = ROOT / "examples" / "custom_controller.py"
 PARAMS = {"Kp": 100.0, "Kd": 20.0, "damping": 5.0}

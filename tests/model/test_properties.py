@@ -17,8 +17,8 @@ from nnrobust.plant import Friction, Plant, SinusoidalDisturbance
 from nnrobust.presets import load_preset, preset_path
 from nnrobust.simulation import simulate
 
-from .arms import arm
-from .problems import ConstantTorque
+from ..arms import arm
+from ..problems import ConstantTorque
 
 SETTINGS = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 

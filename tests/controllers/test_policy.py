@@ -20,9 +20,9 @@ from nnrobust.presets import load_preset
 pytest.importorskip("onnxruntime")
 pytest.importorskip("onnx")
 
-from .policies import linear_policy, nan_policy, unknown_operator_policy  # noqa: E402
+from ..policies import linear_policy, nan_policy, unknown_operator_policy  # noqa: E402
 
-COUNTER = Path(__file__).parent / "controllers" / "eq9_again.py"
+COUNTER = Path(__file__).parents[1] / "controllers" / "eq9_again.py"
 PAPER = ObservationLayout(3, 2)
 needs_compiled = pytest.mark.skipif(not compiled.available(), reason=compiled.unavailable_reason())
 

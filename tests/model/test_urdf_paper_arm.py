@@ -3,7 +3,7 @@ import pytest
 
 from nnrobust.model import ThreeLinkParameters
 
-from .problems import paper_robot
+from ..problems import paper_robot
 
 
 def test_urdf_reproduces_printed_parameters_to_four_decimals():

@@ -24,7 +24,7 @@ from nnrobust.plant.mujoco_engine import (  # noqa: E402 (after the skip)
     build_mujoco_plant,
 )
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).parents[1] / "data"
 ROTATED = DATA / "engines" / "rotated_inertia.urdf"
 
 
@@ -309,7 +309,7 @@ def test_compare_shows_the_sim_to_sim_gap_and_the_verdicts_that_flip(tmp_path, c
 
 def test_a_custom_controller_on_mujoco_same_on_the_hybrid_and_python_loops():
     """The hybrid loop (compiled plant stepping, Python law) steps MuJoCo too: the same run."""
-    custom = Path(__file__).resolve().parents[1] / "examples" / "custom_controller.py"
+    custom = Path(__file__).resolve().parents[2] / "examples" / "custom_controller.py"
     runs = {}
     for backend in ("hybrid", "python"):
         config = load_preset("paper-ellipse").replace(

@@ -15,7 +15,7 @@ from nnrobust.exceptions import ConfigError
 from nnrobust.experiment import build
 from nnrobust.presets import load_preset, preset_names
 
-EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 
 CASES = {
     "paper arm, closed form": ("paper-ellipse", {}, {}),

@@ -191,7 +191,7 @@ def test_nn_controller_tracks_on_robots_the_paper_never_saw(name):
 
     nn, baseline = _late_rms(name, "nn"), _late_rms(name, "no-u0")
     assert nn < 0.02 and 3 * nn < baseline, (nn, baseline)
-    docs = (Path(__file__).resolve().parents[1] / "docs" / "robots.md").read_text()
+    docs = (Path(__file__).resolve().parents[2] / "docs" / "robots.md").read_text()
     row = re.search(rf"\| {name}( leg)? \| \d+ \| ([\d.]+) mm \| ([\d.]+) mm \|", docs)
     assert row, f"docs/robots.md has no row for {name}: run python -m tests.test_any_robot"
     assert (row.group(2), row.group(3)) == (f"{nn * 1e3:.3g}", f"{baseline * 1e3:.3g}"), (
@@ -233,7 +233,7 @@ def test_docs_list_every_robot_as_the_command_prints_it(capsys):
 
     assert main(["robots", "--all"]) == 0
     printed = capsys.readouterr().out
-    docs = (Path(__file__).resolve().parents[1] / "docs" / "robots.md").read_text()
+    docs = (Path(__file__).resolve().parents[2] / "docs" / "robots.md").read_text()
     block = re.search(r"<!-- robots-all -->\n```text\n(.*?)```\n<!-- /robots-all -->", docs, re.S)
     assert block and block.group(1) == printed, "run: nnrobust robots --all, and paste it into docs/robots.md"
 
@@ -331,7 +331,7 @@ def test_the_pybullet_arms_load_unmodified(tmp_path):
     with one warning each where they follow an exporter's convention."""
     from nnrobust.model.urdf_check import InertiaAssumptionWarning
 
-    data = Path(__file__).parent / "data" / "pybullet"
+    data = Path(__file__).parents[1] / "data" / "pybullet"
     expected = {
         "kuka_iiwa/model.urdf": None,
         "franka_panda/panda.urdf": "massless links panda_link8, panda_grasptarget",
@@ -355,7 +355,7 @@ def test_the_pybullet_arms_track_a_circle_with_the_defaults(arm, controller, tmp
     from nnrobust.experiment import run_experiment
 
     path = tmp_path / "circle.toml"
-    source = Path(__file__).parent / "data" / "pybullet" / arm
+    source = Path(__file__).parents[1] / "data" / "pybullet" / arm
     path.write_text(
         f'[robot]\nsource = "{source}"\ntask = "position"\n[trajectory]\n'
         "center = [0.45, 0.0, 0.5]\naxis_a = [0.1, 0.0, 0.0]\naxis_b = [0.0, 0.1, 0.0]\n"

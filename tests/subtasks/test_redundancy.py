@@ -24,7 +24,7 @@ from nnrobust.subtasks import (
 )
 from nnrobust.trajectories import EllipseTrajectory
 
-from .arms import ARM_CASES, arm, random_configurations
+from ..arms import ARM_CASES, arm, random_configurations
 
 GRADIENT_ARMS = [("panda", "position"), ("panda", "pose"), ("ur5", "position"), ("planar7", "planar")]
 

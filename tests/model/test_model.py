@@ -5,8 +5,8 @@ from nnrobust import load_robot
 from nnrobust.exceptions import FrameNotFound, ModelMismatch, NNRobustError, RobotLoadError
 from nnrobust.model import DynamicsModel, ThreeLinkParameters, ThreeLinkPlanarModel, paper_arm_urdf
 
-from .paper_printed import printed_coriolis, printed_mass
-from .problems import (
+from ..paper_printed import printed_coriolis, printed_mass
+from ..problems import (
     VERTICAL_GRAVITY,
     closed_form_of,
     finite_difference,

@@ -1,0 +1,1 @@
+"""The config room's tests (nnrobust/config/)."""

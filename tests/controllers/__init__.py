@@ -1,0 +1,1 @@
+"""The controllers room's tests (nnrobust/controllers/)."""

@@ -1,0 +1,1 @@
+"""The plant room's tests (nnrobust/plant/)."""

@@ -1,0 +1,1 @@
+"""The subtasks room's tests (nnrobust/subtasks/)."""

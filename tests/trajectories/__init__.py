@@ -1,0 +1,1 @@
+"""The trajectories room's tests (nnrobust/trajectories/)."""
