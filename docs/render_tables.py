@@ -755,13 +755,27 @@ def paper_kinds() -> str:
     return "\n".join(lines) + "\n\nMade from the kinds' declarations (`PaperKind`, nnrobust/controllers/).\n"
 
 
+def _declared(params) -> str:
+    """The keys a kind declares beyond its section's fields, for a table's cell ("" if none)."""
+    cells = []
+    for p in params:
+        unit = "" if p.unit == "-" else f" [{p.unit}]"
+        default = "set by the kind" if p.default is None else f"default `{p.default}`"
+        valid = " or ".join(f"`{c}`" for c in p.choices) if p.choices else p.range
+        cells.append(f"`{p.name}`{unit}: {p.doc} ({default}, {valid})")
+    return "; ".join(cells)
+
+
 def disturbance_kinds() -> str:
     """The shipped disturbances of plant.disturbance, from their declarations."""
     from nnrobust.plant.disturbance import DISTURBANCE_KINDS
 
     lines = ["| `plant.disturbance` | τ_d(t) |", "|---|---|"]
     lines.append("| `auto` (default) | `paper` on the paper's arm, `scaled` on any other |")
-    lines += [f"| `{name}` | {DISTURBANCE_KINDS[name].description} |" for name in sorted(DISTURBANCE_KINDS)]
+    for name in sorted(DISTURBANCE_KINDS):
+        kind = DISTURBANCE_KINDS[name]
+        keys = _declared(kind.params)
+        lines.append(f"| `{name}` | {kind.description}{'; its keys: ' + keys if keys else ''} |")
     lines.append(
         "| `custom` | a class of yours, `disturbance_class` and `disturbance_params` (docs/extending.md) |"
     )
@@ -778,11 +792,27 @@ def path_kinds() -> str:
     lines = ["| `kind` | x_d(t) | keys |", "|---|---|---|"]
     for name, kind in PATH_KINDS.items():
         default = " (default)" if name == "ellipse" else ""
-        lines.append(f"| `{name}`{default} | {kind.description} | {kind.keys_doc} |")
+        declared = _declared(kind.params)
+        keys = kind.keys_doc + (f"; {declared}" if declared else "")
+        lines.append(f"| `{name}`{default} | {kind.description} | {keys} |")
     lines.append(
         "| `custom` | a class of yours (planar and position tasks; docs/extending.md) | `class`, `params` |"
     )
     return "\n".join(lines) + "\n\nMade from the paths' declarations (`PathKind`, nnrobust/trajectories/).\n"
+
+
+def criterion_kinds() -> str:
+    """The shipped criteria of subtasks.criteria, from their declarations."""
+    from nnrobust.subtasks import CRITERION_KINDS
+
+    lines = ["| name | h(q), as declared | keys it declares |", "|---|---|---|"]
+    for name, kind in CRITERION_KINDS.items():
+        lines.append(f"| `{name}` | {kind.description} | {_declared(kind.params) or '-'} |")
+    return (
+        "\n".join(lines)
+        + "\n\nMade from the criteria's declarations (`CriterionKind`, nnrobust/subtasks/): a criterion's "
+        "own keys beyond `[subtasks]`'s fields are declared there (`params`).\n"
+    )
 
 
 def serve_misses() -> str:
@@ -825,6 +855,7 @@ RENDERERS = {
     "paper-kind-keys": paper_kind_keys,
     "path-kinds": path_kinds,
     "disturbance-kinds": disturbance_kinds,
+    "criterion-kinds": criterion_kinds,
     "falsify-paper-factors": _falsified("falsify_paper_factors"),
     "falsify-panda-factors": _falsified("falsify_panda_factors"),
     "falsify-tuned-noisy": _falsified("falsify_tuned_noisy"),

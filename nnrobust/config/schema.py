@@ -109,6 +109,7 @@ class ExperimentConfig:
                     for k in _field_names(type(value))
                     if (v := getattr(value, k)) is not None
                 }
+                out[name].update(copy.deepcopy(getattr(value, "extra", None) or {}))  # kinds' keys
             elif value is not None:
                 out[name] = value
         return out
@@ -210,8 +211,10 @@ _FIELD_NAMES: dict[typing.Any, list[str]] = {}
 
 
 def _field_names(cls: typing.Any) -> list[str]:
-    """A config dataclass's field names, listed once per class."""
+    """A config dataclass's field names (its keys; ``extra`` holds the kinds' declared keys),
+    listed once per class.
+    """
     names = _FIELD_NAMES.get(cls)
     if names is None:
-        names = _FIELD_NAMES[cls] = [f.name for f in dataclasses.fields(cls)]
+        names = _FIELD_NAMES[cls] = [f.name for f in dataclasses.fields(cls) if f.name != "extra"]
     return names

@@ -109,12 +109,16 @@ def _section_from_dict(cls, data: dict, path: str):
     if not isinstance(data, dict):
         raise ConfigError(path, f"expected a table, got {type(data).__name__}")
     hints = _type_hints(cls)
-    names = [f.name for f in dataclasses.fields(cls)]
-    values = {}
-    shown = [next((a for a, f in KEY_ALIASES.items() if f == n), n) for n in names]
+    names = _field_names(cls)
+    declared = cls.declared_keys() if hasattr(cls, "declared_keys") else {}  # the kinds' keys
+    values: dict = {}
+    shown = [next((a for a, f in KEY_ALIASES.items() if f == n), n) for n in names] + sorted(declared)
     for key, value in data.items():
         full = f"{path}.{key}" if path else key
         key = KEY_ALIASES.get(key, key)
+        if key in declared:  # checked against its declaration with the section's rules
+            values.setdefault("extra", {})[key] = _declared_value(full, value)
+            continue
         if key not in names:
             raise ConfigError(full, _suggest(key, shown))
         annotation = hints[key]
@@ -123,6 +127,18 @@ def _section_from_dict(cls, data: dict, path: str):
         else:
             values[key] = _check_type(full, value, annotation)
     return cls(**values)
+
+
+def _declared_value(path: str, value):
+    """A value of a key a kind declares: a number, text, true/false or a list of numbers (its
+    range and size are its declaration's, checked with the section's rules).
+    """
+    numbers = isinstance(value, list) and all(
+        isinstance(v, (int, float)) and not isinstance(v, bool) for v in value
+    )
+    if isinstance(value, (bool, int, float, str)) or numbers:
+        return value
+    raise ConfigError(path, f"expected a number, a text, true or false or a list of numbers, got {value!r}")
 
 
 def from_dict(data: dict) -> ExperimentConfig:
@@ -504,6 +520,7 @@ def check_dotted_key(key: str) -> None:
     if section not in top or not dataclasses.is_dataclass(hints[section]):
         raise ConfigError(key, _suggest(section, [t for t in top if dataclasses.is_dataclass(hints[t])]))
     names = [next((a for a, f in KEY_ALIASES.items() if f == n), n) for n in _field_names(hints[section])]
+    names += sorted(getattr(hints[section], "declared_keys", dict)())  # the kinds' keys
     if len(parts) == 3 and section == "controller" and parts[1] == "params":  # one keyword argument
         if not parts[2].isidentifier():
             raise ConfigError(key, f"{parts[2]!r} is not a valid Python identifier (a keyword argument name)")

@@ -6,10 +6,11 @@ kind is declared.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 from ..exceptions import ConfigError
-from ..key_checks import check_choice
+from ..key_checks import DeclaredKeys, check_choice, keys_beyond_fields
 from .registry import (
     PAPER_KINDS,
     controller_kinds,
@@ -21,7 +22,7 @@ from .registry import (
 
 
 @dataclass
-class ControllerConfig:
+class ControllerConfig(DeclaredKeys):
     """Which control law and its gains.
 
     Attributes:
@@ -61,6 +62,13 @@ class ControllerConfig:
     sliding_boundary: float = declared_default("controller.sliding_boundary")
     class_: str | None = None
     params: dict | None = None
+    extra: dict = field(default_factory=dict)
+    """Values of the keys the room's kinds declare beyond these fields (:meth:`declared_keys`)."""
+
+    @classmethod
+    def declared_keys(cls) -> dict:
+        """The ``[controller]`` keys a paper kind declares beyond these fields (a kind's ``params``)."""
+        return keys_beyond_fields("controller", _fields_of(cls), declared_params())
 
 
 CONTROLLER_KINDS = paper_kinds()
@@ -82,7 +90,7 @@ def is_eq9(kind: str) -> bool:
 
 
 @dataclass
-class NNConfig:
+class NNConfig(DeclaredKeys):
     """The NN robust compensator, eqs. (15)-(17): its keys, their units, defaults and ranges as
     the ``nn`` kind declares them (nnrobust/controllers/nn_compensator.py; docs/controller.md's
     key reference).
@@ -100,6 +108,13 @@ class NNConfig:
     bias: bool = declared_default("nn.bias")
     velocity_range: float = declared_default("nn.velocity_range")
     error_range: list[float] = field(default_factory=lambda: declared_default("nn.error_range"))
+    extra: dict = field(default_factory=dict)
+    """Values of the keys the room's kinds declare beyond these fields (:meth:`declared_keys`)."""
+
+    @classmethod
+    def declared_keys(cls) -> dict:
+        """The ``[nn]`` keys a paper kind declares beyond these fields."""
+        return keys_beyond_fields("nn", _fields_of(cls), declared_params())
 
 
 GAIN_KEYS = ("Kp", "Kv", "pd_Kp", "pd_Kd")
@@ -174,3 +189,7 @@ def inert_controller_keys(c: ControllerConfig, nn: NNConfig) -> dict[str, str]:
     if c.kind == "nn" and nn.basis_input == "error":
         mark(["nn.velocity_range"], "nn.basis_input = 'error'")
     return inert
+
+
+def _fields_of(cls) -> list[str]:
+    return [f.name for f in dataclasses.fields(cls) if f.name != "extra"]

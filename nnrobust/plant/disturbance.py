@@ -105,12 +105,15 @@ class DisturbanceKind:
     line for the docs and errors, and ``build(plant_section, robot, tau_ref)`` -> the Disturbance
     (``tau_ref()`` the robot's torque scale, computed once if asked for; a ConfigError names the
     key at fault). ``plant.disturbance_scale``, the per-joint scales, the frequency scale and the
-    phase shift then apply to whatever it builds.
+    phase shift then apply to whatever it builds. ``params``: the ``[plant]`` keys it reads beyond
+    the section's fields, each declared (:class:`nnrobust.key_checks.LawParam`, named
+    ``plant.KEY``): defaulted, range-checked, inert under another disturbance.
     """
 
     name: str
     description: str
     build: Callable[[Any, Any, Callable[[], np.ndarray]], Disturbance]
+    params: tuple[Any, ...] = ()
 
 
 DISTURBANCE_KINDS: Kinds[DisturbanceKind] = Kinds("disturbance")

@@ -5,17 +5,26 @@ defaults. Their builder: :func:`nnrobust.plant.build.build_plant`.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 from ..exceptions import ConfigError
-from ..key_checks import check_choice, require_non_negative, require_physical, require_positive, require_seed
+from ..key_checks import (
+    DeclaredKeys,
+    check_choice,
+    keys_beyond_fields,
+    require_non_negative,
+    require_physical,
+    require_positive,
+    require_seed,
+)
 from ..numeric_limits import MAX_FACTOR, MAX_PAYLOAD, MAX_PHYSICAL, MAX_STOP_STIFFNESS
 from .disturbance import DISTURBANCE_KINDS
 from .mujoco_engine import ENGINES, MUJOCO_INTEGRATORS
 
 
 @dataclass
-class PlantConfig:
+class PlantConfig(DeclaredKeys):
     """Friction and disturbance of the true robot.
 
     Attributes:
@@ -117,6 +126,15 @@ class PlantConfig:
     loads: list[dict] | None = None
     engine: str = "pinocchio"
     mujoco_integrator: str = "rk4"
+    extra: dict = field(default_factory=dict)
+    """Values of the keys the room's kinds declare beyond these fields (:meth:`declared_keys`)."""
+
+    @classmethod
+    def declared_keys(cls) -> dict:
+        """The ``[plant]`` keys a disturbance declares beyond these fields (its ``params``)."""
+        return keys_beyond_fields(
+            "plant", _fields_of(cls), (p for kind in DISTURBANCE_KINDS.values() for p in kind.params)
+        )
 
 
 @dataclass
@@ -225,6 +243,7 @@ def check_plant(pc: PlantConfig, se: SensingConfig) -> None:
         raise ConfigError("sensing.delay", f"must be >= 0 control periods, got {se.delay}")
     for key in ("viscous_level", "coulomb_level", "disturbance_level"):
         require_non_negative(f"plant.{key}", getattr(pc, key))
+    pc.check_declared(1)  # a disturbance's own keys
     if pc.disturbance == "sinusoid" and (pc.disturbance_amplitude is None or pc.disturbance_omega is None):
         raise ConfigError(
             "plant.disturbance_amplitude",
@@ -261,4 +280,11 @@ def inert_plant_keys(pc: PlantConfig) -> dict[str, str]:
         mark(["plant.torque_speed_knee"], "plant.torque_speed = 'none'")
     if not pc.joint_stops:
         mark(["plant.joint_stop_stiffness", "plant.joint_stop_damping"], "plant.joint_stops = false")
+    for name, kind in DISTURBANCE_KINDS.items():  # the keys a disturbance declares, under another
+        if name != pc.disturbance:
+            mark([p.name for p in kind.params], f"plant.disturbance = {pc.disturbance!r}")
     return inert
+
+
+def _fields_of(cls) -> list[str]:
+    return [f.name for f in dataclasses.fields(cls) if f.name != "extra"]

@@ -30,6 +30,9 @@ class CriterionKind:
         twin_fields: ``twin_fields(criterion)`` -> its numbers by name, as the twin reads them
             (2-D arrays; a number is 1 x 1, a vector k x 1); None: no compiled twin.
         det: whether it reads det(J J^T) (its twin is compiled for planar and position tasks).
+        params: the ``[subtasks]`` keys it reads beyond the section's fields, each declared
+            (:class:`nnrobust.key_checks.LawParam`, named ``subtasks.KEY``): a valid key of any
+            experiment, defaulted, range-checked and inert while the criterion is not chosen.
 
     """
 
@@ -40,6 +43,7 @@ class CriterionKind:
     build: Callable[[Any, Any], Criterion]
     twin_fields: Callable[[Any], dict[str, Any]] | None = None
     det: bool = False
+    params: tuple[Any, ...] = ()
 
     def twin_values(self, criterion: Criterion) -> dict[str, np.ndarray]:
         """The twin's fields as 2-D float arrays (what LoopSpec.criterion_params carries)."""

@@ -4,16 +4,17 @@ eq. (4) and their weights. Its builder: :func:`nnrobust.subtasks.build.build_cri
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
 from ..exceptions import ConfigError
-from ..key_checks import require_non_negative, require_positive
-from .registry import default_criteria
+from ..key_checks import DeclaredKeys, keys_beyond_fields, require_non_negative, require_positive
+from .registry import CRITERION_KINDS, default_criteria
 
 
 @dataclass
-class SubtaskConfig:
+class SubtaskConfig(DeclaredKeys):
     """Self-motion criteria h_i with weights w_i that sum to C, eq. (4).
 
     Attributes:
@@ -44,12 +45,22 @@ class SubtaskConfig:
     link_radius: float = 0.0
     criterion_class: str | None = None
     criterion_params: dict | None = None
+    extra: dict = field(default_factory=dict)
+    """Values of the keys the room's kinds declare beyond these fields (:meth:`declared_keys`)."""
+
+    @classmethod
+    def declared_keys(cls) -> dict:
+        """The ``[subtasks]`` keys a criterion declares beyond these fields (its ``params``)."""
+        return keys_beyond_fields(
+            "subtasks", _fields_of(cls), (p for kind in CRITERION_KINDS.values() for p in kind.params)
+        )
 
 
 def check_subtasks(sc: SubtaskConfig) -> None:
     """The rules that read only ``[subtasks]``: eq. (4)'s weights sum to C, the obstacles' spheres
     (the criteria's names are checked when the criterion is built). Changes nothing.
     """
+    sc.check_declared(3)  # a criterion's own keys (none is sized per task row)
     require_positive("subtasks.C", sc.C)
     require_positive("subtasks.obstacle_influence", sc.obstacle_influence)
     require_non_negative("subtasks.link_radius", sc.link_radius)
@@ -87,4 +98,11 @@ def inert_subtask_keys(sc: SubtaskConfig, task: str) -> dict[str, str]:
         )
     if "joint_smoothness" not in criteria:
         inert["subtasks.smoothness_coefficients"] = "'joint_smoothness' is not in subtasks.criteria"
+    for name, kind in CRITERION_KINDS.items():  # the keys a criterion declares, while it is not chosen
+        if name not in criteria:
+            inert |= {p.name: f"{name!r} is not in subtasks.criteria" for p in kind.params}
     return inert
+
+
+def _fields_of(cls) -> list[str]:
+    return [f.name for f in dataclasses.fields(cls) if f.name != "extra"]

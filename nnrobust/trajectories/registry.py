@@ -29,6 +29,9 @@ class PathKind:
         dimension: ``dimension(trajectory_config)``: entries of a path point (2 or 3 are valid).
         build: ``build(trajectory_section, robot, q_seed)`` -> the path (``q_seed``:
             ``simulation.q_seed``, where a path that starts where the arm is reads the start).
+        params: the ``[trajectory]`` keys it reads beyond the section's fields, each declared
+            (:class:`nnrobust.key_checks.LawParam`, named ``trajectory.KEY``; list them in
+            ``keys`` too): defaulted, range-checked, inert under another path.
 
     """
 
@@ -39,6 +42,7 @@ class PathKind:
     check: Callable[[Any], None]
     dimension: Callable[[Any], int]
     build: Callable[[Any, Any, Any], Trajectory]
+    params: tuple[Any, ...] = ()
 
 
 PATH_KINDS: Kinds[PathKind] = Kinds("path")

@@ -4,16 +4,17 @@ defaults and choices. Its builder: :func:`nnrobust.trajectories.build.build_traj
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
 from ..exceptions import ConfigError
-from ..key_checks import check_choice
+from ..key_checks import DeclaredKeys, check_choice, keys_beyond_fields
 from .registry import PATH_KINDS, path_key
 
 
 @dataclass
-class TrajectoryConfig:
+class TrajectoryConfig(DeclaredKeys):
     """The desired path x_d(t) [m], of one of three kinds, or a user's class.
 
     - ``ellipse`` (eq. 18): x_d(t) = center + axis_a cos(omega t + phase) + axis_b sin(omega t +
@@ -70,6 +71,15 @@ class TrajectoryConfig:
     rotation_phase: float = 0.0
     class_: str | None = None
     params: dict | None = None
+    extra: dict = field(default_factory=dict)
+    """Values of the keys the room's kinds declare beyond these fields (:meth:`declared_keys`)."""
+
+    @classmethod
+    def declared_keys(cls) -> dict:
+        """The ``[trajectory]`` keys a path declares beyond these fields (its ``params``)."""
+        return keys_beyond_fields(
+            "trajectory", _fields_of(cls), (p for kind in PATH_KINDS.values() for p in kind.params)
+        )
 
     @property
     def dimension(self) -> int:
@@ -126,7 +136,7 @@ def check_trajectory(tc: TrajectoryConfig) -> None:
     """The rules that read only ``[trajectory]``: its kind, and a shipped path's keys (their
     extents, then the path's declared checks) with 2 or 3 entries per point. Changes nothing.
     """
-    check_choice("trajectory.kind", tc.kind, TRAJECTORY_KINDS)
+    check_choice("trajectory.kind", tc.kind, (*PATH_KINDS, "custom"))  # as declared now
     if tc.kind == "custom":
         return
     _check_extents(tc)
@@ -136,6 +146,7 @@ def check_trajectory(tc: TrajectoryConfig) -> None:
             f"trajectory.{path_key(tc)}",
             f"path points have 2 (x, y) or 3 (x, y, z) entries, got {tc.dimension}",
         )
+    tc.check_declared(tc.dimension)
 
 
 def check_orientation(tc: TrajectoryConfig) -> None:
@@ -162,3 +173,7 @@ def inert_trajectory_keys(tc: TrajectoryConfig) -> dict[str, str]:
     path_keys = {name: kind.keys for name, kind in PATH_KINDS.items()} | {"custom": ("class", "params")}
     why = f"trajectory.kind = {tc.kind!r}"
     return {f"trajectory.{k}": why for other, keys in path_keys.items() if other != tc.kind for k in keys}
+
+
+def _fields_of(cls) -> list[str]:
+    return [f.name for f in dataclasses.fields(cls) if f.name != "extra"]
