@@ -14,10 +14,11 @@ are written with (a leaf module).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass
-from typing import Any
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -164,17 +165,29 @@ class LawParam:
         return np.full(size or 1, arr[0]) if arr.size == 1 else arr
 
 
+@dataclass
 class DeclaredKeys:
-    """A section whose kinds may declare keys beyond its fields (:meth:`declared_keys`): a value
-    given in the file is kept in the section's ``extra`` table (a field of the dataclass, written
-    back flat by ``ExperimentConfig.to_dict``); read as an attribute, it is the value given or the
+    """A section (``[SECTION]``) whose kinds may declare keys beyond its fields
+    (:meth:`kind_params`): a value given in the file is kept in ``extra`` (written back flat by
+    ``ExperimentConfig.to_dict``); read as an attribute, it is the value given or the
     declaration's default.
     """
 
+    extra: dict = field(default_factory=dict, kw_only=True)
+    """The values given of the keys the section's kinds declare beyond its fields."""
+
+    SECTION: ClassVar[str] = ""
+
+    @classmethod
+    def kind_params(cls) -> Iterable[LawParam]:
+        """Every key the section's kinds declare (their ``params``)."""
+        return ()
+
     @classmethod
     def declared_keys(cls) -> dict[str, LawParam]:
-        """The keys the room's kinds declare that are not fields, by their name in the section."""
-        return {}
+        """The keys the kinds declare that are not fields, by their name in the section."""
+        fields = [f.name for f in dataclasses.fields(cls) if f.name != "extra"]
+        return keys_beyond_fields(cls.SECTION, fields, cls.kind_params())
 
     def __getattr__(self, name: str) -> Any:  # only for a name that is not a field or attribute
         if name.startswith("__") or name == "extra":

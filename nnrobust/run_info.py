@@ -69,7 +69,7 @@ class RunInfo:
             mesh_folders=None if rc.mesh_folders is None else tuple(rc.mesh_folders),
             task_frame=rc.task_frame,
             task=rc.task,
-            trajectory=json.loads(json.dumps(asdict(config.trajectory))),
+            trajectory=json.loads(json.dumps(_table(config.trajectory))),
             criteria=tuple(names),
             criterion_weights=tuple(float(w) for w in weights),
             criterion_units=tuple(criterion_unit(c, m) for c in names),
@@ -156,3 +156,11 @@ def _criterion_formula(name: str) -> str:
         label, _, text = text.partition(": ")
         text = text.removesuffix(" (three joints)") + ", " + label
     return text
+
+
+def _table(section) -> dict:
+    """A section as a table: its fields (None included), then the keys its kinds declare beyond
+    them, flat, as the experiment file has them.
+    """
+    table = {k: v for k, v in asdict(section).items() if k != "extra"}
+    return {**table, **getattr(section, "extra", {})}

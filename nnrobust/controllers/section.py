@@ -6,11 +6,11 @@ kind is declared.
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 from ..exceptions import ConfigError
-from ..key_checks import DeclaredKeys, check_choice, keys_beyond_fields
+from ..key_checks import DeclaredKeys, check_choice
 from .registry import (
     PAPER_KINDS,
     controller_kinds,
@@ -62,13 +62,12 @@ class ControllerConfig(DeclaredKeys):
     sliding_boundary: float = declared_default("controller.sliding_boundary")
     class_: str | None = None
     params: dict | None = None
-    extra: dict = field(default_factory=dict)
-    """Values of the keys the room's kinds declare beyond these fields (:meth:`declared_keys`)."""
+    SECTION: ClassVar[str] = "controller"
 
     @classmethod
-    def declared_keys(cls) -> dict:
-        """The ``[controller]`` keys a paper kind declares beyond these fields (a kind's ``params``)."""
-        return keys_beyond_fields("controller", _fields_of(cls), declared_params())
+    def kind_params(cls):
+        """The keys the paper's kinds and the keys they share declare."""
+        return declared_params()
 
 
 CONTROLLER_KINDS = paper_kinds()
@@ -108,13 +107,12 @@ class NNConfig(DeclaredKeys):
     bias: bool = declared_default("nn.bias")
     velocity_range: float = declared_default("nn.velocity_range")
     error_range: list[float] = field(default_factory=lambda: declared_default("nn.error_range"))
-    extra: dict = field(default_factory=dict)
-    """Values of the keys the room's kinds declare beyond these fields (:meth:`declared_keys`)."""
+    SECTION: ClassVar[str] = "nn"
 
     @classmethod
-    def declared_keys(cls) -> dict:
-        """The ``[nn]`` keys a paper kind declares beyond these fields."""
-        return keys_beyond_fields("nn", _fields_of(cls), declared_params())
+    def kind_params(cls):
+        """The keys the paper's kinds declare."""
+        return declared_params()
 
 
 GAIN_KEYS = ("Kp", "Kv", "pd_Kp", "pd_Kd")
@@ -189,7 +187,3 @@ def inert_controller_keys(c: ControllerConfig, nn: NNConfig) -> dict[str, str]:
     if c.kind == "nn" and nn.basis_input == "error":
         mark(["nn.velocity_range"], "nn.basis_input = 'error'")
     return inert
-
-
-def _fields_of(cls) -> list[str]:
-    return [f.name for f in dataclasses.fields(cls) if f.name != "extra"]

@@ -5,14 +5,13 @@ defaults. Their builder: :func:`nnrobust.plant.build.build_plant`.
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 from ..exceptions import ConfigError
 from ..key_checks import (
     DeclaredKeys,
     check_choice,
-    keys_beyond_fields,
     require_non_negative,
     require_physical,
     require_positive,
@@ -126,15 +125,12 @@ class PlantConfig(DeclaredKeys):
     loads: list[dict] | None = None
     engine: str = "pinocchio"
     mujoco_integrator: str = "rk4"
-    extra: dict = field(default_factory=dict)
-    """Values of the keys the room's kinds declare beyond these fields (:meth:`declared_keys`)."""
+    SECTION: ClassVar[str] = "plant"
 
     @classmethod
-    def declared_keys(cls) -> dict:
-        """The ``[plant]`` keys a disturbance declares beyond these fields (its ``params``)."""
-        return keys_beyond_fields(
-            "plant", _fields_of(cls), (p for kind in DISTURBANCE_KINDS.values() for p in kind.params)
-        )
+    def kind_params(cls):
+        """The keys the disturbances declare."""
+        return (p for kind in DISTURBANCE_KINDS.values() for p in kind.params)
 
 
 @dataclass
@@ -284,7 +280,3 @@ def inert_plant_keys(pc: PlantConfig) -> dict[str, str]:
         if name != pc.disturbance:
             mark([p.name for p in kind.params], f"plant.disturbance = {pc.disturbance!r}")
     return inert
-
-
-def _fields_of(cls) -> list[str]:
-    return [f.name for f in dataclasses.fields(cls) if f.name != "extra"]

@@ -4,12 +4,12 @@ eq. (4) and their weights. Its builder: :func:`nnrobust.subtasks.build.build_cri
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 from ..exceptions import ConfigError
-from ..key_checks import DeclaredKeys, keys_beyond_fields, require_non_negative, require_positive
+from ..key_checks import DeclaredKeys, require_non_negative, require_positive
 from .registry import CRITERION_KINDS, default_criteria
 
 
@@ -45,15 +45,12 @@ class SubtaskConfig(DeclaredKeys):
     link_radius: float = 0.0
     criterion_class: str | None = None
     criterion_params: dict | None = None
-    extra: dict = field(default_factory=dict)
-    """Values of the keys the room's kinds declare beyond these fields (:meth:`declared_keys`)."""
+    SECTION: ClassVar[str] = "subtasks"
 
     @classmethod
-    def declared_keys(cls) -> dict:
-        """The ``[subtasks]`` keys a criterion declares beyond these fields (its ``params``)."""
-        return keys_beyond_fields(
-            "subtasks", _fields_of(cls), (p for kind in CRITERION_KINDS.values() for p in kind.params)
-        )
+    def kind_params(cls):
+        """The keys the criteria declare."""
+        return (p for kind in CRITERION_KINDS.values() for p in kind.params)
 
 
 def check_subtasks(sc: SubtaskConfig) -> None:
@@ -102,7 +99,3 @@ def inert_subtask_keys(sc: SubtaskConfig, task: str) -> dict[str, str]:
         if name not in criteria:
             inert |= {p.name: f"{name!r} is not in subtasks.criteria" for p in kind.params}
     return inert
-
-
-def _fields_of(cls) -> list[str]:
-    return [f.name for f in dataclasses.fields(cls) if f.name != "extra"]

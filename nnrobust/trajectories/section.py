@@ -4,12 +4,12 @@ defaults and choices. Its builder: :func:`nnrobust.trajectories.build.build_traj
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 from ..exceptions import ConfigError
-from ..key_checks import DeclaredKeys, check_choice, keys_beyond_fields
+from ..key_checks import DeclaredKeys, check_choice
 from .registry import PATH_KINDS, path_key
 
 
@@ -71,15 +71,12 @@ class TrajectoryConfig(DeclaredKeys):
     rotation_phase: float = 0.0
     class_: str | None = None
     params: dict | None = None
-    extra: dict = field(default_factory=dict)
-    """Values of the keys the room's kinds declare beyond these fields (:meth:`declared_keys`)."""
+    SECTION: ClassVar[str] = "trajectory"
 
     @classmethod
-    def declared_keys(cls) -> dict:
-        """The ``[trajectory]`` keys a path declares beyond these fields (its ``params``)."""
-        return keys_beyond_fields(
-            "trajectory", _fields_of(cls), (p for kind in PATH_KINDS.values() for p in kind.params)
-        )
+    def kind_params(cls):
+        """The keys the paths declare."""
+        return (p for kind in PATH_KINDS.values() for p in kind.params)
 
     @property
     def dimension(self) -> int:
@@ -173,7 +170,3 @@ def inert_trajectory_keys(tc: TrajectoryConfig) -> dict[str, str]:
     path_keys = {name: kind.keys for name, kind in PATH_KINDS.items()} | {"custom": ("class", "params")}
     why = f"trajectory.kind = {tc.kind!r}"
     return {f"trajectory.{k}": why for other, keys in path_keys.items() if other != tc.kind for k in keys}
-
-
-def _fields_of(cls) -> list[str]:
-    return [f.name for f in dataclasses.fields(cls) if f.name != "extra"]

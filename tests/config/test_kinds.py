@@ -196,6 +196,8 @@ def test_a_kind_of_each_concept_declared_here_brings_its_own_key(monkeypatch):
             assert key in inert_keys(_paper()), key  # inert under the preset's own kinds
         result = run_experiment(half)
         assert result.status == "completed", (key, result.status)
+        if section == "trajectory":  # result.npz's info: the section as the file has it, flat
+            assert result.info.trajectory["stretch"] == default / 2 and "extra" not in result.info.trajectory
         assert result.backend == ("hybrid" if law_param else "compiled"), key
     with pytest.raises(ConfigError, match="controller.params"):  # a law's key under another kind: refused
         _paper(controller={"kind": "nn", "params": {"Kp": 1.0}})
