@@ -503,7 +503,11 @@ def check_dotted_key(key: str) -> None:
     if indexed:
         section, field_name, _ = indexed.groups()
         check_dotted_key(f"{section}.{field_name}")
-        annotation = _type_hints(_type_hints(ExperimentConfig)[section])[field_name]
+        cls = _type_hints(ExperimentConfig)[section]
+        declared = getattr(cls, "declared_keys", dict)().get(field_name)  # a key a kind declares
+        annotation = (
+            "list" if declared is not None and declared.size != "1" else _type_hints(cls).get(field_name)
+        )
         if "list" not in str(annotation):
             raise ConfigError(key, f"{section}.{field_name} is not a list; index only list keys")
         return

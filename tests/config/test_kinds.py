@@ -194,6 +194,8 @@ def test_a_kind_of_each_concept_declared_here_brings_its_own_key(monkeypatch):
             assert getattr(getattr(half, section), name) == default / 2
             assert half.to_dict()[section][name] == default / 2
             assert key in inert_keys(_paper()), key  # inert under the preset's own kinds
+            with pytest.raises(ConfigError, match="is not a list"):  # one number: no entry to index
+                apply_overrides(config, {f"{key}[0]": default})
         result = run_experiment(half)
         assert result.status == "completed", (key, result.status)
         if section == "trajectory":  # result.npz's info: the section as the file has it, flat
