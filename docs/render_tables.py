@@ -697,14 +697,17 @@ def registered_laws() -> str:
     return "\n".join(lines) + "\n\nMade from the laws' declarations (`nnrobust/controllers/laws/`).\n"
 
 
+def _valid(p) -> str:
+    """A declared parameter's valid values: its choices, true or false, or its range and size."""
+    size = {"1": "", "2": " (2 entries)", "n": " (per joint)", "m": " (per task row)"}[p.size]
+    if p.choices:
+        return " or ".join(f"`{c}`" for c in p.choices)
+    return "true or false" if isinstance(p.default, bool) else f"{p.range}{size}"
+
+
 def _param_cells(p, unset: str) -> str:
     """A declared parameter's cells: `name`: doc | unit | default | valid values."""
-    size = {"1": "", "2": " (2 entries)", "n": " (per joint)", "m": " (per task row)"}[p.size]
-    valid = (
-        " or ".join(f"`{c}`" for c in p.choices)
-        if p.choices
-        else ("true or false" if isinstance(p.default, bool) else f"{p.range}{size}")
-    )
+    valid = _valid(p)
     if getattr(p, "path", False):  # a file's path: no default, no range
         return f"`{p.name}`: {p.doc} | {p.unit} | required | a file (relative: from the experiment file)"
     one = isinstance(p.default, tuple) and len(p.default) == 1  # one value for every row
@@ -761,8 +764,7 @@ def _declared(params) -> str:
     for p in params:
         unit = "" if p.unit == "-" else f" [{p.unit}]"
         default = "set by the kind" if p.default is None else f"default `{p.default}`"
-        valid = " or ".join(f"`{c}`" for c in p.choices) if p.choices else p.range
-        cells.append(f"`{p.name}`{unit}: {p.doc} ({default}, {valid})")
+        cells.append(f"`{p.name}`{unit}: {p.doc} ({default}, {_valid(p)})")
     return "; ".join(cells)
 
 

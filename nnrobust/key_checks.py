@@ -123,6 +123,11 @@ class LawParam:
         return CHOSEN if self.path or self.choices or isinstance(self.default, bool) else ""
 
     @property
+    def config_default(self) -> Any:
+        """The default as a configuration holds it (a list for a vector)."""
+        return list(self.default) if isinstance(self.default, tuple) else self.default
+
+    @property
     def range(self) -> str:
         """The accepted range as text: ``[0, 1e+12]``, ``(0, 1e+12]``."""
         return f"{'(' if self.low_open else '['}{self.low:g}, {self.high:g}]"
@@ -186,8 +191,13 @@ class DeclaredKeys:
     @classmethod
     def declared_keys(cls) -> dict[str, LawParam]:
         """The keys the kinds declare that are not fields, by their name in the section."""
-        fields = [f.name for f in dataclasses.fields(cls) if f.name != "extra"]
-        return keys_beyond_fields(cls.SECTION, fields, cls.kind_params())
+        fields = {f.name for f in dataclasses.fields(cls)}
+        out: dict[str, LawParam] = {}
+        for p in cls.kind_params():
+            where, _, name = p.name.partition(".")
+            if where == cls.SECTION and name not in fields:
+                out.setdefault(name, p)
+        return out
 
     def __getattr__(self, name: str) -> Any:  # only for a name that is not a field or attribute
         if name.startswith("__") or name == "extra":
@@ -198,7 +208,7 @@ class DeclaredKeys:
         param = type(self).declared_keys().get(name)
         if param is None:
             raise AttributeError(f"{type(self).__name__} has no key {name!r}")
-        return list(param.default) if isinstance(param.default, tuple) else param.default
+        return param.config_default
 
     def check_declared(self, m: int) -> None:
         """Every declared key's value (given or default) against its declaration (``m``: the
@@ -209,16 +219,3 @@ class DeclaredKeys:
             value = getattr(self, name)
             if not (value is None and param.default is None):
                 param.check(value, None, m, param.name)
-
-
-def keys_beyond_fields(
-    section: str, fields: Iterable[str], params: Iterable[LawParam]
-) -> dict[str, LawParam]:
-    """The declared keys of ``section`` (``section.name``) that are not among its ``fields``."""
-    known = set(fields)
-    out: dict[str, LawParam] = {}
-    for p in params:
-        where, _, name = p.name.partition(".")
-        if where == section and name not in known:
-            out.setdefault(name, p)
-    return out

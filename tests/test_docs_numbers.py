@@ -385,6 +385,16 @@ def _example_median(controller: str):
 PT = "falsify_panda_tuned_noisy"
 
 
+def _learning(preset: str, key: str):
+    """``key`` of the row of learning_env.json for this preset."""
+
+    def pick(d):
+        (row,) = [r for r in d["rows"] if r["preset"] == preset]
+        return row[key]
+
+    return pick
+
+
 def _serve(arm: str, load: str, fifo: bool, value):
     """``value`` of the row of serve_misses.json for this arm, load and scheduling."""
 
@@ -1225,28 +1235,28 @@ QUOTED_FIGURES: list[tuple] = [
         "docs/learning.md",
         r"at ([\d.]+) of the batch's steps per\nsecond on the paper's arm",
         "learning_env",
-        lambda d: d["rows"][0]["vector_over_batch"],
+        _learning("paper-ellipse", "vector_over_batch"),
         1.0,
     ),
     (
         "docs/learning.md",
         r"second on the paper's arm and ([\d.]+) on the Panda",
         "learning_env",
-        lambda d: d["rows"][1]["vector_over_batch"],
+        _learning("panda-ellipse", "vector_over_batch"),
         1.0,
     ),
     (
         "docs/learning.md",
         r"costs ([\d.]+) µs \(paper arm\)",
         "learning_env",
-        lambda d: d["rows"][0]["single_env_overhead_us"],
+        _learning("paper-ellipse", "single_env_overhead_us"),
         1.0,
     ),
     (
         "docs/learning.md",
         r"and ([\d.]+) µs\n\(Panda\) more",
         "learning_env",
-        lambda d: d["rows"][1]["single_env_overhead_us"],
+        _learning("panda-ellipse", "single_env_overhead_us"),
         1.0,
     ),
     (

@@ -105,12 +105,17 @@ def _type_hints(cls) -> dict:
     return typing.get_type_hints(cls)
 
 
+def _declared_keys(cls) -> dict:
+    """The keys a section's kinds declare beyond its fields (a ``DeclaredKeys`` section's), or {}."""
+    return cls.declared_keys() if hasattr(cls, "declared_keys") else {}
+
+
 def _section_from_dict(cls, data: dict, path: str):
     if not isinstance(data, dict):
         raise ConfigError(path, f"expected a table, got {type(data).__name__}")
     hints = _type_hints(cls)
     names = _field_names(cls)
-    declared = cls.declared_keys() if hasattr(cls, "declared_keys") else {}  # the kinds' keys
+    declared = _declared_keys(cls)
     values: dict = {}
     shown = [next((a for a, f in KEY_ALIASES.items() if f == n), n) for n in names] + sorted(declared)
     for key, value in data.items():
@@ -504,7 +509,7 @@ def check_dotted_key(key: str) -> None:
         section, field_name, _ = indexed.groups()
         check_dotted_key(f"{section}.{field_name}")
         cls = _type_hints(ExperimentConfig)[section]
-        declared = getattr(cls, "declared_keys", dict)().get(field_name)  # a key a kind declares
+        declared = _declared_keys(cls).get(field_name)
         annotation = (
             "list" if declared is not None and declared.size != "1" else _type_hints(cls).get(field_name)
         )
@@ -524,7 +529,7 @@ def check_dotted_key(key: str) -> None:
     if section not in top or not dataclasses.is_dataclass(hints[section]):
         raise ConfigError(key, _suggest(section, [t for t in top if dataclasses.is_dataclass(hints[t])]))
     names = [next((a for a, f in KEY_ALIASES.items() if f == n), n) for n in _field_names(hints[section])]
-    names += sorted(getattr(hints[section], "declared_keys", dict)())  # the kinds' keys
+    names += sorted(_declared_keys(hints[section]))
     if len(parts) == 3 and section == "controller" and parts[1] == "params":  # one keyword argument
         if not parts[2].isidentifier():
             raise ConfigError(key, f"{parts[2]!r} is not a valid Python identifier (a keyword argument name)")

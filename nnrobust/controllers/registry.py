@@ -245,8 +245,7 @@ def declared_default(key: str) -> Any:
     """The declared default of one of the keys the paper's kinds read, as the configuration holds
     it (a list for a vector).
     """
-    default = declared_key(key).default
-    return list(default) if isinstance(default, tuple) else default
+    return declared_key(key).config_default
 
 
 def paper_kind(name: str) -> PaperKind | None:
