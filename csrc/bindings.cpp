@@ -16,6 +16,8 @@
 #include <exception>
 #include <functional>
 #include <mutex>
+#include <set>
+#include <sstream>
 #include <thread>
 #include <stdexcept>
 #include <string>
@@ -23,6 +25,8 @@
 #include "closed_loop.hpp"
 #include "controllers.hpp"
 #include "controllers/laws/law.hpp"
+#include "controllers/robust_term.hpp"
+#include "plant/disturbance.hpp"
 #include "learning.hpp"
 #include "model/model.hpp"
 #include "serve/virtual_robot.hpp"
@@ -100,18 +104,28 @@ std::map<std::string, int (*)(int)> &native_states() {
   return states;
 }
 
-std::pair<std::string, std::string> load_law_library(const std::string &path, const std::string &cls,
-                                                     const std::string &name) {
+// A library compiled apart calls into the extension (Controller's, Fields'): this module's
+// exported symbols are made global once, before the first such library is loaded.
+void offer_symbols() {
   static bool global = false;
-  if (!global) {
-    Dl_info self;
-    if (dladdr(reinterpret_cast<void *>(&python_signal_pending), &self) == 0 || self.dli_fname == nullptr ||
-        dlopen(self.dli_fname, RTLD_NOW | RTLD_NOLOAD | RTLD_GLOBAL) == nullptr)
-      throw std::runtime_error("the compiled loop could not offer its symbols to a law library");
-    global = true;
-  }
+  if (global) return;
+  Dl_info self;
+  if (dladdr(reinterpret_cast<void *>(&python_signal_pending), &self) == 0 || self.dli_fname == nullptr ||
+      dlopen(self.dli_fname, RTLD_NOW | RTLD_NOLOAD | RTLD_GLOBAL) == nullptr)
+    throw std::runtime_error("the compiled loop could not offer its symbols to a library compiled apart");
+  global = true;
+}
+
+void *open_library(const std::string &path) {
+  offer_symbols();
   void *library = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (library == nullptr) throw std::runtime_error(std::string("loading ") + path + ": " + dlerror());
+  return library;
+}
+
+std::pair<std::string, std::string> load_law_library(const std::string &path, const std::string &cls,
+                                                     const std::string &name) {
+  void *library = open_library(path);
   using Make = nnrobust::Law *(*)(const nnrobust::LawParams &, nnrobust::LawContext &);
   const auto make = reinterpret_cast<Make>(dlsym(library, ("nnrobust_law_factory_" + cls).c_str()));
   const auto signals = reinterpret_cast<const char *(*)()>(dlsym(library, ("nnrobust_law_signals_" + cls).c_str()));
@@ -124,6 +138,63 @@ std::pair<std::string, std::string> load_law_library(const std::string &path, co
   native_states()[name] = state;
   const auto space = reinterpret_cast<const char *(*)()>(dlsym(library, ("nnrobust_law_space_" + cls).c_str()));
   return {signals(), space ? space() : ""};
+}
+
+// A twin compiled apart (nnrobust/native_law.py, nnrobust/twin.hpp): a library whose file registers
+// components with the shipped macros (NNROBUST_PATH, NNROBUST_CRITERION, NNROBUST_DISTURBANCE,
+// NNROBUST_ROBUST_TERM, NNROBUST_LAW) into its own tables; each table it has is copied into this
+// module's. A name a shipped twin holds is refused; a name an earlier library registered is taken
+// over (the newer file). Returns {concept: comma-separated names}.
+std::set<std::string> split_names(const std::string &names) {
+  std::set<std::string> out;
+  std::stringstream stream(names);
+  for (std::string name; std::getline(stream, name, ',');)
+    if (!name.empty()) out.insert(name);
+  return out;
+}
+
+std::map<std::string, std::string> load_twin_library(const std::string &path) {
+  using HandOver = const char *(*)(void *);
+  struct Shared {
+    std::string concept;
+    const char *symbol;
+    HandOver own;  // this module's table of the registry, listed
+    void *table;
+  };
+  const Shared shares[] = {
+      {"law", "nnrobust_twin_laws", &nnrobust::share_registry<nnrobust::LawRegistry>,
+       &nnrobust::LawRegistry::table()},
+      {"robust term", "nnrobust_twin_robust_terms", &nnrobust::share_registry<nnrobust::RobustTermRegistry>,
+       &nnrobust::RobustTermRegistry::table()},
+      {"criterion", "nnrobust_twin_criteria", &nnrobust::share_registry<nnrobust::CriterionRegistry>,
+       &nnrobust::CriterionRegistry::table()},
+      {"path", "nnrobust_twin_paths", &nnrobust::share_registry<nnrobust::PathRegistry>,
+       &nnrobust::PathRegistry::table()},
+      {"disturbance", "nnrobust_twin_disturbances", &nnrobust::share_registry<nnrobust::DisturbanceRegistry>,
+       &nnrobust::DisturbanceRegistry::table()},
+  };
+  static std::map<std::string, std::set<std::string>> shipped;  // each concept's names before any library
+  if (shipped.empty())
+    for (const Shared &share : shares) shipped[share.concept] = split_names(share.own(nullptr));
+  void *library = open_library(path);
+  std::map<std::string, std::string> registered;
+  for (const Shared &share : shares) {
+    const auto hand_over = reinterpret_cast<HandOver>(dlsym(library, share.symbol));
+    if (hand_over == nullptr) continue;
+    const std::string names = hand_over(nullptr);
+    for (const auto &name : split_names(names))
+      if (shipped[share.concept].count(name))
+        throw std::invalid_argument("it registers the " + share.concept + " '" + name +
+                                    "', the name of a shipped twin: choose another name");
+    if (!names.empty()) registered[share.concept] = names;
+  }
+  if (registered.empty())
+    throw std::invalid_argument("it registers nothing: a twin's file includes nnrobust/twin.hpp and names its class "
+                                "with NNROBUST_PATH, NNROBUST_CRITERION, NNROBUST_DISTURBANCE, "
+                                "NNROBUST_ROBUST_TERM or NNROBUST_LAW at namespace scope");
+  for (const Shared &share : shares)
+    if (registered.count(share.concept)) reinterpret_cast<HandOver>(dlsym(library, share.symbol))(share.table);
+  return registered;
 }
 
 int native_law_state(const std::string &name, int n) {
@@ -333,6 +404,9 @@ NB_MODULE(_loop, m) {
   m.def("load_law_library", &load_law_library, nb::arg("path"), nb::arg("cls"), nb::arg("name"),
         "Load a user's law compiled apart and register it as the law `name`; returns its signal names "
         "and its search space as declared (comma-separated; \"\" when it declares none).");
+  m.def("load_twin_library", &load_twin_library, nb::arg("path"),
+        "Load a twin compiled apart (nnrobust/twin.hpp) and register its components; returns the names "
+        "it registered by concept (law, robust term, criterion, path, disturbance), comma-separated.");
   m.def("native_law_state", &native_law_state, nb::arg("name"), nb::arg("n"),
         "The state size of the law library registered as `name`, for n joints.");
   // the virtual robot (nnrobust/serve/, csrc/serve/)

@@ -130,9 +130,9 @@ def law_refusal(setup) -> str:
     refusal = _criterion_refusal(setup)
     if refusal:
         return refusal
-    if is_custom(controller) and not getattr(type(controller), "native", None):
-        return f"a custom controller ({type(controller).__name__}) runs in Python: --backend hybrid or python"
     law = registered_law(config.controller.kind)
+    if law is None and is_custom(controller) and not getattr(type(controller), "native", None):
+        return f"a custom controller ({type(controller).__name__}) runs in Python: --backend hybrid or python"
     path = setup.trajectory.path if type(setup.trajectory) is PoseTrajectory else setup.trajectory
     term = getattr(controller, "compensator", None)
     checks = [
@@ -155,6 +155,44 @@ def own_twin(component) -> str | None:
     declare one has none), or None.
     """
     return type(component).__dict__.get("twin")
+
+
+def twin_source(holder):
+    """The C++ file a class or a kind's declaration names as its twin's (``twin_source``: a kind
+    declared outside nnrobust, docs/extending.md#a-twin-in-c), or None: the twin is shipped. A
+    class's own declaration only, as :func:`own_twin`.
+    """
+    return (
+        holder.__dict__.get("twin_source")
+        if isinstance(holder, type)
+        else getattr(holder, "twin_source", None)
+    )
+
+
+def _registered(holder, concept: str, name: str | None) -> str | None:
+    """``name``, the twin of ``holder`` (a class or a kind's declaration), registered: the C++ file
+    it declares as its ``twin_source`` is compiled (unless cached) and loaded first.
+    """
+    source = twin_source(holder)
+    if source is not None and name is not None:
+        from .native_law import load_twin_source
+
+        owner = holder.__name__ if isinstance(holder, type) else f"the {concept} kind {holder.name!r}"
+        load_twin_source(source, concept, name, owner)
+    return name
+
+
+def _twin_holders(setup) -> list:
+    """The classes and declarations whose twins the controller's spec names (law_spec's parts)."""
+    from .controllers.registry import registered_law
+    from .trajectories import PoseTrajectory
+
+    path = setup.trajectory.path if isinstance(setup.trajectory, PoseTrajectory) else setup.trajectory
+    law = registered_law(setup.config.controller.kind)
+    term = getattr(setup.controller, "compensator", None)
+    criteria = setup.criterion.criteria if setup.criterion is not None else []
+    holders = [type(path), law if law is not None else type(setup.controller), *map(_twin_of, criteria)]
+    return holders + ([type(term)] if law is None and term is not None else [])
 
 
 def is_custom(controller) -> bool:
@@ -233,7 +271,7 @@ def _criterion_spec(s, setup, f) -> None:
     if criterion is None:
         return
     kinds = [_twin_of(c) for c in criterion.criteria]
-    s.criteria = [kind.name for kind in kinds]
+    s.criteria = [_registered(kind, "criterion", kind.name) for kind in kinds]
     s.criterion_params = [kind.twin_values(c) for kind, c in zip(kinds, criterion.criteria)]
     s.criterion_weights = f(criterion.weights)
 
@@ -279,7 +317,8 @@ def loop_spec(setup, duration: float, external: bool = False):
     if plant.engine is not None:  # MuJoCo steps the plant, from (q0, v0)
         plant.engine.reset(setup.q0, setup.v0)
         parts["engine"].update(engine_addresses(plant.engine))
-    s.plant_parts, s.disturbance = parts, own_twin(plant.disturbance)
+    s.plant_parts = parts
+    s.disturbance = _registered(type(plant.disturbance), "disturbance", own_twin(plant.disturbance))
     s.m = setup.robot.m
     _criterion_spec(s, setup, f)
     if external:  # the hybrid loop: the law is Python's, only its state size matters here
@@ -309,18 +348,28 @@ def _law_spec(s, setup, f) -> None:
     if isinstance(path, PoseTrajectory):
         s.pose, s.pose_params = True, twin_values(path, path.twin_fields)
         path = path.path
-    s.path, s.path_params = path.twin, twin_values(path, path.twin_fields)
-    s.pinv_threshold, s.pinv_max_damping = controller.pinv.threshold, controller.pinv.max_damping
-    friction = getattr(controller, "nominal_friction", None) or Friction.none(plant.nq)
+    s.path, s.path_params = _registered(type(path), "path", path.twin), twin_values(path, path.twin_fields)
+    # the law's own pseudo-inverse and F-hat, else the experiment's (a registered law's class may
+    # keep only its context, as a custom controller does)
+    context = setup.controller_context
+    pinv = getattr(controller, "pinv", None) or context.pseudo_inverse
+    s.pinv_threshold, s.pinv_max_damping = pinv.threshold, pinv.max_damping
+    friction = (
+        getattr(controller, "nominal_friction", None)
+        or (context.nominal_friction if context is not None else None)
+        or Friction.none(plant.nq)
+    )
     s.nominal_friction = twin_values(friction, friction.twin_fields)
     law = registered_law(setup.config.controller.kind)
     if law is not None:  # a registered law's twin and its declared fields
-        s.law, s.law_params = law.twin, law.twin_values(controller)
+        s.law, s.law_params = _registered(law, "law", law.twin), law.twin_values(controller)
     else:  # one of the task-space laws (eq. 9 or the PD), with eq. (9)'s robust term
-        s.law, s.law_params = controller.twin, twin_values(controller, controller.twin_fields)
+        s.law = _registered(type(controller), "law", controller.twin)
+        s.law_params = twin_values(controller, controller.twin_fields)
         term = getattr(controller, "compensator", None)
         if term is not None:
-            s.robust, s.robust_params = term.twin, twin_values(term, term.twin_fields)
+            s.robust = _registered(type(term), "robust term", term.twin)
+            s.robust_params = twin_values(term, term.twin_fields)
     s.law_signals = len(controller.signal_names)
     s.z0 = f(controller.initial_state())
 
@@ -330,7 +379,10 @@ def law_spec(setup):
     (nnrobust.export): (LoopSpec with the controller's and criteria's fields, the nominal
     Pinocchio model's ModelSpec or None for the closed form). Refused without a twin.
     """
-    if is_custom(setup.controller) and not getattr(type(setup.controller), "native", None):
+    from .controllers.registry import registered_law
+
+    custom = registered_law(setup.config.controller.kind) is None and is_custom(setup.controller)
+    if custom and not getattr(type(setup.controller), "native", None):
         raise NNRobustError(
             f"this controller cannot be exported: a custom controller ({type(setup.controller).__name__}) "
             "is Python code, with no C++ twin to export"
@@ -338,6 +390,12 @@ def law_spec(setup):
     refusal = law_refusal(setup)
     if refusal:
         raise NNRobustError(f"this controller cannot be exported: {refusal}")
+    apart = [twin_source(h) for h in _twin_holders(setup) if twin_source(h) is not None]
+    if apart:
+        raise NNRobustError(
+            f"this controller cannot be exported: its twin in {apart[0]} is compiled apart, and an "
+            "export carries the shipped twins and a law in C++ only"
+        )
 
     f = contiguous
     s = _module().LoopSpec()

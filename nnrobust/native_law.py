@@ -1,5 +1,7 @@
 """A user's control law in C++ (docs/extending.md#a-law-in-c): one ``.cpp`` file named in an
-experiment like a Python class, ``class = "my_law.cpp:MyLaw"``.
+experiment like a Python class, ``class = "my_law.cpp:MyLaw"``; and the C++ twin of a kind declared
+outside nnrobust (docs/extending.md#a-twin-in-c), named by its ``twin_source``
+(:func:`load_twin_source`).
 
 The file is written against the law header the shipped laws use (installed as
 ``nnrobust/law.hpp``) and names its class with ``NNROBUST_USER_LAW(Class, signals, state size)``.
@@ -33,6 +35,12 @@ COMPILER_LINES = 40
 
 _loaded: dict[str, tuple[str, tuple[str, ...], dict]] = {}
 """Library path -> (registered law name, signal names, search space) of the laws loaded here."""
+
+_twins: dict[str, dict[str, set[str]]] = {}
+"""Library path -> {concept: names it registered} of the twins compiled apart loaded here."""
+
+TWIN_DEFINITION = "NNROBUST_TWIN_LIBRARY"
+"""Defined when a twin's file is compiled: its registries hand themselves over (registry.hpp)."""
 
 
 def is_source(path: str | Path) -> bool:
@@ -106,13 +114,16 @@ def _toolchain(cxx: str, info: dict[str, str]) -> str:
     return digest.hexdigest()
 
 
-def command(source: Path, output: Path, link: list[str] | None = None) -> list[str]:
+def command(
+    source: Path, output: Path, link: list[str] | None = None, definitions: tuple[str, ...] = ()
+) -> list[str]:
     """The compile command of a law's library, linked with ``link`` (by default the pin wheel's
-    Pinocchio; an export links its own copies, nnrobust.export).
+    Pinocchio; an export links its own copies, nnrobust.export), with ``definitions`` beside the
+    package's own.
     """
     info = build_info()
     prefix = cmeel_prefix()
-    definitions = [f"-D{d}" for d in info.get("definitions", "").split(";") if d]
+    defines = [f"-D{d}" for d in (*info.get("definitions", "").split(";"), *definitions) if d]
     options = [o for o in info.get("options", "").split(";") if o]
     return [
         compiler(info),
@@ -123,7 +134,7 @@ def command(source: Path, output: Path, link: list[str] | None = None) -> list[s
         "-shared",
         "-fvisibility=hidden",
         *options,
-        *definitions,
+        *defines,
         "-I",
         str(include_dir()),
         "-I",
@@ -142,12 +153,14 @@ def command(source: Path, output: Path, link: list[str] | None = None) -> list[s
     ]
 
 
-def compiled_library(source: Path, key: str) -> tuple[Path, str]:
-    """The library of a law's file (compiled now unless cached): (path, SHA-256 of its inputs)."""
+def compiled_library(source: Path, key: str, definitions: tuple[str, ...] = ()) -> tuple[Path, str]:
+    """The library of a law's or a twin's file (compiled now unless cached, with ``definitions``):
+    (path, SHA-256 of its inputs).
+    """
     text = source.read_bytes()
     info = build_info()
     cxx = compiler(info)
-    digest = hashlib.sha256(text + _toolchain(cxx, info).encode()).hexdigest()
+    digest = hashlib.sha256(text + repr(definitions).encode() + _toolchain(cxx, info).encode()).hexdigest()
     folder = cache_dir()
     library = folder / f"{''.join(c if c.isalnum() else '_' for c in source.stem)}-{digest[:20]}.so"
     if library.is_file():
@@ -161,7 +174,12 @@ def compiled_library(source: Path, key: str) -> tuple[Path, str]:
         fd, tmp = tempfile.mkstemp(suffix=".so", dir=folder)
         os.close(fd)
         try:
-            done = subprocess.run(command(source, Path(tmp)), capture_output=True, text=True, timeout=1800)
+            done = subprocess.run(
+                command(source, Path(tmp), definitions=definitions),
+                capture_output=True,
+                text=True,
+                timeout=1800,
+            )
             if done.returncode != 0:
                 lines = [line for line in done.stderr.splitlines() if line.strip()]
                 shown = "\n".join(lines[:COMPILER_LINES])
@@ -203,6 +221,38 @@ def load_native_class(path: Path, source: Path, name: str, base: type, key: str)
     if search_space:
         face.search_space = search_space  # type: ignore[attr-defined]
     return face
+
+
+def load_twin_source(source: str | Path, concept: str, name: str, owner: str) -> None:
+    """Compile (unless cached) and load the C++ file a kind declares as its ``twin_source``, and
+    check that it registered the ``concept`` (law, robust term, criterion, path, disturbance)
+    ``name`` its Python twin declares; ``owner`` names the declaring class or kind in errors.
+    """
+    key = f"{owner}.twin_source"
+    path = Path(source)
+    if not path.is_file():
+        raise ConfigError(key, f"{path} is not a file (the C++ twin of the {concept} {name!r})")
+    if not is_source(path):
+        raise ConfigError(key, f"{path} is not a C++ file (one of {', '.join(SOURCE_SUFFIXES)})")
+    try:
+        from . import _loop
+    except ImportError as err:
+        raise ConfigError(
+            key, f"{path}: a twin in C++ runs on the compiled loop, which is not built ({err})"
+        ) from err
+    library, _ = compiled_library(path, key, (TWIN_DEFINITION,))
+    if str(library) not in _twins:
+        try:
+            registered = _loop.load_twin_library(str(library))
+        except (RuntimeError, ValueError) as err:
+            raise ConfigError(key, f"{path}: {err}") from err
+        _twins[str(library)] = {c: set(names.split(",")) for c, names in registered.items()}
+    names = _twins[str(library)]
+    if name not in names.get(concept, set()):
+        found = "; ".join(f"the {c} {', '.join(sorted(n))}" for c, n in sorted(names.items()))
+        raise ConfigError(
+            key, f"{path} registers {found}, not the {concept} {name!r} that {owner} declares as its twin"
+        )
 
 
 def declared_space(text: str, name: str, path: Path, key: str) -> dict:

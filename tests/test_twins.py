@@ -276,7 +276,7 @@ DISTURBANCE_CASES = {
 @pytest.mark.parametrize("kind", ["paper", "none", "sinusoid", "scaled"])
 def test_each_disturbance_kind_is_its_python_twin(kind):
     """Every shipped plant.disturbance builds a class with a compiled twin (registered in
-    csrc/plant/disturbance.hpp under the class's twin name), whose torque enters q'' as the
+    csrc/plant/disturbance.cpp under the class's twin name), whose torque enters q'' as the
     Python one does, scaled and shifted by the plant's disturbance keys, at random times."""
     from nnrobust.plant.disturbance import DISTURBANCE_KINDS
 

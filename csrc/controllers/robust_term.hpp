@@ -28,3 +28,6 @@ using RobustTermRegistry = Registry<RobustTerm, const Fields &>;
       name, [](const ::nnrobust::Fields &f) -> std::unique_ptr<::nnrobust::RobustTerm> {               \
         return std::make_unique<Class>(f);                                                             \
       })
+
+// a twin compiled apart hands its robust terms over (registry.hpp)
+NNROBUST_SHARE_REGISTRY(::nnrobust::RobustTermRegistry, nnrobust_twin_robust_terms)

@@ -59,6 +59,5 @@ struct SinusoidalDisturbance final : Disturbance {
         return std::make_unique<Class>(f);                                                             \
       })
 
-namespace nnrobust {
-NNROBUST_DISTURBANCE("sinusoid", SinusoidalDisturbance);  // the twin of every shipped kind
-}  // namespace nnrobust
+// a twin compiled apart hands its disturbances over (registry.hpp)
+NNROBUST_SHARE_REGISTRY(::nnrobust::DisturbanceRegistry, nnrobust_twin_disturbances)

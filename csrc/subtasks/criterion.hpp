@@ -21,7 +21,7 @@ struct TaskState;  // nominal.hpp: its task quantities at q
 
 // det(J J^T) of the nominal model's task Jacobian and its gradient at q, computed once when a
 // criterion first asks (manipulability.det_and_gradient)
-struct DetAtQ {
+struct NNROBUST_API DetAtQ {
   Nominal &model;
   const Vector &q;
   const TaskState &ts;
@@ -63,3 +63,6 @@ struct Criteria {
       name, [](const ::nnrobust::Fields &f) -> std::unique_ptr<::nnrobust::Criterion> {                  \
         return std::make_unique<Class>(f);                                                             \
       })
+
+// a twin compiled apart hands its criteria over (registry.hpp)
+NNROBUST_SHARE_REGISTRY(::nnrobust::CriterionRegistry, nnrobust_twin_criteria)

@@ -37,3 +37,6 @@ struct Orientation {
       name, [](const ::nnrobust::Fields &f) -> std::unique_ptr<::nnrobust::Path> {                     \
         return std::make_unique<Class>(f);                                                             \
       })
+
+// a twin compiled apart hands its paths over (registry.hpp)
+NNROBUST_SHARE_REGISTRY(::nnrobust::PathRegistry, nnrobust_twin_paths)

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -46,6 +47,8 @@ class Law:
         twin: the name its compiled twin registers under in csrc/controllers/laws/ (None: Python only).
         twin_fields: the attributes of a built controller the twin reads (each a number, a
             vector or a matrix), by name: the one list of what crosses to C++.
+        twin_source: the C++ file of a twin compiled apart (a law registered outside nnrobust,
+            docs/extending.md#a-twin-in-c); None: the twin is shipped.
 
     """
 
@@ -55,6 +58,7 @@ class Law:
     params: tuple[LawParam, ...]
     twin: str | None = None
     twin_fields: tuple[str, ...] = field(default=())
+    twin_source: str | Path | None = None
 
     def param(self, name: str) -> LawParam | None:
         """The declared parameter of this name, or None."""

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -33,6 +34,8 @@ class CriterionKind:
         params: the ``[subtasks]`` keys it reads beyond the section's fields, each declared
             (:class:`nnrobust.key_checks.LawParam`, named ``subtasks.KEY``): a valid key of any
             experiment, defaulted, range-checked and inert while the criterion is not chosen.
+        twin_source: the C++ file of a twin compiled apart (a criterion declared outside
+            nnrobust, docs/extending.md#a-twin-in-c); None: the twin is shipped.
 
     """
 
@@ -44,6 +47,7 @@ class CriterionKind:
     twin_fields: Callable[[Any], dict[str, Any]] | None = None
     det: bool = False
     params: tuple[Any, ...] = ()
+    twin_source: str | Path | None = None
 
     def twin_values(self, criterion: Criterion) -> dict[str, np.ndarray]:
         """The twin's fields as 2-D float arrays (what LoopSpec.criterion_params carries)."""

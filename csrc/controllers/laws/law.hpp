@@ -80,3 +80,6 @@ using LawRegistry = Registry<Law, const LawParams &, LawContext &>;
 // 0 < low < high (a Python law's search_space; docs/extending.md#tuning-it).
 #define NNROBUST_USER_LAW_SPACE(Class, space) \
   extern "C" NNROBUST_API const char *nnrobust_law_space_##Class(void) { return space; }
+
+// a twin compiled apart hands its laws over (registry.hpp)
+NNROBUST_SHARE_REGISTRY(::nnrobust::LawRegistry, nnrobust_twin_laws)
