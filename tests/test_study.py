@@ -156,12 +156,37 @@ def test_a_case_without_randomness_says_it_was_validated_on_the_training_plant(t
         .replace('"plant.disturbance_scale" = {uniform = [0.5, 2.0]}', "")
         .replace('    {name = "taskpd", class = "laws.py:TaskPD"},\n', "")
         .replace("seeds = 2", "seeds = 1")
+        .replace("train_samples = 1", "train_samples = 2")
     )
-    report = run_study(load_study(tmp_path / "study.toml"), tmp_path / "out", workers=2)
+    said: list[str] = []
+    report = run_study(load_study(tmp_path / "study.toml"), tmp_path / "out", workers=2, say=said.append)
     case = report["cases"]["paper-ellipse"]
     assert not case["held_out"]
     assert case["validated_on"].startswith("the training plant")
     assert case["stages"]["falsify"].startswith("skipped")
+    # every draw is the same plant: the budget buys settings, one run each, not repeats
+    assert any("every draw is the same plant" in line for line in said)
+    tuning = json.loads(
+        (tmp_path / "out" / "cases" / "paper-ellipse" / "tune-seed0" / "summary.json").read_text()
+    )
+    assert len(tuning["train_samples"]) == 1 and tuning["trials"] == tuning["budget"]
+
+
+@pytest.mark.parametrize(
+    "case, vary, differ",
+    [
+        ("paper-ellipse", {}, False),  # no box, ideal sensing, the closed-form nominal model
+        ("paper-ellipse-noisy", {}, True),  # sensor noise drawn from each draw's seed
+        ("panda-ellipse", {}, True),  # the nominal model's error drawn from each draw's seed
+        ("paper-ellipse", {"plant.friction_scale": {"uniform": [0.5, 2.0]}}, True),  # a box
+    ],
+)
+def test_draws_differ_exactly_where_a_case_has_randomness(case, vary, differ):
+    from nnrobust.study.engine import draws_differ
+    from nnrobust.sweep.spec import SweepSpec
+
+    sweep = SweepSpec(name="s", base=case, controllers=["pd"], samples=1, seed=0, vary=vary)
+    assert draws_differ(sweep) is differ
 
 
 @pytest.mark.parametrize(

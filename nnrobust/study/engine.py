@@ -221,8 +221,11 @@ def _run_case(
     tuned = [c for c in spec.controllers if c not in spec.fixed]
     out: dict = {"case": case, "stages": {}}
 
-    # 1. tune, once per optimiser seed
+    # 1. tune, once per optimiser seed; on one draw where every draw is the same plant
     tunings = {}
+    train_samples = b["train_samples"] if draws_differ(sweep) else 1
+    if tuned and train_samples < b["train_samples"]:
+        say(f"{name}: every draw is the same plant (no box, no noise, no drawn model error): tuned on one")
     for s in range(b["seeds"]):
         if not tuned:
             break
@@ -231,7 +234,7 @@ def _run_case(
             str(case_file),
             list(tuned),
             b["tune"],
-            train_samples=b["train_samples"],
+            train_samples=train_samples,
             validation=0,
             max_rms_torque=b["max_rms_torque"],
             max_saturated=b["max_saturated"],
@@ -537,6 +540,20 @@ def _select(spec: StudySpec, frame, setting_of: dict) -> tuple[dict, dict]:
         for c, entries in per_seed.items()
     }
     return kept, per_seed
+
+
+def draws_differ(sweep) -> bool:
+    """Whether a case's draws are different plants before any runs: a ``[vary]`` box, sensor
+    noise, or a nominal model whose error is drawn from each draw's seed. Where none is, every
+    draw is the same plant and a tuning setting needs one run (the budget buys settings).
+    """
+    from ..config import nominal_kind
+    from ..sweep.spec import base_config
+
+    config = base_config(sweep)
+    sensing, nominal = config.sensing, config.nominal
+    noisy = any(sensing.position_noise) or any(sensing.velocity_noise)
+    return bool(sweep.vary or noisy or (nominal_kind(config) == "urdf" and nominal.perturbed))
 
 
 def _varies(frame) -> bool:
