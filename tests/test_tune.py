@@ -1,5 +1,6 @@
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -258,6 +259,24 @@ def test_a_tuning_is_the_same_on_one_worker_and_on_two(short_experiment, tmp_pat
         asked.append([row["params"] for row in sorted(rows, key=lambda row: row["trial"])])
     assert asked[0] == asked[1] and len(asked[0]) == 6
     assert best[0] == best[1]
+
+
+def test_a_controllers_trials_do_not_depend_on_the_others_running_beside_it(tuned, tmp_path):
+    """The controllers' rounds run side by side (each is told and asks again while the others'
+    simulations run: nnrobust.sweep.engine.run_task_groups); each optimiser asks from its own
+    rows alone, so no-u0 tuned alone asks, row by row, what it asked beside the PD."""
+    from nnrobust.study_folder import recorded_inputs
+    from nnrobust.tune.engine import _read_trials
+
+    spec, out, _ = tuned
+    alone = replace(spec, controllers=["no-u0"])
+    run_tune(alone, tmp_path / "alone", workers=2)
+
+    def trials(folder):
+        rows = _read_trials(folder, recorded_inputs(folder, "tune").key)
+        return [(r["trial"], r["params"], r["train"]) for r in rows if r["controller"] == "no-u0"]
+
+    assert trials(tmp_path / "alone") == trials(out) and len(trials(out)) == spec.trials
 
 
 def test_a_best_setting_reruns_to_its_training_metrics(tuned):

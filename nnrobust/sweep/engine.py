@@ -664,24 +664,25 @@ def revive(cluster) -> None:
     cluster.scale(len(cluster.worker_spec))
 
 
-def wait_alive(futures: list) -> None:
-    """``distributed.wait(futures)``, or one error instead of a hang when the cluster has had no
-    worker for :data:`NO_WORKER_SECONDS` (every worker process dead and none restarted: user code
-    that ends its process, under a load that makes the nanny give up restarting it). A local
-    cluster of this command's with no worker for :data:`REVIVE_SECONDS` is given new workers
-    (:func:`revive`) first.
+def wait_alive(futures: list, first: bool = False) -> None:
+    """``distributed.wait(futures)`` (with ``first``: until one of them is done), or one error
+    instead of a hang when the cluster has had no worker for :data:`NO_WORKER_SECONDS` (every
+    worker process dead and none restarted: user code that ends its process, under a load that
+    makes the nanny give up restarting it). A local cluster of this command's with no worker for
+    :data:`REVIVE_SECONDS` is given new workers (:func:`revive`) first.
     """
     from distributed import wait
 
-    if all(f.done() for f in futures):
+    if not futures or (any if first else all)(f.done() for f in futures):
         return
+    return_when = "FIRST_COMPLETED" if first else "ALL_COMPLETED"
     client = futures[0].client
     cluster = getattr(client, "cluster", None)
     since = None
     revived = False
     while True:
         try:
-            wait(futures, timeout=5)
+            wait(futures, timeout=5, return_when=return_when)
             return
         except TimeoutError:
             pass
@@ -752,6 +753,36 @@ def run_tasks(client, tasks: list[tuple], crashed, files=None) -> list:
         retry, reason = run_alone(client, files, *task)
         out.append(crashed(reason) if retry is None else retry.result())
     return out
+
+
+def run_task_groups(client, groups: dict, crashed, then, files=None) -> None:
+    """Run groups of (function, *arguments) tasks side by side: as soon as every task of a group
+    has finished, ``then(key, results)`` gets its results (in its tasks' order) and returns that
+    key's next group (empty or None: the key is done), which is submitted at once. Independent
+    searches (one optimiser per controller) thus keep the cluster busy while one of them is told
+    its results and asks again; each key's results are those :func:`run_tasks` gives its groups
+    one after another. A task whose worker died is run again alone once every task in flight has
+    finished, as :func:`run_tasks` does; ``crashed(reason)`` is its result when it ends its
+    worker each time.
+    """
+    pending = {
+        key: (tasks, [submit(client, files, *t) for t in tasks]) for key, tasks in groups.items() if tasks
+    }
+    while pending:
+        wait_alive([f for _, futures in pending.values() for f in futures], first=True)
+        for key in [k for k, (_, futures) in pending.items() if all(f.done() for f in futures)]:
+            tasks, futures = pending.pop(key)
+            results = []
+            for task, future in zip(tasks, futures):
+                if crash_reason(future) is None:
+                    results.append(future.result())
+                    continue
+                wait_alive([f for _, others in pending.values() for f in others])  # alone, as run_tasks
+                retry, reason = run_alone(client, files, *task)
+                results.append(crashed(reason) if retry is None else retry.result())
+            following = then(key, results)
+            if following:
+                pending[key] = (following, [submit(client, files, *t) for t in following])
 
 
 def crashed_rows(spec: SweepSpec, jobs: list[tuple[int, str]], reason: str) -> list[dict]:

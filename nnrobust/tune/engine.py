@@ -9,7 +9,9 @@ multi-objective search spread its budget along the low-gain end of that front an
 simulations, left the NN at 22 mm where a hand search found 0.13 mm). Each round asks every
 controller for a batch of settings (:data:`ROUND_SIMULATIONS`, whatever the cluster's size, so a
 tuning's results do not depend on how many workers ran it); their simulations run on the sweep's
-Dask cluster (one task per setting and training sample) and are told back. Every finished trial is appended
+Dask cluster (one task per setting and training sample) and are told back. The controllers' rounds
+run side by side, each optimiser asking from its own rows alone, so the cluster stays busy while
+one controller is told and asks again. Every finished trial is appended
 to DIR/trials as a Parquet part, so an interrupted tuning resumes from what it wrote: the studies
 are rebuilt from the rows. From half the budget on, whenever the best setting sits on a bound of
 its space that is not physical, that bound moves out a decade and the next setting tried is a
@@ -802,24 +804,52 @@ def _run_tune(
 
         if progress:
             progress(done_count(), total)
-        while any(c.remaining > 0 for c in controllers.values()):
-            asked = [(c, *item) for c in controllers.values() for item in c.ask(batch)]
-            tasks = [
+        # Each controller's optimiser asks from its own rows alone, so the controllers' rounds
+        # run side by side (run_task_groups): one is told and asks again while the others'
+        # simulations run, and the settings asked are those of rounds run one after another.
+        from ..sweep.engine import CRASHED, run_task_groups
+
+        asked: dict[str, list] = {}
+        new: list[dict] = []  # rows not yet written
+
+        def flush() -> None:
+            if new:
+                _write_trials(folder, new, inputs.key)
+                new.clear()
+
+        def round_of(c) -> list[tuple]:
+            asked[c.name] = c.ask(batch) if c.remaining > 0 else []
+            return [
                 (evaluate, sweep_future, base_future, c.law(phase), c.overrides(values, phase), s)
-                for c, _, values, phase in asked
+                for _, values, phase in asked[c.name]
                 for s in train
             ]
-            flat = _simulate(client, tasks, files)
-            by_setting = [flat[i * len(train) : (i + 1) * len(train)] for i in range(len(asked))]
-            finished = [
-                (c, c.tell(trial, values, phase, runs))
-                for (c, trial, values, phase), runs in zip(asked, by_setting)
+
+        def told(name: str, flat: list[dict]) -> list[tuple]:
+            c = controllers[name]
+            rows = [
+                c.tell(trial, values, phase, flat[i * len(train) : (i + 1) * len(train)])
+                for i, (trial, values, phase) in enumerate(asked[name])
             ]
-            for c, row in finished:  # after every tell: recording may widen a space (a new study)
+            for row in rows:  # after every tell: recording may widen a space (a new study)
                 c.record(row)
-            _write_trials(folder, [row for _, row in finished], inputs.key)
+            new.extend(rows)
+            if len(new) >= len(controllers) * batch:  # about one round of every controller a part
+                flush()
             if progress:
                 progress(done_count(), total)
+            return round_of(c)
+
+        try:
+            run_task_groups(
+                client,
+                {name: round_of(c) for name, c in controllers.items()},
+                lambda reason: {"status": CRASHED, "message": reason},
+                told,
+                files,
+            )
+        finally:
+            flush()  # what finished is kept, also when interrupted
         summary = _summary(spec, sweep, controllers, client, sweep_future, base_future, files)
     _write_json(folder / "summary.json", summary)
     plot_pareto(summary, folder)
