@@ -6,10 +6,10 @@ the time its simulations take, and the time a finished study takes to write its 
 The study is examples/study.toml (``--cut``: with the budgets tests/test_study.py cuts it to, for
 a quick look). It runs from scratch into a temporary folder; then:
 
-- ``simulations``: the seconds of worker time the runs take. A sweep stage's rows carry their
-  own time (``task_seconds``: build, run and metrics of one run); a tuning's trial runs and a
-  falsification's simulations do not, and are counted at the median ``task_seconds`` of the same
-  controller's runs on the certification draws (the same case, duration and settings' kind);
+- ``simulations``: the seconds of worker time the runs take, each run's own ``task_seconds``
+  (build, run and metrics of one run, measured on its worker): a sweep stage's rows, a tuning's
+  trial runs and a falsification's simulations all carry it (a run that ended its worker does
+  not: ``runs_without_their_own_time`` counts them);
 - ``overhead``: 1 - simulations / (workers x wall): the share of the study's wall time its
   workers did not spend simulating (scheduling, stage set-up, the cluster, writing the report,
   the realtime stage's exports, idle workers at a stage's end);
@@ -58,36 +58,19 @@ def _frames(folder: Path, kind: str) -> pd.DataFrame:
 
 
 def simulation_seconds(out: Path) -> dict:
-    """Worker seconds of the study's simulations, by stage (see the module's docstring)."""
-    sweeps = {
-        stage: _frames(out, f"{stage}/results")
+    """Worker seconds of the study's simulations, by stage: each run's own task_seconds."""
+    out_seconds = {
+        stage: float(_frames(out, f"{stage}/results")["task_seconds"].sum())
         for stage in ("validate", "certify", "certify-mujoco")
         if list(out.glob(f"cases/*/{stage}/results"))
     }
-    certify = sweeps["certify"]
-    per_run = certify.groupby("controller")["task_seconds"].median().to_dict()
-    fallback = float(certify["task_seconds"].median())
-
-    def base(label: str) -> str:  # a certification entry of a tuned law: 'nn-tuned'
-        for name in (label, f"{label}-tuned"):
-            if name in per_run:
-                return name
-        return ""
-
-    out_seconds = {stage: float(frame["task_seconds"].sum()) for stage, frame in sweeps.items()}
     trials = _frames(out, "tune-seed*/trials")
-    runs = 0.0
-    for _, trial in trials.iterrows():
-        count = len(json.loads(trial["row"]).get("runs", [])) or 1
-        runs += count * per_run.get(base(str(trial["controller"])), fallback)
-    out_seconds["tune"] = runs
+    runs = [run for row in trials["row"] for run in json.loads(row).get("runs", [])]
     history = _frames(out, "falsify/history")
-    out_seconds["falsify"] = float(
-        sum(per_run.get(base(str(c)), fallback) for c in history["controller"]) if len(history) else 0.0
-    )
-    out_seconds["runs_without_their_own_time"] = int(
-        sum(len(json.loads(r).get("runs", [])) or 1 for r in trials["row"]) + len(history)
-    )
+    simulations = [json.loads(row) for row in history["row"]] if len(history) else []
+    out_seconds["tune"] = float(sum(r.get("task_seconds", 0.0) for r in runs))
+    out_seconds["falsify"] = float(sum(r.get("task_seconds", 0.0) for r in simulations))
+    out_seconds["runs_without_their_own_time"] = sum("task_seconds" not in r for r in [*runs, *simulations])
     return out_seconds
 
 
@@ -129,10 +112,7 @@ def main() -> None:
     for stage, value in seconds.items():
         if stage != "runs_without_their_own_time":
             print(f"  {stage:16s} {value:8.1f} worker s of simulation")
-    print(
-        f"  ({seconds['runs_without_their_own_time']} tuning and falsification runs counted at their "
-        "law's median)"
-    )
+    print(f"  ({seconds['runs_without_their_own_time']} runs without their own time: each ended its worker)")
     print(f"overhead: {100 * result['overhead']:.1f} % of {args.workers} x {wall:.1f} s")
     for line, seconds_ in stages:
         print(f"  {seconds_:7.1f} s wall  {line}")

@@ -25,9 +25,12 @@ def evaluate(sweep, base: dict, controller: str, values: dict, properties: list[
     """One run at one point of the box (on a worker): its margins and the metrics they read;
     ``base``: the base's own values (:func:`nnrobust.sweep.spec.base_values`).
     """
+    import time
+
     from ..experiment import run_experiment
     from ..sweep.spec import Sample, experiment, sample_seed
 
+    start = time.perf_counter()  # task_seconds: build, run and metrics, as a sweep's rows carry
     sample = Sample(-1, values, sample_seed(sweep.seed, 0))
     try:
         metrics = run_experiment(experiment(sweep, base, sample, controller)).metrics()
@@ -35,7 +38,7 @@ def evaluate(sweep, base: dict, controller: str, values: dict, properties: list[
         metrics = {"status": "refused", "message": str(err)[:300]}
     except BaseException as err:  # a defect, or user code raising SystemExit or BaseException
         metrics = {"status": "error", "message": f"{type(err).__name__}: {err}"[:300]}
-    return judged(metrics, properties)
+    return {**judged(metrics, properties), "task_seconds": time.perf_counter() - start}
 
 
 def judged(metrics: dict, properties: list[Property]) -> dict:

@@ -240,7 +240,7 @@ def tuned_settings(
     path: str | Path, names: list[str], varied=(), entries: dict | None = None
 ) -> dict[str, dict]:
     """Each named controller's best setting in a tuning's summary (``DIR`` or its summary.json),
-    or in one case of a tuned comparison (benchmarks/tuned_comparison.py's JSON, its seed-0
+    or in one case of the tuned comparison's JSON (docs/data/tuned_comparison.json, its seed-0
     tuning) named as ``FILE#CASE/SENSING``: name -> its dotted-key overrides, each a key the law
     reads itself and none of ``varied``, the box's keys (:func:`check_tuned`). Every law takes
     them: a shipped kind, a registered law, a class as file.py:Class (found under its class name)
@@ -403,18 +403,24 @@ def evaluate(sweep, base: dict, controller: str, overrides: dict, sample_id: int
     setting's keys are set with the sample's in the base's own values
     (:func:`nnrobust.sweep.spec.experiment`), as an edit of the file would set them.
     """
+    import time
+
     from ..experiment import run_experiment
     from ..sweep.spec import draw, experiment
 
+    start = time.perf_counter()  # task_seconds: build, run and metrics, as a sweep's rows carry
     try:
         config = experiment(sweep, base, draw(sweep, sample_id), controller, overrides)
         metrics = run_experiment(config).metrics()
     except NNRobustError as err:
-        return {"status": "refused", "message": str(err)[:300]}
+        metrics = {"status": "refused", "message": str(err)[:300]}
+        keep: tuple[str, ...] = ("status", "message")
     except BaseException as err:  # a defect, or user code raising SystemExit or BaseException
-        return {"status": "error", "message": f"{type(err).__name__}: {err}"[:300]}
-    keep = (*OBJECTIVES, "status", "saturated_fraction", "runaway", "max_joint_limit_violation")
-    return {k: metrics.get(k) for k in keep}
+        metrics = {"status": "error", "message": f"{type(err).__name__}: {err}"[:300]}
+        keep = ("status", "message")
+    else:
+        keep = (*OBJECTIVES, "status", "saturated_fraction", "runaway", "max_joint_limit_violation")
+    return {**{k: metrics.get(k) for k in keep}, "task_seconds": time.perf_counter() - start}
 
 
 # ---- on the client -------------------------------------------------------------------------------
