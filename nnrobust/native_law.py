@@ -194,18 +194,26 @@ def compiled_library(source: Path, key: str, definitions: tuple[str, ...] = ()) 
     return library, digest
 
 
+def _compiled_loop(key: str, path: Path, what: str):
+    """The compiled loop's module, or one line naming ``key`` and the file: ``what`` (a law, a
+    twin) in C++ runs on it.
+    """
+    try:
+        from . import _loop
+    except ImportError as err:
+        raise ConfigError(
+            key, f"{path}: {what} in C++ runs on the compiled loop, which is not built ({err})"
+        ) from err
+    return _loop
+
+
 def load_native_class(path: Path, source: Path, name: str, base: type, key: str) -> type:
     """The Python face of the law ``name`` in the C++ file ``source`` (``path`` as the experiment
     names it): a subclass of ``base`` (Controller) whose compiled twin is the loaded library.
     """
     if not name.isidentifier():
         raise ConfigError(key, f"{name!r} is not a C++ class name")
-    try:
-        from . import _loop
-    except ImportError as err:
-        raise ConfigError(
-            key, f"{path}: a law in C++ runs on the compiled loop, which is not built ({err})"
-        ) from err
+    _loop = _compiled_loop(key, path, "a law")
     library, digest = compiled_library(source, key)
     if str(library) not in _loaded:
         twin = f"cpp:{name}:{digest[:16]}"
@@ -234,12 +242,7 @@ def load_twin_source(source: str | Path, concept: str, name: str, owner: str) ->
         raise ConfigError(key, f"{path} is not a file (the C++ twin of the {concept} {name!r})")
     if not is_source(path):
         raise ConfigError(key, f"{path} is not a C++ file (one of {', '.join(SOURCE_SUFFIXES)})")
-    try:
-        from . import _loop
-    except ImportError as err:
-        raise ConfigError(
-            key, f"{path}: a twin in C++ runs on the compiled loop, which is not built ({err})"
-        ) from err
+    _loop = _compiled_loop(key, path, "a twin")
     library, _ = compiled_library(path, key, (TWIN_DEFINITION,))
     if str(library) not in _twins:
         try:
