@@ -17,6 +17,7 @@ the compiler's own lines, with the file and line.
 from __future__ import annotations
 
 import fcntl
+import functools
 import hashlib
 import os
 import shutil
@@ -101,8 +102,14 @@ def cache_dir() -> Path:
 
 def _toolchain(cxx: str, info: dict[str, str]) -> str:
     """What the library depends on besides the file: the compiler's version, the build's flags and
-    every installed header.
+    every installed header (computed once a process: every run of a sweep asks).
     """
+    return _toolchain_digest(cxx, tuple(sorted(info.items())))
+
+
+@functools.lru_cache(maxsize=8)
+def _toolchain_digest(cxx: str, items: tuple[tuple[str, str], ...]) -> str:
+    info = dict(items)
     try:
         version = subprocess.run([cxx, "--version"], capture_output=True, text=True, timeout=60).stdout
     except (OSError, subprocess.SubprocessError) as err:
