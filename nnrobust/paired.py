@@ -16,6 +16,11 @@ distributions. For N samples with a result for both:
   a difference is not finite;
 - **significant**: the sign test's p-value below alpha (the test that assumes nothing).
 
+Where every sample gave both controllers the same values (one plant: a case without randomness,
+whose draws are the same experiment run again), the N pairs are one comparison repeated, not N:
+the difference is reported, with ``plants`` = 1, and there is no test (p-values None, not
+significant). Counting the repeats as samples would call any difference significant.
+
 A run that did not complete (diverged, refused, crashed) has no metric: it counts as worse than
 any completed run (+inf), so a controller that diverges where the other does not loses that
 pair; a pair where neither completed is a tie. A completed run whose metric is not defined (NaN:
@@ -41,6 +46,11 @@ METHOD = (
     "{confidence:g} % percentile bootstrap interval ({resamples} resamples, seed {seed}); "
     "A better on k of N (d < 0); two-sided exact sign test on the untied pairs; Wilcoxon "
     "signed-rank test beside it; a run that did not complete counts as +inf"
+)
+
+ONE_PLANT = (
+    "; every sample gave both the same values (one plant: the draws are the same experiment run "
+    "again), so the pairs are one comparison and no test is made"
 )
 
 
@@ -121,6 +131,10 @@ def compare(
         return {**out, "median_difference": None, "interval": None, "a_better": 0, "ties": 0,
                 "sign_p": None, "wilcoxon_p": None, "significant": False}  # fmt: skip
     better, ties = int(np.sum(d < 0)), int(np.sum(d == 0))
+    if n > 1 and len(set(zip(x.tolist(), y.tolist()))) == 1:  # one plant: one comparison, repeated
+        return {**out, "method": out["method"] + ONE_PLANT, "plants": 1, "median_difference": float(d[0]),
+                "interval": [float(d[0]), float(d[0])], "a_better": better, "ties": ties, "sign_p": None,
+                "wilcoxon_p": None, "significant": False}  # fmt: skip
     untied = n - ties
     sign_p = float(stats.binomtest(better, untied, 0.5).pvalue) if untied else 1.0
     if n <= BOOTSTRAP_MAX:
@@ -161,6 +175,11 @@ def format_pair(entry: dict, scale: float = 1e3, unit: str = "mm") -> str:
         return "inf" if value is None else f"{scale * value:.4g}"
 
     low, high = entry["interval"]
+    if entry.get("plants") == 1:
+        return (
+            f"{a} - {b}: {num(entry['median_difference'])} {unit} on every one of {n} samples, one plant "
+            "(the same experiment each time): no test"
+        )
     verdict = "significant" if entry["significant"] else "not significant"
     wilcoxon = "" if entry["wilcoxon_p"] is None else f", Wilcoxon p = {entry['wilcoxon_p']:.3g}"
     ties = f" ({entry['ties']} ties)" if entry["ties"] else ""

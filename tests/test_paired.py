@@ -91,3 +91,16 @@ def test_every_pair_once_in_order():
     pairs = all_pairs(frame, ["A", "B", "C"])
     assert [(p["a"], p["b"]) for p in pairs] == [("A", "B"), ("A", "C"), ("B", "C")]
     assert pairs[1]["ties"] == 2 and not pairs[1]["significant"]
+
+
+def test_one_plant_run_again_is_one_comparison_not_a_significant_test():
+    """A case without randomness gives every draw the same plant: 11 identical pairs are one
+    comparison repeated. The sign test would call it significant (p = 2 / 2^11); it is not tested."""
+    entry = compare(_frame([0.003] * 11, [0.001] * 11), "A", "B")
+    assert entry["plants"] == 1 and entry["n"] == 11
+    assert entry["median_difference"] == pytest.approx(0.002)
+    assert (entry["sign_p"], entry["wilcoxon_p"], entry["significant"]) == (None, None, False)
+    assert "one plant" in entry["method"] and "no test" in format_pair(entry)
+    # the same differences from plants that differ are a test again
+    other = compare(_frame(np.linspace(0.003, 0.004, 11), np.linspace(0.001, 0.002, 11)), "A", "B")
+    assert "plants" not in other and other["significant"]
