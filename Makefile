@@ -80,9 +80,14 @@ docs-data: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/subtask.py --json $(DATA)/subtask.json
 	$(BIN)/python benchmarks/arm_presets.py --json $(DATA)/arm_presets.json
 	$(BIN)/python benchmarks/torque_speed.py --json $(DATA)/torque_speed.json
-	rm -rf $(OUT)/tuned $(OUT)/tune-noisy $(OUT)/falsify-paper-factors $(OUT)/falsify-panda-factors \
-	  $(OUT)/falsify-tuned $(OUT)/falsify-panda-tuned $(OUT)/paper-robustness $(OUT)/panda-robustness
-	$(BIN)/python benchmarks/tuned_comparison.py --json $(DATA)/tuned_comparison.json --figure docs/img/tuned_comparison.png
+	rm -rf $(OUT)/tuned-paper $(OUT)/tuned-panda $(OUT)/tune-noisy $(OUT)/falsify-paper-factors \
+	  $(OUT)/falsify-panda-factors $(OUT)/falsify-tuned $(OUT)/falsify-panda-tuned $(OUT)/paper-robustness \
+	  $(OUT)/panda-robustness
+	for study in tuned-paper tuned-panda; do \
+	  $(BIN)/nnrobust study benchmarks/studies/$$study.toml --out $(OUT)/$$study --workers 2 --quiet && \
+	  cp $(OUT)/$$study/report.json $(DATA)/$$(echo $$study | tr - _).json || exit 1; \
+	done
+	$(BIN)/python benchmarks/studies/fronts.py $(OUT)/tuned-paper $(OUT)/tuned-panda --figure docs/img/tuned_comparison.png
 	$(BIN)/python benchmarks/engine_gap.py --json $(DATA)/engine_gap.json
 	$(BIN)/python benchmarks/plant_convergence.py --json $(DATA)/plant_convergence.json
 	$(BIN)/python benchmarks/adaptive_step.py --json $(DATA)/adaptive_step.json

@@ -174,7 +174,7 @@ def main() -> None:
     parser.add_argument(
         "--tuned",
         default=str(HERE.parent / "docs" / "data" / "tuned_comparison.json"),
-        help="the fair comparison's tunings (benchmarks/tuned_comparison.py)",
+        help="the fair comparison's tunings as they were before it became studies",
     )
     args = parser.parse_args()
     import mujoco

@@ -276,27 +276,76 @@ def friction_compensation() -> str:
     )
 
 
-TUNED_COMMAND = (
-    "python benchmarks/tuned_comparison.py --json docs/data/tuned_comparison.json "
-    "--figure docs/img/tuned_comparison.png"
+TUNED_STUDIES = ("tuned-paper", "tuned-panda")
+"""The shipped studies of the fair comparison (benchmarks/studies/), their report.json copied to
+docs/data/tuned_paper.json and tuned_panda.json by `make docs-data`."""
+
+TUNED_COMMAND = " and ".join(
+    f"nnrobust study benchmarks/studies/{s}.toml --out out/{s} --workers 2" for s in TUNED_STUDIES
 )
 
+TUNED_LABELS = {
+    "paper-line": "case (a) line",
+    "paper-ellipse": "case (b) ellipse",
+    "panda-ellipse": "Panda ellipse",
+}
+"""Each case's name in the tables (its sensing, ideal or noisy, follows)."""
 
-def tuned_seed_errors(case: dict, name: str) -> list[float]:
-    """The held-out RMS error [m] of a controller's best setting for each optimiser seed of a case
-    (the seeds where a setting met the constraints)."""
+
+def tuned_cases() -> list[dict]:
+    """Every case of the tuned studies, in their order: its label, its report entry, the study's
+    controllers (in the study file's order), its budgets."""
+    from nnrobust.study import load_study
+
     out = []
-    for seed in case["seeds"]:
-        best = seed["best"][name]
-        if best is not None:
-            out.append(best["validation"].get("rms_error_after_2s", best["train"]["rms_error_after_2s"]))
+    for study in TUNED_STUDIES:
+        report = _data(study.replace("-", "_"))
+        controllers = load_study(ROOT / "benchmarks" / "studies" / f"{study}.toml").controllers
+        for name, case in report["cases"].items():
+            arm = name.removesuffix("-noisy")
+            sensing = "noisy" if name.endswith("-noisy") else "ideal"
+            names = set(case["controllers"]) | set(case["not_kept"])
+            order = [c for c in controllers if c in names]
+            out.append(
+                {
+                    "label": f"{TUNED_LABELS.get(arm, arm)}, {sensing}",
+                    "name": name,
+                    "case": case,
+                    "controllers": order,
+                    "budgets": report["budgets"],
+                }
+            )
     return out
 
 
+def tuned_seed_errors(case: dict, name: str) -> list[float]:
+    """The validation median RMS error [m] of a controller's best setting for each optimiser seed
+    of a case (the seeds where a setting met the constraints)."""
+    entry = case["controllers"].get(name)
+    tuned = entry["tuned"] if entry is not None else None
+    if not tuned:
+        return []
+    return [s["median_error"] for s in tuned["seeds"] if s["median_error"] is not None]
+
+
+def _paired(case: dict, a: str, b: str) -> dict | None:
+    """The paired comparison of a and b on the certification draws, as "a - b"."""
+    for pair in case["paired"]:
+        if (pair["a"], pair["b"]) == (a, b):
+            return pair
+        if (pair["a"], pair["b"]) == (b, a):
+            k, n, ties = pair["a_better"], pair["n"] - pair["undefined"], pair["ties"]
+            low, high = pair["interval"]
+            return {**pair, "a": a, "b": b, "a_better": n - k - ties, "interval": [-high, -low],
+                    "median_difference": -pair["median_difference"]}  # fmt: skip
+    return None
+
+
 def tuned_verdict(case: dict, names: list[str]) -> dict:
-    """A case's verdict: the controller with the least median held-out error over the seeds,
-    whether it is clear (its worst seed beats every other controller's best seed), and the NN's
-    median over the best other controller's."""
+    """A case's verdict: the controller with the least median validation error over the seeds,
+    whether it is clear (its worst seed beats every other controller's best seed), the NN's
+    median over the best other controller's, and the paired comparison of the two on the
+    certification draws."""
     medians = {n: median(e) for n in names if (e := tuned_seed_errors(case, n))}
     best = min(medians, key=medians.__getitem__)
     others = [n for n in medians if n != best]
@@ -307,49 +356,71 @@ def tuned_verdict(case: dict, names: list[str]) -> dict:
         "clear": clear,
         "medians": medians,
         "rival": rival,
-        "nn_ratio": medians["nn"] / medians[rival],
+        "nn_ratio": medians["nn"] / medians[rival] if "nn" in medians else None,
+        "paired": _paired(case, rival, "nn") if "nn" in medians else None,
     }
 
 
 def tuned_headline() -> str:
-    data = _data("tuned_comparison")
-    seeds = data["seeds"]
+    cases = tuned_cases()
+    seeds = {c["budgets"]["seeds"] for c in cases}.pop()
 
-    def cell(case, name):
-        errors = tuned_seed_errors(case, name)
+    def cell(c, name):
+        errors = tuned_seed_errors(c["case"], name)
         if not errors:
             return "no setting met the constraints"
         text = f"{1e3 * median(errors):.3g} ({1e3 * min(errors):.2g}–{1e3 * max(errors):.2g})"
         text += f", {len(errors)} of {seeds} seeds" if len(errors) < seeds else ""
-        return f"**{text}**" if tuned_verdict(case, data["controllers"])["best"] == name else text
+        return f"**{text}**" if tuned_verdict(c["case"], c["controllers"])["best"] == name else text
 
     columns = [("controller", "l", _text("controller"))] + [
-        (f"{c['case']}, {c['sensing']}", "r", lambda r, c=c: cell(c, r["controller"])) for c in data["cases"]
+        (c["label"], "r", lambda r, c=c: cell(c, r["controller"])) for c in cases
     ]
-    rows = [{"controller": name} for name in data["controllers"]]
-    limits = sorted({c["summary"]["constraints"]["max_rms_torque"] for c in data["cases"]})
-    return _markdown(columns, rows) + (
-        f"\nHeld-out RMS task error (t ≥ 2 s) in mm of each controller's best setting under the "
-        f"constraints: the median over {seeds} optimiser seeds (0 to {seeds - 1}), and in brackets "
-        f"the least and the greatest. Each seed gave every controller {data['budget']} simulations "
-        f"per case: RMS torque ≤ {' or '.join(f'{v:g}' for v in limits)} N m (the paper's arm or the "
-        "Panda), at most 1 % saturated steps, no runaway, no stop hit. The least median is in bold. "
-        f"Made by `{TUNED_COMMAND}`.\n"
+    names = list(dict.fromkeys(n for c in cases for n in c["controllers"]))
+    limits = sorted({c["budgets"]["max_rms_torque"] for c in cases})
+    budget = {c["budgets"]["tune"] for c in cases}.pop()
+    validation = {c["budgets"]["validation"] for c in cases}.pop()
+    same = [c["label"] for c in cases if not c["case"]["held_out"]]
+    return _markdown(columns, [{"controller": n} for n in names]) + (
+        f"\nRMS task error (t ≥ 2 s) in mm of each controller's best setting under the constraints, "
+        f"on {validation} validation draws the tuning never ran: per optimiser seed the median over "
+        f"the draws; the cell gives the median over {seeds} seeds (0 to {seeds - 1}) and in brackets "
+        f"the least and the greatest. Each seed gave every controller {budget} simulations per case: "
+        f"RMS torque ≤ {' or '.join(f'{v:g}' for v in limits)} N m (the paper's arm or the Panda), "
+        f"at most {100 * cases[0]['budgets']['max_saturated']:g} % saturated steps, no runaway, no "
+        "stop hit. The least median is in bold. Held out means other plants only where draws differ "
+        "(sensor noise, the Panda's drawn model error); "
+        + (
+            f"in {' and '.join(same)} every draw is the same plant: validated on the training plant. "
+            if same
+            else ""
+        )
+        + f"Made by `{TUNED_COMMAND}`.\n"
     )
 
 
 def tuned_verdicts() -> str:
-    data = _data("tuned_comparison")
     rows = []
-    for case in data["cases"]:
-        v = tuned_verdict(case, data["controllers"])
+    for c in tuned_cases():
+        v = tuned_verdict(c["case"], c["controllers"])
+        pair = v["paired"]
         rows.append(
             {
-                "case": f"{case['case']}, {case['sensing']}",
+                "case": c["label"],
                 "best": v["best"],
                 "clear": "yes" if v["clear"] else "no: within the seeds' spread",
-                "nn": f"{v['nn_ratio']:.2g}",
+                "nn": "–" if v["nn_ratio"] is None else f"{v['nn_ratio']:.2g}",
                 "rival": v["rival"],
+                "paired": "–"
+                if pair is None
+                else f"one plant: {1e3 * pair['median_difference']:.2g} mm on every draw, no test"
+                if pair.get("plants") == 1
+                else (
+                    f"{pair['a_better']} of {pair['n'] - pair['undefined']}, "
+                    f"{1e3 * pair['median_difference']:.2g} mm "
+                    f"({1e3 * pair['interval'][0]:.2g} to {1e3 * pair['interval'][1]:.2g}), "
+                    f"sign test p = {pair['sign_p']:.2g}"
+                ),
             }
         )
     return _markdown(
@@ -359,69 +430,59 @@ def tuned_verdicts() -> str:
             ("every seed better than every other controller's?", "l", _text("clear")),
             ("NN median / best other's", "r", _text("nn")),
             ("best other", "l", _text("rival")),
+            ("best other better than NN, paired on the certification draws", "l", _text("paired")),
         ],
         rows,
         TUNED_COMMAND,
+    ) + (
+        "The paired column: on how many certification draws the best other law's kept setting "
+        "has the lower error, the median of its error minus the NN's with a 95 % bootstrap "
+        "interval, and the two-sided sign test ([robustness.md](robustness.md#paired-comparisons)); "
+        "where every draw is the same plant the draws are one comparison, and no test is made.\n"
     )
 
 
 def tuned_settings() -> str:
-    data = _data("tuned_comparison")
     rows = []
-    for case in data["cases"]:
-        for name, seed, best in (
-            (n, s["seed"], s["best"][n]) for n in data["controllers"] for s in case["seeds"]
-        ):
-            if best is None:
+    for c in tuned_cases():
+        for name in c["controllers"]:
+            entry = c["case"]["controllers"].get(name)
+            tuned = entry["tuned"] if entry is not None else None
+            if not tuned:
+                rows.append({"case": c["label"], "controller": name, "seed": "all", "setting": "–",
+                             "error": "–", "bounds": c["case"]["not_kept"].get(name, "–")})  # fmt: skip
+                continue
+            for seed in tuned["seeds"]:
+                setting = ", ".join(
+                    f"{k.split('.')[-1]} {v[0] if isinstance(v, list) else v:.3g}"
+                    for k, v in seed["settings"].items()
+                    if k != "nn.eps0"
+                )
+                bounds = (
+                    "; ".join(
+                        f"{b['param']} {b['side']}" + (" (physical)" if b["physical"] else "")
+                        for b in seed["at_bound"]
+                    )
+                    or "interior"
+                )
+                kept = " (kept)" if seed["seed"] == tuned["kept_seed"] else ""
                 rows.append(
                     {
-                        "case": f"{case['case']}, {case['sensing']}",
+                        "case": c["label"],
                         "controller": name,
-                        "seed": seed,
-                        "setting": "–",
-                        "train": "–",
-                        "held": "–",
-                        "torque": "–",
-                        "chatter": "–",
-                        "bounds": "–",
+                        "seed": f"{seed['seed']}{kept}",
+                        "setting": setting,
+                        "error": _mm(seed["median_error"]),
+                        "bounds": bounds,
                     }
                 )
-                continue
-            setting = ", ".join(
-                f"{k.split('.')[-1]} {v[0] if isinstance(v, list) else v:.3g}"
-                for k, v in best["params"].items()
-                if k != "nn.eps0"
-            )
-            bounds = (
-                "; ".join(
-                    f"{b['param']} {b['side']}" + (" (physical)" if b["physical"] else "")
-                    for b in best["at_bound"]
-                )
-                or "interior"
-            )
-            rows.append(
-                {
-                    "case": f"{case['case']}, {case['sensing']}",
-                    "controller": name,
-                    "seed": seed,
-                    "setting": setting,
-                    "train": _mm(best["train"]["rms_error_after_2s"]),
-                    "held": _mm(best["validation"].get("rms_error_after_2s")),
-                    "torque": f"{best['train']['rms_torque']:.3g}",
-                    "chatter": f"{best['train']['torque_chatter']:.3g}",
-                    "bounds": bounds,
-                }
-            )
     return _markdown(
         [
             ("case", "l", _text("case")),
             ("controller", "l", _text("controller")),
             ("seed", "r", _text("seed")),
             ("best setting", "l", _text("setting")),
-            ("train error [mm]", "r", _text("train")),
-            ("held-out error [mm]", "r", _text("held")),
-            ("RMS torque [N m]", "r", _text("torque")),
-            ("chatter [N m]", "r", _text("chatter")),
+            ("validation error [mm]", "r", _text("error")),
             ("on a bound", "l", _text("bounds")),
         ],
         rows,

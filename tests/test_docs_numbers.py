@@ -27,6 +27,8 @@ OTHERS = [
     "friction_compensation",
     "plant_convergence",
     "tuned_comparison",
+    "tuned_paper",
+    "tuned_panda",
     "falsify_paper_factors",
     "falsify_panda_factors",
     "falsify_tuned_noisy",
@@ -164,20 +166,68 @@ def _rerun_best(summary: dict, controllers: list[str], name: str) -> None:
         assert np.mean([r[key] for r in runs]) == pytest.approx(best["train"][key], rel=1e-9), key
 
 
-def test_a_best_setting_of_the_tuned_comparison_reproduces():
-    """The PD's best setting on case (b), ideal sensing, rerun on its training sample."""
-    data = json.loads((render_tables.DATA / "tuned_comparison.json").read_text())
-    case = next(c for c in data["cases"] if c["case"] == "case (b) ellipse" and c["sensing"] == "ideal")
-    _rerun_best(case["summary"], data["controllers"], "pd")
+def _rerun_validation(study: str, case_name: str, controller: str) -> tuple[float, float]:
+    """A tuned study's kept setting of ``controller`` in ``case_name``, rerun on the validation
+    draws (rebuilt from the study file, as the study's validate stage draws them): (the median of
+    their RMS errors after 2 s, the median report.json gives)."""
+    from statistics import median
+
+    from nnrobust.experiment import run_experiment
+    from nnrobust.study import load_study
+    from nnrobust.study.engine import VALIDATION_SEED, seed_name, sweep_of
+    from nnrobust.sweep.spec import base_config, draw, experiment
+    from nnrobust.tune.engine import tuned_entry
+
+    spec = load_study(ROOT / "benchmarks" / "studies" / f"{study}.toml")
+    report = json.loads((render_tables.DATA / f"{study.replace('-', '_')}.json").read_text())
+    case = next(c for c in spec.cases if spec.case_name(c) == case_name)
+    tuned = report["cases"][case_name]["controllers"][controller]["tuned"]
+    label = seed_name(controller, tuned["kept_seed"])
+    entries = {label: tuned_entry(controller, tuned["settings"], spec.entries)}
+    n = spec.budgets["validation"]
+    sweep = sweep_of(spec, case, [label], entries, n, spec.seed + VALIDATION_SEED)
+    base = base_config(sweep)
+    errors = [
+        run_experiment(experiment(sweep, base, draw(sweep, i), label)).metrics()["rms_error_after_2s"]
+        for i in range(n)
+    ]
+    kept = next(s for s in tuned["seeds"] if s["seed"] == tuned["kept_seed"])
+    return median(errors), kept["median_error"]
 
 
-@pytest.mark.parametrize("name", ["slotine-li", "rbf-nn"])
-def test_a_classic_best_setting_of_the_tuned_comparison_reproduces(name):
-    """The shipped classics' best settings on case (b), noisy sensing (sensor noise and a delay:
-    the case where the RBF network and the PD part ways), rerun on a training sample."""
-    data = json.loads((render_tables.DATA / "tuned_comparison.json").read_text())
-    case = next(c for c in data["cases"] if c["case"] == "case (b) ellipse" and c["sensing"] == "noisy")
-    _rerun_best(case["summary"], data["controllers"], name)
+@pytest.mark.parametrize(
+    "study, case, controller",
+    [
+        ("tuned-paper", "paper-ellipse", "pd"),  # ideal sensing: every draw is the training plant
+        ("tuned-paper", "paper-ellipse-noisy", "rbf-nn"),  # noisy: held-out draws
+        ("tuned-paper", "paper-ellipse-noisy", "slotine-li"),
+        ("tuned-paper", "paper-line-noisy", "taskpd-cpp"),  # the law in C++ that is not shipped
+        ("tuned-panda", "panda-ellipse-noisy", "nn"),
+    ],
+)
+def test_a_kept_setting_of_the_tuned_studies_reproduces_its_validation_error(study, case, controller):
+    """The headline table's numbers are the seeds' validation medians: one kept setting of each
+    kind, rerun on its validation draws, gives its median."""
+    again, published = _rerun_validation(study, case, controller)
+    assert again == pytest.approx(published, rel=1e-6)
+
+
+def test_make_docs_data_runs_the_tuned_studies_the_tables_name():
+    """The comparison's tables name the studies' commands; make docs-data runs each and copies
+    its report.json to the data file the tables read."""
+    import shlex
+
+    loops = [" ".join(c) for c in _docs_data_commands() if c[:3] == ["for", "study", "in"]]
+    for study in render_tables.TUNED_STUDIES:
+        assert f"benchmarks/studies/{study}.toml" in render_tables.TUNED_COMMAND
+        assert any(
+            f" {study}" in line
+            and "nnrobust study benchmarks/studies/$$study.toml --out out/$$study --workers 2" in line
+            for line in loops
+        ), study
+    text = (ROOT / "Makefile").read_text()
+    assert "cp $(OUT)/$$study/report.json $(DATA)/$$(echo $$study | tr - _).json" in text
+    assert shlex.split(render_tables.TUNED_COMMAND.split(" and ")[0])[:2] == ["nnrobust", "study"]
 
 
 def test_the_nn_best_setting_of_the_tuning_example_reproduces():
@@ -192,7 +242,8 @@ def _at(data, path):
     return data
 
 
-PAPER, PANDA, TUNED = "paper_robustness", "panda_robustness", "tuned_comparison"
+PAPER, PANDA, TUNED = "paper_robustness", "panda_robustness", "tuned_paper"
+"""TUNED: the checks below read both tuned studies' reports (render_tables.tuned_cases)."""
 
 
 def _study(controller, statistic):
@@ -215,16 +266,17 @@ def _falsified(controller, search=None):
     return get
 
 
+def _tuned_case(case: str, sensing: str) -> dict:
+    """A case of the tuned studies by its table label, e.g. ("case (a) line", "noisy")."""
+    return next(c for c in render_tables.tuned_cases() if c["label"] == f"{case}, {sensing}")
+
+
 def _held(case, controller, sensing="noisy"):
-    """The median over the optimiser seeds of a controller's held-out RMS error in
-    tuned_comparison.json (what the headline table prints)."""
+    """The median over the optimiser seeds of a controller's validation error in the tuned
+    studies (what the headline table prints)."""
     from statistics import median
 
-    def get(data):
-        entry = next(c for c in data["cases"] if c["case"] == case and c["sensing"] == sensing)
-        return median(render_tables.tuned_seed_errors(entry, controller))
-
-    return get
+    return lambda _: median(render_tables.tuned_seed_errors(_tuned_case(case, sensing)["case"], controller))
 
 
 def _row(case, variant):
@@ -330,16 +382,16 @@ def _margin(controller):
 
 def _seed_spread(rank):
     """The rank-th largest (0: the largest) ratio of a cell's worst seed to its median in the
-    tuned comparison."""
+    tuned studies."""
     from statistics import median
 
-    def get(data):
+    def get(_):
         ratios = sorted(
             (
                 max(e) / median(e)
-                for c in data["cases"]
-                for n in data["controllers"]
-                if (e := render_tables.tuned_seed_errors(c, n))
+                for c in render_tables.tuned_cases()
+                for n in c["controllers"]
+                if (e := render_tables.tuned_seed_errors(c["case"], n))
             ),
             reverse=True,
         )
@@ -350,13 +402,31 @@ def _seed_spread(rank):
 
 def _nn_gain(pick):
     """The least or greatest adaptation gain F of the NN's best settings over every case and seed."""
-    return lambda data: pick(
-        s["best"]["nn"]["params"]["nn.F"] for c in data["cases"] for s in c["seeds"] if s["best"]["nn"]
+    return lambda _: pick(
+        s["settings"]["nn.F"]
+        for c in render_tables.tuned_cases()
+        if (entry := c["case"]["controllers"].get("nn")) is not None and entry["tuned"]
+        for s in entry["tuned"]["seeds"]
     )
 
 
+def _seed_extreme(case, controller, pick, sensing="noisy"):
+    """The least or greatest of a controller's seeds' validation errors in the tuned studies."""
+    return lambda _: pick(render_tables.tuned_seed_errors(_tuned_case(case, sensing)["case"], controller))
+
+
+def _paired_better(case, a, b, sensing="noisy"):
+    """On how many certification draws ``a``'s kept setting beats ``b``'s (the paired comparison)."""
+    return lambda _: render_tables._paired(_tuned_case(case, sensing)["case"], a, b)["a_better"]
+
+
+def _paired_p(case, a, b, sensing="noisy"):
+    """The sign test's p-value of the paired comparison of ``a`` and ``b``."""
+    return lambda _: render_tables._paired(_tuned_case(case, sensing)["case"], a, b)["sign_p"]
+
+
 def _ratio_to(case, controller, other, sensing="noisy"):
-    """A controller's median held-out error over another's."""
+    """A controller's median validation error over another's."""
     return lambda data: _held(case, controller, sensing)(data) / _held(case, other, sensing)(data)
 
 
@@ -369,7 +439,8 @@ def _nn_ideal_ratio(pick):
         nn = median(render_tables.tuned_seed_errors(case, "nn"))
         return nn / min(median(render_tables.tuned_seed_errors(case, n)) for n in ("no-u0", "sliding-mode"))
 
-    return lambda data: pick(ratio(c) for c in data["cases"] if c["sensing"] == "ideal")
+    cases = render_tables.tuned_cases
+    return lambda _: pick(ratio(c["case"]) for c in cases() if c["label"].endswith("ideal"))
 
 
 PF = "falsify_panda_factors"
@@ -1095,8 +1166,51 @@ QUOTED_FIGURES: list[tuple] = [
     ("README.md", r"against the NN's [\d.]+ and ([\d.]+) mm", TUNED, _held(CASE_B, "nn"), 1e3),
     ("README.md", r"no-u0's ([\d.]+) and [\d.]+ mm", TUNED, _held(CASE_A, "no-u0"), 1e3),
     ("README.md", r"no-u0's [\d.]+ and ([\d.]+) mm", TUNED, _held(CASE_B, "no-u0"), 1e3),
-    ("README.md", r"no-u0 leads \(([\d.]+) mm\) and the NN", TUNED, _held(PANDA_ARM, "no-u0"), 1e3),
-    ("README.md", r"the NN is ([\d.]+)× behind it", TUNED, _ratio_to(PANDA_ARM, "nn", "no-u0"), 1.0),
+    (
+        "README.md",
+        r"the task-space PD in C\+\+ leads \(([\d.]+) mm\)",
+        TUNED,
+        _held(PANDA_ARM, "taskpd-cpp"),
+        1e3,
+    ),
+    ("README.md", r"the NN is ([\d.]+)× behind it", TUNED, _ratio_to(PANDA_ARM, "nn", "taskpd-cpp"), 1.0),
+    ("README.md", r"Panda with them \(([\d.]+) mm,", TUNED, _held(PANDA_ARM, "taskpd-cpp"), 1e3),
+    (
+        "README.md",
+        r"seeds ([\d.]+) to [\d.]+\), within the spread",
+        TUNED,
+        _seed_extreme(PANDA_ARM, "taskpd-cpp", min),
+        1e3,
+    ),
+    (
+        "README.md",
+        r"seeds [\d.]+ to ([\d.]+)\), within the spread",
+        TUNED,
+        _seed_extreme(PANDA_ARM, "taskpd-cpp", max),
+        1e3,
+    ),
+    (
+        "README.md",
+        r"beats the NN on (\d+) of \d+ draws in both",
+        TUNED,
+        _paired_better(CASE_A, "pd", "nn"),
+        1.0,
+    ),
+    ("README.md", r"beats the NN on \d+ of \d+ draws in both", None, None, 1.0),
+    (
+        "README.md",
+        r"no lead is significant \(p = ([\d.]+) and",
+        TUNED,
+        _paired_p(PANDA_ARM, "sliding-mode", "nn", "ideal"),
+        1.0,
+    ),
+    (
+        "README.md",
+        r"no lead is significant \(p = [\d.]+ and ([\d.]+)\)",
+        TUNED,
+        _paired_p(PANDA_ARM, "taskpd-cpp", "nn"),
+        1.0,
+    ),
     ("README.md", r"NN's median is ([\d.]+) to [\d.]+× the best", TUNED, _nn_ideal_ratio(min), 1.0),
     ("README.md", r"NN's median is [\d.]+ to ([\d.]+)× the best", TUNED, _nn_ideal_ratio(max), 1.0),
     (
@@ -1136,15 +1250,22 @@ QUOTED_FIGURES: list[tuple] = [
     ),
     (
         "docs/fair-comparison.md",
-        r"NN\s+0.124 mm, Slotine–Li ([\d.]+) mm",
+        r"NN\s+0.123 mm, Slotine–Li ([\d.]+) mm",
         TUNED,
         _held(CASE_A, "slotine-li"),
         1e3,
     ),
-    ("docs/fair-comparison.md", r"0.212 mm, Slotine–Li ([\d.]+) mm", TUNED, _held(CASE_B, "slotine-li"), 1e3),
+    ("docs/fair-comparison.md", r"0.211 mm, Slotine–Li ([\d.]+) mm", TUNED, _held(CASE_B, "slotine-li"), 1e3),
     (
         "docs/fair-comparison.md",
-        r"before the RBF network \(([\d.]+) mm\)",
+        r"no-u0\s+\(([\d.]+) mm\), the RBF network",
+        TUNED,
+        _held(PANDA_ARM, "no-u0"),
+        1e3,
+    ),
+    (
+        "docs/fair-comparison.md",
+        r"the RBF network \(([\d.]+) mm\), the NN",
         TUNED,
         _held(PANDA_ARM, "rbf-nn"),
         1e3,
@@ -1163,12 +1284,18 @@ QUOTED_FIGURES: list[tuple] = [
     ),
     (
         "docs/fair-comparison.md",
-        r"Case \(a\):.*sliding mode ([\d.]+) mm",
+        r"Case \(a\):[\s\S]*?sliding\s+mode ([\d.]+) mm",
         TUNED,
         _held(CASE_A, "sliding-mode"),
         1e3,
     ),
-    ("docs/fair-comparison.md", r"sliding mode [\d.]+ mm, NN\s+([\d.]+) mm", TUNED, _held(CASE_A, "nn"), 1e3),
+    (
+        "docs/fair-comparison.md",
+        r"sliding\s+mode [\d.]+ mm, NN\s+([\d.]+) mm",
+        TUNED,
+        _held(CASE_A, "nn"),
+        1e3,
+    ),
     (
         "docs/fair-comparison.md",
         r"Case \(b\): RBF network [\d.]+ mm, PD ([\d.]+) mm",
@@ -1183,18 +1310,106 @@ QUOTED_FIGURES: list[tuple] = [
         _held(CASE_B, "sliding-mode"),
         1e3,
     ),
-    ("docs/fair-comparison.md", r"Case \(b\):.*no-u0 ([\d.]+) mm", TUNED, _held(CASE_B, "no-u0"), 1e3),
-    ("docs/fair-comparison.md", r"no-u0 [\d.]+ mm, NN\s+([\d.]+) mm", TUNED, _held(CASE_B, "nn"), 1e3),
-    ("docs/fair-comparison.md", r"no-u0 leads \(([\d.]+) mm\) before", TUNED, _held(PANDA_ARM, "no-u0"), 1e3),
     (
         "docs/fair-comparison.md",
-        r"the sliding mode\s+\(([\d.]+) mm\), the NN",
+        r"Case \(b\):[\s\S]*?no-u0\s+([\d.]+) mm",
+        TUNED,
+        _held(CASE_B, "no-u0"),
+        1e3,
+    ),
+    ("docs/fair-comparison.md", r"no-u0\s+[\d.]+ mm, NN\s+([\d.]+) mm", TUNED, _held(CASE_B, "nn"), 1e3),
+    (
+        "docs/fair-comparison.md",
+        r"in C\+\+ leads \(([\d.]+) mm, its seeds",
+        TUNED,
+        _held(PANDA_ARM, "taskpd-cpp"),
+        1e3,
+    ),
+    (
+        "docs/fair-comparison.md",
+        r"the NN \(([\d.]+) mm\) and the sliding",
+        TUNED,
+        _held(PANDA_ARM, "nn"),
+        1e3,
+    ),
+    (
+        "docs/fair-comparison.md",
+        r"the sliding mode \(([\d.]+) mm\):\s+within",
         TUNED,
         _held(PANDA_ARM, "sliding-mode"),
         1e3,
     ),
-    ("docs/fair-comparison.md", r"the NN \(([\d.]+) mm\) and", TUNED, _held(PANDA_ARM, "nn"), 1e3),
-    ("docs/fair-comparison.md", r"the PD \(([\d.]+) mm\): within", TUNED, _held(PANDA_ARM, "pd"), 1e3),
+    ("docs/fair-comparison.md", r"The shipped PD \(([\d.]+) mm\)", TUNED, _held(PANDA_ARM, "pd"), 1e3),
+    (
+        "docs/fair-comparison.md",
+        r"0.0025 and\s+0.0032 mm on the paper's cases, ([\d.]+) mm",
+        TUNED,
+        _held(PANDA_ARM, "taskpd-cpp", "ideal"),
+        1e3,
+    ),
+    (
+        "docs/fair-comparison.md",
+        r"and the shipped PD \(([\d.]+) and\s+[\d.]+ mm on the paper",
+        TUNED,
+        _held(CASE_A, "taskpd-cpp", "ideal"),
+        1e3,
+    ),
+    (
+        "docs/fair-comparison.md",
+        r"shipped PD \([\d.]+ and\s+([\d.]+) mm on the paper",
+        TUNED,
+        _held(CASE_B, "taskpd-cpp", "ideal"),
+        1e3,
+    ),
+    (
+        "docs/fair-comparison.md",
+        r"the paper's arm \(([\d.]+) and [\d.]+ mm\) and has",
+        TUNED,
+        _held(CASE_A, "taskpd-cpp"),
+        1e3,
+    ),
+    (
+        "docs/fair-comparison.md",
+        r"the paper's arm \([\d.]+ and ([\d.]+) mm\) and has",
+        TUNED,
+        _held(CASE_B, "taskpd-cpp"),
+        1e3,
+    ),
+    (
+        "docs/fair-comparison.md",
+        r"on 11 of 11 draws in both cases \(sign test\s+p = ([\d.]+)\)",
+        TUNED,
+        _paired_p(CASE_A, "pd", "nn"),
+        1.0,
+    ),
+    (
+        "docs/fair-comparison.md",
+        r"worse than the NN on (\d)\s+of 11 draws",
+        TUNED,
+        _paired_better(PANDA_ARM, "nn", "sliding-mode", "ideal"),
+        1.0,
+    ),
+    (
+        "docs/fair-comparison.md",
+        r"with ideal sensing \(p = ([\d.]+)\)",
+        TUNED,
+        _paired_p(PANDA_ARM, "sliding-mode", "nn", "ideal"),
+        1.0,
+    ),
+    (
+        "docs/fair-comparison.md",
+        r"C\+\+ PD better on (\d) of 11",
+        TUNED,
+        _paired_better(PANDA_ARM, "taskpd-cpp", "nn"),
+        1.0,
+    ),
+    (
+        "docs/fair-comparison.md",
+        r"with real encoders\s+\(p = ([\d.]+)\)",
+        TUNED,
+        _paired_p(PANDA_ARM, "taskpd-cpp", "nn"),
+        1.0,
+    ),
     (
         "docs/fair-comparison.md",
         r"The NN's median\s+is ([\d.]+), [\d.]+ and",

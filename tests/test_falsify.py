@@ -351,7 +351,7 @@ def test_tuned_settings_are_falsified_as_named_entries(tmp_path, capsys):
 
 
 def test_a_case_of_a_tuned_comparison_gives_its_seed_zero_settings(tmp_path):
-    """--tuned FILE#CASE/SENSING reads one case of benchmarks/tuned_comparison.py's JSON (the shipped
+    """--tuned FILE#CASE/SENSING reads one case of the tuned comparison's JSON (the shipped
     docs/data/tuned_comparison.json): the settings of its seed-0 tuning; no case, a wrong one, or a
     case on a plain tuning is refused naming --tuned and the cases there are."""
     from nnrobust.tune.engine import tuned_settings
