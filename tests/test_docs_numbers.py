@@ -1497,13 +1497,6 @@ QUOTED_FIGURES: list[tuple] = [
     ),
     (
         "docs/study.md",
-        r"falsifications' (\d+) runs",
-        "study_overhead",
-        lambda d: d["simulation_seconds"]["runs_without_their_own_time"],
-        1.0,
-    ),
-    (
-        "docs/study.md",
         r"writes\nits report in ([\d.]+) s",
         "study_overhead",
         lambda d: d["rerun_seconds"],

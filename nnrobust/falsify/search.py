@@ -138,9 +138,12 @@ class _Search:
 
 
 class _Driver:
-    """Runs searches on the cluster in batches the size of the worker pool, the searches side by
-    side, taking the points already simulated from the history (a resumed search asks the same
-    points again) and appending the new ones to it.
+    """Runs searches on the cluster in batches the size of the worker pool, taking the points
+    already simulated from the history (a resumed search asks the same points again) and
+    appending the new ones to it. The searches' rounds stay in step, asked in a fixed order:
+    CMA-ES (``cma``) samples from NumPy's global generator, shared by every search, so searches
+    run side by side (as ``nnrobust tune``'s controllers are) would ask points that depend on
+    which one finished first, and a resumed falsification would not find its own points again.
     """
 
     def __init__(
@@ -155,61 +158,33 @@ class _Driver:
         self.sweep, self.base = shared(client, sweep), shared(client, base)  # sent to each worker once
         self.finished = 0  # simulations of the calls before (the progress bar counts on)
 
+    def _simulate(self, tasks: list[tuple]) -> list[dict]:
+        """Each (function, *arguments) task's result; one that ends its worker, run again alone,
+        is a run with status ``crashed`` (:func:`nnrobust.sweep.engine.run_tasks`).
+        """
+        from ..sweep.engine import CRASHED, run_tasks
+
+        crashed = {"status": CRASHED}
+        return run_tasks(
+            self.client, tasks, lambda why: judged({**crashed, "message": why}, self.properties), self.files
+        )
+
     def __call__(self, searches: dict, boxes: dict, rows: dict, total: int, stop_at_violation=False):
         """Run every search to the end of its budget (or to its first violation); ``total``: the
-        simulations this call plans, for the progress bar. Each search asks from its own results
-        alone, so the searches' rounds run side by side (run_task_groups): one is told and asks
-        again while the others' simulations run, and each asks the points it would ask alone.
+        simulations this call plans, for the progress bar.
         """
-        from ..sweep.engine import CRASHED, run_task_groups
-
         planned = self.finished + total
-        asked: dict = {}  # key -> its round's points
-        simulated: dict = {}  # key -> the indices of its round's points that are simulated
-        new: list[dict] = []  # rows not yet written to the history
-
-        def finish(key, results: dict) -> None:
-            points = asked[key]
-            for phase, u in points:
-                index = len(rows[key])
-                if index in results:
-                    row = {
-                        "controller": key[0],
-                        "search": key[1],
-                        "index": index,
-                        "phase": phase,
-                        "u": [float(x) for x in u],
-                        "values": boxes[key].values(u),
-                        **results[index],
-                    }
-                    new.append(row)
-                else:
-                    row = self.done[(*key, index)]
-                rows[key].append(row)
-            searches[key].tell(points, [r["objective"] for r in rows[key][-len(points) :]])
-            if stop_at_violation and any(r["objective"] < 0 for r in rows[key]):
-                searches[key].budget = searches[key].asked  # a violation is all the margin needs
-            if len(new) >= len(searches) * self.workers:  # about one round of every search a part
-                flush()
-            if self.progress:
-                self.progress(self.finished + sum(len(rows[k]) for k in searches), planned)
-
-        def flush() -> None:
-            if new:
-                _write_history(self.folder, new, self.key)
-                new.clear()
-
-        def round_of(key) -> list[tuple]:
-            """The key's next round's simulations (the points the history does not hold)."""
-            search = searches[key]
-            while search.remaining > 0:
-                points = asked[key] = search.ask(self.workers)
-                tasks = {}
+        while any(s.remaining > 0 for s in searches.values()):
+            asked = {
+                key: search.ask(self.workers) for key, search in searches.items() if search.remaining > 0
+            }
+            tasks: dict[tuple, tuple] = {}
+            for key, points in asked.items():
                 for offset, (_, u) in enumerate(points):
                     index = len(rows[key]) + offset
                     cached = self.done.get((*key, index))
                     if cached is None or not np.allclose(cached["u"], u, atol=1e-12):
-                        tasks[index] = (
+                        tasks[(key, index)] = (
                             evaluate,
                             self.sweep,
                             self.base,
@@ -217,27 +192,32 @@ class _Driver:
                             boxes[key].values(u),
                             self.properties,
                         )
-                if tasks:
-                    simulated[key] = list(tasks)
-                    return list(tasks.values())
-                finish(key, {})  # a resumed round: every point in the history
-            return []
-
-        def told(key, results: list[dict]) -> list[tuple]:
-            finish(key, dict(zip(simulated[key], results)))
-            return round_of(key)
-
-        crashed = {"status": CRASHED}
-        try:
-            run_task_groups(
-                self.client,
-                {key: round_of(key) for key in searches},
-                lambda why: judged({**crashed, "message": why}, self.properties),
-                told,
-                self.files,
-            )
-        finally:
-            flush()  # what finished is kept, also when interrupted
+            results = dict(zip(tasks, self._simulate(list(tasks.values()))))
+            new = []
+            for key, points in asked.items():
+                for phase, u in points:
+                    index = len(rows[key])
+                    if (key, index) in results:
+                        row = {
+                            "controller": key[0],
+                            "search": key[1],
+                            "index": index,
+                            "phase": phase,
+                            "u": [float(x) for x in u],
+                            "values": boxes[key].values(u),
+                            **results[(key, index)],
+                        }
+                        new.append(row)
+                    else:
+                        row = self.done[(*key, index)]
+                    rows[key].append(row)
+                searches[key].tell(points, [r["objective"] for r in rows[key][-len(points) :]])
+                if stop_at_violation and any(r["objective"] < 0 for r in rows[key]):
+                    searches[key].budget = searches[key].asked  # a violation is all the margin needs
+            if new:
+                _write_history(self.folder, new, self.key)
+            if self.progress:
+                self.progress(self.finished + sum(len(rows[key]) for key in searches), planned)
         self.finished += sum(len(rows[key]) for key in searches)
 
 
