@@ -745,11 +745,19 @@ def run_tasks(client, tasks: list[tuple], crashed, files=None) -> list:
     """
     futures = [submit(client, files, *task) for task in tasks]
     wait_alive(futures)
+    return _results(client, files, tasks, futures, crashed)
+
+
+def _results(client, files, tasks: list[tuple], futures: list, crashed, in_flight=()) -> list:
+    """The results of finished ``futures`` (of ``tasks``): a task whose worker died is run again
+    alone (:func:`run_alone`), once ``in_flight``, the other tasks still running, have finished.
+    """
     out = []
     for task, future in zip(tasks, futures):
         if crash_reason(future) is None:
             out.append(future.result())
             continue
+        wait_alive(list(in_flight))
         retry, reason = run_alone(client, files, *task)
         out.append(crashed(reason) if retry is None else retry.result())
     return out
@@ -772,15 +780,8 @@ def run_task_groups(client, groups: dict, crashed, then, files=None) -> None:
         wait_alive([f for _, futures in pending.values() for f in futures], first=True)
         for key in [k for k, (_, futures) in pending.items() if all(f.done() for f in futures)]:
             tasks, futures = pending.pop(key)
-            results = []
-            for task, future in zip(tasks, futures):
-                if crash_reason(future) is None:
-                    results.append(future.result())
-                    continue
-                wait_alive([f for _, others in pending.values() for f in others])  # alone, as run_tasks
-                retry, reason = run_alone(client, files, *task)
-                results.append(crashed(reason) if retry is None else retry.result())
-            following = then(key, results)
+            others = [f for _, running in pending.values() for f in running]
+            following = then(key, _results(client, files, tasks, futures, crashed, others))
             if following:
                 pending[key] = (following, [submit(client, files, *t) for t in following])
 
