@@ -1,11 +1,12 @@
 """The sim-to-sim gap: every preset and controller, and every tuned setting of the fair
 comparison, run on both true plants, Pinocchio's and MuJoCo's (plant.engine; docs/engines.md).
 
-    python benchmarks/engine_gap.py --json docs/data/engine_gap.json [--tuned docs/data/tuned_comparison.json]
+    python benchmarks/engine_gap.py --json docs/data/engine_gap.json [--tuned tuned-paper,tuned-panda]
 
-Part 1 runs each preset with each controller at the preset's settings. Part 2 takes the best
-setting of each controller in each case of docs/data/tuned_comparison.json (`nnrobust tune`,
-equal budget) and runs it on the case's first two held-out samples. Each row is one experiment run
+Part 1 runs each preset with each controller at the preset's settings. Part 2 takes the kept
+setting of each controller in each case of the tuned studies (benchmarks/studies/tuned-*.toml,
+their reports docs/data/tuned_*.json: every law tuned at equal budget) and runs it on the case's
+first two validation draws. Each row is one experiment run
 on Pinocchio's plant and on MuJoCo (frictionloss, limit constraints), MuJoCo with
 its RK4 (the default) and its implicitfast, each at the experiment's plant step and at 4x more
 steps (their convergence), with the verdicts of the tuning's constraints (RMS torque, <= 1 %
@@ -20,7 +21,7 @@ import time
 import warnings
 from pathlib import Path
 
-from nnrobust.config import CONTROLLER_KINDS, apply_overrides
+from nnrobust.config import CONTROLLER_KINDS
 from nnrobust.exceptions import NNRobustError
 from nnrobust.experiment import run_experiment
 from nnrobust.presets import load_preset, preset_names
@@ -116,47 +117,40 @@ def presets_part() -> list[dict]:
     return rows
 
 
-def tuned_part(path: Path) -> list[dict]:
+def tuned_part(studies: list[str]) -> list[dict]:
+    """Each kept setting of the tuned studies (benchmarks/studies/NAME.toml, their reports in
+    docs/data/NAME.json) on the first HELD_OUT of its case's validation draws, as the study's
+    validate stage drew them."""
+    from nnrobust.study import load_study
+    from nnrobust.study.engine import VALIDATION_SEED, sweep_of
     from nnrobust.sweep.spec import base_config, draw, experiment
-    from nnrobust.tune import TuneSpec
-    from nnrobust.tune.engine import sweep_of
+    from nnrobust.tune.engine import tuned_entry
 
     rows = []
-    for case in json.loads(path.read_text())["cases"]:
-        summary = case["summary"]
-        target = summary["target"]
-        target = str(HERE.parent / target) if target.endswith(".toml") else target
-        sweep = sweep_of(
-            TuneSpec(
-                target,
-                list(summary["controllers"]),
-                summary["budget"],
-                train_samples=len(summary["train_samples"]),
-                validation=len(summary["validation_samples"]),
-                seed=summary["seed"],
-            )
-        )
-        base = base_config(sweep)
-        torque = summary["constraints"]["max_rms_torque"]
-        for name, entry in summary["controllers"].items():
-            if entry["best"] is None:
-                continue
-            for held_out in summary["validation_samples"][:HELD_OUT]:
-                config = apply_overrides(
-                    experiment(sweep, base, draw(sweep, held_out["sample"]), name), entry["best"]["params"]
-                )
-                row = with_verdicts(
-                    {
-                        "case": case["case"],
-                        "sensing": case["sensing"],
-                        "controller": name,
-                        "sample": held_out["sample"],
-                        **both_engines(config),
-                    },
-                    torque,
-                )
-                rows.append(row)
-                print_row(f"{case['case']} {case['sensing']} {name} #{held_out['sample']}", row)
+    for study in studies:
+        spec = load_study(HERE / "studies" / f"{study}.toml")
+        report = json.loads((HERE.parent / "docs" / "data" / f"{study.replace('-', '_')}.json").read_text())
+        torque = report["budgets"]["max_rms_torque"]
+        for case in spec.cases:
+            name = spec.case_name(case)
+            for controller, entry in report["cases"][name]["controllers"].items():
+                label = f"{controller}-kept"
+                entries = {label: tuned_entry(controller, entry["tuned"]["settings"], spec.entries)}
+                sweep = sweep_of(spec, case, [label], entries, HELD_OUT, spec.seed + VALIDATION_SEED)
+                base = base_config(sweep)
+                for sample in range(HELD_OUT):
+                    row = with_verdicts(
+                        {
+                            "case": name.removesuffix("-noisy"),
+                            "sensing": "noisy" if name.endswith("-noisy") else "ideal",
+                            "controller": controller,
+                            "sample": sample,
+                            **both_engines(experiment(sweep, base, draw(sweep, sample), label)),
+                        },
+                        torque,
+                    )
+                    rows.append(row)
+                    print_row(f"{name} {controller} #{sample}", row)
     return rows
 
 
@@ -173,8 +167,8 @@ def main() -> None:
     parser.add_argument("--json", help="write the rows to this file")
     parser.add_argument(
         "--tuned",
-        default=str(HERE.parent / "docs" / "data" / "tuned_comparison.json"),
-        help="the fair comparison's tunings as they were before it became studies",
+        default="tuned-paper,tuned-panda",
+        help="the tuned studies whose kept settings part 2 runs (benchmarks/studies/NAME.toml)",
     )
     args = parser.parse_args()
     import mujoco
@@ -183,7 +177,7 @@ def main() -> None:
     print("RMS error t >= 2 s [mm] of each variant, and the verdicts that change from pinocchio to mujoco")
     print(f"{'experiment':44s} " + " ".join(f"{name[:10]:>10s}" for name in VARIANTS))
     presets = presets_part()
-    tuned = tuned_part(Path(args.tuned))
+    tuned = tuned_part(args.tuned.split(","))
     if args.json:
         write_json_atomic(
             args.json,

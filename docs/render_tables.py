@@ -648,14 +648,10 @@ def engine_gap_tuned() -> str:
 
 FALSIFY_COMMANDS = {
     "falsify_paper_factors": (
-        "nnrobust falsify benchmarks/falsification/paper-factors.toml --controllers "
-        'nn,sliding-mode,no-u0,computed-torque,slotine-li,rbf-nn --require "rms_error_after_2s<=0.05" '
-        "--budget 200 --margin --workers 2 --out out/falsify-paper-factors"
+        "nnrobust study benchmarks/studies/falsify-paper.toml --out out/falsify-paper --workers 2"
     ),
     "falsify_panda_factors": (
-        "nnrobust falsify benchmarks/falsification/panda-factors.toml --controllers "
-        'nn,no-u0,sliding-mode,pd,slotine-li,rbf-nn --require "rms_error_after_2s<=0.005" --budget 200 '
-        "--margin --workers 2 --out out/falsify-panda-factors"
+        "nnrobust study benchmarks/studies/falsify-panda.toml --out out/falsify-panda --workers 2"
     ),
     "falsify_tuned_noisy": (
         "nnrobust falsify benchmarks/falsification/paper-factors-noisy.toml --controllers "
@@ -664,12 +660,13 @@ FALSIFY_COMMANDS = {
     ),
     "falsify_panda_tuned_noisy": (
         "nnrobust falsify benchmarks/falsification/panda-factors-noisy.toml --controllers "
-        'nn,no-u0,pd,sliding-mode,slotine-li,rbf-nn --tuned "docs/data/tuned_comparison.json#Panda '
-        'ellipse/noisy" --require "rms_error_after_2s<=0.0005" --budget 200 --margin --workers 2 '
+        'nn,no-u0,pd,sliding-mode,slotine-li,rbf-nn --tuned "docs/data/tuned_panda.json#panda-ellipse-noisy" '
+        '--require "rms_error_after_2s<=0.0005" --budget 200 --margin --workers 2 '
         "--out out/falsify-panda-tuned"
     ),
 }
-"""The command each falsification data file comes from (its summary.json, copied)."""
+"""The command each falsification data file comes from (its summary.json, copied: a study's
+falsification stage, or a falsification of a study's kept settings)."""
 
 
 def _margin_cell(margin: dict | None) -> str:
@@ -690,6 +687,46 @@ def _certificate_cell(certified: dict | None) -> str:
     c = certified["certificates"][0]
     bound = f"{100 * c['p_upper']:.1f}".removesuffix(".0")
     return f"{c['k']} of {c['N']}: {bound} %"
+
+
+def _certified_box(name: str):
+    """A falsification study's certification stage (its report.json): each law at its own
+    settings on N fresh draws of the box, the RMS error's median, 95th percentile and worst, the
+    draws failing the property and the Clopper-Pearson bound on P(fail)."""
+
+    def render() -> str:
+        report = _data(name)
+        (case,) = report["cases"].values()
+        rows = []
+        for controller, entry in case["controllers"].items():
+            error = entry["statistics"]["rms_error_after_2s"]
+            (c,) = entry["certificates"]
+            rows.append(
+                {
+                    "controller": controller,
+                    "median": _mm(error["median"]),
+                    "p95": _mm(error["p95"]),
+                    "max": _mm(error["max"]),
+                    "failing": f"{c['k']} of {c['N']}",
+                    "bound": f"{100 * c['p_upper']:.1f} %",
+                    "certified": "yes" if c["holds"] else "no",
+                }
+            )
+        claim = f"{100 * c['epsilon']:g} %"
+        columns = [
+            ("controller", "l", _text("controller")),
+            ("median RMS error after 2 s [mm]", "r", _text("median")),
+            ("95th percentile [mm]", "r", _text("p95")),
+            ("worst [mm]", "r", _text("max")),
+            (f"draws failing {c['property']}", "r", _text("failing")),
+            (f"P(fail) ≤ ({100 * (1 - report['budgets']['beta']):g} % confidence)", "r", _text("bound")),
+            (f"certified P(fail) ≤ {claim}", "l", _text("certified")),
+        ]
+        study = report["study"]
+        command = f"nnrobust study benchmarks/studies/{study}.toml --out out/{study} --workers 2"
+        return _markdown(columns, rows, command)
+
+    return render
 
 
 def _falsified(name: str):
@@ -921,6 +958,8 @@ RENDERERS = {
     "criterion-kinds": criterion_kinds,
     "falsify-paper-factors": _falsified("falsify_paper_factors"),
     "falsify-panda-factors": _falsified("falsify_panda_factors"),
+    "falsify-paper-certified": _certified_box("falsify_paper"),
+    "falsify-panda-certified": _certified_box("falsify_panda"),
     "falsify-tuned-noisy": _falsified("falsify_tuned_noisy"),
     "falsify-panda-tuned-noisy": _falsified("falsify_panda_tuned_noisy"),
     "engine-gap-presets": engine_gap_presets,

@@ -1178,8 +1178,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--tuned",
         metavar="DIR",
         help="run each controller at its best setting in this tuning (nnrobust tune's DIR or its "
-        "summary.json, or FILE#CASE/SENSING of a tuned comparison), as NAME-tuned; every law takes "
-        "them: shipped, registered, custom entries",
+        "summary.json, a study's cases/CASE/kept.json, or REPORT.json#CASE of a study's report), as "
+        "NAME-tuned; every law takes them: shipped, registered, custom entries",
     )
     sweep.add_argument(
         "--require",
@@ -1248,9 +1248,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--tuned",
         metavar="DIR",
         help="run each listed law at its best setting in this tuning (nnrobust tune's DIR or its "
-        "summary.json, or one case of a tuned comparison as FILE#CASE/SENSING, e.g. "
-        "'docs/data/tuned_comparison.json#Panda ellipse/noisy'), as NAME-tuned; every law takes "
-        "them: shipped, registered, file.py:Class, a sweep file's entries",
+        "summary.json, a study's cases/CASE/kept.json, or one case of a study's report as "
+        "REPORT.json#CASE, e.g. 'docs/data/tuned_panda.json#panda-ellipse-noisy'), as NAME-tuned; "
+        "every law takes them: shipped, registered, file.py:Class, a sweep file's entries",
     )
     falsify.add_argument(
         "--out",
@@ -1314,9 +1314,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     export.add_argument(
         "--tuned",
-        metavar="DIR|FILE[#CASE/SENSING]",
+        metavar="DIR|FILE[#CASE]",
         help="export the controller at its best setting in this tuning (nnrobust tune's folder or "
-        "summary.json, or a tuned comparison's case), as sweep and falsify take it",
+        "summary.json, or a study's kept settings of a case), as sweep and falsify take it",
     )
     export.add_argument("--overwrite", action="store_true", help="replace an earlier export in --out")
     export.add_argument(

@@ -29,6 +29,8 @@ OTHERS = [
     "tuned_comparison",
     "tuned_paper",
     "tuned_panda",
+    "falsify_paper",
+    "falsify_panda",
     "falsify_paper_factors",
     "falsify_panda_factors",
     "falsify_tuned_noisy",
@@ -483,7 +485,34 @@ def _stage_wall(words: str):
     return lambda d: sum(seconds for line, seconds in d["stage_wall_seconds"] if words in line)
 
 
+def _box_certified(controller: str, key: str):
+    """``key`` of a controller's certificate in the falsify-paper study's report."""
+    return lambda d: d["cases"]["paper-ellipse"]["controllers"][controller]["certificates"][0][key]
+
+
 QUOTED_FIGURES: list[tuple] = [
+    ("README.md", r"the NN fails on (\d+) of the 59", "falsify_paper", _box_certified("nn", "k"), 1.0),
+    (
+        "README.md",
+        r"of the 59\s+\(P\(fail\) ≤ ([\d.]+) %\)",
+        "falsify_paper",
+        _box_certified("nn", "p_upper"),
+        100.0,
+    ),
+    (
+        "README.md",
+        r"its worst draw at (\d+) mm",
+        "falsify_paper",
+        lambda d: d["cases"]["paper-ellipse"]["controllers"]["nn"]["statistics"]["rms_error_after_2s"]["max"],
+        1e3,
+    ),
+    (
+        "README.md",
+        r"only Slotine–Li\s+is certified \(no draw fails: P\(fail\) ≤ (\d+) %",
+        "falsify_paper",
+        _box_certified("slotine-li", "p_upper"),
+        100.0,
+    ),
     ("README.md", r"the tuned NN keeps only ([\d.]+)\s+of it", PT, _margin("nn-tuned"), 1.0),
     (
         "docs/falsification.md",
@@ -1955,8 +1984,66 @@ def _docs_data_commands() -> list[list[str]]:
     return out
 
 
-@pytest.mark.parametrize("name", sorted(render_tables.FALSIFY_COMMANDS))
+@pytest.mark.parametrize(
+    "name", sorted(n for n, c in render_tables.FALSIFY_COMMANDS.items() if c.startswith("nnrobust falsify"))
+)
 def test_make_docs_data_runs_the_command_each_falsification_table_names(name):
+    """(The studies' falsification stages: the test below.)"""
     import shlex
 
     assert shlex.split(render_tables.FALSIFY_COMMANDS[name]) in _docs_data_commands()
+
+
+@pytest.mark.parametrize(
+    "study, case, data",
+    [
+        ("falsify-paper", "paper-ellipse", "falsify_paper_factors"),
+        ("falsify-panda", "panda-ellipse", "falsify_panda_factors"),
+    ],
+)
+def test_the_published_falsifications_are_their_studys_falsification_stage(study, case, data):
+    """make docs-data runs each falsification study and copies its falsification stage's
+    summary.json to the data file the tables read; that file searched the study's box, with the
+    study's controllers, property, budget and margins, each law at its own settings."""
+    from nnrobust.study import load_study
+
+    spec = load_study(ROOT / "benchmarks" / "studies" / f"{study}.toml")
+    text = (ROOT / "Makefile").read_text()
+    assert f"cp $(OUT)/{study}/cases/{case}/falsify/summary.json $(DATA)/{data}.json" in text
+    assert any(study in " ".join(c) for c in _docs_data_commands() if c[:3] == ["for", "study", "in"])
+    assert f"benchmarks/studies/{study}.toml" in render_tables.FALSIFY_COMMANDS[data]
+    summary = json.loads((render_tables.DATA / f"{data}.json").read_text())
+    assert spec.fixed == spec.controllers == list(summary["controllers"])  # untuned: no NAME-tuned
+    assert summary["properties"] == spec.require and summary["budget"] == spec.budgets["falsify"]
+    assert summary["seed"] == spec.seed and bool(summary.get("margin")) == spec.budgets["margin"]
+    box = {k: (v["low"], v["high"], v["log"]) for k, v in summary["box"].items()}
+    declared = {
+        k: (*v.get("uniform", v.get("loguniform", ())), "loguniform" in v) for k, v in spec.vary.items()
+    }
+    assert box == declared
+
+
+def test_the_panda_certification_prose_matches_its_report():
+    """docs/falsification.md: on the Panda's box the NN, Slotine-Li and the RBF network are
+    certified, the sliding-mode term fails on the quoted count of draws, the PD and no-u0 on all."""
+    report = json.loads((render_tables.DATA / "falsify_panda.json").read_text())
+    (cert,) = report["cases"].values()
+    failing = {c: e["certificates"][0]["k"] for c, e in cert["controllers"].items()}
+    held = {c for c, e in cert["controllers"].items() if e["certificates"][0]["holds"]}
+    assert held == {"nn", "slotine-li", "rbf-nn"} and failing["pd"] == failing["no-u0"] == 59
+    text = (ROOT / "docs" / "falsification.md").read_text()
+    assert (
+        int(re.search(r"the sliding-mode term\s+fails on (\d+) of them", text).group(1))
+        == failing["sliding-mode"]
+    )
+
+
+def test_only_slotine_li_is_certified_on_the_papers_box():
+    """README.md: of the laws at the paper's gains, the falsify-paper study certifies only
+    Slotine-Li on its fresh draws (its certificate and the report's own verdict agree)."""
+    report = json.loads((render_tables.DATA / "falsify_paper.json").read_text())
+    controllers = report["cases"]["paper-ellipse"]["controllers"]
+    held = [c for c, e in controllers.items() if all(cert["holds"] for cert in e["certificates"])]
+    assert held == ["slotine-li"]
+    (cert,) = controllers["slotine-li"]["certificates"]
+    assert cert["k"] == 0 and cert["N"] == 59 and cert["p_upper"] <= report["budgets"]["epsilon"]

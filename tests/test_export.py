@@ -241,6 +241,22 @@ def test_a_tuned_law_exports_at_its_tuned_setting_and_replays(tmp_path):
     np.testing.assert_allclose(ours, torques, rtol=0, atol=1e-12)
 
 
+def test_a_studys_kept_setting_exports_from_its_report(tmp_path, capsys):
+    """--tuned REPORT.json#CASE: the kept setting a study certified (docs/data/tuned_paper.json's
+    noisy case b) is the one exported; on the case's own experiment no warning is said."""
+    from nnrobust.config import load_config
+
+    report = ROOT / "docs" / "data" / "tuned_paper.json"
+    kept = json.loads(report.read_text())["cases"]["paper-ellipse-noisy"]["controllers"]["slotine-li"]
+    argv = ["export", "paper-ellipse-noisy", "--controller", "slotine-li", "--no-build", "--quiet"]
+    out = tmp_path / "law"
+    assert main([*argv, "--tuned", f"{report}#paper-ellipse-noisy", "--out", str(out)]) == 0
+    assert "warning" not in capsys.readouterr().err
+    params = load_config(out / "config.toml").controller.params
+    for key, value in kept["tuned"]["settings"].items():
+        assert params[key.removeprefix("controller.params.")] == value, key
+
+
 def test_set_wins_over_tuned_and_other_tunings_and_inert_keys_are_said(tmp_path, capsys):
     summary = str(ROOT / "docs" / "data" / "tune_noisy_case_b.json")
     out = tmp_path / "law"

@@ -350,24 +350,33 @@ def test_tuned_settings_are_falsified_as_named_entries(tmp_path, capsys):
     assert main([*base, "--controllers", "pd", "--tuned", str(tmp_path), "--out", str(tmp_path / "y")]) == 2
 
 
-def test_a_case_of_a_tuned_comparison_gives_its_seed_zero_settings(tmp_path):
-    """--tuned FILE#CASE/SENSING reads one case of the tuned comparison's JSON (the shipped
-    docs/data/tuned_comparison.json): the settings of its seed-0 tuning; no case, a wrong one, or a
-    case on a plain tuning is refused naming --tuned and the cases there are."""
-    from nnrobust.tune.engine import tuned_settings
+def test_a_case_of_a_study_report_gives_its_kept_settings(tmp_path):
+    """--tuned REPORT#CASE reads one case of a study's report.json (the shipped
+    docs/data/tuned_panda.json): each tuned controller's kept setting, as the study's own
+    cases/CASE/kept.json gives it, and nothing for a law the study ran untuned; no case, a wrong
+    one, or a case on a plain tuning is refused naming --tuned and the cases there are."""
+    from nnrobust.tune.engine import tuned_settings, tuned_target
 
-    data = Path(__file__).parent.parent / "docs" / "data" / "tuned_comparison.json"
-    comparison = json.loads(data.read_text())
-    case = next(c for c in comparison["cases"] if c["case"] == "Panda ellipse" and c["sensing"] == "noisy")
-    found = tuned_settings(f"{data}#Panda ellipse/noisy", ["nn", "rbf-nn"])
-    assert found == {n: case["summary"]["controllers"][n]["best"]["params"] for n in ("nn", "rbf-nn")}
-    assert found["nn"] != tuned_settings(f"{data}#Panda ellipse/ideal", ["nn"])["nn"]
-    for selector, words in (("", "name one of its cases"), ("#Panda/noisy", "not 'Panda/noisy'")):
+    data = Path(__file__).parent.parent / "docs" / "data" / "tuned_panda.json"
+    report = json.loads(data.read_text())
+    case = report["cases"]["panda-ellipse-noisy"]["controllers"]
+    found = tuned_settings(f"{data}#panda-ellipse-noisy", ["nn", "rbf-nn"])
+    assert found == {n: case[n]["tuned"]["settings"] for n in ("nn", "rbf-nn")}
+    assert found["nn"] != tuned_settings(f"{data}#panda-ellipse", ["nn"])["nn"]
+    assert tuned_target(f"{data}#panda-ellipse-noisy") == "panda-ellipse-noisy"
+    # the same settings as a study folder's kept.json of that case
+    kept = {n: {"best": {"params": case[n]["tuned"]["settings"]}} for n in ("nn", "rbf-nn")}
+    (tmp_path / "kept.json").write_text(json.dumps({"controllers": kept}))
+    assert tuned_settings(tmp_path / "kept.json", ["nn", "rbf-nn"]) == found
+    untuned = {**report, "cases": {"c": {"controllers": {"nn": {"tuned": None}}}}}
+    (tmp_path / "untuned.json").write_text(json.dumps(untuned))
+    assert tuned_settings(f"{tmp_path / 'untuned.json'}#c", ["nn"]) == {}
+    for selector, words in (("", "name one of its cases"), ("#panda", "not 'panda'")):
         with pytest.raises(ConfigError, match=f"--tuned: .*{words}"):
             tuned_settings(f"{data}{selector}", ["nn"])
     plain = tmp_path / "summary.json"
     plain.write_text(json.dumps({"controllers": {"nn": {"best": {"params": {}}}}}))
-    with pytest.raises(ConfigError, match="not a tuned comparison: drop #x"):
+    with pytest.raises(ConfigError, match="not a study's report: drop #x"):
         tuned_settings(f"{plain}#x", ["nn"])
 
 

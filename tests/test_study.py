@@ -189,6 +189,25 @@ def test_draws_differ_exactly_where_a_case_has_randomness(case, vary, differ):
     assert draws_differ(sweep) is differ
 
 
+def test_a_shipped_law_runs_untuned_under_its_own_name(tmp_path):
+    """{name = "nn", tune = false} is the kind itself at its own settings (its rows, settings and
+    falsification named nn, as the published falsification studies need); {name = "pd", tune =
+    true} is plain "pd", tuned; a name that is no kind is refused naming the valid ones."""
+    from nnrobust.exceptions import ConfigError
+
+    text = (
+        'name = "s"\ncases = ["paper-ellipse"]\nrequire = ["rms_error_after_2s<=0.05"]\n'
+        'controllers = [{name = "nn", tune = false}, {name = "pd", tune = true}, "no-u0"]\n'
+    )
+    (tmp_path / "s.toml").write_text(text)
+    spec = load_study(tmp_path / "s.toml")
+    assert spec.controllers == ["nn", "pd", "no-u0"] and spec.fixed == ["nn"] and spec.entries == {}
+    assert spec.case_sweep("paper-ellipse").controllers == ["nn", "pd", "no-u0"]
+    (tmp_path / "s.toml").write_text(text.replace('name = "nn"', 'name = "nnx"'))
+    with pytest.raises(ConfigError, match="'nnx' is not one of nn, "):
+        load_study(tmp_path / "s.toml")
+
+
 @pytest.mark.parametrize(
     "change, message",
     [

@@ -17,10 +17,11 @@ from pathlib import Path
 import numpy as np
 
 from ..results import write_json_atomic
+from ..tune.engine import STUDY_REPORT
 from ..tune.space import fixed_text
 from .spec import StudySpec
 
-SCHEMA = "nnrobust-study-report/1"
+SCHEMA = f"{STUDY_REPORT}1"
 
 
 def _versions() -> dict:

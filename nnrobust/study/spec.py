@@ -206,6 +206,8 @@ def parse_study(data: dict, path: Path) -> StudySpec:
                     raise ConfigError(f"{where}: controllers", f"an entry's tune is true or false, got {c!r}")
                 if not c.pop(ENTRY_TUNE):
                     fixed.append(str(c.get("name")))
+                if list(c) == ["name"]:  # {name = "nn", tune = false}: a kind at its own settings
+                    controllers[i] = c["name"]
     require = data.get("require", [])
     if not isinstance(require, list) or not require or not all(isinstance(r, str) for r in require):
         raise ConfigError(

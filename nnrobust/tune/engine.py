@@ -181,7 +181,7 @@ def sweep_of(spec: TuneSpec):
 
 
 TUNED_FILE_BYTES = 50_000_000
-"""The largest tuning summary or tuned comparison --tuned reads (the shipped comparison is 1.2 MB)."""
+"""The largest tuning summary or study report --tuned reads (the shipped reports are under 0.3 MB)."""
 
 
 def law_of(name: str, entries: dict | None = None) -> str:
@@ -236,15 +236,43 @@ def check_tuned(
                 )
 
 
+STUDY_REPORT = "nnrobust-study-report/"
+"""The schema of a study's report.json, whose kept settings ``--tuned FILE#CASE`` reads."""
+
+
+def _study_kept(report: dict, file: Path, case: str) -> dict:
+    """One case's kept settings of a study's report.json, as its ``cases/CASE/kept.json`` holds
+    them: each tuned controller's kept setting as its best, an untuned one as fixed.
+    """
+    cases = report.get("cases")
+    if not isinstance(cases, dict):
+        cases = {}
+    if case not in cases or not isinstance(cases[case], dict):
+        raise ConfigError(
+            "--tuned",
+            f"{file} is a study's report: name one of its cases as {file}#CASE, one of "
+            f"{', '.join(repr(k) for k in cases)}" + (f" (not {case!r})" if case else ""),
+        )
+    controllers = cases[case].get("controllers")
+    if not isinstance(controllers, dict):
+        raise ConfigError("--tuned", f"{file}: case {case!r} has no controllers table")
+    kept: dict = {}
+    for name, entry in controllers.items():
+        tuned = entry.get("tuned") if isinstance(entry, dict) else None
+        settings = tuned.get("settings") if isinstance(tuned, dict) else None
+        kept[name] = {"fixed": True} if tuned is None else {"best": {"params": settings}}
+    return {"controllers": kept}
+
+
 def tuned_settings(
     path: str | Path, names: list[str], varied=(), entries: dict | None = None
 ) -> dict[str, dict]:
-    """Each named controller's best setting in a tuning's summary (``DIR`` or its summary.json),
-    or in one case of the tuned comparison's JSON (docs/data/tuned_comparison.json, its seed-0
-    tuning) named as ``FILE#CASE/SENSING``: name -> its dotted-key overrides, each a key the law
-    reads itself and none of ``varied``, the box's keys (:func:`check_tuned`). Every law takes
-    them: a shipped kind, a registered law, a class as file.py:Class (found under its class name)
-    and a sweep file's entry (``entries``, by name).
+    """Each named controller's best setting in a tuning's summary (``DIR`` or its summary.json), or
+    a study's kept settings of one case (its ``cases/CASE/kept.json``, or its report.json named as
+    ``FILE#CASE``): name -> its dotted-key overrides, each a key the law reads itself and none of
+    ``varied``, the box's keys (:func:`check_tuned`). Every law takes them: a shipped kind, a
+    registered law, a class as file.py:Class (found under its class name) and a sweep file's
+    entry (``entries``, by name).
     """
     from ..config import read_text_file
 
@@ -256,17 +284,10 @@ def tuned_settings(
         raise ConfigError("--tuned", f"{file} is not JSON ({err})") from err
     except RecursionError as err:
         raise ConfigError("--tuned", f"{file} nests too deeply to be a tuning's summary") from err
-    if isinstance(summary, dict) and isinstance(summary.get("cases"), list):  # a tuned comparison
-        cases = {f"{c.get('case')}/{c.get('sensing')}": c for c in summary["cases"] if isinstance(c, dict)}
-        if case not in cases:
-            raise ConfigError(
-                "--tuned",
-                f"{file} is a tuned comparison: name one of its cases as {file}#CASE/SENSING, one of "
-                f"{', '.join(repr(k) for k in cases)}" + (f" (not {case!r})" if case else ""),
-            )
-        summary = cases[case].get("summary")
+    if isinstance(summary, dict) and str(summary.get("schema", "")).startswith(STUDY_REPORT):
+        summary = _study_kept(summary, file, case)
     elif case:
-        raise ConfigError("--tuned", f"{file} is one tuning, not a tuned comparison: drop #{case}")
+        raise ConfigError("--tuned", f"{file} is one tuning, not a study's report: drop #{case}")
     tuned = summary.get("controllers") if isinstance(summary, dict) else None
     if not isinstance(tuned, dict) or not all(isinstance(e, dict) for e in tuned.values()):
         raise ConfigError(
@@ -292,8 +313,8 @@ def tuned_settings(
 
 
 def tuned_target(path: str | Path) -> str:
-    """The experiment a tuning tuned on (its summary's ``target``; a tuned comparison's case's),
-    "" when the file does not say (read after :func:`tuned_settings` accepted it).
+    """The experiment a tuning tuned on (its summary's ``target``; a study report's case, by
+    name), "" when the file does not say (read after :func:`tuned_settings` accepted it).
     """
     from ..config import read_text_file
 
@@ -303,9 +324,9 @@ def tuned_target(path: str | Path) -> str:
         summary = json.loads(read_text_file(file, limit=TUNED_FILE_BYTES, what="tuning summary"))
     except (ValueError, RecursionError, ConfigError):
         return ""
-    if isinstance(summary, dict) and isinstance(summary.get("cases"), list):
-        cases = {f"{c.get('case')}/{c.get('sensing')}": c for c in summary["cases"] if isinstance(c, dict)}
-        summary = (cases.get(case) or {}).get("summary")
+    if isinstance(summary, dict) and str(summary.get("schema", "")).startswith(STUDY_REPORT):
+        cases = summary.get("cases")  # a case's name: the preset, or the experiment file's stem
+        return case if isinstance(cases, dict) and case in cases else ""
     target = summary.get("target") if isinstance(summary, dict) else None
     return target if isinstance(target, str) else ""
 
