@@ -96,7 +96,7 @@ docs-data: $(VENV)/.installed-test
 	  --max-rms-torque 10 --max-saturated 0.01 --workers 2 --out $(OUT)/tune-noisy --overwrite --quiet
 	cp $(OUT)/tune-noisy/summary.json $(DATA)/tune_noisy_case_b.json
 	$(BIN)/nnrobust falsify benchmarks/falsification/paper-factors-noisy.toml \
-	  --controllers nn,no-u0,pd,sliding-mode,slotine-li,rbf-nn --tuned $(DATA)/tune_noisy_case_b.json \
+	  --controllers nn,no-u0,pd,sliding-mode,slotine-li,rbf-nn --tuned "$(DATA)/tuned_paper.json#paper-ellipse-noisy" \
 	  --require "rms_error_after_2s<=0.0005" --budget 200 --margin --workers 2 --out $(OUT)/falsify-tuned --quiet
 	cp $(OUT)/falsify-tuned/summary.json $(DATA)/falsify_tuned_noisy.json
 	$(BIN)/nnrobust falsify benchmarks/falsification/panda-factors-noisy.toml \

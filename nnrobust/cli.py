@@ -707,6 +707,8 @@ def cmd_falsify(args) -> int:
         for name, entry in summary["controllers"].items():
             worst, baseline = entry["worst"], entry["random_baseline"]
             verdict = "FALSIFIED" if entry["falsified"] else "not falsified"
+            if entry.get("falsified_by") == ["random"]:  # the baseline's plant is the one to replay
+                verdict, worst = "FALSIFIED by random search only (the search found none)", baseline["worst"]
             status = worst["metrics"].get("status", "completed")
             ended = (
                 f" (the run ended {status}: {one_line(str(worst['metrics'].get('message', '')))})"

@@ -97,10 +97,13 @@ class FalsifySummary(dict):
         rows = []
         for name, e in self["controllers"].items():
             worst = e.get("worst") or {}
+            verdict = "FALSIFIED" if e.get("falsified") else "not falsified"
+            if e.get("falsified_by") == ["random"]:  # the baseline's plant replays the verdict
+                verdict, worst = "FALSIFIED by random search only", e["random_baseline"]["worst"]
             rows.append(
                 [
                     html.escape(name),
-                    "FALSIFIED" if e.get("falsified") else "not falsified",
+                    verdict,
                     _cell(e.get("simulations")),
                     _cell(worst.get("margin")),
                     _cell(((e.get("random_baseline") or {}).get("worst") or {}).get("margin")),

@@ -604,3 +604,43 @@ def test_a_search_is_the_same_on_one_worker_and_on_two(tmp_path):
         summary.pop("seconds")
     assert json.dumps(one, sort_keys=True, default=float) == json.dumps(two, sort_keys=True, default=float)
     assert one["margin"]["nn"]["steps"] and one["controllers"]["nn"]["simulations"] == 12
+
+
+def test_a_plant_only_the_random_baseline_found_falsifies_the_box(tmp_path):
+    """The random baseline's points are plants of the box: a violation only it found falsifies
+    (falsified, falsified_by ["random"]), and the margin's scale 1 counts it, so the margin is
+    bracketed below the box instead of above it. Synthetic histories: the search holds
+    everywhere, the baseline's third plant violates, and every scaled search holds."""
+    from nnrobust.falsify.search import _margins
+    from nnrobust.falsify.spec import _searched_sweep
+    from nnrobust.falsify.summary import _summary
+    from nnrobust.properties import run_properties
+    from nnrobust.sweep.spec import Sample, rerun_command, sample_seed
+
+    sweep_file = tmp_path / "fz.toml"
+    sweep_file.write_text(SWEEP)
+    spec = FalsifySpec(str(sweep_file), ["pd"], ["rms_error<=0.02"], 4, margin=True)
+    sweep, _, _ = _searched_sweep(spec)
+    box = box_of(sweep)
+
+    def row(objective):
+        values = dict(zip(box.keys, box.values(np.full(len(box.keys), 0.5))))
+        margins = {"rms_error<=0.02": objective}
+        return {"values": values, "metrics": {"rms_error": 0.02 * (1 - objective)}, "margins": margins,
+                "objective": objective}  # fmt: skip
+
+    rows = {("pd", "falsifier"): [row(0.5)] * 4, ("pd", "random"): [row(0.4), row(0.3), row(-0.2), row(0.1)]}
+    summary = _summary(
+        spec, sweep, box, run_properties(spec.require), rows, 1.0, rerun_command, Sample, sample_seed
+    )
+    entry = summary["controllers"]["pd"]
+    assert entry["falsified"] and entry["falsified_by"] == ["random"] and entry["first_violation"] is None
+    assert entry["random_baseline"]["first_violation"] == 3
+
+    def drive(searches, boxes, rows, total, stop_at_violation=False):
+        for key in searches:
+            rows[key] = [row(0.5)]
+
+    margin = _margins(spec, sweep, box, rows, drive)["pd"]
+    assert margin["steps"][0] == {"scale": 1.0, "falsified": True, "simulations": 8, "least_margin": -0.2}
+    assert margin["violated_at"] == 1.0 and margin["holds_up_to"] < 1.0

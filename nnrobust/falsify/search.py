@@ -264,15 +264,16 @@ class _Bracket:
 
 def _margins(spec: FalsifySpec, sweep, box: Box, rows: dict, drive: _Driver) -> dict:
     """The robustness margin of each controller: the box scaled by s about its centre, s searched
-    by doubling from the box itself (s = 1, the main search) up to :meth:`Box.largest_scale`,
-    then by bisection, each scale searched at ``spec.margin_budget`` simulations and stopped at
-    its first violation. Where the box itself is violated, the centre (s = 0) is tried first.
+    by doubling from the box itself (s = 1: the main search and the random baseline, violated if
+    either found a violation) up to :meth:`Box.largest_scale`, then by bisection, each scale
+    searched at ``spec.margin_budget`` simulations and stopped at its first violation. Where the
+    box itself is violated, the centre (s = 0) is tried first.
     """
     from ..sweep.spec import Sample, rerun_command, sample_seed
 
     brackets = {name: _Bracket(box.largest_scale()) for name in sweep.controllers}
-    for name, bracket in brackets.items():
-        bracket.record(1.0, rows[(name, "falsifier")])
+    for name, bracket in brackets.items():  # the box itself: the search's and the baseline's plants
+        bracket.record(1.0, rows[(name, "falsifier")] + rows[(name, "random")])
     for step in range(MARGIN_STEPS):
         active = [(name, b.next) for name, b in brackets.items() if b.next is not None]
         if not active:

@@ -46,7 +46,15 @@ def _summary(spec, sweep, box, properties, rows, seconds, rerun_command, Sample,
                     "command": rerun_command(sweep, sample, name),
                 },
             }
-        out["controllers"][name] = {**entry.pop("falsifier"), "random_baseline": entry["random"]}
+        search, random = entry["falsifier"], entry["random"]
+        out["controllers"][name] = {
+            **search,
+            # the box is falsified by any of its plants that violates a property, whichever of the
+            # two searches found it; ``worst`` stays the search's, the baseline's is beside it
+            "falsified": search["falsified"] or random["falsified"],
+            "falsified_by": [k for k, e in (("search", search), ("random", random)) if e["falsified"]],
+            "random_baseline": random,
+        }
     return out
 
 

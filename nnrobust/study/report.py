@@ -144,12 +144,17 @@ def _controller_entry(spec: StudySpec, case: dict, c: str) -> dict:
     falsified = (case.get("falsify") or {}).get("controllers", {})
     found = falsified.get(label) or falsified.get(c)
     if found:
+        # the worst plant found in the box: the search's, or the random baseline's where only it
+        # found a violation (the plant whose command replays the verdict)
+        only_random = found.get("falsified_by") == ["random"]
+        worst = found["random_baseline"]["worst"] if only_random else found["worst"]
         entry["worst"] = {
             "falsified": found["falsified"],
+            "found_by": "random" if only_random else "search",
             "simulations": found["simulations"],
-            "margin": found["worst"]["margin"],
-            "metrics": found["worst"]["metrics"],
-            "command": found["worst"]["command"],
+            "margin": worst["margin"],
+            "metrics": worst["metrics"],
+            "command": worst["command"],
         }
     margins = (case.get("falsify") or {}).get("margin", {})
     if label in margins or c in margins:
