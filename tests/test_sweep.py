@@ -982,7 +982,9 @@ def test_a_stop_signal_to_the_process_group_prints_no_worker_traceback(sig, tmp_
     import subprocess
     import sys
 
-    path = _sweep_file(tmp_path, duration=20.0)
+    # 600 rows, about a minute of work on 2 workers: the signal always finds rows running (12 rows
+    # once finished before it on a fast machine, and the sweep exited 0)
+    path = _sweep_file(tmp_path, text=SWEEP.format(duration=20.0).replace("samples = 3", "samples = 300"))
     command = [sys.executable, "-m", "nnrobust.cli", "sweep", str(path), "--out", str(tmp_path / "out")]
     child = subprocess.Popen(
         [*command, "--workers", "2"], stderr=subprocess.PIPE, text=True, start_new_session=True
