@@ -644,3 +644,32 @@ def test_a_plant_only_the_random_baseline_found_falsifies_the_box(tmp_path):
     margin = _margins(spec, sweep, box, rows, drive)["pd"]
     assert margin["steps"][0] == {"scale": 1.0, "falsified": True, "simulations": 8, "least_margin": -0.2}
     assert margin["violated_at"] == 1.0 and margin["holds_up_to"] < 1.0
+
+
+def test_a_controllers_search_does_not_depend_on_the_others_in_its_run(tmp_path):
+    """The PD searched alone and beside the NN (same box, budget, seed, property): its worst
+    plant, its whole history of points and its margin are the same. (CMA-ES sampled from NumPy's
+    global generator, shared by the searches running in step, and the margins were seeded by
+    their place among the controllers still searching: the PD's worst plant moved when the NN
+    joined.)"""
+    import pandas as pd
+
+    box = tmp_path / "box.toml"
+    box.write_text(
+        SWEEP.replace('"simulation.duration" = 3.0', '"simulation.duration" = 2.5')
+        + '"nominal.factors[0]" = {uniform = [0.7, 1.3]}\n'
+    )
+    found = {}
+    for controllers in (["pd"], ["nn", "pd"]):
+        out = tmp_path / "-".join(controllers)
+        spec = FalsifySpec(str(box), controllers, ["rms_error_after_2s<=0.004"], 24, seed=1, margin=True)
+        summary = run_falsify(spec, out, workers=2)
+        history = pd.read_parquet(out / "history")
+        points = history[history["controller"] == "pd"].sort_values(["search", "index"])
+        found[len(controllers)] = (summary["controllers"]["pd"], summary["margin"]["pd"], points)
+    (alone, margin_alone, points_alone), (beside, margin_beside, points_beside) = found[1], found[2]
+    assert alone["worst"]["values"] == beside["worst"]["values"]
+    assert alone["random_baseline"]["worst"]["values"] == beside["random_baseline"]["worst"]["values"]
+    assert margin_alone == margin_beside and len(margin_alone["steps"]) > 1
+    columns = ["search", "index", *(c for c in points_alone.columns if c.startswith("value."))]
+    assert points_alone[columns].to_numpy().tolist() == points_beside[columns].to_numpy().tolist()

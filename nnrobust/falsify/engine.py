@@ -13,7 +13,7 @@ import numpy as np
 from ..exceptions import NNRobustError
 from ..signals import signals_as_interrupt
 from .history import _history
-from .search import _Driver, _margins, _Search
+from .search import _Driver, _margins, _Search, controller_seed
 from .spec import HISTORY, MARKER, FalsifySpec, _searched_sweep, box_of
 from .summary import WORST, _summary, _write_csv, certify_box, plot_convergence
 
@@ -116,10 +116,10 @@ def _run_falsify(
         (name, kind): _Search(
             len(box.keys),
             spec.budget,
-            spec.seed + 7919 * i + (1 if kind == "random" else 0),
+            spec.seed + controller_seed(name) + (1 if kind == "random" else 0),
             kind == "random",
         )
-        for i, name in enumerate(sweep.controllers)
+        for name in sweep.controllers
         for kind in ("falsifier", "random")
     }
     rows: dict[tuple[str, str], list[dict]] = {key: [] for key in searches}

@@ -7,6 +7,7 @@ box of one coordinate), or the random baseline (:class:`_Search`); the batches r
 from __future__ import annotations
 
 import math
+import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -29,6 +30,13 @@ LINE_TOLERANCE = 1e-9
 """Half-width in the unit box below which a one-coordinate search has converged and restarts."""
 
 
+def controller_seed(name: str) -> int:
+    """The part of a controller's search seeds that is its own: from its name, so its searches
+    are the same in any run that holds it, whatever the other controllers and their order.
+    """
+    return zlib.crc32(name.encode())
+
+
 class _Search:
     """One controller's search (Sobol, then CMA-ES with IPOP restarts; a zooming grid in a box
     of one coordinate) or its random baseline, asking batches and told the results;
@@ -41,6 +49,10 @@ class _Search:
         self.asked = 0
         self.best: tuple[float, np.ndarray] | None = None
         self.rng = np.random.default_rng(seed)
+        # CMA-ES's own normal draws (cma's ``randn`` option): cma would otherwise sample from
+        # NumPy's global generator, which every search of the run shares, so a controller's points
+        # would depend on the other controllers searched beside it
+        self.normal = np.random.default_rng([seed, 1])
         self.es: Any = None  # a cma.CMAEvolutionStrategy once the Sobol start is spent
         self._pending: list[np.ndarray] = []
         self.popsize = max(4 + int(3 * math.log(dims)), 4)
@@ -112,7 +124,7 @@ class _Search:
                     "bounds": [0, 1],
                     "popsize": self.popsize,
                     "verbose": -9,
-                    "seed": self.seed + 1 + self.restarts,
+                    "randn": lambda lam, n: self.normal.standard_normal((lam, n)),
                 },
             )
         self._pending = [np.clip(np.asarray(x), 0, 1) for x in self.es.ask()][: self.remaining]
@@ -140,10 +152,9 @@ class _Search:
 class _Driver:
     """Runs searches on the cluster in batches the size of the worker pool, taking the points
     already simulated from the history (a resumed search asks the same points again) and
-    appending the new ones to it. The searches' rounds stay in step, asked in a fixed order:
-    CMA-ES (``cma``) samples from NumPy's global generator, shared by every search, so searches
-    run side by side (as ``nnrobust tune``'s controllers are) would ask points that depend on
-    which one finished first, and a resumed falsification would not find its own points again.
+    appending the new ones to it. The searches' rounds stay in step, asked in a fixed order; each
+    search draws from generators of its own (its Sobol start, its random points, CMA-ES's normal
+    draws), so a controller's points do not depend on the other controllers of the run.
     """
 
     def __init__(
@@ -279,10 +290,11 @@ def _margins(spec: FalsifySpec, sweep, box: Box, rows: dict, drive: _Driver) -> 
         if not active:
             break
         searches, boxes = {}, {}
-        for i, (name, scale) in enumerate(active):
+        for name, scale in active:
             key = (name, f"margin {scale:.6g}")
             budget = 1 if scale == 0.0 else spec.margin_budget
-            searches[key] = _Search(len(box.keys), budget, spec.seed + 104729 * (step + 1) + 7919 * i, False)
+            seed = spec.seed + 104729 * (step + 1) + controller_seed(name)
+            searches[key] = _Search(len(box.keys), budget, seed, False)
             boxes[key] = box.scaled(scale)
             rows[key] = []
         drive(searches, boxes, rows, sum(s.budget for s in searches.values()), stop_at_violation=True)
