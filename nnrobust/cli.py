@@ -674,6 +674,7 @@ def _number(value) -> str:
 def cmd_falsify(args) -> int:
     """Search each controller's worst plant in the sweep file's box, at one budget."""
     from .falsify import FalsifySpec, run_falsify
+    from .falsify.summary import replayed_worst
 
     controllers = [c.strip() for c in args.controllers.split(",") if c.strip()]
     tuned = None
@@ -705,10 +706,11 @@ def cmd_falsify(args) -> int:
         print(file=sys.stderr)
     if not args.quiet:
         for name, entry in summary["controllers"].items():
-            worst, baseline = entry["worst"], entry["random_baseline"]
+            baseline = entry["random_baseline"]
+            worst, found_by = replayed_worst(entry)
             verdict = "FALSIFIED" if entry["falsified"] else "not falsified"
-            if entry.get("falsified_by") == ["random"]:  # the baseline's plant is the one to replay
-                verdict, worst = "FALSIFIED by random search only (the search found none)", baseline["worst"]
+            if found_by == "random":
+                verdict = "FALSIFIED by random search only (the search found none)"
             status = worst["metrics"].get("status", "completed")
             ended = (
                 f" (the run ended {status}: {one_line(str(worst['metrics'].get('message', '')))})"

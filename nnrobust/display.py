@@ -94,12 +94,14 @@ class FalsifySummary(dict):
     """
 
     def _repr_html_(self) -> str:
+        from .falsify.summary import replayed_worst
+
         rows = []
         for name, e in self["controllers"].items():
-            worst = e.get("worst") or {}
+            worst, found_by = replayed_worst(e)
             verdict = "FALSIFIED" if e.get("falsified") else "not falsified"
-            if e.get("falsified_by") == ["random"]:  # the baseline's plant replays the verdict
-                verdict, worst = "FALSIFIED by random search only", e["random_baseline"]["worst"]
+            if found_by == "random":
+                verdict = "FALSIFIED by random search only"
             rows.append(
                 [
                     html.escape(name),

@@ -613,7 +613,7 @@ def test_a_plant_only_the_random_baseline_found_falsifies_the_box(tmp_path):
     everywhere, the baseline's third plant violates, and every scaled search holds."""
     from nnrobust.falsify.search import _margins
     from nnrobust.falsify.spec import _searched_sweep
-    from nnrobust.falsify.summary import _summary
+    from nnrobust.falsify.summary import _summary, replayed_worst
     from nnrobust.properties import run_properties
     from nnrobust.sweep.spec import Sample, rerun_command, sample_seed
 
@@ -636,6 +636,8 @@ def test_a_plant_only_the_random_baseline_found_falsifies_the_box(tmp_path):
     entry = summary["controllers"]["pd"]
     assert entry["falsified"] and entry["falsified_by"] == ["random"] and entry["first_violation"] is None
     assert entry["random_baseline"]["first_violation"] == 3
+    # the plant the CLI, the notebook display and a study's report replay: the baseline's
+    assert replayed_worst(entry) == (entry["random_baseline"]["worst"], "random")
 
     def drive(searches, boxes, rows, total, stop_at_violation=False):
         for key in searches:

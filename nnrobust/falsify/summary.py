@@ -58,6 +58,15 @@ def _summary(spec, sweep, box, properties, rows, seconds, rerun_command, Sample,
     return out
 
 
+def replayed_worst(entry: dict) -> tuple[dict, str]:
+    """(the worst plant that replays a controller's verdict, who found it): the search's worst,
+    or the random baseline's where only the baseline found a violation (``falsified_by``).
+    """
+    if entry.get("falsified_by") == ["random"]:
+        return entry["random_baseline"]["worst"], "random"
+    return entry.get("worst") or {}, "search"
+
+
 def certify_box(
     sweep, box: Box, properties: list[Property], history: list[dict], epsilon: float, beta: float
 ):

@@ -144,13 +144,12 @@ def _controller_entry(spec: StudySpec, case: dict, c: str) -> dict:
     falsified = (case.get("falsify") or {}).get("controllers", {})
     found = falsified.get(label) or falsified.get(c)
     if found:
-        # the worst plant found in the box: the search's, or the random baseline's where only it
-        # found a violation (the plant whose command replays the verdict)
-        only_random = found.get("falsified_by") == ["random"]
-        worst = found["random_baseline"]["worst"] if only_random else found["worst"]
+        from ..falsify.summary import replayed_worst
+
+        worst, found_by = replayed_worst(found)  # the plant whose command replays the verdict
         entry["worst"] = {
             "falsified": found["falsified"],
-            "found_by": "random" if only_random else "search",
+            "found_by": found_by,
             "simulations": found["simulations"],
             "margin": worst["margin"],
             "metrics": worst["metrics"],
