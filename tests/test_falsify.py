@@ -611,7 +611,7 @@ def test_a_plant_only_the_random_baseline_found_falsifies_the_box(tmp_path):
     (falsified, falsified_by ["random"]), and the margin's scale 1 counts it, so the margin is
     bracketed below the box instead of above it. Synthetic histories: the search holds
     everywhere, the baseline's third plant violates, and every scaled search holds."""
-    from nnrobust.falsify.search import _margins
+    from nnrobust.falsify.search import _Margins
     from nnrobust.falsify.spec import _searched_sweep
     from nnrobust.falsify.summary import _summary, replayed_worst
     from nnrobust.properties import run_properties
@@ -639,11 +639,15 @@ def test_a_plant_only_the_random_baseline_found_falsifies_the_box(tmp_path):
     # the plant the CLI, the notebook display and a study's report replay: the baseline's
     assert replayed_worst(entry) == (entry["random_baseline"]["worst"], "random")
 
-    def drive(searches, boxes, rows, total, stop_at_violation=False):
-        for key in searches:
-            rows[key] = [row(0.5)]
-
-    margin = _margins(spec, sweep, box, rows, drive)["pd"]
+    margins = _Margins(spec, sweep, box, rows)
+    assert margins(("pd", "falsifier")) is None  # the scales wait for the baseline too
+    following = margins(("pd", "random"))
+    while following is not None:  # every scaled search holds
+        key, search, _ = following
+        assert search.stop_at_violation and key[1].startswith("margin ")
+        rows[key] = [row(0.5)]
+        following = margins(key)
+    margin = margins.result()["pd"]
     assert margin["steps"][0] == {"scale": 1.0, "falsified": True, "simulations": 8, "least_margin": -0.2}
     assert margin["violated_at"] == 1.0 and margin["holds_up_to"] < 1.0
 

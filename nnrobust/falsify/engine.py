@@ -13,7 +13,7 @@ import numpy as np
 from ..exceptions import NNRobustError
 from ..signals import signals_as_interrupt
 from .history import _history
-from .search import _Driver, _margins, _Search, controller_seed
+from .search import _Driver, _Margins, _Search, controller_seed
 from .spec import HISTORY, MARKER, FalsifySpec, _searched_sweep, box_of
 from .summary import WORST, _summary, _write_csv, certify_box, plot_convergence
 
@@ -130,8 +130,8 @@ def _run_falsify(
             progress(sum((c, s) in searches and i < spec.budget for c, s, i in done), total)
         files = shipped_files(client, inputs, ship)
         drive = _Driver(client, folder, done, sweep, base, properties, progress, inputs.key, files)
-        drive(searches, dict.fromkeys(searches, box), rows, total)
-        margins = _margins(spec, sweep, box, rows, drive) if spec.margin else None
+        margins = _Margins(spec, sweep, box, rows) if spec.margin else None
+        drive(searches, dict.fromkeys(searches, box), rows, total, then=margins)
     seconds = time.monotonic() - started
     summary = _summary(spec, sweep, box, properties, rows, seconds, rerun_command, Sample, sample_seed)
     if expanded:
@@ -141,7 +141,7 @@ def _run_falsify(
             sweep, box, properties, rows[(name, "random")], *claim
         )
     if margins is not None:
-        summary["margin"] = margins
+        summary["margin"] = margins.result()
     from ..results import write_json_atomic
 
     write_json_atomic(folder / "summary.json", summary)

@@ -1,7 +1,7 @@
 """The search: per controller, a Sobol start then CMA-ES with IPOP restarts (a zooming grid in a
 box of one coordinate), or the random baseline (:class:`_Search`); the batches run on the cluster
 (:class:`_Driver`); and the robustness margin's doubling and bisection on the box's scale
-(:func:`_margins`).
+(:class:`_Margins`).
 """
 
 from __future__ import annotations
@@ -44,8 +44,9 @@ class _Search:
     results from the history.
     """
 
-    def __init__(self, dims: int, budget: int, seed: int, random: bool):
+    def __init__(self, dims: int, budget: int, seed: int, random: bool, stop_at_violation: bool = False):
         self.dims, self.budget, self.seed, self.random = dims, budget, seed, random
+        self.stop_at_violation = stop_at_violation  # a margin's search: its first violation ends it
         self.asked = 0
         self.best: tuple[float, np.ndarray] | None = None
         self.rng = np.random.default_rng(seed)
@@ -150,11 +151,14 @@ class _Search:
 
 
 class _Driver:
-    """Runs searches on the cluster in batches the size of the worker pool, taking the points
-    already simulated from the history (a resumed search asks the same points again) and
-    appending the new ones to it. The searches' rounds stay in step, asked in a fixed order; each
-    search draws from generators of its own (its Sobol start, its random points, CMA-ES's normal
-    draws), so a controller's points do not depend on the other controllers of the run.
+    """Runs searches on the cluster, each on its own: as soon as a batch of a search has
+    finished, the search is told its results and its next batch is submitted while the other
+    searches' simulations run (:func:`nnrobust.sweep.engine.run_task_groups`). Points already
+    simulated are taken from the history (a resumed search asks the same points again); new ones
+    are appended to it. Each search draws from generators of its own (its Sobol start, its random
+    points, CMA-ES's normal draws) and asks batches whose points do not depend on their size, so
+    a controller's points depend neither on the other controllers of the run nor on the timing of
+    their simulations, nor on the number of workers.
     """
 
     def __init__(
@@ -167,69 +171,101 @@ class _Driver:
         from ..sweep.engine import shared
 
         self.sweep, self.base = shared(client, sweep), shared(client, base)  # sent to each worker once
-        self.finished = 0  # simulations of the calls before (the progress bar counts on)
+        self.new: list[dict] = []  # history rows not yet written
 
-    def _simulate(self, tasks: list[tuple]) -> list[dict]:
-        """Each (function, *arguments) task's result; one that ends its worker, run again alone,
-        is a run with status ``crashed`` (:func:`nnrobust.sweep.engine.run_tasks`).
+    def __call__(self, searches: dict, boxes: dict, rows: dict, total: int, then=None) -> None:
+        """Run every search to the end of its budget (one with ``stop_at_violation``: to its first
+        violation). ``then(key)``, called as the search ``key`` ends, returns the search to run
+        next in its place, (key, search, box), or None (the margin's scales, :class:`_Margins`).
+        ``total``: the simulations planned, for the progress bar (grown by each search ``then``
+        starts).
         """
-        from ..sweep.engine import CRASHED, run_tasks
+        from ..sweep.engine import CRASHED, run_task_groups
+
+        planned = [total]
+        current = {key: key for key in searches}  # a lane of the cluster -> the search it runs
+        asked: dict[tuple, tuple[list, list[int]]] = {}  # lane -> (points, those simulated)
+
+        def batch(lane: tuple) -> list[tuple] | None:
+            """The lane's next batch of tasks; points the history holds are told at once."""
+            while True:
+                key = current[lane]
+                if searches[key].remaining <= 0:
+                    following = then(key) if then else None
+                    if following is None:
+                        return None
+                    key, search, box = following
+                    searches[key], boxes[key], rows[key], current[lane] = search, box, [], key
+                    planned[0] += search.budget
+                    continue
+                points = searches[key].ask(self.workers)
+                first = len(rows[key])
+                simulated = [i for i, (_, u) in enumerate(points) if not self._cached(key, first + i, u)]
+                if simulated:
+                    asked[lane] = (points, simulated)
+                    box = boxes[key]
+                    return [
+                        (evaluate, self.sweep, self.base, key[0], box.values(points[i][1]), self.properties)
+                        for i in simulated
+                    ]
+                self._tell(key, searches[key], boxes[key], rows, points, {})
+
+        def told(lane: tuple, results: list[dict]) -> list[tuple] | None:
+            points, simulated = asked.pop(lane)
+            key = current[lane]
+            self._tell(key, searches[key], boxes[key], rows, points, dict(zip(simulated, results)))
+            if len(self.new) >= len(current) * self.workers:  # about one batch of every search a part
+                self._flush()
+            if self.progress:
+                self.progress(sum(len(rows[k]) for k in searches), planned[0])
+            return batch(lane)
 
         crashed = {"status": CRASHED}
-        return run_tasks(
-            self.client, tasks, lambda why: judged({**crashed, "message": why}, self.properties), self.files
-        )
+        try:
+            run_task_groups(
+                self.client,
+                {lane: batch(lane) for lane in list(current)},
+                lambda why: judged({**crashed, "message": why}, self.properties),
+                told,
+                self.files,
+            )
+        finally:
+            self._flush()  # what finished is kept, also when interrupted
+        if self.progress:
+            self.progress(sum(len(rows[k]) for k in searches), planned[0])
 
-    def __call__(self, searches: dict, boxes: dict, rows: dict, total: int, stop_at_violation=False):
-        """Run every search to the end of its budget (or to its first violation); ``total``: the
-        simulations this call plans, for the progress bar.
+    def _cached(self, key: tuple, index: int, u: np.ndarray) -> bool:
+        cached = self.done.get((*key, index))
+        return cached is not None and np.allclose(cached["u"], u, atol=1e-12)
+
+    def _tell(self, key: tuple, search: _Search, box: Box, rows: dict, points: list, results: dict) -> None:
+        """Record a batch (``results``: the simulated points' results by their place in the
+        batch; the others from the history) and tell the search.
         """
-        planned = self.finished + total
-        while any(s.remaining > 0 for s in searches.values()):
-            asked = {
-                key: search.ask(self.workers) for key, search in searches.items() if search.remaining > 0
-            }
-            tasks: dict[tuple, tuple] = {}
-            for key, points in asked.items():
-                for offset, (_, u) in enumerate(points):
-                    index = len(rows[key]) + offset
-                    cached = self.done.get((*key, index))
-                    if cached is None or not np.allclose(cached["u"], u, atol=1e-12):
-                        tasks[(key, index)] = (
-                            evaluate,
-                            self.sweep,
-                            self.base,
-                            key[0],
-                            boxes[key].values(u),
-                            self.properties,
-                        )
-            results = dict(zip(tasks, self._simulate(list(tasks.values()))))
-            new = []
-            for key, points in asked.items():
-                for phase, u in points:
-                    index = len(rows[key])
-                    if (key, index) in results:
-                        row = {
-                            "controller": key[0],
-                            "search": key[1],
-                            "index": index,
-                            "phase": phase,
-                            "u": [float(x) for x in u],
-                            "values": boxes[key].values(u),
-                            **results[(key, index)],
-                        }
-                        new.append(row)
-                    else:
-                        row = self.done[(*key, index)]
-                    rows[key].append(row)
-                searches[key].tell(points, [r["objective"] for r in rows[key][-len(points) :]])
-                if stop_at_violation and any(r["objective"] < 0 for r in rows[key]):
-                    searches[key].budget = searches[key].asked  # a violation is all the margin needs
-            if new:
-                _write_history(self.folder, new, self.key)
-            if self.progress:
-                self.progress(self.finished + sum(len(rows[key]) for key in searches), planned)
-        self.finished += sum(len(rows[key]) for key in searches)
+        for i, (phase, u) in enumerate(points):
+            index = len(rows[key])
+            if i in results:
+                row = {
+                    "controller": key[0],
+                    "search": key[1],
+                    "index": index,
+                    "phase": phase,
+                    "u": [float(x) for x in u],
+                    "values": box.values(u),
+                    **results[i],
+                }
+                self.new.append(row)
+            else:
+                row = self.done[(*key, index)]
+            rows[key].append(row)
+        search.tell(points, [r["objective"] for r in rows[key][-len(points) :]])
+        if search.stop_at_violation and any(r["objective"] < 0 for r in rows[key]):
+            search.budget = search.asked  # a violation is all the margin needs
+
+    def _flush(self) -> None:
+        if self.new:
+            _write_history(self.folder, self.new, self.key)
+            self.new = []
 
 
 @dataclass
@@ -273,45 +309,62 @@ class _Bracket:
             self.next = 0.5 * (self.low + self.high)
 
 
-def _margins(spec: FalsifySpec, sweep, box: Box, rows: dict, drive: _Driver) -> dict:
-    """The robustness margin of each controller: the box scaled by s about its centre, s searched
-    by doubling from the box itself (s = 1: the main search and the random baseline, violated if
-    either found a violation) up to :meth:`Box.largest_scale`, then by bisection, each scale
-    searched at ``spec.margin_budget`` simulations and stopped at its first violation. Where the
-    box itself is violated, the centre (s = 0) is tried first.
+class _Margins:
+    """The robustness margin of each controller, searched as its searches end (the driver's
+    ``then``): the box scaled by s about its centre, s searched by doubling from the box itself
+    (s = 1: the main search and the random baseline, violated if either found a violation) up to
+    :meth:`Box.largest_scale`, then by bisection, each scale searched at ``spec.margin_budget``
+    simulations and stopped at its first violation. Where the box itself is violated, the centre
+    (s = 0) is tried first. A controller's scales follow its own searches alone, so they do not
+    depend on the other controllers of the run.
     """
-    from ..sweep.spec import Sample, rerun_command, sample_seed
 
-    brackets = {name: _Bracket(box.largest_scale()) for name in sweep.controllers}
-    for name, bracket in brackets.items():  # the box itself: the search's and the baseline's plants
-        bracket.record(1.0, rows[(name, "falsifier")] + rows[(name, "random")])
-    for step in range(MARGIN_STEPS):
-        active = [(name, b.next) for name, b in brackets.items() if b.next is not None]
-        if not active:
-            break
-        searches, boxes = {}, {}
-        for name, scale in active:
-            key = (name, f"margin {scale:.6g}")
-            budget = 1 if scale == 0.0 else spec.margin_budget
-            seed = spec.seed + 104729 * (step + 1) + controller_seed(name)
-            searches[key] = _Search(len(box.keys), budget, seed, False)
-            boxes[key] = box.scaled(scale)
-            rows[key] = []
-        drive(searches, boxes, rows, sum(s.budget for s in searches.values()), stop_at_violation=True)
-        for (name, scale), key in zip(active, searches):
-            brackets[name].record(scale, rows[key])
-    out = {}
-    for name, b in brackets.items():
-        plant = None
-        if b.plant is not None:
-            command = rerun_command(sweep, Sample(-1, b.plant["values"], sample_seed(sweep.seed, 0)), name)
-            plant = {"values": b.plant["values"], "margins": b.plant["margins"], "command": command}
-        out[name] = {
-            "holds_up_to": b.low if b.low is not None else 0.0,
-            "violated_at": b.high,
-            "largest_scale": b.cap,
-            "simulations": sum(x["simulations"] for x in b.steps[1:]),
-            "steps": b.steps,
-            "violating_plant": plant,
-        }
-    return out
+    def __init__(self, spec: FalsifySpec, sweep, box: Box, rows: dict):
+        self.spec, self.sweep, self.box, self.rows = spec, sweep, box, rows
+        self.brackets = {name: _Bracket(box.largest_scale()) for name in sweep.controllers}
+        self.ended: set[tuple] = set()
+
+    def __call__(self, key: tuple) -> tuple[tuple, _Search, Box] | None:
+        """The search ``key`` ended: the controller's next scale to search, or None."""
+        name, kind = key
+        bracket = self.brackets[name]
+        self.ended.add(key)
+        if kind in ("falsifier", "random"):
+            if not {(name, "falsifier"), (name, "random")} <= self.ended:
+                return None
+            bracket.record(1.0, self.rows[(name, "falsifier")] + self.rows[(name, "random")])
+        else:
+            assert bracket.next is not None  # the scale this search was started for
+            bracket.record(bracket.next, self.rows[key])
+        step = len(bracket.steps) - 1  # the scales searched so far beyond the box itself
+        scale = bracket.next
+        if scale is None or step >= MARGIN_STEPS:
+            bracket.next = None
+            return None
+        budget = 1 if scale == 0.0 else self.spec.margin_budget
+        seed = self.spec.seed + 104729 * (step + 1) + controller_seed(name)
+        search = _Search(len(self.box.keys), budget, seed, False, stop_at_violation=True)
+        return (name, f"margin {scale:.6g}"), search, self.box.scaled(scale)
+
+    def result(self) -> dict:
+        """Each controller's margin: the scales it holds up to and is violated at, the
+        simulations beyond the box, every scale's search and the violating plant's command.
+        """
+        from ..sweep.spec import Sample, rerun_command, sample_seed
+
+        out = {}
+        for name, b in self.brackets.items():
+            plant = None
+            if b.plant is not None:
+                sample = Sample(-1, b.plant["values"], sample_seed(self.sweep.seed, 0))
+                command = rerun_command(self.sweep, sample, name)
+                plant = {"values": b.plant["values"], "margins": b.plant["margins"], "command": command}
+            out[name] = {
+                "holds_up_to": b.low if b.low is not None else 0.0,
+                "violated_at": b.high,
+                "largest_scale": b.cap,
+                "simulations": sum(x["simulations"] for x in b.steps[1:]),
+                "steps": b.steps,
+                "violating_plant": plant,
+            }
+        return out

@@ -777,7 +777,9 @@ def run_task_groups(client, groups: dict, crashed, then, files=None) -> None:
         key: (tasks, [submit(client, files, *t) for t in tasks]) for key, tasks in groups.items() if tasks
     }
     while pending:
-        wait_alive([f for _, futures in pending.values() for f in futures], first=True)
+        # until one more task finishes (a group with a finished task may still be running: waiting
+        # on every future would return at once and spin)
+        wait_alive([f for _, futures in pending.values() for f in futures if not f.done()], first=True)
         for key in [k for k, (_, futures) in pending.items() if all(f.done() for f in futures)]:
             tasks, futures = pending.pop(key)
             others = [f for _, running in pending.values() for f in running]
