@@ -81,13 +81,16 @@ docs-data: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/arm_presets.py --json $(DATA)/arm_presets.json
 	$(BIN)/python benchmarks/torque_speed.py --json $(DATA)/torque_speed.json
 	rm -rf $(OUT)/tuned-paper $(OUT)/tuned-panda $(OUT)/falsify-paper $(OUT)/falsify-panda $(OUT)/tune-noisy \
-	  $(OUT)/falsify-tuned $(OUT)/falsify-panda-tuned $(OUT)/paper-robustness $(OUT)/panda-robustness
-	for study in tuned-paper tuned-panda falsify-paper falsify-panda; do \
+	  $(OUT)/falsify-paper-tuned $(OUT)/falsify-panda-tuned $(OUT)/paper-robustness $(OUT)/panda-robustness
+	for study in tuned-paper tuned-panda falsify-paper falsify-panda falsify-paper-tuned falsify-panda-tuned \
+	  paper-robustness panda-robustness; do \
 	  $(BIN)/nnrobust study benchmarks/studies/$$study.toml --out $(OUT)/$$study --workers 2 --quiet && \
 	  cp $(OUT)/$$study/report.json $(DATA)/$$(echo $$study | tr - _).json || exit 1; \
 	done
 	cp $(OUT)/falsify-paper/cases/paper-ellipse/falsify/summary.json $(DATA)/falsify_paper_factors.json
 	cp $(OUT)/falsify-panda/cases/panda-ellipse/falsify/summary.json $(DATA)/falsify_panda_factors.json
+	cp $(OUT)/falsify-paper-tuned/cases/paper-ellipse-noisy/falsify/summary.json $(DATA)/falsify_paper_tuned_factors.json
+	cp $(OUT)/falsify-panda-tuned/cases/panda-ellipse-noisy/falsify/summary.json $(DATA)/falsify_panda_tuned_factors.json
 	$(BIN)/python benchmarks/studies/fronts.py $(OUT)/tuned-paper $(OUT)/tuned-panda --figure docs/img/tuned_comparison.png
 	$(BIN)/python benchmarks/engine_gap.py --json $(DATA)/engine_gap.json
 	$(BIN)/python benchmarks/plant_convergence.py --json $(DATA)/plant_convergence.json
@@ -95,18 +98,6 @@ docs-data: $(VENV)/.installed-test
 	$(BIN)/nnrobust tune paper-ellipse-noisy --controllers nn,no-u0,pd,sliding-mode,slotine-li,rbf-nn --budget 120 \
 	  --max-rms-torque 10 --max-saturated 0.01 --workers 2 --out $(OUT)/tune-noisy --overwrite --quiet
 	cp $(OUT)/tune-noisy/summary.json $(DATA)/tune_noisy_case_b.json
-	$(BIN)/nnrobust falsify benchmarks/falsification/paper-factors-noisy.toml \
-	  --controllers nn,no-u0,pd,sliding-mode,slotine-li,rbf-nn --tuned "$(DATA)/tuned_paper.json#paper-ellipse-noisy" \
-	  --require "rms_error_after_2s<=0.0005" --budget 200 --margin --workers 2 --out $(OUT)/falsify-tuned --quiet
-	cp $(OUT)/falsify-tuned/summary.json $(DATA)/falsify_tuned_noisy.json
-	$(BIN)/nnrobust falsify benchmarks/falsification/panda-factors-noisy.toml \
-	  --controllers nn,no-u0,pd,sliding-mode,slotine-li,rbf-nn --tuned "$(DATA)/tuned_panda.json#panda-ellipse-noisy" \
-	  --require "rms_error_after_2s<=0.0005" --budget 200 --margin --workers 2 --out $(OUT)/falsify-panda-tuned --quiet
-	cp $(OUT)/falsify-panda-tuned/summary.json $(DATA)/falsify_panda_tuned_noisy.json
-	for study in paper-robustness panda-robustness; do \
-	  $(BIN)/nnrobust sweep $$study --out $(OUT)/$$study --overwrite --keep-worst 1 && \
-	  cp $(OUT)/$$study/summary.json $(DATA)/$$(echo $$study | tr - _).json || exit 1; \
-	done
 	$(BIN)/python docs/render_tables.py
 
 # The test suite must catch each of benchmarks/mutations.py's broken lines (about 4 minutes).

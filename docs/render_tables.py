@@ -490,59 +490,73 @@ def tuned_settings() -> str:
     )
 
 
-def _study(name: str):
-    """A shipped study's summary (docs/data/<name>.json, DIR/summary.json of its sweep): per
-    controller the error and torque statistics, then the median error at each grid value."""
+def _robustness(name: str):
+    """A robustness study's report (docs/data/<name>.json): per case (a disturbance scale) and
+    controller, on the certification draws, the RMS error's median, 95th percentile and worst,
+    the RMS torque, the saturated steps and the certificate; then the runs on which each warning
+    fired, over every case."""
 
     def render() -> str:
-        summary = _data(name.replace("-", "_"))
-        entries = [{"controller": c, **e} for c, e in summary["controllers"].items()]
-
-        def stat(key, which, scale=1e3):
-            return lambda e: "–" if e[key][which] is None else f"{scale * e[key][which]:.3g}"
-
-        table = _markdown(
-            [
-                ("controller", "l", _text("controller")),
-                ("runs", "r", _text("rows")),
-                ("completed", "r", lambda e: f"{100 * e['success_rate']:.0f} %"),
-                ("median error [mm]", "r", stat("rms_error_after_2s", "median")),
-                ("p95 [mm]", "r", stat("rms_error_after_2s", "p95")),
-                ("max [mm]", "r", stat("rms_error_after_2s", "max")),
-                ("median torque [N m]", "r", stat("rms_torque", "median", 1.0)),
-                ("p95 [N m]", "r", stat("rms_torque", "p95", 1.0)),
-                ("saturated steps [%]", "r", lambda e: f"{100 * e['saturated_fraction_mean']:.2g}"),
-                ("runs with warnings", "r", _text("rows_with_warnings")),
-            ],
-            entries,
-        )
-        for key, values in next(iter(summary["controllers"].values()))["by_grid"].items():
-            columns = [("controller", "l", _text("controller"))] + [
-                (
-                    f"{key} = {value}",
-                    "r",
-                    lambda e, k=key, v=value: (
-                        "–"
-                        if e["by_grid"][k][v]["median"] is None
-                        else f"{1e3 * e['by_grid'][k][v]['median']:.3g} "
-                        f"({1e3 * e['by_grid'][k][v]['p95']:.3g})"
-                    ),
+        report = _data(name.replace("-", "_"))
+        rows = []
+        for case_name, case in report["cases"].items():
+            scale = case["set"].get("plant.disturbance_scale")
+            for controller, entry in case["controllers"].items():
+                stats, (c,) = entry["statistics"], entry["certificates"]
+                error, torque = stats["rms_error_after_2s"], stats["rms_torque"]
+                rows.append(
+                    {
+                        "case": f"{case_name} (× {scale:g})",
+                        "controller": controller,
+                        "completed": f"{100 * stats['success_rate']:.0f} %",
+                        "median": _mm(error["median"]),
+                        "p95": _mm(error["p95"]),
+                        "max": _mm(error["max"]),
+                        "torque": f"{torque['median']:.3g}",
+                        "torque_p95": f"{torque['p95']:.3g}",
+                        "saturated": f"{100 * stats['saturated_fraction_mean']:.2g}",
+                        "failing": f"{c['k']} of {c['N']}",
+                        "bound": f"{100 * c['p_upper']:.1f} %",
+                        "certified": "yes" if c["holds"] else "no",
+                    }
                 )
-                for value in values
-            ]
-            table += "\nMedian (95th percentile) RMS error, t ≥ 2 s [mm], at each value of the grid:\n\n"
-            table += _markdown(columns, entries)
-        kinds = sorted({k for e in entries for k in e.get("warnings_by_kind", {})})
+        claim = f"{100 * c['epsilon']:g} %"
+        columns = [
+            ("disturbance", "l", _text("case")),
+            ("controller", "l", _text("controller")),
+            ("completed", "r", _text("completed")),
+            ("median error [mm]", "r", _text("median")),
+            ("p95 [mm]", "r", _text("p95")),
+            ("max [mm]", "r", _text("max")),
+            ("median torque [N m]", "r", _text("torque")),
+            ("p95 [N m]", "r", _text("torque_p95")),
+            ("saturated steps [%]", "r", _text("saturated")),
+            (f"draws failing {c['property']}", "r", _text("failing")),
+            (f"P(fail) ≤ ({100 * (1 - report['budgets']['beta']):g} % confidence)", "r", _text("bound")),
+            (f"certified P(fail) ≤ {claim}", "l", _text("certified")),
+        ]
+        table = _markdown(columns, rows)
+        counts: dict[str, dict[str, int]] = {}
+        runs: dict[str, int] = {}
+        for case in report["cases"].values():
+            for controller, entry in case["controllers"].items():
+                runs[controller] = runs.get(controller, 0) + entry["statistics"]["rows"]
+                for kind, n in entry["warnings"].items():
+                    counts.setdefault(controller, {})
+                    counts[controller][kind] = counts[controller].get(kind, 0) + n
+        kinds = sorted({k for c in counts.values() for k in c})
         if kinds:
-            table += "\nRuns on which each warning fired (docs/plant.md#verdicts-in-metricsjson):\n\n"
+            table += "\nRuns on which each warning fired, over every case "
+            table += "(docs/plant.md#verdicts-in-metricsjson):\n\n"
             table += _markdown(
-                [("controller", "l", _text("controller"))]
-                + [(k, "r", lambda e, k=k: str(e["warnings_by_kind"].get(k, 0))) for k in kinds],
-                entries,
+                [("controller", "l", _text("controller")), ("runs", "r", _text("runs"))]
+                + [(k, "r", lambda e, k=k: str(e["counts"].get(k, 0))) for k in kinds],
+                [{"controller": c, "runs": runs[c], "counts": counts.get(c, {})} for c in runs],
             )
+        errors = "errors are RMS over t ≥ 2 s"
         return table + (
-            f"\n{summary['samples']} samples; errors are RMS over t ≥ 2 s. Made by "
-            f"`nnrobust sweep {name} --out out/{name}` (summary.json).\n"
+            f"\n{rows[0]['failing'].split(' of ')[1]} draws per case; {errors}. Made by `nnrobust study "
+            f"benchmarks/studies/{name}.toml --out out/{name} --workers 2` (report.json).\n"
         )
 
     return render
@@ -653,20 +667,15 @@ FALSIFY_COMMANDS = {
     "falsify_panda_factors": (
         "nnrobust study benchmarks/studies/falsify-panda.toml --out out/falsify-panda --workers 2"
     ),
-    "falsify_tuned_noisy": (
-        "nnrobust falsify benchmarks/falsification/paper-factors-noisy.toml --controllers "
-        'nn,no-u0,pd,sliding-mode,slotine-li,rbf-nn --tuned "docs/data/tuned_paper.json#paper-ellipse-noisy" '
-        '--require "rms_error_after_2s<=0.0005" --budget 200 --margin --workers 2 --out out/falsify-tuned'
+    "falsify_paper_tuned_factors": (
+        "nnrobust study benchmarks/studies/falsify-paper-tuned.toml --out out/falsify-paper-tuned --workers 2"
     ),
-    "falsify_panda_tuned_noisy": (
-        "nnrobust falsify benchmarks/falsification/panda-factors-noisy.toml --controllers "
-        'nn,no-u0,pd,sliding-mode,slotine-li,rbf-nn --tuned "docs/data/tuned_panda.json#panda-ellipse-noisy" '
-        '--require "rms_error_after_2s<=0.0005" --budget 200 --margin --workers 2 '
-        "--out out/falsify-panda-tuned"
+    "falsify_panda_tuned_factors": (
+        "nnrobust study benchmarks/studies/falsify-panda-tuned.toml --out out/falsify-panda-tuned --workers 2"
     ),
 }
-"""The command each falsification data file comes from (its summary.json, copied: a study's
-falsification stage, or a falsification of a study's kept settings)."""
+"""The study each falsification data file comes from (its falsification stage's summary.json,
+copied)."""
 
 
 def _margin_cell(margin: dict | None) -> str:
@@ -967,14 +976,16 @@ RENDERERS = {
     "falsify-panda-factors": _falsified("falsify_panda_factors"),
     "falsify-paper-certified": _certified_box("falsify_paper"),
     "falsify-panda-certified": _certified_box("falsify_panda"),
-    "falsify-tuned-noisy": _falsified("falsify_tuned_noisy"),
-    "falsify-panda-tuned-noisy": _falsified("falsify_panda_tuned_noisy"),
+    "falsify-paper-tuned-factors": _falsified("falsify_paper_tuned_factors"),
+    "falsify-panda-tuned-factors": _falsified("falsify_panda_tuned_factors"),
+    "falsify-paper-tuned-certified": _certified_box("falsify_paper_tuned"),
+    "falsify-panda-tuned-certified": _certified_box("falsify_panda_tuned"),
     "engine-gap-presets": engine_gap_presets,
     "engine-gap-tuned": engine_gap_tuned,
     "arm-presets": arm_presets,
     "torque-speed": torque_speed,
-    "paper-robustness": _study("paper-robustness"),
-    "panda-robustness": _study("panda-robustness"),
+    "paper-robustness": _robustness("paper-robustness"),
+    "panda-robustness": _robustness("panda-robustness"),
     "paper-reproduction": paper_reproduction,
     "nn-options": nn_options,
     "subtask": subtask,

@@ -1165,7 +1165,9 @@ def build_parser() -> argparse.ArgumentParser:
         "the same command into the same folder computes only the missing rows "
         "(docs/robustness.md).",
     )
-    sweep.add_argument("sweep", help=f"sweep file (TOML), or a shipped study: {', '.join(shipped_sweeps())}")
+    sweep.add_argument(
+        "sweep", help=f"sweep file (TOML), or a shipped sweep file by name: {', '.join(shipped_sweeps())}"
+    )
     sweep.add_argument("--out", required=True, help="sweep folder (results/, sweep.toml, summary.json)")
     sweep.add_argument(
         "--overwrite", action="store_true", help="replace the results of a different sweep in --out"
@@ -1227,7 +1229,9 @@ def build_parser() -> argparse.ArgumentParser:
         "as the baseline. Re-running the same command into the same folder resumes "
         "(docs/falsification.md).",
     )
-    falsify.add_argument("sweep", help="sweep file (TOML) or shipped study whose [vary] ranges are the box")
+    falsify.add_argument(
+        "sweep", help="sweep file (TOML) or shipped sweep file by name whose [vary] ranges are the box"
+    )
     falsify.add_argument(
         "--controllers",
         required=True,

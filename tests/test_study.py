@@ -136,6 +136,53 @@ def test_the_custom_laws_tuned_settings_are_the_ones_every_stage_ran(study):
     assert again["rms_error_after_2s"] == quoted["rms_error_after_2s"]
 
 
+def test_a_study_runs_the_settings_another_studys_report_kept(study, tmp_path, capsys):
+    """``tuned = "REPORT.json#CASE"``: each law at the kept setting of another study's case, as
+    NAME-tuned and untuned (the custom law too; a law that study ran untuned keeps its own name),
+    through certification and falsification; the report names the source file's SHA-256. A case
+    the report does not hold, or a law it did not tune, is one line naming ``tuned``."""
+    import re
+
+    from nnrobust.config import parse_toml
+    from nnrobust.study_folder import file_sha256
+
+    _, first, report = study
+    source = report["cases"]["paper-ellipse-noisy"]["controllers"]
+    shutil.copy(EXAMPLES / "custom_controller.py", tmp_path / "laws.py")
+    text = re.sub(
+        r"controllers = \[.*?\n\]\n",
+        f'controllers = ["nn", {{name = "taskpd", class = "laws.py:TaskPD"}}]\n'
+        f'tuned = "{first / "report.json"}#paper-ellipse-noisy"\n',
+        STUDY_CORE.replace('name = "example"', 'name = "again"'),
+        flags=re.S,
+    )
+    (tmp_path / "study.toml").write_text(text)
+    spec = load_study(tmp_path / "study.toml")
+    assert spec.controllers == ["nn-tuned", "taskpd-tuned"] and spec.fixed == spec.controllers
+    out = tmp_path / "out"
+    assert main(["study", str(tmp_path / "study.toml"), "--out", str(out), "--workers", "2", "--quiet"]) == 0
+    again = json.loads((out / "report.json").read_text())
+    assert again["inputs"][str(first / "report.json")] == file_sha256(first / "report.json")
+    here = out / "cases" / "paper-ellipse-noisy"
+    certify = {c["name"]: c for c in parse_toml((here / "certify.toml").read_text(), "c")["controllers"]}
+    taskpd = source["taskpd"]["tuned"]["settings"]
+    assert certify["taskpd-tuned"]["params"] == {
+        k.removeprefix("controller.params."): v for k, v in taskpd.items()
+    }
+    assert certify["nn-tuned"]["set"] == source["nn"]["tuned"]["settings"]
+    assert not list(here.glob("tune-seed*"))  # nothing tuned again
+    falsified = json.loads((here / "falsify" / "summary.json").read_text())
+    assert set(falsified["controllers"]) == {"nn-tuned", "taskpd-tuned"}
+    for change, message in [
+        (("#paper-ellipse-noisy", "#paper-line"), "name one of its cases"),
+        (('["nn", {name', '["no-u0", {name'), "has no best setting for 'no-u0'"),
+    ]:
+        (tmp_path / "bad.toml").write_text(text.replace(*change))
+        assert main(["study", str(tmp_path / "bad.toml"), "--out", str(tmp_path / "bad")]) == 2
+        err = capsys.readouterr().err
+        assert "bad.toml: tuned: " in err and message in err and err.count("\n") == 1, err
+
+
 def test_a_rerun_computes_nothing_and_each_replay_command_recomputes_its_stage(study, capsys):
     here, out, report = study
     before = _parts(out)
@@ -202,10 +249,45 @@ def test_a_shipped_law_runs_untuned_under_its_own_name(tmp_path):
     (tmp_path / "s.toml").write_text(text)
     spec = load_study(tmp_path / "s.toml")
     assert spec.controllers == ["nn", "pd", "no-u0"] and spec.fixed == ["nn"] and spec.entries == {}
-    assert spec.case_sweep("paper-ellipse").controllers == ["nn", "pd", "no-u0"]
+    assert spec.case_sweep(spec.cases[0]).controllers == ["nn", "pd", "no-u0"]
     (tmp_path / "s.toml").write_text(text.replace('name = "nn"', 'name = "nnx"'))
     with pytest.raises(ConfigError, match="'nnx' is not one of nn, "):
         load_study(tmp_path / "s.toml")
+
+
+def test_cases_of_one_experiment_with_overrides_of_their_own(tmp_path):
+    """Case tables {name, base, set}: the paper's arm at half and twice the disturbance are two
+    cases, each certified on its own ``certify`` draws at its own scale (and the larger
+    disturbance gives the larger error); ``falsify = 0`` skips the search and says so."""
+    text = (
+        'name = "levels"\nrequire = ["rms_error_after_2s<=0.05"]\n'
+        'cases = [{name = "low", base = "paper-ellipse", set = {"plant.disturbance_scale" = 0.5}},\n'
+        '         {name = "high", base = "paper-ellipse", set = {"plant.disturbance_scale" = 2.0}}]\n'
+        'controllers = [{name = "nn", tune = false}]\n'
+        '[set]\n"simulation.duration" = 2.5\n'
+        '[vary]\n"plant.friction_scale" = {loguniform = [0.5, 2.0]}\n'
+        "[budgets]\nvalidation = 2\nepsilon = 0.5\nbeta = 0.2\ncertify = 5\nfalsify = 0\n"
+    )
+    (tmp_path / "s.toml").write_text(text)
+    spec = load_study(tmp_path / "s.toml")
+    assert [c.name for c in spec.cases] == ["low", "high"]
+    report = run_study(spec, tmp_path / "out", workers=2)
+    import pandas as pd
+
+    from nnrobust.config import parse_toml
+
+    medians = {}
+    for name, scale in (("low", 0.5), ("high", 2.0)):
+        case = report["cases"][name]
+        assert case["set"] == {"plant.disturbance_scale": scale}
+        assert case["stages"]["falsify"] == "skipped: falsify = 0"
+        here = tmp_path / "out" / "cases" / name
+        assert parse_toml((here / "certify.toml").read_text(), "c")["set"]["plant.disturbance_scale"] == scale
+        rows = pd.read_parquet(here / "certify" / "results")
+        assert len(rows) == 5 and rows["plant.friction_scale"].nunique() == 5
+        assert case["controllers"]["nn"]["certificates"][0]["N"] == 5
+        medians[name] = rows["rms_error_after_2s"].median()
+    assert medians["high"] > medians["low"]
 
 
 @pytest.mark.parametrize(
@@ -216,6 +298,20 @@ def test_a_shipped_law_runs_untuned_under_its_own_name(tmp_path):
         (("seeds = 2", "seeds = 0"), "budgets.seeds: expected an integer in [1, 20], got 0"),
         (("{uniform = [0.5, 2.0]}", "[0.5, 2.0]"), "a study's uncertainty set is distributions"),
         (("<=0.002", "<=0.002 mm"), "require"),
+        (
+            ('cases = ["paper-ellipse-noisy"]', 'cases = [{name = "a", bas = "paper-ellipse-noisy"}]'),
+            "cases[0].bas: unknown key; did you mean 'base'?",
+        ),
+        (
+            (
+                'cases = ["paper-ellipse-noisy"]',
+                'cases = [{name = "a", base = "paper-ellipse-noisy", '
+                'set = {"plant.disturbance_scale" = 1.0}}]',
+            ),
+            "cases.a.set: sets 'plant.disturbance_scale', which [vary] draws",
+        ),  # fmt: skip
+        (("falsify = 4", "falsify = 2"), "budgets.falsify: expected 0 (no search) or at least 4, got 2"),
+        (("beta = 0.2", "beta = 0.2\ncertify = 2"), "budgets.certify: 2 draws cannot prove P(fail) <= 0.5"),
         (("laws.py:TaskPD", "laws.py:TaskPDD"), "has no 'TaskPDD'; did you mean 'TaskPD'?"),
         (
             ('class = "laws.py:TaskPD"', 'class = "laws.py:TaskPD", tuen = false'),

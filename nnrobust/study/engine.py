@@ -31,7 +31,7 @@ import tempfile
 from pathlib import Path
 
 from ..exceptions import ConfigError, NNRobustError
-from .spec import StudySpec
+from .spec import StudyCase, StudySpec
 
 MARKER = "study.toml"
 VALIDATION_SEED = 1_000_003
@@ -196,7 +196,7 @@ class _SharedCluster:
 
 def _run_case(
     spec: StudySpec,
-    case: str,
+    case: StudyCase,
     folder: Path,
     address: str,
     overwrite: bool,
@@ -219,7 +219,9 @@ def _run_case(
     _write_if_changed(case_file, sweep.to_toml())
     b = spec.budgets
     tuned = [c for c in spec.controllers if c not in spec.fixed]
-    out: dict = {"case": case, "stages": {}}
+    out: dict = {"case": case.base, "stages": {}}
+    if case.set:
+        out["set"] = dict(case.set)
 
     # 1. tune, once per optimiser seed; on one draw where every draw is the same plant
     tunings = {}
@@ -327,7 +329,7 @@ def _run_case(
         else:
             certify_entries[label] = tuned_entry(c, entry["settings"], spec.entries)
             settings[c] = entry["settings"]
-    n = samples_needed(b["epsilon"], b["beta"])
+    n = b["certify"] or samples_needed(b["epsilon"], b["beta"])
     certify = sweep_of(spec, case, certify_names, certify_entries, n, spec.seed + CERTIFY_SEED)
     certify_file = here / "certify.toml"
     _write_if_changed(certify_file, certify.to_toml())
@@ -344,24 +346,26 @@ def _run_case(
     out["failures"] = failures(rows)
 
     # 4. falsify the kept settings
-    say(f"{name}: falsify {len(kept)} controllers, {b['falsify']} simulations each (and as many random)")
-    falsify_spec = FalsifySpec(
-        str(case_file),
-        list(kept),
-        list(spec.require),
-        b["falsify"],
-        seed=spec.seed,
-        margin=b["margin"],
-        tuned=settings or None,
-    )
-    if spec.vary:
+    if spec.vary and b["falsify"]:
+        say(f"{name}: falsify {len(kept)} controllers, {b['falsify']} simulations each (and as many random)")
+        falsify_spec = FalsifySpec(
+            str(case_file),
+            list(kept),
+            list(spec.require),
+            b["falsify"],
+            seed=spec.seed,
+            margin=b["margin"],
+            tuned=settings or None,
+        )
         out["falsify"] = run_falsify(
             falsify_spec, here / "falsify", scheduler=address, overwrite=overwrite, progress=progress,
             claim=(b["epsilon"], b["beta"]), ship_files=ship,
         )  # fmt: skip
         out["stages"]["falsify"] = "finished"
-    else:
+    elif b["falsify"]:
         out["stages"]["falsify"] = "skipped: the study has no [vary] box to search"
+    else:
+        out["stages"]["falsify"] = "skipped: falsify = 0"
 
     # 5. the kept laws exported and timed out of Python
     if b["realtime"]:
@@ -497,17 +501,17 @@ def realtime(sweep, labels: list[str], folder: Path) -> dict:
     return out
 
 
-def sweep_of(spec: StudySpec, case: str, names: list[str], entries: dict, samples: int, seed: int):
+def sweep_of(spec: StudySpec, case: StudyCase, names: list[str], entries: dict, samples: int, seed: int):
     """A sweep of ``names`` (with their ``entries``) on ``samples`` draws of the case's box."""
     from ..sweep.spec import SweepSpec
 
     return SweepSpec(
         name=f"{spec.name}-{spec.case_name(case)}",
-        base=case,
+        base=case.base,
         controllers=list(names),
         samples=samples,
         seed=seed,
-        set=dict(spec.set),
+        set=spec.case_set(case),
         vary=dict(spec.vary),
         entries={k: v for k, v in entries.items() if k in names},
     )

@@ -49,6 +49,10 @@ def _inputs(spec: StudySpec) -> dict:
     from ..sweep.spec import study_inputs
 
     out = {str(spec.path): file_sha256(spec.path)}
+    if spec.tuned:  # the tuning the settings come from
+        source = Path(spec.tuned.partition("#")[0])
+        source = source / "summary.json" if source.is_dir() else source
+        out[str(source)] = file_sha256(source)
     for case in spec.cases:
         for path, digest in study_inputs(spec.case_sweep(case)).files.values():
             out[path] = digest
@@ -120,7 +124,15 @@ def _controller_entry(spec: StudySpec, case: dict, c: str) -> dict:
         else None,
         "statistics": {
             k: certify.get(k)
-            for k in ("rows", "success_rate", "statuses", "rms_error_after_2s", "rms_torque")
+            for k in (
+                "rows",
+                "success_rate",
+                "statuses",
+                "rms_error_after_2s",
+                "rms_torque",
+                "saturated_fraction_mean",
+                "rows_with_warnings",
+            )
         },
         "certificates": certify.get("certificates", []),
         "quantile_bounds": certify.get("quantile_bounds", []),
@@ -136,7 +148,15 @@ def _controller_entry(spec: StudySpec, case: dict, c: str) -> dict:
         engines["mujoco"] = {
             **{
                 k: second.get(k)
-                for k in ("rows", "success_rate", "statuses", "rms_error_after_2s", "rms_torque")
+                for k in (
+                    "rows",
+                    "success_rate",
+                    "statuses",
+                    "rms_error_after_2s",
+                    "rms_torque",
+                    "saturated_fraction_mean",
+                    "rows_with_warnings",
+                )
             },
             "certificates": second.get("certificates", []),
         }
@@ -183,6 +203,7 @@ def build_report(spec: StudySpec, folder: Path, cases: dict) -> dict:
         ]
         report["cases"][name] = {
             "case": case["case"],
+            "set": case.get("set", {}),
             "stages": case["stages"],
             "held_out": case["held_out"],
             "validated_on": "fresh draws of the uncertainty set, independent of the training draws"

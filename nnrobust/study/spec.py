@@ -32,7 +32,7 @@ from ..config import parse_toml, read_text_file
 from ..exceptions import ConfigError
 from ..sweep.spec import NAME, SweepSpec, parse_sweep, resolve_entry_files
 
-KEYS = ("name", "description", "cases", "controllers", "require", "seed", "set", "vary", "budgets")
+KEYS = ("name", "description", "cases", "controllers", "tuned", "require", "seed", "set", "vary", "budgets")
 
 BUDGET_KEYS = {
     "tune": "simulations per controller, case and optimiser seed (training)",
@@ -41,7 +41,8 @@ BUDGET_KEYS = {
     "validation": "fresh draws each (controller, seed) is validated on (selects the seed)",
     "epsilon": "the certified claim: P(a property fails) <= epsilon ...",
     "beta": "... with confidence 1 - beta (Clopper-Pearson, on draws the selection never saw)",
-    "falsify": "falsification budget per controller and case (and as many random draws)",
+    "certify": "certification draws per case (default: the fewest that prove the claim with no failure)",
+    "falsify": "falsification budget per controller and case (and as many random draws); 0: no search",
     "margin": "search how far the box may grow before a property fails (true/false)",
     "max_rms_torque": "tuning constraint: RMS torque <= this [N m]",
     "max_saturated": "tuning constraint: saturated fraction of the steps <= this",
@@ -57,6 +58,7 @@ DEFAULT_BUDGETS = {
     "validation": 20,
     "epsilon": 0.1,
     "beta": 0.05,
+    "certify": 0,
     "falsify": 40,
     "margin": False,
     "max_rms_torque": math.inf,
@@ -64,6 +66,22 @@ DEFAULT_BUDGETS = {
     "second_engine": False,
     "realtime": False,
 }
+
+CASE_KEYS = ("name", "base", "set")
+"""The keys of a case given as a table: its name, its experiment and its own overrides."""
+
+
+@dataclass
+class StudyCase:
+    """One case of a study: a preset or an experiment file, with overrides of its own (a case
+    table's ``set``, over the study's ``[set]``): the same experiment at three disturbance
+    scales is three cases, each certified on its own draws.
+    """
+
+    name: str
+    base: str
+    set: dict = field(default_factory=dict)
+
 
 ENTRY_TUNE = "tune"
 """The key of a controllers entry that, set to false, runs it at its own settings untuned."""
@@ -76,7 +94,8 @@ class StudySpec:
     Attributes:
         name: the study's name (1-40 letters, digits, '_' or '-').
         path: the study file.
-        cases: presets or experiment files (absolute), each a case.
+        cases: the cases (:class:`StudyCase`): a preset or an experiment file (absolute), with
+            overrides of its own.
         controllers: the controllers' names (a built-in kind or registered law, or a table entry's
             name), in the study's order.
         entries: table entries by name, as a sweep file's (``tune = false`` removed).
@@ -85,12 +104,14 @@ class StudySpec:
         seed: the study's seed (tuning seeds, validation, certification draws derive from it).
         set, vary: the fixed overrides and the uncertainty set (distributions).
         budgets: :data:`BUDGET_KEYS` with their values.
+        tuned: the tuning whose kept settings every controller runs at (``tuned = "FILE#CASE"``,
+            absolute), or "": then each such controller is NAME-tuned, untuned here.
 
     """
 
     name: str
     path: Path
-    cases: list[str]
+    cases: list[StudyCase]
     controllers: list[str]
     entries: dict
     fixed: list[str]
@@ -100,20 +121,25 @@ class StudySpec:
     vary: dict = field(default_factory=dict)
     budgets: dict = field(default_factory=lambda: dict(DEFAULT_BUDGETS))
     description: str = ""
+    tuned: str = ""
 
-    def case_name(self, case: str) -> str:
-        """A case's folder name: the preset, or the experiment file's stem."""
-        return Path(case).stem if case.endswith(".toml") else case
+    def case_name(self, case: StudyCase) -> str:
+        """A case's folder name: its table's name, the preset, or the experiment file's stem."""
+        return case.name
 
-    def case_sweep(self, case: str) -> SweepSpec:
-        """The case as a sweep (its controllers and the study's [set] and [vary])."""
+    def case_set(self, case: StudyCase) -> dict:
+        """The overrides every run of the case takes: the study's [set], then the case's own."""
+        return {**self.set, **case.set}
+
+    def case_sweep(self, case: StudyCase) -> SweepSpec:
+        """The case as a sweep (its controllers, its overrides and the study's [vary])."""
         return SweepSpec(
             name=f"{self.name}-{self.case_name(case)}",
-            base=case,
+            base=case.base,
             controllers=list(self.controllers),
             samples=1,
             seed=self.seed,
-            set=dict(self.set),
+            set=self.case_set(case),
             vary=dict(self.vary),
             entries={k: dict(v) for k, v in self.entries.items()},
         )
@@ -136,7 +162,7 @@ def _budgets(data, where: str) -> dict:
             )
         out[key] = value
     whole = {"tune": (2, 100_000), "seeds": (1, 20), "train_samples": (1, 1000), "validation": (2, 10_000),
-             "falsify": (4, 100_000)}  # fmt: skip
+             "certify": (0, 100_000), "falsify": (0, 100_000)}  # fmt: skip
     for key, (low, high) in whole.items():
         value = out[key]
         if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
@@ -154,10 +180,70 @@ def _budgets(data, where: str) -> dict:
         value = out[key]
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
             raise ConfigError(f"{where}: budgets.{key}", f"expected a number > 0, got {value!r}")
+    if 0 < out["falsify"] < 4:
+        raise ConfigError(
+            f"{where}: budgets.falsify", f"expected 0 (no search) or at least 4, got {out['falsify']}"
+        )
+    if out["certify"]:
+        from ..properties import samples_needed
+
+        needed = samples_needed(out["epsilon"], out["beta"])
+        if out["certify"] < needed:
+            raise ConfigError(
+                f"{where}: budgets.certify",
+                f"{out['certify']} draws cannot prove P(fail) <= {out['epsilon']:g} with confidence "
+                f"1 - {out['beta']:g}; it needs at least {needed} (or leave certify out)",
+            )
     if out["max_saturated"] > 1:
         raise ConfigError(
             f"{where}: budgets.max_saturated", f"expected a fraction in (0, 1], got {out['max_saturated']!r}"
         )
+    return out
+
+
+def _cases(cases, path: Path) -> list[StudyCase]:
+    """The ``cases`` list: presets or experiment files (read from the study's folder), or tables
+    ``{name, base, set}`` (a case with overrides of its own); names unique.
+    """
+    where = str(path)
+    if not isinstance(cases, list) or not cases:
+        raise ConfigError(f"{where}: cases", f"expected a list of presets or experiment files, got {cases!r}")
+    out = []
+    for i, case in enumerate(cases):
+        table = case if isinstance(case, dict) else None
+        if table is not None:
+            for key in table:
+                if key not in CASE_KEYS:
+                    raise ConfigError(
+                        f"{where}: cases[{i}].{key}",
+                        f"unknown key{_suggest(key, CASE_KEYS)} Valid: {', '.join(CASE_KEYS)}",
+                    )
+            for key in ("name", "base"):
+                if not isinstance(table.get(key), str):
+                    raise ConfigError(f"{where}: cases[{i}].{key}", "missing (a string)")
+            if not NAME.fullmatch(table["name"]):
+                raise ConfigError(
+                    f"{where}: cases[{i}].name",
+                    f"must be 1-40 letters, digits, '_' or '-', got {table['name']!r}",
+                )
+            if not isinstance(table.get("set", {}), dict):
+                raise ConfigError(f"{where}: cases[{i}].set", "expected a table of overrides")
+            case = table["base"]
+        elif not isinstance(case, str):
+            raise ConfigError(
+                f"{where}: cases",
+                f"expected presets, experiment files or {{name, base, set}} tables, got {case!r}",
+            )
+        if case.endswith(".toml"):
+            file = (path.parent / case).resolve()
+            if not file.is_file():
+                raise ConfigError(f"{where}: cases", f"{case!r} is not a file (read from {path.parent})")
+            case = str(file)
+        name = table["name"] if table else (Path(case).stem if case.endswith(".toml") else case)
+        out.append(StudyCase(name, case, dict(table.get("set", {})) if table else {}))
+    names = [c.name for c in out]
+    if len(set(names)) != len(names):
+        raise ConfigError(f"{where}: cases", f"names a case twice: {', '.join(names)}")
     return out
 
 
@@ -173,20 +259,7 @@ def parse_study(data: dict, path: Path) -> StudySpec:
     name = data["name"]
     if not isinstance(name, str) or not NAME.fullmatch(name):
         raise ConfigError(f"{where}: name", f"must be 1-40 letters, digits, '_' or '-', got {name!r}")
-    cases = data["cases"]
-    if not isinstance(cases, list) or not cases or not all(isinstance(c, str) for c in cases):
-        raise ConfigError(f"{where}: cases", f"expected a list of presets or experiment files, got {cases!r}")
-    resolved = []
-    for case in cases:
-        if case.endswith(".toml"):
-            file = (path.parent / case).resolve()
-            if not file.is_file():
-                raise ConfigError(f"{where}: cases", f"{case!r} is not a file (read from {path.parent})")
-            case = str(file)
-        resolved.append(case)
-    stems = [Path(c).stem if c.endswith(".toml") else c for c in resolved]
-    if len(set(stems)) != len(stems):
-        raise ConfigError(f"{where}: cases", f"names a case twice: {', '.join(stems)}")
+    cases = _cases(data["cases"], path)
     fixed: list[str] = []
     controllers = data["controllers"]
     if isinstance(controllers, list):
@@ -234,7 +307,7 @@ def parse_study(data: dict, path: Path) -> StudySpec:
     sweep = parse_sweep(
         {
             "name": name,
-            "base": resolved[0],
+            "base": cases[0].base,
             "controllers": controllers,
             "seed": data.get("seed", 0),
             **({"set": data["set"]} if "set" in data else {}),
@@ -246,12 +319,29 @@ def parse_study(data: dict, path: Path) -> StudySpec:
     description = data.get("description", "")
     if not isinstance(description, str):
         raise ConfigError(f"{where}: description", "expected a string")
+    names, entries, tuned = sweep.controllers, sweep.entries, ""
+    if "tuned" in data:
+        names, entries, fixed, tuned = _tuned_elsewhere(data["tuned"], sweep, path)
+    for case in cases:  # each case's own overrides: the keys a sweep file's [set] takes
+        if case.set:
+            try:
+                parse_sweep({"name": name, "base": case.base, "controllers": ["pd"], "set": case.set}, where)
+            except ConfigError as err:
+                raise ConfigError(
+                    f"{where}: cases.{case.name}.{err.key.split(': ')[-1]}", err.message
+                ) from err
+            clash = sorted(set(case.set) & set(sweep.vary))
+            if clash:
+                raise ConfigError(
+                    f"{where}: cases.{case.name}.set",
+                    f"sets {clash[0]!r}, which [vary] draws: a case may not fix a coordinate of the box",
+                )
     return StudySpec(
         name,
         path,
-        resolved,
-        sweep.controllers,
-        sweep.entries,
+        cases,
+        names,
+        entries,
         fixed,
         list(require),
         sweep.seed,
@@ -259,7 +349,43 @@ def parse_study(data: dict, path: Path) -> StudySpec:
         sweep.vary,
         _budgets(data.get("budgets", {}), where),
         description,
+        tuned,
     )
+
+
+def _tuned_elsewhere(value, sweep: SweepSpec, path: Path) -> tuple[list[str], dict, list[str], str]:
+    """``tuned = "FILE#CASE"``: every controller at the kept setting another tuning found (a
+    study's report.json with one of its cases, its cases/CASE/kept.json, or ``nnrobust tune``'s
+    DIR or summary.json; read from the study's folder), as ``nnrobust falsify --tuned`` runs it:
+    NAME-tuned, an entry with the setting, untuned here (a controller that tuning ran at its own
+    settings keeps its name and entry). Returns (names, entries, fixed, the source, absolute).
+    """
+    from ..tune.engine import tuned_entry, tuned_settings
+
+    where = f"{path}: tuned"
+    if not isinstance(value, str) or not value.split("#")[0]:
+        raise ConfigError(
+            where, f"expected a study's report as 'REPORT.json#CASE' or a tuning's folder, got {value!r}"
+        )
+    text, sep, case = value.partition("#")
+    source = str((path.parent / text).resolve()) + sep + case
+    if not Path(source.partition("#")[0]).exists():
+        raise ConfigError(where, f"{text!r} does not exist (read from {path.parent})")
+    try:
+        settings = tuned_settings(source, sweep.controllers, list(sweep.vary), sweep.entries)
+    except ConfigError as err:
+        raise ConfigError(where, err.message) from err
+    names, entries = [], {}
+    for c in sweep.controllers:
+        if c in settings:
+            label = f"{c}-tuned"
+            entries[label] = tuned_entry(c, settings[c], sweep.entries)
+        else:
+            label = c
+            if c in sweep.entries:
+                entries[c] = sweep.entries[c]
+        names.append(label)
+    return names, entries, list(names), source
 
 
 def load_study(path: str | Path) -> StudySpec:

@@ -343,23 +343,23 @@ def parse_sweep(data: dict, where: str = "sweep") -> SweepSpec:
 
 
 SWEEP_DIR = Path(__file__).resolve().parent.parent / "sweep_files"
-"""The shipped studies (``nnrobust sweep paper-robustness``)."""
+"""The shipped sweep files (``nnrobust sweep paper-robustness``)."""
 
 
 def shipped_sweeps() -> list[str]:
-    """Names of the shipped studies."""
+    """Names of the shipped sweep files."""
     return sorted(p.stem for p in SWEEP_DIR.glob("*.toml"))
 
 
 def load_sweep(path: str | Path) -> SweepSpec:
-    """Read and validate a sweep file, or a shipped study by name; a relative ``base`` file
+    """Read and validate a sweep file, or a shipped sweep file by name; a relative ``base`` file
     resolves from the file's folder.
     """
     path = Path(path)
     if not path.exists() and str(path) in shipped_sweeps():
         path = SWEEP_DIR / f"{path}.toml"
     if not path.exists():
-        raise ConfigError(str(path), f"not a file nor a shipped study ({', '.join(shipped_sweeps())})")
+        raise ConfigError(str(path), f"not a file nor a shipped sweep file ({', '.join(shipped_sweeps())})")
     data = parse_toml(read_text_file(path, what="sweep file"), str(path))
     spec = parse_sweep(data, str(path))
     base = Path(spec.base)
