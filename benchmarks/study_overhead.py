@@ -2,9 +2,11 @@
 the time its simulations take, and the time a finished study takes to write its report again.
 
     python benchmarks/study_overhead.py --json out/bench/study_overhead.json [--cut] [--workers 2]
+        [--study benchmarks/studies/falsify-panda.toml]
 
 The study is examples/study.toml (``--cut``: with the budgets tests/test_study.py cuts it to, for
-a quick look). It runs from scratch into a temporary folder; then:
+a quick look), or ``--study FILE``, a study file of the repository's. It runs from scratch into a
+temporary folder; then:
 
 - ``simulations``: the seconds of worker time the runs take, each run's own ``task_seconds``
   (build, run and metrics of one run, measured on its worker): a sweep stage's rows, a tuning's
@@ -65,7 +67,7 @@ def simulation_seconds(out: Path) -> dict:
         if list(out.glob(f"cases/*/{stage}/results"))
     }
     trials = _frames(out, "tune-seed*/trials")
-    runs = [run for row in trials["row"] for run in json.loads(row).get("runs", [])]
+    runs = [run for row in trials["row"] for run in json.loads(row).get("runs", [])] if len(trials) else []
     history = _frames(out, "falsify/history")
     simulations = [json.loads(row) for row in history["row"]] if len(history) else []
     out_seconds["tune"] = float(sum(r.get("task_seconds", 0.0) for r in runs))
@@ -79,10 +81,11 @@ def main() -> None:
     parser.add_argument("--json", help="write the result here")
     parser.add_argument("--cut", action="store_true", help="the suite's cut budgets (a quick look)")
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--study", help="another study file (default: examples/study.toml)")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
-        spec = load_study(study_file(folder, args.cut))
+        spec = load_study(args.study if args.study else study_file(folder, args.cut))
         start = time.perf_counter()
         marks: list = [(start, "checks, the cluster")]  # (time, what starts): each stage's wall time
         run_study(
@@ -99,8 +102,9 @@ def main() -> None:
         again = time.perf_counter() - start
         seconds = simulation_seconds(folder / "out")
     simulated = sum(v for k, v in seconds.items() if k != "runs_without_their_own_time")
+    name = Path(args.study).resolve().relative_to(ROOT) if args.study else "examples/study.toml"
     result = {
-        "study": "examples/study.toml" + (" (cut)" if args.cut else ""),
+        "study": str(name) + (" (cut)" if args.cut and not args.study else ""),
         "workers": args.workers,
         "wall_seconds": wall,
         "simulation_seconds": seconds,

@@ -345,10 +345,8 @@ def _figure(name: str, case: dict, folder: Path) -> str:
     out.mkdir(parents=True, exist_ok=True)
     for ext in ("png", "svg", "pdf"):
         fig.savefig(out / f"{name}-error-cdf.{ext}", dpi=120)
-    buffer = io.BytesIO()
-    fig.savefig(buffer, format="png", dpi=100)
     plt.close(fig)
-    return base64.b64encode(buffer.getvalue()).decode()
+    return base64.b64encode((out / f"{name}-error-cdf.png").read_bytes()).decode()
 
 
 def write_html(report: dict, folder: Path, figures: dict[str, str]) -> Path:

@@ -33,6 +33,8 @@ RESULTS = "results"
 MARKER = "sweep.toml"
 CHUNK_SECONDS = 2.0
 """Target compute per task: dask's scheduling costs a few ms per task, under 5 % of this."""
+TASKS_PER_WORKER = 8
+"""The fewest tasks per worker a sweep is cut into when it has the rows (chunk_size)."""
 
 
 def _require_engine():
@@ -582,11 +584,12 @@ def _first_checked(spec: SweepSpec) -> list[int]:
 
 
 def chunk_size(jobs: int, workers: int, seconds_per_job: float) -> int:
-    """Jobs per task: about CHUNK_SECONDS of compute, and at least 4 tasks per worker when there
-    is enough work (so a killed worker loses little and the load balances).
+    """Jobs per task: about CHUNK_SECONDS of compute, and at least TASKS_PER_WORKER tasks per
+    worker when there is enough work (so a killed worker loses little, and the workers finish
+    about together: the last task of a stage leaves the others idle).
     """
     by_time = max(1, int(CHUNK_SECONDS / max(seconds_per_job, 1e-3)))
-    by_balance = max(1, math.ceil(jobs / (4 * max(workers, 1))))
+    by_balance = max(1, math.ceil(jobs / (TASKS_PER_WORKER * max(workers, 1))))
     return max(1, min(by_time, by_balance))
 
 

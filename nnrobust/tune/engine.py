@@ -1008,8 +1008,9 @@ def plot_pareto(summary: dict, folder: Path) -> None:
     ax.set_title(f"Pareto fronts at {summary['budget']} simulations each (★ best under the constraints)")
     ax.legend(fontsize=8)
     ax.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()  # once, where bbox_inches="tight" would lay out every format again
     for ext in ("png", "svg"):
         tmp = folder / f".pareto.partial.{ext}"
-        fig.savefig(tmp, dpi=120, bbox_inches="tight")
+        fig.savefig(tmp, dpi=120)
         os.replace(tmp, folder / f"pareto.{ext}")
     plt.close(fig)
