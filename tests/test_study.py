@@ -311,6 +311,10 @@ def test_cases_of_one_experiment_with_overrides_of_their_own(tmp_path):
             "cases.a.set: sets 'plant.disturbance_scale', which [vary] draws",
         ),  # fmt: skip
         (("falsify = 4", "falsify = 2"), "budgets.falsify: expected 0 (no search) or at least 4, got 2"),
+        (
+            ('"simulation.duration" = 2.5', '"simulation.duration" = 2.5\n"plant.payload" = -1.0'),
+            "case paper-ellipse-noisy: set: plant.payload",
+        ),
         (("beta = 0.2", "beta = 0.2\ncertify = 2"), "budgets.certify: 2 draws cannot prove P(fail) <= 0.5"),
         (("laws.py:TaskPD", "laws.py:TaskPDD"), "has no 'TaskPDD'; did you mean 'TaskPD'?"),
         (

@@ -110,12 +110,13 @@ def _check_controllers(spec: StudySpec) -> None:
     search space, before any stage runs (a refusal names the controller and the case).
     """
     from ..sweep.engine import check_controllers
-    from ..sweep.spec import base_values
+    from ..sweep.spec import base_config, base_values
     from ..tune.space import custom_space, tunable
 
     for case in spec.cases:
         sweep = spec.case_sweep(case)
         try:
+            base_config(sweep)  # the case's experiment with the study's and its own [set]
             check_controllers(sweep, base_values(sweep))
         except ConfigError as err:
             raise ConfigError(f"{spec.path}: case {spec.case_name(case)}: {err.key}", err.message) from err

@@ -104,8 +104,8 @@ class StudySpec:
         seed: the study's seed (tuning seeds, validation, certification draws derive from it).
         set, vary: the fixed overrides and the uncertainty set (distributions).
         budgets: :data:`BUDGET_KEYS` with their values.
-        tuned: the tuning whose kept settings every controller runs at (``tuned = "FILE#CASE"``,
-            absolute), or "": then each such controller is NAME-tuned, untuned here.
+        tuned: the tuning whose kept settings every controller runs at, as NAME-tuned and untuned
+            here (``tuned = "FILE#CASE"``, absolute), or "" (none).
 
     """
 
