@@ -22,6 +22,16 @@ from ..tune.space import fixed_text
 from .spec import StudySpec
 
 SCHEMA = f"{STUDY_REPORT}1"
+STATISTICS = (
+    "rows",
+    "success_rate",
+    "statuses",
+    "rms_error_after_2s",
+    "rms_torque",
+    "saturated_fraction_mean",
+    "rows_with_warnings",
+)
+"""The keys of a certification sweep's summary each controller's statistics hold (either engine)."""
 
 
 def _versions() -> dict:
@@ -122,18 +132,7 @@ def _controller_entry(spec: StudySpec, case: dict, c: str) -> dict:
         }
         if kept
         else None,
-        "statistics": {
-            k: certify.get(k)
-            for k in (
-                "rows",
-                "success_rate",
-                "statuses",
-                "rms_error_after_2s",
-                "rms_torque",
-                "saturated_fraction_mean",
-                "rows_with_warnings",
-            )
-        },
+        "statistics": {k: certify.get(k) for k in STATISTICS},
         "certificates": certify.get("certificates", []),
         "quantile_bounds": certify.get("quantile_bounds", []),
         "warnings": certify.get("warnings_by_kind", {}),
@@ -146,18 +145,7 @@ def _controller_entry(spec: StudySpec, case: dict, c: str) -> dict:
     second = (case.get("engine") or {}).get("controllers", {}).get(label)
     if second:
         engines["mujoco"] = {
-            **{
-                k: second.get(k)
-                for k in (
-                    "rows",
-                    "success_rate",
-                    "statuses",
-                    "rms_error_after_2s",
-                    "rms_torque",
-                    "saturated_fraction_mean",
-                    "rows_with_warnings",
-                )
-            },
+            **{k: second.get(k) for k in STATISTICS},
             "certificates": second.get("certificates", []),
         }
     entry["engines"] = engines
