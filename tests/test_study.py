@@ -65,6 +65,13 @@ def test_the_report_holds_every_stage_for_every_controller(study):
     stages = ("tune", "validate", "certify", "falsify", "realtime", "engine")
     assert case["stages"] == {s: "finished" for s in stages}
     assert case["held_out"] and case["validated_on"].startswith("fresh draws")
+    import os
+
+    umask = os.umask(0)
+    os.umask(umask)
+    for stage_file in ("case.toml", "validate.toml", "certify.toml"):  # the umask's mode, as every output
+        mode = (out / "cases" / "paper-ellipse-noisy" / stage_file).stat().st_mode & 0o777
+        assert mode == 0o666 & ~umask, (stage_file, oct(mode))
     learned = {"learned-residual", "learned-torque"}  # trained offline: tune = false
     assert set(case["controllers"]) == {"nn", "pd", "taskpd"} | learned
     for name, entry in case["controllers"].items():
@@ -159,9 +166,14 @@ def test_a_study_runs_the_settings_another_studys_report_kept(study, tmp_path, c
     (tmp_path / "study.toml").write_text(text)
     spec = load_study(tmp_path / "study.toml")
     assert spec.controllers == ["nn-tuned", "taskpd-tuned"] and spec.fixed == spec.controllers
+    assert json.loads((first / "report.json").read_text())["tuned_from"] is None
     out = tmp_path / "out"
     assert main(["study", str(tmp_path / "study.toml"), "--out", str(out), "--workers", "2", "--quiet"]) == 0
     again = json.loads((out / "report.json").read_text())
+    assert again["tuned_from"] == f"{first / 'report.json'}#paper-ellipse-noisy"
+    assert again["cases"]["paper-ellipse-noisy"]["stages"]["tune"].startswith(
+        "skipped: every law runs at the kept"
+    )
     assert again["inputs"][str(first / "report.json")] == file_sha256(first / "report.json")
     here = out / "cases" / "paper-ellipse-noisy"
     certify = {c["name"]: c for c in parse_toml((here / "certify.toml").read_text(), "c")["controllers"]}
@@ -174,6 +186,10 @@ def test_a_study_runs_the_settings_another_studys_report_kept(study, tmp_path, c
     falsified = json.loads((here / "falsify" / "summary.json").read_text())
     assert set(falsified["controllers"]) == {"nn-tuned", "taskpd-tuned"}
     for change, message in [
+        (
+            (f"{first / 'report.json'}#paper-ellipse-noisy", str(first)),
+            "is a study's folder: name its report",
+        ),
         (("#paper-ellipse-noisy", "#paper-line"), "name one of its cases"),
         (('["nn", {name', '["no-u0", {name'), "has no best setting for 'no-u0'"),
     ]:
@@ -311,6 +327,17 @@ def test_cases_of_one_experiment_with_overrides_of_their_own(tmp_path):
             "cases.a.set: sets 'plant.disturbance_scale', which [vary] draws",
         ),  # fmt: skip
         (("falsify = 4", "falsify = 2"), "budgets.falsify: expected 0 (no search) or at least 4, got 2"),
+        (
+            (
+                'cases = ["paper-ellipse-noisy"]',
+                'cases = [{name = "a", base = "paper-ellipse-noisy", set = {"controller.pd_Kp" = [1000.0]}}]',
+            ),
+            "case a: set.controller.pd_Kp: is a key of pd, which the study tunes",
+        ),  # fmt: skip
+        (
+            ('"simulation.duration" = 2.5', '"simulation.duration" = 1.5'),
+            "simulation.duration: 1.5 s: a study selects, certifies and reports by the RMS error after 2 s",
+        ),
         (
             ('"simulation.duration" = 2.5', '"simulation.duration" = 2.5\n"plant.payload" = -1.0'),
             "case paper-ellipse-noisy: set: plant.payload",

@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 from pathlib import Path
 
 from ..exceptions import ConfigError, NNRobustError
@@ -47,9 +46,8 @@ def _write_if_changed(path: Path, text: str) -> None:
     if path.is_file() and path.read_text() == text:
         return
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
-    with os.fdopen(fd, "w") as f:
-        f.write(text)
+    tmp = path.with_name(f".{path.name}.partial-{os.getpid()}")  # the umask's mode, as every output
+    tmp.write_text(text)
     os.replace(tmp, path)
 
 
@@ -109,17 +107,40 @@ def _check_controllers(spec: StudySpec) -> None:
     """Every controller built and its first step run on every case, and every tuned one with a
     search space, before any stage runs (a refusal names the controller and the case).
     """
+    from ..config import parse_toml
     from ..sweep.engine import check_controllers
-    from ..sweep.spec import base_config, base_values
-    from ..tune.space import custom_space, tunable
+    from ..sweep.spec import base_config, base_values, parse_sweep
+    from ..tune.engine import SETTLED_AFTER, law_of
+    from ..tune.space import custom_space, own_keys, tunable
 
     for case in spec.cases:
         sweep = spec.case_sweep(case)
+        where = f"{spec.path}: case {spec.case_name(case)}"
         try:
-            base_config(sweep)  # the case's experiment with the study's and its own [set]
+            # as its stages' sweep files will read it: the entries' own settings against [set]
+            parse_sweep(parse_toml(sweep.to_toml(), where), where)
+            config = base_config(sweep)  # the case's experiment with the study's and its own [set]
             check_controllers(sweep, base_values(sweep))
         except ConfigError as err:
-            raise ConfigError(f"{spec.path}: case {spec.case_name(case)}: {err.key}", err.message) from err
+            key = err.key.removeprefix(f"{where}: ")
+            raise ConfigError(f"{where}: {key}", err.message) from err
+        if config.simulation.duration <= SETTLED_AFTER:
+            raise ConfigError(
+                f"{where}: simulation.duration",
+                f"{config.simulation.duration:g} s: a study selects, certifies and reports by the RMS "
+                f"error after {SETTLED_AFTER:g} s, so runs must last longer",
+            )
+        for name in spec.controllers:  # a tuned law's own keys are its tuning's, not the case's
+            if name in spec.fixed:
+                continue
+            keys, prefixes = own_keys(law_of(name, spec.entries))
+            fixed = [k for k in spec.case_set(case) if k in keys or k.startswith(prefixes)]
+            if fixed:
+                raise ConfigError(
+                    f"{where}: set.{fixed[0]}",
+                    f"is a key of {name}, which the study tunes: set it in {name}'s entry with "
+                    "tune = false, or leave it to the tuning",
+                )
     for name in spec.controllers:
         if name in spec.fixed:
             continue
@@ -251,7 +272,12 @@ def _run_case(
             progress=progress,
             ship_files=ship,
         )
-    out["stages"]["tune"] = "finished"
+    out["stages"]["tune"] = (
+        "finished"
+        if tuned
+        else "skipped: every law runs at "
+        + (f"the kept settings of {spec.tuned}" if spec.tuned else "its own settings (tune = false)")
+    )
     out["tunings"] = {s: str(here / f"tune-seed{s}") for s in tunings}
     # the keys each tuned law does not search, with why (the same for every seed)
     out["fixed"] = {

@@ -169,6 +169,15 @@ def _controller_entry(spec: StudySpec, case: dict, c: str) -> dict:
     return entry
 
 
+def _untuned(report: dict, c: str, entry: dict) -> str:
+    """The settings cell of a controller the study did not tune."""
+    if not entry["fixed"]:
+        return "-"
+    if report.get("tuned_from") and c.endswith("-tuned"):
+        return f"the kept setting of {report['tuned_from']} (tuned = ...)"
+    return "its own settings (tune = false)"
+
+
 def build_report(spec: StudySpec, folder: Path, cases: dict) -> dict:
     """report.json's content (docs/study.md's schema)."""
     report: dict = {
@@ -178,6 +187,7 @@ def build_report(spec: StudySpec, folder: Path, cases: dict) -> dict:
         "versions": _versions(),
         "inputs": _inputs(spec),
         "require": spec.require,
+        "tuned_from": spec.tuned or None,
         "budgets": {
             k: (None if isinstance(v, float) and math.isinf(v) else v) for k, v in spec.budgets.items()
         },
@@ -385,7 +395,7 @@ def write_html(report: dict, folder: Path, figures: dict[str, str]) -> Path:
             held = "; ".join(fixed_text((tuned.get("fixed") or {}).items())) or "-"
             parts.append(
                 f"<tr><td>{e(c)}</td><td>{e(_cell(tuned.get('kept_seed')))}</td>"
-                f"<td>{e(setting or ('its own settings (tune = false)' if entry['fixed'] else '-'))}</td>"
+                f"<td>{e(setting or _untuned(report, c, entry))}</td>"
                 f"<td>{e(medians or '-')}</td><td>{e(bound)}</td><td>{e(held)}</td></tr>"
             )
         parts.append("</table>")

@@ -371,10 +371,15 @@ def _tuned_elsewhere(value, sweep: SweepSpec, path: Path) -> tuple[list[str], di
     source = str((path.parent / text).resolve()) + sep + case
     if not Path(source.partition("#")[0]).exists():
         raise ConfigError(where, f"{text!r} does not exist (read from {path.parent})")
+    folder = Path(source.partition("#")[0])
+    if folder.is_dir() and (folder / "report.json").is_file():
+        said = f"{text!r} is a study's folder: name its report and a case, '{text}/report.json#CASE'"
+        raise ConfigError(where, said)
     try:
         settings = tuned_settings(source, sweep.controllers, list(sweep.vary), sweep.entries)
-    except ConfigError as err:
-        raise ConfigError(where, err.message) from err
+    except ConfigError as err:  # a file's own key (its path) kept: "cannot read ..." names it
+        said = err.message if err.key == "--tuned" else f"{err.key}: {err.message}"
+        raise ConfigError(where, said) from err
     names, entries = [], {}
     for c in sweep.controllers:
         if c in settings:
