@@ -233,6 +233,12 @@ def test_a_case_without_randomness_says_it_was_validated_on_the_training_plant(t
         (tmp_path / "out" / "cases" / "paper-ellipse" / "tune-seed0" / "summary.json").read_text()
     )
     assert len(tuning["train_samples"]) == 1 and tuning["trials"] == tuning["budget"]
+    # and the report's command for that tuning is the one it ran: rerun into its folder, nothing to do
+    words = shlex.split(case["commands"]["tune seed 0"])
+    assert "--train-samples" in words and words[words.index("--train-samples") + 1] == "1"
+    parts = _parts(tmp_path / "out")
+    assert main([*words[1:], "--workers", "2", "--quiet"]) == 0
+    assert _parts(tmp_path / "out") == parts
 
 
 @pytest.mark.parametrize(

@@ -279,6 +279,7 @@ def _run_case(
         + (f"the kept settings of {spec.tuned}" if spec.tuned else "its own settings (tune = false)")
     )
     out["tunings"] = {s: str(here / f"tune-seed{s}") for s in tunings}
+    out["train_samples"] = train_samples  # what the tunings ran on (one draw where all are the same)
     # the keys each tuned law does not search, with why (the same for every seed)
     out["fixed"] = {
         c: entry.get("fixed", {})

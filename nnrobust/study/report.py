@@ -78,7 +78,8 @@ def _commands(spec: StudySpec, folder: Path, name: str, case: dict) -> dict:
     for s, path in case.get("tunings", {}).items():
         out[f"tune seed {s}"] = (
             f"nnrobust tune {here / 'case.toml'} --controllers {','.join(tuned)} --budget {b['tune']} "
-            f"--train-samples {b['train_samples']} --validation 0 --seed {spec.seed + int(s)}"
+            f"--train-samples {case.get('train_samples', b['train_samples'])} --validation 0 "
+            f"--seed {spec.seed + int(s)}"
             + (f" --max-rms-torque {b['max_rms_torque']:g}" if math.isfinite(b["max_rms_torque"]) else "")
             + (f" --max-saturated {b['max_saturated']:g}" if b["max_saturated"] < 1 else "")
             + f" --out {path}"
