@@ -95,6 +95,10 @@ class FrameNotFound(NNRobustError):
         super().__init__(f"task frame {frame!r} not found; frames in the model: {', '.join(available)}")
 
 
+class ChangedInputs(NNRobustError):
+    """A folder holds what other inputs computed; refused unless overwriting (nnrobust/study_folder.py)."""
+
+
 class ConfigError(NNRobustError):
     """An experiment configuration value is invalid."""
 

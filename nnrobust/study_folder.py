@@ -24,7 +24,7 @@ import uuid
 from dataclasses import dataclass
 from pathlib import Path
 
-from .exceptions import NNRobustError
+from .exceptions import ChangedInputs, NNRobustError
 
 INPUTS_FIELD = b"nnrobust.inputs"
 """The key of a Parquet part's metadata that holds its study's :attr:`Inputs.key`."""
@@ -203,7 +203,7 @@ def prepare(
                 if old is not None
                 else "it was written by an nnrobust that did not record its inputs' digests"
             )
-            raise NNRobustError(
+            raise ChangedInputs(
                 f"{folder} holds a different {what}: {why}; pass --overwrite to replace what the "
                 f"{what} wrote, or choose another --out"
             )

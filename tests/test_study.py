@@ -147,7 +147,8 @@ def test_a_study_runs_the_settings_another_studys_report_kept(study, tmp_path, c
     """``tuned = "REPORT.json#CASE"``: each law at the kept setting of another study's case, as
     NAME-tuned and untuned (the custom law too; a law that study ran untuned keeps its own name),
     through certification and falsification; the report names the source file's SHA-256. A case
-    the report does not hold, or a law it did not tune, is one line naming ``tuned``."""
+    the report does not hold, or a law it did not tune, is one line naming ``tuned``. When the
+    source report changes, the resume is refused and the stages' input files stay as they were."""
     import re
 
     from nnrobust.config import parse_toml
@@ -155,11 +156,13 @@ def test_a_study_runs_the_settings_another_studys_report_kept(study, tmp_path, c
 
     _, first, report = study
     source = report["cases"]["paper-ellipse-noisy"]["controllers"]
+    src = tmp_path / "source.json"
+    shutil.copy(first / "report.json", src)
     shutil.copy(EXAMPLES / "custom_controller.py", tmp_path / "laws.py")
     text = re.sub(
         r"controllers = \[.*?\n\]\n",
         f'controllers = ["nn", {{name = "taskpd", class = "laws.py:TaskPD"}}]\n'
-        f'tuned = "{first / "report.json"}#paper-ellipse-noisy"\n',
+        f'tuned = "{src}#paper-ellipse-noisy"\n',
         STUDY_CORE.replace('name = "example"', 'name = "again"'),
         flags=re.S,
     )
@@ -170,11 +173,11 @@ def test_a_study_runs_the_settings_another_studys_report_kept(study, tmp_path, c
     out = tmp_path / "out"
     assert main(["study", str(tmp_path / "study.toml"), "--out", str(out), "--workers", "2", "--quiet"]) == 0
     again = json.loads((out / "report.json").read_text())
-    assert again["tuned_from"] == f"{first / 'report.json'}#paper-ellipse-noisy"
+    assert again["tuned_from"] == f"{src}#paper-ellipse-noisy"
     assert again["cases"]["paper-ellipse-noisy"]["stages"]["tune"].startswith(
         "skipped: every law runs at the kept"
     )
-    assert again["inputs"][str(first / "report.json")] == file_sha256(first / "report.json")
+    assert again["inputs"][str(src)] == file_sha256(src)
     here = out / "cases" / "paper-ellipse-noisy"
     certify = {c["name"]: c for c in parse_toml((here / "certify.toml").read_text(), "c")["controllers"]}
     taskpd = source["taskpd"]["tuned"]["settings"]
@@ -187,7 +190,7 @@ def test_a_study_runs_the_settings_another_studys_report_kept(study, tmp_path, c
     assert set(falsified["controllers"]) == {"nn-tuned", "taskpd-tuned"}
     for change, message in [
         (
-            (f"{first / 'report.json'}#paper-ellipse-noisy", str(first)),
+            (f"{src}#paper-ellipse-noisy", str(first)),
             "is a study's folder: name its report",
         ),
         (("#paper-ellipse-noisy", "#paper-line"), "name one of its cases"),
@@ -197,6 +200,15 @@ def test_a_study_runs_the_settings_another_studys_report_kept(study, tmp_path, c
         assert main(["study", str(tmp_path / "bad.toml"), "--out", str(tmp_path / "bad")]) == 2
         err = capsys.readouterr().err
         assert "bad.toml: tuned: " in err and message in err and err.count("\n") == 1, err
+    # the source's kept setting changes: refused, and the stages' files still name the old one
+    stage_files = {name: (here / name).read_text() for name in ("case.toml", "validate.toml", "certify.toml")}
+    changed = json.loads(src.read_text())
+    settings = changed["cases"]["paper-ellipse-noisy"]["controllers"]["nn"]["tuned"]["settings"]
+    settings["controller.k"] *= 2
+    src.write_text(json.dumps(changed))
+    assert main(["study", str(tmp_path / "study.toml"), "--out", str(out), "--workers", "2", "--quiet"]) == 2
+    assert "holds a different" in capsys.readouterr().err
+    assert {name: (here / name).read_text() for name in stage_files} == stage_files
 
 
 def test_a_rerun_computes_nothing_and_each_replay_command_recomputes_its_stage(study, capsys):

@@ -29,7 +29,7 @@ import json
 import os
 from pathlib import Path
 
-from ..exceptions import ConfigError, NNRobustError
+from ..exceptions import ChangedInputs, ConfigError, NNRobustError
 from .spec import StudyCase, StudySpec
 
 MARKER = "study.toml"
@@ -227,8 +227,41 @@ def _run_case(
     ship: bool = False,
 ) -> dict:
     """Every stage of one case on the cluster at ``address``; ``ship``: the files the runs read
-    travel with the tasks (:func:`nnrobust.sweep.engine.ships_files`).
+    travel with the tasks (:func:`nnrobust.sweep.engine.ships_files`). A stage that refuses its
+    folder (computed from other inputs, :class:`~nnrobust.exceptions.ChangedInputs`) leaves the
+    stages' input files as they were, so each still names what its rows were computed from.
     """
+    before: dict[Path, str | None] = {}
+    try:
+        return _case_stages(spec, case, folder, address, overwrite, say, progress, ship, before)
+    except ChangedInputs:
+        for path, text in before.items():
+            if text is None:
+                path.unlink(missing_ok=True)
+            else:
+                _write_if_changed(path, text)
+        raise
+
+
+def _stage_file(path: Path, text: str, before: dict) -> None:
+    """Write a stage's input file, keeping in ``before`` what it held first (None: nothing)."""
+    if path not in before:
+        before[path] = path.read_text() if path.is_file() else None
+    _write_if_changed(path, text)
+
+
+def _case_stages(
+    spec: StudySpec,
+    case: StudyCase,
+    folder: Path,
+    address: str,
+    overwrite: bool,
+    say,
+    progress,
+    ship: bool,
+    before: dict,
+) -> dict:
+    """The stages of :func:`_run_case`, writing each stage's input file through :func:`_stage_file`."""
     from ..falsify import FalsifySpec, run_falsify
     from ..sweep.engine import read_results, run_sweep
     from ..sweep.spec import load_sweep
@@ -238,7 +271,7 @@ def _run_case(
     here = folder / "cases" / name
     sweep = spec.case_sweep(case)
     case_file = here / "case.toml"
-    _write_if_changed(case_file, sweep.to_toml())
+    _stage_file(case_file, sweep.to_toml(), before)
     b = spec.budgets
     tuned = [c for c in spec.controllers if c not in spec.fixed]
     out: dict = {"case": case.base, "stages": {}}
@@ -325,7 +358,7 @@ def _run_case(
         )
     validate = sweep_of(spec, case, names, entries, b["validation"], spec.seed + VALIDATION_SEED)
     validate_file = here / "validate.toml"
-    _write_if_changed(validate_file, validate.to_toml())
+    _stage_file(validate_file, validate.to_toml(), before)
     say(f"{name}: validate {len(names)} settings on {b['validation']} fresh draws")
     validate_spec = load_sweep(validate_file)
     run_sweep(
@@ -360,7 +393,7 @@ def _run_case(
     n = b["certify"] or samples_needed(b["epsilon"], b["beta"])
     certify = sweep_of(spec, case, certify_names, certify_entries, n, spec.seed + CERTIFY_SEED)
     certify_file = here / "certify.toml"
-    _write_if_changed(certify_file, certify.to_toml())
+    _stage_file(certify_file, certify.to_toml(), before)
     say(
         f"{name}: certify {len(certify_names)} controllers on {n} fresh draws "
         f"(epsilon {b['epsilon']:g}, beta {b['beta']:g})"
@@ -415,7 +448,7 @@ def _run_case(
     again = load_sweep(certify_file)
     again.set["plant.engine"] = "mujoco"
     engine_file = here / "certify-mujoco.toml"
-    _write_if_changed(engine_file, again.to_toml())
+    _stage_file(engine_file, again.to_toml(), before)
     say(f"{name}: the certification draws again with MuJoCo as the plant")
     out["engine"], _ = _certified(
         spec, load_sweep(engine_file), here / "certify-mujoco", address, overwrite, progress, ship
