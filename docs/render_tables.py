@@ -490,6 +490,25 @@ def tuned_settings() -> str:
     )
 
 
+def _certificate_cells(c: dict) -> dict:
+    """A certificate's cells (:func:`_certificate_columns`): k of N, the bound, its verdict."""
+    return {
+        "failing": f"{c['k']} of {c['N']}",
+        "bound": f"{100 * c['p_upper']:.1f} %",
+        "certified": "yes" if c["holds"] else "no",
+    }
+
+
+def _certificate_columns(c: dict, beta: float) -> list[tuple]:
+    """The columns of a study report's certificates (``c`` names the property and the claim):
+    the draws failing, the Clopper-Pearson bound on P(fail) and whether it proves the claim."""
+    return [
+        (f"draws failing {c['property']}", "r", _text("failing")),
+        (f"P(fail) ≤ ({100 * (1 - beta):g} % confidence)", "r", _text("bound")),
+        (f"certified P(fail) ≤ {100 * c['epsilon']:g} %", "l", _text("certified")),
+    ]
+
+
 def _robustness(name: str):
     """A robustness study's report (docs/data/<name>.json): per case (a disturbance scale) and
     controller, on the certification draws, the RMS error's median, 95th percentile and worst,
@@ -515,12 +534,9 @@ def _robustness(name: str):
                         "torque": f"{torque['median']:.3g}",
                         "torque_p95": f"{torque['p95']:.3g}",
                         "saturated": f"{100 * stats['saturated_fraction_mean']:.2g}",
-                        "failing": f"{c['k']} of {c['N']}",
-                        "bound": f"{100 * c['p_upper']:.1f} %",
-                        "certified": "yes" if c["holds"] else "no",
+                        **_certificate_cells(c),
                     }
                 )
-        claim = f"{100 * c['epsilon']:g} %"
         columns = [
             ("disturbance", "l", _text("case")),
             ("controller", "l", _text("controller")),
@@ -531,9 +547,7 @@ def _robustness(name: str):
             ("median torque [N m]", "r", _text("torque")),
             ("p95 [N m]", "r", _text("torque_p95")),
             ("saturated steps [%]", "r", _text("saturated")),
-            (f"draws failing {c['property']}", "r", _text("failing")),
-            (f"P(fail) ≤ ({100 * (1 - report['budgets']['beta']):g} % confidence)", "r", _text("bound")),
-            (f"certified P(fail) ≤ {claim}", "l", _text("certified")),
+            *_certificate_columns(c, report["budgets"]["beta"]),
         ]
         table = _markdown(columns, rows)
         counts: dict[str, dict[str, int]] = {}
@@ -716,20 +730,15 @@ def _certified_box(name: str):
                     "median": _mm(error["median"]),
                     "p95": _mm(error["p95"]),
                     "max": _mm(error["max"]),
-                    "failing": f"{c['k']} of {c['N']}",
-                    "bound": f"{100 * c['p_upper']:.1f} %",
-                    "certified": "yes" if c["holds"] else "no",
+                    **_certificate_cells(c),
                 }
             )
-        claim = f"{100 * c['epsilon']:g} %"
         columns = [
             ("controller", "l", _text("controller")),
             ("median RMS error after 2 s [mm]", "r", _text("median")),
             ("95th percentile [mm]", "r", _text("p95")),
             ("worst [mm]", "r", _text("max")),
-            (f"draws failing {c['property']}", "r", _text("failing")),
-            (f"P(fail) ≤ ({100 * (1 - report['budgets']['beta']):g} % confidence)", "r", _text("bound")),
-            (f"certified P(fail) ≤ {claim}", "l", _text("certified")),
+            *_certificate_columns(c, report["budgets"]["beta"]),
         ]
         study = report["study"]
         command = f"nnrobust study benchmarks/studies/{study}.toml --out out/{study} --workers 2"

@@ -550,14 +550,21 @@ def singular_episodes(t: np.ndarray, damped: np.ndarray) -> dict:
     return {"count": len(intervals), "intervals": intervals[:MAX_EPISODES]}
 
 
-def write_json_atomic(path: str | Path, data) -> Path:
-    """Write JSON to ``path`` through a temporary file and a rename (never a half-written file)."""
+def write_text_atomic(path: str | Path, text: str) -> Path:
+    """Write ``text`` to ``path`` through a temporary file and a rename (never a half-written
+    file; the umask's mode).
+    """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.partial-{os.getpid()}")
-    tmp.write_text(json.dumps(data, indent=2, default=json_default) + "\n")
+    tmp.write_text(text)
     os.replace(tmp, path)
     return path
+
+
+def write_json_atomic(path: str | Path, data) -> Path:
+    """Write JSON to ``path`` through a temporary file and a rename (never a half-written file)."""
+    return write_text_atomic(path, json.dumps(data, indent=2, default=json_default) + "\n")
 
 
 def json_default(value):

@@ -26,11 +26,10 @@ computed; a finished study reruns to "nothing to do". One local cluster serves e
 from __future__ import annotations
 
 import json
-import os
 from pathlib import Path
 
 from ..exceptions import ChangedInputs, ConfigError, NNRobustError
-from .spec import StudyCase, StudySpec
+from .spec import StudyCase, StudySpec, kept_name
 
 MARKER = "study.toml"
 VALIDATION_SEED = 1_000_003
@@ -43,22 +42,16 @@ def _write_if_changed(path: Path, text: str) -> None:
     """Write ``text`` atomically unless the file already holds it (a stage's input file: an
     unchanged rewrite keeps its resume).
     """
+    from ..results import write_text_atomic
+
     if path.is_file() and path.read_text() == text:
         return
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.partial-{os.getpid()}")  # the umask's mode, as every output
-    tmp.write_text(text)
-    os.replace(tmp, path)
+    write_text_atomic(path, text)
 
 
 def seed_name(controller: str, seed: int) -> str:
     """The validation entry of one (controller, optimiser seed) setting."""
     return f"{controller}-seed{seed}"
-
-
-def kept_name(controller: str) -> str:
-    """The certification and falsification entry of a controller's kept setting."""
-    return f"{controller}-tuned"
 
 
 def prepare(spec: StudySpec, folder: Path, overwrite: bool) -> None:
@@ -188,9 +181,18 @@ def run_study(
     with _SharedCluster(workers, scheduler) as address:
         cases = {}
         for case in spec.cases:
-            cases[spec.case_name(case)] = _run_case(
-                spec, case, folder, address, overwrite, say, progress, ship
-            )
+            before: dict[Path, str | None] = {}  # the stages' input files as they were
+            try:
+                cases[spec.case_name(case)] = _run_case(
+                    spec, case, folder, address, overwrite, say, progress, ship, before
+                )
+            except ChangedInputs:  # a stage refused its folder: its input files name its rows again
+                for path, text in before.items():
+                    if text is None:
+                        path.unlink(missing_ok=True)
+                    else:
+                        _write_if_changed(path, text)
+                raise
     from .report import write_report
 
     return write_report(spec, folder, cases)
@@ -216,6 +218,13 @@ class _SharedCluster:
         return False
 
 
+def _stage_file(path: Path, text: str, before: dict) -> None:
+    """Write a stage's input file, keeping in ``before`` what it held first (None: nothing)."""
+    if path not in before:
+        before[path] = path.read_text() if path.is_file() else None
+    _write_if_changed(path, text)
+
+
 def _run_case(
     spec: StudySpec,
     case: StudyCase,
@@ -225,47 +234,20 @@ def _run_case(
     say,
     progress,
     ship: bool = False,
+    before: dict | None = None,
 ) -> dict:
     """Every stage of one case on the cluster at ``address``; ``ship``: the files the runs read
-    travel with the tasks (:func:`nnrobust.sweep.engine.ships_files`). A stage that refuses its
-    folder (computed from other inputs, :class:`~nnrobust.exceptions.ChangedInputs`) leaves the
-    stages' input files as they were, so each still names what its rows were computed from.
+    travel with the tasks (:func:`nnrobust.sweep.engine.ships_files`). Each stage's input file is
+    written through :func:`_stage_file`, which keeps in ``before`` what it held first: a stage
+    that refuses its folder (computed from other inputs,
+    :class:`~nnrobust.exceptions.ChangedInputs`) then has them put back (:func:`run_study`).
     """
-    before: dict[Path, str | None] = {}
-    try:
-        return _case_stages(spec, case, folder, address, overwrite, say, progress, ship, before)
-    except ChangedInputs:
-        for path, text in before.items():
-            if text is None:
-                path.unlink(missing_ok=True)
-            else:
-                _write_if_changed(path, text)
-        raise
-
-
-def _stage_file(path: Path, text: str, before: dict) -> None:
-    """Write a stage's input file, keeping in ``before`` what it held first (None: nothing)."""
-    if path not in before:
-        before[path] = path.read_text() if path.is_file() else None
-    _write_if_changed(path, text)
-
-
-def _case_stages(
-    spec: StudySpec,
-    case: StudyCase,
-    folder: Path,
-    address: str,
-    overwrite: bool,
-    say,
-    progress,
-    ship: bool,
-    before: dict,
-) -> dict:
-    """The stages of :func:`_run_case`, writing each stage's input file through :func:`_stage_file`."""
     from ..falsify import FalsifySpec, run_falsify
     from ..sweep.engine import read_results, run_sweep
     from ..sweep.spec import load_sweep
     from ..tune.engine import TuneSpec, run_tune
+
+    before = {} if before is None else before
 
     name = spec.case_name(case)
     here = folder / "cases" / name

@@ -19,7 +19,7 @@ import numpy as np
 from ..results import write_json_atomic
 from ..tune.engine import STUDY_REPORT
 from ..tune.space import fixed_text
-from .spec import StudySpec
+from .spec import StudySpec, kept_name
 
 SCHEMA = f"{STUDY_REPORT}1"
 STATISTICS = (
@@ -60,8 +60,9 @@ def _inputs(spec: StudySpec) -> dict:
 
     out = {str(spec.path): file_sha256(spec.path)}
     if spec.tuned:  # the tuning the settings come from
-        source = Path(spec.tuned.partition("#")[0])
-        source = source / "summary.json" if source.is_dir() else source
+        from ..tune.engine import tuned_file
+
+        source, _ = tuned_file(spec.tuned)
         out[str(source)] = file_sha256(source)
     for case in spec.cases:
         for path, digest in study_inputs(spec.case_sweep(case)).files.values():
@@ -107,7 +108,7 @@ def _commands(spec: StudySpec, folder: Path, name: str, case: dict) -> dict:
 
 
 def _controller_entry(spec: StudySpec, case: dict, c: str) -> dict:
-    label = c if c in spec.fixed else f"{c}-tuned"
+    label = c if c in spec.fixed else kept_name(c)
     certify = case["certify"]["controllers"].get(label, {})
     kept = case["kept"].get(c)
     per_seed = case["per_seed"].get(c, [])
@@ -174,7 +175,7 @@ def _untuned(report: dict, c: str, entry: dict) -> str:
     """The settings cell of a controller the study did not tune."""
     if not entry["fixed"]:
         return "-"
-    if report.get("tuned_from") and c.endswith("-tuned"):
+    if report.get("tuned_from") and c.endswith(kept_name("")):
         return f"the kept setting of {report['tuned_from']} (tuned = ...)"
     return "its own settings (tune = false)"
 
@@ -195,7 +196,7 @@ def build_report(spec: StudySpec, folder: Path, cases: dict) -> dict:
         "cases": {},
     }
     for name, case in cases.items():
-        label_of = {(c if c in spec.fixed else f"{c}-tuned"): c for c in spec.controllers}
+        label_of = {(c if c in spec.fixed else kept_name(c)): c for c in spec.controllers}
         paired = [
             {**p, "a": label_of.get(p["a"], p["a"]), "b": label_of.get(p["b"], p["b"])}
             for p in case["certify"].get("paired", [])

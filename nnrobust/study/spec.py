@@ -67,6 +67,14 @@ DEFAULT_BUDGETS = {
     "realtime": False,
 }
 
+
+def kept_name(controller: str) -> str:
+    """The certification and falsification entry of a controller's kept setting (and of a
+    setting ``tuned =`` takes from another study).
+    """
+    return f"{controller}-tuned"
+
+
 CASE_KEYS = ("name", "base", "set")
 """The keys of a case given as a table: its name, its experiment and its own overrides."""
 
@@ -325,7 +333,8 @@ def parse_study(data: dict, path: Path) -> StudySpec:
     for case in cases:  # each case's own overrides: the keys a sweep file's [set] takes
         if case.set:
             try:
-                parse_sweep({"name": name, "base": case.base, "controllers": ["pd"], "set": case.set}, where)
+                only_set = {"name": name, "base": case.base, "controllers": ["pd"], "set": case.set}
+                parse_sweep(only_set, where)  # "pd" stands for any law: the set alone is checked
             except ConfigError as err:
                 raise ConfigError(
                     f"{where}: cases.{case.name}.{err.key.split(': ')[-1]}", err.message
@@ -368,11 +377,11 @@ def _tuned_elsewhere(value, sweep: SweepSpec, path: Path) -> tuple[list[str], di
             where, f"expected a study's report as 'REPORT.json#CASE' or a tuning's folder, got {value!r}"
         )
     text, sep, case = value.partition("#")
-    source = str((path.parent / text).resolve()) + sep + case
-    if not Path(source.partition("#")[0]).exists():
+    file = (path.parent / text).resolve()
+    source = str(file) + sep + case
+    if not file.exists():
         raise ConfigError(where, f"{text!r} does not exist (read from {path.parent})")
-    folder = Path(source.partition("#")[0])
-    if folder.is_dir() and (folder / "report.json").is_file():
+    if file.is_dir() and (file / "report.json").is_file():
         said = f"{text!r} is a study's folder: name its report and a case, '{text}/report.json#CASE'"
         raise ConfigError(where, said)
     try:
@@ -383,7 +392,7 @@ def _tuned_elsewhere(value, sweep: SweepSpec, path: Path) -> tuple[list[str], di
     names, entries = [], {}
     for c in sweep.controllers:
         if c in settings:
-            label = f"{c}-tuned"
+            label = kept_name(c)
             entries[label] = tuned_entry(c, settings[c], sweep.entries)
         else:
             label = c

@@ -264,6 +264,14 @@ def _study_kept(report: dict, file: Path, case: str) -> dict:
     return {"controllers": kept}
 
 
+def tuned_file(path: str | Path) -> tuple[Path, str]:
+    """(the file ``--tuned`` reads, the case named after ``#``): a tuning's DIR is its
+    summary.json; ``FILE#CASE`` names one case of a study's report.
+    """
+    text, _, case = str(path).partition("#")
+    return (Path(text) / "summary.json" if Path(text).is_dir() else Path(text)), case
+
+
 def tuned_settings(
     path: str | Path, names: list[str], varied=(), entries: dict | None = None
 ) -> dict[str, dict]:
@@ -276,8 +284,7 @@ def tuned_settings(
     """
     from ..config import read_text_file
 
-    text, _, case = str(path).partition("#")
-    file = Path(text) / "summary.json" if Path(text).is_dir() else Path(text)
+    file, case = tuned_file(path)
     try:
         summary = json.loads(read_text_file(file, limit=TUNED_FILE_BYTES, what="tuning summary"))
     except ValueError as err:
@@ -318,8 +325,7 @@ def tuned_target(path: str | Path) -> str:
     """
     from ..config import read_text_file
 
-    text, _, case = str(path).partition("#")
-    file = Path(text) / "summary.json" if Path(text).is_dir() else Path(text)
+    file, case = tuned_file(path)
     try:
         summary = json.loads(read_text_file(file, limit=TUNED_FILE_BYTES, what="tuning summary"))
     except (ValueError, RecursionError, ConfigError):
