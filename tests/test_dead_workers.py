@@ -108,7 +108,7 @@ def test_a_cluster_left_without_workers_is_one_error_not_a_hang(monkeypatch):
         cluster.scale(0)
         start = time.monotonic()
         with pytest.raises(NNRobustError, match="the cluster has had no worker for 1 s"):
-            engine.crash_reason(future)
+            engine.outcome(future)
         assert time.monotonic() - start < 60
     finally:
         client.close()
@@ -130,7 +130,7 @@ def test_a_local_cluster_whose_nannies_gave_up_gets_new_workers(monkeypatch):
         cluster.sync(nanny.close)
         assert client.scheduler_info()["workers"] == {} and len(cluster.worker_spec) == 1
         future = client.submit(sum, [1, 2], pure=False)
-        assert engine.crash_reason(future) is None and future.result() == 3
+        assert engine.outcome(future) == (3, None)
         assert len(client.scheduler_info()["workers"]) == 1
     finally:
         client.close()

@@ -21,6 +21,7 @@ import threading
 import time
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 from ..config import ExperimentConfig
 from ..exceptions import ConfigError, NNRobustError
@@ -704,43 +705,44 @@ def wait_alive(futures: list, first: bool = False) -> None:
             )
 
 
-def crash_reason(future) -> str | None:
-    """None when ``future`` finished; else one line on why it did not: its worker died running it
-    (user code that ends its process: ``os._exit``, a segfault) or the cluster cancelled it.
+def outcome(future) -> tuple[Any, str | None]:
+    """``(result, None)`` when ``future`` finished and its result reached the client, else
+    ``(None, reason)``: one line on why not, its worker died running it (user code that ends its
+    process: ``os._exit``, a segfault) or the cluster cancelled it. The result is fetched once:
+    dask keeps it on the worker, and a second fetch after that worker died (a crashing
+    neighbour) would run the task again and could count that death against it.
     """
     wait_alive([future])
     try:
-        future.result()
+        return future.result(), None
     except NNRobustError:  # raised on purpose around the task code: its files refused (shipped_files)
         raise
     except Exception as err:  # KilledWorker, CancelledError: the task code itself catches its errors
         name = type(err).__name__
         if name == "KilledWorker":
-            return (
+            return None, (
                 "the worker process died twice running it (os._exit, a segfault or the OS killing it; "
                 "nnrobust's own errors are rows, never a dead worker)"
             )
-        return f"the cluster lost it ({name}: {str(err)[:200]})"
-    return None
+        return None, f"the cluster lost it ({name}: {str(err)[:200]})"
 
 
-def run_alone(client, files, *task):
-    """(future, None) for a task run alone, or (None, reason) when it ended its worker on each of
-    two such runs: under load a death a crashing neighbour caused a moment before (a worker dead
-    and not yet noticed) can still be counted against a task once, not twice.
+def run_alone(client, files, *task) -> tuple[Any, str | None]:
+    """:func:`outcome` of a task run alone: its reason is set only when it ended its worker on each
+    of two such runs (under load a death a crashing neighbour caused a moment before, a worker
+    dead and not yet noticed, can still be counted against a task once, not twice).
     """
     reason = None
     for _ in range(2):
-        future = submit(client, files, *task)
-        reason = crash_reason(future)
+        result, reason = outcome(submit(client, files, *task))
         if reason is None:
-            return future, None
+            return result, None
     return None, reason
 
 
 def run_tasks(client, tasks: list[tuple], crashed, files=None) -> list:
     """Each (function, *arguments) task's result, run on the cluster (within ``files``:
-    :func:`submit`) and waited for together. A task whose worker died (:func:`crash_reason`) is
+    :func:`submit`) and waited for together. A task whose worker died (:func:`outcome`) is
     submitted again and waited for alone, once every other has finished (a task queued on a
     dying worker counts that death too: alone, its result does not depend on its neighbours);
     when it kills its worker on each run alone (:func:`run_alone`) its result is
@@ -757,12 +759,11 @@ def _results(client, files, tasks: list[tuple], futures: list, crashed, in_fligh
     """
     out = []
     for task, future in zip(tasks, futures):
-        if crash_reason(future) is None:
-            out.append(future.result())
-            continue
-        wait_alive(list(in_flight))
-        retry, reason = run_alone(client, files, *task)
-        out.append(crashed(reason) if retry is None else retry.result())
+        result, reason = outcome(future)
+        if reason is not None:
+            wait_alive(list(in_flight))
+            result, reason = run_alone(client, files, *task)
+        out.append(crashed(reason) if reason is not None else result)
     return out
 
 
@@ -915,10 +916,10 @@ def _run_sweep(
             chunk = chunk_of.pop(future.key)
             if future.cancelled() and stop and group(chunk[0]) in stopped:
                 continue
-            if crash_reason(future):  # one of its rows, or a neighbour on its worker, ended the worker
+            rows, reason = outcome(future)
+            if reason is not None:  # one of its rows, or a neighbour on its worker, ended the worker
                 suspects += chunk
                 continue
-            rows = future.result()
             future.release()  # the worker may drop the chunk's rows
             written, parts = written + len(rows), parts + 1
             _write_part(folder, rows, table_schema, inputs.key)
@@ -940,8 +941,8 @@ def _run_sweep(
             if stop and group(job) in stopped:
                 dropped.append(job)
                 continue
-            future, reason = run_alone(client, files, run_rows, spec_future, base_future, [job])
-            rows = crashed_rows(spec, [job], reason) if future is None else future.result()
+            rows, reason = run_alone(client, files, run_rows, spec_future, base_future, [job])
+            rows = crashed_rows(spec, [job], reason) if reason is not None else rows
             written, parts = written + len(rows), parts + 1
             _write_part(folder, rows, table_schema, inputs.key)
             if stop:
