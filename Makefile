@@ -87,10 +87,6 @@ docs-data: $(VENV)/.installed-test
 	  $(BIN)/nnrobust study benchmarks/studies/$$study.toml --out $(OUT)/$$study --workers 2 --quiet && \
 	  cp $(OUT)/$$study/report.json $(DATA)/$$(echo $$study | tr - _).json || exit 1; \
 	done
-	cp $(OUT)/falsify-paper/cases/paper-ellipse/falsify/summary.json $(DATA)/falsify_paper_factors.json
-	cp $(OUT)/falsify-panda/cases/panda-ellipse/falsify/summary.json $(DATA)/falsify_panda_factors.json
-	cp $(OUT)/falsify-paper-tuned/cases/paper-ellipse-noisy/falsify/summary.json $(DATA)/falsify_paper_tuned_factors.json
-	cp $(OUT)/falsify-panda-tuned/cases/panda-ellipse-noisy/falsify/summary.json $(DATA)/falsify_panda_tuned_factors.json
 	$(BIN)/python benchmarks/studies/fronts.py $(OUT)/tuned-paper $(OUT)/tuned-panda --figure docs/img/tuned_comparison.png
 	$(BIN)/python benchmarks/engine_gap.py --json $(DATA)/engine_gap.json
 	$(BIN)/python benchmarks/plant_convergence.py --json $(DATA)/plant_convergence.json

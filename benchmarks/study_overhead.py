@@ -87,7 +87,7 @@ def main() -> None:
         folder = Path(tmp)
         spec = load_study(args.study if args.study else study_file(folder, args.cut))
         start = time.perf_counter()
-        marks: list = [(start, "checks, the cluster")]  # (time, what starts): each stage's wall time
+        marks: list = [(start, "checks, the cluster")]  # (time, what starts): the wall time to the next
         run_study(
             spec,
             folder / "out",

@@ -674,22 +674,10 @@ def engine_gap_tuned() -> str:
     return _markdown(columns, _data("engine_gap")["tuned"], GAP_COMMAND)
 
 
-FALSIFY_COMMANDS = {
-    "falsify_paper_factors": (
-        "nnrobust study benchmarks/studies/falsify-paper.toml --out out/falsify-paper --workers 2"
-    ),
-    "falsify_panda_factors": (
-        "nnrobust study benchmarks/studies/falsify-panda.toml --out out/falsify-panda --workers 2"
-    ),
-    "falsify_paper_tuned_factors": (
-        "nnrobust study benchmarks/studies/falsify-paper-tuned.toml --out out/falsify-paper-tuned --workers 2"
-    ),
-    "falsify_panda_tuned_factors": (
-        "nnrobust study benchmarks/studies/falsify-panda-tuned.toml --out out/falsify-panda-tuned --workers 2"
-    ),
-}
-"""The study each falsification data file comes from (its falsification stage's summary.json,
-copied)."""
+def _study_command(report: dict) -> str:
+    """The command that makes a shipped study's report (benchmarks/studies/)."""
+    study = report["study"]
+    return f"nnrobust study benchmarks/studies/{study}.toml --out out/{study} --workers 2"
 
 
 def _margin_cell(margin: dict | None) -> str:
@@ -740,24 +728,25 @@ def _certified_box(name: str):
             ("worst [mm]", "r", _text("max")),
             *_certificate_columns(c, report["budgets"]["beta"]),
         ]
-        study = report["study"]
-        command = f"nnrobust study benchmarks/studies/{study}.toml --out out/{study} --workers 2"
-        return _markdown(columns, rows, command)
+        return _markdown(columns, rows, _study_command(report))
 
     return render
 
 
 def _falsified(name: str):
-    """A falsification's results: per controller, its worst plant and the random baseline's, the
-    plant's friction, disturbance and payload, and the margin where one was searched."""
+    """A falsification study's falsification stage (its report.json's ``falsification`` and
+    ``margin`` entries): per controller, its worst plant and the random baseline's, the plant's
+    friction, disturbance and payload, the margin and the baseline's certificate."""
 
     def render() -> str:
-        data = _data(name)
+        report = _data(name)
+        (case,) = report["cases"].values()
         rows = []
-        for controller, entry in data["controllers"].items():
+        for controller, law in case["controllers"].items():
+            entry = law["falsification"]
             worst, baseline = entry["worst"], entry["random_baseline"]["worst"]
             values = worst["values"]
-            margin = data.get("margin", {}).get(controller) or entry.get("margin")
+            margin = law.get("margin")
             if entry["first_violation"] is not None:
                 falsified = f"yes, at simulation {entry['first_violation']}"
             elif entry["falsified"]:  # only the random baseline found a violating plant
@@ -791,12 +780,13 @@ def _falsified(name: str):
         ]
         if any(r["margin"] != "–" for r in rows):
             columns.append(("margin (× the box)", "l", _text("margin")))
-        certified = [e["certificate"] for e in data["controllers"].values() if e.get("certificate")]
+        falsifications = [law["falsification"] for law in case["controllers"].values()]
+        certified = [e["certificate"] for e in falsifications if e.get("certificate")]
         if certified:
             confidence = 100 * (1 - certified[0]["certificates"][0]["beta"])
             header = f"random plants failing: P(fail) ≤ ({confidence:g} % confidence)"
             columns.append((header, "l", _text("certificate")))
-        return _markdown(columns, rows, FALSIFY_COMMANDS[name])
+        return _markdown(columns, rows, _study_command(report))
 
     return render
 
@@ -981,12 +971,12 @@ RENDERERS = {
     "path-kinds": path_kinds,
     "disturbance-kinds": disturbance_kinds,
     "criterion-kinds": criterion_kinds,
-    "falsify-paper-factors": _falsified("falsify_paper_factors"),
-    "falsify-panda-factors": _falsified("falsify_panda_factors"),
+    "falsify-paper-factors": _falsified("falsify_paper"),
+    "falsify-panda-factors": _falsified("falsify_panda"),
     "falsify-paper-certified": _certified_box("falsify_paper"),
     "falsify-panda-certified": _certified_box("falsify_panda"),
-    "falsify-paper-tuned-factors": _falsified("falsify_paper_tuned_factors"),
-    "falsify-panda-tuned-factors": _falsified("falsify_panda_tuned_factors"),
+    "falsify-paper-tuned-factors": _falsified("falsify_paper_tuned"),
+    "falsify-panda-tuned-factors": _falsified("falsify_panda_tuned"),
     "falsify-paper-tuned-certified": _certified_box("falsify_paper_tuned"),
     "falsify-panda-tuned-certified": _certified_box("falsify_panda_tuned"),
     "engine-gap-presets": engine_gap_presets,

@@ -640,7 +640,7 @@ def cmd_study(args) -> int:
 
     def progress(done: int, total: int) -> None:
         if not args.quiet:
-            _bar(done, total, f"of this stage, {time.monotonic() - start:.0f} s in all")
+            _bar(done, total, f"of the stages now running, {time.monotonic() - start:.0f} s in all")
 
     report = _resumable(
         lambda: run_study(spec, args.out, args.workers, args.scheduler, args.overwrite, say, progress),

@@ -12,6 +12,7 @@ STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 
 _pending = False
 _active = 0  # nesting depth of signals_as_interrupt blocks
+_stopping = False  # stages run side by side are asked to stop (stop_stages)
 
 
 def check_interrupt() -> None:
@@ -21,8 +22,17 @@ def check_interrupt() -> None:
     garbage-collection callback (a weakref's, a __del__), the KeyboardInterrupt it raises is
     "ignored" and the work would go on; long loops call this at each step so that it does not.
     """
-    if _pending:
+    if _pending or _stopping:
         raise KeyboardInterrupt
+
+
+def stop_stages(stop: bool = True) -> None:
+    """Ask the work running on other threads (stages of a study run side by side) to stop at
+    their next :func:`check_interrupt`, or, with ``stop=False``, lift that request once they have.
+    A signal's own flag is cleared as each block that handled it ends; this one is not.
+    """
+    global _stopping
+    _stopping = stop
 
 
 def clear_interrupt() -> None:

@@ -30,12 +30,8 @@ OTHERS = [
     "tuned_panda",
     "falsify_paper",
     "falsify_panda",
-    "falsify_paper_factors",
-    "falsify_panda_factors",
     "falsify_paper_tuned",
     "falsify_panda_tuned",
-    "falsify_paper_tuned_factors",
-    "falsify_panda_tuned_factors",
     "engine_gap",
     "adaptive_step",
     "tune_noisy_case_b",
@@ -51,6 +47,22 @@ rerun measures the machine it runs on: it gives other numbers, not the same)."""
 def test_tables_are_rendered_from_the_data(document):
     text = (ROOT / document).read_text()
     assert render_tables.render(text) == text, f"run python docs/render_tables.py ({document})"
+
+
+def test_every_published_study_report_was_computed_from_todays_files():
+    """Each study report in docs/data records the SHA-256 of every file it was computed from (the
+    study file, experiment files, custom laws, another study's report it takes settings from):
+    each path in the project must hold those bytes today, else the report is stale (run
+    ``make docs-data``). Paths are relative to the project (the folder the study ran from)."""
+    from nnrobust.study_folder import file_sha256
+
+    reports = [p for p in sorted(render_tables.DATA.glob("*.json")) if "inputs" in json.loads(p.read_text())]
+    assert len(reports) >= 9  # the eight studies of make docs-data and the example study
+    for report in reports:
+        for path, digest in json.loads(report.read_text())["inputs"].items():
+            assert not Path(path).is_absolute(), (report.name, path)
+            if (ROOT / path).is_file():
+                assert file_sha256(ROOT / path) == digest, f"{report.name}: {path} changed since"
 
 
 def test_every_data_file_has_a_table():
@@ -75,7 +87,7 @@ def test_a_case_of_a_robustness_study_reproduces(name, case):
     from nnrobust.sweep.spec import base_config, draw, experiment
 
     spec = load_study(ROOT / "benchmarks" / "studies" / f"{name.replace('_', '-')}.toml")
-    report = json.loads((render_tables.DATA / f"{name}.json").read_text())
+    report = _read(name)
     assert list(report["cases"]) == [c.name for c in spec.cases]
     assert report["budgets"]["certify"] == spec.budgets["certify"]
     (study_case,) = [c for c in spec.cases if c.name == case]
@@ -127,7 +139,7 @@ def _quickest_row(rows):
 
 @pytest.mark.parametrize("name", DATA_FILES)
 def test_a_row_of_the_data_reproduces(name):
-    rows = json.loads((render_tables.DATA / f"{name}.json").read_text())["rows"]
+    rows = _read(name)["rows"]
     row = _quickest_row(rows)
     job = {k: row[k] for k in ("preset", "changes")}
     again = _common.run_row(job)
@@ -144,7 +156,7 @@ def _rerun(job: dict) -> dict:
 
 
 def test_a_run_of_the_friction_compensation_data_reproduces():
-    runs = json.loads((render_tables.DATA / "friction_compensation.json").read_text())["runs"]
+    runs = _read("friction_compensation")["runs"]
     run = runs[0]
     again = _rerun(run)
     for key in ("rms_error_after_2s", "rms_torque", "torque_chatter"):
@@ -153,7 +165,7 @@ def test_a_run_of_the_friction_compensation_data_reproduces():
 
 def test_a_run_of_the_plant_convergence_data_reproduces():
     """The default-step run of paper-ellipse with the NN, and the table's claim that it converged."""
-    data = json.loads((render_tables.DATA / "plant_convergence.json").read_text())
+    data = _read("plant_convergence")
     run = next(
         r
         for r in data["runs"]
@@ -170,7 +182,7 @@ def test_the_default_row_of_the_adaptive_step_data_reproduces():
     """The falling arm at the default max_step_rotation: the same energy drift and cut periods."""
     import adaptive_step
 
-    data = json.loads((render_tables.DATA / "adaptive_step.json").read_text())
+    data = _read("adaptive_step")
     row = next(r for r in data["rows"] if r["max_step_rotation"] == 0.02)
     again = adaptive_step.row(0.02, data["duration"])
     assert again["energy_drift"] == pytest.approx(row["energy_drift"], rel=1e-6)
@@ -273,8 +285,25 @@ def test_make_docs_data_runs_the_tuned_studies_the_tables_name():
 
 def test_the_nn_best_setting_of_the_tuning_example_reproduces():
     """docs/tuning.md's command (noisy case b): the NN's best setting, rerun on its training sample."""
-    summary = json.loads((render_tables.DATA / "tune_noisy_case_b.json").read_text())
+    summary = _read("tune_noisy_case_b")
     _rerun_best(summary, list(summary["controllers"]), "nn")
+
+
+def _read(name: str):
+    """A data file's content (docs/data/NAME.json). ``NAME:falsification`` reads a falsification
+    study's report as its falsification stage: ``properties`` (the study's require),
+    ``controllers`` (each law's ``falsification`` entry) and ``margin`` (each law's margin)."""
+    name, _, view = name.partition(":")
+    data = json.loads((render_tables.DATA / f"{name}.json").read_text())
+    if not view:
+        return data
+    (case,) = data["cases"].values()
+    laws = case["controllers"]
+    return {
+        "properties": data["require"],
+        "controllers": {c: e["falsification"] for c, e in laws.items()},
+        "margin": {c: e["margin"] for c, e in laws.items() if e.get("margin")},
+    }
 
 
 def _at(data, path):
@@ -384,7 +413,7 @@ def _failing(variant, factor=2.0, sensing="ideal"):
 CASE_A, CASE_B, PANDA_ARM = "case (a) line", "case (b) ellipse", "Panda ellipse"
 GAP = "engine_gap"
 PRINTED = ("paper-ellipse-paper-law",)
-FALSIFIED = "falsify_paper_factors"
+FALSIFIED = "falsify_paper:falsification"
 
 
 def _best(controller: str):
@@ -484,7 +513,7 @@ def _nn_ideal_ratio(pick):
     return lambda _: pick(ratio(c["case"]) for c in cases() if c["label"].endswith("ideal"))
 
 
-PF = "falsify_panda_factors"
+PF = "falsify_panda:falsification"
 
 
 def _example_median(controller: str):
@@ -494,7 +523,7 @@ def _example_median(controller: str):
     ]["median"]
 
 
-PT = "falsify_panda_tuned_factors"
+PT = "falsify_panda_tuned:falsification"
 PT_HELD = ("pd-tuned", "sliding-mode-tuned", "slotine-li-tuned", "rbf-nn-tuned")
 """The tuned Panda laws the falsification did not falsify (docs/falsification.md)."""
 
@@ -545,7 +574,7 @@ def _panda_noisy_kept(stat):
     return get
 
 
-FT = "falsify_paper_tuned_factors"
+FT = "falsify_paper_tuned:falsification"
 
 
 def _ideal_median(controller: str, stat):
@@ -1051,15 +1080,15 @@ QUOTED_FIGURES: list[tuple] = [
     (
         "docs/falsification.md",
         r"term ends at\s+(\d+) mm",
-        "falsify_panda_factors",
+        PF,
         _falsified("sliding-mode"),
         1e3,
     ),
-    ("docs/falsification.md", r"the PD at (\d+) mm and", "falsify_panda_factors", _falsified("pd"), 1e3),
+    ("docs/falsification.md", r"the PD at (\d+) mm and", PF, _falsified("pd"), 1e3),
     (
         "docs/falsification.md",
         r"and no-u0 at (\d+) mm, each",
-        "falsify_panda_factors",
+        PF,
         _falsified("no-u0"),
         1e3,
     ),
@@ -1182,6 +1211,22 @@ QUOTED_FIGURES: list[tuple] = [
         r"at its (\d+)th simulation the search\s+found a plant",
         FALSIFIED,
         lambda d: d["controllers"]["slotine-li"]["first_violation"],
+        1.0,
+    ),
+    (
+        "docs/falsification.md",
+        r"\((\d+) simulations, and \d+ more for the margins",
+        FALSIFIED,
+        lambda d: sum(
+            e["simulations"] + e["random_baseline"]["simulations"] for e in d["controllers"].values()
+        ),
+        1.0,
+    ),
+    (
+        "docs/falsification.md",
+        r"simulations, and (\d+) more for the margins",
+        FALSIFIED,
+        lambda d: sum(m["simulations"] for m in d["margin"].values()),
         1.0,
     ),
     ("docs/falsification.md", r"Scaled to ([\d.]+) of the box \(each", FALSIFIED, _margin("nn"), 1.0),
@@ -1723,10 +1768,27 @@ QUOTED_FIGURES: list[tuple] = [
     ),
     (
         "docs/study.md",
-        r"\((\d+) s of wall time for \d+ worker",
+        r"the MuJoCo draws \((\d+) s of wall time for \d+ worker",
         "study_overhead",
-        _stage_wall("falsify"),
+        _stage_wall("certify, falsify"),
         1.0,
+    ),
+    (
+        "docs/study.md",
+        r"the MuJoCo draws \(\d+ s of wall time for (\d+) worker",
+        "study_overhead",
+        lambda d: sum(d["simulation_seconds"][k] for k in ("certify", "falsify", "certify-mujoco")),
+        1.0,
+    ),
+    (
+        "docs/study.md",
+        r"both workers busy (\d+) % of it\)",
+        "study_overhead",
+        lambda d: (
+            sum(d["simulation_seconds"][k] for k in ("certify", "falsify", "certify-mujoco"))
+            / (2 * _stage_wall("certify, falsify")(d))
+        ),
+        100.0,
     ),
     (
         "docs/study.md",
@@ -1765,29 +1827,22 @@ QUOTED_FIGURES: list[tuple] = [
     ),
     (
         "docs/study.md",
-        r"starting the\s+cluster and checking every controller \(([\d.]+) s\)",
+        r"starting the\s+cluster and checking\s+every controller \(([\d.]+) s\)",
         "study_overhead",
         _stage_wall("checks, the cluster"),
         1.0,
     ),
+    ("docs/study.md", r"seeds' tunings \((\d+) s of\s+wall", "study_overhead", _stage_wall("tune"), 1.0),
     (
         "docs/study.md",
-        r"wall time for (\d+) worker-seconds of simulation: its\s+margin",
-        "study_overhead",
-        lambda d: d["simulation_seconds"]["falsify"],
-        1.0,
-    ),  # fmt: skip
-    ("docs/study.md", r"the tunings \((\d+) s for", "study_overhead", _stage_wall("tune"), 1.0),
-    (
-        "docs/study.md",
-        r"the tunings \(\d+ s for (\d+)\)",
+        r"seeds' tunings \(\d+ s of\s+wall time for (\d+) worker",
         "study_overhead",
         lambda d: d["simulation_seconds"]["tune"],
         1.0,
     ),
     (
         "docs/study.md",
-        r"the\s+realtime stage\) takes (\d+) s",
+        r"the\s+realtime stage, alone on\s+the machine by design\) takes (\d+) s",
         "study_overhead",
         _stage_wall("export the kept laws"),
         1.0,
@@ -1920,7 +1975,7 @@ def test_every_quoted_figure_matches_its_data():
         assert match, f"{document}: no text matches {pattern!r}"
         if name is None:
             continue
-        data = json.loads((render_tables.DATA / f"{name}.json").read_text())
+        data = _read(name)
         value = where(data) if callable(where) else _at(data, where)
         quoted = float(match.group(1))
         # the quoted figure is the data rounded to its printed digits: within half a unit of the last
@@ -1976,14 +2031,14 @@ def _reproduces_or_is_chaotic(config, published: float, what: str, limit: float 
     return value
 
 
-@pytest.mark.parametrize("name", [FALSIFIED, "falsify_panda_factors", FT, PT])
+@pytest.mark.parametrize("name", [FALSIFIED, PF, FT, PT])
 def test_the_published_worst_plants_rerun_to_their_metrics(name):
     """docs/falsification.md's worst plants (docs/data/falsify_*.json, written by nnrobust
     falsify): each printed command reproduces the error the search recorded, or is a chaotic run
     (a millionth of the disturbance moves it by more than 1 %) that fails the property as well."""
     from nnrobust.properties import run_properties
 
-    data = json.loads((render_tables.DATA / f"{name}.json").read_text())
+    data = _read(name)
     (limit,) = [p.value for p in run_properties(data["properties"]) if p.metric == "rms_error_after_2s"]
     for name, entry in data["controllers"].items():
         if not entry["falsified"]:
@@ -2000,7 +2055,7 @@ def test_the_nn_worst_plant_fails_on_the_python_loop_too():
     verdict does not depend on the loop."""
     from nnrobust.experiment import run_experiment
 
-    data = json.loads((render_tables.DATA / f"{FALSIFIED}.json").read_text())
+    data = _read(FALSIFIED)
     config = _worst_config(data["controllers"]["nn"]["worst"]["command"])
     text = (ROOT / "docs" / "falsification.md").read_text()
     quoted = float(re.search(r"The Python loop, whose rounding differs,\s+gave (\d+) mm", text).group(1))
@@ -2024,7 +2079,7 @@ def test_the_margins_violating_plants_rerun_to_their_margins():
     from nnrobust.experiment import run_experiment
     from nnrobust.properties import run_properties
 
-    data = json.loads((render_tables.DATA / f"{FALSIFIED}.json").read_text())
+    data = _read(FALSIFIED)
     properties = run_properties(data["properties"])
     for name in ("nn", "sliding-mode"):
         plant = data["margin"][name]["violating_plant"]
@@ -2047,7 +2102,7 @@ def test_the_first_commands_worst_plant_is_worse_than_the_studys_worst_sample():
     block = re.search(r"the command it printed reruns it:\s+(nnrobust run .*?)\n\n", text, re.S)
     command = " ".join(block.group(1).replace("\\\n", " ").split())
     metrics = run_experiment(_worst_config(command)).metrics()
-    study = json.loads((render_tables.DATA / f"{PAPER}.json").read_text())
+    study = _read(PAPER)
     worst_sample = max(
         case["controllers"]["nn"]["statistics"]["rms_error_after_2s"]["max"]
         for case in study["cases"].values()
@@ -2082,7 +2137,7 @@ def test_the_pandas_nn_worst_plant_is_what_the_text_says():
     pytest.importorskip("mujoco")
     from nnrobust.experiment import run_experiment
 
-    data = json.loads((render_tables.DATA / "falsify_panda_factors.json").read_text())
+    data = _read(PF)
     config = _worst_config(data["controllers"]["nn"]["worst"]["command"])
     metrics = run_experiment(config).metrics()
     text = (ROOT / "docs" / "falsification.md").read_text()
@@ -2102,7 +2157,7 @@ def test_the_tuned_pandas_falsified_plants_are_what_the_text_says():
     pytest.importorskip("mujoco")
     from nnrobust.experiment import run_experiment
 
-    data = json.loads((render_tables.DATA / f"{PT}.json").read_text())
+    data = _read(PT)
     text = (ROOT / "docs" / "falsification.md").read_text()
     no_u0 = _worst_config(data["controllers"]["no-u0-tuned"]["worst"]["command"])
     nn = _worst_config(data["controllers"]["nn-tuned"]["random_baseline"]["worst"]["command"])
@@ -2132,7 +2187,7 @@ def test_every_worst_plant_fails_on_mujoco_too():
     pytest.importorskip("mujoco")
     from nnrobust.experiment import run_experiment
 
-    data = json.loads((render_tables.DATA / f"{FALSIFIED}.json").read_text())
+    data = _read(FALSIFIED)
     text = (ROOT / "docs" / "falsification.md").read_text()
     quoted = {"nn": float(re.search(r"the NN's worst plant gives (\d+) mm", text).group(1))}
     others = re.search(r"computed torque's give (\d+), (\d+) and (\d+) mm", text).groups()
@@ -2161,7 +2216,7 @@ def test_a_row_of_the_engine_gap_reproduces():
     from nnrobust.experiment import run_experiment
     from nnrobust.presets import load_preset
 
-    data = json.loads((render_tables.DATA / "engine_gap.json").read_text())
+    data = _read("engine_gap")
     row = next(r for r in data["presets"] if r["preset"] == "paper-ellipse" and r["controller"] == "nn")
     for engine in ("pinocchio", "mujoco"):
         config = load_preset("paper-ellipse").replace(controller={"kind": "nn"}, plant={"engine": engine})
@@ -2177,7 +2232,7 @@ def test_the_engine_gap_claims_of_the_docs_hold_in_its_data():
     NN and the sliding mode (within the quoted few % of each other); with implicitfast at the plant step
     the rankings differ, and every law but the RBF network and the C++ PD loses the Panda's
     path on both draws."""
-    data = json.loads((render_tables.DATA / "engine_gap.json").read_text())
+    data = _read("engine_gap")
 
     def ranking(variant):
         by_case = {}
@@ -2215,9 +2270,7 @@ def test_the_example_studys_learned_worst_plant_reruns_and_the_budget_is_the_rec
 
     from nnrobust.experiment import run_experiment
 
-    entry = json.loads((render_tables.DATA / "example_study.json").read_text())["cases"][
-        "paper-ellipse-noisy"
-    ]
+    entry = _read("example_study")["cases"]["paper-ellipse-noisy"]
     worst = entry["controllers"]["learned-residual"]["worst"]
     command = worst["command"].replace("examples/policies/", f"{ROOT}/examples/policies/")
     assert shlex.split(command)[:2] == ["nnrobust", "run"]
@@ -2245,41 +2298,48 @@ def _docs_data_commands() -> list[list[str]]:
 
 
 @pytest.mark.parametrize(
-    "study, case, data",
+    "study, case",
     [
-        ("falsify-paper", "paper-ellipse", "falsify_paper_factors"),
-        ("falsify-panda", "panda-ellipse", "falsify_panda_factors"),
-        ("falsify-paper-tuned", "paper-ellipse-noisy", FT),
-        ("falsify-panda-tuned", "panda-ellipse-noisy", PT),
+        ("falsify-paper", "paper-ellipse"),
+        ("falsify-panda", "panda-ellipse"),
+        ("falsify-paper-tuned", "paper-ellipse-noisy"),
+        ("falsify-panda-tuned", "panda-ellipse-noisy"),
     ],
 )
-def test_the_published_falsifications_are_their_studys_falsification_stage(study, case, data):
-    """make docs-data runs each falsification study and copies its falsification stage's
-    summary.json to the data file the tables read; that file searched the study's box, with the
-    study's controllers, property, budget and margins, each law at the study's settings (its own,
-    or the tuned study's kept ones as NAME-tuned, untuned here)."""
+def test_the_published_falsifications_are_their_studys_falsification_stage(study, case):
+    """make docs-data runs each falsification study and copies its report, whose falsification
+    and margin entries the tables read: that report searched the study's box, with the study's
+    controllers, property, budget and margins, each law at the study's settings (its own, or the
+    tuned study's kept ones as NAME-tuned, untuned here); every worst plant lies in the box."""
     from nnrobust.study import load_study
 
     spec = load_study(ROOT / "benchmarks" / "studies" / f"{study}.toml")
-    text = (ROOT / "Makefile").read_text()
-    assert f"cp $(OUT)/{study}/cases/{case}/falsify/summary.json $(DATA)/{data}.json" in text
+    name = study.replace("-", "_")
     assert any(study in " ".join(c) for c in _docs_data_commands() if c[:3] == ["for", "study", "in"])
-    assert f"benchmarks/studies/{study}.toml" in render_tables.FALSIFY_COMMANDS[data]
-    summary = json.loads((render_tables.DATA / f"{data}.json").read_text())
-    assert spec.fixed == spec.controllers == list(summary["controllers"])  # nothing tuned again here
-    assert summary["properties"] == spec.require and summary["budget"] == spec.budgets["falsify"]
-    assert summary["seed"] == spec.seed and bool(summary.get("margin")) == spec.budgets["margin"]
-    box = {k: (v["low"], v["high"], v["log"]) for k, v in summary["box"].items()}
-    declared = {
-        k: (*v.get("uniform", v.get("loguniform", ())), "loguniform" in v) for k, v in spec.vary.items()
+    report = _read(name)
+    assert report["study"] == study and list(report["cases"]) == [case]
+    assert report["require"] == spec.require
+    assert {k: report["budgets"][k] for k in ("falsify", "margin")} == {
+        k: spec.budgets[k] for k in ("falsify", "margin")
     }
-    assert box == declared
+    laws = report["cases"][case]["controllers"]
+    assert spec.fixed == spec.controllers == list(laws)  # nothing tuned again here
+    bounds = {k: v.get("uniform", v.get("loguniform")) for k, v in spec.vary.items()}
+    for controller, entry in laws.items():
+        found = entry["falsification"]
+        assert found["simulations"] == found["random_baseline"]["simulations"] == spec.budgets["falsify"]
+        assert bool(entry.get("margin")) == spec.budgets["margin"], controller
+        for plant in (found["worst"], found["random_baseline"]["worst"]):
+            for key, value in plant["values"].items():
+                low, high = bounds[key]
+                assert low <= value <= high, (controller, key, value)
+    assert f"<!-- table: {study}-factors -->" in (ROOT / "docs" / "falsification.md").read_text()
 
 
 def test_the_panda_certification_prose_matches_its_report():
     """docs/falsification.md: on the Panda's box the NN, Slotine-Li and the RBF network are
     certified, the sliding-mode term fails on the quoted count of draws, the PD and no-u0 on all."""
-    report = json.loads((render_tables.DATA / "falsify_panda.json").read_text())
+    report = _read("falsify_panda")
     (cert,) = report["cases"].values()
     failing = {c: e["certificates"][0]["k"] for c, e in cert["controllers"].items()}
     held = {c for c, e in cert["controllers"].items() if e["certificates"][0]["holds"]}
@@ -2294,7 +2354,7 @@ def test_the_panda_certification_prose_matches_its_report():
 def test_only_slotine_li_is_certified_on_the_papers_box():
     """README.md: of the laws at the paper's gains, the falsify-paper study certifies only
     Slotine-Li on its fresh draws (its certificate and the report's own verdict agree)."""
-    report = json.loads((render_tables.DATA / "falsify_paper.json").read_text())
+    report = _read("falsify_paper")
     controllers = report["cases"]["paper-ellipse"]["controllers"]
     held = [c for c, e in controllers.items() if all(cert["holds"] for cert in e["certificates"])]
     assert held == ["slotine-li"]
@@ -2307,14 +2367,14 @@ def test_on_the_pandas_box_only_tuned_no_u0_and_the_nn_are_falsified():
     falsification finds a violation for no-u0 and the NN alone (the NN's by the random baseline
     only); every other law holds the largest box the margin search reaches, and every law but
     no-u0 is certified on the study's 59 draws."""
-    data = json.loads((render_tables.DATA / f"{PT}.json").read_text())
+    data = _read(PT)
     falsified = {c: e["falsified_by"] for c, e in data["controllers"].items() if e["falsified"]}
     assert falsified == {"no-u0-tuned": ["search", "random"], "nn-tuned": ["random"]}
     assert set(data["controllers"]) - set(falsified) == set(PT_HELD)
     for c in PT_HELD:
         margin = data["margin"][c]
         assert margin["violated_at"] is None and margin["holds_up_to"] == margin["largest_scale"], c
-    report = json.loads((render_tables.DATA / "falsify_panda_tuned.json").read_text())
+    report = _read("falsify_panda_tuned")
     controllers = report["cases"]["panda-ellipse-noisy"]["controllers"]
     assert [c for c, e in controllers.items() if not e["certificates"][0]["holds"]] == ["no-u0-tuned"]
 
@@ -2326,7 +2386,7 @@ def test_the_tuned_rbf_setting_runs_away_at_the_centre_of_the_papers_box():
     friction."""
     from nnrobust.experiment import run_experiment
 
-    data = json.loads((render_tables.DATA / f"{FT}.json").read_text())
+    data = _read(FT)
     centre = _worst_config(data["margin"]["rbf-nn-tuned"]["violating_plant"]["command"])
     assert centre.plant.disturbance_scale == 1.25 and centre.plant.friction_scale == 1.0
     assert run_experiment(centre).metrics()["runaway"]

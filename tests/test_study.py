@@ -104,9 +104,13 @@ def test_the_report_holds_every_stage_for_every_controller(study):
     ]
     assert str(here / "study.toml") in report["inputs"]
     assert any(p.endswith("laws.py") for p in report["inputs"])
+    # beneath the folder the study ran from (the suite's: the project), a path is relative to it
+    policies = EXAMPLES / "policies"
+    if policies.is_relative_to(Path.cwd()):
+        policies = policies.relative_to(Path.cwd())
     assert {p for p in report["inputs"] if p.endswith(".onnx")} == {
-        str(EXAMPLES / "policies" / "residual.onnx"),
-        str(EXAMPLES / "policies" / "torque.onnx"),
+        str(policies / "residual.onnx"),
+        str(policies / "torque.onnx"),
     }
     for name in ("summary.csv", "summary.tex"):
         assert (out / "tables" / name).read_text().count("paper-ellipse-noisy") == 5
@@ -496,3 +500,37 @@ def test_a_changed_study_is_refused_naming_what_changed(study, tmp_path, capsys)
     shutil.copy(here / "laws.py", tmp_path / "laws.py")
     assert main(["study", str(tmp_path / "study.toml"), "--out", str(copy), "--quiet"]) == 2
     assert "changed since its rows were computed: budgets.validation 2 -> 3" in capsys.readouterr().err
+
+
+def test_stages_side_by_side_give_their_results_in_order_and_stop_together_on_an_error():
+    """side_by_side: each stage's result in the stages' order; when one fails, the others are
+    asked to stop at their next check (an engine's check_interrupt) and the first error is raised
+    once all have ended; the request is lifted afterwards (the next run is not stopped)."""
+    import threading
+
+    from nnrobust.signals import check_interrupt
+    from nnrobust.study.engine import side_by_side
+
+    assert side_by_side([lambda: 1, lambda: 2, lambda: 3]) == [1, 2, 3]
+    stopped = threading.Event()
+    failing = threading.Event()
+
+    def long_stage():
+        failing.wait(10)
+        try:
+            for _ in range(1000):  # 100 s unless stopped
+                check_interrupt()
+                threading.Event().wait(0.1)
+        except KeyboardInterrupt:
+            stopped.set()
+            raise
+        return "never stopped"
+
+    def failing_stage():
+        failing.set()
+        raise ValueError("this stage's inputs are bad")
+
+    with pytest.raises(ValueError, match="inputs are bad"):
+        side_by_side([long_stage, failing_stage])
+    assert stopped.is_set()
+    check_interrupt()  # lifted

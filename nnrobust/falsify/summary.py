@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..drawing import drawn_alone
 from ..properties import Property
 from .history import _history
 from .spec import Box, FalsifySpec, _searched_sweep
@@ -146,6 +147,7 @@ def _write_csv(folder: Path, summary: dict) -> None:
     os.replace(tmp, folder / "falsification.csv")
 
 
+@drawn_alone
 def plot_convergence(rows: dict, folder: Path) -> None:
     """DIR/convergence.png and .svg: the least margin found against simulations, per controller,
     for the falsifier and its random baseline.

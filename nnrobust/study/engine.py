@@ -21,11 +21,16 @@ over the steps of a run, the loop alone, on the backend each ran on).
 
 Every stage resumes (its engine does) and refuses inputs that changed since its rows were
 computed; a finished study reruns to "nothing to do". One local cluster serves every stage.
+Stages that do not need each other's results run side by side on it (:func:`side_by_side`): the
+tunings of the optimiser seeds, then certify, falsify and the second engine's draws, so that
+one's last tasks and the next one's first share the workers instead of leaving one idle. Each
+stage's results do not depend on that timing (its draws and its searches are seeded).
 """
 
 from __future__ import annotations
 
 import json
+import threading
 from pathlib import Path
 
 from ..exceptions import ChangedInputs, ConfigError, NNRobustError
@@ -265,10 +270,9 @@ def _run_case(
     train_samples = b["train_samples"] if draws_differ(sweep) else 1
     if tuned and train_samples < b["train_samples"]:
         say(f"{name}: every draw is the same plant (no box, no noise, no drawn model error): tuned on one")
-    for s in range(b["seeds"]):
-        if not tuned:
-            break
-        say(f"{name}: tune, seed {s} of {b['seeds']}: {', '.join(tuned)}, {b['tune']} simulations each")
+    together = _Together(progress)
+
+    def tune(s: int, told):
         tune_spec = TuneSpec(
             str(case_file),
             list(tuned),
@@ -279,14 +283,22 @@ def _run_case(
             max_saturated=b["max_saturated"],
             seed=spec.seed + s,
         )
-        tunings[s] = run_tune(
+        return run_tune(
             tune_spec,
             here / f"tune-seed{s}",
             scheduler=address,
             overwrite=overwrite,
-            progress=progress,
+            progress=told,
             ship_files=ship,
         )
+
+    if tuned:
+        seeds = range(b["seeds"])
+        say(
+            f"{name}: tune {b['seeds']} optimiser seed{'s side by side' if b['seeds'] > 1 else ''}: "
+            f"{', '.join(tuned)}, {b['tune']} simulations each"
+        )
+        tunings = dict(zip(seeds, side_by_side([lambda s=s, t=together.stage(): tune(s, t) for s in seeds])))
     out["stages"]["tune"] = (
         "finished"
         if tuned
@@ -381,12 +393,12 @@ def _run_case(
         f"(epsilon {b['epsilon']:g}, beta {b['beta']:g})"
     )
     certify_spec = load_sweep(certify_file)
-    summary, rows = _certified(spec, certify_spec, here / "certify", address, overwrite, progress, ship)
-    out["stages"]["certify"] = "finished"
-    out["certify"] = summary
-    out["held_out"] = _varies(rows)
-    out["step_cost"] = step_cost(certify_spec, rows)
-    out["failures"] = failures(rows)
+    together = _Together(progress)
+    status: dict[str, str] = {}  # stage -> how it ended, put in the report in the stages' order
+    told = together.stage()
+    stages = {
+        "certify": lambda: _certified(spec, certify_spec, here / "certify", address, overwrite, told, ship)
+    }
 
     # 4. falsify the kept settings
     if spec.vary and b["falsify"]:
@@ -400,43 +412,117 @@ def _run_case(
             margin=b["margin"],
             tuned=settings or None,
         )
-        out["falsify"] = run_falsify(
-            falsify_spec, here / "falsify", scheduler=address, overwrite=overwrite, progress=progress,
+        falsify_told = together.stage()
+        stages["falsify"] = lambda: run_falsify(
+            falsify_spec, here / "falsify", scheduler=address, overwrite=overwrite, progress=falsify_told,
             claim=(b["epsilon"], b["beta"]), ship_files=ship,
         )  # fmt: skip
-        out["stages"]["falsify"] = "finished"
     elif b["falsify"]:
-        out["stages"]["falsify"] = "skipped: the study has no [vary] box to search"
+        status["falsify"] = "skipped: the study has no [vary] box to search"
     else:
-        out["stages"]["falsify"] = "skipped: falsify = 0"
-
-    # 5. the kept laws exported and timed out of Python
-    if b["realtime"]:
-        say(f"{name}: export the kept laws and time their steps out of Python")
-        out["realtime"] = realtime(certify_spec, certify_names, here / "realtime")
-        out["stages"]["realtime"] = "finished"
-    else:
-        out["stages"]["realtime"] = "skipped: realtime = false"
+        status["falsify"] = "skipped: falsify = 0"
 
     # 6. the certification draws again on the second engine
     if not b["second_engine"]:
-        out["stages"]["engine"] = "skipped: second_engine = false"
-        return out
+        status["engine"] = "skipped: second_engine = false"
+    elif not _has_mujoco():
+        status["engine"] = "skipped: MuJoCo is not installed (pip install 'nnrobust[mujoco]')"
+    else:
+        again = load_sweep(certify_file)
+        again.set["plant.engine"] = "mujoco"
+        engine_file = here / "certify-mujoco.toml"
+        _stage_file(engine_file, again.to_toml(), before)
+        say(f"{name}: the certification draws again with MuJoCo as the plant")
+        engine_spec = load_sweep(engine_file)
+        engine_told = together.stage()
+        stages["engine"] = lambda: _certified(
+            spec, engine_spec, here / "certify-mujoco", address, overwrite, engine_told, ship
+        )[0]
+    if len(stages) > 1:
+        say(f"{name}: {', '.join(stages)} side by side")
+    done = dict(zip(stages, side_by_side(list(stages.values()))))
+    summary, rows = done.pop("certify")
+    out["certify"] = summary
+    out["held_out"] = _varies(rows)
+    out["step_cost"] = step_cost(certify_spec, rows)
+    out["failures"] = failures(rows)
+    status.update({stage: "finished" for stage in ("certify", *done)})
+    out.update(done)
+
+    # 5. the kept laws exported and timed out of Python: alone on the machine, after the stages
+    # above (a step timed beside the workers' simulations would be timed on a busy core)
+    if b["realtime"]:
+        say(f"{name}: export the kept laws and time their steps out of Python")
+        out["realtime"] = realtime(certify_spec, certify_names, here / "realtime")
+        status["realtime"] = "finished"
+    else:
+        status["realtime"] = "skipped: realtime = false"
+    out["stages"].update({stage: status[stage] for stage in ("certify", "falsify", "realtime", "engine")})
+    return out
+
+
+def _has_mujoco() -> bool:
     try:
         import mujoco  # noqa: F401
     except ImportError:
-        out["stages"]["engine"] = "skipped: MuJoCo is not installed (pip install 'nnrobust[mujoco]')"
-        return out
-    again = load_sweep(certify_file)
-    again.set["plant.engine"] = "mujoco"
-    engine_file = here / "certify-mujoco.toml"
-    _stage_file(engine_file, again.to_toml(), before)
-    say(f"{name}: the certification draws again with MuJoCo as the plant")
-    out["engine"], _ = _certified(
-        spec, load_sweep(engine_file), here / "certify-mujoco", address, overwrite, progress, ship
-    )
-    out["stages"]["engine"] = "finished"
-    return out
+        return False
+    return True
+
+
+def side_by_side(stages: list) -> list:
+    """Each stage's result (callables, each a stage engine run with its own client of the study's
+    cluster), the stages run on threads side by side: one's last tasks and the next one's first
+    share the workers. The first error (or interrupt) asks the others to stop at their next check
+    (:func:`nnrobust.signals.stop_stages`); once every stage has ended, each keeping what it
+    computed, it is raised.
+    """
+    if len(stages) == 1:
+        return [stages[0]()]
+    from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
+
+    from ..signals import stop_stages
+
+    pool = ThreadPoolExecutor(len(stages), thread_name_prefix="nnrobust-stage")
+    futures = [pool.submit(stage) for stage in stages]
+    try:
+        finished, _ = wait(futures, return_when=FIRST_EXCEPTION)
+        first = next((f.exception() for f in futures if f in finished and f.exception()), None)
+        if first is not None:
+            raise first
+    except BaseException:
+        stop_stages()
+        try:
+            wait(futures)
+        finally:
+            stop_stages(False)
+            pool.shutdown(wait=False)
+        raise
+    pool.shutdown()
+    return [f.result() for f in futures]
+
+
+class _Together:
+    """One progress display for the stages running side by side: the sum of their done and total
+    runs, told to ``progress(done, total)``.
+    """
+
+    def __init__(self, progress):
+        self.progress, self.counts, self.lock = progress, {}, threading.Lock()
+
+    def stage(self):
+        """The ``progress`` callback of one more stage."""
+        if self.progress is None:
+            return None
+        key = len(self.counts)
+        self.counts[key] = (0, 0)
+
+        def told(done: int, total: int) -> None:
+            with self.lock:
+                self.counts[key] = (done, total)
+                counts = self.counts.values()
+                self.progress(sum(d for d, _ in counts), sum(t for _, t in counts))
+
+        return told
 
 
 def _certified(

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..drawing import drawn_alone
 from ..results import write_json_atomic
 from ..tune.engine import STUDY_REPORT
 from ..tune.space import fixed_text
@@ -58,16 +59,30 @@ def _inputs(spec: StudySpec) -> dict:
     from ..study_folder import file_sha256
     from ..sweep.spec import study_inputs
 
-    out = {str(spec.path): file_sha256(spec.path)}
+    out = {_shown(spec.path): file_sha256(spec.path)}
     if spec.tuned:  # the tuning the settings come from
         from ..tune.engine import tuned_file
 
         source, _ = tuned_file(spec.tuned)
-        out[str(source)] = file_sha256(source)
+        out[_shown(source)] = file_sha256(source)
     for case in spec.cases:
         for path, digest in study_inputs(spec.case_sweep(case)).files.values():
-            out[path] = digest
+            out[_shown(path)] = digest
     return out
+
+
+def _shown(path) -> str:
+    """A path as the report shows it: relative to the folder the study was run from when it lies
+    beneath it (a report read on another machine names the project's files, not this one's
+    folders), else as given; a robot's name (a built-in URDF) unchanged.
+    """
+    p = Path(path)
+    if not p.is_absolute():
+        return str(path)
+    try:
+        return str(p.relative_to(Path.cwd()))
+    except ValueError:
+        return str(path)
 
 
 def _commands(spec: StudySpec, folder: Path, name: str, case: dict) -> dict:
@@ -165,6 +180,7 @@ def _controller_entry(spec: StudySpec, case: dict, c: str) -> dict:
             "metrics": worst["metrics"],
             "command": worst["command"],
         }
+        entry["falsification"] = found  # the stage's record: both searches, the baseline's certificate
     margins = (case.get("falsify") or {}).get("margin", {})
     if label in margins or c in margins:
         entry["margin"] = margins.get(label) or margins.get(c)
@@ -315,6 +331,7 @@ def write_tables(report: dict, folder: Path) -> list[Path]:
     return [out / "summary.csv", out / "summary.tex"]
 
 
+@drawn_alone
 def _figure(name: str, case: dict, folder: Path) -> str:
     """The certification draws' error CDF per controller: saved as PNG, SVG and PDF, and returned
     as a base64 PNG for the HTML.

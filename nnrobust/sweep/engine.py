@@ -439,7 +439,8 @@ def check_workers(client, address: str) -> None:
 def _client(workers: int | None, scheduler: str | None):
     """A client of an existing scheduler, or of a LocalCluster on 127.0.0.1 (its HTTP server on a
     free loopback port) with one single-threaded worker process per core; closed on the way out,
-    whatever happens.
+    whatever happens. It is this thread's current client: ``distributed.wait`` and
+    ``as_completed`` wait with it, not with another thread's (a study's stages side by side).
     """
     from distributed import Client
 
@@ -447,14 +448,16 @@ def _client(workers: int | None, scheduler: str | None):
         client = Client(check_scheduler(scheduler), timeout="20s")
         try:
             check_workers(client, scheduler)
-            yield client
+            with client.as_current():
+                yield client
         finally:
             client.close()
         return
     cluster = checked_local_cluster(workers)
     client = Client(cluster)
     try:
-        yield client
+        with client.as_current():
+            yield client
     finally:
         client.close()
         cluster.close()
@@ -685,6 +688,7 @@ def wait_alive(futures: list, first: bool = False) -> None:
     since = None
     revived = False
     while True:
+        check_interrupt()  # a stop asked of stages run side by side (signals.stop_stages)
         try:
             wait(futures, timeout=5, return_when=return_when)
             return
@@ -907,11 +911,12 @@ def _run_sweep(
         chunk_of = {f.key: chunk for f, chunk in zip(futures, chunks)}
         if progress:
             progress(skipped, total)
-        pending = as_completed(futures)
+        pending = as_completed(futures, loop=client.loop)
         unfinished = {f.key: f for f in futures}
         del futures  # as_completed holds them until they finish; each is released once written
         suspects: list[tuple[int, str]] = []  # rows of chunks whose workers died
         for future in pending:
+            check_interrupt()
             unfinished.pop(future.key, None)
             chunk = chunk_of.pop(future.key)
             if future.cancelled() and stop and group(chunk[0]) in stopped:

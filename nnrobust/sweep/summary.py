@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..drawing import drawn_alone
 from ..results import write_json_atomic
 from .spec import SweepSpec, draw, rerun_command
 
@@ -129,6 +130,7 @@ def format_summary(summary: dict) -> str:
     return "\n".join(lines)
 
 
+@drawn_alone
 def plot_sweep(spec: SweepSpec, frame, folder: str | Path) -> list[Path]:
     """DIR/plots: the error CDF per controller, the error against each varied key and the Pareto
     picture of error against torque (completed runs; errors in mm over t >= 2 s).

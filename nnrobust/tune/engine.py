@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..config import CLASS_PATTERN
+from ..drawing import drawn_alone
 from ..exceptions import ConfigError, NNRobustError
 from ..signals import signals_as_interrupt
 from .space import SearchSpace, arm_scales, custom_space, search_space, tunable
@@ -986,6 +987,7 @@ def _write_json(path: Path, data: dict) -> None:
     os.replace(tmp, path)
 
 
+@drawn_alone
 def plot_pareto(summary: dict, folder: Path) -> None:
     """DIR/pareto.png and .svg: every controller's Pareto front, RMS error against RMS torque."""
     import matplotlib
