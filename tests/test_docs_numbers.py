@@ -1813,16 +1813,19 @@ QUOTED_FIGURES: list[tuple] = [
     ),
     (
         "docs/study.md",
-        r"kept both workers busy (\d+) % of its",
+        r"kept both workers busy (\d+) % of their",
         "study_overhead_falsify_panda",
-        lambda d: d["simulation_seconds"]["falsify"] / (2 * _stage_wall("falsify")(d)),
+        lambda d: (
+            (d["simulation_seconds"]["certify"] + d["simulation_seconds"]["falsify"])
+            / (2 * _stage_wall("certify, falsify")(d))
+        ),
         100.0,
     ),
     (
         "docs/study.md",
-        r"busy \d+ % of its (\d+) s\.",
+        r"busy \d+ % of their (\d+) s\.",
         "study_overhead_falsify_panda",
-        _stage_wall("falsify"),
+        _stage_wall("certify, falsify"),
         1.0,
     ),
     (

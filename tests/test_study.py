@@ -534,3 +534,33 @@ def test_stages_side_by_side_give_their_results_in_order_and_stop_together_on_an
         side_by_side([long_stage, failing_stage])
     assert stopped.is_set()
     check_interrupt()  # lifted
+
+
+def test_an_interrupt_in_one_stage_stops_the_others_and_the_study_resumes(study, tmp_path, monkeypatch):
+    """A stop while certify, falsify and the MuJoCo draws run side by side (here: the
+    falsification interrupted as it starts) ends every stage, each keeping what it computed; run
+    again, the study finishes with the numbers of a study never interrupted."""
+    import nnrobust.falsify
+
+    here, _, report = study
+    shutil.copy(here / "laws.py", tmp_path / "laws.py")
+    (tmp_path / "study.toml").write_text(STUDY)
+    spec = load_study(tmp_path / "study.toml")
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    with monkeypatch.context() as patch:
+        patch.setattr(nnrobust.falsify, "run_falsify", interrupted)
+        with pytest.raises(KeyboardInterrupt):
+            run_study(spec, tmp_path / "out", workers=2)
+    assert not (tmp_path / "out" / "report.json").exists()
+    again = run_study(spec, tmp_path / "out", workers=2)
+    for name, case in report["cases"].items():
+        for c, entry in case["controllers"].items():
+            resumed = again["cases"][name]["controllers"][c]
+            assert resumed["statistics"] == entry["statistics"], c
+            drop = ("command",)  # it names the law's file, in this test's folder
+            assert {k: v for k, v in resumed["worst"].items() if k not in drop} == {
+                k: v for k, v in entry["worst"].items() if k not in drop
+            }, c
