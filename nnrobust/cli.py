@@ -1383,12 +1383,15 @@ def build_parser() -> argparse.ArgumentParser:
         "study",
         parents=[many],
         help="one study file -> one report: tune, validate, certify, falsify",
-        description="Run a study file's cases and controllers through every stage in order: tune "
-        "(each optimiser seed), validate every seed's setting on fresh draws and keep the best, "
-        "certify the kept settings on draws the selection never saw (with paired comparisons), and "
-        "falsify them; each stage is the sweep, tune or falsify command's own engine and folder. "
-        "Writes DIR/report.html, report.json, tables/ and figures/. Re-running the same command "
-        "resumes (docs/study.md).",
+        description="Run a study file's cases and controllers through every stage: tune (each "
+        "optimiser seed), validate every seed's setting on fresh draws and keep the best, certify "
+        "the kept settings on draws the selection never saw (with paired comparisons), falsify "
+        "them, and where the study asks, export and time them out of Python (realtime) and run the "
+        "certification draws on MuJoCo (second_engine); each "
+        "stage is the sweep, tune, falsify or export command's own engine and folder, and stages "
+        "that do not need each other's results (the seeds' tunings; certify, falsify and MuJoCo) "
+        "run side by side. Writes DIR/report.html, report.json, tables/ and figures/. Re-running "
+        "the same command resumes (docs/study.md).",
     )
     study.add_argument("study", help="study file (TOML)")
     study.add_argument("--out", required=True, help="study folder (cases/, report.json, report.html)")
