@@ -420,6 +420,10 @@ def cmd_view(args) -> int:
     return 0
 
 
+_BAR_OPEN = [False]
+"""Whether a progress line waits on stderr for its end (an error then starts a line of its own)."""
+
+
 def _bar(done: int, total: int, text: str) -> None:
     """One progress line on stderr, redrawn in place."""
     filled = int(30 * done / max(total, 1))
@@ -429,6 +433,14 @@ def _bar(done: int, total: int, text: str) -> None:
         file=sys.stderr,
         flush=True,
     )
+    _BAR_OPEN[0] = True
+
+
+def _error(line: str) -> None:
+    """``nnrobust: LINE`` on stderr, on a line of its own."""
+    start = "\n" if _BAR_OPEN[0] else ""
+    _BAR_OPEN[0] = False
+    print(f"{start}nnrobust: {line}", file=sys.stderr)
 
 
 def _resumable(work, kept):
@@ -637,6 +649,7 @@ def cmd_study(args) -> int:
     def say(line: str) -> None:
         if not args.quiet:
             print(f"\rstudy {spec.name} [{time.monotonic() - start:.0f} s] {line}".ljust(60), file=sys.stderr)
+            _BAR_OPEN[0] = False
 
     def progress(done: int, total: int) -> None:
         if not args.quiet:
@@ -1516,16 +1529,16 @@ def main(argv: list[str] | None = None) -> int:
         os.dup2(devnull, sys.stdout.fileno())
         return 0
     except NNRobustError as err:
-        print(f"nnrobust: error: {err}", file=sys.stderr)  # one bounded line (NNRobustError.__str__)
+        _error(f"error: {err}")  # one bounded line (NNRobustError.__str__)
         return 2
     except OSError as err:  # a path too long, a full or read-only disk, met where no check named it
         where = f"{err.filename}: " if err.filename else ""
-        print(f"nnrobust: error: {one_line(where + (err.strerror or str(err)))}", file=sys.stderr)
+        _error(f"error: {one_line(where + (err.strerror or str(err)))}")
         return 1 if err.errno in (errno.ENOSPC, errno.EDQUOT, errno.EIO, errno.EROFS) else 2
     except ValueError as err:
         if "null byte" not in str(err):  # a programming error: its traceback is wanted
             raise
-        print("nnrobust: error: a path or name contains a NUL character (\\x00)", file=sys.stderr)
+        _error("error: a path or name contains a NUL character (\\x00)")
         return 2
     except ExtrasInterrupted as err:
         print(f"nnrobust: {err}", file=sys.stderr)

@@ -13,6 +13,7 @@ STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
 _pending = False
 _active = 0  # nesting depth of signals_as_interrupt blocks
 _stopping = False  # stages run side by side are asked to stop (stop_stages)
+_held = 0  # nesting depth of signals_held blocks
 
 
 def check_interrupt() -> None:
@@ -44,7 +45,24 @@ def clear_interrupt() -> None:
 def _stop(signum, frame):
     global _pending
     _pending = True
-    if _active:  # outside a block the work is over (or not begun): remember, do not raise
+    if _active and not _held:  # outside a block the work is over (or not begun): remember, do not raise
+        raise KeyboardInterrupt
+
+
+@contextlib.contextmanager
+def signals_held():
+    """Ctrl-C, SIGTERM and SIGHUP only noted in the block (a cluster being closed, stages being
+    stopped: work that a KeyboardInterrupt cut short would leave half done); a stop noted there
+    is raised as it ends, unless an exception already leaves the block. Unlike
+    :func:`signals_deferred` it holds a signal whichever thread the system delivers it to.
+    """
+    global _held
+    _held += 1
+    try:
+        yield
+    finally:
+        _held -= 1
+    if _pending and _active and not _held:
         raise KeyboardInterrupt
 
 

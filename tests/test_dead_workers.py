@@ -135,3 +135,64 @@ def test_a_local_cluster_whose_nannies_gave_up_gets_new_workers(monkeypatch):
     finally:
         client.close()
         cluster.close()
+
+
+def test_a_wait_for_tasks_notices_a_stop_while_a_task_hangs():
+    """A study's stages run on threads, which receive no signal: a stop asked of them
+    (signals.stop_stages) is noticed by a sweep waiting on a task that never ends (a law that
+    hangs), within a poll, not when the task ends."""
+    import threading
+    import time
+
+    from distributed import Client
+
+    from nnrobust.signals import stop_stages
+    from nnrobust.sweep import engine
+
+    cluster = engine.local_cluster(1)
+    client = Client(cluster)
+    ended = []
+
+    def stage():
+        with client.as_current():
+            future = client.submit(time.sleep, 300, pure=False)
+            try:
+                for _ in engine.as_they_finish([future]):
+                    ended.append("finished")
+            except KeyboardInterrupt:
+                ended.append("stopped")
+
+    try:
+        thread = threading.Thread(target=stage)
+        thread.start()
+        time.sleep(0.5)
+        stop_stages()
+        thread.join(120)  # the task sleeps 300 s
+        assert ended == ["stopped"]
+    finally:
+        stop_stages(False)
+        client.close()
+        cluster.close()
+
+
+def test_a_stop_signal_while_a_cluster_closes_is_raised_once_it_has_closed():
+    """signals_held (around closing a cluster, around stopping side-by-side stages): a stop
+    signal is only noted in the block and raised as it ends; with an exception already leaving
+    the block, that exception leaves, not a second interrupt. (The handler is called directly:
+    which thread the system would deliver a signal to does not matter to it.)"""
+    import signal
+
+    from nnrobust import signals
+
+    done = []
+    with signals.signals_as_interrupt():
+        with pytest.raises(KeyboardInterrupt):
+            with signals.signals_held():
+                signals._stop(signal.SIGINT, None)  # not raised here: the close goes on
+                done.append("closed")
+        assert done == ["closed"]
+        with pytest.raises(ValueError):
+            with signals.signals_held():
+                signals._stop(signal.SIGINT, None)
+                raise ValueError("the close failed")
+    signals.check_interrupt()  # the block handled it

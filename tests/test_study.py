@@ -337,6 +337,10 @@ def test_cases_of_one_experiment_with_overrides_of_their_own(tmp_path):
         (("{uniform = [0.5, 2.0]}", "[0.5, 2.0]"), "a study's uncertainty set is distributions"),
         (("<=0.002", "<=0.002 mm"), "require"),
         (
+            ("{uniform = [0.5, 2.0]}", "{normal = [1.0, 0.2]}"),
+            "falsify searches uniform and loguniform ranges, not normal",
+        ),
+        (
             ('cases = ["paper-ellipse-noisy"]', 'cases = [{name = "a", bas = "paper-ellipse-noisy"}]'),
             "cases[0].bas: unknown key; did you mean 'base'?",
         ),

@@ -119,6 +119,10 @@ def _check_controllers(spec: StudySpec) -> None:
             parse_sweep(parse_toml(sweep.to_toml(), where), where)
             config = base_config(sweep)  # the case's experiment with the study's and its own [set]
             check_controllers(sweep, base_values(sweep))
+            if spec.vary and spec.budgets["falsify"]:
+                from ..falsify.spec import box_of
+
+                box_of(sweep)  # the box the falsify stage will search: ranges only
         except ConfigError as err:
             key = err.key.removeprefix(f"{where}: ")
             raise ConfigError(f"{where}: {key}", err.message) from err
@@ -183,7 +187,9 @@ def run_study(
     check_local_workers(workers, scheduler)  # before the folder is made
     prepare(spec, folder, overwrite)
     ship = ships_files(None, scheduler)  # the stages run on the study's own cluster: decided here
-    with _SharedCluster(workers, scheduler) as address:
+    from ..signals import signals_as_interrupt
+
+    with signals_as_interrupt(), _SharedCluster(workers, scheduler) as address:
         cases = {}
         for case in spec.cases:
             before: dict[Path, str | None] = {}  # the stages' input files as they were
@@ -219,7 +225,10 @@ class _SharedCluster:
 
     def __exit__(self, *exc):
         if self.cluster is not None:
-            self.cluster.close()
+            from ..signals import signals_held
+
+            with signals_held():  # a close cut short leaves its cluster closing for 10 s at exit
+                self.cluster.close()
         return False
 
 
@@ -469,6 +478,11 @@ def _has_mujoco() -> bool:
     return True
 
 
+STOP_SECONDS = 30.0
+"""How long stages asked to stop are waited for (each notices within a second,
+:data:`nnrobust.sweep.engine.POLL_SECONDS`) before the cluster is closed under them."""
+
+
 def side_by_side(stages: list) -> list:
     """Each stage's result (callables, each a stage engine run with its own client of the study's
     cluster), the stages run on threads side by side: one's last tasks and the next one's first
@@ -480,7 +494,7 @@ def side_by_side(stages: list) -> list:
         return [stages[0]()]
     from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
 
-    from ..signals import stop_stages
+    from ..signals import signals_held, stop_stages
 
     pool = ThreadPoolExecutor(len(stages), thread_name_prefix="nnrobust-stage")
     futures = [pool.submit(stage) for stage in stages]
@@ -492,7 +506,8 @@ def side_by_side(stages: list) -> list:
     except BaseException:
         stop_stages()
         try:
-            wait(futures)
+            with signals_held():  # a second Ctrl-C would close the cluster under the stages
+                wait(futures, timeout=STOP_SECONDS)
         finally:
             stop_stages(False)
             pool.shutdown(wait=False)

@@ -26,7 +26,7 @@ from typing import Any
 from ..config import ExperimentConfig
 from ..exceptions import ConfigError, NNRobustError
 from ..package_version import package_version
-from ..signals import STOP_SIGNALS, check_interrupt, signals_as_interrupt
+from ..signals import STOP_SIGNALS, check_interrupt, signals_as_interrupt, signals_held
 from ..verdicts import FLAGS
 from .spec import SweepSpec, base_config, base_values, draw, experiment, study_inputs
 
@@ -439,8 +439,9 @@ def check_workers(client, address: str) -> None:
 def _client(workers: int | None, scheduler: str | None):
     """A client of an existing scheduler, or of a LocalCluster on 127.0.0.1 (its HTTP server on a
     free loopback port) with one single-threaded worker process per core; closed on the way out,
-    whatever happens. It is this thread's current client: ``distributed.wait`` and
-    ``as_completed`` wait with it, not with another thread's (a study's stages side by side).
+    whatever happens. It is this thread's current client: ``distributed.wait`` waits with it,
+    not with another thread's (a study's stages side by side). A stop signal while the cluster
+    closes is held until it has closed (:func:`~nnrobust.signals.signals_held`).
     """
     from distributed import Client
 
@@ -459,8 +460,9 @@ def _client(workers: int | None, scheduler: str | None):
         with client.as_current():
             yield client
     finally:
-        client.close()
-        cluster.close()
+        with signals_held():  # a close cut short leaves its cluster closing for 10 s at exit
+            client.close()
+            cluster.close()
 
 
 CHECK_REPORT_ROWS = 1000
@@ -645,6 +647,8 @@ def ships_files(ship_files: bool | None, scheduler: str | None) -> bool:
     return bool(scheduler) if ship_files is None else ship_files
 
 
+POLL_SECONDS = 1.0
+"""How often a wait for tasks checks for an interrupt and for a cluster left without workers."""
 NO_WORKER_SECONDS = 120.0
 """How long a cluster may have no worker at all before the command stops waiting for it."""
 
@@ -671,6 +675,21 @@ def revive(cluster) -> None:
     cluster.scale(len(cluster.worker_spec))
 
 
+def as_they_finish(futures: list):
+    """Each of ``futures`` as it finishes (or is cancelled), in the order they finish. Between two,
+    an interrupt, or a stop asked of a study's stages run side by side on threads (which receive
+    no signal), is noticed within :data:`POLL_SECONDS` even while every task runs on (a law that
+    hangs): ``distributed.as_completed`` would wait for the next task to finish first.
+    """
+    remaining = dict.fromkeys(futures)  # an ordered set
+    del futures
+    while remaining:
+        wait_alive(list(remaining), first=True)
+        for future in [f for f in remaining if f.done()]:
+            del remaining[future]
+            yield future
+
+
 def wait_alive(futures: list, first: bool = False) -> None:
     """``distributed.wait(futures)`` (with ``first``: until one of them is done), or one error
     instead of a hang when the cluster has had no worker for :data:`NO_WORKER_SECONDS` (every
@@ -690,7 +709,7 @@ def wait_alive(futures: list, first: bool = False) -> None:
     while True:
         check_interrupt()  # a stop asked of stages run side by side (signals.stop_stages)
         try:
-            wait(futures, timeout=5, return_when=return_when)
+            wait(futures, timeout=POLL_SECONDS, return_when=return_when)
             return
         except TimeoutError:
             pass
@@ -892,8 +911,6 @@ def _run_sweep(
     written = parts = 0
     table_schema = schema(spec)
     with signals_as_interrupt(), _client(workers, scheduler) as client:
-        from distributed import as_completed
-
         n_workers = max(len(client.scheduler_info().get("workers", {})), 1)
         size = chunk_size(len(jobs), n_workers, seconds_per_job)
         if stop:  # chunks of one group each, so that a stopped group's chunks can be cancelled
@@ -911,9 +928,9 @@ def _run_sweep(
         chunk_of = {f.key: chunk for f, chunk in zip(futures, chunks)}
         if progress:
             progress(skipped, total)
-        pending = as_completed(futures, loop=client.loop)
+        pending = as_they_finish(futures)
         unfinished = {f.key: f for f in futures}
-        del futures  # as_completed holds them until they finish; each is released once written
+        del futures  # pending holds them until they finish; each is released once written
         suspects: list[tuple[int, str]] = []  # rows of chunks whose workers died
         for future in pending:
             check_interrupt()
@@ -960,7 +977,8 @@ def _run_sweep(
 
 def read_results(folder: str | Path, key: str | None = None):
     """The sweep's rows as a pandas DataFrame (every part), each part checked against ``key``
-    (default: the inputs its folder's marker records) and no row twice.
+    (default: the inputs its folder's marker records) and no row twice; sorted by sample, then
+    controller.
     """
     import pandas as pd
 
@@ -970,7 +988,12 @@ def read_results(folder: str | Path, key: str | None = None):
         recorded = recorded_inputs(Path(folder), "sweep")
         key = recorded.key if recorded is not None else None
     tables = read_parts(Path(folder) / RESULTS, key=key, ids=IDS if key is not None else ())
-    return pd.concat([t.to_pandas() for t in tables], ignore_index=True) if tables else pd.DataFrame()
+    if not tables:
+        return pd.DataFrame()
+    frame = pd.concat([t.to_pandas() for t in tables], ignore_index=True)
+    # in sample order whatever order the parts were written in (an interrupted and resumed sweep
+    # writes other parts): a sum over the rows is then the same to the last bit
+    return frame.sort_values(list(IDS), kind="stable", ignore_index=True)
 
 
 def log(message: str) -> None:
