@@ -38,7 +38,7 @@ OTHERS = [
     "example_study",
 ]
 """Data files with a re-run test of their own below."""
-TIMINGS = ["learning_env", "study_overhead", "study_overhead_falsify_panda", "serve_misses"]
+TIMINGS = ["learning_env", "study_overhead", "study_overhead_falsify_panda", "serve_misses", "fresh_clone"]
 """Timings of this machine quoted in prose: QUOTED_FIGURES checks each quote against its file (a
 rerun measures the machine it runs on: it gives other numbers, not the same)."""
 
@@ -1736,6 +1736,21 @@ QUOTED_FIGURES: list[tuple] = [
         r"and ([\d.]+) µs\n\(Panda\) more",
         "learning_env",
         _learning("panda-ellipse", "single_env_overhead_us"),
+        1.0,
+    ),
+    ("README.md", r"`make test` took (\d+) s on", "fresh_clone", lambda d: d["total_seconds"], 1.0),
+    (
+        "README.md",
+        r"the C\+\+ extension ([\d.]+) minutes",
+        "fresh_clone",
+        lambda d: d["environment_seconds"] / 60,
+        1.0,
+    ),
+    (
+        "README.md",
+        r"pytest-xdist process per core, ([\d.]+) minutes",
+        "fresh_clone",
+        lambda d: d["test_seconds"] / 60,
         1.0,
     ),
     (

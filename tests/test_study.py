@@ -221,6 +221,9 @@ def test_a_rerun_computes_nothing_and_each_replay_command_recomputes_its_stage(s
     assert main(["study", str(here / "study.toml"), "--out", str(out), "--workers", "2", "--quiet"]) == 0
     assert _parts(out) == before
     assert json.loads((out / "report.json").read_text())["cases"] == report["cases"]
+    said: list[str] = []
+    run_study(load_study(here / "study.toml"), out, workers=2, say=said.append)
+    assert said[-1].startswith("nothing computed: every stage's") and _parts(out) == before
     commands = report["cases"]["paper-ellipse-noisy"]["commands"]
     assert set(commands) == {"tune seed 0", "tune seed 1", "validate", "certify", "falsify", "engine"}
     for name in ("validate", "certify", "falsify", "engine", "tune seed 1"):

@@ -186,6 +186,7 @@ def run_study(
 
     check_local_workers(workers, scheduler)  # before the folder is made
     prepare(spec, folder, overwrite)
+    kept = set(_result_parts(folder))
     ship = ships_files(None, scheduler)  # the stages run on the study's own cluster: decided here
     from ..signals import signals_as_interrupt
 
@@ -204,9 +205,20 @@ def run_study(
                     else:
                         _write_if_changed(path, text)
                 raise
+    new = len(set(_result_parts(folder)) - kept)
+    say(
+        f"{new} new part{'s' if new != 1 else ''} of results beside the {len(kept)} kept"
+        if new
+        else f"nothing computed: every stage's {len(kept)} parts of results were there; the report again"
+    )
     from .report import write_report
 
     return write_report(spec, folder, cases)
+
+
+def _result_parts(folder: Path) -> list[Path]:
+    """Every file of rows the stages wrote (sweep results, tuning trials, searches' histories)."""
+    return list((folder / "cases").rglob("part-*.parquet"))
 
 
 class _SharedCluster:
