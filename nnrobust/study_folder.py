@@ -31,6 +31,8 @@ INPUTS_FIELD = b"nnrobust.inputs"
 
 PART_NAME = re.compile(r"part-[0-9a-f]{12}-([0-9a-f]{32})\.parquet")
 """A part's name: a random id, then the first 32 hex digits of the SHA-256 of its bytes."""
+PART_GLOB = "part-*.parquet"
+"""The parts among a folder's files (:data:`PART_NAME` checks each found)."""
 
 MAX_MARKER_BYTES = 1_000_000
 """Largest marker read (a study's is a few kB)."""
@@ -300,7 +302,7 @@ def read_parts(
 
     tables = []
     seen: dict[tuple, Path] = {}
-    for part in sorted(folder.glob("part-*.parquet")):
+    for part in sorted(folder.glob(PART_GLOB)):
         try:
             table = pq.read_table(part, columns=columns)
         except Exception as err:  # pyarrow raises ArrowInvalid, OSError, ...

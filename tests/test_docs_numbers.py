@@ -555,6 +555,22 @@ def _stage_wall(words: str):
     return lambda d: sum(seconds for line, seconds in d["stage_wall_seconds"] if words in line)
 
 
+def _simulated(*stages: str):
+    """The worker seconds of simulation of a study's ``stages``, all of them if none is named
+    (study_overhead.json)."""
+    return lambda d: sum(
+        v
+        for k, v in d["simulation_seconds"].items()
+        if k in stages or (not stages and k != "runs_without_their_own_time")
+    )
+
+
+def _busy(words: str, *stages: str):
+    """The share of the workers' time that ``stages`` simulated while the stage line holding
+    ``words`` ran (study_overhead.json)."""
+    return lambda d: _simulated(*stages)(d) / (d["workers"] * _stage_wall(words)(d))
+
+
 def _box_certified(controller: str, key: str):
     """``key`` of a controller's certificate in the falsify-paper study's report."""
     return lambda d: d["cases"]["paper-ellipse"]["controllers"][controller]["certificates"][0][key]
@@ -1764,7 +1780,7 @@ QUOTED_FIGURES: list[tuple] = [
         "docs/study.md",
         r"its\nsimulations (\d+) worker-seconds",
         "study_overhead",
-        lambda d: sum(v for k, v in d["simulation_seconds"].items() if k != "runs_without_their_own_time"),
+        _simulated(),
         1.0,
     ),
     (
@@ -1792,17 +1808,14 @@ QUOTED_FIGURES: list[tuple] = [
         "docs/study.md",
         r"the MuJoCo draws \(\d+ s of wall time for (\d+) worker",
         "study_overhead",
-        lambda d: sum(d["simulation_seconds"][k] for k in ("certify", "falsify", "certify-mujoco")),
+        _simulated("certify", "falsify", "certify-mujoco"),
         1.0,
     ),
     (
         "docs/study.md",
         r"both workers busy (\d+) % of it\)",
         "study_overhead",
-        lambda d: (
-            sum(d["simulation_seconds"][k] for k in ("certify", "falsify", "certify-mujoco"))
-            / (2 * _stage_wall("certify, falsify")(d))
-        ),
+        _busy("certify, falsify", "certify", "falsify", "certify-mujoco"),
         100.0,
     ),
     (
@@ -1816,7 +1829,7 @@ QUOTED_FIGURES: list[tuple] = [
         "docs/study.md",
         r"of wall time for (\d+) worker-seconds of simulation, a cost",
         "study_overhead_falsify_panda",
-        lambda d: sum(v for k, v in d["simulation_seconds"].items() if k != "runs_without_their_own_time"),
+        _simulated(),
         1.0,
     ),
     (
@@ -1830,10 +1843,7 @@ QUOTED_FIGURES: list[tuple] = [
         "docs/study.md",
         r"kept both workers busy (\d+) % of their",
         "study_overhead_falsify_panda",
-        lambda d: (
-            (d["simulation_seconds"]["certify"] + d["simulation_seconds"]["falsify"])
-            / (2 * _stage_wall("certify, falsify")(d))
-        ),
+        _busy("certify, falsify", "certify", "falsify"),
         100.0,
     ),
     (
@@ -1855,7 +1865,7 @@ QUOTED_FIGURES: list[tuple] = [
         "docs/study.md",
         r"seeds' tunings \(\d+ s of\s+wall time for (\d+) worker",
         "study_overhead",
-        lambda d: d["simulation_seconds"]["tune"],
+        _simulated("tune"),
         1.0,
     ),
     (

@@ -218,7 +218,9 @@ def run_study(
 
 def _result_parts(folder: Path) -> list[Path]:
     """Every file of rows the stages wrote (sweep results, tuning trials, searches' histories)."""
-    return list((folder / "cases").rglob("part-*.parquet"))
+    from ..study_folder import PART_GLOB
+
+    return list((folder / "cases").rglob(PART_GLOB))
 
 
 class _SharedCluster:

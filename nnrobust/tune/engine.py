@@ -982,9 +982,9 @@ def _summary(spec, sweep, controllers, client, sweep_future, base_future, files=
 
 
 def _write_json(path: Path, data: dict) -> None:
-    tmp = path.with_name(f".{path.name}.partial")
-    tmp.write_text(json.dumps(data, indent=1, default=float) + "\n")
-    os.replace(tmp, path)
+    from ..results import write_text_atomic
+
+    write_text_atomic(path, json.dumps(data, indent=1, default=float) + "\n")
 
 
 @drawn_alone
