@@ -280,9 +280,13 @@ TUNED_STUDIES = ("tuned-paper", "tuned-panda")
 """The shipped studies of the fair comparison (benchmarks/studies/), their report.json copied to
 docs/data/tuned_paper.json and tuned_panda.json by `make docs-data`."""
 
-TUNED_COMMAND = " and ".join(
-    f"nnrobust study benchmarks/studies/{s}.toml --out out/{s} --workers 2" for s in TUNED_STUDIES
-)
+
+def _study_command(study: str) -> str:
+    """The command that makes a shipped study's report (benchmarks/studies/STUDY.toml)."""
+    return f"nnrobust study benchmarks/studies/{study}.toml --out out/{study} --workers 2"
+
+
+TUNED_COMMAND = " and ".join(_study_command(s) for s in TUNED_STUDIES)
 
 TUNED_LABELS = {
     "paper-line": "case (a) line",
@@ -569,8 +573,8 @@ def _robustness(name: str):
             )
         errors = "errors are RMS over t ≥ 2 s"
         return table + (
-            f"\n{rows[0]['failing'].split(' of ')[1]} draws per case; {errors}. Made by `nnrobust study "
-            f"benchmarks/studies/{name}.toml --out out/{name} --workers 2` (report.json).\n"
+            f"\n{rows[0]['failing'].split(' of ')[1]} draws per case; {errors}. "
+            f"Made by `{_study_command(name)}` (report.json).\n"
         )
 
     return render
@@ -674,12 +678,6 @@ def engine_gap_tuned() -> str:
     return _markdown(columns, _data("engine_gap")["tuned"], GAP_COMMAND)
 
 
-def _study_command(report: dict) -> str:
-    """The command that makes a shipped study's report (benchmarks/studies/)."""
-    study = report["study"]
-    return f"nnrobust study benchmarks/studies/{study}.toml --out out/{study} --workers 2"
-
-
 def _margin_cell(margin: dict | None) -> str:
     if not margin:
         return "–"
@@ -728,7 +726,7 @@ def _certified_box(name: str):
             ("worst [mm]", "r", _text("max")),
             *_certificate_columns(c, report["budgets"]["beta"]),
         ]
-        return _markdown(columns, rows, _study_command(report))
+        return _markdown(columns, rows, _study_command(report["study"]))
 
     return render
 
@@ -786,7 +784,7 @@ def _falsified(name: str):
             confidence = 100 * (1 - certified[0]["certificates"][0]["beta"])
             header = f"random plants failing: P(fail) ≤ ({confidence:g} % confidence)"
             columns.append((header, "l", _text("certificate")))
-        return _markdown(columns, rows, _study_command(report))
+        return _markdown(columns, rows, _study_command(report["study"]))
 
     return render
 

@@ -261,8 +261,8 @@ def _run_case(
     overwrite: bool,
     say,
     progress,
-    ship: bool = False,
-    before: dict | None = None,
+    ship: bool,
+    before: dict,
 ) -> dict:
     """Every stage of one case on the cluster at ``address``; ``ship``: the files the runs read
     travel with the tasks (:func:`nnrobust.sweep.engine.ships_files`). Each stage's input file is
@@ -274,8 +274,6 @@ def _run_case(
     from ..sweep.engine import read_results, run_sweep
     from ..sweep.spec import load_sweep
     from ..tune.engine import TuneSpec, run_tune
-
-    before = {} if before is None else before
 
     name = spec.case_name(case)
     here = folder / "cases" / name
