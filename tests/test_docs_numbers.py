@@ -2189,7 +2189,10 @@ def test_the_tuned_pandas_falsified_plants_are_what_the_text_says():
     text = (ROOT / "docs" / "falsification.md").read_text()
     no_u0 = _worst_config(data["controllers"]["no-u0-tuned"]["worst"]["command"])
     nn = _worst_config(data["controllers"]["nn-tuned"]["random_baseline"]["worst"]["command"])
-    no_u0_said = (r"saturate in (\d+) %\s+of the steps and it leaves", r"MuJoCo as the plant (\d+) mm\)")
+    no_u0_said = (
+        r"saturate in (\d+) %\s+of the steps and it leaves",
+        r"MuJoCo as the plant loses it too, beyond (\d+) mm",
+    )
     nn_said = (
         r"saturates in (\d+) % of the steps and gives",
         r"MuJoCo as the plant tracks it to ([\d.]+) mm",
@@ -2202,9 +2205,11 @@ def test_the_tuned_pandas_falsified_plants_are_what_the_text_says():
         assert metrics["rms_error_after_2s"] > 0.0005
         mujoco = run_experiment(config.replace(plant={"engine": "mujoco"})).metrics()["rms_error_after_2s"]
         assert (mujoco > 0.0005) == fails
-        assert 1e3 * mujoco == pytest.approx(
-            float(re.search(on_mujoco, text).group(1)), abs=0.5 if fails else 0.005
-        )
+        said = float(re.search(on_mujoco, text).group(1))
+        if fails:  # a lost path: where it ends moves with MuJoCo's floating-point code, by CPU
+            assert 1e3 * mujoco > said
+        else:
+            assert 1e3 * mujoco == pytest.approx(said, abs=0.005)
 
 
 def test_every_worst_plant_fails_on_mujoco_too():
