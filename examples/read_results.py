@@ -22,14 +22,20 @@ def main() -> None:
     parser.add_argument("--run", help="a run folder (e.g. one written by examples/custom_robot.py)")
     args = parser.parse_args()
 
-    rows = nnrobust.read_results(args.sweep)  # one row per (sample, controller): varied values, metrics
+    try:
+        rows = nnrobust.read_results(args.sweep)  # one row per (sample, controller): varied values, metrics
+    except nnrobust.NNRobustError as err:  # no sweep there yet: run examples/sweep.py first
+        raise SystemExit(f"{err} (run examples/sweep.py first, or give --sweep)") from None
+    if not (rows.get("status") == "completed").any():
+        raise SystemExit(f"{args.sweep}: the sweep has no completed row (run examples/sweep.py)")
     print(f"{len(rows)} rows, columns: {', '.join(rows.columns[:8])}, ...")
     rows["error_mm"] = 1e3 * rows["rms_error_after_2s"]
     table = rows.pivot_table(index="sample", columns="controller", values="error_mm")
     print("\nRMS error after 2 s [mm] by controller (quantiles over samples):")
     print(table.quantile([0.5, 0.95, 1.0]).round(3).to_string())
-    wins = (table.drop(columns="nn").min(axis=1) > table["nn"]).mean()
-    print(f"\nthe NN compensator is best on {100 * wins:.0f} % of the samples")
+    if "nn" in table and len(table.columns) > 1:
+        wins = (table.drop(columns="nn").min(axis=1) > table["nn"]).mean()
+        print(f"\nthe NN compensator is best on {100 * wins:.0f} % of the samples")
     heavy = rows["plant.disturbance_scale"] > rows["plant.disturbance_scale"].median()
     print("\nmedian error [mm] with the disturbance below / above its median scale:")
     side = heavy.map({False: "below", True: "above"}).rename("disturbance")

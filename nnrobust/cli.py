@@ -2,7 +2,12 @@
 
 from __future__ import annotations
 
-import argparse
+from .signals import ignore_stop_signals, install_stop_handlers, signals_as_interrupt  # light
+
+if __name__ == "__main__":  # python -m nnrobust.cli: a stop signal during the imports is noted
+    install_stop_handlers()
+
+import argparse  # noqa: E402 (the stop handlers first)
 import errno
 import json
 import os
@@ -22,7 +27,6 @@ from .run_folder import (
     redraw_run,
     write_run,
 )
-from .signals import ignore_stop_signals, install_stop_handlers, signals_as_interrupt
 
 TABLE_COLUMNS = (
     ("run", None),
@@ -851,9 +855,12 @@ def cmd_tune(args) -> int:
         if entry["simulations"] and entry.get("runs_without_result") == entry["simulations"]
     ]
     if never:  # as a sweep whose rows ended without a result: the command did not do its work
+        first = summary["controllers"][never[0]].get("note", "").partition("(first: ")[2].removesuffix(")")
         print(
-            f"nnrobust: {', '.join(never)}: every run ended without a result (refused, raised or crashed): "
-            f"see {out}/summary.json",
+            one_line(
+                f"nnrobust: {', '.join(never)}: every run ended without a result (refused, raised or "
+                f"crashed{'; first: ' + first if first else ''}): see {out}/summary.json"
+            ),
             file=sys.stderr,
         )
         return 1

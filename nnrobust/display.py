@@ -6,11 +6,11 @@ report.json holds), with ``_repr_html_``; ``nnrobust.load_summary(DIR)`` reads a
 from __future__ import annotations
 
 import html
-import json
 import math
 from pathlib import Path
 
 from .exceptions import NNRobustError
+from .results import read_json
 
 
 def _cell(value, scale: float = 1.0, digits: int = 4) -> str:
@@ -151,7 +151,10 @@ def load_summary(folder: str | Path) -> dict:
     folder = Path(folder)
     for marker, (name, kind) in KINDS.items():
         if (folder / marker).is_file() and (folder / name).is_file():
-            return kind(json.loads((folder / name).read_text()))
+            data = read_json(folder / name, "summary")
+            if not isinstance(data, dict):
+                raise NNRobustError(f"{folder / name}: not a summary (its JSON is not a table)")
+            return kind(data)
     raise NNRobustError(
         f"{folder} holds no finished sweep, tuning, falsification or study (no summary.json or report.json "
         "beside its marker); run the command into it first"

@@ -167,33 +167,39 @@ def confidence_text(beta: float) -> str:
     return text if float(text) < 1 else f"1 - {beta:g}"
 
 
-def check_claim(epsilon: float, beta: float, failures: int = 0) -> None:
+CLAIM_FLAGS = ("--epsilon", "--beta", "--failures")
+"""What the command line calls a claim's epsilon, beta and allowed failures."""
+
+
+def check_claim(epsilon: float, beta: float, failures: int = 0, names: tuple = CLAIM_FLAGS) -> None:
     """One-line errors for a claim no sample size can make, or one that would say nothing:
     P(fail) <= epsilon above one half, or a confidence 1 - beta below one half or closer to 1
-    than 1 - :data:`MIN_BETA`.
+    than 1 - :data:`MIN_BETA`. ``names``: what the errors call epsilon, beta and the failures
+    (the command line's flags, or a study file's keys).
     """
-    for flag, value in (("--epsilon", epsilon), ("--beta", beta)):
+    epsilon_key, beta_key, failures_key = names
+    for flag, value in ((epsilon_key, epsilon), (beta_key, beta)):
         if not (isinstance(value, (int, float)) and 0 < value < 1):
             raise ConfigError(flag, f"must be a probability in (0, 1), got {value}")
     if epsilon > 0.5:
         raise ConfigError(
-            "--epsilon",
+            epsilon_key,
             f"P(fail) <= {epsilon!r} says next to nothing (failing more often than not is allowed); "
             "give at most 0.5",
         )
     if beta > 0.5:
         raise ConfigError(
-            "--beta",
+            beta_key,
             f"{beta!r} is a confidence 1 - BETA below one half, which proves nothing; give at most 0.5",
         )
     if beta < MIN_BETA:
         raise ConfigError(
-            "--beta",
+            beta_key,
             f"{beta:g} asks a confidence closer to 1 than double precision can bound (1 - BETA "
             f"rounds); give at least {MIN_BETA:g}",
         )
     if not (isinstance(failures, int) and 0 <= failures <= 10_000):
-        raise ConfigError("--failures", f"must be an integer in [0, 10000], got {failures}")
+        raise ConfigError(failures_key, f"must be an integer in [0, 10000], got {failures}")
 
 
 def clopper_pearson_upper(failures: int, samples: int, beta: float) -> float:

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from . import verdicts
+from .exceptions import NNRobustError
 from .model.tasks import display_coordinates
 from .plant.limits import available_torque
 from .plant.scaling import limits_or_inf
@@ -492,8 +493,6 @@ def _stored_info(arrays: dict, config: str, n: int) -> RunInfo | None:
         return RunInfo.from_json(str(arrays["info"]))
     if not config:
         return None
-    from .exceptions import NNRobustError
-
     try:
         return RunInfo.from_config(_experiment_of(config), n)
     except (NNRobustError, ValueError):  # a configuration this version cannot read
@@ -557,7 +556,10 @@ def write_text_atomic(path: str | Path, text: str) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.partial-{os.getpid()}")
-    tmp.write_text(text)
+    tmp.unlink(missing_ok=True)  # created afresh: never written through a link left in its place
+    fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0), 0o666)
+    with os.fdopen(fd, "w", encoding="utf-8") as fh:
+        fh.write(text)
     os.replace(tmp, path)
     return path
 
@@ -565,6 +567,31 @@ def write_text_atomic(path: str | Path, text: str) -> Path:
 def write_json_atomic(path: str | Path, data) -> Path:
     """Write JSON to ``path`` through a temporary file and a rename (never a half-written file)."""
     return write_text_atomic(path, json.dumps(data, indent=2, default=json_default) + "\n")
+
+
+SUMMARY_BYTES = 200_000_000
+"""The most a summary or report read back may have (a study's report is a few MB)."""
+
+
+def read_json(path: str | Path, what: str, limit: int = SUMMARY_BYTES):
+    """A JSON file nnrobust wrote (a summary, a report), read back with one-line errors: a file
+    that is missing, larger than ``limit`` bytes, not JSON, or nested too deeply to parse (a
+    received folder is not trusted).
+    """
+    path = Path(path)
+    try:
+        size = path.stat().st_size
+        if size > limit:
+            raise NNRobustError(
+                f"{path}: {size / 1e6:.0f} MB is more than a {what} has (at most {limit / 1e6:g} MB)"
+            )
+        return json.loads(path.read_text(encoding="utf-8"))
+    except RecursionError as err:
+        raise NNRobustError(f"{path}: not a {what}: its JSON nests too deeply") from err
+    except (ValueError, UnicodeDecodeError) as err:
+        raise NNRobustError(f"{path}: not a {what}: not JSON ({err})") from err
+    except OSError as err:
+        raise NNRobustError(f"{path}: cannot read the {what}: {err.strerror or err}") from err
 
 
 def json_default(value):

@@ -104,6 +104,8 @@ def signals_as_interrupt():
     sys.unraisablehook = _unraisable(hook)
     _active += 1
     try:
+        if _pending and not _held:  # noted before the block (the command's imports): stop now
+            raise KeyboardInterrupt
         yield
     finally:
         _active -= 1

@@ -238,6 +238,24 @@ def write_new(path: Path, text: str) -> None:
         fh.write(text)
 
 
+def own_folder(path: Path) -> Path:
+    """``path`` as a folder of the study's own, created if missing: a symbolic link or a file in
+    its place (planted in the out folder, or left by something else) is refused, so nothing a
+    study writes lands outside its folder.
+    """
+    if path.is_symlink() or (path.exists() and not path.is_dir()):
+        what = "a symbolic link" if path.is_symlink() else "not a folder"
+        raise NNRobustError(
+            f"{path} is {what}: a study writes only into folders of its own; move it away, or "
+            "choose another --out"
+        )
+    try:
+        path.mkdir(exist_ok=True)
+    except OSError as err:
+        raise NNRobustError(f"cannot create {path}: {err.strerror or err}") from err
+    return path
+
+
 def parts_folder(folder: Path, name: str) -> Path:
     """DIR/name, the folder of a study's Parquet parts, created if missing; refused if something
     else holds its place.

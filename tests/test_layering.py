@@ -30,7 +30,7 @@ FLOORS = {
     "model": ("model", "ik"),
     "leaf": ("exceptions", "numeric_limits", "arrays", "search_coordinates", "small_linalg", "kinds",
              "package_version", "key_checks", "progress", "signals",
-             "forked", "twins", "shipped_files", "_loop", "_floor_loop", "drawing"),
+             "forked", "twins", "shipped_files", "_loop", "_floor_loop", "drawing", "table_text"),
 }  # fmt: skip
 ORDER = list(FLOORS)[::-1]  # leaf first
 FLOOR_OF = {unit: ORDER.index(floor) for floor, units in FLOORS.items() for unit in units}

@@ -193,10 +193,11 @@ def _too_long(err: ValueError) -> str:
 
 def parse_toml(text: str, where: str) -> dict:
     """tomllib.loads with one-line errors (also for tables nested too deep to parse), refusing
-    TOML dates and times (:func:`refuse_dates`).
+    TOML dates and times (:func:`refuse_dates`). A UTF-8 byte-order mark at the start (as some
+    editors on Windows write one) is read as nothing.
     """
     try:
-        data = tomllib.loads(text)
+        data = tomllib.loads(text.removeprefix("\ufeff"))
     except tomllib.TOMLDecodeError as err:
         raise ConfigError(where, f"invalid TOML: {err}") from err
     except RecursionError as err:

@@ -4,7 +4,6 @@ ARCH-COMP CSV, the convergence plot, and the worst plants rerun as run folders (
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 
 import numpy as np
@@ -135,16 +134,20 @@ def _write_csv(folder: Path, summary: dict) -> None:
     """DIR/falsification.csv in the ARCH-COMP falsification format: one row per controller and
     property (system, property, falsified, simulations, time, robustness).
     """
-    lines = ["system,property,falsified,simulations,time,robustness"]
+    import csv
+    import io
+
+    from ..results import write_text_atomic
+    from ..table_text import csv_cell
+
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(["system", "property", "falsified", "simulations", "time", "robustness"])
     for name, entry in summary["controllers"].items():
         for prop, margin in entry["worst"]["margins"].items():
-            lines.append(
-                f'{name},"{prop}",{"yes" if margin < 0 else "no"},{entry["simulations"]},'
-                f"{summary['seconds']:.1f},{margin:.6g}"
-            )
-    tmp = folder / ".falsification.csv.partial"
-    tmp.write_text("\n".join(lines) + "\n")
-    os.replace(tmp, folder / "falsification.csv")
+            row = (name, prop, margin < 0, entry["simulations"], f"{summary['seconds']:.1f}", f"{margin:.6g}")
+            writer.writerow([csv_cell(v) for v in row])
+    write_text_atomic(folder / "falsification.csv", buffer.getvalue())
 
 
 @drawn_alone

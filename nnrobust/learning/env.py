@@ -38,6 +38,24 @@ ENV_VERSION = 1
 end in ``-v1``."""
 
 
+def checked_actions(actions, shape: tuple[int, ...], what: str) -> np.ndarray:
+    """``actions`` as a float array of exactly ``shape`` with every entry finite, else one line
+    naming ``what``: a NaN would become a NaN reward, and a scalar is not one number per joint.
+    """
+    try:
+        array = np.asarray(actions, dtype=float)
+    except (TypeError, ValueError) as err:
+        raise ConfigError(what, f"expected numbers of shape {shape}, got {type(actions).__name__}") from err
+    if array.shape != shape:
+        raise ConfigError(what, f"expected shape {shape}, got {array.shape} ({str(actions)[:60]})")
+    if not np.isfinite(array).all():
+        where = np.argwhere(~np.isfinite(array))[0]
+        raise ConfigError(
+            what, f"entry {tuple(int(i) for i in where)} is {array[tuple(where)]}: actions are finite"
+        )
+    return array
+
+
 @dataclass(frozen=True)
 class Reward:
     """The reward per control period (docs/learning.md#reward), all weights ≥ 0.
@@ -365,7 +383,7 @@ class ArmEnv(gym.Env):
             raise NNRobustError("ArmEnv.step: call reset() first (the episode has ended)")
         from .. import compiled
 
-        self._action[0] = action
+        self._action[0] = checked_actions(action, (self.episodes.action_size,), "ArmEnv.step: action")
         compiled._module().step_loops(
             self._pool,
             [loop],

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..exceptions import ConfigError, NNRobustError
-from .env import Episodes, Reward, gym
+from .env import Episodes, Reward, checked_actions, gym
 
 
 class ArmVectorEnv(gym.vector.VectorEnv):
@@ -49,7 +49,7 @@ class ArmVectorEnv(gym.vector.VectorEnv):
 
         if isinstance(num_envs, bool) or not isinstance(num_envs, int) or not 1 <= num_envs <= 4096:
             raise ConfigError("num_envs", f"expected an integer in [1, 4096], got {num_envs!r}")
-        threads = threads or os.cpu_count() or 1
+        threads = (os.cpu_count() or 1) if threads is None else threads
         if isinstance(threads, bool) or not isinstance(threads, int) or not 1 <= threads <= 256:
             raise ConfigError("threads", f"expected an integer in [1, 256], got {threads!r}")
         self.episodes = Episodes(
@@ -132,10 +132,8 @@ class ArmVectorEnv(gym.vector.VectorEnv):
         N = self.num_envs
         if self._runs[0] is None:
             raise NNRobustError("ArmVectorEnv.step: call reset() first")
-        actions = np.ascontiguousarray(actions, dtype=float)
-        if actions.shape != (N, self.episodes.action_size):
-            size = self.episodes.action_size
-            raise ConfigError("actions", f"expected shape ({N}, {size}), got {actions.shape}")
+        shape = (N, self.episodes.action_size)
+        actions = np.ascontiguousarray(checked_actions(actions, shape, "ArmVectorEnv.step: actions"))
         terminated = np.zeros(N, dtype=bool)
         truncated = np.zeros(N, dtype=bool)
         infos: dict = {}

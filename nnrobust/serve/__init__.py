@@ -59,6 +59,10 @@ def timing_record(report, period: float, lockstep: bool = False) -> dict:
     }
 
 
+MAX_WAIT = 86_400.0
+"""The longest a robot waits for its controller [s] (a day)."""
+
+
 def serve(
     config,
     out: str | Path,
@@ -90,6 +94,15 @@ def serve(
         raise NNRobustError(f"serve: --port {port} is not a port (0 to 65535; 0: a free one)")
     if watchdog < 1:
         raise NNRobustError(f"serve: --watchdog {watchdog}: needs at least 1 period")
+    if (
+        isinstance(wait_seconds, bool)
+        or not isinstance(wait_seconds, (int, float))
+        or not (0 < wait_seconds <= MAX_WAIT)
+    ):
+        raise NNRobustError(
+            f"serve: --wait {wait_seconds}: the seconds to wait for the controller are a number in "
+            f"(0, {MAX_WAIT:g}]"
+        )
     folder = check_out_folder(out, overwrite)
     setup = build(config)
     refusal = compiled.hybrid_refusal(setup)

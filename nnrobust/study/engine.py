@@ -34,9 +34,12 @@ import threading
 from pathlib import Path
 
 from ..exceptions import ChangedInputs, ConfigError, NNRobustError
+from ..study_folder import own_folder
 from .spec import StudyCase, StudySpec, kept_name
 
 MARKER = "study.toml"
+STAGE_FOLDERS = ("validate", "certify", "falsify", "certify-mujoco", "realtime")
+"""A case's stage folders (besides tune-seedS), each written by its command's engine."""
 VALIDATION_SEED = 1_000_003
 """Added to the study's seed for the validation draws (the tunings draw from seed + s, s < 20)."""
 CERTIFY_SEED = 2_000_003
@@ -77,6 +80,12 @@ def prepare(spec: StudySpec, folder: Path, overwrite: bool) -> None:
             )
     folder.mkdir(parents=True, exist_ok=True)
     _write_if_changed(marker, text)
+    stages = [*(f"tune-seed{s}" for s in range(spec.budgets["seeds"])), *STAGE_FOLDERS]
+    for case in spec.cases:  # before any stage: no link planted in the folder is written through
+        here = own_folder(own_folder(folder / "cases") / spec.case_name(case))
+        for name in stages:
+            if (here / name).is_symlink() or (here / name).exists():
+                own_folder(here / name)
 
 
 def _changed(old: str, new: str) -> str:
@@ -181,6 +190,11 @@ def run_study(
     """
     say = say or (lambda line: None)
     folder = Path(folder).resolve()  # the report's commands name absolute paths
+    if len(spec.cases) * len(spec.controllers) > 8:
+        say(
+            f"checking {len(spec.controllers)} controllers on {len(spec.cases)} cases (each built and "
+            "stepped once) before any stage runs"
+        )
     _check_controllers(spec)
     from ..sweep.engine import check_local_workers, ships_files
 
@@ -276,7 +290,7 @@ def _run_case(
     from ..tune.engine import TuneSpec, run_tune
 
     name = spec.case_name(case)
-    here = folder / "cases" / name
+    here = own_folder(own_folder(folder / "cases") / name)  # never through a link planted there
     sweep = spec.case_sweep(case)
     case_file = here / "case.toml"
     _stage_file(case_file, sweep.to_toml(), before)
@@ -733,5 +747,9 @@ def _varies(frame) -> bool:
 def read_report(folder: str | Path) -> dict:
     """DIR/report.json (shown as HTML in Jupyter)."""
     from ..display import StudyReport
+    from ..results import read_json
 
-    return StudyReport(json.loads((Path(folder) / "report.json").read_text()))
+    report = read_json(Path(folder) / "report.json", "study's report")
+    if not isinstance(report, dict):
+        raise NNRobustError(f"{Path(folder) / 'report.json'}: not a study's report (not a table)")
+    return StudyReport(report)

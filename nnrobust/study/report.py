@@ -17,7 +17,9 @@ from pathlib import Path
 import numpy as np
 
 from ..drawing import drawn_alone
-from ..results import write_json_atomic
+from ..results import write_json_atomic, write_text_atomic
+from ..study_folder import own_folder
+from ..table_text import csv_cell, tex_text
 from ..tune.engine import STUDY_REPORT
 from ..tune.space import fixed_text
 from .spec import StudySpec, kept_name
@@ -304,30 +306,27 @@ def write_tables(report: dict, folder: Path) -> list[Path]:
     import csv
 
     rows = table_rows(report)
-    out = folder / "tables"
-    out.mkdir(parents=True, exist_ok=True)
+    out = own_folder(folder / "tables")
     buffer = io.StringIO()
     writer = csv.writer(buffer)
     writer.writerow([key for key, _ in TABLE_COLUMNS])
-    for row in rows:
-        writer.writerow(["" if row[k] is None else row[k] for k, _ in TABLE_COLUMNS])
-    (out / "summary.csv").write_text(buffer.getvalue())
+    for row in rows:  # names come from the user's files: no cell a spreadsheet evaluates
+        writer.writerow([csv_cell(row[k]) for k, _ in TABLE_COLUMNS])
+    write_text_atomic(out / "summary.csv", buffer.getvalue())
 
-    def tex(text: str) -> str:
-        for a, b in (("\\", r"\textbackslash{}"), ("&", r"\&"), ("%", r"\%"), ("_", r"\_"), ("#", r"\#")):
-            text = text.replace(a, b)
-        return text.replace("<=", r"$\le$").replace("us / step", r"$\mu$s / step")
+    def head(text: str) -> str:  # our own headings: escaped, then their two symbols typeset
+        return tex_text(text).replace("<=", r"$\le$").replace("us / step", r"$\mu$s / step")
 
     lines = [
         r"\begin{tabular}{" + "l" * 2 + "r" * (len(TABLE_COLUMNS) - 2) + "}",
         r"\toprule",
-        " & ".join(tex(head) for _, head in TABLE_COLUMNS) + r" \\",
+        " & ".join(head(h) for _, h in TABLE_COLUMNS) + r" \\",
         r"\midrule",
-        *(" & ".join(tex(_cell(row[k])) for k, _ in TABLE_COLUMNS) + r" \\" for row in rows),
+        *(" & ".join(tex_text(_cell(row[k])) for k, _ in TABLE_COLUMNS) + r" \\" for row in rows),
         r"\bottomrule",
         r"\end{tabular}",
     ]
-    (out / "summary.tex").write_text("\n".join(lines) + "\n")
+    write_text_atomic(out / "summary.tex", "\n".join(lines) + "\n")
     return [out / "summary.csv", out / "summary.tex"]
 
 
@@ -356,12 +355,14 @@ def _figure(name: str, case: dict, folder: Path) -> str:
     ax.set_ylabel("fraction of draws")
     ax.set_title(f"{name}: certification draws")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
+    if ax.get_legend_handles_labels()[0]:  # no completed draw: no line, no legend
+        ax.legend(fontsize=8)
     fig.tight_layout()
-    out = folder / "figures"
-    out.mkdir(parents=True, exist_ok=True)
-    for ext in ("png", "svg", "pdf"):
-        fig.savefig(out / f"{name}-error-cdf.{ext}", dpi=120)
+    out = own_folder(folder / "figures")
+    for ext in ("png", "svg", "pdf"):  # drawn beside, renamed into place: never through a link
+        tmp = out / f".{name}-error-cdf.partial.{ext}"
+        fig.savefig(tmp, dpi=120)
+        tmp.replace(out / f"{name}-error-cdf.{ext}")
     plt.close(fig)
     return base64.b64encode((out / f"{name}-error-cdf.png").read_bytes()).decode()
 
@@ -479,11 +480,7 @@ def write_html(report: dict, folder: Path, figures: dict[str, str]) -> Path:
     parts.append("</ul><h3>Inputs (SHA-256)</h3><ul>")
     parts += [f"<li><code>{e(d)}</code> {e(p)}</li>" for p, d in report["inputs"].items()]
     parts.append("</ul></body></html>")
-    path = folder / "report.html"
-    tmp = path.with_name(".report.html.partial")
-    tmp.write_text("\n".join(parts))
-    tmp.replace(path)
-    return path
+    return write_text_atomic(folder / "report.html", "\n".join(parts))
 
 
 def finite(value):

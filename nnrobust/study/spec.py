@@ -75,6 +75,10 @@ def kept_name(controller: str) -> str:
     return f"{controller}-tuned"
 
 
+MAX_CASES = 100
+"""The most cases a study may have: each is tuned, validated, certified and falsified apart (a
+study of more is many studies; split it)."""
+
 CASE_KEYS = ("name", "base", "set")
 """The keys of a case given as a table: its name, its experiment and its own overrides."""
 
@@ -188,6 +192,11 @@ def _budgets(data, where: str) -> dict:
         value = out[key]
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
             raise ConfigError(f"{where}: budgets.{key}", f"expected a number > 0, got {value!r}")
+    from ..properties import check_claim
+
+    check_claim(
+        out["epsilon"], out["beta"], names=(f"{where}: budgets.epsilon", f"{where}: budgets.beta", "")
+    )
     if 0 < out["falsify"] < 4:
         raise ConfigError(
             f"{where}: budgets.falsify", f"expected 0 (no search) or at least 4, got {out['falsify']}"
@@ -216,6 +225,12 @@ def _cases(cases, path: Path) -> list[StudyCase]:
     where = str(path)
     if not isinstance(cases, list) or not cases:
         raise ConfigError(f"{where}: cases", f"expected a list of presets or experiment files, got {cases!r}")
+    if len(cases) > MAX_CASES:
+        raise ConfigError(
+            f"{where}: cases",
+            f"{len(cases)} cases: a study has at most {MAX_CASES} (each is tuned, validated, certified "
+            "and falsified on its own draws); split it into several studies",
+        )
     out = []
     for i, case in enumerate(cases):
         table = case if isinstance(case, dict) else None
@@ -248,6 +263,13 @@ def _cases(cases, path: Path) -> list[StudyCase]:
                 raise ConfigError(f"{where}: cases", f"{case!r} is not a file (read from {path.parent})")
             case = str(file)
         name = table["name"] if table else (Path(case).stem if case.endswith(".toml") else case)
+        if not table and not NAME.fullmatch(name):  # it names the case's folder and its rows
+            raise ConfigError(
+                f"{where}: cases[{i}]",
+                f"the case file {Path(case).name!r} gives the case the name {name!r}, which must be "
+                "1-40 letters, digits, '_' or '-' (it names the case's folder and table rows): "
+                "rename the file, or give the case as a table {name = ..., base = ...}",
+            )
         out.append(StudyCase(name, case, dict(table.get("set", {})) if table else {}))
     names = [c.name for c in out]
     if len(set(names)) != len(names):
@@ -311,6 +333,12 @@ def parse_study(data: dict, path: Path) -> StudySpec:
                 "certification); give {uniform = [a, b]}, {loguniform = ...}, {normal = ...} or "
                 "{choice = [...]}",
             )
+    seed = data.get("seed", 0)
+    if isinstance(seed, int) and not isinstance(seed, bool) and not 0 <= seed < 2**62:
+        raise ConfigError(  # its stages' seeds are seed + offsets, each a sweep's seed (< 2^63)
+            f"{where}: seed",
+            f"expected an integer in [0, 2^62) (the stages' seeds derive from it), got {seed}",
+        )
     # the sweep file's own checks: controllers, [set], [vary], seed
     sweep = parse_sweep(
         {
@@ -330,6 +358,13 @@ def parse_study(data: dict, path: Path) -> StudySpec:
     names, entries, tuned = sweep.controllers, sweep.entries, ""
     if "tuned" in data:
         names, entries, fixed, tuned = _tuned_elsewhere(data["tuned"], sweep, path)
+    for c in names:  # a tuned law's kept setting is certified as NAME-tuned
+        if c not in fixed and kept_name(c) in names:
+            raise ConfigError(
+                f"{where}: controllers",
+                f"{kept_name(c)!r} is the name the study gives the kept setting of {c!r}, which is "
+                "tuned here: rename one of them",
+            )
     for case in cases:  # each case's own overrides: the keys a sweep file's [set] takes
         if case.set:
             try:

@@ -982,8 +982,17 @@ def read_results(folder: str | Path, key: str | None = None):
     """
     import pandas as pd
 
-    from ..study_folder import read_parts, recorded_inputs
+    from ..study_folder import marker_name, read_parts, recorded_inputs
 
+    folder = Path(folder)
+    if not folder.is_dir():
+        said = "is not a folder" if folder.exists() else "does not exist"
+        raise NNRobustError(f"{folder} {said}: read_results reads the folder a sweep wrote (its --out)")
+    if not (folder / marker_name("sweep")).is_file() and not (folder / RESULTS).is_dir():
+        raise NNRobustError(
+            f"{folder} is not a sweep's folder (no {marker_name('sweep')}, no {RESULTS}/): read_results "
+            "reads the folder a sweep wrote (its --out)"
+        )
     if key is None:
         recorded = recorded_inputs(Path(folder), "sweep")
         key = recorded.key if recorded is not None else None
