@@ -670,12 +670,16 @@ def cmd_study(args) -> int:
         for row in table_rows(report):
             print(
                 f"{row['case']:24s} {row['controller']:18s} median {_number(row['median_mm'])} mm, "
-                f"p95 {_number(row['p95_mm'])} mm, P(fail) <= {_number(row['p_fail_upper'])}, "
-                f"falsified: {_number(row['falsified'])}, least margin {_number(row['least_margin'])}"
+                f"p95 {_number(row['p95_mm'])} mm, passed {_number(row['passed'])} %, P(fail) <= "
+                f"{_number(row['p_fail_upper'])}, falsified: {_number(row['falsified'])}, least margin "
+                f"{_number(row['least_margin'])}"
+                + ("" if row["converged"] is not False else ", NOT CONVERGED at its budget")
             )
         for name, case in report["cases"].items():
             for controller, reason in case["not_kept"].items():
-                print(f"{name:24s} {controller:18s} no setting to validate: {reason}")
+                print(f"{name:24s} {controller:18s} not kept: {reason}")
+        for warning in report.get("warnings", []):
+            print(f"warning: {warning}", file=sys.stderr)
         print(f"report in {args.out}/report.html and {args.out}/report.json", file=sys.stderr)
     return 0
 
@@ -779,11 +783,13 @@ def format_tuning(summary: dict) -> str:
     held-out samples, torque, chatter, the bounds it sits on, and the keys it does not search
     with why.
     """
+    from .tune.engine import infeasible_text
     from .tune.space import fixed_text
 
     lines = [
-        f"{'controller':14s} {'train e [mm]':>12s} {'held-out e [mm]':>15s} {'rms tau':>8s} "
-        f"{'chatter':>8s}  setting"
+        f"{'':14s} {'training draws':^29s}   {'held-out draws':^29s}",
+        f"{'controller':14s} {'e [mm]':>10s} {'tau [N m]':>9s} {'chatter':>8s}   {'e [mm]':>10s} "
+        f"{'tau [N m]':>9s} {'feasible':>8s}  setting",
     ]
     for name, entry in summary["controllers"].items():
         best = entry["best"]
@@ -791,15 +797,25 @@ def format_tuning(summary: dict) -> str:
         if best is None:
             lines += [f"{name:14s} {entry['note']}", *fixed]
             continue
-        held_out = best["validation"].get("rms_error_after_2s")
+        held = best["validation"]
+        feasible = best.get("validation_feasible")
         settings = ", ".join(
             f"{k} = {v[0] if isinstance(v, list) else v:.4g}" for k, v in best["params"].items()
         )
+
+        def number(value, scale=1.0, width=10, digits=4):
+            return f"{'-' if value is None else f'{scale * value:.{digits}g}':>{width}s}"
+
+        train = best["train"]
         lines.append(
-            f"{name:14s} {1e3 * best['train']['rms_error_after_2s']:12.4g} "
-            f"{'-' if held_out is None else f'{1e3 * held_out:.4g}':>15s} "
-            f"{best['train']['rms_torque']:8.3f} {best['train']['torque_chatter']:8.4f}  {settings}"
+            f"{name:14s} {number(train['rms_error_after_2s'], 1e3)} "
+            f"{number(train['rms_torque'], width=9)} {number(train['torque_chatter'], width=8)}"
+            f"   {number(held.get('rms_error_after_2s'), 1e3)} {number(held.get('rms_torque'), width=9)} "
+            f"{'-' if feasible is None else 'yes' if feasible else 'NO':>8s}  {settings}"
         )
+        if feasible is False:
+            why = infeasible_text(summary["constraints"], held, best["validation_constraints"])
+            lines.append(f"{'':14s} infeasible on validation: {why}")
         for b in best["at_bound"]:
             lines.append(
                 f"{'':14s} at the {b['side']} bound of {b['param']} ({b['bound']:.4g})"

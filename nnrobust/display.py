@@ -76,16 +76,18 @@ class TuneSummary(dict):
                 [
                     html.escape(name),
                     _cell((best.get("train") or {}).get("rms_error_after_2s"), 1e3),
-                    _cell((best.get("validation") or {}).get("rms_error_after_2s"), 1e3),
                     _cell((best.get("train") or {}).get("rms_torque")),
+                    _cell((best.get("validation") or {}).get("rms_error_after_2s"), 1e3),
+                    _cell((best.get("validation") or {}).get("rms_torque")),
+                    _cell(best.get("validation_feasible")),
                     html.escape(setting or e.get("note", "")),
                 ]
             )
         target = html.escape(str(self.get("target")))
         out = f"<h4>tuning of {target}: {self.get('budget')} simulations each</h4>"
-        return out + table(
-            ["controller", "train e [mm]", "held-out e [mm]", "rms tau [N m]", "best setting"], rows
-        )
+        head = ["controller", "training e [mm]", "training rms tau [N m]", "held-out e [mm]",
+                "held-out rms tau [N m]", "feasible on held-out", "best setting"]  # fmt: skip
+        return out + table(head, rows)
 
 
 class FalsifySummary(dict):

@@ -231,6 +231,41 @@ def certificate(prop: Property, margins: list[float], epsilon: float, beta: floa
     }
 
 
+ALL_OF = "all of: "
+"""How the certificate of several properties together names them (``all of: a, b``)."""
+
+
+def all_certificate(properties: list[Property], records: list[dict], epsilon: float, beta: float) -> dict:
+    """The certificate of the properties together: a run fails when any of them fails (k counts
+    such runs), so P(some property fails) <= p_upper, the bound a design's requirement needs
+    (each property's own bound is smaller, and their union is not bounded by the largest).
+    """
+    n = len(records)
+    failures = sum(1 for r in records if not all(p.holds(r) for p in properties))
+    upper = clopper_pearson_upper(failures, n, beta) if n else 1.0
+    return {
+        "property": ALL_OF + ", ".join(p.text for p in properties),
+        "N": n,
+        "k": failures,
+        "epsilon": epsilon,
+        "beta": beta,
+        "p_upper": upper,
+        "holds": bool(n and upper <= epsilon),
+        "method": "one-sided Clopper-Pearson (exact binomial) bound on P(some property fails) over "
+        "the sweep's distribution; the samples are independent draws of it",
+    }
+
+
+def overall_certificate(certificates: list[dict]) -> dict | None:
+    """The certificate of the whole requirement among ``certificates`` (of one controller and
+    grid cell): the ``all of`` one where there are several properties, else the only one.
+    """
+    for c in certificates:
+        if c["property"].startswith(ALL_OF):
+            return c
+    return certificates[0] if len(certificates) == 1 else None
+
+
 def wilks_upper(values: list[float], quantile: float, beta: float) -> float | None:
     """Wilks' distribution-free bound: the smallest order statistic x_(r) with
     P(x_(r) >= the ``quantile``-quantile) >= 1 - beta, i.e. the least r with
@@ -293,6 +328,8 @@ def certify_runs(
     confidence 1 - beta. A run that did not complete fails every property.
     """
     certificates, bounds = [], []
+    if len(properties) > 1:  # the whole requirement: a run fails it when any property fails
+        certificates.append(all_certificate(properties, records, epsilon, beta))
     for prop in properties:
         certificates.append(certificate(prop, [prop.margin(r) for r in records], epsilon, beta))
         if prop.op in ("<=", "<", ">=", ">"):

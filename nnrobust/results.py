@@ -18,6 +18,9 @@ from .run_info import RunInfo
 from .simulation import period_substeps
 from .small_linalg import det
 
+SETTLED_AFTER = 2.0
+"""Seconds after which a run is scored: ``rms_error_after_2s`` is the RMS task error over t >= 2 s."""
+
 METRIC_UNITS = {
     "rms_error": "m",
     "rms_error_after_2s": "m",
@@ -254,7 +257,7 @@ class Result:
         """
         err = self.position_error()
         turn = self.orientation_error()
-        late = self.t >= 2.0
+        late = self.t >= SETTLED_AFTER
         tau_norm2 = np.sum(self.tau**2, axis=1)
         dtau = np.linalg.norm(np.diff(self.tau, axis=0), axis=1)
 

@@ -6,6 +6,7 @@ coordinates here without importing the tuner (nnrobust/tune/space.py searches th
 from __future__ import annotations
 
 import math
+import zlib
 from dataclasses import dataclass
 
 
@@ -53,3 +54,11 @@ def bandwidth_range(scales: dict) -> tuple[float, float]:
     w (1/2 + d) T = 1 (period T, delay d periods).
     """
     return 2 * math.pi / scales["duration"], 1.0 / ((0.5 + scales["delay"]) * scales["period"])
+
+
+def controller_seed(name: str) -> int:
+    """The part of a controller's search seeds that is its own: from its name (a stable hash), so
+    its tuning and its falsification are the same in any run that holds it, whatever the other
+    controllers and their order.
+    """
+    return zlib.crc32(name.encode())

@@ -1,6 +1,7 @@
 import json
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -32,6 +33,13 @@ def test_the_spaces_come_from_the_arm_and_share_their_gain_coordinates(scales):
         assert w.high == pytest.approx(1 / ((0.5 + d) * T)) and w.high_reason
         assert w.low == pytest.approx(2 * math.pi / 20.0)
     assert spaces["nn"].param("damping_ratio").low > 0.5  # eq. (17): Kv^2 > Kp
+    # one rule for the damping ratio: from 0.2 and widened like any bound, but where the robust
+    # term is built on eq. (16)'s P (the NN, the sliding mode), whose eq. (17) needs z > 1/2
+    for name, space in spaces.items():
+        z = space.param("damping_ratio")
+        assert (z.low, bool(z.reason("low"))) == (
+            (0.51, True) if name in ("nn", "sliding-mode") else (0.2, False)
+        )
     values = {"bandwidth": 100.0, "damping_ratio": 0.8}
     eq9 = search_space("no-u0", scales).overrides({**values, "controller.k": 5.0})
     assert eq9["controller.Kp"] == [1e4] and eq9["controller.Kv"] == [160.0]
@@ -45,6 +53,19 @@ def test_the_spaces_come_from_the_arm_and_share_their_gain_coordinates(scales):
         "controller.sliding_gain",
         "controller.sliding_boundary",
     }
+
+
+def test_eq17s_condition_is_checked_only_where_the_robust_term_needs_it():
+    """Kv^2 <= Kp (z < 1/2: an underdamped loop) is refused for the NN and the sliding mode, whose
+    u_0 is built on eq. (16)'s P, and accepted for eq. (9) without such a term."""
+    from nnrobust.experiment import build
+
+    gains = {"Kp": [20.0], "Kv": [4.0]}
+    for kind in ("no-u0", "computed-torque"):
+        build(load_preset("paper-ellipse").replace(controller={"kind": kind, **gains}))
+    for kind in ("nn", "sliding-mode"):
+        with pytest.raises(ConfigError, match="eq. \\(17\\)"):
+            build(load_preset("paper-ellipse").replace(controller={"kind": kind, **gains}))
 
 
 def test_the_task_inertia_is_that_of_the_arm(scales):
@@ -99,11 +120,11 @@ def test_a_bound_is_widened_until_the_best_is_interior_with_a_worse_probe_beyond
 
     space = SearchSpace("toy", (Param("controller.params.x", 1.0, 10.0, "-"),), custom=True)
     spec = TuneSpec("paper-ellipse", ["toy"], 60, validation=0)
-    toy = _Controller(spec, "toy", space, 0)
+    toy = _Controller(spec, "toy", space)
     x = "controller.params.x"
     objective = lambda v: (math.log10(v[x]) - 2.5) ** 2 + 1e-3  # noqa: E731
     _drive(toy, objective, 38)
-    resumed = _Controller(spec, "toy", space, 0)
+    resumed = _Controller(spec, "toy", space)
     for row in [dict(r) for r in toy.rows]:
         resumed.record(row)
     _drive(toy, objective, 60)
@@ -277,6 +298,72 @@ def test_a_controllers_trials_do_not_depend_on_the_others_running_beside_it(tune
         return [(r["trial"], r["params"], r["train"]) for r in rows if r["controller"] == "no-u0"]
 
     assert trials(tmp_path / "alone") == trials(out) and len(trials(out)) == spec.trials
+
+
+def test_reordering_the_controllers_changes_no_laws_tuning(tuned, tmp_path):
+    """A law's optimiser seed derives from the tuning's seed and the law's name, not its place in
+    the list: the PD and no-u0 tuned in the other order ask, row by row, what they asked (with
+    seed + index, the PD's sampler seed moved with the order)."""
+    from nnrobust.study_folder import recorded_inputs
+    from nnrobust.tune.engine import _read_trials
+
+    spec, out, summary = tuned
+    reordered = replace(spec, controllers=list(reversed(spec.controllers)))
+    again = run_tune(reordered, tmp_path / "reordered", workers=2)
+
+    def trials(folder, name):
+        rows = _read_trials(folder, recorded_inputs(folder, "tune").key)
+        return [(r["trial"], r["params"], r["train"]) for r in rows if r["controller"] == name]
+
+    for name in spec.controllers:
+        assert trials(tmp_path / "reordered", name) == trials(out, name), name
+        assert again["controllers"][name]["best"] == summary["controllers"][name]["best"]
+
+
+def test_a_setting_that_breaks_a_constraint_on_the_held_out_draws_says_so():
+    """Feasibility is judged on the draws each table column is computed from: a best setting whose
+    held-out runs break the torque and saturation limits is marked infeasible on validation, with
+    the numbers, beside its training columns (it was a held-out error beside a training torque)."""
+    from nnrobust.cli import format_tuning
+    from nnrobust.tune.engine import validated
+
+    spec = TuneSpec("paper-ellipse", ["pd"], 4, max_rms_torque=10.0, max_saturated=0.01)
+    run = {"status": "completed", "rms_error_after_2s": 1e-4, "torque_chatter": 1.0,
+           "max_joint_limit_violation": 0.0, "runaway": False}  # fmt: skip
+    train = [{**run, "rms_torque": 8.0, "saturated_fraction": 0.0}]
+    held = [{**run, "rms_torque": 13.1, "saturated_fraction": 0.079}, {**run, "rms_torque": 12.0,
+            "saturated_fraction": 0.0}]  # fmt: skip
+    judged = validated(spec, held)
+    assert judged["validation_feasible"] is False and judged["validation"]["rms_torque"] == pytest.approx(
+        12.55
+    )
+    assert validated(spec, train)["validation_feasible"] is True
+    best = {"params": {"controller.pd_Kp": [100.0]}, "train": judge(spec, train)[2], **judged, "at_bound": []}
+    summary = {"constraints": {"max_rms_torque": 10.0, "max_saturated": 0.01},
+               "controllers": {"pd": {"best": best}}}  # fmt: skip
+    text = format_tuning(summary)
+    assert "training draws" in text and "held-out draws" in text
+    assert "infeasible on validation: RMS torque 12.6 N m > 10 N m, saturated 7.9 % > 1 %" in text, text
+
+
+def test_the_cpp_and_python_twins_tune_to_the_same_setting(short_experiment, tmp_path):
+    """The task-space PD in C++ (examples/controllers/task_pd.cpp) and its Python twin
+    (examples/custom_controller.py), both named TaskPD, tuned apart at one seed and budget: their
+    torques agree to 1e-14, so their optimisers ask the same settings and keep the same best."""
+    from nnrobust.compiled import available
+
+    if not available():
+        pytest.skip("the compiled loop is not built: a law in C++ runs there")
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    best = []
+    for file in (examples / "controllers" / "task_pd.cpp", examples / "custom_controller.py"):
+        spec = TuneSpec(str(short_experiment), [f"{file}:TaskPD"], 6, train_samples=1, validation=0, seed=2)
+        summary = run_tune(spec, tmp_path / file.suffix[1:], workers=2)
+        best.append(summary["controllers"]["TaskPD"]["best"])
+    assert best[0]["params"] == best[1]["params"]
+    assert best[0]["train"]["rms_error_after_2s"] == pytest.approx(
+        best[1]["train"]["rms_error_after_2s"], rel=1e-9
+    )
 
 
 def test_a_best_setting_reruns_to_its_training_metrics(tuned):

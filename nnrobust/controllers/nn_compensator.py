@@ -270,6 +270,7 @@ declare_kind(
     PaperKind(
         "nn", "the NN compensator, eq. (15)", "the experiment's (the paper's p̂, f̂_d)", _build, keys=("nn.",),
         search=_search,
+        lyapunov=True,
         params=(
             LawParam("nn.law", "corrected", "-", "u_0 = -ρ̂² ω / (ρ̂ ‖ω‖ + ε) (`corrected`) or -ρ̂ ω / (...) "
                      "(`printed`, the paper's eq. 15 as printed)", choices=U0_LAWS),

@@ -143,7 +143,10 @@ class PaperKind:
         nominal: the nominal model and friction it uses, one line for the docs.
         build: ``build(parts: KindParts) -> Controller``.
         eq9: whether it is eq. (9)'s task-space law (it reads ``controller.Kp``, ``Kv``, ``k``,
-            the subtasks and the nominal friction; eq. (17)'s Kv^2 > Kp is checked).
+            the subtasks and the nominal friction).
+        lyapunov: whether its robust term is built on eq. (16)'s P (w = B^T P y), which needs
+            eq. (17)'s Q positive definite: Kv^2 > Kp is then checked, and the tuner's damping
+            ratio stops at 0.51 (a physical bound). eq. (9) without such a term needs only Kv > 0.
         keys: its own configuration keys, beyond eq. (9)'s (``section.key``, or ``section.`` for
             a whole section): inert under a kind that does not declare them too.
         ignores: (key, why) of keys that it leaves inert although eq. (9) reads them.
@@ -160,6 +163,7 @@ class PaperKind:
     nominal: str
     build: Callable[[KindParts], Any]
     eq9: bool = True
+    lyapunov: bool = False
     keys: tuple[str, ...] = ()
     ignores: tuple[tuple[str, str], ...] = ()
     search: Callable[[dict], list] | None = None

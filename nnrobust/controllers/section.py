@@ -88,6 +88,12 @@ def is_eq9(kind: str) -> bool:
     return declared is not None and declared.eq9
 
 
+def needs_lyapunov(kind: str) -> bool:
+    """Whether ``controller.kind``'s robust term is built on eq. (16)'s P: Kv^2 > Kp (eq. 17)."""
+    declared = PAPER_KINDS.get(kind)
+    return declared is not None and declared.lyapunov
+
+
 @dataclass
 class NNConfig(DeclaredKeys):
     """The NN robust compensator, eqs. (15)-(17): its keys, their units, defaults and ranges as
@@ -127,7 +133,8 @@ def full_gain(values: list[float], m: int) -> list[float]:
 def check_controller(c: ControllerConfig, nn: NNConfig, m: int, where: str) -> None:
     """The rules that read only ``[controller]`` and ``[nn]``, for a task of ``m`` coordinates
     (``where`` says where m comes from, for messages): the kind, the gains' sizes, every declared
-    key against its declaration, eq. (17)'s Kv^2 > Kp, the NN's floor. A law's
+    key against its declaration, eq. (17)'s Kv^2 > Kp where the robust term is built on P, the NN's
+    floor. A law's
     ``[controller.params]`` are checked with the user's classes. Changes nothing.
     """
     check_choice("controller.kind", c.kind, controller_kinds())
@@ -144,7 +151,7 @@ def check_controller(c: ControllerConfig, nn: NNConfig, m: int, where: str) -> N
         if not (value is None and p.default is None):  # unset: the kind sizes it itself
             p.check(value, None, m, p.name)
     pairs = zip(full_gain(c.Kp, m), full_gain(c.Kv, m))
-    for kp, kv in pairs if is_eq9(c.kind) else ():  # pd and custom laws do not use them
+    for kp, kv in pairs if needs_lyapunov(c.kind) else ():  # the laws whose u_0 is built on P
         if kv * kv <= kp:
             raise ConfigError(
                 "controller.Kv",

@@ -88,6 +88,7 @@ declare_kind(
         _build,
         keys=("controller.sliding_gain", "controller.sliding_boundary"),
         search=_search,
+        lyapunov=True,
         params=(
             LawParam(
                 "controller.sliding_gain",

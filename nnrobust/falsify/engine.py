@@ -11,9 +11,10 @@ from pathlib import Path
 import numpy as np
 
 from ..exceptions import NNRobustError
+from ..search_coordinates import controller_seed
 from ..signals import signals_as_interrupt
 from .history import _history
-from .search import _Driver, _Margins, _Search, controller_seed
+from .search import _Driver, _Margins, _Search
 from .spec import HISTORY, MARKER, FalsifySpec, _searched_sweep, box_of
 from .summary import WORST, _summary, _write_csv, certify_box, plot_convergence
 

@@ -7,13 +7,13 @@ box of one coordinate), or the random baseline (:class:`_Search`); the batches r
 from __future__ import annotations
 
 import math
-import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from ..search_coordinates import controller_seed
 from .history import _write_history, evaluate, judged
 from .spec import Box, FalsifySpec
 
@@ -28,13 +28,6 @@ LINE_START = 0.3
 
 LINE_TOLERANCE = 1e-9
 """Half-width in the unit box below which a one-coordinate search has converged and restarts."""
-
-
-def controller_seed(name: str) -> int:
-    """The part of a controller's search seeds that is its own: from its name, so its searches
-    are the same in any run that holds it, whatever the other controllers and their order.
-    """
-    return zlib.crc32(name.encode())
 
 
 class _Search:

@@ -196,6 +196,8 @@ def train(
         "gain_range": gain_range,
         "vary": vary or {},
         "duration": duration,
+        "training_duration": duration,  # the episodes' horizon: a study scoring past it warns
+        "reward_window": [0.0, duration],  # the reward counts every step of an episode
         "hidden": hidden,
         "population": population,
         "episodes": episodes,

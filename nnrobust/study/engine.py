@@ -30,6 +30,7 @@ stage's results do not depend on that timing (its draws and its searches are see
 from __future__ import annotations
 
 import json
+import math
 import threading
 from pathlib import Path
 
@@ -356,6 +357,7 @@ def _run_case(
     names: list[str] = []
     # validation row -> (controller, seed, settings, the coordinates on a bound of its space)
     setting_of: dict[str, tuple[str, int | None, dict, list]] = {}
+    halves: dict[str, str] = {}  # a seed's label -> the label of its half-budget best
     for c in spec.controllers:
         if c in spec.fixed:
             names.append(c)
@@ -371,6 +373,14 @@ def _run_case(
             entries[label] = tuned_entry(c, best["params"], spec.entries)
             names.append(label)
             setting_of[label] = (c, s, dict(best["params"]), best.get("at_bound") or [])
+            # the same seed's best at half the budget, validated beside it: does doubling move it?
+            half = summary["controllers"].get(c, {}).get("half_budget_best")
+            if half and half["params"] != best["params"]:
+                entries[half_name(label)] = tuned_entry(c, half["params"], spec.entries)
+                names.append(half_name(label))
+                halves[label] = half_name(label)
+            elif half:
+                halves[label] = label
     out["not_kept"] = {
         c: "; ".join(
             f"seed {s}: {summary['controllers'].get(c, {}).get('note', 'no best setting')}"
@@ -402,9 +412,21 @@ def _run_case(
     from ..sweep.summary import summarize, write_summary
 
     write_summary(here / "validate", summarize(validate_spec, frame))
-    kept, per_seed = _select(spec, frame, setting_of)
+    kept, per_seed, infeasible = _select(spec, frame, setting_of)
+    for c, reason in infeasible.items():
+        out["not_kept"][c] = reason
+        say(f"{name}: {c} is not kept: {reason}")
+    out["convergence"] = {
+        c: _convergence(spec, frame, [label for label, s in setting_of.items() if s[0] == c], halves)
+        for c in kept
+        if c not in spec.fixed
+    }
     out["stages"]["validate"] = "finished"
     out["kept"], out["per_seed"] = kept, per_seed
+    if not kept:
+        raise NNRobustError(
+            f"{name}: no controller is feasible on the validation draws ({'; '.join(infeasible.values())})"
+        )
 
     # 3. certify the kept settings on draws the selection never saw
     from ..properties import samples_needed
@@ -580,7 +602,8 @@ def _certified(
     rows = read_results(folder)
     summary = summarize(sweep, rows)
     b = spec.budgets
-    for label, entry in certify(sweep, rows, run_properties(spec.require), b["epsilon"], b["beta"]).items():
+    properties = run_properties(spec.certified_properties())
+    for label, entry in certify(sweep, rows, properties, b["epsilon"], b["beta"]).items():
         summary["controllers"][label].update(entry)
     write_summary(folder, summary)
     return summary, rows
@@ -687,18 +710,52 @@ def sweep_of(spec: StudySpec, case: StudyCase, names: list[str], entries: dict, 
     )
 
 
-def _select(spec: StudySpec, frame, setting_of: dict) -> tuple[dict, dict]:
-    """Each controller's kept setting: the seed whose validation rows have the least median RMS
-    error after 2 s (a run that did not complete counts as +inf; ties: the lower seed); and every
-    seed's validation statistics.
+def half_name(label: str) -> str:
+    """The validation entry of a seed's best setting at half the budget."""
+    return f"{label}-half"
+
+
+def _validation_runs(frame, label: str) -> list[dict]:
+    """The validation rows of one entry, as the tuner judges runs (status and metrics)."""
+    return frame[frame["controller"] == label].sort_values("sample").to_dict("records")
+
+
+def _judged(spec: StudySpec, runs: list[dict]) -> tuple[bool, dict, dict]:
+    """(feasible, the constraints' values, the mean metrics) of runs under the study's tuning
+    constraints (:func:`nnrobust.tune.engine.judge`: RMS torque, saturated share, no runaway, no
+    stop hit, every run completed).
+    """
+    from ..tune.engine import CONSTRAINTS, TuneSpec, judge
+
+    b = spec.budgets  # the constraints the study's tunings ran under
+    limits = TuneSpec(
+        str(spec.path), ["pd"], 2, max_rms_torque=b["max_rms_torque"], max_saturated=b["max_saturated"]
+    )
+    _, constraints, mean = judge(limits, runs)
+    return all(v <= 0 for v in constraints), dict(zip(CONSTRAINTS, constraints)), mean
+
+
+def _select(spec: StudySpec, frame, setting_of: dict) -> tuple[dict, dict, dict]:
+    """Each controller's kept setting: among its seeds *feasible on the validation draws* (the
+    study's constraints judged on the draws that rank them, as the tuner judged the training
+    draws), the one with the least median RMS error after 2 s (a run that did not complete counts
+    as +inf; ties: the lower seed); every seed's validation statistics and feasibility; and, per
+    controller with no feasible seed, why ("infeasible on validation", with the numbers).
     """
     import numpy as np
 
     from ..paired import _values
+    from ..tune.engine import infeasible_text
 
+    limits = {
+        "max_rms_torque": spec.budgets["max_rms_torque"],
+        "max_saturated": spec.budgets["max_saturated"],
+    }
     per_seed: dict[str, list] = {}
     for label, (c, seed, settings, at_bound) in setting_of.items():
-        values = np.array(list(_values(frame[frame["controller"] == label], "rms_error_after_2s").values()))
+        rows = frame[frame["controller"] == label]
+        values = np.array(list(_values(rows, "rms_error_after_2s").values()))
+        feasible, constraints, mean = _judged(spec, _validation_runs(frame, label))
         per_seed.setdefault(c, []).append(
             {
                 "seed": seed,
@@ -707,13 +764,58 @@ def _select(spec: StudySpec, frame, setting_of: dict) -> tuple[dict, dict]:
                 "median_error": float(np.median(values)) if values.size else float("inf"),
                 "rows": int(values.size),
                 "completed": int(np.isfinite(values).sum()),
+                "feasible": feasible,
+                "validation": {k: mean.get(k) for k in ("rms_torque", "saturated_fraction", "runaway",
+                                                        "max_joint_limit_violation", "status")},
+                "why_infeasible": "" if feasible else infeasible_text(limits, mean, constraints),
             }
-        )
-    kept = {
-        c: min(entries, key=lambda e: (e["median_error"], e["seed"] if e["seed"] is not None else -1))
-        for c, entries in per_seed.items()
+        )  # fmt: skip
+    kept, infeasible = {}, {}
+    for c, entries in per_seed.items():
+        fit = [e for e in entries if e["feasible"] or e["seed"] is None]  # an untuned law is what it is
+        if fit:
+            kept[c] = min(fit, key=lambda e: (e["median_error"], e["seed"] if e["seed"] is not None else -1))
+        else:
+            infeasible[c] = "infeasible on validation: " + "; ".join(
+                f"seed {e['seed']}: {e['why_infeasible']}" for e in entries
+            )
+    return kept, per_seed, infeasible
+
+
+def _convergence(spec: StudySpec, frame, labels: list[str], halves: dict) -> dict:
+    """Whether a law's tuning converged at its budget: its kept median m(B) (the least validation
+    median of its feasible seeds) against the same at half the budget, m(B/2), from each seed's
+    best setting after half its simulations, validated on the same draws. Converged when
+    |m(B/2) / m(B) - 1| <= the study's tolerance: doubling the budget from B/2 to B moved the
+    kept result by less than the tolerance.
+    """
+    import numpy as np
+
+    from ..paired import _values
+
+    def kept_median(names: list[str]) -> float:
+        medians = []
+        for label in names:
+            values = np.array(
+                list(_values(frame[frame["controller"] == label], "rms_error_after_2s").values())
+            )
+            if values.size and _judged(spec, _validation_runs(frame, label))[0]:
+                medians.append(float(np.median(values)))
+        return min(medians) if medians else float("inf")
+
+    full = kept_median(labels)
+    half = kept_median([halves[label] for label in labels if label in halves])
+    tolerance = spec.budgets["tolerance"]
+    change = half / full - 1 if math.isfinite(half) and math.isfinite(full) and full > 0 else None
+    return {
+        "budget": spec.budgets["tune"],
+        "half_budget": spec.budgets["tune"] // 2,
+        "kept_median": full if math.isfinite(full) else None,
+        "kept_median_half": half if math.isfinite(half) else None,
+        "change": change,
+        "tolerance": tolerance,
+        "converged": change is not None and abs(change) <= tolerance,
     }
-    return kept, per_seed
 
 
 def draws_differ(sweep) -> bool:

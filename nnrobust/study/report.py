@@ -17,12 +17,13 @@ from pathlib import Path
 import numpy as np
 
 from ..drawing import drawn_alone
+from ..properties import overall_certificate
 from ..results import write_json_atomic, write_text_atomic
 from ..study_folder import own_folder
 from ..table_text import csv_cell, tex_text
 from ..tune.engine import STUDY_REPORT
 from ..tune.space import fixed_text
-from .spec import StudySpec, kept_name
+from .spec import DESIGN, StudySpec, kept_name
 
 SCHEMA = f"{STUDY_REPORT}1"
 STATISTICS = (
@@ -103,7 +104,8 @@ def _commands(spec: StudySpec, folder: Path, name: str, case: dict) -> dict:
             + f" --out {path}"
         )
     out["validate"] = f"nnrobust sweep {here / 'validate.toml'} --out {here / 'validate'}"
-    require = " ".join(f"--require '{r}'" for r in spec.require)
+    require = " ".join(f"--require '{r}'" for r in spec.certified_properties())
+    searched = " ".join(f"--require '{r}'" for r in spec.require)
     out["certify"] = (
         f"nnrobust sweep {here / 'certify.toml'} {require} --epsilon {b['epsilon']:g} --beta {b['beta']:g} "
         f"--out {here / 'certify'}"
@@ -116,7 +118,7 @@ def _commands(spec: StudySpec, folder: Path, name: str, case: dict) -> dict:
     if case["stages"].get("falsify") == "finished":
         kept = ",".join(case["kept"])
         out["falsify"] = (
-            f"nnrobust falsify {here / 'case.toml'} --controllers {kept} {require} --budget {b['falsify']} "
+            f"nnrobust falsify {here / 'case.toml'} --controllers {kept} {searched} --budget {b['falsify']} "
             f"--seed {spec.seed} --tuned {here / 'kept.json'} --epsilon {b['epsilon']:g} --beta {b['beta']:g}"
             + (" --margin" if b["margin"] else "")
             + f" --out {here / 'falsify'}"
@@ -142,12 +144,15 @@ def _controller_entry(spec: StudySpec, case: dict, c: str) -> dict:
             "seed_median": float(np.median(medians)) if medians else None,
             "at_bound": kept["at_bound"] if kept else None,
             "fixed": case.get("fixed", {}).get(c, {}),
+            "convergence": case.get("convergence", {}).get(c),
         },
         "fixed": c in spec.fixed,
         "validation": {
             "median_error": kept["median_error"],
             "rows": kept["rows"],
             "completed": kept["completed"],
+            "feasible": kept.get("feasible"),
+            **(kept.get("validation") or {}),
         }
         if kept
         else None,
@@ -198,6 +203,34 @@ def _untuned(report: dict, c: str, entry: dict) -> str:
     return "its own settings (tune = false)"
 
 
+def study_warnings(spec: StudySpec) -> list[str]:
+    """What a reader of the report must know before its numbers: no torque or saturation
+    constraint (kept settings may saturate), each part of the design's requirement the file
+    waives, and each policy scored outside the horizon it was trained on.
+    """
+    from ..controllers.laws.policy import horizon_warning
+    from ..results import SETTLED_AFTER
+    from ..sweep.spec import base_config
+
+    b = spec.budgets
+    out = []
+    if not math.isfinite(b["max_rms_torque"]) and b["max_saturated"] >= 1:
+        out.append(
+            "no torque or saturation constraint (budgets.max_rms_torque, budgets.max_saturated): kept "
+            "settings may saturate the actuators"
+        )
+    out += [f"waived by the study file: {DESIGN[w]}" for w in spec.waive]
+    for case in spec.cases:
+        duration = base_config(spec.case_sweep(case)).simulation.duration
+        for c in spec.controllers:
+            params = spec.entries.get(c, {}).get("params") or {}
+            if spec.entries.get(c, {}).get("kind") == "policy" and isinstance(params.get("file"), str):
+                said = horizon_warning(c, params["file"], duration, SETTLED_AFTER)
+                if said:
+                    out.append(f"{spec.case_name(case)}: {said}")
+    return out
+
+
 def build_report(spec: StudySpec, folder: Path, cases: dict) -> dict:
     """report.json's content (docs/study.md's schema)."""
     report: dict = {
@@ -211,6 +244,9 @@ def build_report(spec: StudySpec, folder: Path, cases: dict) -> dict:
         "budgets": {
             k: (None if isinstance(v, float) and math.isinf(v) else v) for k, v in spec.budgets.items()
         },
+        "certified_properties": spec.certified_properties(),
+        "waived": {w: DESIGN[w] for w in spec.waive},
+        "warnings": study_warnings(spec),
         "cases": {},
     }
     for name, case in cases.items():
@@ -243,11 +279,13 @@ TABLE_COLUMNS = (
     ("median_mm", "median e [mm]"),
     ("p95_mm", "p95 e [mm]"),
     ("success", "completed %"),
+    ("passed", "passed %"),
     ("p_fail_upper", "P(fail) <="),
     ("falsified", "falsified"),
     ("least_margin", "least margin"),
     ("kept_seed", "kept seed"),
     ("seed_spread_mm", "seeds' medians [mm]"),
+    ("converged", "converged"),
     ("mujoco_median_mm", "MuJoCo median e [mm]"),
     ("step_cost_us", "us / step"),
     ("export_p99_us", "exported p99 [us]"),
@@ -264,6 +302,8 @@ def table_rows(report: dict) -> list[dict]:
             err = e["statistics"].get("rms_error_after_2s") or {}
             certs = e["certificates"]
             spread = (e["tuned"] or {}).get("seed_spread")
+            whole = overall_certificate(certs)
+            convergence = (e["tuned"] or {}).get("convergence") or {}
             rows.append(
                 {
                     "case": name,
@@ -273,7 +313,11 @@ def table_rows(report: dict) -> list[dict]:
                     "success": None
                     if e["statistics"].get("success_rate") is None
                     else 100 * e["statistics"]["success_rate"],
-                    "p_fail_upper": max((c_["p_upper"] for c_ in certs), default=None),
+                    "passed": None
+                    if whole is None or not whole["N"]
+                    else 100 * (1 - whole["k"] / whole["N"]),
+                    "p_fail_upper": None if whole is None else whole["p_upper"],
+                    "converged": convergence.get("converged") if e["tuned"] else None,
                     "falsified": (e.get("worst") or {}).get("falsified"),
                     "least_margin": (e.get("worst") or {}).get("margin"),
                     "kept_seed": (e["tuned"] or {}).get("kept_seed"),
@@ -378,8 +422,10 @@ def write_html(report: dict, folder: Path, figures: dict[str, str]) -> Path:
         "text-align:right}td:first-child,th:first-child,td:nth-child(2){text-align:left}"
         "code{font-size:85%;word-break:break-all}.note{color:#555}</style></head><body>",
         f"<h1>{e(report['study'])}</h1><p>{e(report['description'])}</p>",
-        f"<p>Required: {', '.join(f'<code>{e(r)}</code>' for r in report['require'])}. "
-        f"Budgets: {e(json.dumps(report['budgets']))}.</p>",
+        f"<p>Required: {', '.join(f'<code>{e(r)}</code>' for r in report['require'])}; certified: "
+        f"{', '.join(f'<code>{e(r)}</code>' for r in report.get('certified_properties', report['require']))}"
+        f". Budgets: {e(json.dumps(report['budgets']))}.</p>",
+        *(f"<p><b>Warning:</b> {e(w)}</p>" for w in report.get("warnings", [])),
         "<h2>Summary</h2><table><tr>" + "".join(f"<th>{e(head)}</th>" for _, head in TABLE_COLUMNS) + "</tr>",
     ]
     for row in table_rows(report):
@@ -392,7 +438,7 @@ def write_html(report: dict, folder: Path, figures: dict[str, str]) -> Path:
         stages = ", ".join(f"{k}: {v}" for k, v in case["stages"].items())
         parts.append(f"<p class='note'>Stages: {e(stages)}.</p>")
         for c, reason in case["not_kept"].items():
-            parts.append(f"<p><b>{e(c)}: no setting to validate.</b> {e(reason)}</p>")
+            parts.append(f"<p><b>{e(c)}: not kept.</b> {e(reason)}</p>")
         parts.append(
             "<h3>Kept settings</h3><table><tr><th>controller</th><th>kept seed</th><th>setting</th>"
             "<th>seeds' validation medians [mm]</th><th>on a bound</th><th>not searched, and why</th></tr>"

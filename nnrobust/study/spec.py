@@ -32,7 +32,20 @@ from ..config import parse_toml, read_text_file
 from ..exceptions import ConfigError
 from ..sweep.spec import NAME, SweepSpec, parse_sweep, resolve_entry_files
 
-KEYS = ("name", "description", "cases", "controllers", "tuned", "require", "seed", "set", "vary", "budgets")
+KEYS = (
+    "name", "description", "cases", "controllers", "tuned", "require", "waive", "seed", "set", "vary",
+    "budgets",
+)  # fmt: skip
+
+DESIGN = {
+    "torque": "RMS torque <= budgets.max_rms_torque (where set)",
+    "saturation": "saturated share of the steps <= budgets.max_saturated (where set)",
+    "stops": "no joint stop hit (max_joint_limit_violation <= 0)",
+    "runaway": "the error does not run away (runaway == false)",
+    "tracking": "the path is not lost (tracking_error_ratio <= the tracking-lost threshold)",
+}
+"""The design's own requirement, certified beside ``require`` unless the study file waives one
+(``waive = ["stops"]``): the tuning's constraints and the verdicts that mean a failed design."""
 
 BUDGET_KEYS = {
     "tune": "simulations per controller, case and optimiser seed (training)",
@@ -47,6 +60,7 @@ BUDGET_KEYS = {
     "max_rms_torque": "tuning constraint: RMS torque <= this [N m]",
     "max_saturated": "tuning constraint: saturated fraction of the steps <= this",
     "second_engine": "run the certification draws again with MuJoCo as the plant (true/false)",
+    "tolerance": "convergence: the kept median may move by at most this share from half the budget",
     "realtime": "export each kept law and time its step out of Python (true/false)",
 }
 """The keys of [budgets], each with what it means."""
@@ -65,6 +79,7 @@ DEFAULT_BUDGETS = {
     "max_saturated": 1.0,
     "second_engine": False,
     "realtime": False,
+    "tolerance": 0.1,
 }
 
 
@@ -134,6 +149,27 @@ class StudySpec:
     budgets: dict = field(default_factory=lambda: dict(DEFAULT_BUDGETS))
     description: str = ""
     tuned: str = ""
+    waive: list[str] = field(default_factory=list)
+
+    def design_properties(self) -> list[str]:
+        """The design's requirement (:data:`DESIGN`) as properties, those the file waives left out:
+        the tuning's constraints where set, no joint stop hit, no runaway, the path not lost.
+        """
+        from ..verdicts import TRACKING_LOST
+
+        b = self.budgets
+        texts = {
+            "torque": f"rms_torque<={b['max_rms_torque']:g}" if math.isfinite(b["max_rms_torque"]) else "",
+            "saturation": f"saturated_fraction<={b['max_saturated']:g}" if b["max_saturated"] < 1 else "",
+            "stops": "max_joint_limit_violation<=0",
+            "runaway": "runaway==false",
+            "tracking": f"tracking_error_ratio<={TRACKING_LOST:g}",
+        }
+        return [text for name, text in texts.items() if text and name not in self.waive]
+
+    def certified_properties(self) -> list[str]:
+        """What the certification certifies: ``require``, then the design's own requirement."""
+        return [*self.require, *(p for p in self.design_properties() if p not in self.require)]
 
     def case_name(self, case: StudyCase) -> str:
         """A case's folder name: its table's name, the preset, or the experiment file's stem."""
@@ -188,7 +224,7 @@ def _budgets(data, where: str) -> dict:
     for key in ("margin", "second_engine", "realtime"):
         if not isinstance(out[key], bool):
             raise ConfigError(f"{where}: budgets.{key}", f"expected true or false, got {out[key]!r}")
-    for key in ("max_rms_torque", "max_saturated"):
+    for key in ("max_rms_torque", "max_saturated", "tolerance"):
         value = out[key]
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not value > 0:
             raise ConfigError(f"{where}: budgets.{key}", f"expected a number > 0, got {value!r}")
@@ -355,6 +391,18 @@ def parse_study(data: dict, path: Path) -> StudySpec:
     description = data.get("description", "")
     if not isinstance(description, str):
         raise ConfigError(f"{where}: description", "expected a string")
+    waive = data.get("waive", [])
+    if not isinstance(waive, list) or not all(isinstance(w, str) for w in waive):
+        raise ConfigError(
+            f"{where}: waive", f"expected a list of names among {', '.join(DESIGN)}, got {waive!r}"
+        )
+    for w in waive:
+        if w not in DESIGN:
+            raise ConfigError(
+                f"{where}: waive",
+                f"{w!r} is not part of the design's requirement{_suggest(w, DESIGN)} "
+                f"Valid: {', '.join(DESIGN)}",
+            )
     names, entries, tuned = sweep.controllers, sweep.entries, ""
     if "tuned" in data:
         names, entries, fixed, tuned = _tuned_elsewhere(data["tuned"], sweep, path)
@@ -394,6 +442,7 @@ def parse_study(data: dict, path: Path) -> StudySpec:
         _budgets(data.get("budgets", {}), where),
         description,
         tuned,
+        list(dict.fromkeys(waive)),
     )
 
 

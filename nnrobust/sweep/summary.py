@@ -85,6 +85,7 @@ def summarize(spec: SweepSpec, frame) -> dict:
                 "command": rerun_command(spec, sample, controller),
             }
         out["controllers"][controller] = entry
+    out["warnings"] = policy_warnings(spec)
     if len(spec.controllers) > 1:  # every pair on the same samples (nnrobust.paired)
         from ..paired import all_pairs
 
@@ -92,6 +93,26 @@ def summarize(spec: SweepSpec, frame) -> dict:
     from ..display import SweepSummary
 
     return SweepSummary(out)
+
+
+def policy_warnings(spec: SweepSpec) -> list[str]:
+    """A warning per learned policy the sweep scores outside the horizon its record says it was
+    trained on (nnrobust.controllers.laws.policy.horizon_warning).
+    """
+    from ..controllers.laws.policy import horizon_warning
+    from ..results import SETTLED_AFTER
+    from .spec import base_config
+
+    duration = base_config(spec).simulation.duration
+    out = []
+    for name in spec.controllers:
+        entry = spec.entries.get(name, {})
+        file = (entry.get("params") or {}).get("file")
+        if entry.get("kind") == "policy" and isinstance(file, str):
+            said = horizon_warning(name, file, duration, SETTLED_AFTER)
+            if said:
+                out.append(said)
+    return out
 
 
 def write_summary(folder: str | Path, summary: dict) -> Path:

@@ -35,6 +35,8 @@ import numpy as np
 from ..config import CLASS_PATTERN
 from ..drawing import drawn_alone
 from ..exceptions import ConfigError, NNRobustError
+from ..results import SETTLED_AFTER
+from ..search_coordinates import controller_seed
 from ..signals import signals_as_interrupt
 from .space import SearchSpace, arm_scales, custom_space, search_space, tunable
 
@@ -57,8 +59,6 @@ CONSTRAINTS = (
 FAILED = (1.0, 1e4, 1e4)
 """Objective values of a setting whose run failed (diverged, refused): worse than any real one."""
 
-SETTLED_AFTER = 2.0
-"""Seconds after which the objective's RMS error is measured (``rms_error_after_2s``)."""
 
 MARKER = "tune.toml"
 TRIALS = "trials"
@@ -595,13 +595,14 @@ class _Controller:
     gain phase, with those parameters at their weakest.
     """
 
-    def __init__(self, spec: TuneSpec, name: str, space: SearchSpace, index: int):
+    def __init__(self, spec: TuneSpec, name: str, space: SearchSpace):
         self.spec, self.name, self.space = spec, name, space
         self.gain_trials = int(GAIN_SHARE * spec.trials) if space.robust else 0
         self.rows: list[dict] = []
         self.widenings: list[dict] = []  # {param, side, old, bound, trial, probe}, in order
         self.queue: list[dict] = []  # settings to try before the sampler's own: starts, probes
-        self.sampler_seed = spec.seed + index
+        # from the law's name, not its place in the list: a law tunes the same beside any others
+        self.sampler_seed = (spec.seed + controller_seed(name)) % 2**31
 
     @property
     def phase(self) -> str:
@@ -654,10 +655,25 @@ class _Controller:
     def remaining(self) -> int:
         return self.spec.trials - len(self.rows)
 
-    def best(self, phase: str = "all") -> dict | None:
-        """The feasible setting of a phase with the least training error."""
-        feasible = [r for r in self.rows if r["feasible"] and r["phase"] == phase]
+    def best(self, phase: str = "all", trials: int | None = None) -> dict | None:
+        """The feasible setting of a phase with the least training error (among the first
+        ``trials`` settings tried, or all).
+        """
+        rows = self.rows if trials is None else self.rows[:trials]
+        feasible = [r for r in rows if r["feasible"] and r["phase"] == phase]
         return min(feasible, key=lambda r: r["train"]["rms_error_after_2s"]) if feasible else None
+
+    def curve(self) -> list[list[float | None]]:
+        """The search's convergence: [simulations run, the least training error of a feasible
+        setting of the law itself so far (phase ``all``; None before one)] after each setting.
+        """
+        out: list[list[float | None]] = []
+        least = math.inf
+        for i, row in enumerate(self.rows):
+            if row["feasible"] and row["phase"] == "all":
+                least = min(least, row["train"]["rms_error_after_2s"])
+            out.append([(i + 1) * self.spec.train_samples, least if math.isfinite(least) else None])
+        return out
 
     def starts(self) -> list[dict]:
         """The gain settings the full search starts from: the best of the gain phase, and the best
@@ -803,7 +819,7 @@ def _run_tune(
     from ..user_code import load_class
 
     controllers = {}
-    for index, name in enumerate(sweep.controllers):  # every experiment validated before anything runs
+    for name in sweep.controllers:  # every experiment validated before anything runs
         for sample_id in range(sweep.samples):
             experiment(sweep, base, draw(sweep, sample_id), name)
         first = experiment(sweep, base, draw(sweep, 0), name)
@@ -820,7 +836,7 @@ def _run_tune(
             first_step(experiment(sweep, base, draw(sweep, 0), name, centre))
         else:
             space = search_space(entry["kind"], arm_scales(first_step(first)))
-        controllers[name] = _Controller(spec, name, space, index)
+        controllers[name] = _Controller(spec, name, space)
     inputs = tuning_inputs(spec, sweep)
     prepare_folder(spec, folder, overwrite, inputs)
     for row in _read_trials(folder, inputs.key):  # resume: replay the history, widening as it did
@@ -968,17 +984,58 @@ def _summary(spec, sweep, controllers, client, sweep_future, base_future, files=
                 [(evaluate, sweep_future, base_future, name, best["params"], s) for s in held_out],
                 files,
             )
-            validation = judge(spec, runs)[2] if held_out else {}
             entry["best"] = {
                 "params": best["params"],
                 "search": best["search"],
                 "train": best["train"],
-                "validation": validation,
+                **validated(spec, runs),
                 "at_bound": c.space.at_bound(best["search"]),
             }
+        half = c.best(trials=spec.trials // 2)
+        entry["half_budget_best"] = None if half is None else {
+            "simulations": (spec.trials // 2) * spec.train_samples,
+            "params": half["params"],
+            "search": half["search"],
+            "train": half["train"],
+        }  # fmt: skip
+        entry["curve"] = c.curve()
         entry["widened"] = c.widenings
         out["controllers"][name] = entry
     return out
+
+
+def validated(spec: TuneSpec, runs: list[dict]) -> dict:
+    """A setting's held-out runs judged as its training runs were (:func:`judge`): ``validation``
+    (their mean metrics), ``validation_constraints`` (each constraint's value, met when <= 0) and
+    ``validation_feasible`` (every constraint met on the held-out draws too); empty without runs.
+    """
+    if not runs:
+        return {"validation": {}}
+    _, constraints, mean = judge(spec, runs)
+    return {
+        "validation": mean,
+        "validation_constraints": dict(zip(CONSTRAINTS, constraints)),
+        "validation_feasible": all(v <= 0 for v in constraints),
+    }
+
+
+def infeasible_text(spec_limits: dict, metrics: dict, constraints: dict) -> str:
+    """Which constraints ``constraints`` (:data:`CONSTRAINTS` -> value) break, with the numbers:
+    "RMS torque 13.1 N m > 10 N m, saturated 7.9 % > 1 %" ("" when every one is met).
+    """
+    parts = []
+    if constraints.get("completed", -1) > 0:
+        return f"a run did not complete ({metrics.get('status', 'failed')})"
+    if constraints.get("rms_torque_over_limit", -1) > 0:
+        parts.append(f"RMS torque {metrics['rms_torque']:.3g} N m > {spec_limits['max_rms_torque']:g} N m")
+    if constraints.get("saturated_over_limit", -1) > 0:
+        share, limit = 100 * metrics["saturated_fraction"], 100 * spec_limits["max_saturated"]
+        parts.append(f"saturated {share:.3g} % > {limit:g} %")
+    if constraints.get("runaway", -1) > 0:
+        parts.append("the error ran away")
+    if constraints.get("joint_limit_violation", -1) > 0:
+        parts.append(f"a joint stop hit by {metrics['max_joint_limit_violation']:.3g}")
+    return ", ".join(parts)
 
 
 def _write_json(path: Path, data: dict) -> None:

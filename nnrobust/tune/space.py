@@ -3,7 +3,10 @@
 Gains are searched as a closed-loop bandwidth w [rad/s] and a damping ratio z, the same two
 coordinates for every controller, so no law gets a wider reach than another:
 
-- eq. (9) laws: K_p = w^2, K_v = 2 z w (eq. 17's K_v^2 > K_p is z > 1/2);
+- eq. (9) laws: K_p = w^2, K_v = 2 z w. Where the robust term is built on eq. (16)'s P (the NN
+  compensator, the sliding mode, the RBF network) eq. (17)'s K_v^2 > K_p is z > 1/2, a physical
+  bound (0.51); every other law with a damping ratio (no-u0, computed torque, the PD) is searched
+  from 0.2 and widened below it like any bound that is not physical;
 - the task-space PD: K_p = lambda w^2, K_d = 2 z lambda w, with lambda the task-space inertia
   (J M^-1 J^T)^-1 at q(0) (geometric mean of its eigenvalues) [kg].
 
@@ -225,8 +228,11 @@ def search_space(controller: str, scales: dict[str, float]) -> SearchSpace:
         params.append(Param("damping_ratio", 0.2, 5.0, "-"))
         m = scales["joint_inertia"]
         params.append(Param("controller.pd_null_damping", m * w_low, m * w_high, "N m s/rad"))
-    else:
+    elif kind.lyapunov:  # its u_0 is built on eq. (16)'s P, which needs eq. (17)'s Kv^2 > Kp
         params.append(Param("damping_ratio", 0.51, 5.0, "-", low_reason="eq. (17): K_v^2 > K_p"))
+    else:  # eq. (9) without such a term: the PD's rule, searched from 0.2, widened if the best is there
+        params.append(Param("damping_ratio", 0.2, 5.0, "-"))
+    if kind.eq9:
         params.append(
             Param("controller.k", 0.1, 1.0 / T, "1/s", high_reason=f"sampling: k T <= 1, {1.0 / T:.4g} 1/s")
         )

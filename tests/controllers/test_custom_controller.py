@@ -286,11 +286,13 @@ def test_class_and_params_belong_to_custom_and_custom_needs_a_class():
 
 
 def test_the_pd_and_custom_laws_are_not_held_to_eq17(tmp_path):
-    """Kv^2 > Kp constrains eq. (9)'s gains only; the PD baseline and custom laws do not use them."""
+    """Kv^2 > Kp constrains the gains of the laws whose u_0 is built on eq. (16)'s P only; the PD
+    baseline, custom laws and eq. (9) without a robust term do not need it."""
     config = load_preset("paper-ellipse")
     assert config.replace(controller={"kind": "pd", "Kp": [100.0]}).controller.Kp == [100.0, 100.0]
+    assert config.replace(controller={"kind": "no-u0", "Kp": [100.0]}).controller.Kp == [100.0, 100.0]
     with pytest.raises(ConfigError, match="Kv\\^2 = 16 must exceed Kp = 100"):
-        config.replace(controller={"kind": "no-u0", "Kp": [100.0]})
+        config.replace(controller={"kind": "nn", "Kp": [100.0]})
 
 
 def test_an_experiment_file_starts_from_a_preset_or_another_file(tmp_path):

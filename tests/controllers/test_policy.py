@@ -239,3 +239,24 @@ def test_tune_searches_a_residual_policys_scale(tmp_path):
     best = json.loads((out / "summary.json").read_text())["controllers"]["policy"]["best"]
     assert set(best["params"]) == {"controller.params.residual_scale"}
     assert 0.01 <= best["params"]["controller.params.residual_scale"] <= 1.0
+
+
+def test_a_policy_scored_past_the_horizon_it_was_trained_on_is_said_to_be(tmp_path):
+    """The record beside a policy file gives its episodes' length: a sweep or study of longer runs,
+    scored from t = 2 s, warns (the shipped CMA-ES policies were trained on 2 s episodes and scored
+    on t >= 2 s of 4 s runs); runs within it, or a file without a record, do not."""
+    import json
+
+    from nnrobust.controllers.laws.policy import horizon_warning, trained_horizon
+
+    policy = tmp_path / "p.onnx"
+    policy.write_bytes(b"")
+    assert trained_horizon(policy) is None and horizon_warning("p", policy, 4.0, 2.0) == ""
+    (tmp_path / "p.onnx.json").write_text(json.dumps({"duration": 2.0}))
+    said = horizon_warning("learned", policy, 4.0, 2.0)
+    assert said == (
+        "the policy learned (p.onnx) was trained on 2 s episodes; runs of 4 s, scored only past it, take "
+        "it outside its training horizon"
+    )
+    (tmp_path / "p.onnx.json").write_text(json.dumps({"duration": 2.0, "training_duration": 4.0}))
+    assert horizon_warning("learned", policy, 4.0, 2.0) == ""

@@ -323,3 +323,33 @@ LAW = register_law(
         ),
     )
 )
+
+
+def trained_horizon(file: str | Path) -> float | None:
+    """The episode length [s] a policy file was trained on, as its record (``FILE.json``, written
+    by the trainer beside the ONNX file) gives it; None where no record says.
+    """
+    import json
+
+    record = Path(f"{file}.json")
+    try:
+        data = json.loads(record.read_text(encoding="utf-8"))
+    except (OSError, ValueError, RecursionError):
+        return None
+    value = data.get("training_duration", data.get("duration")) if isinstance(data, dict) else None
+    return float(value) if isinstance(value, (int, float)) and not isinstance(value, bool) else None
+
+
+def horizon_warning(name: str, file: str | Path, duration: float, scored_from: float) -> str:
+    """A warning when a policy is scored outside the horizon it was trained on: runs of
+    ``duration`` [s] scored from ``scored_from`` [s] on, against the episodes of its record; ""
+    when they match or no record says.
+    """
+    trained = trained_horizon(file)
+    if trained is None or duration <= trained + 1e-9:
+        return ""
+    window = f"scored on t >= {scored_from:g} s" if scored_from < trained else "scored only past it"
+    return (
+        f"the policy {name} ({Path(file).name}) was trained on {trained:g} s episodes; runs of "
+        f"{duration:g} s, {window}, take it outside its training horizon"
+    )
