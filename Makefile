@@ -29,8 +29,10 @@ MODULES := $(sort $(shell find nnrobust -name '*.py'))
 $(VENV)/.modules: FORCE | $(BIN)/activate
 	@echo "$(MODULES)" | cmp -s - $@ || echo "$(MODULES)" > $@
 
+# The package with pyproject.toml's `walkthrough` extra (sweep, tune, falsify, study, MuJoCo,
+# learning), so that after `make run` every command README.md shows works.
 $(VENV)/.installed: pyproject.toml $(SOURCES) $(VENV)/.build-deps $(VENV)/.modules
-	CMAKE_BUILD_PARALLEL_LEVEL=2 $(BIN)/pip install --quiet --no-build-isolation -e .
+	CMAKE_BUILD_PARALLEL_LEVEL=2 $(BIN)/pip install --quiet --no-build-isolation -e '.[walkthrough]'
 	touch $@
 
 $(VENV)/.installed-test: pyproject.toml $(VENV)/.installed
@@ -87,10 +89,13 @@ docs-data: $(VENV)/.installed-test
 	  $(BIN)/nnrobust study benchmarks/studies/$$study.toml --out $(OUT)/$$study --workers 2 --quiet && \
 	  cp $(OUT)/$$study/report.json $(DATA)/$$(echo $$study | tr - _).json || exit 1; \
 	done
+	rm -rf $(OUT)/study && $(BIN)/nnrobust study examples/study.toml --out $(OUT)/study --workers 2 --quiet
+	sed "s|$(CURDIR)/||g" $(OUT)/study/report.json > $(DATA)/example_study.json
 	$(BIN)/python benchmarks/studies/fronts.py $(OUT)/tuned-paper $(OUT)/tuned-panda --figure docs/img/tuned_comparison.png
 	$(BIN)/python benchmarks/engine_gap.py --json $(DATA)/engine_gap.json
 	$(BIN)/python benchmarks/plant_convergence.py --json $(DATA)/plant_convergence.json
 	$(BIN)/python benchmarks/adaptive_step.py --json $(DATA)/adaptive_step.json
+	$(BIN)/python benchmarks/interval_coverage.py --json $(DATA)/interval_coverage.json --figure docs/img/interval_coverage.png
 	$(BIN)/nnrobust tune paper-ellipse-noisy --controllers nn,no-u0,pd,sliding-mode,slotine-li,rbf-nn --budget 120 \
 	  --max-rms-torque 10 --max-saturated 0.01 --workers 2 --out $(OUT)/tune-noisy --overwrite --quiet
 	cp $(OUT)/tune-noisy/summary.json $(DATA)/tune_noisy_case_b.json

@@ -582,28 +582,40 @@ def _robustness(name: str):
 
 def example_study() -> str:
     """examples/study.toml's report (docs/data/example_study.json, report.json with the repository's
-    path taken out): each controller's validation, certificate, worst plant and MuJoCo figures."""
+    path taken out): each controller's error and effort on the certification draws, the share that
+    passed the whole requirement and its bound, the worst plant and MuJoCo's figures."""
     report = _data("example_study")
     ((case, entry),) = report["cases"].items()
     rows = [{"controller": name, **e} for name, e in entry["controllers"].items()]
-    require = ", ".join(f"`{r}`" for r in report["require"])
+    certified = ", ".join(f"`{r}`" for r in report.get("certified_properties", report["require"]))
     seeds = report["budgets"]["seeds"]
 
-    def stat(e, key="rms_error_after_2s", which="median", engine=None):
+    def stat(e, key="rms_error_after_2s", which="median", engine=None, scale=1e3):
         block = e["engines"][engine] if engine else e["statistics"]
         value = block[key][which]
-        return "–" if value is None else f"{1e3 * value:.3g}"
+        return "–" if value is None else f"{scale * value:.3g}"
+
+    def settings(e):
+        trained = (e.get("training") or {}).get("simulated_seconds")
+        budget = "" if trained is None else f", {trained:.0f} simulated s"
+        return (
+            ("fixed (trained offline" + budget + ")")
+            if e.get("fixed")
+            else f"tuned, best of {seeds} seeds{budget}"
+        )
+
+    def passed(e):
+        whole = e["certificates"][0]
+        return f"{100 * (1 - whole['k'] / whole['N']):.0f}"
 
     table = _markdown(
         [
             ("controller", "l", _text("controller")),
-            (
-                "settings",
-                "l",
-                lambda e: "fixed (trained offline)" if e.get("fixed") else f"tuned, best of {seeds} seeds",
-            ),
+            ("settings", "l", settings),
             ("median error [mm]", "r", lambda e: stat(e)),
-            ("p95 [mm]", "r", lambda e: stat(e, which="p95")),
+            ("median RMS torque [N m]", "r", lambda e: stat(e, "rms_torque", scale=1.0)),
+            ("saturated [%]", "r", lambda e: f"{100 * e['statistics']['saturated_fraction_mean']:.3g}"),
+            ("passed [%]", "r", passed),
             ("P(fail) ≤", "r", lambda e: f"{e['certificates'][0]['p_upper']:.3g}"),
             ("worst plant [mm]", "r", lambda e: f"{1e3 * e['worst']['metrics']['rms_error_after_2s']:.3g}"),
             ("least margin", "r", lambda e: f"{e['worst']['margin']:.3g}"),
@@ -613,10 +625,11 @@ def example_study() -> str:
     )
     n = rows[0]["certificates"][0]["N"]
     return table + (
-        f"\n{case}, {n} certification draws of the box per controller; errors are RMS over t ≥ 2 s; "
-        f"P(fail) is the certificate's upper bound for {require} at 95 % confidence; the worst plant "
-        f"and the margin are the falsifier's ({report['budgets']['falsify']} simulations). Made by "
-        "`nnrobust study examples/study.toml --out out/study` (report.json).\n"
+        f"\n{case}, {n} certification draws of the box per controller; errors and torques are RMS over "
+        f"t ≥ 2 s and the run; saturated is the mean share of saturated steps; passed is the share of "
+        f"draws that met the whole requirement ({certified}) and P(fail) its sampled bound at 95 % "
+        f"confidence; the worst plant and the margin are the falsifier's ({report['budgets']['falsify']} "
+        "simulations). Made by `nnrobust study examples/study.toml --out out/study` (report.json).\n"
     )
 
 
@@ -962,7 +975,36 @@ def serve_misses() -> str:
     )
 
 
+def interval_coverage() -> str:
+    """docs/robustness.md: the coverage of the paired median's interval, bootstrap against order
+    statistics, by N and distribution."""
+    data = _data("interval_coverage")
+    names = list(dict.fromkeys(r["distribution"] for r in data["rows"]))
+    by = {(r["n"], r["distribution"]): r for r in data["rows"]}
+    columns = [("N", "r", lambda n: str(n)), ("order statistics, exact", "r",
+               lambda n: f"{100 * by[n, names[0]]['exact']:.1f} %")]  # fmt: skip
+
+    def both(n, k):
+        return f"{100 * by[n, k]['order']:.1f} / {100 * by[n, k]['bootstrap']:.1f} %"
+
+    for name in names:
+        columns.append((f"{name}: order stat. / bootstrap", "r", lambda n, k=name: both(n, k)))
+    lines = [
+        "| " + " | ".join(h for h, _, _ in columns) + " |",
+        "|" + "|".join("---:" for _ in columns) + "|",
+        *("| " + " | ".join(cell(n) for _, _, cell in columns) + " |" for n in data["sizes"]),
+    ]
+    return (
+        "\n".join(lines)
+        + f"\n\nShare of {data['trials']} samples whose 95 % interval contains the true median (bootstrap: "
+        f"{data['resamples']} resamples each). Made by `python benchmarks/interval_coverage.py --trials "
+        f"{data['trials']} --json docs/data/interval_coverage.json --figure "
+        "docs/img/interval_coverage.png`.\n"
+    )
+
+
 RENDERERS = {
+    "interval-coverage": interval_coverage,
     "registered-laws": registered_laws,
     "paper-kinds": paper_kinds,
     "paper-kind-keys": paper_kind_keys,

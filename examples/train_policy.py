@@ -40,7 +40,7 @@ def main() -> None:
     parser.add_argument("--generations", type=int, default=30)
     parser.add_argument("--population", type=int, default=12)
     parser.add_argument("--episodes", type=int, default=4, help="plants per candidate and generation")
-    parser.add_argument("--duration", type=float, default=2.0, help="episode length [s]")
+    parser.add_argument("--duration", type=float, default=4.0, help="episode length [s] (the study's)")
     parser.add_argument("--threads", type=int, default=None)
     args = parser.parse_args()
     out = Path(args.out)

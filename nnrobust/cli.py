@@ -312,10 +312,17 @@ def _served_target(args, verb: str):
         target = target / "config.toml"
     overrides = dict(parse_override(item) for item in args.set or ())
     changes = {}
-    if getattr(args, "controller", None):
+    certified = None
+    if getattr(args, "tuned", None) and getattr(args, "controller", None):
+        from .tune.engine import kept_entry
+
+        certified = kept_entry(args.tuned, args.controller)  # a study's law by the name it gave it
+    if certified is not None:  # exactly what its certification ran: kind or class, params, set
+        changes = _entry_changes(certified)
+    elif getattr(args, "controller", None):
         changes = {f"controller.{k}": v for k, v in controller_change(args.controller).items()}
     config = _load_target(str(target), {**changes, **overrides})
-    if getattr(args, "tuned", None):  # the tuning's best setting of this controller, under --set
+    if getattr(args, "tuned", None) and certified is None:  # the tuning's best setting, under --set
         from .tune.engine import tuned_settings, tuned_target
 
         kind = config.controller.kind
@@ -333,6 +340,18 @@ def _served_target(args, verb: str):
         if reason:
             warnings.warn(f"--set {key} changes nothing here: {reason}", stacklevel=2)
     return config
+
+
+def _entry_changes(entry: dict) -> dict:
+    """The dotted-key changes that run a sweep's or a study's controllers entry: its kind or class
+    (a class file as the working folder finds it), its params and its own settings.
+    """
+    if "class" in entry:
+        changes = {f"controller.{k}": v for k, v in controller_change(entry["class"]).items()}
+    else:
+        changes = {"controller.kind": entry.get("kind"), "controller.class": None}
+    changes["controller.params"] = dict(entry["params"]) if entry.get("params") else None
+    return {**changes, **(entry.get("set") or {})}
 
 
 def cmd_export(args) -> int:
@@ -645,7 +664,7 @@ def cmd_study(args) -> int:
     import time
 
     from .study import load_study, run_study
-    from .study.report import table_rows
+    from .study.tables import console_line, table_rows
 
     spec = load_study(args.study)
     start = time.monotonic()
@@ -668,13 +687,7 @@ def cmd_study(args) -> int:
     if not args.quiet:
         print(file=sys.stderr)
         for row in table_rows(report):
-            print(
-                f"{row['case']:24s} {row['controller']:18s} median {_number(row['median_mm'])} mm, "
-                f"p95 {_number(row['p95_mm'])} mm, passed {_number(row['passed'])} %, P(fail) <= "
-                f"{_number(row['p_fail_upper'])}, falsified: {_number(row['falsified'])}, least margin "
-                f"{_number(row['least_margin'])}"
-                + ("" if row["converged"] is not False else ", NOT CONVERGED at its budget")
-            )
+            print(console_line(row))
         for name, case in report["cases"].items():
             for controller, reason in case["not_kept"].items():
                 print(f"{name:24s} {controller:18s} not kept: {reason}")
@@ -682,14 +695,6 @@ def cmd_study(args) -> int:
             print(f"warning: {warning}", file=sys.stderr)
         print(f"report in {args.out}/report.html and {args.out}/report.json", file=sys.stderr)
     return 0
-
-
-def _number(value) -> str:
-    if value is None:
-        return "-"
-    if isinstance(value, bool):
-        return "yes" if value else "no"
-    return f"{value:.4g}"
 
 
 def cmd_falsify(args) -> int:
@@ -829,6 +834,7 @@ def cmd_tune(args) -> int:
     """Tune every controller by one optimiser at one budget; validate on held-out samples."""
     import math
 
+    from .config import parse_override
     from .tune import TuneSpec, run_tune
 
     spec = TuneSpec(
@@ -840,6 +846,7 @@ def cmd_tune(args) -> int:
         math.inf if args.max_rms_torque is None else args.max_rms_torque,
         1.0 if args.max_saturated is None else args.max_saturated,
         args.seed,
+        dict(parse_override(item) for item in args.set or ()),
     )
     progress, started = _simulations_bar(
         args.quiet,
@@ -1485,6 +1492,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="held-out samples each best setting is checked on (default 4)",
     )
     tune.add_argument("--seed", type=int, default=0, help="seed of the optimiser and the samples")
+    tune.add_argument(
+        "--set",
+        action="append",
+        metavar="KEY=VALUE",
+        help="set one key of the target's experiment for every run (dotted, TOML value; as a sweep "
+        "file's [set]); repeatable",
+    )
     tune.add_argument("--overwrite", action="store_true", help="replace a different tuning in --out")
     tune.set_defaults(func=cmd_tune)
 
@@ -1529,10 +1543,28 @@ EXIT_CODES = """exit codes:
   130  interrupted (Ctrl-C, SIGTERM, SIGHUP) outside a simulation"""
 
 
+_WARNED: dict[str, int] = {}
+"""Each warning line printed in this command, with how many times it was raised."""
+
+
 def _warning_line(message, category, filename, lineno, file=None, line=None) -> None:
-    """A warning as one line, ``warning: ...`` (no file name, line number or source line)."""
-    if not issubclass(category, DeprecationWarning):
-        print(f"warning: {one_line(str(message))}", file=sys.stderr if file is None else file)
+    """A warning as one line, ``warning: ...`` (no file name, line number or source line), printed
+    once however often it is raised (every draw of a sweep builds the same experiment again); the
+    repeats are counted and said when the command ends (:func:`_repeated_warnings`).
+    """
+    if issubclass(category, DeprecationWarning):
+        return
+    text = one_line(str(message))
+    _WARNED[text] = _WARNED.get(text, 0) + 1
+    if _WARNED[text] == 1:
+        print(f"warning: {text}", file=sys.stderr if file is None else file)
+
+
+def _repeated_warnings() -> None:
+    """One line per warning raised more than once: its count, and the start of its text."""
+    for text, count in _WARNED.items():
+        if count > 1:
+            print(f"warning (raised {count} times in all): {one_line(text, 120)}", file=sys.stderr)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -1577,7 +1609,9 @@ def run() -> None:
     """
     install_stop_handlers()
     warnings.showwarning = _warning_line
+    warnings.simplefilter("always", UserWarning)  # every one reaches _warning_line, which counts it
     code = main()
+    _repeated_warnings()
     ignore_stop_signals()  # also through the interpreter's teardown, which resets Python handlers
     sys.exit(code)
 

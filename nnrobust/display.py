@@ -123,7 +123,7 @@ class StudyReport(dict):
     """A study's report.json: the summary table of every case and controller."""
 
     def _repr_html_(self) -> str:
-        from .study.report import TABLE_COLUMNS, table_rows
+        from .study.tables import TABLE_COLUMNS, table_rows
 
         rows = [[_cell(row[k]) for k, _ in TABLE_COLUMNS] for row in table_rows(self)]
         notes = "".join(

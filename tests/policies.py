@@ -7,16 +7,20 @@ from pathlib import Path
 import numpy as np
 
 
-def linear_policy(path: Path, d: int, n: int, W=None, b=None, *, batched=True, dtype=np.float32) -> Path:
-    """a = tanh(obs W + b): obs [batch, d] (or [d]) -> a [batch, n]; zeros by default."""
+def linear_policy(
+    path: Path, d: int, n: int, W=None, b=None, *, batched=True, dtype=np.float32, symbolic=False
+) -> Path:
+    """a = tanh(obs W + b): obs [batch, d] (or [d]) -> a [batch, n]; zeros by default. With
+    ``symbolic`` the lengths are named dimensions ("obs", "act"), as exporters often write them."""
     import onnx
     from onnx import TensorProto, helper, numpy_helper
 
     kind = TensorProto.FLOAT if dtype == np.float32 else TensorProto.DOUBLE
     W = np.zeros((d, n)) if W is None else np.asarray(W)
     b = np.zeros(n) if b is None else np.asarray(b)
-    shape_in = ["batch", d] if batched else [d]
-    shape_out = ["batch", n] if batched else [n]
+    din, dout = ("obs", "act") if symbolic else (d, n)
+    shape_in = ["batch", din] if batched else [din]
+    shape_out = ["batch", dout] if batched else [dout]
     graph = helper.make_graph(
         [
             helper.make_node("MatMul", ["obs", "W"], ["h"]),

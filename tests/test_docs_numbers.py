@@ -36,6 +36,7 @@ OTHERS = [
     "adaptive_step",
     "tune_noisy_case_b",
     "example_study",
+    "interval_coverage",
 ]
 """Data files with a re-run test of their own below."""
 TIMINGS = ["learning_env", "study_overhead", "study_overhead_falsify_panda", "serve_misses", "fresh_clone"]
@@ -521,6 +522,26 @@ def _example_median(controller: str):
     return lambda d: d["cases"]["paper-ellipse-noisy"]["controllers"][controller]["statistics"][
         "rms_error_after_2s"
     ]["median"]
+
+
+def _example_passed(controller: str):
+    """How many of the example study's certification draws met a controller's whole requirement."""
+
+    def passed(d):
+        whole = d["cases"]["paper-ellipse-noisy"]["controllers"][controller]["certificates"][0]
+        return whole["N"] - whole["k"]
+
+    return passed
+
+
+def _example_convergence(controller: str):
+    """A tuned controller's kept median at the budget over that at half of it (example study)."""
+
+    def ratio(d):
+        c = d["cases"]["paper-ellipse-noisy"]["controllers"][controller]["tuned"]["convergence"]
+        return c["kept_median"] / c["kept_median_half"]
+
+    return ratio
 
 
 PT = "falsify_panda_tuned:falsification"
@@ -1728,6 +1749,51 @@ QUOTED_FIGURES: list[tuple] = [
     ("README.md", r"against the NN's ([\d.]+) mm", "example_study", _example_median("nn"), 1e3),
     (
         "docs/learning.md",
+        r"the residual\nreaches ([\d.]+) mm",
+        "example_study",
+        _example_median("learned-residual"),
+        1e3,
+    ),
+    (
+        "docs/learning.md",
+        r"and the torque policy ([\d.]+) mm: both",
+        "example_study",
+        _example_median("learned-torque"),
+        1e3,
+    ),
+    (
+        "docs/learning.md",
+        r"the PD meets the whole requirement on (\d+) of 29",
+        "example_study",
+        _example_passed("pd"),
+        1.0,
+    ),
+    ("docs/learning.md", r"draws\n\(([\d.]+) mm\), the NN", "example_study", _example_median("pd"), 1e3),
+    ("docs/learning.md", r"the NN on (\d+) of 29", "example_study", _example_passed("nn"), 1.0),
+    ("docs/learning.md", r"of 29 \(([\d.]+) mm; the error", "example_study", _example_median("nn"), 1e3),
+    (
+        "docs/learning.md",
+        r"task-space PD on none \(([\d.]+) mm\)",
+        "example_study",
+        _example_median("taskpd"),
+        1e3,
+    ),
+    (
+        "docs/learning.md",
+        r"\(to ([\d.]+) and [\d.]+ of their values",
+        "example_study",
+        _example_convergence("nn"),
+        1.0,
+    ),
+    (
+        "docs/learning.md",
+        r"\(to [\d.]+ and ([\d.]+) of their values",
+        "example_study",
+        _example_convergence("pd"),
+        1.0,
+    ),
+    (
+        "docs/learning.md",
         r"at ([\d.]+) of the batch's steps per\nsecond on the paper's arm",
         "learning_env",
         _learning("paper-ellipse", "vector_over_batch"),
@@ -2430,3 +2496,24 @@ def test_the_tuned_rbf_setting_runs_away_at_the_centre_of_the_papers_box():
     pd = data["controllers"]["pd-tuned"]  # its worst plants, the search's and random's: low friction
     assert pd["worst"]["values"]["plant.friction_scale"] < 0.6
     assert pd["random_baseline"]["worst"]["values"]["plant.friction_scale"] < 0.6
+
+
+def test_the_interval_coverage_reruns():
+    """One row of benchmarks/interval_coverage.py's data (N = 11, skewed differences), recomputed
+    with its seed: the same shares of covering intervals, and the order-statistic one at its exact
+    coverage within sampling error (3 standard errors)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "interval_coverage", ROOT / "benchmarks" / "interval_coverage.py"
+    )
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    data = _read("interval_coverage")
+    row = next(r for r in data["rows"] if (r["n"], r["distribution"]) == (11, "skewed"))
+    k = list(bench.DISTRIBUTIONS).index("skewed")
+    again = bench.coverage(11, bench.DISTRIBUTIONS["skewed"], data["trials"], seed=1000 * 11 + k)
+    assert again == {"order": row["order"], "bootstrap": row["bootstrap"]}
+    for r in data["rows"]:
+        se = (r["exact"] * (1 - r["exact"]) / data["trials"]) ** 0.5
+        assert abs(r["order"] - r["exact"]) <= 3 * se + 1e-12, r

@@ -357,3 +357,56 @@ print(lib.nnrobust_law_last_error().decode())
     assert lines[0] == "None" and "is a user's law in C++: create it with nnrobust_law_create" in lines[1]
     assert lines[2] == "0" and lines[3] == "-1"
     assert "the step kept 1 block(s) of memory it allocated" in lines[4]
+
+
+def test_a_studys_cpp_law_exports_by_its_name_and_replays_its_certification_run(tmp_path):
+    """`export --tuned REPORT.json#CASE --controller NAME` for a law in C++ the study named
+    taskpd-cpp: the report carries the entry its certification ran (its class and tuned params),
+    so the law exports by that name (it was "has no best setting for 'custom'") and a C program
+    replays the certification's first draw to its torques."""
+    pytest.importorskip("distributed")
+    pytest.importorskip("optuna")
+    from nnrobust.config import load_config
+    from nnrobust.study import load_study
+    from nnrobust.sweep.spec import base_config, draw, experiment, load_sweep
+
+    shutil.copy(ROOT / "examples" / "controllers" / "task_pd.cpp", tmp_path / "task_pd.cpp")
+    (tmp_path / "study.toml").write_text(
+        'name = "cpp"\ncases = ["paper-ellipse-noisy"]\n'
+        'controllers = [{name = "taskpd-cpp", class = "task_pd.cpp:TaskPD"}]\n'
+        'require = ["rms_error_after_2s<=0.002"]\n[set]\n"simulation.duration" = 2.5\n'
+        '[vary]\n"plant.disturbance_scale" = {uniform = [0.5, 2.0]}\n'
+        "[budgets]\ntune = 6\nseeds = 1\ntrain_samples = 1\nvalidation = 2\nepsilon = 0.5\nbeta = 0.2\n"
+        "falsify = 0\n"
+    )
+    out = tmp_path / "out"
+    assert main(["study", str(tmp_path / "study.toml"), "--out", str(out), "--workers", "2", "--quiet"]) == 0
+    assert load_study(tmp_path / "study.toml").controllers == ["taskpd-cpp"]
+    law = tmp_path / "law"
+    argv = ["export", "paper-ellipse-noisy", "--tuned", f"{out / 'report.json'}#paper-ellipse-noisy"]
+    assert (
+        main(
+            [
+                *argv,
+                "--controller",
+                "taskpd-cpp",
+                "--set",
+                "simulation.duration=2.5",
+                "--out",
+                str(law),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
+    kept = json.loads((out / "report.json").read_text())["cases"]["paper-ellipse-noisy"]["controllers"][
+        "taskpd-cpp"
+    ]
+    exported = load_config(law / "config.toml").controller
+    assert exported.params == {
+        k.removeprefix("controller.params."): v for k, v in kept["tuned"]["settings"].items()
+    }
+    certify = load_sweep(out / "cases" / "paper-ellipse-noisy" / "certify.toml")
+    run = experiment(certify, base_config(certify), draw(certify, 0), "taskpd-cpp-tuned")
+    inputs, torques = recorded_steps(run, DURATION)
+    np.testing.assert_array_equal(_replay(_compile_replay(law), inputs), torques)

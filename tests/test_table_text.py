@@ -69,7 +69,7 @@ def test_the_issues_tex_name_is_no_command():
 def _report(case: str, controller: str) -> dict:
     entry = {
         "statistics": {"rms_error_after_2s": {"median": 0.001, "p95": 0.002}, "success_rate": 1.0},
-        "certificates": [{"p_upper": 0.05}],
+        "certificates": [{"property": "rms_error_after_2s<=0.005", "N": 3, "k": 0, "p_upper": 0.05}],
         "tuned": None,
         "worst": None,
         "engines": {},
@@ -82,7 +82,7 @@ def _report(case: str, controller: str) -> dict:
 def test_a_studys_tables_quote_every_name(tmp_path):
     """write_tables with names no study file would pass today (the study's rules refuse them):
     the CSV has no formula cell and the LaTeX no unescaped special character."""
-    from nnrobust.study.report import write_tables
+    from nnrobust.study.tables import write_tables
 
     csv_path, tex_path = write_tables(_report("=cmd|' -C calc'!A0", "@SUM(1+1)"), tmp_path)
     rows = list(csv.reader(csv_path.open()))
@@ -90,5 +90,5 @@ def test_a_studys_tables_quote_every_name(tmp_path):
     assert not any(_evaluated(c) for row in rows for c in row)
     (tmp_path / "b").mkdir()
     tex_path2 = write_tables(_report("^^5cinput{^^2fetc^^2fpasswd}", "x$y"), tmp_path / "b")[1]
-    body = tex_path2.read_text().splitlines()[4]  # the one row
+    body = tex_path2.read_text().splitlines()[4]  # the one row of the first table
     assert "\\input" not in body and "^^" not in body and r"x\$y" in body

@@ -38,6 +38,8 @@ def _summary(spec, sweep, box, properties, rows, seconds, rerun_command, Sample,
                 "falsified": bool(least < 0 or any(not p.holds({**worst["metrics"]}) for p in properties)),
                 "simulations": len(history),
                 "first_violation": next((i + 1 for i, r in enumerate(history) if r["objective"] < 0), None),
+                # the search's convergence: the least margin found after each simulation
+                "curve": [float(v) for v in np.minimum.accumulate([r["objective"] for r in history])],
                 "worst": {
                     "values": worst["values"],
                     "metrics": worst["metrics"],

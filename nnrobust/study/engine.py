@@ -39,7 +39,7 @@ from ..study_folder import own_folder
 from .spec import StudyCase, StudySpec, kept_name
 
 MARKER = "study.toml"
-STAGE_FOLDERS = ("validate", "certify", "falsify", "certify-mujoco", "realtime")
+STAGE_FOLDERS = ("validate", "certify", "falsify", "certify-mujoco", "realtime", "responses")
 """A case's stage folders (besides tune-seedS), each written by its command's engine."""
 VALIDATION_SEED = 1_000_003
 """Added to the study's seed for the validation draws (the tunings draw from seed + s, s < 20)."""
@@ -122,13 +122,14 @@ def _check_controllers(spec: StudySpec) -> None:
     from ..tune.space import custom_space, own_keys, tunable
 
     for case in spec.cases:
+        view = spec.for_case(case)  # the controllers that run on this case, with its entries
         sweep = spec.case_sweep(case)
         where = f"{spec.path}: case {spec.case_name(case)}"
         try:
             # as its stages' sweep files will read it: the entries' own settings against [set]
             parse_sweep(parse_toml(sweep.to_toml(), where), where)
             config = base_config(sweep)  # the case's experiment with the study's and its own [set]
-            check_controllers(sweep, base_values(sweep))
+            check_controllers(_at_centres(view, sweep), base_values(sweep))
             if spec.vary and spec.budgets["falsify"]:
                 from ..falsify.spec import box_of
 
@@ -142,10 +143,10 @@ def _check_controllers(spec: StudySpec) -> None:
                 f"{config.simulation.duration:g} s: a study selects, certifies and reports by the RMS "
                 f"error after {SETTLED_AFTER:g} s, so runs must last longer",
             )
-        for name in spec.controllers:  # a tuned law's own keys are its tuning's, not the case's
-            if name in spec.fixed:
+        for name in view.controllers:  # a tuned law's own keys are its tuning's, not the case's
+            if name in view.fixed:
                 continue
-            keys, prefixes = own_keys(law_of(name, spec.entries))
+            keys, prefixes = own_keys(law_of(name, view.entries))
             fixed = [k for k in spec.case_set(case) if k in keys or k.startswith(prefixes)]
             if fixed:
                 raise ConfigError(
@@ -174,6 +175,32 @@ def _check_controllers(spec: StudySpec) -> None:
                     f"{spec.path}: controllers.{name}",
                     f"{said}; or run it untuned: tune = false in its entry",
                 ) from err
+
+
+def _at_centres(spec: StudySpec, sweep):
+    """The case's sweep with each tuned class entry at the centre of the space it declares (the
+    tuner builds it there first; it never runs at its entry's own params, which a law in C++ need
+    not give), so that the up-front check builds what the stages will run.
+    """
+    import dataclasses
+    import math
+
+    from ..controllers.base import Controller
+    from ..tune.space import custom_space
+    from ..user_code import load_class
+
+    entries = {k: dict(v) for k, v in sweep.entries.items()}
+    for name, entry in entries.items():
+        if name in spec.fixed or "class" not in entry:
+            continue
+        try:
+            space = custom_space(name, load_class(entry["class"], Controller, "controller.class"))
+        except ConfigError:
+            continue  # refused with its reason below (_check_controllers)
+        centre = space.overrides({p.name: math.sqrt(p.low * p.high) for p in space.params})
+        own = {k.removeprefix("controller.params."): v for k, v in centre.items()}
+        entry["params"] = {**own, **(entry.get("params") or {})}
+    return dataclasses.replace(sweep, entries=entries)
 
 
 def run_study(
@@ -287,9 +314,10 @@ def _run_case(
     """
     from ..falsify import FalsifySpec, run_falsify
     from ..sweep.engine import read_results, run_sweep
-    from ..sweep.spec import load_sweep
+    from ..sweep.spec import base_config, load_sweep
     from ..tune.engine import TuneSpec, run_tune
 
+    spec = spec.for_case(case)  # the controllers that run on this case, with its entries
     name = spec.case_name(case)
     here = own_folder(own_folder(folder / "cases") / name)  # never through a link planted there
     sweep = spec.case_sweep(case)
@@ -343,6 +371,24 @@ def _run_case(
     )
     out["tunings"] = {s: str(here / f"tune-seed{s}") for s in tunings}
     out["train_samples"] = train_samples  # what the tunings ran on (one draw where all are the same)
+    from .evidence import tuning_curves
+
+    out["curves"] = tuning_curves(tunings)
+    out["search"] = {  # per law and seed: the space searched, as widened, and what moved
+        c: {s: {"space": summary["controllers"][c]["space"], "widened": summary["controllers"][c]["widened"]}
+            for s, summary in tunings.items() if c in summary["controllers"]}
+        for c in tuned
+    }  # fmt: skip
+    duration = base_config(sweep).simulation.duration
+    out["training"] = {
+        c: sum(
+            summary["controllers"][c]["simulations"]
+            for summary in tunings.values()
+            if c in summary["controllers"]
+        )
+        * duration
+        for c in tuned
+    }
     # the keys each tuned law does not search, with why (the same for every seed)
     out["fixed"] = {
         c: entry.get("fixed", {})
@@ -441,6 +487,7 @@ def _run_case(
         else:
             certify_entries[label] = tuned_entry(c, entry["settings"], spec.entries)
             settings[c] = entry["settings"]
+    out["entries"] = {label: certify_entries.get(label) or {"kind": label} for label in certify_names}
     n = b["certify"] or samples_needed(b["epsilon"], b["beta"])
     certify = sweep_of(spec, case, certify_names, certify_entries, n, spec.seed + CERTIFY_SEED)
     certify_file = here / "certify.toml"
@@ -503,6 +550,10 @@ def _run_case(
     out["held_out"] = _varies(rows)
     out["step_cost"] = step_cost(certify_spec, rows)
     out["failures"] = failures(rows)
+    from ..properties import run_properties
+    from .evidence import failing_draws
+
+    out["failing"] = failing_draws(certify_spec, rows, run_properties(spec.certified_properties()))
     status.update({stage: "finished" for stage in ("certify", *done)})
     out.update(done)
 
@@ -515,6 +566,10 @@ def _run_case(
     else:
         status["realtime"] = "skipped: realtime = false"
     out["stages"].update({stage: status[stage] for stage in ("certify", "falsify", "realtime", "engine")})
+    from .evidence import responses
+
+    say(f"{name}: the kept laws' time responses on their median and worst certification draws")
+    out["responses"] = responses(certify_spec, rows, certify_names, here / "responses")
     return out
 
 

@@ -1,14 +1,11 @@
 """A study's report: ``report.json`` (the numbers, under the schema of docs/study.md),
-``report.html`` (one self-contained file: tables, figures inside, the reproducibility appendix),
-``tables/`` (CSV and LaTeX booktabs) and ``figures/`` (PNG, SVG, PDF), all from the stages'
-own folders.
+``report.html`` (one self-contained file: tables, figures inside, the reproducibility appendix:
+nnrobust.study.html), ``tables/`` (CSV and LaTeX booktabs: nnrobust.study.tables) and
+``figures/`` (PNG, SVG, PDF: nnrobust.study.figures), all from the stages' own folders.
 """
 
 from __future__ import annotations
 
-import base64
-import html
-import io
 import json
 import math
 import platform
@@ -16,13 +13,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..drawing import drawn_alone
-from ..properties import overall_certificate
-from ..results import write_json_atomic, write_text_atomic
-from ..study_folder import own_folder
-from ..table_text import csv_cell, tex_text
+from ..results import write_json_atomic
 from ..tune.engine import STUDY_REPORT
-from ..tune.space import fixed_text
 from .spec import DESIGN, StudySpec, kept_name
 
 SCHEMA = f"{STUDY_REPORT}1"
@@ -32,6 +24,7 @@ STATISTICS = (
     "statuses",
     "rms_error_after_2s",
     "rms_torque",
+    "torque_chatter",
     "saturated_fraction_mean",
     "rows_with_warnings",
 )
@@ -132,8 +125,13 @@ def _controller_entry(spec: StudySpec, case: dict, c: str) -> dict:
     kept = case["kept"].get(c)
     per_seed = case["per_seed"].get(c, [])
     medians = [e["median_error"] for e in per_seed if math.isfinite(e["median_error"])]
+    certified_entry = dict(case.get("entries", {}).get(label) or {"kind": c})
+    if "class" in certified_entry:  # the file as the report's inputs name it
+        file, _, cls = certified_entry["class"].rpartition(":")
+        certified_entry["class"] = f"{_shown(file)}:{cls}"
     entry: dict = {
         "label": label,
+        "entry": certified_entry,  # what the certification ran: kind or class, params, set
         "tuned": None
         if c in spec.fixed
         else {
@@ -145,7 +143,15 @@ def _controller_entry(spec: StudySpec, case: dict, c: str) -> dict:
             "at_bound": kept["at_bound"] if kept else None,
             "fixed": case.get("fixed", {}).get(c, {}),
             "convergence": case.get("convergence", {}).get(c),
+            # the kept seed's space as searched (bounds, why physical) and what every seed widened
+            "space": (case.get("search", {}).get(c, {}).get(kept["seed"] if kept else None) or {}).get(
+                "space"
+            ),
+            "widened": {
+                s: r["widened"] for s, r in case.get("search", {}).get(c, {}).items() if r["widened"]
+            },
         },
+        "training": _training(spec, case, c),
         "fixed": c in spec.fixed,
         "validation": {
             "median_error": kept["median_error"],
@@ -161,6 +167,7 @@ def _controller_entry(spec: StudySpec, case: dict, c: str) -> dict:
         "quantile_bounds": certify.get("quantile_bounds", []),
         "warnings": certify.get("warnings_by_kind", {}),
         "failures": case.get("failures", {}).get(label, {}),
+        "failing": case.get("failing", {}).get(label),
     }
     cost = case.get("step_cost", {}).get(label, {})
     entry["step_cost_us"], entry["backend"] = cost.get("step_cost_us"), cost.get("backend")
@@ -194,13 +201,35 @@ def _controller_entry(spec: StudySpec, case: dict, c: str) -> dict:
     return entry
 
 
-def _untuned(report: dict, c: str, entry: dict) -> str:
-    """The settings cell of a controller the study did not tune."""
-    if not entry["fixed"]:
-        return "-"
-    if report.get("tuned_from") and c.endswith(kept_name("")):
-        return f"the kept setting of {report['tuned_from']} (tuned = ...)"
-    return "its own settings (tune = false)"
+def _training(spec: StudySpec, case: dict, c: str) -> dict | None:
+    """What a law's setting was trained on, in simulated seconds: its tunings' simulations (every
+    seed) for a tuned law, its training record's for a learned policy; None for a law at its own
+    settings.
+    """
+    if c not in spec.fixed:
+        seconds = case.get("training", {}).get(c)
+        return (
+            None
+            if seconds is None
+            else {"simulated_seconds": seconds, "by": "the study's tunings, every seed"}
+        )
+    params = spec.entries.get(c, {}).get("params") or {}
+    if spec.entries.get(c, {}).get("kind") == "policy" and isinstance(params.get("file"), str):
+        try:
+            record = json.loads(Path(f"{params['file']}.json").read_text())
+        except (OSError, ValueError):
+            return None
+        if isinstance(record, dict) and isinstance(record.get("simulated_seconds"), (int, float)):
+            return {"simulated_seconds": float(record["simulated_seconds"]), "by": "its training record"}
+    return None
+
+
+def property_names(spec: StudySpec) -> dict[str, str]:
+    """Each certified property's short name in the tables: the design part it stands for, or the
+    metric a ``require`` property reads.
+    """
+    names = {r: r.split("<")[0].split(">")[0].split("=")[0].split("!")[0] for r in spec.require}
+    return {**names, **{text: name for name, text in spec.design_requirement().items()}}
 
 
 def study_warnings(spec: StudySpec) -> list[str]:
@@ -222,9 +251,10 @@ def study_warnings(spec: StudySpec) -> list[str]:
     out += [f"waived by the study file: {DESIGN[w]}" for w in spec.waive]
     for case in spec.cases:
         duration = base_config(spec.case_sweep(case)).simulation.duration
-        for c in spec.controllers:
-            params = spec.entries.get(c, {}).get("params") or {}
-            if spec.entries.get(c, {}).get("kind") == "policy" and isinstance(params.get("file"), str):
+        view = spec.for_case(case)
+        for c in view.controllers:
+            params = view.entries.get(c, {}).get("params") or {}
+            if view.entries.get(c, {}).get("kind") == "policy" and isinstance(params.get("file"), str):
                 said = horizon_warning(c, params["file"], duration, SETTLED_AFTER)
                 if said:
                     out.append(f"{spec.case_name(case)}: {said}")
@@ -245,11 +275,16 @@ def build_report(spec: StudySpec, folder: Path, cases: dict) -> dict:
             k: (None if isinstance(v, float) and math.isinf(v) else v) for k, v in spec.budgets.items()
         },
         "certified_properties": spec.certified_properties(),
+        "property_names": property_names(spec),
         "waived": {w: DESIGN[w] for w in spec.waive},
+        "box": dict(spec.vary),
         "warnings": study_warnings(spec),
         "cases": {},
     }
+    by_name = {spec.case_name(c): c for c in spec.cases}
+    study = spec
     for name, case in cases.items():
+        spec = study.for_case(by_name[name])  # the controllers of this case, with its entries
         label_of = {(c if c in spec.fixed else kept_name(c)): c for c in spec.controllers}
         paired = [
             {**p, "a": label_of.get(p["a"], p["a"]), "b": label_of.get(p["b"], p["b"])}
@@ -270,263 +305,8 @@ def build_report(spec: StudySpec, folder: Path, cases: dict) -> dict:
             "paired": paired,
             "commands": _commands(spec, folder, name, case),
         }
+    spec = study
     return report
-
-
-TABLE_COLUMNS = (
-    ("case", "case"),
-    ("controller", "controller"),
-    ("median_mm", "median e [mm]"),
-    ("p95_mm", "p95 e [mm]"),
-    ("success", "completed %"),
-    ("passed", "passed %"),
-    ("p_fail_upper", "P(fail) <="),
-    ("falsified", "falsified"),
-    ("least_margin", "least margin"),
-    ("kept_seed", "kept seed"),
-    ("seed_spread_mm", "seeds' medians [mm]"),
-    ("converged", "converged"),
-    ("mujoco_median_mm", "MuJoCo median e [mm]"),
-    ("step_cost_us", "us / step"),
-    ("export_p99_us", "exported p99 [us]"),
-)
-
-
-def table_rows(report: dict) -> list[dict]:
-    """One row per (case, controller): the certification draws' error statistics, the
-    certificate's bound, the falsification's verdict and the seeds' spread.
-    """
-    rows = []
-    for name, case in report["cases"].items():
-        for c, e in case["controllers"].items():
-            err = e["statistics"].get("rms_error_after_2s") or {}
-            certs = e["certificates"]
-            spread = (e["tuned"] or {}).get("seed_spread")
-            whole = overall_certificate(certs)
-            convergence = (e["tuned"] or {}).get("convergence") or {}
-            rows.append(
-                {
-                    "case": name,
-                    "controller": c,
-                    "median_mm": None if err.get("median") is None else 1e3 * err["median"],
-                    "p95_mm": None if err.get("p95") is None else 1e3 * err["p95"],
-                    "success": None
-                    if e["statistics"].get("success_rate") is None
-                    else 100 * e["statistics"]["success_rate"],
-                    "passed": None
-                    if whole is None or not whole["N"]
-                    else 100 * (1 - whole["k"] / whole["N"]),
-                    "p_fail_upper": None if whole is None else whole["p_upper"],
-                    "converged": convergence.get("converged") if e["tuned"] else None,
-                    "falsified": (e.get("worst") or {}).get("falsified"),
-                    "least_margin": (e.get("worst") or {}).get("margin"),
-                    "kept_seed": (e["tuned"] or {}).get("kept_seed"),
-                    "seed_spread_mm": None if not spread else f"{1e3 * spread[0]:.4g}-{1e3 * spread[1]:.4g}",
-                    "mujoco_median_mm": _median_mm(e["engines"].get("mujoco")),
-                    "step_cost_us": e["step_cost_us"],
-                    "export_p99_us": (e.get("realtime") or {}).get("p99_us"),
-                }
-            )
-    return rows
-
-
-def _median_mm(stats: dict | None) -> float | None:
-    median = ((stats or {}).get("rms_error_after_2s") or {}).get("median")
-    return None if median is None else 1e3 * median
-
-
-def _cell(value) -> str:
-    if value is None:
-        return "-"
-    if isinstance(value, bool):
-        return "yes" if value else "no"
-    if isinstance(value, float):
-        return f"{value:.4g}"
-    return str(value)
-
-
-def write_tables(report: dict, folder: Path) -> list[Path]:
-    """tables/summary.csv and tables/summary.tex (booktabs)."""
-    import csv
-
-    rows = table_rows(report)
-    out = own_folder(folder / "tables")
-    buffer = io.StringIO()
-    writer = csv.writer(buffer)
-    writer.writerow([key for key, _ in TABLE_COLUMNS])
-    for row in rows:  # names come from the user's files: no cell a spreadsheet evaluates
-        writer.writerow([csv_cell(row[k]) for k, _ in TABLE_COLUMNS])
-    write_text_atomic(out / "summary.csv", buffer.getvalue())
-
-    def head(text: str) -> str:  # our own headings: escaped, then their two symbols typeset
-        return tex_text(text).replace("<=", r"$\le$").replace("us / step", r"$\mu$s / step")
-
-    lines = [
-        r"\begin{tabular}{" + "l" * 2 + "r" * (len(TABLE_COLUMNS) - 2) + "}",
-        r"\toprule",
-        " & ".join(head(h) for _, h in TABLE_COLUMNS) + r" \\",
-        r"\midrule",
-        *(" & ".join(tex_text(_cell(row[k])) for k, _ in TABLE_COLUMNS) + r" \\" for row in rows),
-        r"\bottomrule",
-        r"\end{tabular}",
-    ]
-    write_text_atomic(out / "summary.tex", "\n".join(lines) + "\n")
-    return [out / "summary.csv", out / "summary.tex"]
-
-
-@drawn_alone
-def _figure(name: str, case: dict, folder: Path) -> str:
-    """The certification draws' error CDF per controller: saved as PNG, SVG and PDF, and returned
-    as a base64 PNG for the HTML.
-    """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    import numpy as np
-    import pandas as pd
-
-    frame = pd.read_parquet(folder / "cases" / name / "certify" / "results")
-    fig, ax = plt.subplots(figsize=(6, 3.6))
-    for label, rows in frame.groupby("controller", sort=False):
-        done = rows[rows["status"] == "completed"]
-        e = np.sort(1e3 * done["rms_error_after_2s"].to_numpy(dtype=float))
-        e = e[np.isfinite(e)]
-        if e.size:
-            ax.step(e, np.arange(1, e.size + 1) / len(rows), where="post", label=str(label))
-    ax.set_xscale("log")
-    ax.set_xlabel("RMS task error, t >= 2 s [mm]")
-    ax.set_ylabel("fraction of draws")
-    ax.set_title(f"{name}: certification draws")
-    ax.grid(True, which="both", alpha=0.3)
-    if ax.get_legend_handles_labels()[0]:  # no completed draw: no line, no legend
-        ax.legend(fontsize=8)
-    fig.tight_layout()
-    out = own_folder(folder / "figures")
-    for ext in ("png", "svg", "pdf"):  # drawn beside, renamed into place: never through a link
-        tmp = out / f".{name}-error-cdf.partial.{ext}"
-        fig.savefig(tmp, dpi=120)
-        tmp.replace(out / f"{name}-error-cdf.{ext}")
-    plt.close(fig)
-    return base64.b64encode((out / f"{name}-error-cdf.png").read_bytes()).decode()
-
-
-def write_html(report: dict, folder: Path, figures: dict[str, str]) -> Path:
-    """report.html: one file, no network, figures inside as data URIs."""
-    e = html.escape
-    parts = [
-        "<!DOCTYPE html><html><head><meta charset='utf-8'>",
-        f"<title>{e(report['study'])}: nnrobust study</title>",
-        "<style>body{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em}"
-        "table{border-collapse:collapse;margin:1em 0}td,th{border-bottom:1px solid #ccc;padding:3px 8px;"
-        "text-align:right}td:first-child,th:first-child,td:nth-child(2){text-align:left}"
-        "code{font-size:85%;word-break:break-all}.note{color:#555}</style></head><body>",
-        f"<h1>{e(report['study'])}</h1><p>{e(report['description'])}</p>",
-        f"<p>Required: {', '.join(f'<code>{e(r)}</code>' for r in report['require'])}; certified: "
-        f"{', '.join(f'<code>{e(r)}</code>' for r in report.get('certified_properties', report['require']))}"
-        f". Budgets: {e(json.dumps(report['budgets']))}.</p>",
-        *(f"<p><b>Warning:</b> {e(w)}</p>" for w in report.get("warnings", [])),
-        "<h2>Summary</h2><table><tr>" + "".join(f"<th>{e(head)}</th>" for _, head in TABLE_COLUMNS) + "</tr>",
-    ]
-    for row in table_rows(report):
-        parts.append("<tr>" + "".join(f"<td>{e(_cell(row[k]))}</td>" for k, _ in TABLE_COLUMNS) + "</tr>")
-    parts.append("</table>")
-    for name, case in report["cases"].items():
-        parts.append(f"<h2>Case {e(name)}</h2><p class='note'>Validated on {e(case['validated_on'])}.</p>")
-        if name in figures:
-            parts.append(f"<img alt='error CDF of {e(name)}' src='data:image/png;base64,{figures[name]}'>")
-        stages = ", ".join(f"{k}: {v}" for k, v in case["stages"].items())
-        parts.append(f"<p class='note'>Stages: {e(stages)}.</p>")
-        for c, reason in case["not_kept"].items():
-            parts.append(f"<p><b>{e(c)}: not kept.</b> {e(reason)}</p>")
-        parts.append(
-            "<h3>Kept settings</h3><table><tr><th>controller</th><th>kept seed</th><th>setting</th>"
-            "<th>seeds' validation medians [mm]</th><th>on a bound</th><th>not searched, and why</th></tr>"
-        )
-        for c, entry in case["controllers"].items():
-            tuned = entry["tuned"] or {}
-            setting = ", ".join(f"{k} = {_cell(v)}" for k, v in (tuned.get("settings") or {}).items())
-            medians = ", ".join(
-                f"seed {s['seed']}: {_cell(None if s['median_error'] is None else 1e3 * s['median_error'])}"
-                for s in tuned.get("seeds", [])
-            )
-            bound = (
-                ", ".join(
-                    f"{b['param']} at its {b['side']} bound {_cell(b['bound'])}"
-                    + (f" ({b['physical']})" if b.get("physical") else "")
-                    for b in tuned.get("at_bound") or []
-                )
-                or "-"
-            )
-            held = "; ".join(fixed_text((tuned.get("fixed") or {}).items())) or "-"
-            parts.append(
-                f"<tr><td>{e(c)}</td><td>{e(_cell(tuned.get('kept_seed')))}</td>"
-                f"<td>{e(setting or _untuned(report, c, entry))}</td>"
-                f"<td>{e(medians or '-')}</td><td>{e(bound)}</td><td>{e(held)}</td></tr>"
-            )
-        parts.append("</table>")
-        for c, entry in case["controllers"].items():
-            for status, failed in entry["failures"].items():
-                parts.append(
-                    f"<p><b>{e(c)}: {failed['runs']} certification runs {e(status)}</b>, the first: "
-                    f"{e(failed['first_message'])}</p>"
-                )
-            if entry["warnings"]:
-                fired = ", ".join(f"{k} ({n} runs)" for k, n in entry["warnings"].items())
-                parts.append(f"<p>{e(c)}: warnings on the certification draws: {e(fired)}.</p>")
-        if case["paired"]:
-            from ..paired import format_pair
-
-            parts.append("<h3>Paired comparisons (certification draws)</h3><ul>")
-            parts += [f"<li>{e(format_pair(p))}</li>" for p in case["paired"]]
-            parts.append(f"</ul><p class='note'>Method: {e(case['paired'][0]['method'])}.</p>")
-        parts.append("<h3>Certificates</h3><ul>")
-        for c, entry in case["controllers"].items():
-            for cert in entry["certificates"]:
-                parts.append(
-                    f"<li>{e(c)}: P(<code>{e(cert['property'])}</code> fails) &le; {cert['p_upper']:.4g} "
-                    "with "
-                    f"confidence {1 - cert['beta']:.4g} (N = {cert['N']}, k = {cert['k']}; "
-                    f"{e(cert['method'])})</li>"
-                )
-        parts.append("</ul><h3>Worst plants found</h3><ul>")
-        for c, entry in case["controllers"].items():
-            if "worst" in entry:
-                w = entry["worst"]
-                verdict = "FALSIFIED" if w["falsified"] else "not falsified"
-                status = (w.get("metrics") or {}).get("status", "completed")
-                margin = (
-                    _cell(w["margin"])
-                    if w["margin"] is not None
-                    else f"-inf (the run ended {status}: {(w.get('metrics') or {}).get('message', '')})"
-                )
-                parts.append(
-                    f"<li>{e(c)}: {verdict} in {w['simulations']} simulations, least margin {e(margin)}: "
-                    f"<code>{e(w['command'])}</code></li>"
-                )
-        timed = {c: entry["realtime"] for c, entry in case["controllers"].items() if entry.get("realtime")}
-        if timed:
-            parts.append("</ul><h3>Out of Python (the exported law's step)</h3><ul>")
-            for c, r in timed.items():
-                parts.append(
-                    f"<li>{e(c)}: p50 {_cell(r['p50_us'])} us, p99 {_cell(r['p99_us'])} us, max "
-                    f"{_cell(r['max_us'])} us over {r['steps']} steps: p99 is "
-                    f"{_cell(100 * r['p99_share'])} % of the {_cell(r['period_us'])} us period; "
-                    f"{_cell(r['allocations_per_step'])} heap "
-                    "allocations per step</li>"
-                    if "p99_us" in r
-                    else f"<li>{e(c)}: {'not timed' if r.get('exported') else 'no export'} "
-                    f"({e(r.get('reason', ''))})</li>"
-                )
-        parts.append("</ul><h3>Commands</h3><ul>")
-        parts += [f"<li>{e(k)}: <code>{e(v)}</code></li>" for k, v in case["commands"].items()]
-        parts.append("</ul>")
-    parts.append("<h2>Reproducibility</h2><h3>Versions</h3><ul>")
-    parts += [f"<li>{e(k)}: {e(str(v))}</li>" for k, v in report["versions"].items()]
-    parts.append("</ul><h3>Inputs (SHA-256)</h3><ul>")
-    parts += [f"<li><code>{e(d)}</code> {e(p)}</li>" for p, d in report["inputs"].items()]
-    parts.append("</ul></body></html>")
-    return write_text_atomic(folder / "report.html", "\n".join(parts))
 
 
 def finite(value):
@@ -544,6 +324,10 @@ def finite(value):
 
 def write_report(spec: StudySpec, folder: Path, cases: dict) -> dict:
     """report.json, tables/, figures/ and report.html; returns the report."""
+    from . import figures as draw
+    from .html import write_html
+    from .tables import write_tables
+
     for name, case in cases.items():  # the kept settings, as --tuned reads them (the falsify command)
         kept = {  # a fixed controller runs at its own settings: --tuned leaves it untuned
             c: {"fixed": True} if c in spec.fixed else {"best": {"params": k["settings"]}}
@@ -554,7 +338,17 @@ def write_report(spec: StudySpec, folder: Path, cases: dict) -> dict:
     report = finite(report)
     write_json_atomic(folder / "report.json", report)
     write_tables(report, folder)
-    figures = {name: _figure(name, case, folder) for name, case in cases.items()}
+    figures = {}
+    for name, case in cases.items():
+        entries = report["cases"][name]["controllers"]
+        figures[name] = {
+            "cdf": draw.error_cdf(name, folder, spec.require)[0],
+            "tuning": draw.tuning_curves(name, case.get("curves", {}), spec.budgets["tune"] // 2),
+            "falsification": draw.falsification_curves(
+                name, {c: e["falsification"] for c, e in entries.items() if e.get("falsification")}
+            ),
+            "responses": draw.time_responses(name, case.get("responses", {})),
+        }
     write_html(report, folder, figures)
     from ..display import StudyReport
 

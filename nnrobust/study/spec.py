@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import difflib
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from ..config import parse_toml, read_text_file
@@ -113,6 +113,11 @@ class StudyCase:
 ENTRY_TUNE = "tune"
 """The key of a controllers entry that, set to false, runs it at its own settings untuned."""
 
+ENTRY_CASES = "cases"
+"""The key of a controllers entry that runs it on the cases it lists only (by name): two entries
+of one name whose lists do not share a case are one law, with its own settings on each (a
+learned policy of each arm, whose observation sizes differ)."""
+
 
 @dataclass
 class StudySpec:
@@ -150,10 +155,20 @@ class StudySpec:
     description: str = ""
     tuned: str = ""
     waive: list[str] = field(default_factory=list)
+    case_controllers: dict = field(default_factory=dict)
+    """case name -> (controllers, entries) where entries name the cases they run on."""
 
-    def design_properties(self) -> list[str]:
-        """The design's requirement (:data:`DESIGN`) as properties, those the file waives left out:
-        the tuning's constraints where set, no joint stop hit, no runaway, the path not lost.
+    def for_case(self, case: StudyCase) -> StudySpec:
+        """The study as one case sees it: the controllers that run there, with that case's entries."""
+        if case.name not in self.case_controllers:
+            return self
+        names, entries = self.case_controllers[case.name]
+        fixed = [f for f in self.fixed if f in names]
+        return replace(self, controllers=list(names), entries=dict(entries), fixed=fixed, case_controllers={})
+
+    def design_requirement(self) -> dict[str, str]:
+        """The design's requirement (:data:`DESIGN`) as properties by name, those the file waives
+        left out: the tuning's constraints where set, no joint stop hit, no runaway, the path kept.
         """
         from ..verdicts import TRACKING_LOST
 
@@ -165,7 +180,11 @@ class StudySpec:
             "runaway": "runaway==false",
             "tracking": f"tracking_error_ratio<={TRACKING_LOST:g}",
         }
-        return [text for name, text in texts.items() if text and name not in self.waive]
+        return {name: text for name, text in texts.items() if text and name not in self.waive}
+
+    def design_properties(self) -> list[str]:
+        """The design's requirement as properties (:meth:`design_requirement`'s, in order)."""
+        return list(self.design_requirement().values())
 
     def certified_properties(self) -> list[str]:
         """What the certification certifies: ``require``, then the design's own requirement."""
@@ -181,15 +200,16 @@ class StudySpec:
 
     def case_sweep(self, case: StudyCase) -> SweepSpec:
         """The case as a sweep (its controllers, its overrides and the study's [vary])."""
+        view = self.for_case(case)
         return SweepSpec(
             name=f"{self.name}-{self.case_name(case)}",
             base=case.base,
-            controllers=list(self.controllers),
+            controllers=list(view.controllers),
             samples=1,
             seed=self.seed,
             set=self.case_set(case),
             vary=dict(self.vary),
-            entries={k: dict(v) for k, v in self.entries.items()},
+            entries={k: dict(v) for k, v in view.entries.items()},
         )
 
 
@@ -334,8 +354,8 @@ def parse_study(data: dict, path: Path) -> StudySpec:
         controllers = [dict(c) if isinstance(c, dict) else c for c in controllers]
         for i, c in enumerate(controllers):
             for key in c if isinstance(c, dict) else ():
-                if key not in (*ENTRY_KEYS, ENTRY_TUNE):
-                    valid = (*ENTRY_KEYS, ENTRY_TUNE)
+                if key not in (*ENTRY_KEYS, ENTRY_TUNE, ENTRY_CASES):
+                    valid = (*ENTRY_KEYS, ENTRY_TUNE, ENTRY_CASES)
                     raise ConfigError(
                         f"{where}: controllers[{i}].{key}",
                         f"unknown key{_suggest(key, valid)} Valid: {', '.join(valid)}",
@@ -347,6 +367,9 @@ def parse_study(data: dict, path: Path) -> StudySpec:
                     fixed.append(str(c.get("name")))
                 if list(c) == ["name"]:  # {name = "nn", tune = false}: a kind at its own settings
                     controllers[i] = c["name"]
+        controllers, per_case = _per_case(controllers, cases, fixed, where)
+    else:
+        per_case = {}
     require = data.get("require", [])
     if not isinstance(require, list) or not require or not all(isinstance(r, str) for r in require):
         raise ConfigError(
@@ -388,6 +411,11 @@ def parse_study(data: dict, path: Path) -> StudySpec:
         where,
     )
     resolve_entry_files(sweep.entries, path.parent)  # class and policy files: from the study's folder
+    case_controllers = {}
+    for case_name, listed in per_case.items():  # each case's own list, checked as a sweep file's
+        own = parse_sweep({"name": name, "base": cases[0].base, "controllers": listed, "seed": 0}, where)
+        resolve_entry_files(own.entries, path.parent)
+        case_controllers[case_name] = (own.controllers, own.entries)
     description = data.get("description", "")
     if not isinstance(description, str):
         raise ConfigError(f"{where}: description", "expected a string")
@@ -443,7 +471,59 @@ def parse_study(data: dict, path: Path) -> StudySpec:
         description,
         tuned,
         list(dict.fromkeys(waive)),
+        case_controllers,
     )
+
+
+def _per_case(controllers: list, cases: list[StudyCase], fixed: list[str], where: str):
+    """The controllers list with ``cases = [...]`` taken out of its entries: (the list a sweep
+    file's checks read, one entry per name, the first; case name -> that case's own list) where
+    some entry names its cases, else (the list, {}). Two entries of one name must each list
+    their cases, none twice, and agree on being tuned.
+    """
+    known = [c.name for c in cases]
+    listed: dict[int, list[str]] = {}
+    for i, c in enumerate(controllers):
+        if isinstance(c, dict) and ENTRY_CASES in c:
+            names = c.pop(ENTRY_CASES)
+            if not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names):
+                raise ConfigError(
+                    f"{where}: controllers[{i}].cases", f"expected a list of case names, got {names!r}"
+                )
+            unknown = [n for n in names if n not in known]
+            if unknown:
+                raise ConfigError(
+                    f"{where}: controllers[{i}].cases",
+                    f"{unknown[0]!r} is not a case of the study{_suggest(unknown[0], known)} "
+                    f"Cases: {', '.join(known)}",
+                )
+            listed[i] = names
+    if not listed:
+        return controllers, {}
+    by_name: dict[str, list[int]] = {}
+    for i, c in enumerate(controllers):
+        by_name.setdefault(str(c.get("name")) if isinstance(c, dict) else str(c), []).append(i)
+    for law, places in by_name.items():
+        if len(places) == 1:
+            continue
+        if any(i not in listed for i in places):
+            raise ConfigError(
+                f"{where}: controllers",
+                f"{law!r} has {len(places)} entries: each must list the cases it runs on (cases = [...])",
+            )
+        seen: set[str] = set()
+        for i in places:
+            twice = seen & set(listed[i])
+            if twice:
+                raise ConfigError(
+                    f"{where}: controllers", f"{law!r} has two entries for the case {sorted(twice)[0]!r}"
+                )
+            seen |= set(listed[i])
+    first = [controllers[places[0]] for places in by_name.values()]
+    per_case = {
+        case: [c for i, c in enumerate(controllers) if i not in listed or case in listed[i]] for case in known
+    }
+    return first, per_case
 
 
 def _tuned_elsewhere(value, sweep: SweepSpec, path: Path) -> tuple[list[str], dict, list[str], str]:

@@ -11,7 +11,7 @@ from ..drawing import drawn_alone
 from ..results import write_json_atomic
 from .spec import SweepSpec, draw, rerun_command
 
-STATISTICS = ("rms_error_after_2s", "rms_torque")
+STATISTICS = ("rms_error_after_2s", "rms_torque", "torque_chatter")
 
 
 def _stats(values: np.ndarray) -> dict:

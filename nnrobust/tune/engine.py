@@ -26,7 +26,7 @@ import json
 import math
 import os
 from collections import Counter
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -38,6 +38,7 @@ from ..exceptions import ConfigError, NNRobustError
 from ..results import SETTLED_AFTER
 from ..search_coordinates import controller_seed
 from ..signals import signals_as_interrupt
+from ..sweep.spec import NAME
 from .space import SearchSpace, arm_scales, custom_space, search_space, tunable
 
 if TYPE_CHECKING:
@@ -83,6 +84,8 @@ class TuneSpec:
         max_rms_torque: [N m] constraint (inf: none).
         max_saturated: constraint on the fraction of saturated steps (1: none).
         seed: seed of the optimiser and of the samples.
+        set: fixed overrides of the target's experiment (``--set KEY=VALUE``, as a sweep file's
+            [set]: every run takes them; a key the target's [vary] draws is refused).
 
     """
 
@@ -94,6 +97,7 @@ class TuneSpec:
     max_rms_torque: float = math.inf
     max_saturated: float = 1.0
     seed: int = 0
+    set: dict = field(default_factory=dict)
 
     def __post_init__(self):
         checks = [
@@ -139,6 +143,7 @@ class TuneSpec:
                 "max_rms_torque": self.max_rms_torque if math.isfinite(self.max_rms_torque) else "inf",
                 "max_saturated": self.max_saturated,
                 "seed": self.seed,
+                **({"set": dict(self.set)} if self.set else {}),
             }
         )
 
@@ -169,6 +174,12 @@ def sweep_of(spec: TuneSpec):
                 "set them in [set])",
             )
         sweep.samples, sweep.seed = size, spec.seed
+        varied = sorted(set(spec.set) & set(sweep.vary))
+        if varied:
+            raise ConfigError(
+                f"--set {varied[0]}", "is drawn by the sweep file's [vary]: it cannot also be fixed"
+            )
+        sweep.set = {**sweep.set, **spec.set}
     else:
         base = str(path.resolve()) if path.suffix == ".toml" else spec.target
         sweep = SweepSpec(
@@ -177,6 +188,7 @@ def sweep_of(spec: TuneSpec):
             controllers=[],
             samples=size,
             seed=spec.seed,
+            set=dict(spec.set),
         )
     return _with_controllers(sweep, spec.controllers)
 
@@ -197,9 +209,12 @@ def law_of(name: str, entries: dict | None = None) -> str:
 
 
 def summary_name(name: str) -> str:
-    """The name a controller has in a tuning's summary: a class given as file.py:Class by its class
-    name, any other by the name given (:func:`_with_controllers`).
+    """The name a controller has in a tuning's summary: a class given as NAME=file.py:Class by
+    NAME, as file.py:Class by its class name, any other by the name given (:func:`_with_controllers`).
     """
+    label, equals, spec = name.partition("=")
+    if equals and CLASS_PATTERN.fullmatch(spec):
+        return label
     return name.rpartition(":")[2] if CLASS_PATTERN.fullmatch(name) else name
 
 
@@ -263,6 +278,33 @@ def _study_kept(report: dict, file: Path, case: str) -> dict:
         settings = tuned.get("settings") if isinstance(tuned, dict) else None
         kept[name] = {"fixed": True} if tuned is None else {"best": {"params": settings}}
     return {"controllers": kept}
+
+
+def kept_entry(path: str | Path, name: str) -> dict | None:
+    """The controllers entry a study certified as ``name`` (the name the study gave the law, its
+    kept setting's ``NAME-tuned`` label, or the class name of a file.py:Class) in one case of its
+    report (``REPORT.json#CASE``): its kind or class and the params and settings it ran with; None
+    where the source is not a study's report or has no such law.
+    """
+    file, case = tuned_file(path)
+    try:
+        report = (
+            json.loads(file.read_text()) if file.is_file() and file.stat().st_size < TUNED_FILE_BYTES else {}
+        )
+    except (OSError, ValueError, RecursionError):
+        return None
+    if not isinstance(report, dict) or not str(report.get("schema", "")).startswith(STUDY_REPORT):
+        return None
+    controllers = ((report.get("cases") or {}).get(case) or {}).get("controllers") or {}
+    wanted = summary_name(name)
+    for law, entry in controllers.items():
+        if (
+            isinstance(entry, dict)
+            and wanted in (law, entry.get("label"))
+            and isinstance(entry.get("entry"), dict)
+        ):
+            return entry["entry"]
+    return None
 
 
 def tuned_file(path: str | Path) -> tuple[Path, str]:
@@ -399,10 +441,14 @@ def _with_controllers(sweep, names: list[str], tuned: dict | None = None):
         elif name in sweep.entries:
             entries[name] = sweep.entries[name]
             controllers.append(name)
-        elif CLASS_PATTERN.fullmatch(name):
-            path, cls = class_file(name), name.rpartition(":")[2]
-            entries[cls] = {"class": f"{path.resolve()}:{cls}" if path is not None else name, "params": {}}
-            controllers.append(cls)
+        elif CLASS_PATTERN.fullmatch(name.partition("=")[2] if "=" in name else name):
+            label, _, spec = name.rpartition("=")  # NAME=file.py:Class names the entry itself
+            path, cls = class_file(spec), spec.rpartition(":")[2]
+            label = label or cls
+            if not NAME.fullmatch(label):
+                raise ConfigError("--controllers", f"{label!r} must be 1-40 letters, digits, '_' or '-'")
+            entries[label] = {"class": f"{path.resolve()}:{cls}" if path is not None else spec, "params": {}}
+            controllers.append(label)
         else:
             raise ConfigError(
                 "--controllers",
@@ -411,7 +457,11 @@ def _with_controllers(sweep, names: list[str], tuned: dict | None = None):
                 f"({', '.join(sweep.entries) or 'it has none'})",
             )
     if len(set(controllers)) != len(controllers):
-        raise ConfigError("--controllers", f"names a controller twice: {', '.join(controllers)}")
+        raise ConfigError(
+            "--controllers",
+            f"names a controller twice: {', '.join(controllers)} (two files with one class name: name "
+            "each, NAME=file.py:Class)",
+        )
     sweep.controllers, sweep.entries = controllers, entries
     return sweep
 
@@ -566,7 +616,7 @@ def tuning_inputs(spec: TuneSpec, sweep):
         "--max-rms-torque": repr(spec.max_rms_torque),
         "--max-saturated": repr(spec.max_saturated),
         "--seed": str(spec.seed),
-    }
+    }  # the --set values are the sweep's [set]: study_inputs records them
     return study_inputs(sweep, options)
 
 

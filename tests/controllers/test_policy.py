@@ -260,3 +260,15 @@ def test_a_policy_scored_past_the_horizon_it_was_trained_on_is_said_to_be(tmp_pa
     )
     (tmp_path / "p.onnx.json").write_text(json.dumps({"duration": 2.0, "training_duration": 4.0}))
     assert horizon_warning("learned", policy, 4.0, 2.0) == ""
+
+
+def test_a_policy_whose_lengths_are_symbolic_runs_where_they_match(tmp_path):
+    """An ONNX file whose input and output lengths are named dimensions (["batch", "obs"]) is taken
+    when a trial run on the arm's observation gives its action (it was refused for its symbolic
+    length), and refused in one line when it does not take that observation."""
+    fits = linear_policy(tmp_path / "fits.onnx", PAPER.size, 3, symbolic=True)
+    result = run_experiment(_config("paper-ellipse", fits, backend="python"))
+    assert result.status == "completed"
+    wrong = linear_policy(tmp_path / "wrong.onnx", PAPER.size + 1, 3, symbolic=True)
+    with pytest.raises(ConfigError, match=f"does not take this arm's observation of {PAPER.size} entries"):
+        build(_config("paper-ellipse", wrong))

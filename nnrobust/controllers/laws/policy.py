@@ -89,13 +89,20 @@ def _session(path: Path):
         ) from err
 
 
+def _free(dim) -> bool:
+    """Whether an ONNX dimension is symbolic ("batch", "d") or unknown: fixed only at run time."""
+    return dim is None or isinstance(dim, str)
+
+
 def _fits(shape, size: int) -> bool:
-    """Whether an ONNX shape is [size] or [batch, size] (a free batch dimension, or 1)."""
+    """Whether an ONNX shape is [size] or [batch, size] (a free batch dimension, or 1), a symbolic
+    length standing for any size (checked by a trial run: :class:`OnnxPolicy`).
+    """
     dims = list(shape or [])
     if len(dims) == 2:
         batch, last = dims
-        return (batch in (1, None) or isinstance(batch, str)) and last == size
-    return len(dims) == 1 and dims[0] == size
+        return (batch == 1 or _free(batch)) and (last == size or _free(last))
+    return len(dims) == 1 and (dims[0] == size or _free(dims[0]))
 
 
 class OnnxPolicy:
@@ -134,6 +141,22 @@ class OnnxPolicy:
         self.output = out.name
         self.seconds = 0.0  # the last call's wall time, as a real-time loop would see it (the
         # thread's CPU time costs a system call of microseconds a step on this kind of machine)
+        if any(_free(d) for d in [*given.shape[-1:], *out.shape[-1:]]):  # a symbolic length: try it
+            zero = np.zeros((1, d) if self.batched else d, dtype=self.dtype)
+            try:
+                (a,) = self.session.run([self.output], {self.input: zero})
+            except Exception as err:
+                raise ConfigError(
+                    "controller.params.file",
+                    f"{path}: its input {given.name!r} {given.shape} does not take this arm's observation "
+                    f"of {d} entries ({str(err)[:200]})",
+                ) from err
+            if np.asarray(a).size != n:
+                raise ConfigError(
+                    "controller.params.file",
+                    f"{path}: on this arm's observation of {d} entries it gives {np.asarray(a).size} "
+                    f"actions; the action is [{n}] ({entries})",
+                )
 
     def _run(self, feed: dict, t: float) -> np.ndarray:
         """The network's raw action on ``feed`` at ``t`` (n entries of its type), the call's wall
