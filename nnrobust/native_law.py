@@ -455,7 +455,7 @@ def load_native_class(path: Path, source: Path, name: str, base: type, key: str)
     if str(library) not in _loaded:
         twin = f"cpp:{name}:{digest[:16]}"
         try:
-            signals, space = _loop.load_law_library(str(library), name, twin)
+            signals, space = _loop.load_law_library(str(library), name, twin, f"the law {name} ({path})")
         except (RuntimeError, ValueError) as err:
             raise ConfigError(key, f"{path}: {err}") from err
         names = tuple(s.strip() for s in signals.split(",") if s.strip())
@@ -483,7 +483,7 @@ def load_twin_source(source: str | Path, concept: str, name: str, owner: str) ->
     library, _ = compiled_library(path, key, (TWIN_DEFINITION,))
     if str(library) not in _twins:
         try:
-            registered = _loop.load_twin_library(str(library))
+            registered = _loop.load_twin_library(str(library), f"the twin file {path}")
         except (RuntimeError, ValueError) as err:
             raise ConfigError(key, f"{path}: {err}") from err
         _twins[str(library)] = {c: set(names.split(",")) for c, names in registered.items()}
