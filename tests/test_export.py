@@ -137,6 +137,32 @@ def test_law_objects_are_independent_and_reset_restarts_one(tmp_path):
     lib.nnrobust_law_destroy(b)
 
 
+def test_an_absurd_measurement_or_command_is_status_2(tmp_path):
+    """q = 1e300 (a measurement beyond the joint's range) or a command above 10 times its effort
+    limit: status 2, the command not to be applied, the law's state not advanced (status 0 and a
+    1e300 N m command before)."""
+    config = _config("paper arm, NN, noisy")
+    inputs, torques = _compiled_run(config)
+    export_law(config, tmp_path / "law")
+    text = (tmp_path / "law" / "law.description").read_text()
+    assert "vec command_bound 3 " in text and "vec measured_upper 3 " in text
+    lib, _ = _library(tmp_path / "law")
+    law, n = lib.nnrobust_law_create(), 3
+    far = inputs[0].copy()
+    far[1] = 1e300  # the first joint's position
+    status, tau = _step(lib, law, far, n)
+    assert status == 2 and not lib.nnrobust_law_last_error()
+    fast = inputs[0].copy()
+    fast[1 + n :] = 1e5  # positions in range, joint speeds of 1e5 rad/s: a command far above 60 N m
+    status, tau = _step(lib, law, fast, n)
+    assert status == 2 and np.abs(tau).max() > 600.0
+    for k in range(3):  # the adaptive weights were not advanced by the refused steps
+        status, tau = _step(lib, law, inputs[k], n)
+        assert status == 0
+        np.testing.assert_array_equal(tau, torques[k])
+    lib.nnrobust_law_destroy(law)
+
+
 def test_a_bad_description_is_refused_with_the_line_it_names(tmp_path):
     config = _config("paper arm, NN, noisy")
     export_law(config, tmp_path / "law")
