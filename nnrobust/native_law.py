@@ -37,8 +37,9 @@ SOURCE_SUFFIXES = (".cpp", ".cc", ".cxx")
 COMPILER_LINES = 40
 """The most compiler lines an error shows."""
 
-_loaded: dict[str, tuple[str, tuple[str, ...], dict]] = {}
-"""Library path -> (registered law name, signal names, search space) of the laws loaded here."""
+_loaded: dict[tuple[str, str], tuple[str, tuple[str, ...], dict]] = {}
+"""(Library path, class) -> (registered law name, signal names, search space) of the laws loaded
+here (a file may define several)."""
 
 _twins: dict[str, dict[str, set[str]]] = {}
 """Library path -> {concept: names it registered} of the twins compiled apart loaded here."""
@@ -452,15 +453,15 @@ def load_native_class(path: Path, source: Path, name: str, base: type, key: str)
         raise ConfigError(key, f"{name!r} is not a C++ class name")
     _loop = _compiled_loop(key, path, "a law")
     library, digest = compiled_library(source, key)
-    if str(library) not in _loaded:
+    if (str(library), name) not in _loaded:
         twin = f"cpp:{name}:{digest[:16]}"
         try:
             signals, space = _loop.load_law_library(str(library), name, twin, f"the law {name} ({path})")
         except (RuntimeError, ValueError) as err:
             raise ConfigError(key, f"{path}: {err}") from err
         names = tuple(s.strip() for s in signals.split(",") if s.strip())
-        _loaded[str(library)] = (twin, names, declared_space(space, name, path, key))
-    twin, signal_names, search_space = _loaded[str(library)]
+        _loaded[str(library), name] = (twin, names, declared_space(space, name, path, key))
+    twin, signal_names, search_space = _loaded[str(library), name]
     face = _python_face(base, name, twin, signal_names, digest, path)
     face.native_source = source.resolve()  # type: ignore[attr-defined]  # what an export compiles
     if search_space:
