@@ -328,8 +328,8 @@ def _matching(variants: list[dict], base: Path, folder: Path, source: Path, warn
             return Library(path, digest, deps)
         if warn:
             warnings.warn(
-                f"{path}: the cached library of {source} is damaged or missing (its SHA-256 is not the "
-                f"{sha256[:12]}... recorded when it was compiled); compiling it again",
+                f"the cached library of {source} in {folder} is damaged or missing (its bytes are not "
+                "those recorded when it was compiled); compiling it again",
                 stacklevel=3,
             )
     return None

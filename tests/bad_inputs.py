@@ -2324,7 +2324,7 @@ NATIVE_LAW_CASES = [
         "law in C++: a damaged cached library",
         _damaged_library,
         None,
-        "tiny.cpp is damaged or missing (its SHA-256 is not the",
+        "is damaged or missing (its bytes are not those recorded when it was compiled); compiling it again",
         UserWarning,
     ),
 ]
