@@ -336,7 +336,11 @@ def test_a_law_in_cpp_exports_with_its_file_and_replays(tmp_path):
     loop's torques bit for bit, with no allocation in a step (the user's code allocates from the
     law's arena too). A law whose step keeps memory it allocated gets -1 and the reason."""
     source = tmp_path / "task_pd.cpp"
-    source.write_text((ROOT / "examples" / "controllers" / "task_pd.cpp").read_text() + LEAKY)
+    # with a header of its own beside it, which the export copies beside its file
+    (tmp_path / "leaky.hpp").write_text(f"#pragma once\n{LEAKY}")
+    source.write_text(
+        (ROOT / "examples" / "controllers" / "task_pd.cpp").read_text() + '#include "leaky.hpp"\n'
+    )
     params = {"Kp": 100.0, "Kd": 20.0, "damping": 5.0}
     config = load_preset("panda-ellipse").replace(
         simulation={"duration": DURATION},
@@ -348,6 +352,7 @@ def test_a_law_in_cpp_exports_with_its_file_and_replays(tmp_path):
     assert info["law"].startswith("cpp:TaskPD:") and info["law_source"] == "src/task_pd.cpp"
     assert (folder / "src" / "task_pd.cpp").read_bytes() == source.read_bytes()
     assert info["files"]["src/task_pd.cpp"] == hashlib.sha256(source.read_bytes()).hexdigest()
+    assert (folder / "src" / "leaky.hpp").read_bytes() == (tmp_path / "leaky.hpp").read_bytes()
     np.testing.assert_array_equal(_replay(_compile_replay(folder), inputs), torques)
     # no allocation in a step, the user's code included (the hook of the export's bin/time_step)
     timed = time_steps(folder, inputs, repeats=1)

@@ -380,6 +380,25 @@ def _build_native(folder: Path, compiler: str, native: str, data: list[str], lin
         _compile(cxx, cxx[0], f"src/{native}")
 
 
+def _copy_headers(native: Path, folder: Path) -> None:
+    """The headers a law in C++ includes (the compile's dependency list, nnrobust.native_law),
+    copied beside its file in ``folder``/src at the same relative paths: the export compiles them
+    with it, wherever the folder goes. One that would land outside the folder is refused.
+    """
+    from ..native_law import dependencies
+
+    for header, _ in dependencies(native, "controller.class"):
+        relative = os.path.relpath(header, native.parent)
+        target = Path(os.path.normpath(folder / "src" / relative))
+        if not target.is_relative_to(folder):
+            raise NNRobustError(
+                f"export: {native} includes {header}, outside its folder by more than the export's "
+                "src/ would hold; keep the headers a law includes in its folder (or below it)"
+            )
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(header, target)
+
+
 def _compile(command: list[str], compiler: str, what: str) -> None:
     try:
         done = subprocess.run(command, capture_output=True, text=True, timeout=600)
@@ -456,6 +475,7 @@ def export_law(config, out: str | Path, *, overwrite: bool = False, build: bool 
             law_data = LAW_DATA.format(name=config.name, literal=_c_literal(text))
         else:
             shutil.copyfile(native, tmp / "src" / native.name)
+            _copy_headers(native, tmp)
             law_data = NATIVE_LAW_DATA.format(
                 name=config.name, literal=_c_literal(text), cls=type(setup.controller).__name__,
                 source=native.name, twin=spec.law,
