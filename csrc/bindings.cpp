@@ -60,18 +60,37 @@ bool python_signal_pending() {
   return false;
 }
 
-// The laws compiled apart (a user's, a twin's), by the name they are registered under: their
-// runs take the stop signals' watchdog (user_code.hpp); a shipped law's run takes nothing.
+// The laws compiled apart (a user's, a twin's), by the name they are registered under, each with
+// the label its errors name it by (the file it was last loaded from: two files of the same
+// content share one library): their runs take the stop signals' watchdog (user_code.hpp); a
+// shipped law's run takes nothing.
+std::mutex user_laws_lock;
 std::map<std::string, const char *> &user_laws() {
   static std::map<std::string, const char *> laws;
   return laws;
+}
+
+bool is_user_law(const std::string &name) {
+  const std::lock_guard<std::mutex> hold(user_laws_lock);
+  return user_laws().count(name) != 0;
+}
+
+const char *user_law_label(const std::string &name) {
+  const std::lock_guard<std::mutex> hold(user_laws_lock);
+  const auto it = user_laws().find(name);
+  return it == user_laws().end() ? nnrobust::user_label("the law " + name) : it->second;
+}
+
+void set_user_law(const std::string &name, const char *label) {
+  const std::lock_guard<std::mutex> hold(user_laws_lock);
+  user_laws()[name] = label;
 }
 
 LoopTrace run(LoadedModel &plant, const LoopSpec &spec, LoadedModel *nominal) {
   if (spec.nominal == "pinocchio" && nominal == nullptr)
     throw std::invalid_argument("the nominal model 'pinocchio' needs its model");
   std::optional<nnrobust::StopWatchdog> watchdog;
-  if (user_laws().count(spec.law)) watchdog.emplace();
+  if (is_user_law(spec.law)) watchdog.emplace();
   nb::gil_scoped_release released;
   return nnrobust::run_loop(plant, nominal, spec, &python_signal_pending);
 }
@@ -209,10 +228,12 @@ struct GuardedLaw final : nnrobust::Law {
   }
 };
 
-// The factory of a law compiled apart, built as `label` and guarded.
+// The factory of the law compiled apart registered as `name`, guarded, each law it builds named by
+// the label `name` has then (user_laws).
 template <class Make>
-nnrobust::LawRegistry::Factory guarded(Make make, const char *label) {
-  return [make, label](const nnrobust::LawParams &p, nnrobust::LawContext &c) -> std::unique_ptr<nnrobust::Law> {
+nnrobust::LawRegistry::Factory guarded(Make make, const std::string &name) {
+  return [make, name](const nnrobust::LawParams &p, nnrobust::LawContext &c) -> std::unique_ptr<nnrobust::Law> {
+    const char *label = user_law_label(name);
     const std::string owner = "controller.params";
     const nnrobust::LawParams params{owner, p.values};  // a missing field is said as the user's parameter
     std::unique_ptr<nnrobust::Law> law;
@@ -239,10 +260,10 @@ std::pair<std::string, std::string> load_law_library(const std::string &path, co
   const auto state = reinterpret_cast<int (*)(int)>(dlsym(library, ("nnrobust_law_state_" + cls).c_str()));
   if (make == nullptr || signals == nullptr || state == nullptr)
     throw std::invalid_argument("it has no NNROBUST_USER_LAW(" + cls + ", signals, state size) at global scope");
+  set_user_law(name, who);
   nnrobust::LawRegistry::add(
       name, guarded([make](const nnrobust::LawParams &p, nnrobust::LawContext &c) { return std::unique_ptr<nnrobust::Law>(make(p, c)); },
-                    who));
-  user_laws()[name] = who;
+                    name));
   native_states()[name] = state;
   const auto space = reinterpret_cast<const char *(*)()>(dlsym(library, ("nnrobust_law_space_" + cls).c_str()));
   nnrobust::UserCodeScope scope(who, "its NNROBUST_USER_LAW declarations");
@@ -307,10 +328,9 @@ std::map<std::string, std::string> load_twin_library(const std::string &path, co
   if (registered.count("law"))  // its laws are guarded as a user's law is
     for (const auto &name : split_names(registered["law"])) {
       const std::string law_label = "the law " + name + " of " + who;
-      const char *law_who = nnrobust::user_label(law_label);
+      set_user_law(name, nnrobust::user_label(law_label));
       auto &table = nnrobust::LawRegistry::table();
-      table[name] = guarded(table[name], law_who);
-      user_laws()[name] = law_who;
+      table[name] = guarded(table[name], name);
     }
   return registered;
 }
@@ -334,7 +354,7 @@ std::vector<LoopTrace> batch(std::vector<LoadedModel *> plants, std::vector<Load
   }
   std::optional<nnrobust::StopWatchdog> watchdog;
   for (const auto *spec : specs)
-    if (user_laws().count(spec->law) && !watchdog) watchdog.emplace();
+    if (!watchdog && is_user_law(spec->law)) watchdog.emplace();
   nb::gil_scoped_release released;
   return nnrobust::run_batch(items, threads, &python_signal_pending);
 }
@@ -531,6 +551,11 @@ NB_MODULE(_loop, m) {
   m.def("load_twin_library", &load_twin_library, nb::arg("path"), nb::arg("label") = "",
         "Load a twin compiled apart (nnrobust/twin.hpp) and register its components; returns the names "
         "it registered by concept (law, robust term, criterion, path, disturbance), comma-separated.");
+  m.def(
+      "name_law", [](const std::string &name, const std::string &label) { set_user_law(name, nnrobust::user_label(label)); },
+      nb::arg("name"), nb::arg("label"),
+      "Name the law library registered as `name` by `label` in its errors from now on (the file it "
+      "is loaded from again: the same content in another file shares its library).");
   m.def("native_law_state", &native_law_state, nb::arg("name"), nb::arg("n"),
         "The state size of the law library registered as `name`, for n joints.");
   // the virtual robot (nnrobust/serve/, csrc/serve/)

@@ -7,11 +7,13 @@ The file is written against the law header the shipped laws use (installed as
 ``nnrobust/law.hpp``) and names its class with ``NNROBUST_USER_LAW(Class, signals, state size)``.
 On first use it is compiled, with the compiler, definitions and options the package's own laws
 were compiled with (``native_build.txt``, written by CMakeLists.txt), into a library cached by
-the SHA-256 of the file, the headers and the toolchain; the library is loaded into the compiled
-loop and registered as a law, and the class returned here is its Python face: a Controller whose
-compiled twin is that law, so it runs on the compiled loop (and in sweep, tune, falsify and
-study, whose workers compile it from the file that travels with the task). Compiler errors are
-the compiler's own lines, with the file and line.
+everything the compiler read (:func:`library`: the file, the headers it includes, recorded from
+the compile's dependency file, and the toolchain; a damaged library is compiled again); the
+library is loaded into the compiled loop and registered as a law (its exits, crashes, exceptions
+and hangs said with its name: csrc/user_code.cpp), and the class returned here is its Python
+face: a Controller whose compiled twin is that law, so it runs on the compiled loop (and in
+sweep, tune, falsify and study, whose workers compile it from the file and headers that travel
+with the task). Compiler errors are the compiler's own lines, with the file and line.
 """
 
 from __future__ import annotations
@@ -453,15 +455,17 @@ def load_native_class(path: Path, source: Path, name: str, base: type, key: str)
         raise ConfigError(key, f"{name!r} is not a C++ class name")
     _loop = _compiled_loop(key, path, "a law")
     library, digest = compiled_library(source, key)
+    label = f"the law {name} ({path})"
     if (str(library), name) not in _loaded:
         twin = f"cpp:{name}:{digest[:16]}"
         try:
-            signals, space = _loop.load_law_library(str(library), name, twin, f"the law {name} ({path})")
+            signals, space = _loop.load_law_library(str(library), name, twin, label)
         except (RuntimeError, ValueError) as err:
             raise ConfigError(key, f"{path}: {err}") from err
         names = tuple(s.strip() for s in signals.split(",") if s.strip())
         _loaded[str(library), name] = (twin, names, declared_space(space, name, path, key))
     twin, signal_names, search_space = _loaded[str(library), name]
+    _loop.name_law(twin, label)  # its errors name this file (another of the same content shares it)
     face = _python_face(base, name, twin, signal_names, digest, path)
     face.native_source = source.resolve()  # type: ignore[attr-defined]  # what an export compiles
     if search_space:

@@ -27,7 +27,7 @@ from ..config import (
 )
 from ..config.toml_io import policy_file
 from ..controllers.registry import registered_law
-from ..exceptions import ConfigError
+from ..exceptions import ConfigError, NNRobustError
 from ..numeric_limits import finite_number
 
 DISTRIBUTIONS = ("uniform", "normal", "loguniform", "choice")
@@ -500,7 +500,7 @@ def _included(path: Path, role: str, key: str) -> dict[str, tuple[str, str]]:
         return {}
     try:
         headers = dependencies(local(path), key)
-    except ConfigError as err:
+    except NNRobustError as err:  # a compile error, no compiler here
         said = hashlib.sha256(str(err).encode()).hexdigest()
         return {f"the compiler's message on {role}": (str(path), said)}
     folder = Path(os.path.abspath(path)).parent

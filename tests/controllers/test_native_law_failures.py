@@ -135,3 +135,22 @@ def test_a_law_that_ends_its_worker_is_named_in_the_sweep(cache, tmp_path):
     assert rows.loc["no-u0", "status"] == "completed" and rows.loc["mine", "status"] == "crashed"
     assert f"; it ran the law Exits in C++ ({LAWS})" in rows.loc["mine", "message"]
     assert f"the law Exits ({LAWS}) called exit(0)" in done.stderr
+
+
+def test_an_error_names_the_file_the_run_loaded(cache, tmp_path, monkeypatch):
+    """Two files of the same content share one library: each run's error names its own file."""
+    from nnrobust.config import load_config
+    from nnrobust.exceptions import ControllerError
+    from nnrobust.experiment import run_experiment
+
+    monkeypatch.setenv("NNROBUST_CACHE", str(cache))
+    for name in ("a", "b", "a"):
+        folder = tmp_path / name
+        folder.mkdir(exist_ok=True)
+        shutil.copy(LAWS, folder / "laws.cpp")
+        (folder / "run.toml").write_text(
+            'base = "paper-ellipse"\n[controller]\nkind = "custom"\nclass = "laws.cpp:Throws"\n'
+            "[simulation]\nduration = 0.01\n"
+        )
+        with pytest.raises(ControllerError, match=f"^the law Throws \\({folder / 'laws.cpp'}\\) threw"):
+            run_experiment(load_config(folder / "run.toml"))
