@@ -8,6 +8,7 @@
 #include <nanobind/stl/vector.h>
 
 #include <Python.h>
+#include <cxxabi.h>
 #include <dlfcn.h>
 
 #include <atomic>
@@ -16,6 +17,7 @@
 #include <exception>
 #include <functional>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <thread>
@@ -30,6 +32,7 @@
 #include "learning.hpp"
 #include "model/model.hpp"
 #include "serve/virtual_robot.hpp"
+#include "user_code.hpp"
 
 namespace nb = nanobind;
 using nnrobust::LoadedModel;
@@ -57,9 +60,37 @@ bool python_signal_pending() {
   return false;
 }
 
+// The laws compiled apart (a user's, a twin's), by the name they are registered under, each with
+// the label its errors name it by (the file it was last loaded from: two files of the same
+// content share one library): their runs take the stop signals' watchdog (user_code.hpp); a
+// shipped law's run takes nothing.
+std::mutex user_laws_lock;
+std::map<std::string, const char *> &user_laws() {
+  static std::map<std::string, const char *> laws;
+  return laws;
+}
+
+bool is_user_law(const std::string &name) {
+  const std::lock_guard<std::mutex> hold(user_laws_lock);
+  return user_laws().count(name) != 0;
+}
+
+const char *user_law_label(const std::string &name) {
+  const std::lock_guard<std::mutex> hold(user_laws_lock);
+  const auto it = user_laws().find(name);
+  return it == user_laws().end() ? nnrobust::user_label("the law " + name) : it->second;
+}
+
+void set_user_law(const std::string &name, const char *label) {
+  const std::lock_guard<std::mutex> hold(user_laws_lock);
+  user_laws()[name] = label;
+}
+
 LoopTrace run(LoadedModel &plant, const LoopSpec &spec, LoadedModel *nominal) {
   if (spec.nominal == "pinocchio" && nominal == nullptr)
     throw std::invalid_argument("the nominal model 'pinocchio' needs its model");
+  std::optional<nnrobust::StopWatchdog> watchdog;
+  if (is_user_law(spec.law)) watchdog.emplace();
   nb::gil_scoped_release released;
   return nnrobust::run_loop(plant, nominal, spec, &python_signal_pending);
 }
@@ -116,27 +147,126 @@ void offer_symbols() {
   global = true;
 }
 
-void *open_library(const std::string &path) {
+// The library at `path`, known as `label` (user_code.hpp: its exits and crashes are said so).
+void *open_library(const std::string &path, const char *label) {
   offer_symbols();
+  nnrobust::name_library(path, label);
   void *library = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL);
   if (library == nullptr) throw std::runtime_error(std::string("loading ") + path + ": " + dlerror());
   return library;
 }
 
+// The exception being handled, as "std::out_of_range: what it said".
+std::string current_exception_text() {
+  std::string type = "an exception";
+  if (const std::type_info *info = abi::__cxa_current_exception_type()) {
+    int status = 0;
+    char *name = abi::__cxa_demangle(info->name(), nullptr, nullptr, &status);
+    type = status == 0 && name ? name : info->name();
+    std::free(name);
+  }
+  try {
+    throw;
+  } catch (const std::exception &err) {
+    return type + ": " + err.what();
+  } catch (...) {
+    return type + " (not a std::exception)";
+  }
+}
+
+std::string seconds_text(double t) {
+  std::ostringstream out;
+  out << t;
+  return out.str();
+}
+
+// A law compiled apart, run inside a UserCodeScope (user_code.hpp) with its output checked: an
+// exception it throws, a torque, state or signals of another size are one UserLawError naming
+// it and its file. The shipped laws are called directly.
+struct GuardedLaw final : nnrobust::Law {
+  std::unique_ptr<nnrobust::Law> inner;
+  const char *label;
+  Eigen::Index state_size, signals;
+
+  GuardedLaw(std::unique_ptr<nnrobust::Law> law, const char *who, const LoopSpec &spec)
+      : inner(std::move(law)), label(who), state_size(spec.z0.size()), signals(spec.law_signals) {}
+  ~GuardedLaw() override {
+    nnrobust::UserCodeScope scope(label, "its destructor");
+    inner.reset();
+  }
+
+  nnrobust::Output compute(double t, const nnrobust::Vector &q, const nnrobust::Vector &v,
+                           const nnrobust::Vector &z) override {
+    nnrobust::Output out;
+    {
+      nnrobust::UserCodeScope scope(label, "its compute");
+      try {
+        out = inner->compute(t, q, v, z);
+      } catch (...) {
+        throw nnrobust::UserLawError(std::string(label) + " threw in its compute at t = " + seconds_text(t) +
+                                     " s: " + current_exception_text());
+      }
+    }
+    const auto wrong = [&](Eigen::Index size, const std::string &what, const std::string &why) {
+      return nnrobust::UserLawError(std::string(label) + " returned " + what + " of " + std::to_string(size) +
+                                    " entries at t = " + seconds_text(t) + " s; " + why);
+    };
+    if (out.tau.size() != q.size())
+      throw wrong(out.tau.size(), "a torque", "the arm has " + std::to_string(q.size()) + " joints");
+    if (out.z.size() != state_size)
+      throw wrong(out.z.size(), "a state",
+                  "its state size is " + std::to_string(state_size) + " (NNROBUST_USER_LAW's third argument)");
+    if (out.signals.size() != signals)
+      throw wrong(out.signals.size(), "signals",
+                  "it declares " + std::to_string(signals) + " (NNROBUST_USER_LAW's second argument)");
+    return out;
+  }
+
+  bool scale_gains(double position, double velocity) override {
+    nnrobust::UserCodeScope scope(label, "its scale_gains");
+    return inner->scale_gains(position, velocity);
+  }
+};
+
+// The factory of the law compiled apart registered as `name`, guarded, each law it builds named by
+// the label `name` has then (user_laws).
+template <class Make>
+nnrobust::LawRegistry::Factory guarded(Make make, const std::string &name) {
+  return [make, name](const nnrobust::LawParams &p, nnrobust::LawContext &c) -> std::unique_ptr<nnrobust::Law> {
+    const char *label = user_law_label(name);
+    const std::string owner = "controller.params";
+    const nnrobust::LawParams params{owner, p.values};  // a missing field is said as the user's parameter
+    std::unique_ptr<nnrobust::Law> law;
+    {
+      nnrobust::UserCodeScope scope(label, "its constructor");
+      try {
+        law = make(params, c);
+      } catch (...) {
+        throw nnrobust::UserLawError(std::string(label) + " could not be built: " + current_exception_text());
+      }
+    }
+    if (!law) throw nnrobust::UserLawError(std::string(label) + " could not be built: its factory gave no law");
+    return std::make_unique<GuardedLaw>(std::move(law), label, c.spec);
+  };
+}
+
 std::pair<std::string, std::string> load_law_library(const std::string &path, const std::string &cls,
-                                                     const std::string &name) {
-  void *library = open_library(path);
+                                                     const std::string &name, const std::string &label) {
+  const char *who = nnrobust::user_label(label.empty() ? "the law " + cls + " (" + path + ")" : label);
+  void *library = open_library(path, who);
   using Make = nnrobust::Law *(*)(const nnrobust::LawParams &, nnrobust::LawContext &);
   const auto make = reinterpret_cast<Make>(dlsym(library, ("nnrobust_law_factory_" + cls).c_str()));
   const auto signals = reinterpret_cast<const char *(*)()>(dlsym(library, ("nnrobust_law_signals_" + cls).c_str()));
   const auto state = reinterpret_cast<int (*)(int)>(dlsym(library, ("nnrobust_law_state_" + cls).c_str()));
   if (make == nullptr || signals == nullptr || state == nullptr)
     throw std::invalid_argument("it has no NNROBUST_USER_LAW(" + cls + ", signals, state size) at global scope");
-  nnrobust::LawRegistry::add(name, [make](const nnrobust::LawParams &p, nnrobust::LawContext &c) {
-    return std::unique_ptr<nnrobust::Law>(make(p, c));
-  });
+  set_user_law(name, who);
+  nnrobust::LawRegistry::add(
+      name, guarded([make](const nnrobust::LawParams &p, nnrobust::LawContext &c) { return std::unique_ptr<nnrobust::Law>(make(p, c)); },
+                    name));
   native_states()[name] = state;
   const auto space = reinterpret_cast<const char *(*)()>(dlsym(library, ("nnrobust_law_space_" + cls).c_str()));
+  nnrobust::UserCodeScope scope(who, "its NNROBUST_USER_LAW declarations");
   return {signals(), space ? space() : ""};
 }
 
@@ -153,7 +283,7 @@ std::set<std::string> split_names(const std::string &names) {
   return out;
 }
 
-std::map<std::string, std::string> load_twin_library(const std::string &path) {
+std::map<std::string, std::string> load_twin_library(const std::string &path, const std::string &label) {
   using HandOver = const char *(*)(void *);
   struct Shared {
     std::string concept;
@@ -176,7 +306,8 @@ std::map<std::string, std::string> load_twin_library(const std::string &path) {
   static std::map<std::string, std::set<std::string>> shipped;  // each concept's names before any library
   if (shipped.empty())
     for (const Shared &share : shares) shipped[share.concept] = split_names(share.own(nullptr));
-  void *library = open_library(path);
+  const char *who = nnrobust::user_label(label.empty() ? "the twin library " + path : label);
+  void *library = open_library(path, who);
   std::map<std::string, std::string> registered;
   for (const Shared &share : shares) {
     const auto hand_over = reinterpret_cast<HandOver>(dlsym(library, share.symbol));
@@ -194,6 +325,13 @@ std::map<std::string, std::string> load_twin_library(const std::string &path) {
                                 "NNROBUST_ROBUST_TERM or NNROBUST_LAW at namespace scope");
   for (const Shared &share : shares)
     if (registered.count(share.concept)) reinterpret_cast<HandOver>(dlsym(library, share.symbol))(share.table);
+  if (registered.count("law"))  // its laws are guarded as a user's law is
+    for (const auto &name : split_names(registered["law"])) {
+      const std::string law_label = "the law " + name + " of " + who;
+      set_user_law(name, nnrobust::user_label(law_label));
+      auto &table = nnrobust::LawRegistry::table();
+      table[name] = guarded(table[name], name);
+    }
   return registered;
 }
 
@@ -214,6 +352,9 @@ std::vector<LoopTrace> batch(std::vector<LoadedModel *> plants, std::vector<Load
       throw std::invalid_argument("run_batch: the nominal model 'pinocchio' needs its model");
     items.push_back({plants[i], nominals[i], specs[i]});
   }
+  std::optional<nnrobust::StopWatchdog> watchdog;
+  for (const auto *spec : specs)
+    if (!watchdog && is_user_law(spec->law)) watchdog.emplace();
   nb::gil_scoped_release released;
   return nnrobust::run_batch(items, threads, &python_signal_pending);
 }
@@ -401,12 +542,20 @@ NB_MODULE(_loop, m) {
         "One control period of every loop on the pool's threads (GIL released): loop i takes the raw "
         "action actions[i] (clipped to [-1, 1], scaled by spec.action_scale, as spec.mode says) and "
         "writes its next observation, applied torque, reward and whether it runs on.");
+  nb::exception<nnrobust::UserLawError>(m, "UserLawError", PyExc_RuntimeError);
   m.def("load_law_library", &load_law_library, nb::arg("path"), nb::arg("cls"), nb::arg("name"),
-        "Load a user's law compiled apart and register it as the law `name`; returns its signal names "
-        "and its search space as declared (comma-separated; \"\" when it declares none).");
-  m.def("load_twin_library", &load_twin_library, nb::arg("path"),
+        nb::arg("label") = "",
+        "Load a user's law compiled apart and register it as the law `name`, said as `label` in its "
+        "errors; returns its signal names and its search space as declared (comma-separated; \"\" "
+        "when it declares none).");
+  m.def("load_twin_library", &load_twin_library, nb::arg("path"), nb::arg("label") = "",
         "Load a twin compiled apart (nnrobust/twin.hpp) and register its components; returns the names "
         "it registered by concept (law, robust term, criterion, path, disturbance), comma-separated.");
+  m.def(
+      "name_law", [](const std::string &name, const std::string &label) { set_user_law(name, nnrobust::user_label(label)); },
+      nb::arg("name"), nb::arg("label"),
+      "Name the law library registered as `name` by `label` in its errors from now on (the file it "
+      "is loaded from again: the same content in another file shares its library).");
   m.def("native_law_state", &native_law_state, nb::arg("name"), nb::arg("n"),
         "The state size of the law library registered as `name`, for n joints.");
   // the virtual robot (nnrobust/serve/, csrc/serve/)

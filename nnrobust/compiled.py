@@ -7,6 +7,7 @@ why not, and everything else runs on the Python reference implementation.
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 
 import pinocchio as pin
@@ -474,7 +475,21 @@ def simulate_compiled(setup, duration: float):
 
     check_interrupt()
     plant, nominal, spec = _prepared(setup, duration)
-    return _trace(setup, spec, _module().run_loop(plant, spec, nominal))
+    with _user_law_errors():
+        out = _module().run_loop(plant, spec, nominal)
+    return _trace(setup, spec, out)
+
+
+@contextlib.contextmanager
+def _user_law_errors():
+    """A law compiled apart that throws, returns arrays of the wrong size or misses a parameter
+    (nnrobust._loop.UserLawError, its message naming the law and its file) is a ControllerError,
+    as a Python law's is.
+    """
+    try:
+        yield
+    except _module().UserLawError as err:
+        raise ControllerError(str(err)) from None
 
 
 class _HybridLaw:
@@ -608,5 +623,6 @@ def simulate_batch(setups: list, durations: list[float] | None = None, threads: 
         raise NNRobustError(f"simulate_batch: {len(setups)} experiments but {len(durations)} durations")
     prepared = [_prepared(setup, duration) for setup, duration in zip(setups, durations)]
     plants, nominals, specs = (list(column) for column in zip(*prepared)) if prepared else ([], [], [])
-    outs = _module().run_batch(plants, nominals, specs, threads or os.cpu_count() or 1)
+    with _user_law_errors():
+        outs = _module().run_batch(plants, nominals, specs, threads or os.cpu_count() or 1)
     return [_trace(setup, spec, out) for setup, spec, out in zip(setups, specs, outs)]

@@ -137,6 +137,32 @@ def test_law_objects_are_independent_and_reset_restarts_one(tmp_path):
     lib.nnrobust_law_destroy(b)
 
 
+def test_an_absurd_measurement_or_command_is_status_2(tmp_path):
+    """q = 1e300 (a measurement beyond the joint's range) or a command above 10 times its effort
+    limit: status 2, the command not to be applied, the law's state not advanced (status 0 and a
+    1e300 N m command before)."""
+    config = _config("paper arm, NN, noisy")
+    inputs, torques = _compiled_run(config)
+    export_law(config, tmp_path / "law")
+    text = (tmp_path / "law" / "law.description").read_text()
+    assert "vec command_bound 3 " in text and "vec measured_upper 3 " in text
+    lib, _ = _library(tmp_path / "law")
+    law, n = lib.nnrobust_law_create(), 3
+    far = inputs[0].copy()
+    far[1] = 1e300  # the first joint's position
+    status, tau = _step(lib, law, far, n)
+    assert status == 2 and not lib.nnrobust_law_last_error()
+    fast = inputs[0].copy()
+    fast[1 + n :] = 1e5  # positions in range, joint speeds of 1e5 rad/s: a command far above 60 N m
+    status, tau = _step(lib, law, fast, n)
+    assert status == 2 and np.abs(tau).max() > 600.0
+    for k in range(3):  # the adaptive weights were not advanced by the refused steps
+        status, tau = _step(lib, law, inputs[k], n)
+        assert status == 0
+        np.testing.assert_array_equal(tau, torques[k])
+    lib.nnrobust_law_destroy(law)
+
+
 def test_a_bad_description_is_refused_with_the_line_it_names(tmp_path):
     config = _config("paper arm, NN, noisy")
     export_law(config, tmp_path / "law")
@@ -310,7 +336,11 @@ def test_a_law_in_cpp_exports_with_its_file_and_replays(tmp_path):
     loop's torques bit for bit, with no allocation in a step (the user's code allocates from the
     law's arena too). A law whose step keeps memory it allocated gets -1 and the reason."""
     source = tmp_path / "task_pd.cpp"
-    source.write_text((ROOT / "examples" / "controllers" / "task_pd.cpp").read_text() + LEAKY)
+    # with a header of its own beside it, which the export copies beside its file
+    (tmp_path / "leaky.hpp").write_text(f"#pragma once\n{LEAKY}")
+    source.write_text(
+        (ROOT / "examples" / "controllers" / "task_pd.cpp").read_text() + '#include "leaky.hpp"\n'
+    )
     params = {"Kp": 100.0, "Kd": 20.0, "damping": 5.0}
     config = load_preset("panda-ellipse").replace(
         simulation={"duration": DURATION},
@@ -322,6 +352,7 @@ def test_a_law_in_cpp_exports_with_its_file_and_replays(tmp_path):
     assert info["law"].startswith("cpp:TaskPD:") and info["law_source"] == "src/task_pd.cpp"
     assert (folder / "src" / "task_pd.cpp").read_bytes() == source.read_bytes()
     assert info["files"]["src/task_pd.cpp"] == hashlib.sha256(source.read_bytes()).hexdigest()
+    assert (folder / "src" / "leaky.hpp").read_bytes() == (tmp_path / "leaky.hpp").read_bytes()
     np.testing.assert_array_equal(_replay(_compile_replay(folder), inputs), torques)
     # no allocation in a step, the user's code included (the hook of the export's bin/time_step)
     timed = time_steps(folder, inputs, repeats=1)

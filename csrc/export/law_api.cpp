@@ -20,6 +20,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <exception>
+#include <limits>
 #include <memory>
 #include <mutex>
 #include <sstream>
@@ -130,6 +131,10 @@ struct nnrobust_law {
   std::unique_ptr<nnrobust::Nominal> nominal;
   std::unique_ptr<nnrobust::Controller> controller;  // holds references to spec and nominal
   Vector q, v, z;
+  // what a step refuses as absurd (status 2; export.py's absurd_bounds): |tau_i| > command_bound_i,
+  // or |q_i - measured_mid_i| > measured_half_i; infinite (nothing refused) when the description
+  // gives none (an export written before them)
+  Vector command_bound, measured_lower, measured_upper, measured_mid, measured_half;
 
   explicit nnrobust_law(const char *description) {
     read(description);
@@ -145,6 +150,22 @@ struct nnrobust_law {
     q.resize(n);
     v.resize(n);
     z = spec.z0;
+    const double inf = std::numeric_limits<double>::infinity();
+    for (Vector *bound : {&command_bound, &measured_lower, &measured_upper}) {
+      if (bound->size() == 0) *bound = Vector::Constant(n, bound == &measured_lower ? -inf : inf);
+      if (bound->size() != n) throw std::invalid_argument("the description's absurd-value bounds need n entries each");
+    }
+    measured_mid = 0.5 * (measured_lower + measured_upper);
+    measured_half = 0.5 * (measured_upper - measured_lower);
+    for (int i = 0; i < n; ++i)
+      if (!std::isfinite(measured_mid[i])) measured_mid[i] = 0.0, measured_half[i] = inf;
+  }
+
+  // Whether the measurement or the command is absurd: one comparison per joint each.
+  bool absurd(const Vector &tau) const {
+    for (int i = 0; i < n; ++i)
+      if (std::abs(q[i] - measured_mid[i]) > measured_half[i] || std::abs(tau[i]) > command_bound[i]) return true;
+    return false;
   }
 
   Params &params(const std::string &name, const std::vector<std::string> &key, long number) {
@@ -243,6 +264,9 @@ struct nnrobust_law {
       const Vector x = line.matrix(line.integer(), 1);
       if (k == "criterion_weights") s.criterion_weights = x;
       else if (k == "z0") s.z0 = x;
+      else if (k == "command_bound") command_bound = x;
+      else if (k == "measured_lower") measured_lower = x;
+      else if (k == "measured_upper") measured_upper = x;
       else throw unknown();
     } else {
       throw unknown();
@@ -333,6 +357,8 @@ int nnrobust_law_step(nnrobust_law *law, double t, const double *q, const double
       Eigen::Map<Vector>(tau_out, n) = out.tau;
       if (!out.tau.allFinite()) {
         status = 1;
+      } else if (law->absurd(out.tau)) {  // not to be applied: the state is not advanced either
+        status = 2;
       } else {
         if (out.z.size() != law->z.size()) throw std::length_error("the law returned a state of the wrong size");
         law->z = out.z;  // the same size: copied into the law's own storage

@@ -49,8 +49,11 @@ NNROBUST_LAW_API double nnrobust_law_period(const nnrobust_law *law);
  * positions q [rad or m] and velocities v (n entries each): writes the commanded torques into
  * tau_out (n entries, N m or N) and advances the law's state. Returns 0 on success, 1 when the
  * torque is not finite (the caller should apply its safe reaction; the state is not advanced),
- * -1 on an error (nnrobust_law_last_error()), among them a step that kept memory it allocated
- * (which the next step would hand out again). */
+ * 2 when the values are absurd: a measured position beyond its joint's range by more than the
+ * range's width, or a command above 10 times its joint's effort limit (tau_out holds it: do not
+ * apply it; apply the safe reaction; the state is not advanced), -1 on an error
+ * (nnrobust_law_last_error()), among them a step that kept memory it allocated (which the next
+ * step would hand out again). */
 NNROBUST_LAW_API int nnrobust_law_step(nnrobust_law *law, double t, const double *q, const double *v,
                                        double *tau_out);
 

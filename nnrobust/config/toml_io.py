@@ -265,6 +265,13 @@ def load_config(path: str | Path, overrides: dict | None = None) -> ExperimentCo
     for part, source in user_files(config).items():
         pattern = re.compile(rf"^# {part} sha256: ([0-9a-f]{{64}})$", re.MULTILINE)
         checks.append((f"{part} file", pattern, source, _file_digest))
+        included = re.compile(rf"^# {part} includes (.+) sha256: ([0-9a-f]{{64}})$", re.MULTILINE)
+        for match in included.finditer(text):  # the headers a law in C++ included
+            header = str(Path(source).parent / match.group(1))
+            pattern = re.compile(
+                rf"^# {part} includes {re.escape(match.group(1))} sha256: ([0-9a-f]{{64}})$", re.M
+            )
+            checks.append((f"{part} file's header {match.group(1)}", pattern, header, _file_digest))
     for what, pattern, source, digest in checks:
         recorded = pattern.search(text)
         if not recorded or not source:
@@ -448,7 +455,28 @@ def provenance_header(config: ExperimentConfig) -> str:
     for part, source in user_files(config).items():
         if Path(source).is_file():
             lines.append(f"# {part} sha256: {_file_digest(source)}")
+            lines += _native_lines(part, source)
     return "\n".join(lines) + "\n"
+
+
+def _native_lines(part: str, source: str) -> list[str]:
+    """For a law in C++: the SHA-256 of each header its file includes and of all its library's
+    inputs (nnrobust.native_law.Library: the file, its headers, the toolchain).
+    """
+    from ..native_law import compiled_inputs, is_source
+
+    library = compiled_inputs(Path(source)) if is_source(source) else None
+    if library is None:
+        return []
+    lines = [
+        f"# {part} includes {_path_text(name)} sha256: {digest}" for name, digest in library.dependencies
+    ]
+    return [*lines, f"# {part} inputs sha256: {library.digest}"]
+
+
+def _path_text(name: str) -> str:
+    """A header's relative path on one comment line (control characters escaped)."""
+    return name.encode("unicode_escape").decode("ascii")
 
 
 # ---- TOML output -------------------------------------------------------------------------

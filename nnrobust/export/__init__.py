@@ -89,9 +89,51 @@ def _params_lines(prefix: str, params: dict) -> list[str]:
     return lines
 
 
-def description(spec, model, n: int, comments: tuple[str, ...] | list[str] = ()) -> str:
+ABSURD_COMMAND = 10.0
+"""A step whose command exceeds a joint's effort limit this many times returns status 2."""
+
+ABSURD_COMMAND_WITHOUT_LIMIT = 1e6
+"""[N m or N] The bound of a joint without an effort limit (no actuator comes near it)."""
+
+ABSURD_POSITION = 1e6
+"""[rad or m] The bound on the measured position of a joint without a range (a continuous one)."""
+
+
+def absurd_bounds(setup) -> dict:
+    """What a step's status 2 compares against (docs/export.md#absurd-values): per joint, the
+    command bound, ABSURD_COMMAND times its effort limit (the plant's, else the URDF's; without
+    one ABSURD_COMMAND_WITHOUT_LIMIT), and the range of a plausible measured position, the joint's
+    range widened by its width on each side (without one, +-ABSURD_POSITION).
+    """
+    import numpy as np
+
+    robot = setup.robot
+    effort = setup.plant.torque_limit if setup.plant.torque_limit is not None else robot.effort_limits
+    effort = np.asarray(effort, dtype=float)
+    bound = np.where(
+        np.isfinite(effort) & (effort > 0), ABSURD_COMMAND * effort, ABSURD_COMMAND_WITHOUT_LIMIT
+    )
+    lower, upper = np.asarray(robot.lower_limits, float), np.asarray(robot.upper_limits, float)
+    width = upper - lower
+    ranged = (
+        np.isfinite(width)
+        & (width > 0)
+        & (np.abs(lower) < ABSURD_POSITION)
+        & (np.abs(upper) < ABSURD_POSITION)
+    )
+    return {
+        "command_bound": bound,
+        "measured_lower": np.where(ranged, lower - width, -ABSURD_POSITION),
+        "measured_upper": np.where(ranged, upper + width, ABSURD_POSITION),
+    }
+
+
+def description(
+    spec, model, n: int, comments: tuple[str, ...] | list[str] = (), bounds: dict | None = None
+) -> str:
     """The text description of a compiled controller (LoopSpec ``spec`` with its law's fields, the
-    nominal model's ModelSpec ``model`` or None) that csrc/export/law_api.cpp rebuilds it from.
+    nominal model's ModelSpec ``model`` or None) that csrc/export/law_api.cpp rebuilds it from;
+    with ``bounds`` (:func:`absurd_bounds`), what its step refuses as absurd (status 2).
     """
     lines = [FORMAT, *(f"# {c}" for c in comments)]
     lines += [
@@ -107,6 +149,7 @@ def description(spec, model, n: int, comments: tuple[str, ...] | list[str] = ())
         f"num pinv_threshold {_number(spec.pinv_threshold)}",
         f"num pinv_max_damping {_number(spec.pinv_max_damping)}",
         _vector_line("z0", spec.z0),
+        *(_vector_line(name, values) for name, values in (bounds or {}).items()),
     ]
     for name in _PARAM_MAPS:
         lines += _params_lines(name, getattr(spec, name))
@@ -337,6 +380,25 @@ def _build_native(folder: Path, compiler: str, native: str, data: list[str], lin
         _compile(cxx, cxx[0], f"src/{native}")
 
 
+def _copy_headers(native: Path, folder: Path) -> None:
+    """The headers a law in C++ includes (the compile's dependency list, nnrobust.native_law),
+    copied beside its file in ``folder``/src at the same relative paths: the export compiles them
+    with it, wherever the folder goes. One that would land outside the folder is refused.
+    """
+    from ..native_law import dependencies
+
+    for header, _ in dependencies(native, "controller.class"):
+        relative = os.path.relpath(header, native.parent)
+        target = Path(os.path.normpath(folder / "src" / relative))
+        if not target.is_relative_to(folder):
+            raise NNRobustError(
+                f"export: {native} includes {header}, outside its folder by more than the export's "
+                "src/ would hold; keep the headers a law includes in its folder (or below it)"
+            )
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(header, target)
+
+
 def _compile(command: list[str], compiler: str, what: str) -> None:
     try:
         done = subprocess.run(command, capture_output=True, text=True, timeout=600)
@@ -400,6 +462,7 @@ def export_law(config, out: str | Path, *, overwrite: bool = False, build: bool 
             f"{config.name}: controller {label}, law {spec.law}, nominal model {spec.nominal}",
             f"written by nnrobust {__version__}",
         ],
+        absurd_bounds(setup),
     )
     folder.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{folder.name}.", dir=folder.parent))
@@ -412,6 +475,7 @@ def export_law(config, out: str | Path, *, overwrite: bool = False, build: bool 
             law_data = LAW_DATA.format(name=config.name, literal=_c_literal(text))
         else:
             shutil.copyfile(native, tmp / "src" / native.name)
+            _copy_headers(native, tmp)
             law_data = NATIVE_LAW_DATA.format(
                 name=config.name, literal=_c_literal(text), cls=type(setup.controller).__name__,
                 source=native.name, twin=spec.law,

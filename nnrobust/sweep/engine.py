@@ -816,12 +816,14 @@ def run_task_groups(client, groups: dict, crashed, then, files=None) -> None:
 
 
 def crashed_rows(spec: SweepSpec, jobs: list[tuple[int, str]], reason: str) -> list[dict]:
-    """The rows of ``jobs``, each with status ``crashed`` and ``reason``."""
+    """The rows of ``jobs``, each with status ``crashed`` and ``reason``, naming the user's class
+    the row ran (a law in C++ that ends its process or crashes says so on the worker's stderr).
+    """
     return [
         {
             **_row_head(draw(spec, sample_id), controller),
             "status": CRASHED,
-            "message": reason,
+            "message": reason + _ran(spec, controller),
             "warnings": [],
             "task_seconds": 0.0,
         }
@@ -973,6 +975,19 @@ def _run_sweep(
             if progress:
                 progress(skipped + written + len(dropped), total)
     return {"computed": written, "skipped": skipped, "parts": parts, "stopped": len(dropped)}
+
+
+def _ran(spec: SweepSpec, controller: str) -> str:
+    """What a crashed row adds for a controller entry of a user's class ("; it ran the law X (FILE)")."""
+    from ..native_law import is_source
+    from ..user_code import class_file
+
+    cls = spec.entries.get(controller, {}).get("class")
+    where = class_file(cls) if isinstance(cls, str) else None
+    if where is None:
+        return ""
+    language = " in C++" if is_source(where) else ""
+    return f"; it ran the law {cls.rpartition(':')[2]}{language} ({where})"
 
 
 def read_results(folder: str | Path, key: str | None = None):

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -26,7 +27,7 @@ from ..config import (
 )
 from ..config.toml_io import policy_file
 from ..controllers.registry import registered_law
-from ..exceptions import ConfigError
+from ..exceptions import ConfigError, NNRobustError
 from ..numeric_limits import finite_number
 
 DISTRIBUTIONS = ("uniform", "normal", "loguniform", "choice")
@@ -468,10 +469,12 @@ def study_inputs(spec: SweepSpec, options: dict[str, str] | None = None):
         files["the robot's URDF"] = (source if not source.lstrip().startswith("<") else "(inline)", digest)
     for part, class_path in user_files(config).items():
         files[f"the {part} class file"] = (class_path, file_sha256(class_path))
+        files.update(_included(Path(class_path), f"the {part} class file", f"{part}.class"))
     for name, entry in spec.entries.items():
         where = class_file(entry["class"]) if "class" in entry else None
         if where is not None:
             files[f"the class file of controller {name}"] = (str(where), file_sha256(where))
+            files.update(_included(where, f"the class file of controller {name}", f"controllers: {name}"))
         policy = policy_file(entry.get("kind"), entry.get("params"))
         if policy is not None and Path(policy).is_file():
             files[f"the policy file of controller {name}"] = (policy, file_sha256(policy))
@@ -482,6 +485,29 @@ def study_inputs(spec: SweepSpec, options: dict[str, str] | None = None):
             if where is not None and where.is_file():
                 files[f"the file of [vary] {key} = {text}"] = (str(where), file_sha256(where))
     return Inputs(values, files, package_version())
+
+
+def _included(path: Path, role: str, key: str) -> dict[str, tuple[str, str]]:
+    """The headers a law in C++ includes (nnrobust.native_law.dependencies: compiled now unless
+    cached), by role: what the study's rows are computed from, and sent with its file to workers
+    that do not see the client's files. A file that does not compile records the compiler's
+    message instead, so that a fix in one of its headers is a change of inputs too.
+    """
+    from ..native_law import dependencies, is_source
+    from ..shipped_files import local
+
+    if not is_source(path) or not local(path).is_file():
+        return {}
+    try:
+        headers = dependencies(local(path), key)
+    except NNRobustError as err:  # a compile error, no compiler here
+        said = hashlib.sha256(str(err).encode()).hexdigest()
+        return {f"the compiler's message on {role}": (str(path), said)}
+    folder = Path(os.path.abspath(path)).parent
+    return {
+        f"the header {os.path.relpath(header, folder)} that {role} includes": (header, digest)
+        for header, digest in headers
+    }
 
 
 def sample_seed(seed: int, sample_id: int) -> int:

@@ -15,6 +15,7 @@ from ..bad_inputs import (
     CASES,
     CONFIG_CASES,
     CUSTOM_CASES,
+    NATIVE_LAW_CASES,
     PART_CASES,
     URDF_CASES,
     BuildExperiment,
@@ -80,7 +81,7 @@ def test_command_line_answers_a_bad_urdf_with_one_line(case, tmp_path, capsys, m
     assert not (tmp_path / "run").exists()
 
 
-REFUSED = [c for c in CONFIG_CASES + CUSTOM_CASES + PART_CASES if c.error is not None]
+REFUSED = [c for c in CONFIG_CASES + CUSTOM_CASES + PART_CASES + NATIVE_LAW_CASES if c.error is not None]
 
 
 @pytest.mark.parametrize("case", REFUSED, ids=[c.what for c in REFUSED])
