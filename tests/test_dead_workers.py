@@ -64,7 +64,7 @@ def test_tune_and_falsify_name_a_crash_and_go_on(tmp_path, capsys):
     law = f"{LAWS}:EndsItsProcess"
     # every setting of the space crashes before 2.2 s, or lasts: the crashed ones fail
     code = main(
-        ["tune", str(box), "--controllers", law, "--budget", "3", "--validation", "0"]
+        ["tune", str(box), "--controllers", law, "--budget", "6", "--validation", "0"]
         + ["--workers", "2", "--out", str(tmp_path / "tune"), "--quiet"]
     )
     assert code == 0
