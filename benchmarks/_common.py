@@ -8,8 +8,8 @@ import signal
 import sys
 from concurrent.futures import ProcessPoolExecutor
 
-from nnrobust.experiment import run_experiment
-from nnrobust.presets import load_preset
+from nnrobust.config.presets import load_preset
+from nnrobust.run.experiment import run_experiment
 
 ROW_METRICS = (
     "status",
@@ -123,7 +123,7 @@ def report(
     """Run the jobs (each with its chaos probes), print one line per row as it arrives
     (``columns``: header, width, and a function of the row giving the cell text), and write
     {**extra, "rows": rows} to --json."""
-    from nnrobust.results import write_json_atomic
+    from nnrobust.run.results import write_json_atomic
 
     print(" ".join(f"{h:>{w}s}" if i else f"{h:{w}s}" for i, (h, w, _) in enumerate(columns)))
 

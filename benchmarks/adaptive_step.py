@@ -22,8 +22,8 @@ import numpy as np
 from nnrobust import load_robot
 from nnrobust.controllers import ControlOutput
 from nnrobust.plant import Friction, Plant, SinusoidalDisturbance
-from nnrobust.results import write_json_atomic
-from nnrobust.simulation import simulate
+from nnrobust.run.results import write_json_atomic
+from nnrobust.run.simulation import simulate
 
 Q0 = np.array([0.3, 1.0, -0.8])
 V0 = np.array([1.5, -2.0, 3.0])

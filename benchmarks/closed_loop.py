@@ -23,11 +23,12 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from nnrobust import Controller, ControlOutput, compiled
-from nnrobust.experiment import build
-from nnrobust.presets import load_preset
-from nnrobust.results import write_json_atomic
-from nnrobust.simulation import simulate
+from nnrobust import Controller, ControlOutput
+from nnrobust.config.presets import load_preset
+from nnrobust.run import compiled
+from nnrobust.run.experiment import build
+from nnrobust.run.results import write_json_atomic
+from nnrobust.run.simulation import simulate
 
 PRESETS = ("paper-ellipse", "panda-ellipse")
 

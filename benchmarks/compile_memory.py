@@ -21,7 +21,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from nnrobust.results import write_json_atomic
+from nnrobust.run.results import write_json_atomic
 
 ROOT = Path(__file__).resolve().parent.parent
 TARGET_GB = 1.5

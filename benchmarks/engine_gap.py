@@ -22,12 +22,12 @@ import warnings
 from pathlib import Path
 
 from nnrobust.config import CONTROLLER_KINDS
-from nnrobust.exceptions import NNRobustError
-from nnrobust.experiment import run_experiment
-from nnrobust.presets import load_preset, preset_names
-from nnrobust.properties import run_properties
-from nnrobust.results import write_json_atomic
-from nnrobust.run_deltas import verdicts
+from nnrobust.config.presets import load_preset, preset_names
+from nnrobust.core.exceptions import NNRobustError
+from nnrobust.outputs.run_deltas import verdicts
+from nnrobust.run.experiment import run_experiment
+from nnrobust.run.properties import run_properties
+from nnrobust.run.results import write_json_atomic
 
 HERE = Path(__file__).resolve().parent
 KEEP = (
@@ -66,7 +66,7 @@ FINE times more steps (its convergence); MuJoCo's implicitfast likewise."""
 
 def both_engines(config) -> dict:
     """The runs of ``config`` in every variant: the kept metrics of each."""
-    from nnrobust.experiment import build
+    from nnrobust.run.experiment import build
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -121,10 +121,10 @@ def tuned_part(studies: list[str]) -> list[dict]:
     """Each kept setting of the tuned studies (benchmarks/studies/NAME.toml, their reports in
     docs/data/NAME.json) on the first HELD_OUT of its case's validation draws, as the study's
     validate stage drew them."""
-    from nnrobust.study import load_study
-    from nnrobust.study.engine import VALIDATION_SEED, sweep_of
-    from nnrobust.sweep.spec import base_config, draw, experiment
-    from nnrobust.tune.engine import tuned_entry
+    from nnrobust.studies.base.plan import base_config, draw, experiment
+    from nnrobust.studies.base.tuned import tuned_entry
+    from nnrobust.studies.study import load_study
+    from nnrobust.studies.study.engine import VALIDATION_SEED, sweep_of
 
     rows = []
     for study in studies:

@@ -5,9 +5,9 @@ with both cores loaded by other processes.
     python benchmarks/export_step.py --json docs/data/export_step.json [--seconds 5] [--repeats 5]
 
 For each arm: a compiled run of the preset (``seconds`` of simulated time) is recorded as the law
-sees it (nnrobust.export.recorded_steps), the preset's controller is exported, and the export's
+sees it (nnrobust.outputs.export.recorded_steps), the preset's controller is exported, and the export's
 bin/time_step (example/time_step.c, with allocation-counting wrappers around glibc's malloc
-family; nnrobust.export.time_steps) steps the law through the recorded states ``repeats`` times,
+family; nnrobust.outputs.export.time_steps) steps the law through the recorded states ``repeats`` times,
 timing each step with CLOCK_MONOTONIC. "loaded" runs the same with two busy-looping processes on
 the machine; "rt" adds SCHED_FIFO priority 80 (chrt) where the machine allows it, else the row
 says it was not allowed.
@@ -23,9 +23,9 @@ import sys
 import tempfile
 from pathlib import Path
 
-from nnrobust.export import export_law, recorded_steps, time_steps
-from nnrobust.presets import load_preset
-from nnrobust.results import write_json_atomic
+from nnrobust.config.presets import load_preset
+from nnrobust.outputs.export import export_law, recorded_steps, time_steps
+from nnrobust.run.results import write_json_atomic
 
 ARMS = ("paper-ellipse", "panda-ellipse")
 

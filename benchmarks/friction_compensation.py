@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from _common import parser, run_rows
 
-from nnrobust.results import write_json_atomic
+from nnrobust.run.results import write_json_atomic
 
 BASE = {
     "controller": {"kind": "computed-torque", "Kp": [100.0], "Kv": [20.0]},

@@ -8,9 +8,9 @@ order-statistic interval (what they print now), at the N the studies use.
 For each N and each distribution of the paired differences d (normal; lognormal minus its median,
 skewed; Student t with 3 degrees of freedom, heavy-tailed; a two-component mixture, bimodal: each
 centred so that its median is 0), ``--trials`` samples of N are drawn with a fixed seed; each gets
-both intervals (nnrobust.paired's, the bootstrap with 2000 resamples), and the share that contains
-0 is its coverage. The order-statistic interval's exact coverage 1 - 2 P(Binomial(N, 1/2) < l)
-(nnrobust.paired.order_coverage) holds for any continuous distribution: the measured shares must
+both intervals (nnrobust.studies.base.paired's, the bootstrap with 2000 resamples), and the share
+that contains 0 is its coverage. The order-statistic interval's exact coverage 1 - 2 P(Binomial(N, 1/2) < l)
+(nnrobust.studies.base.paired.order_coverage) holds for any continuous distribution: the measured shares must
 sit on it within sampling error.
 """
 
@@ -21,8 +21,8 @@ import time
 
 import numpy as np
 
-from nnrobust.paired import _order_interval, bootstrap_interval, order_coverage
-from nnrobust.results import write_json_atomic
+from nnrobust.run.results import write_json_atomic
+from nnrobust.studies.base.paired import bootstrap_interval, order_coverage, order_interval
 
 SIZES = (5, 8, 11, 20, 29, 59)
 """The certification draws of the shipped studies (11: the tuned studies, 29: the example) and the
@@ -57,7 +57,7 @@ def coverage(n: int, draw, trials: int, seed: int) -> dict:
     order = boot = 0
     for i in range(trials):
         d = draw(rng, n)
-        low, high = _order_interval(d, 0.05)
+        low, high = order_interval(d, 0.05)
         order += low <= 0.0 <= high
         low, high = bootstrap_interval(d, 0.05, RESAMPLES, seed + i)
         boot += low <= 0.0 <= high

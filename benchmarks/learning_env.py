@@ -34,12 +34,12 @@ from pathlib import Path
 
 import numpy as np
 
-from nnrobust.compiled import simulate_batch
-from nnrobust.experiment import build
-from nnrobust.learning.env import ArmEnv
-from nnrobust.learning.vector import ArmVectorEnv
-from nnrobust.presets import load_preset
-from nnrobust.results import write_json_atomic
+from nnrobust.config.presets import load_preset
+from nnrobust.run.compiled import simulate_batch
+from nnrobust.run.experiment import build
+from nnrobust.run.results import write_json_atomic
+from nnrobust.studies.learning.env import ArmEnv
+from nnrobust.studies.learning.vector import ArmVectorEnv
 
 ARMS = ("paper-ellipse", "panda-ellipse")
 
@@ -82,8 +82,8 @@ def policy_overhead(preset: str, seconds: float, folder: Path) -> dict:
     """(µs per step, marginal: runs of 3 ``seconds`` less runs of ``seconds``) of a zero residual
     policy's run beyond its base law's compiled run, less the inference time it recorded; and the
     inference's mean wall time."""
-    from nnrobust.experiment import run_experiment
-    from nnrobust.learning import ObservationLayout
+    from nnrobust.run.experiment import run_experiment
+    from nnrobust.studies.learning import ObservationLayout
 
     base = load_preset(preset)
     setup = build(base)

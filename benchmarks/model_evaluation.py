@@ -12,7 +12,7 @@ import numpy as np
 
 from nnrobust import load_robot
 from nnrobust.model import ThreeLinkParameters, ThreeLinkPlanarModel
-from nnrobust.results import write_json_atomic
+from nnrobust.run.results import write_json_atomic
 
 
 def time_call(fn, number: int = 20000) -> float:

@@ -194,7 +194,7 @@ def main() -> None:
         + (f"; survived: {', '.join(survived)}" if survived else "")
     )
     if args.json:
-        from nnrobust.results import write_json_atomic
+        from nnrobust.run.results import write_json_atomic
 
         write_json_atomic(args.json, {"rows": rows})
     sys.exit(1 if survived else 0)

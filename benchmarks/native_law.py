@@ -18,9 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
-from nnrobust.experiment import build, run_experiment
-from nnrobust.presets import load_preset
-from nnrobust.results import write_json_atomic
+from nnrobust.config.presets import load_preset
+from nnrobust.run.experiment import build, run_experiment
+from nnrobust.run.results import write_json_atomic
 
 ROOT = Path(__file__).resolve().parent.parent
 ARMS = ("paper-ellipse", "panda-ellipse")

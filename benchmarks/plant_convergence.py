@@ -27,8 +27,8 @@ from _common import parser, run_rows
 from scipy.stats import fisher_exact, mannwhitneyu
 
 from nnrobust.config import CONTROLLER_KINDS
-from nnrobust.presets import load_preset, preset_names
-from nnrobust.results import write_json_atomic
+from nnrobust.config.presets import load_preset, preset_names
+from nnrobust.run.results import write_json_atomic
 
 TOLERANCES = {"rms_error_after_2s": 0.02, "rms_torque": 0.02, "torque_chatter": 0.10}
 """Largest relative difference from the fine plant step that counts as converged."""
@@ -134,7 +134,7 @@ def verdict(runs: list[dict]) -> dict:
 
 def _collect_extra(row_job):
     """run_rows keeps only _common.ROW_METRICS; the event counts come from the metrics too."""
-    from nnrobust.experiment import run_experiment
+    from nnrobust.run.experiment import run_experiment
 
     metrics = run_experiment(load_preset(row_job["preset"]).replace(**row_job["changes"])).metrics()
     keep = ("status", *TOLERANCES, "friction_events", "unresolved_events", "refined_periods")

@@ -21,8 +21,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from nnrobust.forked import WORKERS_VARIABLE, default_workers
-from nnrobust.results import write_json_atomic
+from nnrobust.core.forked import WORKERS_VARIABLE, default_workers
+from nnrobust.run.results import write_json_atomic
 
 CONTENDERS = {
     "forked drawing (default)": ([], {}),

@@ -20,10 +20,10 @@ import sys
 import tempfile
 from pathlib import Path
 
-from nnrobust.export import export_law
-from nnrobust.presets import load_preset
-from nnrobust.results import write_json_atomic
-from nnrobust.serve import serve
+from nnrobust.config.presets import load_preset
+from nnrobust.outputs.export import export_law
+from nnrobust.outputs.serve import serve
+from nnrobust.run.results import write_json_atomic
 
 ARMS = ("paper-ellipse", "panda-ellipse")
 

@@ -28,11 +28,11 @@ import time
 
 import numpy as np
 
-from nnrobust import compiled
-from nnrobust.experiment import build
-from nnrobust.presets import load_preset
-from nnrobust.results import write_json_atomic
-from nnrobust.simulation import simulate
+from nnrobust.config.presets import load_preset
+from nnrobust.run import compiled
+from nnrobust.run.experiment import build
+from nnrobust.run.results import write_json_atomic
+from nnrobust.run.simulation import simulate
 
 SIZES = (3, 7, 15, 30, 60, 120, 300)
 

@@ -31,8 +31,8 @@ from pathlib import Path
 
 import pandas as pd
 
-from nnrobust.results import write_json_atomic
-from nnrobust.study import load_study, run_study
+from nnrobust.run.results import write_json_atomic
+from nnrobust.studies.study import load_study, run_study
 
 ROOT = Path(__file__).resolve().parent.parent
 CUT = {"tune": 4, "seeds": 2, "train_samples": 1, "validation": 2, "epsilon": 0.5, "beta": 0.2,

@@ -3,12 +3,12 @@ share of wall time that is not simulation (scheduling, transfer, writing parts).
 
     python benchmarks/sweep_throughput.py --json out/bench/sweep_throughput.json [--samples 40]
 
-Each worker count gets its own LocalCluster (nnrobust.sweep.engine.local_cluster, the one `nnrobust
+Each worker count gets its own LocalCluster (nnrobust.studies.base.cluster.local_cluster, the one `nnrobust
 sweep` starts), started before the clock runs; the sweep varies the disturbance scale, one
 controller (nn). Overhead = 1 - (sum of the rows' task time) / (workers x wall time). "Of loop
 rate" is samples per second over workers x the compiled loop's own rate, the loop's time measured
 on the same rows run one after another in this process first. The idle cluster's CPU is measured
-with the local cluster's settings (nnrobust.sweep.engine.QUIET_CLUSTER) and with dask's defaults.
+with the local cluster's settings (nnrobust.studies.base.cluster.QUIET_CLUSTER) and with dask's defaults.
 """
 
 from __future__ import annotations
@@ -19,9 +19,9 @@ import tempfile
 import time
 from pathlib import Path
 
-from nnrobust.results import write_json_atomic
-from nnrobust.sweep import parse_sweep, read_results, run_sweep
-from nnrobust.sweep.engine import LOOPBACK_HTTP, local_cluster
+from nnrobust.run.results import write_json_atomic
+from nnrobust.studies.base.cluster import LOOPBACK_HTTP, local_cluster
+from nnrobust.studies.sweep import parse_sweep, read_results, run_sweep
 
 
 def sweep(workers: int, samples: int):
@@ -66,7 +66,7 @@ def measure(workers: int, samples: int) -> dict:
 def in_process(samples: int) -> dict:
     """The same rows run in this process, one after another: the time of a row and of its compiled
     loop alone (``wall_seconds``), the rate that workers x loop rate is measured against."""
-    from nnrobust.sweep.engine import plan, run_rows
+    from nnrobust.studies.sweep.engine import plan, run_rows
 
     spec = sweep(1, samples)
     base_toml, jobs = plan(spec)

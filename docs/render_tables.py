@@ -299,7 +299,7 @@ TUNED_LABELS = {
 def tuned_cases() -> list[dict]:
     """Every case of the tuned studies, in their order: its label, its report entry, the study's
     controllers (in the study file's order), its budgets."""
-    from nnrobust.study import load_study
+    from nnrobust.studies.study import load_study
 
     out = []
     for study in TUNED_STUDIES:

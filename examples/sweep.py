@@ -14,8 +14,8 @@ import argparse
 from pathlib import Path
 
 import nnrobust
-from nnrobust.sweep import parse_sweep
-from nnrobust.sweep.summary import summarize, write_summary
+from nnrobust.studies.sweep import parse_sweep
+from nnrobust.studies.sweep.summary import summarize, write_summary
 
 
 def main() -> None:

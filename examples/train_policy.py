@@ -19,7 +19,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from nnrobust.learning.es import train
+from nnrobust.studies.learning.es import train
 
 HERE = Path(__file__).resolve().parent
 BOX = {

@@ -11,31 +11,31 @@ import importlib
 _EXPORTS = {
     # the workflow: load, configure, build, run, write, plot
     "load_robot": ".model",
-    "load_preset": ".presets",
-    "preset_names": ".presets",
+    "load_preset": ".config.presets",
+    "preset_names": ".config.presets",
     "load_config": ".config",
     "ExperimentConfig": ".config",
     "apply_overrides": ".config",
-    "build": ".experiment",
-    "Setup": ".experiment",
-    "run_experiment": ".experiment",
-    "Result": ".results",
-    "write_run": ".run_folder",
-    "load_run": ".run_folder",
-    "plot_run": ".plots",
-    "plot_comparison": ".plots",
+    "build": ".run.experiment",
+    "Setup": ".run.experiment",
+    "run_experiment": ".run.experiment",
+    "Result": ".run.results",
+    "write_run": ".outputs.run_folder",
+    "load_run": ".outputs.run_folder",
+    "plot_run": ".outputs.plots",
+    "plot_comparison": ".outputs.plots",
     # many runs: sweeps and tuning (the sweep and tune extras)
-    "load_sweep": ".sweep",
-    "run_sweep": ".sweep",
-    "read_results": ".sweep",
-    "TuneSpec": ".tune",
-    "run_tune": ".tune",
-    "FalsifySpec": ".falsify",
-    "run_falsify": ".falsify",
-    "load_study": ".study",
-    "run_study": ".study",
+    "load_sweep": ".studies.base.plan",
+    "run_sweep": ".studies.sweep",
+    "read_results": ".studies.sweep",
+    "TuneSpec": ".studies.tune",
+    "run_tune": ".studies.tune",
+    "FalsifySpec": ".studies.falsify",
+    "run_falsify": ".studies.falsify",
+    "load_study": ".studies.study",
+    "run_study": ".studies.study",
     # a sweep's, tuning's, falsification's or study's summary, shown as HTML in Jupyter
-    "load_summary": ".display",
+    "load_summary": ".studies.study.summaries",
     # the contract of a controller of your own (docs/extending.md)
     "Controller": ".controllers",
     "ControlOutput": ".controllers",
@@ -51,9 +51,9 @@ _EXPORTS = {
     "ThreeLinkPlanarModel": ".model",
     "paper_arm_urdf": ".model",
     # errors
-    "NNRobustError": ".exceptions",
-    "ConfigError": ".exceptions",
-    "ControllerError": ".exceptions",
+    "NNRobustError": ".core.exceptions",
+    "ConfigError": ".core.exceptions",
+    "ControllerError": ".core.exceptions",
 }
 
 __all__ = sorted(_EXPORTS)
@@ -61,7 +61,7 @@ __all__ = sorted(_EXPORTS)
 
 def __getattr__(name: str):
     if name == "__version__":
-        from .package_version import package_version
+        from .core.package_version import package_version
 
         globals()["__version__"] = value = package_version()
         return value

@@ -1,9 +1,9 @@
 """``python -m nnrobust`` and the ``nnrobust`` command: the stop signals are routed through
-nnrobust.signals before the command line's modules are imported, so that a Ctrl-C, SIGTERM or
+nnrobust.core.signals before the command line's modules are imported, so that a Ctrl-C, SIGTERM or
 SIGHUP at any instant of the start ends the command with its one line and exit code 130.
 """
 
-from nnrobust.signals import install_stop_handlers
+from nnrobust.core.signals import install_stop_handlers
 
 
 def run() -> None:

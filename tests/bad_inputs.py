@@ -15,14 +15,14 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from nnrobust import exceptions as ex
+from nnrobust.core import exceptions as ex
 from nnrobust.model.urdf_check import (
     InertiaAssumptionWarning,
     MeshOutsideFoldersWarning,
     MissingMeshWarning,
     UndeclaredPrefixWarning,
 )
-from nnrobust.run_folder import RunFolderError
+from nnrobust.outputs.run_folder import RunFolderError
 
 ARM = """<?xml version="1.0"?>
 <robot name="arm">
@@ -153,13 +153,13 @@ class BuildExperiment:
         self.preset, self.sections = preset, sections
 
     def toml(self) -> str:
-        from nnrobust.presets import load_preset
+        from nnrobust.config.presets import load_preset
 
         return load_preset(self.preset).replace(**self.sections).to_toml()
 
     def __call__(self):
-        from nnrobust.experiment import build
-        from nnrobust.presets import load_preset
+        from nnrobust.config.presets import load_preset
+        from nnrobust.run.experiment import build
 
         return build(load_preset(self.preset).replace(**self.sections))
 
@@ -969,7 +969,7 @@ def _fifo(folder: Path) -> Path:
 
 
 def _check_out(folder: Path, overwrite: bool = False):
-    from nnrobust.run_folder import check_out_folder
+    from nnrobust.outputs.run_folder import check_out_folder
 
     return lambda: check_out_folder(folder, overwrite)
 
@@ -988,7 +988,7 @@ def _symlink(folder: Path) -> Path:
 
 
 def _locked_twice(folder: Path):
-    from nnrobust.run_folder import locked
+    from nnrobust.outputs.run_folder import locked
 
     def action():
         with locked(folder / "run"), locked(folder / "run"):
@@ -1001,9 +1001,9 @@ def _damaged_run(folder: Path, damage: str):
     """A run folder written by a short run, then damaged; the action reads it back."""
     import numpy as np
 
-    from nnrobust.experiment import run_experiment
-    from nnrobust.presets import load_preset
-    from nnrobust.run_folder import load_run, write_run
+    from nnrobust.config.presets import load_preset
+    from nnrobust.outputs.run_folder import load_run, write_run
+    from nnrobust.run.experiment import run_experiment
 
     run = folder / damage
     write_run(
@@ -1066,7 +1066,7 @@ def _damaged_run(folder: Path, damage: str):
 
 
 def _viewer(host: str = "127.0.0.1", port: int | None = None):
-    from nnrobust.viewer.server import check_listen_address
+    from nnrobust.outputs.viewer.server import check_listen_address
 
     return lambda: check_listen_address(host, port)
 
@@ -1213,7 +1213,7 @@ def _tune(folder: Path, *args: str, **kwargs):
     """nnrobust tune's checks, as the command line calls them (nothing runs: each is refused first)."""
 
     def run():
-        from nnrobust.tune import TuneSpec, run_tune
+        from nnrobust.studies.tune import TuneSpec, run_tune
 
         return run_tune(TuneSpec(*args, **kwargs), folder / "tuning", workers=1)
 
@@ -1224,7 +1224,7 @@ def _tune_into(folder: Path, make) -> Callable[[], object]:
     """A tuning into a folder ``make`` prepares."""
 
     def run():
-        from nnrobust.tune import TuneSpec, run_tune
+        from nnrobust.studies.tune import TuneSpec, run_tune
 
         return run_tune(TuneSpec("paper-ellipse", ["pd"], 4), make(folder), workers=1)
 
@@ -1334,7 +1334,7 @@ class RunExperiment(ReadConfig):
     """Read an experiment file and run it."""
 
     def __call__(self):
-        from nnrobust.experiment import run_experiment
+        from nnrobust.run.experiment import run_experiment
 
         return run_experiment(super().__call__())
 
@@ -1576,7 +1576,7 @@ PART_CASES = [
 
 def _require(*texts: str):
     def check():
-        from nnrobust.properties import run_properties
+        from nnrobust.run.properties import run_properties
 
         return run_properties(list(texts))
 
@@ -1585,7 +1585,7 @@ def _require(*texts: str):
 
 def _claim(epsilon, beta, failures=0):
     def check():
-        from nnrobust.properties import samples_needed
+        from nnrobust.run.properties import samples_needed
 
         return samples_needed(epsilon, beta, failures)
 
@@ -1594,8 +1594,8 @@ def _claim(epsilon, beta, failures=0):
 
 def _mutated(change):
     def run():
-        from nnrobust.experiment import build
-        from nnrobust.presets import load_preset
+        from nnrobust.config.presets import load_preset
+        from nnrobust.run.experiment import build
 
         config = load_preset("paper-ellipse")
         change(config)
@@ -1606,7 +1606,7 @@ def _mutated(change):
 
 def _scheduler(address: str):
     def check():
-        from nnrobust.sweep.engine import check_scheduler
+        from nnrobust.studies.base.cluster import check_scheduler
 
         return check_scheduler(address)
 
@@ -1615,7 +1615,7 @@ def _scheduler(address: str):
 
 def _workers(count: int):
     def check():
-        from nnrobust.sweep.engine import _client
+        from nnrobust.studies.base.cluster import cluster_client as _client
 
         with _client(count, None):
             pass
@@ -1662,7 +1662,7 @@ def _hand_made_result(folder: Path):
         import numpy as np
 
         from nnrobust import write_run
-        from nnrobust.results import Result
+        from nnrobust.run.results import Result
 
         zeros = np.zeros((3, 2))
         made = Result(t=np.zeros(3), q=zeros, dq=zeros, tau=zeros, x=zeros, x_d=zeros, e=zeros,
@@ -1932,7 +1932,7 @@ PROPERTY_CASES = [
 
 def _falsify(**changes):
     def check():
-        from nnrobust.falsify import FalsifySpec
+        from nnrobust.studies.falsify import FalsifySpec
 
         return FalsifySpec(
             **{
@@ -1949,8 +1949,8 @@ def _falsify(**changes):
 
 def _box(folder: Path, vary: str):
     def check():
-        from nnrobust.falsify import box_of
-        from nnrobust.sweep import load_sweep
+        from nnrobust.studies.falsify import box_of
+        from nnrobust.studies.sweep import load_sweep
 
         return box_of(
             load_sweep(
@@ -1967,7 +1967,7 @@ def _box(folder: Path, vary: str):
 
 def _entry_sweep(folder: Path, entry: str, tables: str = ""):
     def check():
-        from nnrobust.sweep import load_sweep
+        from nnrobust.studies.sweep import load_sweep
 
         text = f'name = "s"\nbase = "paper-ellipse"\ncontrollers = ["nn", {entry}]\n{tables}'
         return load_sweep(_file(folder, "s.toml", text))
@@ -1977,7 +1977,7 @@ def _entry_sweep(folder: Path, entry: str, tables: str = ""):
 
 def _tuned(folder: Path, summary: str, names: list[str], varied=()):
     def check():
-        from nnrobust.tune.engine import tuned_settings
+        from nnrobust.studies.base.tuned import tuned_settings
 
         return tuned_settings(_file(folder, "summary.json", summary), names, varied)
 
@@ -1986,7 +1986,7 @@ def _tuned(folder: Path, summary: str, names: list[str], varied=()):
 
 def _damaged_parts(folder: Path, damage: str):
     def check():
-        from nnrobust.study_folder import parts_folder, read_parts
+        from nnrobust.studies.base.folder import parts_folder, read_parts
 
         study = folder / f"study-{damage}"
         study.mkdir(exist_ok=True)
@@ -2004,8 +2004,8 @@ def _cannot_run(folder: Path, command: str, entry: str):
     """A sweep or a search of a controller that can never run (refused before anything runs)."""
 
     def run():
-        from nnrobust.falsify import FalsifySpec, run_falsify
-        from nnrobust.sweep import load_sweep, run_sweep
+        from nnrobust.studies.falsify import FalsifySpec, run_falsify
+        from nnrobust.studies.sweep import load_sweep, run_sweep
 
         (folder / "laws.py").write_text(LAWS.read_text())
         path = _file(
@@ -2029,8 +2029,8 @@ def _study_cannot_run(folder: Path):
     (it was "controllers: mine: mine: cannot run")."""
 
     def check():
-        from nnrobust.study import load_study
-        from nnrobust.study.engine import _check_controllers
+        from nnrobust.studies.study import load_study
+        from nnrobust.studies.study.engine import _check_controllers
 
         (folder / "laws.py").write_text(LAWS.read_text())
         path = _file(
@@ -2056,9 +2056,9 @@ def _resumed(folder: Path, change: str):
         import pyarrow as pa
         import pyarrow.parquet as pq
 
-        from nnrobust.study_folder import prepare, read_parts, write_part
-        from nnrobust.sweep import load_sweep
-        from nnrobust.sweep.spec import study_inputs
+        from nnrobust.studies.base.folder import prepare, read_parts, write_part
+        from nnrobust.studies.base.plan import study_inputs
+        from nnrobust.studies.sweep import load_sweep
 
         base = _file(folder, "base.toml", 'base = "paper-ellipse"\n[simulation]\nduration = 0.3\n')
         sweep = _file(folder, "s.toml", 'name = "s"\nbase = "base.toml"\ncontrollers = ["nn"]\n')
@@ -2192,7 +2192,7 @@ FALSIFY_CASES = [
     Case(
         "sweep file: samples = a 300-digit integer (echoed as %.6g)",
         lambda d: (
-            lambda: __import__("nnrobust.sweep", fromlist=["load_sweep"]).load_sweep(
+            lambda: __import__("nnrobust.studies.sweep", fromlist=["load_sweep"]).load_sweep(
                 _file(
                     d,
                     "s.toml",
@@ -2274,7 +2274,7 @@ def _small_study(folder: Path, cases='"paper-ellipse"', controllers='{name = "pd
 
 
 def _load_small_study(folder: Path, **kwargs):
-    from nnrobust.study import load_study
+    from nnrobust.studies.study import load_study
 
     path = _small_study(folder, **kwargs)
     return lambda: load_study(path)
@@ -2284,8 +2284,8 @@ def _study_through_a_link(folder: Path, link: str = "cases", out: str = "o"):
     """S with a link planted in its out folder (``link``, e.g. its cases/) to someone else's folder."""
 
     def check():
-        from nnrobust.study import load_study
-        from nnrobust.study.engine import prepare
+        from nnrobust.studies.study import load_study
+        from nnrobust.studies.study.engine import prepare
 
         victim = folder / "victim"
         victim.mkdir(exist_ok=True)
@@ -2313,7 +2313,7 @@ def _deep_report(folder: Path):
 
 def _env_step(action):
     def check():
-        from nnrobust.learning.env import ArmEnv
+        from nnrobust.studies.learning.env import ArmEnv
 
         env = ArmEnv("paper-ellipse", duration=0.05)
         env.reset(seed=0)
@@ -2324,7 +2324,7 @@ def _env_step(action):
 
 def _vector_env(**kwargs):
     def check():
-        from nnrobust.learning.vector import ArmVectorEnv
+        from nnrobust.studies.learning.vector import ArmVectorEnv
 
         return ArmVectorEnv("paper-ellipse", num_envs=2, duration=0.05, **kwargs)
 
@@ -2333,8 +2333,8 @@ def _vector_env(**kwargs):
 
 def _serve(wait: float):
     def check():
-        from nnrobust.presets import load_preset
-        from nnrobust.serve import serve
+        from nnrobust.config.presets import load_preset
+        from nnrobust.outputs.serve import serve
 
         return serve(load_preset("paper-ellipse"), "never-written", wait_seconds=wait)
 
@@ -2474,7 +2474,7 @@ def _damaged_library(folder: Path):
     """A law's cached library truncated, then asked for again (in a cache of the folder's)."""
 
     def run():
-        from nnrobust import native_law
+        from nnrobust.plugins import native_law
 
         source = _file(folder, "tiny.cpp", 'extern "C" int tiny(void) { return 1; }\n')
         before = os.environ.get("NNROBUST_CACHE")
@@ -2581,7 +2581,7 @@ def render_table(folder: Path) -> str:
         "  `simulation.memory_limit` (2 GB by default) or above the memory the machine has available",
         "  is refused; `simulation.substeps` is at most 10,000, `nn.centers` at most 1,000, a run at",
         "  most 10^9 control steps.",
-        "- **Run folders** (`nnrobust/run_folder.py`) carry a marker file, `.nnrobust-run`, with the",
+        "- **Run folders** (`nnrobust/outputs/run_folder.py`) carry a marker file, `.nnrobust-run`, with the",
         "  run's status. `--overwrite` replaces only folders that have it (or that hold nothing but a",
         "  run's files). The output folder is checked before the simulation and locked for the whole",
         "  run, so a second run into it is refused at once. The arrays and metrics are saved first and",
@@ -2591,9 +2591,10 @@ def render_table(folder: Path) -> str:
         "  beside it, to `<folder>.<status>`. If a write fails (a full disk), the previous run is",
         "  untouched and the new arrays are saved to the temporary folder if they fit there; the",
         "  message says where.",
-        "- **Study folders** of `sweep`, `tune` and `falsify` (`nnrobust/study_folder.py`) carry a hidden",
-        "  marker, `.nnrobust-sweep` (`-tune`, `-falsify`), with what their rows are computed from, by",
-        "  content: the options that change results, nnrobust's version and the SHA-256 of every file",
+        "- **Study folders** of `sweep`, `tune` and `falsify` (`nnrobust/studies/base/folder.py`) carry a",
+        "  hidden marker, `.nnrobust-sweep` (`-tune`, `-falsify`), with what their rows are computed",
+        "  from, by content: the options that change results, nnrobust's version and the SHA-256 of",
+        "  every file",
         "  read (the base experiment and the files it starts from, the URDF, user classes); a user's own",
         "  `sweep.toml` never makes a folder one. A resume on anything else is refused, naming what",
         "  changed; the same content resumes wherever it has moved. Each Parquet part records that",

@@ -9,8 +9,8 @@ import pytest
 from scipy.stats import beta as beta_distribution
 from scipy.stats import binom
 
-from nnrobust.exceptions import ConfigError
-from nnrobust.properties import (
+from nnrobust.core.exceptions import ConfigError
+from nnrobust.run.properties import (
     clopper_pearson_upper,
     run_properties,
     samples_needed,
@@ -86,7 +86,7 @@ def test_the_sweep_command_refuses_such_a_claim_in_one_line(tmp_path, capsys):
 
 
 def test_a_confidence_never_prints_as_certainty():
-    from nnrobust.properties import confidence_text
+    from nnrobust.run.properties import confidence_text
 
     assert [confidence_text(b) for b in (0.05, 1e-6, 5e-7, 1e-9)] == [
         "0.95",
@@ -155,7 +155,7 @@ def test_a_sweep_certifies_each_controller_from_its_rows(tmp_path, capsys):
     too small for the claim is refused before anything runs unless --allow-small."""
     pytest.importorskip("distributed")
     from nnrobust.cli import main
-    from nnrobust.sweep import read_results
+    from nnrobust.studies.sweep import read_results
 
     sweep = tmp_path / "s.toml"
     sweep.write_text(
@@ -192,7 +192,7 @@ def test_sequential_stopping_ends_a_refuted_claim_and_keeps_the_rest(tmp_path, c
     resumed sweep does not run the refuted rows either."""
     pytest.importorskip("distributed")
     from nnrobust.cli import main
-    from nnrobust.sweep import read_results
+    from nnrobust.studies.sweep import read_results
 
     sweep = tmp_path / "s.toml"
     sweep.write_text(

@@ -12,9 +12,9 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from nnrobust import compiled
-from nnrobust.exceptions import NNRobustError
+from nnrobust.core.exceptions import NNRobustError
 from nnrobust.model.perturbation import perturb_inertias
+from nnrobust.run import compiled
 
 from .arms import arm, random_configurations
 
@@ -104,8 +104,8 @@ def test_without_the_extension_the_package_says_why(monkeypatch):
         robot = paper_robot()
         compiled.load_model(robot.model, robot.task_frame)
     # auto falls back to the Python loop with one clear warning; the run still works
-    from nnrobust.experiment import build, choose_backend, run_experiment
-    from nnrobust.presets import load_preset
+    from nnrobust.config.presets import load_preset
+    from nnrobust.run.experiment import build, choose_backend, run_experiment
 
     config = load_preset("paper-ellipse").replace(simulation={"duration": 0.2})
     with pytest.warns(UserWarning, match="running on the Python backend: the compiled loop is not built"):
@@ -131,9 +131,9 @@ KINDS = ["nn", "no-u0", "sliding-mode", "computed-torque", "pd"]
 
 def _both_backends(preset, duration, **changes):
     from nnrobust.config import step_rotation_limit
-    from nnrobust.experiment import build
-    from nnrobust.presets import load_preset
-    from nnrobust.simulation import simulate
+    from nnrobust.config.presets import load_preset
+    from nnrobust.run.experiment import build
+    from nnrobust.run.simulation import simulate
 
     simulation = {"duration": duration, **changes.pop("simulation", {})}
     config = load_preset(preset).replace(simulation=simulation, **changes)
@@ -175,8 +175,8 @@ def test_compiled_loop_equals_the_python_loop(preset, kind):
 @pytest.mark.parametrize("preset", ["paper-ellipse"])
 def test_compiled_metrics_match_over_a_full_run(preset):
     """Over the full 20 s the metrics agree within 1 %, and metrics.json says which loop ran."""
-    from nnrobust.experiment import run_experiment
-    from nnrobust.presets import load_preset
+    from nnrobust.config.presets import load_preset
+    from nnrobust.run.experiment import run_experiment
 
     config = load_preset(preset)
     py = run_experiment(config.replace(simulation={"backend": "python"})).metrics()
@@ -189,8 +189,8 @@ def test_compiled_metrics_match_over_a_full_run(preset):
 
 @needs_extension
 def test_auto_takes_the_compiled_loop_only_with_a_twin_for_every_component():
-    from nnrobust.experiment import build, choose_backend
-    from nnrobust.presets import load_preset
+    from nnrobust.config.presets import load_preset
+    from nnrobust.run.experiment import build, choose_backend
 
     paper = build(load_preset("paper-ellipse").replace(simulation={"duration": 1.0}))
     assert choose_backend(paper) == "compiled"
@@ -252,8 +252,8 @@ def test_the_step_is_cut_at_the_stops_alike_on_both_loops():
 def test_a_compiled_result_equals_the_python_result(preset):
     """What the compiled loop records for the Result (chain points, x, e, the criterion h and the
     manipulability, from the true robot's kinematics) equals what Result.from_trace computes."""
-    from nnrobust.experiment import run_experiment
-    from nnrobust.presets import load_preset
+    from nnrobust.config.presets import load_preset
+    from nnrobust.run.experiment import run_experiment
 
     config = load_preset(preset).replace(simulation={"duration": 0.5})
     py = run_experiment(config.replace(simulation={"backend": "python"}))
@@ -269,8 +269,8 @@ def test_a_compiled_result_equals_the_python_result(preset):
 def test_a_batch_on_threads_equals_the_runs_one_by_one():
     """simulate_batch runs experiments on C++ threads with the GIL released: the same traces,
     bit for bit, as running each alone (closed-form and Pinocchio nominal models mixed)."""
-    from nnrobust.experiment import build
-    from nnrobust.presets import load_preset
+    from nnrobust.config.presets import load_preset
+    from nnrobust.run.experiment import build
 
     presets = ["paper-ellipse", "panda-ellipse", "paper-ellipse-noisy", "ur5-ellipse", "panda-pose"]
 
@@ -294,8 +294,8 @@ def test_ctrl_c_stops_every_run_of_a_batch():
     import signal
     import threading
 
-    from nnrobust.experiment import build
-    from nnrobust.presets import load_preset
+    from nnrobust.config.presets import load_preset
+    from nnrobust.run.experiment import build
 
     setups = [build(load_preset("panda-ellipse").replace(simulation={"duration": 60.0})) for _ in range(3)]
     # Python's own Ctrl-C handler, whatever this process inherited: started in the background by a
@@ -319,8 +319,8 @@ def test_obstacle_and_smoothness_criteria_are_compiled(preset):
     """The obstacle criterion (with an obstacle inside its influence along the run) and joint
     smoothness, on the closed-form and on a Pinocchio nominal model: equal to Python to 1e-8,
     and the recorded h equals Result.from_trace's."""
-    from nnrobust.experiment import build, run_experiment
-    from nnrobust.presets import load_preset
+    from nnrobust.config.presets import load_preset
+    from nnrobust.run.experiment import build, run_experiment
 
     setup = build(load_preset(preset))
     n, chain = setup.robot.nq, setup.robot.chain_points(setup.q0)

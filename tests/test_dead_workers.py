@@ -13,7 +13,7 @@ pytest.importorskip("distributed")
 pytest.importorskip("pyarrow")
 
 from nnrobust.cli import main  # noqa: E402
-from nnrobust.sweep import read_results  # noqa: E402
+from nnrobust.studies.sweep import read_results  # noqa: E402
 
 LAWS = Path(__file__).parent / "controllers" / "eq9_again.py"
 
@@ -84,8 +84,8 @@ def test_tune_and_falsify_name_a_crash_and_go_on(tmp_path, capsys):
 
 
 def read_results_of_trials(folder):
-    from nnrobust.study_folder import recorded_inputs
-    from nnrobust.tune.engine import _read_trials
+    from nnrobust.studies.base.folder import recorded_inputs
+    from nnrobust.studies.tune.engine import _read_trials
 
     return _read_trials(folder, recorded_inputs(folder, "tune").key)
 
@@ -97,8 +97,8 @@ def test_a_cluster_left_without_workers_is_one_error_not_a_hang(monkeypatch):
 
     from distributed import Client
 
-    from nnrobust.exceptions import NNRobustError
-    from nnrobust.sweep import engine
+    from nnrobust.core.exceptions import NNRobustError
+    from nnrobust.studies.base import cluster as engine
 
     monkeypatch.setattr(engine, "NO_WORKER_SECONDS", 1.0)
     cluster = engine.local_cluster(1)
@@ -120,7 +120,7 @@ def test_a_local_cluster_whose_nannies_gave_up_gets_new_workers(monkeypatch):
     its worker dies while it is starting) is replaced after REVIVE_SECONDS: the task runs."""
     from distributed import Client
 
-    from nnrobust.sweep import engine
+    from nnrobust.studies.base import cluster as engine
 
     monkeypatch.setattr(engine, "REVIVE_SECONDS", 1.0)
     cluster = engine.local_cluster(1)
@@ -146,8 +146,8 @@ def test_a_wait_for_tasks_notices_a_stop_while_a_task_hangs():
 
     from distributed import Client
 
-    from nnrobust.signals import stop_stages
-    from nnrobust.sweep import engine
+    from nnrobust.core.signals import stop_stages
+    from nnrobust.studies.base import cluster as engine
 
     cluster = engine.local_cluster(1)
     client = Client(cluster)
@@ -182,7 +182,7 @@ def test_a_stop_signal_while_a_cluster_closes_is_raised_once_it_has_closed():
     which thread the system would deliver a signal to does not matter to it.)"""
     import signal
 
-    from nnrobust import signals
+    from nnrobust.core import signals
 
     done = []
     with signals.signals_as_interrupt():

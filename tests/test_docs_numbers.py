@@ -55,7 +55,7 @@ def test_every_published_study_report_was_computed_from_todays_files():
     study file, experiment files, custom laws, another study's report it takes settings from):
     each path in the project must hold those bytes today, else the report is stale (run
     ``make docs-data``). Paths are relative to the project (the folder the study ran from)."""
-    from nnrobust.study_folder import file_sha256
+    from nnrobust.studies.base.folder import file_sha256
 
     reports = [p for p in sorted(render_tables.DATA.glob("*.json")) if "inputs" in json.loads(p.read_text())]
     assert len(reports) >= 9  # the eight studies of make docs-data and the example study
@@ -82,10 +82,10 @@ def test_a_case_of_a_robustness_study_reproduces(name, case):
     median and worst RMS errors are the report's (and the report is of the study file as it is)."""
     from statistics import median
 
-    from nnrobust.experiment import run_experiment
-    from nnrobust.study import load_study
-    from nnrobust.study.engine import CERTIFY_SEED, sweep_of
-    from nnrobust.sweep.spec import base_config, draw, experiment
+    from nnrobust.run.experiment import run_experiment
+    from nnrobust.studies.base.plan import base_config, draw, experiment
+    from nnrobust.studies.study import load_study
+    from nnrobust.studies.study.engine import CERTIFY_SEED, sweep_of
 
     spec = load_study(ROOT / "benchmarks" / "studies" / f"{name.replace('_', '-')}.toml")
     report = _read(name)
@@ -108,9 +108,9 @@ def test_the_sweep_files_rarer_panda_tail_reproduces():
     """docs/robustness.md and the README: the panda-robustness sweep file's draws at three times
     the disturbance hold a tail the study's draws do not: samples 21, 24 and 30 let rho-hat keep
     growing, at low friction, and reach 7.0 to 34 mm (rerun from the sweep file)."""
-    from nnrobust.experiment import run_experiment
-    from nnrobust.sweep import draw, load_sweep
-    from nnrobust.sweep.spec import base_config, experiment
+    from nnrobust.run.experiment import run_experiment
+    from nnrobust.studies.base.plan import base_config, experiment
+    from nnrobust.studies.sweep import draw, load_sweep
 
     spec = load_sweep("panda-robustness")
     base = base_config(spec)
@@ -150,8 +150,8 @@ def test_a_row_of_the_data_reproduces(name):
 
 
 def _rerun(job: dict) -> dict:
-    from nnrobust.experiment import run_experiment
-    from nnrobust.presets import load_preset
+    from nnrobust.config.presets import load_preset
+    from nnrobust.run.experiment import run_experiment
 
     return run_experiment(load_preset(job["preset"]).replace(**job["changes"])).metrics()
 
@@ -193,10 +193,10 @@ def test_the_default_row_of_the_adaptive_step_data_reproduces():
 def _rerun_best(summary: dict, controllers: list[str], name: str) -> None:
     """A tuning's best setting of ``name``, rerun on its training sample, gives its metrics."""
     from nnrobust.config import apply_overrides
-    from nnrobust.experiment import run_experiment
-    from nnrobust.sweep.spec import base_config, draw, experiment
-    from nnrobust.tune import TuneSpec
-    from nnrobust.tune.engine import sweep_of
+    from nnrobust.run.experiment import run_experiment
+    from nnrobust.studies.base.plan import base_config, draw, experiment
+    from nnrobust.studies.tune import TuneSpec
+    from nnrobust.studies.tune.engine import sweep_of
 
     spec = TuneSpec(
         summary["target"],
@@ -226,11 +226,11 @@ def _rerun_validation(study: str, case_name: str, controller: str) -> tuple[floa
     their RMS errors after 2 s, the median report.json gives)."""
     from statistics import median
 
-    from nnrobust.experiment import run_experiment
-    from nnrobust.study import load_study
-    from nnrobust.study.engine import VALIDATION_SEED, seed_name, sweep_of
-    from nnrobust.sweep.spec import base_config, draw, experiment
-    from nnrobust.tune.engine import tuned_entry
+    from nnrobust.run.experiment import run_experiment
+    from nnrobust.studies.base.plan import base_config, draw, experiment
+    from nnrobust.studies.base.tuned import tuned_entry
+    from nnrobust.studies.study import load_study
+    from nnrobust.studies.study.engine import VALIDATION_SEED, seed_name, sweep_of
 
     spec = load_study(ROOT / "benchmarks" / "studies" / f"{study}.toml")
     report = json.loads((render_tables.DATA / f"{study.replace('-', '_')}.json").read_text())
@@ -2088,7 +2088,7 @@ def _worst_config(command: str):
     import shlex
 
     from nnrobust.config import apply_overrides, load_config, parse_override
-    from nnrobust.presets import load_preset
+    from nnrobust.config.presets import load_preset
 
     words = shlex.split(command)
     assert words[:2] == ["nnrobust", "run"]
@@ -2108,7 +2108,7 @@ def _reproduces_or_is_chaotic(config, published: float, what: str, limit: float 
     chaotic run (its probes spread by more than CHAOS_SPREAD: the digits depend on the machine's
     rounding, its BLAS and compiler) that still exceeds ``limit`` on every probe, so the verdict
     the docs draw from it holds wherever it is rerun."""
-    from nnrobust.experiment import run_experiment
+    from nnrobust.run.experiment import run_experiment
 
     value = run_experiment(config).metrics()["rms_error_after_2s"]
     if value == pytest.approx(published, rel=1e-9, abs=1e-15):
@@ -2130,7 +2130,7 @@ def test_the_published_worst_plants_rerun_to_their_metrics(name):
     """docs/falsification.md's worst plants (docs/data/falsify_*.json, written by nnrobust
     falsify): each printed command reproduces the error the search recorded, or is a chaotic run
     (a millionth of the disturbance moves it by more than 1 %) that fails the property as well."""
-    from nnrobust.properties import run_properties
+    from nnrobust.run.properties import run_properties
 
     data = _read(name)
     (limit,) = [p.value for p in run_properties(data["properties"]) if p.metric == "rms_error_after_2s"]
@@ -2147,7 +2147,7 @@ def test_the_nn_worst_plant_fails_on_the_python_loop_too():
     """The NN's worst plant is a chaotic run once saturated: the Python loop, whose rounding differs,
     ends elsewhere (docs/falsification.md quotes both), but past the 50 mm required as well: the
     verdict does not depend on the loop."""
-    from nnrobust.experiment import run_experiment
+    from nnrobust.run.experiment import run_experiment
 
     data = _read(FALSIFIED)
     config = _worst_config(data["controllers"]["nn"]["worst"]["command"])
@@ -2170,8 +2170,8 @@ def test_the_nn_worst_plant_fails_on_the_python_loop_too():
 def test_the_margins_violating_plants_rerun_to_their_margins():
     """docs/falsification.md's margins: the plant that violated each robust law's property at the
     top of its bracket reruns from its printed command to the margins the search recorded."""
-    from nnrobust.experiment import run_experiment
-    from nnrobust.properties import run_properties
+    from nnrobust.run.experiment import run_experiment
+    from nnrobust.run.properties import run_properties
 
     data = _read(FALSIFIED)
     properties = run_properties(data["properties"])
@@ -2187,7 +2187,7 @@ def test_the_first_commands_worst_plant_is_worse_than_the_studys_worst_sample():
     """docs/falsification.md's first command (issue 21's acceptance: falsify paper-robustness, the
     NN, 200 simulations): the worst plant it printed reruns to the figure quoted, and that is worse
     than the worst of the paper-robustness study's certification draws, quoted beside it."""
-    from nnrobust.experiment import run_experiment
+    from nnrobust.run.experiment import run_experiment
 
     text = (ROOT / "docs" / "falsification.md").read_text()
     said = re.search(
@@ -2211,7 +2211,7 @@ def test_the_plant_the_search_no_longer_finds_still_fails():
     """docs/falsification.md: the NN's worst plants of earlier searches (one on an earlier plant
     step, one of the previous regeneration), rerun from their printed commands, give the figures
     quoted today, past 50 mm."""
-    from nnrobust.experiment import run_experiment
+    from nnrobust.run.experiment import run_experiment
 
     text = (ROOT / "docs" / "falsification.md").read_text()
     block = re.search(r"today's step, it gives (\d+) mm:\s+(nnrobust run .*?)\n\n", text, re.S)
@@ -2229,7 +2229,7 @@ def test_the_pandas_nn_worst_plant_is_what_the_text_says():
     """docs/falsification.md: the NN's worst Panda plant saturates and reaches a stop as quoted,
     and MuJoCo as the plant gives the error quoted, past the 5 mm required as well."""
     pytest.importorskip("mujoco")
-    from nnrobust.experiment import run_experiment
+    from nnrobust.run.experiment import run_experiment
 
     data = _read(PF)
     config = _worst_config(data["controllers"]["nn"]["worst"]["command"])
@@ -2249,7 +2249,7 @@ def test_the_tuned_pandas_falsified_plants_are_what_the_text_says():
     saturates as quoted and fails on MuJoCo by the figure quoted; the NN's plant, which only the
     random baseline found, saturates as quoted and holds on MuJoCo (the edge the text names)."""
     pytest.importorskip("mujoco")
-    from nnrobust.experiment import run_experiment
+    from nnrobust.run.experiment import run_experiment
 
     data = _read(PT)
     text = (ROOT / "docs" / "falsification.md").read_text()
@@ -2284,7 +2284,7 @@ def test_every_worst_plant_fails_on_mujoco_too():
     search did not falsify (Slotine–Li) satisfies it there as well; the figures quoted are the
     compiled loop's."""
     pytest.importorskip("mujoco")
-    from nnrobust.experiment import run_experiment
+    from nnrobust.run.experiment import run_experiment
 
     data = _read(FALSIFIED)
     text = (ROOT / "docs" / "falsification.md").read_text()
@@ -2312,8 +2312,8 @@ def test_every_worst_plant_fails_on_mujoco_too():
 def test_a_row_of_the_engine_gap_reproduces():
     """paper-ellipse with the NN on both engines reruns to docs/data/engine_gap.json's figures."""
     pytest.importorskip("mujoco")
-    from nnrobust.experiment import run_experiment
-    from nnrobust.presets import load_preset
+    from nnrobust.config.presets import load_preset
+    from nnrobust.run.experiment import run_experiment
 
     data = _read("engine_gap")
     row = next(r for r in data["presets"] if r["preset"] == "paper-ellipse" and r["controller"] == "nn")
@@ -2367,7 +2367,7 @@ def test_the_example_studys_learned_worst_plant_reruns_and_the_budget_is_the_rec
     import re
     import shlex
 
-    from nnrobust.experiment import run_experiment
+    from nnrobust.run.experiment import run_experiment
 
     entry = _read("example_study")["cases"]["paper-ellipse-noisy"]
     worst = entry["controllers"]["learned-residual"]["worst"]
@@ -2410,7 +2410,7 @@ def test_the_published_falsifications_are_their_studys_falsification_stage(study
     and margin entries the tables read: that report searched the study's box, with the study's
     controllers, property, budget and margins, each law at the study's settings (its own, or the
     tuned study's kept ones as NAME-tuned, untuned here); every worst plant lies in the box."""
-    from nnrobust.study import load_study
+    from nnrobust.studies.study import load_study
 
     spec = load_study(ROOT / "benchmarks" / "studies" / f"{study}.toml")
     name = study.replace("-", "_")
@@ -2483,7 +2483,7 @@ def test_the_tuned_rbf_setting_runs_away_at_the_centre_of_the_papers_box():
     centre (the disturbance x 1.25: runaway, margin 0) and still tracks at x 1.1 to the quoted
     error; the tuned PD's worst plants, the search's and the random baseline's, lie at low
     friction."""
-    from nnrobust.experiment import run_experiment
+    from nnrobust.run.experiment import run_experiment
 
     data = _read(FT)
     centre = _worst_config(data["margin"]["rbf-nn-tuned"]["violating_plant"]["command"])

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from nnrobust import compiled
+from nnrobust.run import compiled
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "examples"
@@ -90,7 +90,7 @@ def test_slotine_li_regressor_is_m_qddr_plus_christoffel_c_qdr_plus_g():
     import pinocchio as pin
 
     from nnrobust.config import load_config
-    from nnrobust.experiment import build
+    from nnrobust.run.experiment import build
 
     with pytest.warns(UserWarning, match="T\\*lambda_max"):  # its explicit wrist gain is near the limit
         setup = build(load_config(EXAMPLES / "slotine_li.toml").replace(simulation={"duration": 0.1}))

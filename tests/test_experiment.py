@@ -6,11 +6,11 @@ import pytest
 
 from nnrobust.cli import main
 from nnrobust.config import EQ9_KINDS, KEY_ALIASES, ExperimentConfig, from_dict, load_config
-from nnrobust.exceptions import ConfigError, RunFolderExists
-from nnrobust.experiment import build, run_experiment
-from nnrobust.presets import load_preset, preset_names
-from nnrobust.results import Result
-from nnrobust.run_folder import RunFolderError, write_run
+from nnrobust.config.presets import load_preset, preset_names
+from nnrobust.core.exceptions import ConfigError, RunFolderExists
+from nnrobust.outputs.run_folder import RunFolderError, write_run
+from nnrobust.run.experiment import build, run_experiment
+from nnrobust.run.results import Result
 
 DATA = Path(__file__).resolve().parent.parent / "docs" / "data"
 
@@ -251,7 +251,7 @@ def test_plots_draw_the_envelope_of_long_series(n):
     no two drawn samples are more than two buckets apart, and short series are drawn whole.
     Lengths that are not multiples of the bucket count are the ones that matter (a 10 s run at
     1 kHz has 10 001 samples)."""
-    from nnrobust.plots import MAX_BUCKETS, envelope
+    from nnrobust.outputs.plots import MAX_BUCKETS, envelope
 
     t = np.linspace(0.0, 10.0, n)
     rng = np.random.default_rng(n)
@@ -273,8 +273,8 @@ def test_plots_draw_the_envelope_of_long_series(n):
 def test_a_reachable_path_is_checked_once_per_process_and_a_changed_one_again(monkeypatch):
     """The workspace check's inverse kinematics runs once for a sweep's shared arm and path; a
     path that leaves the workspace is still refused, however many reachable ones came before."""
-    import nnrobust.experiment as ex
-    from nnrobust.exceptions import ConfigError
+    import nnrobust.run.experiment as ex
+    from nnrobust.core.exceptions import ConfigError
 
     calls = []
     real = ex.solve_ik
@@ -349,7 +349,7 @@ def _readme_panda() -> str:
 
 
 def _preset_text(name: str) -> str:
-    from nnrobust.presets import preset_path
+    from nnrobust.config.presets import preset_path
 
     return preset_path(name).read_text()
 
@@ -383,7 +383,7 @@ def test_a_set_gives_the_configuration_of_the_edited_file(case, tmp_path):
     """`run FILE --set KEY=VALUE` is FILE edited so: the override is set in the file's own values,
     before a gain given once is written out m times (it was set in the resolved copy, where the
     README's Kp = [25.0] had become 3 entries, and robot.task=pose was refused for them)."""
-    from nnrobust.cli import _load_target
+    from nnrobust.cli.common import load_target as _load_target
     from nnrobust.config import parse_override
 
     text, override, (old, new) = SET_CASES[case]

@@ -1,4 +1,4 @@
-"""An exported law (nnrobust/export.py, csrc/export/; docs/export.md) against the compiled loop it
+"""An exported law (nnrobust/outputs/export.py, csrc/export/; docs/export.md) against the compiled loop it
 came from: a C program linked to the export, fed the measured states of a compiled run (at each
 control instant, what the loop's sensor gave its law), returns the torques the loop's law
 commanded there, bit for bit, without one heap allocation in a step; several law objects are
@@ -17,12 +17,12 @@ from urllib.parse import quote
 import numpy as np
 import pytest
 
-from nnrobust import compiled
 from nnrobust.cli import main
-from nnrobust.exceptions import NNRobustError
-from nnrobust.experiment import build
-from nnrobust.export import description, export_law, recorded_steps, time_steps
-from nnrobust.presets import load_preset
+from nnrobust.config.presets import load_preset
+from nnrobust.core.exceptions import NNRobustError
+from nnrobust.outputs.export import description, export_law, recorded_steps, time_steps
+from nnrobust.run import compiled
+from nnrobust.run.experiment import build
 
 pytestmark = [
     pytest.mark.skipif(not compiled.available(), reason=compiled.unavailable_reason()),
@@ -398,8 +398,8 @@ def test_a_studys_cpp_law_exports_by_its_name_and_replays_its_certification_run(
     pytest.importorskip("distributed")
     pytest.importorskip("optuna")
     from nnrobust.config import load_config
-    from nnrobust.study import load_study
-    from nnrobust.sweep.spec import base_config, draw, experiment, load_sweep
+    from nnrobust.studies.base.plan import base_config, draw, experiment, load_sweep
+    from nnrobust.studies.study import load_study
 
     shutil.copy(ROOT / "examples" / "controllers" / "task_pd.cpp", tmp_path / "task_pd.cpp")
     (tmp_path / "study.toml").write_text(

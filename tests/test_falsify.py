@@ -11,9 +11,9 @@ pytest.importorskip("cma")
 pytest.importorskip("distributed")
 
 from nnrobust.cli import main  # noqa: E402
-from nnrobust.exceptions import ConfigError  # noqa: E402
-from nnrobust.falsify import FalsifySpec, box_of, run_falsify  # noqa: E402
-from nnrobust.sweep import parse_sweep  # noqa: E402
+from nnrobust.core.exceptions import ConfigError  # noqa: E402
+from nnrobust.studies.falsify import FalsifySpec, box_of, run_falsify  # noqa: E402
+from nnrobust.studies.sweep import parse_sweep  # noqa: E402
 
 SWEEP = """name = "fz"
 base = "paper-ellipse"
@@ -112,7 +112,7 @@ def test_a_search_finds_the_worst_plant_reruns_it_and_resumes(tmp_path, capsys):
     resumed = run_falsify(spec, out, workers=2)
     assert sorted((out / "history").glob("part-*.parquet")) == parts  # nothing simulated again
     assert resumed["controllers"]["nn"]["worst"] == worst
-    from nnrobust.falsify import keep_worst
+    from nnrobust.studies.falsify import keep_worst
 
     kept = keep_worst(spec, summary, out, 2)  # --keep-worst 2: the two worst plants as run folders
     assert kept == [out / "worst" / "nn", out / "worst" / "nn-2"]
@@ -170,10 +170,10 @@ def test_a_seeded_relative_error_is_searched_as_the_factors_it_draws():
     [1 - r, 1 + r]: falsify searches those factors instead (6 on the closed-form arm, a mass and an
     inertia per body on the Panda), with relative_error 0, and the plant of a point is the model
     those factors give; both keys varied at once is refused."""
-    from nnrobust.experiment import build
-    from nnrobust.falsify import searchable
-    from nnrobust.sweep import load_sweep
-    from nnrobust.sweep.spec import Sample, base_config, experiment
+    from nnrobust.run.experiment import build
+    from nnrobust.studies.base.plan import Sample, base_config, experiment
+    from nnrobust.studies.falsify import searchable
+    from nnrobust.studies.sweep import load_sweep
 
     study = load_sweep("paper-robustness")
     sweep, note = searchable(study, base_config(study))
@@ -219,8 +219,8 @@ def test_the_searched_factors_replace_the_bases_seeded_model_error(tmp_path):
     """A base with a seeded model error (panda-ellipse: relative_error = 0.2) whose box varies it:
     each point runs with relative_error 0, as the printed command sets it, the searched factors
     alone drawing the model (the base's 0.2 was drawn on top of them: [set] took no part)."""
-    from nnrobust.falsify.spec import _searched_sweep
-    from nnrobust.sweep.spec import Sample, experiment, rerun_command
+    from nnrobust.studies.base.plan import Sample, experiment, rerun_command
+    from nnrobust.studies.falsify.spec import _searched_sweep
 
     path = tmp_path / "p.toml"
     path.write_text(
@@ -237,8 +237,8 @@ def test_the_searched_factors_replace_the_bases_seeded_model_error(tmp_path):
 def test_per_joint_plant_keys_are_coordinates_of_the_box():
     """One joint's friction scale and the disturbance's frequency, searched as box coordinates:
     each point builds the plant it names."""
-    from nnrobust.experiment import build
-    from nnrobust.sweep.spec import Sample, base_config, experiment
+    from nnrobust.run.experiment import build
+    from nnrobust.studies.base.plan import Sample, base_config, experiment
 
     spec = parse_sweep(
         {
@@ -287,8 +287,8 @@ def test_the_margin_brackets_the_scale_where_a_monotone_property_breaks(tmp_path
     error grows with the disturbance) and a bound on the error met exactly at 1.7, i.e. at s* =
     1.4 times the box: the margin's bracket holds s*, is narrower than 10 % of its top, and its
     violating plant reruns past the bound."""
-    from nnrobust.experiment import run_experiment
-    from nnrobust.presets import load_preset
+    from nnrobust.config.presets import load_preset
+    from nnrobust.run.experiment import run_experiment
 
     base = load_preset("paper-ellipse").replace(simulation={"duration": 3.0}, controller={"kind": "pd"})
     errors = [
@@ -355,7 +355,7 @@ def test_a_case_of_a_study_report_gives_its_kept_settings(tmp_path):
     docs/data/tuned_panda.json): each tuned controller's kept setting, as the study's own
     cases/CASE/kept.json gives it, and nothing for a law the study ran untuned; no case, a wrong
     one, or a case on a plain tuning is refused naming --tuned and the cases there are."""
-    from nnrobust.tune.engine import tuned_settings, tuned_target
+    from nnrobust.studies.base.tuned import tuned_settings, tuned_target
 
     data = Path(__file__).parent.parent / "docs" / "data" / "tuned_panda.json"
     report = json.loads(data.read_text())
@@ -412,7 +412,7 @@ def test_one_coordinate_is_searched_by_a_zooming_grid_without_cma(monkeypatch):
     toy objective, restarts once converged, spends the budget exactly and never builds CMA-ES."""
     import cma
 
-    from nnrobust.falsify.search import _Search
+    from nnrobust.studies.falsify.search import _Search
 
     def refused(*args, **kwargs):
         raise ValueError("Optimization in 1-D is not supported (code was never tested)")
@@ -448,9 +448,9 @@ def test_a_controller_that_cannot_run_is_refused_and_a_refused_run_keeps_its_mes
     metrics keep the refusal's message (they kept its status alone)."""
     import shutil
 
-    from nnrobust.falsify import evaluate
-    from nnrobust.falsify.spec import _searched_sweep
-    from nnrobust.properties import run_properties
+    from nnrobust.run.properties import run_properties
+    from nnrobust.studies.falsify import evaluate
+    from nnrobust.studies.falsify.spec import _searched_sweep
 
     shutil.copy(Path(__file__).parent / "controllers" / "eq9_again.py", tmp_path / "laws.py")
     sweep = tmp_path / "laws.toml"
@@ -611,11 +611,11 @@ def test_a_plant_only_the_random_baseline_found_falsifies_the_box(tmp_path):
     (falsified, falsified_by ["random"]), and the margin's scale 1 counts it, so the margin is
     bracketed below the box instead of above it. Synthetic histories: the search holds
     everywhere, the baseline's third plant violates, and every scaled search holds."""
-    from nnrobust.falsify.search import _Margins
-    from nnrobust.falsify.spec import _searched_sweep
-    from nnrobust.falsify.summary import _summary, replayed_worst
-    from nnrobust.properties import run_properties
-    from nnrobust.sweep.spec import Sample, rerun_command, sample_seed
+    from nnrobust.run.properties import run_properties
+    from nnrobust.studies.base.plan import Sample, rerun_command, sample_seed
+    from nnrobust.studies.falsify.search import _Margins
+    from nnrobust.studies.falsify.spec import _searched_sweep
+    from nnrobust.studies.falsify.summary import _summary, replayed_worst
 
     sweep_file = tmp_path / "fz.toml"
     sweep_file.write_text(SWEEP)

@@ -1,5 +1,5 @@
 """The figures, read back from the matplotlib objects: what each axis shows, its labels, limits
-and limit lines (nnrobust/plots.py)."""
+and limit lines (nnrobust/outputs/plots.py)."""
 
 import matplotlib
 
@@ -8,9 +8,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import pytest  # noqa: E402
 
-from nnrobust import plots  # noqa: E402
-from nnrobust.experiment import run_experiment  # noqa: E402
-from nnrobust.presets import load_preset  # noqa: E402
+from nnrobust.config.presets import load_preset  # noqa: E402
+from nnrobust.outputs import plots  # noqa: E402
+from nnrobust.run.experiment import run_experiment  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -129,7 +129,7 @@ def test_compare_draws_errors_in_mm_with_ticks_that_do_not_touch(panda, paper, t
         load_preset("paper-ellipse").replace(simulation={"duration": 1.0}, controller={"kind": "no-u0"})
     )
     captured = {}
-    original = plots._save
+    original = plots.save_figure
 
     def keep(fig, folder, stem):  # read the figure as drawn, before it is saved and closed
         fig.canvas.draw()
@@ -145,11 +145,11 @@ def test_compare_draws_errors_in_mm_with_ticks_that_do_not_touch(panda, paper, t
         captured["error"] = fig.axes[1]
         return original(fig, folder, stem)
 
-    plots._save = keep
+    plots.save_figure = keep
     try:
         plots.plot_comparison({"nn": paper, "no-u0": other}, tmp_path)
     finally:
-        plots._save = original
+        plots.save_figure = original
     error = captured["error"]
     assert error.get_ylabel() == "|position error| [mm]"
     drawn = np.concatenate([line.get_ydata() for line in error.get_lines()])
@@ -221,7 +221,7 @@ def test_saved_figures_are_cropped_to_what_they_draw(panda, tmp_path, name):
 
     fig = plots.FIGURES[name](panda)
     tight = fig.get_tightbbox(fig.canvas.get_renderer()).padded(plots.PAD)
-    png, svg = plots._save(fig, tmp_path, name)
+    png, svg = plots.save_figure(fig, tmp_path, name)
     image = np.asarray(Image.open(png).convert("RGB"))
     rows, columns = image.shape[:2]
     assert abs(columns - tight.width * plots.DPI) < 12 and abs(rows - tight.height * plots.DPI) < 12
@@ -245,7 +245,7 @@ def test_a_figure_larger_than_its_room_is_cropped_by_its_layout(tmp_path):
     legend = plots.legend_outside(ax)
     tight = fig.get_tightbbox(fig.canvas.get_renderer()).padded(plots.PAD)
     assert legend.get_window_extent().height / fig.dpi > 2 + plots.ROOM[1]  # beyond the room
-    png, svg = plots._save(fig, tmp_path, "tall")
+    png, svg = plots.save_figure(fig, tmp_path, "tall")
     rows = np.asarray(Image.open(png)).shape[0]
     assert rows == pytest.approx(tight.height * plots.DPI, abs=2)
     assert _svg_size_pt(svg)[1] == pytest.approx(tight.height * 72, abs=1)

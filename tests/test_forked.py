@@ -1,4 +1,4 @@
-"""Jobs run by processes forked before their input exists (nnrobust/forked.py): the first worker
+"""Jobs run by processes forked before their input exists (nnrobust/core/forked.py): the first worker
 prepares while this process works, the others inherit what it prepared, the jobs are shared,
 warnings and errors come back, and no process is left behind however the work ends."""
 
@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from nnrobust.forked import ForkedJobs, share
+from nnrobust.core.forked import ForkedJobs, share
 
 
 def _alive(pid: int) -> bool:
@@ -144,7 +144,7 @@ def test_the_workers_die_with_a_killed_parent(tmp_path):
     script = textwrap.dedent(f"""
         import os, time
         from pathlib import Path
-        from nnrobust.forked import ForkedJobs
+        from nnrobust.core.forked import ForkedJobs
 
         def job(i):
             def run(data):
@@ -205,7 +205,7 @@ def test_a_signal_at_the_fork_is_neither_lost_nor_sends_a_worker_back_into_the_c
     fork hook, its KeyboardInterrupt was swallowed and the worker lived on until killed after
     STOP_TIMEOUT; raised a moment later, it went on as a copy of this process (it once ran the
     rest of a test session)."""
-    from nnrobust.forked import STOP_TIMEOUT
+    from nnrobust.core.forked import STOP_TIMEOUT
 
     me, escaped = os.getpid(), tmp_path / "escaped"
 

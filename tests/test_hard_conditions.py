@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from nnrobust.cli import main
-from nnrobust.experiment import run_experiment
-from nnrobust.presets import load_preset
-from nnrobust.results import Result, singular_episodes
+from nnrobust.config.presets import load_preset
+from nnrobust.run.experiment import run_experiment
+from nnrobust.run.results import Result, singular_episodes
 
 
 def _experiment(tmp_path, **sections):
@@ -52,13 +52,13 @@ def test_saturation_keeps_the_same_gains_bounded_and_says_so(tmp_path, capsys):
 
 
 def test_ctrl_c_keeps_the_partial_result_marked_interrupted(tmp_path, monkeypatch, capsys):
-    import nnrobust.progress
+    import nnrobust.core.progress
 
     def interrupt_at_half_a_second(self, t, q=None):
         if t >= 0.5:
             raise KeyboardInterrupt
 
-    monkeypatch.setattr(nnrobust.progress.ProgressBar, "__call__", interrupt_at_half_a_second)
+    monkeypatch.setattr(nnrobust.core.progress.ProgressBar, "__call__", interrupt_at_half_a_second)
     experiment = _experiment(tmp_path, simulation={"duration": 5.0, "backend": "python"})
     out = tmp_path / "run"
     assert main(["run", str(experiment), "--out", str(out), "--no-plots", "--no-animation"]) == 1
@@ -75,8 +75,8 @@ def test_a_signal_stops_a_compiled_run_and_keeps_its_result():
     not depend on a thread being scheduled in time."""
     import signal
 
-    from nnrobust import compiled
-    from nnrobust.experiment import build
+    from nnrobust.run import compiled
+    from nnrobust.run.experiment import build
 
     if not compiled.available():
         pytest.skip(compiled.unavailable_reason())
@@ -125,7 +125,7 @@ def _fake_trace(q, n):
 
 def test_divergence_cause_names_an_exploding_criterion_gradient():
     """k dh/dq above 1e3 on some joint at the last state: the message says so and names the joint."""
-    from nnrobust.experiment import build, likely_cause
+    from nnrobust.run.experiment import build, likely_cause
 
     config = load_preset("paper-ellipse").replace(
         controller={"k": 1e4}, subtasks={"criteria": ["joint_limits"]}, simulation={"duration": 1.0}
@@ -139,8 +139,8 @@ def test_divergence_cause_names_an_exploding_criterion_gradient():
 
 def test_divergence_cause_names_an_implausible_effort_limit(tmp_path):
     """An effort limit of 50 kN m on the paper's arm: named in a warning, and the likely cause."""
-    from nnrobust.experiment import build, likely_cause
     from nnrobust.model import paper_arm_urdf
+    from nnrobust.run.experiment import build, likely_cause
 
     urdf = tmp_path / "arm.urdf"
     urdf.write_text(paper_arm_urdf().read_text().replace('effort="60"', 'effort="50000"'))
@@ -161,8 +161,8 @@ def test_a_run_that_diverges_as_a_huge_load_starts_blames_the_load_not_the_gains
     """A 1e9 N m s impulse at 0.1 s makes any law diverge: the divergence names that load and its
     size (it blamed "the closed loop is unstable for these gains"); a load that started long
     before a divergence is not blamed."""
-    from nnrobust import compiled
-    from nnrobust.experiment import _load_just_before
+    from nnrobust.run import compiled
+    from nnrobust.run.experiment import _load_just_before
 
     if backend == "compiled" and not compiled.available():
         pytest.skip(compiled.unavailable_reason())

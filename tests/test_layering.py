@@ -1,55 +1,85 @@
-"""The layering of the package, enforced (docs/architecture: issue 36's floors).
+"""The layering of the package, read from its folders (docs/architecture.md's floors).
 
-Every module of nnrobust sits on a floor; a module may import its own floor and the floors below,
-never above. Imports inside functions count (they are how a cycle hides); ``if TYPE_CHECKING:``
-blocks do not (they never run). The floors, from the top:
-
-    tool layer > studies > run folders > experiment > compiled/results > config > loop > rooms
-    > model > leaf modules
-
-The imports that still go up are listed in KNOWN, each with the number of places it occurs: a
-new one fails this test, and so does a listed one that is gone (remove it from the list, so the
-list only shrinks). ``results -> plots`` is the one exception the layering itself allows.
+Every module's unit is the folder it sits in: ``nnrobust/<unit>/...``, or, under ``studies/``,
+``studies/<unit>/...`` (the study commands' shared base and each command are units of their own).
+The floors are one bottom-first list (:data:`FLOORS`); a unit may import its own unit and the
+floors below it, never a floor above, and never a sibling on its own floor (sweep, tune, falsify
+and learning stand side by side on the base: what two of them need goes down into the base).
+Imports inside functions count (they are how a cycle hides); ``if TYPE_CHECKING:`` blocks do not
+(they never run). :data:`ALLOWED` holds the one exception, ``Result._repr_html_`` drawing a run's
+plots. No private name (``_name``) is imported from another unit, the compiled extension aside;
+no module is longer than :data:`MAX_LINES` and no function longer than :data:`MAX_FUNCTION` but the
+ones :data:`LONG_FUNCTIONS` names, a list that may only shrink.
 """
 
 import ast
-from collections import Counter
 from pathlib import Path
 
 PACKAGE = Path(__file__).resolve().parents[1] / "nnrobust"
 
-FLOORS = {
-    "tool": ("cli", "__init__", "__main__"),
-    "studies": ("sweep", "tune", "falsify", "study", "learning", "display", "export", "serve"),
-    "run folders": ("run_folder", "run_deltas", "plots", "viewer", "study_folder", "properties", "paired"),
-    "experiment": ("experiment", "presets"),
-    "compiled/results": ("compiled", "results", "run_info", "verdicts"),
-    "config": ("config",),
-    "loop": ("simulation",),
-    "rooms": ("controllers", "plant", "subtasks", "trajectories", "user_parts", "user_code", "native_law"),
-    "model": ("model", "ik"),
-    "leaf": ("exceptions", "numeric_limits", "arrays", "search_coordinates", "small_linalg", "kinds",
-             "package_version", "key_checks", "progress", "signals",
-             "forked", "twins", "shipped_files", "_loop", "_floor_loop", "drawing", "table_text"),
-}  # fmt: skip
-ORDER = list(FLOORS)[::-1]  # leaf first
-FLOOR_OF = {unit: ORDER.index(floor) for floor, units in FLOORS.items() for unit in units}
-ALLOWED = {("results", "plots")}
+FLOORS = [
+    ["core"],
+    ["plugins"],
+    ["model"],
+    ["plant", "subtasks", "trajectories"],
+    ["controllers"],
+    ["config"],
+    ["run"],
+    ["outputs"],
+    ["studies/base"],
+    ["studies/sweep", "studies/tune", "studies/falsify", "studies/learning"],
+    ["studies/study"],
+    ["cli"],
+    ["__init__", "__main__"],
+]
+"""The floors, bottom first: each a list of the units (folders) that stand on it side by side."""
 
-KNOWN: dict[tuple[str, str], int] = {
-    # (importing unit, imported unit): places. Empty: add none.
+EXTENSIONS = ("_loop", "_floor_loop")
+"""The compiled extension modules at the top of the package (below every floor)."""
+
+DATA_FOLDERS = {"preset_files", "sweep_files", "include", "urdf"}
+"""Folders of the package that hold data, not modules (include/ and urdf/ are installed by CMake)."""
+
+FLOOR_OF = {unit: i for i, units in enumerate(FLOORS) for unit in units} | {e: -1 for e in EXTENSIONS}
+ALLOWED = {("run", "outputs")}
+"""run -> outputs: Result._repr_html_ draws the run's plots (a notebook's display of a result)."""
+
+MAX_LINES = 800
+MAX_FUNCTION = 150
+LONG_FUNCTIONS = {
+    # module:function -> lines; may only shrink (remove an entry once it is short)
+    "run/simulation.py:simulate": 169,  # the Python loop of eqs. (9)-(18), one step inline
+    "studies/study/engine.py:_run_case": 276,  # a case's stages inline, until the stage table
 }
 
 
-def _unit(module: str) -> str:
-    """nnrobust.controllers.laws.x -> controllers; nnrobust.cli -> cli."""
-    parts = module.split(".")
-    return parts[1] if len(parts) > 1 else "__init__"
+def unit_of(module: str) -> str:
+    """nnrobust.studies.sweep.engine -> studies/sweep; nnrobust.run.results -> run; nnrobust -> __init__."""
+    parts = module.split(".")[1:]
+    if not parts:
+        return "__init__"
+    if parts[0] in EXTENSIONS:
+        return parts[0]
+    if parts == ["studies"]:  # the face of the studies' folder stands on their base
+        return "studies/base"
+    for k in range(len(parts), 0, -1):
+        unit = "/".join(parts[:k])
+        if unit in FLOOR_OF:
+            return unit
+    return "?" + "/".join(parts)
 
 
-def _imports(path: Path) -> list[str]:
-    """The nnrobust modules a file imports, anywhere but under ``if TYPE_CHECKING:``."""
-    module = "nnrobust." + ".".join(path.relative_to(PACKAGE).with_suffix("").parts)
+def module_of(path: Path) -> str:
+    parts = list(path.relative_to(PACKAGE).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts = parts[:-1]
+    return ".".join(["nnrobust", *parts])
+
+
+def _imports(path: Path) -> list[tuple[str, str | None, int]]:
+    """(module, imported name or None, line) of every nnrobust import of a file, anywhere but under
+    ``if TYPE_CHECKING:``."""
+    module = module_of(path)
     package = module if path.name == "__init__.py" else module.rpartition(".")[0]
     tree = ast.parse(path.read_text(encoding="utf-8"))
     skipped = set()
@@ -61,7 +91,7 @@ def _imports(path: Path) -> list[str]:
         if id(node) in skipped:
             continue
         if isinstance(node, ast.Import):
-            out += [a.name for a in node.names if a.name.startswith("nnrobust")]
+            out += [(a.name, None, node.lineno) for a in node.names if a.name.startswith("nnrobust")]
         elif isinstance(node, ast.ImportFrom):
             if node.level:
                 base = package.split(".")
@@ -70,65 +100,101 @@ def _imports(path: Path) -> list[str]:
             else:
                 target = node.module or ""
             if target.startswith("nnrobust"):
-                if node.module is None or target == "nnrobust":  # from . import x: each name a module
-                    out += [f"{target}.{a.name}" for a in node.names]
-                else:
-                    out.append(target)
+                for alias in node.names:
+                    sub = f"{target}.{alias.name}"
+                    if alias.name in EXTENSIONS:
+                        out.append((sub, None, node.lineno))
+                        continue
+                    is_module = (PACKAGE.parent / sub.replace(".", "/")).with_suffix(".py").exists() or (
+                        PACKAGE.parent / sub.replace(".", "/") / "__init__.py"
+                    ).exists()
+                    out.append((sub, None, node.lineno) if is_module else (target, alias.name, node.lineno))
     return out
 
 
-def upward_imports() -> Counter:
-    """(importing unit, imported unit) -> places, for every import that goes up a floor."""
-    found: Counter = Counter()
-    for path in PACKAGE.rglob("*.py"):
-        mine = _unit("nnrobust." + ".".join(path.relative_to(PACKAGE).with_suffix("").parts))
-        for target in _imports(path):
-            theirs = _unit(target)
-            if theirs == mine or theirs not in FLOOR_OF or (mine, theirs) in ALLOWED:
-                continue
-            if FLOOR_OF[theirs] > FLOOR_OF[mine]:
-                found[(mine, theirs)] += 1
-    return found
+def _edges():
+    """(importing unit, imported unit, file, line, name) of every import between two units."""
+    for path in sorted(PACKAGE.rglob("*.py")):
+        mine = unit_of(module_of(path))
+        for target, name, line in _imports(path):
+            theirs = unit_of(target)
+            if theirs != mine:
+                yield mine, theirs, str(path.relative_to(PACKAGE)), line, name
 
 
-def test_every_unit_has_a_floor():
-    units = {p.stem if p.is_file() else p.name for p in PACKAGE.iterdir() if not p.name.startswith(".")}
-    units = {
-        u
-        for u in units
-        if (PACKAGE / u).is_dir() and (PACKAGE / u / "__init__.py").exists() or u.isidentifier()
-    }
-    units -= {"preset_files", "sweep_files", "__pycache__", "urdf"}
-    missing = sorted(u for u in units if u not in FLOOR_OF and not u.startswith("_loop"))
-    assert not missing, f"give these a floor in FLOORS: {missing}"
+def test_the_top_of_the_package_is_its_floors():
+    """The top of nnrobust/ is the front door, the data folders and one package per floor."""
+    top = {p.name for p in PACKAGE.iterdir() if not p.name.startswith((".", "__pycache__"))}
+    top = {n for n in top if not n.startswith(EXTENSIONS)}  # the compiled modules
+    floors = {unit.split("/")[0] for units in FLOORS for unit in units} - {"__init__", "__main__"}
+    expected = {"__init__.py", "__main__.py", *DATA_FOLDERS, *floors}
+    assert top <= expected and floors <= top, (sorted(top - expected), sorted(floors - top))
 
 
-def test_no_import_goes_up_a_floor_beyond_the_known_ones():
-    found = upward_imports()
-    new = {pair: n for pair, n in found.items() if pair not in KNOWN}
-    assert not new, f"imports that go up a floor (importer, imported): places -- {new}"
-    over = {pair: n for pair, n in found.items() if pair in KNOWN and n > KNOWN[pair]}
-    assert not over, f"more places than known: {over}"
-    gone = sorted(pair for pair in KNOWN if pair not in found)
-    assert not gone, f"fixed, so remove from KNOWN: {gone}"
+def test_every_module_has_a_unit():
+    unknown = sorted(
+        {str(p.relative_to(PACKAGE)) for p in PACKAGE.rglob("*.py") if unit_of(module_of(p)).startswith("?")}
+    )
+    assert not unknown, f"give these a unit in FLOORS: {unknown}"
+
+
+def test_no_import_goes_up_a_floor():
+    up = [e for e in _edges() if FLOOR_OF[e[1]] > FLOOR_OF[e[0]] and (e[0], e[1]) not in ALLOWED]
+    assert not up, f"imports that go up a floor (importer, imported, file, line): {up}"
+    used = {(e[0], e[1]) for e in _edges()}
+    assert ALLOWED <= used, f"the allowed exception is gone: remove it from ALLOWED ({ALLOWED - used})"
+
+
+def test_siblings_never_import_each_other():
+    side = [e for e in _edges() if FLOOR_OF[e[1]] == FLOOR_OF[e[0]] and e[1] not in EXTENSIONS]
+    assert not side, f"imports between units of one floor (what both need goes into the floor below): {side}"
+
+
+def test_no_private_name_crosses_a_unit():
+    crossing = [
+        e
+        for e in _edges()
+        if e[4] and e[4].startswith("_") and not e[4].startswith("__") and e[1] not in EXTENSIONS
+    ]
+    assert not crossing, (
+        f"private names imported from another unit (make them public in a shared base): {crossing}"
+    )
+
+
+def test_modules_and_functions_are_sizes_a_reader_can_hold():
+    long_modules, long_functions = [], {}
+    for path in sorted(PACKAGE.rglob("*.py")):
+        text = path.read_text(encoding="utf-8")
+        lines = text.count("\n")
+        if lines > MAX_LINES:
+            long_modules.append((str(path.relative_to(PACKAGE)), lines))
+        for node in ast.walk(ast.parse(text)):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                size = node.end_lineno - node.lineno + 1
+                if size > MAX_FUNCTION:
+                    long_functions[f"{path.relative_to(PACKAGE)}:{node.name}"] = size
+    assert not long_modules, f"modules over {MAX_LINES} lines: {long_modules}"
+    new = {k: v for k, v in long_functions.items() if k not in LONG_FUNCTIONS or v > LONG_FUNCTIONS[k]}
+    assert not new, f"functions over {MAX_FUNCTION} lines (or longer than listed): {new}"
+    gone = sorted(k for k in LONG_FUNCTIONS if k not in long_functions)
+    assert not gone, f"no longer long, so remove from LONG_FUNCTIONS: {gone}"
 
 
 def test_the_architecture_page_lists_the_floors_the_test_enforces():
-    """docs/architecture.md's table of floors names every unit of FLOORS on its floor, in order
-    (the package face stands for ``__init__`` and ``__main__``; C++ modules are not listed)."""
+    """docs/architecture.md's table of floors names, from the top, every unit of FLOORS on its floor
+    (each unit as its folder, ``name/``; the package face stands for ``__init__`` and ``__main__``)."""
     import re
 
     text = (PACKAGE.parent / "docs" / "architecture.md").read_text(encoding="utf-8")
     table = text[text.index("| floor | units |") :].split("\n\n")[0].splitlines()[2:]
-    written = {}
+    written = []
     for row in table:
         floor, units = (cell.strip() for cell in row.strip("|").split("|"))
-        written[floor] = {u.strip("/") for u in re.findall(r"`([^`]+)`", units)}
+        found = {u.strip("/") for u in re.findall(r"`([^`]+/)`", units)}
         if "the package face" in units:
-            written[floor] |= {"__init__", "__main__"}
-    assert list(written) == list(FLOORS)
-    for floor, units in FLOORS.items():
-        assert written[floor] == {u for u in units if not u.startswith("_loop") and u != "_floor_loop"}, floor
+            found |= {"__init__", "__main__"}
+        written.append(found)
+    assert written[::-1] == [set(units) for units in FLOORS]
 
 
 ROOM_FACES = {

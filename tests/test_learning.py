@@ -10,10 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nnrobust import compiled
-from nnrobust.exceptions import ConfigError, NNRobustError
-from nnrobust.experiment import run_experiment
-from nnrobust.learning import ObservationLayout, observation
+from nnrobust.core.exceptions import ConfigError, NNRobustError
+from nnrobust.run import compiled
+from nnrobust.run.experiment import run_experiment
+from nnrobust.studies.learning import ObservationLayout, observation
 
 gym = pytest.importorskip("gymnasium")
 if not compiled.available():
@@ -21,9 +21,9 @@ if not compiled.available():
 
 from gymnasium.utils.env_checker import check_env  # noqa: E402
 
-from nnrobust.learning.env import ArmEnv, Reward  # noqa: E402
-from nnrobust.learning.vector import ArmVectorEnv  # noqa: E402
-from nnrobust.sweep.spec import draw, experiment  # noqa: E402
+from nnrobust.studies.base.plan import draw, experiment  # noqa: E402
+from nnrobust.studies.learning.env import ArmEnv, Reward  # noqa: E402
+from nnrobust.studies.learning.vector import ArmVectorEnv  # noqa: E402
 
 COUNTER = Path(__file__).parent / "controllers" / "eq9_again.py"
 BOX = {"nominal.relative_error": {"uniform": [0.0, 0.3]}, "plant.disturbance_scale": {"uniform": [0.5, 2.0]}}
@@ -270,7 +270,7 @@ def test_es_training_writes_a_policy_that_runs_as_the_environment_scored_it(tmp_
     """A tiny CMA-ES training (the path docs/learning.md documents): its ONNX file, run as a
     controller on episode 0's plant, gives the run the environment's rollout of the same weights
     gave (float32 inference against float64: close, not equal)."""
-    from nnrobust.learning.es import Network, train
+    from nnrobust.studies.learning.es import Network, train
 
     out = tmp_path / "policy.onnx"
     record = train("paper-ellipse", out, action="residual", controller="no-u0", duration=0.2,

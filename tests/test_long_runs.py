@@ -6,8 +6,8 @@ These are the acceptance runs of the honest-plant work (docs/plant.md); each tak
 import numpy as np
 import pytest
 
-from nnrobust.experiment import build, run_experiment
-from nnrobust.presets import load_preset
+from nnrobust.config.presets import load_preset
+from nnrobust.run.experiment import build, run_experiment
 
 EFFORT = np.array([60.0, 40.0, 20.0])  # urdf/three_link_planar.urdf
 
@@ -85,12 +85,12 @@ def test_sigma_modification_bounds_Z_by_omega_over_sigma():
 
 def _trace(setup):
     """The run's raw trace (with the controller state z_k), on the backend run_experiment uses."""
-    from nnrobust.experiment import choose_backend
-    from nnrobust.simulation import simulate
+    from nnrobust.run.experiment import choose_backend
+    from nnrobust.run.simulation import simulate
 
     sim = setup.config.simulation
     if choose_backend(setup) == "compiled":
-        from nnrobust.compiled import simulate_compiled
+        from nnrobust.run.compiled import simulate_compiled
 
         return simulate_compiled(setup, sim.duration)
     return simulate(setup.plant, setup.controller, setup.q0, setup.v0, sim.duration, sim.control_period)

@@ -1,4 +1,4 @@
-"""Paired comparisons (nnrobust.paired) against scipy and known distributions: the sign test is
+"""Paired comparisons (nnrobust.studies.base.paired) against scipy and known distributions: the sign test is
 scipy's exact binomial test, the Wilcoxon p-value scipy's, the intervals cover the true median
 as often as they claim, and a run that did not complete loses its pair."""
 
@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 from scipy import stats
 
-from nnrobust.paired import all_pairs, compare, format_pair
+from nnrobust.studies.base.paired import all_pairs, compare, format_pair
 
 
 def _frame(a, b, status_a=None, status_b=None):
@@ -54,7 +54,7 @@ def test_the_interval_covers_the_true_median_as_often_as_it_claims():
     """2000 experiments of 11 pairs (the tuned studies' certification N), d skewed (lognormal -
     1): the order-statistic interval covers the true median at least as often as its exact
     coverage says (98.8 % at N = 11; the binomial 0.1 % lower tail of 2000 x 0.988 is 1955)."""
-    from nnrobust.paired import order_coverage
+    from nnrobust.studies.base.paired import order_coverage
 
     rng = np.random.default_rng(11)
     truth = 1.0 - 1.0  # median of lognormal(0, 1) is 1
@@ -72,7 +72,7 @@ def test_the_interval_covers_the_true_median_as_often_as_it_claims():
 def test_the_order_interval_is_the_binomial_one_at_every_n():
     """l is the largest with P(Binomial(N, 1/2) < l) <= 2.5 % (scipy), at least 1: below N = 6 the
     interval is [min, max] and its coverage 1 - 2^(1-N) is what is claimed."""
-    from nnrobust.paired import order_coverage, order_rank
+    from nnrobust.studies.base.paired import order_coverage, order_rank
 
     for n in range(1, 80):
         l = order_rank(n, 0.05)
@@ -96,7 +96,7 @@ def test_the_least_attainable_p_says_when_no_outcome_could_be_significant():
 def test_holms_correction_is_the_step_down_one():
     """holm() against its definition on random p-values, with untested pairs left out; all_pairs
     marks significance on the adjusted p-values."""
-    from nnrobust.paired import holm
+    from nnrobust.studies.base.paired import holm
 
     rng = np.random.default_rng(4)
     for _ in range(50):
@@ -182,7 +182,7 @@ def test_the_coverages_robustness_md_quotes_are_the_formulas():
     import re
     from pathlib import Path
 
-    from nnrobust.paired import order_coverage
+    from nnrobust.studies.base.paired import order_coverage
 
     text = (Path(__file__).resolve().parents[1] / "docs" / "robustness.md").read_text()
     quoted = re.search(

@@ -7,8 +7,8 @@ numbers.
 import numpy as np
 import pytest
 
-from nnrobust.experiment import run_experiment
-from nnrobust.presets import load_preset, preset_names
+from nnrobust.config.presets import load_preset, preset_names
+from nnrobust.run.experiment import run_experiment
 
 PRESETS = ["panda-ellipse", "panda-pose", "ur5-ellipse", "planar7-ellipse"]
 

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from nnrobust.cli import main
-from nnrobust.results import Result
+from nnrobust.run.results import Result
 
 README = Path(__file__).resolve().parents[1] / "README.md"
 

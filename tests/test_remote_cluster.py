@@ -27,10 +27,10 @@ pytest.importorskip("distributed")
 pandas = pytest.importorskip("pandas")
 pytest.importorskip("pyarrow")
 
-from nnrobust import shipped_files  # noqa: E402
 from nnrobust.cli import main  # noqa: E402
-from nnrobust.exceptions import NNRobustError  # noqa: E402
-from nnrobust.sweep import read_results  # noqa: E402
+from nnrobust.core import shipped_files  # noqa: E402
+from nnrobust.core.exceptions import NNRobustError  # noqa: E402
+from nnrobust.studies.sweep import read_results  # noqa: E402
 
 SCHEDULER = [sys.executable, "-m", "distributed.cli.dask_scheduler"]  # `dask scheduler` of this Python
 WORKER = [sys.executable, "-m", "distributed.cli.dask_worker"]
@@ -198,10 +198,10 @@ def unseen(cluster: Cluster, monkeypatch):
     if cluster.hide is not None:
         yield
         return
-    from nnrobust.sweep import engine
+    from nnrobust.studies.sweep import engine
 
     folder, away = cluster.hidden, cluster.hidden.with_name("client-away")
-    make, connect = engine.shipped_files, engine._client
+    make, connect = engine.shipped_files, engine.cluster_client
 
     def shipped_then_hidden(client, inputs, ship):
         files = make(client, inputs, ship)
@@ -218,7 +218,7 @@ def unseen(cluster: Cluster, monkeypatch):
                 away.rename(folder)
 
     monkeypatch.setattr(engine, "shipped_files", shipped_then_hidden)
-    monkeypatch.setattr(engine, "_client", client_then_back)
+    monkeypatch.setattr(engine, "cluster_client", client_then_back)
     yield
 
 
@@ -252,8 +252,8 @@ def test_a_sweep_on_workers_that_cannot_see_its_files_equals_a_local_run(
 def test_tune_and_falsify_send_the_files_too(cluster, client_folder, tmp_path, monkeypatch):
     """A short tuning of the custom law and a short falsification, on the same workers: every run
     completes, so each read the URDF and the law's file from the copies sent with its task."""
-    from nnrobust.falsify import FalsifySpec, run_falsify
-    from nnrobust.tune.engine import TuneSpec, run_tune
+    from nnrobust.studies.falsify import FalsifySpec, run_falsify
+    from nnrobust.studies.tune.engine import TuneSpec, run_tune
 
     address = cluster.address()
     tune = TuneSpec(str(client_folder / "tune.toml"), ["mine"], 2, train_samples=1, validation=0, seed=1)
@@ -356,8 +356,8 @@ def test_a_shipped_class_file_is_imported_from_its_copy_and_named_by_the_clients
     """A task within a bundle imports the class file from its copy while the client's file is
     gone; an import of a module beside it says that only the class file travels."""
     from nnrobust.controllers.base import Controller
-    from nnrobust.exceptions import ConfigError
-    from nnrobust.user_code import load_class
+    from nnrobust.core.exceptions import ConfigError
+    from nnrobust.plugins.user_code import load_class
 
     text = (REPO / "tests" / "controllers" / "eq9_again.py").read_bytes() + b"\n# remote copy\n"
     law, bundle = _bundle(tmp_path, text)

@@ -1,7 +1,7 @@
 """nnrobust compare's changes: metric deltas against the first run and the verdicts that flip."""
 
-from nnrobust.properties import run_properties
-from nnrobust.run_deltas import delta_table, verdict_changes
+from nnrobust.outputs.run_deltas import delta_table, verdict_changes
+from nnrobust.run.properties import run_properties
 
 
 def metrics(error, torque, warnings=(), status="completed"):

@@ -14,12 +14,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nnrobust.cli import main, run_labels
-from nnrobust.exceptions import ConfigError, NNRobustError, one_line
-from nnrobust.experiment import run_experiment
-from nnrobust.presets import load_preset
-from nnrobust.results import Result
-from nnrobust.run_folder import MARKER, ExtrasInterrupted, RunFolderError, locked, write_run
+from nnrobust.cli import main
+from nnrobust.cli.runs import run_labels
+from nnrobust.config.presets import load_preset
+from nnrobust.core.exceptions import ConfigError, NNRobustError, one_line
+from nnrobust.outputs.run_folder import MARKER, ExtrasInterrupted, RunFolderError, locked, write_run
+from nnrobust.run.experiment import run_experiment
+from nnrobust.run.results import Result
 
 QUICK = ["--duration", "0.3", "--no-plots", "--no-animation", "--quiet"]
 
@@ -119,7 +120,7 @@ def test_ctrl_c_while_plotting_keeps_the_finished_simulation(tmp_path, monkeypat
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr("nnrobust.plots.plot_run", interrupted)
+    monkeypatch.setattr("nnrobust.outputs.plots.plot_run", interrupted)
     with pytest.raises(ExtrasInterrupted, match="arrays and metrics are saved"):
         write_run(tmp_path / "run", result)
     folder = tmp_path / "run"
@@ -142,7 +143,7 @@ def test_ctrl_c_while_the_run_is_saved_names_what_was_kept_and_nnrobust_plot(tmp
     import signal
     import threading
 
-    from nnrobust import run_folder
+    from nnrobust.outputs import run_folder
 
     place = run_folder._place
 
@@ -179,8 +180,8 @@ def test_figures_and_animation_read_the_runs_info_not_its_toml(tmp_path, capsys)
     """The analysis reads the typed run info stored with the arrays (criteria, weights, units,
     robot): with config.toml unreadable, nnrobust plot draws the same figures, the subtask
     figure's title and unit included, and the animation; the info round-trips exactly."""
-    from nnrobust.run_folder import load_run
-    from nnrobust.run_info import RunInfo
+    from nnrobust.outputs.run_folder import load_run
+    from nnrobust.run.run_info import RunInfo
 
     folder = tmp_path / "run"
     words = ["run", "panda-ellipse", "--out", str(folder), "--duration", "0.3", "--quiet"]
@@ -205,7 +206,7 @@ def test_plot_finishes_a_run_whose_drawing_was_interrupted(tmp_path, monkeypatch
         raise KeyboardInterrupt
 
     with monkeypatch.context() as patched:
-        patched.setattr("nnrobust.plots.plot_run", interrupted)
+        patched.setattr("nnrobust.outputs.plots.plot_run", interrupted)
         with pytest.raises(ExtrasInterrupted, match="'nnrobust plot .*' draws the plots"):
             write_run(tmp_path / "run", result)
     folder = tmp_path / "run"
@@ -242,7 +243,7 @@ def test_a_write_failure_keeps_the_previous_run_and_rescues_the_arrays(tmp_path,
     def full(*args, **kwargs):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr("nnrobust.run_folder._write_marker", full)
+    monkeypatch.setattr("nnrobust.outputs.run_folder._write_marker", full)
     with pytest.raises(
         RunFolderError,
         match=r"No space left.*previous run there is unchanged.*arrays are in "
@@ -280,7 +281,7 @@ def test_output_paths_that_cannot_work_are_refused_before_simulating(kind, tmp_p
         out, expected = tmp_path / "plain" / "run", "plain is a file, not a folder"
     else:
         if os.geteuid() == 0:  # root writes anywhere: let the permission check see what a user would
-            monkeypatch.setattr("nnrobust.run_folder.os.access", lambda path, mode: False)
+            monkeypatch.setattr("nnrobust.outputs.run_folder.os.access", lambda path, mode: False)
         locked_dir = tmp_path / "ro"
         locked_dir.mkdir()
         locked_dir.chmod(0o555)
@@ -289,7 +290,7 @@ def test_output_paths_that_cannot_work_are_refused_before_simulating(kind, tmp_p
     def simulate(*args, **kwargs):
         raise AssertionError("simulated before the output path was refused")
 
-    monkeypatch.setattr("nnrobust.experiment.run_experiment", simulate)
+    monkeypatch.setattr("nnrobust.run.experiment.run_experiment", simulate)
     assert main(["run", "paper-ellipse", "--out", str(out), "--overwrite", "--quiet"]) == 2
     assert expected in _one_error_line(capsys)
 
@@ -403,7 +404,7 @@ def test_the_memory_estimate_counts_the_models_and_stops_at_what_the_machine_has
     """A long chain's Pinocchio models grow as n^3: a 150-joint chain's six copies need 0.63 GB
     (0.67 with the arrays), one copy measured by creating it; and a memory_limit above the
     machine's available memory does not let a run through."""
-    from nnrobust import experiment
+    from nnrobust.run import experiment
 
     probe = (
         "import gc, pinocchio as pin\n"
@@ -431,7 +432,8 @@ UNDER_WAY = """
 import sys
 from pathlib import Path
 
-from nnrobust import cli, progress
+from nnrobust import cli
+from nnrobust.core import progress
 
 flag, argv = Path(sys.argv[1]), sys.argv[2:]
 report = progress.ProgressBar.__call__

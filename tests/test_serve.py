@@ -1,4 +1,4 @@
-"""The virtual robot (nnrobust/serve/, csrc/serve/; docs/serve.md) with controllers in other
+"""The virtual robot (nnrobust/outputs/serve/, csrc/serve/; docs/serve.md) with controllers in other
 processes: the exported law's driver closes the loop and, in lockstep, the served run is the
 simulated run exactly; a hostile client's datagrams are each refused with a logged reason, never
 applied; silence trips the watchdog. Nothing here depends on the machine's timing: the wall-clock
@@ -16,12 +16,12 @@ import time
 import numpy as np
 import pytest
 
-from nnrobust import compiled
 from nnrobust.cli import main
-from nnrobust.export import export_law
-from nnrobust.presets import load_preset
-from nnrobust.run_folder import load_run as load_result
-from nnrobust.serve import serve
+from nnrobust.config.presets import load_preset
+from nnrobust.outputs.export import export_law
+from nnrobust.outputs.run_folder import load_run as load_result
+from nnrobust.outputs.serve import serve
+from nnrobust.run import compiled
 
 pytestmark = [
     pytest.mark.skipif(not compiled.available(), reason=compiled.unavailable_reason()),
@@ -70,7 +70,7 @@ def test_in_lockstep_the_served_run_is_the_simulated_run(tmp_path):
     assert record["periods"] == record["commands_in_time"] == steps and record["deadline_misses"] == 0
     assert record["rejected"] == {} and record["stopped"] == ""
     served = load_result(tmp_path / "run")
-    from nnrobust.experiment import run_experiment
+    from nnrobust.run.experiment import run_experiment
 
     simulated = run_experiment(config.replace(simulation={"backend": "compiled"}))
     np.testing.assert_array_equal(served.tau, simulated.tau)

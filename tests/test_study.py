@@ -16,7 +16,7 @@ pytest.importorskip("optuna")
 pytest.importorskip("cma")
 
 from nnrobust.cli import main  # noqa: E402
-from nnrobust.study import load_study, run_study  # noqa: E402
+from nnrobust.studies.study import load_study, run_study  # noqa: E402
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
@@ -160,7 +160,7 @@ def test_a_study_runs_the_settings_another_studys_report_kept(study, tmp_path, c
     import re
 
     from nnrobust.config import parse_toml
-    from nnrobust.study_folder import file_sha256
+    from nnrobust.studies.base.folder import file_sha256
 
     _, first, report = study
     source = report["cases"]["paper-ellipse-noisy"]["controllers"]
@@ -274,8 +274,8 @@ def test_a_case_without_randomness_says_it_was_validated_on_the_training_plant(t
     ],
 )
 def test_draws_differ_exactly_where_a_case_has_randomness(case, vary, differ):
-    from nnrobust.study.engine import draws_differ
-    from nnrobust.sweep.spec import SweepSpec
+    from nnrobust.studies.base.plan import SweepSpec
+    from nnrobust.studies.study.engine import draws_differ
 
     sweep = SweepSpec(name="s", base=case, controllers=["pd"], samples=1, seed=0, vary=vary)
     assert draws_differ(sweep) is differ
@@ -285,7 +285,7 @@ def test_a_shipped_law_runs_untuned_under_its_own_name(tmp_path):
     """{name = "nn", tune = false} is the kind itself at its own settings (its rows, settings and
     falsification named nn, as the published falsification studies need); {name = "pd", tune =
     true} is plain "pd", tuned; a name that is no kind is refused naming the valid ones."""
-    from nnrobust.exceptions import ConfigError
+    from nnrobust.core.exceptions import ConfigError
 
     text = (
         'name = "s"\ncases = ["paper-ellipse"]\nrequire = ["rms_error_after_2s<=0.05"]\n'
@@ -413,7 +413,7 @@ def test_the_report_opens_in_a_browser_without_a_console_error(study, tmp_path):
 def test_validation_and_certification_draws_are_ones_the_earlier_stages_never_saw(study):
     """Held out means held out: the tunings' training draws, the validation draws (which select
     the seed) and the certification draws are three disjoint sets of plants."""
-    from nnrobust.sweep import read_results
+    from nnrobust.studies.sweep import read_results
 
     _, out, _ = study
     here = out / "cases" / "paper-ellipse-noisy"
@@ -523,8 +523,8 @@ def test_stages_side_by_side_give_their_results_in_order_and_stop_together_on_an
     once all have ended; the request is lifted afterwards (the next run is not stopped)."""
     import threading
 
-    from nnrobust.signals import check_interrupt
-    from nnrobust.study.engine import side_by_side
+    from nnrobust.core.signals import check_interrupt
+    from nnrobust.studies.study.engine import side_by_side
 
     assert side_by_side([lambda: 1, lambda: 2, lambda: 3]) == [1, 2, 3]
     stopped = threading.Event()
@@ -555,7 +555,7 @@ def test_an_interrupt_in_one_stage_stops_the_others_and_the_study_resumes(study,
     """A stop while certify, falsify and the MuJoCo draws run side by side (here: the
     falsification interrupted as it starts) ends every stage, each keeping what it computed; run
     again, the study finishes with the numbers of a study never interrupted."""
-    import nnrobust.falsify
+    import nnrobust.studies.falsify
 
     here, _, report = study
     shutil.copy(here / "laws.py", tmp_path / "laws.py")
@@ -566,7 +566,7 @@ def test_an_interrupt_in_one_stage_stops_the_others_and_the_study_resumes(study,
         raise KeyboardInterrupt
 
     with monkeypatch.context() as patch:
-        patch.setattr(nnrobust.falsify, "run_falsify", interrupted)
+        patch.setattr(nnrobust.studies.falsify, "run_falsify", interrupted)
         with pytest.raises(KeyboardInterrupt):
             run_study(spec, tmp_path / "out", workers=2)
     assert not (tmp_path / "out" / "report.json").exists()
@@ -609,7 +609,7 @@ def test_the_kept_seed_is_the_least_error_among_the_seeds_feasible_on_validation
     """Seed 0 has the least validation median but breaks the torque limit on the validation draws:
     seed 1 is kept. With every seed infeasible the law is not kept, and the reason gives the
     numbers (it kept the least median, feasible or not)."""
-    from nnrobust.study.engine import _select
+    from nnrobust.studies.study.selection import select_kept as _select
 
     spec = _spec_with(tmp_path, "max_rms_torque = 10.0\nmax_saturated = 0.01\n")
     setting_of = {"pd-seed0": ("pd", 0, {"k": 1}, []), "pd-seed1": ("pd", 1, {"k": 2}, [])}
@@ -632,7 +632,7 @@ def test_a_tuning_has_converged_when_doubling_its_budget_moves_the_kept_median_l
 ):
     """m(B/2) against m(B): the least validation median of the feasible seeds' best settings at half
     the budget and at the whole of it; converged when |m(B/2) / m(B) - 1| <= budgets.tolerance."""
-    from nnrobust.study.engine import _convergence
+    from nnrobust.studies.study.selection import convergence as _convergence
 
     spec = _spec_with(tmp_path, "tune = 40\ntolerance = 0.1\n")
     labels, halves = ["pd-seed0", "pd-seed1"], {"pd-seed0": "pd-seed0-half", "pd-seed1": "pd-seed1"}
@@ -653,7 +653,7 @@ def test_the_certificate_is_over_the_designs_whole_requirement(tmp_path):
     """A study certifies its require, its tuning constraints, no stop hit, no runaway and the path
     kept, together ("all of") and one by one; a run that completed but broke the torque limit
     fails it (it counted as a pass). A study file may waive one part, and says so."""
-    from nnrobust.properties import certify_runs, run_properties
+    from nnrobust.run.properties import certify_runs, run_properties
 
     spec = _spec_with(tmp_path, "max_rms_torque = 10.0\nmax_saturated = 0.01\n")
     assert spec.certified_properties() == [
@@ -670,7 +670,7 @@ def test_the_certificate_is_over_the_designs_whole_requirement(tmp_path):
     assert {c["property"]: c["k"] for c in certificates[1:]}["rms_torque<=10"] == 1
     waived = _spec_with(tmp_path, "max_rms_torque = 10.0\n", top='waive = ["stops"]\n')
     assert "max_joint_limit_violation<=0" not in waived.certified_properties()
-    from nnrobust.study.report import study_warnings
+    from nnrobust.studies.study.report import study_warnings
 
     assert any("waived by the study file: no joint stop hit" in w for w in study_warnings(waived))
     assert any("no torque or saturation constraint" in w for w in study_warnings(_spec_with(tmp_path)))
@@ -727,8 +727,8 @@ def test_a_tuned_law_in_cpp_needs_no_params_of_its_own(tmp_path):
     params it was refused for a missing Kp)."""
     import shutil
 
-    from nnrobust.compiled import available
-    from nnrobust.study.engine import _check_controllers
+    from nnrobust.run.compiled import available
+    from nnrobust.studies.study.engine import _check_controllers
 
     if not available():
         pytest.skip("the compiled loop is not built: a law in C++ runs there")
@@ -747,7 +747,7 @@ def test_a_policy_per_arm_is_one_law_in_a_study_of_two_arms(tmp_path):
     of its arm (observations of 16 and 29 entries): one law of the study, run on each arm with its
     own file (a policy file is bound to one observation size; it was refused on the other arm)."""
     pytest.importorskip("onnxruntime")
-    from nnrobust.learning import ObservationLayout
+    from nnrobust.studies.learning import ObservationLayout
 
     from .policies import linear_policy
 
@@ -782,7 +782,7 @@ def test_a_policy_per_arm_is_one_law_in_a_study_of_two_arms(tmp_path):
         .read_text()
         .replace('cases = ["panda-ellipse"]', 'cases = ["paper-ellipse"]')
     )
-    from nnrobust.exceptions import ConfigError
+    from nnrobust.core.exceptions import ConfigError
 
     with pytest.raises(ConfigError, match="'learned' has two entries for the case 'paper-ellipse'"):
         load_study(tmp_path / "twice.toml")

@@ -13,9 +13,10 @@ pytest.importorskip("distributed")
 pytest.importorskip("pyarrow")
 
 from nnrobust.cli import main  # noqa: E402
-from nnrobust.exceptions import ConfigError, NNRobustError  # noqa: E402
-from nnrobust.sweep import load_sweep, parse_sweep, read_results, run_sweep  # noqa: E402
-from nnrobust.sweep.engine import local_cluster, plan  # noqa: E402
+from nnrobust.core.exceptions import ConfigError, NNRobustError  # noqa: E402
+from nnrobust.studies.base.cluster import local_cluster
+from nnrobust.studies.sweep import load_sweep, parse_sweep, read_results, run_sweep  # noqa: E402
+from nnrobust.studies.sweep.engine import plan  # noqa: E402
 
 SWEEP = """
 name = "tiny"
@@ -62,9 +63,9 @@ def test_every_row_once_then_resume_computes_nothing(tmp_path):
 def test_a_sample_reruns_as_a_normal_run(tmp_path, capsys):
     """The rerun command of the summary reproduces the sample's row."""
     from nnrobust.config import apply_overrides, parse_override
-    from nnrobust.experiment import run_experiment
-    from nnrobust.presets import load_preset
-    from nnrobust.sweep import draw, rerun_command
+    from nnrobust.config.presets import load_preset
+    from nnrobust.run.experiment import run_experiment
+    from nnrobust.studies.sweep import draw, rerun_command
 
     spec = load_sweep(_sweep_file(tmp_path))
     run_sweep(spec, tmp_path / "out", workers=2)
@@ -171,7 +172,7 @@ def test_overwrite_replaces_only_what_the_sweep_wrote(tmp_path, monkeypatch, cap
 
 def test_two_sweeps_into_one_folder_never_write_a_row_twice(tmp_path):
     """Issue 22 item 12: the sweep folder is locked; a second sweep into it is refused at once."""
-    from nnrobust.run_folder import locked
+    from nnrobust.outputs.run_folder import locked
 
     spec = load_sweep(_sweep_file(tmp_path, duration=1.0))
     out = tmp_path / "out"
@@ -375,7 +376,7 @@ samples = 2
 @pytest.mark.parametrize("name", ["paper-robustness", "panda-robustness"])
 def test_shipped_studies_validate_every_sample(name):
     """The shipped studies load by name and every (sample, controller) experiment passes the schema."""
-    from nnrobust.sweep.spec import shipped_sweeps
+    from nnrobust.studies.base.plan import shipped_sweeps
 
     assert name in shipped_sweeps()
     spec = load_sweep(name)
@@ -428,7 +429,7 @@ def test_client_memory_does_not_grow_with_samples(tmp_path):
 def test_a_local_cluster_listens_on_loopback_only():
     """Every socket the local cluster's scheduler listens on (its RPC and the HTTP server dask
     starts even without a dashboard) is on 127.0.0.1, and none takes the dashboard's port 8787."""
-    from nnrobust.sweep.engine import _client
+    from nnrobust.studies.base.cluster import cluster_client as _client
 
     with _client(1, None) as client:
         scheduler = client.cluster.scheduler
@@ -442,7 +443,7 @@ def test_local_workers_keep_the_environments_malloc_thresholds(monkeypatch):
     """Dask's nanny would set MALLOC_TRIM_THRESHOLD_ in its workers, which switches off glibc's
     dynamic mmap threshold and costs a sweep's rows 10 % (benchmarks/sweep_throughput.py): the
     local cluster's workers have the client's environment's value, absent or the user's."""
-    from nnrobust.sweep.engine import _client
+    from nnrobust.studies.base.cluster import cluster_client as _client
 
     monkeypatch.delenv("MALLOC_TRIM_THRESHOLD_", raising=False)
     with _client(1, None) as client:
@@ -457,9 +458,9 @@ def test_local_workers_keep_the_environments_malloc_thresholds(monkeypatch):
 def test_a_sample_that_raises_is_a_row_and_the_sweep_goes_on(monkeypatch):
     """A defect that raises inside one run (not a refusal) is that row's status ``error`` with
     its type and message; the other rows run."""
-    import nnrobust.experiment
-    from nnrobust.sweep.engine import run_rows
-    from nnrobust.sweep.spec import base_values
+    import nnrobust.run.experiment
+    from nnrobust.studies.base.plan import base_values
+    from nnrobust.studies.sweep.engine import run_rows
 
     spec = parse_sweep(
         {
@@ -470,7 +471,7 @@ def test_a_sample_that_raises_is_a_row_and_the_sweep_goes_on(monkeypatch):
             "set": {"simulation.duration": 0.2},
         }
     )
-    real, calls = nnrobust.experiment.run_experiment, []
+    real, calls = nnrobust.run.experiment.run_experiment, []
 
     def flaky(config, *args, **kwargs):
         calls.append(1)
@@ -478,7 +479,7 @@ def test_a_sample_that_raises_is_a_row_and_the_sweep_goes_on(monkeypatch):
             raise ZeroDivisionError("a defect")
         return real(config, *args, **kwargs)
 
-    monkeypatch.setattr(nnrobust.experiment, "run_experiment", flaky)
+    monkeypatch.setattr(nnrobust.run.experiment, "run_experiment", flaky)
     rows = run_rows(spec, base_values(spec), [(0, "nn"), (1, "nn")])
     assert [r["status"] for r in rows] == ["error", "completed"]
     assert rows[0]["message"] == "ZeroDivisionError: a defect"
@@ -491,7 +492,7 @@ def test_a_scheduler_address_that_is_not_a_scheduler_is_one_error_within_seconds
     import socket
     import threading
 
-    from nnrobust.sweep import engine
+    from nnrobust.studies.base import cluster as engine
 
     monkeypatch.setattr(engine, "PROBE_SECONDS", 0.5)
 
@@ -517,7 +518,7 @@ def test_a_scheduler_address_that_is_not_a_scheduler_is_one_error_within_seconds
     with pytest.raises(NNRobustError, match="does not speak dask's protocol"):
         engine.check_scheduler(f"tcp://127.0.0.1:{server(b'HTTP/1.1 400 Bad Request')}")
     assert time.perf_counter() - start < 3
-    with engine._client(1, None) as client:
+    with engine.cluster_client(1, None) as client:
         address = client.cluster.scheduler_address
         assert engine.check_scheduler(address) == address
 
@@ -549,8 +550,8 @@ controllers = ["pd"]
 def test_a_bad_value_late_in_a_long_grid_is_refused_before_the_rest_is_checked(monkeypatch):
     """The first sample of every distinct grid value is checked first: a bad 10,000th grid value
     is refused after a handful of checks, not after the 9,999 good samples (44 s before)."""
-    from nnrobust.sweep import engine
-    from nnrobust.sweep.spec import draw
+    from nnrobust.studies.base.plan import draw
+    from nnrobust.studies.sweep import engine
 
     spec = parse_sweep(
         {
@@ -665,7 +666,7 @@ def test_a_set_or_varied_key_gives_the_configuration_of_the_edited_file(table, t
     "pose" gives six gains of 25; it said `controller.Kp: has 3 entries` (the keys were set in the
     resolved base, whose one-value gains were already written out three times)."""
     from nnrobust.config import load_config
-    from nnrobust.sweep.spec import base_config, base_values, draw, experiment
+    from nnrobust.studies.base.plan import base_config, base_values, draw, experiment
 
     from .test_experiment import _readme_panda
 
@@ -801,8 +802,8 @@ def test_local_workers_are_bounded_by_the_machines_cpus_and_memory(monkeypatch):
     """--workers beyond 4 per CPU, or beyond what the available memory holds at 0.5 GB each, is
     refused before any process starts, naming the bound and why (1024 were accepted on 2 cores:
     6 GB of processes in 38 s)."""
-    from nnrobust import forked
-    from nnrobust.sweep import engine
+    from nnrobust.core import forked
+    from nnrobust.studies.base import cluster as engine
 
     monkeypatch.setattr(forked, "available_cpus", lambda: 2)
     monkeypatch.setattr(engine, "_available_memory", lambda: 24e9)
@@ -816,7 +817,7 @@ def test_local_workers_are_bounded_by_the_machines_cpus_and_memory(monkeypatch):
         match=r"--workers 1024: give 1 to 4 local worker processes on this "
         r"machine \(2.2 GB of memory available, 0.5 GB per worker\); for more, start a cluster",
     ):
-        with engine._client(1024, None):
+        with engine.cluster_client(1024, None):
             pass
     assert started == []
 
@@ -828,7 +829,7 @@ def test_too_many_local_workers_are_refused_before_the_folder_is_made(command, t
     marker before the cluster refused the number."""
     from pathlib import Path
 
-    from nnrobust.sweep import engine
+    from nnrobust.studies.base import cluster as engine
 
     monkeypatch.setattr(engine, "max_local_workers", lambda: (8, "2 CPUs, at most 4 workers each"))
     box = tmp_path / "box.toml"
@@ -924,7 +925,7 @@ def test_a_million_row_grid_is_planned_in_seconds_and_a_long_check_shows_progres
     """Round 3: 10^6 valid rows printed nothing for 100 s while each row's experiment was checked.
     Rows that differ only by their seeds are one check (a grid point's samples need no draw), and
     ``checking(done, total)`` reports a long check as it goes."""
-    from nnrobust.sweep import engine
+    from nnrobust.studies.sweep import engine
 
     grid = parse_sweep(
         {
@@ -958,14 +959,14 @@ def test_a_million_row_grid_is_planned_in_seconds_and_a_long_check_shows_progres
 
 
 def test_the_command_line_shows_a_long_check_and_an_interrupt_during_it(tmp_path, monkeypatch, capsys):
-    import nnrobust.sweep
+    import nnrobust.studies.sweep
 
     def slow_check(spec, out, *args, checking=None, **kwargs):
         time.sleep(1.05)  # the line is shown once the check has taken a second
         checking(1000, 1_000_000)
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(nnrobust.sweep, "run_sweep", slow_check)
+    monkeypatch.setattr(nnrobust.studies.sweep, "run_sweep", slow_check)
     assert main(["sweep", str(_sweep_file(tmp_path)), "--out", str(tmp_path / "out")]) == 130
     err = capsys.readouterr().err
     assert "sweep tiny: checking the experiments of 1000000 rows before any of them runs" in err
@@ -1034,7 +1035,7 @@ def test_a_worker_without_nnrobust_is_one_line_naming_it(tmp_path, monkeypatch, 
     traceback in its log) and the sweep waited for a worker that never came."""
     from distributed import LocalCluster
 
-    from nnrobust.sweep import engine
+    from nnrobust.studies.base import cluster as engine
 
     path = _sweep_file(tmp_path, duration=0.2)
     with LocalCluster(

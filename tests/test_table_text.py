@@ -8,7 +8,7 @@ import re
 from hypothesis import given
 from hypothesis import strategies as st
 
-from nnrobust.table_text import FORMULA_STARTS, TEX_ESCAPES, csv_cell, tex_text
+from nnrobust.core.table_text import FORMULA_STARTS, TEX_ESCAPES, csv_cell, tex_text
 
 HOSTILE = ["=cmd|' -C calc'!A0", "+1+2", "-3+4", "@SUM(1+1)", "\t=1", "\r=1", "=1+1", "-inf"]
 
@@ -82,7 +82,7 @@ def _report(case: str, controller: str) -> dict:
 def test_a_studys_tables_quote_every_name(tmp_path):
     """write_tables with names no study file would pass today (the study's rules refuse them):
     the CSV has no formula cell and the LaTeX no unescaped special character."""
-    from nnrobust.study.tables import write_tables
+    from nnrobust.studies.study.tables import write_tables
 
     csv_path, tex_path = write_tables(_report("=cmd|' -C calc'!A0", "@SUM(1+1)"), tmp_path)
     rows = list(csv.reader(csv_path.open()))

@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from nnrobust.cli import main
-from nnrobust.exceptions import ConfigError, NNRobustError
-from nnrobust.experiment import build
-from nnrobust.presets import load_preset
-from nnrobust.tune import TuneSpec, arm_scales, run_tune, search_space
-from nnrobust.tune.engine import CONSTRAINTS, judge, sweep_of
+from nnrobust.config.presets import load_preset
+from nnrobust.core.exceptions import ConfigError, NNRobustError
+from nnrobust.run.experiment import build
+from nnrobust.studies.tune import TuneSpec, arm_scales, run_tune, search_space
+from nnrobust.studies.tune.engine import CONSTRAINTS, judge, sweep_of
 
 pytest.importorskip("optuna")
 pytest.importorskip("distributed")
@@ -58,7 +58,7 @@ def test_the_spaces_come_from_the_arm_and_share_their_gain_coordinates(scales):
 def test_eq17s_condition_is_checked_only_where_the_robust_term_needs_it():
     """Kv^2 <= Kp (z < 1/2: an underdamped loop) is refused for the NN and the sliding mode, whose
     u_0 is built on eq. (16)'s P, and accepted for eq. (9) without such a term."""
-    from nnrobust.experiment import build
+    from nnrobust.run.experiment import build
 
     gains = {"Kp": [20.0], "Kv": [4.0]}
     for kind in ("no-u0", "computed-torque"):
@@ -115,8 +115,8 @@ def test_a_bound_is_widened_until_the_best_is_interior_with_a_worse_probe_beyond
     """An optimum two and a half decades past a non-physical bound: from half the budget on the
     bound moves out a decade at a time, each move probed half a decade beyond the old bound,
     until the best is interior; resuming from the rows asks what the uninterrupted search asks."""
-    from nnrobust.tune.engine import _Controller
-    from nnrobust.tune.space import Param, SearchSpace
+    from nnrobust.studies.tune.search import ControllerSearch as _Controller
+    from nnrobust.studies.tune.space import Param, SearchSpace
 
     space = SearchSpace("toy", (Param("controller.params.x", 1.0, 10.0, "-"),), custom=True)
     spec = TuneSpec("paper-ellipse", ["toy"], 60, validation=0)
@@ -268,8 +268,8 @@ def test_every_controller_gets_the_same_budget_samples_and_constraints(tuned):
 def test_a_tuning_is_the_same_on_one_worker_and_on_two(short_experiment, tmp_path):
     """The settings asked each round do not depend on the cluster: one training sample (where
     the batch was the number of workers) gives the same trials and best on 1 and 2 workers."""
-    from nnrobust.study_folder import recorded_inputs
-    from nnrobust.tune.engine import _read_trials
+    from nnrobust.studies.base.folder import recorded_inputs
+    from nnrobust.studies.tune.engine import _read_trials
 
     spec = TuneSpec(str(short_experiment), ["pd"], 6, train_samples=1, validation=1, seed=1)
     best, asked = [], []
@@ -284,10 +284,10 @@ def test_a_tuning_is_the_same_on_one_worker_and_on_two(short_experiment, tmp_pat
 
 def test_a_controllers_trials_do_not_depend_on_the_others_running_beside_it(tuned, tmp_path):
     """The controllers' rounds run side by side (each is told and asks again while the others'
-    simulations run: nnrobust.sweep.engine.run_task_groups); each optimiser asks from its own
+    simulations run: nnrobust.studies.base.cluster.run_task_groups); each optimiser asks from its own
     rows alone, so no-u0 tuned alone asks, row by row, what it asked beside the PD."""
-    from nnrobust.study_folder import recorded_inputs
-    from nnrobust.tune.engine import _read_trials
+    from nnrobust.studies.base.folder import recorded_inputs
+    from nnrobust.studies.tune.engine import _read_trials
 
     spec, out, _ = tuned
     alone = replace(spec, controllers=["no-u0"])
@@ -304,8 +304,8 @@ def test_reordering_the_controllers_changes_no_laws_tuning(tuned, tmp_path):
     """A law's optimiser seed derives from the tuning's seed and the law's name, not its place in
     the list: the PD and no-u0 tuned in the other order ask, row by row, what they asked (with
     seed + index, the PD's sampler seed moved with the order)."""
-    from nnrobust.study_folder import recorded_inputs
-    from nnrobust.tune.engine import _read_trials
+    from nnrobust.studies.base.folder import recorded_inputs
+    from nnrobust.studies.tune.engine import _read_trials
 
     spec, out, summary = tuned
     reordered = replace(spec, controllers=list(reversed(spec.controllers)))
@@ -324,8 +324,8 @@ def test_a_setting_that_breaks_a_constraint_on_the_held_out_draws_says_so():
     """Feasibility is judged on the draws each table column is computed from: a best setting whose
     held-out runs break the torque and saturation limits is marked infeasible on validation, with
     the numbers, beside its training columns (it was a held-out error beside a training torque)."""
-    from nnrobust.cli import format_tuning
-    from nnrobust.tune.engine import validated
+    from nnrobust.cli.studies import format_tuning
+    from nnrobust.studies.tune.engine import validated
 
     spec = TuneSpec("paper-ellipse", ["pd"], 4, max_rms_torque=10.0, max_saturated=0.01)
     run = {"status": "completed", "rms_error_after_2s": 1e-4, "torque_chatter": 1.0,
@@ -350,7 +350,7 @@ def test_the_cpp_and_python_twins_tune_to_the_same_setting(short_experiment, tmp
     """The task-space PD in C++ (examples/controllers/task_pd.cpp) and its Python twin
     (examples/custom_controller.py), both named TaskPD, tuned apart at one seed and budget: their
     torques agree to 1e-14, so their optimisers ask the same settings and keep the same best."""
-    from nnrobust.compiled import available
+    from nnrobust.run.compiled import available
 
     if not available():
         pytest.skip("the compiled loop is not built: a law in C++ runs there")
@@ -369,8 +369,8 @@ def test_the_cpp_and_python_twins_tune_to_the_same_setting(short_experiment, tmp
 def test_a_best_setting_reruns_to_its_training_metrics(tuned):
     """The summary's params are the overrides the runs used: rerunning sample 0 gives its row."""
     from nnrobust.config import apply_overrides
-    from nnrobust.experiment import run_experiment
-    from nnrobust.sweep.spec import base_config, draw, experiment
+    from nnrobust.run.experiment import run_experiment
+    from nnrobust.studies.base.plan import base_config, draw, experiment
 
     spec, out, summary = tuned
     sweep = sweep_of(spec)
@@ -453,8 +453,8 @@ def test_a_custom_class_is_tuned_in_the_space_it_declares(short_experiment, tmp_
     from pathlib import Path
 
     from nnrobust.config import apply_overrides
-    from nnrobust.experiment import run_experiment
-    from nnrobust.sweep.spec import base_config, draw, experiment
+    from nnrobust.run.experiment import run_experiment
+    from nnrobust.studies.base.plan import base_config, draw, experiment
 
     laws = Path(__file__).parent / "controllers" / "eq9_again.py"
     spec = TuneSpec(str(short_experiment), ["no-u0", f"{laws}:Eq9"], 6, train_samples=2, validation=1, seed=5)
@@ -487,8 +487,8 @@ def test_a_registered_law_is_tuned_in_the_space_it_declares(short_experiment, tm
     import pandas as pd
 
     from nnrobust.config import apply_overrides
-    from nnrobust.experiment import run_experiment
-    from nnrobust.sweep.spec import base_config, draw, experiment
+    from nnrobust.run.experiment import run_experiment
+    from nnrobust.studies.base.plan import base_config, draw, experiment
 
     scales = arm_scales(build(load_preset("paper-ellipse-noisy")))
     space = search_space("slotine-li", scales)
@@ -535,7 +535,7 @@ def test_every_parameter_of_a_shipped_law_is_searched_or_held_with_a_reason(name
     or is held at the experiment's value for a reason its declaration states; a registered law's
     search bounds lie in its declared range, so widening one never asks what the law refuses."""
     from nnrobust.controllers.registry import SHARED_KEYS, registered_law
-    from nnrobust.tune.space import own_keys, tunable
+    from nnrobust.studies.base.tuned import own_keys, tunable
 
     assert name in tunable(), f"{name} declares nothing to search"
     space = search_space(name, scales)
@@ -580,7 +580,7 @@ def test_a_bound_on_the_end_of_a_laws_range_is_physical_and_never_widened(scales
 def test_a_custom_class_says_which_of_its_parameters_it_does_not_search():
     """A user's class searches its search_space; its other constructor parameters are listed as
     held, the reason being its author's choice."""
-    from nnrobust.tune.space import custom_space
+    from nnrobust.studies.tune.space import custom_space
 
     class Law:
         search_space = {"Kp": (1.0, 1e5, "1/s^2")}
@@ -597,7 +597,7 @@ def test_a_custom_class_says_which_of_its_parameters_it_does_not_search():
 
 def test_the_tuning_prints_what_it_does_not_search_and_why(scales):
     """nnrobust tune's table lists, under each controller, the keys it holds grouped by reason."""
-    from nnrobust.cli import format_tuning
+    from nnrobust.cli.studies import format_tuning
 
     space = search_space("slotine-li", scales)
     text = format_tuning(

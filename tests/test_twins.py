@@ -9,9 +9,9 @@ import copy
 import numpy as np
 import pytest
 
-from nnrobust import compiled
-from nnrobust.experiment import build
-from nnrobust.presets import load_preset
+from nnrobust.config.presets import load_preset
+from nnrobust.run import compiled
+from nnrobust.run.experiment import build
 
 pytestmark = pytest.mark.skipif(not compiled.available(), reason=compiled.unavailable_reason())
 

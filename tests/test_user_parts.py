@@ -11,13 +11,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nnrobust import compiled
 from nnrobust.cli import main
 from nnrobust.config import load_config
-from nnrobust.exceptions import ConfigError
-from nnrobust.experiment import build, run_experiment
-from nnrobust.presets import load_preset
-from nnrobust.run_folder import load_run
+from nnrobust.config.presets import load_preset
+from nnrobust.core.exceptions import ConfigError
+from nnrobust.outputs.run_folder import load_run
+from nnrobust.run import compiled
+from nnrobust.run.experiment import build, run_experiment
 
 PARTS = Path(__file__).parent / "parts" / "again.py"
 

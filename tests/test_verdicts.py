@@ -5,11 +5,11 @@ figure of a law's own signals (docs/plant.md#verdicts-in-metricsjson)."""
 import numpy as np
 import pytest
 
-from nnrobust import verdicts
-from nnrobust.experiment import build, run_experiment
+from nnrobust.config.presets import load_preset
 from nnrobust.plant.limits import available_torque
-from nnrobust.presets import load_preset
-from nnrobust.results import Result
+from nnrobust.run import verdicts
+from nnrobust.run.experiment import build, run_experiment
+from nnrobust.run.results import Result
 
 from .test_compiled import needs_extension
 
@@ -186,7 +186,7 @@ def test_the_envelope_cuts_the_driving_torque_on_both_loops(envelope_runs):
 
 def test_the_envelope_needs_effort_limits_and_is_refused_by_name():
     """plant.torque_speed names what is wrong: an unknown choice, no effort limits to cut."""
-    from nnrobust.exceptions import ConfigError
+    from nnrobust.core.exceptions import ConfigError
 
     config = load_preset("paper-ellipse")
     with pytest.raises(ConfigError, match=r"plant.torque_speed: 'urdff' is not one of none, urdf"):
@@ -200,7 +200,7 @@ def test_the_envelope_needs_effort_limits_and_is_refused_by_name():
 def test_a_laws_own_signals_are_drawn():
     """A law's declared signals get the signals figure, one panel each; the paper's kinds (whose
     signals have figures or metrics of their own) get none."""
-    from nnrobust import plots
+    from nnrobust.outputs import plots
 
     t = np.arange(50) * 1e-3
     own = _result(np.zeros((50, 3)), signals={"gain": np.sin(t), "s_norm": t, "rho_hat": t, "eps": t})

@@ -15,11 +15,11 @@ import pytest
 
 from nnrobust.cli import main
 from nnrobust.config import ExperimentConfig
-from nnrobust.experiment import run_experiment
+from nnrobust.config.presets import load_preset
 from nnrobust.model import paper_arm_urdf
-from nnrobust.presets import load_preset
-from nnrobust.results import Result
-from nnrobust.run_folder import write_run
+from nnrobust.outputs.run_folder import write_run
+from nnrobust.run.experiment import run_experiment
+from nnrobust.run.results import Result
 
 CHROMIUM_FLAGS = [
     "--headless",
@@ -54,7 +54,7 @@ def test_animation_is_one_self_contained_file(paper_run):
 
 
 def test_animation_of_a_meshed_robot_embeds_its_meshes(tmp_path):
-    from nnrobust.viewer import animation_html
+    from nnrobust.outputs.viewer import animation_html
 
     config = load_preset("panda-ellipse").replace(simulation={"duration": 0.1})
     result = run_experiment(config)
@@ -69,7 +69,7 @@ def test_animation_tracks_equal_meshcats_own_keyframes():
     import meshcat
     from meshcat.animation import Animation
 
-    from nnrobust.viewer.scene import PoseRecorder, RunScene, SceneRecorder, tip_positions
+    from nnrobust.outputs.viewer.scene import PoseRecorder, RunScene, SceneRecorder, tip_positions
 
     config = load_preset("panda-ellipse").replace(simulation={"duration": 0.5})
     result = run_experiment(config)
@@ -132,7 +132,7 @@ def test_visual_geometry_matches_pinocchios_own_parse(name):
 def test_the_camera_sees_the_whole_arm_and_path():
     """Every chain point of a Panda run (and the meshes around them) lies inside the camera's
     field of view: the camera aims at their middle, not at the base."""
-    from nnrobust.viewer.scene import CAMERA_FOV, camera_placement, tip_positions
+    from nnrobust.outputs.viewer.scene import CAMERA_FOV, camera_placement, tip_positions
 
     result = run_experiment(load_preset("panda-ellipse").replace(simulation={"duration": 2.0}))
     _, desired = tip_positions(result)
@@ -146,8 +146,8 @@ def test_the_camera_sees_the_whole_arm_and_path():
 
 
 def test_run_folders_name_every_figure_that_plots_draws():
-    from nnrobust import plots
-    from nnrobust.run_folder import FIGURE_NAMES
+    from nnrobust.outputs import plots
+    from nnrobust.outputs.run_folder import FIGURE_NAMES
 
     assert tuple(plots.FIGURES) == FIGURE_NAMES
 
@@ -180,7 +180,7 @@ def _listening_addresses(pid: int) -> list[str]:
 
 @pytest.mark.skipif(not Path("/proc/net/tcp").exists(), reason="needs Linux /proc to list sockets")
 def test_viewer_listens_on_loopback_only(paper_run):
-    from nnrobust.viewer import draw_run, start_viewer
+    from nnrobust.outputs.viewer import draw_run, start_viewer
 
     result = Result.load(paper_run)
     with start_viewer() as viewer:
@@ -230,7 +230,7 @@ def test_browser_draws_the_arm_and_it_moves(paper_run, tmp_path):
         pytest.skip("Chromium is not installed (make test installs Debian's chromium where it can)")
     import meshcat
 
-    from nnrobust.viewer import SceneRecorder, draw_run
+    from nnrobust.outputs.viewer import SceneRecorder, draw_run
 
     result = Result.load(paper_run)
     recorder = SceneRecorder()
@@ -307,7 +307,7 @@ def test_the_browser_reports_no_error_for_a_run_or_a_mixed_obj_mesh(paper_run, t
     browser = _chromium()
     if browser is None:
         pytest.skip("Chromium is not installed (make test installs Debian's chromium where it can)")
-    from nnrobust.viewer.scene import uniform_obj
+    from nnrobust.outputs.viewer.scene import uniform_obj
 
     assert console_errors(browser, paper_run / "animation.html", tmp_path) == []
     (tmp_path / "meshes").mkdir()
@@ -335,7 +335,7 @@ def test_the_browser_reports_no_error_for_a_run_or_a_mixed_obj_mesh(paper_run, t
 def test_progress_bar_reports_simulated_time_and_speed():
     import io
 
-    from nnrobust.progress import ProgressBar
+    from nnrobust.core.progress import ProgressBar
 
     stream = io.StringIO()
     bar = ProgressBar(4.0, stream=stream, delay=0.0)
@@ -363,8 +363,8 @@ def test_robots_command_lists_the_known_arms(capsys):
 
 
 def test_module_server_refuses_an_address_it_cannot_bind():
-    from nnrobust.exceptions import NNRobustError
-    from nnrobust.viewer import start_viewer
+    from nnrobust.core.exceptions import NNRobustError
+    from nnrobust.outputs.viewer import start_viewer
 
     before = set(_children_of(os.getpid()))  # e.g. multiprocessing's resource tracker, from other tests
     with pytest.raises(NNRobustError, match="cannot listen on 203.0.113.1:7999: .*use an address of this"):
@@ -388,7 +388,7 @@ def test_view_refuses_bad_addresses_in_one_line(paper_run, capsys, args, message
 
 def test_command_port_stays_on_loopback_when_the_page_is_shared():
     """--host 0.0.0.0 shares the web page; the unauthenticated ZeroMQ command port stays on 127.0.0.1."""
-    from nnrobust.viewer import start_viewer
+    from nnrobust.outputs.viewer import start_viewer
 
     with start_viewer(host="0.0.0.0") as viewer:
         addresses = _listening_addresses(viewer.process.pid)
@@ -405,7 +405,7 @@ def test_the_server_does_not_outlive_a_killed_parent(tmp_path):
     import time
 
     script = (
-        "from nnrobust.viewer import start_viewer\n"
+        "from nnrobust.outputs.viewer import start_viewer\n"
         "v = start_viewer()\nprint(v.process.pid, flush=True)\nimport time\ntime.sleep(60)\n"
     )
     parent = subprocess.Popen([sys.executable, "-c", script], stdout=subprocess.PIPE, text=True)
@@ -442,7 +442,7 @@ def _children_of(pid: int) -> list[int]:
 def test_run_with_live_view_streams_the_arm(tmp_path, monkeypatch, capsys):
     """run --view starts the loopback viewer, runs, redraws the finished run, then serves it
     (here stopped at once instead of waiting for Ctrl-C)."""
-    import nnrobust.cli as cli
+    import nnrobust.cli.runs as cli
 
     served = []
     monkeypatch.setattr(
@@ -495,7 +495,7 @@ def test_command_line_basics(capsys):
 
 def test_an_ipv6_host_gets_a_url_a_browser_can_open():
     """--host ::1 printed http://::1:7000/static/, which no browser opens; the host goes in brackets."""
-    from nnrobust.viewer.server import url_for
+    from nnrobust.outputs.viewer.server import url_for
 
     assert url_for("http://::1:7000/static/", "::1") == "http://[::1]:7000/static/"
     assert url_for("http://127.0.0.1:7000/static/", "127.0.0.1") == "http://127.0.0.1:7000/static/"

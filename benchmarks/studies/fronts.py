@@ -16,7 +16,7 @@ import math
 import sys
 from pathlib import Path
 
-from nnrobust.tune.engine import error_torque_front
+from nnrobust.studies.tune.engine import error_torque_front
 
 
 def seed_zero_tunings(folders: list[Path]) -> list[tuple[str, dict]]:

@@ -6,8 +6,8 @@ of a checked configuration). Everything is importable from here.
 
 from ..controllers.registry import controller_kinds, shipped_laws  # the rooms' own rules, re-exported
 from ..controllers.section import CONTROLLER_KINDS, EQ9_KINDS, ControllerConfig, NNConfig, is_eq9
+from ..core.numeric_limits import MAX_CENTERS, MAX_GAIN, MAX_PINV, RANGE_LIMITS
 from ..model.section import NominalConfig, RobotConfig
-from ..numeric_limits import MAX_CENTERS, MAX_GAIN, MAX_PINV, RANGE_LIMITS
 from ..plant.section import PlantConfig, SensingConfig
 from ..subtasks.registry import default_criteria
 from ..subtasks.section import SubtaskConfig

@@ -11,11 +11,11 @@ from __future__ import annotations
 import re
 
 from ..controllers.section import check_controller, inert_controller_keys
-from ..exceptions import ConfigError
-from ..key_checks import check_choice, require_positive
+from ..core.exceptions import ConfigError
+from ..core.key_checks import check_choice, require_positive
+from ..core.numeric_limits import MAX_FACTOR, MAX_PAYLOAD, MAX_PHYSICAL, MAX_STOP_STIFFNESS
 from ..model.section import check_model, inert_model_keys
 from ..model.tasks import TASK_KINDS
-from ..numeric_limits import MAX_FACTOR, MAX_PAYLOAD, MAX_PHYSICAL, MAX_STOP_STIFFNESS
 from ..plant.section import check_plant, inert_plant_keys
 from ..subtasks.section import check_subtasks, inert_subtask_keys
 from ..trajectories import path_key

@@ -13,9 +13,9 @@ import typing
 from dataclasses import dataclass, field
 
 from ..controllers.section import ControllerConfig, NNConfig
+from ..core.numeric_limits import MAX_STEP_ROTATION
 from ..model.section import NominalConfig, RobotConfig, resolved_nominal_kind
 from ..plant.section import PlantConfig, SensingConfig
-from ..simulation import MAX_STEP_ROTATION
 from ..subtasks.section import SubtaskConfig
 from ..trajectories.section import TrajectoryConfig
 

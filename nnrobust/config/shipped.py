@@ -1,12 +1,12 @@
 """The shipped experiments' files: one TOML file each in ``nnrobust/preset_files``, found by name
-(an experiment file's ``base``, the command line's target). :mod:`nnrobust.presets` loads them.
+(an experiment file's ``base``, the command line's target). :mod:`nnrobust.config.presets` loads them.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from ..exceptions import ConfigError
+from ..core.exceptions import ConfigError
 
 PRESET_DIR = Path(__file__).resolve().parents[1] / "preset_files"
 

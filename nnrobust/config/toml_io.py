@@ -20,7 +20,7 @@ import typing
 import warnings
 from pathlib import Path
 
-from ..exceptions import ConfigError
+from ..core.exceptions import ConfigError
 from .checks import FILLED_LISTS, INDEXED, validate
 from .resolve import resolve
 from .schema import KEY_ALIASES, USER_PARTS, ExperimentConfig, _field_names, _user_part
@@ -343,7 +343,7 @@ def _file_data(path: Path, text: str, depth: int = 0, read: list[Path] | None = 
             str((folder / entry).resolve()) if isinstance(entry, str) and entry.strip() else entry
             for entry in robot["mesh_folders"]
         ]
-    from ..user_code import class_file
+    from ..plugins.user_code import class_file
 
     controller = data.get("controller")
     if isinstance(controller, dict):  # a policy's ONNX file, read from the file's folder
@@ -396,7 +396,7 @@ def user_classes(config: ExperimentConfig) -> dict[str, str]:
 
 def user_files(config: ExperimentConfig) -> dict[str, str]:
     """The files of the user classes the experiment uses (part -> path; module paths left out)."""
-    from ..user_code import class_file
+    from ..plugins.user_code import class_file
 
     paths = {part: class_file(spec) for part, spec in user_classes(config).items()}
     out = {part: str(path) for part, path in paths.items() if path is not None}
@@ -414,7 +414,7 @@ def policy_file(kind, params) -> str | None:
 
 
 def _file_digest(source: str) -> str:
-    from ..user_code import file_digest
+    from ..plugins.user_code import file_digest
 
     return file_digest(source)
 
@@ -442,11 +442,11 @@ def provenance_header(config: ExperimentConfig) -> str:
     robot's URDF and of every user class's file, so that a run can be repeated, and checked,
     from anywhere.
     """
-    from .. import __version__
+    from ..core.package_version import package_version
     from ..model.loading import urdf_digest
 
     lines = [
-        f"# written by nnrobust {__version__} (pin {_package_version('pin')}, example-robot-data "
+        f"# written by nnrobust {package_version()} (pin {_package_version('pin')}, example-robot-data "
         f"{_package_version('example-robot-data')})"
     ]
     digest = urdf_digest(config.robot.source)
@@ -461,9 +461,9 @@ def provenance_header(config: ExperimentConfig) -> str:
 
 def _native_lines(part: str, source: str) -> list[str]:
     """For a law in C++: the SHA-256 of each header its file includes and of all its library's
-    inputs (nnrobust.native_law.Library: the file, its headers, the toolchain).
+    inputs (nnrobust.plugins.native_law.Library: the file, its headers, the toolchain).
     """
-    from ..native_law import compiled_inputs, is_source
+    from ..plugins.native_law import compiled_inputs, is_source
 
     library = compiled_inputs(Path(source)) if is_source(source) else None
     if library is None:

@@ -26,5 +26,5 @@ __all__ = [
 ]
 
 # the registered laws (nnrobust/controllers/laws/), after the paper's kinds: declaration order is
-# the order kinds are listed in (nnrobust.kinds)
+# the order kinds are listed in (nnrobust.core.kinds)
 _import_module(f"{__name__}.laws")

@@ -2,7 +2,7 @@
 (:mod:`.section`): one of the paper's kinds (eq. 9 with its robust terms, the PD; each declared
 beside its code, :class:`PaperKind`), a registered law (nnrobust/controllers/laws/) or a user's
 class, each from the :class:`ControllerContext` it is handed. What the builders take beyond their
-sections is chosen by the composition root (:func:`nnrobust.experiment.build`): the control
+sections is chosen by the composition root (:func:`nnrobust.run.experiment.build`): the control
 period, the nominal model and its friction, the trajectory, the criterion, the plant's limits.
 """
 
@@ -13,7 +13,7 @@ import dataclasses
 
 import numpy as np
 
-from ..exceptions import ConfigError
+from ..core.exceptions import ConfigError
 from ..model import DynamicsModel, PinocchioModel
 from ..plant import Friction, Plant
 from ..subtasks.base import Criterion

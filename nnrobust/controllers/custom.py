@@ -1,5 +1,5 @@
 """User controllers: ``controller.kind = "custom"`` builds ``controller.class`` as
-``Class(context, **controller.params)`` (docs/extending.md; loaded by :mod:`nnrobust.user_code`),
+``Class(context, **controller.params)`` (docs/extending.md; loaded by :mod:`nnrobust.plugins.user_code`),
 checked against the contract before and at its first step.
 """
 
@@ -9,8 +9,8 @@ import re
 
 import numpy as np
 
-from ..exceptions import ConfigError, ControllerError
-from ..user_code import construct, located
+from ..core.exceptions import ConfigError, ControllerError
+from ..plugins.user_code import construct, located
 from .base import Controller, ControllerContext, ControlOutput
 
 KEY = "controller.class"
@@ -19,7 +19,7 @@ SIGNAL_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]{0,63}")
 """A signal's name: it becomes an array's name in result.npz (``signal_NAME``) and a plot title."""
 
 RESERVED_SIGNALS = ("h", "manipulability")
-"""The signals every run records itself (nnrobust.results.Result.from_trace)."""
+"""The signals every run records itself (nnrobust.run.results.Result.from_trace)."""
 
 MAX_STATE = 10**7
 """The most entries a user's controller state may have (80 MB a vector; the record of a run holds

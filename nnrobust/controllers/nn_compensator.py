@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..numeric_limits import MAX_CENTERS, MAX_GAIN, RANGE_LIMITS
+from ..core.numeric_limits import MAX_CENTERS, MAX_GAIN, RANGE_LIMITS
 from .basis import AdditiveRBFBasis
 from .registry import KindParts, LawParam, PaperKind, declare_kind
 
@@ -240,11 +240,11 @@ def _build(parts: KindParts):
 
 
 def _search(scales: dict) -> list:
-    """The tuner's coordinates of the NN term (nnrobust/tune/space.py): F, the leakage rate F
+    """The tuner's coordinates of the NN term (nnrobust/studies/tune/space.py): F, the leakage rate F
     sigma from 1 % over the run to one control period, and the eps floor up to the arm's task
     acceleration.
     """
-    from ..search_coordinates import Param
+    from ..core.search_coordinates import Param
 
     D, T, a = scales["duration"], scales["period"], scales["task_acceleration"]
     return [

@@ -1,12 +1,12 @@
 """Damped least-squares pseudo-inverse J+ and the null-space projection, eqs. (3), (5), (6): the
 keys every law shares in an experiment file. The linear algebra itself lives in
-:mod:`nnrobust.small_linalg` (inverse kinematics uses it too).
+:mod:`nnrobust.core.small_linalg` (inverse kinematics uses it too).
 """
 
 from __future__ import annotations
 
-from ..numeric_limits import MAX_PINV
-from ..small_linalg import DampedPseudoInverse, project_null_space
+from ..core.numeric_limits import MAX_PINV
+from ..core.small_linalg import DampedPseudoInverse, project_null_space
 from .registry import LawParam, SharedKeys, declare_shared
 
 __all__ = ["KEYS", "SAME_PSEUDO_INVERSE", "DampedPseudoInverse", "project_null_space"]

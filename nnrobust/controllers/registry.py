@@ -28,9 +28,9 @@ from typing import Any
 
 import numpy as np
 
-from ..exceptions import ConfigError
-from ..key_checks import CHOSEN, LawParam
-from ..kinds import Kinds
+from ..core.exceptions import ConfigError
+from ..core.key_checks import CHOSEN, LawParam
+from ..core.kinds import Kinds
 
 __all__ = ["CHOSEN", "LawParam"]  # the one way any kind declares a key, in the leaf key_checks
 
@@ -93,8 +93,8 @@ class Law:
         """``cls(context, **params)`` with every parameter checked and defaulted; an error of the
         constructor names ``controller.params``.
         """
-        from ..exceptions import NNRobustError
-        from ..user_code import located
+        from ..core.exceptions import NNRobustError
+        from ..plugins.user_code import located
 
         resolved = self.resolve(params, context.n, context.m)
         try:
@@ -110,7 +110,7 @@ class Law:
         """The twin's fields of a built controller, each as a 2-D float array (a number 1 x 1,
         a vector k x 1): what the compiled law reads by name (csrc/controllers/laws/law.hpp).
         """
-        from ..twins import twin_values
+        from ..core.twins import twin_values
 
         return twin_values(controller, self.twin_fields)
 
@@ -224,7 +224,9 @@ def declare_kind(kind: PaperKind) -> PaperKind:
 
 def paper_kinds() -> tuple[str, ...]:
     """The names of the paper's kinds (``nn``, ``no-u0``, ...), in declaration order."""
-    from . import nn_compensator, sliding_mode, task_space  # noqa: F401  (their declarations)
+    from . import (
+        task_space,  # noqa: F401  (their declarations)
+    )
 
     return tuple(PAPER_KINDS)
 
@@ -275,7 +277,7 @@ def register_law(law: Law) -> Law:
 
 def registered_law(name: str) -> Law | None:
     """The registered law named ``name`` (``controller.kind``), or None (the laws' package,
-    imported with the room, has declared every law: nnrobust.kinds).
+    imported with the room, has declared every law: nnrobust.core.kinds).
     """
     from . import laws  # noqa: F401  (imported with nnrobust.controllers: a no-op here)
 

@@ -9,8 +9,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import ClassVar
 
-from ..exceptions import ConfigError
-from ..key_checks import DeclaredKeys, check_choice
+from ..core.exceptions import ConfigError
+from ..core.key_checks import DeclaredKeys, check_choice
 from .registry import (
     PAPER_KINDS,
     controller_kinds,

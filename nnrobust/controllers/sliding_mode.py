@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..numeric_limits import MAX_GAIN
+from ..core.numeric_limits import MAX_GAIN
 from .nn_compensator import error_dynamics, lyapunov_P
 from .registry import KindParts, LawParam, PaperKind, declare_kind
 
@@ -69,9 +69,9 @@ def _build(parts: KindParts):
 
 def _search(scales: dict) -> list:
     """The tuner's coordinates of the sliding-mode term: K and Phi, scaled by the arm's task
-    acceleration a (nnrobust/tune/space.py).
+    acceleration a (nnrobust/studies/tune/space.py).
     """
-    from ..search_coordinates import Param
+    from ..core.search_coordinates import Param
 
     a = scales["task_acceleration"]
     return [

@@ -6,8 +6,8 @@ from typing import Protocol
 
 import numpy as np
 
+from ..core.numeric_limits import MAX_GAIN
 from ..model.base import DynamicsModel
-from ..numeric_limits import MAX_GAIN
 from ..plant.friction import Friction
 from ..subtasks.base import Criterion
 from ..trajectories import Trajectory

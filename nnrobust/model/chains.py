@@ -21,7 +21,7 @@ import re
 
 import pinocchio as pin
 
-from ..exceptions import RobotLoadError
+from ..core.exceptions import RobotLoadError
 from .pinocchio_model import LINK_FRAME_TYPES, frame_id
 
 TIP_PREFERENCE = (

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pinocchio as pin
 
-from ..exceptions import RobotLoadError
+from ..core.exceptions import RobotLoadError
 
 
 @dataclass(frozen=True)

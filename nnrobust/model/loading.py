@@ -18,8 +18,8 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from ..exceptions import ModelMismatch, RobotLoadError
-from ..shipped_files import local
+from ..core.exceptions import ModelMismatch, RobotLoadError
+from ..core.shipped_files import local
 from .chains import chain_between, default_chain
 from .continuous_joints import with_revolute_continuous_joints
 from .example_robots import ExampleRobot, example_robot, is_example_robot, robot_names

@@ -1,7 +1,7 @@
 """The controller's nominal model built from the ``[nominal]`` section: the paper's closed form
 with beta-hat and p-hat, or the robot's own Pinocchio model (perturbed, or scaled by
 ``nominal.factors``), or the true model for computed-torque control. The builder takes its own
-section and what the composition root (:func:`nnrobust.experiment.build`) decides: the resolved
+section and what the composition root (:func:`nnrobust.run.experiment.build`) decides: the resolved
 kind and, for computed torque, the true model.
 """
 
@@ -10,8 +10,8 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from ..arrays import joint_vector, padded
-from ..exceptions import ConfigError
+from ..core.arrays import joint_vector, padded
+from ..core.exceptions import ConfigError
 from .base import DynamicsModel
 from .loading import load_robot
 from .perturbation import bodies_with_mass, perturb_inertias

@@ -7,8 +7,8 @@ from functools import cached_property
 import numpy as np
 import pinocchio as pin
 
-from ..exceptions import FrameNotFound, ModelMismatch
-from ..small_linalg import adjugate, det
+from ..core.exceptions import FrameNotFound, ModelMismatch
+from ..core.small_linalg import adjugate, det
 from .tasks import TASK_KINDS, pose_vector
 
 _LWA = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED

@@ -9,9 +9,9 @@ import math
 import os
 from dataclasses import dataclass
 
-from ..exceptions import ConfigError
-from ..key_checks import check_choice, require_physical, require_positive, require_seed
-from ..numeric_limits import MAX_FACTOR
+from ..core.exceptions import ConfigError
+from ..core.key_checks import check_choice, require_physical, require_positive, require_seed
+from ..core.numeric_limits import MAX_FACTOR
 from .tasks import TASK_KINDS
 
 

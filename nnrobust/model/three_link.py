@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from ..exceptions import ModelMismatch
+from ..core.exceptions import ModelMismatch
 
 
 @dataclass(frozen=True)

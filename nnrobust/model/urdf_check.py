@@ -2,7 +2,7 @@
 
 Pinocchio returns an empty model for a kinematic cycle and the XML parsers behind URDF readers
 repair broken files silently, so nnrobust reads the XML itself first, with hard limits, and
-refuses with one clear message per kind of problem (exceptions in :mod:`nnrobust.exceptions`).
+refuses with one clear message per kind of problem (exceptions in :mod:`nnrobust.core.exceptions`).
 """
 
 from __future__ import annotations
@@ -17,14 +17,14 @@ from xml.parsers import expat
 
 import numpy as np
 
-from ..exceptions import (
+from ..core.exceptions import (
     InvalidInertia,
     KinematicCycle,
     UrdfRefused,
     UrdfStructureError,
     UrdfSyntaxError,
 )
-from ..shipped_files import local
+from ..core.shipped_files import local
 
 MAX_URDF_BYTES = 20_000_000
 """Largest URDF read [bytes]; real arms are well under 1 MB."""
@@ -53,7 +53,7 @@ UNDECLARED_NAMESPACE = "urn:nnrobust:undeclared:"
 
 def read_urdf_file(path: str | Path) -> str:
     """The text of a URDF file, refused when it is too large or not UTF-8; read from its copy when
-    the running task brought it with it (:func:`nnrobust.shipped_files.local`).
+    the running task brought it with it (:func:`nnrobust.core.shipped_files.local`).
     """
     path = Path(path)
     source = local(path)

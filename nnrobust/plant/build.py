@@ -2,7 +2,7 @@
 (:mod:`.section`): the true robot (armature, payload), friction, disturbance (its declaration,
 nnrobust/plant/disturbance.py), actuator limits, joint stops, sensors, delay, loads, and MuJoCo as
 the engine when asked. What the builders take beyond their sections is chosen by the composition
-root (:func:`nnrobust.experiment.build`): the control period, the duration and the disturbance
+root (:func:`nnrobust.run.experiment.build`): the control period, the duration and the disturbance
 ``auto`` resolves to.
 """
 
@@ -14,11 +14,11 @@ from collections.abc import Callable
 import numpy as np
 import pinocchio as pin
 
-from .. import user_parts
-from ..arrays import joint_vector, padded, per_joint
-from ..exceptions import ConfigError
-from ..ik import finite_limits
+from ..core.arrays import joint_vector, padded, per_joint
+from ..core.exceptions import ConfigError
 from ..model import PinocchioModel
+from ..model.ik import finite_limits
+from .custom import build_disturbance as build_custom_disturbance
 from .disturbance import DISTURBANCE_KINDS, Disturbance, ScaledDisturbance, SinusoidalDisturbance
 from .friction import Friction
 from .limits import JointStops
@@ -120,7 +120,7 @@ def build_plant(
     )
     disturbance: Disturbance
     if disturbance_kind == "custom":
-        disturbance = user_parts.build_disturbance(pc.disturbance_class or "", pc.disturbance_params, robot)
+        disturbance = build_custom_disturbance(pc.disturbance_class or "", pc.disturbance_params, robot)
     else:
         disturbance = DISTURBANCE_KINDS[disturbance_kind].build(pc, robot, tau_ref)
     rows = pc.disturbance_scale * _joint_scales(

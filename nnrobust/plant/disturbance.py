@@ -9,8 +9,8 @@ from typing import Any
 
 import numpy as np
 
-from ..exceptions import ConfigError
-from ..kinds import Kinds
+from ..core.exceptions import ConfigError
+from ..core.kinds import Kinds
 
 
 class Disturbance(ABC):
@@ -106,7 +106,7 @@ class DisturbanceKind:
     (``tau_ref()`` the robot's torque scale, computed once if asked for; a ConfigError names the
     key at fault). ``plant.disturbance_scale``, the per-joint scales, the frequency scale and the
     phase shift then apply to whatever it builds. ``params``: the ``[plant]`` keys it reads beyond
-    the section's fields, each declared (:class:`nnrobust.key_checks.LawParam`, named
+    the section's fields, each declared (:class:`nnrobust.core.key_checks.LawParam`, named
     ``plant.KEY``): defaulted, range-checked, inert under another disturbance.
     """
 

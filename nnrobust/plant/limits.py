@@ -61,7 +61,7 @@ class JointStops:
         alpha: Hunt-Crossley damping [s/rad or s/m].
         ring: per joint, the frequency [rad/s] at which the arm rings against the stop, sqrt(K_i
             (M^-1)_ii) at q(0) (0 for a joint without a stop); the plant step resolves it while
-            the joint is at its stop (:func:`nnrobust.simulation.step_rate`). None: not known.
+            the joint is at its stop (:func:`nnrobust.run.simulation.step_rate`). None: not known.
 
     """
 

@@ -24,8 +24,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..exceptions import ConfigError
-from ..numeric_limits import finite_number
+from ..core.exceptions import ConfigError
+from ..core.numeric_limits import finite_number
 
 LOAD_KINDS = ("step", "impulse", "wrench", "payload")
 """The values of a ``[[plant.loads]]`` entry's ``kind``."""
@@ -196,7 +196,7 @@ def parse_loads(
     configuration is checked before the robot is loaded). ``duration``: the run's [s]; a load
     starting at or after its end never acts, and a warning says so.
     """
-    from ..numeric_limits import MAX_PAYLOAD
+    from ..core.numeric_limits import MAX_PAYLOAD
 
     pulses, wrenches, payloads = [], [], []
     for i, entry in enumerate(entries or ()):

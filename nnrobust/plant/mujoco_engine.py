@@ -41,7 +41,7 @@ from typing import Any
 
 import numpy as np
 
-from ..exceptions import ConfigError, ModelMismatch, RobotLoadError
+from ..core.exceptions import ConfigError, ModelMismatch, RobotLoadError
 
 ENGINES = ("pinocchio", "mujoco")
 """The true plant's physics engines (``plant.engine``)."""

@@ -8,8 +8,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import ClassVar
 
-from ..exceptions import ConfigError
-from ..key_checks import (
+from ..core.exceptions import ConfigError
+from ..core.key_checks import (
     DeclaredKeys,
     check_choice,
     require_non_negative,
@@ -17,7 +17,7 @@ from ..key_checks import (
     require_positive,
     require_seed,
 )
-from ..numeric_limits import MAX_FACTOR, MAX_PAYLOAD, MAX_PHYSICAL, MAX_STOP_STIFFNESS
+from ..core.numeric_limits import MAX_FACTOR, MAX_PAYLOAD, MAX_PHYSICAL, MAX_STOP_STIFFNESS
 from .disturbance import DISTURBANCE_KINDS
 from .mujoco_engine import ENGINES, MUJOCO_INTEGRATORS
 

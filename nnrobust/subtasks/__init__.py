@@ -1,6 +1,6 @@
 """Self-motion criteria h_i(q) with analytic gradients, eqs. (3), (4) and (19)."""
 
-from ..kinds import import_modules as _import_modules
+from ..core.kinds import import_modules as _import_modules
 from .base import Criterion, WeightedCriteria
 from .joint_limits import JointCentering, JointLimitAvoidance
 from .joint_smoothness import PAPER_SMOOTHNESS, JointSmoothness, PaperCriterion

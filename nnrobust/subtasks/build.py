@@ -7,8 +7,9 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from ..exceptions import ConfigError
+from ..core.exceptions import ConfigError
 from .base import Criterion, WeightedCriteria
+from .custom import build_criterion as build_custom_criterion
 from .registry import CRITERION_KINDS
 from .section import SubtaskConfig
 
@@ -18,7 +19,6 @@ if TYPE_CHECKING:
 
 def build_criterion(sc: SubtaskConfig, robot: PinocchioModel) -> Criterion | None:
     """Weighted sum of the named criteria, eq. (4), or None."""
-    from .. import user_parts
     from .registry import default_criteria
 
     names = default_criteria(robot.nq, robot.task) if sc.criteria is None else sc.criteria
@@ -29,7 +29,7 @@ def build_criterion(sc: SubtaskConfig, robot: PinocchioModel) -> Criterion | Non
         valid = ", ".join(sorted(CRITERION_KINDS))
         raise ConfigError("subtasks.criteria", f"unknown {unknown}; valid: {valid}, custom")
     criteria = [
-        user_parts.build_criterion(sc.criterion_class or "", sc.criterion_params, robot)
+        build_custom_criterion(sc.criterion_class or "", sc.criterion_params, robot)
         if name == "custom"
         else CRITERION_KINDS[name].build(sc, robot)
         for name in names

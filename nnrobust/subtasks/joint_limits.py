@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..exceptions import ConfigError
+from ..core.exceptions import ConfigError
 from ..model.base import DynamicsModel
 from .base import Criterion
 from .registry import CriterionKind, declare

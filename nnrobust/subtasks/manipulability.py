@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..core.small_linalg import adjugate, det
 from ..model.base import DynamicsModel
-from ..small_linalg import adjugate, det
 from .base import Criterion
 from .registry import CriterionKind, declare
 

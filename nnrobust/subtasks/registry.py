@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from ..kinds import Kinds
+from ..core.kinds import Kinds
 from .base import Criterion
 
 
@@ -32,7 +32,7 @@ class CriterionKind:
             (2-D arrays; a number is 1 x 1, a vector k x 1); None: no compiled twin.
         det: whether it reads det(J J^T) (its twin is compiled for planar and position tasks).
         params: the ``[subtasks]`` keys it reads beyond the section's fields, each declared
-            (:class:`nnrobust.key_checks.LawParam`, named ``subtasks.KEY``): a valid key of any
+            (:class:`nnrobust.core.key_checks.LawParam`, named ``subtasks.KEY``): a valid key of any
             experiment, defaulted, range-checked and inert while the criterion is not chosen.
         twin_source: the C++ file of a twin compiled apart (a criterion declared outside
             nnrobust, docs/extending.md#a-twin-in-c); None: the twin is shipped.
@@ -51,7 +51,7 @@ class CriterionKind:
 
     def twin_values(self, criterion: Criterion) -> dict[str, np.ndarray]:
         """The twin's fields as 2-D float arrays (what LoopSpec.criterion_params carries)."""
-        from ..twins import field_array
+        from ..core.twins import field_array
 
         assert self.twin_fields is not None, self.name
         return {key: field_array(value) for key, value in self.twin_fields(criterion).items()}

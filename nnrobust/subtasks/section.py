@@ -8,8 +8,8 @@ import math
 from dataclasses import dataclass, field
 from typing import ClassVar
 
-from ..exceptions import ConfigError
-from ..key_checks import DeclaredKeys, require_non_negative, require_positive
+from ..core.exceptions import ConfigError
+from ..core.key_checks import DeclaredKeys, require_non_negative, require_positive
 from .registry import CRITERION_KINDS, default_criteria
 
 

@@ -25,7 +25,7 @@ class Trajectory(ABC):
     """The name its compiled twin registers under in csrc/trajectories/ (None: Python only)."""
 
     twin_fields: ClassVar[tuple[str, ...]] = ()
-    """The attributes its twin reads, by name (:mod:`nnrobust.twins`)."""
+    """The attributes its twin reads, by name (:mod:`nnrobust.core.twins`)."""
 
     @abstractmethod
     def __call__(self, t: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -1,7 +1,7 @@
 """How an experiment builds its desired trajectory from its own section, ``[trajectory]``
 (:mod:`.section`): the declared path (nnrobust/trajectories/registry.py), with a rocking or held
 orientation for a pose task, or a user's class. Beyond its section a builder takes
-``simulation.q_seed``, chosen by the composition root (:func:`nnrobust.experiment.build`): where
+``simulation.q_seed``, chosen by the composition root (:func:`nnrobust.run.experiment.build`): where
 a path without a start, or a pose without an orientation, is read from.
 """
 
@@ -11,6 +11,7 @@ import numpy as np
 import pinocchio as pin
 
 from .base import Trajectory
+from .custom import build_trajectory as build_custom_trajectory
 from .pose import PoseTrajectory, PositionPath
 from .registry import PATH_KINDS, path_key
 from .section import TrajectoryConfig
@@ -25,13 +26,12 @@ def build_trajectory(tc: TrajectoryConfig, robot, q_seed: list[float] | None) ->
     """The position path (:func:`build_path`), with a rocking or held orientation for a pose task;
     or a user's trajectory (``kind = "custom"``).
     """
-    from .. import user_parts
-    from ..ik import reach, seed_configuration
     from ..model import PinocchioModel
+    from ..model.ik import reach, seed_configuration
     from ..model.tasks import split_pose
 
     if tc.kind == "custom":
-        return user_parts.build_trajectory(tc.class_ or "", tc.params, robot, robot.task)
+        return build_custom_trajectory(tc.class_ or "", tc.params, robot, robot.task)
     path = build_path(tc, robot, q_seed)
     if robot.task != "pose":
         return path

@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..exceptions import ConfigError
+from ..core.exceptions import ConfigError
 from .base import Trajectory
 from .registry import PathKind, declare
 

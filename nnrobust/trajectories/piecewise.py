@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..exceptions import ConfigError
+from ..core.exceptions import ConfigError
 from .base import Trajectory
 from .registry import PathKind, declare
 
@@ -144,7 +144,7 @@ def _check_point_to_point(tc) -> None:
 
 def _build_point_to_point(tc, robot, q_seed) -> PiecewisePolynomialPath:
     """From ``start``, or from where the task frame is at ``simulation.q_seed``, to ``goal``."""
-    from ..ik import seed_configuration
+    from ..model.ik import seed_configuration
     from ..model.tasks import split_pose
 
     goal = tc.goal or []

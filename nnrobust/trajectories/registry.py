@@ -11,7 +11,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from ..kinds import Kinds
+from ..core.kinds import Kinds
 from .base import Trajectory
 
 
@@ -30,7 +30,7 @@ class PathKind:
         build: ``build(trajectory_section, robot, q_seed)`` -> the path (``q_seed``:
             ``simulation.q_seed``, where a path that starts where the arm is reads the start).
         params: the ``[trajectory]`` keys it reads beyond the section's fields, each declared
-            (:class:`nnrobust.key_checks.LawParam`, named ``trajectory.KEY``; list them in
+            (:class:`nnrobust.core.key_checks.LawParam`, named ``trajectory.KEY``; list them in
             ``keys`` too): defaulted, range-checked, inert under another path.
 
     """

@@ -8,8 +8,8 @@ import math
 from dataclasses import dataclass, field
 from typing import ClassVar
 
-from ..exceptions import ConfigError
-from ..key_checks import DeclaredKeys, check_choice
+from ..core.exceptions import ConfigError
+from ..core.key_checks import DeclaredKeys, check_choice
 from .registry import PATH_KINDS, path_key
 
 

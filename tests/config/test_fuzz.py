@@ -195,7 +195,7 @@ def _mutate_toml(text: str, rng: random.Random) -> str:
 )
 @given(seed=st.integers(0, 2**32 - 1))
 def test_mutated_experiment_files(seed, tmp_path_factory):
-    from nnrobust.presets import load_preset
+    from nnrobust.config.presets import load_preset
 
     folder = tmp_path_factory.mktemp("toml")
     base = load_preset("paper-line").replace(simulation={"duration": 0.05}).to_toml()

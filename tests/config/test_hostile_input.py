@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from nnrobust.cli import main
-from nnrobust.exceptions import NNRobustError
+from nnrobust.core.exceptions import NNRobustError
 
 from ..bad_inputs import (
     CASES,
@@ -319,8 +319,8 @@ def test_long_numbers_in_messages_are_shown_to_six_digits(capsys):
     """A 300-digit integer given for a value was echoed whole into errors and warnings; every
     message line shows numbers of more than 20 digits as %.6g does (names, paths and digests
     that hold digits are left as they are)."""
-    from nnrobust.cli import _warning_line
-    from nnrobust.exceptions import ConfigError, one_line
+    from nnrobust.cli.console import warning_line as _warning_line
+    from nnrobust.core.exceptions import ConfigError, one_line
 
     assert one_line(f"got {'9' * 300} and -{'1' * 30}") == "got 1e+300 and -1.11111e+29"
     assert one_line(f"x = 0.{'0' * 300}1, y = 0.30000000000000004") == "x = 1e-301, y = 0.30000000000000004"

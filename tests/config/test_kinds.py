@@ -1,4 +1,4 @@
-"""The one shape of every registry of kinds (nnrobust/kinds.py): the paper's kinds, the registered
+"""The one shape of every registry of kinds (nnrobust/core/kinds.py): the paper's kinds, the registered
 laws, the criteria, the paths and the disturbances are each a Kinds, filled by their room's
 modules when the room is imported."""
 
@@ -10,10 +10,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nnrobust import compiled
 from nnrobust.controllers.nn_compensator import error_dynamics, lyapunov_P
-from nnrobust.kinds import Kinds
+from nnrobust.core.kinds import Kinds
 from nnrobust.plant.disturbance import Disturbance
+from nnrobust.run import compiled
 from nnrobust.subtasks.base import Criterion
 from nnrobust.trajectories import Trajectory
 
@@ -59,7 +59,7 @@ def test_every_registry_is_a_kinds_filled_when_its_room_is_imported():
 
 
 def _paper(**sections):
-    from nnrobust.presets import load_preset
+    from nnrobust.config.presets import load_preset
 
     return load_preset("paper-ellipse").replace(simulation={"duration": 0.05}, **sections)
 
@@ -251,8 +251,8 @@ def test_a_kind_of_each_concept_declared_here_brings_its_own_key_and_twin(case, 
     component (the one twin-test case each)."""
     from nnrobust.config import apply_overrides, inert_keys
     from nnrobust.controllers.registry import LAWS
-    from nnrobust.exceptions import ConfigError
-    from nnrobust.experiment import build, run_experiment
+    from nnrobust.core.exceptions import ConfigError
+    from nnrobust.run.experiment import build, run_experiment
 
     sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "docs"))
     import render_tables
@@ -325,8 +325,8 @@ def _twin_case(setup, section):
 def test_a_twin_file_is_checked_against_its_declaration(tmp_path):
     """A twin_source that registers another name, a shipped name, or nothing is refused in one
     line naming the file; so is a path that is not a C++ file."""
-    from nnrobust.exceptions import ConfigError
-    from nnrobust.native_law import load_twin_source
+    from nnrobust.core.exceptions import ConfigError
+    from nnrobust.plugins.native_law import load_twin_source
 
     if not compiled.available():
         pytest.skip(compiled.unavailable_reason())

@@ -14,8 +14,8 @@ from nnrobust.controllers import (
     lyapunov_Q,
     project_null_space,
 )
-from nnrobust.experiment import build
-from nnrobust.simulation import simulate
+from nnrobust.run.experiment import build
+from nnrobust.run.simulation import simulate
 
 from ..problems import paper_robot, random_states
 
@@ -236,8 +236,8 @@ def test_the_pd_null_damping_is_sized_from_the_arm():
     damping's rate r is the geometric mean of eig(J M^-1 J^T K_d), sqrt(det) for two rows; at a
     long period, D stops at m_s / (2 T). The PD built at the defaults uses it; a value set is kept."""
     from nnrobust.config import apply_overrides
+    from nnrobust.config.presets import load_preset
     from nnrobust.controllers.task_space import sized_null_damping
-    from nnrobust.presets import load_preset
 
     from ..problems import closed_form_of
 
@@ -264,12 +264,13 @@ def test_one_of_the_papers_kinds_is_one_declaration(monkeypatch):
     builder, reads its keys while the other kinds' stay inert, and brings its robust term's search
     coordinates to the tuner: nothing else names it."""
     from nnrobust.config import controller_kinds, inert_keys
+    from nnrobust.config.presets import load_preset
     from nnrobust.controllers.registry import PAPER_KINDS, PaperKind
     from nnrobust.controllers.sliding_mode import SlidingModeCompensator
     from nnrobust.controllers.task_space import eq9_law
-    from nnrobust.experiment import run_experiment
-    from nnrobust.presets import load_preset
-    from nnrobust.tune.space import Param, arm_scales, search_space, tunable
+    from nnrobust.run.experiment import run_experiment
+    from nnrobust.studies.base.tuned import tunable
+    from nnrobust.studies.tune.space import Param, arm_scales, search_space
 
     built = []
 
@@ -325,7 +326,7 @@ def test_the_papers_kinds_keys_are_defaulted_and_checked_by_their_declarations(m
 
     from nnrobust.config import from_dict
     from nnrobust.controllers.registry import PAPER_KINDS, declared_default, declared_params
-    from nnrobust.exceptions import ConfigError
+    from nnrobust.core.exceptions import ConfigError
 
     config = ExperimentConfig()
     declared = declared_params()

@@ -13,12 +13,12 @@ import numpy as np
 import pytest
 
 import nnrobust
-from nnrobust import compiled
 from nnrobust.cli import main
 from nnrobust.config import load_config
-from nnrobust.exceptions import ConfigError, ControllerError
-from nnrobust.experiment import build, run_experiment
-from nnrobust.presets import load_preset
+from nnrobust.config.presets import load_preset
+from nnrobust.core.exceptions import ConfigError, ControllerError
+from nnrobust.run import compiled
+from nnrobust.run.experiment import build, run_experiment
 
 LAWS = Path(__file__).parents[1] / "controllers" / "eq9_again.py"
 
@@ -382,7 +382,7 @@ def test_a_signal_inside_the_hybrid_loop_keeps_the_steps_so_far(tmp_path):
     """Ctrl-C while the Python controller runs: the run stops, marked interrupted, with its steps."""
     import signal
 
-    from nnrobust.signals import signals_as_interrupt
+    from nnrobust.core.signals import signals_as_interrupt
 
     config = load_config(_experiment(tmp_path, "Counter", extra='backend = "hybrid"\n', duration=5.0))
     setup = build(config)

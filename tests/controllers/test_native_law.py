@@ -1,4 +1,4 @@
-"""A user's law in C++ (nnrobust/native_law.py; docs/extending.md#a-law-in-c): one .cpp file named
+"""A user's law in C++ (nnrobust/plugins/native_law.py; docs/extending.md#a-law-in-c): one .cpp file named
 like a Python class is compiled on first use (cached by SHA-256), loaded into the compiled loop
 and run there; with its Python twin (examples/custom_controller.py's TaskPD) it gives the same
 run; a broken file gets the compiler's own lines.
@@ -11,10 +11,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nnrobust import compiled
-from nnrobust.exceptions import ConfigError
-from nnrobust.experiment import build, run_experiment
-from nnrobust.presets import load_preset
+from nnrobust.config.presets import load_preset
+from nnrobust.core.exceptions import ConfigError
+from nnrobust.run import compiled
+from nnrobust.run.experiment import build, run_experiment
 
 pytestmark = [
     pytest.mark.skipif(not compiled.available(), reason=compiled.unavailable_reason()),
@@ -51,7 +51,7 @@ def _config(preset, cls, **simulation):
 
 @pytest.mark.parametrize("preset", ["paper-ellipse-noisy", "panda-ellipse"])
 def test_the_cpp_law_runs_compiled_and_is_its_python_twin(preset, tmp_path):
-    from nnrobust.experiment import compare_twins
+    from nnrobust.run.experiment import compare_twins
 
     config = load_preset(preset).replace(simulation={"duration": 1.0})
     twins = compare_twins(config, f"{CPP}:TaskPD", f"{PY}:TaskPD", PARAMS)
@@ -63,7 +63,7 @@ def test_the_cpp_law_runs_compiled_and_is_its_python_twin(preset, tmp_path):
     off.write_text(PY.read_text().replace("- self.Kd * de", "- 2.0 * self.Kd * de"))
     assert compare_twins(config, f"{CPP}:TaskPD", f"{off}:TaskPD", PARAMS)["tau_cmd"] > 1e-3
     # what ran is recorded: the file's SHA-256 in the run's configuration
-    from nnrobust.user_code import file_digest
+    from nnrobust.plugins.user_code import file_digest
 
     assert (
         f"sha256: {file_digest(CPP)}"
@@ -74,7 +74,7 @@ def test_the_cpp_law_runs_compiled_and_is_its_python_twin(preset, tmp_path):
 def test_the_library_is_cached_by_content(law_cache, tmp_path):
     """One compile per content: the same file again is the same library, untouched; an edit is a
     new library (a file without the law header: the cache does not care what it holds)."""
-    from nnrobust.native_law import compiled_library
+    from nnrobust.plugins.native_law import compiled_library
 
     source = tmp_path / "cached.cpp"
     source.write_text('extern "C" int cached_value(void) { return 1; }\n')
@@ -119,7 +119,7 @@ def test_a_cpp_law_joins_a_sweep_and_its_rows_are_the_python_twins(tmp_path, mon
     import json
 
     from nnrobust.cli import main
-    from nnrobust.sweep import read_results
+    from nnrobust.studies.sweep import read_results
 
     shutil.copy(CPP, tmp_path / "task_pd.cpp")
     shutil.copy(PY, tmp_path / "task_pd.py")
@@ -155,9 +155,9 @@ def test_a_cpp_law_is_tuned_in_the_space_it_declares(tmp_path):
     searched, and its best setting reruns (on the compiled loop) to its training metrics."""
     pytest.importorskip("optuna")
     from nnrobust.config import apply_overrides
-    from nnrobust.sweep.spec import base_config, draw, experiment
-    from nnrobust.tune import TuneSpec, run_tune
-    from nnrobust.tune.engine import sweep_of
+    from nnrobust.studies.base.plan import base_config, draw, experiment
+    from nnrobust.studies.tune import TuneSpec, run_tune
+    from nnrobust.studies.tune.engine import sweep_of
 
     short = tmp_path / "short.toml"
     short.write_text(load_preset("paper-ellipse-noisy").replace(simulation={"duration": 2.5}).to_toml())
@@ -208,7 +208,7 @@ def test_a_cpp_law_is_falsified_and_its_worst_plant_reruns(tmp_path):
     import shlex
 
     from nnrobust.cli import main
-    from nnrobust.falsify import FalsifySpec, run_falsify
+    from nnrobust.studies.falsify import FalsifySpec, run_falsify
 
     sweep = tmp_path / "fz.toml"
     sweep.write_text(
@@ -241,7 +241,7 @@ def test_a_study_takes_a_cpp_law_through_every_stage(tmp_path):
     import json
 
     from nnrobust.cli import main
-    from nnrobust.user_code import file_digest
+    from nnrobust.plugins.user_code import file_digest
 
     mujoco = importlib.util.find_spec("mujoco") is not None
     shutil.copy(CPP, tmp_path / "task_pd.cpp")

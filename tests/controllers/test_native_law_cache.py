@@ -1,4 +1,4 @@
-"""The cache of a law's library (nnrobust/native_law.py): keyed by everything the compiler read,
+"""The cache of a law's library (nnrobust/plugins/native_law.py): keyed by everything the compiler read,
 the headers a law includes beside it among them (ccache's direct mode: the .d file of -MMD,
 each header's SHA-256 in a manifest), and never trusting a damaged library.
 """
@@ -12,9 +12,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nnrobust import compiled
-from nnrobust.experiment import run_experiment
-from nnrobust.presets import load_preset
+from nnrobust.config.presets import load_preset
+from nnrobust.run import compiled
+from nnrobust.run.experiment import run_experiment
 
 pytestmark = [
     pytest.mark.skipif(not compiled.available(), reason=compiled.unavailable_reason()),
@@ -61,7 +61,7 @@ def _folder(root: Path, name: str, source: str, gain: float) -> Path:
 def test_a_header_is_part_of_the_key(cache, tmp_path):
     """Two folders with the same .cpp and other headers: two libraries; an edited header: another
     library; the header as it was: the first library again, not compiled again."""
-    from nnrobust.native_law import compiled_library
+    from nnrobust.plugins.native_law import compiled_library
 
     a = _folder(tmp_path, "a", TINY, 1.0)
     b = _folder(tmp_path, "b", TINY, 2.0)
@@ -128,9 +128,9 @@ def test_a_study_records_the_headers_and_sends_them_to_its_workers(cache, tmp_pa
     """A sweep's inputs name each header its C++ law includes: an edited header is a changed input
     (a resume is refused, naming it), and the files sent to workers that do not see the client's
     hold it, so that such a worker compiles the law from them."""
-    from nnrobust.native_law import library
-    from nnrobust.shipped_files import bundle_of, local, within
-    from nnrobust.sweep.spec import load_sweep, study_inputs
+    from nnrobust.core.shipped_files import bundle_of, local, within
+    from nnrobust.plugins.native_law import library
+    from nnrobust.studies.base.plan import load_sweep, study_inputs
 
     a = _folder(tmp_path, "a", TINY, 1.0)
     sweep = tmp_path / "sweep.toml"

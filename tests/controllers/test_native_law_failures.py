@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from nnrobust import compiled
+from nnrobust.run import compiled
 
 pytestmark = [
     pytest.mark.skipif(not compiled.available(), reason=compiled.unavailable_reason()),
@@ -114,7 +114,7 @@ def test_a_law_that_ends_its_worker_is_named_in_the_sweep(cache, tmp_path):
     and the rows are crashed, naming the law (exit 0 before: no worker restarted, and a study
     ended after 120 s on "the cluster has had no worker")."""
     pytest.importorskip("distributed")
-    from nnrobust.sweep import read_results
+    from nnrobust.studies.sweep import read_results
 
     sweep = tmp_path / "sweep.toml"
     sweep.write_text(
@@ -140,8 +140,8 @@ def test_a_law_that_ends_its_worker_is_named_in_the_sweep(cache, tmp_path):
 def test_an_error_names_the_file_the_run_loaded(cache, tmp_path, monkeypatch):
     """Two files of the same content share one library: each run's error names its own file."""
     from nnrobust.config import load_config
-    from nnrobust.exceptions import ControllerError
-    from nnrobust.experiment import run_experiment
+    from nnrobust.core.exceptions import ControllerError
+    from nnrobust.run.experiment import run_experiment
 
     monkeypatch.setenv("NNROBUST_CACHE", str(cache))
     for name in ("a", "b", "a"):

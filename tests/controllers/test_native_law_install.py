@@ -21,7 +21,7 @@ from pathlib import Path
 import pytest
 from packaging.requirements import Requirement
 
-from nnrobust import compiled
+from nnrobust.run import compiled
 
 pytestmark = [
     pytest.mark.skipif(not compiled.available(), reason=compiled.unavailable_reason()),

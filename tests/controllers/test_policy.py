@@ -9,13 +9,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nnrobust import compiled
 from nnrobust.cli import main
 from nnrobust.config import load_config
-from nnrobust.exceptions import ConfigError, ControllerError
-from nnrobust.experiment import build, run_experiment
-from nnrobust.learning import ObservationLayout
-from nnrobust.presets import load_preset
+from nnrobust.config.presets import load_preset
+from nnrobust.core.exceptions import ConfigError, ControllerError
+from nnrobust.run import compiled
+from nnrobust.run.experiment import build, run_experiment
+from nnrobust.studies.learning import ObservationLayout
 
 pytest.importorskip("onnxruntime")
 pytest.importorskip("onnx")
@@ -169,7 +169,7 @@ def test_a_policy_entry_runs_in_a_sweep_on_the_same_plants(tmp_path):
     sample for sample (common random numbers), exactly eq. (9)'s own rows; the file's SHA-256
     is among the sweep's inputs."""
     pytest.importorskip("distributed")
-    from nnrobust.sweep import load_sweep, read_results, run_sweep
+    from nnrobust.studies.sweep import load_sweep, read_results, run_sweep
 
     linear_policy(tmp_path / "zero.onnx", PAPER.size, 3)
     (tmp_path / "sweep.toml").write_text(

@@ -9,10 +9,11 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from nnrobust import compiled, run_experiment
-from nnrobust.exceptions import ConfigError
-from nnrobust.experiment import build
-from nnrobust.presets import load_preset
+from nnrobust import run_experiment
+from nnrobust.config.presets import load_preset
+from nnrobust.core.exceptions import ConfigError
+from nnrobust.run import compiled
+from nnrobust.run.experiment import build
 
 CASES = {
     "paper arm, joint basis": ("paper-ellipse", {}),

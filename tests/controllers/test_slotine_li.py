@@ -10,10 +10,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nnrobust import compiled, run_experiment
-from nnrobust.exceptions import ConfigError
-from nnrobust.experiment import build
-from nnrobust.presets import load_preset, preset_names
+from nnrobust import run_experiment
+from nnrobust.config.presets import load_preset, preset_names
+from nnrobust.core.exceptions import ConfigError
+from nnrobust.run import compiled
+from nnrobust.run.experiment import build
 
 EXAMPLES = Path(__file__).resolve().parents[2] / "examples"
 

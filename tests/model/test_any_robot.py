@@ -10,8 +10,8 @@ import pinocchio as pin
 import pytest
 
 from nnrobust import load_robot
-from nnrobust.exceptions import NNRobustError, RobotLoadError
-from nnrobust.experiment import run_experiment
+from nnrobust.config.presets import load_preset
+from nnrobust.core.exceptions import NNRobustError, RobotLoadError
 from nnrobust.model.continuous_joints import (
     angles_from_configuration,
     configuration_from_angles,
@@ -20,7 +20,7 @@ from nnrobust.model.continuous_joints import (
 )
 from nnrobust.model.example_robots import example_robot, robot_names
 from nnrobust.plant.scaling import implausible_efforts, torque_scale
-from nnrobust.presets import load_preset
+from nnrobust.run.experiment import run_experiment
 
 
 def _quiet(call, *args, **kwargs):
@@ -253,7 +253,7 @@ def test_a_minimal_experiment_file_runs_on_any_arm(tmp_path, controller):
     """Robot, task and trajectory only: the defaults adapt (the paper's criterion and disturbance
     only on the paper's arm), and the run completes bounded."""
     from nnrobust.config import load_config
-    from nnrobust.experiment import build, run_experiment
+    from nnrobust.run.experiment import build, run_experiment
 
     path = tmp_path / "minimal.toml"
     path.write_text(
@@ -272,8 +272,8 @@ def test_a_minimal_experiment_file_runs_on_any_arm(tmp_path, controller):
 
 def test_the_paper_arm_keeps_the_papers_defaults():
     from nnrobust.config import ExperimentConfig
-    from nnrobust.experiment import build
     from nnrobust.plant import SinusoidalDisturbance
+    from nnrobust.run.experiment import build
 
     setup = build(ExperimentConfig().replace(simulation={"duration": 1.0}))
     assert [type(c).__name__ for c in setup.criterion.criteria] == ["PaperCriterion"]
@@ -352,7 +352,7 @@ def test_the_pybullet_arms_track_a_circle_with_the_defaults(arm, controller, tmp
     """Issue 22's acceptance: each arm, unmodified, runs a position-task circle with nn and pd at
     the default settings, bounded (the substeps, where its light wrist needs them, chosen and said)."""
     from nnrobust.config import load_config
-    from nnrobust.experiment import run_experiment
+    from nnrobust.run.experiment import run_experiment
 
     path = tmp_path / "circle.toml"
     source = Path(__file__).parents[1] / "data" / "pybullet" / arm

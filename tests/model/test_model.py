@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from nnrobust import load_robot
-from nnrobust.exceptions import FrameNotFound, ModelMismatch, NNRobustError, RobotLoadError
+from nnrobust.core.exceptions import FrameNotFound, ModelMismatch, NNRobustError, RobotLoadError
 from nnrobust.model import DynamicsModel, ThreeLinkParameters, ThreeLinkPlanarModel, paper_arm_urdf
 
 from ..paper_printed import printed_coriolis, printed_mass

@@ -9,13 +9,13 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from nnrobust.config import from_dict, load_config
+from nnrobust.config.presets import load_preset, preset_path
 from nnrobust.controllers import DampedPseudoInverse, project_null_space
-from nnrobust.exceptions import NNRobustError
-from nnrobust.experiment import build
+from nnrobust.core.exceptions import NNRobustError
 from nnrobust.model import load_robot, paper_arm_urdf
 from nnrobust.plant import Friction, Plant, SinusoidalDisturbance
-from nnrobust.presets import load_preset, preset_path
-from nnrobust.simulation import simulate
+from nnrobust.run.experiment import build
+from nnrobust.run.simulation import simulate
 
 from ..arms import arm
 from ..problems import ConstantTorque

@@ -4,8 +4,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from nnrobust.ik import solve_ik
 from nnrobust.model import planar_chain_urdf
+from nnrobust.model.ik import solve_ik
 from nnrobust.model.tasks import pose_vector, split_pose, task_error
 from nnrobust.trajectories import EllipseTrajectory, PoseTrajectory
 
@@ -148,7 +148,7 @@ def test_generated_chain_rejects_bad_parameters():
 def test_joint_count_is_bounded_by_pinocchio_memory():
     """pin.Data grows as n^3; more than MAX_JOINTS joints is refused with the reason."""
     from nnrobust import load_robot
-    from nnrobust.exceptions import ModelMismatch, RobotLoadError
+    from nnrobust.core.exceptions import ModelMismatch, RobotLoadError
     from nnrobust.model.pinocchio_model import MAX_JOINTS
 
     with pytest.raises(RobotLoadError, match="1 to 300 links"):

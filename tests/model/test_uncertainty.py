@@ -8,11 +8,11 @@ import pinocchio as pin
 import pytest
 
 from nnrobust.config import ExperimentConfig
-from nnrobust.exceptions import ConfigError
-from nnrobust.experiment import build_nominal, build_plant
+from nnrobust.core.exceptions import ConfigError
 from nnrobust.model import PinocchioModel
 from nnrobust.model.perturbation import is_physical, perturb_inertias
 from nnrobust.plant import scaled_disturbance, scaled_friction, torque_scale
+from nnrobust.run.experiment import build_nominal, build_plant
 
 from ..arms import arm, random_configurations
 
@@ -109,9 +109,9 @@ def test_configuration_builds_the_perturbed_nominal_and_scaled_plant():
 def test_stiff_viscous_friction_sets_the_substeps_or_is_refused_before_the_run():
     """On a 15-link chain 3 % viscous friction is a ~4e3 1/s mode: RK4 at 1 ms would diverge. With
     simulation.substeps unset, 2 are chosen and said; set to 1, the run is refused."""
-    from nnrobust.exceptions import ConfigError
-    from nnrobust.experiment import build
-    from nnrobust.presets import load_preset
+    from nnrobust.config.presets import load_preset
+    from nnrobust.core.exceptions import ConfigError
+    from nnrobust.run.experiment import build
 
     config = load_preset("planar7-ellipse").replace(
         robot={"source": "planar15"}, simulation={"q_seed": [0.9] + [-0.1] * 14}
@@ -127,8 +127,8 @@ def test_friction_scale_scales_the_plant_friction_only():
     """plant.friction_scale multiplies the true plant's viscous and Coulomb friction; the
     controller's nominal friction stays as configured."""
     from nnrobust.config import apply_overrides
-    from nnrobust.experiment import build as build_experiment
-    from nnrobust.presets import load_preset
+    from nnrobust.config.presets import load_preset
+    from nnrobust.run.experiment import build as build_experiment
 
     base = load_preset("paper-ellipse")
     one = build_experiment(base)
@@ -145,8 +145,8 @@ def test_relative_error_of_the_closed_form_model():
     """nominal.relative_error on the closed form: each of beta-hat, p-hat is off by its own seeded
     factor within [1 - r, 1 + r]; the same seed gives the same model, another seed another one."""
     from nnrobust.config import apply_overrides
-    from nnrobust.experiment import build as build_experiment
-    from nnrobust.presets import load_preset
+    from nnrobust.config.presets import load_preset
+    from nnrobust.run.experiment import build as build_experiment
 
     base = load_preset("paper-ellipse")
     exact = build_experiment(base).nominal.params
@@ -168,9 +168,9 @@ def test_model_error_as_factors_a_search_can_move_along():
     """nominal.factors: one factor per inertial parameter, set entry by entry (the others 1):
     closed form on (beta, p), URDF on each body's mass then its rotational inertia."""
     from nnrobust.config import apply_overrides
-    from nnrobust.exceptions import ConfigError
-    from nnrobust.experiment import build
-    from nnrobust.presets import load_preset
+    from nnrobust.config.presets import load_preset
+    from nnrobust.core.exceptions import ConfigError
+    from nnrobust.run.experiment import build
 
     paper = load_preset("paper-ellipse")
     exact = build(paper).nominal.params

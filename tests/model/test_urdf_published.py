@@ -14,7 +14,7 @@ import pytest
 
 from nnrobust import load_robot
 from nnrobust.cli import main
-from nnrobust.exceptions import UrdfSyntaxError
+from nnrobust.core.exceptions import UrdfSyntaxError
 from nnrobust.model.example_robots import example_robot
 from nnrobust.model.loading import load_visual_model, paper_arm_urdf
 from nnrobust.model.urdf_check import (
@@ -22,7 +22,7 @@ from nnrobust.model.urdf_check import (
     MissingMeshWarning,
     UndeclaredPrefixWarning,
 )
-from nnrobust.run_folder import load_run
+from nnrobust.outputs.run_folder import load_run
 
 OPENED: list[str] | None = None
 """Files this process opens while a test records them (:func:`opened`), else None."""
@@ -367,7 +367,7 @@ def test_mesh_folders_in_an_experiment_file_are_read_from_its_folder(tmp_path):
     """Relative entries of robot.mesh_folders are from the experiment file's folder, as
     robot.source; the filesystem root is refused, in one line naming the key."""
     from nnrobust.config import load_config
-    from nnrobust.exceptions import ConfigError
+    from nnrobust.core.exceptions import ConfigError
 
     (tmp_path / "sub").mkdir()
     experiment = tmp_path / "sub" / "experiment.toml"

@@ -5,11 +5,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from nnrobust.config.presets import load_preset
 from nnrobust.controllers import ControlOutput
-from nnrobust.experiment import build, run_experiment
 from nnrobust.plant import Friction, JointStops, Plant, Sensor, SinusoidalDisturbance, saturate
-from nnrobust.presets import load_preset
-from nnrobust.simulation import simulate
+from nnrobust.run.experiment import build, run_experiment
+from nnrobust.run.simulation import simulate
 
 from ..problems import ConstantTorque, paper_robot
 
@@ -87,7 +87,7 @@ def test_an_effort_limit_of_zero_is_said_to_be_no_limit(tmp_path, engine):
 def _stop_run(alpha, duration=0.4, period=5e-5, ring=False):
     """Joint 2 thrown at 4 rad/s into its stop at +2.8 rad; frictionless, no input. ``ring``: the
     stops know their ring frequencies, so the adaptive step resolves the contact (as built)."""
-    from nnrobust.experiment import stop_rings
+    from nnrobust.run.experiment import stop_rings
 
     robot = paper_robot()
     stops = JointStops(robot.lower_limits, robot.upper_limits, np.full(3, 2000.0), alpha)
@@ -221,7 +221,7 @@ def test_stiff_stops_are_refused_with_the_substeps_needed():
     """A stop too stiff for an RK4 step set explicitly gets a clear error before the run; with the
     substeps unset, each such stop is sized to the step from its joint's effective inertia,
     h omega = 1, and said (the yield at the torque scale is tiny here: 1e6 / rad was asked)."""
-    from nnrobust.exceptions import ConfigError
+    from nnrobust.core.exceptions import ConfigError
 
     config = load_preset("paper-ellipse").replace(plant={"joint_stop_stiffness": 1e6})
     with pytest.raises(ConfigError, match="joint_stop_stiffness.*substeps >="):

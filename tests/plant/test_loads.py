@@ -7,12 +7,12 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from nnrobust import compiled
+from nnrobust.config.presets import load_preset
 from nnrobust.controllers.base import Controller, ControlOutput
-from nnrobust.exceptions import ConfigError
-from nnrobust.experiment import build, run_experiment
-from nnrobust.presets import load_preset
-from nnrobust.simulation import simulate
+from nnrobust.core.exceptions import ConfigError
+from nnrobust.run import compiled
+from nnrobust.run.experiment import build, run_experiment
+from nnrobust.run.simulation import simulate
 
 needs_extension = pytest.mark.skipif(not compiled.available(), reason=compiled.unavailable_reason())
 

@@ -8,13 +8,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from nnrobust.exceptions import ConfigError, ModelMismatch
-from nnrobust.experiment import build, run_experiment
+from nnrobust.config.presets import load_preset
+from nnrobust.core.exceptions import ConfigError, ModelMismatch
 from nnrobust.model.loading import load_robot
+from nnrobust.outputs.run_folder import load_run, write_run
 from nnrobust.plant import Friction, Plant, SinusoidalDisturbance
-from nnrobust.presets import load_preset
-from nnrobust.run_folder import load_run, write_run
-from nnrobust.simulation import _rk4_step
+from nnrobust.run.experiment import build, run_experiment
+from nnrobust.run.simulation import _rk4_step
 
 mujoco = pytest.importorskip("mujoco")
 
@@ -241,7 +241,7 @@ def test_a_payload_enters_both_engines_alike(preset):
     """plant.payload: MuJoCo's model carries the same sphere (the audit of M, the bias and gravity
     against Pinocchio's loaded true model still passes, and its total mass grows by the payload);
     a run with it is the same on both loops."""
-    from nnrobust import compiled
+    from nnrobust.run import compiled
 
     config = load_preset(preset).replace(
         plant={"engine": "mujoco", "payload": 2.5}, simulation={"duration": 0.5}
@@ -325,7 +325,7 @@ def test_a_custom_controller_on_mujoco_same_on_the_hybrid_and_python_loops():
 def test_a_sweep_varies_the_engine(tmp_path):
     """plant.engine in [vary]: each sample runs on its engine (the same draw: different, close)."""
     pytest.importorskip("distributed")
-    from nnrobust.sweep import load_sweep, read_results, run_sweep
+    from nnrobust.studies.sweep import load_sweep, read_results, run_sweep
 
     path = tmp_path / "gap.toml"
     path.write_text(

@@ -2,9 +2,9 @@ import numpy as np
 import pytest
 
 from nnrobust.config import ExperimentConfig
-from nnrobust.experiment import build
 from nnrobust.plant import Friction, Plant, SinusoidalDisturbance
-from nnrobust.simulation import simulate
+from nnrobust.run.experiment import build
+from nnrobust.run.simulation import simulate
 
 from ..problems import VERTICAL_GRAVITY, ConstantTorque, paper_robot
 
@@ -170,7 +170,7 @@ def test_per_joint_friction_and_disturbance_scales_and_the_disturbance_frequency
     disturbance row after the global scales, missing entries being 1; disturbance_omega_scale and
     disturbance_phase_shift move every harmonic; one entry is set alone as an indexed key."""
     from nnrobust.config import apply_overrides
-    from nnrobust.presets import load_preset
+    from nnrobust.config.presets import load_preset
 
     base = load_preset("paper-ellipse").replace(plant={"friction_scale": 2.0, "disturbance_scale": 0.5})
     ref = build(base).plant
@@ -207,8 +207,8 @@ def test_a_payload_is_a_sphere_at_the_task_frame_in_the_true_plant_only(preset):
     gravity exactly m g through Jv; the controller's nominal model is unchanged."""
     import pinocchio as pin
 
+    from nnrobust.config.presets import load_preset
     from nnrobust.plant.build import PAYLOAD_RADIUS
-    from nnrobust.presets import load_preset
 
     base = load_preset(preset)
     m = 2.5
@@ -233,11 +233,11 @@ def test_every_declared_disturbance_is_a_choice_and_builds_what_it_says():
     """plant.disturbance takes the declared kinds (and auto, custom); each builds on the paper's
     arm: none is zero, paper the paper's tau_d, scaled peaks at disturbance_level x the torque
     scale on every joint, sinusoid is the amplitudes given."""
-    from nnrobust.exceptions import ConfigError
-    from nnrobust.experiment import build
+    from nnrobust.config.presets import load_preset
+    from nnrobust.core.exceptions import ConfigError
     from nnrobust.plant.disturbance import DISTURBANCE_KINDS, SinusoidalDisturbance
     from nnrobust.plant.scaling import torque_scale
-    from nnrobust.presets import load_preset
+    from nnrobust.run.experiment import build
 
     assert set(DISTURBANCE_KINDS) == {"none", "paper", "scaled", "sinusoid"}
     base = load_preset("paper-ellipse").replace(simulation={"duration": 0.01})

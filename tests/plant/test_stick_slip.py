@@ -3,12 +3,13 @@
 import numpy as np
 import pytest
 
-from nnrobust import compiled, load_robot
+from nnrobust import load_robot
+from nnrobust.config.presets import load_preset
 from nnrobust.model.planar_chain import planar_chain_urdf
 from nnrobust.plant import Friction, Plant, SinusoidalDisturbance
 from nnrobust.plant.stick_slip import settle
-from nnrobust.presets import load_preset
-from nnrobust.simulation import simulate
+from nnrobust.run import compiled
+from nnrobust.run.simulation import simulate
 
 from ..problems import ConstantTorque, paper_robot
 
@@ -122,7 +123,7 @@ def test_the_plant_step_is_converged_for_a_chattering_controller():
         },
         simulation={"duration": 3.0, "backend": "compiled"},
     )
-    from nnrobust.experiment import run_experiment
+    from nnrobust.run.experiment import run_experiment
 
     coarse, fine = (run_experiment(config.replace(simulation={"substeps": s})).metrics() for s in (1, 16))
     assert coarse["rms_torque"] == pytest.approx(fine["rms_torque"], rel=0.02)

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from nnrobust.controllers import DampedPseudoInverse, TaskSpaceController, project_null_space
-from nnrobust.ik import solve_ik
 from nnrobust.model import PinocchioModel
+from nnrobust.model.ik import solve_ik
 from nnrobust.plant import Friction, Plant, SinusoidalDisturbance
-from nnrobust.simulation import simulate
+from nnrobust.run.simulation import simulate
 from nnrobust.subtasks import (
     HalfDetManipulability,
     JointCentering,
@@ -204,9 +204,9 @@ def test_ik_reaches_a_reachable_target_from_another_seed(name, task):
 
 def test_initial_state_keeps_a_margin_inside_the_limits():
     """A q_seed on a joint limit: the initial inverse kinematics starts 2 % of the range inside."""
-    from nnrobust.experiment import build
-    from nnrobust.ik import IK_LIMIT_MARGIN
-    from nnrobust.presets import load_preset
+    from nnrobust.config.presets import load_preset
+    from nnrobust.model.ik import IK_LIMIT_MARGIN
+    from nnrobust.run.experiment import build
 
     setup = build(
         load_preset("paper-ellipse").replace(simulation={"q_seed": [0.2, 2.8, 1.0], "duration": 1.0})

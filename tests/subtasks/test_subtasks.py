@@ -88,7 +88,7 @@ def test_linear_time_manipulability_gradient(source, task):
     """PinocchioModel.det_jjt_gradient (O(n) prefix and suffix sums, docs/equations.md) equals
     central finite differences of det(J J^T) and the kinematic-Hessian form."""
     from nnrobust import load_robot
-    from nnrobust.small_linalg import det
+    from nnrobust.core.small_linalg import det
     from nnrobust.subtasks.manipulability import hessian_det_gradient
 
     robot = load_robot(source, task=task)

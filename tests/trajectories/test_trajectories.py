@@ -5,9 +5,9 @@ the closed loop on them (compiled equal to Python)."""
 import numpy as np
 import pytest
 
-from nnrobust.exceptions import ConfigError
-from nnrobust.experiment import build, run_experiment
-from nnrobust.presets import load_preset
+from nnrobust.config.presets import load_preset
+from nnrobust.core.exceptions import ConfigError
+from nnrobust.run.experiment import build, run_experiment
 from nnrobust.trajectories import PiecewisePolynomialPath, quintic_point_to_point, spline_through
 
 

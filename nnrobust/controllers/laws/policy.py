@@ -22,7 +22,7 @@ file's SHA-256 (config.toml's provenance) and each step's inference time (signal
 
 With the compiled loop available, a run of this law is a compiled run of its base law driven one
 period at a time (``SteppedLoop``): the observation and the base law's command are computed in
-C++, only the inference in Python (nnrobust/compiled.py, ``simulate_policy``). This module is
+C++, only the inference in Python (nnrobust/run/compiled.py, ``simulate_policy``). This module is
 its Python reference (the Python loop), and tests/controllers/test_policy.py holds the two equal.
 """
 
@@ -34,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ...exceptions import ConfigError, ControllerError
+from ...core.exceptions import ConfigError, ControllerError
 from ..base import Controller, ControllerContext, ControlOutput
 from ..registry import Law, LawParam, register_law
 
@@ -47,7 +47,7 @@ GAIN_ACTIONS = 2
 def action_scale(action: str, limits, residual_scale: float, gain_range: float) -> np.ndarray:
     """What a clipped action a ∈ [-1, 1] is multiplied by: τ_max (``torque``), s · τ_max
     (``residual``), or ln G for each of the two exponents (``gains``: a factor exp(a ln G) = G^a).
-    The law and the learning environment (nnrobust.learning.env) share it.
+    The law and the learning environment (nnrobust.studies.learning.env) share it.
     """
     if action == "gains":
         return np.full(GAIN_ACTIONS, math.log(gain_range))
@@ -65,9 +65,9 @@ def no_gains(kind: str) -> str:
 def _session(path: Path):
     """An onnxruntime session on one CPU thread, or one line naming the file and what is wrong.
     A file the running task brought with it is read from its copy
-    (:func:`nnrobust.shipped_files.local`), still named by ``path``.
+    (:func:`nnrobust.core.shipped_files.local`), still named by ``path``.
     """
-    from ...shipped_files import local
+    from ...core.shipped_files import local
 
     try:
         import onnxruntime as ort
@@ -109,7 +109,7 @@ class OnnxPolicy:
     """An ONNX file as a function observation (d entries) -> action (n entries), checked."""
 
     def __init__(self, file: str | Path, d: int, n: int, entries: str = "one entry per joint"):
-        from ...shipped_files import local
+        from ...core.shipped_files import local
 
         path = Path(file)
         if not local(path).is_file():

@@ -22,7 +22,7 @@ import math
 
 import numpy as np
 
-from ...search_coordinates import bandwidth_range
+from ...core.search_coordinates import bandwidth_range
 from ..base import ControllerContext
 from ..basis import AdditiveRBFBasis, input_box
 from ..nn_compensator import error_dynamics, lyapunov_P

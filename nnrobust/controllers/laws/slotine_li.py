@@ -42,8 +42,8 @@ from typing import Any, cast
 import numpy as np
 import pinocchio as pin
 
-from ...exceptions import ConfigError
-from ...search_coordinates import bandwidth_range
+from ...core.exceptions import ConfigError
+from ...core.search_coordinates import bandwidth_range
 from ..base import Controller, ControllerContext, ControlOutput
 from ..registry import Law, LawParam, register_law
 

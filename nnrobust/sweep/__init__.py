@@ -1,8 +1,0 @@
-"""Robustness sweeps: one experiment over many samples of the uncertainty set, on dask.distributed
-(docs/robustness.md). Needs the ``sweep`` extra: ``pip install 'nnrobust[sweep]'``.
-"""
-
-from .engine import read_results, run_sweep
-from .spec import SweepSpec, draw, load_sweep, parse_sweep, rerun_command
-
-__all__ = ["SweepSpec", "draw", "load_sweep", "parse_sweep", "read_results", "rerun_command", "run_sweep"]
