@@ -137,6 +137,40 @@ def test_a_local_cluster_whose_nannies_gave_up_gets_new_workers(monkeypatch):
         cluster.close()
 
 
+def _ends_its_worker(value):
+    import os
+
+    os._exit(3)
+
+
+def test_a_shared_input_killed_with_crashing_neighbours_is_sent_again(monkeypatch):
+    """CI, round 5: a tuning on two workers whose law ends its process on half its settings kept
+    none. Each crash loses the inputs the dead worker held (the sweep, the base experiment); one
+    computed again twice on workers that crashing neighbours ended is itself KilledWorker, and every
+    task reading it inherited that death, the settings that last included. A task lost so is not
+    counted against it, and its input is submitted afresh: the task runs."""
+    from distributed import Client
+
+    from nnrobust.studies.base import cluster as engine
+
+    cluster = engine.local_cluster(1)
+    client = Client(cluster)
+    try:
+        value = engine.shared(client, [1, 2])
+        first = value.future()
+        value._future = client.submit(_ends_its_worker, 0, pure=False)  # the input, killed twice
+        reader = engine.submit(client, None, sum, value)
+        assert engine.outcome(reader) == (None, engine.LOST_INPUT)  # not the reader's own death
+        assert engine.run_alone(client, None, sum, value) == (3, None)
+        assert value.future() is not first and value.future().status == "finished"
+        # a task that ends its worker itself is still named so, on each of two runs alone
+        result, reason = engine.run_alone(client, None, _ends_its_worker, value)
+        assert result is None and reason.startswith("the worker process died twice running it")
+    finally:
+        client.close()
+        cluster.close()
+
+
 def test_a_wait_for_tasks_notices_a_stop_while_a_task_hangs():
     """A study's stages run on threads, which receive no signal: a stop asked of them
     (signals.stop_stages) is noticed by a sweep waiting on a task that never ends (a law that

@@ -321,12 +321,31 @@ def _same(value):
     return value
 
 
-def shared(client, value):
-    """A future holding ``value`` for many tasks. It is a task of its own, not scattered data:
-    when the worker holding it dies, the scheduler computes it again, where scattered data would
-    be lost and every task needing it cancelled.
+class SharedInput:
+    """A value many tasks read (a sweep, a base experiment, the shipped files), held on the
+    cluster as a task of its own (:func:`_same`), not as scattered data: when the worker holding
+    it dies, the scheduler computes it again, where scattered data would be lost and every task
+    needing it cancelled. The client keeps the value: a task of its own can itself be killed
+    (a worker that user code ends while the input is computed there again, twice:
+    ``KilledWorker`` of the input, which every task reading it would then inherit), and
+    :meth:`future` then submits it afresh, so that one input lost to crashing neighbours never
+    fails the tasks that come after.
     """
-    return client.submit(_same, value, pure=False)
+
+    def __init__(self, client, value):
+        self.client, self.value = client, value
+        self._future = client.submit(_same, value, pure=False)
+
+    def future(self):
+        """The input's future on the cluster; submitted again when the last one was lost."""
+        if self._future.status in ("error", "cancelled", "lost"):
+            self._future = self.client.submit(_same, self.value, pure=False)
+        return self._future
+
+
+def shared(client, value) -> SharedInput:
+    """``value`` as a :class:`SharedInput` for many tasks (sent to the cluster once)."""
+    return SharedInput(client, value)
 
 
 def shipped_files(client, inputs, ship: bool):
@@ -344,13 +363,15 @@ def shipped_files(client, inputs, ship: bool):
 
 def submit(client, files, function, *args):
     """The future of ``function(*args)`` on the cluster; with ``files`` (:func:`shipped_files`),
-    run within them on the worker (:func:`nnrobust.core.shipped_files.run_within`).
+    run within them on the worker (:func:`nnrobust.core.shipped_files.run_within`). A
+    :class:`SharedInput` among the arguments is passed as its current future.
     """
+    args = tuple(a.future() if isinstance(a, SharedInput) else a for a in args)
     if files is None:
         return client.submit(function, *args, pure=False)
     from ...core.shipped_files import run_within
 
-    return client.submit(run_within, files, function, *args, pure=False)
+    return client.submit(run_within, files.future(), function, *args, pure=False)
 
 
 def ships_files(ship_files: bool | None, scheduler: str | None) -> bool:
@@ -448,9 +469,10 @@ def wait_alive(futures: list, first: bool = False) -> None:
 def outcome(future) -> tuple[Any, str | None]:
     """``(result, None)`` when ``future`` finished and its result reached the client, else
     ``(None, reason)``: one line on why not, its worker died running it (user code that ends its
-    process: ``os._exit``, a segfault) or the cluster cancelled it. The result is fetched once:
-    dask keeps it on the worker, and a second fetch after that worker died (a crashing
-    neighbour) would run the task again and could count that death against it.
+    process: ``os._exit``, a segfault), an input it reads was lost with crashing neighbours
+    (:data:`LOST_INPUT`), or the cluster cancelled it. The result is fetched once: dask keeps it
+    on the worker, and a second fetch after that worker died (a crashing neighbour) would run the
+    task again and could count that death against it.
     """
     wait_alive([future])
     try:
@@ -460,6 +482,8 @@ def outcome(future) -> tuple[Any, str | None]:
     except Exception as err:  # KilledWorker, CancelledError: the task code itself catches its errors
         name = type(err).__name__
         if name == "KilledWorker":
+            if getattr(err, "task", future.key) != future.key:
+                return None, LOST_INPUT
             return None, (
                 "the worker process died twice running it (os._exit, a segfault or the OS killing it; "
                 "nnrobust's own errors are rows, never a dead worker)"
@@ -467,16 +491,31 @@ def outcome(future) -> tuple[Any, str | None]:
         return None, f"the cluster lost it ({name}: {str(err)[:200]})"
 
 
+LOST_INPUT = "an input it reads was lost with the workers its neighbours ended"
+"""The reason of a task that failed because a :class:`SharedInput` it reads was killed (twice
+computed again on a worker that crashing user code ended): never held against the task."""
+
+MAX_LOST_INPUTS = 3
+"""Runs alone a task may lose to its inputs (each submitted afresh) before it counts as lost."""
+
+
 def run_alone(client, files, *task) -> tuple[Any, str | None]:
     """:func:`outcome` of a task run alone: its reason is set only when it ended its worker on each
     of two such runs (under load a death a crashing neighbour caused a moment before, a worker
-    dead and not yet noticed, can still be counted against a task once, not twice).
+    dead and not yet noticed, can still be counted against a task once, not twice). A run lost to
+    an input killed with its neighbours (:data:`LOST_INPUT`; the input is submitted afresh) is
+    not counted, up to :data:`MAX_LOST_INPUTS` of them.
     """
     reason = None
-    for _ in range(2):
+    counted = lost = 0
+    while counted < 2:
         result, reason = outcome(submit(client, files, *task))
         if reason is None:
             return result, None
+        if reason == LOST_INPUT and lost < MAX_LOST_INPUTS:
+            lost += 1
+        else:
+            counted += 1
     return None, reason
 
 
