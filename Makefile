@@ -93,6 +93,7 @@ docs-data: $(VENV)/.installed-test
 	sed "s|$(CURDIR)/||g" $(OUT)/study/report.json > $(DATA)/example_study.json
 	$(BIN)/python benchmarks/studies/fronts.py $(OUT)/tuned-paper $(OUT)/tuned-panda --figure docs/img/tuned_comparison.png
 	$(BIN)/python benchmarks/engine_gap.py --json $(DATA)/engine_gap.json
+	$(BIN)/python benchmarks/worst_plant_loops.py --json $(DATA)/worst_plant_loops.json
 	$(BIN)/python benchmarks/plant_convergence.py --json $(DATA)/plant_convergence.json
 	$(BIN)/python benchmarks/adaptive_step.py --json $(DATA)/adaptive_step.json
 	$(BIN)/python benchmarks/interval_coverage.py --json $(DATA)/interval_coverage.json --figure docs/img/interval_coverage.png

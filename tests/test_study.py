@@ -231,8 +231,8 @@ def test_a_rerun_computes_nothing_and_each_replay_command_recomputes_its_stage(s
     commands = report["cases"]["paper-ellipse-noisy"]["commands"]
     assert set(commands) == {"tune seed 0", "tune seed 1", "validate", "certify", "falsify", "engine"}
     for name in ("validate", "certify", "falsify", "engine", "tune seed 1"):
-        words = shlex.split(commands[name])
-        assert main([*words[1:], "--workers", "2", "--quiet"]) == 0, name
+        words = shlex.split(commands[name])  # one worker: a replay of a finished stage runs nothing
+        assert main([*words[1:], "--workers", "1", "--quiet"]) == 0, name
     assert _parts(out) == before  # the stage folders took every command as their own: nothing new
 
 
@@ -556,11 +556,15 @@ def test_an_interrupt_in_one_stage_stops_the_others_and_the_study_resumes(study,
     falsification interrupted as it starts) ends every stage, each keeping what it computed; run
     again, the study finishes with the numbers of a study never interrupted."""
     import nnrobust.studies.falsify
+    from nnrobust.studies.study.engine import STAGE_FOLDERS
 
-    here, _, report = study
-    shutil.copy(here / "laws.py", tmp_path / "laws.py")
-    (tmp_path / "study.toml").write_text(STUDY)
-    spec = load_study(tmp_path / "study.toml")
+    here, out, report = study
+    spec = load_study(here / "study.toml")
+    # the finished study's tunings and validation, the stages from certify on to compute again
+    shutil.copytree(out, tmp_path / "out", ignore=shutil.ignore_patterns("report.*", "tables", "figures"))
+    for case in (tmp_path / "out" / "cases").iterdir():
+        for stage in set(STAGE_FOLDERS) - {"validate"}:
+            shutil.rmtree(case / stage, ignore_errors=True)
 
     def interrupted(*args, **kwargs):
         raise KeyboardInterrupt
@@ -570,6 +574,7 @@ def test_an_interrupt_in_one_stage_stops_the_others_and_the_study_resumes(study,
         with pytest.raises(KeyboardInterrupt):
             run_study(spec, tmp_path / "out", workers=2)
     assert not (tmp_path / "out" / "report.json").exists()
+    assert not list((tmp_path / "out" / "cases").glob("*/falsify/history/*"))
     again = run_study(spec, tmp_path / "out", workers=2)
     for name, case in report["cases"].items():
         for c, entry in case["controllers"].items():
