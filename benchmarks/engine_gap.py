@@ -124,7 +124,7 @@ def tuned_part(studies: list[str]) -> list[dict]:
     from nnrobust.studies.base.plan import base_config, draw, experiment
     from nnrobust.studies.base.tuned import tuned_entry
     from nnrobust.studies.study import load_study
-    from nnrobust.studies.study.engine import VALIDATION_SEED, sweep_of
+    from nnrobust.studies.study.stages import VALIDATION_SEED, sweep_of
 
     rows = []
     for study in studies:

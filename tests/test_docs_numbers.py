@@ -86,7 +86,7 @@ def test_a_case_of_a_robustness_study_reproduces(name, case):
     from nnrobust.run.experiment import run_experiment
     from nnrobust.studies.base.plan import base_config, draw, experiment
     from nnrobust.studies.study import load_study
-    from nnrobust.studies.study.engine import CERTIFY_SEED, sweep_of
+    from nnrobust.studies.study.stages import CERTIFY_SEED, sweep_of
 
     spec = load_study(ROOT / "benchmarks" / "studies" / f"{name.replace('_', '-')}.toml")
     report = _read(name)
@@ -231,7 +231,7 @@ def _rerun_validation(study: str, case_name: str, controller: str) -> tuple[floa
     from nnrobust.studies.base.plan import base_config, draw, experiment
     from nnrobust.studies.base.tuned import tuned_entry
     from nnrobust.studies.study import load_study
-    from nnrobust.studies.study.engine import VALIDATION_SEED, seed_name, sweep_of
+    from nnrobust.studies.study.stages import VALIDATION_SEED, seed_name, sweep_of
 
     spec = load_study(ROOT / "benchmarks" / "studies" / f"{study}.toml")
     report = json.loads((render_tables.DATA / f"{study.replace('-', '_')}.json").read_text())

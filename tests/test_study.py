@@ -125,6 +125,21 @@ def test_the_report_holds_every_stage_for_every_controller(study):
     assert "http://" not in page.replace("http://www.w3.org/", "") and "https://" not in page
 
 
+def test_the_stage_table_is_what_the_engine_ran_and_the_spec_budgets(study):
+    """The stage table (nnrobust.studies.study.stages.STAGES) names every [budgets] key of the
+    spec, every stage folder a case holds, and the report's stages in its order."""
+    from nnrobust.studies.study.spec import BUDGET_KEYS
+    from nnrobust.studies.study.stages import STAGE_FOLDERS, STAGES
+
+    _, out, report = study
+    assert set().union(*(stage.budgets for stage in STAGES)) == set(BUDGET_KEYS)
+    reported = [stage.name for stage in STAGES if stage.reported]
+    for name, case in report["cases"].items():
+        assert list(case["stages"]) == reported, name
+        folders = {p.name for p in (out / "cases" / name).iterdir() if p.is_dir()}
+        assert {f for f in folders if not f.startswith("tune-seed")} <= set(STAGE_FOLDERS), name
+
+
 def test_the_custom_laws_tuned_settings_are_the_ones_every_stage_ran(study):
     _, out, report = study
     here = out / "cases" / "paper-ellipse-noisy"
@@ -275,7 +290,7 @@ def test_a_case_without_randomness_says_it_was_validated_on_the_training_plant(t
 )
 def test_draws_differ_exactly_where_a_case_has_randomness(case, vary, differ):
     from nnrobust.studies.base.plan import SweepSpec
-    from nnrobust.studies.study.engine import draws_differ
+    from nnrobust.studies.study.stages import draws_differ
 
     sweep = SweepSpec(name="s", base=case, controllers=["pd"], samples=1, seed=0, vary=vary)
     assert draws_differ(sweep) is differ
@@ -524,7 +539,7 @@ def test_stages_side_by_side_give_their_results_in_order_and_stop_together_on_an
     import threading
 
     from nnrobust.core.signals import check_interrupt
-    from nnrobust.studies.study.engine import side_by_side
+    from nnrobust.studies.study.stages import side_by_side
 
     assert side_by_side([lambda: 1, lambda: 2, lambda: 3]) == [1, 2, 3]
     stopped = threading.Event()

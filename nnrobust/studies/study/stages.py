@@ -1,0 +1,607 @@
+"""A study case's stages as one table (:data:`STAGES`): each stage's name, the budget keys it reads,
+its folder under ``cases/C/``, what it runs, what it puts in the report and whether it runs side
+by side with the others that do (docs/study.md). The engine (:func:`run_case`) reads the table:
+the stages before the first side-by-side one run in order, the side-by-side ones together on the
+study's cluster, then the rest in order (the realtime timing alone on the machine, after the
+simulations). A new stage is one function here and one entry of the table.
+
+Each stage's ``run(case)`` takes the :class:`CaseRun` (what every stage reads, what the earlier
+ones found, and the report entry ``case.out`` it fills) and returns what runs: a function of no
+argument for the engine to call (side by side, or in turn), with ``finish`` putting its result
+into the report; or a string, the stage's status when it has nothing to run ("skipped: ...").
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ...core.exceptions import NNRobustError
+from .evidence import failures, realtime, step_cost
+from .selection import convergence, half_name, select_kept
+from .spec import StudyCase, StudySpec, kept_name
+
+# ---- what the stages share ----------------------------------------------------------------------
+VALIDATION_SEED = 1_000_003
+"""Added to the study's seed for the validation draws (the tunings draw from seed + s, s < 20)."""
+
+CERTIFY_SEED = 2_000_003
+"""Added to the study's seed for the certification draws: independent of training and validation."""
+
+
+def seed_name(controller: str, seed: int) -> str:
+    """The validation entry of one (controller, optimiser seed) setting."""
+    return f"{controller}-seed{seed}"
+
+
+def sweep_of(spec: StudySpec, case: StudyCase, names: list[str], entries: dict, samples: int, seed: int):
+    """A sweep of ``names`` (with their ``entries``) on ``samples`` draws of the case's box."""
+    from ..base.plan import SweepSpec
+
+    return SweepSpec(
+        name=f"{spec.name}-{spec.case_name(case)}",
+        base=case.base,
+        controllers=list(names),
+        samples=samples,
+        seed=seed,
+        set=spec.case_set(case),
+        vary=dict(spec.vary),
+        entries={k: v for k, v in entries.items() if k in names},
+    )
+
+
+def draws_differ(sweep) -> bool:
+    """Whether a case's draws are different plants before any runs: a ``[vary]`` box, sensor
+    noise, or a nominal model whose error is drawn from each draw's seed. Where none is, every
+    draw is the same plant and a tuning setting needs one run (the budget buys settings).
+    """
+    from ...config import nominal_kind
+    from ..base.plan import base_config
+
+    config = base_config(sweep)
+    sensing, nominal = config.sensing, config.nominal
+    noisy = any(sensing.position_noise) or any(sensing.velocity_noise)
+    return bool(sweep.vary or noisy or (nominal_kind(config) == "urdf" and nominal.perturbed))
+
+
+def varies(frame) -> bool:
+    """Whether the rows of a sweep differ from draw to draw: a case with no randomness (no box,
+    no noise) gives every draw the same plant, so "held-out" draws are the training plant.
+    """
+    import numpy as np
+
+    for _, rows in frame.groupby("controller"):
+        values = rows["rms_error_after_2s"].to_numpy(dtype=float)
+        values = values[np.isfinite(values)]
+        if values.size > 1 and np.ptp(values) > 0:
+            return True
+    return False
+
+
+def has_mujoco() -> bool:
+    """Whether MuJoCo, the second engine, is installed."""
+    try:
+        import mujoco  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+STOP_SECONDS = 30.0
+"""How long stages asked to stop are waited for (each notices within a second,
+:data:`nnrobust.studies.base.cluster.POLL_SECONDS`) before the cluster is closed under them."""
+
+
+def side_by_side(stages: list) -> list:
+    """Each stage's result (callables, each a stage engine run with its own client of the study's
+    cluster), the stages run on threads side by side: one's last tasks and the next one's first
+    share the workers. The first error (or interrupt) asks the others to stop at their next check
+    (:func:`nnrobust.core.signals.stop_stages`); once every stage has ended, each keeping what it
+    computed, it is raised.
+    """
+    if len(stages) == 1:
+        return [stages[0]()]
+    from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
+
+    from ...core.signals import signals_held, stop_stages
+
+    pool = ThreadPoolExecutor(len(stages), thread_name_prefix="nnrobust-stage")
+    futures = [pool.submit(stage) for stage in stages]
+    try:
+        finished, _ = wait(futures, return_when=FIRST_EXCEPTION)
+        first = next((f.exception() for f in futures if f in finished and f.exception()), None)
+        if first is not None:
+            raise first
+    except BaseException:
+        stop_stages()
+        try:
+            with signals_held():  # a second Ctrl-C would close the cluster under the stages
+                wait(futures, timeout=STOP_SECONDS)
+        finally:
+            stop_stages(False)
+            pool.shutdown(wait=False)
+        raise
+    pool.shutdown()
+    return [f.result() for f in futures]
+
+
+class Together:
+    """One progress display for the stages running side by side: the sum of their done and total
+    runs, told to ``progress(done, total)``.
+    """
+
+    def __init__(self, progress):
+        self.progress, self.counts, self.lock = progress, {}, threading.Lock()
+
+    def stage(self):
+        """The ``progress`` callback of one more stage."""
+        if self.progress is None:
+            return None
+        key = len(self.counts)
+        self.counts[key] = (0, 0)
+
+        def told(done: int, total: int) -> None:
+            with self.lock:
+                self.counts[key] = (done, total)
+                counts = self.counts.values()
+                self.progress(sum(d for d, _ in counts), sum(t for _, t in counts))
+
+        return told
+
+
+def certified(
+    spec: StudySpec, sweep, folder: Path, address: str, overwrite: bool, progress, ship: bool = False
+):
+    """(summary, rows) of a certification sweep run into ``folder``: its statistics, paired
+    comparisons and a certificate per property (the study's epsilon and beta), summary.json written.
+    """
+    from ...run.properties import certify, run_properties
+    from ..sweep.engine import read_results, run_sweep
+    from ..sweep.summary import summarize, write_summary
+
+    run_sweep(sweep, folder, scheduler=address, overwrite=overwrite, progress=progress, ship_files=ship)
+    rows = read_results(folder)
+    summary = summarize(sweep, rows)
+    b = spec.budgets
+    properties = run_properties(spec.certified_properties())
+    for label, entry in certify(sweep, rows, properties, b["epsilon"], b["beta"]).items():
+        summary["controllers"][label].update(entry)
+    write_summary(folder, summary)
+    return summary, rows
+
+
+@dataclass
+class CaseRun:
+    """One case of a study as its stages run: what they all read, what the earlier stages found
+    (``tunings``, ``validation``, ``certification``), and ``out``, the case's report entry.
+    """
+
+    spec: StudySpec
+    """The study as this case runs it (:meth:`StudySpec.for_case`: its controllers and entries)."""
+    case: StudyCase
+    sweep: Any
+    """The case's sweep (:meth:`StudySpec.case_sweep`): its experiment, [set] and box."""
+    here: Path
+    address: str
+    overwrite: bool
+    say: Callable[[str], None]
+    progress: Any
+    ship: bool
+    stage_file: Callable[[Path, str], None]
+    """Writes a stage's input file, keeping what it held first (the engine puts it back when a
+    stage refuses its folder)."""
+    out: dict = field(default_factory=dict)
+    tunings: dict = field(default_factory=dict)
+    validation: dict = field(default_factory=dict)
+    certification: dict = field(default_factory=dict)
+    together: Any = None
+    """The one progress display of the stages run side by side (:class:`Together`)."""
+
+    @property
+    def name(self) -> str:
+        """The case's name (its folder under ``cases/``)."""
+        return self.spec.case_name(self.case)
+
+    @property
+    def case_file(self) -> Path:
+        """The case's sweep as a file (the tunings' and the falsification's target)."""
+        return self.here / "case.toml"
+
+    @property
+    def tuned(self) -> list[str]:
+        """The controllers the study tunes."""
+        return [c for c in self.spec.controllers if c not in self.spec.fixed]
+
+
+@dataclass(frozen=True)
+class Stage:
+    """One entry of the stage table."""
+
+    name: str
+    """Its key in the report's ``stages`` (how it ended) and in the CLI's replay commands."""
+    budgets: tuple[str, ...]
+    """The study's ``[budgets]`` keys it reads."""
+    folders: tuple[str, ...]
+    """Its folders under ``cases/C/`` (besides ``tune-seedS``, one per optimiser seed)."""
+    run: Callable[[CaseRun], Callable[[], Any] | str]
+    finish: Callable[[CaseRun, Any], None] = lambda case, result: None
+    side_by_side: bool = False
+    """Runs on the cluster beside the other side-by-side stages (they need none of each other's
+    results); otherwise alone, in the table's order."""
+    reported: bool = True
+    """Whether the report's ``stages`` names it."""
+
+
+# ---- 1. tune -------------------------------------------------------------------------------------
+
+
+def tune(run: CaseRun):
+    """Tune once per optimiser seed, side by side (``nnrobust tune``'s engine, ``tune-seedS/``); on
+    one draw where every draw is the same plant.
+    """
+    from ..tune.engine import TuneSpec, run_tune
+
+    spec, b, tuned = run.spec, run.spec.budgets, run.tuned
+    train_samples = b["train_samples"] if draws_differ(run.sweep) else 1
+    if tuned and train_samples < b["train_samples"]:
+        run.say(
+            f"{run.name}: every draw is the same plant (no box, no noise, no drawn model error): tuned on one"
+        )
+    run.out["train_samples"] = train_samples  # what the tunings ran on (one draw where all are the same)
+    if not tuned:
+        tuned_report(run, {})
+        return "skipped: every law runs at " + (
+            f"the kept settings of {spec.tuned}" if spec.tuned else "its own settings (tune = false)"
+        )
+    together = Together(run.progress)
+
+    def one(s: int, told):
+        tune_spec = TuneSpec(
+            str(run.case_file),
+            list(tuned),
+            b["tune"],
+            train_samples=train_samples,
+            validation=0,
+            max_rms_torque=b["max_rms_torque"],
+            max_saturated=b["max_saturated"],
+            seed=spec.seed + s,
+        )
+        return run_tune(
+            tune_spec,
+            run.here / f"tune-seed{s}",
+            scheduler=run.address,
+            overwrite=run.overwrite,
+            progress=told,
+            ship_files=run.ship,
+        )
+
+    seeds = range(b["seeds"])
+    run.say(
+        f"{run.name}: tune {b['seeds']} optimiser seed{'s side by side' if b['seeds'] > 1 else ''}: "
+        f"{', '.join(tuned)}, {b['tune']} simulations each"
+    )
+    return lambda: dict(zip(seeds, side_by_side([lambda s=s, t=together.stage(): one(s, t) for s in seeds])))
+
+
+def tuned_report(run: CaseRun, tunings) -> None:
+    """The tunings' folders, curves, spaces as searched, training time and fixed keys."""
+    from ..base.plan import base_config
+    from .evidence import tuning_curves
+
+    run.tunings = tunings = tunings or {}
+    out, tuned = run.out, run.tuned
+    out["tunings"] = {s: str(run.here / f"tune-seed{s}") for s in tunings}
+    out["curves"] = tuning_curves(tunings)
+    out["search"] = {  # per law and seed: the space searched, as widened, and what moved
+        c: {s: {"space": summary["controllers"][c]["space"], "widened": summary["controllers"][c]["widened"]}
+            for s, summary in tunings.items() if c in summary["controllers"]}
+        for c in tuned
+    }  # fmt: skip
+    duration = base_config(run.sweep).simulation.duration
+    out["training"] = {
+        c: sum(s["controllers"][c]["simulations"] for s in tunings.values() if c in s["controllers"])
+        * duration
+        for c in tuned
+    }
+    # the keys each tuned law does not search, with why (the same for every seed)
+    out["fixed"] = {
+        c: entry.get("fixed", {})
+        for summary in tunings.values()
+        for c, entry in summary["controllers"].items()
+    }
+
+
+# ---- 2. validate ---------------------------------------------------------------------------------
+
+
+def _candidates(run: CaseRun) -> tuple[list[str], dict, dict, dict]:
+    """The validation entries: every fixed law, and every (controller, seed) best with its best at
+    half the budget beside it. (names, entries, setting_of, halves).
+    """
+    from ..base.tuned import tuned_entry
+
+    spec = run.spec
+    entries: dict = {}
+    names: list[str] = []
+    # validation row -> (controller, seed, settings, the coordinates on a bound of its space)
+    setting_of: dict[str, tuple[str, int | None, dict, list]] = {}
+    halves: dict[str, str] = {}  # a seed's label -> the label of its half-budget best
+    for c in spec.controllers:
+        if c in spec.fixed:
+            names.append(c)
+            if c in spec.entries:
+                entries[c] = spec.entries[c]
+            setting_of[c] = (c, None, {}, [])
+            continue
+        for s, summary in run.tunings.items():
+            best = summary["controllers"].get(c, {}).get("best")
+            if not best:
+                continue
+            label = seed_name(c, s)
+            entries[label] = tuned_entry(c, best["params"], spec.entries)
+            names.append(label)
+            setting_of[label] = (c, s, dict(best["params"]), best.get("at_bound") or [])
+            # the same seed's best at half the budget, validated beside it: does doubling move it?
+            half = summary["controllers"].get(c, {}).get("half_budget_best")
+            if half and half["params"] != best["params"]:
+                entries[half_name(label)] = tuned_entry(c, half["params"], spec.entries)
+                names.append(half_name(label))
+                halves[label] = half_name(label)
+            elif half:
+                halves[label] = label
+    return names, entries, setting_of, halves
+
+
+def validate(run: CaseRun):
+    """Every (controller, seed) setting on fresh draws (``nnrobust sweep``'s engine, ``validate/``);
+    each controller keeps its best seed feasible there (:func:`~.selection.select_kept`).
+    """
+    from ..base.plan import load_sweep
+    from ..sweep.engine import read_results, run_sweep
+
+    spec, b, name = run.spec, run.spec.budgets, run.name
+    names, entries, setting_of, halves = _candidates(run)
+    run.out["not_kept"] = {
+        c: "; ".join(
+            f"seed {s}: {summary['controllers'].get(c, {}).get('note', 'no best setting')}"
+            for s, summary in run.tunings.items()
+        )
+        for c in run.tuned
+        if not any(setting_of.get(seed_name(c, s)) for s in run.tunings)
+    }
+    for c, reason in run.out["not_kept"].items():
+        run.say(f"{name}: {c} has no setting to validate: {reason}")
+    if not names:
+        raise NNRobustError(
+            f"{name}: no controller has a setting to validate ({'; '.join(run.out['not_kept'].values())})"
+        )
+    sweep = sweep_of(spec, run.case, names, entries, b["validation"], spec.seed + VALIDATION_SEED)
+    validate_file = run.here / "validate.toml"
+    run.stage_file(validate_file, sweep.to_toml())
+    run.say(f"{name}: validate {len(names)} settings on {b['validation']} fresh draws")
+    validate_spec = load_sweep(validate_file)
+    run.validation = {"setting_of": setting_of, "halves": halves, "spec": validate_spec}
+
+    def rows():
+        run_sweep(
+            validate_spec,
+            run.here / "validate",
+            scheduler=run.address,
+            overwrite=run.overwrite,
+            progress=run.progress,
+            ship_files=run.ship,
+        )
+        return read_results(run.here / "validate")
+
+    return rows
+
+
+def kept_report(run: CaseRun, frame) -> None:
+    """Each controller's kept setting, every seed's validation and the convergence of the budget."""
+    from ..sweep.summary import summarize, write_summary
+
+    spec, name, out = run.spec, run.name, run.out
+    setting_of, halves = run.validation["setting_of"], run.validation["halves"]
+    write_summary(run.here / "validate", summarize(run.validation["spec"], frame))
+    kept, per_seed, infeasible = select_kept(spec, frame, setting_of)
+    for c, reason in infeasible.items():
+        out["not_kept"][c] = reason
+        run.say(f"{name}: {c} is not kept: {reason}")
+    out["convergence"] = {
+        c: convergence(spec, frame, [label for label, s in setting_of.items() if s[0] == c], halves)
+        for c in kept
+        if c not in spec.fixed
+    }
+    out["kept"], out["per_seed"] = kept, per_seed
+    if not kept:
+        raise NNRobustError(
+            f"{name}: no controller is feasible on the validation draws ({'; '.join(infeasible.values())})"
+        )
+
+
+# ---- 3. certify, 4. falsify, 6. engine: side by side -------------------------------------------
+
+
+def certify(run: CaseRun):
+    """The kept settings on draws the selection never saw, as many as the claim needs (a sweep,
+    ``certify/``): certificates, statistics and paired comparisons.
+    """
+    from ...run.properties import samples_needed
+    from ..base.plan import load_sweep
+    from ..base.tuned import tuned_entry
+
+    spec, b = run.spec, run.spec.budgets
+    names, entries, settings = [], {}, {}
+    for c, entry in run.out["kept"].items():
+        label = c if c in spec.fixed else kept_name(c)
+        names.append(label)
+        if c in spec.fixed:
+            if c in spec.entries:
+                entries[c] = spec.entries[c]
+        else:
+            entries[label] = tuned_entry(c, entry["settings"], spec.entries)
+            settings[c] = entry["settings"]
+    run.out["entries"] = {label: entries.get(label) or {"kind": label} for label in names}
+    n = b["certify"] or samples_needed(b["epsilon"], b["beta"])
+    sweep = sweep_of(spec, run.case, names, entries, n, spec.seed + CERTIFY_SEED)
+    certify_file = run.here / "certify.toml"
+    run.stage_file(certify_file, sweep.to_toml())
+    run.say(
+        f"{run.name}: certify {len(names)} controllers on {n} fresh draws "
+        f"(epsilon {b['epsilon']:g}, beta {b['beta']:g})"
+    )
+    certify_spec = load_sweep(certify_file)
+    run.certification = {"names": names, "settings": settings, "spec": certify_spec, "file": certify_file}
+    told = run.together.stage()
+    return lambda: certified(
+        spec, certify_spec, run.here / "certify", run.address, run.overwrite, told, run.ship
+    )
+
+
+def certified_report(run: CaseRun, result) -> None:
+    """The certification's summary, whether its draws differ, step costs, failures, failing draws."""
+    from ...run.properties import run_properties
+    from .evidence import failing_draws
+
+    summary, rows = result
+    certify_spec = run.certification["spec"]
+    run.certification["rows"] = rows
+    out = run.out
+    out["certify"] = summary
+    out["held_out"] = varies(rows)
+    out["step_cost"] = step_cost(certify_spec, rows)
+    out["failures"] = failures(rows)
+    out["failing"] = failing_draws(certify_spec, rows, run_properties(run.spec.certified_properties()))
+
+
+def falsify(run: CaseRun):
+    """The kept settings searched for their worst plant (``nnrobust falsify``'s engine, ``falsify/``)."""
+    from ..falsify import FalsifySpec, run_falsify
+
+    spec, b, kept = run.spec, run.spec.budgets, run.out["kept"]
+    if not (spec.vary and b["falsify"]):
+        return "skipped: the study has no [vary] box to search" if b["falsify"] else "skipped: falsify = 0"
+    run.say(
+        f"{run.name}: falsify {len(kept)} controllers, {b['falsify']} simulations each (and as many random)"
+    )
+    falsify_spec = FalsifySpec(
+        str(run.case_file),
+        list(kept),
+        list(spec.require),
+        b["falsify"],
+        seed=spec.seed,
+        margin=b["margin"],
+        tuned=run.certification["settings"] or None,
+    )
+    told = run.together.stage()
+    return lambda: run_falsify(
+        falsify_spec, run.here / "falsify", scheduler=run.address, overwrite=run.overwrite, progress=told,
+        claim=(b["epsilon"], b["beta"]), ship_files=run.ship,
+    )  # fmt: skip
+
+
+def second_engine(run: CaseRun):
+    """The certification draws again with MuJoCo as the plant (a sweep, ``certify-mujoco/``)."""
+    from ..base.plan import load_sweep
+
+    if not run.spec.budgets["second_engine"]:
+        return "skipped: second_engine = false"
+    if not has_mujoco():
+        return "skipped: MuJoCo is not installed (pip install 'nnrobust[mujoco]')"
+    again = load_sweep(run.certification["file"])
+    again.set["plant.engine"] = "mujoco"
+    engine_file = run.here / "certify-mujoco.toml"
+    run.stage_file(engine_file, again.to_toml())
+    run.say(f"{run.name}: the certification draws again with MuJoCo as the plant")
+    engine_spec = load_sweep(engine_file)
+    told = run.together.stage()
+    return lambda: certified(
+        run.spec, engine_spec, run.here / "certify-mujoco", run.address, run.overwrite, told, run.ship
+    )[0]
+
+
+# ---- 5. realtime, and the time responses: after the simulations ----------------------------------
+
+
+def realtime_stage(run: CaseRun):
+    """The kept laws exported and timed out of Python (``realtime/``): alone on the machine, after
+    the side-by-side stages (a step timed beside the workers' simulations is timed on a busy core).
+    """
+    if not run.spec.budgets["realtime"]:
+        return "skipped: realtime = false"
+    run.say(f"{run.name}: export the kept laws and time their steps out of Python")
+    certification = run.certification
+    return lambda: realtime(certification["spec"], certification["names"], run.here / "realtime")
+
+
+def responses(run: CaseRun):
+    """The kept laws' time responses on their median and worst certification draws (``responses/``)."""
+    from .evidence import responses as drawn
+
+    run.say(f"{run.name}: the kept laws' time responses on their median and worst certification draws")
+    c = run.certification
+    return lambda: drawn(c["spec"], c["rows"], c["names"], run.here / "responses")
+
+
+def _into(key: str):
+    def put(run: CaseRun, result) -> None:
+        run.out[key] = result
+
+    return put
+
+
+TUNE_BUDGETS = ("tune", "seeds", "train_samples", "max_rms_torque", "max_saturated")
+STAGES: tuple[Stage, ...] = (
+    Stage("tune", TUNE_BUDGETS, (), tune, tuned_report),
+    Stage("validate", ("validation", "tolerance"), ("validate",), validate, kept_report),
+    Stage("certify", ("certify", "epsilon", "beta"), ("certify",), certify, certified_report, True),
+    Stage("falsify", ("falsify", "margin"), ("falsify",), falsify, _into("falsify"), True),
+    Stage("realtime", ("realtime",), ("realtime",), realtime_stage, _into("realtime")),
+    Stage("engine", ("second_engine",), ("certify-mujoco",), second_engine, _into("engine"), True),
+    Stage("responses", (), ("responses",), responses, _into("responses"), reported=False),
+)
+"""The stages of a case, in the report's order (docs/study.md)."""
+
+STAGE_FOLDERS = tuple(folder for stage in STAGES for folder in stage.folders)
+"""A case's stage folders (besides tune-seedS), each written by its command's engine."""
+
+
+def run_case(run: CaseRun) -> dict:
+    """Every stage of the table on one case: those before the first side-by-side stage in turn,
+    the side-by-side ones together (:func:`side_by_side`), then the rest in turn. Returns the
+    case's report entry (``run.out``).
+    """
+    status: dict[str, str] = {}
+
+    def alone(stage: Stage) -> None:
+        work = stage.run(run)
+        if isinstance(work, str):
+            status[stage.name] = work
+        else:
+            stage.finish(run, work())
+            status[stage.name] = "finished"
+
+    first = next(i for i, s in enumerate(STAGES) if s.side_by_side)
+    for stage in STAGES[:first]:
+        alone(stage)
+    run.together = Together(run.progress)
+    works = []
+    for stage in (s for s in STAGES[first:] if s.side_by_side):
+        work = stage.run(run)
+        if isinstance(work, str):
+            status[stage.name] = work
+        else:
+            works.append((stage, work))
+    if len(works) > 1:
+        run.say(f"{run.name}: {', '.join(stage.name for stage, _ in works)} side by side")
+    for (stage, _), result in zip(works, side_by_side([work for _, work in works])):
+        stage.finish(run, result)
+        status[stage.name] = "finished"
+    for stage in STAGES[first:]:
+        if not stage.side_by_side:
+            alone(stage)
+    run.out["stages"] = {stage.name: status[stage.name] for stage in STAGES if stage.reported}
+    return run.out
