@@ -104,7 +104,7 @@ MUTATIONS = [
         "nnrobust/controllers/task_space.py",
         "MUTATE-U0",
         "MUTATE-U0",
-        ["tests/test_experiment.py"],
+        ["tests/run/test_experiment.py"],
     ),
 ]
 

@@ -4,8 +4,9 @@ the time its simulations take, and the time a finished study takes to write its 
     python benchmarks/study_overhead.py --json out/bench/study_overhead.json [--cut] [--workers 2]
         [--study benchmarks/studies/falsify-panda.toml]
 
-The study is examples/study.toml (``--cut``: with the budgets tests/test_study.py cuts it to, for
-a quick look), or ``--study FILE``, a study file of the repository's. It runs from scratch into a
+The study is examples/study.toml (``--cut``: with the budgets that
+tests/studies/study/test_engine.py cuts it to, for a quick look), or ``--study FILE``, a study
+file of the repository's. It runs from scratch into a
 temporary folder; then:
 
 - ``simulations``: the seconds of worker time the runs take, each run's own ``task_seconds``
@@ -37,7 +38,7 @@ from nnrobust.studies.study import load_study, run_study
 ROOT = Path(__file__).resolve().parent.parent
 CUT = {"tune": 4, "seeds": 2, "train_samples": 1, "validation": 2, "epsilon": 0.5, "beta": 0.2,
        "falsify": 4, "margin": "false"}  # fmt: skip
-"""tests/test_study.py's budgets."""
+"""tests/studies/study/test_engine.py's budgets."""
 
 
 def study_file(folder: Path, cut: bool) -> Path:

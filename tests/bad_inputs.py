@@ -1,6 +1,6 @@
 """Every bad input nnrobust is tested with, and the error it must give.
 
-Shared by tests/config/test_hostile_input.py and by ``python -m tests.bad_inputs`` (run from the
+Shared by tests/test_hostile_input.py and by ``python -m tests.bad_inputs`` (run from the
 repository root), which writes docs/bad-inputs.md from the messages actually raised.
 """
 
@@ -2565,7 +2565,7 @@ def render_table(folder: Path) -> str:
     lines = [
         "# Bad inputs and the messages they get",
         "",
-        "Every row is a test case in `tests/bad_inputs.py`; `tests/config/test_hostile_input.py` checks",
+        "Every row is a test case in `tests/bad_inputs.py`; `tests/test_hostile_input.py` checks",
         "the exception class and message, and that the command line answers each with exit code 2",
         "and one line. Regenerate this page with `python -m tests.bad_inputs` (repository root).",
         "Paths of the scratch folder the cases run in are shown as `<dir>` (its parent `<dir>/..`).",

@@ -234,3 +234,30 @@ def test_every_room_face_may_import_its_builder_and_section(tmp_path):
         code = SCRATCH_IMPORT.format(scratch=str(scratch), first=first)
         done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
         assert done.returncode == 0 and f"imported {first}" in done.stdout, (first, done.stderr[-2000:])
+
+
+THEMED = {
+    "test_docs_build.py",  # the docs site builds, every export documented
+    "test_docs_numbers.py",  # every number of README.md and docs/ against its data or a rerun
+    "test_examples.py",  # examples/ run as a user runs them
+    "test_fuzz.py",  # mutated experiment files, URDFs and signals at random instants
+    "test_hard_conditions.py",  # stiff, singular and saturated runs
+    "test_hostile_input.py",  # docs/bad-inputs.md: each hostile input and its one line
+    "test_layering.py",  # this file
+    "test_long_runs.py",  # long simulations
+    "test_presets_any_arm.py",  # every preset on every arm known to work
+    "test_readme.py",  # README.md's commands
+}
+"""The themed suites, at the top of tests/: each spans the package. Every other test file sits in
+the folder of the package it tests, tests/<package>/test_<module or package>.py."""
+
+
+def test_the_tests_mirror_the_tree():
+    tests = PACKAGE.parent / "tests"
+    assert {p.name for p in tests.glob("test_*.py")} == THEMED
+    astray = []
+    for path in sorted(tests.rglob("test_*.py")):
+        rel = path.relative_to(tests)
+        if len(rel.parts) > 1 and not PACKAGE.joinpath(*rel.parts[:-1]).is_dir():
+            astray.append(str(rel))
+    assert not astray, f"test files outside a folder of the package's tree: {astray}"

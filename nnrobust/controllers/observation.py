@@ -17,7 +17,7 @@ ddx_d  m              x_d''
 
 x(q_m) and J(q_m) are the nominal model's (the controller's), never the true plant's. The
 compiled loop computes the same vector (``SteppedLoop::observe``, csrc/closed_loop.cpp); this
-module is its Python reference, and tests/test_learning.py holds the two equal.
+module is its Python reference, and tests/studies/learning/test_env.py holds the two equal.
 """
 
 from __future__ import annotations

@@ -113,7 +113,7 @@ class LawParam:
     def fixed_reason(self) -> str:
         """Why the tuner holds it at the experiment's value: ``fixed``, or :data:`CHOSEN` for a
         text, file or true/false parameter (a structure, not a level to search); "" for a
-        searched parameter, and for a number that declares no reason (tests/test_tune.py
+        searched parameter, and for a number that declares no reason (tests/studies/tune/test_engine.py
         fails on one).
         """
         if self.search is not None:

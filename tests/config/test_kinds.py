@@ -288,7 +288,7 @@ def test_a_kind_of_each_concept_declared_here_brings_its_own_key_and_twin(case, 
 
 
 def _twin_case(setup, section):
-    """The compiled component against its Python class at random states (tests/test_twins.py's
+    """The compiled component against its Python class at random states (tests/core/test_twins.py's
     comparisons): the control step (path, robust term, law), the criterion, or the plant's q''."""
     assert compiled.twin_refusal(setup) == ""
     robot, nominal, spec = compiled._prepared(setup, 0.01)

@@ -16,8 +16,7 @@ from nnrobust.controllers import (
 )
 from nnrobust.run.experiment import build
 from nnrobust.run.simulation import simulate
-
-from ..problems import paper_robot, random_states
+from tests.problems import paper_robot, random_states
 
 KP, KV = np.diag([10.0, 10.0]), np.diag([4.0, 4.0])
 
@@ -238,8 +237,7 @@ def test_the_pd_null_damping_is_sized_from_the_arm():
     from nnrobust.config import apply_overrides
     from nnrobust.config.presets import load_preset
     from nnrobust.controllers.task_space import sized_null_damping
-
-    from ..problems import closed_form_of
+    from tests.problems import closed_form_of
 
     model = closed_form_of(paper_robot())
     q0, Kd = np.array([0.3, 1.1, -0.7]), np.diag([40.0, 25.0])

@@ -20,7 +20,7 @@ from nnrobust.studies.learning import ObservationLayout
 pytest.importorskip("onnxruntime")
 pytest.importorskip("onnx")
 
-from ..policies import linear_policy, nan_policy, unknown_operator_policy  # noqa: E402
+from tests.policies import linear_policy, nan_policy, unknown_operator_policy  # noqa: E402
 
 COUNTER = Path(__file__).parents[1] / "controllers" / "eq9_again.py"
 PAPER = ObservationLayout(3, 2)

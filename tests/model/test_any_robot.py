@@ -211,7 +211,7 @@ def test_compiled_loop_equals_python_with_unlimited_joints_in_the_joint_criteria
         simulation={"duration": 0.5, "q_seed": [float(v) for v in q], "substeps": 4},
         subtasks={"criteria": ["joint_centering", "joint_limits"], "weights": [0.5, 0.5]},
     )
-    from tests.test_compiled import needs_extension
+    from tests.run.test_compiled import needs_extension
 
     if needs_extension.args[0]:
         pytest.skip(needs_extension.kwargs["reason"])

@@ -4,9 +4,8 @@ import pytest
 from nnrobust import load_robot
 from nnrobust.core.exceptions import FrameNotFound, ModelMismatch, NNRobustError, RobotLoadError
 from nnrobust.model import DynamicsModel, ThreeLinkParameters, ThreeLinkPlanarModel, paper_arm_urdf
-
-from ..paper_printed import printed_coriolis, printed_mass
-from ..problems import (
+from tests.paper_printed import printed_coriolis, printed_mass
+from tests.problems import (
     VERTICAL_GRAVITY,
     closed_form_of,
     finite_difference,

@@ -16,9 +16,8 @@ from nnrobust.model import load_robot, paper_arm_urdf
 from nnrobust.plant import Friction, Plant, SinusoidalDisturbance
 from nnrobust.run.experiment import build
 from nnrobust.run.simulation import simulate
-
-from ..arms import arm
-from ..problems import ConstantTorque
+from tests.arms import arm
+from tests.problems import ConstantTorque
 
 SETTINGS = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 

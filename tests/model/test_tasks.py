@@ -8,8 +8,7 @@ from nnrobust.model import planar_chain_urdf
 from nnrobust.model.ik import solve_ik
 from nnrobust.model.tasks import pose_vector, split_pose, task_error
 from nnrobust.trajectories import EllipseTrajectory, PoseTrajectory
-
-from ..arms import ARM_CASES, arm, random_configurations
+from tests.arms import ARM_CASES, arm, random_configurations
 
 H = 1e-6
 
@@ -73,7 +72,7 @@ def test_chain_jacobians_match_finite_differences(name, task):
 
 
 def test_closed_form_chain_jacobians_match_pinocchio():
-    from ..problems import closed_form_of, paper_robot
+    from tests.problems import closed_form_of, paper_robot
 
     robot = paper_robot()
     oracle = closed_form_of(robot)

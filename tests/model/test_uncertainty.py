@@ -13,8 +13,7 @@ from nnrobust.model import PinocchioModel
 from nnrobust.model.perturbation import is_physical, perturb_inertias
 from nnrobust.plant import scaled_disturbance, scaled_friction, torque_scale
 from nnrobust.run.experiment import build_nominal, build_plant
-
-from ..arms import arm, random_configurations
+from tests.arms import arm, random_configurations
 
 
 def _perturbed(robot, **kwargs):

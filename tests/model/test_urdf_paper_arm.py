@@ -2,8 +2,7 @@ import numpy as np
 import pytest
 
 from nnrobust.model import ThreeLinkParameters
-
-from ..problems import paper_robot
+from tests.problems import paper_robot
 
 
 def test_urdf_reproduces_printed_parameters_to_four_decimals():

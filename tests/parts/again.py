@@ -1,4 +1,4 @@
-"""Shipped parts written again against the public contracts, as a user would (tests/test_user_parts.py):
+"""Shipped parts written again against the public contracts, as a user would (tests/plugins/test_checked.py):
 each must give the run its built-in twin gives."""
 
 import math

@@ -10,8 +10,7 @@ from nnrobust.controllers import ControlOutput
 from nnrobust.plant import Friction, JointStops, Plant, Sensor, SinusoidalDisturbance, saturate
 from nnrobust.run.experiment import build, run_experiment
 from nnrobust.run.simulation import simulate
-
-from ..problems import ConstantTorque, paper_robot
+from tests.problems import ConstantTorque, paper_robot
 
 
 class Recorder:

@@ -5,8 +5,7 @@ from nnrobust.config import ExperimentConfig
 from nnrobust.plant import Friction, Plant, SinusoidalDisturbance
 from nnrobust.run.experiment import build
 from nnrobust.run.simulation import simulate
-
-from ..problems import VERTICAL_GRAVITY, ConstantTorque, paper_robot
+from tests.problems import VERTICAL_GRAVITY, ConstantTorque, paper_robot
 
 Q0 = np.array([0.3, 1.0, -0.8])
 V0 = np.array([1.5, -2.0, 3.0])

@@ -10,8 +10,7 @@ from nnrobust.plant import Friction, Plant, SinusoidalDisturbance
 from nnrobust.plant.stick_slip import settle
 from nnrobust.run import compiled
 from nnrobust.run.simulation import simulate
-
-from ..problems import ConstantTorque, paper_robot
+from tests.problems import ConstantTorque, paper_robot
 
 FD, FC = 0.3, 0.8
 """Viscous [N m s/rad] and Coulomb [N m] friction of the one-link arm."""
@@ -111,7 +110,7 @@ def test_static_friction_below_coulomb_is_refused():
 def test_the_plant_step_is_converged_for_a_chattering_controller():
     """A stiff sliding mode on paper-ellipse (the case where a fixed step across sgn made 10 x the
     chatter): 1 and 16 plant steps per period agree within 2 % in RMS torque, 10 % in chatter.
-    On the compiled loop; the Python loop takes the same steps (tests/test_compiled.py compares
+    On the compiled loop; the Python loop takes the same steps (tests/run/test_compiled.py compares
     the two step by step, speed-adaptive cuts included)."""
     config = load_preset("paper-ellipse").replace(
         controller={

@@ -23,8 +23,7 @@ from nnrobust.subtasks import (
     WeightedCriteria,
 )
 from nnrobust.trajectories import EllipseTrajectory
-
-from ..arms import ARM_CASES, arm, random_configurations
+from tests.arms import ARM_CASES, arm, random_configurations
 
 GRADIENT_ARMS = [("panda", "position"), ("panda", "pose"), ("ur5", "position"), ("planar7", "planar")]
 

@@ -8,8 +8,7 @@ from nnrobust.subtasks import (
     PaperCriterion,
     WeightedCriteria,
 )
-
-from ..problems import closed_form_of, finite_difference, paper_robot, random_states
+from tests.problems import closed_form_of, finite_difference, paper_robot, random_states
 
 
 @pytest.mark.parametrize(

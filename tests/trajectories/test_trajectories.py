@@ -113,7 +113,7 @@ MOVES = {
 @pytest.mark.parametrize("task", ["position", "pose"])
 @pytest.mark.parametrize("kind", list(MOVES))
 def test_the_compiled_loop_follows_the_new_paths_as_python_does(kind, task):
-    from tests.test_compiled import needs_extension
+    from tests.run.test_compiled import needs_extension
 
     if needs_extension.args[0]:
         pytest.skip(needs_extension.kwargs["reason"])

@@ -412,7 +412,7 @@ def recorded_steps(config, duration: float | None = None):
     """A compiled run of ``config`` as an exported law sees it: (inputs, torques), one row per
     control instant, inputs = (t, measured q, measured v) and torques = what the compiled law
     commanded there (and the loop applied). Replaying the inputs through the export must give the
-    torques (tests/test_export.py, benchmarks/export_step.py).
+    torques (tests/outputs/test_export.py, benchmarks/export_step.py).
     """
     import numpy as np
 

@@ -27,7 +27,8 @@ def _register() -> None:
                 entry_point="nnrobust.studies.learning.env:ArmEnv",
                 vector_entry_point="nnrobust.studies.learning.vector:ArmVectorEnv",
                 kwargs={"experiment": name},
-                disable_env_checker=True,  # tests/test_learning.py runs Gymnasium's checker itself
+                # tests/studies/learning/test_env.py runs Gymnasium's checker itself
+                disable_env_checker=True,
             )
 
 

@@ -212,7 +212,7 @@ def _fixed(controller: str, space: SearchSpace) -> tuple[tuple[str, str], ...]:
     """(key, why) of every key the shipped law ``controller`` reads that ``space`` does not
     search: its own keys (:func:`own_keys`) and the keys every shipped law shares (the
     pseudo-inverse's), each with its declaration's :attr:`~nnrobust.controllers.registry.LawParam.
-    fixed_reason` ("" where none is declared: tests/test_tune.py fails on one).
+    fixed_reason` ("" where none is declared: tests/studies/tune/test_engine.py fails on one).
     """
     from ...controllers.registry import SHARED_KEYS, declared_key, registered_law
 

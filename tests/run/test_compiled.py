@@ -15,13 +15,12 @@ import pytest
 from nnrobust.core.exceptions import NNRobustError
 from nnrobust.model.perturbation import perturb_inertias
 from nnrobust.run import compiled
+from tests.arms import arm, random_configurations
 
-from .arms import arm, random_configurations
-
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 from closed_loop import cpp_floor_loop, python_floor_loop  # noqa: E402  (the benchmark's floors)
 
-from .problems import VERTICAL_GRAVITY, paper_robot
+from tests.problems import VERTICAL_GRAVITY, paper_robot
 
 needs_extension = pytest.mark.skipif(not compiled.available(), reason=compiled.unavailable_reason())
 

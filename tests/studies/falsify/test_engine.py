@@ -357,7 +357,7 @@ def test_a_case_of_a_study_report_gives_its_kept_settings(tmp_path):
     one, or a case on a plain tuning is refused naming --tuned and the cases there are."""
     from nnrobust.studies.base.tuned import tuned_settings, tuned_target
 
-    data = Path(__file__).parent.parent / "docs" / "data" / "tuned_panda.json"
+    data = Path(__file__).parents[3] / "docs" / "data" / "tuned_panda.json"
     report = json.loads(data.read_text())
     case = report["cases"]["panda-ellipse-noisy"]["controllers"]
     found = tuned_settings(f"{data}#panda-ellipse-noisy", ["nn", "rbf-nn"])
@@ -452,7 +452,7 @@ def test_a_controller_that_cannot_run_is_refused_and_a_refused_run_keeps_its_mes
     from nnrobust.studies.falsify import evaluate
     from nnrobust.studies.falsify.spec import _searched_sweep
 
-    shutil.copy(Path(__file__).parent / "controllers" / "eq9_again.py", tmp_path / "laws.py")
+    shutil.copy(Path(__file__).parents[2] / "controllers" / "eq9_again.py", tmp_path / "laws.py")
     sweep = tmp_path / "laws.toml"
     sweep.write_text(
         'name = "laws"\nbase = "paper-ellipse"\ncontrollers = [{name = "shape", class = '
@@ -516,7 +516,7 @@ def test_a_search_resumes_only_on_the_inputs_it_was_computed_from(tmp_path, caps
 
     study = tmp_path / "study"
     study.mkdir()
-    shutil.copy(Path(__file__).parent / "controllers" / "eq9_again.py", study / "laws.py")
+    shutil.copy(Path(__file__).parents[2] / "controllers" / "eq9_again.py", study / "laws.py")
     (study / "base.toml").write_text('base = "paper-ellipse"\n[simulation]\nduration = 0.3\n')
     (study / "box.toml").write_text(
         'name = "box"\nbase = "base.toml"\ncontrollers = [{name = "eq9", class = "laws.py:Eq9", '
@@ -564,7 +564,7 @@ def test_a_custom_laws_tuned_settings_are_falsified_as_a_shipped_laws(tmp_path, 
     import shlex
     import shutil
 
-    shutil.copy(Path(__file__).parent / "controllers" / "eq9_again.py", tmp_path / "laws.py")
+    shutil.copy(Path(__file__).parents[2] / "controllers" / "eq9_again.py", tmp_path / "laws.py")
     monkeypatch.chdir(tmp_path)
     (tmp_path / "fz.toml").write_text(SWEEP)
     tuning = tmp_path / "tuning"

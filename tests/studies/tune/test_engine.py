@@ -354,7 +354,7 @@ def test_the_cpp_and_python_twins_tune_to_the_same_setting(short_experiment, tmp
 
     if not available():
         pytest.skip("the compiled loop is not built: a law in C++ runs there")
-    examples = Path(__file__).resolve().parents[1] / "examples"
+    examples = Path(__file__).resolve().parents[3] / "examples"
     best = []
     for file in (examples / "controllers" / "task_pd.cpp", examples / "custom_controller.py"):
         spec = TuneSpec(str(short_experiment), [f"{file}:TaskPD"], 6, train_samples=1, validation=0, seed=2)
@@ -456,7 +456,7 @@ def test_a_custom_class_is_tuned_in_the_space_it_declares(short_experiment, tmp_
     from nnrobust.run.experiment import run_experiment
     from nnrobust.studies.base.plan import base_config, draw, experiment
 
-    laws = Path(__file__).parent / "controllers" / "eq9_again.py"
+    laws = Path(__file__).parents[2] / "controllers" / "eq9_again.py"
     spec = TuneSpec(str(short_experiment), ["no-u0", f"{laws}:Eq9"], 6, train_samples=2, validation=1, seed=5)
     summary = run_tune(spec, tmp_path / "out", workers=2)
     assert set(summary["controllers"]) == {"no-u0", "Eq9"}
@@ -648,7 +648,7 @@ def test_a_tuning_where_a_law_never_gave_a_result_exits_1(short_experiment, tmp_
 
     from nnrobust.cli import main
 
-    law = f"{Path(__file__).parent / 'controllers' / 'eq9_again.py'}:RaisesLate"
+    law = f"{Path(__file__).parents[2] / 'controllers' / 'eq9_again.py'}:RaisesLate"
     argv = ["tune", str(short_experiment), "--controllers", f"no-u0,{law}", "--budget", "4"]
     assert main([*argv, "--validation", "0", "--workers", "1", "--out", str(tmp_path / "t"), "--quiet"]) == 1
     assert "RaisesLate: every run ended without a result" in capsys.readouterr().err

@@ -184,7 +184,7 @@ def test_the_coverages_robustness_md_quotes_are_the_formulas():
 
     from nnrobust.studies.base.paired import order_coverage
 
-    text = (Path(__file__).resolve().parents[1] / "docs" / "robustness.md").read_text()
+    text = (Path(__file__).resolve().parents[3] / "docs" / "robustness.md").read_text()
     quoted = re.search(
         r"whatever the distribution of d: ([\d.]+) % at N = 11, ([\d.]+) % at N = 29, ([\d.]+) % at N = 5",
         text,

@@ -18,7 +18,7 @@ pytest.importorskip("cma")
 from nnrobust.cli import main  # noqa: E402
 from nnrobust.studies.study import load_study, run_study  # noqa: E402
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[3] / "examples"
 
 CUT = {"tune": 8, "seeds": 2, "train_samples": 2, "validation": 2, "epsilon": 0.5, "beta": 0.2,
        "falsify": 4, "margin": "false"}  # fmt: skip
@@ -408,7 +408,7 @@ def test_a_bad_study_is_one_line_naming_the_key_before_any_stage(change, message
 
 
 def test_a_controller_that_cannot_run_is_refused_before_any_stage(tmp_path, capsys):
-    shutil.copy(Path(__file__).parent / "controllers" / "eq9_again.py", tmp_path / "laws.py")
+    shutil.copy(Path(__file__).parents[2] / "controllers" / "eq9_again.py", tmp_path / "laws.py")
     (tmp_path / "study.toml").write_text(STUDY.replace("laws.py:TaskPD", "laws.py:WrongShape"))
     assert main(["study", str(tmp_path / "study.toml"), "--out", str(tmp_path / "out")]) == 2
     assert "returned a torque of shape (4,)" in capsys.readouterr().err
@@ -416,7 +416,7 @@ def test_a_controller_that_cannot_run_is_refused_before_any_stage(tmp_path, caps
 
 
 def test_the_report_opens_in_a_browser_without_a_console_error(study, tmp_path):
-    from tests.test_viewer import _chromium, console_errors
+    from tests.outputs.test_viewer import _chromium, console_errors
 
     browser = _chromium()
     if browser is None:
@@ -485,7 +485,7 @@ def test_a_law_that_fails_says_why_in_the_report_and_the_report_is_standard_json
     """A tuned law whose every run raises is not silently dropped: the report, its page and the
     command say why (its exception, located). A law run untuned that fails keeps its rows' first
     message. report.json holds no Infinity (a margin of -inf is null beside the status)."""
-    shutil.copy(Path(__file__).parent / "controllers" / "eq9_again.py", tmp_path / "laws.py")
+    shutil.copy(Path(__file__).parents[2] / "controllers" / "eq9_again.py", tmp_path / "laws.py")
     text = STUDY_CORE.replace(
         '{name = "taskpd", class = "laws.py:TaskPD"}',
         '{name = "late", class = "laws.py:RaisesLate", tune = false}, '
@@ -513,7 +513,7 @@ def test_a_law_that_fails_says_why_in_the_report_and_the_report_is_standard_json
 
 
 def test_a_law_without_a_search_space_is_refused_naming_the_way_out(tmp_path, capsys):
-    shutil.copy(Path(__file__).parent / "controllers" / "eq9_again.py", tmp_path / "laws.py")
+    shutil.copy(Path(__file__).parents[2] / "controllers" / "eq9_again.py", tmp_path / "laws.py")
     (tmp_path / "study.toml").write_text(STUDY.replace("laws.py:TaskPD", "laws.py:Counter"))
     assert main(["study", str(tmp_path / "study.toml"), "--out", str(tmp_path / "out")]) == 2
     err = capsys.readouterr().err
@@ -768,8 +768,7 @@ def test_a_policy_per_arm_is_one_law_in_a_study_of_two_arms(tmp_path):
     own file (a policy file is bound to one observation size; it was refused on the other arm)."""
     pytest.importorskip("onnxruntime")
     from nnrobust.studies.learning import ObservationLayout
-
-    from .policies import linear_policy
+    from tests.policies import linear_policy
 
     linear_policy(tmp_path / "paper.onnx", ObservationLayout(3, 2).size, 3)
     linear_policy(tmp_path / "panda.onnx", ObservationLayout(7, 3).size, 7)

@@ -10,8 +10,7 @@ import pytest
 
 from nnrobust.cli import main
 from nnrobust.core.exceptions import NNRobustError
-
-from ..bad_inputs import (
+from tests.bad_inputs import (
     CASES,
     CONFIG_CASES,
     CUSTOM_CASES,
@@ -24,7 +23,7 @@ from ..bad_inputs import (
     render_table,
 )
 
-DOCS = Path(__file__).resolve().parents[2] / "docs" / "bad-inputs.md"
+DOCS = Path(__file__).resolve().parents[1] / "docs" / "bad-inputs.md"
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c.what for c in CASES])
@@ -180,7 +179,7 @@ endsolid t
 
 def _ros_workspace(root: Path, missing: bool = False) -> Path:
     """ws/src/my_arm/{urdf/arm.urdf, meshes/l1.stl, meshes/l2.stl}: meshes as package://my_arm/..."""
-    from ..bad_inputs import arm
+    from tests.bad_inputs import arm
 
     pkg = root / "ws" / "src" / "my_arm"
     (pkg / "urdf").mkdir(parents=True)
@@ -252,7 +251,7 @@ def test_a_mistyped_set_key_gets_the_suggestion_a_file_gets(capsys):
 def test_a_toml_date_in_set_is_refused_before_anything_runs(tmp_path, capsys):
     """A TOML date-time given to a custom law's parameter was simulated, then lost the run when
     config.toml was written (TypeError: cannot write datetime to TOML); now one line, nothing run."""
-    laws = Path(__file__).parents[1] / "controllers" / "eq9_again.py"
+    laws = Path(__file__).parent / "controllers" / "eq9_again.py"
     words = [
         "run",
         "paper-ellipse",
@@ -274,7 +273,7 @@ def test_a_toml_date_in_set_is_refused_before_anything_runs(tmp_path, capsys):
 def test_quiet_prints_no_warning(tmp_path, capsys):
     """--quiet is "print nothing but errors": the xarm6 URDF's inertia warning is not printed (the
     run's own warnings stay in metrics.json)."""
-    source = Path(__file__).parents[1] / "data" / "pybullet" / "xarm" / "xarm6_robot.urdf"
+    source = Path(__file__).parent / "data" / "pybullet" / "xarm" / "xarm6_robot.urdf"
     path = tmp_path / "x.toml"
     path.write_text(
         f'[robot]\nsource = "{source}"\ntask = "position"\n[trajectory]\n'

@@ -1,6 +1,6 @@
 """Each compiled component against its Python twin, alone, on random states: the law's torque and
 next state, the weighted criterion's gradient (on the nominal model) and value (on the true robot),
-and the plant's q''. A whole-run comparison (tests/test_compiled.py) can hide a component that
+and the plant's q''. A whole-run comparison (tests/run/test_compiled.py) can hide a component that
 differs only where a run rarely goes; these states are drawn across the joints' ranges.
 """
 

@@ -19,7 +19,7 @@ from nnrobust.outputs.run_folder import load_run
 from nnrobust.run import compiled
 from nnrobust.run.experiment import build, run_experiment
 
-PARTS = Path(__file__).parent / "parts" / "again.py"
+PARTS = Path(__file__).parents[1] / "parts" / "again.py"
 
 ELLIPSE = """
 [trajectory]

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-STORED = Path(__file__).parent / "data" / "cli_help"
+STORED = Path(__file__).parents[1] / "data" / "cli_help"
 COMMANDS = ("", "run", "plot", "presets", "robots", "compare", "view", "sweep", "falsify", "export",
             "serve", "study", "tune", "bench")  # fmt: skip
 """Every command ("" is the bare ``nnrobust --help``)."""

@@ -12,7 +12,7 @@ from nnrobust.outputs.run_folder import RunFolderError, write_run
 from nnrobust.run.experiment import build, run_experiment
 from nnrobust.run.results import Result
 
-DATA = Path(__file__).resolve().parent.parent / "docs" / "data"
+DATA = Path(__file__).resolve().parents[2] / "docs" / "data"
 
 
 @pytest.fixture(scope="module")
@@ -344,7 +344,7 @@ def _readme_panda() -> str:
     """The README's my-panda.toml (its first TOML block)."""
     import re
 
-    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    readme = (Path(__file__).resolve().parents[2] / "README.md").read_text()
     return re.findall(r"```toml\n(.*?)```", readme, flags=re.S)[0]
 
 

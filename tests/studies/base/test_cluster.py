@@ -15,7 +15,7 @@ pytest.importorskip("pyarrow")
 from nnrobust.cli import main  # noqa: E402
 from nnrobust.studies.sweep import read_results  # noqa: E402
 
-LAWS = Path(__file__).parent / "controllers" / "eq9_again.py"
+LAWS = Path(__file__).parents[2] / "controllers" / "eq9_again.py"
 
 SWEEP = """
 name = "dead"

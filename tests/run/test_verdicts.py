@@ -10,8 +10,7 @@ from nnrobust.plant.limits import available_torque
 from nnrobust.run import verdicts
 from nnrobust.run.experiment import build, run_experiment
 from nnrobust.run.results import Result
-
-from .test_compiled import needs_extension
+from tests.run.test_compiled import needs_extension
 
 LIMIT = np.array([60.0, 40.0, 20.0])
 

@@ -336,7 +336,7 @@ def test_a_custom_controller_joins_a_sweep_as_a_table_entry(tmp_path, monkeypatc
     import shutil
     from pathlib import Path
 
-    shutil.copy(Path(__file__).parent / "controllers" / "eq9_again.py", tmp_path / "laws.py")
+    shutil.copy(Path(__file__).parents[2] / "controllers" / "eq9_again.py", tmp_path / "laws.py")
     path = _sweep_file(
         tmp_path,
         text="""
@@ -667,8 +667,7 @@ def test_a_set_or_varied_key_gives_the_configuration_of_the_edited_file(table, t
     resolved base, whose one-value gains were already written out three times)."""
     from nnrobust.config import load_config
     from nnrobust.studies.base.plan import base_config, base_values, draw, experiment
-
-    from .test_experiment import _readme_panda
+    from tests.run.test_experiment import _readme_panda
 
     base = tmp_path / "my-panda.toml"
     base.write_text(_readme_panda())
@@ -711,7 +710,7 @@ def test_a_controller_that_cannot_run_is_refused_before_any_sample(case, tmp_pat
     import shutil
     from pathlib import Path
 
-    shutil.copy(Path(__file__).parent / "controllers" / "eq9_again.py", tmp_path / "laws.py")
+    shutil.copy(Path(__file__).parents[2] / "controllers" / "eq9_again.py", tmp_path / "laws.py")
     entry, message = UNBUILDABLE[case]
     path = _sweep_file(
         tmp_path,
@@ -752,7 +751,7 @@ def test_a_changed_input_is_named_and_a_copied_or_changed_part_is_refused(tmp_pa
 
     study = tmp_path / "study"
     study.mkdir()
-    shutil.copy(Path(__file__).parents[1] / "urdf" / "three_link_planar.urdf", study / "arm.urdf")
+    shutil.copy(Path(__file__).parents[3] / "urdf" / "three_link_planar.urdf", study / "arm.urdf")
     (study / "exp.toml").write_text(
         'base = "paper-ellipse"\n[robot]\nsource = "arm.urdf"\n[simulation]\nduration = 0.2\n'
     )
@@ -837,7 +836,7 @@ def test_too_many_local_workers_are_refused_before_the_folder_is_made(command, t
         'name = "box"\nbase = "paper-ellipse"\ncontrollers = ["pd"]\nsamples = 2\n'
         '[set]\n"simulation.duration" = 2.2\n[vary]\n"plant.disturbance_scale" = {uniform = [0.5, 2.0]}\n'
     )
-    study = Path(__file__).resolve().parents[1] / "examples" / "study.toml"
+    study = Path(__file__).resolve().parents[3] / "examples" / "study.toml"
     out = tmp_path / "out"
     argv = {
         "sweep": ["sweep", str(box)],
@@ -861,7 +860,7 @@ def test_tuned_settings_of_every_kind_of_law_flow_into_a_sweep(tmp_path, capsys)
     import shutil
     from pathlib import Path
 
-    shutil.copy(Path(__file__).parent / "controllers" / "eq9_again.py", tmp_path / "laws.py")
+    shutil.copy(Path(__file__).parents[2] / "controllers" / "eq9_again.py", tmp_path / "laws.py")
     path = _sweep_file(
         tmp_path,
         text="""

@@ -25,7 +25,7 @@ from nnrobust.studies.base.plan import draw, experiment  # noqa: E402
 from nnrobust.studies.learning.env import ArmEnv, Reward  # noqa: E402
 from nnrobust.studies.learning.vector import ArmVectorEnv  # noqa: E402
 
-COUNTER = Path(__file__).parent / "controllers" / "eq9_again.py"
+COUNTER = Path(__file__).parents[2] / "controllers" / "eq9_again.py"
 BOX = {"nominal.relative_error": {"uniform": [0.0, 0.3]}, "plant.disturbance_scale": {"uniform": [0.5, 2.0]}}
 
 

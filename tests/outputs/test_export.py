@@ -38,7 +38,7 @@ CASES = {
     "Panda pose, PD": ("panda-pose", {"controller": {"kind": "pd"}}),
 }
 DURATION = 0.3
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _config(name):

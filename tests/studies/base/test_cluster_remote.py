@@ -34,7 +34,7 @@ from nnrobust.studies.sweep import read_results  # noqa: E402
 
 SCHEDULER = [sys.executable, "-m", "distributed.cli.dask_scheduler"]  # `dask scheduler` of this Python
 WORKER = [sys.executable, "-m", "distributed.cli.dask_worker"]
-REPO = Path(__file__).resolve().parents[1]
+REPO = Path(__file__).resolve().parents[3]
 CLOCKS = ("task_seconds", "wall_seconds", "realtime_factor", "max_inference_time", "inference_over_period")
 """The columns that time a row: the only ones that differ from machine to machine."""
 
@@ -382,8 +382,7 @@ def test_a_shipped_policy_file_is_read_from_its_copy(tmp_path):
     import numpy as np
 
     from nnrobust.controllers.laws.policy import OnnxPolicy
-
-    from .policies import linear_policy
+    from tests.policies import linear_policy
 
     file = linear_policy(tmp_path / "policy.onnx", 4, 2, b=[0.5, -0.5])
     bundle = shipped_files.bundle_of([(str(file), hashlib.sha256(file.read_bytes()).hexdigest())])
