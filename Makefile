@@ -73,7 +73,7 @@ bench: $(VENV)/.installed
 
 # Every number in README.md and docs/: regenerate each data file (about 1.5 hours on 2 cores;
 # the resumable tunings and searches start afresh, so a changed plant or tuner is not replayed),
-# then rewrite the tables from them (tests/test_docs_numbers.py checks both).
+# then rewrite the tables from them (tests/docs_numbers/ checks both).
 DATA := docs/data
 docs-data: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/paper_reproduction.py --json $(DATA)/paper_reproduction.json

@@ -5,7 +5,7 @@ loops, whose rounding differs, end at different errors (docs/falsification.md qu
     python benchmarks/worst_plant_loops.py --json docs/data/worst_plant_loops.json
 
 The Python loop's run of that 25 s plant takes about a minute, which is why it is measured here
-and not in the suite: tests/test_docs_numbers.py checks the page against this file, reruns the
+and not in the suite: tests/docs_numbers/test_falsification.py checks the page against this file, reruns the
 compiled loop, and checks that the Python loop's error is past the requirement too.
 """
 

@@ -5,7 +5,7 @@
 
 Each table sits between ``<!-- table: NAME -->`` and ``<!-- /table -->`` in a Markdown file and
 is rendered from docs/data/*.json, which the benchmark scripts write (each table says which
-command made its data). tests/test_docs_numbers.py runs the check and re-runs one row of every
+command made its data). tests/docs_numbers/ runs the check and re-runs one row of every
 data file, so the numbers in the docs are those the current code produces.
 """
 

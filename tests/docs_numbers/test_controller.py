@@ -1,0 +1,39 @@
+"""The numbers docs/controller.md quotes: each against its data file, and the reruns behind them."""
+
+import pytest
+
+from tests.docs_numbers.common import (
+    CASE_B,
+    _row,
+    check_quote,
+)
+
+QUOTES: list[tuple] = [
+    (
+        "docs/controller.md",
+        r"smoothness: ([\d.]+) mm against",
+        "paper_reproduction",
+        _row(CASE_B, "NN, defaults"),
+        1e3,
+    ),
+    (
+        "docs/controller.md",
+        r"paper's law's (\d+) mm, but",
+        "paper_reproduction",
+        _row(CASE_B, "NN, paper's law, ideal actuators"),
+        1e3,
+    ),
+    (
+        "docs/controller.md",
+        r"tracks to ([\d.]+) mm at",
+        "paper_reproduction",
+        _row(CASE_B, "NN, tuned (Kp 400, Kv 40, sigma 0.5), 120 s"),
+        1e3,
+    ),
+]
+
+
+@pytest.mark.parametrize("quote", QUOTES, ids=lambda quote: quote[1][:40])
+def test_every_quoted_figure_matches_its_data(quote):
+    """Each figure docs/controller.md quotes, against its data file."""
+    check_quote(*quote)

@@ -1,0 +1,383 @@
+"""The numbers README.md quotes: each against its data file, and the reruns behind them."""
+
+import json
+import re
+
+import pytest
+
+from tests.docs_numbers.common import (
+    CASE_A,
+    CASE_B,
+    FALSIFIED,
+    FT,
+    GAP,
+    GAP_RBF_A,
+    GAP_RBF_PANDA,
+    GAP_REST,
+    PANDA,
+    PANDA_ARM,
+    PAPER,
+    PF,
+    PT,
+    ROOT,
+    TUNED,
+    _box_certified,
+    _case,
+    _case_failing,
+    _certified,
+    _example_median,
+    _falsified,
+    _held,
+    _margin,
+    _nn_gain,
+    _nn_ideal_ratio,
+    _paired_better,
+    _paired_p,
+    _random_failures,
+    _ratio,
+    _ratio_to,
+    _read,
+    _row,
+    _seed_extreme,
+    _seed_spread,
+    _worst_config,
+    _worst_draw,
+    check_quote,
+)
+
+QUOTES: list[tuple] = [
+    *[
+        (
+            "README.md",
+            rf"NN compensator's median error is {lead}([\d.]+)",
+            PAPER,
+            _case(case, "nn", "median"),
+            1e3,
+        )
+        for lead, case in (
+            ("", "half-disturbance"),
+            (r"[\d.]+ / ", "paper-disturbance"),
+            (r"[\d.]+ / [\d.]+ / ", "double-disturbance"),
+        )
+    ],
+    ("README.md", r"three scales and its worst (\d+) mm", PAPER, _worst_draw("nn"), 1e3),
+    *[
+        (
+            "README.md",
+            rf"sliding-mode term has {lead}([\d.]+)",
+            PAPER,
+            _case(case, "sliding-mode", "median"),
+            1e3,
+        )
+        for lead, case in (
+            ("", "half-disturbance"),
+            (r"[\d.]+ / ", "paper-disturbance"),
+            (r"[\d.]+ / [\d.]+ / ", "double-disturbance"),
+        )
+    ],
+    (
+        "README.md",
+        r"fails 50 mm on (\d+) of the 50 draws",
+        PAPER,
+        _case_failing("double-disturbance", "sliding-mode"),
+        1.0,
+    ),
+    (
+        "README.md",
+        r"no-u₀ has (\d+) mm at the paper's",
+        PAPER,
+        _case("paper-disturbance", "no-u0", "median"),
+        1e3,
+    ),
+    (
+        "README.md",
+        r"exact\s+model (\d+) mm",
+        PAPER,
+        _case("paper-disturbance", "computed-torque", "median"),
+        1e3,
+    ),
+    *[
+        ("README.md", rf"learns η has {lead}([\d.]+)", PAPER, _case(case, "rbf-nn", "median"), 1e3)
+        for lead, case in (
+            ("", "half-disturbance"),
+            (r"[\d.]+ / ", "paper-disturbance"),
+            (r"[\d.]+ / [\d.]+ / ", "double-disturbance"),
+        )
+    ],
+    ("README.md", r"learns η has [\d./ ]+ mm\s+\(worst (\d+) mm\)", PAPER, _worst_draw("rbf-nn"), 1e3),
+    *[
+        ("README.md", rf"arm, tracks to {lead}([\d.]+)", PAPER, _case(case, "slotine-li", "median"), 1e3)
+        for lead, case in (
+            ("", "half-disturbance"),
+            (r"[\d.]+ / ", "paper-disturbance"),
+            (r"[\d.]+ / [\d.]+ / ", "double-disturbance"),
+        )
+    ],
+    ("README.md", r"the median and ([\d.]+) mm at worst", PAPER, _worst_draw("slotine-li"), 1e3),
+    *[
+        ("README.md", pattern, PANDA, where, 1e3)
+        for pattern, where in (
+            (r"best median \(([\d.]+) / ", _case("preset-disturbance", "slotine-li", "median")),
+            (r"best median \([\d.]+ / ([\d.]+) mm\)", _case("triple-disturbance", "slotine-li", "median")),
+            (r"and tail\s+\(([\d.]+) mm\)", _worst_draw("slotine-li")),
+            (r"then the RBF network \(([\d.]+) / ", _case("preset-disturbance", "rbf-nn", "median")),
+            (r"then the RBF network \([\d.]+ / ([\d.]+) mm", _case("triple-disturbance", "rbf-nn", "median")),
+            (r"RBF network \([\d.]+ / [\d.]+ mm, at most ([\d.]+) mm\)", _worst_draw("rbf-nn")),
+            (r"third-best\s+median\s+\(([\d.]+) / ", _case("preset-disturbance", "nn", "median")),
+            (r"third-best\s+median\s+\([\d.]+ / ([\d.]+) mm\)", _case("triple-disturbance", "nn", "median")),
+            (r"stays below ([\d.]+) mm everywhere", _worst_draw("sliding-mode")),
+        )
+    ],
+    *[
+        ("README.md", pattern, FT, where, scale)
+        for pattern, where, scale in (
+            (r"on some plant \(the NN at (\d+) mm\)", _falsified("nn-tuned"), 1e3),
+            (r"margins are ([\d.]+) of the box for the NN", _margin("nn-tuned"), 1.0),
+            (r"for the NN, ([\d.]+) for the sliding mode", _margin("sliding-mode-tuned"), 1.0),
+            (r"sliding mode and\s+([\d.]+) for no-u0", _margin("no-u0-tuned"), 1.0),
+            (r"The classics split: ([\d.]+) for the RBF network", _margin("rbf-nn-tuned"), 1.0),
+            (r"and ([\d.]+) for\s+Slotine–Li, the widest", _margin("slotine-li-tuned"), 1.0),
+            (r"keeps the widest margin, ([\d.]+), yet", _margin("pd-tuned"), 1.0),
+            (r"not safe either: (\d+) of 200\s+random plants fail it", _random_failures("pd-tuned"), 1.0),
+            (r"fail it at low friction \(P\(fail\) ≤ ([\d.]+) %\)", _certified("pd-tuned"), 100.0),
+        )
+    ],
+    (
+        "README.md",
+        r"Slotine–Li hold ([\d.]+) of the box",
+        PT,
+        lambda d: d["margin"]["pd-tuned"]["largest_scale"],
+        1.0,
+    ),
+    ("README.md", r"the NN fails on (\d+) of the 59", "falsify_paper", _box_certified("nn", "k"), 1.0),
+    (
+        "README.md",
+        r"of the 59\s+\(P\(fail\) ≤ ([\d.]+) %\)",
+        "falsify_paper",
+        _box_certified("nn", "p_upper"),
+        100.0,
+    ),
+    (
+        "README.md",
+        r"its worst draw at (\d+) mm",
+        "falsify_paper",
+        lambda d: d["cases"]["paper-ellipse"]["controllers"]["nn"]["statistics"]["rms_error_after_2s"]["max"],
+        1e3,
+    ),
+    (
+        "README.md",
+        r"only Slotine–Li\s+is certified \(no draw fails: P\(fail\) ≤ (\d+) %",
+        "falsify_paper",
+        _box_certified("slotine-li", "p_upper"),
+        100.0,
+    ),
+    ("README.md", r"\(its worst: ([\d.]+) mm in 200", PF, _falsified("nn"), 1e3),
+    ("README.md", r"no violation up to ([\d.]+) of the box\), and", PF, _margin("nn"), 1.0),
+    ("README.md", r"fails it \(P\(fail\) ≤ ([\d.]+) % with", PF, _certified("nn"), 100.0),
+    ("README.md", r"comes close \(margin ([\d.]+)\)", PF, _margin("rbf-nn"), 1.0),
+    ("README.md", r"no violation at ([\d.]+) times the box", PF, _margin("slotine-li"), 1.0),
+    (
+        "README.md",
+        r"Slotine–Li is not falsified \(its worst\s+([\d.]+) mm",
+        PF,
+        _falsified("slotine-li"),
+        1e3,
+    ),
+    ("README.md", r"its worst\s+plant costs it ([\d.]+) mm", FALSIFIED, _falsified("slotine-li"), 1e3),
+    (
+        "README.md",
+        r"holds up to ([\d.]+) of the box, and\s+none of 200",
+        FALSIFIED,
+        _margin("slotine-li"),
+        1.0,
+    ),
+    (
+        "README.md",
+        r"found, at its (\d+)th\s+simulation",
+        FALSIFIED,
+        lambda d: d["controllers"]["slotine-li"]["first_violation"],
+        1.0,
+    ),
+    ("README.md", r"baseline 19–(\d+)× on them", "arm_presets", _ratio("panda-ellipse"), 1.0),
+    ("README.md", r"baseline (\d+)–\d+× on them", "arm_presets", _ratio("planar7-ellipse"), 1.0),
+    ("README.md", r"error 54× \(([\d.]+) against", "paper_reproduction", _row(CASE_B, "NN, defaults"), 1e3),
+    (
+        "README.md",
+        r"error 54× \([\d.]+ against (\d+) mm",
+        "paper_reproduction",
+        _row(CASE_B, "no-u0 baseline"),
+        1e3,
+    ),
+    ("README.md", r"loses the\s+ellipse: (\d+) mm RMS", FALSIFIED, _falsified("nn"), 1e3),
+    ("README.md", r"and (\d+) mm for\s+random\s+search", FALSIFIED, _falsified("nn", "random_baseline"), 1e3),
+    ("README.md", r"against (\d+) mm for the robustness study's worst draw", PAPER, _worst_draw("nn"), 1e3),
+    ("README.md", r"the sliding-mode term at (\d+) mm and", FALSIFIED, _falsified("sliding-mode"), 1e3),
+    ("README.md", r"the RBF network at (\d+) mm\. Scaled", FALSIFIED, _falsified("rbf-nn"), 1e3),
+    ("README.md", r"The RBF network holds up to ([\d.]+) of the box", FALSIFIED, _margin("rbf-nn"), 1.0),
+    (
+        "README.md",
+        r"fails on (\d+) of 200 random\s+plants against",
+        FALSIFIED,
+        _random_failures("rbf-nn"),
+        1.0,
+    ),
+    ("README.md", r"plants against the\s+NN's (\d+)\.", FALSIFIED, _random_failures("nn"), 1.0),
+    *[
+        (document, pattern, GAP, stat, 1.0)
+        for document, pattern, stat in (
+            ("docs/engines.md", r"ends within ([\d.]+) % of its Pinocchio", GAP_REST),
+            ("docs/engines.md", r"it ends (\d+) % lower on MuJoCo", GAP_RBF_A),
+            ("docs/engines.md", r"on the Panda (\d+) % and \d+ % lower", GAP_RBF_PANDA[0]),
+            ("docs/engines.md", r"on the Panda \d+ % and (\d+) % lower", GAP_RBF_PANDA[1]),
+            ("README.md", r"seven laws ends within ([\d.]+) % of its", GAP_REST),
+            ("README.md", r"on case \(a\) \((\d+) % lower on MuJoCo\)", GAP_RBF_A),
+            ("README.md", r"on the Panda\s+\((\d+) % and", GAP_RBF_PANDA[0]),
+            ("README.md", r"\(\d+ % and (\d+) % lower\)", GAP_RBF_PANDA[1]),
+        )
+    ],
+    ("README.md", r"up to ([\d.]+) of its size for the", FALSIFIED, ("margin", "nn", "holds_up_to"), 1.0),
+    (
+        "README.md",
+        r"NN controller and ([\d.]+) for the sliding-mode",
+        FALSIFIED,
+        ("margin", "sliding-mode", "holds_up_to"),
+        1.0,
+    ),
+    ("README.md", r"ends up\s+to ([\d.]+)× from the median", TUNED, _seed_spread(1), 1.0),
+    ("README.md", r"and once ([\d.]+)×, so one tuning", TUNED, _seed_spread(0), 1.0),
+    ("README.md", r"gain F from (\d)·10⁻⁴", TUNED, _nn_gain(min), 1e4),
+    ("README.md", r"gain F from \d·10⁻⁴ to ([\d.]+)\)", TUNED, _nn_gain(max), 1.0),
+    ("README.md", r"paper's arm:\*\*\s+the PD ([\d.]+) mm on case \(a\)", TUNED, _held(CASE_A, "pd"), 1e3),
+    (
+        "README.md",
+        r"mm on case \(a\) and ([\d.]+) mm on case \(b\), against",
+        TUNED,
+        _held(CASE_B, "pd"),
+        1e3,
+    ),
+    ("README.md", r"against the NN's ([\d.]+) and", TUNED, _held(CASE_A, "nn"), 1e3),
+    ("README.md", r"against the NN's [\d.]+ and ([\d.]+) mm", TUNED, _held(CASE_B, "nn"), 1e3),
+    ("README.md", r"no-u0's ([\d.]+) and [\d.]+ mm", TUNED, _held(CASE_A, "no-u0"), 1e3),
+    ("README.md", r"no-u0's [\d.]+ and ([\d.]+) mm", TUNED, _held(CASE_B, "no-u0"), 1e3),
+    (
+        "README.md",
+        r"the task-space PD in C\+\+ leads \(([\d.]+) mm\)",
+        TUNED,
+        _held(PANDA_ARM, "taskpd-cpp"),
+        1e3,
+    ),
+    ("README.md", r"the NN is ([\d.]+)× behind it", TUNED, _ratio_to(PANDA_ARM, "nn", "taskpd-cpp"), 1.0),
+    ("README.md", r"Panda with them \(([\d.]+) mm,", TUNED, _held(PANDA_ARM, "taskpd-cpp"), 1e3),
+    (
+        "README.md",
+        r"seeds ([\d.]+) to [\d.]+\), within the spread",
+        TUNED,
+        _seed_extreme(PANDA_ARM, "taskpd-cpp", min),
+        1e3,
+    ),
+    (
+        "README.md",
+        r"seeds [\d.]+ to ([\d.]+)\), within the spread",
+        TUNED,
+        _seed_extreme(PANDA_ARM, "taskpd-cpp", max),
+        1e3,
+    ),
+    (
+        "README.md",
+        r"beats the NN on (\d+) of \d+ draws in both",
+        TUNED,
+        _paired_better(CASE_A, "pd", "nn"),
+        1.0,
+    ),
+    ("README.md", r"beats the NN on \d+ of \d+ draws in both", None, None, 1.0),
+    (
+        "README.md",
+        r"no lead is significant \(p = ([\d.]+) and",
+        TUNED,
+        _paired_p(PANDA_ARM, "sliding-mode", "nn", "ideal"),
+        1.0,
+    ),
+    (
+        "README.md",
+        r"no lead is significant \(p = [\d.]+ and ([\d.]+)\)",
+        TUNED,
+        _paired_p(PANDA_ARM, "taskpd-cpp", "nn"),
+        1.0,
+    ),
+    ("README.md", r"NN's median is ([\d.]+) to [\d.]+× the best", TUNED, _nn_ideal_ratio(min), 1.0),
+    ("README.md", r"NN's median is [\d.]+ to ([\d.]+)× the best", TUNED, _nn_ideal_ratio(max), 1.0),
+    (
+        "README.md",
+        r"leads case \(b\) with real encoders \(([\d.]+) mm\)",
+        TUNED,
+        _held(CASE_B, "rbf-nn"),
+        1e3,
+    ),
+    (
+        "README.md",
+        r"median errors of ([\d.]+) mm \(a residual",
+        "example_study",
+        _example_median("learned-residual"),
+        1e3,
+    ),
+    (
+        "README.md",
+        r"and ([\d.]+) mm\n\(a torque policy\)",
+        "example_study",
+        _example_median("learned-torque"),
+        1e3,
+    ),
+    ("README.md", r"against the NN's ([\d.]+) mm", "example_study", _example_median("nn"), 1e3),
+    ("README.md", r"`make test` took (\d+) s on", "fresh_clone", lambda d: d["total_seconds"], 1.0),
+    (
+        "README.md",
+        r"the C\+\+ extension ([\d.]+) minutes",
+        "fresh_clone",
+        lambda d: d["environment_seconds"] / 60,
+        1.0,
+    ),
+    (
+        "README.md",
+        r"pytest-xdist process per core, ([\d.]+) minutes",
+        "fresh_clone",
+        lambda d: d["test_seconds"] / 60,
+        1.0,
+    ),
+    ("README.md", r"\(`examples/train_policy.py`, (\d+) simulated seconds", None, None, 1.0),
+]
+
+
+@pytest.mark.parametrize("quote", QUOTES, ids=lambda quote: quote[1][:40])
+def test_every_quoted_figure_matches_its_data(quote):
+    """Each figure README.md quotes, against its data file."""
+    check_quote(*quote)
+
+
+def test_the_example_studys_learned_worst_plant_reruns_and_the_budget_is_the_records():
+    """The learned residual's worst plant, rerun from its printed command, gives its metric; the
+    simulated seconds the README quotes are the shipped policies' training records'."""
+    import shlex
+
+    from nnrobust.run.experiment import run_experiment
+
+    entry = _read("example_study")["cases"]["paper-ellipse-noisy"]
+    worst = entry["controllers"]["learned-residual"]["worst"]
+    command = worst["command"].replace("examples/policies/", f"{ROOT}/examples/policies/")
+    assert shlex.split(command)[:2] == ["nnrobust", "run"]
+    value = run_experiment(_worst_config(command)).metrics()["rms_error_after_2s"]
+    assert value == pytest.approx(worst["metrics"]["rms_error_after_2s"], rel=1e-6)
+    quoted = int(re.search(r"(\d+) simulated seconds each", (ROOT / "README.md").read_text()).group(1))
+    for name in ("residual", "torque"):
+        record = json.loads((ROOT / "examples" / "policies" / f"{name}.onnx.json").read_text())
+        assert record["simulated_seconds"] == quoted
+
+
+def test_only_slotine_li_is_certified_on_the_papers_box():
+    """README.md: of the laws at the paper's gains, the falsify-paper study certifies only
+    Slotine-Li on its fresh draws (its certificate and the report's own verdict agree)."""
+    report = _read("falsify_paper")
+    controllers = report["cases"]["paper-ellipse"]["controllers"]
+    held = [c for c, e in controllers.items() if all(cert["holds"] for cert in e["certificates"])]
+    assert held == ["slotine-li"]
+    (cert,) = controllers["slotine-li"]["certificates"]
+    assert cert["k"] == 0 and cert["N"] == 59 and cert["p_upper"] <= report["budgets"]["epsilon"]
