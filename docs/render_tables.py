@@ -825,7 +825,7 @@ def _valid(p) -> str:
     """A declared parameter's valid values: its choices, true or false, or its range and size."""
     size = {"1": "", "2": " (2 entries)", "n": " (per joint)", "m": " (per task row)"}[p.size]
     if p.choices:
-        return " or ".join(f"`{c}`" for c in p.choices)
+        return " or ".join(f"`{c}`" for c in p.allowed)
     return "true or false" if isinstance(p.default, bool) else f"{p.range}{size}"
 
 

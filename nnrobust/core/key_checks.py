@@ -75,7 +75,8 @@ class LawParam:
         size: ``"1"`` (a number), ``"2"`` (two numbers), ``"m"`` (one or one per task
             coordinate) or ``"n"`` (one or one per joint).
         integer: the number must be whole.
-        choices: the accepted strings, for a text parameter.
+        choices: the accepted strings, for a text parameter; or a function returning them, read
+            when a value is checked (a list another registry holds, complete only once it is).
         search: (low, high) of the tuner's log-uniform search, or a function of the arm's scales
             (:func:`nnrobust.studies.tune.arm_scales`) returning them; None: not searched.
         low_reason, high_reason: why a search bound is physical (the tuner never widens it), or "".
@@ -99,7 +100,7 @@ class LawParam:
     low: float = -math.inf
     high: float = math.inf
     size: str = "1"
-    choices: tuple[str, ...] = ()
+    choices: tuple[str, ...] | Callable[[], tuple[str, ...]] = ()
     integer: bool = False
     search: tuple[float, float] | Callable[[dict], tuple[float, float]] | None = None
     low_reason: str = ""
@@ -123,6 +124,11 @@ class LawParam:
         return CHOSEN if self.path or self.choices or isinstance(self.default, bool) else ""
 
     @property
+    def allowed(self) -> tuple[str, ...]:
+        """The accepted strings of a text parameter (``choices``, called when it is a function)."""
+        return tuple(self.choices()) if callable(self.choices) else self.choices
+
+    @property
     def config_default(self) -> Any:
         """The default as a configuration holds it (a list for a vector)."""
         return list(self.default) if isinstance(self.default, tuple) else self.default
@@ -139,8 +145,9 @@ class LawParam:
                 raise ConfigError(key, f"expected the path of a file, got {value!r}")
             return value
         if self.choices:
-            if value not in self.choices:
-                raise ConfigError(key, f"expected one of {', '.join(map(repr, self.choices))}, got {value!r}")
+            allowed = self.allowed
+            if value not in allowed:
+                raise ConfigError(key, f"expected one of {', '.join(map(repr, allowed))}, got {value!r}")
             return value
         if isinstance(self.default, bool):
             if not isinstance(value, bool):

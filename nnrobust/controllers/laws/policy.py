@@ -54,6 +54,13 @@ def action_scale(action: str, limits, residual_scale: float, gain_range: float) 
     return np.asarray(limits, dtype=float) * (residual_scale if action == "residual" else 1.0)
 
 
+def base_laws() -> tuple[str, ...]:
+    """The laws a policy can act on: every shipped law (the registry's) but a policy."""
+    from ..registry import shipped_laws
+
+    return tuple(name for name in shipped_laws() if name != "policy")
+
+
 def no_gains(kind: str) -> str:
     """Why a law of ``kind`` cannot be the base of a gains action."""
     return (
@@ -321,7 +328,7 @@ LAW = register_law(
                 "pd",
                 "-",
                 "the law a residual is added to, or whose gains are set (with the experiment's settings)",
-                choices=("nn", "sliding-mode", "no-u0", "computed-torque", "pd", "rbf-nn", "slotine-li"),
+                choices=base_laws,
             ),
             LawParam(
                 "residual_scale",
