@@ -17,11 +17,10 @@ from tests.bad_inputs import (
     NATIVE_LAW_CASES,
     PART_CASES,
     URDF_CASES,
-    BuildExperiment,
-    ReadConfig,
     message_of,
     render_table,
 )
+from tests.bad_inputs.common import BuildExperiment, ReadConfig
 
 DOCS = Path(__file__).resolve().parents[1] / "docs" / "bad-inputs.md"
 
@@ -179,7 +178,7 @@ endsolid t
 
 def _ros_workspace(root: Path, missing: bool = False) -> Path:
     """ws/src/my_arm/{urdf/arm.urdf, meshes/l1.stl, meshes/l2.stl}: meshes as package://my_arm/..."""
-    from tests.bad_inputs import arm
+    from tests.bad_inputs.common import arm
 
     pkg = root / "ws" / "src" / "my_arm"
     (pkg / "urdf").mkdir(parents=True)

@@ -72,7 +72,7 @@ def test_continuous_joints_keep_the_dynamics_of_the_unbounded_joints(name):
 
 
 def test_a_continuous_joint_in_a_urdf_file_is_one_unlimited_angle():
-    from tests.bad_inputs import arm
+    from tests.bad_inputs.common import arm
 
     robot = load_robot(arm().replace('name="j1" type="revolute"', 'name="j1" type="continuous"'))
     assert robot.nq == 2 and robot.lower_limits[0] == -np.inf and robot.upper_limits[0] == np.inf
@@ -291,7 +291,7 @@ def test_exports_conventions_are_read_as_such_and_the_dynamics_follow():
     CAD sign convention is read with that sign: M(q) equals that of the URDF written so by hand
     (the independent reference), and the assumption is said in one warning."""
     from nnrobust.model.urdf_check import InertiaAssumptionWarning
-    from tests.bad_inputs import CAD_PRODUCTS, FLANGE, _l2_inertia, arm
+    from tests.bad_inputs.common import CAD_PRODUCTS, FLANGE, _l2_inertia, arm
 
     q = [0.3, -0.7]
     with pytest.warns(InertiaAssumptionWarning, match="massless link flange read with no inertia") as said:
