@@ -10,12 +10,14 @@ from __future__ import annotations
 
 import re
 
+from ..controllers.registry import registered_law
 from ..controllers.section import check_controller, inert_controller_keys
 from ..core.exceptions import ConfigError
 from ..core.key_checks import check_choice, require_positive
 from ..core.numeric_limits import MAX_FACTOR, MAX_PAYLOAD, MAX_PHYSICAL, MAX_STOP_STIFFNESS
 from ..model.section import check_model, inert_model_keys
 from ..model.tasks import TASK_KINDS
+from ..plant.loads import parse_loads
 from ..plant.section import check_plant, inert_plant_keys
 from ..subtasks.section import check_subtasks, inert_subtask_keys
 from ..trajectories import path_key
@@ -98,8 +100,6 @@ def _check_user_classes(config: ExperimentConfig) -> None:
     """A class and its params belong to the choice that names a user's class (e.g.
     ``controller.kind = "custom"``), which needs the class.
     """
-    from ..controllers.registry import registered_law
-
     for part, (section, class_name, params_name, choice) in USER_PARTS.items():
         spec, params, custom, now = _user_part(config, part)
         class_key, params_key = f"{section}.{class_name}", f"{section}.{params_name}"
@@ -232,8 +232,6 @@ def validate(config: ExperimentConfig) -> None:
                 f"({int(round(ratio))} steps per control period); give one of the two",
             )
     if pc.loads:
-        from ..plant.loads import parse_loads
-
         parse_loads(pc.loads, sim.control_period)
     if sim.duration < sim.control_period:
         raise ConfigError("simulation.duration", "is shorter than one control period")

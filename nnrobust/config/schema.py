@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from ..controllers.section import ControllerConfig, NNConfig
 from ..core.numeric_limits import MAX_STEP_ROTATION
 from ..model.section import NominalConfig, RobotConfig, resolved_nominal_kind
+from ..model.tasks import TASK_KINDS
 from ..plant.section import PlantConfig, SensingConfig
 from ..subtasks.section import SubtaskConfig
 from ..trajectories.section import TrajectoryConfig
@@ -116,7 +117,7 @@ class ExperimentConfig:
 
     def to_toml(self) -> str:
         """TOML text that :func:`load_config` reads back to an equal configuration."""
-        from .toml_io import dump_toml
+        from .toml_io import dump_toml  # here: toml_io imports this module
 
         return dump_toml(self.to_dict())
 
@@ -128,7 +129,7 @@ class ExperimentConfig:
                 data.setdefault(key, {}).update(value)
             else:
                 data[key] = value
-        from .toml_io import from_dict
+        from .toml_io import from_dict  # here: toml_io imports this module
 
         return from_dict(data)
 
@@ -198,8 +199,6 @@ def task_rows(config: ExperimentConfig) -> int:
     """m, the task coordinates a configuration implies: 6 on a pose task, else the entries of its
     path's points (a custom trajectory: the task's, 2 planar or 3 position).
     """
-    from ..model.tasks import TASK_KINDS
-
     if config.robot.task == "pose":
         return 6
     if config.trajectory.kind == "custom":

@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+import difflib
 from pathlib import Path
 
 from ..core.exceptions import ConfigError
@@ -18,8 +19,6 @@ def preset_names() -> list[str]:
 
 def presets_hint(name: object) -> str:
     """'did you mean X? ' for a name close to a preset's (a typo), then the presets."""
-    import difflib
-
     names = preset_names()
     close = difflib.get_close_matches(name, names, n=1) if isinstance(name, str) else []
     return (f"did you mean {close[0]!r}? " if close else "") + f"presets: {', '.join(names)}"

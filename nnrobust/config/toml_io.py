@@ -18,12 +18,18 @@ import tomllib
 import types
 import typing
 import warnings
+from importlib import metadata
 from pathlib import Path
 
 from ..core.exceptions import ConfigError
+from ..core.package_version import package_version
+from ..model.loading import urdf_digest
+from ..plugins.native_law import compiled_inputs, is_source
+from ..plugins.user_code import class_file, file_digest
 from .checks import FILLED_LISTS, INDEXED, validate
 from .resolve import resolve
 from .schema import KEY_ALIASES, USER_PARTS, ExperimentConfig, _field_names, _user_part
+from .shipped import preset_path
 
 
 def _suggest(key: str, valid: list[str], prefix: str = "") -> str:
@@ -259,7 +265,6 @@ def load_config(path: str | Path, overrides: dict | None = None) -> ExperimentCo
         if own is None:  # the file alone is sound: the overrides made the error
             raise
         raise ConfigError(f"{path}: {own.key}", str(own).split(": ", 1)[1]) from own
-    from ..model.loading import urdf_digest
 
     checks = [("robot's URDF", RECORDED_DIGEST, config.robot.source, urdf_digest)]
     for part, source in user_files(config).items():
@@ -343,7 +348,6 @@ def _file_data(path: Path, text: str, depth: int = 0, read: list[Path] | None = 
             str((folder / entry).resolve()) if isinstance(entry, str) and entry.strip() else entry
             for entry in robot["mesh_folders"]
         ]
-    from ..plugins.user_code import class_file
 
     controller = data.get("controller")
     if isinstance(controller, dict):  # a policy's ONNX file, read from the file's folder
@@ -371,8 +375,6 @@ def _file_data(path: Path, text: str, depth: int = 0, read: list[Path] | None = 
         if not base_path.is_file():
             raise ConfigError(f"{path}: base", f"{base!r} is not a file in {folder}")
     else:
-        from .shipped import preset_path
-
         try:
             base_path = preset_path(base)
         except ConfigError as err:
@@ -396,8 +398,6 @@ def user_classes(config: ExperimentConfig) -> dict[str, str]:
 
 def user_files(config: ExperimentConfig) -> dict[str, str]:
     """The files of the user classes the experiment uses (part -> path; module paths left out)."""
-    from ..plugins.user_code import class_file
-
     paths = {part: class_file(spec) for part, spec in user_classes(config).items()}
     out = {part: str(path) for part, path in paths.items() if path is not None}
     policy = policy_file(config.controller.kind, config.controller.params)
@@ -414,7 +414,6 @@ def policy_file(kind, params) -> str | None:
 
 
 def _file_digest(source: str) -> str:
-    from ..plugins.user_code import file_digest
 
     return file_digest(source)
 
@@ -429,8 +428,6 @@ def _is_relative_urdf_path(source: str) -> bool:
 @functools.cache
 def _package_version(package: str) -> str:
     """An installed package's version, or "?" (read once per process)."""
-    from importlib import metadata
-
     try:
         return metadata.version(package)
     except metadata.PackageNotFoundError:
@@ -442,9 +439,6 @@ def provenance_header(config: ExperimentConfig) -> str:
     robot's URDF and of every user class's file, so that a run can be repeated, and checked,
     from anywhere.
     """
-    from ..core.package_version import package_version
-    from ..model.loading import urdf_digest
-
     lines = [
         f"# written by nnrobust {package_version()} (pin {_package_version('pin')}, example-robot-data "
         f"{_package_version('example-robot-data')})"
@@ -463,8 +457,6 @@ def _native_lines(part: str, source: str) -> list[str]:
     """For a law in C++: the SHA-256 of each header its file includes and of all its library's
     inputs (nnrobust.plugins.native_law.Library: the file, its headers, the toolchain).
     """
-    from ..plugins.native_law import compiled_inputs, is_source
-
     library = compiled_inputs(Path(source)) if is_source(source) else None
     if library is None:
         return []

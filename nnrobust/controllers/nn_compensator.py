@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.numeric_limits import MAX_CENTERS, MAX_GAIN, RANGE_LIMITS
+from ..core.search_coordinates import Param
 from .basis import AdditiveRBFBasis
 from .registry import KindParts, LawParam, PaperKind, declare_kind
 
@@ -219,7 +220,9 @@ class NNCompensator:
 
 def _build(parts: KindParts):
     """Eq. (9) with the NN compensator of ``[nn]``."""
-    from .build import build_basis
+    from .build import build_basis  # here: build reads the declared defaults (section.py) first
+
+    # here: at the top, task_space's kinds would be declared before this one (the order listed)
     from .task_space import eq9_law
 
     c, nn = parts.controller, parts.nn
@@ -244,8 +247,6 @@ def _search(scales: dict) -> list:
     sigma from 1 % over the run to one control period, and the eps floor up to the arm's task
     acceleration.
     """
-    from ..core.search_coordinates import Param
-
     D, T, a = scales["duration"], scales["period"], scales["task_acceleration"]
     return [
         Param("nn.F", 1e-2, 1e3, "-", weak="low"),

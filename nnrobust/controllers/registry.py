@@ -21,6 +21,7 @@ are derived from that declaration, so adding a law touches its Python file, its 
 
 from __future__ import annotations
 
+import difflib
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -28,9 +29,11 @@ from typing import Any
 
 import numpy as np
 
-from ..core.exceptions import ConfigError
+from ..core.exceptions import ConfigError, NNRobustError
 from ..core.key_checks import CHOSEN, LawParam
 from ..core.kinds import Kinds
+from ..core.twins import twin_values
+from ..plugins.user_code import located
 
 __all__ = ["CHOSEN", "LawParam"]  # the one way any kind declares a key, in the leaf key_checks
 
@@ -71,8 +74,6 @@ class Law:
         given = dict(params or {})
         unknown = [k for k in given if self.param(k) is None]
         if unknown:
-            import difflib
-
             names = [p.name for p in self.params]
             close = difflib.get_close_matches(unknown[0], names, n=1)
             raise ConfigError(
@@ -93,9 +94,6 @@ class Law:
         """``cls(context, **params)`` with every parameter checked and defaulted; an error of the
         constructor names ``controller.params``.
         """
-        from ..core.exceptions import NNRobustError
-        from ..plugins.user_code import located
-
         resolved = self.resolve(params, context.n, context.m)
         try:
             return self.cls(context, **resolved)
@@ -110,8 +108,6 @@ class Law:
         """The twin's fields of a built controller, each as a 2-D float array (a number 1 x 1,
         a vector k x 1): what the compiled law reads by name (csrc/controllers/laws/law.hpp).
         """
-        from ..core.twins import twin_values
-
         return twin_values(controller, self.twin_fields)
 
 

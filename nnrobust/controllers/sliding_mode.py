@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.numeric_limits import MAX_GAIN
+from ..core.search_coordinates import Param
 from .nn_compensator import error_dynamics, lyapunov_P
 from .registry import KindParts, LawParam, PaperKind, declare_kind
 
@@ -59,6 +60,7 @@ class SlidingModeCompensator:
 
 def _build(parts: KindParts):
     """Eq. (9) with the sliding-mode term of ``controller.sliding_gain`` and ``sliding_boundary``."""
+    # here: at the top, task_space's kinds would be declared before this one (the order listed)
     from .task_space import eq9_law
 
     c = parts.controller
@@ -71,8 +73,6 @@ def _search(scales: dict) -> list:
     """The tuner's coordinates of the sliding-mode term: K and Phi, scaled by the arm's task
     acceleration a (nnrobust/studies/tune/space.py).
     """
-    from ..core.search_coordinates import Param
-
     a = scales["task_acceleration"]
     return [
         Param("controller.sliding_gain", 1e-3 * a, 10 * a, "m/s^2", weak="low"),

@@ -133,7 +133,7 @@ def sized_null_damping(nominal: DynamicsModel, q0: np.ndarray, Kd: np.ndarray, p
     (2 T): a damping torque held for a period T overshoots past D T / m = 1. An arm without
     self-motion (n = m) is damped at r times its mean joint inertia (the term then does nothing).
     """
-    from scipy.linalg import null_space
+    from scipy.linalg import null_space  # here: scipy, imported on first use (import time)
 
     M, J = nominal.mass(q0), nominal.task_jacobian(q0)
     rates = np.linalg.eigvals(J @ np.linalg.solve(M, J.T) @ np.asarray(Kd, dtype=float)).real

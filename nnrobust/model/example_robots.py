@@ -20,6 +20,7 @@ import numpy as np
 import pinocchio as pin
 
 from ..core.exceptions import RobotLoadError
+from .urdf_parser import parsed
 
 
 @dataclass(frozen=True)
@@ -42,7 +43,7 @@ class ExampleRobot:
 
 def _robots() -> dict:
     try:
-        from example_robot_data.robots_loader import ROBOTS
+        from example_robot_data.robots_loader import ROBOTS  # here: example-robot-data, read on first use
     except ImportError as err:  # pragma: no cover - a declared dependency
         raise RobotLoadError("example-robot-data", "not installed: pip install example-robot-data") from err
     return ROBOTS
@@ -60,7 +61,7 @@ def is_example_robot(name: str) -> bool:
 
 def _plain_urdf(loader) -> bool:
     """Whether the loader class only names a URDF file (no code of its own, no SDF)."""
-    from example_robot_data.utils import RobotLoader
+    from example_robot_data.utils import RobotLoader  # here: example-robot-data, read on first use
 
     custom = any(
         "__init__" in klass.__dict__ for klass in loader.__mro__ if klass not in (RobotLoader, object)
@@ -71,9 +72,7 @@ def _plain_urdf(loader) -> bool:
 @functools.lru_cache(maxsize=16)
 def example_robot(name: str) -> ExampleRobot:
     """The robot ``name`` of example-robot-data, base fixed, once per process."""
-    from example_robot_data.utils import getModelPath
-
-    from .loading import _parsed
+    from example_robot_data.utils import getModelPath  # here: example-robot-data, read on first use
 
     loader = _robots()[name]
     if _plain_urdf(loader):
@@ -83,7 +82,7 @@ def example_robot(name: str) -> ExampleRobot:
         except OSError as err:
             raise RobotLoadError(name, f"example-robot-data does not hold its URDF ({err})") from err
         urdf = model_dir / relative
-        model = _parsed(
+        model = parsed(
             f"example-robot-data:{name}", "invalid URDF", lambda: pin.buildModelFromUrdf(str(urdf))
         )
         return ExampleRobot(name, model, urdf, (str(model_dir.parent.parent),), bool(loader.free_flyer))
@@ -112,7 +111,7 @@ def _symmetric_limits(model: pin.Model) -> pin.Model:
 @functools.lru_cache(maxsize=4)
 def _loaded(name: str):
     """example_robot_data.load(name) (it reads every mesh too), once per process."""
-    import example_robot_data
+    import example_robot_data  # here: example-robot-data, read on first use
 
     try:
         with contextlib.redirect_stdout(io.StringIO()):

@@ -3,12 +3,8 @@
 from __future__ import annotations
 
 import collections
-import contextlib
 import difflib
 import hashlib
-import os
-import sys
-import tempfile
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -35,6 +31,7 @@ from .urdf_check import (
     resolved_visuals,
     visual_meshes_set_aside,
 )
+from .urdf_parser import parsed
 
 PAPER_ARM = "three_link_planar"
 """Name of the paper's three-link arm, shipped in ``urdf/``."""
@@ -158,45 +155,11 @@ def _build(source: str, locked_joints=None, chain=None, say_notes: bool = True) 
             if not say_notes:  # said when the robot was loaded for its dynamics
                 warnings.simplefilter("ignore")
             text = check_urdf(text, name, locked=user if explicit else user | mimic)
-    model = _parsed(name, "invalid URDF", lambda: pin.buildModelFromXML(text))
+    model = parsed(name, "invalid URDF", lambda: pin.buildModelFromXML(text))
     if model.nq == 0 and model.njoints <= 1:
         raise ModelMismatch(f"{name}: the URDF has no movable joint (only fixed joints)")
     model = with_revolute_continuous_joints(model)
     return _Built(model, name, text, base, None, mimic, unique_frame_names(model))
-
-
-@contextlib.contextmanager
-def parser_messages():
-    """Catch what the C++ URDF parser prints on the process's stderr (file descriptor 2), so that
-    it never reaches the terminal as noise; the block gets a list that holds the text afterwards.
-    """
-    said: list[str] = []
-    sys.stderr.flush()
-    saved = os.dup(2)
-    with tempfile.TemporaryFile() as sink:
-        os.dup2(sink.fileno(), 2)
-        try:
-            yield said
-        finally:
-            os.dup2(saved, 2)
-            os.close(saved)
-            sink.seek(0)
-            said.append(sink.read(100_000).decode(errors="replace"))
-
-
-def _parsed(name: str, what: str, build):
-    """``build()`` (a call of Pinocchio's URDF parser) with what the parser prints caught; its
-    failure is one RobotLoadError, "``what``: the error (the parser says: its first line)".
-    """
-    failure = None
-    with parser_messages() as said:
-        try:
-            return build()
-        except (ValueError, RuntimeError) as err:
-            failure = err
-    printed = [" ".join(line.split()) for line in "".join(said).splitlines() if line.strip()]
-    detail = f"{failure} (the parser says: {printed[0]})" if printed else str(failure)
-    raise RobotLoadError(name, f"{what}: {detail}") from failure
 
 
 def _locks(built: _Built, source: str, locked_joints, chain) -> tuple[list[str], str]:
@@ -290,7 +253,7 @@ def _visual_geometry(
         frame = pin.Frame(model.frames[fid])
         frame.name = name
         model.frames[fid] = frame
-    visual = _parsed(
+    visual = parsed(
         built.name,
         "cannot read the visual geometry",
         lambda: pin.buildGeomFromUrdfString(model, text, pin.GeometryType.VISUAL),

@@ -9,6 +9,7 @@ root (:func:`nnrobust.run.experiment.build`): the control period, the duration a
 from __future__ import annotations
 
 import functools
+import warnings
 from collections.abc import Callable
 
 import numpy as np
@@ -23,6 +24,7 @@ from .disturbance import DISTURBANCE_KINDS, Disturbance, ScaledDisturbance, Sinu
 from .friction import Friction
 from .limits import JointStops
 from .loads import ExternalLoads, parse_loads
+from .mujoco_engine import build_mujoco_plant
 from .plant import Plant
 from .scaling import limits_or_inf, scaled_friction, torque_scale, usable
 from .section import PlantConfig, SensingConfig
@@ -37,8 +39,6 @@ def build_torque_limits(pc: PlantConfig, robot: PinocchioModel) -> np.ndarray | 
     if limits == "urdf":
         zero = [name for name, e in zip(robot.joint_names, robot.effort_limits) if e == 0]
         if zero:  # a limit of 0 would hold the joint still; URDFs write it for "none": said, not silent
-            import warnings
-
             several = len(zero) > 1
             joints = f"joint{'s' if several else ''} {', '.join(map(repr, zero))}"
             warnings.warn(
@@ -216,7 +216,6 @@ def build_engine(pc: PlantConfig, plant: Plant, period: float, substeps: int) ->
     """
     if pc.engine != "mujoco":
         return
-    from .mujoco_engine import build_mujoco_plant
 
     true = plant.model
     assert isinstance(true, PinocchioModel)  # build_plant's true_model

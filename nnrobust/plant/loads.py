@@ -20,12 +20,13 @@ actuators' torque).
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from ..core.exceptions import ConfigError
-from ..core.numeric_limits import finite_number
+from ..core.numeric_limits import MAX_PAYLOAD, finite_number
 
 LOAD_KINDS = ("step", "impulse", "wrench", "payload")
 """The values of a ``[[plant.loads]]`` entry's ``kind``."""
@@ -196,8 +197,6 @@ def parse_loads(
     configuration is checked before the robot is loaded). ``duration``: the run's [s]; a load
     starting at or after its end never acts, and a warning says so.
     """
-    from ..core.numeric_limits import MAX_PAYLOAD
-
     pulses, wrenches, payloads = [], [], []
     for i, entry in enumerate(entries or ()):
         where = f"plant.loads[{i}]"
@@ -214,8 +213,6 @@ def parse_loads(
             raise ConfigError(f"{where}.time", f"a {kind!r} load needs the time it starts [s]")
         start = _periods(f"{where}.time", entry["time"], period, positive=False)
         if duration is not None and start >= duration:  # a shortened run of a file with loads: said
-            import warnings
-
             warnings.warn(
                 f"{where}.time: {start:g} s is not before the run ends (simulation.duration = "
                 f"{duration:g} s): the load never acts",

@@ -87,7 +87,7 @@ INSTALL_HINT = "plant.engine = 'mujoco' needs MuJoCo: pip install 'nnrobust[mujo
 def import_mujoco():
     """The ``mujoco`` module, or one ConfigError that says which extra installs it."""
     try:
-        import mujoco
+        import mujoco  # here: MuJoCo, an optional engine
     except ImportError as err:
         raise ConfigError("plant.engine", f"{INSTALL_HINT} ({err})") from None
     return mujoco
@@ -96,7 +96,7 @@ def import_mujoco():
 def mujoco_version() -> str:
     """MuJoCo's version ("" when it is not installed)."""
     try:
-        import mujoco
+        import mujoco  # here: MuJoCo, an optional engine
     except ImportError:
         return ""
     return str(mujoco.__version__)

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING
 from ..core.exceptions import ConfigError
 from .base import Criterion, WeightedCriteria
 from .custom import build_criterion as build_custom_criterion
-from .registry import CRITERION_KINDS
+from .registry import CRITERION_KINDS, default_criteria
 from .section import SubtaskConfig
 
 if TYPE_CHECKING:
@@ -19,8 +19,6 @@ if TYPE_CHECKING:
 
 def build_criterion(sc: SubtaskConfig, robot: PinocchioModel) -> Criterion | None:
     """Weighted sum of the named criteria, eq. (4), or None."""
-    from .registry import default_criteria
-
     names = default_criteria(robot.nq, robot.task) if sc.criteria is None else sc.criteria
     if not names:
         return None

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from ..core.kinds import Kinds
+from ..core.twins import field_array
 from .base import Criterion
 
 
@@ -51,8 +52,6 @@ class CriterionKind:
 
     def twin_values(self, criterion: Criterion) -> dict[str, np.ndarray]:
         """The twin's fields as 2-D float arrays (what LoopSpec.criterion_params carries)."""
-        from ..core.twins import field_array
-
         assert self.twin_fields is not None, self.name
         return {key: field_array(value) for key, value in self.twin_fields(criterion).items()}
 

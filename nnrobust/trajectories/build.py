@@ -10,6 +10,9 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
+from ..model import PinocchioModel
+from ..model.ik import reach, seed_configuration
+from ..model.tasks import split_pose
 from .base import Trajectory
 from .custom import build_trajectory as build_custom_trajectory
 from .pose import PoseTrajectory, PositionPath
@@ -26,10 +29,6 @@ def build_trajectory(tc: TrajectoryConfig, robot, q_seed: list[float] | None) ->
     """The position path (:func:`build_path`), with a rocking or held orientation for a pose task;
     or a user's trajectory (``kind = "custom"``).
     """
-    from ..model import PinocchioModel
-    from ..model.ik import reach, seed_configuration
-    from ..model.tasks import split_pose
-
     if tc.kind == "custom":
         return build_custom_trajectory(tc.class_ or "", tc.params, robot, robot.task)
     path = build_path(tc, robot, q_seed)

@@ -10,6 +10,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.exceptions import ConfigError
+from ..model.ik import seed_configuration
+from ..model.tasks import split_pose
 from .base import Trajectory
 from .registry import PathKind, declare
 
@@ -113,7 +115,7 @@ def spline_through(points, times) -> PiecewisePolynomialPath:
     ends (clamped: zero velocity), twice continuously differentiable in between. Its
     acceleration is not zero at the ends, so it steps there.
     """
-    from scipy.interpolate import CubicSpline
+    from scipy.interpolate import CubicSpline  # here: scipy, imported on first use (import time)
 
     points, times = np.asarray(points, dtype=float), np.asarray(times, dtype=float)
     if points.ndim != 2 or points.shape[0] != times.size or times.size < 2:
@@ -144,9 +146,6 @@ def _check_point_to_point(tc) -> None:
 
 def _build_point_to_point(tc, robot, q_seed) -> PiecewisePolynomialPath:
     """From ``start``, or from where the task frame is at ``simulation.q_seed``, to ``goal``."""
-    from ..model.ik import seed_configuration
-    from ..model.tasks import split_pose
-
     goal = tc.goal or []
     if tc.start is None:
         p = robot.task_position(seed_configuration(q_seed, robot))

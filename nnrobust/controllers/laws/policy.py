@@ -28,6 +28,7 @@ its Python reference (the Python loop), and tests/controllers/test_policy.py hol
 
 from __future__ import annotations
 
+import json
 import math
 import time
 from pathlib import Path
@@ -35,8 +36,10 @@ from pathlib import Path
 import numpy as np
 
 from ...core.exceptions import ConfigError, ControllerError
+from ...core.shipped_files import local
 from ..base import Controller, ControllerContext, ControlOutput
-from ..registry import Law, LawParam, register_law
+from ..observation import ObservationLayout, observation
+from ..registry import Law, LawParam, register_law, shipped_laws
 
 ACTIONS = ("torque", "residual", "gains")
 """The action modes, in the order of the compiled loop's ActionMode (csrc/learning.hpp)."""
@@ -56,8 +59,6 @@ def action_scale(action: str, limits, residual_scale: float, gain_range: float) 
 
 def base_laws() -> tuple[str, ...]:
     """The laws a policy can act on: every shipped law (the registry's) but a policy."""
-    from ..registry import shipped_laws
-
     return tuple(name for name in shipped_laws() if name != "policy")
 
 
@@ -74,10 +75,8 @@ def _session(path: Path):
     A file the running task brought with it is read from its copy
     (:func:`nnrobust.core.shipped_files.local`), still named by ``path``.
     """
-    from ...core.shipped_files import local
-
     try:
-        import onnxruntime as ort
+        import onnxruntime as ort  # here: onnxruntime, the policy extra
     except ImportError as err:
         raise ConfigError(
             "controller.params.file", "a policy runs on onnxruntime: pip install 'nnrobust[learning]'"
@@ -116,7 +115,6 @@ class OnnxPolicy:
     """An ONNX file as a function observation (d entries) -> action (n entries), checked."""
 
     def __init__(self, file: str | Path, d: int, n: int, entries: str = "one entry per joint"):
-        from ...core.shipped_files import local
 
         path = Path(file)
         if not local(path).is_file():
@@ -236,7 +234,6 @@ class PolicyLaw(Controller):
         residual_scale: float = 0.1,
         gain_range: float = 4.0,
     ):
-        from ..observation import ObservationLayout
 
         if file is None:
             raise ConfigError("controller.params.file", "missing: the policy's ONNX file")
@@ -289,8 +286,6 @@ class PolicyLaw(Controller):
         self, t: float, q: np.ndarray, v: np.ndarray, z: np.ndarray, period: float = 0.0
     ) -> ControlOutput:
         """The command from the observation at t (torque or residual mode)."""
-        from ..observation import observation
-
         a = self.policy(observation(self.nominal, self.trajectory, t, q, v), t)
         command = np.clip(a, -1.0, 1.0) * self.scale
         base = self.base
@@ -359,8 +354,6 @@ def trained_horizon(file: str | Path) -> float | None:
     """The episode length [s] a policy file was trained on, as its record (``FILE.json``, written
     by the trainer beside the ONNX file) gives it; None where no record says.
     """
-    import json
-
     record = Path(f"{file}.json")
     try:
         data = json.loads(record.read_text(encoding="utf-8"))

@@ -44,6 +44,7 @@ import pinocchio as pin
 
 from ...core.exceptions import ConfigError
 from ...core.search_coordinates import bandwidth_range
+from ...model.three_link import ThreeLinkParameters, ThreeLinkPlanarModel
 from ..base import Controller, ControllerContext, ControlOutput
 from ..registry import Law, LawParam, register_law
 
@@ -120,8 +121,6 @@ class SlotineLi(Controller):
             self.armature = np.asarray(model.armature, dtype=float).copy()
             self.pseudo_floor = PSEUDO_FLOOR * np.maximum(self.theta0[0::10], 1e-3)
         else:  # the closed-form arm: theta = (beta, p, gamma), one unit model per column of Y
-            from ...model.three_link import ThreeLinkParameters, ThreeLinkPlanarModel
-
             params = cast(ThreeLinkPlanarModel, nominal).params
             self.theta0 = np.array([*params.beta, *params.p, *params.gamma], dtype=float)
             self.units = []
