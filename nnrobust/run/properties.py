@@ -215,18 +215,24 @@ def clopper_pearson_upper(failures: int, samples: int, beta: float) -> float:
 
 def certificate(prop: Property, margins: list[float], epsilon: float, beta: float) -> dict:
     """The statement N samples make about a property (their margins, one per sample)."""
-    n = len(margins)
     failures = sum(1 for m in margins if not (m > 0 if prop.op in ("<", ">") else m >= 0))
+    return _statement(prop.text, len(margins), failures, epsilon, beta, "P(fail)")
+
+
+def _statement(text: str, n: int, failures: int, epsilon: float, beta: float, bounded: str) -> dict:
+    """A certificate: ``failures`` of ``n`` independent draws failed ``text``; the one-sided
+    Clopper-Pearson bound on ``bounded`` (the failure probability), and whether it is <= epsilon.
+    """
     upper = clopper_pearson_upper(failures, n, beta) if n else 1.0
     return {
-        "property": prop.text,
+        "property": text,
         "N": n,
         "k": failures,
         "epsilon": epsilon,
         "beta": beta,
         "p_upper": upper,
         "holds": bool(n and upper <= epsilon),
-        "method": "one-sided Clopper-Pearson (exact binomial) bound on P(fail) over the sweep's "
+        "method": f"one-sided Clopper-Pearson (exact binomial) bound on {bounded} over the sweep's "
         "distribution; the samples are independent draws of it",
     }
 
@@ -240,20 +246,9 @@ def all_certificate(properties: list[Property], records: list[dict], epsilon: fl
     such runs), so P(some property fails) <= p_upper, the bound a design's requirement needs
     (each property's own bound is smaller, and their union is not bounded by the largest).
     """
-    n = len(records)
     failures = sum(1 for r in records if not all(p.holds(r) for p in properties))
-    upper = clopper_pearson_upper(failures, n, beta) if n else 1.0
-    return {
-        "property": ALL_OF + ", ".join(p.text for p in properties),
-        "N": n,
-        "k": failures,
-        "epsilon": epsilon,
-        "beta": beta,
-        "p_upper": upper,
-        "holds": bool(n and upper <= epsilon),
-        "method": "one-sided Clopper-Pearson (exact binomial) bound on P(some property fails) over "
-        "the sweep's distribution; the samples are independent draws of it",
-    }
+    text = ALL_OF + ", ".join(p.text for p in properties)
+    return _statement(text, len(records), failures, epsilon, beta, "P(some property fails)")
 
 
 def overall_certificate(certificates: list[dict]) -> dict | None:
