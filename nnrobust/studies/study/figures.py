@@ -108,6 +108,15 @@ def _plain(ax) -> None:
     ax.grid(True, alpha=0.3)
 
 
+def _inline(fig, plt, title: str, salt: str) -> str:
+    """A report figure finished (its title, its layout) as inline SVG markup, then closed."""
+    fig.suptitle(title, fontsize=9)
+    fig.tight_layout()
+    markup = svg_markup(fig, salt)
+    plt.close(fig)
+    return markup
+
+
 def _grid(count: int, plt, height: float = 1.9):
     columns = min(count, 3)
     rows = -(-count // columns)
@@ -140,11 +149,7 @@ def tuning_curves(name: str, curves: dict[str, dict[int, list]], half: int) -> s
     axes[0].set_ylabel("best training e [mm]", fontsize=8)
     axes[0].legend(fontsize=7)
     fig.supxlabel("simulations (dotted: half the budget)", fontsize=8)
-    fig.suptitle(f"{name}: tuning, best feasible setting so far", fontsize=9)
-    fig.tight_layout()
-    markup = svg_markup(fig, f"{name}-tuning")
-    plt.close(fig)
-    return markup
+    return _inline(fig, plt, f"{name}: tuning, best feasible setting so far", f"{name}-tuning")
 
 
 @drawn_alone
@@ -173,11 +178,8 @@ def falsification_curves(name: str, records: dict[str, dict]) -> str | None:
     axes[0].set_ylabel("least margin found", fontsize=8)
     axes[0].legend(fontsize=7)
     fig.supxlabel("simulations", fontsize=8)
-    fig.suptitle(f"{name}: falsification, worst plant so far (below 0: violated)", fontsize=9)
-    fig.tight_layout()
-    markup = svg_markup(fig, f"{name}-falsification")
-    plt.close(fig)
-    return markup
+    title = f"{name}: falsification, worst plant so far (below 0: violated)"
+    return _inline(fig, plt, title, f"{name}-falsification")
 
 
 @drawn_alone
@@ -208,11 +210,7 @@ def time_responses(name: str, responses: dict[str, dict]) -> str | None:
     axes[0][1].legend(fontsize=7)
     axes[-1][0].set_xlabel("t [s]", fontsize=8)
     axes[-1][1].set_xlabel("t [s]", fontsize=8)
-    fig.suptitle(f"{name}: time responses of the kept settings", fontsize=9)
-    fig.tight_layout()
-    markup = svg_markup(fig, f"{name}-responses")
-    plt.close(fig)
-    return markup
+    return _inline(fig, plt, f"{name}: time responses of the kept settings", f"{name}-responses")
 
 
 def response_of(result, sample: int) -> dict:
