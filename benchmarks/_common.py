@@ -35,6 +35,22 @@ ROW_METRICS = (
 """The metrics each benchmark row keeps."""
 
 
+def worst_config(command: str):
+    """The experiment of a printed rerun command (``nnrobust run PRESET|FILE.toml --controller C
+    --set K=V ...``, as a falsification or a sweep prints a plant's)."""
+    import shlex
+
+    from nnrobust.config import apply_overrides, load_config, parse_override
+
+    words = shlex.split(command)
+    if words[:2] != ["nnrobust", "run"]:
+        raise ValueError(f"not a rerun command (nnrobust run ...): {command[:80]!r}")
+    sets = dict(parse_override(words[i + 1]) for i, w in enumerate(words) if w == "--set")
+    controller = words[words.index("--controller") + 1]
+    base = load_config(words[2]) if words[2].endswith(".toml") else load_preset(words[2])
+    return apply_overrides(base.replace(controller={"kind": controller}), sets)
+
+
 def run_row(job: dict) -> dict:
     """One run: ``job`` = {"preset": name, "changes": {section: {key: value}}, **labels}."""
     config = load_preset(job["preset"]).replace(**job["changes"])

@@ -17,27 +17,14 @@ import platform
 import time
 from pathlib import Path
 
+from _common import worst_config
+
 from nnrobust.run.experiment import run_experiment
 from nnrobust.run.results import write_json_atomic
 
 ROOT = Path(__file__).resolve().parents[1]
 FALSIFIED = ROOT / "docs" / "data" / "falsify_paper.json"
 KEPT = ("rms_error_after_2s", "saturated_fraction", "max_joint_limit_violation", "status")
-
-
-def worst_config(command: str):
-    """The experiment of a printed rerun command (nnrobust run PRESET|FILE.toml --controller C
-    --set K=V ...)."""
-    import shlex
-
-    from nnrobust.config import apply_overrides, load_config, parse_override
-    from nnrobust.config.presets import load_preset
-
-    words = shlex.split(command)
-    sets = dict(parse_override(words[i + 1]) for i, w in enumerate(words) if w == "--set")
-    controller = words[words.index("--controller") + 1]
-    base = load_config(words[2]) if words[2].endswith(".toml") else load_preset(words[2])
-    return apply_overrides(base.replace(controller={"kind": controller}), sets)
 
 
 def main() -> None:

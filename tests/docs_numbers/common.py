@@ -506,20 +506,8 @@ def _paper_noisy_kept(controller):
     return get
 
 
-def _worst_config(command: str):
-    """The experiment of a printed rerun command (nnrobust run PRESET|FILE.toml --controller C
-    --set K=V ...)."""
-    import shlex
-
-    from nnrobust.config import apply_overrides, load_config, parse_override
-    from nnrobust.config.presets import load_preset
-
-    words = shlex.split(command)
-    assert words[:2] == ["nnrobust", "run"]
-    sets = dict(parse_override(words[i + 1]) for i, w in enumerate(words) if w == "--set")
-    controller = words[words.index("--controller") + 1]
-    base = load_config(words[2]) if words[2].endswith(".toml") else load_preset(words[2])
-    return apply_overrides(base.replace(controller={"kind": controller}), sets)
+_worst_config = _common.worst_config
+"""The experiment of a printed rerun command (benchmarks/_common.py, which its benchmarks use)."""
 
 
 CHAOS_PROBE, CHAOS_SPREAD = 1e-6, 0.01
@@ -582,3 +570,14 @@ def check_quote(document: str, pattern: str, name, where, scale: float) -> None:
     half = 0.5 * 10 ** -len(digits) if digits else 0.5
     bound = max(half, 0.02 * abs(scale * value))
     assert abs(quoted - scale * value) <= bound, (document, pattern, scale * value)
+
+
+def quoted_figures_test(quotes: list[tuple]):
+    """A page's test of the figures it quotes: one case per figure (:func:`check_quote`), so a
+    failing number names its page's file and the start of its text."""
+
+    @pytest.mark.parametrize("quote", quotes, ids=lambda quote: quote[1][:40])
+    def test(quote):
+        check_quote(*quote)
+
+    return test
