@@ -1,11 +1,9 @@
 """The numbers docs/controller.md quotes: each against its data file, and the reruns behind them."""
 
-import pytest
-
 from tests.docs_numbers.common import (
     CASE_B,
     _row,
-    check_quote,
+    quoted_figures_test,
 )
 
 QUOTES: list[tuple] = [
@@ -33,7 +31,4 @@ QUOTES: list[tuple] = [
 ]
 
 
-@pytest.mark.parametrize("quote", QUOTES, ids=lambda quote: quote[1][:40])
-def test_every_quoted_figure_matches_its_data(quote):
-    """Each figure docs/controller.md quotes, against its data file."""
-    check_quote(*quote)
+test_every_quoted_figure_matches_its_data = quoted_figures_test(QUOTES)

@@ -14,7 +14,7 @@ from tests.docs_numbers.common import (
     _gap_error,
     _gap_stat,
     _read,
-    check_quote,
+    quoted_figures_test,
 )
 
 QUOTES: list[tuple] = [
@@ -100,10 +100,7 @@ QUOTES: list[tuple] = [
 ]
 
 
-@pytest.mark.parametrize("quote", QUOTES, ids=lambda quote: quote[1][:40])
-def test_every_quoted_figure_matches_its_data(quote):
-    """Each figure docs/engines.md quotes, against its data file."""
-    check_quote(*quote)
+test_every_quoted_figure_matches_its_data = quoted_figures_test(QUOTES)
 
 
 def test_the_engine_gap_claims_of_the_docs_hold_in_its_data():

@@ -1,7 +1,5 @@
 """The numbers docs/fair-comparison.md quotes: each against its data file, and the reruns behind them."""
 
-import pytest
-
 from tests.docs_numbers.common import (
     CASE_A,
     CASE_B,
@@ -14,7 +12,7 @@ from tests.docs_numbers.common import (
     _paired_p,
     _ratio_to,
     _seed_spread,
-    check_quote,
+    quoted_figures_test,
 )
 
 QUOTES: list[tuple] = [
@@ -261,7 +259,4 @@ QUOTES: list[tuple] = [
 ]
 
 
-@pytest.mark.parametrize("quote", QUOTES, ids=lambda quote: quote[1][:40])
-def test_every_quoted_figure_matches_its_data(quote):
-    """Each figure docs/fair-comparison.md quotes, against its data file."""
-    check_quote(*quote)
+test_every_quoted_figure_matches_its_data = quoted_figures_test(QUOTES)

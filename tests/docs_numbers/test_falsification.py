@@ -24,7 +24,7 @@ from tests.docs_numbers.common import (
     _tuned_draws_failing,
     _worst_config,
     _worst_draw,
-    check_quote,
+    quoted_figures_test,
 )
 
 QUOTES: list[tuple] = [
@@ -336,10 +336,7 @@ QUOTES: list[tuple] = [
 ]
 
 
-@pytest.mark.parametrize("quote", QUOTES, ids=lambda quote: quote[1][:40])
-def test_every_quoted_figure_matches_its_data(quote):
-    """Each figure docs/falsification.md quotes, against its data file."""
-    check_quote(*quote)
+test_every_quoted_figure_matches_its_data = quoted_figures_test(QUOTES)
 
 
 @pytest.mark.parametrize("name", [FALSIFIED, PF, FT, PT])

@@ -1,13 +1,11 @@
 """The numbers docs/learning.md quotes: each against its data file, and the reruns behind them."""
 
-import pytest
-
 from tests.docs_numbers.common import (
     _example_convergence,
     _example_median,
     _example_passed,
     _learning,
-    check_quote,
+    quoted_figures_test,
 )
 
 QUOTES: list[tuple] = [
@@ -87,7 +85,4 @@ QUOTES: list[tuple] = [
 ]
 
 
-@pytest.mark.parametrize("quote", QUOTES, ids=lambda quote: quote[1][:40])
-def test_every_quoted_figure_matches_its_data(quote):
-    """Each figure docs/learning.md quotes, against its data file."""
-    check_quote(*quote)
+test_every_quoted_figure_matches_its_data = quoted_figures_test(QUOTES)

@@ -42,7 +42,7 @@ from tests.docs_numbers.common import (
     _seed_spread,
     _worst_config,
     _worst_draw,
-    check_quote,
+    quoted_figures_test,
 )
 
 QUOTES: list[tuple] = [
@@ -347,10 +347,7 @@ QUOTES: list[tuple] = [
 ]
 
 
-@pytest.mark.parametrize("quote", QUOTES, ids=lambda quote: quote[1][:40])
-def test_every_quoted_figure_matches_its_data(quote):
-    """Each figure README.md quotes, against its data file."""
-    check_quote(*quote)
+test_every_quoted_figure_matches_its_data = quoted_figures_test(QUOTES)
 
 
 def test_the_example_studys_learned_worst_plant_reruns_and_the_budget_is_the_records():

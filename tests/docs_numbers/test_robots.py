@@ -1,10 +1,8 @@
 """The numbers docs/robots.md quotes: each against its data file, and the reruns behind them."""
 
-import pytest
-
 from tests.docs_numbers.common import (
     _ratio,
-    check_quote,
+    quoted_figures_test,
 )
 
 QUOTES: list[tuple] = [
@@ -13,7 +11,4 @@ QUOTES: list[tuple] = [
 ]
 
 
-@pytest.mark.parametrize("quote", QUOTES, ids=lambda quote: quote[1][:40])
-def test_every_quoted_figure_matches_its_data(quote):
-    """Each figure docs/robots.md quotes, against its data file."""
-    check_quote(*quote)
+test_every_quoted_figure_matches_its_data = quoted_figures_test(QUOTES)

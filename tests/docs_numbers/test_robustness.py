@@ -11,7 +11,7 @@ from tests.docs_numbers.common import (
     _case,
     _case_failing,
     _worst_draw,
-    check_quote,
+    quoted_figures_test,
 )
 
 QUOTES: list[tuple] = [
@@ -118,10 +118,7 @@ QUOTES: list[tuple] = [
 ]
 
 
-@pytest.mark.parametrize("quote", QUOTES, ids=lambda quote: quote[1][:40])
-def test_every_quoted_figure_matches_its_data(quote):
-    """Each figure docs/robustness.md quotes, against its data file."""
-    check_quote(*quote)
+test_every_quoted_figure_matches_its_data = quoted_figures_test(QUOTES)
 
 
 def test_the_sweep_files_rarer_panda_tail_reproduces():

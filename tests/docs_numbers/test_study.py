@@ -1,12 +1,10 @@
 """The numbers docs/study.md quotes: each against its data file, and the reruns behind them."""
 
-import pytest
-
 from tests.docs_numbers.common import (
     _busy,
     _simulated,
     _stage_wall,
-    check_quote,
+    quoted_figures_test,
 )
 
 QUOTES: list[tuple] = [
@@ -119,7 +117,4 @@ QUOTES: list[tuple] = [
 ]
 
 
-@pytest.mark.parametrize("quote", QUOTES, ids=lambda quote: quote[1][:40])
-def test_every_quoted_figure_matches_its_data(quote):
-    """Each figure docs/study.md quotes, against its data file."""
-    check_quote(*quote)
+test_every_quoted_figure_matches_its_data = quoted_figures_test(QUOTES)
