@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from ...core.exceptions import NNRobustError
-from .evidence import failures, realtime, step_cost
+from .evidence import failing_draws, failures, realtime, responses, step_cost, tuning_curves
 from .selection import convergence, half_name, select_kept
 from .spec import StudyCase, StudySpec, kept_name
 
@@ -289,7 +289,6 @@ def tune(run: CaseRun):
 def tuned_report(run: CaseRun, tunings) -> None:
     """The tunings' folders, curves, spaces as searched, training time and fixed keys."""
     from ..base.plan import base_config
-    from .evidence import tuning_curves
 
     run.tunings = tunings = tunings or {}
     out, tuned = run.out, run.tuned
@@ -464,7 +463,6 @@ def certify(run: CaseRun):
 def certified_report(run: CaseRun, result) -> None:
     """The certification's summary, whether its draws differ, step costs, failures, failing draws."""
     from ...run.properties import run_properties
-    from .evidence import failing_draws
 
     summary, rows = result
     certify_spec = run.certification["spec"]
@@ -537,13 +535,11 @@ def realtime_stage(run: CaseRun):
     return lambda: realtime(certification["spec"], certification["names"], run.here / "realtime")
 
 
-def responses(run: CaseRun):
+def responses_stage(run: CaseRun):
     """The kept laws' time responses on their median and worst certification draws (``responses/``)."""
-    from .evidence import responses as drawn
-
     run.say(f"{run.name}: the kept laws' time responses on their median and worst certification draws")
     c = run.certification
-    return lambda: drawn(c["spec"], c["rows"], c["names"], run.here / "responses")
+    return lambda: responses(c["spec"], c["rows"], c["names"], run.here / "responses")
 
 
 def _into(key: str):
@@ -561,7 +557,7 @@ STAGES: tuple[Stage, ...] = (
     Stage("falsify", ("falsify", "margin"), ("falsify",), falsify, _into("falsify"), True),
     Stage("realtime", ("realtime",), ("realtime",), realtime_stage, _into("realtime")),
     Stage("engine", ("second_engine",), ("certify-mujoco",), second_engine, _into("engine"), True),
-    Stage("responses", (), ("responses",), responses, _into("responses"), reported=False),
+    Stage("responses", (), ("responses",), responses_stage, _into("responses"), reported=False),
 )
 """The stages of a case, in the report's order (docs/study.md)."""
 
