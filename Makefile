@@ -94,6 +94,9 @@ docs-data: $(VENV)/.installed-test
 	$(BIN)/python benchmarks/studies/fronts.py $(OUT)/tuned-paper $(OUT)/tuned-panda --figure docs/img/tuned_comparison.png
 	$(BIN)/python benchmarks/engine_gap.py --json $(DATA)/engine_gap.json
 	$(BIN)/python benchmarks/worst_plant_loops.py --json $(DATA)/worst_plant_loops.json
+	test -d $(OUT)/FrankaEmikaPandaDynModel || git clone --depth 1 \
+	  https://github.com/marcocognetti/FrankaEmikaPandaDynModel $(OUT)/FrankaEmikaPandaDynModel
+	$(BIN)/python benchmarks/identify_panda.py $(OUT)/FrankaEmikaPandaDynModel --json $(DATA)/identify_panda.json
 	$(BIN)/python benchmarks/plant_convergence.py --json $(DATA)/plant_convergence.json
 	$(BIN)/python benchmarks/adaptive_step.py --json $(DATA)/adaptive_step.json
 	$(BIN)/python benchmarks/interval_coverage.py --json $(DATA)/interval_coverage.json --figure docs/img/interval_coverage.png

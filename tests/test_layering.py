@@ -27,7 +27,7 @@ FLOORS = [
     ["run"],
     ["outputs"],
     ["studies/base"],
-    ["studies/sweep", "studies/tune", "studies/falsify", "studies/learning"],
+    ["studies/sweep", "studies/tune", "studies/falsify", "studies/learning", "studies/identify"],
     ["studies/study"],
     ["cli"],
     ["__init__", "__main__"],

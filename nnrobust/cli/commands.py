@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import argparse
 
-from . import catalog, robot, runs, studies
+from . import catalog, identify, robot, runs, studies
 from .common import Command, many_run_options
 
 COMMANDS: tuple[Command, ...] = (
@@ -23,6 +23,7 @@ COMMANDS: tuple[Command, ...] = (
     robot.SERVE,
     studies.STUDY,
     studies.TUNE,
+    identify.IDENTIFY,
     catalog.BENCH,
 )
 

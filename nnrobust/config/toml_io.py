@@ -349,6 +349,10 @@ def _file_data(path: Path, text: str, depth: int = 0, read: list[Path] | None = 
             for entry in robot["mesh_folders"]
         ]
 
+    nominal = data.get("nominal")
+    if isinstance(nominal, dict) and isinstance(nominal.get("file"), str) and nominal["file"].strip():
+        if not Path(nominal["file"]).is_absolute():  # an identified model, read from the file's folder
+            nominal["file"] = str((folder / nominal["file"]).resolve())
     controller = data.get("controller")
     if isinstance(controller, dict):  # a policy's ONNX file, read from the file's folder
         policy = policy_file(controller.get("kind"), controller.get("params"))
@@ -403,6 +407,8 @@ def user_files(config: ExperimentConfig) -> dict[str, str]:
     policy = policy_file(config.controller.kind, config.controller.params)
     if policy is not None:
         out["policy"] = policy
+    if config.nominal.kind == "identified" and config.nominal.file:
+        out["identified model"] = config.nominal.file
     return out
 
 

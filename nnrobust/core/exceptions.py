@@ -111,6 +111,13 @@ class ConfigError(NNRobustError):
         super().__init__(f"{key}: {message}")
 
 
+class LogError(NNRobustError):
+    """A robot's log cannot be identified from: unreadable, a column missing or of the wrong length,
+    a NaN, times out of order, or a log that does not excite what the fit needs (the file and
+    column named).
+    """
+
+
 class ModelMismatch(NNRobustError):
     """A model cannot represent the requested robot (wrong structure or size)."""
 

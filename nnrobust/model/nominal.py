@@ -13,6 +13,7 @@ import pinocchio as pin
 from ..core.arrays import joint_vector, padded
 from ..core.exceptions import ConfigError
 from .base import DynamicsModel
+from .identified import read_identified
 from .loading import load_robot
 from .perturbation import bodies_with_mass, perturb_inertias
 from .pinocchio_model import PinocchioModel
@@ -24,22 +25,27 @@ def build_nominal_model(
     nc: NominalConfig, robot: PinocchioModel, kind: str, exact: pin.Model | None = None
 ) -> DynamicsModel:
     """The controller's model from ``[nominal]`` (``nc``) of ``kind`` (``nominal.kind`` resolved:
-    ``closed-form`` or ``urdf``): closed form with beta-hat, p-hat, or the robot's own (perturbed)
-    model; a copy of ``exact``, the true model, when given (computed-torque control). Always a
-    ``pin.Model`` of its own, never the true plant's: a law that adapts its model in place changes
-    only its own.
+    ``closed-form``, ``urdf`` or ``identified``): closed form with beta-hat, p-hat, the robot's own
+    or its identified model (perturbed if asked); a copy of ``exact``, the true model, when given
+    (computed-torque control). Always a ``pin.Model`` of its own, never the true plant's: a law
+    that adapts its model in place changes only its own.
     """
     if exact is not None:  # the true model, armature included
         return PinocchioModel(pin.Model(exact), robot.task_frame, robot.task, robot.name)
-    if kind == "urdf":
+    if kind in ("urdf", "identified"):
+        own = (
+            robot.model
+            if kind == "urdf"
+            else read_identified(str(nc.file)).pinocchio(robot.model, robot.name)
+        )
         if nc.perturbed:
             model = perturb_inertias(
-                robot.model, nc.mass_scale, nc.inertia_scale, nc.relative_error, nc.com_error, nc.seed
+                own, nc.mass_scale, nc.inertia_scale, nc.relative_error, nc.com_error, nc.seed
             )
             if nc.factors is not None:
                 model = _with_factors(model, nc.factors)
         else:
-            model = pin.Model(robot.model)  # a copy: the plant's stays out of the controller's reach
+            model = pin.Model(own)  # a copy: the plant's stays out of the controller's reach
         return PinocchioModel(model, robot.task_frame, robot.task, robot.name)
     if robot.task != "planar":
         raise ConfigError("nominal.kind", "'closed-form' is the planar three-link model; use 'urdf'")
@@ -68,11 +74,16 @@ def build_nominal_model(
 
 def nominal_friction(nc: NominalConfig, n: int) -> tuple[np.ndarray, np.ndarray]:
     """F-hat's viscous [N m s/rad] and Coulomb [N m] coefficients per joint, as ``[nominal]``
-    gives them (zero where not given: friction unmodelled).
+    gives them (where not given: the identified model's, or zero: friction unmodelled).
     """
+    if nc.kind == "identified" and nc.file is not None:
+        identified = read_identified(nc.file)
+        viscous, coulomb = identified.viscous, identified.coulomb
+    else:
+        viscous = coulomb = np.zeros(n)
     return (
-        joint_vector("nominal.viscous_friction", nc.viscous_friction, n, np.zeros(n)),
-        joint_vector("nominal.coulomb_friction", nc.coulomb_friction, n, np.zeros(n)),
+        joint_vector("nominal.viscous_friction", nc.viscous_friction, n, viscous),
+        joint_vector("nominal.coulomb_friction", nc.coulomb_friction, n, coulomb),
     )
 
 
@@ -86,7 +97,7 @@ def nominal_factor_count(kind: str, rc: RobotConfig) -> int:
     body with mass of the robot's model (masses, then inertias), which ``nominal.relative_error``
     draws its factors for.
     """
-    if kind != "urdf":
+    if kind not in ("urdf", "identified"):
         return CLOSED_FORM_FACTORS
     model = load_robot(rc.source, rc.task_frame, rc.task, None, rc.locked_joints, rc.chain).model
     return 2 * len(bodies_with_mass(model))

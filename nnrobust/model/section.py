@@ -51,8 +51,13 @@ class NominalConfig:
 
     Attributes:
         kind: ``closed-form`` (three-link closed form with beta and p below), ``urdf`` (the true
-            robot's Pinocchio model, perfect unless perturbed by the fields below) or ``auto``
-            (the default: closed-form on the paper's arm, urdf on any other; :func:`nominal_kind`).
+            robot's Pinocchio model, perfect unless perturbed by the fields below),
+            ``identified`` (the robot's kinematics with the bodies, friction and armature of
+            ``file``, an identified model ``nnrobust identify`` wrote; perturbed like urdf) or
+            ``auto`` (the default: closed-form on the paper's arm, urdf on any other;
+            :func:`nominal_kind`).
+        file: ``identified``: the identified model's file (``nominal.json``; a relative path is
+            read from the experiment file's folder).
         beta: beta-hat [kg m^2] (closed form; default the true robot's).
         p: p-hat [kg m^2] (closed form; default the true robot's).
         mass_scale: every body's mass times this (urdf).
@@ -67,12 +72,14 @@ class NominalConfig:
             (docs/falsification.md): closed-form, 6 factors on (beta_1, beta_2, beta_3, p_1,
             p_2, p_3); urdf, 2 per body with mass, the masses first, then the rotational inertias.
             A single entry is set as ``nominal.factors[i]``; the others are then 1.
-        viscous_friction: F_d-hat [N m s/rad] (default 0).
-        coulomb_friction: Coulomb friction in N-hat [N m] (default 0: Coulomb friction unmodelled).
+        viscous_friction: F_d-hat [N m s/rad] (default 0, or the identified model's).
+        coulomb_friction: Coulomb friction in N-hat [N m] (default 0: Coulomb friction unmodelled;
+            or the identified model's).
 
     """
 
     kind: str = "auto"
+    file: str | None = None
     beta: list[float] | None = None
     p: list[float] | None = None
     mass_scale: float = 1.0
@@ -101,7 +108,7 @@ def resolved_nominal_kind(nc: NominalConfig, rc: RobotConfig) -> str:
     return nc.kind
 
 
-NOMINAL_KINDS = ("auto", "closed-form", "urdf")
+NOMINAL_KINDS = ("auto", "closed-form", "urdf", "identified")
 """The choices of ``nominal.kind``."""
 
 
@@ -125,6 +132,12 @@ def check_model(rc: RobotConfig, nc: NominalConfig) -> None:
             )
     check_choice("robot.task", rc.task, tuple(TASK_KINDS))
     check_choice("nominal.kind", nc.kind, NOMINAL_KINDS)
+    if (nc.kind == "identified") != (nc.file is not None):
+        raise ConfigError(
+            "nominal.file" if nc.file is not None else "nominal.kind",
+            "an identified model needs both kind = 'identified' and file = the model's nominal.json "
+            "(nnrobust identify writes it)",
+        )
     require_positive("nominal.mass_scale", nc.mass_scale)
     require_positive("nominal.inertia_scale", nc.inertia_scale)
     if not 0 <= nc.relative_error < 1:
@@ -154,7 +167,8 @@ def check_model(rc: RobotConfig, nc: NominalConfig) -> None:
 
 def inert_model_keys(rc: RobotConfig, nc: NominalConfig) -> dict[str, str]:
     """The ``[nominal]`` keys the resolved nominal model does not read, each with the reason."""
-    if resolved_nominal_kind(nc, rc) == "urdf":
-        why = "nominal.kind = 'urdf' (beta and p are the closed form's)"
+    kind = resolved_nominal_kind(nc, rc)
+    if kind in ("urdf", "identified"):
+        why = f"nominal.kind = '{kind}' (beta and p are the closed form's)"
         return {"nominal.beta": why, "nominal.p": why}
     return {}

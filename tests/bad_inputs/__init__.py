@@ -1,6 +1,6 @@
 """Every bad input nnrobust is tested with, and the error it must give: one module per section
 (urdf, config, run_folders, tune, custom, parts, scheduler, api, properties, falsify, study,
-native_law; common.py: what they share).
+native_law, identify; common.py: what they share).
 
 Shared by tests/test_hostile_input.py and by ``python -m tests.bad_inputs`` (run from the
 repository root), which writes docs/bad-inputs.md from the messages actually raised.
@@ -28,6 +28,9 @@ from .custom import (
 )
 from .falsify import (
     FALSIFY_CASES,
+)
+from .identify import (
+    IDENTIFY_CASES,
 )
 from .native_law import (
     NATIVE_LAW_CASES,
@@ -69,6 +72,7 @@ CASES = (
     + API_CASES
     + SCHEDULER_CASES
     + NATIVE_LAW_CASES
+    + IDENTIFY_CASES
 )
 
 

@@ -1,7 +1,7 @@
 """The command line a user sees, against a stored copy: every command's ``--help`` text (at 80
 columns) and the exit code of each help, of a bare ``nnrobust`` and of an unknown command. A
 restructuring of the package must leave them byte-identical; a change made on purpose is stored
-again with ``python -m tests.test_cli_help`` (repository root) and reviewed in the diff.
+again with ``python -m tests.cli.test_commands`` (repository root) and reviewed in the diff.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import pytest
 
 STORED = Path(__file__).parents[1] / "data" / "cli_help"
 COMMANDS = ("", "run", "plot", "presets", "robots", "compare", "view", "sweep", "falsify", "export",
-            "serve", "study", "tune", "bench")  # fmt: skip
+            "serve", "study", "tune", "identify", "bench")  # fmt: skip
 """Every command ("" is the bare ``nnrobust --help``)."""
 
 
@@ -65,7 +65,7 @@ def test_every_help_text_is_the_stored_one(command, monkeypatch):
     code, text = _help(command)
     name = command or "nnrobust"
     assert f"exit {code}\n{text}" == (STORED / f"{name}.txt").read_text(), (
-        f"python -m tests.test_cli_help ({name})"
+        f"python -m tests.cli.test_commands ({name})"
     )
 
 

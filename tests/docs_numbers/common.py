@@ -564,7 +564,7 @@ def check_quote(document: str, pattern: str, name, where, scale: float) -> None:
         return
     data = _read(name)
     value = where(data) if callable(where) else _at(data, where)
-    quoted = float(match.group(1))
+    quoted = float(match.group(1).replace(" ", "").replace(",", ""))  # 20 544 and 1,255 too
     # the quoted figure is the data rounded to its printed digits: within half a unit of the last
     digits = match.group(1).split(".")[1] if "." in match.group(1) else ""
     half = 0.5 * 10 ** -len(digits) if digits else 0.5

@@ -469,6 +469,9 @@ def study_inputs(spec: SweepSpec, options: dict[str, str] | None = None):
     if digest:
         files["the robot's URDF"] = (source if not source.lstrip().startswith("<") else "(inline)", digest)
     for part, class_path in user_files(config).items():
+        if part == "identified model":  # a data file, no class and no headers
+            files["the identified model"] = (class_path, file_sha256(class_path))
+            continue
         files[f"the {part} class file"] = (class_path, file_sha256(class_path))
         files.update(_included(Path(class_path), f"the {part} class file", f"{part}.class"))
     for name, entry in spec.entries.items():

@@ -64,7 +64,7 @@ def draws_differ(sweep) -> bool:
     config = base_config(sweep)
     sensing, nominal = config.sensing, config.nominal
     noisy = any(sensing.position_noise) or any(sensing.velocity_noise)
-    return bool(sweep.vary or noisy or (nominal_kind(config) == "urdf" and nominal.perturbed))
+    return bool(sweep.vary or noisy or (nominal_kind(config) in ("urdf", "identified") and nominal.perturbed))
 
 
 def varies(frame) -> bool:

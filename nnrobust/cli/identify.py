@@ -1,0 +1,144 @@
+"""``nnrobust identify``: a robot's identified model from its log (docs/identification.md)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+from ..core.exceptions import ConfigError
+from .common import Command
+
+
+def identify_arguments(parser: argparse.ArgumentParser) -> None:
+    """The arguments of ``nnrobust identify``."""
+    parser.add_argument(
+        "logs",
+        nargs="+",
+        metavar="LOG",
+        help="the log: one CSV or Parquet file, one run folder, or text files (one per signal, or "
+        "their folder)",
+    )
+    parser.add_argument(
+        "--robot", required=True, help="the robot: a URDF file or a robot's name (nnrobust robots)"
+    )
+    parser.add_argument(
+        "--out", required=True, help="folder to write (nominal.json, identification.json, parameters.csv)"
+    )
+    parser.add_argument(
+        "--locked-joints",
+        metavar="A,B",
+        help="joints held fixed, as robot.locked_joints (default: the robot's rule)",
+    )
+    parser.add_argument(
+        "--friction",
+        default="viscous,coulomb",
+        metavar="TERMS",
+        help="each joint's friction terms, comma-separated, of viscous, coulomb, offset "
+        "(default: viscous,coulomb)",
+    )
+    parser.add_argument("--armature", action="store_true", help="identify each joint's rotor inertia too")
+    parser.add_argument(
+        "--cutoff",
+        type=float,
+        default=10.0,
+        metavar="HZ",
+        help="the low-pass filter's cut-off [Hz] (default 10)",
+    )
+    parser.add_argument("--order", type=int, default=4, help="the Butterworth filter's order (default 4)")
+    parser.add_argument(
+        "--filter-torque",
+        action="store_true",
+        help="pass the torque through the same filter (default: as logged, its noise white)",
+    )
+    parser.add_argument(
+        "--delay", type=float, default=0.0, metavar="S", help="the torque's measurement delay [s] (default 0)"
+    )
+    parser.add_argument(
+        "--stick-band",
+        type=float,
+        default=0.01,
+        metavar="RAD_S",
+        help="|q'| below which a joint sticks; its samples leave the fit (default 0.01 rad/s)",
+    )
+    parser.add_argument(
+        "--fit-share",
+        type=float,
+        default=0.7,
+        metavar="F",
+        help="the share of the log, from its start, that fits; the rest is held out (default 0.7)",
+    )
+    parser.add_argument(
+        "--allow-unexcited",
+        action="store_true",
+        help="fit although the log leaves base parameters unexcited (the URDF's values stand for them)",
+    )
+    parser.add_argument("--overwrite", action="store_true", help="replace an earlier identification in --out")
+    parser.add_argument("--quiet", action="store_true", help="print nothing but errors")
+
+
+def cmd_identify(args) -> int:
+    """Identify a robot from its log."""
+    from ..model.regressor import FRICTION_TERMS
+    from ..studies.identify.engine import IdentifyOptions, identify
+    from ..studies.identify.signals import FilterChoice
+
+    terms = tuple(t.strip() for t in args.friction.split(",") if t.strip())
+    unknown = [t for t in terms if t not in FRICTION_TERMS]
+    if unknown or len(set(terms)) != len(terms):
+        raise ConfigError(
+            "--friction", f"{args.friction!r}: name each of {', '.join(FRICTION_TERMS)} at most once"
+        )
+    for option, value, low in (("--cutoff", args.cutoff, 0.0), ("--stick-band", args.stick_band, 0.0)):
+        if not value > low or value != value or value == float("inf"):
+            raise ConfigError(option, f"must be a positive number, got {value}")
+    if not 1 <= args.order <= 8:
+        raise ConfigError("--order", f"must be 1 to 8, got {args.order}")
+    if not abs(args.delay) < 1.0:
+        raise ConfigError("--delay", f"must be under 1 s in size, got {args.delay}")
+    options = IdentifyOptions(
+        friction=terms,
+        armature=args.armature,
+        filter=FilterChoice(args.cutoff, args.order, args.delay, torque=args.filter_torque),
+        stick_band=args.stick_band,
+        fit_share=args.fit_share,
+        allow_unexcited=args.allow_unexcited,
+    )
+    locked = None if args.locked_joints is None else [j for j in args.locked_joints.split(",") if j]
+    say = (lambda text: None) if args.quiet else (lambda text: print(text, file=sys.stderr))
+    summary = identify(
+        args.logs, args.robot, args.out, options, locked_joints=locked, overwrite=args.overwrite, say=say
+    )
+    if not args.quiet:
+        shares = summary["residuals"]
+        print(
+            f"{'joint':<16} {'torque rms':>11} {'URDF':>8} {'least sq.':>10} {'physical':>9}"
+            "   (held-out residual / torque RMS)"
+        )
+        for j, name in enumerate(summary["joints"]):
+            print(
+                f"{name:<16} {summary['torque_rms']['held_out'][j]:>9.3f} Nm"
+                + "".join(
+                    f"{100 * shares[k]['held_out_share'][j]:>9.1f}%"
+                    for k in ("urdf", "least_squares", "physical")
+                )
+            )
+        checks = summary["checks"]
+        print(
+            f"physical: {'yes' if checks['physical'] else 'NO'} (least M(q) eigenvalue "
+            f"{checks['mass_matrix_least_eigenvalue']:.3g}); wrote {args.out}/nominal.json: use it as "
+            f'[nominal] kind = "identified", file = "{args.out}/nominal.json"'
+        )
+    return 0
+
+
+IDENTIFY = Command(
+    "identify",
+    help="identify a robot's model from its log (nominal.json for [nominal] kind = 'identified')",
+    description="Fit a robot's base inertial parameters and joint friction to a log of its joint "
+    "positions, velocities and torques (CSV, Parquet, text files or a run folder): weighted least "
+    "squares on Pinocchio's torque regressor, then the physically consistent model (every body's "
+    "pseudo-inertia positive semi-definite), with the held-out residual per joint "
+    "(docs/identification.md).",
+    arguments=identify_arguments,
+    run=cmd_identify,
+)

@@ -1,0 +1,269 @@
+"""``nnrobust identify``: from a robot's log to its identified model (docs/identification.md).
+
+The log is read (:mod:`.logs`), put on a uniform grid and filtered (:mod:`.signals`), split in
+time (the first ``fit_share`` fits, the rest is held out), checked for identifiability, fitted by
+weighted least squares and then physically (:mod:`.fit`), and audited. The folder it writes:
+
+- ``nominal.json``: the physically consistent model (:mod:`nnrobust.model.identified`), usable as
+  ``[nominal] kind = "identified"``, ``file = ".../nominal.json"`` in any experiment.
+- ``identification.json``: everything the fit found: the signals' notes, the base parameters with
+  the least-squares estimate, its standard errors and the physical estimate, each joint's
+  residual on the fit and held-out segments (for the URDF, the least-squares and the physical
+  model), the physical checks, and the inputs' SHA-256.
+- ``parameters.csv``: the base parameters' table.
+
+The folder is written whole, then renamed into place: an interrupted identification leaves no
+half folder, and ``--overwrite`` replaces only a folder identify wrote (its marker).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import shutil
+import tempfile
+import time
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ...core.exceptions import LogError, NNRobustError, RunFolderExists
+from ...core.folders import check_place, write_new
+from ...core.package_version import package_version
+from ...model.identified import IdentifiedModel
+from ...model.loading import load_robot
+from ...model.regressor import (
+    ParameterLayout,
+    base_parameters,
+    body_problems,
+    inertial_vector,
+    mass_matrix_audit,
+    with_inertial_vector,
+)
+from ..base.folder import file_sha256
+from .fit import (
+    base_columns,
+    base_projector,
+    identifiability,
+    least_pseudo_inertia_eigenvalues,
+    normal_equations,
+    physically_consistent,
+    weighted_least_squares,
+)
+from .logs import read_log
+from .signals import FilterChoice, prepare
+
+MARKER = ".nnrobust-identification"
+"""The marker of a folder ``identify`` wrote."""
+
+OUTPUTS = ("nominal.json", "identification.json", "parameters.csv", MARKER)
+"""Everything an identification folder holds."""
+
+
+@dataclass(frozen=True)
+class IdentifyOptions:
+    """The choices of an identification (each a command-line option; docs/identification.md).
+
+    Attributes:
+        friction: the friction terms of every joint (:data:`nnrobust.model.regressor.FRICTION_TERMS`).
+        armature: whether each joint's rotor inertia is identified.
+        filter: the low-pass, and the torque's delay (:class:`.signals.FilterChoice`).
+        stick_band: |q'| below which a joint is taken to stick [rad/s] (its rows left out).
+        fit_share: the share of the log, from its start, that fits; the rest is held out.
+        allow_unexcited: fit even if the log leaves base parameters unexcited (the URDF's values
+            then stand for them in the physical model; the least-squares estimate is minimum-norm).
+
+    """
+
+    friction: tuple[str, ...] = ("viscous", "coulomb")
+    armature: bool = False
+    filter: FilterChoice = field(default_factory=FilterChoice)
+    stick_band: float = 0.01
+    fit_share: float = 0.7
+    allow_unexcited: bool = False
+
+
+def identify(
+    logs: Sequence[str | Path],
+    robot: str,
+    out: str | Path | None = None,
+    options: IdentifyOptions = IdentifyOptions(),
+    locked_joints: list[str] | None = None,
+    chain: Sequence[str] | None = None,
+    overwrite: bool = False,
+    say=lambda text: None,
+) -> dict:
+    """Identify ``robot`` (a URDF or a robot's name) from ``logs``; write the folder ``out`` (if
+    given) and return what ``identification.json`` holds.
+    """
+    if not 0 < options.fit_share < 1:
+        raise NNRobustError(f"--fit-share must be in (0, 1), got {options.fit_share}")
+    if out is not None:
+        out = Path(out)
+        check_place(out)
+        if out.exists() and not (out / MARKER).is_file() and (not out.is_dir() or any(out.iterdir())):
+            raise NNRobustError(
+                f"{out} exists and is not an identification folder (no {MARKER}); choose another --out"
+            )
+        if out.exists() and (out / MARKER).is_file() and not overwrite:
+            raise RunFolderExists(f"{out} holds an identification already; pass --overwrite to replace it")
+    started = time.perf_counter()
+    arm = load_robot(robot, task="position", locked_joints=locked_joints, chain=chain)
+    model = arm.model
+    joints = tuple(model.names[1:])
+    log = read_log(logs, joints)
+    say(f"read {log.samples} samples of {len(joints)} joints from {log.source}")
+    states = prepare(log, options.filter)
+    layout = ParameterLayout(joints, tuple(options.friction), options.armature)
+    inertial_names = layout.names[: 10 * layout.n]
+    base = base_parameters(model, inertial_names)
+    columns = base_columns(layout, base)
+    names = list(base.names) + layout.names[10 * layout.n :]
+    split = int(options.fit_share * len(states.t))
+    fit_rows = normal_equations(model, layout, states, options.stick_band, slice(0, split))
+    # every held-out sample is scored, a joint in stick included: a prediction is judged where it is used
+    held_rows = normal_equations(model, layout, states, 0.0, slice(split, None))
+    excitation = identifiability(fit_rows, columns, names)
+    say(
+        f"{base.rank} base parameters + {layout.size - 10 * layout.n} friction terms; condition number "
+        f"{excitation.condition:.4g}"
+    )
+    if excitation.unexcited and not options.allow_unexcited:
+        named = ", ".join(excitation.unexcited[:6]) + (" ..." if len(excitation.unexcited) > 6 else "")
+        raise LogError(
+            f"{log.source}: the fit segment does not excite {len(excitation.unexcited)} of the base "
+            f"parameters: {named}; "
+            "log a trajectory that moves every joint both ways at several speeds, or pass "
+            "--allow-unexcited to keep the URDF's values for them"
+        )
+    least = weighted_least_squares(fit_rows, columns, minimum_norm=bool(excitation.unexcited))
+    prior = np.concatenate([inertial_vector(model), np.zeros(layout.size - 10 * layout.n)])
+    phi = physically_consistent(fit_rows, layout, least.sigma, prior)
+    phi_least = np.zeros(layout.size)
+    phi_least[columns] = least.beta
+    identified_model = with_inertial_vector(model, phi)
+    armature = phi[layout.armature_slice] if layout.armature else np.zeros(layout.n)
+    least_eigenvalue, _ = mass_matrix_audit(identified_model, armature)
+    checks = {
+        "pseudo_inertia_least_eigenvalues": least_pseudo_inertia_eigenvalues(phi, layout.n).tolist(),
+        "body_problems": body_problems(identified_model),
+        "mass_matrix_least_eigenvalue": least_eigenvalue,
+        "physical": not body_problems(identified_model) and least_eigenvalue > 0,
+    }
+
+    def residuals(p: np.ndarray) -> dict:
+        return {
+            "fit_rms": fit_rows.rms(p).tolist(),
+            "held_out_rms": held_rows.rms(p).tolist(),
+            "held_out_share": (held_rows.rms(p) / held_rows.torque_rms()).tolist(),
+        }
+
+    beta_physical = (base_projector(layout, base) @ phi).tolist()
+    standard_errors = np.sqrt(np.maximum(np.diag(least.covariance), 0)).tolist()
+    friction = {term: phi[layout.friction_slice(term)].tolist() for term in layout.friction}
+    files = {str(p): file_sha256(p) for p in log.files}
+    summary = {
+        "format": "nnrobust-identification/1",
+        "robot": arm.name,
+        "joints": list(joints),
+        "log": {"source": log.source, "files": files, **states.notes},
+        "options": {
+            "friction": list(options.friction),
+            "armature": options.armature,
+            "stick_band": options.stick_band,
+            "fit_share": options.fit_share,
+            "allow_unexcited": options.allow_unexcited,
+            **{f"filter_{k}": v for k, v in asdict(options.filter).items()},
+        },
+        "segments": {
+            "fit": [float(states.t[0]), float(states.t[split - 1])],
+            "held_out": [float(states.t[split]), float(states.t[-1])],
+            "fit_rows": fit_rows.rows.tolist(),
+            "held_out_rows": held_rows.rows.tolist(),
+        },
+        "identifiability": {
+            "base_parameters": base.rank,
+            "parameters": len(columns),
+            "condition_number": excitation.condition,
+            "unexcited": excitation.unexcited,
+        },
+        "noise_sigma": least.sigma.tolist(),
+        "torque_rms": {"fit": fit_rows.torque_rms().tolist(), "held_out": held_rows.torque_rms().tolist()},
+        "parameters": [
+            {"name": name, "least_squares": float(b), "standard_error": float(s), "physical": float(p)}
+            for name, b, s, p in zip(names, least.beta, standard_errors, beta_physical)
+        ],
+        "friction": friction,
+        "armature": armature.tolist(),
+        "residuals": {
+            "urdf": residuals(prior),
+            "least_squares": residuals(phi_least),
+            "physical": residuals(phi),
+        },
+        "checks": checks,
+        "seconds": time.perf_counter() - started,
+        "version": package_version(),
+    }
+    say(
+        "held-out torque residual / torque RMS, per joint: "
+        + " ".join(f"{100 * s:.1f}%" for s in summary["residuals"]["physical"]["held_out_share"])
+    )
+    if out is not None:
+        record = {
+            "identification": summary["format"],
+            "robot": arm.name,
+            "log_files": files,
+            "version": package_version(),
+        }
+        zeros = np.zeros(layout.n)
+        identified = IdentifiedModel(
+            str(robot),
+            joints,
+            tuple(identified_model.inertias[j] for j in range(1, identified_model.njoints)),
+            np.asarray(friction.get("viscous", zeros)),
+            np.asarray(friction.get("coulomb", zeros)),
+            np.asarray(friction.get("offset", zeros)),
+            armature,
+        )
+        _write_folder(out, identified.to_dict(record), summary, overwrite)
+    return summary
+
+
+def _write_folder(out: Path, nominal: dict, summary: dict, overwrite: bool) -> None:
+    """The folder written whole beside ``out``, then renamed into place."""
+    out = out.absolute()
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
+    tmp.chmod(0o755)
+    try:
+        write_new(tmp / "nominal.json", json.dumps(nominal, indent=1) + "\n")
+        write_new(tmp / "identification.json", json.dumps(summary, indent=1) + "\n")
+        table = io.StringIO()
+        writer = csv.writer(table)
+        writer.writerow(["name", "least_squares", "standard_error", "physical"])
+        for row in summary["parameters"]:
+            writer.writerow(
+                [row["name"], repr(row["least_squares"]), repr(row["standard_error"]), repr(row["physical"])]
+            )
+        write_new(tmp / "parameters.csv", table.getvalue())
+        write_new(
+            tmp / MARKER, json.dumps({"format": summary["format"], "version": summary["version"]}) + "\n"
+        )
+        if out.exists():
+            if not overwrite and (out / MARKER).is_file():
+                raise RunFolderExists(
+                    f"{out} holds an identification already; pass --overwrite to replace it"
+                )
+            old = out.parent / f".{out.name}.old-{os.getpid()}"
+            os.replace(out, old)
+            os.replace(tmp, out)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            os.replace(tmp, out)
+    finally:
+        if tmp.exists():
+            shutil.rmtree(tmp, ignore_errors=True)

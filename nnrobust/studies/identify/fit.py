@@ -1,0 +1,267 @@
+"""The fit: normal equations built in batches, identifiability before anything is solved, weighted
+least squares in the base parameters, then the physically consistent estimate (docs/identification.md).
+
+tau_k = Y(q_k, q'_k, q''_k) phi + e_k for every sample k and joint j, with phi every body's ten
+inertial parameters, the friction terms and the armature (:class:`ParameterLayout`). Only the
+normal equations of each joint are kept (G_j = sum Y_j^T Y_j, b_j = sum Y_j^T tau_j, c_j =
+sum tau_j^2), so memory does not grow with the log's length, and any residual or fit of the
+segment is a function of them.
+
+1. **Identifiability**: the base regressor's columns scaled to unit norm; its condition number,
+   and each direction the log leaves at under :data:`EXCITATION_TOLERANCE` of the best excited one
+   named by the base parameter that dominates it.
+2. **Weighted least squares** (Gautier): ordinary least squares, each joint's noise variance from
+   its residual, then the fit weighted by 1 / sigma_j^2.
+3. **Physically consistent estimate** (Sousa and Cortesao 2014; Wensing, Kim and Slotine 2018): the
+   same weighted cost over the full parameters with each body's pseudo-inertia positive
+   semi-definite (implying the triangle inequalities), friction and armature non-negative; an
+   SDP solved by Clarabel through cvxpy. A tie-breaking pull of weight :data:`PRIOR_WEIGHT` towards
+   the URDF's parameters fixes what the log cannot see (directions outside the base).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from ...core.exceptions import LogError
+from ...model.regressor import (
+    BaseParameters,
+    ParameterLayout,
+    friction_regressor,
+    pseudo_inertia,
+    slipping,
+    torque_regressor,
+)
+from .signals import States
+
+BATCH = 4096
+"""Samples whose regressor rows are built at once (memory: BATCH x n x p doubles)."""
+
+EXCITATION_TOLERANCE = 1e-6
+"""A direction of the scaled base regressor whose eigenvalue is below this share of the largest
+is not excited by the log (a condition number above 1e3 in singular values)."""
+
+PRIOR_WEIGHT = 1e-8
+"""Weight of the pull towards the URDF's parameters, relative to the mean eigenvalue of the fit's
+weighted normal matrix: it moves nothing the log excites."""
+
+PSD_MARGIN = 1e-9
+"""Each pseudo-inertia's least eigenvalue is at least this [kg m^2]: M(q) stays invertible."""
+
+
+@dataclass
+class NormalEquations:
+    """Per joint: G_j = sum_k Y_kj^T Y_kj, b_j = sum_k Y_kj^T tau_kj, c_j = sum_k tau_kj^2 and the
+    rows counted, over the samples of one segment (a joint's rows in stick left out).
+    """
+
+    G: np.ndarray
+    b: np.ndarray
+    c: np.ndarray
+    rows: np.ndarray
+
+    @classmethod
+    def empty(cls, n: int, p: int) -> NormalEquations:
+        """Nothing summed yet, for n joints and p parameters."""
+        return cls(np.zeros((n, p, p)), np.zeros((n, p)), np.zeros(n), np.zeros(n, dtype=np.int64))
+
+    def add(self, Y: np.ndarray, tau: np.ndarray, used: np.ndarray) -> None:
+        """Sum in the rows ``Y`` (N x n x p) and torques ``tau`` (N x n) where ``used`` (N x n)."""
+        for j in range(Y.shape[1]):
+            rows = Y[used[:, j], j, :]
+            target = tau[used[:, j], j]
+            self.G[j] += rows.T @ rows
+            self.b[j] += rows.T @ target
+            self.c[j] += target @ target
+            self.rows[j] += len(target)
+
+    def rss(self, phi: np.ndarray) -> np.ndarray:
+        """Each joint's residual sum of squares of the parameters ``phi``."""
+        return np.einsum("i,jik,k->j", phi, self.G, phi) - 2 * self.b @ phi + self.c
+
+    def rms(self, phi: np.ndarray) -> np.ndarray:
+        """Each joint's residual RMS [N m]."""
+        return np.sqrt(np.maximum(self.rss(phi), 0) / np.maximum(self.rows, 1))
+
+    def torque_rms(self) -> np.ndarray:
+        """Each joint's torque RMS [N m]."""
+        return np.sqrt(self.c / np.maximum(self.rows, 1))
+
+
+def normal_equations(
+    model: pin.Model, layout: ParameterLayout, states: States, band: float, segment: slice = slice(None)
+) -> NormalEquations:
+    """The normal equations of ``states[segment]``, :data:`BATCH` samples at a time; with Coulomb
+    friction in the layout, a joint's samples in stick (|q'| < ``band``) are left out of its rows.
+    """
+    q, dq, ddq, tau = (x[segment] for x in (states.q, states.dq, states.ddq, states.tau))
+    out = NormalEquations.empty(layout.n, layout.size)
+    for start in range(0, len(q), BATCH):
+        part = slice(start, start + BATCH)
+        Y = np.concatenate(
+            [
+                torque_regressor(model, q[part], dq[part], ddq[part]),
+                friction_regressor(layout, dq[part], ddq[part]),
+            ],
+            axis=2,
+        )
+        used = (
+            slipping(dq[part], band) if "coulomb" in layout.friction else np.ones(dq[part].shape, dtype=bool)
+        )
+        out.add(Y, tau[part], used)
+    return out
+
+
+def base_columns(layout: ParameterLayout, base: BaseParameters) -> np.ndarray:
+    """The full vector's columns of the base regressor: the base inertial ones, then every
+    friction and armature column.
+    """
+    return np.concatenate([base.base, np.arange(10 * layout.n, layout.size)])
+
+
+def base_projector(layout: ParameterLayout, base: BaseParameters) -> np.ndarray:
+    """The matrix that maps the full parameters to the base ones (friction and armature as they are)."""
+    extra = layout.size - 10 * layout.n
+    P = np.zeros((base.rank + extra, layout.size))
+    P[: base.rank, : 10 * layout.n] = base.projector(10 * layout.n)
+    P[base.rank :, 10 * layout.n :] = np.eye(extra)
+    return P
+
+
+@dataclass
+class Identifiability:
+    """How well the log excites the base parameters.
+
+    Attributes:
+        condition: the condition number of the base regressor with unit-norm columns.
+        unexcited: the base parameters the log does not excite (named), one per weak direction.
+
+    """
+
+    condition: float
+    unexcited: list[str]
+
+
+def identifiability(normal: NormalEquations, columns: np.ndarray, names: list[str]) -> Identifiability:
+    """The condition number and the unexcited directions of the base regressor (module docstring, 1)."""
+    G = normal.G.sum(axis=0)[np.ix_(columns, columns)]
+    diag = np.diag(G)
+    zero = [names[i] for i in np.flatnonzero(diag <= 0)]
+    if zero:
+        return Identifiability(np.inf, zero)
+    scale = 1 / np.sqrt(diag)
+    values, vectors = np.linalg.eigh(G * np.outer(scale, scale))
+    values = np.maximum(values, 0)
+    weak = values < EXCITATION_TOLERANCE * values[-1]
+    unexcited = [names[int(np.argmax(np.abs(vectors[:, i])))] for i in np.flatnonzero(weak)]
+    condition = float(np.sqrt(values[-1] / values[0])) if values[0] > 0 else np.inf
+    return Identifiability(condition, unexcited)
+
+
+@dataclass
+class LeastSquares:
+    """The weighted least-squares estimate of the base parameters.
+
+    Attributes:
+        beta: the base parameters (base inertial, then friction and armature).
+        sigma: each joint's noise standard deviation [N m] (from the ordinary fit's residual).
+        covariance: (sum_j G_j / sigma_j^2)^-1, the estimate's covariance if the residuals are white.
+
+    """
+
+    beta: np.ndarray
+    sigma: np.ndarray
+    covariance: np.ndarray
+
+
+def weighted_least_squares(
+    normal: NormalEquations, columns: np.ndarray, minimum_norm: bool = False
+) -> LeastSquares:
+    """Ordinary, then weighted least squares in the base parameters (module docstring, 2); with
+    ``minimum_norm`` (a log that leaves directions unexcited), the least-norm solutions.
+    """
+    G = normal.G[:, columns][:, :, columns]
+    b = normal.b[:, columns]
+    solve = _least_norm if minimum_norm else np.linalg.solve
+    beta = solve(G.sum(axis=0), b.sum(axis=0))
+    dof = max(int(normal.rows.sum()) - len(columns), 1)
+    rss = np.einsum("i,jik,k->j", beta, G, beta) - 2 * b @ beta + normal.c
+    sigma = np.sqrt(np.maximum(rss, 1e-30) / np.maximum(normal.rows, 1) * normal.rows.sum() / dof)
+    weights = 1 / sigma**2
+    Gw = np.einsum("j,jik->ik", weights, G)
+    beta = solve(Gw, weights @ b)
+    return LeastSquares(
+        beta, sigma, np.linalg.pinv(Gw, hermitian=True) if minimum_norm else np.linalg.inv(Gw)
+    )
+
+
+def _least_norm(G: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.linalg.lstsq(G, b, rcond=EXCITATION_TOLERANCE)[0]
+
+
+def physically_consistent(
+    normal: NormalEquations, layout: ParameterLayout, sigma: np.ndarray, prior: np.ndarray
+) -> np.ndarray:
+    """The full parameters of least weighted residual with every body physical (module docstring, 3)."""
+    try:
+        import cvxpy as cp  # here: cvxpy and clarabel are the identify extra's
+    except ImportError as err:
+        raise LogError("the physically consistent fit needs cvxpy: pip install 'nnrobust[identify]'") from err
+    weights = 1 / sigma**2
+    H = np.einsum("j,jik->ik", weights, normal.G)
+    g = weights @ normal.b
+    values, vectors = np.linalg.eigh(H)
+    keep = values > 1e-12 * values[-1]
+    A = np.sqrt(values[keep])[:, None] * vectors[:, keep].T
+    target = (vectors[:, keep].T @ g) / np.sqrt(values[keep])
+    mu = PRIOR_WEIGHT * float(values[keep].mean())
+    # the parameters in units where the prior is 1 (a body's parameters span 1e-4 to 10)
+    scale = np.maximum(np.abs(prior), _typical(layout))
+    x = cp.Variable(layout.size)
+    phi = cp.multiply(scale, x)
+    cost = cp.sum_squares(A @ phi - target) + mu * cp.sum_squares(x - prior / scale)
+    constraints = []
+    for i in range(layout.n):
+        J = _pseudo_inertia(phi[10 * i : 10 * i + 10], cp)
+        constraints.append(J - PSD_MARGIN * np.eye(4) >> 0)
+    for term in layout.friction:
+        if term != "offset":
+            constraints.append(phi[layout.friction_slice(term)] >= 0)
+    if layout.armature:
+        constraints.append(phi[layout.armature_slice] >= 0)
+    problem = cp.Problem(cp.Minimize(cost), constraints)
+    try:
+        problem.solve(solver=cp.CLARABEL)
+    except cp.error.SolverError as err:
+        raise LogError(f"the physically consistent fit failed in its solver: {err}") from err
+    if problem.status not in ("optimal", "optimal_inaccurate") or x.value is None:
+        raise LogError(f"the physically consistent fit ended {problem.status}")
+    return np.asarray(scale * x.value, dtype=float)
+
+
+def _typical(layout: ParameterLayout) -> np.ndarray:
+    """A typical magnitude of each parameter (kg, kg m, kg m^2, N m s/rad, N m, kg m^2)."""
+    body = np.array([1.0, 0.1, 0.1, 0.1] + [0.01] * 6)
+    return np.concatenate([np.tile(body, layout.n), np.full(layout.size - 10 * layout.n, 0.1)])
+
+
+def _pseudo_inertia(phi10, cp):
+    """:func:`nnrobust.model.regressor.pseudo_inertia` as a cvxpy expression."""
+    m, hx, hy, hz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz = (phi10[k] for k in range(10))
+    half = (Ixx + Iyy + Izz) / 2
+    return cp.bmat(
+        [
+            [half - Ixx, -Ixy, -Ixz, hx],
+            [-Ixy, half - Iyy, -Iyz, hy],
+            [-Ixz, -Iyz, half - Izz, hz],
+            [hx, hy, hz, m],
+        ]
+    )
+
+
+def least_pseudo_inertia_eigenvalues(phi: np.ndarray, n: int) -> np.ndarray:
+    """Each body's least pseudo-inertia eigenvalue (>= 0: physical)."""
+    return np.array([np.linalg.eigvalsh(pseudo_inertia(phi[10 * i : 10 * i + 10]))[0] for i in range(n)])

@@ -1,0 +1,308 @@
+"""A robot's joint log, read from the files robots and simulators write: time, positions,
+velocities (optional) and torques, one row per sample (docs/identification.md, "Logs").
+
+- **CSV** (a header row) and **Parquet**: a time column (``time``, ``t``, ``stamp`` or
+  ``timestamp``, in seconds) and per signal one column per joint, named by index from 0 (``q0``,
+  ``q_0``, ``q[0]``) or by joint (``q.panda_joint1``, ``q_panda_joint1``); the signals are ``q``
+  (also ``position``), ``dq`` (``velocity``) and ``tau`` (``torque``, ``effort``).
+- **Plain text**, one file per signal, as the Gaz et al. Panda log ships: each file either one
+  number per line (sample after sample, every joint of a sample in turn) or one sample per line;
+  the file's name says its signal (``time``, ``position``, ``velocity``, ``torque``), a folder of
+  such files may be given whole.
+- **A run folder** nnrobust wrote (``result.npz``): every simulated run is a log.
+
+Reading checks what no fit can repair, each in one line naming the file and column: a column
+missing or of another length, a value that is not a finite number, and times that go back or repeat.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ...core.exceptions import LogError, NNRobustError
+
+TIME_COLUMNS = ("time", "t", "stamp", "timestamp")
+"""Names a time column may have [s]."""
+
+SIGNALS = {
+    "q": ("q", "position", "pos"),
+    "dq": ("dq", "velocity", "vel", "qd"),
+    "tau": ("tau", "torque", "effort"),
+}
+"""Each signal and the names its columns (or text files) may start with."""
+
+TEXT_SUFFIXES = (".txt", ".dat", ".log")
+"""Plain-text files of one signal each."""
+
+
+@dataclass
+class JointLog:
+    """A log as read: N samples of n joints, in the file's own units (rad, rad/s, N m).
+
+    Attributes:
+        source: what was read (the files, for messages and the record).
+        t: sample times [s], N, strictly increasing.
+        q: positions, N x n.
+        dq: velocities, N x n, or None when the log has none (they are then differentiated).
+        tau: joint torques, N x n (the torque the joint delivers, gravity included).
+        files: every file read, for the record's digests.
+        torque_lag: how far after its stamp a torque sample's value holds on average [s]: half a
+            control period for a run folder's torque, held over [t_k, t_k + T).
+
+    """
+
+    source: str
+    t: np.ndarray
+    q: np.ndarray
+    dq: np.ndarray | None
+    tau: np.ndarray
+    files: list[Path] = field(default_factory=list)
+    torque_lag: float = 0.0
+
+    @property
+    def samples(self) -> int:
+        """N."""
+        return len(self.t)
+
+    def segment(self, start: int, stop: int) -> JointLog:
+        """Samples ``start:stop``."""
+        dq = None if self.dq is None else self.dq[start:stop]
+        return JointLog(
+            self.source,
+            self.t[start:stop],
+            self.q[start:stop],
+            dq,
+            self.tau[start:stop],
+            self.files,
+            self.torque_lag,
+        )
+
+
+def read_log(given: Sequence[str | Path], joints: Sequence[str]) -> JointLog:
+    """The log in ``given`` (files or folders of one format) for the robot's ``joints``."""
+    paths = [Path(p) for p in given]
+    if not paths:
+        raise LogError("identify needs at least one log file or folder")
+    for path in paths:
+        if not path.exists():
+            raise LogError(f"{path}: no such file or folder")
+    if len(paths) == 1 and paths[0].is_dir():
+        folder = paths[0]
+        if (folder / "result.npz").is_file():
+            return _run_folder(folder, joints)
+        texts = sorted(p for p in folder.iterdir() if p.suffix in TEXT_SUFFIXES)
+        if not texts:
+            raise LogError(
+                f"{folder}: neither a run folder (result.npz) nor a folder of text files "
+                "(*.txt, one per signal)"
+            )
+        return _text_files(texts, joints)
+    suffixes = {p.suffix.lower() for p in paths}
+    if len(paths) == 1 and suffixes <= {".csv", ".parquet", ".pq"}:
+        return _table(paths[0], joints)
+    if suffixes <= set(TEXT_SUFFIXES):
+        return _text_files(paths, joints)
+    raise LogError(
+        f"{', '.join(map(str, paths))}: give one CSV or Parquet file, one run folder, or the text files "
+        f"of one log (one per signal: {', '.join(TEXT_SUFFIXES)})"
+    )
+
+
+def _run_folder(folder: Path, joints: Sequence[str]) -> JointLog:
+    from ...outputs.run_folder import load_run  # here: the run folder's reader sits a floor below
+
+    try:
+        result = load_run(folder)
+    except NNRobustError as err:
+        raise LogError(str(err)) from err
+    period = float(np.median(np.diff(result.t))) if len(result.t) > 1 else 0.0
+    log = JointLog(
+        str(folder), result.t, result.q, result.dq, result.tau, [folder / "result.npz"], period / 2
+    )
+    return _checked(log, joints, {"q": "q", "dq": "dq", "tau": "tau", "t": "t"})
+
+
+def _table(path: Path, joints: Sequence[str]) -> JointLog:
+    try:
+        if path.suffix.lower() == ".csv":
+            from pyarrow import csv  # here: pyarrow is the identify extra's
+
+            table = csv.read_csv(path)
+        else:
+            from pyarrow import parquet
+
+            table = parquet.read_table(path)
+    except ImportError as err:
+        raise LogError(
+            f"{path}: reading CSV and Parquet logs needs pyarrow: pip install 'nnrobust[identify]'"
+        ) from err
+    except Exception as err:  # pyarrow's ArrowInvalid and OSError: a file that is not a table
+        raise LogError(f"{path}: not a readable table ({type(err).__name__}: {str(err)[:200]})") from err
+    columns = {name: table.column(name) for name in table.column_names}
+    time = next((c for c in TIME_COLUMNS if c in columns), None)
+    if time is None:
+        raise LogError(
+            f"{path}: no time column (one of {', '.join(TIME_COLUMNS)}); its columns: {_listed(columns)}"
+        )
+    arrays = {"t": _numbers(path, time, columns[time])}
+    names = {"t": time}
+    for signal, prefixes in SIGNALS.items():
+        found = _signal_columns(columns, prefixes, joints)
+        if found is None:
+            if signal == "dq":
+                continue
+            raise LogError(
+                f"{path}: no {signal} columns for the robot's {len(joints)} joints (e.g. {prefixes[0]}0..."
+                f"{prefixes[0]}{len(joints) - 1} or {prefixes[0]}.{joints[0]}); its columns: "
+                f"{_listed(columns)}"
+            )
+        arrays[signal] = np.column_stack([_numbers(path, c, columns[c]) for c in found])
+        names[signal] = f"{found[0]}..{found[-1]}"
+    log = JointLog(str(path), arrays["t"], arrays["q"], arrays.get("dq"), arrays["tau"], [path])
+    return _checked(log, joints, names)
+
+
+def _signal_columns(columns: dict, prefixes: Sequence[str], joints: Sequence[str]) -> list[str] | None:
+    """The columns of one signal, joint by joint, or None if the log has none of them."""
+    for prefix in prefixes:
+        for form in (
+            f"{prefix}{{i}}",
+            f"{prefix}_{{i}}",
+            f"{prefix}[{{i}}]",
+            f"{prefix}.{{j}}",
+            f"{prefix}_{{j}}",
+        ):
+            names = [form.format(i=i, j=j) for i, j in enumerate(joints)]
+            present = [n in columns for n in names]
+            if all(present):
+                return names
+            if any(present):
+                missing = [n for n, p in zip(names, present) if not p]
+                raise LogError(f"the log has some {prefix} columns but not {', '.join(missing)}")
+    return None
+
+
+def _numbers(path: Path, name: str, column) -> np.ndarray:
+    try:
+        values = np.asarray(column.to_numpy(zero_copy_only=False), dtype=float)
+    except (TypeError, ValueError) as err:
+        raise LogError(f"{path}: column {name!r} is not numbers ({str(err)[:120]})") from err
+    return values
+
+
+def _text_files(paths: Sequence[Path], joints: Sequence[str]) -> JointLog:
+    by_signal: dict[str, Path] = {}
+    for path in paths:
+        stem = path.stem.lower()
+        tokens = set(re.split(r"[^a-z]+", stem))
+        matches = [
+            s
+            for s, names in (("t", ("time", "stamp", "timestamp", "t")), *SIGNALS.items())
+            if _named(stem, tokens, names)
+        ]
+        if len(matches) != 1:
+            raise LogError(
+                f"{path}: its name must say which one signal it holds (time, position, velocity or torque)"
+                + (f"; it names {matches}" if matches else "")
+            )
+        if matches[0] in by_signal:
+            raise LogError(
+                f"{path} and {by_signal[matches[0]]} both hold {matches[0]}: give one file per signal"
+            )
+        by_signal[matches[0]] = path
+    for needed in ("t", "q", "tau"):
+        if needed not in by_signal:
+            what = {"t": "time", "q": "position", "tau": "torque"}[needed]
+            raise LogError(
+                f"{', '.join(map(str, paths))}: no {what} file among them (its name must say '{what}')"
+            )
+    t = _text(by_signal["t"], 1)
+    arrays = {s: _text(p, len(joints), len(t)) for s, p in by_signal.items() if s != "t"}
+    log = JointLog(
+        str(by_signal["t"].parent),
+        t[:, 0],
+        arrays["q"],
+        arrays.get("dq"),
+        arrays["tau"],
+        list(by_signal.values()),
+    )
+    return _checked(log, joints, {s: p.name for s, p in by_signal.items()})
+
+
+def _named(stem: str, tokens: set[str], names: Sequence[str]) -> bool:
+    return any(n in tokens or (len(n) > 3 and n in stem) for n in names)
+
+
+def _text(path: Path, n: int, samples: int | None = None) -> np.ndarray:
+    try:
+        values = np.loadtxt(path, dtype=float, ndmin=2)
+    except (OSError, ValueError) as err:
+        raise LogError(f"{path}: not a text file of numbers ({str(err)[:160]})") from err
+    if values.shape[1] == 1 and n > 1:
+        if values.shape[0] % n:
+            raise LogError(f"{path}: {values.shape[0]} numbers, not a whole number of samples of {n} joints")
+        values = values.reshape(-1, n)
+    if values.shape[1] != n:
+        raise LogError(f"{path}: {values.shape[1]} numbers per line, the robot has {n} joints")
+    if samples is not None and values.shape[0] != samples:
+        raise LogError(f"{path}: {values.shape[0]} samples, the time file has {samples}")
+    return values
+
+
+def _checked(log: JointLog, joints: Sequence[str], names: dict[str, str]) -> JointLog:
+    """The log refused, in one line naming the column, when no fit could use it."""
+    n = len(joints)
+    N = len(log.t)
+    if N < 2:
+        raise LogError(f"{log.source}: {N} samples; a fit needs a trajectory")
+    for signal in ("q", "dq", "tau"):
+        values = getattr(log, signal)
+        if values is None:
+            continue
+        if values.ndim != 2 or values.shape[1] != n:
+            raise LogError(
+                f"{log.source}: {names[signal]} has {values.shape[-1]} joints, the robot has {n}: "
+                f"{list(joints)}"
+            )
+        if len(values) != N:
+            raise LogError(
+                f"{log.source}: {names[signal]} has {len(values)} samples, the time column has {N}"
+            )
+    for signal in ("t", "q", "dq", "tau"):
+        values = getattr(log, signal)
+        if values is None:
+            continue
+        bad = np.argwhere(~np.isfinite(values))
+        if bad.size:
+            row = int(bad[0][0])
+            column = (
+                names[signal] if values.ndim == 1 else f"{names[signal]} (joint {joints[int(bad[0][1])]})"
+            )
+            value = values[tuple(bad[0])]
+            raise LogError(
+                f"{log.source}: {column} is {value} at sample {row}; every value must be a finite number"
+            )
+    steps = np.diff(log.t)
+    if np.any(steps < 0):
+        k = int(np.argmax(steps < 0))
+        raise LogError(
+            f"{log.source}: {names['t']} goes back at sample {k + 1} ({log.t[k]:.9g} s then "
+            f"{log.t[k + 1]:.9g} s); sort the log by time"
+        )
+    if np.any(steps == 0):
+        k = int(np.argmax(steps == 0))
+        raise LogError(
+            f"{log.source}: {names['t']} repeats {log.t[k]:.9g} s at samples {k} and {k + 1}; each sample "
+            "needs its own time"
+        )
+    return log
+
+
+def _listed(columns: dict) -> str:
+    names = list(columns)
+    return ", ".join(names[:12]) + (f", ... ({len(names)} in all)" if len(names) > 12 else "")

@@ -1,0 +1,163 @@
+"""From a log as recorded to the states a fit reads: stale samples dropped, one uniform time grid,
+a zero-phase low-pass filter, velocities and accelerations (docs/identification.md, "Signals").
+
+What each step does, and why:
+
+- **Stale samples** (a row whose positions repeat the previous row's exactly while the time
+  advanced: the controller's loop read an old packet) are dropped; the grid below fills them in.
+  A robot at rest also repeats its positions: dropping those rows loses nothing, for the
+  interpolation puts them back.
+- **Resampling**: the stamps of a real log jitter (the Panda's: 0.7 to 8.8 ms around 1 ms);
+  every signal is interpolated linearly onto the grid of the log's median step.
+- **Filtering**: q and q' pass a Butterworth low-pass forwards and backwards
+  (``scipy.signal.sosfiltfilt``: zero phase, the magnitude squared), so noise above the cut-off
+  does not reach q''. The torque is left as logged unless asked (:class:`FilterChoice`): its
+  noise then stays white, which the fit's covariance assumes and the report's whiteness test checks.
+- **Differentiation**: q' is the log's own (filtered), or the central difference of the
+  filtered q when the log has none; q'' is the central difference of the filtered q'. Both are
+  biased by a known factor at frequency f (:func:`amplitude_gain`), under 0.5 % up to half the
+  cut-off at the default order (a test measures it on a known signal).
+- The samples within :data:`EDGE_PERIODS` cut-off periods of either end are dropped: the filter's
+  start-up transient.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.signal
+
+from ...core.exceptions import LogError
+from .logs import JointLog
+
+EDGE_PERIODS = 3.0
+"""Cut-off periods dropped at each end of the log (the zero-phase filter's transients)."""
+
+
+@dataclass(frozen=True)
+class FilterChoice:
+    """The low-pass every signal passes (a stated choice; docs/identification.md).
+
+    Attributes:
+        cutoff: the -3 dB frequency of one pass [Hz] (the zero-phase pair is -6 dB there).
+        order: the Butterworth order of one pass.
+        delay: the torque's measurement delay [s]: tau(t + delay) is paired with q(t).
+        torque: whether the torque passes the filter too (default no: its noise is then white and
+            independent of the states, so least squares is unbiased, its covariance holds, and a
+            Coulomb switch in the torque stays as sharp as the regressor's sgn(q')).
+
+    """
+
+    cutoff: float = 10.0
+    order: int = 4
+    delay: float = 0.0
+    torque: bool = False
+
+
+@dataclass
+class States:
+    """The states a fit reads, on a uniform grid.
+
+    Attributes:
+        t: times [s], N.
+        q, dq, ddq: positions, velocities, accelerations, N x n.
+        tau: torques, N x n.
+        dt: the grid's step [s].
+        notes: what was done to the log, for the report (stale rows, jitter, quantisation).
+
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    dq: np.ndarray
+    ddq: np.ndarray
+    tau: np.ndarray
+    dt: float
+    notes: dict
+
+
+def amplitude_gain(frequency: float, choice: FilterChoice, dt: float, derivatives: int) -> float:
+    """The factor by which the zero-phase filter and ``derivatives`` central differences scale a
+    sinusoid of ``frequency`` [Hz]: |H(f)|^2 (sin(w dt) / (w dt))^derivatives.
+    """
+    sos = scipy.signal.butter(choice.order, choice.cutoff, fs=1.0 / dt, output="sos")
+    _, h = scipy.signal.sosfreqz(sos, worN=[frequency], fs=1.0 / dt)
+    w = 2 * np.pi * frequency * dt
+    return float(np.abs(h[0]) ** 2 * (np.sinc(w / np.pi) ** derivatives))
+
+
+def quantum(values: np.ndarray) -> float:
+    """The smallest step between two different values of a signal (its quantisation, or 0 when
+    a signal has no repeated level).
+    """
+    steps = np.abs(np.diff(np.sort(np.ravel(values))))
+    steps = steps[steps > 0]
+    return float(steps.min()) if steps.size else 0.0
+
+
+def prepare(log: JointLog, choice: FilterChoice = FilterChoice()) -> States:
+    """The log on a uniform grid, filtered and differentiated (the module's steps, in order)."""
+    steps = np.diff(log.t)
+    stale = np.concatenate([[False], np.all(np.diff(log.q, axis=0) == 0, axis=1)])
+    moving = stale & (np.abs(log.dq).max(axis=1) > 0 if log.dq is not None else stale)
+    keep = ~stale
+    t, q, tau = log.t[keep], log.q[keep], log.tau[keep]
+    dq = None if log.dq is None else log.dq[keep]
+    dt = float(np.median(steps))  # the log's own rate (the stale rows dropped leave wider steps)
+    duration = float(t[-1] - t[0]) if len(t) > 1 else 0.0
+    nyquist = 0.5 / dt if dt > 0 else 0.0
+    if not 0 < choice.cutoff < 0.8 * nyquist:
+        raise LogError(
+            f"{log.source}: the filter's cut-off {choice.cutoff:g} Hz must be positive and below 80 % of the "
+            f"log's Nyquist frequency {nyquist:.4g} Hz (its median step is {dt * 1e3:.4g} ms)"
+        )
+    edge = EDGE_PERIODS / choice.cutoff
+    if duration <= 2 * edge + 10 * dt:
+        raise LogError(
+            f"{log.source}: {duration:.3g} s of log; a fit at a {choice.cutoff:g} Hz cut-off needs more than "
+            f"{2 * edge:.3g} s (its filter's transients are dropped at both ends)"
+        )
+    grid = np.arange(t[0], t[-1], dt)
+
+    def resampled(values: np.ndarray, shift: float = 0.0) -> np.ndarray:
+        return np.column_stack([np.interp(grid + shift, t, values[:, i]) for i in range(values.shape[1])])
+
+    sos = scipy.signal.butter(choice.order, choice.cutoff, fs=1.0 / dt, output="sos")
+
+    def filtered(values: np.ndarray) -> np.ndarray:
+        return scipy.signal.sosfiltfilt(sos, values, axis=0)
+
+    qf = filtered(resampled(q))
+    dqf = filtered(resampled(dq)) if dq is not None else np.gradient(qf, dt, axis=0)
+    ddqf = np.gradient(dqf, dt, axis=0)
+    tauf = resampled(tau, choice.delay - log.torque_lag)
+    if choice.torque:
+        tauf = filtered(tauf)
+    cut = int(np.ceil(edge / dt))
+    inside = slice(cut, len(grid) - cut)
+    notes = {
+        "samples": int(len(log.t)),
+        "stale_samples": int(stale.sum()),
+        "stale_while_moving": int(moving.sum()),
+        "median_step_ms": dt * 1e3,
+        "step_range_ms": [float(steps.min() * 1e3), float(steps.max() * 1e3)],
+        "step_jitter_ms": float(np.std(np.diff(t)) * 1e3),
+        "grid_samples": int(len(grid) - 2 * cut),
+        "edge_dropped_s": cut * dt,
+        "quantum": {
+            "q": quantum(log.q),
+            "dq": quantum(log.dq) if log.dq is not None else None,
+            "tau": quantum(log.tau),
+        },
+        "velocity": "logged, filtered" if dq is not None else "central difference of the filtered q",
+        "filter": {
+            "kind": "butterworth, zero phase (sosfiltfilt)",
+            "cutoff_hz": choice.cutoff,
+            "order": choice.order,
+            "torque_filtered": choice.torque,
+        },
+        "torque_lag_s": log.torque_lag,
+        "delay_s": choice.delay,
+    }
+    return States(grid[inside], qf[inside], dqf[inside], ddqf[inside], tauf[inside], dt, notes)

@@ -1,0 +1,128 @@
+"""The numbers docs/identification.md quotes: the Panda tables, regenerated from
+docs/data/identify_panda.json (benchmarks/identify_panda.py, which needs the log no one here
+ships), and the log's and the fit's figures beside them."""
+
+from __future__ import annotations
+
+import json
+import re
+
+import pytest
+
+from nnrobust.model.loading import load_robot
+from tests.docs_numbers.common import ROOT, quoted_figures_test
+
+PAGE = ROOT / "docs" / "identification.md"
+DATA = ROOT / "docs" / "data" / "identify_panda.json"
+ROWS = (
+    "published (Gaz et al. 2019)",
+    "URDF (example-robot-data, no friction)",
+    "nnrobust least squares",
+    "nnrobust physical",
+)
+
+
+def table(treatment: dict) -> str:
+    """The page's table of one torque treatment, from the benchmark's JSON."""
+    lines = ["| model | " + " | ".join(f"joint {j}" for j in range(1, 8)) + " |", "|---" * 8 + "|"]
+    lines.append("| torque RMS [N m] | " + " | ".join(f"{x:.3f}" for x in treatment["torque_rms"]) + " |")
+    for row in ROWS:
+        lines.append(
+            f"| {row} | " + " | ".join(f"{100 * x:.1f} %" for x in treatment["residual_share"][row]) + " |"
+        )
+    return "\n".join(lines)
+
+
+@pytest.mark.parametrize("treatment", ["filtered", "as logged"])
+def test_the_panda_tables_are_the_benchmarks(treatment):
+    data = json.loads(DATA.read_text())["treatments"][treatment]
+    text = PAGE.read_text()
+    found = re.search(rf"<!-- identify_panda {treatment} -->\n(.*?)\n<!-- end -->", text, re.S)
+    assert found and found.group(1) == table(data), "python -m tests.docs_numbers.test_identification"
+
+
+def test_the_physical_model_is_at_or_below_the_published_one_on_every_joint():
+    """The page's claim, on both treatments, and the physical checks it quotes."""
+    for data in json.loads(DATA.read_text())["treatments"].values():
+        ours, theirs = data["residual_rms"]["nnrobust physical"], data["residual_rms"][ROWS[0]]
+        assert all(a <= b for a, b in zip(ours, theirs))
+        assert data["physical"] and data["mass_matrix_least_eigenvalue"] > 0 and data["base_parameters"] == 43
+
+
+def test_the_urdfs_link_7_is_the_one_the_page_names():
+    mass = load_robot("panda", task="position").model.inertias[7].mass
+    assert round(mass, 2) == 1.50 == round(json.loads(DATA.read_text())["link7_mass"]["urdf"], 2)
+
+
+def _filtered(*path):
+    """The value at ``path`` in the filtered treatment's entry."""
+
+    def value(data):
+        out = data["treatments"]["filtered"]
+        for key in path:
+            out = out[key]
+        return float(out)
+
+    return value
+
+
+PAGE_NAME = "docs/identification.md"
+QUOTES: list[tuple] = [
+    (
+        PAGE_NAME,
+        r"The Panda log has ([\d ]+) of its",
+        "identify_panda",
+        _filtered("log", "stale_samples"),
+        1.0,
+    ),
+    (
+        PAGE_NAME,
+        r"The Panda log has [\d ]+ of its\s+([\d ]+)\.",
+        "identify_panda",
+        _filtered("log", "samples"),
+        1.0,
+    ),
+    (
+        PAGE_NAME,
+        r"stamps range from ([\d.]+) to",
+        "identify_panda",
+        _filtered("log", "step_range_ms", 0),
+        1.0,
+    ),
+    (
+        PAGE_NAME,
+        r"stamps range from [\d.]+ to ([\d.]+) ms",
+        "identify_panda",
+        _filtered("log", "step_range_ms", 1),
+        1.0,
+    ),
+    (PAGE_NAME, r"base regressor is (\d+)\.", "identify_panda", _filtered("condition_number"), 1.0),
+    (
+        PAGE_NAME,
+        r"against the published ([\d.]+) kg",
+        "identify_panda",
+        lambda d: d["link7_mass"]["published"],
+        1.0,
+    ),
+    (
+        PAGE_NAME,
+        r"Joint 7's residual \((\d+) % filtered\)",
+        "identify_panda",
+        _filtered("residual_share", "nnrobust physical", 6),
+        100.0,
+    ),
+]
+
+test_every_quoted_figure_matches_its_data = quoted_figures_test(QUOTES)
+
+
+if __name__ == "__main__":
+    text = PAGE.read_text()
+    for name, data in json.loads(DATA.read_text())["treatments"].items():
+        text = re.sub(
+            rf"(<!-- identify_panda {name} -->\n).*?(\n<!-- end -->)",
+            lambda m: m.group(1) + table(data) + m.group(2),
+            text,
+            flags=re.S,
+        )
+    PAGE.write_text(text)

@@ -1,0 +1,70 @@
+"""The log's preparation on signals whose derivatives are known: the filter's bias is the one
+stated (amplitude_gain), stale samples and jittered stamps leave the states right."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from nnrobust.studies.identify.logs import JointLog
+from nnrobust.studies.identify.signals import FilterChoice, amplitude_gain, prepare, quantum
+
+
+def _sine_log(frequency, t, stale=()):
+    w = 2 * np.pi * frequency
+    q = np.sin(w * t)[:, None]
+    dq = w * np.cos(w * t)[:, None]
+    tau = np.cos(w * t)[:, None]
+    q, dq, tau = q.copy(), dq.copy(), tau.copy()
+    for k in sorted(stale):  # in order: a run of stale samples repeats the last fresh one
+        q[k], dq[k], tau[k] = q[k - 1], dq[k - 1], tau[k - 1]
+    return JointLog("sine", t, q, dq, tau)
+
+
+@pytest.mark.parametrize("frequency", [0.5, 2.5, 5.0, 10.0])
+def test_the_acceleration_bias_is_the_stated_gain(frequency):
+    """q'' of a sinusoid comes out scaled by |H(f)|^2 sinc(w dt) (the filter and one central
+    difference of the filtered q'), to 1e-3 of its amplitude: the stated bias is the bias."""
+    choice = FilterChoice(cutoff=10.0)
+    t = np.arange(20000) / 1000.0
+    states = prepare(_sine_log(frequency, t), choice)
+    w = 2 * np.pi * frequency
+    truth = -(w**2) * np.sin(w * states.t)
+    gain = amplitude_gain(frequency, choice, states.dt, 1)
+    assert np.max(np.abs(states.ddq[:, 0] - gain * truth)) < 1e-3 * w**2
+    if frequency <= choice.cutoff / 2:
+        assert abs(gain - 1) < 0.005  # the docstring's claim
+    else:
+        assert abs(gain - 1) > 0.005  # where it stops holding: at and near the cut-off
+
+
+def test_stale_samples_and_jittered_stamps_leave_the_states_right():
+    rng = np.random.default_rng(0)
+    t = np.arange(10000) / 1000.0 + rng.normal(0, 2e-4, 10000)
+    t = np.sort(t)
+    stale = rng.choice(np.arange(1, 10000), 400, replace=False)
+    states = prepare(_sine_log(1.0, t, stale), FilterChoice(cutoff=10.0))
+    w = 2 * np.pi
+    assert states.notes["stale_samples"] == len(set(stale)) and states.notes["stale_while_moving"] > 0
+    assert np.max(np.abs(states.q[:, 0] - np.sin(w * states.t))) < 1e-4
+    assert np.max(np.abs(states.ddq[:, 0] + w**2 * np.sin(w * states.t))) < 2e-2 * w**2
+    # the torque is left as logged (interpolated only), so its noise stays white
+    assert np.max(np.abs(states.tau[:, 0] - np.cos(w * states.t))) < 1e-4
+    assert abs(states.dt - 1e-3) < 1e-5
+
+
+def test_a_delay_and_a_run_folders_half_period_shift_the_torque():
+    t = np.arange(10000) / 1000.0
+    log = _sine_log(1.0, t)
+    log.tau = np.cos(2 * np.pi * (t - 0.004))[:, None]  # logged 4 ms late
+    states = prepare(log, FilterChoice(cutoff=10.0, delay=0.004))
+    assert np.max(np.abs(states.tau[:, 0] - np.cos(2 * np.pi * states.t))) < 1e-4
+    log.torque_lag = 0.004  # a torque that holds 4 ms after its stamp, and no delay
+    log.tau = np.cos(2 * np.pi * (t + 0.004))[:, None]
+    states = prepare(log, FilterChoice(cutoff=10.0))
+    assert np.max(np.abs(states.tau[:, 0] - np.cos(2 * np.pi * states.t))) < 1e-4
+
+
+def test_quantum_is_the_smallest_step_between_levels():
+    assert quantum(np.round(np.linspace(0, 1, 1000) / 0.01) * 0.01) == pytest.approx(0.01)
+    assert quantum(np.zeros(5)) == 0.0
