@@ -58,7 +58,12 @@ def test_a_law_that_ends_its_worker_is_a_row_never_a_hole(cls, status, message, 
     assert "2 rows ended without a result" in capsys.readouterr().err + err
 
 
-def test_tune_and_falsify_name_a_crash_and_go_on(tmp_path, capsys):
+def test_tune_and_falsify_name_a_crash_and_go_on(tmp_path, capsys, monkeypatch):
+    from nnrobust.studies.base import cluster
+
+    # both workers dead at once and their nannies given up: replaced after 5 s, not 20 (the suite's
+    # time; test_a_local_cluster_whose_nannies_gave_up_gets_new_workers covers the revival itself)
+    monkeypatch.setattr(cluster, "REVIVE_SECONDS", 5.0)
     box = tmp_path / "box.toml"
     box.write_text(SWEEP.format(laws=LAWS, cls="EndsItsProcess").replace('"no-u0", ', "").replace("3", "1"))
     law = f"{LAWS}:EndsItsProcess"
