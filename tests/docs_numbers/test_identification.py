@@ -54,7 +54,9 @@ def test_the_physical_model_is_at_or_below_the_published_one_on_every_joint():
 def test_the_verdict_holds_at_the_other_cut_offs():
     cutoffs = json.loads(DATA.read_text())["cutoffs"]
     assert sorted(cutoffs) == ["20 Hz, as logged", "20 Hz, filtered", "5 Hz, as logged", "5 Hz, filtered"]
-    assert all(entry["below_published"] == list(range(1, 8)) and entry["physical"] for entry in cutoffs.values())
+    assert all(
+        entry["below_published"] == list(range(1, 8)) and entry["physical"] for entry in cutoffs.values()
+    )
 
 
 def test_the_urdfs_link_7_is_the_one_the_page_names():
