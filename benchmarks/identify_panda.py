@@ -179,6 +179,8 @@ def main() -> None:
             "physical": summary["checks"]["physical"],
             "mass_matrix_least_eigenvalue": summary["checks"]["mass_matrix_least_eigenvalue"],
             "noise_sigma": summary["noise_sigma"],
+            "white": summary["confidence"]["white"],
+            "long_run_ratio": summary["confidence"]["long_run_ratio"],
             "log": {
                 k: summary["log"][k] for k in ("samples", "stale_samples", "median_step_ms", "step_range_ms")
             },

@@ -68,6 +68,13 @@ def identify_arguments(parser: argparse.ArgumentParser) -> None:
         help="the share of the log, from its start, that fits; the rest is held out (default 0.7)",
     )
     parser.add_argument(
+        "--confidence",
+        type=float,
+        default=0.95,
+        metavar="LEVEL",
+        help="the level 1 - alpha of the parameters' confidence region and intervals (default 0.95)",
+    )
+    parser.add_argument(
         "--allow-unexcited",
         action="store_true",
         help="fit although the log leaves base parameters unexcited (the URDF's values stand for them)",
@@ -102,6 +109,7 @@ def cmd_identify(args) -> int:
         stick_band=args.stick_band,
         fit_share=args.fit_share,
         allow_unexcited=args.allow_unexcited,
+        confidence=args.confidence,
     )
     locked = None if args.locked_joints is None else [j for j in args.locked_joints.split(",") if j]
     say = (lambda text: None) if args.quiet else (lambda text: print(text, file=sys.stderr))
@@ -122,6 +130,8 @@ def cmd_identify(args) -> int:
                     for k in ("urdf", "least_squares", "physical")
                 )
             )
+        region = summary["confidence"]
+        print(f"parameters' {100 * region['level']:g} % confidence region: {region['method']}")
         checks = summary["checks"]
         print(
             f"physical: {'yes' if checks['physical'] else 'NO'} (least M(q) eigenvalue "

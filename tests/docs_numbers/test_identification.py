@@ -8,6 +8,7 @@ import json
 import re
 
 import pytest
+import scipy.stats
 
 from nnrobust.model.loading import load_robot
 from tests.docs_numbers.common import ROOT, quoted_figures_test
@@ -34,6 +35,32 @@ def table(treatment: dict) -> str:
     return "\n".join(lines)
 
 
+CALIBRATION = ROOT / "docs" / "data" / "identify_calibration.json"
+
+
+def calibration_table(data: dict) -> str:
+    """The page's calibration table, from benchmarks/identify_calibration.py's JSON."""
+    median = sorted(r["distance2"] for r in data["rows"])[len(data["rows"]) // 2] / data["parameters"]
+    return "\n".join(
+        [
+            "| logs | parameters | truth in the 95 % region | median distance² / p | physical | "
+            "worst held-out RMS / noise floor |",
+            "|---|---|---|---|---|---|",
+            f"| {data['logs']} | {data['parameters']} | {100 * data['coverage']:.0f} % | {median:.2f} | "
+            f"{100 * data['physical_share']:.0f} % | {data['worst_held_out_over_floor']:.2f} |",
+        ]
+    )
+
+
+def test_the_calibration_table_is_the_benchmarks():
+    data = json.loads(CALIBRATION.read_text())
+    found = re.search(r"<!-- identify_calibration -->\n(.*?)\n<!-- end -->", PAGE.read_text(), re.S)
+    assert found and found.group(1) == calibration_table(data), (
+        "python -m tests.docs_numbers.test_identification"
+    )
+    assert data["logs"] == 100 and data["physical_share"] == 1.0 and data["worst_held_out_over_floor"] <= 1.2
+
+
 @pytest.mark.parametrize("treatment", ["filtered", "as logged"])
 def test_the_panda_tables_are_the_benchmarks(treatment):
     data = json.loads(DATA.read_text())["treatments"][treatment]
@@ -49,6 +76,7 @@ def test_the_physical_model_is_at_or_below_the_published_one_on_every_joint():
         for theirs in (data["residual_rms"][ROWS[0]], data["residual_rms"][ROWS[1]]):
             assert all(a <= b for a, b in zip(ours, theirs))
         assert data["physical"] and data["mass_matrix_least_eigenvalue"] > 0 and data["base_parameters"] == 43
+        assert not any(data["white"])  # "every joint's residual fails the whiteness test"
 
 
 def test_the_verdict_holds_at_the_other_cut_offs():
@@ -76,8 +104,34 @@ def _filtered(*path):
     return value
 
 
+def _chi2_median_over_p(data):
+    return float(scipy.stats.chi2.median(data["parameters"]) / data["parameters"])
+
+
 PAGE_NAME = "docs/identification.md"
 QUOTES: list[tuple] = [
+    (
+        PAGE_NAME,
+        r"rⱼ is between ([\d.]+) and",
+        "identify_panda",
+        lambda d: min(d["treatments"]["as logged"]["long_run_ratio"]),
+        1.0,
+    ),
+    (
+        PAGE_NAME,
+        r"rⱼ is between [\d.]+ and ([\d.]+)",
+        "identify_panda",
+        lambda d: max(d["treatments"]["as logged"]["long_run_ratio"]),
+        1.0,
+    ),
+    (
+        PAGE_NAME,
+        r"median over p is about ([\d.]+) at p",
+        "identify_calibration",
+        _chi2_median_over_p,
+        1.0,
+    ),
+    (PAGE_NAME, r"at p = (\d+)\)", "identify_calibration", lambda d: float(d["parameters"]), 1.0),
     (
         PAGE_NAME,
         r"The Panda log has ([\d ]+) of its",
@@ -135,4 +189,7 @@ if __name__ == "__main__":
             text,
             flags=re.S,
         )
+    pattern = r"(<!-- identify_calibration -->\n).*?(\n?<!-- end -->)"
+    table = calibration_table(json.loads(CALIBRATION.read_text()))
+    text = re.sub(pattern, lambda m: m.group(1) + table + "\n<!-- end -->", text, flags=re.S)
     PAGE.write_text(text)

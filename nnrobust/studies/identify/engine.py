@@ -7,7 +7,8 @@ weighted least squares and then physically (:mod:`.fit`), and audited. The folde
 - ``nominal.json``: the physically consistent model (:mod:`nnrobust.model.identified`), usable as
   ``[nominal] kind = "identified"``, ``file = ".../nominal.json"`` in any experiment.
 - ``identification.json``: everything the fit found: the signals' notes, the base parameters with
-  the least-squares estimate, its standard errors and the physical estimate, each joint's
+  the least-squares estimate, its standard errors, its confidence interval and region (its
+  covariance, and how it was computed: :mod:`.confidence`) and the physical estimate, each joint's
   residual on the fit and held-out segments (for the URDF, the least-squares and the physical
   model), the physical checks, and the inputs' SHA-256.
 - ``parameters.csv``: the base parameters' table.
@@ -45,6 +46,7 @@ from ...model.regressor import (
     with_inertial_vector,
 )
 from ..base.folder import file_sha256
+from .confidence import confidence_region
 from .fit import (
     base_columns,
     base_projector,
@@ -54,7 +56,8 @@ from .fit import (
     physically_consistent,
     weighted_least_squares,
 )
-from .logs import read_log
+from .fit import residuals as fit_residuals
+from .logs import JointLog, read_log
 from .signals import FilterChoice, prepare
 
 MARKER = ".nnrobust-identification"
@@ -76,6 +79,7 @@ class IdentifyOptions:
         fit_share: the share of the log, from its start, that fits; the rest is held out.
         allow_unexcited: fit even if the log leaves base parameters unexcited (the URDF's values
             then stand for them in the physical model; the least-squares estimate is minimum-norm).
+        confidence: 1 - alpha, the level of the parameters' confidence region (:mod:`.confidence`).
 
     """
 
@@ -85,10 +89,11 @@ class IdentifyOptions:
     stick_band: float = 0.01
     fit_share: float = 0.7
     allow_unexcited: bool = False
+    confidence: float = 0.95
 
 
 def identify(
-    logs: Sequence[str | Path],
+    logs: Sequence[str | Path] | JointLog,
     robot: str,
     out: str | Path | None = None,
     options: IdentifyOptions = IdentifyOptions(),
@@ -97,30 +102,25 @@ def identify(
     overwrite: bool = False,
     say=lambda text: None,
 ) -> dict:
-    """Identify ``robot`` (a URDF or a robot's name) from ``logs``; write the folder ``out`` (if
-    given) and return what ``identification.json`` holds.
+    """Identify ``robot`` (a URDF or a robot's name) from ``logs`` (files, or a log already read);
+    write the folder ``out`` (if given) and return what ``identification.json`` holds.
     """
+    if not 0.5 <= options.confidence < 1:
+        raise NNRobustError(f"--confidence must be in [0.5, 1), got {options.confidence}")
     if not 0 < options.fit_share < 1:
         raise NNRobustError(f"--fit-share must be in (0, 1), got {options.fit_share}")
     if out is not None:
         out = Path(out)
-        check_place(out)
-        if out.exists() and not (out / MARKER).is_file() and (not out.is_dir() or any(out.iterdir())):
-            raise NNRobustError(
-                f"{out} exists and is not an identification folder (no {MARKER}); choose another --out"
-            )
-        if out.exists() and (out / MARKER).is_file() and not overwrite:
-            raise RunFolderExists(f"{out} holds an identification already; pass --overwrite to replace it")
+        _check_out(out, overwrite)
     started = time.perf_counter()
     arm = load_robot(robot, task="position", locked_joints=locked_joints, chain=chain)
     model = arm.model
     joints = tuple(model.names[1:])
-    log = read_log(logs, joints)
+    log = logs if isinstance(logs, JointLog) else read_log(logs, joints)
     say(f"read {log.samples} samples of {len(joints)} joints from {log.source}")
     states = prepare(log, options.filter)
     layout = ParameterLayout(joints, tuple(options.friction), options.armature)
-    inertial_names = layout.names[: 10 * layout.n]
-    base = base_parameters(model, inertial_names)
+    base = base_parameters(model, layout.names[: 10 * layout.n])
     columns = base_columns(layout, base)
     names = list(base.names) + layout.names[10 * layout.n :]
     split = int(options.fit_share * len(states.t))
@@ -133,27 +133,20 @@ def identify(
         f"{excitation.condition:.4g}"
     )
     if excitation.unexcited and not options.allow_unexcited:
-        named = ", ".join(excitation.unexcited[:6]) + (" ..." if len(excitation.unexcited) > 6 else "")
-        raise LogError(
-            f"{log.source}: the fit segment does not excite {len(excitation.unexcited)} of the base "
-            f"parameters: {named}; "
-            "log a trajectory that moves every joint both ways at several speeds, or pass "
-            "--allow-unexcited to keep the URDF's values for them"
-        )
+        _refuse_unexcited(log.source, excitation.unexcited)
     least = weighted_least_squares(fit_rows, columns, minimum_norm=bool(excitation.unexcited))
     prior = np.concatenate([inertial_vector(model), np.zeros(layout.size - 10 * layout.n)])
     phi = physically_consistent(fit_rows, layout, least.sigma, prior)
     phi_least = np.zeros(layout.size)
     phi_least[columns] = least.beta
+    fit_residual = fit_residuals(model, layout, states, options.stick_band, slice(0, split), phi_least)
+    region = confidence_region(
+        fit_rows, columns, least.beta, least.sigma, fit_residual, states.dt, options.confidence
+    )
+    low, high = region.intervals()
     identified_model = with_inertial_vector(model, phi)
     armature = phi[layout.armature_slice] if layout.armature else np.zeros(layout.n)
-    least_eigenvalue, _ = mass_matrix_audit(identified_model, armature)
-    checks = {
-        "pseudo_inertia_least_eigenvalues": least_pseudo_inertia_eigenvalues(phi, layout.n).tolist(),
-        "body_problems": body_problems(identified_model),
-        "mass_matrix_least_eigenvalue": least_eigenvalue,
-        "physical": not body_problems(identified_model) and least_eigenvalue > 0,
-    }
+    checks = _physical_checks(identified_model, phi, layout.n, armature)
 
     def residuals(p: np.ndarray) -> dict:
         return {
@@ -163,7 +156,7 @@ def identify(
         }
 
     beta_physical = (base_projector(layout, base) @ phi).tolist()
-    standard_errors = np.sqrt(np.maximum(np.diag(least.covariance), 0)).tolist()
+    standard_errors = np.sqrt(np.maximum(np.diag(region.covariance), 0)).tolist()
     friction = {term: phi[layout.friction_slice(term)].tolist() for term in layout.friction}
     files = {str(p): file_sha256(p) for p in log.files}
     summary = {
@@ -177,6 +170,7 @@ def identify(
             "stick_band": options.stick_band,
             "fit_share": options.fit_share,
             "allow_unexcited": options.allow_unexcited,
+            "confidence": options.confidence,
             **{f"filter_{k}": v for k, v in asdict(options.filter).items()},
         },
         "segments": {
@@ -194,9 +188,26 @@ def identify(
         "noise_sigma": least.sigma.tolist(),
         "torque_rms": {"fit": fit_rows.torque_rms().tolist(), "held_out": held_rows.torque_rms().tolist()},
         "parameters": [
-            {"name": name, "least_squares": float(b), "standard_error": float(s), "physical": float(p)}
-            for name, b, s, p in zip(names, least.beta, standard_errors, beta_physical)
+            {
+                "name": name,
+                "least_squares": float(b),
+                "standard_error": float(s),
+                "low": float(lo),
+                "high": float(hi),
+                "physical": float(p),
+            }
+            for name, b, s, lo, hi, p in zip(names, least.beta, standard_errors, low, high, beta_physical)
         ],
+        "confidence": {
+            "level": region.level,
+            "method": region.method,
+            "region": "ellipsoid (beta - least_squares)^T C^-1 (beta - least_squares) <= radius2",
+            "radius2": region.radius2,
+            "white": region.white,
+            "whiteness_p": region.whiteness_p,
+            "long_run_ratio": region.long_run,
+            "covariance": region.covariance.tolist(),
+        },
         "friction": friction,
         "armature": armature.tolist(),
         "residuals": {
@@ -233,6 +244,40 @@ def identify(
     return summary
 
 
+def _check_out(out: Path, overwrite: bool) -> None:
+    """``--out`` checked before anything is read: a new folder, or one identify wrote."""
+    check_place(out)
+    if out.exists() and not (out / MARKER).is_file() and (not out.is_dir() or any(out.iterdir())):
+        raise NNRobustError(
+            f"{out} exists and is not an identification folder (no {MARKER}); choose another --out"
+        )
+    if out.exists() and (out / MARKER).is_file() and not overwrite:
+        raise RunFolderExists(f"{out} holds an identification already; pass --overwrite to replace it")
+
+
+def _refuse_unexcited(source: str, unexcited: list[str]) -> None:
+    named = ", ".join(unexcited[:6]) + (" ..." if len(unexcited) > 6 else "")
+    raise LogError(
+        f"{source}: the fit segment does not excite {len(unexcited)} of the base parameters: {named}; "
+        "log a trajectory that moves every joint both ways at several speeds, or pass "
+        "--allow-unexcited to keep the URDF's values for them"
+    )
+
+
+def _physical_checks(model, phi: np.ndarray, n: int, armature: np.ndarray) -> dict:
+    """The identified model's audit: each body's least pseudo-inertia eigenvalue, what is not
+    physical, and the least eigenvalue of M(q) over random poses.
+    """
+    least_eigenvalue, _ = mass_matrix_audit(model, armature)
+    problems = body_problems(model)
+    return {
+        "pseudo_inertia_least_eigenvalues": least_pseudo_inertia_eigenvalues(phi, n).tolist(),
+        "body_problems": problems,
+        "mass_matrix_least_eigenvalue": least_eigenvalue,
+        "physical": not problems and least_eigenvalue > 0,
+    }
+
+
 def _write_folder(out: Path, nominal: dict, summary: dict, overwrite: bool) -> None:
     """The folder written whole beside ``out``, then renamed into place."""
     out = out.absolute()
@@ -244,11 +289,10 @@ def _write_folder(out: Path, nominal: dict, summary: dict, overwrite: bool) -> N
         write_new(tmp / "identification.json", json.dumps(summary, indent=1) + "\n")
         table = io.StringIO()
         writer = csv.writer(table)
-        writer.writerow(["name", "least_squares", "standard_error", "physical"])
+        fields = ["name", "least_squares", "standard_error", "low", "high", "physical"]
+        writer.writerow(fields)
         for row in summary["parameters"]:
-            writer.writerow(
-                [row["name"], repr(row["least_squares"]), repr(row["standard_error"]), repr(row["physical"])]
-            )
+            writer.writerow([row["name"], *(repr(row[f]) for f in fields[1:])])
         write_new(tmp / "parameters.csv", table.getvalue())
         write_new(
             tmp / MARKER, json.dumps({"format": summary["format"], "version": summary["version"]}) + "\n"

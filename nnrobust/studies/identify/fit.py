@@ -91,14 +91,14 @@ class NormalEquations:
         return np.sqrt(self.c / np.maximum(self.rows, 1))
 
 
-def normal_equations(
+def regressor_rows(
     model: pin.Model, layout: ParameterLayout, states: States, band: float, segment: slice = slice(None)
-) -> NormalEquations:
-    """The normal equations of ``states[segment]``, :data:`BATCH` samples at a time; with Coulomb
-    friction in the layout, a joint's samples in stick (|q'| < ``band``) are left out of its rows.
+):
+    """The full regressor of ``states[segment]``, :data:`BATCH` samples at a time: (Y, tau, used)
+    per batch, ``used`` false where a joint sticks (|q'| < ``band``, with Coulomb friction in the
+    layout): there its row is no equation.
     """
     q, dq, ddq, tau = (x[segment] for x in (states.q, states.dq, states.ddq, states.tau))
-    out = NormalEquations.empty(layout.n, layout.size)
     for start in range(0, len(q), BATCH):
         part = slice(start, start + BATCH)
         Y = np.concatenate(
@@ -111,8 +111,27 @@ def normal_equations(
         used = (
             slipping(dq[part], band) if "coulomb" in layout.friction else np.ones(dq[part].shape, dtype=bool)
         )
-        out.add(Y, tau[part], used)
+        yield Y, tau[part], used
+
+
+def normal_equations(
+    model: pin.Model, layout: ParameterLayout, states: States, band: float, segment: slice = slice(None)
+) -> NormalEquations:
+    """The normal equations of ``states[segment]`` (:func:`regressor_rows`)."""
+    out = NormalEquations.empty(layout.n, layout.size)
+    for Y, tau, used in regressor_rows(model, layout, states, band, segment):
+        out.add(Y, tau, used)
     return out
+
+
+def residuals(
+    model: pin.Model, layout: ParameterLayout, states: States, band: float, segment: slice, phi: np.ndarray
+) -> np.ndarray:
+    """The residual tau - Y phi on ``states[segment]``, N x n, NaN where a joint's row is no equation."""
+    parts = []
+    for Y, tau, used in regressor_rows(model, layout, states, band, segment):
+        parts.append(np.where(used, tau - Y @ phi, np.nan))
+    return np.concatenate(parts) if parts else np.zeros((0, layout.n))
 
 
 def base_columns(layout: ParameterLayout, base: BaseParameters) -> np.ndarray:

@@ -60,8 +60,14 @@ def test_identify_writes_a_model_that_runs_as_the_nominal(paper_log, tmp_path, c
     model = read_identified(out / "nominal.json")
     assert np.allclose(model.viscous, friction.viscous, atol=0.01)
     assert np.allclose(model.coulomb, friction.coulomb, atol=0.02)
-    # the parameters' table has a row per base parameter and friction term
-    assert len((out / "parameters.csv").read_text().splitlines()) == 1 + 7 + 6
+    # the parameters' table has a row per base parameter and friction term, with its interval
+    lines = (out / "parameters.csv").read_text().splitlines()
+    assert len(lines) == 1 + 7 + 6 and lines[0] == "name,least_squares,standard_error,low,high,physical"
+    region = summary["confidence"]
+    assert region["level"] == 0.95 and np.array(region["covariance"]).shape == (13, 13)
+    assert not all(region["white"]) and "sandwich" in region["method"]  # resampled stale samples
+    for row in summary["parameters"]:
+        assert row["low"] < row["least_squares"] < row["high"]
     # a second identification into the folder is refused; --overwrite replaces it
     assert main(["identify", str(path), "--robot", "three_link_planar", "--out", str(out), "--quiet"]) == 2
     assert "holds an identification already" in capsys.readouterr().err
