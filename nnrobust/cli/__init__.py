@@ -10,7 +10,8 @@ its group:
 - :mod:`~nnrobust.cli.studies`: ``sweep`` (Monte Carlo over an uncertainty set), ``falsify`` (the
   worst plant of a box), ``tune`` (controllers at one budget), ``study`` (a study file's report);
 - :mod:`~nnrobust.cli.robot`: ``export`` (a law as a C library), ``serve`` (a virtual robot over
-  UDP).
+  UDP);
+- :mod:`~nnrobust.cli.identify`: ``identify`` (a robot's model from its log).
 
 This module stays light (the stop signals are routed before the commands' modules are imported,
 so that a Ctrl-C at any instant of the start is a clean exit 130): :func:`main` imports the table.

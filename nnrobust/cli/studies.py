@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from ..core.exceptions import ConfigError, one_line
+from ..studies.study.stage_table import study_description
 from .common import (
     Command,
     keep_count,
@@ -599,15 +600,7 @@ def study_arguments(parser: argparse.ArgumentParser) -> None:
 STUDY = Command(
     "study",
     help="one study file -> one report: tune, validate, certify, falsify",
-    description="Run a study file's cases and controllers through every stage: tune (each "
-    "optimiser seed), validate every seed's setting on fresh draws and keep the best, certify "
-    "the kept settings on draws the selection never saw (with paired comparisons), falsify "
-    "them, and where the study asks, export and time them out of Python (realtime) and run the "
-    "certification draws on MuJoCo (second_engine); each "
-    "stage is the sweep, tune, falsify or export command's own engine and folder, and stages "
-    "that do not need each other's results (the seeds' tunings; certify, falsify and MuJoCo) "
-    "run side by side. Writes DIR/report.html, report.json, tables/ and figures/. Re-running "
-    "the same command resumes (docs/study.md).",
+    description=study_description(),
     arguments=study_arguments,
     run=cmd_study,
     many_runs=True,

@@ -263,6 +263,18 @@ def _search(scales: dict) -> list:
     ]
 
 
+def _search_keys(values: dict) -> dict:
+    """The keys the NN term's coordinates set: sigma-modification's rate F sigma gives nn.sigma
+    (Z' = F |w| phi - F sigma Z), and the boundary layer is held at its floor (eps0 = eps_min).
+    """
+    out = {}
+    if "leakage_rate" in values:
+        out["nn.sigma"] = values["leakage_rate"] / values["nn.F"]
+    if "nn.eps_min" in values:
+        out["nn.eps0"] = values["nn.eps_min"]
+    return out
+
+
 _LOW, _HIGH = RANGE_LIMITS
 BASIS = "the network's structure, the experiment's (rbf-nn's basis has the same defaults)"
 """Why the tuner holds the basis' keys: the network's structure, not a gain (docs/controller.md)."""
@@ -271,6 +283,7 @@ declare_kind(
     PaperKind(
         "nn", "the NN compensator, eq. (15)", "the experiment's (the paper's p̂, f̂_d)", _build, keys=("nn.",),
         search=_search,
+        search_keys=_search_keys,
         lyapunov=True,
         params=(
             LawParam("nn.law", "corrected", "-", "u_0 = -ρ̂² ω / (ρ̂ ‖ω‖ + ε) (`corrected`) or -ρ̂ ω / (...) "

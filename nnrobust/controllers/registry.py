@@ -148,6 +148,9 @@ class PaperKind:
         ignores: (key, why) of keys that it leaves inert although eq. (9) reads them.
         search: ``search(scales) -> [search_coordinates.Param, ...]``, its robust term's search coordinates
             beside the gains (None: the gains alone).
+        search_keys: ``search_keys(values) -> {key: value}``: the configuration keys its search
+            coordinates that are not keys themselves set (a rate that is a product of two keys,
+            a key held to another), from every coordinate's value (None: its coordinates are keys).
         params: its own keys' declarations (a :class:`LawParam` named by the key,
             ``section.field``): the configuration's defaults, its checks and docs/controller.md's
             key reference read them.
@@ -163,6 +166,7 @@ class PaperKind:
     keys: tuple[str, ...] = ()
     ignores: tuple[tuple[str, str], ...] = ()
     search: Callable[[dict], list] | None = None
+    search_keys: Callable[[dict], dict] | None = None
     params: tuple[LawParam, ...] = ()
 
 

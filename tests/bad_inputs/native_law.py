@@ -91,4 +91,4 @@ NATIVE_LAW_CASES = [
 ]
 """A law in C++ that fails as a Python law may: the same one-line ControllerError, naming the law
 and its file. (One that exits, crashes or never returns ends the process with one line:
-tests/controllers/test_native_law_failures.py.)"""
+tests/plugins/test_native_law_failures.py.)"""

@@ -205,5 +205,5 @@ STUDY_CASES = [
     ),
 ]
 
-BROKEN_LAWS = Path(__file__).parents[1] / "controllers" / "broken_laws.cpp"
+BROKEN_LAWS = Path(__file__).parents[1] / "plugins" / "broken_laws.cpp"
 """Laws in C++ that do what a law must not, one class each (one compile for every case)."""

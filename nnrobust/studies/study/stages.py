@@ -23,6 +23,7 @@ from ...core.exceptions import NNRobustError
 from .evidence import failing_draws, failures, realtime, responses, step_cost, tuning_curves
 from .selection import convergence, half_name, select_kept
 from .spec import StudyCase, StudySpec, kept_name
+from .stage_table import STAGE_ROWS, StageRow
 
 # ---- what the stages share ----------------------------------------------------------------------
 VALIDATION_SEED = 1_000_003
@@ -218,21 +219,36 @@ class CaseRun:
 
 @dataclass(frozen=True)
 class Stage:
-    """One entry of the stage table."""
+    """One entry of the stage table: its row (:class:`.stage_table.StageRow`) and what runs it."""
 
-    name: str
-    """Its key in the report's ``stages`` (how it ended) and in the CLI's replay commands."""
-    budgets: tuple[str, ...]
-    """The study's ``[budgets]`` keys it reads."""
-    folders: tuple[str, ...]
-    """Its folders under ``cases/C/`` (besides ``tune-seedS``, one per optimiser seed)."""
+    row: StageRow
     run: Callable[[CaseRun], Callable[[], Any] | str]
     finish: Callable[[CaseRun, Any], None] = lambda case, result: None
-    side_by_side: bool = False
-    """Runs on the cluster beside the other side-by-side stages (they need none of each other's
-    results); otherwise alone, in the table's order."""
-    reported: bool = True
-    """Whether the report's ``stages`` names it."""
+
+    @property
+    def name(self) -> str:
+        """The row's name."""
+        return self.row.name
+
+    @property
+    def budgets(self) -> tuple[str, ...]:
+        """The row's [budgets] keys."""
+        return self.row.budgets
+
+    @property
+    def folders(self) -> tuple[str, ...]:
+        """The row's folders."""
+        return self.row.folders
+
+    @property
+    def side_by_side(self) -> bool:
+        """Whether it runs beside the other side-by-side stages."""
+        return self.row.side_by_side
+
+    @property
+    def reported(self) -> bool:
+        """Whether the report names it."""
+        return self.row.reported
 
 
 # ---- 1. tune -------------------------------------------------------------------------------------
@@ -549,16 +565,16 @@ def _into(key: str):
     return put
 
 
-TUNE_BUDGETS = ("tune", "seeds", "train_samples", "max_rms_torque", "max_saturated")
-STAGES: tuple[Stage, ...] = (
-    Stage("tune", TUNE_BUDGETS, (), tune, tuned_report),
-    Stage("validate", ("validation", "tolerance"), ("validate",), validate, kept_report),
-    Stage("certify", ("certify", "epsilon", "beta"), ("certify",), certify, certified_report, True),
-    Stage("falsify", ("falsify", "margin"), ("falsify",), falsify, _into("falsify"), True),
-    Stage("realtime", ("realtime",), ("realtime",), realtime_stage, _into("realtime")),
-    Stage("engine", ("second_engine",), ("certify-mujoco",), second_engine, _into("engine"), True),
-    Stage("responses", (), ("responses",), responses_stage, _into("responses"), reported=False),
-)
+_RUNS = {
+    "tune": (tune, tuned_report),
+    "validate": (validate, kept_report),
+    "certify": (certify, certified_report),
+    "falsify": (falsify, _into("falsify")),
+    "realtime": (realtime_stage, _into("realtime")),
+    "engine": (second_engine, _into("engine")),
+    "responses": (responses_stage, _into("responses")),
+}
+STAGES: tuple[Stage, ...] = tuple(Stage(row, *_RUNS[row.name]) for row in STAGE_ROWS)
 """The stages of a case, in the report's order (docs/study.md)."""
 
 STAGE_FOLDERS = tuple(folder for stage in STAGES for folder in stage.folders)

@@ -25,6 +25,7 @@ widened; the others are, when a best setting sits on them.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -46,6 +47,7 @@ class SearchSpace:
     custom: bool = False  # a user's class: every coordinate is a controller.params key
     eq9: bool = True  # its gains are eq. (9)'s Kp, Kv (else the PD's pd_Kp, pd_Kd)
     fixed: tuple[tuple[str, str], ...] = ()  # (key, why) of each key of the law not searched
+    search_keys: Callable[[dict], dict] | None = None  # its robust term's coordinates -> keys
 
     def param(self, name: str) -> Param:
         """The coordinate called ``name``."""
@@ -76,10 +78,8 @@ class SearchSpace:
             out.update({"controller.pd_Kp": [lam * w * w], "controller.pd_Kd": [2 * z * lam * w]})
         else:
             out.update({"controller.Kp": [w * w], "controller.Kv": [2 * z * w]})
-        if "leakage_rate" in values:  # sigma-modification's rate F sigma: Z' = F |w| phi - F sigma Z
-            out["nn.sigma"] = values["leakage_rate"] / values["nn.F"]
-        if "nn.eps_min" in out:  # the boundary layer is held at its floor (eps0 = eps_min)
-            out["nn.eps0"] = out["nn.eps_min"]
+        if self.search_keys is not None:  # as the robust term's kind declares them
+            out.update(self.search_keys(values))
         return out
 
     def at_bound(self, values: dict[str, float]) -> list[dict]:
@@ -204,7 +204,9 @@ def search_space(controller: str, scales: dict[str, float]) -> SearchSpace:
         )
     if kind.search is not None:  # its robust term's coordinates, as its module declares them
         params += kind.search(scales)
-    space = SearchSpace(controller, tuple(params), scales["task_inertia"], eq9=kind.eq9)
+    space = SearchSpace(
+        controller, tuple(params), scales["task_inertia"], eq9=kind.eq9, search_keys=kind.search_keys
+    )
     return replace(space, fixed=_fixed(controller, space))
 
 

@@ -1,6 +1,6 @@
 """A law in C++ that exits, crashes or loops (csrc/user_code.cpp) ends `nnrobust run` with one line
 naming the law and a nonzero exit, and a sweep's rows name it; one that returns keeps the run's
-usual ending. Each law is one class of tests/controllers/broken_laws.cpp, compiled once.
+usual ending. Each law is one class of tests/plugins/broken_laws.cpp, compiled once.
 """
 
 import os
