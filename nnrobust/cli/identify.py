@@ -15,8 +15,8 @@ def identify_arguments(parser: argparse.ArgumentParser) -> None:
         "logs",
         nargs="+",
         metavar="LOG",
-        help="the log: one CSV or Parquet file, one run folder, or text files (one per signal, or "
-        "their folder)",
+        help="the log: one CSV or Parquet file, one run folder, one ROS 2 bag or MCAP file, or text "
+        "files (one per signal, or their folder)",
     )
     parser.add_argument(
         "--robot", required=True, help="the robot: a URDF file or a robot's name (nnrobust robots)"
@@ -35,6 +35,10 @@ def identify_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="TERMS",
         help="each joint's friction terms, comma-separated, of viscous, coulomb, offset "
         "(default: viscous,coulomb)",
+    )
+    parser.add_argument(
+        "--topic",
+        help="a ROS 2 bag's or MCAP file's sensor_msgs/msg/JointState topic (default: its only one)",
     )
     parser.add_argument("--armature", action="store_true", help="identify each joint's rotor inertia too")
     parser.add_argument(
@@ -110,6 +114,7 @@ def cmd_identify(args) -> int:
         fit_share=args.fit_share,
         allow_unexcited=args.allow_unexcited,
         confidence=args.confidence,
+        topic=args.topic,
     )
     locked = None if args.locked_joints is None else [j for j in args.locked_joints.split(",") if j]
     say = (lambda text: None) if args.quiet else (lambda text: print(text, file=sys.stderr))

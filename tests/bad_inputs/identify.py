@@ -163,6 +163,12 @@ IDENTIFY_CASES = [
         "frequency 500 Hz",
     ),
     Case(
+        "identify: an MCAP file that is not one",
+        lambda d: _identify(d, lambda f: _file(f, "log.mcap", "not a recording\n")),
+        ex.LogError,
+        "log.mcap: not a readable MCAP file (",
+    ),
+    Case(
         "nominal: an identified model for another robot",
         _run_identified(lambda data: data.update(joints=["a", "b", "c"])),
         ex.ConfigError,

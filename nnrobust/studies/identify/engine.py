@@ -80,6 +80,7 @@ class IdentifyOptions:
         allow_unexcited: fit even if the log leaves base parameters unexcited (the URDF's values
             then stand for them in the physical model; the least-squares estimate is minimum-norm).
         confidence: 1 - alpha, the level of the parameters' confidence region (:mod:`.confidence`).
+        topic: a ROS 2 bag's or MCAP file's JointState topic (None: its only one).
 
     """
 
@@ -90,6 +91,7 @@ class IdentifyOptions:
     fit_share: float = 0.7
     allow_unexcited: bool = False
     confidence: float = 0.95
+    topic: str | None = None
 
 
 def identify(
@@ -116,7 +118,7 @@ def identify(
     arm = load_robot(robot, task="position", locked_joints=locked_joints, chain=chain)
     model = arm.model
     joints = tuple(model.names[1:])
-    log = logs if isinstance(logs, JointLog) else read_log(logs, joints)
+    log = logs if isinstance(logs, JointLog) else read_log(logs, joints, options.topic)
     say(f"read {log.samples} samples of {len(joints)} joints from {log.source}")
     states = prepare(log, options.filter)
     layout = ParameterLayout(joints, tuple(options.friction), options.armature)
@@ -163,7 +165,7 @@ def identify(
         "format": "nnrobust-identification/1",
         "robot": arm.name,
         "joints": list(joints),
-        "log": {"source": log.source, "files": files, **states.notes},
+        "log": {"source": log.source, "files": files, **log.notes, **states.notes},
         "options": {
             "friction": list(options.friction),
             "armature": options.armature,

@@ -10,6 +10,8 @@ velocities (optional) and torques, one row per sample (docs/identification.md, "
   the file's name says its signal (``time``, ``position``, ``velocity``, ``torque``), a folder of
   such files may be given whole.
 - **A run folder** nnrobust wrote (``result.npz``): every simulated run is a log.
+- **A ROS 2 bag** (a folder with ``metadata.yaml``) or an **MCAP file**: its
+  ``sensor_msgs/msg/JointState`` messages (:mod:`.bags`).
 
 Reading checks what no fit can repair, each in one line naming the file and column: a column
 missing or of another length, a value that is not a finite number, and times that go back or repeat.
@@ -25,6 +27,7 @@ from pathlib import Path
 import numpy as np
 
 from ...core.exceptions import LogError, NNRobustError
+from .bags import is_bag, read_bag
 
 TIME_COLUMNS = ("time", "t", "stamp", "timestamp")
 """Names a time column may have [s]."""
@@ -63,6 +66,7 @@ class JointLog:
     tau: np.ndarray
     files: list[Path] = field(default_factory=list)
     torque_lag: float = 0.0
+    notes: dict = field(default_factory=dict)
 
     @property
     def samples(self) -> int:
@@ -83,14 +87,23 @@ class JointLog:
         )
 
 
-def read_log(given: Sequence[str | Path], joints: Sequence[str]) -> JointLog:
-    """The log in ``given`` (files or folders of one format) for the robot's ``joints``."""
+def read_log(given: Sequence[str | Path], joints: Sequence[str], topic: str | None = None) -> JointLog:
+    """The log in ``given`` (files or folders of one format) for the robot's ``joints``; ``topic``:
+    a bag's or MCAP file's JointState topic, where it has several.
+    """
     paths = [Path(p) for p in given]
     if not paths:
         raise LogError("identify needs at least one log file or folder")
     for path in paths:
         if not path.exists():
             raise LogError(f"{path}: no such file or folder")
+    if len(paths) == 1 and is_bag(paths[0]):
+        t, q, dq, tau, notes = read_bag(paths[0], joints, topic)
+        files = sorted(p for p in paths[0].iterdir() if p.is_file()) if paths[0].is_dir() else [paths[0]]
+        log = JointLog(str(paths[0]), t, q, dq, tau, files, notes=notes)
+        return _checked(
+            log, joints, {"t": "the header stamps", "q": "position", "dq": "velocity", "tau": "effort"}
+        )
     if len(paths) == 1 and paths[0].is_dir():
         folder = paths[0]
         if (folder / "result.npz").is_file():
@@ -108,8 +121,8 @@ def read_log(given: Sequence[str | Path], joints: Sequence[str]) -> JointLog:
     if suffixes <= set(TEXT_SUFFIXES):
         return _text_files(paths, joints)
     raise LogError(
-        f"{', '.join(map(str, paths))}: give one CSV or Parquet file, one run folder, or the text files "
-        f"of one log (one per signal: {', '.join(TEXT_SUFFIXES)})"
+        f"{', '.join(map(str, paths))}: give one CSV or Parquet file, one run folder, one ROS 2 bag or "
+        f"MCAP file, or the text files of one log (one per signal: {', '.join(TEXT_SUFFIXES)})"
     )
 
 
