@@ -119,7 +119,7 @@ def scored(files, joints, published, published_friction, cutoff: float, filtered
         "published inertias, friction refitted": rms(
             states.tau[held] - refitted_friction(published, states, held)
         ),
-        "URDF (example-robot-data, no friction)": np.array(summary["residuals"]["urdf"]["held_out_rms"]),
+        "URDF (example-robot-data, its damping)": np.array(summary["residuals"]["urdf"]["held_out_rms"]),
         "nnrobust least squares": np.array(summary["residuals"]["least_squares"]["held_out_rms"]),
         "nnrobust physical": np.array(summary["residuals"]["physical"]["held_out_rms"]),
     }

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 from ..core.exceptions import ConfigError
 from .common import Command
@@ -125,7 +126,7 @@ def cmd_identify(args) -> int:
         shares = summary["residuals"]
         print(
             f"{'joint':<16} {'torque rms':>11} {'URDF':>8} {'least sq.':>10} {'physical':>9}"
-            "   (held-out residual / torque RMS)"
+            "   (held-out residual / torque RMS; URDF: its bodies and <dynamics> friction)"
         )
         for j, name in enumerate(summary["joints"]):
             print(
@@ -138,10 +139,10 @@ def cmd_identify(args) -> int:
         region = summary["confidence"]
         print(f"parameters' {100 * region['level']:g} % confidence region: {region['method']}")
         checks = summary["checks"]
+        model = (Path(args.out) / "nominal.json").absolute()
         print(
-            f"physical: {'yes' if checks['physical'] else 'NO'} (least M(q) eigenvalue "
-            f"{checks['mass_matrix_least_eigenvalue']:.3g}); wrote {args.out}/nominal.json: use it as "
-            f'[nominal] kind = "identified", file = "{args.out}/nominal.json"'
+            f"physical: yes (least M(q) eigenvalue {checks['mass_matrix_least_eigenvalue']:.3g}); wrote "
+            f'{model}: use it as [nominal] kind = "identified", file = "{model}"'
         )
     return 0
 

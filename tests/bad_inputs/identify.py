@@ -64,6 +64,28 @@ def _joint_named(columns):
             columns[f"{s}.{j}"] = columns.pop(f"{s}{i}")
 
 
+def _degrees(columns):
+    for i in range(3):
+        columns[f"q{i}"] = columns[f"q{i}"] * 180 / np.pi * 20  # degrees, and a swing past the limits
+
+
+def _gap(columns):
+    for name in list(columns):
+        columns[name] = np.delete(columns[name], np.arange(2000, 2400))
+
+
+def _fourth_joint(columns):
+    columns["q3"] = columns["q0"].copy()
+
+
+def _twice(folder: Path) -> Path:
+    path = _csv(folder)
+    lines = path.read_text().splitlines()
+    lines[0] = lines[0].replace("dq1", "dq2", 1)
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
 def _still_joint(columns):
     for s, value in (("q", 0.2), ("dq", 0.0)):
         columns[f"{s}2"] = np.full_like(columns["time"], value)
@@ -161,6 +183,30 @@ IDENTIFY_CASES = [
         ex.LogError,
         "log.csv: the filter's cut-off 600 Hz must be positive and below 80 % of the log's Nyquist "
         "frequency 500 Hz",
+    ),
+    Case(
+        "identify: a column name twice",
+        lambda d: _identify(d, _twice),
+        ex.LogError,
+        "log.csv: the columns dq2 appear twice; each signal of each joint once",
+    ),
+    Case(
+        "identify: a column of a joint the robot does not have",
+        lambda d: _identify(d, lambda f: _csv(f, _fourth_joint)),
+        ex.LogError,
+        "log.csv: a column q3: the log has more joints than the robot's 3 (joint1, joint2, joint3)",
+    ),
+    Case(
+        "identify: positions in degrees",
+        lambda d: _identify(d, lambda f: _csv(f, _degrees)),
+        ex.LogError,
+        "outside its URDF limits [-3.142, 3.142]: positions must be in rad",
+    ),
+    Case(
+        "identify: 0.4 s without a sample",
+        lambda d: _identify(d, lambda f: _csv(f, _gap)),
+        ex.LogError,
+        "log.csv: no sample between 1.999 s and 2.4 s; a gap over 0.5 cut-off period (50 ms) would be filled",
     ),
     Case(
         "identify: an MCAP file that is not one",

@@ -18,7 +18,7 @@ DATA = ROOT / "docs" / "data" / "identify_panda.json"
 ROWS = (
     "published (Gaz et al. 2019)",
     "published inertias, friction refitted",
-    "URDF (example-robot-data, no friction)",
+    "URDF (example-robot-data, its damping)",
     "nnrobust least squares",
     "nnrobust physical",
 )
@@ -88,7 +88,9 @@ def test_the_verdict_holds_at_the_other_cut_offs():
 
 
 def test_the_urdfs_link_7_is_the_one_the_page_names():
-    mass = load_robot("panda", task="position").model.inertias[7].mass
+    model = load_robot("panda", task="position").model
+    assert list(model.damping) == [0.003] * 7 and not any(model.friction)  # "its only friction"
+    mass = model.inertias[7].mass
     assert round(mass, 2) == 1.50 == round(json.loads(DATA.read_text())["link7_mass"]["urdf"], 2)
 
 

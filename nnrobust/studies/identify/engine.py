@@ -120,12 +120,14 @@ def identify(
     joints = tuple(model.names[1:])
     log = logs if isinstance(logs, JointLog) else read_log(logs, joints, options.topic)
     say(f"read {log.samples} samples of {len(joints)} joints from {log.source}")
+    _check_limits(log, model)
     states = prepare(log, options.filter)
     layout = ParameterLayout(joints, tuple(options.friction), options.armature)
     base = base_parameters(model, layout.names[: 10 * layout.n])
     columns = base_columns(layout, base)
     names = list(base.names) + layout.names[10 * layout.n :]
     split = int(options.fit_share * len(states.t))
+    _check_segments(log.source, states.t, split)
     fit_rows = normal_equations(model, layout, states, options.stick_band, slice(0, split))
     # every held-out sample is scored, a joint in stick included: a prediction is judged where it is used
     held_rows = normal_equations(model, layout, states, 0.0, slice(split, None))
@@ -137,7 +139,7 @@ def identify(
     if excitation.unexcited and not options.allow_unexcited:
         _refuse_unexcited(log.source, excitation.unexcited)
     least = weighted_least_squares(fit_rows, columns, minimum_norm=bool(excitation.unexcited))
-    prior = np.concatenate([inertial_vector(model), np.zeros(layout.size - 10 * layout.n)])
+    prior = urdf_parameters(model, layout)
     phi = physically_consistent(fit_rows, layout, least.sigma, prior)
     phi_least = np.zeros(layout.size)
     phi_least[columns] = least.beta
@@ -149,6 +151,21 @@ def identify(
     identified_model = with_inertial_vector(model, phi)
     armature = phi[layout.armature_slice] if layout.armature else np.zeros(layout.n)
     checks = _physical_checks(identified_model, phi, layout.n, armature)
+    if not checks["physical"]:  # never a model a run would refuse
+        raise LogError(
+            f"{log.source}: the physically consistent model is not physical after all: "
+            f"{'; '.join(checks['body_problems']) or 'M(q) not positive definite'}"
+        )
+    warnings = _fit_warnings(fit_rows, phi, phi_least, least.sigma)
+    blind = [j for j, share in enumerate(held_rows.rms(phi) / held_rows.torque_rms()) if share >= 0.5]
+    if blind:
+        warnings.append(
+            f"the model misses half or more of the held-out torque of {', '.join(joints[j] for j in blind)}: "
+            "a torque the log does not record acts on the arm (a run's plant disturbance, a contact), or "
+            "the segments differ"
+        )
+    for line in warnings:
+        say(f"warning: {line}")
 
     def residuals(p: np.ndarray) -> dict:
         return {
@@ -160,7 +177,7 @@ def identify(
     beta_physical = (base_projector(layout, base) @ phi).tolist()
     standard_errors = np.sqrt(np.maximum(np.diag(region.covariance), 0)).tolist()
     friction = {term: phi[layout.friction_slice(term)].tolist() for term in layout.friction}
-    files = {str(p): file_sha256(p) for p in log.files}
+    files = {str(Path(p).absolute()): file_sha256(p) for p in log.files}
     summary = {
         "format": "nnrobust-identification/1",
         "robot": arm.name,
@@ -218,6 +235,7 @@ def identify(
             "physical": residuals(phi),
         },
         "checks": checks,
+        "warnings": warnings,
         "seconds": time.perf_counter() - started,
         "version": package_version(),
     }
@@ -244,6 +262,70 @@ def identify(
         )
         _write_folder(out, identified.to_dict(record), summary, overwrite)
     return summary
+
+
+LIMIT_MARGIN = 0.1
+"""How far past a joint's URDF limits [rad or m] a logged position may go (a stop's give)."""
+
+
+def _check_limits(log: JointLog, model) -> None:
+    """Positions within the URDF's joint limits (and :data:`LIMIT_MARGIN`): a log in degrees, or
+    of another robot, is refused before it is fitted.
+    """
+    low, high = model.lowerPositionLimit, model.upperPositionLimit
+    for j in range(model.nv):
+        if not (np.isfinite(low[j]) and np.isfinite(high[j])):
+            continue
+        least, most = float(log.q[:, j].min()), float(log.q[:, j].max())
+        if least < low[j] - LIMIT_MARGIN or most > high[j] + LIMIT_MARGIN:
+            raise LogError(
+                f"{log.source}: joint {model.names[j + 1]}'s positions span [{least:.4g}, {most:.4g}], "
+                f"outside its URDF limits [{low[j]:.4g}, {high[j]:.4g}]: positions must be in rad (m for a "
+                "prismatic joint), of the robot given by --robot"
+            )
+
+
+MIN_SEGMENT_SECONDS = 1.0
+"""The fit and the held-out segments are each at least this long [s]."""
+
+
+def _check_segments(source: str, t: np.ndarray, split: int) -> None:
+    """Each segment at least :data:`MIN_SEGMENT_SECONDS` long."""
+    for what, (a, b) in (("fit", (0, split - 1)), ("held-out", (split, len(t) - 1))):
+        length = float(t[b] - t[a]) if b > a else 0.0
+        if length < MIN_SEGMENT_SECONDS:
+            raise LogError(
+                f"{source}: the {what} segment is {length:.3g} s; each needs {MIN_SEGMENT_SECONDS:g} s at "
+                "least (--fit-share, or a longer log)"
+            )
+
+
+def urdf_parameters(model, layout: ParameterLayout) -> np.ndarray:
+    """The URDF's own parameters in the layout: its bodies, its <dynamics damping> as viscous and
+    friction as Coulomb friction, no offset, no armature (what the physical fit is pulled
+    towards where the log does not see, and the residual table's URDF row).
+    """
+    out = np.zeros(layout.size)
+    out[layout.inertial] = inertial_vector(model)
+    for term, values in (("viscous", model.damping), ("coulomb", model.friction)):
+        if term in layout.friction:
+            out[layout.friction_slice(term)] = np.asarray(values, dtype=float)
+    return out
+
+
+def _fit_warnings(fit_rows, phi: np.ndarray, phi_least: np.ndarray, sigma: np.ndarray) -> list[str]:
+    """What the physical fit says of the log: a joint it fits far worse than least squares does
+    (a torque of the wrong sign or units, a log no physical robot explains).
+    """
+    physical, least = fit_rows.rms(phi), fit_rows.rms(phi_least)
+    worse = [j for j in range(len(sigma)) if physical[j] > 1.5 * least[j] + sigma[j]]
+    if not worse:
+        return []
+    shown = ", ".join(f"joint {j + 1} ({physical[j]:.3g} against {least[j]:.3g} N m)" for j in worse)
+    return [
+        f"the physical model fits {shown} far worse than least squares: no physical robot explains this "
+        "log (is the torque the joint torque, in N m, of the sign that accelerates q?)"
+    ]
 
 
 def _check_out(out: Path, overwrite: bool) -> None:
@@ -281,7 +363,9 @@ def _physical_checks(model, phi: np.ndarray, n: int, armature: np.ndarray) -> di
 
 
 def _write_folder(out: Path, nominal: dict, summary: dict, overwrite: bool) -> None:
-    """The folder written whole beside ``out``, then renamed into place."""
+    """The folder written whole beside ``out``, then renamed into place (over an earlier
+    identification, its files each replaced whole; nothing else in the folder is touched).
+    """
     out = out.absolute()
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}.", dir=out.parent))
@@ -304,10 +388,9 @@ def _write_folder(out: Path, nominal: dict, summary: dict, overwrite: bool) -> N
                 raise RunFolderExists(
                     f"{out} holds an identification already; pass --overwrite to replace it"
                 )
-            old = out.parent / f".{out.name}.old-{os.getpid()}"
-            os.replace(out, old)
-            os.replace(tmp, out)
-            shutil.rmtree(old, ignore_errors=True)
+            # file by file (each whole), the model last: what else the folder holds stays
+            for name in ("identification.json", "parameters.csv", MARKER, "nominal.json"):
+                os.replace(tmp / name, out / name)
         else:
             os.replace(tmp, out)
     finally:

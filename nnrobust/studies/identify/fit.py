@@ -257,8 +257,51 @@ def physically_consistent(
     except cp.error.SolverError as err:
         raise LogError(f"the physically consistent fit failed in its solver: {err}") from err
     if problem.status not in ("optimal", "optimal_inaccurate") or x.value is None:
-        raise LogError(f"the physically consistent fit ended {problem.status}")
-    return np.asarray(scale * x.value, dtype=float)
+        raise LogError(
+            f"the physically consistent fit ended {problem.status}: no physical robot fits these torques "
+            "(are they the joint torques, in N m, with the sign of q''?)"
+        )
+    phi_out = np.asarray(scale * x.value, dtype=float)
+    for i in range(layout.n):  # the solver's tolerance can leave a body a hair outside physics
+        phi_out[10 * i : 10 * i + 10] = strictly_physical(phi_out[10 * i : 10 * i + 10])
+    for term in layout.friction:
+        if term != "offset":
+            phi_out[layout.friction_slice(term)] = np.maximum(phi_out[layout.friction_slice(term)], 0.0)
+    if layout.armature:
+        phi_out[layout.armature_slice] = np.maximum(phi_out[layout.armature_slice], 0.0)
+    return phi_out
+
+
+STRICT_MARGIN = 1e-6
+"""A body's pseudo-inertia eigenvalues are raised to at least this share of its largest."""
+
+
+def strictly_physical(phi10: np.ndarray) -> np.ndarray:
+    """The body's ten parameters with its pseudo-inertia's eigenvalues raised to at least
+    :data:`STRICT_MARGIN` of the largest (a change within the solver's tolerance): J > 0, so the
+    body's mass is positive and its inertia about the centre of mass positive definite, with the
+    triangle inequalities strict.
+    """
+    J = pseudo_inertia(phi10)
+    values, vectors = np.linalg.eigh(J)
+    floor = STRICT_MARGIN * max(values[-1], 1e-12)
+    if values[0] >= floor:
+        return phi10
+    J = (vectors * np.maximum(values, floor)) @ vectors.T
+    sigma = J[:3, :3]
+    inertia = np.trace(sigma) * np.eye(3) - sigma  # J's block is tr(I)/2 1 - I
+    return np.array(
+        [
+            J[3, 3],
+            *J[:3, 3],
+            inertia[0, 0],
+            inertia[0, 1],
+            inertia[1, 1],
+            inertia[0, 2],
+            inertia[1, 2],
+            inertia[2, 2],
+        ]
+    )
 
 
 def _typical(layout: ParameterLayout) -> np.ndarray:

@@ -34,7 +34,7 @@ TIME_COLUMNS = ("time", "t", "stamp", "timestamp")
 
 SIGNALS = {
     "q": ("q", "position", "pos"),
-    "dq": ("dq", "velocity", "vel", "qd"),
+    "dq": ("dq", "velocity", "velocities", "vel", "qd"),
     "tau": ("tau", "torque", "effort"),
 }
 """Each signal and the names its columns (or text files) may start with."""
@@ -156,7 +156,11 @@ def _table(path: Path, joints: Sequence[str]) -> JointLog:
         ) from err
     except Exception as err:  # pyarrow's ArrowInvalid and OSError: a file that is not a table
         raise LogError(f"{path}: not a readable table ({type(err).__name__}: {str(err)[:200]})") from err
-    columns = {name: table.column(name) for name in table.column_names}
+    stripped = [name.strip() for name in table.column_names]  # "time, q0" as spreadsheets write it
+    twice = sorted({name for name in stripped if stripped.count(name) > 1})
+    if twice:
+        raise LogError(f"{path}: the columns {', '.join(twice)} appear twice; each signal of each joint once")
+    columns = {name: table.column(i) for i, name in enumerate(stripped)}
     time = next((c for c in TIME_COLUMNS if c in columns), None)
     if time is None:
         raise LogError(
@@ -165,7 +169,7 @@ def _table(path: Path, joints: Sequence[str]) -> JointLog:
     arrays = {"t": _numbers(path, time, columns[time])}
     names = {"t": time}
     for signal, prefixes in SIGNALS.items():
-        found = _signal_columns(columns, prefixes, joints)
+        found = _signal_columns(path, columns, prefixes, joints)
         if found is None:
             if signal == "dq":
                 continue
@@ -180,8 +184,13 @@ def _table(path: Path, joints: Sequence[str]) -> JointLog:
     return _checked(log, joints, names)
 
 
-def _signal_columns(columns: dict, prefixes: Sequence[str], joints: Sequence[str]) -> list[str] | None:
-    """The columns of one signal, joint by joint, or None if the log has none of them."""
+def _signal_columns(
+    path: Path, columns: dict, prefixes: Sequence[str], joints: Sequence[str]
+) -> list[str] | None:
+    """The columns of one signal, joint by joint, or None if the log has none of them; a log with
+    them in two forms, or with an indexed column past the robot's joints, is refused.
+    """
+    chosen: list[str] | None = None
     for prefix in prefixes:
         for form in (
             f"{prefix}{{i}}",
@@ -193,11 +202,26 @@ def _signal_columns(columns: dict, prefixes: Sequence[str], joints: Sequence[str
             names = [form.format(i=i, j=j) for i, j in enumerate(joints)]
             present = [n in columns for n in names]
             if all(present):
-                return names
-            if any(present):
+                if chosen is not None:
+                    raise LogError(
+                        f"{path}: both {chosen[0]}.. and {names[0]}.. are {prefix} columns of the robot's "
+                        "joints; keep one of them"
+                    )
+                chosen = names
+                beyond = form.format(i=len(joints), j="")
+                if "{i}" in form and beyond in columns:
+                    raise LogError(
+                        f"{path}: a column {beyond}: the log has more joints than the robot's "
+                        f"{len(joints)} ({', '.join(joints)}); name the columns by joint, or lock or drop "
+                        "the others"
+                    )
+            elif any(present):
                 missing = [n for n, p in zip(names, present) if not p]
-                raise LogError(f"the log has some {prefix} columns but not {', '.join(missing)}")
-    return None
+                raise LogError(
+                    f"{path}: the log has some {prefix} columns but not {', '.join(missing)} (one per joint: "
+                    f"{', '.join(joints)})"
+                )
+    return chosen
 
 
 def _numbers(path: Path, name: str, column) -> np.ndarray:

@@ -31,6 +31,9 @@ import scipy.signal
 from ...core.exceptions import LogError
 from .logs import JointLog
 
+MAX_GAP_PERIODS = 0.5
+"""The longest gap between fresh samples, in cut-off periods (the Panda log's is 0.09 at 10 Hz)."""
+
 EDGE_PERIODS = 3.0
 """Cut-off periods dropped at each end of the log (the zero-phase filter's transients)."""
 
@@ -108,9 +111,18 @@ def prepare(log: JointLog, choice: FilterChoice = FilterChoice()) -> States:
     duration = float(t[-1] - t[0]) if len(t) > 1 else 0.0
     nyquist = 0.5 / dt if dt > 0 else 0.0
     if not 0 < choice.cutoff < 0.8 * nyquist:
+        units = " (are the times in seconds?)" if not 1e-5 <= dt <= 0.1 else ""
         raise LogError(
             f"{log.source}: the filter's cut-off {choice.cutoff:g} Hz must be positive and below 80 % of the "
-            f"log's Nyquist frequency {nyquist:.4g} Hz (its median step is {dt * 1e3:.4g} ms)"
+            f"log's Nyquist frequency {nyquist:.4g} Hz (its median step is {dt * 1e3:.4g} ms){units}"
+        )
+    gaps = np.diff(t)
+    longest = int(np.argmax(gaps)) if len(gaps) else 0
+    if len(gaps) and gaps[longest] > MAX_GAP_PERIODS / choice.cutoff:
+        raise LogError(
+            f"{log.source}: no sample between {t[longest]:.6g} s and {t[longest + 1]:.6g} s; a gap over "
+            f"{MAX_GAP_PERIODS:g} cut-off period ({MAX_GAP_PERIODS / choice.cutoff * 1e3:.3g} ms) would be "
+            "filled with made-up samples: identify the parts on either side apart"
         )
     edge = EDGE_PERIODS / choice.cutoff
     if duration <= 2 * edge + 10 * dt:
