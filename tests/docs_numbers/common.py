@@ -36,8 +36,12 @@ OTHERS = [
     "example_study",
     "interval_coverage",
     "worst_plant_loops",
+    "identify_panda",
+    "identify_calibration",
 ]
-"""Data files with a re-run test of their own below (worst_plant_loops: its compiled loop)."""
+"""Data files with a re-run test of their own below (worst_plant_loops: its compiled loop), or
+whose tables a page's test regenerates from them (identify_panda, whose log no one here ships,
+and identify_calibration: tests/docs_numbers/test_identification.py)."""
 
 
 TIMINGS = ["learning_env", "study_overhead", "study_overhead_falsify_panda", "serve_misses", "fresh_clone"]

@@ -150,29 +150,10 @@ def identify(
     low, high = region.intervals()
     identified_model = with_inertial_vector(model, phi)
     armature = phi[layout.armature_slice] if layout.armature else np.zeros(layout.n)
-    checks = _physical_checks(identified_model, phi, layout.n, armature)
-    if not checks["physical"]:  # never a model a run would refuse
-        raise LogError(
-            f"{log.source}: the physically consistent model is not physical after all: "
-            f"{'; '.join(checks['body_problems']) or 'M(q) not positive definite'}"
-        )
-    warnings = _fit_warnings(fit_rows, phi, phi_least, least.sigma)
-    blind = [j for j, share in enumerate(held_rows.rms(phi) / held_rows.torque_rms()) if share >= 0.5]
-    if blind:
-        warnings.append(
-            f"the model misses half or more of the held-out torque of {', '.join(joints[j] for j in blind)}: "
-            "a torque the log does not record acts on the arm (a run's plant disturbance, a contact), or "
-            "the segments differ"
-        )
+    checks = _physical_checks(log.source, identified_model, phi, layout.n, armature)
+    warnings = _fit_warnings(fit_rows, held_rows, phi, phi_least, least.sigma, joints)
     for line in warnings:
         say(f"warning: {line}")
-
-    def residuals(p: np.ndarray) -> dict:
-        return {
-            "fit_rms": fit_rows.rms(p).tolist(),
-            "held_out_rms": held_rows.rms(p).tolist(),
-            "held_out_share": (held_rows.rms(p) / held_rows.torque_rms()).tolist(),
-        }
 
     beta_physical = (base_projector(layout, base) @ phi).tolist()
     standard_errors = np.sqrt(np.maximum(np.diag(region.covariance), 0)).tolist()
@@ -230,9 +211,9 @@ def identify(
         "friction": friction,
         "armature": armature.tolist(),
         "residuals": {
-            "urdf": residuals(prior),
-            "least_squares": residuals(phi_least),
-            "physical": residuals(phi),
+            "urdf": _residuals(fit_rows, held_rows, prior),
+            "least_squares": _residuals(fit_rows, held_rows, phi_least),
+            "physical": _residuals(fit_rows, held_rows, phi),
         },
         "checks": checks,
         "warnings": warnings,
@@ -313,19 +294,37 @@ def urdf_parameters(model, layout: ParameterLayout) -> np.ndarray:
     return out
 
 
-def _fit_warnings(fit_rows, phi: np.ndarray, phi_least: np.ndarray, sigma: np.ndarray) -> list[str]:
-    """What the physical fit says of the log: a joint it fits far worse than least squares does
-    (a torque of the wrong sign or units, a log no physical robot explains).
+def _fit_warnings(fit_rows, held_rows, phi, phi_least, sigma, joints) -> list[str]:
+    """What the fit says of the log: a joint the physical model fits far worse than least squares
+    does (a torque of the wrong sign or units, a log no physical robot explains), and joints whose
+    held-out torque it misses by half or more (a torque the log does not record).
     """
+    out = []
     physical, least = fit_rows.rms(phi), fit_rows.rms(phi_least)
     worse = [j for j in range(len(sigma)) if physical[j] > 1.5 * least[j] + sigma[j]]
-    if not worse:
-        return []
-    shown = ", ".join(f"joint {j + 1} ({physical[j]:.3g} against {least[j]:.3g} N m)" for j in worse)
-    return [
-        f"the physical model fits {shown} far worse than least squares: no physical robot explains this "
-        "log (is the torque the joint torque, in N m, of the sign that accelerates q?)"
-    ]
+    if worse:
+        shown = ", ".join(f"joint {j + 1} ({physical[j]:.3g} against {least[j]:.3g} N m)" for j in worse)
+        out.append(
+            f"the physical model fits {shown} far worse than least squares: no physical robot explains "
+            "this log (is the torque the joint torque, in N m, of the sign that accelerates q?)"
+        )
+    blind = [j for j, share in enumerate(held_rows.rms(phi) / held_rows.torque_rms()) if share >= 0.5]
+    if blind:
+        out.append(
+            f"the model misses half or more of the held-out torque of {', '.join(joints[j] for j in blind)}: "
+            "a torque the log does not record acts on the arm (a run's plant disturbance, a contact), or "
+            "the segments differ"
+        )
+    return out
+
+
+def _residuals(fit_rows, held_rows, p: np.ndarray) -> dict:
+    """Each joint's residual RMS of the parameters ``p`` on the fit and held-out segments."""
+    return {
+        "fit_rms": fit_rows.rms(p).tolist(),
+        "held_out_rms": held_rows.rms(p).tolist(),
+        "held_out_share": (held_rows.rms(p) / held_rows.torque_rms()).tolist(),
+    }
 
 
 def _check_out(out: Path, overwrite: bool) -> None:
@@ -348,12 +347,18 @@ def _refuse_unexcited(source: str, unexcited: list[str]) -> None:
     )
 
 
-def _physical_checks(model, phi: np.ndarray, n: int, armature: np.ndarray) -> dict:
+def _physical_checks(source: str, model, phi: np.ndarray, n: int, armature: np.ndarray) -> dict:
     """The identified model's audit: each body's least pseudo-inertia eigenvalue, what is not
-    physical, and the least eigenvalue of M(q) over random poses.
+    physical, and the least eigenvalue of M(q) over random poses; a model that fails it is an
+    error (never a model a run would refuse).
     """
     least_eigenvalue, _ = mass_matrix_audit(model, armature)
     problems = body_problems(model)
+    if problems or not least_eigenvalue > 0:
+        raise LogError(
+            f"{source}: the physically consistent model is not physical after all: "
+            f"{'; '.join(problems) or 'M(q) not positive definite'}"
+        )
     return {
         "pseudo_inertia_least_eigenvalues": least_pseudo_inertia_eigenvalues(phi, n).tolist(),
         "body_problems": problems,
