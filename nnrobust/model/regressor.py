@@ -178,8 +178,7 @@ def base_parameters(
     n = model.nv
     rng = np.random.default_rng(seed)
     samples = samples or max(40, 4 * n)
-    low = np.where(np.isfinite(model.lowerPositionLimit), model.lowerPositionLimit, -np.pi)
-    high = np.where(np.isfinite(model.upperPositionLimit), model.upperPositionLimit, np.pi)
+    low, high = position_ranges(model)
     q = rng.uniform(np.maximum(low, -np.pi), np.minimum(high, np.pi), (samples, n))
     Y = torque_regressor(model, q, rng.standard_normal((samples, n)), rng.standard_normal((samples, n)))
     W = Y.reshape(-1, Y.shape[2])
@@ -195,6 +194,31 @@ def base_parameters(
         terms = [f"{K[row, c]:+.3g} {names[d]}" for c, d in enumerate(dependent) if K[row, c] != 0]
         labels.append(names[i] + (" " + " ".join(terms) if terms else ""))
     return BaseParameters(base, dependent, K, tuple(labels))
+
+
+def position_ranges(model: pin.Model) -> tuple[np.ndarray, np.ndarray]:
+    """Each joint's position limits, a joint without them taken as [-pi, pi]."""
+    low = np.where(np.isfinite(model.lowerPositionLimit), model.lowerPositionLimit, -np.pi)
+    high = np.where(np.isfinite(model.upperPositionLimit), model.upperPositionLimit, np.pi)
+    return low, high
+
+
+def from_pseudo_inertia(J: np.ndarray) -> np.ndarray:
+    """A body's ten parameters of its pseudo-inertia (:func:`pseudo_inertia`'s inverse)."""
+    sigma = J[:3, :3]
+    inertia = np.trace(sigma) * np.eye(3) - sigma  # J's block is tr(I)/2 1 - I
+    return np.array(
+        [
+            J[3, 3],
+            *J[:3, 3],
+            inertia[0, 0],
+            inertia[0, 1],
+            inertia[1, 1],
+            inertia[0, 2],
+            inertia[1, 2],
+            inertia[2, 2],
+        ]
+    )
 
 
 def pseudo_inertia(phi10: np.ndarray) -> np.ndarray:
@@ -233,8 +257,7 @@ def mass_matrix_audit(model: pin.Model, armature: np.ndarray | None = None, pose
     """
     rng = np.random.default_rng(seed)
     data = model.createData()
-    low = np.where(np.isfinite(model.lowerPositionLimit), model.lowerPositionLimit, -np.pi)
-    high = np.where(np.isfinite(model.upperPositionLimit), model.upperPositionLimit, np.pi)
+    low, high = position_ranges(model)
     extra = np.zeros(model.nv) if armature is None else np.asarray(armature, dtype=float)
     least, where = np.inf, None
     for _ in range(poses):

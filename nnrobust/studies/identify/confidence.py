@@ -124,8 +124,7 @@ def confidence_region(
     ``residual``: the fit segment's residuals, N x n (NaN: no equation).
     """
     weights = 1 / sigma**2
-    G = normal.G[:, columns][:, :, columns]
-    Gw = np.einsum("j,jik->ik", weights, G)
+    Gw = normal.weighted(weights, columns)
     p_values = [ljung_box(residual[:, j]) for j in range(residual.shape[1])]
     white = [p >= WHITENESS_LEVEL for p in p_values]
     block = max(2, int(round(BLOCK_SECONDS / dt)))
@@ -134,7 +133,7 @@ def confidence_region(
     if all(white):
         covariance, method = inverse, "classical: every joint's residual white (Ljung-Box)"
     else:
-        middle = np.einsum("j,jik->ik", weights * np.asarray(ratio), G)
+        middle = normal.weighted(weights * np.asarray(ratio), columns)
         covariance = inverse @ middle @ inverse
         method = (
             f"sandwich: the long-run variance (batch means over {BLOCK_SECONDS:g} s blocks) of the joints "

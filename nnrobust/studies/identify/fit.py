@@ -31,6 +31,7 @@ from ...model.regressor import (
     BaseParameters,
     ParameterLayout,
     friction_regressor,
+    from_pseudo_inertia,
     pseudo_inertia,
     slipping,
     torque_regressor,
@@ -77,6 +78,11 @@ class NormalEquations:
             self.b[j] += rows.T @ target
             self.c[j] += target @ target
             self.rows[j] += len(target)
+
+    def weighted(self, weights: np.ndarray, columns: np.ndarray | None = None) -> np.ndarray:
+        """sum_j weights_j G_j, of the ``columns`` given (all where None)."""
+        G = self.G if columns is None else self.G[:, columns][:, :, columns]
+        return np.einsum("j,jik->ik", weights, G)
 
     def rss(self, phi: np.ndarray) -> np.ndarray:
         """Each joint's residual sum of squares of the parameters ``phi``."""
@@ -230,7 +236,7 @@ def physically_consistent(
     except ImportError as err:
         raise LogError("the physically consistent fit needs cvxpy: pip install 'nnrobust[identify]'") from err
     weights = 1 / sigma**2
-    H = np.einsum("j,jik->ik", weights, normal.G)
+    H = normal.weighted(weights)
     g = weights @ normal.b
     values, vectors = np.linalg.eigh(H)
     keep = values > 1e-12 * values[-1]
@@ -287,21 +293,7 @@ def strictly_physical(phi10: np.ndarray) -> np.ndarray:
     floor = STRICT_MARGIN * max(values[-1], 1e-12)
     if values[0] >= floor:
         return phi10
-    J = (vectors * np.maximum(values, floor)) @ vectors.T
-    sigma = J[:3, :3]
-    inertia = np.trace(sigma) * np.eye(3) - sigma  # J's block is tr(I)/2 1 - I
-    return np.array(
-        [
-            J[3, 3],
-            *J[:3, 3],
-            inertia[0, 0],
-            inertia[0, 1],
-            inertia[1, 1],
-            inertia[0, 2],
-            inertia[1, 2],
-            inertia[2, 2],
-        ]
-    )
+    return from_pseudo_inertia((vectors * np.maximum(values, floor)) @ vectors.T)
 
 
 def _typical(layout: ParameterLayout) -> np.ndarray:

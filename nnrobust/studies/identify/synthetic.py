@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from ...model.regressor import position_ranges
 from .logs import JointLog
 
 
@@ -40,8 +41,7 @@ class FourierTrajectory:
         """
         rng = np.random.default_rng(seed)
         n = model.nv
-        low = np.where(np.isfinite(model.lowerPositionLimit), model.lowerPositionLimit, -np.pi)
-        high = np.where(np.isfinite(model.upperPositionLimit), model.upperPositionLimit, np.pi)
+        low, high = position_ranges(model)
         q0 = (low + high) / 2
         a = rng.normal(0, 1, (n, harmonics))
         b = rng.normal(0, 1, (n, harmonics))
