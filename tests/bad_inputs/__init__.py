@@ -58,6 +58,8 @@ from .urdf import (
     URDF_CASES,
 )
 
+REPO = Path(__file__).resolve().parents[2]
+
 CASES = (
     URDF_CASES
     + CONFIG_CASES
@@ -96,7 +98,8 @@ def render_table(folder: Path) -> str:
         "Every row is a test case in a section of `tests/bad_inputs/`; `tests/test_hostile_input.py` checks",
         "the exception class and message, and that the command line answers each with exit code 2",
         "and one line. Regenerate this page with `python -m tests.bad_inputs` (repository root).",
-        "Paths of the scratch folder the cases run in are shown as `<dir>` (its parent `<dir>/..`).",
+        "Paths of the scratch folder the cases run in are shown as `<dir>` (its parent `<dir>/..`),",
+        "and the checkout's own folder as `<repo>`.",
         "",
         "Rules that hold for every input:",
         "",
@@ -148,6 +151,7 @@ def render_table(folder: Path) -> str:
             (folder.resolve(), "<dir>"),
             (folder, "<dir>"),
             (folder.resolve().parent, "<dir>/.."),
+            (REPO, "<repo>"),
         ):
             message = message.replace(str(path), name)
         message = re.sub(r"pid \d+", "pid <pid>", message).replace("|", "\\|").replace("\n", " ")
