@@ -7,6 +7,7 @@ start) stays fast and interruptible.
 from __future__ import annotations
 
 import importlib
+import sys
 
 _EXPORTS = {
     # the workflow: load, configure, build, run, write, plot
@@ -59,7 +60,35 @@ _EXPORTS = {
 __all__ = sorted(_EXPORTS)
 
 
+def _result_html(result) -> str:
+    from .outputs.plots import result_html
+
+    return result_html(result)
+
+
+def _show_results_with_figures() -> bool:
+    """In IPython (a Jupyter kernel), show a run's :class:`Result` as its table and figures.
+
+    The formatter is registered by the class's module and name, so nothing is imported until a
+    result is shown; ``run/`` stays below ``outputs/`` (``Result._repr_html_`` alone is the
+    table). Returns whether a shell was there to register with.
+    """
+    ipython = sys.modules.get("IPython")
+    shell = ipython.get_ipython() if ipython is not None else None
+    if shell is None:
+        return False
+    html = shell.display_formatter.formatters["text/html"]
+    html.for_type_by_name("nnrobust.run.results", "Result", _result_html)
+    return True
+
+
+_SHOWN_WITH_FIGURES = _show_results_with_figures()
+
+
 def __getattr__(name: str):
+    global _SHOWN_WITH_FIGURES
+    if not _SHOWN_WITH_FIGURES:  # IPython started after ``import nnrobust``
+        _SHOWN_WITH_FIGURES = _show_results_with_figures()
     if name == "__version__":
         from .core.package_version import package_version
 

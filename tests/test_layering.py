@@ -6,10 +6,11 @@ The floors are one bottom-first list (:data:`FLOORS`); a unit may import its own
 floors below it, never a floor above, and never a sibling on its own floor (sweep, tune, falsify
 and learning stand side by side on the base: what two of them need goes down into the base).
 Imports inside functions count (they are how a cycle hides); ``if TYPE_CHECKING:`` blocks do not
-(they never run). :data:`ALLOWED` holds the one exception, ``Result._repr_html_`` drawing a run's
-plots. No private name (``_name``) is imported from another unit, the compiled extension aside;
-no module is longer than :data:`MAX_LINES` and no function longer than :data:`MAX_FUNCTION` but the
-ones :data:`LONG_FUNCTIONS` names, a list that may only shrink.
+(they never run), and there is no exception (:data:`ALLOWED` is empty: a notebook's figures of a
+run are registered by the front door, not imported by ``run/``). No private name (``_name``) is
+imported from another unit, the compiled extension aside; no module is longer than
+:data:`MAX_LINES` and no function longer than :data:`MAX_FUNCTION` but the ones
+:data:`LONG_FUNCTIONS` names, a list that may only shrink.
 """
 
 import ast
@@ -41,8 +42,9 @@ DATA_FOLDERS = {"preset_files", "sweep_files", "include", "urdf"}
 """Folders of the package that hold data, not modules (include/ and urdf/ are installed by CMake)."""
 
 FLOOR_OF = {unit: i for i, units in enumerate(FLOORS) for unit in units} | {e: -1 for e in EXTENSIONS}
-ALLOWED = {("run", "outputs")}
-"""run -> outputs: Result._repr_html_ draws the run's plots (a notebook's display of a result)."""
+ALLOWED: set[tuple[str, str]] = set()
+"""Imports allowed up a floor: none (the issue's one allowed exception, run -> outputs for
+``Result._repr_html_``'s figures, is gone: the front door registers them with IPython)."""
 
 MAX_LINES = 800
 MAX_FUNCTION = 150

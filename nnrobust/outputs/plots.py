@@ -512,6 +512,29 @@ def plot_run(result: Result, folder: str | Path, names=None) -> list[Path]:
     return written
 
 
+def result_html(result: Result) -> str:
+    """A run in a notebook: its summary table (``Result._repr_html_``) and its path and error
+    figures inline, as PNG. The front door registers this as IPython's HTML formatter of
+    :class:`~nnrobust.run.results.Result`.
+    """
+    import base64
+    import io
+
+    images = []
+    for name in ("path", "errors"):
+        fig = FIGURES[name](result)
+        if fig is None:
+            continue
+        buffer = io.BytesIO()
+        fig.savefig(buffer, format="png", dpi=80, bbox_inches="tight")
+        plt.close(fig)
+        images.append(
+            f'<img src="data:image/png;base64,{base64.b64encode(buffer.getvalue()).decode()}" '
+            f'alt="{name}" style="max-width:48%">'
+        )
+    return f"{result._repr_html_()}<div>{''.join(images)}</div>"
+
+
 def comparison_warnings(results: dict[str, Result]) -> list[str]:
     """What makes runs hard to compare: a different robot, task or desired trajectory."""
     infos = {label: r.info for label, r in results.items() if r.info is not None}

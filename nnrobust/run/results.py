@@ -398,29 +398,16 @@ class Result:
         return rows
 
     def _repr_html_(self) -> str:
-        """Jupyter: the summary table and the path and error figures, inline."""
-        import base64
+        """Jupyter: the summary table. The front door (``import nnrobust``) registers a notebook
+        formatter that adds the path and error figures (:func:`nnrobust.outputs.plots.result_html`);
+        the figures are drawn above this floor, so the table is what a result shows on its own.
+        """
         import html
-        import io
 
-        table = "".join(
+        rows = "".join(
             f"<tr><td>{html.escape(k)}</td><td>{html.escape(v)}</td></tr>" for k, v in self.summary_rows()
         )
-        images = []
-        from ..outputs import plots
-
-        for name in ("path", "errors"):
-            fig = plots.FIGURES[name](self)
-            if fig is None:
-                continue
-            buffer = io.BytesIO()
-            fig.savefig(buffer, format="png", dpi=80, bbox_inches="tight")
-            plots.plt.close(fig)
-            images.append(
-                f'<img src="data:image/png;base64,{base64.b64encode(buffer.getvalue()).decode()}" '
-                f'alt="{name}" style="max-width:48%">'
-            )
-        return f"<table>{table}</table><div>{''.join(images)}</div>"
+        return f"<table>{rows}</table>"
 
     def save_npz(self, path: str | Path) -> None:
         """Arrays and signals in one .npz (signals prefixed ``signal_``), uncompressed: zlib saves

@@ -409,14 +409,3 @@ def test_a_setup_runs_twice_identically_on_the_python_loop():
     setup = build(config)
     first, second = run_experiment(config, setup=setup), run_experiment(config, setup=setup)
     np.testing.assert_array_equal(first.q, second.q)
-
-
-def test_a_result_shows_its_summary_and_figures_in_a_notebook():
-    config = load_preset("paper-ellipse").replace(
-        simulation={"duration": 2.5}, plant={"torque_limits": [3, 3, 1]}
-    )
-    result = run_experiment(config)
-    page = result._repr_html_()
-    metrics = result.metrics()
-    assert f"{1e3 * metrics['rms_error_after_2s']:.4g} mm" in page and "torque saturation" in page
-    assert page.count('<img src="data:image/png;base64,') == 2

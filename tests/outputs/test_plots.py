@@ -249,3 +249,54 @@ def test_a_figure_larger_than_its_room_is_cropped_by_its_layout(tmp_path):
     rows = np.asarray(Image.open(png)).shape[0]
     assert rows == pytest.approx(tight.height * plots.DPI, abs=2)
     assert _svg_size_pt(svg)[1] == pytest.approx(tight.height * 72, abs=1)
+
+
+def test_a_result_shows_its_summary_alone_below_the_outputs_floor():
+    config = load_preset("paper-ellipse").replace(
+        simulation={"duration": 2.5}, plant={"torque_limits": [3, 3, 1]}
+    )
+    result = run_experiment(config)
+    table = result._repr_html_()
+    metrics = result.metrics()
+    assert f"{1e3 * metrics['rms_error_after_2s']:.4g} mm" in table and "torque saturation" in table
+    assert "<img" not in table
+    page = plots.result_html(result)
+    assert page.startswith(table) and page.count('<img src="data:image/png;base64,') == 2
+
+
+SHELL = "from IPython.core.interactiveshell import InteractiveShell; shell = InteractiveShell.instance()"
+"""What a Jupyter kernel is: a shell that ``get_ipython()`` returns."""
+
+NOTEBOOK = """
+{before}
+{after}
+from nnrobust.config.presets import load_preset
+from nnrobust.run.experiment import run_experiment
+
+result = run_experiment(load_preset("paper-ellipse").replace(simulation={{"duration": 2.5}}))
+data, _ = shell.display_formatter.format(result)
+print(data["text/html"].count('<img src="data:image/png;base64,'), "RMS error" in data["text/html"])
+"""
+
+
+@pytest.mark.parametrize(
+    "before, after",
+    [
+        (SHELL, ""),  # importing nnrobust.run.experiment imports the package: registered there
+        ("import nnrobust", SHELL + "; nnrobust.Result"),  # the shell came later: the first use
+    ],
+    ids=["shell-first", "shell-after"],
+)
+def test_a_notebook_shows_a_result_with_its_path_and_error_figures(before, after):
+    import subprocess
+    import sys
+
+    pytest.importorskip("IPython")
+    out = subprocess.run(
+        [sys.executable, "-c", NOTEBOOK.format(before=before, after=after)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=True,
+    )
+    assert out.stdout.split() == ["2", "True"], out.stderr
