@@ -181,6 +181,29 @@ def test_modules_and_functions_are_sizes_a_reader_can_hold():
     assert not gone, f"no longer long, so remove from LONG_FUNCTIONS: {gone}"
 
 
+COMMENTED_LOCAL_IMPORTS = ("model", "plant", "subtasks", "trajectories", "controllers", "config")
+"""Where an import inside a function must say why it is there (a comment on its lines or above)."""
+
+
+def test_an_import_inside_a_function_of_a_room_or_config_says_why():
+    """The rooms and config/ import at the top; an import left inside a function (a cycle it
+    unties, a slow package imported on first use) carries a comment saying so."""
+    silent = []
+    for unit in COMMENTED_LOCAL_IMPORTS:
+        for path in sorted((PACKAGE / unit).rglob("*.py")):
+            lines = path.read_text(encoding="utf-8").splitlines()
+            for function in ast.walk(ast.parse("\n".join(lines))):
+                if not isinstance(function, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                    continue
+                for node in ast.walk(function):
+                    if not isinstance(node, (ast.Import, ast.ImportFrom)):
+                        continue
+                    said = lines[node.lineno - 2 : node.end_lineno]
+                    if not any("#" in line for line in said):
+                        silent.append(f"{path.relative_to(PACKAGE)}:{node.lineno}")
+    assert not silent, f"imports inside functions with no comment saying why (hoist, or say why): {silent}"
+
+
 def test_the_architecture_page_lists_the_floors_the_test_enforces():
     """docs/architecture.md's table of floors names, from the top, every unit of FLOORS on its floor
     (each unit as its folder, ``name/``; the package face stands for ``__init__`` and ``__main__``)."""
