@@ -430,7 +430,7 @@ NB_MODULE(_loop, m) {
   FIELD(nominal_params); FIELD(m); FIELD(nominal_friction); FIELD(path); FIELD(path_params); FIELD(pose);
   FIELD(pose_params); FIELD(law); FIELD(law_params); FIELD(law_signals); FIELD(robust); FIELD(robust_params);
   FIELD(criteria); FIELD(criterion_params); FIELD(criterion_weights); FIELD(pinv_threshold);
-  FIELD(pinv_max_damping); FIELD(z0);
+  FIELD(pinv_max_damping); FIELD(z0); FIELD(profile);
 #undef FIELD
   nb::class_<LoopTrace>(m, "LoopTrace", "The arrays of a compiled run (nnrobust.simulation.Trace).")
       .def_ro("q", &LoopTrace::q)
@@ -448,7 +448,12 @@ NB_MODULE(_loop, m) {
       .def_ro("divergence_joint", &LoopTrace::divergence_joint)
       .def_ro("friction_events", &LoopTrace::friction_events)
       .def_ro("unresolved_events", &LoopTrace::unresolved_events)
-      .def_ro("refined_periods", &LoopTrace::refined_periods);
+      .def_ro("refined_periods", &LoopTrace::refined_periods)
+      .def_ro("part_seconds", &LoopTrace::part_seconds)
+      .def_ro("part_allocations", &LoopTrace::part_allocations);
+  m.attr("LOOP_PARTS") = nb::make_tuple(nnrobust::kLoopPartNames[0], nnrobust::kLoopPartNames[1],
+                                        nnrobust::kLoopPartNames[2], nnrobust::kLoopPartNames[3],
+                                        nnrobust::kLoopPartNames[4]);
   m.def("run_loop", &run, nb::arg("plant"), nb::arg("spec"), nb::arg("nominal").none() = nb::none(),
         "Run the compiled closed loop (GIL released; Ctrl-C and SIGTERM stop it); `nominal` is the "
         "controller's Pinocchio model when spec.nominal is 'pinocchio'.");

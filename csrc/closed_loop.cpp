@@ -4,7 +4,6 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <deque>
 #include <exception>
 #include <limits>
 #include <memory>
@@ -20,13 +19,42 @@
 #include "plant/stick_slip.hpp"
 #include "subtasks/criterion.hpp"
 
+// The allocation counter benchmarks/allocation_counter.cpp defines when it is preloaded
+// (LD_PRELOAD): the calling thread's calls to the malloc family so far. Absent, this is null.
+extern "C" __attribute__((weak, visibility("default"))) long nnrobust_allocations();
+
 namespace nnrobust {
+
+namespace {
+double seconds_now() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+long allocations_now() { return nnrobust_allocations ? nnrobust_allocations() : 0; }
+}  // namespace
+
+PartClock::PartClock(LoopTrace &trace) : tr_(trace), last_(seconds_now()), allocations_(allocations_now()) {
+  tr_.part_seconds = Vector::Zero(kLoopParts);
+  tr_.part_allocations = Vector::Constant(kLoopParts, nnrobust_allocations ? 0.0 : unset);
+}
+
+void PartClock::lap(LoopPart part) {
+  const double now = seconds_now();
+  tr_.part_seconds[part] += now - last_;
+  if (nnrobust_allocations) {
+    const long count = allocations_now();
+    tr_.part_allocations[part] += static_cast<double>(count - allocations_);
+    allocations_ = count;
+  }
+  last_ = now;
+}
+
 namespace {
 
 // Result.from_trace's per-sample quantities of the true robot at q: the chain points, the
-// manipulability sqrt(det(J J^T)) of the task Jacobian and the weighted criterion h.
+// manipulability sqrt(det(J J^T)) of the task Jacobian and the weighted criterion h. `work` holds
+// the Jacobians and products between calls (no allocation once sized).
 void record_kinematics(LoadedModel &m, const LoopSpec &s, const Criteria &criteria, const Vector &q, long k,
-                       LoopTrace &tr) {
+                       LoopTrace &tr, KinematicsWork &work) {
   auto &model = m.model;
   auto &data = m.data;
   pin::computeJointJacobians(model, data, q);  // one kinematics pass: placements and Jacobians
@@ -34,13 +62,14 @@ void record_kinematics(LoadedModel &m, const LoopSpec &s, const Criteria &criter
   const int joints = model.njoints - 1;
   for (int j = 0; j < joints; ++j) tr.chain.block<1, 3>(k, 3 * j) = data.oMi[j + 1].translation().transpose();
   tr.chain.block<1, 3>(k, 3 * joints) = data.oMf[m.frame].translation().transpose();
-  pin::Matrix6x J6 = pin::Matrix6x::Zero(6, model.nv);
-  pin::getFrameJacobian(model, data, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, J6);
-  const Matrix J = J6.topRows(s.m);
-  tr.manipulability[k] = std::sqrt(std::max(det_small(J * J.transpose()), 0.0));
+  work.J6.setZero(6, model.nv);
+  pin::getFrameJacobian(model, data, m.frame, pinocchio::LOCAL_WORLD_ALIGNED, work.J6);
+  work.J = work.J6.topRows(s.m);
+  work.JJt.noalias() = work.J * work.J.transpose();
+  tr.manipulability[k] = std::sqrt(std::max(det_small(work.JJt), 0.0));
   if (!s.criteria.empty()) {
-    const Matrix points = Eigen::Map<const Rows>(tr.chain.row(k).data(), joints + 1, 3);
-    tr.h[k] = criteria.value(q, J, points);
+    work.points = Eigen::Map<const Rows>(tr.chain.row(k).data(), joints + 1, 3);
+    tr.h[k] = criteria.value(q, work.J, work.points);
   }
 }
 
@@ -77,7 +106,10 @@ SteppedLoop::SteppedLoop(LoadedModel &model, LoadedModel *nominal_model, const L
   v_ = s.v0;
   z_ = s.z0;
   tau_ = Vector::Zero(n);
+  tau_cmd_ = Vector::Zero(n);
+  commands_ = Rows::Zero(plant_->delay + 1, n);
   if (steps > 0) plant_->sensor.measure(0, q_, v_, qm_, vm_);
+  if (s.profile) clock_ = std::make_unique<PartClock>(tr_);
 }
 
 SteppedLoop::~SteppedLoop() = default;
@@ -128,10 +160,14 @@ bool SteppedLoop::advance(const Output &out) {
   const double t = time();
   Plant &plant = *plant_;
   Vector &q = q_, &v = v_;
-  commands_.push_back(out.tau);
-  if (static_cast<int>(commands_.size()) > plant.delay + 1) commands_.pop_front();
-  const Vector tau_cmd = commands_.front();
-  tau_ = plant.applied_torque(tau_cmd, v);
+  // the commands of the last delay + 1 periods, a ring: the applied one is the oldest (the first
+  // command until delay + 1 were given)
+  const long held = commands_.rows();
+  commands_.row(commanded_ % held) = out.tau;
+  ++commanded_;
+  tau_cmd_ = commands_.row(commanded_ <= held ? 0 : commanded_ % held);
+  const Vector &tau_cmd = tau_cmd_;
+  plant.applied_torque(tau_cmd, v, tau_);
   const Vector &tau = tau_;
   tr_.q.row(k) = q;
   tr_.dq.row(k) = v;
@@ -144,7 +180,9 @@ bool SteppedLoop::advance(const Output &out) {
                               " signals; its Python twin declares " + std::to_string(s_.law_signals));
     tr_.signals.row(k) = out.signals;
   }
-  if (q.allFinite()) record_kinematics(model_, s_, *criteria_, q, k, tr_);
+  lap(kPartBookkeeping);
+  if (q.allFinite()) record_kinematics(model_, s_, *criteria_, q, k, tr_, kinematics_);
+  lap(kPartRecord);
   ++k_;
   if (!out.tau.allFinite() || !q.allFinite() || !v.allFinite()) {
     tr_.status = "diverged";
@@ -161,6 +199,7 @@ bool SteppedLoop::advance(const Output &out) {
     return false;
   }
   z_ = out.z;
+  lap(kPartBookkeeping);
   plant.begin_period(t);  // the loads held over this period
   if (plant.engine) {  // MuJoCo steps the plant; a state or torque it discarded ends the run
     if (!plant.engine->advance(t, tau, s_.period, *plant.disturbance, [&](int i) { return plant.load(i); }, q, v)) {
@@ -176,18 +215,27 @@ bool SteppedLoop::advance(const Output &out) {
     if (stick_slip_) {  // simulation.simulate with the plant's stick-slip integrator
       for (int i = 0; i < n_steps; ++i) stick_slip_->advance(t + i * h, q, v, tau, h, i == 0);
     } else {
+      Rk4Work &w = rk4_;  // the stages (k1q is v itself), sized once
       for (int i = 0; i < n_steps; ++i) {  // simulation._rk4_step with the torque held
         const double ti = t + i * h;
-        const Vector k1q = v, k1v = plant.acceleration(ti, q, v, tau);
-        const Vector k2q = v + 0.5 * h * k1v, k2v = plant.acceleration(ti + 0.5 * h, q + 0.5 * h * k1q, k2q, tau);
-        const Vector k3q = v + 0.5 * h * k2v, k3v = plant.acceleration(ti + 0.5 * h, q + 0.5 * h * k2q, k3q, tau);
-        const Vector k4q = v + h * k3v, k4v = plant.acceleration(ti + h, q + h * k3q, k4q, tau);
-        q = q + (h / 6.0) * (k1q + 2.0 * k2q + 2.0 * k3q + k4q);
-        v = v + (h / 6.0) * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+        w.k1v = plant.acceleration(ti, q, v, tau);
+        w.k2q = v + 0.5 * h * w.k1v;
+        w.q_stage = q + 0.5 * h * v;
+        w.k2v = plant.acceleration(ti + 0.5 * h, w.q_stage, w.k2q, tau);
+        w.k3q = v + 0.5 * h * w.k2v;
+        w.q_stage = q + 0.5 * h * w.k2q;
+        w.k3v = plant.acceleration(ti + 0.5 * h, w.q_stage, w.k3q, tau);
+        w.k4q = v + h * w.k3v;
+        w.q_stage = q + h * w.k3q;
+        w.k4v = plant.acceleration(ti + h, w.q_stage, w.k4q, tau);
+        q = q + (h / 6.0) * (v + 2.0 * w.k2q + 2.0 * w.k3q + w.k4q);
+        v = v + (h / 6.0) * (w.k1v + 2.0 * w.k2v + 2.0 * w.k3v + w.k4v);
       }
     }
   }
+  lap(kPartPlant);
   if (k_ < s_.steps) plant.sensor.measure(k_, q, v, qm_, vm_);  // the next instant's measurement
+  lap(kPartMeasure);
   return k_ < s_.steps;
 }
 
@@ -218,6 +266,7 @@ LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpe
     } else {
       out = loop.control();
     }
+    loop.lap(kPartLaw);
     loop.advance(out);
   }
   return loop.finish();
@@ -242,7 +291,8 @@ double twin_criterion_value(LoadedModel &robot, const LoopSpec &s, const Vector 
   LoopTrace tr;
   tr.chain = Rows::Zero(1, 3 * robot.model.njoints);
   tr.manipulability = tr.h = Vector::Constant(1, std::numeric_limits<double>::quiet_NaN());
-  record_kinematics(robot, s, criteria, q, 0, tr);
+  KinematicsWork work;
+  record_kinematics(robot, s, criteria, q, 0, tr, work);
   return tr.h[0];
 }
 

@@ -3,7 +3,6 @@
 // the comments; tests/test_compiled.py holds the two equal.
 #pragma once
 
-#include <deque>
 #include <functional>
 #include <memory>
 #include <limits>
@@ -73,7 +72,19 @@ struct LoopSpec {
   Vector criterion_weights;
   double pinv_threshold = unset, pinv_max_damping = unset;
   Vector z0;
+  // time the step's parts (LoopTrace::part_seconds; benchmarks/loop_profile.py); off in every run
+  // the library makes, where it costs one untaken branch per part
+  bool profile = false;
 };
+
+// The parts of a step LoopSpec::profile times, in LoopTrace::part_seconds' order: the law's
+// compute (the compiled law, or the hybrid loop's Python law with its calls), the loop's own
+// bookkeeping (the command's delay and the applied torque, the per-step rows, the divergence
+// checks), the recorded kinematics of the true robot (chain points, manipulability, criterion),
+// the plant's integration over the period (RK4 or the stick-slip integrator), and the sensor's
+// next measurement.
+enum LoopPart { kPartLaw, kPartBookkeeping, kPartRecord, kPartPlant, kPartMeasure, kLoopParts };
+inline const char *const kLoopPartNames[kLoopParts] = {"law", "bookkeeping", "record", "plant", "measure"};
 
 // What simulate() returns (nnrobust.simulation.Trace).
 struct LoopTrace {
@@ -89,6 +100,23 @@ struct LoopTrace {
   int divergence_joint = -1;   // joint that ran away (-1: non-finite state or torque)
   long friction_events = 0, unresolved_events = 0;  // StickSlipIntegrator's counts
   long refined_periods = 0;                           // periods whose plant step was cut for speed
+  // with LoopSpec::profile, per part (LoopPart): seconds, and calls to the system allocator made
+  // on the loop's thread (counted only where benchmarks/allocation_counter.cpp is preloaded: NaN
+  // otherwise), summed over the run
+  Vector part_seconds, part_allocations;
+};
+
+// Times the parts of a step (LoopSpec::profile): lap(part) charges the time and allocations since
+// the previous lap to `part`.
+class PartClock {
+ public:
+  explicit PartClock(LoopTrace &trace);
+  void lap(LoopPart part);
+
+ private:
+  LoopTrace &tr_;
+  double last_;
+  long allocations_;
 };
 
 // A control law without a compiled twin (the hybrid loop: a Python controller's compute), called
@@ -96,6 +124,18 @@ struct LoopTrace {
 // and z_next (z's size) and returns false to stop the run (the caller keeps the error).
 using ExternalLaw = std::function<bool(double t, const Vector &q, const Vector &v, const Vector &z, Vector &tau,
                                        Vector &z_next)>;
+
+// The buffers of a step's recorded kinematics (closed_loop.cpp's record_kinematics), kept by the
+// loop between steps: the frame's 6 x n Jacobian, its task rows J, J J^T, the chain's points.
+struct KinematicsWork {
+  Eigen::Matrix<double, 6, Eigen::Dynamic> J6;
+  Matrix J, JJt, points;
+};
+
+// The stages of the plant's RK4 step with the torque held (simulation._rk4_step), kept by the loop.
+struct Rk4Work {
+  Vector k1v, k2q, k2v, k3q, k3v, k4q, k4v, q_stage;
+};
 
 struct Output;
 struct Controller;
@@ -153,9 +193,19 @@ class SteppedLoop {
   std::unique_ptr<Plant> plant_;
   std::unique_ptr<StickSlipIntegrator> stick_slip_;
   LoopTrace tr_;
-  Vector q_, v_, z_, tau_, qm_, vm_;
-  std::deque<Vector> commands_;
+  Vector q_, v_, z_, tau_, tau_cmd_, qm_, vm_;
+  KinematicsWork kinematics_;
+  Rk4Work rk4_;
+  Rows commands_;       // the last delay + 1 commands, a ring (row commanded_ % rows is the next)
+  long commanded_ = 0;  // commands given so far
   long k_ = 0;
+  std::unique_ptr<PartClock> clock_;  // with LoopSpec::profile
+
+ public:
+  // with LoopSpec::profile, charge what ran since the last lap to `part` (run_loop's law)
+  void lap(LoopPart part) {
+    if (clock_) clock_->lap(part);
+  }
 };
 
 // Runs the loop; `nominal` is the controller's Pinocchio model (LoopSpec.nominal "pinocchio", else

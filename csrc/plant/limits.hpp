@@ -9,8 +9,9 @@
 
 namespace nnrobust {
 
-// saturate: the torque the actuators apply for the command, clipped to [-limit, limit] (inf: none)
-inline Vector saturate(const Vector &tau, const Vector &limit) { return tau.cwiseMax(-limit).cwiseMin(limit); }
+// saturate: the torque the actuators apply for the command, clipped to [-limit, limit] (inf: none),
+// written into `out` (no allocation once it is sized)
+inline void saturate(const Vector &tau, const Vector &limit, Vector &out) { out = tau.cwiseMax(-limit).cwiseMin(limit); }
 
 // available_torque, joint i: the effort limit, cut while driving (tau_cmd q' > 0) by the
 // torque-speed envelope limit min(1, max(0, (1 - |q'| / q'_max) / (1 - knee))); knee < 0 or an

@@ -84,15 +84,17 @@ struct Plant {
   }
 
   // Plant.applied_torque: the command saturated at the effort limits and, where set, the
-  // torque-speed envelope at the joint speeds v
-  Vector applied_torque(const Vector &tau_cmd, const Vector &v) const {
-    if (knee < 0.0) return saturate(tau_cmd, effort_limit);
-    Vector out(tau_cmd.size());
+  // torque-speed envelope at the joint speeds v, written into `out` (no allocation once sized)
+  void applied_torque(const Vector &tau_cmd, const Vector &v, Vector &out) const {
+    if (knee < 0.0) {
+      saturate(tau_cmd, effort_limit, out);
+      return;
+    }
+    out.resize(tau_cmd.size());
     for (Eigen::Index i = 0; i < tau_cmd.size(); ++i) {
       const double limit = available_torque(effort_limit[i], tau_cmd[i], v[i], speed_limit[i], knee);
       out[i] = std::clamp(tau_cmd[i], -limit, limit);
     }
-    return out;
   }
 
   // Plant.begin_period: the loads of [[plant.loads]] held over the control period that starts at t
@@ -122,8 +124,9 @@ struct Plant {
     return stops ? std::max(rate, stops->ringing(q, v, period)) : rate;
   }
 
-  // Plant.acceleration: the slipping law with sgn(0) = 0, net_torque with every mode sgn(v_i)
-  Vector acceleration(double t, const Vector &q, const Vector &v, const Vector &tau) {
+  // Plant.acceleration: the slipping law with sgn(0) = 0, net_torque with every mode sgn(v_i);
+  // Pinocchio's buffer, good until the next call
+  const Vector &acceleration(double t, const Vector &q, const Vector &v, const Vector &tau) {
     signs_.resize(v.size());
     for (int i = 0; i < v.size(); ++i) signs_[i] = static_cast<int>(sign(v[i]));
     return pin::aba(m.model, m.data, q, v, net_torque(t, q, v, tau, signs_));
@@ -169,9 +172,10 @@ struct Plant {
   }
 
   // Plant.constrained_acceleration: q'' with the held joints' q''_i = 0, and `hold`, the
-  // friction torque holding them (in joint order)
-  Vector constrained_acceleration(double t, const Vector &q, const Vector &v, const Vector &tau, const Modes &mode,
-                                  Vector &hold) {
+  // friction torque holding them (in joint order). The q'' returned is the plant's own buffer
+  // (or Pinocchio's), good until the next call: a caller keeps a copy.
+  const Vector &constrained_acceleration(double t, const Vector &q, const Vector &v, const Vector &tau,
+                                         const Modes &mode, Vector &hold) {
     const int n = static_cast<int>(q.size());
     net_torque(t, q, v, tau, mode);
     free_.clear();
@@ -183,7 +187,8 @@ struct Plant {
     }
     mass(q);
     r_ = net_ - bias(q, v);
-    Vector a = Vector::Zero(n);
+    Vector &a = constrained_;
+    a.setZero(n);
     const int nf = static_cast<int>(free_.size());
     if (nf) {
       Mff_.resize(nf, nf);
@@ -204,7 +209,7 @@ struct Plant {
 
  private:
   // workspaces: sized once, so a step allocates nothing here
-  Vector net_, r_, rf_;
+  Vector net_, r_, rf_, constrained_;
   Vector load_, wrench_, loaded_;  // begin_period's held loads; loaded_: with J^T w
   bool has_wrench_ = false;
   int payload_index_ = -1;

@@ -24,33 +24,38 @@ class StickSlipIntegrator {
     const int n = static_cast<int>(q.size());
     bool rest = false;
     for (int i = 0; i < n; ++i) rest = rest || (plant_.sticky(i) && v[i] == 0.0);
-    if (new_command && rest) mode = settle(t, q, v, tau, mode);
+    if (new_command && rest) settle(t, q, v, tau, mode);
     const double end = t + h;
     for (int round = 0; round <= kMaxEvents; ++round) {
-      const Modes held_mode = mode;
-      std::vector<int> slipping, held;
+      held_mode_ = mode;
+      const Modes &held_mode = held_mode_;
+      slipping_.clear();
+      held_.clear();
       for (int i = 0; i < n; ++i)
-        if (plant_.sticky(i)) (held_mode[i] != 0 ? slipping : held).push_back(i);
+        if (plant_.sticky(i)) (held_mode[i] != 0 ? slipping_ : held_).push_back(i);
+      const std::vector<int> &slipping = slipping_, &held = held_;
       const double span = end - t;
-      Vector q1, v1;
+      Vector &q1 = q_end_, &v1 = v_end_;
       flow(t, q, v, tau, held_mode, span, q1, v1);
-      const Vector g_end = events(end, q1, v1, tau, held_mode, slipping, held);
-      std::vector<int> triggered;
+      events(end, q1, v1, tau, held_mode, slipping, held, g_end_);
+      const Vector &g_end = g_end_;
+      triggered_.clear();
       for (int i = 0; i < g_end.size(); ++i)
-        if (g_end[i] <= 0.0) triggered.push_back(i);
-      if (triggered.empty()) {
+        if (g_end[i] <= 0.0) triggered_.push_back(i);
+      if (triggered_.empty()) {
         q = q1;
         v = v1;
         return;
       }
-      const Vector g_start = events(t, q, v, tau, held_mode, slipping, held);
+      events(t, q, v, tau, held_mode, slipping, held, g_start_);
+      const Vector &g_start = g_start_;
       double first = span;
       int which = -1;
-      for (int i : triggered) {
+      for (int i : triggered_) {
         auto g = [&](double s_) {
-          Vector qs, vs;
-          flow(t, q, v, tau, held_mode, s_, qs, vs);
-          return events(t + s_, qs, vs, tau, held_mode, slipping, held)[i];
+          flow(t, q, v, tau, held_mode, s_, q_try_, v_try_);
+          events(t + s_, q_try_, v_try_, tau, held_mode, slipping, held, g_try_);
+          return g_try_[i];
         };
         const double s_i = event_time(g, g_start[i], span, g_end[i]);
         if (s_i >= 0.0 && (s_i < first || which < 0)) {
@@ -67,22 +72,21 @@ class StickSlipIntegrator {
         q = q1;
         v = v1;
       } else if (first > 0.0) {
-        Vector qf, vf;
-        flow(t, q, v, tau, held_mode, first, qf, vf);
-        q = qf;
-        v = vf;
+        flow(t, q, v, tau, held_mode, first, q_try_, v_try_);
+        q = q_try_;
+        v = v_try_;
       }
       t = t + first;
       const int n_slip = static_cast<int>(slipping.size());
       if (which < n_slip) v[slipping[which]] = 0.0;
       ++events_;
-      mode = settle(t, q, v, tau, held_mode);
+      mode = held_mode;
+      settle(t, q, v, tau, mode);
       if (which >= n_slip) {  // a held joint breaks away toward its holding torque
         const int joint = held[which - n_slip];
         if (mode[joint] == 0) {
-          Vector hold;
-          plant_.constrained_acceleration(t, q, v, tau, held_mode, hold);
-          mode[joint] = hold[which - n_slip] > 0 ? 1 : -1;
+          plant_.constrained_acceleration(t, q, v, tau, held_mode, hold_);
+          mode[joint] = hold_[which - n_slip] > 0 ? 1 : -1;
         }
       }
       if (first >= span) return;
@@ -102,79 +106,95 @@ class StickSlipIntegrator {
  private:
   long events_ = 0, unresolved_ = 0;
 
-  // stick_slip.rk4_flow
+  // stick_slip.rk4_flow, into q_out, v_out (neither may be q or v): the stages in the work
+  // buffers below, so that a flow allocates nothing once they are sized
   void flow(double t, const Vector &q, const Vector &v, const Vector &tau, const Modes &md, double h, Vector &q_out,
             Vector &v_out) {
-    Vector hold;
-    const Vector a1 = plant_.constrained_acceleration(t, q, v, tau, md, hold);
-    const Vector v2 = v + 0.5 * h * a1;
-    const Vector a2 = plant_.constrained_acceleration(t + 0.5 * h, q + 0.5 * h * v, v2, tau, md, hold);
-    const Vector v3 = v + 0.5 * h * a2;
-    const Vector a3 = plant_.constrained_acceleration(t + 0.5 * h, q + 0.5 * h * v2, v3, tau, md, hold);
-    const Vector v4 = v + h * a3;
-    const Vector a4 = plant_.constrained_acceleration(t + h, q + h * v3, v4, tau, md, hold);
-    q_out = q + (h / 6.0) * (v + 2.0 * v2 + 2.0 * v3 + v4);
-    v_out = v + (h / 6.0) * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
+    a1_ = plant_.constrained_acceleration(t, q, v, tau, md, hold_);
+    v2_ = v + 0.5 * h * a1_;
+    q_stage_ = q + 0.5 * h * v;
+    a2_ = plant_.constrained_acceleration(t + 0.5 * h, q_stage_, v2_, tau, md, hold_);
+    v3_ = v + 0.5 * h * a2_;
+    q_stage_ = q + 0.5 * h * v2_;
+    a3_ = plant_.constrained_acceleration(t + 0.5 * h, q_stage_, v3_, tau, md, hold_);
+    v4_ = v + h * a3_;
+    q_stage_ = q + h * v3_;
+    a4_ = plant_.constrained_acceleration(t + h, q_stage_, v4_, tau, md, hold_);
+    q_out = q + (h / 6.0) * (v + 2.0 * v2_ + 2.0 * v3_ + v4_);
+    v_out = v + (h / 6.0) * (a1_ + 2.0 * a2_ + 2.0 * a3_ + a4_);
   }
 
-  // stick_slip._events: mode_i v_i of the slipping joints, then 1 - |f_i| / F_s,i of the held
-  Vector events(double t, const Vector &q, const Vector &v, const Vector &tau, const Modes &md,
-                const std::vector<int> &slipping, const std::vector<int> &held) {
+  // stick_slip._events, into g: mode_i v_i of the slipping joints, then 1 - |f_i| / F_s,i of the
+  // held
+  void events(double t, const Vector &q, const Vector &v, const Vector &tau, const Modes &md,
+              const std::vector<int> &slipping, const std::vector<int> &held, Vector &g) {
     const int ns = static_cast<int>(slipping.size()), nh = static_cast<int>(held.size());
-    Vector g(ns + nh);
+    g.resize(ns + nh);
     for (int i = 0; i < ns; ++i) g[i] = md[slipping[i]] * v[slipping[i]];
-    if (nh == 0) return g;
-    Vector hold;
-    plant_.constrained_acceleration(t, q, v, tau, md, hold);
-    for (int i = 0; i < nh; ++i) g[ns + i] = 1.0 - std::abs(hold[i]) / plant_.friction.stiction[held[i]];
-    return g;
+    if (nh == 0) return;
+    plant_.constrained_acceleration(t, q, v, tau, md, hold_);
+    for (int i = 0; i < nh; ++i) g[ns + i] = 1.0 - std::abs(hold_[i]) / plant_.friction.stiction[held[i]];
   }
 
-  // stick_slip.settle
-  Modes settle(double t, const Vector &q, const Vector &v, const Vector &tau, Modes md) {
+  // work buffers (sized on first use; a step then allocates nothing in advance, flow or events)
+  Modes held_mode_;
+  std::vector<int> slipping_, held_, triggered_;
+  Vector q_end_, v_end_, q_try_, v_try_, g_end_, g_start_, g_try_;
+  Vector a1_, a2_, a3_, a4_, v2_, v3_, v4_, q_stage_, hold_;
+
+  // stick_slip.settle: the modes of the joints at rest (v_i = 0) chosen in place in `md`
+  void settle(double t, const Vector &q, const Vector &v, const Vector &tau, Modes &md) {
     const int n = static_cast<int>(q.size());
-    std::vector<int> rest;
+    std::vector<int> &rest = rest_;
+    rest.clear();
     for (int i = 0; i < n; ++i)
       if (plant_.sticky(i) && v[i] == 0.0) rest.push_back(i);
-    if (rest.empty()) return md;
+    if (rest.empty()) return;
     for (int i : rest) md[i] = 0;
-    const Matrix M = plant_.mass(q);
-    const Vector r = plant_.net_torque(t, q, v, tau, md) - plant_.bias(q, v);
-    const Eigen::PartialPivLU<Matrix> lu(M);
-    const Matrix Minv = lu.inverse();
-    const Vector Minv_r = lu.solve(r);
+    const Matrix &M = plant_.mass(q);  // the plant's: net_torque and bias leave it alone
+    r_ = plant_.net_torque(t, q, v, tau, md) - plant_.bias(q, v);
+    lu_.compute(M);
+    Minv_ = lu_.inverse();
+    Minv_r_ = lu_.solve(r_);
     const int k = static_cast<int>(rest.size());
-    Matrix W(k, k);
-    Vector c(k), stat(k), coul(k);
+    W_.resize(k, k);
+    c_.resize(k);
+    stat_.resize(k);
+    coul_.resize(k);
     for (int i = 0; i < k; ++i) {
-      c[i] = Minv_r[rest[i]];
-      stat[i] = plant_.friction.stiction[rest[i]];
-      coul[i] = plant_.friction.coulomb[rest[i]];
-      for (int j = 0; j < k; ++j) W(i, j) = Minv(rest[i], rest[j]);
+      c_[i] = Minv_r_[rest[i]];
+      stat_[i] = plant_.friction.stiction[rest[i]];
+      coul_[i] = plant_.friction.coulomb[rest[i]];
+      for (int j = 0; j < k; ++j) W_(i, j) = Minv_(rest[i], rest[j]);
     }
-    Vector f;
-    Eigen::VectorXi side;
-    box_qp(W, c, stat, f, side);
-    std::vector<bool> slides(k);
-    for (int i = 0; i < k; ++i) slides[i] = side[i] != 0;
+    box_qp(W_, c_, stat_, f_, side_);
+    slides_.assign(k, false);
+    for (int i = 0; i < k; ++i) slides_[i] = side_[i] != 0;
     auto stiction = [&]() {
       for (int i = 0; i < k; ++i)
-        if (slides[i] && stat[i] > coul[i]) return true;
+        if (slides_[i] && stat_[i] > coul_[i]) return true;
       return false;
     };
     while (stiction()) {
-      Vector bound(k);
-      for (int i = 0; i < k; ++i) bound[i] = slides[i] ? coul[i] : std::numeric_limits<double>::infinity();
-      box_qp(W, c, bound, f, side);
+      bound_.resize(k);
+      for (int i = 0; i < k; ++i) bound_[i] = slides_[i] ? coul_[i] : std::numeric_limits<double>::infinity();
+      box_qp(W_, c_, bound_, f_, side_);
       bool broke = false;
       for (int i = 0; i < k; ++i)
-        if (!slides[i] && std::abs(f[i]) > stat[i]) slides[i] = broke = true;
+        if (!slides_[i] && std::abs(f_[i]) > stat_[i]) slides_[i] = broke = true;
       if (!broke) break;
     }
-    const Vector a = c - W * f;
-    for (int i = 0; i < k; ++i) md[rest[i]] = (side[i] != 0 && side[i] * a[i] > 0) ? side[i] : 0;
-    return md;
+    a_rest_ = c_ - W_ * f_;
+    for (int i = 0; i < k; ++i) md[rest[i]] = (side_[i] != 0 && side_[i] * a_rest_[i] > 0) ? side_[i] : 0;
   }
+
+  // settle's work buffers
+  std::vector<int> rest_;
+  std::vector<bool> slides_;
+  Vector r_, Minv_r_, c_, stat_, coul_, bound_, f_, a_rest_;
+  Matrix Minv_, W_;
+  Eigen::PartialPivLU<Matrix> lu_;
+  Eigen::VectorXi side_;
 
  public:
   // stick_slip.box_qp: min 1/2 f'W f - c'f subject to |f_i| <= bound_i, by a primal active set

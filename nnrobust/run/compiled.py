@@ -480,6 +480,41 @@ def simulate_compiled(setup, duration: float):
     return _trace(setup, spec, out)
 
 
+def allocation_counter() -> str:
+    """The path of the allocation counter built with the extension
+    (``benchmarks/allocation_counter.cpp``), to preload (``LD_PRELOAD``) in a process that
+    :func:`profile_compiled` should count allocations in; "" where it was not built (not Linux).
+    """
+    from pathlib import Path
+
+    path = Path(_module().__file__).with_name("libnnrobust_allocation_counter.so")
+    return str(path) if path.exists() else ""
+
+
+def profile_compiled(setup, duration: float) -> tuple[dict, object]:
+    """One compiled run with its step's parts timed (``LoopSpec.profile``): ``{part: (µs per
+    step, system-allocator calls per step)}`` for each of the loop's parts (``nnrobust._loop.
+    LOOP_PARTS``: law, bookkeeping, record, plant, measure), and the run's Trace. The calls are
+    None unless :func:`allocation_counter` is preloaded in this process
+    (``benchmarks/loop_profile.py`` does it). The run is the unprofiled run's, bit for bit.
+    """
+    import math
+
+    from ..core.signals import check_interrupt
+
+    check_interrupt()
+    plant, nominal, spec = _prepared(setup, duration)
+    spec.profile = True
+    with _user_law_errors():
+        out = _module().run_loop(plant, spec, nominal)
+    steps = max(out.done, 1)
+    parts = {
+        name: (1e6 * seconds / steps, None if math.isnan(calls) else calls / steps)
+        for name, seconds, calls in zip(_module().LOOP_PARTS, out.part_seconds, out.part_allocations)
+    }
+    return parts, _trace(setup, spec, out)
+
+
 @contextlib.contextmanager
 def _user_law_errors():
     """A law compiled apart that throws, returns arrays of the wrong size or misses a parameter

@@ -1,0 +1,79 @@
+"""The compiled step's parts, timed and counted (LoopSpec.profile; benchmarks/loop_profile.py):
+a profiled run is the run, the parts account for no more than the run's time, and the loop's own
+parts make no call to the system allocator (counted by benchmarks/allocation_counter.cpp,
+preloaded in a child process)."""
+
+import json
+import os
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from nnrobust.config.presets import load_preset
+from nnrobust.run import compiled
+from nnrobust.run.experiment import build
+
+pytestmark = pytest.mark.skipif(not compiled.available(), reason="the compiled loop is not built")
+
+PARTS = ("law", "bookkeeping", "record", "plant", "measure")
+
+
+def test_a_profiled_run_is_the_run_and_its_parts_fit_in_its_time():
+    setup = build(load_preset("paper-ellipse-noisy").replace(simulation={"duration": 1.0}))
+    plain = compiled.simulate_compiled(setup, 1.0)
+    start = time.perf_counter()
+    parts, trace = compiled.profile_compiled(setup, 1.0)
+    wall = time.perf_counter() - start
+    for name in ("q", "dq", "tau", "tau_cmd"):
+        np.testing.assert_array_equal(getattr(trace, name), getattr(plain, name))
+    assert tuple(parts) == PARTS
+    assert all(us >= 0.0 and calls is None for us, calls in parts.values())  # no counter preloaded here
+    assert parts["law"][0] > 0.0 and parts["plant"][0] > 0.0
+    assert sum(us for us, _ in parts.values()) * 1e-6 * trace.t.size <= wall
+
+
+COUNTED = """
+import ctypes, json
+from nnrobust.config.presets import load_preset
+from nnrobust.run import compiled
+from nnrobust.run.experiment import build
+
+process = ctypes.CDLL(None)  # the process's symbols: the preloaded malloc comes first
+counted = process.nnrobust_allocations
+libc = process
+libc.malloc.restype = ctypes.c_void_p
+libc.free.argtypes = [ctypes.c_void_p]
+before = counted()
+blocks = [libc.malloc(64) for _ in range(1000)]
+made = counted() - before
+for block in blocks:
+    libc.free(block)
+rows = {}
+for preset in ("paper-ellipse", "panda-ellipse"):
+    setup = build(load_preset(preset).replace(simulation={"duration": 0.5}))
+    rows[preset] = compiled.profile_compiled(setup, 0.5)[0]
+print(json.dumps({"made": made, "rows": rows}))
+"""
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the allocation counter is glibc's")
+def test_the_counter_counts_and_the_loops_own_parts_never_allocate():
+    counter = compiled.allocation_counter()
+    assert counter, "the allocation counter was not built with the extension"
+    out = subprocess.run(
+        [sys.executable, "-c", COUNTED],
+        env={**os.environ, "LD_PRELOAD": counter},
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=True,
+    )
+    result = json.loads(out.stdout.splitlines()[-1])
+    assert 1000 <= result["made"] < 1100  # the 1000 blocks asked for, and what ctypes adds
+    for preset, parts in result["rows"].items():
+        calls = {name: c for name, (_, c) in parts.items()}
+        assert calls["bookkeeping"] == 0 and calls["measure"] == 0, (preset, calls)
+        assert calls["law"] > 0, (preset, calls)  # the laws still allocate (issue 53: not yet zero)
