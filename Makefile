@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 OUT ?= out
 
-.PHONY: run test lint bench docs-data mutations clean FORCE
+.PHONY: run test lint bench bench-check docs-data mutations clean FORCE
 
 $(BIN)/activate:
 	$(PYTHON) -m venv $(VENV)
@@ -70,6 +70,13 @@ test: $(VENV)/.installed-test $(VENV)/.browser
 
 bench: $(VENV)/.installed
 	$(BIN)/nnrobust bench --out $(OUT)/bench
+
+# The compiled loop's speed goals (benchmarks/bench_check.py): about a minute, on a quiet machine;
+# fails, naming the part of the step that grew, when a goal is missed.
+bench-check: $(VENV)/.installed
+	$(BIN)/python benchmarks/closed_loop.py --json $(OUT)/bench/closed_loop.json
+	$(BIN)/python benchmarks/loop_profile.py --json $(OUT)/bench/loop_profile.json
+	$(BIN)/python benchmarks/bench_check.py $(OUT)/bench/closed_loop.json $(OUT)/bench/loop_profile.json
 
 # Every number in README.md and docs/: regenerate each data file (about 1.5 hours on 2 cores;
 # the resumable tunings and searches start afresh, so a changed plant or tuner is not replayed),

@@ -4,7 +4,8 @@ Python controller (examples/custom_controller.py's TaskPD) on the Python and the
 compute timed alone, its outputs' contract checks alone (both loops make them at every step), and
 the hybrid loop replaying its commands: the loop's own cost; and the
 library's loops with MuJoCo as the plant (plant.engine = "mujoco"; the compiled loop calls
-MuJoCo's mj_step itself).
+MuJoCo's mj_step itself); and Slotine–Li (controller.kind = "slotine-li") on the compiled loop.
+`make bench-check` compares the ratios with their goals (benchmarks/bench_check.py).
 
     python benchmarks/closed_loop.py --json out/bench/closed_loop.json [--duration 2]
 
@@ -92,6 +93,9 @@ def _contenders(preset: str, duration: float) -> dict:
     if compiled.available():
         if not compiled.twin_refusal(setup):
             out["nnrobust, compiled loop"] = lambda: compiled.simulate_compiled(setup, duration)
+        slotine_li = build(config.replace(controller={"kind": "slotine-li"}))
+        if not compiled.twin_refusal(slotine_li):
+            out["slotine-li, compiled loop"] = lambda: compiled.simulate_compiled(slotine_li, duration)
         if mujoco is not None:
             out["nnrobust, compiled, MuJoCo"] = lambda: compiled.simulate_compiled(mujoco, duration)
         loaded = compiled.load_model(robot.model, robot.task_frame)

@@ -77,3 +77,52 @@ def test_the_counter_counts_and_the_loops_own_parts_never_allocate():
         calls = {name: c for name, (_, c) in parts.items()}
         assert calls["bookkeeping"] == 0 and calls["measure"] == 0, (preset, calls)
         assert calls["law"] > 0, (preset, calls)  # the laws still allocate (issue 53: not yet zero)
+
+
+def _bench_check():
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "benchmarks" / "bench_check.py"
+    spec = importlib.util.spec_from_file_location("bench_check", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def _loop_rows(compiled_us: float, hybrid_us: float) -> dict:
+    rows = [("floor, C++", 5.0), ("nnrobust, compiled loop", compiled_us), ("slotine-li, compiled loop", 7.0)]
+    rows += [("TaskPD, hybrid loop", hybrid_us), ("TaskPD, compute alone", 60.0)]
+    return {"rows": [{"preset": "arm", "contender": c, "step_seconds": 1e-6 * us} for c, us in rows]}
+
+
+def _profile(law_us: float, law_calls: float) -> dict:
+    rows = [("law", law_us, law_calls), ("plant", 4.0, 0.0)]
+    return {
+        "rows": [
+            {"preset": "arm", "law": "nn", "part": p, "us_per_step": us, "allocations_per_step": c}
+            for p, us, c in rows
+        ]
+    }
+
+
+def test_bench_check_says_which_goal_is_missed_and_which_part_grew(tmp_path, capsys):
+    check = _bench_check()
+    stored = tmp_path / "stored.json"
+    stored.write_text(json.dumps(_profile(2.0, 50.0)))
+    cases = {
+        "met": (_loop_rows(7.5, 68.0), _profile(2.1, 50.0), 0),  # 1.5x the floor, 8 µs beyond compute
+        "slow": (_loop_rows(8.5, 68.0), _profile(3.2, 55.0), 1),  # 1.7x: missed, and the law grew
+        "hybrid": (_loop_rows(7.5, 75.0), _profile(2.0, 50.0), 1),  # 15 µs beyond compute
+    }
+    for name, (loop, profile, code) in cases.items():
+        (tmp_path / "loop.json").write_text(json.dumps(loop))
+        (tmp_path / "profile.json").write_text(json.dumps(profile))
+        args = [str(tmp_path / "loop.json"), str(tmp_path / "profile.json"), "--stored", str(stored)]
+        assert check.main(args) == code, name
+        out = capsys.readouterr().out
+        if name == "slow":
+            assert "MISS arm: nn compiled / C++ floor: 1.70" in out and "ok   arm: slotine-li" in out
+            assert "arm, nn, law: 2.00 -> 3.20 µs per step" in out and "50.0 -> 55.0 allocations" in out
+        if name == "hybrid":
+            assert "MISS arm: hybrid overhead [µs]: 15.00" in out and "no part grew" in out
