@@ -11,7 +11,9 @@ its group:
   worst plant of a box), ``tune`` (controllers at one budget), ``study`` (a study file's report);
 - :mod:`~nnrobust.cli.robot`: ``export`` (a law as a C library), ``serve`` (a virtual robot over
   UDP);
-- :mod:`~nnrobust.cli.identify`: ``identify`` (a robot's model from its log).
+- :mod:`~nnrobust.cli.identify`: ``identify`` (a robot's model from its log);
+- :mod:`~nnrobust.cli.learn`: ``learn`` (a policy trained by PPO or SAC, per seed, with its
+  learning curve).
 
 This module stays light (the stop signals are routed before the commands' modules are imported,
 so that a Ctrl-C at any instant of the start is a clean exit 130): :func:`main` imports the table.

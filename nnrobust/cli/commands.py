@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import argparse
 
-from . import catalog, identify, robot, runs, studies
+from . import catalog, identify, learn, robot, runs, studies
 from .common import Command, many_run_options
 
 COMMANDS: tuple[Command, ...] = (
@@ -24,6 +24,7 @@ COMMANDS: tuple[Command, ...] = (
     studies.STUDY,
     studies.TUNE,
     identify.IDENTIFY,
+    learn.LEARN,
     catalog.BENCH,
 )
 

@@ -220,6 +220,7 @@ class Episodes:
             np.asarray(a, dtype=float) for a in (robot.lower_limits, robot.upper_limits)
         )
         self.period = first.config.simulation.control_period
+        self.horizon = first.config.simulation.duration  # an episode's length [s]
         self.cache = 64  # built episodes kept: candidates of a training generation share plants
         self._built: dict = {(self.spec.seed, 0): first}
 

@@ -101,6 +101,14 @@ class ArmVectorEnv(gym.vector.VectorEnv):
         self._sizes[j] = size
         self._running[j], self._ended[j] = True, False
 
+    def restart(self, j: int) -> np.ndarray:
+        """Start sub-environment j's next episode now and return its first observation: a
+        same-step reset, for trainers that expect one (Stable-Baselines3's VecEnv;
+        nnrobust.studies.learning.rl). Call it after the step that ended j's episode.
+        """
+        self._start(j)
+        return self._obs[j].copy()
+
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         """Start a new episode in every sub-environment; ``seed`` restarts at episode 0 of the
         sweep with that seed (sub-environment j then runs episode j). ``options={"episodes":

@@ -1,0 +1,193 @@
+"""``nnrobust learn``: a learned policy trained on an experiment or a sweep's box, one per seed,
+with its learning curve (docs/learning.md#ppo-and-sac).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import io
+import json
+import sys
+from pathlib import Path
+
+from ..core.exceptions import ConfigError
+from .common import Command
+
+CURVE_COLUMNS = ("seed", "simulated_seconds", "wall_seconds", "mean_return", "median_rms_error_after_2s",
+                 "median_rms_torque")  # fmt: skip
+"""The columns of DIR/curves.csv: one row per seed and point of its learning curve."""
+
+SAME_RUN = ("experiment_sha256", "algorithm", "budget_seconds", "action", "controller", "duration", "hyper")
+"""A seed's stored record is reused when these match the command's (else the seed is refused)."""
+
+
+def learn_arguments(parser: argparse.ArgumentParser) -> None:
+    """The arguments of ``nnrobust learn``."""
+    parser.add_argument(
+        "experiment",
+        metavar="EXPERIMENT|SWEEP.toml",
+        help="a preset, an experiment file, or a sweep file (its [vary] box is the training's "
+        "domain randomisation, its first controller the base law)",
+    )
+    parser.add_argument(
+        "--algorithm", default="ppo", choices=("ppo", "sac"), help="the trainer (default ppo)"
+    )
+    parser.add_argument(
+        "--budget",
+        type=float,
+        required=True,
+        metavar="SECONDS",
+        help="simulated seconds of training per seed (each environment step is one control period)",
+    )
+    parser.add_argument("--seeds", type=int, default=1, metavar="K", help="train seeds 0 .. K-1 (default 1)")
+    parser.add_argument(
+        "--out", required=True, help="folder to write (seed-K/policy.onnx and its record, curves)"
+    )
+    parser.add_argument(
+        "--action",
+        default="residual",
+        choices=("residual", "torque", "gains"),
+        help="what the policy commands (default residual: added to the base law's torque)",
+    )
+    parser.add_argument("--controller", help="the base law's kind (default: the experiment's)")
+    parser.add_argument(
+        "--duration",
+        type=float,
+        metavar="S",
+        help="an episode's length [s] (default: the experiment's simulation.duration, the horizon "
+        "it is scored on)",
+    )
+    parser.add_argument(
+        "--num-envs", type=int, default=8, metavar="N", help="episodes stepped together (default 8)"
+    )
+    parser.add_argument(
+        "--validation-episodes",
+        type=int,
+        default=8,
+        metavar="N",
+        help="fixed validation plants of the learning curve, drawn apart from training's (default 8)",
+    )
+    parser.add_argument(
+        "--eval-every",
+        type=float,
+        metavar="SECONDS",
+        help="simulated seconds of training between the curve's points (default: a tenth of the budget)",
+    )
+    parser.add_argument("--quiet", action="store_true", help="print nothing but errors")
+
+
+def _reused(folder: Path, wanted: dict) -> dict | None:
+    """The seed's stored record when it is the same training (``SAME_RUN``), else None."""
+    path = folder / "policy.onnx.json"
+    if not path.is_file():
+        return None
+    stored = json.loads(path.read_text())
+    differs = [k for k in SAME_RUN if k in wanted and stored.get(k) != wanted[k]]
+    if differs:
+        raise ConfigError(
+            "--out",
+            f"{folder} holds another training (its {', '.join(differs)} differ): choose another --out",
+        )
+    return stored
+
+
+def write_curves(out: Path, records: list[dict]) -> None:
+    """DIR/curves.csv (one row per seed and point) and DIR/curves.png (the validation error and
+    return against simulated seconds, one line per seed).
+    """
+    from ..run.results import write_text_atomic
+
+    text = io.StringIO()
+    writer = csv.writer(text, lineterminator="\n")
+    writer.writerow(CURVE_COLUMNS)
+    for record in records:
+        for point in record["curve"]:
+            writer.writerow([record["seed"], *(point[k] for k in CURVE_COLUMNS[1:])])
+    write_text_atomic(out / "curves.csv", text.getvalue())
+    from ..outputs.plots import plt, save_figure
+
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(6.4, 5.6), sharex=True)
+    for record in records:
+        x = [p["simulated_seconds"] for p in record["curve"]]
+        top.plot(
+            x,
+            [1e3 * p["median_rms_error_after_2s"] for p in record["curve"]],
+            marker="o",
+            label=f"seed {record['seed']}",
+        )
+        bottom.plot(x, [p["mean_return"] for p in record["curve"]], marker="o")
+    top.set_ylabel("validation median\nRMS error, t >= 2 s [mm]")
+    bottom.set_ylabel("validation mean return")
+    bottom.set_xlabel("simulated seconds of training")
+    top.legend(fontsize="small")
+    top.set_title(f"{records[0]['algorithm'].upper()}, {records[0]['action']} on {records[0]['controller']}")
+    save_figure(fig, out, "curves")
+    plt.close(fig)
+
+
+def cmd_learn(args) -> int:
+    """Train one policy per seed and write their curves."""
+    from ..studies.learning.rl import experiment_sha256, train
+
+    for option, value, low in (("--seeds", args.seeds, 1), ("--num-envs", args.num_envs, 1),
+                               ("--validation-episodes", args.validation_episodes, 1)):  # fmt: skip
+        if value < low:
+            raise ConfigError(option, f"must be at least {low}, got {value}")
+    out = Path(args.out)
+    say = (lambda text: None) if args.quiet else (lambda text: print(text, file=sys.stderr))
+    records = []
+    for seed in range(args.seeds):
+        folder = out / f"seed-{seed}"
+        folder.mkdir(parents=True, exist_ok=True)
+        wanted = {"algorithm": args.algorithm, "budget_seconds": args.budget, "action": args.action,
+                  "experiment_sha256": experiment_sha256(args.experiment)}  # fmt: skip
+        if args.controller:
+            wanted["controller"] = args.controller
+        if args.duration is not None:
+            wanted["duration"] = args.duration
+        stored = _reused(folder, wanted)
+        if stored is not None and (folder / "policy.onnx").is_file():
+            say(f"seed {seed}: trained before ({folder / 'policy.onnx'}), kept")
+            records.append(stored)
+            continue
+        records.append(
+            train(
+                args.experiment,
+                folder / "policy.onnx",
+                algorithm=args.algorithm,
+                budget=args.budget,
+                action=args.action,
+                controller=args.controller,
+                duration=args.duration,
+                seed=seed,
+                num_envs=args.num_envs,
+                validation_episodes=args.validation_episodes,
+                eval_every=args.eval_every,
+                progress=say,
+            )  # fmt: skip
+        )
+    write_curves(out, records)
+    if not args.quiet:
+        print(f"{'seed':>4} {'simulated s':>12} {'wall s':>8} {'validation error [mm]':>22} {'at 0 s':>10}")
+        for record in records:
+            last, first = record["curve"][-1], record["curve"][0]
+            error, start = (1e3 * p["median_rms_error_after_2s"] for p in (last, first))
+            print(
+                f"{record['seed']:>4} {record['simulated_seconds']:>12.4g} {record['wall_seconds']:>8.1f} "
+                f"{error:>22.4g} {start:>10.4g}"
+            )
+        print(f"wrote {out / 'curves.csv'} and {out}/seed-*/policy.onnx ([controller] kind = 'policy')")
+    return 0
+
+
+LEARN = Command(
+    "learn",
+    help="train a learned policy (PPO or SAC, Stable-Baselines3) on an experiment, per seed",
+    description="Train a policy with Stable-Baselines3's PPO or SAC on the experiment's vector "
+    "environment (the compiled loop), for a budget of simulated seconds per seed, with its learning "
+    "curve on validation plants the training never sees; write each seed's ONNX policy file and "
+    "record, and the curves (docs/learning.md). Needs the rl extra: pip install 'nnrobust[rl]'.",
+    arguments=learn_arguments,
+    run=cmd_learn,
+)

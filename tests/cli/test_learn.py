@@ -1,0 +1,34 @@
+"""``nnrobust learn`` (docs/learning.md#ppo-and-sac): one policy per seed with its curve, a rerun
+keeps what was trained, and another training in the same folder is refused in one line."""
+
+import csv
+import json
+
+import pytest
+
+from nnrobust.cli import main
+from nnrobust.run import compiled
+
+pytest.importorskip("stable_baselines3")
+pytestmark = pytest.mark.skipif(not compiled.available(), reason="the compiled loop is not built")
+
+ARGS = ["paper-ellipse", "--budget", "0.2", "--duration", "0.1", "--num-envs", "2", "--validation-episodes",
+        "2", "--eval-every", "0.1", "--controller", "no-u0", "--seeds", "2", "--quiet"]  # fmt: skip
+
+
+def test_learn_trains_each_seed_and_a_rerun_keeps_them(tmp_path, capsys):
+    out = tmp_path / "learned"
+    assert main(["learn", *ARGS, "--out", str(out)]) == 0
+    rows = list(csv.DictReader((out / "curves.csv").open()))
+    assert {r["seed"] for r in rows} == {"0", "1"} and (out / "curves.png").is_file()
+    records = [json.loads((out / f"seed-{k}" / "policy.onnx.json").read_text()) for k in (0, 1)]
+    assert [r["seed"] for r in records] == [0, 1] and all(r["algorithm"] == "ppo" for r in records)
+    assert records[0]["curve"] != records[1]["curve"]  # two seeds, two trainings
+    mtime = (out / "seed-0" / "policy.onnx").stat().st_mtime_ns
+    assert main(["learn", *ARGS, "--out", str(out)]) == 0  # kept, not trained again
+    assert (out / "seed-0" / "policy.onnx").stat().st_mtime_ns == mtime
+    capsys.readouterr()
+    changed = [a if a != "0.2" else "0.3" for a in ARGS]
+    assert main(["learn", *changed, "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "--out" in err and "budget_seconds" in err and len(err.strip().splitlines()) == 1
