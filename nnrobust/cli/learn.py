@@ -19,7 +19,8 @@ CURVE_COLUMNS = ("seed", "simulated_seconds", "wall_seconds", "mean_return", "me
 """The columns of DIR/curves.csv: one row per seed and point of its learning curve."""
 
 SAME_RUN = ("experiment_sha256", "algorithm", "budget_seconds", "action", "controller", "duration", "hyper")
-"""A seed's stored record is reused when these match the command's (else the seed is refused)."""
+"""A seed's stored record is reused when these (and the --tuned file) match the command's; else
+the folder is refused."""
 
 
 def learn_arguments(parser: argparse.ArgumentParser) -> None:
@@ -51,6 +52,12 @@ def learn_arguments(parser: argparse.ArgumentParser) -> None:
         help="what the policy commands (default residual: added to the base law's torque)",
     )
     parser.add_argument("--controller", help="the base law's kind (default: the experiment's)")
+    parser.add_argument(
+        "--tuned",
+        metavar="DIR|REPORT.json#CASE",
+        help="run the base law at its tuned setting: a tuning's folder or summary.json, or a study's "
+        "report and case (a residual then learns on the best model-based law found)",
+    )
     parser.add_argument(
         "--duration",
         type=float,
@@ -84,6 +91,8 @@ def _reused(folder: Path, wanted: dict) -> dict | None:
         return None
     stored = json.loads(path.read_text())
     differs = [k for k in SAME_RUN if k in wanted and stored.get(k) != wanted[k]]
+    if (stored.get("tuned") or {}).get("file") != wanted.get("tuned_file"):
+        differs.append("tuned setting")
     if differs:
         raise ConfigError(
             "--out",
@@ -146,6 +155,7 @@ def cmd_learn(args) -> int:
             wanted["controller"] = args.controller
         if args.duration is not None:
             wanted["duration"] = args.duration
+        wanted["tuned_file"] = args.tuned
         stored = _reused(folder, wanted)
         if stored is not None and (folder / "policy.onnx").is_file():
             say(f"seed {seed}: trained before ({folder / 'policy.onnx'}), kept")
@@ -161,6 +171,7 @@ def cmd_learn(args) -> int:
                 controller=args.controller,
                 duration=args.duration,
                 seed=seed,
+                tuned=args.tuned,
                 num_envs=args.num_envs,
                 validation_episodes=args.validation_episodes,
                 eval_every=args.eval_every,

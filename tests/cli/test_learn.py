@@ -32,3 +32,16 @@ def test_learn_trains_each_seed_and_a_rerun_keeps_them(tmp_path, capsys):
     assert main(["learn", *changed, "--out", str(out)]) == 2
     err = capsys.readouterr().err
     assert "--out" in err and "budget_seconds" in err and len(err.strip().splitlines()) == 1
+
+
+def test_learn_on_a_tuned_law_records_its_setting(tmp_path):
+    tuning = tmp_path / "tuning"
+    tuning.mkdir()
+    best = {"controller.Kp": [400.0, 400.0], "controller.Kv": [40.0, 40.0]}
+    (tuning / "summary.json").write_text(json.dumps({"controllers": {"no-u0": {"best": {"params": best}}}}))
+    one = [a if a != "2" or i != ARGS.index("--seeds") + 1 else "1" for i, a in enumerate(ARGS)]
+    out = tmp_path / "learned"
+    assert main(["learn", *one, "--tuned", str(tuning), "--out", str(out)]) == 0
+    record = json.loads((out / "seed-0" / "policy.onnx.json").read_text())
+    assert record["tuned"] == {"file": str(tuning), "settings": best} and record["controller"] == "no-u0"
+    assert main(["learn", *one, "--out", str(out)]) == 2  # the same folder, the untuned law: refused

@@ -82,9 +82,11 @@ class Reward:
                 raise ConfigError(f"reward.{f.name}", f"expected a finite weight >= 0, got {value!r}")
 
 
-def _source_spec(experiment, vary: dict | None, seed: int, controller: str | None):
-    """(SweepSpec, the base law's row name) of an environment's source: a sweep file (its base,
-    [set] and [vary]), or a preset / experiment file with an optional ``vary`` box.
+def _source_spec(experiment, vary: dict | None, seed: int, controller: str | None, tuned=None):
+    """(SweepSpec, the base law's row name, its tuned settings) of an environment's source: a
+    sweep file (its base, [set] and [vary]), or a preset / experiment file with an optional
+    ``vary`` box; with ``tuned`` (a tuning's DIR or summary.json, a study's REPORT.json#CASE, as
+    ``--tuned`` reads them), the base law runs at its tuned setting (the row ``LAW-tuned``).
     """
     from ...config.presets import preset_names
     from ...controllers.registry import shipped_laws
@@ -137,7 +139,15 @@ def _source_spec(experiment, vary: dict | None, seed: int, controller: str | Non
         raise ConfigError(
             "controller", f"{law!r} is not one of the sweep's controllers: {', '.join(spec.controllers)}"
         )
-    return spec, law
+    settings: dict = {}
+    if tuned is not None:
+        from ..base.tuned import tuned_settings, with_controllers
+
+        settings = tuned_settings(tuned, [law], varied=list(spec.vary), entries=spec.entries).get(law, {})
+        if settings:
+            spec = with_controllers(spec, [law], {law: settings})
+            law = spec.controllers[0]  # LAW-tuned: its entry sets the tuned keys
+    return spec, law, settings
 
 
 def _preset(name: str) -> Path:
@@ -161,7 +171,17 @@ class Episodes:
     """
 
     def __init__(
-        self, experiment, *, action: str, vary, seed: int, controller, residual_scale, duration, gain_range
+        self,
+        experiment,
+        *,
+        action: str,
+        vary,
+        seed: int,
+        controller,
+        residual_scale,
+        duration,
+        gain_range,
+        tuned=None,
     ):
         """See :class:`ArmEnv` for the arguments."""
         from ...run import compiled
@@ -187,10 +207,12 @@ class Episodes:
             raise ConfigError("duration", f"expected a duration > 0 [s], got {duration!r}")
         from ..base.plan import base_values
 
-        self.spec, self.law = _source_spec(experiment, vary, seed, controller)
+        self.spec, self.law, self.tuned = _source_spec(experiment, vary, seed, controller, tuned)
+        # the base law's kind: a policy file's controller.params.base (the row may be LAW-tuned)
+        self.kind = self.spec.entries.get(self.law, {}).get("kind", self.law)
         self.base = base_values(self.spec)
         own = self.base.get("controller", {})
-        if isinstance(own, dict) and own.get("kind") != self.law:  # another law than the file's
+        if isinstance(own, dict) and own.get("kind") != self.kind:  # another law than the file's
             for key in ("class", "params"):  # the file's law's own settings: not the base law's
                 own.pop(key, None)
         self.action, self.mode = action, ACTION_MODES[action]
@@ -212,7 +234,7 @@ class Episodes:
         from ...controllers.laws.policy import action_scale, no_gains
 
         if action == "gains" and not first.controller.scale_gains(1.0, 1.0):
-            raise ConfigError("controller", no_gains(self.law))
+            raise ConfigError("controller", no_gains(self.kind))
         self.action_scale = action_scale(action, self.torque_limit, self.residual_scale, self.gain_range)
         self.action_size = self.action_scale.size
         self.speed_limit = np.asarray(robot.velocity_limits, dtype=float)
@@ -308,6 +330,8 @@ class ArmEnv(gym.Env):
         duration: the episode's length [s] (default the experiment's simulation.duration).
         reward: the reward's weights.
         verdicts: compute the run's metrics and warnings at the end of each episode (info).
+        tuned: the base law at its tuned setting: a tuning's folder or summary.json, or a
+            study's ``REPORT.json#CASE`` (as ``--tuned`` reads them).
 
     """
 
@@ -326,6 +350,7 @@ class ArmEnv(gym.Env):
         reward: Reward | None = None,
         verdicts: bool = True,
         gain_range: float = 4.0,
+        tuned: str | Path | None = None,
     ):
         self.episodes = Episodes(
             experiment,
@@ -336,6 +361,7 @@ class ArmEnv(gym.Env):
             residual_scale=residual_scale,
             duration=duration,
             gain_range=gain_range,
+            tuned=tuned,
         )
         self.weights = reward if reward is not None else Reward()
         self.verdicts = verdicts

@@ -191,7 +191,7 @@ def train(
     record = {
         "experiment": str(experiment),
         "action": action,
-        "controller": vec.episodes.law,
+        "controller": vec.episodes.kind,
         "residual_scale": residual_scale,
         "gain_range": gain_range,
         "vary": vary or {},

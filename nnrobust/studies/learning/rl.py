@@ -314,6 +314,7 @@ def train(
     hyper: dict | None = None,
     residual_scale: float = 0.1,
     gain_range: float = 4.0,
+    tuned: str | Path | None = None,
     threads: int | None = None,
     progress=print,
 ) -> dict:
@@ -325,7 +326,9 @@ def train(
 
     The episodes are ``duration`` seconds long (default: the experiment's ``simulation.duration``,
     the horizon a run is scored on). ``eval_every`` (simulated seconds of training, default a tenth
-    of the budget) spaces the learning curve's points.
+    of the budget) spaces the learning curve's points. ``tuned`` (a tuning's folder or
+    summary.json, a study's ``REPORT.json#CASE``) runs the base law at its tuned setting: a
+    residual then learns on top of the best model-based law the tuning found.
     """
     sb3, torch = _sb3()
     from stable_baselines3.common.callbacks import BaseCallback
@@ -349,7 +352,8 @@ def train(
     started = time.perf_counter()
     torch.set_num_threads(1)  # the environment's C++ threads use the cores
     common: dict[str, Any] = {"action": action, "vary": vary, "controller": controller, "duration": duration,
-              "residual_scale": residual_scale, "gain_range": gain_range, "threads": threads}  # fmt: skip
+                              "residual_scale": residual_scale, "gain_range": gain_range, "threads": threads,
+                              "tuned": tuned}  # fmt: skip
     vec = ArmVectorEnv(experiment, num_envs, seed=seed, verdicts=False, **common)
     checking = ArmVectorEnv(experiment, validation_episodes, seed=seed, verdicts=True, **common)
     period, horizon = vec.episodes.period, vec.episodes.horizon
@@ -406,7 +410,8 @@ def train(
         "algorithm": algorithm,
         "hyper": settings,
         "action": action,
-        "controller": vec.episodes.law,
+        "controller": vec.episodes.kind,
+        "tuned": {"file": str(tuned), "settings": vec.episodes.tuned} if tuned is not None else None,
         "residual_scale": residual_scale,
         "gain_range": gain_range,
         "vary": vary or {},

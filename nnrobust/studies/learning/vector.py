@@ -44,6 +44,7 @@ class ArmVectorEnv(gym.vector.VectorEnv):
         verdicts: bool = True,
         threads: int | None = None,
         gain_range: float = 4.0,
+        tuned: str | Path | None = None,
     ):
         from ...run import compiled
 
@@ -61,6 +62,7 @@ class ArmVectorEnv(gym.vector.VectorEnv):
             residual_scale=residual_scale,
             duration=duration,
             gain_range=gain_range,
+            tuned=tuned,
         )
         self.weights = reward if reward is not None else Reward()
         self.verdicts = verdicts

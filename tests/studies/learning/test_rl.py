@@ -139,3 +139,36 @@ def test_the_exported_file_is_its_formula(output, tmp_path):
     expected = np.clip(y, -1.0, 1.0) if output == "clip" else np.tanh(y)
     assert (np.abs(x) == rl.CLIP_OBS).any() and (np.abs(y) > 1).any()
     np.testing.assert_allclose(_onnx_actions(path, obs), expected, atol=1e-5)
+
+
+def test_a_residual_on_a_tuned_law_starts_at_that_law_bit_for_bit(tmp_path):
+    """tuned=DIR: the base law runs at the tuning's best setting (the row LAW-tuned); an untrained
+    residual on it is the tuned law's run, which is not the untuned law's."""
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    from nnrobust.studies.learning.vector import ArmVectorEnv
+
+    tuning = tmp_path / "tuning"
+    tuning.mkdir()
+    best = {"controller.Kp": [400.0, 400.0], "controller.Kv": [40.0, 40.0]}
+    (tuning / "summary.json").write_text(json.dumps({"controllers": {"no-u0": {"best": {"params": best}}}}))
+    vec = ArmVectorEnv("paper-ellipse", 2, action="residual", controller="no-u0", duration=0.1,
+                       verdicts=False, tuned=tuning)  # fmt: skip
+    assert vec.episodes.law == "no-u0-tuned" and vec.episodes.kind == "no-u0" and vec.episodes.tuned == best
+    model = rl._make_model("ppo", VecNormalize(rl.sb3_vec_env(vec)), rl.DEFAULTS["ppo"], 0, "residual")
+    path = rl.export_onnx(
+        tmp_path / "zero.onnx", *rl.policy_layers(model, "ppo"), np.zeros(16), np.ones(16), 1e-8
+    )
+    spec = vec.episodes.spec
+    tuned = experiment(spec, vec.episodes.base, draw(spec, 0), "no-u0-tuned").replace(
+        simulation={"duration": 0.1}
+    )
+    assert tuned.controller.Kp == [400.0, 400.0]
+    policy = tuned.replace(
+        controller={"kind": "policy", "params": {"file": str(path), "action": "residual", "base": "no-u0"}}
+    )
+    untuned = experiment(spec, vec.episodes.base, draw(spec, 0), "no-u0").replace(
+        simulation={"duration": 0.1}
+    )
+    np.testing.assert_array_equal(run_experiment(policy).tau, run_experiment(tuned).tau)
+    assert not np.array_equal(run_experiment(untuned).tau, run_experiment(tuned).tau)
