@@ -160,35 +160,47 @@ def _table(path: Path, joints: Sequence[str]) -> JointLog:
     twice = sorted({name for name in stripped if stripped.count(name) > 1})
     if twice:
         raise LogError(f"{path}: the columns {', '.join(twice)} appear twice; each signal of each joint once")
-    columns = {name: table.column(i) for i, name in enumerate(stripped)}
+    # names match in any case ("Time", "TAU0", "q.Panda_Joint1"): two that differ only in case are refused
+    folded = [name.casefold() for name in stripped]
+    alike = sorted({name for name, key in zip(stripped, folded) if folded.count(key) > 1})
+    if alike:
+        raise LogError(
+            f"{path}: the columns {', '.join(alike)} differ only in upper and lower case; column names are "
+            "read in any case, so keep one of them"
+        )
+    columns = {key: table.column(i) for i, key in enumerate(folded)}
+    shown = dict(zip(folded, stripped))  # each column as the file names it, for the messages
     time = next((c for c in TIME_COLUMNS if c in columns), None)
     if time is None:
         raise LogError(
-            f"{path}: no time column (one of {', '.join(TIME_COLUMNS)}); its columns: {_listed(columns)}"
+            f"{path}: no time column (one of {', '.join(TIME_COLUMNS)}); its columns: "
+            f"{_listed(dict(zip(stripped, folded)))}"
         )
-    arrays = {"t": _numbers(path, time, columns[time])}
-    names = {"t": time}
+    arrays = {"t": _seconds(path, shown[time], columns[time])}
+    names = {"t": shown[time]}
     for signal, prefixes in SIGNALS.items():
-        found = _signal_columns(path, columns, prefixes, joints)
+        found = _signal_columns(path, columns, prefixes, [j.casefold() for j in joints], joints)
         if found is None:
             if signal == "dq":
                 continue
             raise LogError(
                 f"{path}: no {signal} columns for the robot's {len(joints)} joints (e.g. {prefixes[0]}0..."
                 f"{prefixes[0]}{len(joints) - 1} or {prefixes[0]}.{joints[0]}); its columns: "
-                f"{_listed(columns)}"
+                f"{_listed(dict(zip(stripped, folded)))}"
             )
-        arrays[signal] = np.column_stack([_numbers(path, c, columns[c]) for c in found])
-        names[signal] = f"{found[0]}..{found[-1]}"
+        arrays[signal] = np.column_stack([_numbers(path, shown[c], columns[c]) for c in found])
+        names[signal] = f"{shown[found[0]]}..{shown[found[-1]]}"
     log = JointLog(str(path), arrays["t"], arrays["q"], arrays.get("dq"), arrays["tau"], [path])
     return _checked(log, joints, names)
 
 
 def _signal_columns(
-    path: Path, columns: dict, prefixes: Sequence[str], joints: Sequence[str]
+    path: Path, columns: dict, prefixes: Sequence[str], joints: Sequence[str], named: Sequence[str]
 ) -> list[str] | None:
-    """The columns of one signal, joint by joint, or None if the log has none of them; a log with
-    them in two forms, or with an indexed column past the robot's joints, is refused.
+    """The columns of one signal, joint by joint (their case-folded names; ``joints`` are the
+    robot's joint names case-folded, ``named`` as the robot names them, for the messages), or None
+    if the log has none of them; a log with them in two forms, or with an indexed column past the
+    robot's joints, is refused.
     """
     chosen: list[str] | None = None
     for prefix in prefixes:
@@ -212,16 +224,32 @@ def _signal_columns(
                 if "{i}" in form and beyond in columns:
                     raise LogError(
                         f"{path}: a column {beyond}: the log has more joints than the robot's "
-                        f"{len(joints)} ({', '.join(joints)}); name the columns by joint, or lock or drop "
+                        f"{len(joints)} ({', '.join(named)}); name the columns by joint, or lock or drop "
                         "the others"
                     )
             elif any(present):
                 missing = [n for n, p in zip(names, present) if not p]
                 raise LogError(
                     f"{path}: the log has some {prefix} columns but not {', '.join(missing)} (one per joint: "
-                    f"{', '.join(joints)})"
+                    f"{', '.join(named)})"
                 )
     return chosen
+
+
+def _seconds(path: Path, name: str, column) -> np.ndarray:
+    """The time column in seconds: numbers as they are, a timestamp or a duration (Parquet's, or a
+    CSV's ISO times) as seconds since the first sample, from its integer ticks (no rounding).
+    """
+    import pyarrow as pa
+
+    kind = column.type
+    if pa.types.is_timestamp(kind) or pa.types.is_duration(kind):
+        ticks = column.cast(pa.int64()).to_numpy(zero_copy_only=False)
+        if column.null_count:
+            raise LogError(f"{path}: column {name!r} has {column.null_count} empty time stamps")
+        per_second = {"s": 1, "ms": 1_000, "us": 1_000_000, "ns": 1_000_000_000}[kind.unit]
+        return (ticks - ticks[0]) / per_second if ticks.size else ticks.astype(float)
+    return _numbers(path, name, column)
 
 
 def _numbers(path: Path, name: str, column) -> np.ndarray:
