@@ -54,6 +54,7 @@ from .fit import (
     least_pseudo_inertia_eigenvalues,
     normal_equations,
     physically_consistent,
+    unidentifiable_armature,
     weighted_least_squares,
 )
 from .fit import residuals as fit_residuals
@@ -125,7 +126,18 @@ def identify(
     layout = ParameterLayout(joints, tuple(options.friction), options.armature)
     base = base_parameters(model, layout.names[: 10 * layout.n])
     columns = base_columns(layout, base)
-    names = list(base.names) + layout.names[10 * layout.n :]
+    # a rotor inertia no log can tell from the links' (a first joint's, a second perpendicular to it):
+    # held at the URDF's value, the links' base parameter about that axis holds the sum
+    absorbed = unidentifiable_armature(model, base) if options.armature else []
+    held = [layout.armature_slice.start + j for j in absorbed]
+    if absorbed:
+        columns = np.array([c for c in columns if c not in held])
+        say(
+            f"armature of {', '.join(joints[j] for j in absorbed)}: no log separates it from the links' "
+            "inertia about the same axis (it moves the torque as that does); held at the URDF's value, "
+            "the links' base parameter holds the sum"
+        )
+    names = [*base.names, *(layout.names[c] for c in columns[base.rank :])]
     split = int(options.fit_share * len(states.t))
     _check_segments(log.source, states.t, split)
     fit_rows = normal_equations(model, layout, states, options.stick_band, slice(0, split))
@@ -140,7 +152,7 @@ def identify(
         _refuse_unexcited(log.source, excitation.unexcited)
     least = weighted_least_squares(fit_rows, columns, minimum_norm=bool(excitation.unexcited))
     prior = urdf_parameters(model, layout)
-    phi = physically_consistent(fit_rows, layout, least.sigma, prior)
+    phi = physically_consistent(fit_rows, layout, least.sigma, prior, held)
     phi_least = np.zeros(layout.size)
     phi_least[columns] = least.beta
     fit_residual = fit_residuals(model, layout, states, options.stick_band, slice(0, split), phi_least)
@@ -155,7 +167,9 @@ def identify(
     for line in warnings:
         say(f"warning: {line}")
 
-    beta_physical = (base_projector(layout, base) @ phi).tolist()
+    # the physical model's value of each fitted column: the base combinations, then the extra terms fitted
+    extra_rows = [base.rank + int(c) - 10 * layout.n for c in columns[base.rank :]]
+    beta_physical = (base_projector(layout, base)[[*range(base.rank), *extra_rows]] @ phi).tolist()
     standard_errors = np.sqrt(np.maximum(np.diag(region.covariance), 0)).tolist()
     friction = {term: phi[layout.friction_slice(term)].tolist() for term in layout.friction}
     files = {str(Path(p).absolute()): file_sha256(p) for p in log.files}
@@ -184,6 +198,7 @@ def identify(
             "parameters": len(columns),
             "condition_number": excitation.condition,
             "unexcited": excitation.unexcited,
+            "armature_held": [joints[j] for j in absorbed],
         },
         "noise_sigma": least.sigma.tolist(),
         "torque_rms": {"fit": fit_rows.torque_rms().tolist(), "held_out": held_rows.torque_rms().tolist()},

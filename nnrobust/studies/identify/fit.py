@@ -147,6 +147,37 @@ def base_columns(layout: ParameterLayout, base: BaseParameters) -> np.ndarray:
     return np.concatenate([base.base, np.arange(10 * layout.n, layout.size)])
 
 
+def unidentifiable_armature(
+    model: pin.Model, base: BaseParameters, samples: int = 0, seed: int = 0
+) -> list[int]:
+    """The joints whose rotor inertia no log can tell from the links' inertia: those whose
+    armature column (q''_j on joint j's row) lies in the span of the base inertial columns over
+    random states (as :func:`~nnrobust.model.regressor.base_parameters` draws them). These are
+    Khalil's regrouping rules: a serial arm's first joint (its axis fixed in the base: its rotor
+    inertia adds to the links' moment about that axis), and a second joint perpendicular to the
+    first (its link's moment about its own axis moves only its own torque, with q''_2, as its
+    rotor inertia does); only the sum moves the torque.
+    """
+    from ...model.regressor import position_ranges
+
+    n = model.nv
+    rng = np.random.default_rng(seed)
+    samples = samples or max(40, 4 * n)
+    low, high = position_ranges(model)
+    q = rng.uniform(np.maximum(low, -np.pi), np.minimum(high, np.pi), (samples, n))
+    a = rng.standard_normal((samples, n))
+    W = torque_regressor(model, q, rng.standard_normal((samples, n)), a).reshape(-1, 10 * n)[:, base.base]
+    out = []
+    for j in range(n):
+        column = np.zeros((samples, n))
+        column[:, j] = a[:, j]
+        column = column.reshape(-1)
+        c, *_ = np.linalg.lstsq(W, column, rcond=None)
+        if np.linalg.norm(column - W @ c) <= 1e-8 * np.linalg.norm(column):
+            out.append(j)
+    return out
+
+
 def base_projector(layout: ParameterLayout, base: BaseParameters) -> np.ndarray:
     """The matrix that maps the full parameters to the base ones (friction and armature as they are)."""
     extra = layout.size - 10 * layout.n
@@ -228,9 +259,12 @@ def _least_norm(G: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def physically_consistent(
-    normal: NormalEquations, layout: ParameterLayout, sigma: np.ndarray, prior: np.ndarray
+    normal: NormalEquations, layout: ParameterLayout, sigma: np.ndarray, prior: np.ndarray, held=()
 ) -> np.ndarray:
-    """The full parameters of least weighted residual with every body physical (module docstring, 3)."""
+    """The full parameters of least weighted residual with every body physical (module docstring,
+    3); the full vector's entries ``held`` stay at the prior (a rotor inertia no log can tell from
+    the links', :func:`unidentifiable_armature`).
+    """
     try:
         import cvxpy as cp  # here: cvxpy and clarabel are the identify extra's
     except ImportError as err:
@@ -257,6 +291,8 @@ def physically_consistent(
             constraints.append(phi[layout.friction_slice(term)] >= 0)
     if layout.armature:
         constraints.append(phi[layout.armature_slice] >= 0)
+    for i in held:
+        constraints.append(x[i] == prior[i] / scale[i])
     problem = cp.Problem(cp.Minimize(cost), constraints)
     try:
         problem.solve(solver=cp.CLARABEL)
@@ -268,6 +304,7 @@ def physically_consistent(
             "(are they the joint torques, in N m, with the sign of q''?)"
         )
     phi_out = np.asarray(scale * x.value, dtype=float)
+    phi_out[list(held)] = prior[list(held)]  # exactly, not to the solver's tolerance
     for i in range(layout.n):  # the solver's tolerance can leave a body a hair outside physics
         phi_out[10 * i : 10 * i + 10] = strictly_physical(phi_out[10 * i : 10 * i + 10])
     for term in layout.friction:

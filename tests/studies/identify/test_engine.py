@@ -6,6 +6,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 pytest.importorskip("cvxpy")
@@ -145,3 +146,26 @@ def test_a_run_folder_is_a_log(tmp_path):
     log = read_log([run], ("joint1", "joint2", "joint3"))
     assert log.samples > 1000 and log.dq is not None
     assert log.torque_lag == pytest.approx(0.5 * (log.t[1] - log.t[0]))
+
+
+def test_armature_is_identified_where_a_log_can_separate_it(tmp_path):
+    """--armature on the paper arm: joint1's rotor inertia is one with the links' about its fixed
+    axis (held at the URDF's value, said), joint2's and joint3's are identified from the log."""
+    model = load_robot("three_link_planar").model
+    true = pin.Model(model)
+    true.armature = np.array([0.0, 0.04, 0.02])
+    log = synthetic_log(true, FourierTrajectory.random(model, seed=4, speed=1.5), 20.0,
+                        faults=SensorFaults(torque_noise=0.005))  # fmt: skip
+    path = tmp_path / "log.csv"
+    _write_csv(path, log, model.names[1:], named=True)
+    out = tmp_path / "identified"
+    code = main(["identify", str(path), "--robot", "three_link_planar", "--out", str(out), "--armature",
+                 "--friction", "viscous", "--quiet"])  # fmt: skip
+    assert code == 0
+    summary = json.loads((out / "identification.json").read_text())
+    assert summary["identifiability"]["armature_held"] == ["joint1"]
+    names = [p["name"] for p in summary["parameters"]]
+    assert "armature@joint1" not in names and {"armature@joint2", "armature@joint3"} <= set(names)
+    identified = read_identified(out / "nominal.json")
+    np.testing.assert_allclose(identified.armature[1:], [0.04, 0.02], atol=4e-3)
+    assert identified.armature[0] == 0.0  # the URDF's

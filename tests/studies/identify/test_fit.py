@@ -86,3 +86,16 @@ def test_the_physical_fit_stays_physical_on_a_short_noisy_log():
     assert np.all(phi[layout.friction_slice("viscous")] >= 0) and np.all(
         phi[layout.friction_slice("coulomb")] >= 0
     )
+
+
+@pytest.mark.parametrize("source, expected", [("three_link_planar", [0]), ("panda", [0, 1])])
+def test_the_armatures_no_log_separates_are_the_regrouping_rules(source, expected):
+    """Khalil's regrouping of rotor inertias: a serial arm's first joint turns about an axis fixed
+    in the base, so its rotor inertia and the links' moment about that axis are one base
+    direction. A second joint perpendicular to the first (the Panda's) likewise: its link's
+    moment about its own axis ZZ2 moves only its own torque, with q''_2, as its rotor inertia
+    does. A second joint parallel to the first (the planar arm's) is not: its links' moment
+    also drives the first joint's torque."""
+    model = load_robot(source, task="position").model
+    base = base_parameters(model, ParameterLayout(tuple(model.names[1:]), (), False).names)
+    assert fit.unidentifiable_armature(model, base) == expected
