@@ -182,6 +182,13 @@ def _locks(built: _Built, source: str, locked_joints, chain) -> tuple[list[str],
     return sorted(set(names) | built.mimic, key=model.getJointId), frame
 
 
+def locked_joint_names(source: str | Path, locked_joints=None, chain=None) -> list[str]:
+    """The joints :func:`load_robot` locks (held at their neutral value) for these arguments."""
+    _check_names(str(source), locked_joints, chain)
+    built = _build(str(source), locked_joints, chain, say_notes=False)
+    return _locks(built, str(source), locked_joints, chain)[0]
+
+
 def _reduced(built: _Built, locked: list[str], visual: pin.GeometryModel | None = None):
     """The model (and visual geometry) with ``locked`` held at their neutral value; a joint
     that is still not one angle or one length is refused by name.

@@ -36,7 +36,7 @@ from ...core.exceptions import LogError, NNRobustError, RunFolderExists
 from ...core.folders import check_place, write_new
 from ...core.package_version import package_version
 from ...model.identified import IdentifiedModel
-from ...model.loading import load_robot
+from ...model.loading import load_robot, locked_joint_names
 from ...model.regressor import (
     ParameterLayout,
     base_parameters,
@@ -58,7 +58,7 @@ from .fit import (
     weighted_least_squares,
 )
 from .fit import residuals as fit_residuals
-from .logs import JointLog, read_log
+from .logs import JointLog, check_locked, read_log
 from .signals import FilterChoice, prepare
 
 MARKER = ".nnrobust-identification"
@@ -119,8 +119,10 @@ def identify(
     arm = load_robot(robot, task="position", locked_joints=locked_joints, chain=chain)
     model = arm.model
     joints = tuple(model.names[1:])
-    log = logs if isinstance(logs, JointLog) else read_log(logs, joints, options.topic)
+    locked = locked_joint_names(robot, locked_joints, chain)
+    log = logs if isinstance(logs, JointLog) else read_log(logs, joints, options.topic, locked)
     say(f"read {log.samples} samples of {len(joints)} joints from {log.source}")
+    locked_warnings = check_locked(log)
     _check_limits(log, model)
     states = prepare(log, options.filter)
     layout = ParameterLayout(joints, tuple(options.friction), options.armature)
@@ -163,7 +165,7 @@ def identify(
     identified_model = with_inertial_vector(model, phi)
     armature = phi[layout.armature_slice] if layout.armature else np.zeros(layout.n)
     checks = _physical_checks(log.source, identified_model, phi, layout.n, armature)
-    warnings = _fit_warnings(fit_rows, held_rows, phi, phi_least, least.sigma, joints)
+    warnings = locked_warnings + _fit_warnings(fit_rows, held_rows, phi, phi_least, least.sigma, joints)
     for line in warnings:
         say(f"warning: {line}")
 

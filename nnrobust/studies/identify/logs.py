@@ -87,9 +87,13 @@ class JointLog:
         )
 
 
-def read_log(given: Sequence[str | Path], joints: Sequence[str], topic: str | None = None) -> JointLog:
+def read_log(
+    given: Sequence[str | Path], joints: Sequence[str], topic: str | None = None, locked: Sequence[str] = ()
+) -> JointLog:
     """The log in ``given`` (files or folders of one format) for the robot's ``joints``; ``topic``:
-    a bag's or MCAP file's JointState topic, where it has several.
+    a bag's or MCAP file's JointState topic, where it has several. ``locked``: the joints the model
+    holds at their neutral value; a table's position columns named after one of them are read into
+    ``notes["locked"]`` (name -> its least and largest value), for :func:`check_locked`.
     """
     paths = [Path(p) for p in given]
     if not paths:
@@ -117,7 +121,7 @@ def read_log(given: Sequence[str | Path], joints: Sequence[str], topic: str | No
         return _text_files(texts, joints)
     suffixes = {p.suffix.lower() for p in paths}
     if len(paths) == 1 and suffixes <= {".csv", ".parquet", ".pq"}:
-        return _table(paths[0], joints)
+        return _table(paths[0], joints, locked)
     if suffixes <= set(TEXT_SUFFIXES):
         return _text_files(paths, joints)
     raise LogError(
@@ -140,7 +144,7 @@ def _run_folder(folder: Path, joints: Sequence[str]) -> JointLog:
     return _checked(log, joints, {"q": "q", "dq": "dq", "tau": "tau", "t": "t"})
 
 
-def _table(path: Path, joints: Sequence[str]) -> JointLog:
+def _table(path: Path, joints: Sequence[str], locked: Sequence[str] = ()) -> JointLog:
     try:
         if path.suffix.lower() == ".csv":
             from pyarrow import csv  # here: pyarrow is the identify extra's
@@ -191,7 +195,45 @@ def _table(path: Path, joints: Sequence[str]) -> JointLog:
         arrays[signal] = np.column_stack([_numbers(path, shown[c], columns[c]) for c in found])
         names[signal] = f"{shown[found[0]]}..{shown[found[-1]]}"
     log = JointLog(str(path), arrays["t"], arrays["q"], arrays.get("dq"), arrays["tau"], [path])
+    held = {}
+    for joint in locked:  # a locked joint's position, where the log names it
+        for prefix in SIGNALS["q"]:
+            key = next(
+                (f.casefold() for f in (f"{prefix}.{joint}", f"{prefix}_{joint}") if f.casefold() in columns),
+                None,
+            )
+            if key is not None:
+                values = _numbers(path, shown[key], columns[key])
+                held[joint] = [float(np.nanmin(values)), float(np.nanmax(values))]
+                break
+    if held:
+        log.notes["locked"] = held
     return _checked(log, joints, names)
+
+
+LOCKED_TOLERANCE = 1e-3
+"""How far [rad or m] a locked joint may sit from its neutral value in a log, or move in it."""
+
+
+def check_locked(log: JointLog) -> list[str]:
+    """A locked joint that moves in the log is refused (the model holds it still: its motion
+    changes every torque of the joints before it); one held still away from its neutral value
+    is a warning (the model holds it at 0: its links sit elsewhere). Returns the warnings.
+    """
+    said = []
+    for joint, (low, high) in log.notes.get("locked", {}).items():
+        if high - low > LOCKED_TOLERANCE:
+            raise LogError(
+                f"{log.source}: {joint} is locked (robot.locked_joints, or the robot's rule) but moves over "
+                f"[{low:.4g}, {high:.4g}] in the log; the model holds it still, so unlock it "
+                "(--locked-joints without it) or log it at rest"
+            )
+        if max(abs(low), abs(high)) > LOCKED_TOLERANCE:
+            said.append(
+                f"{joint} is locked at 0 in the model but held at {0.5 * (low + high):.4g} in the log; "
+                "the bodies it carries sit elsewhere in the model"
+            )
+    return said
 
 
 def _signal_columns(

@@ -65,3 +65,48 @@ def test_a_timestamp_time_column_is_seconds_from_the_first_sample(unit, tmp_path
     expected = np.arange(500.0) if unit == "s" else columns["time"]
     np.testing.assert_allclose(log.t, expected, rtol=0, atol=1e-12)
     np.testing.assert_array_equal(log.q, read_log([plain], JOINTS).q)
+
+
+def test_a_locked_joints_position_is_read_and_checked(tmp_path):
+    """A table's position column named after a locked joint: moving, the log is refused (the model
+    holds the joint still); held still away from its neutral value, a warning."""
+    from nnrobust.core.exceptions import LogError
+    from nnrobust.studies.identify.logs import check_locked
+
+    columns = _columns(("time", "q.{j}", "dq.{j}", "tau.{j}"))
+    t = columns["time"]
+    for name, values, verdict in (
+        ("moving", 0.02 * np.sin(t), "moves over"),
+        ("open", np.full(t.size, 0.04), "held at 0.04"),
+        ("closed", np.zeros(t.size), None),
+    ):
+        path = tmp_path / f"{name}.csv"
+        csv.write_csv(pa.table({**columns, "Q.Gripper": values}), path)
+        log = read_log([path], JOINTS, locked=["gripper"])
+        assert log.notes["locked"]["gripper"] == [float(values.min()), float(values.max())]
+        if verdict == "moves over":
+            with pytest.raises(LogError, match="gripper is locked .* but moves over"):
+                check_locked(log)
+        else:
+            warnings = check_locked(log)
+            assert (verdict in warnings[0]) if verdict else warnings == []
+    assert "locked" not in read_log([path], JOINTS).notes  # nothing locked: nothing read
+
+
+def test_identify_refuses_a_log_in_which_a_locked_finger_moves(tmp_path, capsys):
+    from nnrobust.cli import main
+    from nnrobust.model.loading import load_robot
+
+    model = load_robot("panda", task="position").model  # the fingers locked: the robot's rule
+    joints = model.names[1:]
+    t = np.arange(2000) / 1000.0
+    columns = {"time": t}
+    for i, joint in enumerate(joints):
+        columns[f"q.{joint}"] = 0.2 * np.sin(t + i)
+        columns[f"dq.{joint}"] = 0.2 * np.cos(t + i)
+        columns[f"tau.{joint}"] = np.sin(t)
+    columns["q.panda_finger_joint1"] = 0.02 + 0.01 * np.sin(3 * t)
+    path = tmp_path / "panda.csv"
+    csv.write_csv(pa.table(columns), path)
+    code = main(["identify", str(path), "--robot", "panda", "--out", str(tmp_path / "out"), "--quiet"])
+    assert code == 2 and "panda_finger_joint1 is locked" in capsys.readouterr().err
