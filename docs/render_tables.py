@@ -31,6 +31,7 @@ DOCUMENTS = (
     "docs/falsification.md",
     "docs/learning.md",
     "docs/serve.md",
+    "docs/compiled.md",
 )
 TABLE = re.compile(r"(<!-- table: (?P<name>[\w-]+) -->\n)(?P<body>.*?)(<!-- /table -->)", re.S)
 
@@ -975,6 +976,38 @@ def serve_misses() -> str:
     )
 
 
+def loop_profile() -> str:
+    """docs/compiled.md: the compiled step in parts, per arm and law (µs and system-allocator calls
+    per step), from benchmarks/loop_profile.py."""
+    data = _data("loop_profile")
+    cases = list(dict.fromkeys((r["preset"], r["law"]) for r in data["rows"]))
+    parts = list(dict.fromkeys(r["part"] for r in data["rows"]))
+    by = {(r["preset"], r["law"], r["part"]): r for r in data["rows"]}
+
+    def cell(case, part):
+        r = by[(*case, part)]
+        calls = r["allocations_per_step"]
+        return f"{r['us_per_step']:.2f} ({'–' if calls is None else f'{calls:.1f}'})"
+
+    def total(case):
+        rows = [by[(*case, p)] for p in parts]
+        calls = [r["allocations_per_step"] for r in rows]
+        shown = "–" if None in calls else f"{sum(calls):.1f}"
+        return f"{sum(r['us_per_step'] for r in rows):.2f} ({shown})"
+
+    arms = {"paper-ellipse": "paper arm", "panda-ellipse": "Panda"}
+    columns = [("arm", "l", lambda c: arms.get(c[0], c[0])), ("controller", "l", lambda c: c[1])]
+    columns += [(part, "r", lambda c, p=part: cell(c, p)) for part in parts]
+    columns.append(("step", "r", total))
+    return _markdown(
+        columns,
+        cases,
+        f"python benchmarks/loop_profile.py --duration {data['duration']:g} --repeats {data['repeats']} "
+        "--json docs/data/loop_profile.json",
+        chaos_note=False,
+    )
+
+
 def interval_coverage() -> str:
     """docs/robustness.md: the coverage of the paired median's interval, bootstrap against order
     statistics, by N and distribution."""
@@ -1036,6 +1069,7 @@ RENDERERS = {
     "tuned-verdicts": tuned_verdicts,
     "example-study": example_study,
     "serve-misses": serve_misses,
+    "loop-profile": loop_profile,
 }
 
 
