@@ -128,17 +128,7 @@ def identify(
     layout = ParameterLayout(joints, tuple(options.friction), options.armature)
     base = base_parameters(model, layout.names[: 10 * layout.n])
     columns = base_columns(layout, base)
-    # a rotor inertia no log can tell from the links' (a first joint's, a second perpendicular to it):
-    # held at the URDF's value, the links' base parameter about that axis holds the sum
-    absorbed = unidentifiable_armature(model, base) if options.armature else []
-    held = [layout.armature_slice.start + j for j in absorbed]
-    if absorbed:
-        columns = np.array([c for c in columns if c not in held])
-        say(
-            f"armature of {', '.join(joints[j] for j in absorbed)}: no log separates it from the links' "
-            "inertia about the same axis (it moves the torque as that does); held at the URDF's value, "
-            "the links' base parameter holds the sum"
-        )
+    columns, held, absorbed = _held_armature(model, base, layout, columns, say)
     names = [*base.names, *(layout.names[c] for c in columns[base.rank :])]
     split = int(options.fit_share * len(states.t))
     _check_segments(log.source, states.t, split)
@@ -248,18 +238,52 @@ def identify(
             "log_files": files,
             "version": package_version(),
         }
-        zeros = np.zeros(layout.n)
-        identified = IdentifiedModel(
-            str(robot),
-            joints,
-            tuple(identified_model.inertias[j] for j in range(1, identified_model.njoints)),
-            np.asarray(friction.get("viscous", zeros)),
-            np.asarray(friction.get("coulomb", zeros)),
-            np.asarray(friction.get("offset", zeros)),
-            armature,
-        )
-        _write_folder(out, identified.to_dict(record), summary, overwrite)
+        identified = _identified(str(robot), joints, identified_model, friction, armature)
+        page = _report(model, layout, states, split, phi, summary)
+        _write_folder(out, identified.to_dict(record), summary, overwrite, page)
     return summary
+
+
+def _held_armature(model, base, layout: ParameterLayout, columns: np.ndarray, say):
+    """(the fitted columns, the full vector's entries held, their joints): a rotor inertia no log
+    can tell from the links' (a first joint's, a second perpendicular to it;
+    :func:`.fit.unidentifiable_armature`) is held at the URDF's value, and the links' base
+    parameter about that axis holds the sum.
+    """
+    absorbed = unidentifiable_armature(model, base) if layout.armature else []
+    held = [layout.armature_slice.start + j for j in absorbed]
+    if absorbed:
+        columns = np.array([c for c in columns if c not in held])
+        say(
+            f"armature of {', '.join(layout.joints[j] for j in absorbed)}: no log separates it from the "
+            "links' inertia about the same axis (it moves the torque as that does); held at the URDF's "
+            "value, the links' base parameter holds the sum"
+        )
+    return columns, held, absorbed
+
+
+def _identified(robot: str, joints, model, friction: dict, armature: np.ndarray) -> IdentifiedModel:
+    """The identified model nominal.json holds: the bodies of ``model``, the friction, the armature."""
+    zeros = np.zeros(len(joints))
+    return IdentifiedModel(
+        robot,
+        joints,
+        tuple(model.inertias[j] for j in range(1, model.njoints)),
+        np.asarray(friction.get("viscous", zeros)),
+        np.asarray(friction.get("coulomb", zeros)),
+        np.asarray(friction.get("offset", zeros)),
+        armature,
+    )
+
+
+def _report(model, layout: ParameterLayout, states, split: int, phi: np.ndarray, summary: dict) -> str:
+    """report.html: the held-out torque against the physical model's prediction, and the rest."""
+    from .report import report_html
+
+    held = slice(split, None)
+    residual = fit_residuals(model, layout, states, 0.0, held, phi)
+    logged = states.tau[held]
+    return report_html(summary, states.t[held], logged, logged - residual, states.dq)
 
 
 LIMIT_MARGIN = 0.1
@@ -384,7 +408,7 @@ def _physical_checks(source: str, model, phi: np.ndarray, n: int, armature: np.n
     }
 
 
-def _write_folder(out: Path, nominal: dict, summary: dict, overwrite: bool) -> None:
+def _write_folder(out: Path, nominal: dict, summary: dict, overwrite: bool, page: str) -> None:
     """The folder written whole beside ``out``, then renamed into place (over an earlier
     identification, its files each replaced whole; nothing else in the folder is touched).
     """
@@ -402,6 +426,7 @@ def _write_folder(out: Path, nominal: dict, summary: dict, overwrite: bool) -> N
         for row in summary["parameters"]:
             writer.writerow([row["name"], *(repr(row[f]) for f in fields[1:])])
         write_new(tmp / "parameters.csv", table.getvalue())
+        write_new(tmp / "report.html", page)
         write_new(
             tmp / MARKER, json.dumps({"format": summary["format"], "version": summary["version"]}) + "\n"
         )
@@ -411,7 +436,7 @@ def _write_folder(out: Path, nominal: dict, summary: dict, overwrite: bool) -> N
                     f"{out} holds an identification already; pass --overwrite to replace it"
                 )
             # file by file (each whole), the model last: what else the folder holds stays
-            for name in ("identification.json", "parameters.csv", MARKER, "nominal.json"):
+            for name in ("identification.json", "parameters.csv", "report.html", MARKER, "nominal.json"):
                 os.replace(tmp / name, out / name)
         else:
             os.replace(tmp, out)

@@ -55,6 +55,10 @@ def test_identify_writes_a_model_that_runs_as_the_nominal(paper_log, tmp_path, c
     summary = json.loads((out / "identification.json").read_text())
     assert summary["log"]["stale_samples"] > 0 and summary["identifiability"]["unexcited"] == []
     assert summary["checks"]["physical"] and summary["log"]["files"][str(path)]
+    page = (out / "report.html").read_text()  # self-contained: torque, residual shares, friction
+    assert page.count('src="data:image/png;base64,') == 3 and "Held-out torque" in page
+    assert f"{summary['identifiability']['condition_number']:.4g}" in page
+    assert all(p["name"] in page for p in summary["parameters"][:5])
     held = np.array(summary["residuals"]["physical"]["held_out_rms"])
     assert np.all(held < 1.2 * 0.02 * 1.0)  # the noise floor (interpolation only lowers it)
     assert np.all(held < 0.2 * np.array(summary["residuals"]["urdf"]["held_out_rms"]))
