@@ -81,7 +81,7 @@ def test_bad_searches_are_refused_with_the_flag_named(kwargs, flag):
         FalsifySpec(**args)
 
 
-def test_a_search_finds_the_worst_plant_reruns_it_and_resumes(tmp_path, capsys):
+def test_a_search_finds_the_worst_plant_reruns_it_and_resumes(scheduler, tmp_path, capsys):
     """The error grows with the disturbance: the worst plant found is near the top of its range;
     every controller and its random baseline spend the budget exactly; the printed command
     reproduces the worst plant's metrics bit for bit; the same command again simulates nothing."""
@@ -89,7 +89,7 @@ def test_a_search_finds_the_worst_plant_reruns_it_and_resumes(tmp_path, capsys):
     sweep.write_text(SWEEP)
     spec = FalsifySpec(str(sweep), ["nn"], ["rms_error<=0.02"], 16, seed=1)
     out = tmp_path / "out"
-    summary = run_falsify(spec, out, workers=2)
+    summary = run_falsify(spec, out, scheduler=scheduler)
     entry = summary["controllers"]["nn"]
     assert entry["simulations"] == entry["random_baseline"]["simulations"] == 16
     worst = entry["worst"]
@@ -109,7 +109,7 @@ def test_a_search_finds_the_worst_plant_reruns_it_and_resumes(tmp_path, capsys):
     assert csv[0] == "system,property,falsified,simulations,time,robustness" and len(csv) == 2
     assert (out / "convergence.png").is_file()
     parts = sorted((out / "history").glob("part-*.parquet"))
-    resumed = run_falsify(spec, out, workers=2)
+    resumed = run_falsify(spec, out, scheduler=scheduler)
     assert sorted((out / "history").glob("part-*.parquet")) == parts  # nothing simulated again
     assert resumed["controllers"]["nn"]["worst"] == worst
     from nnrobust.studies.falsify import keep_worst
@@ -128,8 +128,9 @@ def test_a_search_finds_the_worst_plant_reruns_it_and_resumes(tmp_path, capsys):
     assert kept_metrics[1]["rms_error"] == pytest.approx(second, rel=1e-12)
     other = FalsifySpec(str(sweep), ["nn"], ["rms_error<=0.03"], 16, seed=1)
     with pytest.raises(Exception, match="holds a different search"):
-        run_falsify(other, out, workers=2)
-    run_falsify(other, out, workers=2, overwrite=True)  # the search's own outputs replaced, worst/ too
+        run_falsify(other, out, scheduler=scheduler)
+    # the search's own outputs replaced, worst/ too
+    run_falsify(other, out, scheduler=scheduler, overwrite=True)
     assert not (out / "worst").exists()
 
 
@@ -282,7 +283,7 @@ def test_the_box_scales_about_its_centre():
     assert box.largest_scale() == pytest.approx(0.9 * 1.0 / 0.5)  # disturbance_scale keeps 10 % of 1
 
 
-def test_the_margin_brackets_the_scale_where_a_monotone_property_breaks(tmp_path, capsys):
+def test_the_margin_brackets_the_scale_where_a_monotone_property_breaks(scheduler, tmp_path, capsys):
     """One coordinate, the disturbance scale in [0.5, 1.5] (centre 1), the task-space PD (whose
     error grows with the disturbance) and a bound on the error met exactly at 1.7, i.e. at s* =
     1.4 times the box: the margin's bracket holds s*, is narrower than 10 % of its top, and its
@@ -303,7 +304,7 @@ def test_the_margin_brackets_the_scale_where_a_monotone_property_breaks(tmp_path
         '"plant.disturbance_scale" = {uniform = [0.5, 1.5]}\n'
     )
     spec = FalsifySpec(str(sweep), ["pd"], [f"rms_error_after_2s<={errors[1]!r}"], 64, seed=2, margin=True)
-    summary = run_falsify(spec, tmp_path / "out", workers=2)
+    summary = run_falsify(spec, tmp_path / "out", scheduler=scheduler)
     margin = summary["margin"]["pd"]
     assert not summary["controllers"]["pd"]["falsified"]  # the box itself holds
     assert margin["holds_up_to"] <= 1.4 + 1e-9 <= margin["violated_at"]
@@ -319,7 +320,7 @@ def test_the_margin_brackets_the_scale_where_a_monotone_property_breaks(tmp_path
     assert json.loads((tmp_path / "again" / "metrics.json").read_text())["rms_error_after_2s"] > errors[1]
 
 
-def test_tuned_settings_are_falsified_as_named_entries(tmp_path, capsys):
+def test_tuned_settings_are_falsified_as_named_entries(scheduler, tmp_path, capsys):
     """--tuned DIR runs each law at its best setting in a tuning's summary, as NAME-tuned: the
     worst plant's command carries the settings and reruns to its metrics; a law the tuning did
     not tune, or a folder that is not a tuning, is refused naming --tuned."""
@@ -334,7 +335,8 @@ def test_tuned_settings_are_falsified_as_named_entries(tmp_path, capsys):
     (tuning / "summary.json").write_text(json.dumps(summary))
     out = tmp_path / "out"
     base = ["falsify", str(sweep), "--require", "rms_error<=0.02", "--budget", "4", "--quiet"]
-    assert main([*base, "--controllers", "pd", "--tuned", str(tuning), "--out", str(out)]) == 0
+    on = ["--scheduler", scheduler]
+    assert main([*base, *on, "--controllers", "pd", "--tuned", str(tuning), "--out", str(out)]) == 0
     found = json.loads((out / "summary.json").read_text())
     assert list(found["controllers"]) == ["pd-tuned"]
     words = shlex.split(found["controllers"]["pd-tuned"]["worst"]["command"])
@@ -380,7 +382,7 @@ def test_a_case_of_a_study_report_gives_its_kept_settings(tmp_path):
         tuned_settings(f"{plain}#x", ["nn"])
 
 
-def test_the_header_counts_what_the_folder_held_before_the_search(tmp_path, capsys):
+def test_the_header_counts_what_the_folder_held_before_the_search(scheduler, tmp_path, capsys):
     """The first line says how many simulations the folder already held, before any is run: 0 in an
     empty folder (it said "4 of 8", counting the first batch it had just run), all of them when
     the same command runs again, and what is left of a history that lost a part."""
@@ -388,7 +390,7 @@ def test_the_header_counts_what_the_folder_held_before_the_search(tmp_path, caps
     sweep.write_text(SWEEP.replace("= 3.0", "= 0.5"))
     out = tmp_path / "out"
     words = ["falsify", str(sweep), "--controllers", "nn", "--require", "rms_error<=0.02"]
-    words += ["--budget", "4", "--workers", "2", "--out", str(out)]
+    words += ["--budget", "4", "--scheduler", scheduler, "--out", str(out)]
 
     def header() -> str:
         assert main(words) == 0
@@ -427,7 +429,7 @@ def test_one_coordinate_is_searched_by_a_zooming_grid_without_cma(monkeypatch):
     assert abs(search.best[1][0] - 0.371) < 1e-6
 
 
-def test_a_box_of_one_coordinate_is_falsified_at_a_tiny_budget(tmp_path, capsys):
+def test_a_box_of_one_coordinate_is_falsified_at_a_tiny_budget(scheduler, tmp_path, capsys):
     """The disturbance scale alone, budget 8: the search runs to its end (it crashed in CMA-ES),
     the worst plant at the top of the range, the falsifier and its baseline 8 simulations each."""
     sweep = tmp_path / "one.toml"
@@ -436,7 +438,7 @@ def test_a_box_of_one_coordinate_is_falsified_at_a_tiny_budget(tmp_path, capsys)
         '[set]\n"simulation.duration" = 0.5\n[vary]\n"plant.disturbance_scale" = {uniform = [0.5, 2.0]}\n'
     )
     spec = FalsifySpec(str(sweep), ["no-u0"], ["rms_error<=0.05"], 8, seed=1)
-    entry = run_falsify(spec, tmp_path / "out", workers=2)["controllers"]["no-u0"]
+    entry = run_falsify(spec, tmp_path / "out", scheduler=scheduler)["controllers"]["no-u0"]
     assert entry["simulations"] == entry["random_baseline"]["simulations"] == 8
     assert entry["worst"]["values"]["plant.disturbance_scale"] > 1.9
 
@@ -507,7 +509,7 @@ def test_tuned_settings_set_only_the_laws_own_keys_and_none_the_box_varies(setti
         run_falsify(FalsifySpec(str(sweep), [name], ["rms_error<=0.02"], 4, tuned=settings), tmp_path / "out")
 
 
-def test_a_search_resumes_only_on_the_inputs_it_was_computed_from(tmp_path, capsys):
+def test_a_search_resumes_only_on_the_inputs_it_was_computed_from(scheduler, tmp_path, capsys):
     """Issue 35, item 1, as the issue ran it: the box's range edited after a search, then the same
     command: it said "16 of 16 already done" and reported a worst plant outside the new box. Now
     an edited box, class file or base experiment is one line naming what changed; the same
@@ -526,7 +528,7 @@ def test_a_search_resumes_only_on_the_inputs_it_was_computed_from(tmp_path, caps
     def search(where) -> tuple[int, list[str]]:
         capsys.readouterr()
         words = ["falsify", str(where / "box.toml"), "--controllers", "eq9", "--require", "rms_error<=0.05"]
-        code = main([*words, "--budget", "4", "--workers", "2", "--out", str(where / "f")])
+        code = main([*words, "--budget", "4", "--scheduler", scheduler, "--out", str(where / "f")])
         return code, capsys.readouterr().err.strip().splitlines()
 
     assert search(study)[0] == 0
@@ -558,7 +560,7 @@ def test_a_search_resumes_only_on_the_inputs_it_was_computed_from(tmp_path, caps
     assert sorted(p.name for p in (tmp_path / "moved" / "f" / "history").glob("part-*.parquet")) == parts
 
 
-def test_a_custom_laws_tuned_settings_are_falsified_as_a_shipped_laws(tmp_path, monkeypatch):
+def test_a_custom_laws_tuned_settings_are_falsified_as_a_shipped_laws(scheduler, tmp_path, monkeypatch):
     """--tuned takes a class given as file.py:Class (found in the summary under its class name):
     it runs as CLASS-tuned at exactly the tuned params, which its worst plant's command carries."""
     import shlex
@@ -572,7 +574,8 @@ def test_a_custom_laws_tuned_settings_are_falsified_as_a_shipped_laws(tmp_path, 
     settings = {"controller.params.Kp": 400.0, "controller.params.Kv": 40.0}
     (tuning / "summary.json").write_text(json.dumps({"controllers": {"Eq9": {"best": {"params": settings}}}}))
     argv = ["falsify", "fz.toml", "--require", "rms_error<=0.02", "--budget", "4", "--quiet"]
-    assert main([*argv, "--controllers", "laws.py:Eq9", "--tuned", "tuning", "--out", "out"]) == 0
+    on = ["--scheduler", scheduler]
+    assert main([*argv, *on, "--controllers", "laws.py:Eq9", "--tuned", "tuning", "--out", "out"]) == 0
     found = json.loads((tmp_path / "out" / "summary.json").read_text())
     assert list(found["controllers"]) == ["Eq9-tuned"]
     words = shlex.split(found["controllers"]["Eq9-tuned"]["worst"]["command"])
@@ -652,7 +655,7 @@ def test_a_plant_only_the_random_baseline_found_falsifies_the_box(tmp_path):
     assert margin["violated_at"] == 1.0 and margin["holds_up_to"] < 1.0
 
 
-def test_a_controllers_search_does_not_depend_on_the_others_in_its_run(tmp_path):
+def test_a_controllers_search_does_not_depend_on_the_others_in_its_run(scheduler, tmp_path):
     """The PD searched alone and beside the NN (same box, budget, seed, property): its worst
     plant, its whole history of points and its margin are the same. (CMA-ES sampled from NumPy's
     global generator, shared by the searches running in step, and the margins were seeded by
@@ -669,7 +672,7 @@ def test_a_controllers_search_does_not_depend_on_the_others_in_its_run(tmp_path)
     for controllers in (["pd"], ["nn", "pd"]):
         out = tmp_path / "-".join(controllers)
         spec = FalsifySpec(str(box), controllers, ["rms_error_after_2s<=0.004"], 24, seed=1, margin=True)
-        summary = run_falsify(spec, out, workers=2)
+        summary = run_falsify(spec, out, scheduler=scheduler)
         history = pd.read_parquet(out / "history")
         points = history[history["controller"] == "pd"].sort_values(["search", "index"])
         found[len(controllers)] = (summary["controllers"]["pd"], summary["margin"]["pd"], points)

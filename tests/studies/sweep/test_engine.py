@@ -44,10 +44,10 @@ def _assert_complete(frame, samples, controllers):
     assert set(pairs) == {(s, c) for s in range(samples) for c in controllers}
 
 
-def test_every_row_once_then_resume_computes_nothing(tmp_path):
+def test_every_row_once_then_resume_computes_nothing(scheduler, tmp_path):
     spec = load_sweep(_sweep_file(tmp_path))
     out = tmp_path / "out"
-    first = run_sweep(spec, out, workers=2)
+    first = run_sweep(spec, out, scheduler=scheduler)
     frame = read_results(out)
     _assert_complete(frame, 6, ["nn", "no-u0"])
     assert first["computed"] == 12 and set(frame["status"]) == {"completed"}
@@ -55,12 +55,12 @@ def test_every_row_once_then_resume_computes_nothing(tmp_path):
     by_sample = frame.groupby("sample")["nn.sigma"].nunique()
     assert (by_sample == 1).all()
     assert set(frame["plant.disturbance_scale"]) == {0.5, 2.0}
-    again = run_sweep(spec, out, workers=2)
+    again = run_sweep(spec, out, scheduler=scheduler)
     assert again == {"computed": 0, "skipped": 12, "parts": 0, "stopped": 0}
     _assert_complete(read_results(out), 6, ["nn", "no-u0"])
 
 
-def test_a_sample_reruns_as_a_normal_run(tmp_path, capsys):
+def test_a_sample_reruns_as_a_normal_run(scheduler, tmp_path, capsys):
     """The rerun command of the summary reproduces the sample's row."""
     from nnrobust.config import apply_overrides, parse_override
     from nnrobust.config.presets import load_preset
@@ -68,7 +68,7 @@ def test_a_sample_reruns_as_a_normal_run(tmp_path, capsys):
     from nnrobust.studies.sweep import draw, rerun_command
 
     spec = load_sweep(_sweep_file(tmp_path))
-    run_sweep(spec, tmp_path / "out", workers=2)
+    run_sweep(spec, tmp_path / "out", scheduler=scheduler)
     frame = read_results(tmp_path / "out")
     row = frame[(frame["sample"] == 4) & (frame["controller"] == "nn")].iloc[0]
     import shlex
@@ -108,7 +108,7 @@ def test_a_killed_worker_costs_only_its_chunk(tmp_path):
     _assert_complete(read_results(out), 6, ["nn", "no-u0"])
 
 
-def test_a_diverged_sample_is_a_row(tmp_path):
+def test_a_diverged_sample_is_a_row(scheduler, tmp_path):
     text = """
 name = "unstable"
 base = "paper-ellipse"
@@ -120,28 +120,28 @@ controllers = ["nn"]
 "controller.Kv" = [[4.0], [2000.0]]
 """
     spec = load_sweep(_sweep_file(tmp_path, text=text))
-    run_sweep(spec, tmp_path / "out", workers=2)
+    run_sweep(spec, tmp_path / "out", scheduler=scheduler)
     frame = read_results(tmp_path / "out").sort_values("sample")
     assert list(frame["status"]) == ["completed", "diverged"]
     assert "rad/s" in frame["message"].iloc[1]
 
 
-def test_a_changed_sweep_is_refused_unless_overwrite(tmp_path):
+def test_a_changed_sweep_is_refused_unless_overwrite(scheduler, tmp_path):
     spec = load_sweep(_sweep_file(tmp_path, duration=1.0))
     out = tmp_path / "out"
-    run_sweep(spec, out, workers=2)
+    run_sweep(spec, out, scheduler=scheduler)
     changed = load_sweep(_sweep_file(tmp_path, duration=1.5))
     with pytest.raises(NNRobustError, match="holds a different sweep"):
-        run_sweep(changed, out, workers=2)
-    assert run_sweep(changed, out, workers=2, overwrite=True)["computed"] == 12
+        run_sweep(changed, out, scheduler=scheduler)
+    assert run_sweep(changed, out, scheduler=scheduler, overwrite=True)["computed"] == 12
     (tmp_path / "mine").mkdir()
     (tmp_path / "mine" / "notes.txt").write_text("keep me")
     with pytest.raises(NNRobustError, match="is not a sweep folder"):
-        run_sweep(changed, tmp_path / "mine", workers=2)
+        run_sweep(changed, tmp_path / "mine", scheduler=scheduler)
     assert (tmp_path / "mine" / "notes.txt").read_text() == "keep me"
 
 
-def test_overwrite_replaces_only_what_the_sweep_wrote(tmp_path, monkeypatch, capsys):
+def test_overwrite_replaces_only_what_the_sweep_wrote(scheduler, tmp_path, monkeypatch, capsys):
     """Issue 22 item 10: a folder holding the user's own sweep.toml is not a sweep folder, and
     --overwrite never removes it nor a file the sweep did not write; the working folder and its
     ancestors are refused as --out."""
@@ -162,10 +162,12 @@ def test_overwrite_replaces_only_what_the_sweep_wrote(tmp_path, monkeypatch, cap
     assert "is not a sweep folder (no .nnrobust-sweep)" in capsys.readouterr().err
     assert (study / "notes.md").read_text() == "mine" and (project / "thesis.tex").is_file()
     out = project / "out"
-    assert main(["sweep", "sweep.toml", "--out", "out", "--workers", "2", "--quiet"]) == 0
+    assert main(["sweep", "sweep.toml", "--out", "out", "--scheduler", scheduler, "--quiet"]) == 0
     (out / "notes.md").write_text("my notes on this sweep")
     path.write_text(SWEEP.format(duration=1.5))
-    assert main(["sweep", "sweep.toml", "--out", "out", "--workers", "2", "--quiet", "--overwrite"]) == 0
+    assert (
+        main(["sweep", "sweep.toml", "--out", "out", "--scheduler", scheduler, "--quiet", "--overwrite"]) == 0
+    )
     assert (out / "notes.md").read_text() == "my notes on this sweep"
     assert "1.5" in (out / "sweep.toml").read_text() and (project / "thesis.tex").is_file()
 
@@ -286,10 +288,10 @@ controllers = ["nn"]
     assert not (tmp_path / "out").exists()
 
 
-def test_cli_sweep_writes_results_summary_and_rerun_commands(tmp_path, capsys):
+def test_cli_sweep_writes_results_summary_and_rerun_commands(scheduler, tmp_path, capsys):
     path = _sweep_file(tmp_path, duration=2.5)
     out = tmp_path / "out"
-    assert main(["sweep", str(path), "--out", str(out), "--workers", "2", "--keep-worst", "1"]) == 0
+    assert main(["sweep", str(path), "--out", str(out), "--scheduler", scheduler, "--keep-worst", "1"]) == 0
     printed = capsys.readouterr()
     assert "worst nn: sample" in printed.out and "nnrobust run paper-ellipse --controller nn" in printed.out
     import json
@@ -327,7 +329,7 @@ def test_cli_sweep_writes_results_summary_and_rerun_commands(tmp_path, capsys):
     assert (folder / "animation.html").is_file() and (folder / "result.npz").is_file()
 
 
-def test_a_custom_controller_joins_a_sweep_as_a_table_entry(tmp_path, monkeypatch):
+def test_a_custom_controller_joins_a_sweep_as_a_table_entry(scheduler, tmp_path, monkeypatch):
     """A controllers entry {name, class, params}: its class file is read from the sweep file's
     folder, the Dask workers import it, its rows are named by the entry, and the printed command
     reruns a row exactly. The entry is eq. (9) written again, so its rows equal no-u0's."""
@@ -352,7 +354,7 @@ samples = 2
     )
     out = tmp_path / "out"
     monkeypatch.chdir(tmp_path / "..")
-    assert main(["sweep", str(path), "--out", str(out), "--workers", "2"]) == 0
+    assert main(["sweep", str(path), "--out", str(out), "--scheduler", scheduler]) == 0
     frame = read_results(out).sort_values(["controller", "sample"])
     mine, builtin = frame[frame["controller"] == "eq9"], frame[frame["controller"] == "no-u0"]
     assert list(mine["status"]) == ["completed"] * 2
@@ -385,7 +387,7 @@ def test_shipped_studies_validate_every_sample(name):
     assert {"nominal.relative_error", "plant.friction_scale", "plant.disturbance_scale"} <= set(spec.vary)
 
 
-def test_client_memory_does_not_grow_with_samples(tmp_path):
+def test_client_memory_does_not_grow_with_samples(scheduler, tmp_path):
     """The client keeps (id, controller) pairs and writes each chunk's rows as they arrive: from
     40 to 400 rows its peak Python memory (tracemalloc, which also counts the in-process
     scheduler) grows by less per row than one row of the metrics table takes as Python objects.
@@ -408,19 +410,13 @@ def test_client_memory_does_not_grow_with_samples(tmp_path):
         )
         tracemalloc.start()
         try:
-            run_sweep(
-                spec, tmp_path / f"out-{samples}", scheduler=cluster.scheduler_address, seconds_per_job=1e-3
-            )
+            run_sweep(spec, tmp_path / f"out-{samples}", scheduler=scheduler, seconds_per_job=1e-3)
             return tracemalloc.get_traced_memory()[1]
         finally:
             tracemalloc.stop()
 
-    cluster = local_cluster(2)
-    try:
-        peak(20)  # warm up: imports, connections
-        small, large = peak(40), peak(400)
-    finally:
-        cluster.close()
+    peak(20)  # warm up: imports, connections
+    small, large = peak(40), peak(400)
     row = read_results(tmp_path / "out-400").iloc[0].to_dict()
     row_bytes = sys.getsizeof(row) + sum(sys.getsizeof(k) + sys.getsizeof(v) for k, v in row.items())
     assert (large - small) / 360 < row_bytes, (small, large, row_bytes)
@@ -523,7 +519,7 @@ def test_a_scheduler_address_that_is_not_a_scheduler_is_one_error_within_seconds
         assert engine.check_scheduler(address) == address
 
 
-def test_grids_of_mixed_types_and_seeds_beyond_2_53_are_stored_exactly(tmp_path):
+def test_grids_of_mixed_types_and_seeds_beyond_2_53_are_stored_exactly(scheduler, tmp_path):
     """Issue 22 item 13: a grid mixing a name and a list, and seeds beyond 2^53, used to crash
     pyarrow on the first part; runs shorter than 2 s used to crash the plots."""
     path = _sweep_file(
@@ -539,7 +535,9 @@ controllers = ["pd"]
 "sensing.seed" = [9007199254740993, 3]
 """,
     )
-    assert main(["sweep", str(path), "--out", str(tmp_path / "out"), "--workers", "1", "--quiet"]) == 0
+    assert (
+        main(["sweep", str(path), "--out", str(tmp_path / "out"), "--scheduler", scheduler, "--quiet"]) == 0
+    )
     frame = read_results(tmp_path / "out")
     assert set(frame["sensing.seed"]) == {9007199254740993, 3}  # exact: a float64 column would round it
     assert set(frame["plant.torque_limits"]) == {"urdf", "[60.0, 40.0, 20.0]"}
@@ -573,7 +571,7 @@ def test_a_bad_value_late_in_a_long_grid_is_refused_before_the_rest_is_checked(m
     assert len(checked) < 10
 
 
-def test_a_damaged_results_folder_is_refused_on_resume_and_names_what_to_do(tmp_path, capsys):
+def test_a_damaged_results_folder_is_refused_on_resume_and_names_what_to_do(scheduler, tmp_path, capsys):
     """A part changed after it was written, or a file where results/ was: the resume stops with
     one line naming it (it was a pyarrow or FileExistsError traceback); removing it resumes."""
     sweep = tmp_path / "s.toml"
@@ -582,7 +580,7 @@ def test_a_damaged_results_folder_is_refused_on_resume_and_names_what_to_do(tmp_
         '[set]\n"simulation.duration" = 0.5\n'
     )
     out = tmp_path / "out"
-    command = ["sweep", str(sweep), "--out", str(out), "--workers", "1", "--quiet"]
+    command = ["sweep", str(sweep), "--out", str(out), "--scheduler", scheduler, "--quiet"]
     assert main(command) == 0
     part = sorted((out / "results").glob("part-*.parquet"))[0]
     part.write_bytes(b"garbage")
@@ -597,7 +595,9 @@ def test_a_damaged_results_folder_is_refused_on_resume_and_names_what_to_do(tmp_
     assert main(command) == 2 and "results is not a folder" in capsys.readouterr().err
 
 
-def test_a_registered_law_joins_a_sweep_by_name_and_as_an_entry_with_its_params(tmp_path, monkeypatch):
+def test_a_registered_law_joins_a_sweep_by_name_and_as_an_entry_with_its_params(
+    scheduler, tmp_path, monkeypatch
+):
     """controllers = ["slotine-li", {name, kind = "slotine-li", params}]: both run on every sample,
     the entry at its own parameters, and the printed command reruns its worst row exactly."""
     import json
@@ -617,7 +617,7 @@ samples = 2
 """,
     )
     out = tmp_path / "out"
-    assert main(["sweep", str(path), "--out", str(out), "--workers", "2"]) == 0
+    assert main(["sweep", str(path), "--out", str(out), "--scheduler", scheduler]) == 0
     frame = read_results(out).sort_values(["controller", "sample"])
     fast, slow = frame[frame["controller"] == "slotine-li"], frame[frame["controller"] == "sl-slow"]
     assert list(fast["status"]) == list(slow["status"]) == ["completed"] * 2
@@ -725,7 +725,7 @@ def test_a_controller_that_cannot_run_is_refused_before_any_sample(case, tmp_pat
     assert len(err) == 1 and message in err[0] and not (tmp_path / "out").exists()
 
 
-def test_a_controller_runs_where_the_experiment_itself_cannot_be_built(tmp_path):
+def test_a_controller_runs_where_the_experiment_itself_cannot_be_built(scheduler, tmp_path):
     """The check blames a controller only when the shipped no-u0 runs where it does not: a base
     that only the samples make valid (its duration over the memory limit, each sample's within it)
     is left to the rows, which run."""
@@ -734,10 +734,10 @@ def test_a_controller_runs_where_the_experiment_itself_cannot_be_built(tmp_path)
         tmp_path,
         text='name = "b"\nbase = "long.toml"\ncontrollers = ["nn"]\n[vary]\n"simulation.duration" = [0.2]\n',
     )
-    assert run_sweep(load_sweep(path), tmp_path / "out", workers=1)["computed"] == 1
+    assert run_sweep(load_sweep(path), tmp_path / "out", scheduler=scheduler)["computed"] == 1
 
 
-def test_a_changed_input_is_named_and_a_copied_or_changed_part_is_refused(tmp_path, capsys):
+def test_a_changed_input_is_named_and_a_copied_or_changed_part_is_refused(scheduler, tmp_path, capsys):
     """Issue 35, item 1: every row is tied to the SHA-256 of what it was computed from. An edited
     URDF, base experiment or sweep value is refused on resume in one line naming it (the old rows
     were reported as results of the new inputs, rc 0); the same content resumes, from a moved
@@ -759,7 +759,7 @@ def test_a_changed_input_is_named_and_a_copied_or_changed_part_is_refused(tmp_pa
 
     def sweep_into(folder: Path, sweep: Path) -> tuple[int, list[str]]:
         capsys.readouterr()
-        code = main(["sweep", str(sweep), "--out", str(folder), "--workers", "1", "--quiet"])
+        code = main(["sweep", str(sweep), "--out", str(folder), "--scheduler", scheduler, "--quiet"])
         return code, capsys.readouterr().err.strip().splitlines()
 
     out = study / "out"
@@ -777,7 +777,7 @@ def test_a_changed_input_is_named_and_a_copied_or_changed_part_is_refused(tmp_pa
         (study / name).write_text(text)
     shutil.move(study, tmp_path / "moved")  # the same content elsewhere: resumes
     study, out = tmp_path / "moved", tmp_path / "moved" / "out"
-    assert run_sweep(load_sweep(study / "s.toml"), out, workers=1)["computed"] == 0
+    assert run_sweep(load_sweep(study / "s.toml"), out, scheduler=scheduler)["computed"] == 0
     (study / "o.toml").write_text((study / "s.toml").read_text() + "seed = 5\n")
     assert sweep_into(study / "other", study / "o.toml")[0] == 0
     part = sorted((out / "results").glob("part-*.parquet"))[0]
@@ -851,7 +851,7 @@ def test_too_many_local_workers_are_refused_before_the_folder_is_made(command, t
     assert not out.exists()
 
 
-def test_tuned_settings_of_every_kind_of_law_flow_into_a_sweep(tmp_path, capsys):
+def test_tuned_settings_of_every_kind_of_law_flow_into_a_sweep(scheduler, tmp_path, capsys):
     """sweep --tuned DIR: a custom class entry, a registered law and a shipped kind each run at
     their best setting of a tuning, as NAME-tuned; the rows' rerun commands carry exactly those
     settings and rerun to the row. A key that is not the law's own is refused naming --tuned."""
@@ -886,7 +886,19 @@ samples = 2
     )
     out = tmp_path / "out"
     assert (
-        main(["sweep", str(path), "--out", str(out), "--workers", "2", "--tuned", str(tuning), "--quiet"])
+        main(
+            [
+                "sweep",
+                str(path),
+                "--out",
+                str(out),
+                "--scheduler",
+                scheduler,
+                "--tuned",
+                str(tuning),
+                "--quiet",
+            ]
+        )
         == 0
     )
     frame = read_results(out)

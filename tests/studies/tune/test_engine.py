@@ -224,7 +224,7 @@ def short_experiment(tmp_path_factory):
 
 
 @pytest.fixture(scope="module")
-def tuned(short_experiment, tmp_path_factory):
+def tuned(scheduler, short_experiment, tmp_path_factory):
     out = tmp_path_factory.mktemp("tune") / "out"
     spec = TuneSpec(
         str(short_experiment),
@@ -236,7 +236,7 @@ def tuned(short_experiment, tmp_path_factory):
         max_saturated=0.01,
         seed=3,
     )
-    return spec, out, run_tune(spec, out, workers=2)
+    return spec, out, run_tune(spec, out, scheduler=scheduler)
 
 
 def test_every_controller_gets_the_same_budget_samples_and_constraints(tuned):
@@ -282,7 +282,7 @@ def test_a_tuning_is_the_same_on_one_worker_and_on_two(short_experiment, tmp_pat
     assert best[0] == best[1]
 
 
-def test_a_controllers_trials_do_not_depend_on_the_others_running_beside_it(tuned, tmp_path):
+def test_a_controllers_trials_do_not_depend_on_the_others_running_beside_it(scheduler, tuned, tmp_path):
     """The controllers' rounds run side by side (each is told and asks again while the others'
     simulations run: nnrobust.studies.base.cluster.run_task_groups); each optimiser asks from its own
     rows alone, so no-u0 tuned alone asks, row by row, what it asked beside the PD."""
@@ -291,7 +291,7 @@ def test_a_controllers_trials_do_not_depend_on_the_others_running_beside_it(tune
 
     spec, out, _ = tuned
     alone = replace(spec, controllers=["no-u0"])
-    run_tune(alone, tmp_path / "alone", workers=2)
+    run_tune(alone, tmp_path / "alone", scheduler=scheduler)
 
     def trials(folder):
         rows = _read_trials(folder, recorded_inputs(folder, "tune").key)
@@ -300,7 +300,7 @@ def test_a_controllers_trials_do_not_depend_on_the_others_running_beside_it(tune
     assert trials(tmp_path / "alone") == trials(out) and len(trials(out)) == spec.trials
 
 
-def test_reordering_the_controllers_changes_no_laws_tuning(tuned, tmp_path):
+def test_reordering_the_controllers_changes_no_laws_tuning(scheduler, tuned, tmp_path):
     """A law's optimiser seed derives from the tuning's seed and the law's name, not its place in
     the list: the PD and no-u0 tuned in the other order ask, row by row, what they asked (with
     seed + index, the PD's sampler seed moved with the order)."""
@@ -309,7 +309,7 @@ def test_reordering_the_controllers_changes_no_laws_tuning(tuned, tmp_path):
 
     spec, out, summary = tuned
     reordered = replace(spec, controllers=list(reversed(spec.controllers)))
-    again = run_tune(reordered, tmp_path / "reordered", workers=2)
+    again = run_tune(reordered, tmp_path / "reordered", scheduler=scheduler)
 
     def trials(folder, name):
         rows = _read_trials(folder, recorded_inputs(folder, "tune").key)
@@ -346,7 +346,7 @@ def test_a_setting_that_breaks_a_constraint_on_the_held_out_draws_says_so():
     assert "infeasible on validation: RMS torque 12.6 N m > 10 N m, saturated 7.9 % > 1 %" in text, text
 
 
-def test_the_cpp_and_python_twins_tune_to_the_same_setting(short_experiment, tmp_path):
+def test_the_cpp_and_python_twins_tune_to_the_same_setting(scheduler, short_experiment, tmp_path):
     """The task-space PD in C++ (examples/controllers/task_pd.cpp) and its Python twin
     (examples/custom_controller.py), both named TaskPD, tuned apart at one seed and budget: their
     torques agree to 1e-14, so their optimisers ask the same settings and keep the same best."""
@@ -358,7 +358,7 @@ def test_the_cpp_and_python_twins_tune_to_the_same_setting(short_experiment, tmp
     best = []
     for file in (examples / "controllers" / "task_pd.cpp", examples / "custom_controller.py"):
         spec = TuneSpec(str(short_experiment), [f"{file}:TaskPD"], 6, train_samples=1, validation=0, seed=2)
-        summary = run_tune(spec, tmp_path / file.suffix[1:], workers=2)
+        summary = run_tune(spec, tmp_path / file.suffix[1:], scheduler=scheduler)
         best.append(summary["controllers"]["TaskPD"]["best"])
     assert best[0]["params"] == best[1]["params"]
     assert best[0]["train"]["rms_error_after_2s"] == pytest.approx(
@@ -383,16 +383,16 @@ def test_a_best_setting_reruns_to_its_training_metrics(tuned):
     assert np.mean(runs) == pytest.approx(best["train"]["rms_error_after_2s"], rel=1e-9)
 
 
-def test_the_same_command_resumes_and_a_different_one_is_refused(tuned, short_experiment):
+def test_the_same_command_resumes_and_a_different_one_is_refused(scheduler, tuned, short_experiment):
     spec, out, summary = tuned
-    again = run_tune(spec, out, workers=1)
+    again = run_tune(spec, out, scheduler=scheduler)
     assert again["controllers"]["pd"]["best"]["params"] == summary["controllers"]["pd"]["best"]["params"]
     import pandas as pd
 
     assert len(pd.read_parquet(out / "trials")) == 2 * spec.trials  # nothing ran twice
     other = TuneSpec(str(short_experiment), ["no-u0", "pd"], 10, train_samples=2, validation=2, seed=3)
     with pytest.raises(NNRobustError, match="different tuning"):
-        run_tune(other, out, workers=1)
+        run_tune(other, out, scheduler=scheduler)
 
 
 def test_tune_refuses_a_folder_it_did_not_write(tmp_path, short_experiment):
@@ -418,7 +418,7 @@ def test_tune_refuses_a_folder_it_did_not_write(tmp_path, short_experiment):
 
 
 def test_a_robust_law_tunes_its_gains_first_then_starts_from_them_with_the_term_at_its_weakest(
-    short_experiment, tmp_path
+    scheduler, short_experiment, tmp_path
 ):
     """Sliding mode: the first 30 % of its budget run the no-u0 law (u_0 off) over the gains alone;
     the full search then starts from the best gains with K at its low and Phi at its high bound,
@@ -426,7 +426,7 @@ def test_a_robust_law_tunes_its_gains_first_then_starts_from_them_with_the_term_
     import pandas as pd
 
     spec = TuneSpec(str(short_experiment), ["sliding-mode"], 10, validation=0, max_rms_torque=10.0, seed=1)
-    summary = run_tune(spec, tmp_path / "out", workers=1)
+    summary = run_tune(spec, tmp_path / "out", scheduler=scheduler)
     rows = sorted(
         (json.loads(r) for r in pd.read_parquet(tmp_path / "out" / "trials")["row"]), key=lambda r: r["trial"]
     )
@@ -447,7 +447,7 @@ def test_a_robust_law_tunes_its_gains_first_then_starts_from_them_with_the_term_
     assert "controller.sliding_gain" in entry["best"]["params"] and entry["simulations"] == 10
 
 
-def test_a_custom_class_is_tuned_in_the_space_it_declares(short_experiment, tmp_path):
+def test_a_custom_class_is_tuned_in_the_space_it_declares(scheduler, short_experiment, tmp_path):
     """--controllers takes file.py:Class: its declared search_space is searched at the same budget
     and samples as a shipped law, and its best setting reruns to its training metrics."""
     from pathlib import Path
@@ -458,7 +458,7 @@ def test_a_custom_class_is_tuned_in_the_space_it_declares(short_experiment, tmp_
 
     laws = Path(__file__).parents[2] / "controllers" / "eq9_again.py"
     spec = TuneSpec(str(short_experiment), ["no-u0", f"{laws}:Eq9"], 6, train_samples=2, validation=1, seed=5)
-    summary = run_tune(spec, tmp_path / "out", workers=2)
+    summary = run_tune(spec, tmp_path / "out", scheduler=scheduler)
     assert set(summary["controllers"]) == {"no-u0", "Eq9"}
     entry = summary["controllers"]["Eq9"]
     assert set(entry["space"]) == {"controller.params.Kp", "controller.params.Kv"}
@@ -476,7 +476,7 @@ def test_a_custom_class_is_tuned_in_the_space_it_declares(short_experiment, tmp_
     assert np.mean(runs) == pytest.approx(best["train"]["rms_error_after_2s"], rel=1e-9)
 
 
-def test_a_registered_law_is_tuned_in_the_space_it_declares(short_experiment, tmp_path):
+def test_a_registered_law_is_tuned_in_the_space_it_declares(scheduler, short_experiment, tmp_path):
     """slotine-li declares Lambda (up to the sampling limit, never widened), K_D_step (up to the
     law's own limit 1, never widened), the adaptation's gamma and leakage (weakest at gamma's low
     and leakage's high end) and the null-space damping k_n (issue 37: held at 1 it capped
@@ -502,7 +502,7 @@ def test_a_registered_law_is_tuned_in_the_space_it_declares(short_experiment, tm
     assert space.param("controller.params.Lambda").high_reason.startswith("sampling")
     assert space.weakest() == {"controller.params.gamma": 1e-3, "controller.params.leakage": 10.0}
     spec = TuneSpec(str(short_experiment), ["slotine-li"], 10, train_samples=2, validation=0, seed=2)
-    summary = run_tune(spec, tmp_path / "out", workers=2)
+    summary = run_tune(spec, tmp_path / "out", scheduler=scheduler)
     rows = [json.loads(r) for r in pd.read_parquet(tmp_path / "out" / "trials")["row"]]
     gains = [r for r in rows if r["phase"] == "gains"]
     assert gains and all(r["law"] == "slotine-li" for r in gains)
@@ -608,7 +608,7 @@ def test_the_tuning_prints_what_it_does_not_search_and_why(scales):
 
 
 def test_a_moved_tuning_resumes_and_trials_copied_in_or_changed_are_refused(
-    tuned, short_experiment, tmp_path
+    scheduler, tuned, short_experiment, tmp_path
 ):
     """Issue 35, item 1: another tuning's trials copied into the folder were counted (8
     simulations for a budget of 4), and a trial row changed in place became the reported best.
@@ -621,15 +621,19 @@ def test_a_moved_tuning_resumes_and_trials_copied_in_or_changed_are_refused(
     spec, out, summary = tuned
     copy = tmp_path / "copy"
     shutil.copytree(out, copy)
-    again = run_tune(spec, copy, workers=1)
+    again = run_tune(spec, copy, scheduler=scheduler)
     assert again["controllers"]["pd"]["best"]["params"] == summary["controllers"]["pd"]["best"]["params"]
     parts = sorted((copy / "trials").glob("part-*.parquet"))
     assert [p.name for p in parts] == sorted(p.name for p in (out / "trials").glob("part-*.parquet"))
-    run_tune(TuneSpec(str(short_experiment), ["pd"], 2, validation=0, seed=9), tmp_path / "other", workers=1)
+    run_tune(
+        TuneSpec(str(short_experiment), ["pd"], 2, validation=0, seed=9),
+        tmp_path / "other",
+        scheduler=scheduler,
+    )
     foreign = sorted((tmp_path / "other" / "trials").glob("part-*.parquet"))[0]
     shutil.copy(foreign, copy / "trials" / foreign.name)
     with pytest.raises(NNRobustError, match=f"{foreign.name} was computed from other inputs"):
-        run_tune(spec, copy, workers=1)
+        run_tune(spec, copy, scheduler=scheduler)
     (copy / "trials" / foreign.name).unlink()
     frame = pd.read_parquet(parts[0])
     rows = [json.loads(r) for r in frame["row"]]
@@ -637,10 +641,10 @@ def test_a_moved_tuning_resumes_and_trials_copied_in_or_changed_are_refused(
     frame["row"] = [json.dumps(r) for r in rows]
     frame.to_parquet(parts[0])
     with pytest.raises(NNRobustError, match=f"{parts[0].name} was changed after it was written"):
-        run_tune(spec, copy, workers=1)
+        run_tune(spec, copy, scheduler=scheduler)
 
 
-def test_a_tuning_where_a_law_never_gave_a_result_exits_1(short_experiment, tmp_path, capsys):
+def test_a_tuning_where_a_law_never_gave_a_result_exits_1(scheduler, short_experiment, tmp_path, capsys):
     """Every run of the law raised (after its first step passed the up-front check): the tuning
     says so and exits 1, as a sweep whose rows ended without a result does; no-u0 beside it is
     tuned as usual."""
@@ -650,7 +654,10 @@ def test_a_tuning_where_a_law_never_gave_a_result_exits_1(short_experiment, tmp_
 
     law = f"{Path(__file__).parents[2] / 'controllers' / 'eq9_again.py'}:RaisesLate"
     argv = ["tune", str(short_experiment), "--controllers", f"no-u0,{law}", "--budget", "4"]
-    assert main([*argv, "--validation", "0", "--workers", "1", "--out", str(tmp_path / "t"), "--quiet"]) == 1
+    assert (
+        main([*argv, "--validation", "0", "--scheduler", scheduler, "--out", str(tmp_path / "t"), "--quiet"])
+        == 1
+    )
     assert "RaisesLate: every run ended without a result" in capsys.readouterr().err
     summary = json.loads((tmp_path / "t" / "summary.json").read_text())
     assert summary["controllers"]["RaisesLate"]["runs_without_result"] == 4
