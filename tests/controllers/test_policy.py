@@ -164,7 +164,7 @@ def test_a_policy_run_records_its_file_and_reruns_from_its_folder(tmp_path, caps
 
 
 @needs_compiled
-def test_a_policy_entry_runs_in_a_sweep_on_the_same_plants(tmp_path):
+def test_a_policy_entry_runs_in_a_sweep_on_the_same_plants(scheduler, tmp_path):
     """A sweep file names a policy by a path relative to itself; a zero residual on eq. (9) gives,
     sample for sample (common random numbers), exactly eq. (9)'s own rows; the file's SHA-256
     is among the sweep's inputs."""
@@ -180,7 +180,7 @@ def test_a_policy_entry_runs_in_a_sweep_on_the_same_plants(tmp_path):
         '[vary]\n"plant.disturbance_scale" = {uniform = [0.5, 2.0]}\n'
     )
     spec = load_sweep(tmp_path / "sweep.toml")
-    run_sweep(spec, tmp_path / "out", workers=1)
+    run_sweep(spec, tmp_path / "out", scheduler=scheduler)
     frame = read_results(tmp_path / "out").sort_values(["controller", "sample"])
     mine = frame[frame["controller"] == "zero-residual"]
     theirs = frame[frame["controller"] == "no-u0"]
@@ -222,7 +222,7 @@ def test_an_inference_longer_than_the_period_is_a_verdict(tmp_path, monkeypatch)
 
 
 @needs_compiled
-def test_tune_searches_a_residual_policys_scale(tmp_path):
+def test_tune_searches_a_residual_policys_scale(scheduler, tmp_path):
     """``nnrobust tune`` on an experiment whose law is a policy searches residual_scale in its
     declared bounds and holds the file, the action and the base law, saying why."""
     pytest.importorskip("optuna")
@@ -234,7 +234,16 @@ def test_tune_searches_a_residual_policys_scale(tmp_path):
         'action = "residual"\nbase = "no-u0"\n[simulation]\nduration = 2.5\n'
     )
     out = tmp_path / "out"
-    argv = ["tune", str(tmp_path / "exp.toml"), "--controllers", "policy", "--budget", "4", "--workers", "1"]
+    argv = [
+        "tune",
+        str(tmp_path / "exp.toml"),
+        "--controllers",
+        "policy",
+        "--budget",
+        "4",
+        "--scheduler",
+        scheduler,
+    ]
     assert main([*argv, "--out", str(out)]) == 0
     best = json.loads((out / "summary.json").read_text())["controllers"]["policy"]["best"]
     assert set(best["params"]) == {"controller.params.residual_scale"}

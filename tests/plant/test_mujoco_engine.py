@@ -322,7 +322,7 @@ def test_a_custom_controller_on_mujoco_same_on_the_hybrid_and_python_loops():
     np.testing.assert_allclose(runs["hybrid"].q, runs["python"].q, rtol=0, atol=1e-9)
 
 
-def test_a_sweep_varies_the_engine(tmp_path):
+def test_a_sweep_varies_the_engine(scheduler, tmp_path):
     """plant.engine in [vary]: each sample runs on its engine (the same draw: different, close)."""
     pytest.importorskip("distributed")
     from nnrobust.studies.sweep import load_sweep, read_results, run_sweep
@@ -333,7 +333,7 @@ def test_a_sweep_varies_the_engine(tmp_path):
         '[set]\n"simulation.duration" = 2.5\n"nominal.seed" = 5\n"sensing.seed" = 5\n'
         '[vary]\n"plant.engine" = ["pinocchio", "mujoco"]\n'
     )
-    run_sweep(load_sweep(path), tmp_path / "out", workers=2)
+    run_sweep(load_sweep(path), tmp_path / "out", scheduler=scheduler)
     frame = read_results(tmp_path / "out").set_index("plant.engine")
     assert set(frame.index) == {"pinocchio", "mujoco"} and set(frame["status"]) == {"completed"}
     errors = frame["rms_error_after_2s"]

@@ -150,7 +150,7 @@ def test_bad_properties_get_one_line_errors(texts, words):
     assert words in str(err.value) and "\n" not in str(err.value)
 
 
-def test_a_sweep_certifies_each_controller_from_its_rows(tmp_path, capsys):
+def test_a_sweep_certifies_each_controller_from_its_rows(scheduler, tmp_path, capsys):
     """--require with --epsilon/--beta: N and k are the rows', p_upper scipy's exact bound; a sweep
     too small for the claim is refused before anything runs unless --allow-small."""
     pytest.importorskip("distributed")
@@ -169,7 +169,18 @@ def test_a_sweep_certifies_each_controller_from_its_rows(tmp_path, capsys):
     assert "needs N >= 59 samples with at most 0 failures; the sweep draws 6" in err
     assert not (tmp_path / "out").exists()
     assert (
-        main(["sweep", str(sweep), "--out", str(tmp_path / "out"), "--workers", "2", "--allow-small", *claim])
+        main(
+            [
+                "sweep",
+                str(sweep),
+                "--out",
+                str(tmp_path / "out"),
+                "--scheduler",
+                scheduler,
+                "--allow-small",
+                *claim,
+            ]
+        )
         == 0
     )
     summary = json.loads((tmp_path / "out" / "summary.json").read_text())
@@ -185,7 +196,7 @@ def test_a_sweep_certifies_each_controller_from_its_rows(tmp_path, capsys):
     assert "P(rms_error_after_2s<=0.02 fails) <=" in capsys.readouterr().out
 
 
-def test_sequential_stopping_ends_a_refuted_claim_and_keeps_the_rest(tmp_path, capsys):
+def test_sequential_stopping_ends_a_refuted_claim_and_keeps_the_rest(scheduler, tmp_path, capsys):
     """--stop-early: no-u0 fails every sample (its error is hundreds of mm), so its claim is
     refuted by its first rows (p_upper(k, 20) > epsilon for any k >= 1) and its other rows are not
     run; the NN's rows, which do not refute it, all run. The certificates say what happened, and a
@@ -202,7 +213,9 @@ def test_sequential_stopping_ends_a_refuted_claim_and_keeps_the_rest(tmp_path, c
     )
     claim = ["--require", "rms_error_after_2s<=0.05", "--epsilon", "0.05", "--beta", "0.05", "--allow-small"]
     out = tmp_path / "out"
-    assert main(["sweep", str(sweep), "--out", str(out), "--workers", "2", "--stop-early", *claim]) == 0
+    assert (
+        main(["sweep", str(sweep), "--out", str(out), "--scheduler", scheduler, "--stop-early", *claim]) == 0
+    )
     frame = read_results(out)
     nn, no_u0 = (frame[frame["controller"] == c] for c in ("nn", "no-u0"))
     assert len(nn) == 20 and (nn["rms_error_after_2s"] <= 0.05).all()
@@ -216,7 +229,9 @@ def test_sequential_stopping_ends_a_refuted_claim_and_keeps_the_rest(tmp_path, c
     (full,) = summary["controllers"]["nn"]["certificates"]
     assert full["N"] == 20 and "planned" not in full
     assert f"{20 - len(no_u0)} not run (claim already refuted)" in capsys.readouterr().err
-    assert main(["sweep", str(sweep), "--out", str(out), "--workers", "1", "--stop-early", *claim]) == 0
+    assert (
+        main(["sweep", str(sweep), "--out", str(out), "--scheduler", scheduler, "--stop-early", *claim]) == 0
+    )
     assert len(read_results(out)) == 20 + len(no_u0)
     assert "0 rows computed" in capsys.readouterr().err
 

@@ -166,7 +166,7 @@ def test_the_custom_laws_tuned_settings_are_the_ones_every_stage_ran(study):
     assert again["rms_error_after_2s"] == quoted["rms_error_after_2s"]
 
 
-def test_a_study_runs_the_settings_another_studys_report_kept(study, tmp_path, capsys):
+def test_a_study_runs_the_settings_another_studys_report_kept(scheduler, study, tmp_path, capsys):
     """``tuned = "REPORT.json#CASE"``: each law at the kept setting of another study's case, as
     NAME-tuned and untuned (the custom law too; a law that study ran untuned keeps its own name),
     through certification and falsification; the report names the source file's SHA-256. A case
@@ -194,7 +194,10 @@ def test_a_study_runs_the_settings_another_studys_report_kept(study, tmp_path, c
     assert spec.controllers == ["nn-tuned", "taskpd-tuned"] and spec.fixed == spec.controllers
     assert json.loads((first / "report.json").read_text())["tuned_from"] is None
     out = tmp_path / "out"
-    assert main(["study", str(tmp_path / "study.toml"), "--out", str(out), "--workers", "2", "--quiet"]) == 0
+    assert (
+        main(["study", str(tmp_path / "study.toml"), "--out", str(out), "--scheduler", scheduler, "--quiet"])
+        == 0
+    )
     again = json.loads((out / "report.json").read_text())
     assert again["tuned_from"] == f"{src}#paper-ellipse-noisy"
     assert again["cases"]["paper-ellipse-noisy"]["stages"]["tune"].startswith(
@@ -229,29 +232,34 @@ def test_a_study_runs_the_settings_another_studys_report_kept(study, tmp_path, c
     settings = changed["cases"]["paper-ellipse-noisy"]["controllers"]["nn"]["tuned"]["settings"]
     settings["controller.k"] *= 2
     src.write_text(json.dumps(changed))
-    assert main(["study", str(tmp_path / "study.toml"), "--out", str(out), "--workers", "2", "--quiet"]) == 2
+    assert (
+        main(["study", str(tmp_path / "study.toml"), "--out", str(out), "--scheduler", scheduler, "--quiet"])
+        == 2
+    )
     assert "holds a different" in capsys.readouterr().err
     assert {name: (here / name).read_text() for name in stage_files} == stage_files
 
 
-def test_a_rerun_computes_nothing_and_each_replay_command_recomputes_its_stage(study, capsys):
+def test_a_rerun_computes_nothing_and_each_replay_command_recomputes_its_stage(scheduler, study, capsys):
     here, out, report = study
     before = _parts(out)
-    assert main(["study", str(here / "study.toml"), "--out", str(out), "--workers", "2", "--quiet"]) == 0
+    assert (
+        main(["study", str(here / "study.toml"), "--out", str(out), "--scheduler", scheduler, "--quiet"]) == 0
+    )
     assert _parts(out) == before
     assert json.loads((out / "report.json").read_text())["cases"] == report["cases"]
     said: list[str] = []
-    run_study(load_study(here / "study.toml"), out, workers=2, say=said.append)
+    run_study(load_study(here / "study.toml"), out, scheduler=scheduler, say=said.append)
     assert said[-1].startswith("nothing computed: every stage's") and _parts(out) == before
     commands = report["cases"]["paper-ellipse-noisy"]["commands"]
     assert set(commands) == {"tune seed 0", "tune seed 1", "validate", "certify", "falsify", "engine"}
     for name in ("validate", "certify", "falsify", "engine", "tune seed 1"):
-        words = shlex.split(commands[name])  # one worker: a replay of a finished stage runs nothing
-        assert main([*words[1:], "--workers", "1", "--quiet"]) == 0, name
+        words = shlex.split(commands[name])  # a replay of a finished stage runs nothing
+        assert main([*words[1:], "--scheduler", scheduler, "--quiet"]) == 0, name
     assert _parts(out) == before  # the stage folders took every command as their own: nothing new
 
 
-def test_a_case_without_randomness_says_it_was_validated_on_the_training_plant(tmp_path):
+def test_a_case_without_randomness_says_it_was_validated_on_the_training_plant(scheduler, tmp_path):
     (tmp_path / "study.toml").write_text(
         STUDY_CORE.replace('cases = ["paper-ellipse-noisy"]', 'cases = ["paper-ellipse"]')
         .replace('"plant.disturbance_scale" = {uniform = [0.5, 2.0]}', "")
@@ -260,7 +268,9 @@ def test_a_case_without_randomness_says_it_was_validated_on_the_training_plant(t
         .replace("train_samples = 1", "train_samples = 2")
     )
     said: list[str] = []
-    report = run_study(load_study(tmp_path / "study.toml"), tmp_path / "out", workers=2, say=said.append)
+    report = run_study(
+        load_study(tmp_path / "study.toml"), tmp_path / "out", scheduler=scheduler, say=said.append
+    )
     case = report["cases"]["paper-ellipse"]
     assert not case["held_out"]
     assert case["validated_on"].startswith("the training plant")
@@ -275,7 +285,7 @@ def test_a_case_without_randomness_says_it_was_validated_on_the_training_plant(t
     words = shlex.split(case["commands"]["tune seed 0"])
     assert "--train-samples" in words and words[words.index("--train-samples") + 1] == "1"
     parts = _parts(tmp_path / "out")
-    assert main([*words[1:], "--workers", "2", "--quiet"]) == 0
+    assert main([*words[1:], "--scheduler", scheduler, "--quiet"]) == 0
     assert _parts(tmp_path / "out") == parts
 
 
@@ -315,7 +325,7 @@ def test_a_shipped_law_runs_untuned_under_its_own_name(tmp_path):
         load_study(tmp_path / "s.toml")
 
 
-def test_cases_of_one_experiment_with_overrides_of_their_own(tmp_path):
+def test_cases_of_one_experiment_with_overrides_of_their_own(scheduler, tmp_path):
     """Case tables {name, base, set}: the paper's arm at half and twice the disturbance are two
     cases, each certified on its own ``certify`` draws at its own scale (and the larger
     disturbance gives the larger error); ``falsify = 0`` skips the search and says so."""
@@ -331,7 +341,7 @@ def test_cases_of_one_experiment_with_overrides_of_their_own(tmp_path):
     (tmp_path / "s.toml").write_text(text)
     spec = load_study(tmp_path / "s.toml")
     assert [c.name for c in spec.cases] == ["low", "high"]
-    report = run_study(spec, tmp_path / "out", workers=2)
+    report = run_study(spec, tmp_path / "out", scheduler=scheduler)
     import pandas as pd
 
     from nnrobust.config import parse_toml
@@ -481,7 +491,7 @@ def test_every_summary_displays_as_html_in_a_notebook(study):
         nnrobust.load_summary(here)
 
 
-def test_a_law_that_fails_says_why_in_the_report_and_the_report_is_standard_json(tmp_path, capsys):
+def test_a_law_that_fails_says_why_in_the_report_and_the_report_is_standard_json(scheduler, tmp_path, capsys):
     """A tuned law whose every run raises is not silently dropped: the report, its page and the
     command say why (its exception, located). A law run untuned that fails keeps its rows' first
     message. report.json holds no Infinity (a margin of -inf is null beside the status)."""
@@ -493,7 +503,7 @@ def test_a_law_that_fails_says_why_in_the_report_and_the_report_is_standard_json
     ).replace('    "nn",\n', "")
     (tmp_path / "study.toml").write_text(text)
     out = tmp_path / "out"
-    assert main(["study", str(tmp_path / "study.toml"), "--out", str(out), "--workers", "2"]) == 0
+    assert main(["study", str(tmp_path / "study.toml"), "--out", str(out), "--scheduler", scheduler]) == 0
     said = capsys.readouterr()
     raw = (out / "report.json").read_text()
     report = json.loads(raw, parse_constant=lambda c: pytest.fail(f"report.json holds {c}"))
@@ -696,7 +706,7 @@ def test_the_certificate_is_over_the_designs_whole_requirement(tmp_path):
     assert any("no torque or saturation constraint" in w for w in study_warnings(_spec_with(tmp_path)))
 
 
-def test_reordering_a_studys_controllers_changes_no_result(tmp_path):
+def test_reordering_a_studys_controllers_changes_no_result(scheduler, tmp_path):
     """Every stage of a law is seeded by the study's seed and the law's name: the same study with its
     controllers listed the other way round writes the same report but for the order (the step
     costs, wall-clock readings, and the study file's own digest aside)."""
@@ -712,7 +722,7 @@ def test_reordering_a_studys_controllers_changes_no_result(tmp_path):
         folder = tmp_path / order.replace('"', "").replace(", ", "-")
         folder.mkdir()
         (folder / "study.toml").write_text(study.format(order=order))
-        run_study(load_study(folder / "study.toml"), folder / "out", workers=2)
+        run_study(load_study(folder / "study.toml"), folder / "out", scheduler=scheduler)
         reports.append(json.loads((folder / "out" / "report.json").read_text()))
 
     def comparable(report: dict) -> dict:
@@ -762,7 +772,7 @@ def test_a_tuned_law_in_cpp_needs_no_params_of_its_own(tmp_path):
     _check_controllers(load_study(tmp_path / "s.toml"))
 
 
-def test_a_policy_per_arm_is_one_law_in_a_study_of_two_arms(tmp_path):
+def test_a_policy_per_arm_is_one_law_in_a_study_of_two_arms(scheduler, tmp_path):
     """Two entries named learned, each listing its case (cases = [...]), each with the policy file
     of its arm (observations of 16 and 29 entries): one law of the study, run on each arm with its
     own file (a policy file is bound to one observation size; it was refused on the other arm)."""
@@ -791,7 +801,7 @@ def test_a_policy_per_arm_is_one_law_in_a_study_of_two_arms(tmp_path):
         "paper-ellipse": str(tmp_path / "paper.onnx"),
         "panda-ellipse": str(tmp_path / "panda.onnx"),
     }
-    report = run_study(spec, tmp_path / "out", workers=2)
+    report = run_study(spec, tmp_path / "out", scheduler=scheduler)
     for case, file in files.items():
         entry = report["cases"][case]["controllers"]["learned"]
         assert entry["entry"]["params"]["file"].endswith(Path(file).name)
