@@ -69,8 +69,7 @@ class Network:
         """The network with ``theta`` as an ONNX file: input ``obs`` [batch, d] float32, output
         ``action`` [batch, n] (docs/learning.md#policy-files).
         """
-        import onnx
-        from onnx import TensorProto, helper, numpy_helper
+        from onnx import helper, numpy_helper
 
         f = np.float32
         tensors = [numpy_helper.from_array(self.mean.astype(f), "mean"),
@@ -87,21 +86,31 @@ class Network:
             nodes += [helper.make_node("MatMul", [f"x{i}", f"W{i}"], [f"h{i}"]),
                       helper.make_node("Add", [f"h{i}", f"b{i}"], [f"z{i}"]),
                       helper.make_node("Tanh", [f"z{i}"], [last])]  # fmt: skip
-        graph = helper.make_graph(
-            nodes,
-            "nnrobust-es-policy",
-            [helper.make_tensor_value_info("obs", TensorProto.FLOAT, ["batch", self.d])],
-            [helper.make_tensor_value_info("action", TensorProto.FLOAT, ["batch", self.n])],
-            tensors,
-        )
-        model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)])
-        model.ir_version = 8
-        onnx.checker.check_model(model)
-        path = Path(path)
-        tmp = path.with_name(path.name + ".tmp")
-        onnx.save(model, str(tmp))
-        tmp.replace(path)
-        return path
+        return write_policy(path, "nnrobust-es-policy", nodes, tensors, self.d, self.n)
+
+
+def write_policy(path: str | Path, name: str, nodes: list, tensors: list, d: int, n: int) -> Path:
+    """A policy file (docs/learning.md#policy-files) of ``nodes`` and ``tensors``: input ``obs``
+    [batch, d] float32, output ``action`` [batch, n]; checked, and written atomically.
+    """
+    import onnx
+    from onnx import TensorProto, helper
+
+    graph = helper.make_graph(
+        nodes,
+        name,
+        [helper.make_tensor_value_info("obs", TensorProto.FLOAT, ["batch", d])],
+        [helper.make_tensor_value_info("action", TensorProto.FLOAT, ["batch", n])],
+        tensors,
+    )
+    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)])
+    model.ir_version = 8
+    onnx.checker.check_model(model)
+    path = Path(path)
+    tmp = path.with_name(path.name + ".tmp")
+    onnx.save(model, str(tmp))
+    tmp.replace(path)
+    return path
 
 
 def observation_statistics(vec, episodes: int) -> tuple[np.ndarray, np.ndarray]:

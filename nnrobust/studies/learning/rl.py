@@ -189,8 +189,9 @@ def export_onnx(
     normalised as VecNormalize does (``clip((obs - mean) / sqrt(var + eps), ±CLIP_OBS)``), the
     layers, then ``output``; output ``action`` [batch, n]. Written atomically.
     """
-    import onnx
-    from onnx import TensorProto, helper, numpy_helper
+    from onnx import helper, numpy_helper
+
+    from .es import write_policy
 
     f = np.float32
     d = int(mean.size)
@@ -207,7 +208,7 @@ def export_onnx(
         helper.make_node("Div", ["centred", "scale"], ["scaled"]),
         helper.make_node("Clip", ["scaled", "clip_low", "clip_high"], ["x0"]),
     ]
-    x, n = "x0", None
+    x, n = "x0", 0
     for i, (kind, W, b) in enumerate(layers):
         if kind == "linear":
             tensors += [
@@ -226,21 +227,7 @@ def export_onnx(
         nodes.append(helper.make_node("Clip", [x, "action_low", "action_high"], ["action"]))
     else:
         nodes.append(helper.make_node("Tanh", [x], ["action"]))
-    graph = helper.make_graph(
-        nodes,
-        "nnrobust-sb3-policy",
-        [helper.make_tensor_value_info("obs", TensorProto.FLOAT, ["batch", d])],
-        [helper.make_tensor_value_info("action", TensorProto.FLOAT, ["batch", n])],
-        tensors,
-    )
-    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 17)])
-    model.ir_version = 8
-    onnx.checker.check_model(model)
-    path = Path(path)
-    tmp = path.with_name(path.name + ".tmp")
-    onnx.save(model, str(tmp))
-    tmp.replace(path)
-    return path
+    return write_policy(path, "nnrobust-sb3-policy", nodes, tensors, d, n)
 
 
 def validate(model, normalize, vec, seed: int) -> dict:
