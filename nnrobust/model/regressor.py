@@ -167,6 +167,20 @@ class BaseParameters:
         return P
 
 
+def random_regressor(model: pin.Model, samples: int = 0, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """The torque regressor stacked over random states, (samples n) x 10 n, and their q'' (samples
+    x n): positions within the joint limits, velocities and accelerations standard normal;
+    ``samples`` 0 is max(40, 4 n). What the base parameters are computed from.
+    """
+    n = model.nv
+    rng = np.random.default_rng(seed)
+    samples = samples or max(40, 4 * n)
+    low, high = position_ranges(model)
+    q = rng.uniform(np.maximum(low, -np.pi), np.minimum(high, np.pi), (samples, n))
+    v, a = rng.standard_normal((samples, n)), rng.standard_normal((samples, n))
+    return torque_regressor(model, q, v, a).reshape(-1, 10 * n), a
+
+
 def base_parameters(
     model: pin.Model, names: list[str], samples: int = 0, seed: int = 0, rel_tol: float = 1e-8
 ) -> BaseParameters:
@@ -175,13 +189,7 @@ def base_parameters(
     QR-factored with column pivoting; the columns whose pivots exceed ``rel_tol`` times the first
     are the base, the others their combinations. ``names``: the inertial parameters' names.
     """
-    n = model.nv
-    rng = np.random.default_rng(seed)
-    samples = samples or max(40, 4 * n)
-    low, high = position_ranges(model)
-    q = rng.uniform(np.maximum(low, -np.pi), np.minimum(high, np.pi), (samples, n))
-    Y = torque_regressor(model, q, rng.standard_normal((samples, n)), rng.standard_normal((samples, n)))
-    W = Y.reshape(-1, Y.shape[2])
+    W = random_regressor(model, samples, seed)[0]
     _, R, pivots = scipy.linalg.qr(W, mode="economic", pivoting=True)
     diag = np.abs(np.diag(R))
     rank = int(np.sum(diag > rel_tol * diag[0]))

@@ -158,18 +158,13 @@ def unidentifiable_armature(
     first (its link's moment about its own axis moves only its own torque, with q''_2, as its
     rotor inertia does); only the sum moves the torque.
     """
-    from ...model.regressor import position_ranges
+    from ...model.regressor import random_regressor
 
-    n = model.nv
-    rng = np.random.default_rng(seed)
-    samples = samples or max(40, 4 * n)
-    low, high = position_ranges(model)
-    q = rng.uniform(np.maximum(low, -np.pi), np.minimum(high, np.pi), (samples, n))
-    a = rng.standard_normal((samples, n))
-    W = torque_regressor(model, q, rng.standard_normal((samples, n)), a).reshape(-1, 10 * n)[:, base.base]
+    Y, a = random_regressor(model, samples, seed)
+    W = Y[:, base.base]
     out = []
-    for j in range(n):
-        column = np.zeros((samples, n))
+    for j in range(model.nv):
+        column = np.zeros_like(a)
         column[:, j] = a[:, j]
         column = column.reshape(-1)
         c, *_ = np.linalg.lstsq(W, column, rcond=None)
