@@ -146,16 +146,16 @@ def cmd_learn(args) -> int:
     out = Path(args.out)
     say = (lambda text: None) if args.quiet else (lambda text: print(text, file=sys.stderr))
     records = []
+    # what a seed's stored record must match to be kept (the same for every seed)
+    wanted = {"algorithm": args.algorithm, "budget_seconds": args.budget, "action": args.action,
+              "experiment_sha256": experiment_sha256(args.experiment), "tuned_file": args.tuned}  # fmt: skip
+    if args.controller:
+        wanted["controller"] = args.controller
+    if args.duration is not None:
+        wanted["duration"] = args.duration
     for seed in range(args.seeds):
         folder = out / f"seed-{seed}"
         folder.mkdir(parents=True, exist_ok=True)
-        wanted = {"algorithm": args.algorithm, "budget_seconds": args.budget, "action": args.action,
-                  "experiment_sha256": experiment_sha256(args.experiment)}  # fmt: skip
-        if args.controller:
-            wanted["controller"] = args.controller
-        if args.duration is not None:
-            wanted["duration"] = args.duration
-        wanted["tuned_file"] = args.tuned
         stored = _reused(folder, wanted)
         if stored is not None and (folder / "policy.onnx").is_file():
             say(f"seed {seed}: trained before ({folder / 'policy.onnx'}), kept")
