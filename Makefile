@@ -35,13 +35,15 @@ $(VENV)/.installed: pyproject.toml $(SOURCES) $(VENV)/.build-deps $(VENV)/.modul
 	CMAKE_BUILD_PARALLEL_LEVEL=2 $(BIN)/pip install --quiet --no-build-isolation -e '.[walkthrough]'
 	touch $@
 
-# The test extra includes the rl extra's PyTorch: its CPU build first (TORCH; about 30 s and
-# 850 MB here), so that `torch>=2.3` finds it installed and no CUDA build is fetched. Elsewhere,
-# TORCH='torch --index-url https://download.pytorch.org/whl/cpu' does the same.
+# The suite also tests the rl extra (PPO and SAC: Stable-Baselines3 on PyTorch): PyTorch's CPU
+# build first (TORCH; about 30 s and 850 MB here), so that the extra's `torch>=2.3` finds it
+# installed and no CUDA build (several GB) is fetched. Elsewhere,
+# TORCH='torch --index-url https://download.pytorch.org/whl/cpu' does the same. The test extra
+# alone leaves PyTorch out (its RL tests then skip, saying so).
 TORCH ?= torch==2.13.0
 $(VENV)/.installed-test: pyproject.toml $(VENV)/.installed
 	$(BIN)/pip install --quiet $(TORCH)
-	CMAKE_BUILD_PARALLEL_LEVEL=2 $(BIN)/pip install --quiet --no-build-isolation -e '.[test]'
+	CMAKE_BUILD_PARALLEL_LEVEL=2 $(BIN)/pip install --quiet --no-build-isolation -e '.[test,rl]'
 	touch $@
 
 run: $(VENV)/.installed
