@@ -5,22 +5,11 @@ with its learning curve (docs/learning.md#ppo-and-sac).
 from __future__ import annotations
 
 import argparse
-import csv
-import io
-import json
 import sys
 from pathlib import Path
 
 from ..core.exceptions import ConfigError
 from .common import Command
-
-CURVE_COLUMNS = ("seed", "simulated_seconds", "wall_seconds", "mean_return", "median_rms_error_after_2s",
-                 "median_rms_torque")  # fmt: skip
-"""The columns of DIR/curves.csv: one row per seed and point of its learning curve."""
-
-SAME_RUN = ("experiment_sha256", "algorithm", "budget_seconds", "action", "controller", "duration", "hyper")
-"""A seed's stored record is reused when these (and the --tuned file) match the command's; else
-the folder is refused."""
 
 
 def learn_arguments(parser: argparse.ArgumentParser) -> None:
@@ -84,60 +73,9 @@ def learn_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--quiet", action="store_true", help="print nothing but errors")
 
 
-def _reused(folder: Path, wanted: dict) -> dict | None:
-    """The seed's stored record when it is the same training (``SAME_RUN``), else None."""
-    path = folder / "policy.onnx.json"
-    if not path.is_file():
-        return None
-    stored = json.loads(path.read_text())
-    differs = [k for k in SAME_RUN if k in wanted and stored.get(k) != wanted[k]]
-    if (stored.get("tuned") or {}).get("file") != wanted.get("tuned_file"):
-        differs.append("tuned setting")
-    if differs:
-        raise ConfigError(
-            "--out",
-            f"{folder} holds another training (its {', '.join(differs)} differ): choose another --out",
-        )
-    return stored
-
-
-def write_curves(out: Path, records: list[dict]) -> None:
-    """DIR/curves.csv (one row per seed and point) and DIR/curves.png (the validation error and
-    return against simulated seconds, one line per seed).
-    """
-    from ..run.results import write_text_atomic
-
-    text = io.StringIO()
-    writer = csv.writer(text, lineterminator="\n")
-    writer.writerow(CURVE_COLUMNS)
-    for record in records:
-        for point in record["curve"]:
-            writer.writerow([record["seed"], *(point[k] for k in CURVE_COLUMNS[1:])])
-    write_text_atomic(out / "curves.csv", text.getvalue())
-    from ..outputs.plots import plt, save_figure
-
-    fig, (top, bottom) = plt.subplots(2, 1, figsize=(6.4, 5.6), sharex=True)
-    for record in records:
-        x = [p["simulated_seconds"] for p in record["curve"]]
-        top.plot(
-            x,
-            [1e3 * p["median_rms_error_after_2s"] for p in record["curve"]],
-            marker="o",
-            label=f"seed {record['seed']}",
-        )
-        bottom.plot(x, [p["mean_return"] for p in record["curve"]], marker="o")
-    top.set_ylabel("validation median\nRMS error, t >= 2 s [mm]")
-    bottom.set_ylabel("validation mean return")
-    bottom.set_xlabel("simulated seconds of training")
-    top.legend(fontsize="small")
-    top.set_title(f"{records[0]['algorithm'].upper()}, {records[0]['action']} on {records[0]['controller']}")
-    save_figure(fig, out, "curves")
-    plt.close(fig)
-
-
 def cmd_learn(args) -> int:
     """Train one policy per seed and write their curves."""
-    from ..studies.learning.rl import experiment_sha256, train
+    from ..studies.learning.rl import experiment_sha256, stored_training, train, write_curves
 
     for option, value, low in (("--seeds", args.seeds, 1), ("--num-envs", args.num_envs, 1),
                                ("--validation-episodes", args.validation_episodes, 1)):  # fmt: skip
@@ -156,8 +94,8 @@ def cmd_learn(args) -> int:
     for seed in range(args.seeds):
         folder = out / f"seed-{seed}"
         folder.mkdir(parents=True, exist_ok=True)
-        stored = _reused(folder, wanted)
-        if stored is not None and (folder / "policy.onnx").is_file():
+        stored = stored_training(folder / "policy.onnx", wanted)
+        if stored is not None:
             say(f"seed {seed}: trained before ({folder / 'policy.onnx'}), kept")
             records.append(stored)
             continue

@@ -92,7 +92,55 @@ def _serve(wait: float):
     return check
 
 
+TRAINED = '{{name = "ppo", kind = "{kind}", train = {train}, params = {params}}}'
+
+
+def _trained(
+    train='{algorithm = "ppo", budget = 1.0}', params='{action = "residual", base = "pd"}', kind="policy"
+):
+    return TRAINED.format(kind=kind, train=train, params=params)
+
+
 STUDY_CASES = [
+    Case(
+        "study: a trained policy's train table with an algorithm it does not know",
+        lambda d: _load_small_study(d, controllers=_trained(train='{algorithm = "dqn", budget = 1.0}')),
+        ex.ConfigError,
+        "study.toml: controllers[0].train.algorithm: expected one of ppo, sac, got 'dqn'",
+    ),
+    Case(
+        "study: a trained policy's budget of 0 simulated seconds",
+        lambda d: _load_small_study(d, controllers=_trained(train='{algorithm = "sac", budget = 0}')),
+        ex.ConfigError,
+        "study.toml: controllers[0].train.budget: expected simulated seconds of training > 0, got 0",
+    ),
+    Case(
+        "study: a train table on a law that is not a policy",
+        lambda d: _load_small_study(d, controllers=_trained(kind="pd", params="{}")),
+        ex.ConfigError,
+        "study.toml: controllers[0].train: only a policy entry (kind = \"policy\") is trained, not 'ppo'",
+    ),
+    Case(
+        "study: a trained policy that also names its file",
+        lambda d: _load_small_study(d, controllers=_trained(params='{file = "p.onnx", action = "torque"}')),
+        ex.ConfigError,
+        "study.toml: controllers[0].params.file: the train stage writes a trained policy's file",
+    ),
+    Case(
+        "study: a trained policy's train table with a misspelt key",
+        lambda d: _load_small_study(
+            d, controllers=_trained(train='{algorithm = "ppo", budget = 1.0, sedes = 3}')
+        ),
+        ex.ConfigError,
+        "study.toml: controllers[0].train.sedes: unknown key; did you mean 'seeds'?",
+    ),
+    Case(
+        "study: a trained residual on a law with no compiled twin",
+        lambda d: _load_small_study(d, controllers=_trained(params='{action = "residual", base = "my-law"}')),
+        ex.ConfigError,
+        "study.toml: controllers[0].params.base: 'my-law': a trained policy's base law runs on the "
+        "compiled loop",
+    ),
     Case(
         "study: a case file named as a spreadsheet formula (its name would start a CSV row)",
         lambda d: _load_small_study(

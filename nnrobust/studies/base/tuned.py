@@ -46,13 +46,18 @@ def check_tuned(
     law's; a custom law's are its ``controller.params.*``), or a key the box varies (``varied``,
     dotted keys): it would run every point of the box at that value while the summary claims the
     box. ``where`` names the settings' file in the message; ``entries``: the sweep file's table
-    entries, by name.
+    entries, by name. A residual or gains policy reads its base law's keys too (it runs that law:
+    a policy trained on a tuned law carries its setting).
     """
     import re
 
     box = {re.sub(r"\[\d+\]$", "", str(k)) for k in varied}
     for name, settings in tuned.items():
         keys, prefixes = own_keys(law_of(name, entries))
+        params = ((entries or {}).get(name) or {}).get("params") or {}
+        if law_of(name, entries) == "policy" and params.get("action", "torque") != "torque":
+            base_keys, base_prefixes = own_keys(str(params.get("base", "pd")))  # the base law it runs
+            keys, prefixes = keys | base_keys, prefixes + base_prefixes
         for key in settings:
             plain = re.sub(r"\[\d+\]$", "", str(key))
             if plain not in keys and not plain.startswith(prefixes):

@@ -19,8 +19,11 @@ Stable-Baselines3 and PyTorch are the ``rl`` extra (``pip install 'nnrobust[rl]'
 
 from __future__ import annotations
 
+import csv
 import hashlib
 import importlib.metadata
+import io
+import json
 import math
 import time
 from pathlib import Path
@@ -30,6 +33,14 @@ import numpy as np
 
 from ...core.exceptions import ConfigError, NNRobustError
 from ...run.results import write_json_atomic
+
+CURVE_COLUMNS = ("seed", "simulated_seconds", "wall_seconds", "mean_return", "median_rms_error_after_2s",
+                 "median_rms_torque")  # fmt: skip
+"""The columns of curves.csv: one row per seed and point of its learning curve."""
+
+SAME_RUN = ("experiment_sha256", "algorithm", "budget_seconds", "action", "controller", "duration", "hyper")
+"""A seed's stored record is reused when these (and the tuned setting) match the training asked
+for (:func:`stored_training`)."""
 
 ALGORITHMS = ("ppo", "sac")
 """The Stable-Baselines3 algorithms :func:`train` runs."""
@@ -418,3 +429,61 @@ def train(
     }
     write_json_atomic(Path(str(path) + ".json"), record)
     return record
+
+
+def stored_training(path: Path, wanted: dict, where: str = "--out") -> dict | None:
+    """The record of the training stored at ``path`` (a policy file and its ``.json`` record)
+    when it is the training ``wanted`` describes (:data:`SAME_RUN`; ``tuned_file``, and
+    ``tuned_settings`` where given, the base law's tuned setting); None when nothing is stored
+    there. Another training there is refused, naming ``where``.
+    """
+    record = Path(str(path) + ".json")
+    if not record.is_file():
+        return None
+    stored = json.loads(record.read_text())
+    differs = [k for k in SAME_RUN if k in wanted and stored.get(k) != wanted[k]]
+    tuned = stored.get("tuned") or {}
+    if tuned.get("file") != wanted.get("tuned_file") or (
+        "tuned_settings" in wanted and tuned.get("settings") != wanted["tuned_settings"]
+    ):
+        differs.append("tuned setting")
+    if differs:
+        raise ConfigError(
+            where,
+            f"{path.parent} holds another training (its {', '.join(differs)} differ): choose another "
+            "folder" + (" or give --overwrite" if where != "--out" else ""),
+        )
+    return stored if path.is_file() else None
+
+
+def write_curves(out: Path, records: list[dict]) -> None:
+    """``out``/curves.csv (one row per seed and point) and curves.png (the validation error and
+    return against simulated seconds, one line per seed).
+    """
+    from ...outputs.plots import plt, save_figure
+    from ...run.results import write_text_atomic
+
+    text = io.StringIO()
+    writer = csv.writer(text, lineterminator="\n")
+    writer.writerow(CURVE_COLUMNS)
+    for record in records:
+        for point in record["curve"]:
+            writer.writerow([record["seed"], *(point[k] for k in CURVE_COLUMNS[1:])])
+    write_text_atomic(out / "curves.csv", text.getvalue())
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(6.4, 5.6), sharex=True)
+    for record in records:
+        x = [p["simulated_seconds"] for p in record["curve"]]
+        top.plot(
+            x,
+            [1e3 * p["median_rms_error_after_2s"] for p in record["curve"]],
+            marker="o",
+            label=f"seed {record['seed']}",
+        )
+        bottom.plot(x, [p["mean_return"] for p in record["curve"]], marker="o")
+    top.set_ylabel("validation median\nRMS error, t >= 2 s [mm]")
+    bottom.set_ylabel("validation mean return")
+    bottom.set_xlabel("simulated seconds of training")
+    top.legend(fontsize="small")
+    top.set_title(f"{records[0]['algorithm'].upper()}, {records[0]['action']} on {records[0]['controller']}")
+    save_figure(fig, out, "curves")
+    plt.close(fig)

@@ -168,7 +168,8 @@ def _check_controllers(spec: StudySpec) -> None:
 def _at_centres(spec: StudySpec, sweep):
     """The case's sweep with each tuned class entry at the centre of the space it declares (the
     tuner builds it there first; it never runs at its entry's own params, which a law in C++ need
-    not give), so that the up-front check builds what the stages will run.
+    not give), and each policy the study trains as its base law (its file is the train stage's),
+    so that the up-front check builds what the stages will run.
     """
     import dataclasses
 
@@ -177,6 +178,8 @@ def _at_centres(spec: StudySpec, sweep):
     from ..tune.space import custom_space
 
     entries = {k: dict(v) for k, v in sweep.entries.items()}
+    for name in spec.trained:  # no file before the train stage: its base law, which the episodes run
+        entries[name] = {"kind": (entries[name].get("params") or {}).get("base", "pd"), "set": {}}
     for name, entry in entries.items():
         if name in spec.fixed or "class" not in entry:
             continue

@@ -85,7 +85,7 @@ def _commands(spec: StudySpec, folder: Path, name: str, case: dict) -> dict:
     """The command that recomputes each stage's numbers from its own folder's input file."""
     here = folder / "cases" / name
     b = spec.budgets
-    tuned = [c for c in spec.controllers if c not in spec.fixed]
+    tuned = spec.searched
     out = {}
     for s, path in case.get("tunings", {}).items():
         out[f"tune seed {s}"] = (
@@ -97,6 +97,10 @@ def _commands(spec: StudySpec, folder: Path, name: str, case: dict) -> dict:
             + f" --out {path}"
         )
     out["validate"] = f"nnrobust sweep {here / 'validate.toml'} --out {here / 'validate'}"
+    if case["stages"].get("train") == "finished":  # each seed's training: its record holds every option
+        out["validate trained"] = (
+            f"nnrobust sweep {here / 'validate-train.toml'} --out {here / 'validate-train'}"
+        )
     require = " ".join(f"--require '{r}'" for r in spec.certified_properties())
     searched = " ".join(f"--require '{r}'" for r in spec.require)
     out["certify"] = (
@@ -152,6 +156,7 @@ def _controller_entry(spec: StudySpec, case: dict, c: str) -> dict:
             },
         },
         "training": _training(spec, case, c),
+        "trained": case.get("trained", {}).get(c),  # a policy the study trained: its seeds' records
         "fixed": c in spec.fixed,
         "validation": {
             "median_error": kept["median_error"],
@@ -206,6 +211,11 @@ def _training(spec: StudySpec, case: dict, c: str) -> dict | None:
     seed) for a tuned law, its training record's for a learned policy; None for a law at its own
     settings.
     """
+    if c in spec.trained:
+        table = spec.trained[c]
+        seconds = case.get("training", {}).get(c)
+        by = f"the train stage: {table['algorithm'].upper()}, {table['seeds']} seeds of {table['budget']:g} s"
+        return None if seconds is None else {"simulated_seconds": seconds, "by": by}
     if c not in spec.fixed:
         seconds = case.get("training", {}).get(c)
         return (

@@ -29,8 +29,10 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from ...config import parse_toml, read_text_file
+from ...controllers.registry import shipped_laws
 from ...core.exceptions import ConfigError
 from ..base.plan import NAME, SweepSpec, parse_sweep, resolve_entry_files
+from ..learning.rl import ALGORITHMS, DEFAULTS
 
 KEYS = (
     "name", "description", "cases", "controllers", "tuned", "require", "waive", "seed", "set", "vary",
@@ -113,6 +115,21 @@ class StudyCase:
 ENTRY_TUNE = "tune"
 """The key of a controllers entry that, set to false, runs it at its own settings untuned."""
 
+ENTRY_TRAIN = "train"
+"""The key of a policy entry (``kind = "policy"``, no ``file``) that the study trains as a stage:
+``train = {algorithm = "ppo", budget = 60.0, seeds = 3}`` (:data:`TRAIN_KEYS`)."""
+
+TRAIN_KEYS = {
+    "algorithm": "ppo or sac (Stable-Baselines3: the rl extra)",
+    "budget": "simulated seconds of training per seed (> 0)",
+    "seeds": "training seeds (1-20, default 1); the study keeps the best on its validation draws",
+    "num_envs": "episodes run side by side (the vector environment, default 8)",
+    "curve_points": "points of the learning curve after its start (default 10, one per tenth of the budget)",
+    "curve_episodes": "validation episodes of each point of the learning curve (default 8)",
+    "hyper": "the algorithm's hyper-parameters, over its defaults (docs/learning.md)",
+}
+"""The keys of a policy entry's ``train`` table, each with what it means."""
+
 ENTRY_CASES = "cases"
 """The key of a controllers entry that runs it on the cases it lists only (by name): two entries
 of one name whose lists do not share a case are one law, with its own settings on each (a
@@ -157,6 +174,14 @@ class StudySpec:
     waive: list[str] = field(default_factory=list)
     case_controllers: dict = field(default_factory=dict)
     """case name -> (controllers, entries) where entries name the cases they run on."""
+    trained: dict = field(default_factory=dict)
+    """The learned policies the study trains (name -> its checked ``train`` table); neither
+    fixed nor tuned: the train stage gives each seed's policy file, the validation keeps one."""
+
+    @property
+    def searched(self) -> list[str]:
+        """The controllers the study's tunings search: neither fixed nor trained."""
+        return [c for c in self.controllers if c not in self.fixed and c not in self.trained]
 
     def for_case(self, case: StudyCase) -> StudySpec:
         """The study as one case sees it: the controllers that run there, with that case's entries."""
@@ -164,7 +189,15 @@ class StudySpec:
             return self
         names, entries = self.case_controllers[case.name]
         fixed = [f for f in self.fixed if f in names]
-        return replace(self, controllers=list(names), entries=dict(entries), fixed=fixed, case_controllers={})
+        trained = {c: t for c, t in self.trained.items() if c in names}
+        return replace(
+            self,
+            controllers=list(names),
+            entries=dict(entries),
+            fixed=fixed,
+            case_controllers={},
+            trained=trained,
+        )
 
     def design_requirement(self) -> dict[str, str]:
         """The design's requirement (:data:`DESIGN`) as properties by name, those the file waives
@@ -347,6 +380,7 @@ def parse_study(data: dict, path: Path) -> StudySpec:
         raise ConfigError(f"{where}: name", f"must be 1-40 letters, digits, '_' or '-', got {name!r}")
     cases = _cases(data["cases"], path)
     fixed: list[str] = []
+    trained: dict[str, dict] = {}
     controllers = data["controllers"]
     if isinstance(controllers, list):
         from ..base.plan import ENTRY_KEYS
@@ -354,12 +388,14 @@ def parse_study(data: dict, path: Path) -> StudySpec:
         controllers = [dict(c) if isinstance(c, dict) else c for c in controllers]
         for i, c in enumerate(controllers):
             for key in c if isinstance(c, dict) else ():
-                if key not in (*ENTRY_KEYS, ENTRY_TUNE, ENTRY_CASES):
-                    valid = (*ENTRY_KEYS, ENTRY_TUNE, ENTRY_CASES)
+                if key not in (*ENTRY_KEYS, ENTRY_TUNE, ENTRY_CASES, ENTRY_TRAIN):
+                    valid = (*ENTRY_KEYS, ENTRY_TUNE, ENTRY_CASES, ENTRY_TRAIN)
                     raise ConfigError(
                         f"{where}: controllers[{i}].{key}",
                         f"unknown key{_suggest(key, valid)} Valid: {', '.join(valid)}",
                     )
+            if isinstance(c, dict) and ENTRY_TRAIN in c:
+                trained[str(c.get("name"))] = _train_table(c, f"{where}: controllers[{i}]")
             if isinstance(c, dict) and ENTRY_TUNE in c:
                 if not isinstance(c[ENTRY_TUNE], bool):
                     raise ConfigError(f"{where}: controllers", f"an entry's tune is true or false, got {c!r}")
@@ -433,7 +469,10 @@ def parse_study(data: dict, path: Path) -> StudySpec:
             )
     names, entries, tuned = sweep.controllers, sweep.entries, ""
     if "tuned" in data:
+        _no_training_at_kept_settings(trained, where)
         names, entries, fixed, tuned = _tuned_elsewhere(data["tuned"], sweep, path)
+    for c, table in trained.items():  # a residual on a law the study tunes learns on its kept setting
+        table["base"] = _trained_base(entries[c], names, fixed, trained)
     for c in names:  # a tuned law's kept setting is certified as NAME-tuned
         if c not in fixed and kept_name(c) in names:
             raise ConfigError(
@@ -472,7 +511,95 @@ def parse_study(data: dict, path: Path) -> StudySpec:
         tuned,
         list(dict.fromkeys(waive)),
         case_controllers,
+        trained,
     )
+
+
+def _no_training_at_kept_settings(trained: dict, where: str) -> None:
+    if trained:
+        raise ConfigError(
+            f"{where}: tuned",
+            f"the study trains {', '.join(trained)}: a study whose laws run at another study's kept "
+            "settings trains no policy (train it in that study, or give its file with tune = false)",
+        )
+
+
+def _trained_base(entry: dict, names: list[str], fixed: list[str], trained: dict) -> str | None:
+    """The law a trained residual or gains policy learns on the kept setting of: its base, where
+    the study tunes it; else None (the base at the case's own settings, or a torque policy).
+    """
+    params = entry.get("params") or {}
+    base = params.get("base", "pd") if params.get("action", "torque") != "torque" else None
+    return base if base in names and base not in fixed and base not in trained else None
+
+
+def _train_table(entry: dict, where: str) -> dict:
+    """A policy entry's ``train`` table, checked (:data:`TRAIN_KEYS`); the entry loses its
+    ``train`` key (the sweeps run the trained file) and may not also be tuned or fixed.
+    """
+    table = entry.pop(ENTRY_TRAIN)
+    if entry.get("kind") != "policy" or "class" in entry:
+        raise ConfigError(
+            f"{where}.train", f'only a policy entry (kind = "policy") is trained, not {entry.get("name")!r}'
+        )
+    if ENTRY_TUNE in entry:
+        raise ConfigError(f"{where}.tune", "a trained policy is neither tuned nor fixed: drop tune")
+    params = entry.get("params") or {}
+    if "file" in params:
+        raise ConfigError(
+            f"{where}.params.file",
+            "the train stage writes a trained policy's file: drop file, or drop train (and give "
+            "tune = false) to run a policy trained before",
+        )
+    if not isinstance(table, dict):
+        raise ConfigError(
+            f"{where}.train", f'expected a table such as {{algorithm = "ppo", budget = 60.0}}, got {table!r}'
+        )
+    for key in table:
+        if key not in TRAIN_KEYS:
+            raise ConfigError(
+                f"{where}.train.{key}",
+                f"unknown key{_suggest(key, TRAIN_KEYS)} Valid: {', '.join(TRAIN_KEYS)}",
+            )
+    algorithm = table.get("algorithm")
+    if algorithm not in ALGORITHMS:
+        raise ConfigError(
+            f"{where}.train.algorithm", f"expected one of {', '.join(ALGORITHMS)}, got {algorithm!r}"
+        )
+    budget = table.get("budget")
+    if isinstance(budget, bool) or not isinstance(budget, int | float) or not 0 < budget < math.inf:
+        raise ConfigError(
+            f"{where}.train.budget", f"expected simulated seconds of training > 0, got {budget!r}"
+        )
+    checked = {"algorithm": algorithm, "budget": float(budget)}
+    counts = (("seeds", 1, 1, 20), ("num_envs", 8, 1, 256), ("curve_points", 10, 1, 1000),
+              ("curve_episodes", 8, 1, 1000))  # fmt: skip
+    for key, default, low, high in counts:
+        value = table.get(key, default)
+        if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+            raise ConfigError(
+                f"{where}.train.{key}", f"expected an integer in [{low}, {high}], got {value!r}"
+            )
+        checked[key] = value
+    hyper = table.get("hyper", {})
+    unknown = sorted(set(hyper) - set(DEFAULTS[algorithm])) if isinstance(hyper, dict) else ["?"]
+    if unknown:
+        raise ConfigError(
+            f"{where}.train.hyper",
+            f"unknown for {algorithm}: {', '.join(unknown)} (known: {', '.join(DEFAULTS[algorithm])})",
+        )
+    checked["hyper"] = dict(hyper)
+    if params.get("action", "torque") != "torque" and params.get("base", "pd") not in _shipped():
+        raise ConfigError(
+            f"{where}.params.base",
+            f"{params.get('base')!r}: a trained policy's base law runs on the compiled loop, so it is one of "
+            f"{', '.join(_shipped())}",
+        )
+    return checked
+
+
+def _shipped() -> tuple[str, ...]:
+    return tuple(k for k in shipped_laws() if k != "policy")
 
 
 def _per_case(controllers: list, cases: list[StudyCase], fixed: list[str], where: str):

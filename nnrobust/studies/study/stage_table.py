@@ -38,6 +38,13 @@ STAGE_ROWS: tuple[StageRow, ...] = (
         "validate every seed's setting on fresh draws and keep the best",
     ),
     StageRow(
+        "train",
+        (),
+        ("train", "validate-train"),
+        "train each learned policy an entry's train table names (PPO or SAC, each seed, on the "
+        "kept setting of its base law) and keep its best seed on the same fresh draws",
+    ),
+    StageRow(
         "certify",
         ("certify", "epsilon", "beta"),
         ("certify",),

@@ -116,7 +116,7 @@ def table_rows(report: dict) -> list[dict]:
                     "seed_spread_mm": None if not spread else f"{1e3 * spread[0]:.4g}-{1e3 * spread[1]:.4g}",
                     "converged": None
                     if not e["tuned"]
-                    else ("yes" if convergence.get("converged") else f"no, at {convergence.get('budget')}"),
+                    else ("yes" if convergence.get("converged") else _not_converged(convergence)),
                     "training_seconds": (e.get("training") or {}).get("simulated_seconds"),
                     "mujoco_median_mm": _median_mm(e["engines"].get("mujoco")),
                     "step_cost_us": e["step_cost_us"],
@@ -205,3 +205,12 @@ class StudyReport(dict):
             + table([h for _, h in TABLE_COLUMNS], rows)
             + notes
         )
+
+
+def _not_converged(convergence: dict) -> str:
+    """The convergence column of a law whose budget did not converge: "no, at" its budget (a
+    tuning's simulations, a training's simulated seconds).
+    """
+    budget = convergence.get("budget")
+    unit = " simulated s" if convergence.get("unit") else ""
+    return f"no, at {budget:g}{unit}" if isinstance(budget, int | float) else f"no, at {budget}"
