@@ -45,7 +45,8 @@ def learn_arguments(parser: argparse.ArgumentParser) -> None:
         "--tuned",
         metavar="DIR|REPORT.json#CASE",
         help="run the base law at its tuned setting: a tuning's folder or summary.json, or a study's "
-        "report and case (a residual then learns on the best model-based law found)",
+        "report and case (a residual then learns on the best model-based law found; curves.png then "
+        "marks each tuned law's own training, in simulated seconds, on its axis)",
     )
     parser.add_argument(
         "--duration",
@@ -75,7 +76,7 @@ def learn_arguments(parser: argparse.ArgumentParser) -> None:
 
 def cmd_learn(args) -> int:
     """Train one policy per seed and write their curves."""
-    from ..studies.learning.rl import experiment_sha256, stored_training, train, write_curves
+    from ..studies.learning.rl import experiment_sha256, stored_training, train, tuned_budgets, write_curves
 
     for option, value, low in (("--seeds", args.seeds, 1), ("--num-envs", args.num_envs, 1),
                                ("--validation-episodes", args.validation_episodes, 1)):  # fmt: skip
@@ -116,7 +117,7 @@ def cmd_learn(args) -> int:
                 progress=say,
             )  # fmt: skip
         )
-    write_curves(out, records)
+    write_curves(out, records, tuned_budgets(args.tuned))  # the tuned laws' training, marked
     if not args.quiet:
         print(f"{'seed':>4} {'simulated s':>12} {'wall s':>8} {'validation error [mm]':>22} {'at 0 s':>10}")
         for record in records:

@@ -456,9 +456,39 @@ def stored_training(path: Path, wanted: dict, where: str = "--out") -> dict | No
     return stored if path.is_file() else None
 
 
-def write_curves(out: Path, records: list[dict]) -> None:
+def tuned_budgets(tuned: str | Path | None) -> dict[str, float]:
+    """The simulated seconds each tuned law of a study's case trained for (its report's
+    ``training``: the tunings' simulations times the run's duration, every seed), from
+    ``REPORT.json#CASE``; {} for any other source (a tuning's folder does not say its duration).
+    """
+    from ..base.tuned import STUDY_REPORT, tuned_file
+
+    if tuned is None:
+        return {}
+    file, case = tuned_file(tuned)
+    try:
+        report = json.loads(file.read_text())
+    except (OSError, ValueError):
+        return {}
+    if not isinstance(report, dict) or not str(report.get("schema", "")).startswith(STUDY_REPORT):
+        return {}
+    laws = ((report.get("cases") or {}).get(case) or {}).get("controllers") or {}
+    out = {}
+    for law, entry in laws.items():
+        seconds = ((entry or {}).get("training") or {}).get("simulated_seconds")
+        if (
+            (entry or {}).get("tuned")
+            and not (entry or {}).get("trained")
+            and isinstance(seconds, int | float)
+        ):
+            out[law] = float(seconds)
+    return out
+
+
+def write_curves(out: Path, records: list[dict], marks: dict[str, float] | None = None) -> None:
     """``out``/curves.csv (one row per seed and point) and curves.png (the validation error and
-    return against simulated seconds, one line per seed).
+    return against simulated seconds, one line per seed; ``marks``, each tuned law's own training
+    in simulated seconds, drawn on the same axis).
     """
     from ...outputs.plots import plt, save_figure
     from ...run.results import write_text_atomic
@@ -480,6 +510,15 @@ def write_curves(out: Path, records: list[dict]) -> None:
             label=f"seed {record['seed']}",
         )
         bottom.plot(x, [p["mean_return"] for p in record["curve"]], marker="o")
+    for i, (law, seconds) in enumerate(sorted((marks or {}).items())):
+        for ax in (top, bottom):
+            ax.axvline(
+                seconds,
+                color=f"C{(i + 3) % 10}",
+                ls=":",
+                lw=1,
+                label=f"{law}'s tuning" if ax is top else None,
+            )
     top.set_ylabel("validation median\nRMS error, t >= 2 s [mm]")
     bottom.set_ylabel("validation mean return")
     bottom.set_xlabel("simulated seconds of training")

@@ -1,7 +1,7 @@
 """The study report's figures, drawn from the stages' own folders as SVG inside report.html (and
 the error CDF as files in figures/): per case, the certification draws' error distribution with
-the requirement's line, each tuned law's search (best-so-far against simulations, every seed), the
-falsification's (least margin found against simulations, search and random baseline), and the
+the requirement's line, each tuned law's search (best-so-far against simulations, every seed), each
+trained policy's learning curves (beside the tuned laws' training), the falsification's (least margin found against simulations, search and random baseline), and the
 kept settings' time responses (error and torque against time on the median and the worst
 certification draw). Long series are drawn as min-max envelopes and text stays text, so a figure is
 a few tens of kB; a figure's SVG is the same bytes from the same numbers.
@@ -150,6 +150,35 @@ def tuning_curves(name: str, curves: dict[str, dict[int, list]], half: int) -> s
     axes[0].legend(fontsize=7)
     fig.supxlabel("simulations (dotted: half the budget)", fontsize=8)
     return _inline(fig, plt, f"{name}: tuning, best feasible setting so far", f"{name}-tuning")
+
+
+@drawn_alone
+def learning_curves(name: str, trained: dict[str, dict], budgets: dict[str, float]) -> str | None:
+    """Each trained policy's learning curve: the median RMS error after 2 s of its validation
+    episodes against the simulated seconds of training, one line per seed, with each tuned law's
+    training (its tunings' simulations times the run's duration, every seed) marked on the same
+    axis. ``trained``: policy -> the report's ``trained`` entry; ``budgets``: tuned law -> seconds.
+    """
+    laws = {c: t for c, t in trained.items() if t and t.get("curves")}
+    if not laws:
+        return None
+    plt = _pyplot()
+    fig, axes = _grid(len(laws), plt, height=2.3)
+    for ax, (law, entry) in zip(axes, laws.items()):
+        for seed, curve in sorted(entry["curves"].items(), key=lambda item: int(item[0])):
+            points = [(p["simulated_seconds"], 1e3 * p["median_rms_error_after_2s"]) for p in curve
+                      if np.isfinite(p["median_rms_error_after_2s"])]  # fmt: skip
+            if points:
+                ax.plot(*zip(*points), marker="o", ms=2.5, lw=1.2, label=f"seed {seed}")
+        for i, (tuned, seconds) in enumerate(sorted(budgets.items())):
+            ax.axvline(seconds, color=f"C{(i + 3) % 10}", ls=":", lw=1, label=f"{tuned}'s tuning")
+        ax.set_yscale("log")
+        ax.set_title(f"{law} ({entry['algorithm'].upper()})", fontsize=9)
+        _plain(ax)
+    axes[0].set_ylabel("validation median e [mm]", fontsize=8)
+    axes[0].legend(fontsize=6)
+    fig.supxlabel("simulated seconds of training (dotted: the tuned laws' own training)", fontsize=8)
+    return _inline(fig, plt, f"{name}: learning curves, every seed", f"{name}-learning")
 
 
 @drawn_alone

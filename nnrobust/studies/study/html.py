@@ -157,6 +157,7 @@ def write_html(report: dict, folder: Path, figures: dict[str, dict[str, str | No
         for key, title in (
             ("cdf", "Error distribution on the certification draws"),
             ("tuning", "Tuning: best feasible setting against simulations, every seed"),
+            ("learning", "Learning: validation error against simulated seconds of training, every seed"),
             ("falsification", "Falsification: worst plant found against simulations"),
             ("responses", "Time responses of the kept settings (median and worst certification draw)"),
         ):

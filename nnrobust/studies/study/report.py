@@ -354,6 +354,15 @@ def write_report(spec: StudySpec, folder: Path, cases: dict) -> dict:
         figures[name] = {
             "cdf": draw.error_cdf(name, folder, spec.require)[0],
             "tuning": draw.tuning_curves(name, case.get("curves", {}), spec.budgets["tune"] // 2),
+            "learning": draw.learning_curves(
+                name,
+                case.get("trained", {}),
+                {
+                    c: seconds
+                    for c, seconds in case.get("training", {}).items()
+                    if c not in case.get("trained", {})
+                },
+            ),
             "falsification": draw.falsification_curves(
                 name, {c: e["falsification"] for c, e in entries.items() if e.get("falsification")}
             ),

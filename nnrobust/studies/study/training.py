@@ -168,7 +168,8 @@ def trained_report(run: CaseRun, result) -> None:
     out.setdefault("trained", {})
     for c, table in spec.trained.items():
         mine = [records[key] for key in sorted(records) if key[0] == c]
-        write_curves(run.here / "train" / c, mine)
+        tuned = {law: seconds for law, seconds in out.get("training", {}).items() if law not in spec.trained}
+        write_curves(run.here / "train" / c, mine, tuned)
         out["trained"][c] = {
             **{
                 k: table[k]

@@ -94,6 +94,18 @@ def test_each_seed_learns_on_the_kept_setting_and_the_best_on_validation_is_kept
     assert (folder / "train" / "ppo-residual" / "curves.csv").is_file()
 
 
+def test_the_report_draws_the_learning_curves_beside_the_tuned_budgets(study):
+    _, out, report, _ = study
+    case = report["cases"]["paper-ellipse-noisy"]
+    pd = case["controllers"]["pd"]
+    assert pd["training"]["simulated_seconds"] == pytest.approx(4 * 2.2)  # 4 simulations of 2.2 s
+    html = (out / "report.html").read_text()
+    assert "Learning: validation error against simulated seconds of training" in html
+    start = html.index("Learning: validation error")
+    figure = html[start : html.index("</svg>", start)]
+    assert "pd" in figure and "tuning" in figure and "seed 1" in figure
+
+
 def test_a_rerun_trains_nothing_and_writes_the_same_report(study):
     here, out, report, argv = study
     folder = out / "cases" / "paper-ellipse-noisy" / "train"
@@ -112,3 +124,13 @@ def _rows(folder):
     from nnrobust.studies.sweep import read_results
 
     return read_results(folder).to_dict("records")
+
+
+def test_learn_marks_a_studys_tuned_budgets_from_its_report(study):
+    """``nnrobust learn --tuned REPORT.json#CASE`` marks each tuned law's own training on its
+    curves: the report's seconds for the tuned law, none for the trained policy."""
+    from nnrobust.studies.learning.rl import tuned_budgets
+
+    _, out, _, _ = study
+    assert tuned_budgets(f"{out / 'report.json'}#paper-ellipse-noisy") == pytest.approx({"pd": 4 * 2.2})
+    assert tuned_budgets(out / "cases" / "paper-ellipse-noisy" / "kept.json") == {}
