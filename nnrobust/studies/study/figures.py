@@ -1,10 +1,11 @@
 """The study report's figures, drawn from the stages' own folders as SVG inside report.html (and
 the error CDF as files in figures/): per case, the certification draws' error distribution with
-the requirement's line, each tuned law's search (best-so-far against simulations, every seed), each
-trained policy's learning curves (beside the tuned laws' training), the falsification's (least margin found against simulations, search and random baseline), and the
-kept settings' time responses (error and torque against time on the median and the worst
-certification draw). Long series are drawn as min-max envelopes and text stays text, so a figure is
-a few tens of kB; a figure's SVG is the same bytes from the same numbers.
+the requirement's line, each tuned law's search (best-so-far against simulations, every seed),
+each trained policy's learning curves (beside the tuned laws' training), the falsification's
+(least margin found against simulations, search and random baseline), and the kept settings'
+time responses (error and torque against time on the median and the worst certification draw).
+Long series are drawn as min-max envelopes and text stays text, so a figure is a few tens of kB;
+a figure's SVG is the same bytes from the same numbers.
 """
 
 from __future__ import annotations
