@@ -355,15 +355,28 @@ def train(
     vec = ArmVectorEnv(experiment, num_envs, seed=seed, verdicts=False, **common)
     checking = ArmVectorEnv(experiment, validation_episodes, seed=seed, verdicts=True, **common)
     period, horizon = vec.episodes.period, vec.episodes.horizon
-    venv = VecNormalize(
-        sb3_vec_env(vec), norm_obs=True, norm_reward=True, clip_obs=CLIP_OBS, gamma=settings["gamma"]
-    )
-    venv.seed(seed)
-    model = _make_model(algorithm, venv, settings, seed, action)
     steps = int(math.ceil(budget / period))
     every = max(1, int(round((eval_every if eval_every is not None else budget / 10) / period)))
     validation_seed = seed + VALIDATION_SEED_OFFSET
-    curve: list[dict] = []
+    path = Path(out)
+    same = {"experiment_sha256": experiment_sha256(experiment), "algorithm": algorithm, "hyper": settings,
+            "seed": seed, "budget": budget, "every": every, **common, "num_envs": num_envs,
+            "tuned": str(tuned) if tuned is not None else None,
+            "validation_episodes": validation_episodes}  # fmt: skip
+    checkpoint = Checkpoint(path, same)  # what a stopped training of the same resumes from
+    resumed = checkpoint.load(algorithm, sb3_vec_env(vec))
+    if resumed is None:
+        venv = VecNormalize(
+            sb3_vec_env(vec), norm_obs=True, norm_reward=True, clip_obs=CLIP_OBS, gamma=settings["gamma"]
+        )
+        venv.seed(seed)
+        model = _make_model(algorithm, venv, settings, seed, action)
+        curve: list[dict] = []
+    else:
+        model, venv, curve = resumed
+        started -= curve[-1]["wall_seconds"]  # the wall time already spent, before the interruption
+        if progress:
+            progress(f"{algorithm} seed {seed}: resumed at {model.num_timesteps * period:.4g} simulated s")
 
     def point(simulated_steps: int) -> None:
         venv.training = False
@@ -383,23 +396,31 @@ def train(
                      f"validation return {score['mean_return']:.4g}, median error {shown}")  # fmt: skip
 
     class Curve(BaseCallback):
-        def __init__(self):
+        def __init__(self, done: int):
             super().__init__()
-            self.next = every
+            self.next = (done // every + 1) * every
 
         def _on_step(self) -> bool:
             if self.num_timesteps >= self.next:
                 point(self.num_timesteps)
+                checkpoint.save(model, venv, curve)  # where a stopped training resumes
                 self.next += every
             return True
 
-    point(0)
-    model.learn(total_timesteps=steps, callback=Curve(), progress_bar=False)
+    done = model.num_timesteps
+    if not curve:
+        point(0)
+    model.learn(
+        total_timesteps=max(steps - done, 0),
+        callback=Curve(done),
+        reset_num_timesteps=done == 0,
+        progress_bar=False,
+    )
     if not curve or curve[-1]["simulated_seconds"] < model.num_timesteps * period:
         point(model.num_timesteps)
     layers, output = policy_layers(model, algorithm)
     rms: Any = venv.obs_rms  # one RunningMeanStd: the observation is one array
-    path = export_onnx(out, layers, output, rms.mean, rms.var, venv.epsilon)
+    path = export_onnx(path, layers, output, rms.mean, rms.var, venv.epsilon)
     model.save(str(path) + ".zip")
     venv.save(str(path) + ".vecnormalize.pkl")
     record = {
@@ -423,12 +444,75 @@ def train(
         "simulations": model.num_timesteps * period / horizon,
         "wall_seconds": time.perf_counter() - started,
         "validation": {"seed": validation_seed, "episodes": validation_episodes},
+        "resumed_at": None if resumed is None else done * period,  # simulated s: an interrupted training
         "versions": _versions(),
         "layout": vec.episodes.layout.describe(),
         "curve": curve,
     }
     write_json_atomic(Path(str(path) + ".json"), record)
+    checkpoint.remove()
     return record
+
+
+class Checkpoint:
+    """Where a training stopped (Ctrl-C, a killed process) resumes: at each point of the learning
+    curve, ``OUT.checkpoint/`` holds the model, its normalisation, SAC's replay buffer and the
+    curve so far, with what the training is (``same``); a training of the same ``same`` starts
+    from it, another starts afresh. Removed when the training ends.
+
+    A resumed training is not the uninterrupted one continued bit for bit: Stable-Baselines3 does
+    not save a rollout in progress, the environments' episodes in flight or the random generators'
+    states, so it goes on from the last point with fresh episodes. Its curve up to that point is
+    the uninterrupted run's, and its record says where it resumed (``resumed_at``).
+    """
+
+    def __init__(self, out: Path, same: dict):
+        self.folder = Path(str(out) + ".checkpoint")
+        self.same = json.loads(json.dumps(same, default=str))
+
+    def save(self, model, venv, curve: list[dict]) -> None:
+        """The training as it is now, replacing the last checkpoint (written apart, then renamed)."""
+        import shutil
+
+        fresh = self.folder.with_name(self.folder.name + ".new")
+        shutil.rmtree(fresh, ignore_errors=True)
+        fresh.mkdir(parents=True)
+        model.save(str(fresh / "model.zip"))
+        venv.save(str(fresh / "vecnormalize.pkl"))
+        if hasattr(model, "save_replay_buffer"):
+            model.save_replay_buffer(str(fresh / "replay.pkl"))
+        write_json_atomic(fresh / "state.json", {"same": self.same, "curve": curve})
+        old = self.folder.with_name(self.folder.name + ".old")
+        shutil.rmtree(old, ignore_errors=True)
+        if self.folder.exists():
+            self.folder.rename(old)
+        fresh.rename(self.folder)
+        shutil.rmtree(old, ignore_errors=True)
+
+    def load(self, algorithm: str, sb3_env):
+        """(model, normalised env, curve) of a checkpoint of this training, or None."""
+        state_file = self.folder / "state.json"
+        try:
+            state = json.loads(state_file.read_text())
+        except (OSError, ValueError):
+            return None
+        if state.get("same") != self.same or not state.get("curve"):
+            return None
+        sb3, _ = _sb3()
+        from stable_baselines3.common.vec_env import VecNormalize
+
+        venv = VecNormalize.load(str(self.folder / "vecnormalize.pkl"), sb3_env)
+        venv.training = True
+        model = getattr(sb3, algorithm.upper()).load(str(self.folder / "model.zip"), env=venv, device="cpu")
+        if (self.folder / "replay.pkl").is_file():
+            model.load_replay_buffer(str(self.folder / "replay.pkl"))
+        return model, venv, state["curve"]
+
+    def remove(self) -> None:
+        """The checkpoint of a finished training, gone."""
+        import shutil
+
+        shutil.rmtree(self.folder, ignore_errors=True)
 
 
 def stored_training(path: Path, wanted: dict, where: str = "--out") -> dict | None:

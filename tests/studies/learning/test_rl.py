@@ -172,3 +172,44 @@ def test_a_residual_on_a_tuned_law_starts_at_that_law_bit_for_bit(tmp_path):
     )
     np.testing.assert_array_equal(run_experiment(policy).tau, run_experiment(tuned).tau)
     assert not np.array_equal(run_experiment(untuned).tau, run_experiment(tuned).tau)
+
+
+class Stop(Exception):
+    """Stands for Ctrl-C in the middle of a training."""
+
+
+@pytest.mark.parametrize("algorithm", rl.ALGORITHMS)
+def test_a_stopped_training_resumes_from_its_last_point(algorithm, tmp_path):
+    """Stopped after its second curve point, a training leaves OUT.checkpoint; run again it goes on
+    from there (the curve up to that point is the uninterrupted run's, the budget is spent once, the
+    record says where it resumed) and the checkpoint is removed. Past the point the two runs differ:
+    Stable-Baselines3 keeps no rollout in progress (docs/learning.md#ppo-and-sac)."""
+    hyper = (
+        {"learning_starts": 20, "batch_size": 32} if algorithm == "sac" else {"n_steps": 32, "batch_size": 64}
+    )
+    options = dict(algorithm=algorithm, budget=0.4, duration=0.1, num_envs=2, validation_episodes=1,
+                   eval_every=0.1, controller="no-u0", hyper=hyper, threads=1)  # fmt: skip
+    whole = rl.train("paper-ellipse", tmp_path / "whole.onnx", progress=None, **options)
+    assert whole["resumed_at"] is None and not (tmp_path / "whole.onnx.checkpoint").exists()
+
+    def stop_at_the_third_point(text):
+        if "0.2 / 0.4 simulated s" in text:
+            raise Stop
+
+    out = tmp_path / "stopped.onnx"
+    with pytest.raises(Stop):
+        rl.train("paper-ellipse", out, progress=stop_at_the_third_point, **options)
+    assert (tmp_path / "stopped.onnx.checkpoint" / "state.json").is_file() and not out.exists()
+    said = []
+    resumed = rl.train("paper-ellipse", out, progress=said.append, **options)
+    assert said[0] == f"{algorithm} seed 0: resumed at 0.1 simulated s"
+    assert resumed["resumed_at"] == pytest.approx(0.1)
+    keys = ("simulated_seconds", "mean_return", "median_rms_torque")  # (0.1 s episodes: no error after 2 s)
+    assert [{k: p[k] for k in keys} for p in resumed["curve"][:2]] == [
+        {k: p[k] for k in keys} for p in whole["curve"][:2]
+    ]
+    # the budget spent once (PPO ends on a whole rollout of 2 x 32 steps, from wherever it resumed)
+    assert 0.4 <= resumed["simulated_seconds"] < 0.4 + 0.064 + 1e-9
+    points = [p["simulated_seconds"] for p in resumed["curve"]]
+    assert points[:5] == pytest.approx([0.0, 0.1, 0.2, 0.3, 0.4]) and len(points) <= 6
+    assert not (tmp_path / "stopped.onnx.checkpoint").exists()

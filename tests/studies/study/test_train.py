@@ -37,7 +37,8 @@ train_samples = 1
 validation = 2
 epsilon = 0.5
 beta = 0.2
-falsify = 0
+falsify = 4
+second_engine = true
 """
 )
 
@@ -85,6 +86,9 @@ def test_each_seed_learns_on_the_kept_setting_and_the_best_on_validation_is_kept
     assert entry["params"]["file"].endswith(f"train/ppo-residual-seed{kept}/policy.onnx")
     assert entry["set"] == pd["entry"]["set"]
     assert policy["certificates"] and policy["certificates"][0]["N"] == 3
+    assert isinstance(policy["worst"]["falsified"], bool) and policy["worst"]["simulations"] >= 4
+    if case["stages"]["engine"] == "finished":  # MuJoCo installed: the same draws on its plant
+        assert policy["engines"]["mujoco"]["rows"] == 3
     assert policy["training"]["simulated_seconds"] == pytest.approx(
         sum(r["simulated_seconds"] for r in records)
     )
@@ -134,3 +138,11 @@ def test_learn_marks_a_studys_tuned_budgets_from_its_report(study):
     _, out, _, _ = study
     assert tuned_budgets(f"{out / 'report.json'}#paper-ellipse-noisy") == pytest.approx({"pd": 4 * 2.2})
     assert tuned_budgets(out / "cases" / "paper-ellipse-noisy" / "kept.json") == {}
+
+
+def test_export_of_a_trained_policy_says_why_it_has_no_twin(study, tmp_path, capsys):
+    _, out, _, _ = study
+    code = main(["export", "paper-ellipse-noisy", "--tuned", f"{out / 'report.json'}#paper-ellipse-noisy",
+                 "--controller", "ppo-residual", "--out", str(tmp_path / "x"), "--no-build"])  # fmt: skip
+    err = capsys.readouterr().err
+    assert code == 2 and "cannot be exported" in err and "polic" in err, err
