@@ -295,6 +295,22 @@ def _make_model(algorithm: str, venv, hyper: dict, seed: int, action: str):
     return model
 
 
+def _start(checkpoint, algorithm: str, vec, settings: dict, seed: int, action: str):
+    """(model, normalised env, curve so far, resumed): a stopped training's checkpoint, else a new
+    model on ``vec`` (an ArmVectorEnv).
+    """
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    resumed = checkpoint.load(algorithm, sb3_vec_env(vec))
+    if resumed is not None:
+        return (*resumed, True)
+    venv = VecNormalize(
+        sb3_vec_env(vec), norm_obs=True, norm_reward=True, clip_obs=CLIP_OBS, gamma=settings["gamma"]
+    )
+    venv.seed(seed)
+    return _make_model(algorithm, venv, settings, seed, action), venv, [], False
+
+
 def train(
     experiment: str | Path,
     out: str | Path,
@@ -330,7 +346,6 @@ def train(
     """
     sb3, torch = _sb3()
     from stable_baselines3.common.callbacks import BaseCallback
-    from stable_baselines3.common.vec_env import VecNormalize
 
     from .vector import ArmVectorEnv
 
@@ -364,16 +379,8 @@ def train(
             "tuned": str(tuned) if tuned is not None else None,
             "validation_episodes": validation_episodes}  # fmt: skip
     checkpoint = Checkpoint(path, same)  # what a stopped training of the same resumes from
-    resumed = checkpoint.load(algorithm, sb3_vec_env(vec))
-    if resumed is None:
-        venv = VecNormalize(
-            sb3_vec_env(vec), norm_obs=True, norm_reward=True, clip_obs=CLIP_OBS, gamma=settings["gamma"]
-        )
-        venv.seed(seed)
-        model = _make_model(algorithm, venv, settings, seed, action)
-        curve: list[dict] = []
-    else:
-        model, venv, curve = resumed
+    model, venv, curve, resumed = _start(checkpoint, algorithm, vec, settings, seed, action)
+    if resumed:
         started -= curve[-1]["wall_seconds"]  # the wall time already spent, before the interruption
         if progress:
             progress(f"{algorithm} seed {seed}: resumed at {model.num_timesteps * period:.4g} simulated s")
@@ -444,7 +451,7 @@ def train(
         "simulations": model.num_timesteps * period / horizon,
         "wall_seconds": time.perf_counter() - started,
         "validation": {"seed": validation_seed, "episodes": validation_episodes},
-        "resumed_at": None if resumed is None else done * period,  # simulated s: an interrupted training
+        "resumed_at": done * period if resumed else None,  # simulated s: an interrupted training
         "versions": _versions(),
         "layout": vec.episodes.layout.describe(),
         "curve": curve,
