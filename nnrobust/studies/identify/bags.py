@@ -27,10 +27,13 @@ def is_bag(path: Path) -> bool:
     return (path.is_dir() and (path / "metadata.yaml").is_file()) or path.suffix.lower() == ".mcap"
 
 
-def read_bag(path: Path, joints: Sequence[str], topic: str | None = None):
-    """(t, q, dq or None, tau, notes) of the JointState messages of ``path``."""
+def read_bag(path: Path, joints: Sequence[str], topic: str | None = None, locked: Sequence[str] = ()):
+    """(t, q, dq or None, tau, notes) of the JointState messages of ``path``; ``notes["locked"]``:
+    each of the ``locked`` joints the messages name, with its least and largest position (for
+    :func:`.logs.check_locked`).
+    """
     messages = _bag_messages(path, topic) if path.is_dir() else _mcap_messages(path, topic)
-    return _samples(path, messages, joints)
+    return _samples(path, messages, joints, locked)
 
 
 def _bag_messages(path: Path, topic: str | None):
@@ -136,8 +139,8 @@ def _json_fields(message: dict, log_time: int) -> tuple:
     )
 
 
-def _samples(path: Path, messages, joints: Sequence[str]):
-    times, q, dq, tau = [], [], [], []
+def _samples(path: Path, messages, joints: Sequence[str], locked: Sequence[str] = ()):
+    times, q, dq, tau, held = [], [], [], [], []
     index = None
     names: list[str] = []
     velocities = True
@@ -150,6 +153,8 @@ def _samples(path: Path, messages, joints: Sequence[str]):
                     f"{path}: its JointState names {names}, not the robot's joints {', '.join(missing)}"
                 )
             index = [names.index(j) for j in joints]
+            kept = [j for j in locked if j in names]
+            still = [names.index(j) for j in kept]
         elif names_k != names:
             raise LogError(f"{path}: message {k} names the joints {names_k}, the first {names}")
         if len(position) != len(names) or len(effort) != len(names):
@@ -162,8 +167,14 @@ def _samples(path: Path, messages, joints: Sequence[str]):
         q.append(position[index])
         dq.append(velocity[index] if len(velocity) == len(names) else np.zeros(len(joints)))
         tau.append(effort[index])
+        held.append(position[still])
     if index is None:
         raise LogError(f"{path}: its JointState topic has no message")
     extra = [n for n in names if n not in joints]
-    notes = {"topic_joints_left_out": extra}
+    notes: dict = {"topic_joints_left_out": [n for n in extra if n not in kept]}
+    if kept:
+        positions = np.array(held)
+        notes["locked"] = {
+            j: [float(positions[:, i].min()), float(positions[:, i].max())] for i, j in enumerate(kept)
+        }
     return np.array(times), np.array(q), (np.array(dq) if velocities else None), np.array(tau), notes

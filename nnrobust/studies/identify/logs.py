@@ -92,8 +92,9 @@ def read_log(
 ) -> JointLog:
     """The log in ``given`` (files or folders of one format) for the robot's ``joints``; ``topic``:
     a bag's or MCAP file's JointState topic, where it has several. ``locked``: the joints the model
-    holds at their neutral value; a table's position columns named after one of them are read into
-    ``notes["locked"]`` (name -> its least and largest value), for :func:`check_locked`.
+    holds at their neutral value; a table's position columns named after one of them (or a bag's
+    JointState entries) are read into ``notes["locked"]`` (name -> its least and largest value),
+    for :func:`check_locked`.
     """
     paths = [Path(p) for p in given]
     if not paths:
@@ -102,7 +103,7 @@ def read_log(
         if not path.exists():
             raise LogError(f"{path}: no such file or folder")
     if len(paths) == 1 and is_bag(paths[0]):
-        t, q, dq, tau, notes = read_bag(paths[0], joints, topic)
+        t, q, dq, tau, notes = read_bag(paths[0], joints, topic, locked)
         files = sorted(p for p in paths[0].iterdir() if p.is_file()) if paths[0].is_dir() else [paths[0]]
         log = JointLog(str(paths[0]), t, q, dq, tau, files, notes=notes)
         return _checked(

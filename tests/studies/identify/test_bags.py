@@ -112,3 +112,19 @@ def test_a_bag_without_the_robots_joints_is_one_line(tmp_path):
         read_log([bag], ("joint1", "wrist"))
     with pytest.raises(LogError, match="no topic '/other'; its topics: /joint_states"):
         read_log([bag], JOINTS, topic="/other")
+
+
+@pytest.mark.parametrize("make", [_bag, lambda f: _mcap(f, "cdr")], ids=["bag", "mcap-cdr"])
+def test_a_locked_joint_a_bag_names_is_checked_as_a_tables_is(make, tmp_path):
+    """The JointState's entry of a joint the model locks: held still away from 0, a warning; moving,
+    a refusal naming it (its motion changes the torques the model predicts)."""
+    from nnrobust.studies.identify.logs import check_locked
+
+    path = make(tmp_path)
+    still = read_log([path], JOINTS, locked=["finger"])
+    assert still.notes["locked"] == {"finger": [0.5, 0.5]} and still.notes["topic_joints_left_out"] == []
+    (warning,) = check_locked(still)
+    assert "finger is locked at 0 in the model but held at 0.5" in warning
+    moving = read_log([path], ("joint1", "joint2"), locked=["joint3"])
+    with pytest.raises(LogError, match="joint3 is locked .* but moves over"):
+        check_locked(moving)
