@@ -66,6 +66,13 @@ def learn_arguments(parser: argparse.ArgumentParser) -> None:
         help="fixed validation plants of the learning curve, drawn apart from training's (default 8)",
     )
     parser.add_argument(
+        "--hyper",
+        action="append",
+        metavar="KEY=VALUE",
+        help="one hyper-parameter of the algorithm over its default (TOML value), e.g. --hyper n_steps=64 "
+        "--hyper 'net_arch=[32, 32]'; repeatable (docs/learning.md#ppo-and-sac lists them)",
+    )
+    parser.add_argument(
         "--eval-every",
         type=float,
         metavar="SECONDS",
@@ -74,20 +81,45 @@ def learn_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--quiet", action="store_true", help="print nothing but errors")
 
 
+def _hyper(text: str) -> tuple[str, object]:
+    """``--hyper KEY=VALUE``: a hyper-parameter's name and its TOML value (the trainer checks the
+    name against the algorithm's).
+    """
+    import tomllib
+
+    key, sep, raw = text.partition("=")
+    if not sep or not key.strip():
+        raise ConfigError("--hyper", f"{text!r} is not KEY=VALUE (e.g. n_steps=64)")
+    try:
+        return key.strip(), tomllib.loads(f"v = {raw.strip()}")["v"]
+    except (tomllib.TOMLDecodeError, RecursionError, ValueError):
+        raise ConfigError("--hyper", f"{text!r}: the value is not a TOML number, string or list") from None
+
+
 def cmd_learn(args) -> int:
     """Train one policy per seed and write their curves."""
-    from ..studies.learning.rl import experiment_sha256, stored_training, train, tuned_budgets, write_curves
+    from ..studies.learning.rl import (
+        DEFAULTS,
+        experiment_sha256,
+        stored_training,
+        train,
+        tuned_budgets,
+        write_curves,
+    )
 
     for option, value, low in (("--seeds", args.seeds, 1), ("--num-envs", args.num_envs, 1),
                                ("--validation-episodes", args.validation_episodes, 1)):  # fmt: skip
         if value < low:
             raise ConfigError(option, f"must be at least {low}, got {value}")
     out = Path(args.out)
+    hyper = dict(_hyper(item) for item in args.hyper or ())
     say = (lambda text: None) if args.quiet else (lambda text: print(text, file=sys.stderr))
     records = []
     # what a seed's stored record must match to be kept (the same for every seed)
     wanted = {"algorithm": args.algorithm, "budget_seconds": args.budget, "action": args.action,
               "experiment_sha256": experiment_sha256(args.experiment), "tuned_file": args.tuned}  # fmt: skip
+    if args.algorithm in DEFAULTS:  # every hyper-parameter the training runs with
+        wanted["hyper"] = {**DEFAULTS[args.algorithm], **hyper}
     if args.controller:
         wanted["controller"] = args.controller
     if args.duration is not None:
@@ -114,6 +146,7 @@ def cmd_learn(args) -> int:
                 num_envs=args.num_envs,
                 validation_episodes=args.validation_episodes,
                 eval_every=args.eval_every,
+                hyper=hyper or None,
                 progress=say,
             )  # fmt: skip
         )

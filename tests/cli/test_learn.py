@@ -12,8 +12,9 @@ from nnrobust.run import compiled
 pytest.importorskip("stable_baselines3")
 pytestmark = pytest.mark.skipif(not compiled.available(), reason="the compiled loop is not built")
 
-ARGS = ["paper-ellipse", "--budget", "0.2", "--duration", "0.1", "--num-envs", "2", "--validation-episodes",
-        "2", "--eval-every", "0.1", "--controller", "no-u0", "--seeds", "2", "--quiet"]  # fmt: skip
+ARGS = ["paper-ellipse", "--budget", "0.2", "--duration", "0.1", "--num-envs", "2", "--hyper", "n_steps=32",
+        "--hyper", "batch_size=64", "--validation-episodes", "2", "--eval-every", "0.1", "--controller",
+        "no-u0", "--seeds", "2", "--quiet"]  # fmt: skip
 
 
 def test_learn_trains_each_seed_and_a_rerun_keeps_them(tmp_path, capsys):
@@ -32,6 +33,15 @@ def test_learn_trains_each_seed_and_a_rerun_keeps_them(tmp_path, capsys):
     assert main(["learn", *changed, "--out", str(out)]) == 2
     err = capsys.readouterr().err
     assert "--out" in err and "budget_seconds" in err and len(err.strip().splitlines()) == 1
+
+
+def test_learn_refuses_a_ppo_budget_below_one_rollout(tmp_path, capsys):
+    """PPO trains on whole rollouts (n_steps x environments): a smaller budget would be rounded up
+    to one, silently; it is refused, naming the rollout."""
+    short = [a for a in ARGS if a not in ("n_steps=32", "batch_size=64") and a != "--hyper"]
+    assert main(["learn", *short, "--out", str(tmp_path / "x")]) == 2
+    err = capsys.readouterr().err
+    assert "less than one PPO rollout (256 steps x 2 environments" in err and "0.512 s" in err
 
 
 def test_learn_on_a_tuned_law_records_its_setting(tmp_path):

@@ -295,6 +295,21 @@ def _make_model(algorithm: str, venv, hyper: dict, seed: int, action: str):
     return model
 
 
+def _check_rollout(algorithm: str, steps: int, settings: dict, num_envs: int, period: float, budget: float):
+    """PPO trains on whole rollouts (n_steps x environments): a budget below one is refused, not
+    rounded up to it.
+    """
+    if algorithm == "ppo" and steps < settings["n_steps"] * num_envs:
+        rollout = settings["n_steps"] * num_envs * period
+        raise ConfigError(
+            "budget",
+            f"{budget:g} simulated s is less than one PPO rollout ({settings['n_steps']} steps x {num_envs} "
+            f"environments x the {period:g} s period = {rollout:g} s), and PPO trains on whole rollouts: "
+            "give "
+            f"a budget of at least {rollout:g} s, or fewer n_steps or environments",
+        )
+
+
 def _start(checkpoint, algorithm: str, vec, settings: dict, seed: int, action: str):
     """(model, normalised env, curve so far, resumed): a stopped training's checkpoint, else a new
     model on ``vec`` (an ArmVectorEnv).
@@ -371,6 +386,7 @@ def train(
     checking = ArmVectorEnv(experiment, validation_episodes, seed=seed, verdicts=True, **common)
     period, horizon = vec.episodes.period, vec.episodes.horizon
     steps = int(math.ceil(budget / period))
+    _check_rollout(algorithm, steps, settings, num_envs, period, budget)
     every = max(1, int(round((eval_every if eval_every is not None else budget / 10) / period)))
     validation_seed = seed + VALIDATION_SEED_OFFSET
     path = Path(out)
@@ -576,10 +592,13 @@ def tuned_budgets(tuned: str | Path | None) -> dict[str, float]:
     return out
 
 
-def write_curves(out: Path, records: list[dict], marks: dict[str, float] | None = None) -> None:
+def write_curves(
+    out: Path, records: list[dict], marks: dict[str, float] | None = None, seed_offset: int = 0
+) -> None:
     """``out``/curves.csv (one row per seed and point) and curves.png (the validation error and
     return against simulated seconds, one line per seed; ``marks``, each tuned law's own training
-    in simulated seconds, drawn on the same axis).
+    in simulated seconds, drawn on the same axis). A seed is shown as its record's seed less
+    ``seed_offset`` (a study's seeds 0, 1, ... of its training seeds).
     """
     from ...outputs.plots import plt, save_figure
     from ...run.results import write_text_atomic
@@ -598,7 +617,7 @@ def write_curves(out: Path, records: list[dict], marks: dict[str, float] | None 
             x,
             [1e3 * p["median_rms_error_after_2s"] for p in record["curve"]],
             marker="o",
-            label=f"seed {record['seed']}",
+            label=f"seed {record['seed'] - seed_offset}",
         )
         bottom.plot(x, [p["mean_return"] for p in record["curve"]], marker="o")
     for i, (law, seconds) in enumerate(sorted((marks or {}).items())):
@@ -614,6 +633,8 @@ def write_curves(out: Path, records: list[dict], marks: dict[str, float] | None 
     bottom.set_ylabel("validation mean return")
     bottom.set_xlabel("simulated seconds of training")
     top.legend(fontsize="small")
-    top.set_title(f"{records[0]['algorithm'].upper()}, {records[0]['action']} on {records[0]['controller']}")
+    first = records[0]
+    on = "" if first["action"] == "torque" else f" on {first['controller']}"  # a torque policy has no base
+    top.set_title(f"{first['algorithm'].upper()}, {first['action']}{on}")
     save_figure(fig, out, "curves")
     plt.close(fig)

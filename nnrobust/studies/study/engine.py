@@ -86,9 +86,24 @@ def _changed(old: str, new: str) -> str:
             data = parse_toml(text, "study")
         except ConfigError:
             return {"(the file)": text}
-        out = {}
-        for key, value in data.items():
+        out: dict = {}
+
+        def put(key: str, value) -> None:
             if isinstance(value, dict):
+                for k, v in value.items():
+                    put(f"{key}.{k}", v)
+            else:
+                out[key] = value
+
+        for key, value in data.items():
+            if key == "controllers" and isinstance(value, list):  # an entry by its name: what changed in it
+                for i, entry in enumerate(value):
+                    name = entry.get("name", i) if isinstance(entry, dict) else entry
+                    put(f"controllers.{name}", entry if isinstance(entry, dict) else "listed")
+                out["controllers (their order)"] = [
+                    e.get("name") if isinstance(e, dict) else e for e in value
+                ]
+            elif isinstance(value, dict):
                 out.update({f"{key}.{k}": v for k, v in value.items()})
             else:
                 out[key] = value
@@ -239,20 +254,25 @@ def run_study(
                 raise
     new = len(set(_result_parts(folder)) - kept)
     say(
-        f"{new} new part{'s' if new != 1 else ''} of results beside the {len(kept)} kept"
+        f"{new} new part{'s' if new != 1 else ''} of results (or trained policies) beside the "
+        f"{len(kept)} kept"
         if new
-        else f"nothing computed: every stage's {len(kept)} parts of results were there; the report again"
+        else f"nothing computed: every stage's {len(kept)} parts of results (and trained policies) were "
+        "there; the report again"
     )
     from .report import write_report
 
     return write_report(spec, folder, cases)
 
 
-def _result_parts(folder: Path) -> list[Path]:
-    """Every file of rows the stages wrote (sweep results, tuning trials, searches' histories)."""
+def _result_parts(folder: Path) -> list[tuple[Path, int]]:
+    """Every file of rows the stages wrote (sweep results, tuning trials, searches' histories) and
+    every trained policy file, each with its modification time (a policy trained again is new).
+    """
     from ..base.folder import PART_GLOB
 
-    return list((folder / "cases").rglob(PART_GLOB))
+    files = [*(folder / "cases").rglob(PART_GLOB), *(folder / "cases").glob("*/train/*/policy.onnx")]
+    return [(path, path.stat().st_mtime_ns) for path in files]
 
 
 class _SharedCluster:

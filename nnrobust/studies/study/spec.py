@@ -593,7 +593,7 @@ def _train_table(entry: dict, where: str) -> dict:
         raise ConfigError(
             f"{where}.params.base",
             f"{params.get('base')!r}: a trained policy's base law runs on the compiled loop, so it is one of "
-            f"{', '.join(_shipped())}",
+            f"{', '.join(_shipped())}{_suggest(str(params.get('base')), _shipped())}",
         )
     return checked
 

@@ -102,9 +102,10 @@ def train(run: CaseRun):
             else:
                 jobs.append(((c, s), (train_seed, str(episodes), str(path), options)))
     said = [
-        f"{c} ({t['algorithm']}, {t['seeds']} seeds, {t['budget']:g} simulated s)" for c, t in trained.items()
+        f"{c} ({t['algorithm']}, {t['seeds']} seed{'s' * (t['seeds'] != 1)}, {t['budget']:g} simulated s)"
+        for c, t in trained.items()
     ]
-    before = f"; {len(records)} seeds trained before" if records else ""
+    before = f"; {len(records)} seed{'s' if len(records) != 1 else ''} trained before" if records else ""
     run.say(f"{run.name}: train {', '.join(said)}{before}")
 
     def crashed(reason):
@@ -169,7 +170,7 @@ def trained_report(run: CaseRun, result) -> None:
     for c, table in spec.trained.items():
         mine = [records[key] for key in sorted(records) if key[0] == c]
         tuned = {law: seconds for law, seconds in out.get("training", {}).items() if law not in spec.trained}
-        write_curves(run.here / "train" / c, mine, tuned)
+        write_curves(run.here / "train" / c, mine, tuned, seed_offset=spec.seed + TRAIN_SEED)
         out["trained"][c] = {
             **{
                 k: table[k]

@@ -14,7 +14,10 @@ pytest.importorskip("stable_baselines3")
 from nnrobust.cli import main  # noqa: E402
 from nnrobust.studies.study.case_run import TRAIN_SEED  # noqa: E402
 
-TRAIN = "{algorithm = 'ppo', budget = 0.2, seeds = 2, num_envs = 2, curve_points = 2, curve_episodes = 1}"
+TRAIN = (
+    "{algorithm = 'ppo', budget = 0.2, seeds = 2, num_envs = 2, curve_points = 2, curve_episodes = 1, "
+    "hyper = {n_steps = 32, batch_size = 64}}"
+)
 STUDY = (
     """
 name = "trained"
@@ -146,3 +149,14 @@ def test_export_of_a_trained_policy_says_why_it_has_no_twin(study, tmp_path, cap
                  "--controller", "ppo-residual", "--out", str(tmp_path / "x"), "--no-build"])  # fmt: skip
     err = capsys.readouterr().err
     assert code == 2 and "cannot be exported" in err and "polic" in err, err
+
+
+def test_a_changed_entry_is_named_by_the_key_that_changed():
+    """A study refused over its folder names the entry's key that changed (its train budget),
+    not the whole controllers list."""
+    from nnrobust.studies.study.engine import _changed
+
+    assert _changed(STUDY, STUDY.replace("budget = 0.2", "budget = 0.3")) == (
+        "controllers.ppo-residual.train.budget 0.2 -> 0.3"
+    )
+    assert _changed(STUDY, STUDY.replace('    "pd",\n', "")).startswith("controllers (their order) ")
