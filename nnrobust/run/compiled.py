@@ -388,6 +388,12 @@ def law_spec(setup):
             f"this controller cannot be exported: a custom controller ({type(setup.controller).__name__}) "
             "is Python code, with no C++ twin to export"
         )
+    if is_policy(setup.controller):  # before law_refusal: its message would say "no twin yet"
+        raise NNRobustError(
+            "this controller cannot be exported: a learned policy (controller.kind = 'policy') is an "
+            "ONNX network run by onnxruntime, with no C++ twin; export its base law "
+            f"({setup.controller.base_kind}) and run the network beside it"
+        )
     refusal = law_refusal(setup)
     if refusal:
         raise NNRobustError(f"this controller cannot be exported: {refusal}")

@@ -148,7 +148,8 @@ def test_export_of_a_trained_policy_says_why_it_has_no_twin(study, tmp_path, cap
     code = main(["export", "paper-ellipse-noisy", "--tuned", f"{out / 'report.json'}#paper-ellipse-noisy",
                  "--controller", "ppo-residual", "--out", str(tmp_path / "x"), "--no-build"])  # fmt: skip
     err = capsys.readouterr().err
-    assert code == 2 and "cannot be exported" in err and "polic" in err, err
+    assert code == 2 and "a learned policy (controller.kind = 'policy') is an ONNX network" in err, err
+    assert "export its base law (pd)" in err
 
 
 def test_a_changed_entry_is_named_by_the_key_that_changed():
