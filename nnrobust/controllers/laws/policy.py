@@ -62,6 +62,13 @@ def base_laws() -> tuple[str, ...]:
     return tuple(name for name in shipped_laws() if name != "policy")
 
 
+def policy_params(params: dict | None) -> dict:
+    """A policy entry's ``params`` with every parameter the law declares, at its default where the
+    entry leaves it out (action ``torque``, base ``pd``, ...): what the law will be built with.
+    """
+    return {p.name: (params or {}).get(p.name, p.default) for p in LAW.params}
+
+
 def no_gains(kind: str) -> str:
     """Why a law of ``kind`` cannot be the base of a gains action."""
     return (

@@ -32,6 +32,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from ...controllers.laws.policy import policy_params
 from ...core.exceptions import ChangedInputs, ConfigError, NNRobustError
 from ...core.folders import own_folder
 from .spec import StudyCase, StudySpec
@@ -194,7 +195,7 @@ def _at_centres(spec: StudySpec, sweep):
 
     entries = {k: dict(v) for k, v in sweep.entries.items()}
     for name in spec.trained:  # no file before the train stage: its base law, which the episodes run
-        entries[name] = {"kind": (entries[name].get("params") or {}).get("base", "pd"), "set": {}}
+        entries[name] = {"kind": policy_params(entries[name].get("params"))["base"], "set": {}}
     for name, entry in entries.items():
         if name in spec.fixed or "class" not in entry:
             continue

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 from ...config import parse_toml, read_text_file
-from ...controllers.registry import shipped_laws
+from ...controllers.laws.policy import base_laws, policy_params
 from ...core.exceptions import ConfigError
 from ..base.plan import NAME, SweepSpec, parse_sweep, resolve_entry_files
 from ..learning.rl import ALGORITHMS, DEFAULTS
@@ -528,8 +528,8 @@ def _trained_base(entry: dict, names: list[str], fixed: list[str], trained: dict
     """The law a trained residual or gains policy learns on the kept setting of: its base, where
     the study tunes it; else None (the base at the case's own settings, or a torque policy).
     """
-    params = entry.get("params") or {}
-    base = params.get("base", "pd") if params.get("action", "torque") != "torque" else None
+    params = policy_params(entry.get("params"))
+    base = params["base"] if params["action"] != "torque" else None
     return base if base in names and base not in fixed and base not in trained else None
 
 
@@ -544,8 +544,7 @@ def _train_table(entry: dict, where: str) -> dict:
         )
     if ENTRY_TUNE in entry:
         raise ConfigError(f"{where}.tune", "a trained policy is neither tuned nor fixed: drop tune")
-    params = entry.get("params") or {}
-    if "file" in params:
+    if "file" in (entry.get("params") or {}):
         raise ConfigError(
             f"{where}.params.file",
             "the train stage writes a trained policy's file: drop file, or drop train (and give "
@@ -589,17 +588,14 @@ def _train_table(entry: dict, where: str) -> dict:
             f"unknown for {algorithm}: {', '.join(unknown)} (known: {', '.join(DEFAULTS[algorithm])})",
         )
     checked["hyper"] = dict(hyper)
-    if params.get("action", "torque") != "torque" and params.get("base", "pd") not in _shipped():
+    params = policy_params(entry.get("params"))
+    if params["action"] != "torque" and params["base"] not in base_laws():
         raise ConfigError(
             f"{where}.params.base",
-            f"{params.get('base')!r}: a trained policy's base law runs on the compiled loop, so it is one of "
-            f"{', '.join(_shipped())}{_suggest(str(params.get('base')), _shipped())}",
+            f"{params['base']!r}: a trained policy's base law runs on the compiled loop, so it is one of "
+            f"{', '.join(base_laws())}{_suggest(str(params['base']), base_laws())}",
         )
     return checked
-
-
-def _shipped() -> tuple[str, ...]:
-    return tuple(k for k in shipped_laws() if k != "policy")
 
 
 def _per_case(controllers: list, cases: list[StudyCase], fixed: list[str], where: str):

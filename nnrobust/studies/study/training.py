@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ...controllers.laws.policy import policy_params
 from ...core.exceptions import ConfigError, NNRobustError
 from .case_run import TRAIN_SEED, VALIDATION_SEED, CaseRun, seed_name, sweep_of
 from .selection import select_kept
@@ -68,8 +69,8 @@ def train(run: CaseRun):
         return "skipped: no policy to train (no entry with a train table)"
     jobs, kept_base, records = [], {}, {}
     for c, table in trained.items():
-        params = spec.entries[c].get("params") or {}
-        action, base = params.get("action", "torque"), params.get("base", "pd")
+        params = policy_params(spec.entries[c].get("params"))
+        action, base = params["action"], params["base"]
         tuned_file, settings = _base_kept(run, c)
         kept_base[c] = settings
         # the episodes: the case's experiment and box, its base law's row (the observation's model)
@@ -85,8 +86,7 @@ def train(run: CaseRun):
                        "num_envs": table["num_envs"], "validation_episodes": table["curve_episodes"],
                        "eval_every": table["budget"] / table["curve_points"],
                        "hyper": table["hyper"] or None,
-                       "residual_scale": params.get("residual_scale", 0.1),
-                       "gain_range": params.get("gain_range", 4.0),
+                       "residual_scale": params["residual_scale"], "gain_range": params["gain_range"],
                        "tuned": str(tuned_file) if tuned_file else None}  # fmt: skip
             wanted = {"experiment_sha256": sha, "algorithm": table["algorithm"],
                       "budget_seconds": table["budget"], "action": action, "tuned_file": options["tuned"],
