@@ -103,11 +103,9 @@ def _study_kept(report: dict, file: Path, case: str) -> dict:
     return {"controllers": kept}
 
 
-def kept_entry(path: str | Path, name: str) -> dict | None:
-    """The controllers entry a study certified as ``name`` (the name the study gave the law, its
-    kept setting's ``NAME-tuned`` label, or the class name of a file.py:Class) in one case of its
-    report (``REPORT.json#CASE``): its kind or class and the params and settings it ran with; None
-    where the source is not a study's report or has no such law.
+def study_report(path: str | Path) -> tuple[dict | None, str]:
+    """(a study's report.json, the case named after ``#``) of ``REPORT.json#CASE``; None for the
+    report where the file is not a study's report, cannot be read or is over TUNED_FILE_BYTES.
     """
     file, case = tuned_file(path)
     try:
@@ -115,8 +113,20 @@ def kept_entry(path: str | Path, name: str) -> dict | None:
             json.loads(file.read_text()) if file.is_file() and file.stat().st_size < TUNED_FILE_BYTES else {}
         )
     except (OSError, ValueError, RecursionError):
-        return None
+        return None, case
     if not isinstance(report, dict) or not str(report.get("schema", "")).startswith(STUDY_REPORT):
+        return None, case
+    return report, case
+
+
+def kept_entry(path: str | Path, name: str) -> dict | None:
+    """The controllers entry a study certified as ``name`` (the name the study gave the law, its
+    kept setting's ``NAME-tuned`` label, or the class name of a file.py:Class) in one case of its
+    report (``REPORT.json#CASE``): its kind or class and the params and settings it ran with; None
+    where the source is not a study's report or has no such law.
+    """
+    report, case = study_report(path)
+    if report is None:
         return None
     controllers = ((report.get("cases") or {}).get(case) or {}).get("controllers") or {}
     wanted = summary_name(name)

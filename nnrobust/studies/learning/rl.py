@@ -42,6 +42,9 @@ SAME_RUN = ("experiment_sha256", "algorithm", "budget_seconds", "action", "contr
 """A seed's stored record is reused when these (and the tuned setting) match the training asked
 for (:func:`stored_training`)."""
 
+ACTIVATIONS = ("tanh", "relu")
+"""The networks' activation functions (``hyper["activation"]``)."""
+
 ALGORITHMS = ("ppo", "sac")
 """The Stable-Baselines3 algorithms :func:`train` runs."""
 
@@ -274,7 +277,7 @@ def validate(model, normalize, vec, seed: int) -> dict:
 
 def _make_model(algorithm: str, venv, hyper: dict, seed: int, action: str):
     sb3, torch = _sb3()
-    activation = {"tanh": torch.nn.Tanh, "relu": torch.nn.ReLU}[hyper["activation"]]
+    activation = {"tanh": torch.nn.Tanh, "relu": torch.nn.ReLU}[hyper["activation"]]  # ACTIVATIONS
     kwargs = {k: v for k, v in hyper.items() if k not in ("net_arch", "activation", "log_std_init")}
     policy_kwargs: dict[str, Any] = {"net_arch": list(hyper["net_arch"]), "activation_fn": activation}
     if algorithm == "ppo":
@@ -295,6 +298,24 @@ def _make_model(algorithm: str, venv, hyper: dict, seed: int, action: str):
     return model
 
 
+def hyper_settings(algorithm: str, hyper: dict | None) -> dict:
+    """Every hyper-parameter of ``algorithm``: its defaults (:data:`DEFAULTS`) with ``hyper`` over
+    them; an unknown name or activation is refused.
+    """
+    unknown = sorted(set(hyper or {}) - set(DEFAULTS[algorithm]))
+    if unknown:
+        raise ConfigError(
+            "hyper",
+            f"unknown for {algorithm}: {', '.join(unknown)} (known: {', '.join(DEFAULTS[algorithm])})",
+        )
+    settings = {**DEFAULTS[algorithm], **(hyper or {})}
+    if settings["activation"] not in ACTIVATIONS:
+        raise ConfigError(
+            "hyper.activation", f"expected one of {', '.join(ACTIVATIONS)}, got {settings['activation']!r}"
+        )
+    return settings
+
+
 def _check_rollout(algorithm: str, steps: int, settings: dict, num_envs: int, period: float, budget: float):
     """PPO trains on whole rollouts (n_steps x environments): a budget below one is refused, not
     rounded up to it.
@@ -305,8 +326,7 @@ def _check_rollout(algorithm: str, steps: int, settings: dict, num_envs: int, pe
             "budget",
             f"{budget:g} simulated s is less than one PPO rollout ({settings['n_steps']} steps x {num_envs} "
             f"environments x the {period:g} s period = {rollout:g} s), and PPO trains on whole rollouts: "
-            "give "
-            f"a budget of at least {rollout:g} s, or fewer n_steps or environments",
+            f"give a budget of at least {rollout:g} s, or fewer n_steps or environments",
         )
 
 
@@ -370,13 +390,7 @@ def train(
         )
     if isinstance(budget, bool) or not isinstance(budget, (int, float)) or not budget > 0:
         raise ConfigError("budget", f"expected simulated seconds > 0, got {budget!r}")
-    unknown = sorted(set(hyper or {}) - set(DEFAULTS[algorithm]))
-    if unknown:
-        raise ConfigError(
-            "hyper",
-            f"unknown for {algorithm}: {', '.join(unknown)} (known: {', '.join(DEFAULTS[algorithm])})",
-        )
-    settings = {**DEFAULTS[algorithm], **(hyper or {})}
+    settings = hyper_settings(algorithm, hyper)
     started = time.perf_counter()
     torch.set_num_threads(1)  # the environment's C++ threads use the cores
     common: dict[str, Any] = {"action": action, "vary": vary, "controller": controller, "duration": duration,
@@ -390,7 +404,8 @@ def train(
     every = max(1, int(round((eval_every if eval_every is not None else budget / 10) / period)))
     validation_seed = seed + VALIDATION_SEED_OFFSET
     path = Path(out)
-    same = {"experiment_sha256": experiment_sha256(experiment), "algorithm": algorithm, "hyper": settings,
+    sha = experiment_sha256(experiment)  # the checkpoint's and the record's
+    same = {"experiment_sha256": sha, "algorithm": algorithm, "hyper": settings,
             "seed": seed, "budget": budget, "every": every, **common, "num_envs": num_envs,
             "tuned": str(tuned) if tuned is not None else None,
             "validation_episodes": validation_episodes}  # fmt: skip
@@ -448,7 +463,7 @@ def train(
     venv.save(str(path) + ".vecnormalize.pkl")
     record = {
         "experiment": str(experiment),
-        "experiment_sha256": experiment_sha256(experiment),
+        "experiment_sha256": sha,
         "algorithm": algorithm,
         "hyper": settings,
         "action": action,
@@ -568,16 +583,10 @@ def tuned_budgets(tuned: str | Path | None) -> dict[str, float]:
     ``training``: the tunings' simulations times the run's duration, every seed), from
     ``REPORT.json#CASE``; {} for any other source (a tuning's folder does not say its duration).
     """
-    from ..base.tuned import STUDY_REPORT, tuned_file
+    from ..base.tuned import study_report
 
-    if tuned is None:
-        return {}
-    file, case = tuned_file(tuned)
-    try:
-        report = json.loads(file.read_text())
-    except (OSError, ValueError):
-        return {}
-    if not isinstance(report, dict) or not str(report.get("schema", "")).startswith(STUDY_REPORT):
+    report, case = study_report(tuned) if tuned is not None else (None, "")
+    if report is None:
         return {}
     laws = ((report.get("cases") or {}).get(case) or {}).get("controllers") or {}
     out = {}
