@@ -81,26 +81,12 @@ def learn_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--quiet", action="store_true", help="print nothing but errors")
 
 
-def _hyper(text: str) -> tuple[str, object]:
-    """``--hyper KEY=VALUE``: a hyper-parameter's name and its TOML value (the trainer checks the
-    name against the algorithm's).
-    """
-    import tomllib
-
-    key, sep, raw = text.partition("=")
-    if not sep or not key.strip():
-        raise ConfigError("--hyper", f"{text!r} is not KEY=VALUE (e.g. n_steps=64)")
-    try:
-        return key.strip(), tomllib.loads(f"v = {raw.strip()}")["v"]
-    except (tomllib.TOMLDecodeError, RecursionError, ValueError):
-        raise ConfigError("--hyper", f"{text!r}: the value is not a TOML number, string or list") from None
-
-
 def cmd_learn(args) -> int:
     """Train one policy per seed and write their curves."""
+    from ..config.toml_io import parse_override
     from ..studies.learning.rl import (
-        DEFAULTS,
         experiment_sha256,
+        hyper_settings,
         stored_training,
         train,
         tuned_budgets,
@@ -112,14 +98,13 @@ def cmd_learn(args) -> int:
         if value < low:
             raise ConfigError(option, f"must be at least {low}, got {value}")
     out = Path(args.out)
-    hyper = dict(_hyper(item) for item in args.hyper or ())
+    hyper = dict(parse_override(item, "--hyper", "n_steps=64") for item in args.hyper or ())
     say = (lambda text: None) if args.quiet else (lambda text: print(text, file=sys.stderr))
     records = []
     # what a seed's stored record must match to be kept (the same for every seed)
     wanted = {"algorithm": args.algorithm, "budget_seconds": args.budget, "action": args.action,
               "experiment_sha256": experiment_sha256(args.experiment), "tuned_file": args.tuned}  # fmt: skip
-    if args.algorithm in DEFAULTS:  # every hyper-parameter the training runs with
-        wanted["hyper"] = {**DEFAULTS[args.algorithm], **hyper}
+    wanted["hyper"] = hyper_settings(args.algorithm, hyper)  # every hyper-parameter the training runs with
     if args.controller:
         wanted["controller"] = args.controller
     if args.duration is not None:

@@ -621,22 +621,27 @@ def _set_entry(table: dict, section: str, field_name: str, index: int, value) ->
     table[field_name] = entries
 
 
-def parse_override(text: str) -> tuple[str, object]:
+def parse_override(
+    text: str, option: str = "--set", example: str = "simulation.duration=20"
+) -> tuple[str, object]:
     """``key=value`` with a TOML value (``simulation.duration=20``, ``nn.sigma=0.5``,
-    ``controller.Kp=[100.0]``); a value that is not TOML is taken as a string.
+    ``controller.Kp=[100.0]``); a value that is not TOML is taken as a string. The key is an
+    experiment's dotted key for ``--set``; another ``option`` (``--hyper``: a trainer's
+    hyper-parameter, ``example``) names itself in its errors and leaves the key to its reader.
     """
     key, sep, raw = text.partition("=")
     key = key.strip()
     if not sep or not key:
-        raise ConfigError("--set", f"{text!r} is not key=value (e.g. simulation.duration=20)")
+        raise ConfigError(option, f"{text!r} is not key=value (e.g. {example})")
     try:
         value = tomllib.loads(f"v = {raw.strip()}")["v"]
     except tomllib.TOMLDecodeError:
         value = raw.strip()
     except RecursionError as err:
-        raise ConfigError(f"--set {key}", "the value is nested too deeply") from err
+        raise ConfigError(f"{option} {key}", "the value is nested too deeply") from err
     except ValueError as err:
-        raise ConfigError(f"--set {key}", _too_long(err)) from err
-    refuse_dates(value, key, "--set ")
-    check_dotted_key(key)
+        raise ConfigError(f"{option} {key}", _too_long(err)) from err
+    refuse_dates(value, key, f"{option} ")
+    if option == "--set":
+        check_dotted_key(key)
     return key, value

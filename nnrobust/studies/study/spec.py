@@ -32,7 +32,7 @@ from ...config import parse_toml, read_text_file
 from ...controllers.laws.policy import base_laws, policy_params
 from ...core.exceptions import ConfigError
 from ..base.plan import NAME, SweepSpec, parse_sweep, resolve_entry_files
-from ..learning.rl import ALGORITHMS, DEFAULTS
+from ..learning.rl import ALGORITHMS, hyper_settings
 
 KEYS = (
     "name", "description", "cases", "controllers", "tuned", "require", "waive", "seed", "set", "vary",
@@ -581,12 +581,12 @@ def _train_table(entry: dict, where: str) -> dict:
             )
         checked[key] = value
     hyper = table.get("hyper", {})
-    unknown = sorted(set(hyper) - set(DEFAULTS[algorithm])) if isinstance(hyper, dict) else ["?"]
-    if unknown:
-        raise ConfigError(
-            f"{where}.train.hyper",
-            f"unknown for {algorithm}: {', '.join(unknown)} (known: {', '.join(DEFAULTS[algorithm])})",
-        )
+    if not isinstance(hyper, dict):
+        raise ConfigError(f"{where}.train.hyper", f"expected a table of hyper-parameters, got {hyper!r}")
+    try:
+        hyper_settings(algorithm, hyper)  # the trainer's own check, before any stage runs
+    except ConfigError as err:
+        raise ConfigError(f"{where}.train.{err.key}", err.message) from err
     checked["hyper"] = dict(hyper)
     params = policy_params(entry.get("params"))
     if params["action"] != "torque" and params["base"] not in base_laws():

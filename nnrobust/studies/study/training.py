@@ -62,7 +62,7 @@ def train(run: CaseRun):
     from ..base.cluster import cluster_client, run_tasks
     from ..base.plan import load_sweep
     from ..base.tuned import tuned_entry
-    from ..learning.rl import DEFAULTS, experiment_sha256, stored_training
+    from ..learning.rl import experiment_sha256, hyper_settings, stored_training
 
     spec, b, trained = run.spec, run.spec.budgets, run.spec.trained
     if not trained:
@@ -90,7 +90,7 @@ def train(run: CaseRun):
                        "tuned": str(tuned_file) if tuned_file else None}  # fmt: skip
             wanted = {"experiment_sha256": sha, "algorithm": table["algorithm"],
                       "budget_seconds": table["budget"], "action": action, "tuned_file": options["tuned"],
-                      "hyper": {**DEFAULTS[table["algorithm"]], **table["hyper"]}, "controller": base,
+                      "hyper": hyper_settings(table["algorithm"], table["hyper"]), "controller": base,
                       **({"tuned_settings": settings} if tuned_file else {})}  # fmt: skip
             try:
                 stored = stored_training(path, wanted, where=f"{run.name}: train")
