@@ -101,7 +101,7 @@ docs-data: $(VENV)/.installed-test
 	for study in tuned-paper tuned-panda falsify-paper falsify-panda falsify-paper-tuned falsify-panda-tuned \
 	  paper-robustness panda-robustness; do \
 	  $(BIN)/nnrobust study benchmarks/studies/$$study.toml --out $(OUT)/$$study --workers 2 --quiet && \
-	  cp $(OUT)/$$study/report.json $(DATA)/$$(echo $$study | tr - _).json || exit 1; \
+	  sed "s|$(CURDIR)/||g" $(OUT)/$$study/report.json > $(DATA)/$$(echo $$study | tr - _).json || exit 1; \
 	done
 	rm -rf $(OUT)/study && $(BIN)/nnrobust study examples/study.toml --out $(OUT)/study --workers 2 --quiet
 	sed "s|$(CURDIR)/||g" $(OUT)/study/report.json > $(DATA)/example_study.json

@@ -366,6 +366,18 @@ def tuned_verdict(case: dict, names: list[str]) -> dict:
     }
 
 
+def tuned_convergence(case: dict, name: str) -> dict | None:
+    """A controller's convergence record in a tuned case (its report entry's
+    ``tuned.convergence``: the kept seed's validation median at half the budget and at the whole,
+    their relative change and the tolerance), None if the law was not tuned there."""
+    entry = case["controllers"].get(name)
+    return (entry.get("tuned") or {}).get("convergence") if entry is not None else None
+
+
+def _not_converged(case: dict, names: list[str]) -> list[str]:
+    return [n for n in names if (conv := tuned_convergence(case, n)) and not conv["converged"]]
+
+
 def tuned_headline() -> str:
     cases = tuned_cases()
     seeds = {c["budgets"]["seeds"] for c in cases}.pop()
@@ -376,6 +388,7 @@ def tuned_headline() -> str:
             return "no setting met the constraints"
         text = f"{1e3 * median(errors):.3g} ({1e3 * min(errors):.2g}–{1e3 * max(errors):.2g})"
         text += f", {len(errors)} of {seeds} seeds" if len(errors) < seeds else ""
+        text += " †" if _not_converged(c["case"], [name]) else ""
         return f"**{text}**" if tuned_verdict(c["case"], c["controllers"])["best"] == name else text
 
     columns = [("controller", "l", _text("controller"))] + [
@@ -386,6 +399,14 @@ def tuned_headline() -> str:
     budget = {c["budgets"]["tune"] for c in cases}.pop()
     validation = {c["budgets"]["validation"] for c in cases}.pop()
     same = [c["label"] for c in cases if not c["case"]["held_out"]]
+    tolerance = {
+        conv["tolerance"]
+        for c in cases
+        for n in c["controllers"]
+        if (conv := tuned_convergence(c["case"], n))
+    }.pop()
+    unconverged = sum(len(_not_converged(c["case"], c["controllers"])) for c in cases)
+    tuned = sum(1 for c in cases for n in c["controllers"] if tuned_convergence(c["case"], n))
     return _markdown(columns, [{"controller": n} for n in names]) + (
         f"\nRMS task error (t ≥ 2 s) in mm of each controller's best setting under the constraints, "
         f"on {validation} validation draws the tuning never ran: per optimiser seed the median over "
@@ -400,7 +421,10 @@ def tuned_headline() -> str:
             if same
             else ""
         )
-        + f"Made by `{TUNED_COMMAND}`.\n"
+        + f"† not converged at {budget} simulations ({unconverged} of {tuned} tunings): the kept "
+        f"seed's validation median moved by more than {100 * tolerance:g} % between {budget // 2} "
+        f"and {budget} simulations, so a longer search may still lower it. "
+        f"Made by `{TUNED_COMMAND}`.\n"
     )
 
 
@@ -416,6 +440,11 @@ def tuned_verdicts() -> str:
                 "clear": "yes" if v["clear"] else "no: within the seeds' spread",
                 "nn": "–" if v["nn_ratio"] is None else f"{v['nn_ratio']:.2g}",
                 "rival": v["rival"],
+                "converged": ", ".join(
+                    f"{n} not"
+                    for n in _not_converged(c["case"], list(dict.fromkeys([v["best"], v["rival"], "nn"])))
+                )
+                or "yes",
                 "paired": "–"
                 if pair is None
                 else f"one plant: {1e3 * pair['median_difference']:.2g} mm on every draw, no test"
@@ -424,7 +453,7 @@ def tuned_verdicts() -> str:
                     f"{pair['a_better']} of {pair['n'] - pair['undefined']}, "
                     f"{1e3 * pair['median_difference']:.2g} mm "
                     f"({1e3 * pair['interval'][0]:.2g} to {1e3 * pair['interval'][1]:.2g}), "
-                    f"sign test p = {pair['sign_p']:.2g}"
+                    f"sign test p = {pair['sign_p']:.2g} (Holm {pair['holm_p']:.2g})"
                 ),
             }
         )
@@ -435,15 +464,20 @@ def tuned_verdicts() -> str:
             ("every seed better than every other controller's?", "l", _text("clear")),
             ("NN median / best other's", "r", _text("nn")),
             ("best other", "l", _text("rival")),
+            ("converged at the budget?", "l", _text("converged")),
             ("best other better than NN, paired on the certification draws", "l", _text("paired")),
         ],
         rows,
         TUNED_COMMAND,
     ) + (
         "The paired column: on how many certification draws the best other law's kept setting "
-        "has the lower error, the median of its error minus the NN's with a 95 % bootstrap "
-        "interval, and the two-sided sign test ([robustness.md](robustness.md#paired-comparisons)); "
-        "where every draw is the same plant the draws are one comparison, and no test is made.\n"
+        "has the lower error, the median of its error minus the NN's with its distribution-free "
+        "order-statistic interval (nominal 95 %), and the two-sided sign test with its p after "
+        "Holm's correction over the case's pairs ([robustness.md](robustness.md#paired-comparisons)); "
+        "where every draw is the same plant the draws are one comparison, and no test is made. "
+        "The converged column names the least-error law, the best other and the NN where their "
+        "tuning had not converged at the budget (the headline table's †): such a verdict holds at "
+        "that budget only.\n"
     )
 
 
@@ -495,22 +529,38 @@ def tuned_settings() -> str:
     )
 
 
-def _certificate_cells(c: dict) -> dict:
-    """A certificate's cells (:func:`_certificate_columns`): k of N, the bound, its verdict."""
+def _requirement(entry: dict, names: dict) -> tuple[dict, str]:
+    """A law's certificates in a study report: the first is the whole requirement (every property
+    at once), the others one property each. Returns the first and the failing draws of each
+    property that failed on some draw, by the report's ``property_names`` ("torque 18, stops
+    21"), "none" if none did."""
+    whole, *parts = entry["certificates"]
+    failing = [f"{names.get(c['property'], c['property'])} {c['k']}" for c in parts if c["k"]]
+    return whole, ", ".join(failing) or ("none" if parts else "–")
+
+
+def _certificate_cells(entry: dict, names: dict) -> dict:
+    """A law's certificate cells (:func:`_certificate_columns`): k of N failing the requirement,
+    the failing draws of each property, the bound, its verdict."""
+    c, parts = _requirement(entry, names)
     return {
         "failing": f"{c['k']} of {c['N']}",
+        "parts": parts,
         "bound": f"{100 * c['p_upper']:.1f} %",
         "certified": "yes" if c["holds"] else "no",
     }
 
 
-def _certificate_columns(c: dict, beta: float) -> list[tuple]:
-    """The columns of a study report's certificates (``c`` names the property and the claim):
-    the draws failing, the Clopper-Pearson bound on P(fail) and whether it proves the claim."""
+def _certificate_columns(entry: dict, beta: float) -> list[tuple]:
+    """The columns of a study report's certificates (``entry`` is one law's, naming the
+    requirement and the claim): the draws failing the requirement and each of its properties, the
+    Clopper-Pearson bound on P(fail) and whether the sampled claim over the box holds."""
+    c, _ = _requirement(entry, {})
     return [
-        (f"draws failing {c['property']}", "r", _text("failing")),
+        (f"draws failing the requirement ({c['property']})", "r", _text("failing")),
+        ("failing draws by property", "l", _text("parts")),
         (f"P(fail) ≤ ({100 * (1 - beta):g} % confidence)", "r", _text("bound")),
-        (f"certified P(fail) ≤ {100 * c['epsilon']:g} %", "l", _text("certified")),
+        (f"P(fail) ≤ {100 * c['epsilon']:g} % over the box, sampled", "l", _text("certified")),
     ]
 
 
@@ -526,7 +576,7 @@ def _robustness(name: str):
         for case_name, case in report["cases"].items():
             scale = case["set"].get("plant.disturbance_scale")
             for controller, entry in case["controllers"].items():
-                stats, (c,) = entry["statistics"], entry["certificates"]
+                stats = entry["statistics"]
                 error, torque = stats["rms_error_after_2s"], stats["rms_torque"]
                 rows.append(
                     {
@@ -539,7 +589,7 @@ def _robustness(name: str):
                         "torque": f"{torque['median']:.3g}",
                         "torque_p95": f"{torque['p95']:.3g}",
                         "saturated": f"{100 * stats['saturated_fraction_mean']:.2g}",
-                        **_certificate_cells(c),
+                        **_certificate_cells(entry, report.get("property_names", {})),
                     }
                 )
         columns = [
@@ -552,7 +602,7 @@ def _robustness(name: str):
             ("median torque [N m]", "r", _text("torque")),
             ("p95 [N m]", "r", _text("torque_p95")),
             ("saturated steps [%]", "r", _text("saturated")),
-            *_certificate_columns(c, report["budgets"]["beta"]),
+            *_certificate_columns(entry, report["budgets"]["beta"]),
         ]
         table = _markdown(columns, rows)
         counts: dict[str, dict[str, int]] = {}
@@ -723,14 +773,13 @@ def _certified_box(name: str):
         rows = []
         for controller, entry in case["controllers"].items():
             error = entry["statistics"]["rms_error_after_2s"]
-            (c,) = entry["certificates"]
             rows.append(
                 {
                     "controller": controller,
                     "median": _mm(error["median"]),
                     "p95": _mm(error["p95"]),
                     "max": _mm(error["max"]),
-                    **_certificate_cells(c),
+                    **_certificate_cells(entry, report.get("property_names", {})),
                 }
             )
         columns = [
@@ -738,7 +787,7 @@ def _certified_box(name: str):
             ("median RMS error after 2 s [mm]", "r", _text("median")),
             ("95th percentile [mm]", "r", _text("p95")),
             ("worst [mm]", "r", _text("max")),
-            *_certificate_columns(c, report["budgets"]["beta"]),
+            *_certificate_columns(entry, report["budgets"]["beta"]),
         ]
         return _markdown(columns, rows, _study_command(report["study"]))
 

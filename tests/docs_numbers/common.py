@@ -219,7 +219,7 @@ def _gaps(part, controller=None, exclude=(), variant="mujoco", reference="pinocc
     return get
 
 
-RBF_IDEAL = (("paper-line", "rbf-nn", "ideal"), ("panda-ellipse", "rbf-nn", "ideal"))
+RBF_IDEAL = (("paper-line", "rbf-nn", "ideal"), ("paper-ellipse", "rbf-nn", "ideal"))
 """The tuned rows the engines' text names apart: the RBF network's hundredths of a micrometre."""
 
 
@@ -233,9 +233,9 @@ GAP_REST = _gap_stat(max, "tuned", exclude=RBF_IDEAL)
 GAP_RBF_A = _gap_stat(max, "tuned", only=RBF_IDEAL[0])
 
 
-GAP_RBF_PANDA = (_gap_stat(min, "tuned", only=RBF_IDEAL[1]), _gap_stat(max, "tuned", only=RBF_IDEAL[1]))
-"""The quoted engine gaps: every tuned row but RBF_IDEAL's (max), the RBF network's on case (a),
-and its two on the Panda (least, largest)."""
+GAP_RBF_B = _gap_stat(max, "tuned", only=RBF_IDEAL[1])
+"""The quoted engine gaps: every tuned row but RBF_IDEAL's (max), the RBF network's on case (a)
+and on case (b)."""
 
 
 def _gap_error(preset, controller, variant):
@@ -337,9 +337,50 @@ def _paired_better(case, a, b, sensing="noisy"):
     return lambda _: render_tables._paired(_tuned_case(case, sensing)["case"], a, b)["a_better"]
 
 
-def _paired_p(case, a, b, sensing="noisy"):
-    """The sign test's p-value of the paired comparison of ``a`` and ``b``."""
-    return lambda _: render_tables._paired(_tuned_case(case, sensing)["case"], a, b)["sign_p"]
+def _paired_p(case, a, b, sensing="noisy", key="sign_p"):
+    """The sign test's p-value of the paired comparison of ``a`` and ``b`` (``holm_p``: after
+    Holm's correction over the case's pairs)."""
+    return lambda _: render_tables._paired(_tuned_case(case, sensing)["case"], a, b)[key]
+
+
+def _pairs(case, sensing="noisy"):
+    """How many pairs a tuned case compares (Holm's correction is over them)."""
+    return lambda _: len(_tuned_case(case, sensing)["case"]["paired"])
+
+
+def _unconverged(_):
+    """How many tunings of the tuned studies had not converged at their budget."""
+    return sum(
+        len(render_tables._not_converged(c["case"], c["controllers"])) for c in render_tables.tuned_cases()
+    )
+
+
+def _lead(case, sensing="noisy"):
+    """The least median over the next law's in a tuned case (how far the winner leads)."""
+    from statistics import median
+
+    def get(_):
+        c = _tuned_case(case, sensing)
+        medians = sorted(
+            median(e) for n in c["controllers"] if (e := render_tables.tuned_seed_errors(c["case"], n))
+        )
+        return medians[1] / medians[0]
+
+    return get
+
+
+def _half_budget_ratio(controller, pick):
+    """The least or greatest, over the tuned cases, of a controller's kept validation median at
+    half its tuning budget over that at the whole (1 + the convergence record's change)."""
+
+    def get(_):
+        return pick(
+            conv["kept_median_half"] / conv["kept_median"]
+            for c in render_tables.tuned_cases()
+            if (conv := render_tables.tuned_convergence(c["case"], controller))
+        )
+
+    return get
 
 
 def _ratio_to(case, controller, other, sensing="noisy"):
@@ -440,9 +481,19 @@ def _busy(words: str, *stages: str):
     return lambda d: _simulated(*stages)(d) / (d["workers"] * _stage_wall(words)(d))
 
 
-def _box_certified(controller: str, key: str):
-    """``key`` of a controller's certificate in the falsify-paper study's report."""
-    return lambda d: d["cases"]["paper-ellipse"]["controllers"][controller]["certificates"][0][key]
+def _box_certified(controller: str, key: str, metric: str | None = None):
+    """``key`` of a controller's certificate in a one-case study's report (a falsify study's):
+    the whole requirement's, or with ``metric`` that of the property on it."""
+
+    def get(d):
+        (case,) = d["cases"].values()
+        certificates = case["controllers"][controller]["certificates"]
+        if metric is None:
+            return certificates[0][key]
+        (certificate,) = [c for c in certificates if c["property"].startswith(f"{metric}<")]
+        return certificate[key]
+
+    return get
 
 
 def _panda_noisy_kept(stat):
@@ -487,9 +538,19 @@ def _worst_draw(controller: str):
     )
 
 
-def _case_failing(case: str, controller: str):
-    """How many of a case's certification draws fail the property (the certificate's k)."""
-    return lambda d: d["cases"][case]["controllers"][controller]["certificates"][0]["k"]
+def _case_failing(case: str, controller: str, metric: str | None = "rms_error_after_2s"):
+    """How many of a case's certification draws fail one property (the certificate of the
+    property on ``metric``), or with ``metric`` None the whole requirement (the first
+    certificate: every property at once)."""
+
+    def get(d):
+        certificates = d["cases"][case]["controllers"][controller]["certificates"]
+        if metric is None:
+            return certificates[0]["k"]
+        (certificate,) = [c for c in certificates if c["property"].startswith(f"{metric}<")]
+        return certificate["k"]
+
+    return get
 
 
 def _tuned_draws_failing(stat):

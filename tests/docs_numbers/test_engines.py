@@ -8,6 +8,7 @@ import pytest
 from tests.docs_numbers.common import (
     GAP,
     PRINTED,
+    RBF_IDEAL,
     ROOT,
     _error,
     _failing,
@@ -90,25 +91,110 @@ QUOTES: list[tuple] = [
         1.0,
     ),
     ("docs/engines.md", r"With 4× as many steps, \d+ of those (\d+)", GAP, _failing("implicitfast"), 1.0),
+    ("docs/engines.md", r"With real encoders none of the 42 runs", None, None, 1.0),
+]
+
+
+def _tuned_row(case, controller, sensing, variant, metric, sample=0):
+    return lambda data: next(
+        r[variant][metric]
+        for r in data["tuned"]
+        if (r["case"], r["controller"], r["sensing"], r["sample"]) == (case, controller, sensing, sample)
+    )
+
+
+QUOTES += [
     (
         "docs/engines.md",
-        r"With real encoders (\d+) of the 42 runs",
+        r"ideal sensing: ([\d.]+) against\s+[\d.]+ µm\)",
         GAP,
-        _failing("implicitfast", sensing="noisy"),
+        _tuned_row("paper-line", "no-u0", "ideal", "mujoco", "rms_error_after_2s", 1),
+        1e6,
+    ),
+    (
+        "docs/engines.md",
+        r"ideal sensing: [\d.]+ against\s+([\d.]+) µm\)",
+        GAP,
+        _tuned_row("paper-line", "no-u0", "ideal", "pinocchio", "rms_error_after_2s", 1),
+        1e6,
+    ),
+    (
+        "docs/engines.md",
+        r"on both draws \(([\d.]+)·10⁻⁵ mm against",
+        GAP,
+        _tuned_row("paper-line", "rbf-nn", "ideal", "mujoco", "rms_error_after_2s"),
+        1e8,
+    ),
+    (
+        "docs/engines.md",
+        r"mm against ([\d.]+)·10⁻⁵ mm; its 4× run",
+        GAP,
+        _tuned_row("paper-line", "rbf-nn", "ideal", "pinocchio", "rms_error_after_2s"),
+        1e8,
+    ),
+    (
+        "docs/engines.md",
+        r"its 4× run within ([\d.]+) %\)",
+        GAP,
+        _gap_stat(max, "tuned", variant="mujoco_fine", reference="mujoco", only=RBF_IDEAL[0]),
         1.0,
     ),
+    (
+        "docs/engines.md",
+        r"tracks as well on MuJoCo \(([\d.]+) against",
+        GAP,
+        _tuned_row("paper-ellipse", "slotine-li", "ideal", "mujoco", "rms_error_after_2s"),
+        1e3,
+    ),
+    (
+        "docs/engines.md",
+        r"MuJoCo \([\d.]+ against\s+([\d.]+) mm\)",
+        GAP,
+        _tuned_row("paper-ellipse", "slotine-li", "ideal", "pinocchio", "rms_error_after_2s"),
+        1e3,
+    ),
+    *[
+        (document, pattern, GAP, _tuned_row("paper-ellipse", "slotine-li", "ideal", variant, metric), scale)
+        for document, pattern, variant, metric, scale in (
+            ("docs/engines.md", r"there: ([\d.]+) N m RMS against", "mujoco", "rms_torque", 1.0),
+            ("docs/engines.md", r"N m RMS against ([\d.]+) N m, and", "pinocchio", "rms_torque", 1.0),
+            (
+                "docs/engines.md",
+                r"and ([\d.]+) % of the steps\s+saturated against",
+                "mujoco",
+                "saturated_fraction",
+                100.0,
+            ),
+            (
+                "docs/engines.md",
+                r"saturated against ([\d.]+) %, so",
+                "pinocchio",
+                "saturated_fraction",
+                100.0,
+            ),
+            ("README.md", r"needs ([\d.]+) N m RMS on MuJoCo", "mujoco", "rms_torque", 1.0),
+            ("README.md", r"on MuJoCo against ([\d.]+) N m on Pinocchio", "pinocchio", "rms_torque", 1.0),
+        )
+    ],
 ]
 
 
 test_every_quoted_figure_matches_its_data = quoted_figures_test(QUOTES)
 
 
+def test_no_real_encoder_run_fails_on_implicitfast():
+    """docs/engines.md: "With real encoders none of the 42 runs fails so"."""
+    data = _read("engine_gap")
+    assert sum(r["sensing"] == "noisy" for r in data["tuned"]) == 42
+    assert _failing("implicitfast", sensing="noisy")(data) == 0
+
+
 def test_the_engine_gap_claims_of_the_docs_hold_in_its_data():
     """docs/engines.md and the README: on MuJoCo with RK4 the tuned controllers rank as on
-    Pinocchio in four of the six cases, case (b)'s and the Panda's with ideal sensing swapping the
-    NN and the sliding mode (within the quoted few % of each other); with implicitfast at the plant step
-    the rankings differ, and every law but the RBF network and the C++ PD loses the Panda's
-    path on both draws."""
+    Pinocchio in five of the six cases, case (b)'s with real encoders swapping the NN and the RBF
+    network (within the quoted few % of each other); with implicitfast at the plant step the
+    rankings differ, Slotine-Li first on case (a) and second on case (b) and the Panda, and every
+    law but Slotine-Li and the C++ PD loses the Panda's path on both draws."""
     data = _read("engine_gap")
 
     def ranking(variant):
@@ -121,19 +207,45 @@ def test_the_engine_gap_claims_of_the_docs_hold_in_its_data():
 
     pinocchio, mujoco = ranking("pinocchio"), ranking("mujoco")
     differ = [case for case in pinocchio if mujoco[case] != pinocchio[case]]
-    assert len(pinocchio) == 6 and differ == [("paper-ellipse", "ideal"), ("panda-ellipse", "ideal")]
+    assert len(pinocchio) == 6 and differ == [("paper-ellipse", "noisy")]
     for document in ("README.md", "docs/engines.md"):
-        quoted = re.search(
-            r"the NN and the sliding\s+mode, ([\d.]+) and ([\d.]+) %\s+apart", (ROOT / document).read_text()
-        )
+        quoted = re.search(r"the NN and the RBF network,\s+([\d.]+) %\s+apart", (ROOT / document).read_text())
         assert quoted, document
-    for case, apart in zip(differ, map(float, quoted.groups())):
+        (case,) = differ
         swapped = [c for c, d in zip(pinocchio[case], mujoco[case]) if c != d]
-        assert sorted(swapped) == ["nn", "sliding-mode"]
+        assert sorted(swapped) == ["nn", "rbf-nn"]
         rows = [r for r in data["tuned"] if (r["case"], r["sensing"]) == case]
         mean = {c: np.mean([_error(r, "pinocchio") for r in rows if r["controller"] == c]) for c in swapped}
-        assert 100 * abs(mean["nn"] / mean["sliding-mode"] - 1) == pytest.approx(apart, abs=0.05)
-    assert ranking("implicitfast") != pinocchio
+        assert 100 * abs(mean["nn"] / mean["rbf-nn"] - 1) == pytest.approx(float(quoted.group(1)), abs=0.05)
+    implicit = ranking("implicitfast")
+    assert implicit != pinocchio
+    assert pinocchio[("paper-line", "ideal")][-1] == "slotine-li"
+    assert implicit[("paper-line", "ideal")][0] == "slotine-li"
+    assert implicit[("paper-ellipse", "ideal")][1] == implicit[("panda-ellipse", "ideal")][1] == "slotine-li"
     lost = {r["controller"] for r in data["tuned"] if r["case"] == "panda-ellipse" and r["sensing"] == "ideal"
             and _error(r, "implicitfast") > 0.1}  # fmt: skip
-    assert lost == {"nn", "no-u0", "pd", "sliding-mode", "slotine-li"}
+    assert lost == {"nn", "no-u0", "pd", "sliding-mode", "rbf-nn"}
+    spared = {(r["case"], r["controller"]) for r in data["tuned"] if r["sensing"] == "ideal"
+              and _error(r, "implicitfast") <= 2 * _error(r, "pinocchio")}  # fmt: skip
+    assert spared == {("paper-ellipse", "rbf-nn"), ("panda-ellipse", "taskpd-cpp")}
+
+
+def test_the_verdicts_that_flip_on_mujoco_are_the_ones_the_page_names():
+    """docs/engines.md's "Verdicts that flip" for the tuned settings: the PD's subtask on the
+    paper's cases and Slotine-Li's effort constraints on case (b), ideal; nothing else."""
+    data = _read("engine_gap")
+    flips = {}
+    for r in data["tuned"]:
+        pin, other = r["verdicts"]["pinocchio"], r["verdicts"]["mujoco"]
+        changed = {k for k in {*pin, *other} if pin.get(k, "no") != other.get(k, "no")}
+        if changed:
+            flips.setdefault((r["case"], r["sensing"], r["controller"]), set()).update(changed)
+    subtask = {k for k, v in flips.items() if v == {"subtask degraded"}}
+    assert subtask == {
+        ("paper-line", "ideal", "pd"),
+        ("paper-ellipse", "ideal", "pd"),
+        ("paper-ellipse", "noisy", "pd"),
+    }
+    (rest,) = set(flips) - subtask
+    assert rest == ("paper-ellipse", "ideal", "slotine-li")
+    assert {"rms_torque<=10", "saturated_fraction<=0.01"} <= flips[rest]
