@@ -434,10 +434,6 @@ def _example_convergence(controller: str):
 PT = "falsify_panda_tuned:falsification"
 
 
-PT_HELD = ("pd-tuned", "sliding-mode-tuned", "slotine-li-tuned", "rbf-nn-tuned")
-"""The tuned Panda laws the falsification did not falsify (docs/falsification.md)."""
-
-
 def _learning(preset: str, key: str):
     """``key`` of the row of learning_env.json for this preset."""
 
