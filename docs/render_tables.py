@@ -325,12 +325,15 @@ def tuned_cases() -> list[dict]:
 
 def tuned_seed_errors(case: dict, name: str) -> list[float]:
     """The validation median RMS error [m] of a controller's best setting for each optimiser seed
-    of a case (the seeds where a setting met the constraints)."""
+    of a case whose setting met the constraints on the validation draws (``feasible``): a seed
+    that broke them is not a result under the constraints, so no table ranks it."""
     entry = case["controllers"].get(name)
     tuned = entry["tuned"] if entry is not None else None
     if not tuned:
         return []
-    return [s["median_error"] for s in tuned["seeds"] if s["median_error"] is not None]
+    return [
+        s["median_error"] for s in tuned["seeds"] if s["median_error"] is not None and s.get("feasible", True)
+    ]
 
 
 def _paired(case: dict, a: str, b: str) -> dict | None:
@@ -410,8 +413,10 @@ def tuned_headline() -> str:
     return _markdown(columns, [{"controller": n} for n in names]) + (
         f"\nRMS task error (t ≥ 2 s) in mm of each controller's best setting under the constraints, "
         f"on {validation} validation draws the tuning never ran: per optimiser seed the median over "
-        f"the draws; the cell gives the median over {seeds} seeds (0 to {seeds - 1}) and in brackets "
-        f"the least and the greatest. Each seed gave every controller {budget} simulations per case: "
+        f"the draws; the cell gives the median over the seeds (0 to {seeds - 1}) whose setting met the "
+        f"constraints on those draws ({seeds} unless the cell says fewer: a seed that broke them is "
+        f"no result under them) and in brackets the least and the greatest. Each seed gave every "
+        f"controller {budget} simulations per case: "
         f"RMS torque ≤ {' or '.join(f'{v:g}' for v in limits)} N m (the paper's arm or the Panda), "
         f"at most {100 * cases[0]['budgets']['max_saturated']:g} % saturated steps, no runaway, no "
         "stop hit. The least median is in bold. Held out means other plants only where draws differ "
@@ -421,7 +426,8 @@ def tuned_headline() -> str:
             if same
             else ""
         )
-        + f"† not converged at {budget} simulations ({unconverged} of {tuned} tunings): the kept "
+        + f"† not converged at {budget} simulations ({unconverged} of {tuned} kept tunings, one per "
+        f"law and case): the kept "
         f"seed's validation median moved by more than {100 * tolerance:g} % between {budget // 2} "
         f"and {budget} simulations, so a longer search may still lower it. "
         f"Made by `{TUNED_COMMAND}`.\n"

@@ -512,8 +512,10 @@ FT = "falsify_paper_tuned:falsification"
 def _ideal_median(controller: str, stat):
     """``stat`` over the ideal-sensing cases of both tuned studies of a controller's median of
     its seeds' validation medians (the headline table's cells)."""
+    from statistics import median
+
     return lambda _: stat(
-        c["case"]["controllers"][controller]["tuned"]["seed_median"]
+        median(render_tables.tuned_seed_errors(c["case"], controller))
         for c in render_tables.tuned_cases()
         if c["label"].endswith("ideal")
     )
