@@ -117,7 +117,7 @@ QUOTES: list[tuple] = [
             (r"comes next\*\* \([\d.]+ and [\d.]+ mm,\s+at most ([\d.]+) mm\)", _worst_draw("rbf-nn"), 1e3),
             (r"third-best median\*\* \(([\d.]+) and", _case("preset-disturbance", "nn", "median"), 1e3),
             (
-                r"third-best median\*\* \([\d.]+ and ([\d.]+) mm\)",
+                r"third-best median\*\* \([\d.]+ and ([\d.]+) mm;",
                 _case("triple-disturbance", "nn", "median"),
                 1e3,
             ),
