@@ -477,17 +477,23 @@ def _busy(words: str, *stages: str):
     return lambda d: _simulated(*stages)(d) / (d["workers"] * _stage_wall(words)(d))
 
 
+def _pick_certificate(certificates: list[dict], metric: str | None) -> dict:
+    """Of a controller's certificates, the whole requirement's (the first: every property at
+    once), or with ``metric`` that of the property on it."""
+    if metric is None:
+        assert certificates[0]["property"].startswith("all of: ")
+        return certificates[0]
+    (certificate,) = [c for c in certificates[1:] if re.match(rf"{metric}\s*(<|>|=)", c["property"])]
+    return certificate
+
+
 def _box_certified(controller: str, key: str, metric: str | None = None):
     """``key`` of a controller's certificate in a one-case study's report (a falsify study's):
     the whole requirement's, or with ``metric`` that of the property on it."""
 
     def get(d):
         (case,) = d["cases"].values()
-        certificates = case["controllers"][controller]["certificates"]
-        if metric is None:
-            return certificates[0][key]
-        (certificate,) = [c for c in certificates if c["property"].startswith(f"{metric}<")]
-        return certificate[key]
+        return _pick_certificate(case["controllers"][controller]["certificates"], metric)[key]
 
     return get
 
@@ -509,15 +515,15 @@ def _panda_noisy_kept(stat):
 FT = "falsify_paper_tuned:falsification"
 
 
-def _ideal_median(controller: str, stat):
-    """``stat`` over the ideal-sensing cases of both tuned studies of a controller's median of
-    its seeds' validation medians (the headline table's cells)."""
+def _ideal_median(controller: str, stat, sensing: str = "ideal"):
+    """``stat`` over the cases of both tuned studies with that sensing of a controller's median
+    of its seeds' validation medians (the headline table's cells)."""
     from statistics import median
 
     return lambda _: stat(
         median(render_tables.tuned_seed_errors(c["case"], controller))
         for c in render_tables.tuned_cases()
-        if c["label"].endswith("ideal")
+        if c["label"].endswith(sensing)
     )
 
 
@@ -541,14 +547,9 @@ def _case_failing(case: str, controller: str, metric: str | None = "rms_error_af
     property on ``metric``), or with ``metric`` None the whole requirement (the first
     certificate: every property at once)."""
 
-    def get(d):
-        certificates = d["cases"][case]["controllers"][controller]["certificates"]
-        if metric is None:
-            return certificates[0]["k"]
-        (certificate,) = [c for c in certificates if c["property"].startswith(f"{metric}<")]
-        return certificate["k"]
-
-    return get
+    return lambda d: _pick_certificate(d["cases"][case]["controllers"][controller]["certificates"], metric)[
+        "k"
+    ]
 
 
 def _tuned_draws_failing(stat):

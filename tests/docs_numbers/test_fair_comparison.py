@@ -67,11 +67,6 @@ def _certified_median(case: str, controller: str, sensing: str = "noisy"):
     ]["median"]
 
 
-def _kept_validation(case: str, controller: str, sensing: str = "noisy"):
-    """The kept seed's validation median (the least over the seeds)."""
-    return lambda _: min(render_tables.tuned_seed_errors(_tuned_case(case, sensing)["case"], controller))
-
-
 def _sl_over_best_eq9(pick):
     """Slotine-Li's median over the best eq. (9) law's (NN, no-u0, sliding mode), ideal cases."""
     from statistics import median
@@ -84,17 +79,6 @@ def _sl_over_best_eq9(pick):
 
     return lambda _: pick(
         ratio(c["case"]) for c in render_tables.tuned_cases() if c["label"].endswith("ideal")
-    )
-
-
-def _noisy_median(controller: str, stat):
-    """``stat`` over the noisy cases of a controller's median of its seeds' validation medians."""
-    from statistics import median
-
-    return lambda _: stat(
-        median(render_tables.tuned_seed_errors(c["case"], controller))
-        for c in render_tables.tuned_cases()
-        if c["label"].endswith("noisy")
     )
 
 
@@ -174,14 +158,14 @@ QUOTES: list[tuple] = [
         FC,
         r"and ([\d.]+) to [\d.]+ mm with real encoders\. With",
         TUNED,
-        _noisy_median("slotine-li", min),
+        _ideal_median("slotine-li", min, "noisy"),
         1e3,
     ),
     (
         FC,
         r"and [\d.]+ to ([\d.]+) mm with real encoders\. With",
         TUNED,
-        _noisy_median("slotine-li", max),
+        _ideal_median("slotine-li", max, "noisy"),
         1e3,
     ),
     (
@@ -298,7 +282,7 @@ QUOTES: list[tuple] = [
         )
         for law in ("no-u0", "pd", "sliding-mode", "slotine-li", "rbf-nn", "taskpd-cpp")
     ],
-    (FC, r"validation draws \(([\d.]+) mm there", TUNED, _kept_validation(PANDA_ARM, "nn"), 1e3),
+    (FC, r"validation draws \(([\d.]+) mm there", TUNED, _seed_extreme(PANDA_ARM, "nn", min), 1e3),
     (FC, r"its median of ([\d.]+) mm on the certification", TUNED, _certified_median(PANDA_ARM, "nn"), 1e3),
     (
         FC,

@@ -17,6 +17,7 @@ from tests.docs_numbers.common import (
     _margin,
     _panda_noisy_kept,
     _paper_noisy_kept,
+    _pick_certificate,
     _random_failures,
     _read,
     _reproduces_or_is_chaotic,
@@ -44,14 +45,8 @@ def _laws(d) -> dict:
 
 
 def _certificate(d, controller: str, metric: str | None = None) -> dict:
-    """A controller's certificate in a one-case study's report: the whole requirement's (the
-    first: every property at once), or with ``metric`` that of the property on it."""
-    certificates = _laws(d)[controller]["certificates"]
-    if metric is None:
-        assert certificates[0]["property"].startswith("all of: ")
-        return certificates[0]
-    (certificate,) = [c for c in certificates[1:] if re.match(rf"{metric}\s*(<|>|=)", c["property"])]
-    return certificate
+    """A controller's certificate in a one-case study's report (:func:`_pick_certificate`)."""
+    return _pick_certificate(_laws(d)[controller]["certificates"], metric)
 
 
 def _fails(controller: str, metric: str | None = None, key: str = "k"):
