@@ -128,7 +128,11 @@ def _controller_entry(spec: StudySpec, case: dict, c: str) -> dict:
     certify = case["certify"]["controllers"].get(label, {})
     kept = case["kept"].get(c)
     per_seed = case["per_seed"].get(c, [])
-    medians = [e["median_error"] for e in per_seed if math.isfinite(e["median_error"])]
+    # the seeds' spread and median over the seeds feasible on validation: a seed that broke the
+    # study's constraints is not a result under them (selection.select_kept), so it ranks nowhere
+    medians = [
+        e["median_error"] for e in per_seed if math.isfinite(e["median_error"]) and e.get("feasible", True)
+    ]
     certified_entry = dict(case.get("entries", {}).get(label) or {"kind": c})
     if "class" in certified_entry:  # the file as the report's inputs name it
         file, _, cls = certified_entry["class"].rpartition(":")
@@ -144,6 +148,7 @@ def _controller_entry(spec: StudySpec, case: dict, c: str) -> dict:
             "settings": kept["settings"] if kept else None,
             "seed_spread": [min(medians), max(medians)] if medians else None,
             "seed_median": float(np.median(medians)) if medians else None,
+            "infeasible_seeds": [e["seed"] for e in per_seed if not e.get("feasible", True)],
             "at_bound": kept["at_bound"] if kept else None,
             "fixed": case.get("fixed", {}).get(c, {}),
             "convergence": case.get("convergence", {}).get(c),

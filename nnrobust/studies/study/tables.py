@@ -51,7 +51,7 @@ VERDICT_COLUMNS = (
     ("falsified", "falsified"),
     ("least_margin", "least margin"),
     ("kept_seed", "kept seed"),
-    ("seed_spread_mm", "seeds' medians [mm]"),
+    ("seed_spread_mm", "feasible seeds' medians [mm]"),
     ("converged", "converged at its budget"),
     ("training_seconds", "training [simulated s]"),
     ("mujoco_median_mm", "MuJoCo median e [mm]"),

@@ -818,3 +818,23 @@ def test_a_policy_per_arm_is_one_law_in_a_study_of_two_arms(scheduler, tmp_path)
 
     with pytest.raises(ConfigError, match="'learned' has two entries for the case 'paper-ellipse'"):
         load_study(tmp_path / "twice.toml")
+
+
+def test_the_reports_seed_spread_and_median_rank_only_the_seeds_feasible_on_validation(tmp_path):
+    """Three seeds, the least median (0.1 mm) infeasible: the report's spread and median are over
+    the two feasible seeds (0.2 and 0.4 mm), and it names the seed left out."""
+    from nnrobust.studies.study.report import _controller_entry
+
+    spec = _spec_with(tmp_path, "max_rms_torque = 10.0\n")
+    seeds = [
+        {"seed": 0, "median_error": 1e-4, "feasible": False, "why_infeasible": "RMS torque 13.1 N m"},
+        {"seed": 1, "median_error": 4e-4, "feasible": True, "why_infeasible": ""},
+        {"seed": 2, "median_error": 2e-4, "feasible": True, "why_infeasible": ""},
+    ]
+    kept = {"seed": 2, "settings": {}, "at_bound": [], "median_error": 2e-4, "rows": 2, "completed": 2,
+            "feasible": True}  # fmt: skip
+    case = {"certify": {"controllers": {}}, "kept": {"pd": kept}, "per_seed": {"pd": seeds}, "stages": {}}
+    tuned = _controller_entry(spec, case, "pd")["tuned"]
+    assert tuned["seed_spread"] == [2e-4, 4e-4]
+    assert tuned["seed_median"] == pytest.approx(3e-4, rel=1e-12)
+    assert tuned["infeasible_seeds"] == [0]
