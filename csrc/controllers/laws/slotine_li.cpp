@@ -1,6 +1,7 @@
 // SlotineLi (nnrobust/controllers/laws/slotine_li.py): task-space Slotine–Li adaptive control,
 // Y(q, q', q'_r, q''_r) theta-hat - K_D s (K_D unset: K_D_step / T M-hat(q)), theta-hat advanced by
 // explicit Euler over the period and projected (pseudo-inertias floored; the closed form's box).
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <pinocchio/algorithm/regressor.hpp>
 
@@ -18,6 +19,10 @@ struct SlotineLi : Law {
   bool exact, project;
   PinocchioNominal *pin_model = nullptr;  // else the closed form, one unit model per column of Y
   std::vector<ThreeLinkSpec> unit_specs;
+  // the regressor's workspaces (Y, and the exact form's two velocity terms), sized here: a step
+  // allocates none of them (an exported law keeps nothing it allocated in a step)
+  Matrix Y_, Y_plus_, Y_minus_;
+  Vector zero_, velocity_;
 
   SlotineLi(const LawParams &p, LawContext &context)
       : c(context), Lambda(p.vector("Lambda")), K_D(p.vector("K_D")), theta0(p.vector("theta0")),
@@ -38,49 +43,63 @@ struct SlotineLi : Law {
         unit_specs.push_back(unit);
       }
     }
+    const int n = pin_model ? pin_model->m.model.nv : 3;
+    const int columns = pin_model ? 10 * (pin_model->m.model.njoints - 1) : 9;
+    Y_.setZero(n, columns);
+    if (pin_model && exact) {
+      Y_plus_.setZero(n, columns);
+      Y_minus_.setZero(n, columns);
+    }
+    zero_.setZero(n);
+    velocity_.setZero(n);
   }
 
   // pinocchio.computeJointTorqueRegressor(q, v, a), from calls the pin wheel's library instantiates
   // (instantiating that algorithm here took this unit's compiler to 2.2 GB): body i's regressor
   // bodyRegressor(v_i, a_i + g_i) (local frame, a_i with the base's -g), moved to the world frame,
   // gives joint j's row block J_j^T oMi* Y_i for every joint j on the path from i to the base.
-  Matrix joint_torque_regressor(const Vector &q, const Vector &v, const Vector &a) const {
+  void joint_torque_regressor(const Vector &q, const Vector &v, const Vector &a, Matrix &Y) const {
     const pinocchio::Model &model = pin_model->m.model;
     pinocchio::Data &data = pin_model->m.data;
     pin::forwardKinematics(model, data, q, v, a);
     const pin::Matrix6x &J = pin::computeJointJacobians(model, data);
     const pinocchio::Motion base(-model.gravity.linear(), Vector3d::Zero());  // a_gf[0] = -g
-    Matrix Y = Matrix::Zero(model.nv, 10 * (model.njoints - 1));
+    Y.setZero();
     for (int i = 1; i < model.njoints; ++i) {
       const pinocchio::Motion a_gf = data.a[i] + data.oMi[i].actInv(base);
       const Eigen::Matrix<double, 6, 10> world =
           data.oMi[i].toDualActionMatrix() * pinocchio::bodyRegressor(data.v[i], a_gf);
       for (int j = i; j > 0; j = static_cast<int>(model.parents[j]))
-        Y.block(model.idx_vs[j], 10 * (i - 1), model.nvs[j], 10) =
+        Y.block(model.idx_vs[j], 10 * (i - 1), model.nvs[j], 10).noalias() =
             J.middleCols(model.idx_vs[j], model.nvs[j]).transpose() * world;
     }
-    return Y;
   }
 
-  // Y with Y theta = M(q) a_r + C(q, v) v_r + G(q) (C(q, v_r) v_r when not exact), SlotineLi.regressor
-  Matrix regressor(const Vector &q, const Vector &v, const Vector &v_r, const Vector &a_r) const {
-    const Vector zero = Vector::Zero(q.size());
+  // Y with Y theta = M(q) a_r + C(q, v) v_r + G(q) (C(q, v_r) v_r when not exact), SlotineLi.regressor;
+  // the law's own buffer, good until the next call
+  const Matrix &regressor(const Vector &q, const Vector &v, const Vector &v_r, const Vector &a_r) {
     if (pin_model) {
-      auto Y = [&](const Vector &vel, const Vector &acc) { return joint_torque_regressor(q, vel, acc); };
-      if (!exact) return Y(v_r, a_r);
-      const Matrix Y0 = Y(zero, a_r), Yp = Y(v + v_r, zero), Ym = Y(v - v_r, zero);
-      return Y0 + 0.25 * (Yp - Ym);
+      if (!exact) {
+        joint_torque_regressor(q, v_r, a_r, Y_);
+        return Y_;
+      }
+      joint_torque_regressor(q, zero_, a_r, Y_);
+      velocity_ = v + v_r;
+      joint_torque_regressor(q, velocity_, zero_, Y_plus_);
+      velocity_ = v - v_r;
+      joint_torque_regressor(q, velocity_, zero_, Y_minus_);
+      Y_ += 0.25 * (Y_plus_ - Y_minus_);
+      return Y_;
     }
-    Matrix Y(3, 9);
     const Vector3d q3 = q;
     for (int i = 0; i < 9; ++i) {
       const ThreeLink unit{unit_specs[i]};
       const Vector3d g = unit.bias(q3, Vector3d::Zero());
       const Vector3d coriolis = exact ? Vector3d(0.25 * (unit.bias(q3, v + v_r) - unit.bias(q3, v - v_r)))
                                       : Vector3d(unit.bias(q3, v_r) - g);
-      Y.col(i) = unit.mass(q3) * a_r + coriolis + g;
+      Y_.col(i) = unit.mass(q3) * a_r + coriolis + g;
     }
-    return Y;
+    return Y_;
   }
 
   static Eigen::Matrix4d pseudo_inertia(const Vector &pi) {
@@ -103,6 +122,11 @@ struct SlotineLi : Law {
     double lowest = INFINITY;
     for (int i = 0; i < theta.size(); i += 10) {
       const Eigen::Matrix4d P = pseudo_inertia(theta.segment(i, 10));
+      // P - lowest I positive definite: this body's least eigenvalue is above the least so far
+      // (a 4 x 4 Cholesky instead of its eigenvalues; a tie within rounding decides nothing)
+      if (std::isfinite(lowest) &&
+          Eigen::LLT<Eigen::Matrix4d>(P - lowest * Eigen::Matrix4d::Identity()).info() == Eigen::Success)
+        continue;
       lowest = std::min(lowest, Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d>(P, Eigen::EigenvaluesOnly).eigenvalues()[0]);
     }
     return lowest;
@@ -113,7 +137,13 @@ struct SlotineLi : Law {
     if (!pin_model) return theta.cwiseMax(lower).cwiseMin(upper);  // the closed form's box
     Vector out = theta;
     for (int k = 0, i = 0; i < theta.size(); ++k, i += 10) {
-      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> eig(pseudo_inertia(theta.segment(i, 10)));
+      const Eigen::Matrix4d P0 = pseudo_inertia(theta.segment(i, 10));
+      // P - floor I positive definite: every eigenvalue above the floor, nothing to project (a
+      // Cholesky factorisation of 4 x 4, where the eigen-decomposition below costs ten times it;
+      // the two can disagree only within rounding of the floor, where the decomposition decides)
+      if (Eigen::LLT<Eigen::Matrix4d>(P0 - pseudo_floor[k] * Eigen::Matrix4d::Identity()).info() == Eigen::Success)
+        continue;
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> eig(P0);
       if (eig.eigenvalues()[0] >= pseudo_floor[k]) continue;
       const Eigen::Vector4d w = eig.eigenvalues().cwiseMax(pseudo_floor[k]);
       const Eigen::Matrix4d P = eig.eigenvectors() * w.asDiagonal() * eig.eigenvectors().transpose();
@@ -135,7 +165,7 @@ struct SlotineLi : Law {
     const Vector v_r = J_pinv * (r.dxd - Lambda.cwiseProduct(r.e)) + (null - J_pinv * (J * null));
     const Vector a_r = J_pinv * (r.ddxd - Lambda.cwiseProduct(r.de) - r.ts.jdot_v);
     const Vector s = v - v_r;
-    const Matrix Y = regressor(q, v, v_r, a_r);
+    const Matrix &Y = regressor(q, v, v_r, a_r);
     Output out;
     Vector damping = K_D.cwiseProduct(s);  // SlotineLi.damping: K_D s, or K_D_step / T M-hat(q) s
     if (K_D_mass != 0.0)
