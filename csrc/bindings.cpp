@@ -25,6 +25,7 @@
 #include <string>
 
 #include "closed_loop.hpp"
+#include "export/arena.hpp"
 #include "controllers.hpp"
 #include "controllers/laws/law.hpp"
 #include "controllers/robust_term.hpp"
@@ -283,6 +284,24 @@ std::set<std::string> split_names(const std::string &names) {
   return out;
 }
 
+// The names the twin libraries loaded so far registered, of every concept (load_twin_library)
+std::set<std::string> &twin_names() {
+  static std::set<std::string> names;
+  return names;
+}
+
+// nnrobust::law_in_arena: the law and the parts it names are all this module's, none compiled
+// apart (a user's law, a twin library's component), whose code allocates outside the arena
+bool all_shipped(const nnrobust::LoopSpec &s) {
+  if (is_user_law(s.law)) return false;
+  const std::lock_guard<std::mutex> hold(user_laws_lock);
+  const std::set<std::string> &apart = twin_names();
+  if (apart.count(s.law) || apart.count(s.robust) || apart.count(s.path)) return false;
+  for (const std::string &c : s.criteria)
+    if (apart.count(c)) return false;
+  return true;
+}
+
 std::map<std::string, std::string> load_twin_library(const std::string &path, const std::string &label) {
   using HandOver = const char *(*)(void *);
   struct Shared {
@@ -323,6 +342,11 @@ std::map<std::string, std::string> load_twin_library(const std::string &path, co
     throw std::invalid_argument("it registers nothing: a twin's file includes nnrobust/twin.hpp and names its class "
                                 "with NNROBUST_PATH, NNROBUST_CRITERION, NNROBUST_DISTURBANCE, "
                                 "NNROBUST_ROBUST_TERM or NNROBUST_LAW at namespace scope");
+  {
+    const std::lock_guard<std::mutex> hold(user_laws_lock);
+    for (const auto &[concept, names] : registered)
+      for (const auto &name : split_names(names)) twin_names().insert(name);
+  }
   for (const Shared &share : shares)
     if (registered.count(share.concept)) reinterpret_cast<HandOver>(dlsym(library, share.symbol))(share.table);
   if (registered.count("law"))  // its laws are guarded as a user's law is
@@ -400,6 +424,11 @@ void step_loops(nnrobust::StepPool &pool, std::vector<SteppedLoop *> loops, cons
 
 NB_MODULE(_loop, m) {
   m.doc() = "The compiled closed loop of nnrobust (Pinocchio C++ API).";
+  nnrobust::law_in_arena = &all_shipped;
+  m.def("law_in_arena", [](const nnrobust::LoopSpec &s) { return nnrobust::arena_wrapped() && all_shipped(s); },
+        "Whether a run of this spec takes its compiled law's temporaries from the loop's arena (its step "
+        "then calls no system allocator): the allocator is wrapped and the law and its parts are all the "
+        "module's own.");
   nb::class_<ModelSpec>(m, "ModelSpec", "A Pinocchio model as numbers (nnrobust/compiled.py, model_spec).")
       .def(nb::init<>())
       .def_rw("joint_types", &ModelSpec::joint_types)

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <exception>
 #include <limits>
 #include <memory>
@@ -13,6 +14,7 @@
 #include <thread>
 
 #include "controllers.hpp"
+#include "export/arena.hpp"
 #include "controllers/laws/law.hpp"
 #include "model/nominal.hpp"
 #include "pin_calls.hpp"
@@ -25,7 +27,12 @@ extern "C" __attribute__((weak, visibility("default"))) long nnrobust_allocation
 
 namespace nnrobust {
 
+bool (*law_in_arena)(const LoopSpec &spec) = nullptr;
+
 namespace {
+// The arena of a law's step: the Panda's Slotine-Li, the heaviest shipped step, takes under 64 KiB
+constexpr std::size_t law_arena_bytes = std::size_t{1} << 20;
+
 double seconds_now() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
@@ -99,6 +106,14 @@ SteppedLoop::SteppedLoop(LoadedModel &model, LoadedModel *nominal_model, const L
   if (with_law) {  // none on the hybrid loop, whose law is Python's
     nominal_ = make_nominal(s, nominal_model);
     controller_ = std::make_unique<Controller>(s, *nominal_);
+    out_ = std::make_unique<Output>();
+    out_->tau = Vector::Zero(n);
+    out_->z = Vector::Zero(s.z0.size());
+    out_->signals = Vector::Zero(s.law_signals);
+    if (arena_wrapped() && law_in_arena && law_in_arena(s)) {
+      arena_ = std::make_unique<Arena>(law_arena_bytes);
+      failure_.reserve(1023);
+    }
   }
   plant_ = std::make_unique<Plant>(model, s);
   if (plant_->any_sticky() && !plant_->engine) stick_slip_ = std::make_unique<StickSlipIntegrator>(*plant_, s.v0);
@@ -108,15 +123,80 @@ SteppedLoop::SteppedLoop(LoadedModel &model, LoadedModel *nominal_model, const L
   tau_ = Vector::Zero(n);
   tau_cmd_ = Vector::Zero(n);
   commands_ = Rows::Zero(plant_->delay + 1, n);
+  kinematics_.J6.setZero(6, n);  // record_kinematics's buffers, sized before any step
+  kinematics_.J.setZero(s.m, n);
+  kinematics_.JJt.setZero(s.m, s.m);
+  kinematics_.points.setZero(model.model.njoints, 3);
   if (steps > 0) plant_->sensor.measure(0, q_, v_, qm_, vm_);
   if (s.profile) clock_ = std::make_unique<PartClock>(tr_);
 }
 
 SteppedLoop::~SteppedLoop() = default;
 
-Output SteppedLoop::control() {
+void SteppedLoop::wrong_sizes(Eigen::Index tau, Eigen::Index z, Eigen::Index signals) const {
+  if (tau != q_.size() || z != z_.size())  // a law compiled apart may get them wrong
+    throw std::length_error("the law " + s_.law + " returned " + std::to_string(tau) + " torques and a " +
+                            "state of " + std::to_string(z) + " (needs " + std::to_string(q_.size()) + " and " +
+                            std::to_string(z_.size()) + ")");
+  throw std::length_error("the law " + s_.law + " returned " + std::to_string(signals) +
+                          " signals; its Python twin declares " + std::to_string(s_.law_signals));
+}
+
+const Output &SteppedLoop::control() {
   if (!controller_) throw std::logic_error("SteppedLoop::control: this loop was built without its law");
-  return controller_->compute(time(), qm_, vm_, z_);
+  Output &kept = *out_;
+  if (!arena_) {
+    kept = controller_->compute(time(), qm_, vm_, z_);
+    return kept;
+  }
+  // Every temporary of the law's step comes from the arena and is freed in the step; what leaves
+  // it is copied into the loop's own buffers (sized in the constructor: no allocation) and an
+  // error's text into failure_ (reserved), since nothing of the arena may outlive the step.
+  Eigen::Index sizes[3] = {0, 0, 0};
+  enum { none, invalid, length, logic, other } failed = none;
+  {
+    ArenaScope scope(*arena_);
+    try {
+      const Output out = controller_->compute(time(), qm_, vm_, z_);
+      sizes[0] = out.tau.size(), sizes[1] = out.z.size(), sizes[2] = out.signals.size();
+      if (sizes[0] == kept.tau.size() && sizes[1] == kept.z.size() && sizes[2] == kept.signals.size()) {
+        kept.tau = out.tau;
+        kept.z = out.z;
+        kept.signals = out.signals;
+      }
+    } catch (const std::exception &err) {
+      const std::size_t length_of = std::min(std::strlen(err.what()), failure_.capacity());
+      failure_.assign(err.what(), length_of);
+      failed = dynamic_cast<const std::invalid_argument *>(&err) ? invalid
+               : dynamic_cast<const std::length_error *>(&err)   ? length
+               : dynamic_cast<const std::logic_error *>(&err)    ? logic
+                                                                 : other;
+    } catch (...) {
+      failure_.assign("unknown error");
+      failed = other;
+    }
+  }
+  switch (failed) {
+    case invalid: throw std::invalid_argument(failure_);
+    case length: throw std::length_error(failure_);
+    case logic: throw std::logic_error(failure_);
+    case other: throw std::runtime_error(failure_);
+    case none: break;
+  }
+  if (arena_->live() != 0) {
+    // blocks of the arena are held by the law: never freed to the system allocator, they and the
+    // law are left allocated (a defect of the law, said once; the run ends here)
+    const long held = arena_->live();
+    (void)controller_.release();
+    (void)nominal_.release();
+    (void)arena_.release();
+    throw std::logic_error("the law " + s_.law + " kept " + std::to_string(held) +
+                           " block(s) of memory its step allocated: a law allocates what it keeps from one "
+                           "step to the next in its constructor");
+  }
+  if (sizes[0] != kept.tau.size() || sizes[1] != kept.z.size() || sizes[2] != kept.signals.size())
+    wrong_sizes(sizes[0], sizes[1], sizes[2]);
+  return kept;
 }
 
 bool SteppedLoop::scale_gains(double position, double velocity) {
@@ -152,10 +232,7 @@ void SteppedLoop::end(const std::string &status) {
 
 bool SteppedLoop::advance(const Output &out) {
   if (!running()) throw std::logic_error("SteppedLoop::advance: the run has ended (" + tr_.status + ")");
-  if (out.tau.size() != q_.size() || out.z.size() != z_.size())  // a law compiled apart may get them wrong
-    throw std::length_error("the law " + s_.law + " returned " + std::to_string(out.tau.size()) + " torques and a " +
-                            "state of " + std::to_string(out.z.size()) + " (needs " + std::to_string(q_.size()) +
-                            " and " + std::to_string(z_.size()) + ")");
+  if (out.tau.size() != q_.size() || out.z.size() != z_.size()) wrong_sizes(out.tau.size(), out.z.size(), 0);
   const long k = k_;
   const double t = time();
   Plant &plant = *plant_;
@@ -175,9 +252,7 @@ bool SteppedLoop::advance(const Output &out) {
   tr_.tau_cmd.row(k) = tau_cmd;
   if (z_.size()) tr_.z.row(k) = z_;
   if (controller_) {
-    if (out.signals.size() != s_.law_signals)
-      throw std::length_error("the law " + s_.law + " returned " + std::to_string(out.signals.size()) +
-                              " signals; its Python twin declares " + std::to_string(s_.law_signals));
+    if (out.signals.size() != s_.law_signals) wrong_sizes(q_.size(), z_.size(), out.signals.size());
     tr_.signals.row(k) = out.signals;
   }
   lap(kPartBookkeeping);
@@ -250,24 +325,27 @@ LoopTrace SteppedLoop::finish() {
 LoopTrace run_loop(LoadedModel &model, LoadedModel *nominal_model, const LoopSpec &s, bool (*interrupted)(),
                    const ExternalLaw *external) {
   SteppedLoop loop(model, nominal_model, s, external == nullptr);
+  Output given;  // an external law's
   while (loop.running()) {
     const long k = loop.step();
     if (interrupted && k % 256 == 0 && k > 0 && interrupted()) {
       loop.end("interrupted");
       break;
     }
-    Output out;
+    loop.lap(kPartBookkeeping);  // the poll is the loop's, not the law's
     if (external) {
-      out.z = loop.state();
-      if (!(*external)(loop.time(), loop.measured_q(), loop.measured_v(), loop.state(), out.tau, out.z)) {
+      given.z = loop.state();
+      if (!(*external)(loop.time(), loop.measured_q(), loop.measured_v(), loop.state(), given.tau, given.z)) {
         loop.end("failed");
         break;
       }
+      loop.lap(kPartLaw);
+      loop.advance(given);
     } else {
-      out = loop.control();
+      const Output &out = loop.control();
+      loop.lap(kPartLaw);
+      loop.advance(out);
     }
-    loop.lap(kPartLaw);
-    loop.advance(out);
   }
   return loop.finish();
 }

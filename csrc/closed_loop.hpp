@@ -138,6 +138,7 @@ struct Rk4Work {
 };
 
 struct Output;
+class Arena;
 struct Controller;
 struct Nominal;
 struct Plant;
@@ -167,8 +168,11 @@ class SteppedLoop {
   const LoopTrace &trace() const { return tr_; }
   int signal_count() const { return s_.law_signals; }
   int task_rows() const { return s_.m; }
-  // the compiled law's output at the current instant from the measurement and the state
-  Output control();
+  // the compiled law's output at the current instant from the measurement and the state: the
+  // loop's own buffer, good until the next call. A law whose code and parts are all this
+  // module's (law_in_arena) takes its step's temporaries from the loop's arena, as an exported
+  // law does (csrc/export/arena.hpp): its step calls no system allocator
+  const Output &control();
   // Law::scale_gains of the compiled law (false: it has no position and velocity gains)
   bool scale_gains(double position, double velocity);
   // the learning environment's observation (docs/learning.md): the measured q, q', the desired
@@ -200,6 +204,11 @@ class SteppedLoop {
   long commanded_ = 0;  // commands given so far
   long k_ = 0;
   std::unique_ptr<PartClock> clock_;  // with LoopSpec::profile
+  std::unique_ptr<Arena> arena_;      // the law's step's memory (law_in_arena), else none
+  std::unique_ptr<Output> out_;       // control()'s, sized here: tau n, z, the signals
+  std::string failure_;               // a law's error inside the arena, copied out of it
+  // the sizes a law returned, in the error that refuses them (advance and control)
+  [[noreturn]] void wrong_sizes(Eigen::Index tau, Eigen::Index z, Eigen::Index signals) const;
 
  public:
   // with LoopSpec::profile, charge what ran since the last lap to `part` (run_loop's law)
@@ -207,6 +216,12 @@ class SteppedLoop {
     if (clock_) clock_->lap(part);
   }
 };
+
+// Whether a run's compiled law takes its step's temporaries from the loop's arena: set by the
+// module (bindings.cpp) to "the law and every part it names (robust term, criteria, path) are
+// the module's own", since code compiled apart allocates and frees outside the arena's wrappers.
+// Unset (nullptr): never.
+extern bool (*law_in_arena)(const LoopSpec &spec);
 
 // Runs the loop; `nominal` is the controller's Pinocchio model (LoopSpec.nominal "pinocchio", else
 // unused); `interrupted()` is polled every few hundred steps (Ctrl-C, SIGTERM). With `external`,

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <pinocchio/spatial/explog.hpp>
 
@@ -28,10 +29,17 @@ Controller::~Controller() = default;
 // DampedPseudoInverse.factor
 Matrix Controller::pinv_factor(const Matrix &J, double &lam2) const {
   const Matrix JJt = J * J.transpose();
-  const double sigma_min_sq =
-      std::max(Eigen::SelfAdjointEigenSolver<Matrix>(JJt, Eigen::EigenvaluesOnly).eigenvalues()[0], 0.0);
   const double thr_sq = s.pinv_threshold * s.pinv_threshold;
-  lam2 = sigma_min_sq >= thr_sq ? 0.0 : s.pinv_max_damping * s.pinv_max_damping * (1.0 - sigma_min_sq / thr_sq);
+  // J J^T - threshold^2 I positive definite: sigma_min above the threshold, no damping, and no
+  // eigen-solve needed to say so (the two can disagree only within rounding of the threshold)
+  const Matrix shifted = JJt - thr_sq * Matrix::Identity(J.rows(), J.rows());
+  if (Eigen::LLT<Matrix>(shifted).info() == Eigen::Success) {
+    lam2 = 0.0;
+  } else {
+    const double sigma_min_sq =
+        std::max(Eigen::SelfAdjointEigenSolver<Matrix>(JJt, Eigen::EigenvaluesOnly).eigenvalues()[0], 0.0);
+    lam2 = sigma_min_sq >= thr_sq ? 0.0 : s.pinv_max_damping * s.pinv_max_damping * (1.0 - sigma_min_sq / thr_sq);
+  }
   return (JJt + lam2 * Matrix::Identity(J.rows(), J.rows())).inverse();
 }
 

@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "../closed_loop.hpp"
 #include "../model/nominal.hpp"
 
 namespace nnrobust {
@@ -15,7 +16,7 @@ void DetAtQ::need() {
 
 void DetAtQ::chain(Matrix &points, std::vector<Matrix> &jacobians) { model.chain(q, points, jacobians); }
 
-Criteria::Criteria(const LoopSpec &spec) : weights(spec.criterion_weights) {
+Criteria::Criteria(const LoopSpec &spec) : weights(spec.criterion_weights), JJt_(Matrix::Zero(spec.m, spec.m)) {
   if (spec.criterion_params.size() != spec.criteria.size())
     throw std::invalid_argument("LoopSpec.criterion_params: one table of fields per criterion");
   for (size_t i = 0; i < spec.criteria.size(); ++i) {
@@ -36,7 +37,8 @@ Vector Criteria::gradient(Nominal &model, const Vector &q, const TaskState &ts) 
 }
 
 double Criteria::value(const Vector &q, const Matrix &J, const Matrix &points) const {
-  const double det = det_small(J * J.transpose());
+  JJt_.noalias() = J * J.transpose();
+  const double det = det_small(JJt_);
   double h = 0.0;
   for (size_t c = 0; c < terms.size(); ++c) h += weights[c] * terms[c]->value(q, det, points);
   return h;

@@ -53,6 +53,9 @@ struct Criteria {
   bool empty() const { return terms.empty(); }
   Vector gradient(Nominal &model, const Vector &q, const TaskState &ts) const;
   double value(const Vector &q, const Matrix &J, const Matrix &points) const;
+
+ private:
+  mutable Matrix JJt_;  // value's J J^T, sized m x m here: a recorded step allocates nothing
 };
 
 }  // namespace nnrobust

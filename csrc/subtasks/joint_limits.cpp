@@ -13,8 +13,10 @@ namespace {
 struct JointLimitAvoidance : Criterion {
   Vector lower, upper;
   double margin;
+  mutable Vector b_, db_;  // value's barrier, sized here: a recorded step allocates nothing
   explicit JointLimitAvoidance(const Fields &f)
-      : lower(f.vector("lower")), upper(f.vector("upper")), margin(f.scalar("margin")) {}
+      : lower(f.vector("lower")), upper(f.vector("upper")), margin(f.scalar("margin")),
+        b_(Vector::Zero(lower.size())), db_(Vector::Zero(lower.size())) {}
 
   void barrier(const Vector &q, Vector &b, Vector &db) const {
     b.resize(q.size());
@@ -33,9 +35,8 @@ struct JointLimitAvoidance : Criterion {
     }
   }
   double value(const Vector &q, double, const Matrix &) const override {
-    Vector b, db;
-    barrier(q, b, db);
-    return -b.mean();
+    barrier(q, b_, db_);
+    return -b_.mean();
   }
   Vector gradient(const Vector &q, DetAtQ &) const override {
     Vector b, db;

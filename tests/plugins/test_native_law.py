@@ -268,3 +268,17 @@ def test_a_study_takes_a_cpp_law_through_every_stage(tmp_path):
     if mujoco:
         assert entry["engines"]["mujoco"]["rows"] == 3
     assert report["inputs"][str(tmp_path / "task_pd.cpp")] == file_digest(CPP)
+
+
+def test_a_law_compiled_apart_runs_outside_the_loops_arena():
+    """A shipped law's step takes its temporaries from the loop's arena (no system allocator in
+    it: tests/run/test_loop_profile.py); a user's law, compiled apart without the allocator's
+    wrappers, allocates as it will, and its run is the same run either way."""
+
+    module = compiled._module()
+    shipped = build(load_preset("panda-ellipse").replace(simulation={"duration": 0.05}))
+    assert module.law_in_arena(compiled.loop_spec(shipped, 0.05))
+    setup = build(_config("panda-ellipse", f"{CPP}:TaskPD", duration=0.05))
+    trace = compiled.simulate_compiled(setup, 0.05)  # loads and registers its library
+    assert not module.law_in_arena(compiled.loop_spec(setup, 0.05))
+    assert np.isfinite(trace.tau_cmd).all() and trace.t.size == 50

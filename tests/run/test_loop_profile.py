@@ -75,8 +75,12 @@ def test_the_counter_counts_and_the_loops_own_parts_never_allocate():
     assert 1000 <= result["made"] < 1100  # the 1000 blocks asked for, and what ctypes adds
     for preset, parts in result["rows"].items():
         calls = {name: c for name, (_, c) in parts.items()}
-        assert calls["bookkeeping"] == 0 and calls["measure"] == 0, (preset, calls)
-        assert calls["law"] > 0, (preset, calls)  # the laws still allocate (issue 53: not yet zero)
+        # the law's step takes its temporaries from the loop's arena; the kinematics' buffers are
+        # sized before the first step; the bookkeeping's only calls are the interrupt poll's
+        # (Python's signal check, every 256 steps: 1 of the 500)
+        assert calls["law"] == 0 and calls["record"] == 0 and calls["measure"] == 0, (preset, calls)
+        assert calls["bookkeeping"] * 500 <= 2, (preset, calls)
+        assert calls["plant"] > 0, (preset, calls)  # the stick-slip active set still allocates (issue 53)
 
 
 def _bench_check():
