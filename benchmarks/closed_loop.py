@@ -208,7 +208,8 @@ def main() -> None:
                 flush=True,
             )
     if args.json:
-        write_json_atomic(args.json, {"duration": args.duration, "rows": rows})
+        stamp = {"date": time.strftime("%Y-%m-%d"), "duration": args.duration, "repeats": args.repeats}
+        write_json_atomic(args.json, {**stamp, "rows": rows})
 
 
 if __name__ == "__main__":

@@ -1063,6 +1063,55 @@ def loop_profile() -> str:
     )
 
 
+def _closed_loop_made(data: dict) -> str:
+    command = (
+        f"python benchmarks/closed_loop.py --duration {data['duration']:g} --repeats {data['repeats']} "
+        "--json docs/data/closed_loop.json"
+    )
+    return f"\nMade by `{command}` on {data['date']}, every contender interleaved in one process.\n"
+
+
+def closed_loop() -> str:
+    """docs/compiled.md: every contender of benchmarks/closed_loop.py, µs per 1 ms control step,
+    interleaved in one process."""
+    data = _data("closed_loop")
+    columns = [
+        ("preset", "l", lambda r: r["preset"]),
+        ("contender", "l", lambda r: r["contender"]),
+        ("µs per step", "r", lambda r: f"{1e6 * r['step_seconds']:.1f}"),
+        ("× real time", "r", lambda r: f"{r['realtime_factor']:.1f}"),
+        (
+            "/ C++ floor",
+            "r",
+            lambda r: "–" if r["ratio_to_cpp_floor"] is None else f"{r['ratio_to_cpp_floor']:.1f}",
+        ),
+    ]
+    return _markdown(columns, data["rows"], chaos_note=False) + _closed_loop_made(data)
+
+
+def closed_loop_summary() -> str:
+    """README: the Python and compiled loops against the C++ floor per arm, from
+    docs/data/closed_loop.json."""
+    data = _data("closed_loop")
+    us = {(r["preset"], r["contender"]): 1e6 * r["step_seconds"] for r in data["rows"]}
+    joints = {"paper-ellipse": 3, "panda-ellipse": 7}
+    presets = list(dict.fromkeys(r["preset"] for r in data["rows"]))
+
+    def ratio(p, contender):
+        return f"{us[p, contender] / us[p, 'floor, C++']:.1f}"
+
+    columns = [
+        ("preset", "l", lambda p: f"{p} ({joints.get(p, '?')} joints)"),
+        ("Python loop", "r", lambda p: f"{us[p, 'nnrobust, Python loop']:.0f}"),
+        ("compiled loop", "r", lambda p: f"{us[p, 'nnrobust, compiled loop']:.1f}"),
+        ("C++ floor", "r", lambda p: f"{us[p, 'floor, C++']:.1f}"),
+        ("compiled × real time", "r", lambda p: f"{1e3 / us[p, 'nnrobust, compiled loop']:.0f}"),
+        ("compiled / floor", "r", lambda p: ratio(p, "nnrobust, compiled loop")),
+        ("Slotine–Li / floor", "r", lambda p: ratio(p, "slotine-li, compiled loop")),
+    ]
+    return _markdown(columns, presets, chaos_note=False) + _closed_loop_made(data)
+
+
 def interval_coverage() -> str:
     """docs/robustness.md: the coverage of the paired median's interval, bootstrap against order
     statistics, by N and distribution."""
@@ -1125,6 +1174,8 @@ RENDERERS = {
     "example-study": example_study,
     "serve-misses": serve_misses,
     "loop-profile": loop_profile,
+    "closed-loop": closed_loop,
+    "closed-loop-summary": closed_loop_summary,
 }
 
 
