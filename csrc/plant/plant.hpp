@@ -171,9 +171,10 @@ struct Plant {
     return bias_;
   }
 
-  // Plant.constrained_acceleration: q'' with the held joints' q''_i = 0, and `hold`, the
-  // friction torque holding them (in joint order). The q'' returned is the plant's own buffer
-  // (or Pinocchio's), good until the next call: a caller keeps a copy.
+  // Plant.constrained_acceleration: q'' with the held joints' q''_i = 0, and `hold`'s first
+  // entries, one per held joint, the friction torque holding them (in joint order; `hold` has n
+  // entries, so that a change of modes never resizes it). The q'' returned is the plant's own
+  // buffer (or Pinocchio's), good until the next call: a caller keeps a copy.
   const Vector &constrained_acceleration(double t, const Vector &q, const Vector &v, const Vector &tau,
                                          const Modes &mode, Vector &hold) {
     const int n = static_cast<int>(q.size());
@@ -181,41 +182,50 @@ struct Plant {
     free_.clear();
     held_.clear();
     for (int i = 0; i < n; ++i) (sticky(i) && mode[i] == 0 ? held_ : free_).push_back(i);
-    if (held_.empty()) {
-      hold.resize(0);
-      return pin::aba(m.model, m.data, q, v, net_);
-    }
+    if (hold.size() != n) hold.setZero(n);
+    if (held_.empty()) return pin::aba(m.model, m.data, q, v, net_);
     mass(q);
     r_ = net_ - bias(q, v);
     Vector &a = constrained_;
     a.setZero(n);
     const int nf = static_cast<int>(free_.size());
     if (nf) {
-      Mff_.resize(nf, nf);
-      rf_.resize(nf);
+      FreeBlock &b = free_block(n, nf);
       for (int i = 0; i < nf; ++i) {
-        rf_[i] = r_[free_[i]];
-        for (int j = 0; j < nf; ++j) Mff_(i, j) = M_(free_[i], free_[j]);
+        b.r[i] = r_[free_[i]];
+        for (int j = 0; j < nf; ++j) b.M(i, j) = M_(free_[i], free_[j]);
       }
-      llt_.compute(Mff_);
-      rf_ = llt_.solve(rf_);
-      for (int i = 0; i < nf; ++i) a[free_[i]] = rf_[i];
+      b.llt.compute(b.M);
+      b.llt.solveInPlace(b.r);
+      for (int i = 0; i < nf; ++i) a[free_[i]] = b.r[i];
     }
     const int nh = static_cast<int>(held_.size());
-    hold.resize(nh);
     for (int i = 0; i < nh; ++i) hold[i] = r_[held_[i]] - M_.row(held_[i]).dot(a);
     return a;
   }
 
  private:
+  // constrained_acceleration's free block for nf free joints: M_ff, its right side and factor,
+  // made the first time nf joints are free (an Eigen resize reallocates: one per size, once)
+  struct FreeBlock {
+    Matrix M;
+    Vector r;
+    Eigen::LLT<Matrix> llt;
+    explicit FreeBlock(int nf) : M(Matrix::Zero(nf, nf)), r(Vector::Zero(nf)), llt(nf) {}
+  };
+  FreeBlock &free_block(int n, int nf) {
+    if (free_blocks_.empty()) free_blocks_.resize(n);
+    if (!free_blocks_[nf - 1]) free_blocks_[nf - 1] = std::make_unique<FreeBlock>(nf);
+    return *free_blocks_[nf - 1];
+  }
+  std::vector<std::unique_ptr<FreeBlock>> free_blocks_;
   // workspaces: sized once, so a step allocates nothing here
-  Vector net_, r_, rf_, constrained_;
+  Vector net_, r_, constrained_;
   Vector load_, wrench_, loaded_;  // begin_period's held loads; loaded_: with J^T w
   bool has_wrench_ = false;
   int payload_index_ = -1;
-  Matrix M_, Mff_;
+  Matrix M_;
   Vector q_mass_, q_bias_, v_bias_, bias_;
-  Eigen::LLT<Matrix> llt_;
   std::vector<int> free_, held_;
   Modes signs_;
 };

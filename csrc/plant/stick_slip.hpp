@@ -3,6 +3,7 @@
 #pragma once
 
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include "plant.hpp"
@@ -142,6 +143,30 @@ class StickSlipIntegrator {
   Vector q_end_, v_end_, q_try_, v_try_, g_end_, g_start_, g_try_;
   Vector a1_, a2_, a3_, a4_, v2_, v3_, v4_, q_stage_, hold_;
 
+  // A box QP's work buffers for k joints at rest, and each active set's for nf free ones: Eigen
+  // resizes reallocate, so every size has its own, made in the constructor (a step allocates
+  // none of them; the arithmetic is the one of the fresh temporaries they replace)
+  struct FreeSet {
+    Matrix W;
+    Vector rhs, x;
+    Eigen::PartialPivLU<Matrix> lu;
+    explicit FreeSet(int nf) : W(Matrix::Zero(nf, nf)), rhs(Vector::Zero(nf)), x(Vector::Zero(nf)), lu(nf) {}
+  };
+  struct BoxWork {
+    Matrix W;
+    Vector c, stat, coul, bound, f, target, d, a, Wf;
+    Eigen::VectorXi side;
+    std::vector<int> free, bound_set;
+    std::vector<FreeSet> sets;  // sets[nf - 1]: nf = 1..k
+    explicit BoxWork(int k)
+        : W(Matrix::Zero(k, k)), c(Vector::Zero(k)), stat(c), coul(c), bound(c), f(c), target(c), d(c), a(c), Wf(c),
+          side(Eigen::VectorXi::Zero(k)) {
+      free.reserve(k);
+      bound_set.reserve(k);
+      for (int nf = 1; nf <= k; ++nf) sets.emplace_back(nf);
+    }
+  };
+
   // stick_slip.settle: the modes of the joints at rest (v_i = 0) chosen in place in `md`
   void settle(double t, const Vector &q, const Vector &v, const Vector &tau, Modes &md) {
     const int n = static_cast<int>(q.size());
@@ -157,69 +182,83 @@ class StickSlipIntegrator {
     Minv_ = lu_.inverse();
     Minv_r_ = lu_.solve(r_);
     const int k = static_cast<int>(rest.size());
-    W_.resize(k, k);
-    c_.resize(k);
-    stat_.resize(k);
-    coul_.resize(k);
+    BoxWork &w = box_work(n, k);
     for (int i = 0; i < k; ++i) {
-      c_[i] = Minv_r_[rest[i]];
-      stat_[i] = plant_.friction.stiction[rest[i]];
-      coul_[i] = plant_.friction.coulomb[rest[i]];
-      for (int j = 0; j < k; ++j) W_(i, j) = Minv_(rest[i], rest[j]);
+      w.c[i] = Minv_r_[rest[i]];
+      w.stat[i] = plant_.friction.stiction[rest[i]];
+      w.coul[i] = plant_.friction.coulomb[rest[i]];
+      for (int j = 0; j < k; ++j) w.W(i, j) = Minv_(rest[i], rest[j]);
     }
-    box_qp(W_, c_, stat_, f_, side_);
+    box_qp(w, w.stat);
     slides_.assign(k, false);
-    for (int i = 0; i < k; ++i) slides_[i] = side_[i] != 0;
+    for (int i = 0; i < k; ++i) slides_[i] = w.side[i] != 0;
     auto stiction = [&]() {
       for (int i = 0; i < k; ++i)
-        if (slides_[i] && stat_[i] > coul_[i]) return true;
+        if (slides_[i] && w.stat[i] > w.coul[i]) return true;
       return false;
     };
     while (stiction()) {
-      bound_.resize(k);
-      for (int i = 0; i < k; ++i) bound_[i] = slides_[i] ? coul_[i] : std::numeric_limits<double>::infinity();
-      box_qp(W_, c_, bound_, f_, side_);
+      for (int i = 0; i < k; ++i) w.bound[i] = slides_[i] ? w.coul[i] : std::numeric_limits<double>::infinity();
+      box_qp(w, w.bound);
       bool broke = false;
       for (int i = 0; i < k; ++i)
-        if (!slides_[i] && std::abs(f_[i]) > stat_[i]) slides_[i] = broke = true;
+        if (!slides_[i] && std::abs(w.f[i]) > w.stat[i]) slides_[i] = broke = true;
       if (!broke) break;
     }
-    a_rest_ = c_ - W_ * f_;
-    for (int i = 0; i < k; ++i) md[rest[i]] = (side_[i] != 0 && side_[i] * a_rest_[i] > 0) ? side_[i] : 0;
+    w.Wf.noalias() = w.W * w.f;
+    w.a = w.c - w.Wf;  // the rest's accelerations c - W f
+    for (int i = 0; i < k; ++i) md[rest[i]] = (w.side[i] != 0 && w.side[i] * w.a[i] > 0) ? w.side[i] : 0;
+  }
+
+  // the box QP's buffers for k joints at rest, made the first time k joints rest (once per k,
+  // never again)
+  BoxWork &box_work(int n, int k) {
+    if (box_.empty()) box_.resize(n);
+    if (!box_[k - 1]) box_[k - 1] = std::make_unique<BoxWork>(k);
+    return *box_[k - 1];
   }
 
   // settle's work buffers
   std::vector<int> rest_;
   std::vector<bool> slides_;
-  Vector r_, Minv_r_, c_, stat_, coul_, bound_, f_, a_rest_;
-  Matrix Minv_, W_;
+  Vector r_, Minv_r_;
+  Matrix Minv_;
   Eigen::PartialPivLU<Matrix> lu_;
-  Eigen::VectorXi side_;
+  std::vector<std::unique_ptr<BoxWork>> box_;
 
  public:
-  // stick_slip.box_qp: min 1/2 f'W f - c'f subject to |f_i| <= bound_i, by a primal active set
-  static void box_qp(const Matrix &W, const Vector &c, const Vector &bound, Vector &f, Eigen::VectorXi &side) {
+  // stick_slip.box_qp: min 1/2 f'W f - c'f subject to |f_i| <= bound_i, by a primal active set,
+  // on w's W and c, into w.f and w.side
+  static void box_qp(BoxWork &w, const Vector &bound) {
+    const Matrix &W = w.W;
+    const Vector &c = w.c;
+    Vector &f = w.f;
+    Eigen::VectorXi &side = w.side;
     const int k = static_cast<int>(c.size());
-    f = Vector::Zero(k);
-    side = Eigen::VectorXi::Zero(k);
+    f.setZero();
+    side.setZero();
+    std::vector<int> &fr = w.free, &bd = w.bound_set;
     for (int it = 0; it < 4 * k + 8; ++it) {
-      std::vector<int> fr, bd;
+      fr.clear();
+      bd.clear();
       for (int i = 0; i < k; ++i) (side[i] == 0 ? fr : bd).push_back(i);
-      Vector target = f;
+      Vector &target = w.target;
+      target = f;
       if (!fr.empty()) {
         const int nf = static_cast<int>(fr.size());
-        Matrix Wff(nf, nf);
-        Vector rhs(nf);
+        FreeSet &set = w.sets[nf - 1];
         for (int i = 0; i < nf; ++i) {
           double sum = 0.0;
           for (int j : bd) sum += W(fr[i], j) * f[j];
-          rhs[i] = c[fr[i]] - sum;
-          for (int j = 0; j < nf; ++j) Wff(i, j) = W(fr[i], fr[j]);
+          set.rhs[i] = c[fr[i]] - sum;
+          for (int j = 0; j < nf; ++j) set.W(i, j) = W(fr[i], fr[j]);
         }
-        const Vector x = Wff.partialPivLu().solve(rhs);
-        for (int i = 0; i < nf; ++i) target[fr[i]] = x[i];
+        set.lu.compute(set.W);
+        set.x = set.lu.solve(set.rhs);
+        for (int i = 0; i < nf; ++i) target[fr[i]] = set.x[i];
       }
-      const Vector d = target - f;
+      Vector &d = w.d;
+      d = target - f;
       double step = 1.0;
       int blocking = -1;
       for (int i : fr) {
@@ -237,7 +276,9 @@ class StickSlipIntegrator {
         f[blocking] = side[blocking] * bound[blocking];
         continue;
       }
-      const Vector a = c - W * f;
+      w.Wf.noalias() = W * f;
+      Vector &a = w.a;
+      a = c - w.Wf;
       int worst = -1;
       double worst_value = -std::numeric_limits<double>::infinity();
       for (int i = 0; i < k; ++i) {
