@@ -32,6 +32,7 @@
 #include "plant/disturbance.hpp"
 #include "learning.hpp"
 #include "model/model.hpp"
+#include "model/regressor.hpp"
 #include "serve/virtual_robot.hpp"
 #include "user_code.hpp"
 
@@ -451,6 +452,30 @@ NB_MODULE(_loop, m) {
       .def("bias", &LoadedModel::bias, nb::arg("q"), nb::arg("v"), "V_m(q, v) v + G(q) [N m].")
       .def("frame_jacobian", &LoadedModel::frame_jacobian, nb::arg("q"),
            "6 x n Jacobian of the task frame, world-aligned axes.");
+  m.def(
+      "torque_regressor",
+      [](LoadedModel &model, const nnrobust::Rows &q, const nnrobust::Rows &v, const nnrobust::Rows &a) {
+        const Eigen::Index N = q.rows(), n = model.model.nv, p = 10 * (model.model.njoints - 1);
+        if (q.cols() != model.model.nq || v.rows() != N || a.rows() != N || v.cols() != n || a.cols() != n)
+          throw std::invalid_argument("torque_regressor: q, v and a must be N x " + std::to_string(n) +
+                                      " rows of the same N");
+        nnrobust::Rows out(N * n, p);
+        {
+          nb::gil_scoped_release released;
+          nnrobust::Matrix Y = nnrobust::Matrix::Zero(n, p);
+          nnrobust::Vector qk(q.cols()), vk(n), ak(n);
+          for (Eigen::Index k = 0; k < N; ++k) {
+            qk = q.row(k).transpose();
+            vk = v.row(k).transpose();
+            ak = a.row(k).transpose();
+            nnrobust::joint_torque_regressor(model.model, model.data, qk, vk, ak, Y);
+            out.middleRows(k * n, n) = Y;
+          }
+        }
+        return out;
+      },
+      "The joint torque regressor Y(q, q', q'') of N states (rows of q, v, a), stacked: (N n) x 10 n, "
+      "Y phi = M(q) q'' + N(q, q') (nnrobust.model.regressor.torque_regressor's twin, one C++ call).");
   nb::class_<LoopSpec> spec(m, "LoopSpec", "Everything one compiled run needs (nnrobust/compiled.py).");
   spec.def(nb::init<>());
 #define FIELD(name) spec.def_rw(#name, &LoopSpec::name)

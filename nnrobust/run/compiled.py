@@ -99,6 +99,27 @@ def load_model(model: pin.Model, frame: str):
     return _module().LoadedModel(model_spec(model, frame))
 
 
+def torque_regressor_of(model: pin.Model):
+    """A function (q, q', q'') of N samples -> Y, N x n x 10 n, in one C++ call per batch
+    (csrc/model/regressor.hpp): the twin of :func:`nnrobust.model.regressor.torque_regressor`,
+    for identification's rows. None when the compiled loop is not built or the model has a joint
+    it has no twin of.
+    """
+    import numpy as np
+
+    joints = (model.joints[j].shortname() for j in range(1, model.njoints))
+    if not available() or any(kind not in COMPILED_JOINTS for kind in joints):
+        return None
+    loaded = load_model(model, model.frames[model.nframes - 1].name)
+    regressor = _module().torque_regressor
+
+    def rows(q, v, a):
+        q, v, a = (np.ascontiguousarray(x, dtype=float).reshape(len(q), -1) for x in (q, v, a))
+        return regressor(loaded, q, v, a).reshape(len(q), model.nv, -1)
+
+    return rows
+
+
 # ---- the compiled closed loop ---------------------------------------------------------------------
 
 

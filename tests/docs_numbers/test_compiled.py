@@ -1,6 +1,7 @@
-"""The timings docs/compiled.md, docs/benchmarks.md, docs/plant.md and README quote in prose: each
-against docs/data/closed_loop.json (benchmarks/closed_loop.py) or docs/data/loop_profile.json
-(benchmarks/loop_profile.py), the runs its tables are rendered from."""
+"""The timings docs/compiled.md, docs/benchmarks.md, docs/plant.md, docs/identification.md and
+README quote in prose: each against docs/data/closed_loop.json (benchmarks/closed_loop.py),
+docs/data/loop_profile.json (benchmarks/loop_profile.py) or docs/data/identify_rows.json
+(benchmarks/identify_rows.py), the runs its tables are rendered from."""
 
 from tests.docs_numbers.common import quoted_figures_test
 
@@ -153,5 +154,20 @@ QUOTES: list[tuple] = [
     ("README.md", r"\(paper arm\) and (\d+)× \(Panda\) real time", "closed_loop", _realtime(Q, MJ), 1.0),
 ]
 
+
+def _rows(contender, scale=1.0):
+    """µs per sample of one contender of identify_rows.json, times ``scale``."""
+    return lambda d: (
+        scale * next(r["us_per_sample"] for r in d["rows"] if r["contender"].startswith(contender))
+    )
+
+
+ID = "docs/identification.md"
+QUOTES += [
+    (ID, r"interleaved: ([\d.]+) µs per sample\s+in C\+\+", "identify_rows", _rows("C++"), 1.0),
+    (ID, r"in C\+\+ against ([\d.]+) µs from Python", "identify_rows", _rows("Python"), 1.0),
+    (ID, r"log's rows take ([\d.]+) s where", "identify_rows", _rows("C++", 3.6), 1.0),
+    (ID, r"where they took\s+([\d.]+) s", "identify_rows", _rows("Python", 3.6), 1.0),
+]
 
 test_every_quoted_figure_matches_its_data = quoted_figures_test(QUOTES)

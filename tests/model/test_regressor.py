@@ -49,6 +49,24 @@ def test_the_regressor_times_the_parameters_is_the_inverse_dynamics(source, task
     assert base.rank == int(np.sum(s > 1e-8 * s[0]))
 
 
+@pytest.mark.parametrize(
+    "source, task", [("three_link_planar", "planar"), ("panda", "position"), ("ur5", "position")]
+)
+def test_the_compiled_regressor_rows_are_pinocchios(source, task):
+    """identify's rows in one C++ call per batch (csrc/model/regressor.hpp) are
+    pinocchio.computeJointTorqueRegressor's, state by state."""
+    from nnrobust.run import compiled
+
+    if not compiled.available():
+        pytest.skip(compiled.unavailable_reason())
+    model = load_robot(source, task=task).model
+    q, v, a = _states(model.nv, count=50, seed=3)
+    rows = compiled.torque_regressor_of(model)(q, v, a)
+    reference = torque_regressor(model, q, v, a)
+    assert rows.shape == reference.shape
+    assert np.abs(rows - reference).max() <= 1e-12 * max(1.0, np.abs(reference).max())
+
+
 def test_the_base_parameters_give_the_paper_closed_forms_torques():
     """For random links (masses, centres of mass on the link axes, inertias), the closed form of
     the paper (from_links) and Y_b beta of the base parameters give the same torques; the planar

@@ -3,9 +3,9 @@
 // explicit Euler over the period and projected (pseudo-inertias floored; the closed form's box).
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
-#include <pinocchio/algorithm/regressor.hpp>
 
 #include "../../model/nominal.hpp"
+#include "../../model/regressor.hpp"
 #include "../../pin_calls.hpp"
 #include "law.hpp"
 
@@ -54,25 +54,9 @@ struct SlotineLi : Law {
     velocity_.setZero(n);
   }
 
-  // pinocchio.computeJointTorqueRegressor(q, v, a), from calls the pin wheel's library instantiates
-  // (instantiating that algorithm here took this unit's compiler to 2.2 GB): body i's regressor
-  // bodyRegressor(v_i, a_i + g_i) (local frame, a_i with the base's -g), moved to the world frame,
-  // gives joint j's row block J_j^T oMi* Y_i for every joint j on the path from i to the base.
+  // pinocchio.computeJointTorqueRegressor(q, v, a) into Y (csrc/model/regressor.hpp)
   void joint_torque_regressor(const Vector &q, const Vector &v, const Vector &a, Matrix &Y) const {
-    const pinocchio::Model &model = pin_model->m.model;
-    pinocchio::Data &data = pin_model->m.data;
-    pin::forwardKinematics(model, data, q, v, a);
-    const pin::Matrix6x &J = pin::computeJointJacobians(model, data);
-    const pinocchio::Motion base(-model.gravity.linear(), Vector3d::Zero());  // a_gf[0] = -g
-    Y.setZero();
-    for (int i = 1; i < model.njoints; ++i) {
-      const pinocchio::Motion a_gf = data.a[i] + data.oMi[i].actInv(base);
-      const Eigen::Matrix<double, 6, 10> world =
-          data.oMi[i].toDualActionMatrix() * pinocchio::bodyRegressor(data.v[i], a_gf);
-      for (int j = i; j > 0; j = static_cast<int>(model.parents[j]))
-        Y.block(model.idx_vs[j], 10 * (i - 1), model.nvs[j], 10).noalias() =
-            J.middleCols(model.idx_vs[j], model.nvs[j]).transpose() * world;
-    }
+    nnrobust::joint_torque_regressor(pin_model->m.model, pin_model->m.data, q, v, a, Y);
   }
 
   // Y with Y theta = M(q) a_r + C(q, v) v_r + G(q) (C(q, v_r) v_r when not exact), SlotineLi.regressor;

@@ -104,12 +104,15 @@ def regressor_rows(
     per batch, ``used`` false where a joint sticks (|q'| < ``band``, with Coulomb friction in the
     layout): there its row is no equation.
     """
+    from ...run.compiled import torque_regressor_of
+
     q, dq, ddq, tau = (x[segment] for x in (states.q, states.dq, states.ddq, states.tau))
+    inertial = torque_regressor_of(model) or (lambda *x: torque_regressor(model, *x))  # C++, else pin's
     for start in range(0, len(q), BATCH):
         part = slice(start, start + BATCH)
         Y = np.concatenate(
             [
-                torque_regressor(model, q[part], dq[part], ddq[part]),
+                inertial(q[part], dq[part], ddq[part]),
                 friction_regressor(layout, dq[part], ddq[part]),
             ],
             axis=2,
