@@ -179,7 +179,8 @@ class StickSlipIntegrator {
     const Matrix &M = plant_.mass(q);  // the plant's: net_torque and bias leave it alone
     r_ = plant_.net_torque(t, q, v, tau, md) - plant_.bias(q, v);
     lu_.compute(M);
-    Minv_ = lu_.inverse();
+    if (identity_.rows() != n) identity_.setIdentity(n, n);
+    Minv_ = lu_.solve(identity_);  // inverse(), without the identity's temporary
     Minv_r_ = lu_.solve(r_);
     const int k = static_cast<int>(rest.size());
     BoxWork &w = box_work(n, k);
@@ -222,7 +223,7 @@ class StickSlipIntegrator {
   std::vector<int> rest_;
   std::vector<bool> slides_;
   Vector r_, Minv_r_;
-  Matrix Minv_;
+  Matrix Minv_, identity_;
   Eigen::PartialPivLU<Matrix> lu_;
   std::vector<std::unique_ptr<BoxWork>> box_;
 
