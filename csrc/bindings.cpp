@@ -25,7 +25,6 @@
 #include <string>
 
 #include "closed_loop.hpp"
-#include "export/arena.hpp"
 #include "controllers.hpp"
 #include "controllers/laws/law.hpp"
 #include "controllers/robust_term.hpp"
@@ -426,7 +425,7 @@ void step_loops(nnrobust::StepPool &pool, std::vector<SteppedLoop *> loops, cons
 NB_MODULE(_loop, m) {
   m.doc() = "The compiled closed loop of nnrobust (Pinocchio C++ API).";
   nnrobust::law_in_arena = &all_shipped;
-  m.def("law_in_arena", [](const nnrobust::LoopSpec &s) { return nnrobust::arena_wrapped() && all_shipped(s); },
+  m.def("law_in_arena", &nnrobust::law_runs_in_arena,
         "Whether a run of this spec takes its compiled law's temporaries from the loop's arena (its step "
         "then calls no system allocator): the allocator is wrapped and the law and its parts are all the "
         "module's own.");

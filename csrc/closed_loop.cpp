@@ -29,6 +29,8 @@ namespace nnrobust {
 
 bool (*law_in_arena)(const LoopSpec &spec) = nullptr;
 
+bool law_runs_in_arena(const LoopSpec &spec) { return arena_wrapped() && law_in_arena && law_in_arena(spec); }
+
 namespace {
 // The arena of a law's step, as an exported law's (csrc/export/law_api.cpp): a request it cannot
 // hold goes to the system allocator, which the allocation counter then shows (loop_profile.py)
@@ -111,7 +113,7 @@ SteppedLoop::SteppedLoop(LoadedModel &model, LoadedModel *nominal_model, const L
     out_->tau = Vector::Zero(n);
     out_->z = Vector::Zero(s.z0.size());
     out_->signals = Vector::Zero(s.law_signals);
-    if (arena_wrapped() && law_in_arena && law_in_arena(s)) {
+    if (law_runs_in_arena(s)) {
       arena_ = std::make_unique<Arena>(law_arena_bytes);
       failure_.reserve(1023);
     }

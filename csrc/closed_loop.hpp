@@ -223,6 +223,10 @@ class SteppedLoop {
 // Unset (nullptr): never.
 extern bool (*law_in_arena)(const LoopSpec &spec);
 
+// Whether a run of `spec` takes its law's temporaries from the arena: the allocator is wrapped
+// (arena_wrapped) and law_in_arena, set, says the law and its parts allow it.
+bool law_runs_in_arena(const LoopSpec &spec);
+
 // Runs the loop; `nominal` is the controller's Pinocchio model (LoopSpec.nominal "pinocchio", else
 // unused); `interrupted()` is polled every few hundred steps (Ctrl-C, SIGTERM). With `external`,
 // that law replaces the compiled controller (none is built) and the run ends with status

@@ -3,11 +3,11 @@
 #include <algorithm>
 #include <stdexcept>
 
-#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <pinocchio/spatial/explog.hpp>
 
 #include "controllers/laws/law.hpp"
+#include "spectral.hpp"
 
 namespace nnrobust {
 
@@ -30,10 +30,7 @@ Controller::~Controller() = default;
 Matrix Controller::pinv_factor(const Matrix &J, double &lam2) const {
   const Matrix JJt = J * J.transpose();
   const double thr_sq = s.pinv_threshold * s.pinv_threshold;
-  // J J^T - threshold^2 I positive definite: sigma_min above the threshold, no damping, and no
-  // eigen-solve needed to say so (the two can disagree only within rounding of the threshold)
-  const Matrix shifted = JJt - thr_sq * Matrix::Identity(J.rows(), J.rows());
-  if (Eigen::LLT<Matrix>(shifted).info() == Eigen::Success) {
+  if (eigenvalues_above(JJt, thr_sq)) {  // sigma_min above the threshold: no damping, no eigen-solve
     lam2 = 0.0;
   } else {
     const double sigma_min_sq =

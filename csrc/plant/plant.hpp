@@ -16,6 +16,7 @@
 #include <Eigen/Cholesky>
 
 #include "../closed_loop.hpp"
+#include "../per_size.hpp"
 #include "../pin_calls.hpp"
 #include "disturbance.hpp"
 #include "friction.hpp"
@@ -190,7 +191,7 @@ struct Plant {
     a.setZero(n);
     const int nf = static_cast<int>(free_.size());
     if (nf) {
-      FreeBlock &b = free_block(n, nf);
+      FreeBlock &b = free_blocks_.at(n, nf);
       for (int i = 0; i < nf; ++i) {
         b.r[i] = r_[free_[i]];
         for (int j = 0; j < nf; ++j) b.M(i, j) = M_(free_[i], free_[j]);
@@ -205,20 +206,14 @@ struct Plant {
   }
 
  private:
-  // constrained_acceleration's free block for nf free joints: M_ff, its right side and factor,
-  // made the first time nf joints are free (an Eigen resize reallocates: one per size, once)
+  // constrained_acceleration's free block for nf free joints: M_ff, its right side and factor
   struct FreeBlock {
     Matrix M;
     Vector r;
     Eigen::LLT<Matrix> llt;
     explicit FreeBlock(int nf) : M(Matrix::Zero(nf, nf)), r(Vector::Zero(nf)), llt(nf) {}
   };
-  FreeBlock &free_block(int n, int nf) {
-    if (free_blocks_.empty()) free_blocks_.resize(n);
-    if (!free_blocks_[nf - 1]) free_blocks_[nf - 1] = std::make_unique<FreeBlock>(nf);
-    return *free_blocks_[nf - 1];
-  }
-  std::vector<std::unique_ptr<FreeBlock>> free_blocks_;
+  PerSize<FreeBlock> free_blocks_;
   // workspaces: sized once, so a step allocates nothing here
   Vector net_, r_, constrained_;
   Vector load_, wrench_, loaded_;  // begin_period's held loads; loaded_: with J^T w

@@ -3,7 +3,6 @@
 #pragma once
 
 #include <limits>
-#include <memory>
 #include <vector>
 
 #include "plant.hpp"
@@ -143,9 +142,8 @@ class StickSlipIntegrator {
   Vector q_end_, v_end_, q_try_, v_try_, g_end_, g_start_, g_try_;
   Vector a1_, a2_, a3_, a4_, v2_, v3_, v4_, q_stage_, hold_;
 
-  // A box QP's work buffers for k joints at rest, and each active set's for nf free ones: Eigen
-  // resizes reallocate, so every size has its own, made in the constructor (a step allocates
-  // none of them; the arithmetic is the one of the fresh temporaries they replace)
+  // A box QP's work buffers for k joints at rest, and each active set's for nf free ones, one per
+  // size (per_size.hpp; the arithmetic is the one of the fresh temporaries they replace)
   struct FreeSet {
     Matrix W;
     Vector rhs, x;
@@ -157,13 +155,13 @@ class StickSlipIntegrator {
     Vector c, stat, coul, bound, f, target, d, a, Wf;
     Eigen::VectorXi side;
     std::vector<int> free, bound_set;
-    std::vector<FreeSet> sets;  // sets[nf - 1]: nf = 1..k
+    PerSize<FreeSet> sets;
     explicit BoxWork(int k)
         : W(Matrix::Zero(k, k)), c(Vector::Zero(k)), stat(c), coul(c), bound(c), f(c), target(c), d(c), a(c), Wf(c),
           side(Eigen::VectorXi::Zero(k)) {
       free.reserve(k);
       bound_set.reserve(k);
-      for (int nf = 1; nf <= k; ++nf) sets.emplace_back(nf);
+      for (int nf = 1; nf <= k; ++nf) sets.at(k, nf);  // every active set's, with the QP's
     }
   };
 
@@ -183,7 +181,7 @@ class StickSlipIntegrator {
     Minv_ = lu_.solve(identity_);  // inverse(), without the identity's temporary
     Minv_r_ = lu_.solve(r_);
     const int k = static_cast<int>(rest.size());
-    BoxWork &w = box_work(n, k);
+    BoxWork &w = box_.at(n, k);
     for (int i = 0; i < k; ++i) {
       w.c[i] = Minv_r_[rest[i]];
       w.stat[i] = plant_.friction.stiction[rest[i]];
@@ -211,21 +209,13 @@ class StickSlipIntegrator {
     for (int i = 0; i < k; ++i) md[rest[i]] = (w.side[i] != 0 && w.side[i] * w.a[i] > 0) ? w.side[i] : 0;
   }
 
-  // the box QP's buffers for k joints at rest, made the first time k joints rest (once per k,
-  // never again)
-  BoxWork &box_work(int n, int k) {
-    if (box_.empty()) box_.resize(n);
-    if (!box_[k - 1]) box_[k - 1] = std::make_unique<BoxWork>(k);
-    return *box_[k - 1];
-  }
-
   // settle's work buffers
   std::vector<int> rest_;
   std::vector<bool> slides_;
   Vector r_, Minv_r_;
   Matrix Minv_, identity_;
   Eigen::PartialPivLU<Matrix> lu_;
-  std::vector<std::unique_ptr<BoxWork>> box_;
+  PerSize<BoxWork> box_;  // per count of joints at rest
 
  public:
   // stick_slip.box_qp: min 1/2 f'W f - c'f subject to |f_i| <= bound_i, by a primal active set,
@@ -247,7 +237,7 @@ class StickSlipIntegrator {
       target = f;
       if (!fr.empty()) {
         const int nf = static_cast<int>(fr.size());
-        FreeSet &set = w.sets[nf - 1];
+        FreeSet &set = w.sets.at(k, nf);
         for (int i = 0; i < nf; ++i) {
           double sum = 0.0;
           for (int j : bd) sum += W(fr[i], j) * f[j];

@@ -2,7 +2,6 @@
 
 #include <stdexcept>
 
-#include "../closed_loop.hpp"
 #include "../model/nominal.hpp"
 
 namespace nnrobust {

@@ -1,12 +1,12 @@
 // SlotineLi (nnrobust/controllers/laws/slotine_li.py): task-space Slotine–Li adaptive control,
 // Y(q, q', q'_r, q''_r) theta-hat - K_D s (K_D unset: K_D_step / T M-hat(q)), theta-hat advanced by
 // explicit Euler over the period and projected (pseudo-inertias floored; the closed form's box).
-#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
 #include "../../model/nominal.hpp"
 #include "../../model/regressor.hpp"
 #include "../../pin_calls.hpp"
+#include "../../spectral.hpp"
 #include "law.hpp"
 
 namespace nnrobust {
@@ -106,11 +106,9 @@ struct SlotineLi : Law {
     double lowest = INFINITY;
     for (int i = 0; i < theta.size(); i += 10) {
       const Eigen::Matrix4d P = pseudo_inertia(theta.segment(i, 10));
-      // P - lowest I positive definite: this body's least eigenvalue is above the least so far
-      // (a 4 x 4 Cholesky instead of its eigenvalues; a tie within rounding decides nothing)
-      if (std::isfinite(lowest) &&
-          Eigen::LLT<Eigen::Matrix4d>(P - lowest * Eigen::Matrix4d::Identity()).info() == Eigen::Success)
-        continue;
+      // this body's least eigenvalue above the least so far: it is not the least (a tie within
+      // rounding decides nothing)
+      if (std::isfinite(lowest) && eigenvalues_above(P, lowest)) continue;
       lowest = std::min(lowest, Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d>(P, Eigen::EigenvaluesOnly).eigenvalues()[0]);
     }
     return lowest;
@@ -122,11 +120,9 @@ struct SlotineLi : Law {
     Vector out = theta;
     for (int k = 0, i = 0; i < theta.size(); ++k, i += 10) {
       const Eigen::Matrix4d P0 = pseudo_inertia(theta.segment(i, 10));
-      // P - floor I positive definite: every eigenvalue above the floor, nothing to project (a
-      // Cholesky factorisation of 4 x 4, where the eigen-decomposition below costs ten times it;
-      // the two can disagree only within rounding of the floor, where the decomposition decides)
-      if (Eigen::LLT<Eigen::Matrix4d>(P0 - pseudo_floor[k] * Eigen::Matrix4d::Identity()).info() == Eigen::Success)
-        continue;
+      // every eigenvalue above the floor: nothing to project, and no decomposition (within
+      // rounding of the floor, the decomposition below decides)
+      if (eigenvalues_above(P0, pseudo_floor[k])) continue;
       const Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d> eig(P0);
       if (eig.eigenvalues()[0] >= pseudo_floor[k]) continue;
       const Eigen::Vector4d w = eig.eigenvalues().cwiseMax(pseudo_floor[k]);
