@@ -112,6 +112,7 @@ docs-data: $(VENV)/.installed-test
 	  https://github.com/marcocognetti/FrankaEmikaPandaDynModel $(OUT)/FrankaEmikaPandaDynModel
 	$(BIN)/python benchmarks/identify_panda.py $(OUT)/FrankaEmikaPandaDynModel --json $(DATA)/identify_panda.json
 	$(BIN)/python benchmarks/identify_calibration.py --json $(DATA)/identify_calibration.json
+	$(BIN)/python benchmarks/identify_walkthrough.py --json $(DATA)/identify_walkthrough.json
 	$(BIN)/python benchmarks/plant_convergence.py --json $(DATA)/plant_convergence.json
 	$(BIN)/python benchmarks/adaptive_step.py --json $(DATA)/adaptive_step.json
 	$(BIN)/python benchmarks/interval_coverage.py --json $(DATA)/interval_coverage.json --figure docs/img/interval_coverage.png

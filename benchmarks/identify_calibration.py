@@ -3,7 +3,8 @@ each of a different true robot (masses and inertias up to 20 % and centres of ma
 the URDF's, friction drawn per joint) following a different finite-Fourier trajectory, with the
 faults of a real log (white torque noise, quantisation, a known 2 ms torque delay, jittered
 stamps, 2 % stale samples); each identified by the whole command (``identify``), its 95 % region
-checked for the truth.
+checked for the truth, and so is its box (``box.toml``: the region's principal coordinates, each
+within +-c, nnrobust.model.region).
 
     python benchmarks/identify_calibration.py --json docs/data/identify_calibration.json
 
@@ -24,6 +25,7 @@ import numpy as np
 
 from nnrobust.model.loading import load_robot
 from nnrobust.model.perturbation import perturb_inertias
+from nnrobust.model.region import region_from_fit
 from nnrobust.model.regressor import ParameterLayout, base_parameters, inertial_vector
 from nnrobust.plant.friction import Friction
 from nnrobust.run.results import write_json_atomic
@@ -64,11 +66,18 @@ def main() -> None:
         truth = P @ np.concatenate([inertial_vector(true), friction.viscous, friction.coulomb])
         d = truth - beta
         distance2 = float(d @ np.linalg.solve(covariance, d))
+        # the box (nnrobust.model.region): the region's principal coordinates, each within +-c
+        box = region_from_fit(
+            ROBOT, layout, [], LEVEL, "", beta, covariance, np.zeros((len(beta), 0)), np.zeros(0)
+        )
+        worst_z = float(np.max(np.abs(box.coordinates(truth))))
         held = np.array(summary["residuals"]["physical"]["held_out_rms"])
         rows.append(
             {
                 "inside": distance2 <= summary["confidence"]["radius2"],
                 "distance2": distance2,
+                "inside_box": worst_z <= box.half_width,
+                "box_coordinate": worst_z,
                 "physical": summary["checks"]["physical"],
                 "held_out_over_floor": float(np.max(held / floor)),
                 "white": summary["confidence"]["white"],
@@ -77,11 +86,13 @@ def main() -> None:
         if (s + 1) % 10 == 0:
             print(f"{s + 1}/{args.logs} logs, {time.perf_counter() - start:.0f} s", flush=True)
     coverage = np.mean([r["inside"] for r in rows])
+    box_coverage = np.mean([r["inside_box"] for r in rows])
     physical = np.mean([r["physical"] for r in rows])
     worst = max(r["held_out_over_floor"] for r in rows)
     p = len(beta)
     print(f"\n{args.logs} logs of {ROBOT} ({p} base parameters), {DURATION:g} s each")
     print(f"{100 * LEVEL:g} % region holds the truth in {100 * coverage:.0f} % of the logs")
+    print(f"{100 * LEVEL:g} % box holds the truth in {100 * box_coverage:.0f} % of the logs")
     print(f"median distance^2 / p {np.median([r['distance2'] for r in rows]) / p:.3f} (chi2_p's: about 1)")
     print(f"physical checks passed: {100 * physical:.0f} %")
     print(f"held-out residual RMS / noise floor, worst joint of the worst log: {worst:.3f}")
@@ -95,6 +106,7 @@ def main() -> None:
                 "level": LEVEL,
                 "parameters": p,
                 "coverage": float(coverage),
+                "box_coverage": float(box_coverage),
                 "physical_share": float(physical),
                 "worst_held_out_over_floor": worst,
                 "noise_floor": float(floor),

@@ -23,7 +23,10 @@ def identify_arguments(parser: argparse.ArgumentParser) -> None:
         "--robot", required=True, help="the robot: a URDF file or a robot's name (nnrobust robots)"
     )
     parser.add_argument(
-        "--out", required=True, help="folder to write (nominal.json, identification.json, parameters.csv)"
+        "--out",
+        required=True,
+        help="folder to write (nominal.json, box.toml, region.json, identification.json, parameters.csv, "
+        "report.html)",
     )
     parser.add_argument(
         "--locked-joints",
@@ -143,6 +146,12 @@ def cmd_identify(args) -> int:
         print(
             f"physical: yes (least M(q) eigenvalue {checks['mass_matrix_least_eigenvalue']:.3g}); wrote "
             f'{model}: use it as [nominal] kind = "identified", file = "{model}"'
+        )
+        box = model.parent / "box.toml"
+        print(
+            f"wrote {box}: the plants of the {100 * region['level']:g} % box ({len(summary['parameters'])} "
+            f"coordinates, each within +-{region['box_half_width']:.4g} standard deviations): use it as "
+            f'box = "{box}" in a sweep, falsify or study file'
         )
     return 0
 

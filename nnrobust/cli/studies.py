@@ -231,6 +231,10 @@ def cmd_study(args) -> int:
         for name, case in report["cases"].items():
             for controller, reason in case["not_kept"].items():
                 print(f"{name:24s} {controller:18s} not kept: {reason}")
+        if report.get("composed_claim"):
+            from ..studies.study.html import composed_text
+
+            print(f"composed claim: {composed_text(report['composed_claim'])}")
         for warning in report.get("warnings", []):
             print(f"warning: {warning}", file=sys.stderr)
         print(f"report in {args.out}/report.html and {args.out}/report.json", file=sys.stderr)

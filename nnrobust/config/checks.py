@@ -137,8 +137,10 @@ FILLED_LISTS = {
     ("nominal", "factors"): 1.0,
     ("plant", "joint_friction_scales"): 1.0,
     ("plant", "joint_disturbance_scales"): 1.0,
+    ("plant", "region_coordinates"): 0.0,
 }
-"""List keys whose entries not given are known (a factor not given is 1): set entry by entry."""
+"""List keys whose entries not given are known (a factor not given is 1, a box's coordinate 0):
+set entry by entry."""
 
 
 def validate(config: ExperimentConfig) -> None:

@@ -353,6 +353,10 @@ def _file_data(path: Path, text: str, depth: int = 0, read: list[Path] | None = 
     if isinstance(nominal, dict) and isinstance(nominal.get("file"), str) and nominal["file"].strip():
         if not Path(nominal["file"]).is_absolute():  # an identified model, read from the file's folder
             nominal["file"] = str((folder / nominal["file"]).resolve())
+    plant = data.get("plant")
+    if isinstance(plant, dict) and isinstance(plant.get("region"), str) and plant["region"].strip():
+        if not Path(plant["region"]).is_absolute():  # an identified box, read from the file's folder
+            plant["region"] = str((folder / plant["region"]).resolve())
     controller = data.get("controller")
     if isinstance(controller, dict):  # a policy's ONNX file, read from the file's folder
         policy = policy_file(controller.get("kind"), controller.get("params"))
@@ -409,6 +413,8 @@ def user_files(config: ExperimentConfig) -> dict[str, str]:
         out["policy"] = policy
     if config.nominal.kind == "identified" and config.nominal.file:
         out["identified model"] = config.nominal.file
+    if config.plant.region:
+        out["identified box"] = config.plant.region
     return out
 
 

@@ -243,6 +243,46 @@ def pseudo_inertia(phi10: np.ndarray) -> np.ndarray:
     return J
 
 
+def pseudo_inertia_expression(phi10, cp):
+    """:func:`pseudo_inertia` as a cvxpy expression (``cp``: the cvxpy module)."""
+    m, hx, hy, hz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz = (phi10[k] for k in range(10))
+    half = (Ixx + Iyy + Izz) / 2
+    return cp.bmat(
+        [
+            [half - Ixx, -Ixy, -Ixz, hx],
+            [-Ixy, half - Iyy, -Iyz, hy],
+            [-Ixz, -Iyz, half - Izz, hz],
+            [hx, hy, hz, m],
+        ]
+    )
+
+
+STRICT_MARGIN = 1e-6
+"""A body's pseudo-inertia eigenvalues are raised to at least this share of its largest."""
+
+
+def strictly_physical(phi10: np.ndarray) -> np.ndarray:
+    """The body's ten parameters with its pseudo-inertia's eigenvalues raised to at least
+    :data:`STRICT_MARGIN` of the largest (a change within a solver's tolerance): J > 0, so the
+    body's mass is positive and its inertia about the centre of mass positive definite, with the
+    triangle inequalities strict.
+    """
+    J = pseudo_inertia(phi10)
+    values, vectors = np.linalg.eigh(J)
+    floor = STRICT_MARGIN * max(values[-1], 1e-12)
+    if values[0] >= floor:
+        return phi10
+    return from_pseudo_inertia((vectors * np.maximum(values, floor)) @ vectors.T)
+
+
+def typical_sizes(layout: ParameterLayout) -> np.ndarray:
+    """A typical magnitude of each parameter of ``layout`` (kg, kg m, kg m^2, N m s/rad, N m,
+    kg m^2): the scale of the physical fit's pull and of a region's parameter metric.
+    """
+    body = np.array([1.0, 0.1, 0.1, 0.1] + [0.01] * 6)
+    return np.concatenate([np.tile(body, layout.n), np.full(layout.size - 10 * layout.n, 0.1)])
+
+
 def body_problems(model: pin.Model, rel_tol: float = 1e-9) -> list[str]:
     """What is not physical in each moving body (mass <= 0, an inertia about the centre of mass
     not positive definite or breaking the triangle inequalities), one line each.

@@ -19,6 +19,8 @@ from ..core.arrays import joint_vector, padded, per_joint
 from ..core.exceptions import ConfigError
 from ..model import PinocchioModel
 from ..model.ik import finite_limits
+from ..model.region import read_region
+from ..model.regressor import with_inertial_vector
 from .custom import build_disturbance as build_custom_disturbance
 from .disturbance import DISTURBANCE_KINDS, Disturbance, ScaledDisturbance, SinusoidalDisturbance
 from .friction import Friction
@@ -106,11 +108,13 @@ def build_plant(
     """
     n = robot.nq
     tau_ref = functools.cache(lambda: torque_scale(robot))  # once (with its warning), if asked for
-    base = (
-        scaled_friction(robot, pc.viscous_level, pc.coulomb_level, tau_ref())
-        if pc.friction == "scaled"
-        else Friction(robot.viscous_friction, robot.coulomb_friction)
-    )
+    identified = identified_plant(pc, robot)
+    if identified is not None:
+        base = identified[1]
+    elif pc.friction == "scaled":
+        base = scaled_friction(robot, pc.viscous_level, pc.coulomb_level, tau_ref())
+    else:
+        base = Friction(robot.viscous_friction, robot.coulomb_friction)
     scale = pc.friction_scale * _joint_scales("plant.joint_friction_scales", pc.joint_friction_scales, n)
     coulomb = scale * joint_vector("plant.coulomb_friction", pc.coulomb_friction, n, base.coulomb)
     friction = Friction(
@@ -141,7 +145,7 @@ def build_plant(
             disturbance.omega * pc.disturbance_omega_scale,
             disturbance.phase + pc.disturbance_phase_shift,
         )
-    true = true_model(pc, robot)
+    true = true_model(pc, robot if identified is None else identified[0])
     loads = parse_loads(pc.loads, period, n, duration)
     return Plant(
         true,
@@ -189,6 +193,46 @@ def payload(model: pin.Model, task_frame: str, mass: float) -> tuple[int, pin.In
     frame = model.frames[model.getFrameId(task_frame)]
     sphere = np.eye(3) * 0.4 * mass * PAYLOAD_RADIUS**2
     return frame.parentJoint, pin.Inertia(mass, frame.placement.translation, sphere)
+
+
+def identified_plant(pc: PlantConfig, robot: PinocchioModel) -> tuple[PinocchioModel, Friction] | None:
+    """The robot at the point ``plant.region_coordinates`` of the identified box ``plant.region``
+    (its bodies and armature) and its friction, or None without a region
+    (:mod:`nnrobust.model.region`).
+    """
+    if pc.region is None:
+        return None
+    region = read_region(pc.region)
+    names = tuple(robot.model.names[1:])
+    if names != region.joints:
+        raise ConfigError(
+            "plant.region",
+            f"the box's joints {list(region.joints)} are not the robot's {list(names)}: identify it on the "
+            "same robot (robot.source, locked_joints, chain)",
+        )
+    z = np.zeros(region.dimension)
+    given = pc.region_coordinates or []
+    if len(given) > region.dimension:
+        raise ConfigError(
+            "plant.region_coordinates",
+            f"has {len(given)} entries; the box has {region.dimension} coordinates",
+        )
+    z[: len(given)] = given
+    phi = region.parameters(z)
+    model = with_inertial_vector(robot.model, phi)
+    armature = region.armature(phi)
+    if armature is not None:
+        model.armature = armature
+    problems = region.plant_problems(phi, model)
+    if problems:
+        raise ConfigError(
+            "plant.region_coordinates",
+            f"this point of the box is no plant: {'; '.join(problems)} (the box's coordinates "
+            f"{np.round(z, 3).tolist()})",
+        )
+    true = PinocchioModel(model, robot.task_frame, robot.task, robot.name)
+    true.urdf_text = robot.urdf_text
+    return true, Friction(region.friction(phi, "viscous"), region.friction(phi, "coulomb"))
 
 
 def true_model(pc: PlantConfig, robot: PinocchioModel) -> PinocchioModel:

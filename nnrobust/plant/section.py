@@ -85,6 +85,14 @@ class PlantConfig(DeclaredKeys):
         armature: rotor inertia added to the diagonal of M, one value for all joints or one per
             joint [kg m^2 or kg] (none: 0); the true plant's alone, on either engine (a
             nominal model from the URDF does not know it).
+        region: an identified robot's box (``region.json``, which ``nnrobust identify`` writes
+            beside ``box.toml``; a relative path is read from the experiment file's folder): the
+            true plant's bodies, viscous and Coulomb friction (and armature, where identified)
+            are those of the point ``region_coordinates`` of the box (docs/identification.md,
+            "The box"), in place of the URDF's.
+        region_coordinates: the point z of ``region``'s box, one coordinate per fitted parameter
+            (entries not given are 0, the estimate); set or searched alone as
+            ``plant.region_coordinates[i]``, as box.toml's ``[vary]`` does.
         engine: the true plant's physics: ``pinocchio`` (this package's plant, docs/plant.md) or
             ``mujoco`` (MuJoCo built from the same URDF and audited against Pinocchio;
             docs/engines.md; needs ``pip install 'nnrobust[mujoco]'``).
@@ -123,6 +131,8 @@ class PlantConfig(DeclaredKeys):
     armature: list[float] | None = None
     payload: float = 0.0
     loads: list[dict] | None = None
+    region: str | None = None
+    region_coordinates: list[float] | None = None
     engine: str = "pinocchio"
     mujoco_integrator: str = "rk4"
     SECTION: ClassVar[str] = "plant"
@@ -189,6 +199,7 @@ def check_plant(pc: PlantConfig, se: SensingConfig) -> None:
         raise ConfigError(
             "plant.stiction", f"the static / Coulomb friction ratio must be in [1, 1e6), got {pc.stiction}"
         )
+    _check_region(pc)
     if isinstance(pc.torque_limits, str):
         if pc.torque_limits not in ("urdf", "none"):
             raise ConfigError(
@@ -280,3 +291,33 @@ def inert_plant_keys(pc: PlantConfig) -> dict[str, str]:
         if name != pc.disturbance:
             mark([p.name for p in kind.params], f"plant.disturbance = {pc.disturbance!r}")
     return inert
+
+
+def _check_region(pc: PlantConfig) -> None:
+    """An identified box's plant: its friction and armature are the box's, so no key replaces them."""
+    if pc.region is None:
+        if pc.region_coordinates is not None:
+            raise ConfigError(
+                "plant.region_coordinates", "are a point of plant.region's box: give plant.region too"
+            )
+        return
+    if pc.engine != "pinocchio":
+        raise ConfigError(
+            "plant.engine",
+            f"{pc.engine!r}: an identified box's plant (plant.region) runs on 'pinocchio' only",
+        )
+    if pc.friction != "urdf":
+        raise ConfigError(
+            "plant.friction",
+            f"{pc.friction!r}: with plant.region the plant's friction is the identified box's; "
+            "leave it 'urdf'",
+        )
+    for key in ("viscous_friction", "coulomb_friction", "armature"):
+        if getattr(pc, key) is not None:
+            raise ConfigError(
+                f"plant.{key}", "would replace the identified box's (plant.region): give one or the other"
+            )
+    if pc.region_coordinates is not None and not all(
+        isinstance(z, (int, float)) and abs(z) < 1e6 for z in pc.region_coordinates
+    ):
+        raise ConfigError("plant.region_coordinates", f"must be finite numbers, got {pc.region_coordinates}")

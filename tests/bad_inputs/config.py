@@ -9,6 +9,7 @@ from nnrobust.core import exceptions as ex
 from .common import (
     Case,
     _build,
+    _file,
     _read_config,
     _toml,
 )
@@ -20,6 +21,19 @@ from .urdf import (
 )
 
 CONFIG_CASES = [
+    Case(
+        "a point of an identified box without the box",
+        lambda d: _toml(d, f"{PAPER}[plant]\nregion_coordinates = [1.0]\n"),
+        ex.ConfigError,
+        "plant.region_coordinates: are a point of plant.region's box: give plant.region too",
+    ),
+    Case(
+        "plant.region naming a JSON file that is not an identified box's region",
+        lambda d: _build(plant={"region": str(_file(d, "region.json", '{"format": "x"}'))}),
+        ex.ConfigError,
+        "region.json: is not an identified region (its format must be 'nnrobust-identified-region/1'; "
+        "nnrobust identify writes one)",
+    ),
     Case(
         "a TOML date-time in controller.params",
         lambda d: _toml(

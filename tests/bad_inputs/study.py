@@ -103,6 +103,12 @@ def _trained(
 
 STUDY_CASES = [
     Case(
+        "a study whose box file does not exist",
+        lambda d: _load_small_study(d, top='box = "identified/box.toml"\n'),
+        ex.ConfigError,
+        "box.toml is not a file (nnrobust identify writes DIR/box.toml)",
+    ),
+    Case(
         "study: a trained policy's train table with an algorithm it does not know",
         lambda d: _load_small_study(d, controllers=_trained(train='{algorithm = "dqn", budget = 1.0}')),
         ex.ConfigError,

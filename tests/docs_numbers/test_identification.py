@@ -43,10 +43,11 @@ def calibration_table(data: dict) -> str:
     median = sorted(r["distance2"] for r in data["rows"])[len(data["rows"]) // 2] / data["parameters"]
     return "\n".join(
         [
-            "| logs | parameters | truth in the 95 % region | median distance² / p | physical | "
-            "worst held-out RMS / noise floor |",
-            "|---|---|---|---|---|---|",
-            f"| {data['logs']} | {data['parameters']} | {100 * data['coverage']:.0f} % | {median:.2f} | "
+            "| logs | parameters | truth in the 95 % region | truth in the 95 % box | median distance² / p | "
+            "physical | worst held-out RMS / noise floor |",
+            "|---|---|---|---|---|---|---|",
+            f"| {data['logs']} | {data['parameters']} | {100 * data['coverage']:.0f} % | "
+            f"{100 * data['box_coverage']:.0f} % | {median:.2f} | "
             f"{100 * data['physical_share']:.0f} % | {data['worst_held_out_over_floor']:.2f} |",
         ]
     )
@@ -111,6 +112,15 @@ def _chi2_median_over_p(data):
 
 
 PAGE_NAME = "docs/identification.md"
+
+
+def _panda_box_half_width(data: dict) -> float:
+    """c of the calibration's box: (2 Phi(c) - 1)^p = its level, p its parameters."""
+    from nnrobust.model.region import box_half_width
+
+    return box_half_width(data["level"], data["parameters"])
+
+
 QUOTES: list[tuple] = [
     (
         PAGE_NAME,
@@ -133,6 +143,31 @@ QUOTES: list[tuple] = [
         _chi2_median_over_p,
         1.0,
     ),
+    # the walkthrough (benchmarks/identify_walkthrough.py)
+    *(
+        (PAGE_NAME, pattern, "identify_walkthrough", where, scale)
+        for pattern, where, scale in (
+            (r"On this log the box has (\d+) coordinates", lambda d: float(d["coordinates"]), 1.0),
+            (r"coordinates, each within ±([\d.]+); the", lambda d: d["half_width"], 1.0),
+            (r"largest coordinate is ([\d.]+): it is in", lambda d: d["truth_largest_coordinate"], 1.0),
+            (
+                r"law passes (\d+) of \d+\s+certification",
+                lambda d: d["laws"]["nn"]["N"] - d["laws"]["nn"]["failed"],
+                1.0,
+            ),
+            (r"law passes \d+ of (\d+)\s+certification", lambda d: float(d["laws"]["nn"]["N"]), 1.0),
+            (r"draws \(P\(fail\) ≤ ([\d.]+) at 0.95", lambda d: d["laws"]["nn"]["p_upper"], 1.0),
+            (r"at 0.95; median error ([\d.]+) mm\)", lambda d: d["laws"]["nn"]["median_error_mm"], 1.0),
+            (r"passes none \(median error ([\d.]+) mm", lambda d: d["laws"]["pd"]["median_error_mm"], 1.0),
+            (
+                r"with confidence ≥ ([\d.]+), the robot is in the box and",
+                lambda d: d["composed_claim"]["together"],
+                1.0,
+            ),
+            (r"c = ([\d.]+) for p = 13", lambda d: d["half_width"], 1.0),
+        )
+    ),
+    (PAGE_NAME, r"([\d.]+) for p = 57 \(the Panda\)", "identify_calibration", _panda_box_half_width, 1.0),
     (PAGE_NAME, r"at p = (\d+)\)", "identify_calibration", lambda d: float(d["parameters"]), 1.0),
     (
         PAGE_NAME,
@@ -195,3 +230,11 @@ if __name__ == "__main__":
     table = calibration_table(json.loads(CALIBRATION.read_text()))
     text = re.sub(pattern, lambda m: m.group(1) + table + "\n<!-- end -->", text, flags=re.S)
     PAGE.write_text(text)
+
+
+def test_the_walkthrough_s_verdicts_are_its_data():
+    """What the walkthrough's prose says in words: the truth in its box, the NN law certified and
+    the PD not (docs/data/identify_walkthrough.json)."""
+    data = json.loads((ROOT / "docs" / "data" / "identify_walkthrough.json").read_text())
+    assert data["truth_in_box"] and data["laws"]["nn"]["certified"] and not data["laws"]["pd"]["certified"]
+    assert data["laws"]["pd"]["failed"] == data["laws"]["pd"]["N"] and data["composed_claim"]["stated"]

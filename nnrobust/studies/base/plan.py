@@ -34,7 +34,7 @@ DISTRIBUTIONS = ("uniform", "normal", "loguniform", "choice")
 """The tables a [vary] key may hold: {uniform = [a, b]}, {normal = [mu, sd]},
 {loguniform = [a, b]} (0 < a < b) or {choice = [...]}."""
 
-KEYS = ("name", "base", "controllers", "samples", "seed", "set", "vary", "description")
+KEYS = ("name", "base", "controllers", "samples", "seed", "set", "vary", "description", "box")
 MAX_ROWS = 1_000_000
 """Samples x controllers above which a sweep is refused."""
 
@@ -48,6 +48,9 @@ class SweepSpec:
         base: a preset name or an experiment file (relative paths from the sweep file's folder).
         controllers: the names of the controllers every sample runs with: built-in kinds, and
             the names of table entries.
+        box: an identified box the file names (``box = "box.toml"``, :func:`with_box`): its file,
+            SHA-256 and ``[claim]``; its ``[set]`` and ``[vary]`` are in ``set`` and ``vary``
+            (empty: no box file).
         entries: per name of a table in the controllers list, ``{"class": ..., "params": {...}}``
             (a custom law) or ``{"kind": ..., "set": {...}}`` (a built-in law with its own
             settings).
@@ -68,6 +71,7 @@ class SweepSpec:
     vary: dict = field(default_factory=dict)
     description: str = ""
     entries: dict = field(default_factory=dict)
+    box: dict = field(default_factory=dict)
 
     @property
     def grid_keys(self) -> list[str]:
@@ -106,6 +110,8 @@ class SweepSpec:
             "seed": self.seed,
         }
         lines = [dump_toml(head).rstrip("\n")]
+        if self.box:  # merged below; named for the reader
+            lines.append(f"# box: {self.box['file']} (sha256 {self.box['sha256']}): its [set], [vary] below")
         for table in ("set", "vary"):
             lines += ["", f"[{table}]"]
             lines += [f'"{k}" = {_inline(v)}' for k, v in getattr(self, table).items()]
@@ -266,8 +272,81 @@ NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_-]{0,39}")
 """A controllers table's name in a sweep: it names rows, columns and folders."""
 
 
-def parse_sweep(data: dict, where: str = "sweep") -> SweepSpec:
-    """Validate a sweep table (as read from TOML); every error names its key."""
+BOX_TABLES = ("claim", "set", "vary")
+"""The tables of a box file (box.toml, which ``nnrobust identify`` writes)."""
+
+
+def with_box(data: dict, folder: Path, where: str) -> tuple[dict, dict]:
+    """(``data`` with the ``[set]`` and ``[vary]`` of the box file its ``box`` key names merged in,
+    the box's record: its file, SHA-256 and ``[claim]``); ``data`` unchanged without a ``box``.
+    A key both the file and the box give is refused: the box's plant is what its claim is about.
+    A relative path is read from ``folder`` (the sweep or study file's).
+    """
+    if "box" not in data:
+        return data, {}
+    from .folder import file_sha256
+
+    given = data["box"]
+    if not isinstance(given, str) or not given.strip():
+        raise ConfigError(f"{where}: box", f"expected the path of a box file (box.toml), got {given!r}")
+    path = Path(given) if Path(given).is_absolute() else (folder / given).resolve()
+    if not path.is_file():
+        raise ConfigError(f"{where}: box", f"{path} is not a file (nnrobust identify writes DIR/box.toml)")
+    box = parse_toml(read_text_file(path, what="box file"), str(path))
+    unknown = [k for k in box if k not in BOX_TABLES]
+    if unknown or not all(isinstance(box.get(t, {}), dict) for t in BOX_TABLES):
+        raise ConfigError(
+            f"{path}: {unknown[0] if unknown else 'tables'}",
+            f"a box file holds the tables {', '.join(BOX_TABLES)} (nnrobust identify writes one)",
+        )
+    out = {k: v for k, v in data.items() if k != "box"}
+    for table in ("set", "vary"):
+        own = out.get(table, {})
+        if not isinstance(own, dict):
+            continue  # parse_sweep says so
+        both = sorted(set(own) & (set(box.get("set", {})) | set(box.get("vary", {}))))
+        if both:
+            raise ConfigError(
+                f"{where}: {table}.{both[0]}",
+                f"is also given by the box {path}: the box's plant is what its claim is about; leave the "
+                "key to the box, or drop the box",
+            )
+        out[table] = {**box.get(table, {}), **own}
+    claim = dict(box.get("claim", {}))
+    keys = [*box.get("set", {}), *box.get("vary", {})]
+    return out, {"file": str(path), "sha256": file_sha256(path), "claim": claim, "keys": keys}
+
+
+FILE_KEYS = ("nominal.file", "plant.region")
+"""[set] keys that name a data file: a relative path is read from the sweep or study file's folder,
+as in an experiment file."""
+
+
+def _files_from(data: dict, folder: Path | None) -> dict:
+    """``data`` with the relative paths of its [set]'s :data:`FILE_KEYS` made absolute from ``folder``."""
+    given = data.get("set")
+    if folder is None or not isinstance(given, dict):
+        return data
+    fixed = {
+        k: str((folder / v).resolve())
+        if k in FILE_KEYS and isinstance(v, str) and v and not Path(v).is_absolute()
+        else v
+        for k, v in given.items()
+    }
+    return {**data, "set": fixed}
+
+
+def box_keys(box: dict) -> list[str]:
+    """The dotted keys a box (:func:`with_box`'s record) gives, in its [set] and [vary]."""
+    return list(box.get("keys", []))
+
+
+def parse_sweep(data: dict, where: str = "sweep", folder: Path | None = None) -> SweepSpec:
+    """Validate a sweep table (as read from TOML); every error names its key. A ``box`` key is
+    merged in (:func:`with_box`; relative to ``folder``, default the working folder).
+    """
+    data, box = with_box(data, folder or Path.cwd(), where)
+    data = _files_from(data, folder)
     unknown = [k for k in data if k not in KEYS]
     if unknown:
         raise ConfigError(f"{where}: {unknown[0]}", f"unknown key; valid keys: {', '.join(KEYS)}")
@@ -334,6 +413,7 @@ def parse_sweep(data: dict, where: str = "sweep") -> SweepSpec:
         dict(vary),
         data.get("description", ""),
         entries,
+        box,
     )
     if spec.size * len(controllers) > MAX_ROWS:
         raise ConfigError(
@@ -362,7 +442,7 @@ def load_sweep(path: str | Path) -> SweepSpec:
     if not path.exists():
         raise ConfigError(str(path), f"not a file nor a shipped sweep file ({', '.join(shipped_sweeps())})")
     data = parse_toml(read_text_file(path, what="sweep file"), str(path))
-    spec = parse_sweep(data, str(path))
+    spec = parse_sweep(data, str(path), path.parent)
     base = Path(spec.base)
     if base.suffix == ".toml" and not base.is_absolute():
         spec.base = str((path.parent / base).resolve())
@@ -469,8 +549,8 @@ def study_inputs(spec: SweepSpec, options: dict[str, str] | None = None):
     if digest:
         files["the robot's URDF"] = (source if not source.lstrip().startswith("<") else "(inline)", digest)
     for part, class_path in user_files(config).items():
-        if part == "identified model":  # a data file, no class and no headers
-            files["the identified model"] = (class_path, file_sha256(class_path))
+        if part in ("identified model", "identified box"):  # data files, no class and no headers
+            files[f"the {part}"] = (class_path, file_sha256(class_path))
             continue
         files[f"the {part} class file"] = (class_path, file_sha256(class_path))
         files.update(_included(Path(class_path), f"the {part} class file", f"{part}.class"))
@@ -482,6 +562,8 @@ def study_inputs(spec: SweepSpec, options: dict[str, str] | None = None):
         policy = policy_file(entry.get("kind"), entry.get("params"))
         if policy is not None and Path(policy).is_file():
             files[f"the policy file of controller {name}"] = (policy, file_sha256(policy))
+    if spec.box:
+        files["the box file"] = (spec.box["file"], spec.box["sha256"])
     for key, value in spec.vary.items():
         choices = value if isinstance(value, list) else value.get("choice", [])
         for text in (v for v in choices if isinstance(v, str)):

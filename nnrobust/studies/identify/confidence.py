@@ -6,15 +6,25 @@ residual is white. A real log's is not: resampling jittered stamps averages neig
 sensor filters, the model misses something slow. So each joint's residual is first tested for
 whiteness (Ljung-Box over :data:`LAGS` lags, at level :data:`WHITENESS_LEVEL`). Where it is white
 the covariance is the classical one. Where it is not, the joint's noise variance is replaced by its
-*long-run* variance, r_j sigma_j^2, with r_j = sum over all lags of the residual's autocorrelation,
-estimated by batch means (the variance of means over blocks of :data:`BLOCK_SECONDS`): for
-regressors that vary slowly against the noise's correlation time (a trajectory under the filter's
-cut-off, noise correlated over milliseconds), the estimate's covariance is then
+*long-run* variance, r_j sigma_j^2, with r_j = sum over all lags of the noise's autocorrelation,
+estimated by batch means over blocks of :data:`BLOCK_SECONDS` (:func:`long_run_ratios`): for
+regressors that vary slowly against the noise's correlation time, the estimate's covariance is then
 
     C = Gw^-1 (sum_j r_j G_j / sigma_j^2) Gw^-1,   Gw = sum_j G_j / sigma_j^2,
 
 the sandwich form of a heteroscedastic-and-autocorrelation-consistent covariance with one
-correction per joint, which needs only the normal equations. The region at confidence 1 - alpha
+correction per joint, which needs only the normal equations and per-block sums.
+
+Two biases of batch means on a *fitted* residual are corrected or avoided. The fit absorbs the
+part of the noise that looks like its regressors, which move slowly: a block sum of the residual
+has the variance K_b sigma^2 - S_b^T Gw^-1 S_b of white noise (K_b rows, S_b the sum of their
+regressor rows), not K_b sigma^2, a leverage that grows with the block (19 % of the variance at
+0.5 s blocks on a 21 s Panda fit): each joint's ratio is divided by its share left,
+1 - sum_b w_j S_bj^T Gw^-1 S_bj / sum_b K_bj. And the noise that matters is the noise at the
+regressors' frequencies: a filtered acceleration's noise, M(q) times the derivative of a
+low-passed noise, has its power near the cut-off and none at zero frequency, which short blocks
+count and the estimate never sees; blocks of :data:`BLOCK_SECONDS` (0.5 s, a pass band of about
+1 Hz) leave it out. The region at confidence 1 - alpha
 is the ellipsoid (beta - beta_hat)^T C^-1 (beta - beta_hat) <= chi2_p(1 - alpha); each parameter's
 marginal interval is beta_hat_i +- z_(1 - alpha/2) sqrt(C_ii). ``benchmarks/identify_calibration.py``
 measures how often the region holds the truth on synthetic logs.
@@ -27,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.stats
 
-from .fit import NormalEquations
+from .fit import BlockSums, NormalEquations
 
 LAGS = 20
 """Lags of the Ljung-Box whiteness test."""
@@ -35,9 +45,12 @@ LAGS = 20
 WHITENESS_LEVEL = 0.01
 """A joint's residual is white unless the Ljung-Box test rejects it at this level."""
 
-BLOCK_SECONDS = 0.2
+BLOCK_SECONDS = 0.5
 """The blocks of the batch-means long-run variance [s]: long against the noise's correlation
-time (milliseconds), short against the log (dozens of blocks)."""
+time and the filter's (milliseconds, and 1/(2 pi f_c) = 16 ms at 10 Hz), so that the estimate
+reads the noise at the trajectory's frequencies; short against the log (dozens of blocks). On
+synthetic Panda logs the corrected ratios of blocks of 0.5 and 1 s agree within the estimate's
+noise, where 0.05 to 0.2 s blocks count the acceleration's filtered noise (docs/identification.md)."""
 
 
 @dataclass(frozen=True)
@@ -94,21 +107,31 @@ def ljung_box(e: np.ndarray, lags: int = LAGS) -> float:
     return float(scipy.stats.chi2.sf(q, lags))
 
 
-def long_run_ratio(e: np.ndarray, block: int) -> float:
-    """R = (long-run variance) / variance of ``e``, by batch means over blocks of ``block``
-    samples (NaN samples left out of their block's mean); at least 1.
+MIN_BLOCKS = 40
+"""The fewest blocks a ratio is estimated from: a fit shorter than 40 blocks of
+:data:`BLOCK_SECONDS` (20 s) gets shorter blocks (its ratio's noise, about sqrt(2 / B), kept
+under a quarter; shorter blocks err on the wide side, counting some of the filtered noise)."""
+
+
+def block_length(dt: float, samples: int) -> int:
+    """The samples of a block for a fit segment of ``samples`` at the step ``dt``: :data:`BLOCK_SECONDS`,
+    or less where that leaves fewer than :data:`MIN_BLOCKS` blocks (at least 2 samples).
     """
-    blocks = len(e) // block
-    if blocks < 8:
-        return 1.0
-    x = e[: blocks * block].reshape(blocks, block)
-    counts = np.sum(np.isfinite(x), axis=1)
-    keep = counts >= block // 2
-    means = np.nanmean(x[keep], axis=1)
-    variance = np.nanvar(e)
-    if not variance > 0 or keep.sum() < 8:
-        return 1.0
-    return float(max(1.0, np.mean(counts[keep]) * np.var(means, ddof=1) / variance))
+    return max(2, min(int(round(BLOCK_SECONDS / dt)), samples // MIN_BLOCKS))
+
+
+def long_run_ratios(sums: BlockSums, sigma: np.ndarray, inverse: np.ndarray) -> np.ndarray:
+    """Each joint's r_j from the block sums of a fitted residual (module docstring): the mean
+    squared block sum per row over sigma_j^2, with the fit's leverage taken out, at least 1 (1
+    where there are under 8 full blocks).
+    """
+    counts = sums.rows.sum(axis=0)
+    if len(sums.rows) < 8:
+        return np.ones(len(sigma))
+    leverage = np.einsum("bjp,pq,bjq->j", sums.regressor, inverse, sums.regressor)
+    left = counts * sigma**2 - leverage
+    ratio = np.sum(sums.residual**2, axis=0) / np.where(left > 0, left, np.nan)
+    return np.where(np.isfinite(ratio) & (ratio > 0), ratio, 1.0)
 
 
 def confidence_region(
@@ -117,27 +140,28 @@ def confidence_region(
     beta: np.ndarray,
     sigma: np.ndarray,
     residual: np.ndarray,
-    dt: float,
+    sums: BlockSums,
     level: float = 0.95,
 ) -> ConfidenceRegion:
     """The region at ``level`` of the weighted least-squares estimate ``beta`` (module docstring);
-    ``residual``: the fit segment's residuals, N x n (NaN: no equation).
+    ``residual``: the fit segment's residuals, N x n (NaN: no equation), for the whiteness test;
+    ``sums``: their block sums over :data:`BLOCK_SECONDS` (:func:`.fit.block_sums`).
     """
     weights = 1 / sigma**2
     Gw = normal.weighted(weights, columns)
     p_values = [ljung_box(residual[:, j]) for j in range(residual.shape[1])]
     white = [p >= WHITENESS_LEVEL for p in p_values]
-    block = max(2, int(round(BLOCK_SECONDS / dt)))
-    ratio = [1.0 if w else long_run_ratio(residual[:, j], block) for j, w in enumerate(white)]
     inverse = np.linalg.pinv(Gw, hermitian=True)
+    ratios = long_run_ratios(sums, sigma, inverse)
+    ratio = [1.0 if w else float(r) for w, r in zip(white, ratios)]
     if all(white):
         covariance, method = inverse, "classical: every joint's residual white (Ljung-Box)"
     else:
         middle = normal.weighted(weights * np.asarray(ratio), columns)
         covariance = inverse @ middle @ inverse
         method = (
-            f"sandwich: the long-run variance (batch means over {BLOCK_SECONDS:g} s blocks) of the joints "
-            "whose residual is not white (Ljung-Box)"
+            f"sandwich: the long-run variance (batch means over {BLOCK_SECONDS:g} s blocks, the fit's "
+            "leverage taken out) of the joints whose residual is not white (Ljung-Box)"
         )
     covariance = (covariance + covariance.T) / 2
     radius2 = float(scipy.stats.chi2.ppf(level, len(columns)))

@@ -37,6 +37,7 @@ from ...core.folders import check_place, write_new
 from ...core.package_version import package_version
 from ...model.identified import IdentifiedModel
 from ...model.loading import load_robot, locked_joint_names
+from ...model.region import region_from_fit
 from ...model.regressor import (
     ParameterLayout,
     base_parameters,
@@ -46,10 +47,11 @@ from ...model.regressor import (
     with_inertial_vector,
 )
 from ..base.folder import file_sha256
-from .confidence import confidence_region
+from .confidence import block_length, confidence_region
 from .fit import (
     base_columns,
     base_projector,
+    block_sums,
     identifiability,
     least_pseudo_inertia_eigenvalues,
     normal_equations,
@@ -64,7 +66,12 @@ from .signals import FilterChoice, prepare
 MARKER = ".nnrobust-identification"
 """The marker of a folder ``identify`` wrote."""
 
-OUTPUTS = ("nominal.json", "identification.json", "parameters.csv", MARKER)
+MODELS = ("urdf", "least_squares", "physical")
+"""The models whose residuals identification.json holds: the URDF's, least squares, physical."""
+
+OUTPUTS = (
+    "nominal.json", "identification.json", "parameters.csv", "report.html", "region.json", "box.toml", MARKER,
+)  # fmt: skip
 """Everything an identification folder holds."""
 
 
@@ -148,8 +155,10 @@ def identify(
     phi_least = np.zeros(layout.size)
     phi_least[columns] = least.beta
     fit_residual = fit_residuals(model, layout, states, options.stick_band, slice(0, split), phi_least)
+    block = block_length(states.dt, split)
+    sums = block_sums(model, layout, states, options.stick_band, slice(0, split), phi_least, columns, block)
     region = confidence_region(
-        fit_rows, columns, least.beta, least.sigma, fit_residual, states.dt, options.confidence
+        fit_rows, columns, least.beta, least.sigma, fit_residual, sums, options.confidence
     )
     low, high = region.intervals()
     identified_model = with_inertial_vector(model, phi)
@@ -160,8 +169,11 @@ def identify(
         say(f"warning: {line}")
 
     # the physical model's value of each fitted column: the base combinations, then the extra terms fitted
-    extra_rows = [base.rank + int(c) - 10 * layout.n for c in columns[base.rank :]]
-    beta_physical = (base_projector(layout, base)[[*range(base.rank), *extra_rows]] @ phi).tolist()
+    projection = _fitted_projection(layout, base, columns)
+    beta_physical = (projection @ phi).tolist()
+    box = region_from_fit(
+        arm.name, layout, names, region.level, region.method, least.beta, region.covariance, projection, phi
+    )
     standard_errors = np.sqrt(np.maximum(np.diag(region.covariance), 0)).tolist()
     friction = {term: phi[layout.friction_slice(term)].tolist() for term in layout.friction}
     files = {str(Path(p).absolute()): file_sha256(p) for p in log.files}
@@ -214,14 +226,12 @@ def identify(
             "whiteness_p": region.whiteness_p,
             "long_run_ratio": region.long_run,
             "covariance": region.covariance.tolist(),
+            "box_half_width": box.half_width,
+            "physical_in_box": bool(np.max(np.abs(box.coordinates(projection @ phi))) <= box.half_width),
         },
         "friction": friction,
         "armature": armature.tolist(),
-        "residuals": {
-            "urdf": _residuals(fit_rows, held_rows, prior),
-            "least_squares": _residuals(fit_rows, held_rows, phi_least),
-            "physical": _residuals(fit_rows, held_rows, phi),
-        },
+        "residuals": {k: _residuals(fit_rows, held_rows, p) for k, p in zip(MODELS, (prior, phi_least, phi))},
         "checks": checks,
         "warnings": warnings,
         "seconds": time.perf_counter() - started,
@@ -240,8 +250,16 @@ def identify(
         }
         identified = _identified(str(robot), joints, identified_model, friction, armature)
         page = _report(model, layout, states, split, phi, summary)
-        _write_folder(out, identified.to_dict(record), summary, overwrite, page)
+        _write_folder(out, identified.to_dict(record), summary, overwrite, page, box.to_dict(record))
     return summary
+
+
+def _fitted_projection(layout: ParameterLayout, base, columns: np.ndarray) -> np.ndarray:
+    """B: the fitted parameters (the base combinations, then the extra terms fitted) of a full
+    parameter vector.
+    """
+    extra_rows = [base.rank + int(c) - 10 * layout.n for c in columns[base.rank :]]
+    return base_projector(layout, base)[[*range(base.rank), *extra_rows]]
 
 
 def _held_armature(model, base, layout: ParameterLayout, columns: np.ndarray, say):
@@ -408,7 +426,37 @@ def _physical_checks(source: str, model, phi: np.ndarray, n: int, armature: np.n
     }
 
 
-def _write_folder(out: Path, nominal: dict, summary: dict, overwrite: bool, page: str) -> None:
+def box_toml(out: Path, box: dict) -> str:
+    """box.toml: the sweep table of the identified box whose region file is ``out``/region.json
+    (:mod:`nnrobust.model.region`): ``[set]`` the plant keys that make the plant the box's,
+    ``[vary]`` each coordinate uniform in [-c, c], ``[claim]`` what the box's confidence means.
+    """
+    region = (out / "region.json").absolute()
+    c, p = box["half_width"], len(box["center"])
+    lines = [
+        f"# The identified box of {box['robot']}: nnrobust identify wrote it with {region.name}.",
+        f"# With confidence {box['level']:g} the robot's {p} fitted parameters are in it:",
+        "# beta = center + axes z (region.json), every z_i uniform in [-c, c], and",
+        f"# (2 Phi(c) - 1)^p = {box['level']:g} with p = {p}, c = {c:.6g} (to the fit's first order).",
+        f"# Use it in a sweep, falsify or study file: box = {json.dumps(str(out.absolute() / 'box.toml'))}",
+        "",
+        "[claim]",
+        f"level = {box['level']!r}",
+        f"method = {json.dumps(box['method'])}",
+        f"region = {json.dumps(str(region))}",
+        "",
+        "[set]",
+        f'"plant.region" = {json.dumps(str(region))}',
+        '"plant.friction" = "urdf"',
+        '"plant.friction_scale" = 1.0',
+        "",
+        "[vary]",
+        *(f'"plant.region_coordinates[{i}]" = {{uniform = [{-c!r}, {c!r}]}}' for i in range(p)),
+    ]
+    return "\n".join(lines) + "\n"
+
+
+def _write_folder(out: Path, nominal: dict, summary: dict, overwrite: bool, page: str, box: dict) -> None:
     """The folder written whole beside ``out``, then renamed into place (over an earlier
     identification, its files each replaced whole; nothing else in the folder is touched).
     """
@@ -427,6 +475,8 @@ def _write_folder(out: Path, nominal: dict, summary: dict, overwrite: bool, page
             writer.writerow([row["name"], *(repr(row[f]) for f in fields[1:])])
         write_new(tmp / "parameters.csv", table.getvalue())
         write_new(tmp / "report.html", page)
+        write_new(tmp / "region.json", json.dumps(box) + "\n")
+        write_new(tmp / "box.toml", box_toml(out, box))
         write_new(
             tmp / MARKER, json.dumps({"format": summary["format"], "version": summary["version"]}) + "\n"
         )
@@ -436,7 +486,7 @@ def _write_folder(out: Path, nominal: dict, summary: dict, overwrite: bool, page
                     f"{out} holds an identification already; pass --overwrite to replace it"
                 )
             # file by file (each whole), the model last: what else the folder holds stays
-            for name in ("identification.json", "parameters.csv", "report.html", MARKER, "nominal.json"):
+            for name in (*(f for f in OUTPUTS if f not in ("nominal.json", MARKER)), MARKER, "nominal.json"):
                 os.replace(tmp / name, out / name)
         else:
             os.replace(tmp, out)

@@ -31,10 +31,12 @@ from ...model.regressor import (
     BaseParameters,
     ParameterLayout,
     friction_regressor,
-    from_pseudo_inertia,
     pseudo_inertia,
+    pseudo_inertia_expression,
     slipping,
+    strictly_physical,
     torque_regressor,
+    typical_sizes,
 )
 from .signals import States
 
@@ -141,6 +143,53 @@ def residuals(
     for Y, tau, used in regressor_rows(model, layout, states, band, segment):
         parts.append(np.where(used, tau - Y @ phi, np.nan))
     return np.concatenate(parts) if parts else np.zeros((0, layout.n))
+
+
+@dataclass
+class BlockSums:
+    """Per block of consecutive samples and per joint: the residual's sum over the block's rows,
+    the rows counted, and the sum of the regressor rows (the fitted columns) over them; what the
+    residual's long-run variance and its leverage correction read
+    (:func:`.confidence.long_run_ratios`). A trailing part block is left out.
+    """
+
+    residual: np.ndarray
+    rows: np.ndarray
+    regressor: np.ndarray
+
+
+def block_sums(
+    model: pin.Model,
+    layout: ParameterLayout,
+    states: States,
+    band: float,
+    segment: slice,
+    phi: np.ndarray,
+    columns: np.ndarray,
+    block: int,
+) -> BlockSums:
+    """The :class:`BlockSums` of blocks of ``block`` samples of ``states[segment]`` for the
+    residual of ``phi``, summed batch by batch (:func:`regressor_rows`): memory of the blocks only.
+    """
+    length = len(states.t[segment])
+    blocks, n = length // block, layout.n
+    out = BlockSums(np.zeros((blocks, n)), np.zeros((blocks, n)), np.zeros((blocks, n, len(columns))))
+    start = 0
+    for Y, tau, used in regressor_rows(model, layout, states, band, segment):
+        index = (start + np.arange(len(tau))) // block
+        start += len(tau)
+        keep = index < blocks
+        if not keep.any():
+            continue
+        index, used = index[keep], used[keep]
+        e = np.where(used, tau[keep] - Y[keep] @ phi, 0.0)
+        rows = Y[keep][:, :, columns] * used[:, :, None]
+        first = np.flatnonzero(np.r_[True, index[1:] != index[:-1]])  # each block's first row here
+        at = index[first]
+        out.residual[at] += np.add.reduceat(e, first, axis=0)
+        out.rows[at] += np.add.reduceat(used.astype(float), first, axis=0)
+        out.regressor[at] += np.add.reduceat(rows, first, axis=0)
+    return out
 
 
 def base_columns(layout: ParameterLayout, base: BaseParameters) -> np.ndarray:
@@ -276,13 +325,13 @@ def physically_consistent(
     target = (vectors[:, keep].T @ g) / np.sqrt(values[keep])
     mu = PRIOR_WEIGHT * float(values[keep].mean())
     # the parameters in units where the prior is 1 (a body's parameters span 1e-4 to 10)
-    scale = np.maximum(np.abs(prior), _typical(layout))
+    scale = np.maximum(np.abs(prior), typical_sizes(layout))
     x = cp.Variable(layout.size)
     phi = cp.multiply(scale, x)
     cost = cp.sum_squares(A @ phi - target) + mu * cp.sum_squares(x - prior / scale)
     constraints = []
     for i in range(layout.n):
-        J = _pseudo_inertia(phi[10 * i : 10 * i + 10], cp)
+        J = pseudo_inertia_expression(phi[10 * i : 10 * i + 10], cp)
         constraints.append(J - PSD_MARGIN * np.eye(4) >> 0)
     for term in layout.friction:
         if term != "offset":
@@ -311,44 +360,6 @@ def physically_consistent(
     if layout.armature:
         phi_out[layout.armature_slice] = np.maximum(phi_out[layout.armature_slice], 0.0)
     return phi_out
-
-
-STRICT_MARGIN = 1e-6
-"""A body's pseudo-inertia eigenvalues are raised to at least this share of its largest."""
-
-
-def strictly_physical(phi10: np.ndarray) -> np.ndarray:
-    """The body's ten parameters with its pseudo-inertia's eigenvalues raised to at least
-    :data:`STRICT_MARGIN` of the largest (a change within the solver's tolerance): J > 0, so the
-    body's mass is positive and its inertia about the centre of mass positive definite, with the
-    triangle inequalities strict.
-    """
-    J = pseudo_inertia(phi10)
-    values, vectors = np.linalg.eigh(J)
-    floor = STRICT_MARGIN * max(values[-1], 1e-12)
-    if values[0] >= floor:
-        return phi10
-    return from_pseudo_inertia((vectors * np.maximum(values, floor)) @ vectors.T)
-
-
-def _typical(layout: ParameterLayout) -> np.ndarray:
-    """A typical magnitude of each parameter (kg, kg m, kg m^2, N m s/rad, N m, kg m^2)."""
-    body = np.array([1.0, 0.1, 0.1, 0.1] + [0.01] * 6)
-    return np.concatenate([np.tile(body, layout.n), np.full(layout.size - 10 * layout.n, 0.1)])
-
-
-def _pseudo_inertia(phi10, cp):
-    """:func:`nnrobust.model.regressor.pseudo_inertia` as a cvxpy expression."""
-    m, hx, hy, hz, Ixx, Ixy, Iyy, Ixz, Iyz, Izz = (phi10[k] for k in range(10))
-    half = (Ixx + Iyy + Izz) / 2
-    return cp.bmat(
-        [
-            [half - Ixx, -Ixy, -Ixz, hx],
-            [-Ixy, half - Iyy, -Iyz, hy],
-            [-Ixz, -Iyz, half - Izz, hz],
-            [hx, hy, hz, m],
-        ]
-    )
 
 
 def least_pseudo_inertia_eigenvalues(phi: np.ndarray, n: int) -> np.ndarray:

@@ -130,3 +130,16 @@ def synthetic_log(
         for k in stale:  # in order: a run of stale samples repeats the last fresh one
             q[k], dq[k], tau[k] = q[k - 1], dq[k - 1], tau[k - 1]
     return JointLog("synthetic", t, q, dq, tau)
+
+
+def write_csv(log: JointLog, path, joints, named: bool = True) -> None:
+    """``log`` as a CSV file ``identify`` reads: a ``time`` column, then ``q``, ``dq`` and ``tau``
+    per joint, named ``q.JOINT`` (``named``) or ``q0``, ``q1``, ...
+    """
+    columns = {"time": log.t}
+    for signal, values in (("q", log.q), ("dq", log.dq), ("tau", log.tau)):
+        for i, joint in enumerate(joints):
+            columns[f"{signal}.{joint}" if named else f"{signal}{i}"] = values[:, i]
+    names = list(columns)
+    rows = np.column_stack([columns[c] for c in names])
+    np.savetxt(path, rows, delimiter=",", header=",".join(names), comments="", fmt="%.12g")

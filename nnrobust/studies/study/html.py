@@ -49,6 +49,25 @@ def claim_text(report: dict) -> str:
     )
 
 
+def composed_text(claim: dict) -> str:
+    """The composed claim in words (report.html and the console), with both numbers."""
+    if not claim["stated"]:
+        return f"Not composed with the identified box: {claim['why']}."
+    held = [
+        f"{c} on {name}: {'certified' if v and v['holds'] else 'not certified'}"
+        for name, laws in claim["cases"].items()
+        for c, v in laws.items()
+    ]
+    return (
+        f"With confidence >= {1 - claim['alpha']:g} the robot is in the identified box ({claim['box']}; "
+        f"{claim['method']}), and with confidence {1 - claim['beta']:g} plants drawn from the box fail "
+        f"with probability at most {claim['epsilon']:g} (the certificate); by the union bound both hold "
+        f"together with confidence >= {claim['together']:g} (1 - alpha - beta), for each certified law. "
+        "It bounds the share of the box's plants that fail, not the robot's own outcome: that is the "
+        "worst case over the box (the falsification). " + "; ".join(held) + "."
+    )
+
+
 def _untuned(report: dict, c: str, entry: dict) -> str:
     """The settings cell of a controller the study did not tune."""
     if not entry["fixed"]:
@@ -138,6 +157,11 @@ def write_html(report: dict, folder: Path, figures: dict[str, dict[str, str | No
         f"<title>{e(report['study'])}: nnrobust study</title>{STYLE}</head><body>",
         f"<h1>{e(report['study'])}</h1><p>{e(report['description'])}</p>",
         f"<p>{e(claim_text(report))}</p>",
+        *(
+            [f"<p><b>Composed with the identified box.</b> {e(composed_text(report['composed_claim']))}</p>"]
+            if report.get("composed_claim")
+            else []
+        ),
         f"<p>Required (the falsification's properties): {_codes(report['require'])}; certified (the "
         f"whole requirement): {_codes(report.get('certified_properties', report['require']))}. "
         f"Budgets: {e(json.dumps(report['budgets']))}.</p>",

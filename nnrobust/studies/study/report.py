@@ -293,6 +293,7 @@ def build_report(spec: StudySpec, folder: Path, cases: dict) -> dict:
         "property_names": property_names(spec),
         "waived": {w: DESIGN[w] for w in spec.waive},
         "box": dict(spec.vary),
+        "identified_box": dict(spec.box),
         "warnings": study_warnings(spec),
         "cases": {},
     }
@@ -321,7 +322,50 @@ def build_report(spec: StudySpec, folder: Path, cases: dict) -> dict:
             "commands": _commands(spec, folder, name, case),
         }
     spec = study
+    report["composed_claim"] = composed_claim(study, report)
     return report
+
+
+CHANGES_THE_BOX = ("plant.joint_friction_scales", "plant.payload", "plant.loads", "plant.armature")
+"""Keys that change the true plant beyond an identified box's point: set or drawn, the plant is
+no longer the box's, so the identification's confidence says nothing of it."""
+
+
+def composed_claim(spec: StudySpec, report: dict) -> dict | None:
+    """The study's claim composed with its identified box's (docs/identification.md, "The box"):
+    with confidence >= 1 - alpha the robot is in the box (the identification), and over the box
+    P(fail) <= epsilon with confidence 1 - beta (the certificate); by the union bound both hold
+    with confidence >= 1 - alpha - beta. None without a box file that states a level.
+    """
+    level = spec.box.get("claim", {}).get("level") if spec.box else None
+    if not isinstance(level, (int, float)):
+        return None
+    alpha, beta = round(1 - float(level), 12), float(spec.budgets["beta"])
+    changed = sorted(
+        k for k in (*spec.set, *spec.vary) if any(k == c or k.startswith(c + "[") for c in CHANGES_THE_BOX)
+    )
+    out: dict = {
+        "box": spec.box["file"],
+        "box_sha256": spec.box["sha256"],
+        "alpha": alpha,
+        "beta": beta,
+        "epsilon": float(spec.budgets["epsilon"]),
+        "together": round(1 - alpha - beta, 12),
+        "method": spec.box["claim"].get("method", ""),
+    }
+    if changed:
+        why = f"{', '.join(changed)} change the plant beyond the box's point"
+        return {**out, "stated": False, "why": why}
+    from ...run.properties import overall_certificate
+
+    laws: dict = {}
+    for name, case in report["cases"].items():
+        for c, entry in case["controllers"].items():
+            found = overall_certificate(entry.get("certificates", []))
+            laws.setdefault(name, {})[c] = (
+                None if found is None else {k: found[k] for k in ("holds", "p_upper", "N")}
+            )
+    return {**out, "stated": True, "cases": laws}
 
 
 def finite(value):

@@ -31,12 +31,12 @@ from pathlib import Path
 from ...config import parse_toml, read_text_file
 from ...controllers.laws.policy import base_laws, policy_params
 from ...core.exceptions import ConfigError
-from ..base.plan import NAME, SweepSpec, parse_sweep, resolve_entry_files
+from ..base.plan import NAME, SweepSpec, box_keys, parse_sweep, resolve_entry_files, with_box
 from ..learning.rl import ALGORITHMS, hyper_settings
 
 KEYS = (
     "name", "description", "cases", "controllers", "tuned", "require", "waive", "seed", "set", "vary",
-    "budgets",
+    "budgets", "box",
 )  # fmt: skip
 
 DESIGN = {
@@ -155,6 +155,9 @@ class StudySpec:
         budgets: :data:`BUDGET_KEYS` with their values.
         tuned: the tuning whose kept settings every controller runs at, as NAME-tuned and untuned
             here (``tuned = "FILE#CASE"``, absolute), or "" (none).
+        box: the identified box the file names (``box = "box.toml"``; its [set] and [vary] are in
+            ``set`` and ``vary``): its file, SHA-256 and [claim] (:func:`~..base.plan.with_box`),
+            or empty.
 
     """
 
@@ -177,6 +180,7 @@ class StudySpec:
     trained: dict = field(default_factory=dict)
     """The learned policies the study trains (name -> its checked ``train`` table); neither
     fixed nor tuned: the train stage gives each seed's policy file, the validation keeps one."""
+    box: dict = field(default_factory=dict)
 
     @property
     def searched(self) -> list[str]:
@@ -243,6 +247,7 @@ class StudySpec:
             set=self.case_set(case),
             vary=dict(self.vary),
             entries={k: dict(v) for k, v in view.entries.items()},
+            box=dict(self.box),
         )
 
 
@@ -372,6 +377,7 @@ def parse_study(data: dict, path: Path) -> StudySpec:
     for key in data:
         if key not in KEYS:
             raise ConfigError(f"{where}: {key}", f"unknown key{_suggest(key, KEYS)} Valid: {', '.join(KEYS)}")
+    data, box = with_box(data, path.parent, where)  # its [set] and [vary] merged in
     for key in ("name", "cases", "controllers"):
         if key not in data:
             raise ConfigError(f"{where}: {key}", "missing")
@@ -444,7 +450,7 @@ def parse_study(data: dict, path: Path) -> StudySpec:
             **({"set": data["set"]} if "set" in data else {}),
             **({"vary": vary} if "vary" in data else {}),
         },
-        where,
+        *(where, path.parent),
     )
     resolve_entry_files(sweep.entries, path.parent)  # class and policy files: from the study's folder
     case_controllers = {}
@@ -489,11 +495,12 @@ def parse_study(data: dict, path: Path) -> StudySpec:
                 raise ConfigError(
                     f"{where}: cases.{case.name}.{err.key.split(': ')[-1]}", err.message
                 ) from err
-            clash = sorted(set(case.set) & set(sweep.vary))
+            clash = sorted(set(case.set) & (set(sweep.vary) | set(box_keys(box))))
             if clash:
                 raise ConfigError(
                     f"{where}: cases.{case.name}.set",
-                    f"sets {clash[0]!r}, which [vary] draws: a case may not fix a coordinate of the box",
+                    f"sets {clash[0]!r}, which [vary] draws or the box file gives: a case may not change "
+                    "the box",
                 )
     return StudySpec(
         name,
@@ -512,6 +519,7 @@ def parse_study(data: dict, path: Path) -> StudySpec:
         list(dict.fromkeys(waive)),
         case_controllers,
         trained,
+        box,
     )
 
 

@@ -17,17 +17,16 @@ from nnrobust.model.identified import IdentifiedModel, read_identified  # noqa: 
 from nnrobust.model.loading import load_robot  # noqa: E402
 from nnrobust.model.perturbation import perturb_inertias  # noqa: E402
 from nnrobust.plant.friction import Friction  # noqa: E402
-from nnrobust.studies.identify.synthetic import FourierTrajectory, SensorFaults, synthetic_log  # noqa: E402
+from nnrobust.studies.identify.synthetic import (  # noqa: E402
+    FourierTrajectory,
+    SensorFaults,
+    synthetic_log,
+    write_csv,
+)
 
 
 def _write_csv(path, log, joints, named=False):
-    columns = {"time": log.t}
-    for signal, values in (("q", log.q), ("dq", log.dq), ("tau", log.tau)):
-        for i, joint in enumerate(joints):
-            columns[f"{signal}.{joint}" if named else f"{signal}{i}"] = values[:, i]
-    names = list(columns)
-    rows = np.column_stack([columns[c] for c in names])
-    np.savetxt(path, rows, delimiter=",", header=",".join(names), comments="", fmt="%.12g")
+    write_csv(log, path, joints, named)
 
 
 @pytest.fixture(scope="module")
