@@ -21,6 +21,7 @@ COMMANDS: tuple[Command, ...] = (
     studies.FALSIFY,
     robot.EXPORT,
     robot.SERVE,
+    robot.DRIVE,
     studies.STUDY,
     studies.TUNE,
     identify.IDENTIFY,

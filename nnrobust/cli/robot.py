@@ -182,6 +182,58 @@ EXPORT = Command(
 )
 
 
+def cmd_drive(args) -> int:
+    """Drive a served robot with an experiment's law, in Python."""
+    from ..outputs.serve.client import drive
+    from ..run.experiment import build
+
+    config = _served_target(args, "driven")
+    if not 0 < args.wait <= 86400:
+        raise NNRobustError(f"--wait must be in (0, 86400] s, got {args.wait:g}")
+    done = drive(build(config), args.port, args.host, args.wait)
+    if not args.quiet:
+        step = f"; the law's step {done['step_us']:.1f} us (median)" if done["step_us"] is not None else ""
+        print(
+            f"drove {done['periods']} periods of the robot at {args.host}:{args.port} with {config.name}'s "
+            f"{config.controller.kind} law{step}",
+            file=sys.stderr,
+        )
+    return 0
+
+
+def drive_arguments(parser: argparse.ArgumentParser) -> None:
+    """The arguments of ``nnrobust drive``."""
+    parser.add_argument("target", help="preset name, experiment file (TOML) or run folder whose law drives")
+    parser.add_argument("--port", type=int, required=True, help="the served robot's UDP port")
+    parser.add_argument("--host", default="127.0.0.1", help="the served robot's address (default 127.0.0.1)")
+    parser.add_argument(
+        "--controller", help="the law: a built-in kind, a registered law or a custom class (FILE.py:Class)"
+    )
+    parser.add_argument(
+        "--tuned",
+        help="a tuning's folder or summary.json, or a study's REPORT.json#CASE: its setting of the law",
+    )
+    parser.add_argument(
+        "--wait", type=float, default=60.0, help="seconds to wait for any datagram of the robot (default 60)"
+    )
+    parser.add_argument(
+        "--set", action="append", metavar="KEY=VALUE", help="set one key of the experiment; repeatable"
+    )
+    parser.add_argument("--quiet", action="store_true", help="print nothing but errors")
+
+
+DRIVE = Command(
+    "drive",
+    help="a controller in Python for a served robot: the experiment's law over UDP",
+    description="Answer a virtual robot's (nnrobust serve) measured states with the torques of "
+    "the experiment's law computed here in Python, period by period, until the robot's run "
+    "ends: any law, also one without a C++ twin (an ONNX policy, a custom Python class), drives "
+    "a served robot as an exported law's bin/drive does (docs/serve.md).",
+    arguments=drive_arguments,
+    run=cmd_drive,
+)
+
+
 def serve_arguments(parser: argparse.ArgumentParser) -> None:
     """The arguments of ``nnrobust serve``."""
     parser.add_argument("target", help="preset name, experiment file (TOML) or run folder")

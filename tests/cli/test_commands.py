@@ -16,7 +16,7 @@ import pytest
 
 STORED = Path(__file__).parents[1] / "data" / "cli_help"
 COMMANDS = ("", "run", "plot", "presets", "robots", "compare", "view", "sweep", "falsify", "export",
-            "serve", "study", "tune", "identify", "learn", "bench")  # fmt: skip
+            "serve", "drive", "study", "tune", "identify", "learn", "bench")  # fmt: skip
 """Every command ("" is the bare ``nnrobust --help``)."""
 
 

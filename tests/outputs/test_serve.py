@@ -12,6 +12,7 @@ import struct
 import subprocess
 import threading
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -28,6 +29,7 @@ pytestmark = [
     pytest.mark.skipif(shutil.which("cc") is None, reason="no C compiler"),
 ]
 
+ROOT = Path(__file__).resolve().parents[2]
 HEADER = struct.Struct("<IHHQdII")  # csrc/serve/protocol.h
 MAGIC, VERSION = 0x53524E4E, 1
 HELLO, INFO, STATE, COMMAND, END = 1, 2, 3, 4, 5
@@ -198,3 +200,56 @@ def test_no_controller_and_a_taken_port_are_refused(tmp_path, capsys):
     )
     assert code == 2 and f"cannot listen on 127.0.0.1:{port}" in capsys.readouterr().err
     busy.close()
+
+
+@pytest.mark.parametrize("action", ["torque", "residual", "nn"])
+def test_a_law_in_python_drives_a_served_robot_as_the_hybrid_loop_runs_it(action, tmp_path):
+    """``nnrobust drive`` in another process: the ONNX policy (no C++ twin) computes each command
+    in Python from the STATE datagram; in lockstep every command is applied, and the served run
+    is the hybrid loop's simulation (the compiled plant calling the same Python law once a period):
+    bit for bit for a torque policy and for the eq. (9) law's Python twin (its NN weights the
+    state drive carries from period to period); to rounding for a residual on no-u0, whose base
+    law the hybrid loop steps in C++ and drive in Python (the twins agree to 1e-12)."""
+    pytest.importorskip("onnxruntime")
+    import sys
+
+    from nnrobust.run.experiment import run_experiment
+
+    config = _config()
+    if action != "nn":
+        policy = {"file": str(ROOT / "examples" / "policies" / f"{action}.onnx"), "action": action}
+        if action == "residual":
+            policy["base"] = "no-u0"
+        config = config.replace(controller={"kind": "policy", "params": policy})
+    experiment = tmp_path / "policy.toml"
+    experiment.write_text(config.to_toml())
+    argv = [sys.executable, "-m", "nnrobust", "drive", str(experiment), "--quiet", "--port"]
+    record = _serve_with(
+        config,
+        tmp_path / "run",
+        lambda port: subprocess.Popen([*argv, str(port)]),
+        lockstep=True,
+        wait_seconds=60,
+    )
+    assert record["periods"] == record["commands_in_time"] == 2500 and record["rejected"] == {}
+    assert record["simulated_backend"] == ("compiled" if action == "nn" else "hybrid")
+    served = load_result(tmp_path / "run")
+    simulated = run_experiment(config.replace(simulation={"backend": "hybrid"}))
+    if action != "residual":
+        np.testing.assert_array_equal(served.tau, simulated.tau)
+        np.testing.assert_array_equal(served.q, simulated.q)
+    else:
+        np.testing.assert_allclose(served.tau, simulated.tau, rtol=0, atol=1e-9)
+        np.testing.assert_allclose(served.q, simulated.q, rtol=0, atol=1e-9)
+
+
+def test_drive_without_a_robot_is_one_error_within_its_wait(capsys):
+    """No robot on the port: drive says so once its --wait has passed (never a hang)."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as taken:
+        taken.bind(("127.0.0.1", 0))
+        port = taken.getsockname()[1]  # bound by no robot: HELLO goes unanswered
+        started = time.monotonic()
+        code = main(["drive", "paper-ellipse", "--port", str(port), "--wait", "0.5"])
+    assert code != 0 and time.monotonic() - started < 30
+    said = capsys.readouterr().err
+    assert f"no datagram from the robot at 127.0.0.1:{port} for 0.5 s" in said, said

@@ -134,7 +134,11 @@ def serve(
         record["served"] = {k: mine.get(k) for k in COMPARED} | {"status": served.status}
         record["served_verdicts"] = list(mine.get("warnings", []))
         if compare:
-            theirs = run_experiment(config.replace(simulation={"backend": "compiled"})).metrics()
+            # the compiled loop; a law with no compiled twin (a policy, a Python class) in the hybrid
+            # loop, the compiled plant calling it once a period, as a Python controller drives the robot
+            simulated = run_experiment(config.replace(simulation={"backend": "auto"}))
+            theirs = simulated.metrics()
+            record["simulated_backend"] = simulated.backend
             record["simulated"] = {k: theirs.get(k) for k in COMPARED} | {"status": theirs.get("status")}
             record["simulated_verdicts"] = list(theirs.get("warnings", []))
             a, b = mine.get("rms_error_after_2s"), theirs.get("rms_error_after_2s")
