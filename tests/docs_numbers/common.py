@@ -47,7 +47,7 @@ commands tests/studies/identify/test_walkthrough.py runs, its budgets cut)."""
 
 
 TIMINGS = ["learning_env", "study_overhead", "study_overhead_falsify_panda", "serve_misses", "fresh_clone",
-           "loop_profile", "closed_loop", "identify_rows"]  # fmt: skip
+           "loop_profile", "closed_loop", "identify_rows", "identify_hour"]  # fmt: skip
 """Timings of this machine quoted in prose or drawn in a table (loop_profile: docs/compiled.md's
 breakdown; closed_loop: its timings and README's): QUOTED_FIGURES checks each quote against its
 file, render_tables each table (a rerun measures the machine it runs on: it gives other numbers,

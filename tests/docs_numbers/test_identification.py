@@ -53,6 +53,29 @@ def calibration_table(data: dict) -> str:
     )
 
 
+HOUR = ROOT / "docs" / "data" / "identify_hour.json"
+
+
+def hour_table(data: dict) -> str:
+    """The page's long-log table, from benchmarks/identify_hour.py's JSON."""
+    lines = [
+        "| log | samples | identify [s] | peak memory [MB] |",
+        "|---|---|---|---|",
+    ]
+    for row in data["rows"]:
+        lines.append(
+            f"| {row['minutes']:g} min | {row['samples']:,} | {row['seconds']:.1f} | {row['peak_mb']:.0f} |"
+        )
+    return "\n".join(lines)
+
+
+def test_the_long_log_table_is_the_benchmarks():
+    found = re.search(r"<!-- identify_hour -->\n(.*?)\n<!-- end -->", PAGE.read_text(), re.S)
+    assert found and found.group(1) == hour_table(json.loads(HOUR.read_text())), (
+        "python -m tests.docs_numbers.test_identification"
+    )
+
+
 def test_the_calibration_table_is_the_benchmarks():
     data = json.loads(CALIBRATION.read_text())
     found = re.search(r"<!-- identify_calibration -->\n(.*?)\n<!-- end -->", PAGE.read_text(), re.S)
@@ -143,6 +166,20 @@ QUOTES: list[tuple] = [
         _chi2_median_over_p,
         1.0,
     ),
+    (
+        PAGE_NAME,
+        r"A one-hour log is identified in ([\d.]+) s",
+        "identify_hour",
+        lambda d: d["rows"][-1]["seconds"],
+        1.0,
+    ),
+    (
+        PAGE_NAME,
+        r"grows with the log \(([\d ]+) MB for the hour\)",
+        "identify_hour",
+        lambda d: d["rows"][-1]["peak_mb"],
+        1.0,
+    ),
     # the walkthrough (benchmarks/identify_walkthrough.py)
     *(
         (PAGE_NAME, pattern, "identify_walkthrough", where, scale)
@@ -228,6 +265,9 @@ if __name__ == "__main__":
         )
     pattern = r"(<!-- identify_calibration -->\n).*?(\n?<!-- end -->)"
     table = calibration_table(json.loads(CALIBRATION.read_text()))
+    text = re.sub(pattern, lambda m: m.group(1) + table + "\n<!-- end -->", text, flags=re.S)
+    pattern = r"(<!-- identify_hour -->\n).*?(\n?<!-- end -->)"
+    table = hour_table(json.loads(HOUR.read_text()))
     text = re.sub(pattern, lambda m: m.group(1) + table + "\n<!-- end -->", text, flags=re.S)
     PAGE.write_text(text)
 

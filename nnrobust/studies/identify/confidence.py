@@ -37,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.stats
 
-from .fit import BlockSums, NormalEquations
+from .fit import NormalEquations, regressor_rows
 
 LAGS = 20
 """Lags of the Ljung-Box whiteness test."""
@@ -51,6 +51,98 @@ time and the filter's (milliseconds, and 1/(2 pi f_c) = 16 ms at 10 Hz), so that
 reads the noise at the trajectory's frequencies; short against the log (dozens of blocks). On
 synthetic Panda logs the corrected ratios of blocks of 0.5 and 1 s agree within the estimate's
 noise, where 0.05 to 0.2 s blocks count the acceleration's filtered noise (docs/identification.md)."""
+
+
+@dataclass
+class BlockSums:
+    """Per block of consecutive samples and per joint: the residual's sum over the block's rows,
+    the rows counted, and the sum of the regressor rows (the fitted columns) over them; what the
+    residual's long-run variance and its leverage correction read
+    (:func:`.confidence.long_run_ratios`). A trailing part block is left out.
+    """
+
+    residual: np.ndarray
+    rows: np.ndarray
+    regressor: np.ndarray
+
+
+class Autocorrelation:
+    """A series' autocorrelations at lags 1 to ``lags``, summed chunk by chunk (memory of the
+    lags only): what :func:`ljung_box` computes of the whole series, NaN samples skipped as gaps.
+    """
+
+    def __init__(self, lags: int = LAGS):
+        self.lags = lags
+        self.count, self.total, self.squares = 0, 0.0, 0.0
+        self.products = np.zeros(lags)
+        self.head = np.zeros(0)
+        self.tail = np.zeros(0)
+
+    def add(self, values: np.ndarray) -> None:
+        """The next samples of the series."""
+        x = np.asarray(values, dtype=float)
+        x = x[np.isfinite(x)]
+        if not len(x):
+            return
+        joined = np.concatenate([self.tail, x])
+        start = len(self.tail)
+        for k in range(1, self.lags + 1):  # the pairs whose later sample is in this chunk
+            first = max(0, start - k)
+            if first < len(joined) - k:
+                self.products[k - 1] += joined[first : len(joined) - k] @ joined[first + k :]
+        self.count += len(x)
+        self.total += float(x.sum())
+        self.squares += float(x @ x)
+        if len(self.head) < self.lags:
+            self.head = np.concatenate([self.head, x[: self.lags - len(self.head)]])
+        self.tail = joined[-self.lags :]
+
+    def p_value(self) -> float:
+        """The Ljung-Box test's p-value that the series is white."""
+        n, lags = self.count, self.lags
+        if n <= lags + 1:
+            return 1.0
+        mean = self.total / n
+        denominator = self.squares - n * mean**2
+        if not denominator > 0:
+            return 1.0
+        k = np.arange(1, lags + 1)
+        first = np.array([self.total - self.tail[len(self.tail) - j :].sum() for j in k])  # x_0..x_(n-k-1)
+        later = np.array([self.total - self.head[:j].sum() for j in k])  # x_k..x_(n-1)
+        rho = (self.products - mean * (first + later) + (n - k) * mean**2) / denominator
+        q = n * (n + 2) * np.sum(rho**2 / (n - k))
+        return float(scipy.stats.chi2.sf(q, lags))
+
+
+def residual_statistics(
+    model, layout, states, band: float, segment: slice, phi: np.ndarray, columns: np.ndarray, block: int
+) -> tuple[BlockSums, list[float]]:
+    """One pass over the residual of ``phi`` on ``states[segment]`` (:func:`.fit.regressor_rows`,
+    batch by batch): its :class:`BlockSums` over blocks of ``block`` samples and each joint's
+    Ljung-Box p-value. Memory: the blocks and the lags, not the segment.
+    """
+    length = len(states.t[segment])
+    blocks, n = length // block, layout.n
+    out = BlockSums(np.zeros((blocks, n)), np.zeros((blocks, n)), np.zeros((blocks, n, len(columns))))
+    series = [Autocorrelation() for _ in range(n)]
+    start = 0
+    for Y, tau, used in regressor_rows(model, layout, states, band, segment):
+        e = np.where(used, tau - Y @ phi, np.nan)
+        for j in range(n):
+            series[j].add(e[:, j])
+        index = (start + np.arange(len(tau))) // block
+        start += len(tau)
+        keep = index < blocks
+        if not keep.any():
+            continue
+        index, kept = index[keep], used[keep]
+        rows = Y[keep][:, :, columns] * kept[:, :, None]
+        first = np.flatnonzero(np.r_[True, index[1:] != index[:-1]])  # each block's first row here
+        at = index[first]
+        out.residual[at] += np.add.reduceat(np.nan_to_num(e[keep]), first, axis=0)
+        out.rows[at] += np.add.reduceat(kept.astype(float), first, axis=0)
+        out.regressor[at] += np.add.reduceat(rows, first, axis=0)
+    return out, [s.p_value() for s in series]
 
 
 @dataclass(frozen=True)
@@ -139,17 +231,16 @@ def confidence_region(
     columns: np.ndarray,
     beta: np.ndarray,
     sigma: np.ndarray,
-    residual: np.ndarray,
     sums: BlockSums,
+    p_values: list[float],
     level: float = 0.95,
 ) -> ConfidenceRegion:
-    """The region at ``level`` of the weighted least-squares estimate ``beta`` (module docstring);
-    ``residual``: the fit segment's residuals, N x n (NaN: no equation), for the whiteness test;
-    ``sums``: their block sums over :data:`BLOCK_SECONDS` (:func:`.fit.block_sums`).
+    """The region at ``level`` of the weighted least-squares estimate ``beta`` (module docstring)
+    from the fit segment's residual statistics (:func:`residual_statistics`): its block sums over
+    :func:`block_length` and each joint's whiteness p-value.
     """
     weights = 1 / sigma**2
     Gw = normal.weighted(weights, columns)
-    p_values = [ljung_box(residual[:, j]) for j in range(residual.shape[1])]
     white = [p >= WHITENESS_LEVEL for p in p_values]
     inverse = np.linalg.pinv(Gw, hermitian=True)
     ratios = long_run_ratios(sums, sigma, inverse)

@@ -47,11 +47,10 @@ from ...model.regressor import (
     with_inertial_vector,
 )
 from ..base.folder import file_sha256
-from .confidence import block_length, confidence_region
+from .confidence import block_length, confidence_region, residual_statistics
 from .fit import (
     base_columns,
     base_projector,
-    block_sums,
     identifiability,
     least_pseudo_inertia_eigenvalues,
     normal_equations,
@@ -154,11 +153,10 @@ def identify(
     phi = physically_consistent(fit_rows, layout, least.sigma, prior, held)
     phi_least = np.zeros(layout.size)
     phi_least[columns] = least.beta
-    fit_residual = fit_residuals(model, layout, states, options.stick_band, slice(0, split), phi_least)
-    block = block_length(states.dt, split)
-    sums = block_sums(model, layout, states, options.stick_band, slice(0, split), phi_least, columns, block)
+    fit_part = (model, layout, states, options.stick_band, slice(0, split))
+    sums, whiteness = residual_statistics(*fit_part, phi_least, columns, block_length(states.dt, split))
     region = confidence_region(
-        fit_rows, columns, least.beta, least.sigma, fit_residual, sums, options.confidence
+        fit_rows, columns, least.beta, least.sigma, sums, whiteness, options.confidence
     )
     low, high = region.intervals()
     identified_model = with_inertial_vector(model, phi)
@@ -295,14 +293,19 @@ def _identified(robot: str, joints, model, friction: dict, armature: np.ndarray)
 
 
 def _report(model, layout: ParameterLayout, states, split: int, phi: np.ndarray, summary: dict) -> str:
-    """report.html: the held-out torque against the physical model's prediction, and the rest."""
+    """report.html: the held-out torque against the physical model's prediction (at most
+    :data:`FIGURE_SAMPLES` of its samples, evenly spaced), and the rest.
+    """
     from .report import report_html
 
-    held = slice(split, None)
+    held = slice(split, None, max(1, (len(states.t) - split) // FIGURE_SAMPLES))
     residual = fit_residuals(model, layout, states, 0.0, held, phi)
     logged = states.tau[held]
     return report_html(summary, states.t[held], logged, logged - residual, states.dq)
 
+
+FIGURE_SAMPLES = 20_000
+"""The held-out samples report.html's torque figure draws at most (a figure shows no more)."""
 
 LIMIT_MARGIN = 0.1
 """How far past a joint's URDF limits [rad or m] a logged position may go (a stop's give)."""

@@ -145,53 +145,6 @@ def residuals(
     return np.concatenate(parts) if parts else np.zeros((0, layout.n))
 
 
-@dataclass
-class BlockSums:
-    """Per block of consecutive samples and per joint: the residual's sum over the block's rows,
-    the rows counted, and the sum of the regressor rows (the fitted columns) over them; what the
-    residual's long-run variance and its leverage correction read
-    (:func:`.confidence.long_run_ratios`). A trailing part block is left out.
-    """
-
-    residual: np.ndarray
-    rows: np.ndarray
-    regressor: np.ndarray
-
-
-def block_sums(
-    model: pin.Model,
-    layout: ParameterLayout,
-    states: States,
-    band: float,
-    segment: slice,
-    phi: np.ndarray,
-    columns: np.ndarray,
-    block: int,
-) -> BlockSums:
-    """The :class:`BlockSums` of blocks of ``block`` samples of ``states[segment]`` for the
-    residual of ``phi``, summed batch by batch (:func:`regressor_rows`): memory of the blocks only.
-    """
-    length = len(states.t[segment])
-    blocks, n = length // block, layout.n
-    out = BlockSums(np.zeros((blocks, n)), np.zeros((blocks, n)), np.zeros((blocks, n, len(columns))))
-    start = 0
-    for Y, tau, used in regressor_rows(model, layout, states, band, segment):
-        index = (start + np.arange(len(tau))) // block
-        start += len(tau)
-        keep = index < blocks
-        if not keep.any():
-            continue
-        index, used = index[keep], used[keep]
-        e = np.where(used, tau[keep] - Y[keep] @ phi, 0.0)
-        rows = Y[keep][:, :, columns] * used[:, :, None]
-        first = np.flatnonzero(np.r_[True, index[1:] != index[:-1]])  # each block's first row here
-        at = index[first]
-        out.residual[at] += np.add.reduceat(e, first, axis=0)
-        out.rows[at] += np.add.reduceat(used.astype(float), first, axis=0)
-        out.regressor[at] += np.add.reduceat(rows, first, axis=0)
-    return out
-
-
 def base_columns(layout: ParameterLayout, base: BaseParameters) -> np.ndarray:
     """The full vector's columns of the base regressor: the base inertial ones, then every
     friction and armature column.

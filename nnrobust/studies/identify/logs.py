@@ -19,6 +19,7 @@ missing or of another length, a value that is not a finite number, and times tha
 
 from __future__ import annotations
 
+import functools
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -151,17 +152,20 @@ def _table(path: Path, joints: Sequence[str], locked: Sequence[str] = ()) -> Joi
             from pyarrow import csv  # here: pyarrow is the identify extra's
 
             table = csv.read_csv(path)
+            column_names, read = table.column_names, table.column
         else:
             from pyarrow import parquet
 
-            table = parquet.read_table(path)
+            table = parquet.ParquetFile(path)  # its columns read one at a time, as they are used
+            column_names = table.schema_arrow.names
+            read = lambda i, file=table: file.read([column_names[i]]).column(0)  # noqa: E731
     except ImportError as err:
         raise LogError(
             f"{path}: reading CSV and Parquet logs needs pyarrow: pip install 'nnrobust[identify]'"
         ) from err
     except Exception as err:  # pyarrow's ArrowInvalid and OSError: a file that is not a table
         raise LogError(f"{path}: not a readable table ({type(err).__name__}: {str(err)[:200]})") from err
-    stripped = [name.strip() for name in table.column_names]  # "time, q0" as spreadsheets write it
+    stripped = [name.strip() for name in column_names]  # "time, q0" as spreadsheets write it
     twice = sorted({name for name in stripped if stripped.count(name) > 1})
     if twice:
         raise LogError(f"{path}: the columns {', '.join(twice)} appear twice; each signal of each joint once")
@@ -173,7 +177,7 @@ def _table(path: Path, joints: Sequence[str], locked: Sequence[str] = ()) -> Joi
             f"{path}: the columns {', '.join(alike)} differ only in upper and lower case; column names are "
             "read in any case, so keep one of them"
         )
-    columns = {key: table.column(i) for i, key in enumerate(folded)}
+    columns = {key: functools.partial(read, i) for i, key in enumerate(folded)}  # each read when used
     shown = dict(zip(folded, stripped))  # each column as the file names it, for the messages
     time = next((c for c in TIME_COLUMNS if c in columns), None)
     if time is None:
@@ -181,7 +185,7 @@ def _table(path: Path, joints: Sequence[str], locked: Sequence[str] = ()) -> Joi
             f"{path}: no time column (one of {', '.join(TIME_COLUMNS)}); its columns: "
             f"{_listed(dict(zip(stripped, folded)))}"
         )
-    arrays = {"t": _seconds(path, shown[time], columns[time])}
+    arrays = {"t": _seconds(path, shown[time], _column(path, shown[time], columns[time]))}
     names = {"t": shown[time]}
     for signal, prefixes in SIGNALS.items():
         found = _signal_columns(path, columns, prefixes, [j.casefold() for j in joints], joints)
@@ -193,9 +197,10 @@ def _table(path: Path, joints: Sequence[str], locked: Sequence[str] = ()) -> Joi
                 f"{prefixes[0]}{len(joints) - 1} or {prefixes[0]}.{joints[0]}); its columns: "
                 f"{_listed(dict(zip(stripped, folded)))}"
             )
-        arrays[signal] = np.column_stack([_numbers(path, shown[c], columns[c]) for c in found])
+        arrays[signal] = np.empty((len(arrays["t"]), len(found)))  # filled column by column: one copy
+        for i, c in enumerate(found):
+            arrays[signal][:, i] = _numbers(path, shown[c], _column(path, shown[c], columns[c]))
         names[signal] = f"{shown[found[0]]}..{shown[found[-1]]}"
-    log = JointLog(str(path), arrays["t"], arrays["q"], arrays.get("dq"), arrays["tau"], [path])
     held = {}
     for joint in locked:  # a locked joint's position, where the log names it
         for prefix in SIGNALS["q"]:
@@ -204,9 +209,11 @@ def _table(path: Path, joints: Sequence[str], locked: Sequence[str] = ()) -> Joi
                 None,
             )
             if key is not None:
-                values = _numbers(path, shown[key], columns[key])
+                values = _numbers(path, shown[key], _column(path, shown[key], columns[key]))
                 held[joint] = [float(np.nanmin(values)), float(np.nanmax(values))]
                 break
+    del table, columns, read  # the arrays are copies: the table's memory goes before the checks
+    log = JointLog(str(path), arrays["t"], arrays["q"], arrays.get("dq"), arrays["tau"], [path])
     if held:
         log.notes["locked"] = held
     return _checked(log, joints, names)
@@ -277,6 +284,16 @@ def _signal_columns(
                     f"{', '.join(named)})"
                 )
     return chosen
+
+
+def _column(path: Path, name: str, read):
+    """A column of a table, read now (a Parquet file's from the file)."""
+    try:
+        return read()
+    except Exception as err:  # pyarrow's ArrowInvalid and OSError: a damaged column
+        raise LogError(
+            f"{path}: column {name!r} cannot be read ({type(err).__name__}: {str(err)[:200]})"
+        ) from err
 
 
 def _seconds(path: Path, name: str, column) -> np.ndarray:

@@ -94,7 +94,9 @@ def quantum(values: np.ndarray) -> float:
     """The smallest step between two different values of a signal (its quantisation, or 0 when
     a signal has no repeated level).
     """
-    steps = np.abs(np.diff(np.sort(np.ravel(values))))
+    ordered = np.sort(np.ravel(values))
+    steps = np.diff(ordered)  # sorted: no step is negative
+    del ordered
     steps = steps[steps > 0]
     return float(steps.min()) if steps.size else 0.0
 
@@ -105,8 +107,7 @@ def prepare(log: JointLog, choice: FilterChoice = FilterChoice()) -> States:
     stale = np.concatenate([[False], np.all(np.diff(log.q, axis=0) == 0, axis=1)])
     moving = stale & (np.abs(log.dq).max(axis=1) > 0 if log.dq is not None else stale)
     keep = ~stale
-    t, q, tau = log.t[keep], log.q[keep], log.tau[keep]
-    dq = None if log.dq is None else log.dq[keep]
+    t = log.t[keep]  # the signals' fresh rows are taken column by column (on_grid)
     dt = float(np.median(steps))  # the log's own rate (the stale rows dropped leave wider steps)
     duration = float(t[-1] - t[0]) if len(t) > 1 else 0.0
     nyquist = 0.5 / dt if dt > 0 else 0.0
@@ -132,20 +133,22 @@ def prepare(log: JointLog, choice: FilterChoice = FilterChoice()) -> States:
         )
     grid = np.arange(t[0], t[-1], dt)
 
-    def resampled(values: np.ndarray, shift: float = 0.0) -> np.ndarray:
-        return np.column_stack([np.interp(grid + shift, t, values[:, i]) for i in range(values.shape[1])])
-
     sos = scipy.signal.butter(choice.order, choice.cutoff, fs=1.0 / dt, output="sos")
 
-    def filtered(values: np.ndarray) -> np.ndarray:
-        return scipy.signal.sosfiltfilt(sos, values, axis=0)
+    def on_grid(values: np.ndarray, shift: float = 0.0, filter: bool = True) -> np.ndarray:
+        """Each column interpolated onto the grid (and filtered), one column at a time: the
+        temporaries are a column's, not the log's.
+        """
+        out = np.empty((len(grid), values.shape[1]))
+        for i in range(values.shape[1]):
+            column = np.interp(grid + shift, t, values[keep, i])
+            out[:, i] = scipy.signal.sosfiltfilt(sos, column) if filter else column
+        return out
 
-    qf = filtered(resampled(q))
-    dqf = filtered(resampled(dq)) if dq is not None else np.gradient(qf, dt, axis=0)
+    qf = on_grid(log.q)
+    dqf = on_grid(log.dq) if log.dq is not None else np.gradient(qf, dt, axis=0)
     ddqf = np.gradient(dqf, dt, axis=0)
-    tauf = resampled(tau, choice.delay - log.torque_lag)
-    if choice.torque:
-        tauf = filtered(tauf)
+    tauf = on_grid(log.tau, choice.delay - log.torque_lag, filter=choice.torque)
     cut = int(np.ceil(edge / dt))
     inside = slice(cut, len(grid) - cut)
     notes = {
@@ -162,7 +165,7 @@ def prepare(log: JointLog, choice: FilterChoice = FilterChoice()) -> States:
             "dq": quantum(log.dq) if log.dq is not None else None,
             "tau": quantum(log.tau),
         },
-        "velocity": "logged, filtered" if dq is not None else "central difference of the filtered q",
+        "velocity": "logged, filtered" if log.dq is not None else "central difference of the filtered q",
         "filter": {
             "kind": "butterworth, zero phase (sosfiltfilt)",
             "cutoff_hz": choice.cutoff,

@@ -14,7 +14,15 @@ from nnrobust.model.region import region_from_fit
 from nnrobust.model.regressor import ParameterLayout, base_parameters, inertial_vector
 from nnrobust.plant.friction import Friction
 from nnrobust.studies.identify import fit
-from nnrobust.studies.identify.confidence import block_length, confidence_region, ljung_box, long_run_ratios
+from nnrobust.studies.identify.confidence import (
+    Autocorrelation,
+    BlockSums,
+    block_length,
+    confidence_region,
+    ljung_box,
+    long_run_ratios,
+    residual_statistics,
+)
 from nnrobust.studies.identify.signals import FilterChoice, prepare
 from nnrobust.studies.identify.synthetic import FourierTrajectory, SensorFaults, synthetic_log
 
@@ -29,10 +37,26 @@ def test_the_whiteness_test_tells_white_from_coloured_noise():
     assert all(ljung_box(_ar1(0.3, 5000, s)) < 1e-6 for s in range(5))
 
 
+def test_the_whiteness_test_summed_chunk_by_chunk_is_the_whole_series_one():
+    """Autocorrelation (the fit's one pass) against ljung_box of the whole series, NaN gaps and
+    chunks of every size from 1 sample on."""
+    rng = np.random.default_rng(2)
+    for e in (rng.standard_normal(5000), _ar1(0.2, 5000, 1), _ar1(0.05, 5000, 2)):
+        e = e + 3.0  # a mean: the centring summed apart
+        e[rng.random(len(e)) < 0.05] = np.nan
+        streamed = Autocorrelation()
+        for x in e[:50]:  # chunks shorter than the lags
+            streamed.add(np.array([x]))
+        cuts = np.sort(rng.choice(np.arange(51, len(e)), 60, replace=False))
+        for part in np.split(e[50:], cuts - 50):
+            streamed.add(part)
+        assert streamed.p_value() == pytest.approx(ljung_box(e), rel=1e-9, abs=1e-12)
+
+
 def _series_ratio(e: np.ndarray, block: int, regressor: np.ndarray | None = None) -> float:
     """long_run_ratios of one series in blocks (no fit: no leverage, unless ``regressor``)."""
     blocks = len(e) // block
-    sums = fit.BlockSums(
+    sums = BlockSums(
         e[: blocks * block].reshape(blocks, block).sum(axis=1)[:, None],
         np.full((blocks, 1), float(block)),
         np.zeros((blocks, 1, 1)) if regressor is None else regressor,
@@ -63,13 +87,13 @@ def test_the_fits_leverage_is_taken_out_of_a_fitted_residuals_ratio():
         fitted = e - Y @ np.linalg.lstsq(Y, e, rcond=None)[0]
         sigma = np.array([fitted.std()])
         blocks = len(t) // 500
-        sums = fit.BlockSums(
+        sums = BlockSums(
             fitted.reshape(blocks, 500).sum(axis=1)[:, None],
             np.full((blocks, 1), 500.0),
             Y.reshape(blocks, 500, -1).sum(axis=1)[:, None, :],
         )
         inverse = np.linalg.inv(Y.T @ Y / sigma[0] ** 2)  # Gw^-1, each row weighted 1 / sigma^2
-        raw_sums = fit.BlockSums(sums.residual, sums.rows, np.zeros_like(sums.regressor))
+        raw_sums = BlockSums(sums.residual, sums.rows, np.zeros_like(sums.regressor))
         # the raw batch means, without the clamp at 1
         raw.append(np.sum(sums.residual**2) / (blocks * 500 * sigma[0] ** 2))
         corrected.append(float(long_run_ratios(sums, sigma, inverse)[0]))
@@ -101,12 +125,11 @@ def _coverage(logs: int, classical: bool = False) -> tuple[float, float]:
         least = fit.weighted_least_squares(rows, columns)
         phi = np.zeros(layout.size)
         phi[columns] = least.beta
-        e = fit.residuals(model, layout, states, 0.01, slice(0, split), phi)
-        if classical:
-            e = np.random.default_rng(s).standard_normal(e.shape)  # every joint taken for white
         block = block_length(states.dt, split)
-        sums = fit.block_sums(model, layout, states, 0.01, slice(0, split), phi, columns, block)
-        region = confidence_region(rows, columns, least.beta, least.sigma, e, sums, 0.95)
+        sums, white = residual_statistics(model, layout, states, 0.01, slice(0, split), phi, columns, block)
+        if classical:
+            white = [1.0] * len(white)  # every joint taken for white
+        region = confidence_region(rows, columns, least.beta, least.sigma, sums, white, 0.95)
         truth = P @ np.concatenate([inertial_vector(true), friction.viscous, friction.coulomb])
         inside += region.contains(truth)
         box = region_from_fit("", layout, [], 0.95, "", least.beta, region.covariance, P, phi)
