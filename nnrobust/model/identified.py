@@ -87,22 +87,28 @@ class IdentifiedModel:
         }
 
 
-def read_identified(path: str | Path) -> IdentifiedModel:
-    """The identified model in ``path``; a file that is not one is one error naming the field."""
-    path = Path(path)
-    where = f"nominal.file {path}"
+def identify_file(path: Path, where: str, format: str, what: str) -> dict:
+    """The JSON object of a file ``nnrobust identify`` wrote, of ``format``: one error naming
+    ``where`` when it cannot be read, is not JSON or is another file.
+    """
     try:
-        data = json.loads(path.read_text())
+        data = json.loads(Path(path).read_text())
     except (OSError, UnicodeDecodeError) as err:
         raise ConfigError(where, f"cannot be read ({type(err).__name__}: {err})") from err
     except ValueError as err:
         raise ConfigError(where, f"is not JSON ({err})") from err
-    if not isinstance(data, dict) or data.get("format") != IDENTIFIED_FORMAT:
+    if not isinstance(data, dict) or data.get("format") != format:
         raise ConfigError(
-            where,
-            f"is not an identified model (its format must be {IDENTIFIED_FORMAT!r}; nnrobust identify "
-            "writes one)",
+            where, f"is not {what} (its format must be {format!r}; nnrobust identify writes one)"
         )
+    return data
+
+
+def read_identified(path: str | Path) -> IdentifiedModel:
+    """The identified model in ``path``; a file that is not one is one error naming the field."""
+    path = Path(path)
+    where = f"nominal.file {path}"
+    data = identify_file(path, where, IDENTIFIED_FORMAT, "an identified model")
     joints = data.get("joints")
     if not isinstance(joints, list) or not joints or not all(isinstance(j, str) for j in joints):
         raise ConfigError(where, "needs 'joints', a list of joint names")

@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import functools
 import hashlib
-import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -38,6 +37,7 @@ import numpy as np
 import scipy.stats
 
 from ..core.exceptions import ConfigError
+from .identified import identify_file
 from .regressor import ParameterLayout, mass_matrix_audit, pseudo_inertia, typical_sizes
 
 REGION_FORMAT = "nnrobust-identified-region/1"
@@ -225,18 +225,7 @@ def _stamp(path: Path, where: str) -> tuple[int, int]:
 def _read_region(path: str, where: str, mtime: int, size: int) -> IdentifiedRegion:
     """A region read once per content stamp (a sweep's runs share the file)."""
     where = f"{where} {path}"
-    try:
-        data = json.loads(Path(path).read_text())
-    except (OSError, UnicodeDecodeError) as err:
-        raise ConfigError(where, f"cannot be read ({type(err).__name__}: {err})") from err
-    except ValueError as err:
-        raise ConfigError(where, f"is not JSON ({err})") from err
-    if not isinstance(data, dict) or data.get("format") != REGION_FORMAT:
-        raise ConfigError(
-            where,
-            f"is not an identified region (its format must be {REGION_FORMAT!r}; nnrobust identify "
-            "writes one)",
-        )
+    data = identify_file(Path(path), where, REGION_FORMAT, "an identified region")
     try:
         joints = tuple(str(j) for j in data["joints"])
         friction = tuple(str(t) for t in data["layout"]["friction"])
