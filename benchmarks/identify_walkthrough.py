@@ -49,21 +49,13 @@ def main() -> None:
     for argv in steps:
         if nnrobust([*argv, "--quiet"]) != 0:
             raise SystemExit(f"nnrobust {' '.join(argv)} failed")
+    doubled = _doubled_budget(walk, args.workers)
     region = read_region(identified / "region.json")
     truth = json.loads((walk / "truth.json").read_text())
     phi = np.concatenate([truth["inertial"], truth["viscous"], truth["coulomb"]])
     truth_z = float(np.max(np.abs(region.coordinates(region.projection @ phi))))
     report = json.loads((walk / "study" / "report.json").read_text())
-    laws = {}
-    for c, entry in report["cases"]["identified"]["controllers"].items():
-        whole = next(x for x in entry["certificates"] if x["property"].startswith("all of"))
-        laws[c] = {
-            "N": whole["N"],
-            "failed": whole["k"],
-            "p_upper": whole["p_upper"],
-            "certified": whole["holds"],
-            "median_error_mm": _median_error_mm(walk, c),
-        }
+    laws = _laws(report, walk / "study")
     summary = {
         "coordinates": region.dimension,
         "half_width": region.half_width,
@@ -72,6 +64,7 @@ def main() -> None:
         "truth_in_box": truth_z <= region.half_width,
         "composed_claim": report["composed_claim"],
         "laws": laws,
+        "doubled_budget": doubled,
         "exported": json.loads((walk / "law" / "export.json").read_text())["law"],
         "seconds": time.perf_counter() - started,
         "machine": platform.machine(),
@@ -85,15 +78,61 @@ def main() -> None:
             f"{'certified' if law['certified'] else 'not certified'}"
         )
     print(f"composed: with confidence >= {report['composed_claim']['together']:g}")
+    more = doubled["laws"]["nn"]
+    verdict = "certified" if more["certified"] else "not certified"
+    print(
+        f"at twice the tuning budget ({doubled['tune']}): nn {more['N'] - more['failed']} of {more['N']} "
+        f"pass ({verdict}; failed: {more['failed_properties']})"
+    )
     if args.json:
         write_json_atomic(Path(args.json), summary)
 
 
-def _median_error_mm(walk: Path, controller: str) -> float:
+def _laws(report: dict, study: Path) -> dict:
+    """Per law of the study's report: its whole requirement's certificate, the properties its
+    failing draws failed, its median error and its tuning's convergence."""
+    laws = {}
+    for c, entry in report["cases"]["identified"]["controllers"].items():
+        whole = next(x for x in entry["certificates"] if x["property"].startswith("all of"))
+        failed = sorted(
+            {p for draw in entry.get("failing", {}).get("shown", []) for p in draw.get("failed", {})}
+        )
+        tuned = entry.get("tuned") or {}
+        laws[c] = {
+            "N": whole["N"],
+            "failed": whole["k"],
+            "p_upper": whole["p_upper"],
+            "certified": whole["holds"],
+            "failed_properties": failed,
+            "median_error_mm": _median_error_mm(study, c),
+            "convergence": tuned.get("convergence"),
+        }
+    return laws
+
+
+def _doubled_budget(walk: Path, workers: int) -> dict:
+    """The same study at twice its tuning budget (into walk/study-doubled): its laws' outcome."""
+    import re
+
+    text = (ROOT / "examples" / "identified_study.toml").read_text()
+    tune = 2 * int(re.search(r"^tune = (\d+)", text, re.M).group(1))
+    text = re.sub(r"^tune = \d+", f"tune = {tune}", text, flags=re.M)
+    text = text.replace('"../out/walkthrough/', f'"{walk}/').replace(
+        '"identified.toml"', f'"{ROOT / "examples" / "identified.toml"}"'
+    )
+    study = walk / "study-doubled.toml"
+    study.write_text(text)
+    out = walk / "study-doubled"
+    if nnrobust(["study", str(study), "--out", str(out), "--workers", str(workers), "--quiet"]) != 0:
+        raise SystemExit("the doubled study failed")
+    return {"tune": tune, "laws": _laws(json.loads((out / "report.json").read_text()), out)}
+
+
+def _median_error_mm(study: Path, controller: str) -> float:
     """The law's median RMS error after 2 s over the certification draws [mm]."""
     import pandas as pd
 
-    rows = pd.read_parquet(walk / "study" / "cases" / "identified" / "certify" / "results")
+    rows = pd.read_parquet(study / "cases" / "identified" / "certify" / "results")
     mine = rows[rows["controller"].isin([controller, f"{controller}-tuned"])]
     return float(1000 * mine["rms_error_after_2s"].median())
 

@@ -231,13 +231,23 @@ ServeReport VirtualRobot::run(bool (*interrupted)()) {
          values.size());
     report.lateness.push_back(sent - scheduled);
     const double deadline = options_.lockstep ? sent + options_.wait_seconds : scheduled + period;
+    bool stop = false;
     for (;;) {  // the commands until the next instant (lockstep: until this period's command)
       drain(true);
       const double left = deadline - seconds(now());
       if (left <= 0.0 || (options_.lockstep && got)) break;
+      if (options_.lockstep && interrupted()) {  // a lockstep wait is long: a signal ends it at once
+        stop = true;
+        break;
+      }
       pollfd p{fd_, POLLIN, 0};
-      const timespec wait = at(left);
+      const timespec wait = at(options_.lockstep ? std::min(left, 0.05) : left);
       ppoll(&p, 1, &wait, nullptr);
+    }
+    if (stop) {
+      report.stopped = "interrupted";
+      loop_.end("interrupted");
+      break;
     }
     if (got) {
       ++report.accepted;
@@ -250,6 +260,12 @@ ServeReport VirtualRobot::run(bool (*interrupted)()) {
     applied.z = loop_.state();
     ++report.periods;
     ++k;
+    if (options_.lockstep && !got) {  // a lockstep period waited --wait seconds: the controller is gone
+      report.stopped = "protective stop: no command within " + std::to_string(options_.wait_seconds) +
+                       " s in lockstep (the controller is gone)";
+      loop_.end("interrupted");
+      break;
+    }
     if (without >= options_.watchdog) {
       report.stopped = "protective stop: no command for " + std::to_string(without) + " periods (the watchdog)";
       loop_.end("interrupted");

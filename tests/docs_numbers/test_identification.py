@@ -202,6 +202,29 @@ QUOTES: list[tuple] = [
                 1.0,
             ),
             (r"c = ([\d.]+) for p = 13", lambda d: d["half_width"], 1.0),
+            (
+                r"budget of (\d+) simulations per\s+seed",
+                lambda d: d["laws"]["nn"]["convergence"]["budget"],
+                1.0,
+            ),
+            (
+                r"kept median moved (\d+) % from half",
+                lambda d: d["laws"]["nn"]["convergence"]["change"],
+                100.0,
+            ),
+            (r"study asks at most (\d+) %", lambda d: d["laws"]["nn"]["convergence"]["tolerance"], 100.0),
+            (
+                r"passes (\d+) of \d+ certification draws, both",
+                lambda d: (
+                    d["doubled_budget"]["laws"]["nn"]["N"] - d["doubled_budget"]["laws"]["nn"]["failed"]
+                ),
+                1.0,
+            ),
+            (
+                r"passes \d+ of (\d+) certification draws, both",
+                lambda d: d["doubled_budget"]["laws"]["nn"]["N"],
+                1.0,
+            ),
         )
     ),
     (PAGE_NAME, r"([\d.]+) for p = 57 \(the Panda\)", "identify_calibration", _panda_box_half_width, 1.0),
@@ -278,3 +301,8 @@ def test_the_walkthrough_s_verdicts_are_its_data():
     data = json.loads((ROOT / "docs" / "data" / "identify_walkthrough.json").read_text())
     assert data["truth_in_box"] and data["laws"]["nn"]["certified"] and not data["laws"]["pd"]["certified"]
     assert data["laws"]["pd"]["failed"] == data["laws"]["pd"]["N"] and data["composed_claim"]["stated"]
+    assert not data["laws"]["nn"]["convergence"]["converged"]  # "did not converge at its budget"
+    doubled = data["doubled_budget"]
+    assert doubled["tune"] == 2 * data["laws"]["nn"]["convergence"]["budget"]
+    assert not doubled["laws"]["nn"]["certified"] and doubled["laws"]["nn"]["failed"] == 2  # "both failures"
+    assert doubled["laws"]["nn"]["failed_properties"] == ["rms_torque<=10"]

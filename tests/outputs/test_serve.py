@@ -253,3 +253,33 @@ def test_drive_without_a_robot_is_one_error_within_its_wait(capsys):
     assert code != 0 and time.monotonic() - started < 30
     said = capsys.readouterr().err
     assert f"no datagram from the robot at 127.0.0.1:{port} for 0.5 s" in said, said
+
+
+def test_in_lockstep_a_controller_gone_stops_the_robot_after_one_wait(tmp_path):
+    """Lockstep: a controller that answers five periods and goes: the sixth period waits --wait
+    seconds, then the robot stops (a protective stop, the run marked interrupted), where it held
+    the last command for 20 waits of the watchdog."""
+
+    def client(port):
+        def answer():
+            sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+            sock.settimeout(30)
+            sock.sendto(_packet(HELLO, 0, 3), ("127.0.0.1", port))
+            sock.recv(65536)  # INFO
+            for _ in range(5):
+                _, _, kind, seq, _, _, _ = HEADER.unpack_from(sock.recv(65536))
+                sock.sendto(_packet(COMMAND, seq, 3, [0.0] * 3), ("127.0.0.1", port))
+            sock.close()
+
+        thread = threading.Thread(target=answer)
+        thread.start()
+        return thread
+
+    started = time.monotonic()
+    record = _serve_with(
+        _config(1.0), tmp_path / "run", client, lockstep=True, wait_seconds=1.0, compare=False
+    )
+    assert record["commands_in_time"] == 5 and record["periods"] == 6 and record["deadline_misses"] == 1
+    assert record["stopped"].startswith("protective stop: no command within 1.0")
+    assert record["served"]["status"] == "interrupted"
+    assert time.monotonic() - started < 60

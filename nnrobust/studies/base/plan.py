@@ -757,6 +757,11 @@ def check_controllers(spec: SweepSpec, base: dict, values: dict | None = None) -
         except NNRobustError as err:
             try:
                 first_step(experiment(spec, base, sample, REFERENCE))
-            except NNRobustError:
-                continue  # the experiment itself fails: every row will say so
+            except NNRobustError as fault:
+                key = fault.key.split(" ")[0] if isinstance(fault, ConfigError) else ""
+                if key in spec.set and key not in spec.vary:  # no draw changes it: every row would fail
+                    raise ConfigError(
+                        f"set: {fault.key}", f"fails every run, whatever is drawn: {fault.message}"
+                    ) from fault
+                continue  # the experiment itself fails where the samples may not: every row will say so
             raise ConfigError(f"controllers: {name}", f"cannot run: {err}") from err

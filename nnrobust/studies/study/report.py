@@ -354,7 +354,9 @@ def composed_claim(spec: StudySpec, report: dict) -> dict | None:
         "method": spec.box["claim"].get("method", ""),
     }
     if changed:
-        why = f"{', '.join(changed)} change the plant beyond the box's point"
+        why = (
+            f"{', '.join(changed)} change{'s' if len(changed) == 1 else ''} the plant beyond the box's point"
+        )
         return {**out, "stated": False, "why": why}
     from ...run.properties import overall_certificate
 

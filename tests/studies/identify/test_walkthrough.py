@@ -32,7 +32,7 @@ from nnrobust.studies.study import load_study  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[3]
 EXAMPLES = ROOT / "examples"
-CUT = {"tune": 8, "validation": 4, "falsify": 4}
+CUT = {"tune": 24, "validation": 4, "falsify": 4}
 """examples/identified_study.toml's budgets cut down for the suite (epsilon and beta as shipped)."""
 
 
@@ -147,6 +147,13 @@ def test_a_box_in_a_sweep_file_is_merged_and_its_keys_are_the_boxs_alone(walked,
         with pytest.raises(ConfigError) as err:
             load_sweep(tmp_path / "s.toml")
         assert err.value.key.endswith(key) and "is also given by the box" in str(err.value)
+    (tmp_path / "s.toml").write_text(text.replace("paper-ellipse", "panda-ellipse"))  # another robot's box
+    with pytest.raises(ConfigError) as err:
+        from nnrobust.studies.base.plan import base_values, check_controllers
+
+        spec = load_sweep(tmp_path / "s.toml")
+        check_controllers(spec, base_values(spec))
+    assert err.value.key == "set: plant.region" and "are not the robot's" in str(err.value), str(err.value)
     (tmp_path / "s.toml").write_text(text.replace(str(box), "nothing/box.toml"))
     with pytest.raises(ConfigError, match="is not a file"):
         load_sweep(tmp_path / "s.toml")
