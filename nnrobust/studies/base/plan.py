@@ -759,7 +759,8 @@ def check_controllers(spec: SweepSpec, base: dict, values: dict | None = None) -
                 first_step(experiment(spec, base, sample, REFERENCE))
             except NNRobustError as fault:
                 key = fault.key.split(" ")[0] if isinstance(fault, ConfigError) else ""
-                if key in spec.set and key not in spec.vary:  # no draw changes it: every row would fail
+                if isinstance(fault, ConfigError) and key in spec.set and key not in spec.vary:
+                    # no draw changes it: every row would fail
                     raise ConfigError(
                         f"set: {fault.key}", f"fails every run, whatever is drawn: {fault.message}"
                     ) from fault

@@ -138,6 +138,8 @@ def write_csv(log: JointLog, path, joints, named: bool = True) -> None:
     """
     columns = {"time": log.t}
     for signal, values in (("q", log.q), ("dq", log.dq), ("tau", log.tau)):
+        if values is None:  # a log without velocities
+            continue
         for i, joint in enumerate(joints):
             columns[f"{signal}.{joint}" if named else f"{signal}{i}"] = values[:, i]
     names = list(columns)
