@@ -106,6 +106,8 @@ class ForkedJobs:
         self._load = load or (lambda message: message)
         # (pid, the write end of its message pipe, the read end of its report pipe)
         self._first: tuple[int, int | None, int] | None = None
+        self.killed = False
+        """Whether :meth:`close` had to kill the first worker (it outlived STOP_TIMEOUT after SIGTERM)."""
         if self._workers > 1 and can_fork():
             self._fork_first()
 
@@ -175,7 +177,7 @@ class ForkedJobs:
         for fd in (message_write, report_read):
             if fd is not None:
                 _close(fd)
-        _stop(pid)
+        self.killed = _stop(pid)
 
     def __enter__(self) -> ForkedJobs:
         return self
@@ -366,8 +368,10 @@ def _kill(pid: int, read: int) -> None:
     _close(read)
 
 
-def _stop(pid: int) -> None:
-    """SIGTERM to a first worker (it kills and reaps its siblings), then SIGKILL if it lingers; reaped."""
+def _stop(pid: int) -> bool:
+    """SIGTERM to a first worker (it kills and reaps its siblings), then SIGKILL if it lingers;
+    reaped. Returns whether it had to be killed.
+    """
     try:
         os.kill(pid, signal.SIGTERM)
         deadline = time.monotonic() + STOP_TIMEOUT
@@ -375,10 +379,11 @@ def _stop(pid: int) -> None:
             if time.monotonic() > deadline:
                 os.kill(pid, signal.SIGKILL)
                 os.waitpid(pid, 0)
-                return
+                return True
             time.sleep(0.005)
     except (ProcessLookupError, ChildProcessError):
         pass
+    return False
 
 
 def _raise(report: dict) -> None:

@@ -199,6 +199,11 @@ def test_with_another_thread_running_the_work_stays_in_this_process(tmp_path):
     assert {(tmp_path / f"{i}").read_text() for i in range(3)} == {str(os.getpid())}
 
 
+TRIALS = 20
+"""Forks stopped at once by the signal test (the interrupt it guards against, swallowed in a fork
+hook, made every one of them linger)."""
+
+
 def test_a_signal_at_the_fork_is_neither_lost_nor_sends_a_worker_back_into_the_callers_code(tmp_path):
     """With a Python SIGTERM handler that raises (as the command line installs), the workers are
     stopped right after the fork. The worker must not take the handler it inherits: raised in a
@@ -213,20 +218,23 @@ def test_a_signal_at_the_fork_is_neither_lost_nor_sends_a_worker_back_into_the_c
         raise KeyboardInterrupt
 
     old = signal.signal(signal.SIGTERM, interrupt)
-    took = []
+    killed = []
     try:
-        for _ in range(20):
-            started = time.monotonic()
+        for _ in range(TRIALS):
+            jobs = None
             try:
-                with ForkedJobs([lambda data: None] * 2, workers=2, prepare=lambda: time.sleep(30)):
+                with ForkedJobs([lambda data: None] * 2, workers=2, prepare=lambda: time.sleep(30)) as jobs:
                     pass  # left at once: the first worker is stopped right after its fork
             except KeyboardInterrupt:
                 pass
             if os.getpid() != me:  # a worker that came back here: say so and leave
                 escaped.write_text(str(os.getpid()))
                 os._exit(0)
-            took.append(time.monotonic() - started)
+            killed.append(jobs is not None and jobs.killed)
     finally:
         signal.signal(signal.SIGTERM, old)
     assert not escaped.exists()
-    assert max(took) < STOP_TIMEOUT / 2, took  # each worker ended at once on SIGTERM
+    # each worker ends on SIGTERM, not by the SIGKILL after STOP_TIMEOUT (the swallowed interrupt
+    # made every one of them linger); not timed: one worker a machine starves of CPU for
+    # STOP_TIMEOUT s is allowed (it happened once with both cores busy), a pattern is not
+    assert sum(killed) <= 1, f"{sum(killed)} of {TRIALS} first workers outlived SIGTERM by {STOP_TIMEOUT} s"
