@@ -5,6 +5,7 @@ reruns from its config.toml alone."""
 
 import re
 import sys
+import threading
 import warnings
 from pathlib import Path
 
@@ -25,11 +26,20 @@ from nnrobust.model.urdf_check import (
 from nnrobust.outputs.run_folder import load_run
 
 OPENED: list[str] | None = None
-"""Files this process opens while a test records them (:func:`opened`), else None."""
+"""Files the recording thread opens while a test records them (:func:`opened`), else None."""
+
+RECORDING: int | None = None
+"""The thread that records: another thread's opens (a cluster's monitor reading /proc/PID/stat,
+left by an earlier test in this worker) are not the test's."""
 
 
 def _audit(event: str, args: tuple) -> None:
-    if OPENED is not None and event == "open" and isinstance(args[0], (str, bytes, Path)):
+    if (
+        OPENED is not None
+        and threading.get_ident() == RECORDING
+        and event == "open"
+        and isinstance(args[0], (str, bytes, Path))
+    ):
         OPENED.append(str(Path(args[0] if not isinstance(args[0], bytes) else args[0].decode()).resolve()))
 
 
@@ -37,16 +47,16 @@ sys.addaudithook(_audit)  # an audit hook cannot be removed: it records only ins
 
 
 class opened:  # noqa: N801 - used as a function: `with opened() as files:`
-    """The files opened by this process inside the block (Python's ``open`` audit event)."""
+    """The files this thread opens inside the block (Python's ``open`` audit event)."""
 
     def __enter__(self) -> list[str]:
-        global OPENED
-        OPENED = []
+        global OPENED, RECORDING
+        OPENED, RECORDING = [], threading.get_ident()
         return OPENED
 
     def __exit__(self, *exc) -> None:
-        global OPENED
-        OPENED = None
+        global OPENED, RECORDING
+        OPENED, RECORDING = None, None
 
 
 def _recorded(call, *args, **kwargs):
