@@ -319,6 +319,11 @@ def file_values(path: str | Path, read: list[Path] | None = None) -> dict:
     return _file_data(path, read_text_file(path, what="experiment file"), read=read)
 
 
+DATA_FILE_KEYS = (("nominal", "file"), ("plant", "region"))
+"""(section, key) of the keys that name a data file (an identified model, an identified box): a
+relative path is read from the folder of the file that gives it."""
+
+
 def _file_data(path: Path, text: str, depth: int = 0, read: list[Path] | None = None) -> dict:
     """An experiment file's table with its relative paths (robot.source, robot.mesh_folders, the
     classes of :data:`USER_PARTS`) made absolute from the file's folder, merged over its ``base``
@@ -349,14 +354,11 @@ def _file_data(path: Path, text: str, depth: int = 0, read: list[Path] | None = 
             for entry in robot["mesh_folders"]
         ]
 
-    nominal = data.get("nominal")
-    if isinstance(nominal, dict) and isinstance(nominal.get("file"), str) and nominal["file"].strip():
-        if not Path(nominal["file"]).is_absolute():  # an identified model, read from the file's folder
-            nominal["file"] = str((folder / nominal["file"]).resolve())
-    plant = data.get("plant")
-    if isinstance(plant, dict) and isinstance(plant.get("region"), str) and plant["region"].strip():
-        if not Path(plant["region"]).is_absolute():  # an identified box, read from the file's folder
-            plant["region"] = str((folder / plant["region"]).resolve())
+    for section, key in DATA_FILE_KEYS:  # an identified model or box, read from the file's folder
+        table = data.get(section)
+        if isinstance(table, dict) and isinstance(table.get(key), str) and table[key].strip():
+            if not Path(table[key]).is_absolute():
+                table[key] = str((folder / table[key]).resolve())
     controller = data.get("controller")
     if isinstance(controller, dict):  # a policy's ONNX file, read from the file's folder
         policy = policy_file(controller.get("kind"), controller.get("params"))

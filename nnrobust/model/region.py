@@ -38,13 +38,10 @@ import scipy.stats
 
 from ..core.exceptions import ConfigError
 from .identified import identify_file
-from .regressor import ParameterLayout, mass_matrix_audit, pseudo_inertia, typical_sizes
+from .regressor import ParameterLayout, mass_matrix_audit, typical_sizes
 
 REGION_FORMAT = "nnrobust-identified-region/1"
 """The ``format`` of a region's file."""
-
-PHYSICAL_TOLERANCE = 1e-9
-"""A body's least pseudo-inertia eigenvalue may be this share of its largest below zero."""
 
 AUDIT_POSES = 200
 """Random poses over which a point's mass matrix must be positive definite."""
@@ -114,15 +111,6 @@ class IdentifiedRegion:
         D = typical_sizes(self.layout)
         gap = self.beta(z) - self.projection @ self.physical
         return self.physical + D * np.linalg.lstsq(self.projection * D, gap, rcond=None)[0]
-
-    def body_problems(self, phi: np.ndarray) -> list[str]:
-        """The bodies of ``phi`` that are not physical (a pseudo-inertia with a negative eigenvalue)."""
-        out = []
-        for i, joint in enumerate(self.joints):
-            values = np.linalg.eigvalsh(pseudo_inertia(phi[10 * i : 10 * i + 10]))
-            if values[0] < -PHYSICAL_TOLERANCE * max(values[-1], 1e-12):
-                out.append(f"the body of {joint} (pseudo-inertia eigenvalue {values[0]:.3g})")
-        return out
 
     def plant_problems(self, phi: np.ndarray, model) -> list[str]:
         """Why ``phi`` is no plant to simulate (empty: it is one): friction or armature below zero,

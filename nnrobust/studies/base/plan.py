@@ -25,7 +25,7 @@ from ...config import (
     read_text_file,
     shipped_laws,
 )
-from ...config.toml_io import policy_file
+from ...config.toml_io import DATA_FILE_KEYS, policy_file
 from ...controllers.registry import registered_law
 from ...core.exceptions import ConfigError, NNRobustError
 from ...core.numeric_limits import finite_number
@@ -317,9 +317,9 @@ def with_box(data: dict, folder: Path, where: str) -> tuple[dict, dict]:
     return out, {"file": str(path), "sha256": file_sha256(path), "claim": claim, "keys": keys}
 
 
-FILE_KEYS = ("nominal.file", "plant.region")
+FILE_KEYS = tuple(f"{section}.{key}" for section, key in DATA_FILE_KEYS)
 """[set] keys that name a data file: a relative path is read from the sweep or study file's folder,
-as in an experiment file."""
+as in an experiment file (:data:`nnrobust.config.toml_io.DATA_FILE_KEYS`)."""
 
 
 def _files_from(data: dict, folder: Path | None) -> dict:
@@ -334,11 +334,6 @@ def _files_from(data: dict, folder: Path | None) -> dict:
         for k, v in given.items()
     }
     return {**data, "set": fixed}
-
-
-def box_keys(box: dict) -> list[str]:
-    """The dotted keys a box (:func:`with_box`'s record) gives, in its [set] and [vary]."""
-    return list(box.get("keys", []))
 
 
 def parse_sweep(data: dict, where: str = "sweep", folder: Path | None = None) -> SweepSpec:

@@ -57,8 +57,8 @@ noise, where 0.05 to 0.2 s blocks count the acceleration's filtered noise (docs/
 class BlockSums:
     """Per block of consecutive samples and per joint: the residual's sum over the block's rows,
     the rows counted, and the sum of the regressor rows (the fitted columns) over them; what the
-    residual's long-run variance and its leverage correction read
-    (:func:`.confidence.long_run_ratios`). A trailing part block is left out.
+    residual's long-run variance and its leverage correction read (:func:`long_run_ratios`). A
+    trailing part block is left out.
     """
 
     residual: np.ndarray
@@ -214,8 +214,8 @@ def block_length(dt: float, samples: int) -> int:
 
 def long_run_ratios(sums: BlockSums, sigma: np.ndarray, inverse: np.ndarray) -> np.ndarray:
     """Each joint's r_j from the block sums of a fitted residual (module docstring): the mean
-    squared block sum per row over sigma_j^2, with the fit's leverage taken out, at least 1 (1
-    where there are under 8 full blocks).
+    squared block sum per row over sigma_j^2, with the fit's leverage taken out (1 where there are
+    under 8 full blocks, or nothing is left of the variance).
     """
     counts = sums.rows.sum(axis=0)
     if len(sums.rows) < 8:

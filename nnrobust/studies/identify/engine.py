@@ -168,7 +168,7 @@ def identify(
 
     # the physical model's value of each fitted column: the base combinations, then the extra terms fitted
     projection = _fitted_projection(layout, base, columns)
-    beta_physical = (projection @ phi).tolist()
+    beta_physical = projection @ phi
     box = region_from_fit(
         arm.name, layout, names, region.level, region.method, least.beta, region.covariance, projection, phi
     )
@@ -225,7 +225,7 @@ def identify(
             "long_run_ratio": region.long_run,
             "covariance": region.covariance.tolist(),
             "box_half_width": box.half_width,
-            "physical_in_box": bool(np.max(np.abs(box.coordinates(projection @ phi))) <= box.half_width),
+            "physical_in_box": bool(np.max(np.abs(box.coordinates(beta_physical))) <= box.half_width),
         },
         "friction": friction,
         "armature": armature.tolist(),

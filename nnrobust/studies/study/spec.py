@@ -31,7 +31,7 @@ from pathlib import Path
 from ...config import parse_toml, read_text_file
 from ...controllers.laws.policy import base_laws, policy_params
 from ...core.exceptions import ConfigError
-from ..base.plan import NAME, SweepSpec, box_keys, parse_sweep, resolve_entry_files, with_box
+from ..base.plan import NAME, SweepSpec, parse_sweep, resolve_entry_files, with_box
 from ..learning.rl import ALGORITHMS, hyper_settings
 
 KEYS = (
@@ -495,7 +495,7 @@ def parse_study(data: dict, path: Path) -> StudySpec:
                 raise ConfigError(
                     f"{where}: cases.{case.name}.{err.key.split(': ')[-1]}", err.message
                 ) from err
-            clash = sorted(set(case.set) & (set(sweep.vary) | set(box_keys(box))))
+            clash = sorted(set(case.set) & (set(sweep.vary) | set(box.get("keys", []))))
             if clash:
                 raise ConfigError(
                     f"{where}: cases.{case.name}.set",
