@@ -22,6 +22,7 @@ from hypothesis import strategies as st
 
 MEMORY = 4 * 1024**3  # address space per input [bytes]
 SECONDS = 300  # wall time per input (generous: the suite runs on busy machines)
+ATTEMPTS = 5  # of a signal meant for the imports that may land in the simulation on a busy machine
 
 WEIRD_VALUES = [
     "nan",
@@ -266,17 +267,29 @@ def _loaded(pid: int, library: str) -> bool:
 def test_a_signal_during_the_imports_exits_130_with_one_line(entry, sig, tmp_path):
     """A stop signal while the command line is still importing its modules (the json accelerator,
     which its first lines import, is mapped): the command stops as soon as its work would start,
-    exit 130, one line, no traceback, nothing written. Watched through /proc, not timed."""
+    exit 130, one line, no traceback, nothing written. Watched through /proc, not timed: on a busy
+    machine the child can reach its simulation before the signal does, and then the run's own
+    interrupt is the answer (exit 1, "run interrupted", its partial result marked so); such an
+    attempt is checked for that and made again, up to ATTEMPTS times."""
     if not Path("/proc/self/maps").is_file():
         pytest.skip("needs /proc to see the child's imports")
-    out = tmp_path / "run"
-    cmd = [sys.executable, *entry, "run", "paper-line", "--out", str(out), "--backend", "python", "--quiet"]
-    proc = subprocess.Popen(cmd, stderr=subprocess.PIPE, text=True)
-    deadline = time.monotonic() + SECONDS
-    while not _loaded(proc.pid, "/_json.") and proc.poll() is None and time.monotonic() < deadline:
-        time.sleep(0.001)
-    proc.send_signal(sig)
-    code = proc.wait(timeout=SECONDS)
-    stderr = proc.stderr.read()
-    assert code == 130 and stderr == "nnrobust: interrupted\n", (code, stderr)
-    assert not out.exists() and list(tmp_path.iterdir()) == []
+    for attempt in range(ATTEMPTS):
+        where = tmp_path / str(attempt)
+        where.mkdir()
+        out = where / "run"
+        cmd = [sys.executable, *entry, "run", "paper-line", "--out", str(out), "--backend", "python"]
+        proc = subprocess.Popen([*cmd, "--quiet"], stderr=subprocess.PIPE, text=True)
+        deadline = time.monotonic() + SECONDS
+        while not _loaded(proc.pid, "/_json.") and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.001)
+        proc.send_signal(sig)
+        code = proc.wait(timeout=SECONDS)
+        stderr = proc.stderr.read()
+        if stderr.startswith("run interrupted: interrupted at t = "):  # too late: the run's answer
+            assert code == 1 and "Traceback" not in stderr, (code, stderr)
+            assert json.loads((out / ".nnrobust-run").read_text())["status"] == "interrupted"
+            continue
+        assert code == 130 and stderr == "nnrobust: interrupted\n", (code, stderr)
+        assert not out.exists() and list(where.iterdir()) == []
+        return
+    pytest.fail(f"the signal reached the run's simulation in all {ATTEMPTS} attempts, never its imports")

@@ -26,12 +26,23 @@ struct ThreeLinkSpec {
         gamma(f.vector("gamma", 3)), gravity(f.vector("gravity", 2)) {}
 };
 
+// The sines and cosines of q the closed form's M and bias read: computed once per q where many
+// models are evaluated at one pose (Slotine-Li's nine unit models, one per column of Y).
+struct ThreeLinkTrig {
+  double c2, c3, c23, s2, s3, s23;
+  Vector3d sin_theta, cos_theta;  // of the links' absolute angles q1, q1 + q2, q1 + q2 + q3
+  explicit ThreeLinkTrig(const Vector3d &q);
+};
+
 // nnrobust.model.three_link.ThreeLinkPlanarModel: the paper's closed-form nominal model.
 struct ThreeLink {
   const ThreeLinkSpec &s;
 
-  Matrix3d mass(const Vector3d &q) const;
-  Vector3d bias(const Vector3d &q, const Vector3d &v) const;  // V_m(q, v) v + G(q)
+  Matrix3d mass(const Vector3d &q) const { return mass(ThreeLinkTrig(q)); }
+  // V_m(q, v) v + G(q)
+  Vector3d bias(const Vector3d &q, const Vector3d &v) const { return bias(ThreeLinkTrig(q), v); }
+  Matrix3d mass(const ThreeLinkTrig &trig) const;
+  Vector3d bias(const ThreeLinkTrig &trig, const Vector3d &v) const;
   // (x, J, J'q') of ThreeLinkPlanarModel.task_state
   void task_state(const Vector3d &q, const Vector3d &v, Vector2d &x, Matrix23 &J, Vector2d &jdot_v) const;
   // H[:, i, k] = dJ_i/dq_k = tail[:, max(i, k)], tail[:, j] = -sum_{l >= j} l_l (cos, sin) theta_l

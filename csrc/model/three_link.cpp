@@ -6,8 +6,18 @@
 
 namespace nnrobust {
 
-Matrix3d ThreeLink::mass(const Vector3d &q) const {
-  const double c2 = std::cos(q[1]), c3 = std::cos(q[2]), c23 = std::cos(q[1] + q[2]);
+ThreeLinkTrig::ThreeLinkTrig(const Vector3d &q)
+    : c2(std::cos(q[1])), c3(std::cos(q[2])), c23(std::cos(q[1] + q[2])), s2(std::sin(q[1])), s3(std::sin(q[2])),
+      s23(std::sin(q[1] + q[2])) {
+  const Vector3d theta(q[0], q[0] + q[1], q[0] + q[1] + q[2]);
+  for (int j = 0; j < 3; ++j) {
+    sin_theta[j] = std::sin(theta[j]);
+    cos_theta[j] = std::cos(theta[j]);
+  }
+}
+
+Matrix3d ThreeLink::mass(const ThreeLinkTrig &trig) const {
+  const double c2 = trig.c2, c3 = trig.c3, c23 = trig.c23;
   const double m11 = s.beta[0] + 2 * s.p[0] * c2 + 2 * s.p[1] * c23 + 2 * s.p[2] * c3;
   const double m12 = s.beta[1] + s.p[0] * c2 + s.p[1] * c23 + 2 * s.p[2] * c3;
   const double m13 = s.beta[2] + s.p[1] * c23 + s.p[2] * c3;
@@ -18,18 +28,17 @@ Matrix3d ThreeLink::mass(const Vector3d &q) const {
   return M;
 }
 
-Vector3d ThreeLink::bias(const Vector3d &q, const Vector3d &v) const {
-  const double s2 = std::sin(q[1]), s3 = std::sin(q[2]), s23 = std::sin(q[1] + q[2]);
+Vector3d ThreeLink::bias(const ThreeLinkTrig &trig, const Vector3d &v) const {
+  const double s2 = trig.s2, s3 = trig.s3, s23 = trig.s23;
   const double a = s.p[0] * s2 + s.p[1] * s23, b = s.p[1] * s23 + s.p[2] * s3, c = s.p[2] * s3;
   const double v1 = v[0], v2 = v[1], v3 = v[2];
   Matrix3d V;
   V << -a * v2 - b * v3, -a * (v1 + v2) - b * v3, -b * (v1 + v2 + v3),
       a * v1 - c * v3, -c * v3, -c * (v1 + v2 + v3),
       b * v1 + c * v2, c * (v1 + v2), 0.0;
-  Vector3d theta(q[0], q[0] + q[1], q[0] + q[1] + q[2]);
   Vector3d dU;
   for (int j = 0; j < 3; ++j)
-    dU[j] = s.gamma[j] * (s.gravity[0] * std::sin(theta[j]) - s.gravity[1] * std::cos(theta[j]));
+    dU[j] = s.gamma[j] * (s.gravity[0] * trig.sin_theta[j] - s.gravity[1] * trig.cos_theta[j]);
   Vector3d G(dU[0] + dU[1] + dU[2], dU[1] + dU[2], dU[2]);
   return V * v + G;
 }

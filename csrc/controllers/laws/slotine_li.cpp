@@ -2,6 +2,7 @@
 // Y(q, q', q'_r, q''_r) theta-hat - K_D s (K_D unset: K_D_step / T M-hat(q)), theta-hat advanced by
 // explicit Euler over the period and projected (pseudo-inertias floored; the closed form's box).
 #include <Eigen/Eigenvalues>
+#include <memory>
 
 #include "../../model/nominal.hpp"
 #include "../../model/regressor.hpp"
@@ -19,10 +20,17 @@ struct SlotineLi : Law {
   bool exact, project;
   PinocchioNominal *pin_model = nullptr;  // else the closed form, one unit model per column of Y
   std::vector<ThreeLinkSpec> unit_specs;
-  // the regressor's workspaces (Y, and the exact form's two velocity terms), sized here: a step
-  // allocates none of them (an exported law keeps nothing it allocated in a step)
-  Matrix Y_, Y_plus_, Y_minus_;
-  Vector zero_, velocity_;
+  // the regressor's workspaces, sized here: a step allocates none of them (an exported law keeps
+  // nothing it allocated in a step)
+  Matrix Y_;
+  ChristoffelWork christoffel_;
+  // M-hat(q) s of the unset K_D by one RNEA of the nominal model without gravity (Pinocchio)
+  pinocchio::Model weightless_;
+  std::unique_ptr<pinocchio::Data> weightless_data_;
+  Vector zero_;
+  // the body whose pseudo-inertia had the least eigenvalue last step: solved first, the others
+  // only tested against it (the least eigenvalue moves little from one step to the next)
+  mutable int least_body_ = 0;
 
   SlotineLi(const LawParams &p, LawContext &context)
       : c(context), Lambda(p.vector("Lambda")), K_D(p.vector("K_D")), theta0(p.vector("theta0")),
@@ -46,12 +54,13 @@ struct SlotineLi : Law {
     const int n = pin_model ? pin_model->m.model.nv : 3;
     const int columns = pin_model ? 10 * (pin_model->m.model.njoints - 1) : 9;
     Y_.setZero(n, columns);
-    if (pin_model && exact) {
-      Y_plus_.setZero(n, columns);
-      Y_minus_.setZero(n, columns);
-    }
+    christoffel_ = ChristoffelWork(n, columns);
     zero_.setZero(n);
-    velocity_.setZero(n);
+    if (pin_model) {
+      weightless_ = pin_model->m.model;
+      weightless_.gravity.setZero();
+      weightless_data_ = std::make_unique<pinocchio::Data>(weightless_);
+    }
   }
 
   // pinocchio.computeJointTorqueRegressor(q, v, a) into Y (csrc/model/regressor.hpp)
@@ -60,28 +69,24 @@ struct SlotineLi : Law {
   }
 
   // Y with Y theta = M(q) a_r + C(q, v) v_r + G(q) (C(q, v_r) v_r when not exact), SlotineLi.regressor;
-  // the law's own buffer, good until the next call
+  // the law's own buffer, good until the next call. The exact form by polarisation of the bias:
+  // on Pinocchio models in two passes (christoffel_regressor), on the closed form per column.
   const Matrix &regressor(const Vector &q, const Vector &v, const Vector &v_r, const Vector &a_r) {
     if (pin_model) {
-      if (!exact) {
+      if (exact)
+        christoffel_regressor(pin_model->m.model, pin_model->m.data, q, v, v_r, a_r, Y_, christoffel_);
+      else
         joint_torque_regressor(q, v_r, a_r, Y_);
-        return Y_;
-      }
-      joint_torque_regressor(q, zero_, a_r, Y_);
-      velocity_ = v + v_r;
-      joint_torque_regressor(q, velocity_, zero_, Y_plus_);
-      velocity_ = v - v_r;
-      joint_torque_regressor(q, velocity_, zero_, Y_minus_);
-      Y_ += 0.25 * (Y_plus_ - Y_minus_);
       return Y_;
     }
-    const Vector3d q3 = q;
+    const ThreeLinkTrig trig{Vector3d(q)};  // one pose, nine unit models
+    const Vector3d plus = v + v_r, minus = v - v_r;
     for (int i = 0; i < 9; ++i) {
       const ThreeLink unit{unit_specs[i]};
-      const Vector3d g = unit.bias(q3, Vector3d::Zero());
-      const Vector3d coriolis = exact ? Vector3d(0.25 * (unit.bias(q3, v + v_r) - unit.bias(q3, v - v_r)))
-                                      : Vector3d(unit.bias(q3, v_r) - g);
-      Y_.col(i) = unit.mass(q3) * a_r + coriolis + g;
+      const Vector3d g = unit.bias(trig, Vector3d::Zero());
+      const Vector3d coriolis = exact ? Vector3d(0.25 * (unit.bias(trig, plus) - unit.bias(trig, minus)))
+                                      : Vector3d(unit.bias(trig, v_r) - g);
+      Y_.col(i) = unit.mass(trig) * a_r + coriolis + g;
     }
     return Y_;
   }
@@ -99,17 +104,26 @@ struct SlotineLi : Law {
 
   double min_inertia_eigenvalue(const Vector &q, const Vector &theta) const {
     if (!pin_model) {
+      const ThreeLinkTrig trig{Vector3d(q)};
       Eigen::Matrix3d M = Eigen::Matrix3d::Zero();
-      for (int i = 0; i < 9; ++i) M += theta[i] * ThreeLink{unit_specs[i]}.mass(q);
+      for (int i = 0; i < 9; ++i) M += theta[i] * ThreeLink{unit_specs[i]}.mass(trig);
       return Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(M, Eigen::EigenvaluesOnly).eigenvalues()[0];
     }
-    double lowest = INFINITY;
-    for (int i = 0; i < theta.size(); i += 10) {
-      const Eigen::Matrix4d P = pseudo_inertia(theta.segment(i, 10));
+    const auto least = [&](int body) {
+      const Eigen::Matrix4d P = pseudo_inertia(theta.segment(10 * body, 10));
+      return Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d>(P, Eigen::EigenvaluesOnly).eigenvalues()[0];
+    };
+    const int first = least_body_;
+    double lowest = least(first);
+    for (int body = 0; body < theta.size() / 10; ++body) {
       // this body's least eigenvalue above the least so far: it is not the least (a tie within
       // rounding decides nothing)
-      if (std::isfinite(lowest) && eigenvalues_above(P, lowest)) continue;
-      lowest = std::min(lowest, Eigen::SelfAdjointEigenSolver<Eigen::Matrix4d>(P, Eigen::EigenvaluesOnly).eigenvalues()[0]);
+      if (body == first || eigenvalues_above(pseudo_inertia(theta.segment(10 * body, 10)), lowest)) continue;
+      const double value = least(body);
+      if (value < lowest) {
+        lowest = value;
+        least_body_ = body;
+      }
     }
     return lowest;
   }
@@ -133,6 +147,12 @@ struct SlotineLi : Law {
     return out;
   }
 
+  // M-hat(q) s (SlotineLi.damping's RNEA(q, 0, s) - G(q))
+  Vector mass_times(const Vector &q, const Vector &s) {
+    if (!pin_model) return dynamic_cast<ClosedFormNominal &>(c.nominal).model.mass(Vector3d(q)) * Vector3d(s);
+    return pin::rnea(weightless_, *weightless_data_, q, zero_, s);
+  }
+
   // SlotineLi.compute
   Output compute(double t, const Vector &q, const Vector &v, const Vector &z) override {
     const TaskReference r = c.shared.reference(t, q, v);
@@ -148,8 +168,7 @@ struct SlotineLi : Law {
     const Matrix &Y = regressor(q, v, v_r, a_r);
     Output out;
     Vector damping = K_D.cwiseProduct(s);  // SlotineLi.damping: K_D s, or K_D_step / T M-hat(q) s
-    if (K_D_mass != 0.0)
-      damping += K_D_mass * (c.nominal.inverse_dynamics(q, Vector::Zero(q.size()), s) - c.nominal.gravity(q));
+    if (K_D_mass != 0.0) damping += K_D_mass * mass_times(q, s);
     out.tau = Y * z + armature.cwiseProduct(a_r) - damping + c.shared.nominal_friction(v);
     out.z = z + c.spec.period * (-gamma * (Y.transpose() * s) - leakage * (z - theta0));
     if (project) out.z = projected(out.z);

@@ -15,6 +15,9 @@ parameters per joint (``Inertia.toDynamicParameters``) and Y comes from three ca
 
     Y = Y(q, 0, q̈_r) + ¼ [Y(q, q̇ + q̇_r, 0) − Y(q, q̇ − q̇_r, 0)]
 
+(the compiled twin takes the same identity in two passes that share the kinematics, gravity and
+q̈_r doubled in one and negated in the other: 4 Y = Y(q, q̇ + q̇_r, 2q̈_r; 2g) − Y(q, q̇ − q̇_r, −2q̈_r;
+−2g), csrc/model/regressor.hpp christoffel_regressor; equal within rounding),
 and, with ``project``, each link's 4×4 pseudo-inertia is kept positive definite after every
 step (its eigenvalues clipped at 1e-5 × the link's nominal mass), so that θ̂ stays physical. On
 the paper's closed-form arm θ = (β₁, β₂, β₃, p₁, p₂, p₃, γ₁, γ₂, γ₃), in which M, C and G are
