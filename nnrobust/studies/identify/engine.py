@@ -300,8 +300,9 @@ def _report(model, layout: ParameterLayout, states, split: int, phi: np.ndarray,
 
     held = slice(split, None, max(1, (len(states.t) - split) // FIGURE_SAMPLES))
     residual = fit_residuals(model, layout, states, 0.0, held, phi)
-    logged = states.tau[held]
-    return report_html(summary, states.t[held], logged, logged - residual, states.dq)
+    logged = states.whole(held).tau
+    fastest = np.max([np.abs(w.dq).max(axis=0) for w in states.windows()], axis=0)  # each joint's
+    return report_html(summary, states.t[held], logged, logged - residual, fastest[None, :])
 
 
 FIGURE_SAMPLES = 20_000

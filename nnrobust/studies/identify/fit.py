@@ -102,27 +102,31 @@ class NormalEquations:
 def regressor_rows(
     model: pin.Model, layout: ParameterLayout, states: States, band: float, segment: slice = slice(None)
 ):
-    """The full regressor of ``states[segment]``, :data:`BATCH` samples at a time: (Y, tau, used)
-    per batch, ``used`` false where a joint sticks (|q'| < ``band``, with Coulomb friction in the
-    layout): there its row is no equation.
+    """The full regressor of ``states[segment]``, :data:`BATCH` samples at a time (the states a
+    window at a time: :meth:`.signals.States.windows`): (Y, tau, used) per batch, ``used`` false
+    where a joint sticks (|q'| < ``band``, with Coulomb friction in the layout): there its row is
+    no equation.
     """
     from ...run.compiled import torque_regressor_of
 
-    q, dq, ddq, tau = (x[segment] for x in (states.q, states.dq, states.ddq, states.tau))
     inertial = torque_regressor_of(model) or (lambda *x: torque_regressor(model, *x))  # C++, else pin's
-    for start in range(0, len(q), BATCH):
-        part = slice(start, start + BATCH)
-        Y = np.concatenate(
-            [
-                inertial(q[part], dq[part], ddq[part]),
-                friction_regressor(layout, dq[part], ddq[part]),
-            ],
-            axis=2,
-        )
-        used = (
-            slipping(dq[part], band) if "coulomb" in layout.friction else np.ones(dq[part].shape, dtype=bool)
-        )
-        yield Y, tau[part], used
+    for window in states.windows(segment):
+        q, dq, ddq, tau = window.q, window.dq, window.ddq, window.tau
+        for start in range(0, len(q), BATCH):
+            part = slice(start, start + BATCH)
+            Y = np.concatenate(
+                [
+                    inertial(q[part], dq[part], ddq[part]),
+                    friction_regressor(layout, dq[part], ddq[part]),
+                ],
+                axis=2,
+            )
+            used = (
+                slipping(dq[part], band)
+                if "coulomb" in layout.friction
+                else np.ones(dq[part].shape, dtype=bool)
+            )
+            yield Y, tau[part], used
 
 
 def normal_equations(

@@ -69,7 +69,9 @@ def share_figure(summary: dict) -> str:
 
 
 def friction_figure(summary: dict, speeds: np.ndarray) -> str:
-    """Each joint's identified friction torque over the log's speeds (an <img>)."""
+    """Each joint's identified friction torque over the log's speeds (an <img>; ``speeds``: rows
+    of joint speeds, the largest in magnitude of each column is the axis' reach).
+    """
     from ...outputs.plots import plt
 
     joints, friction = summary["joints"], summary["friction"]

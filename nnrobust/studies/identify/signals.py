@@ -23,6 +23,7 @@ What each step does, and why:
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -58,26 +59,92 @@ class FilterChoice:
     torque: bool = False
 
 
+WINDOW = 1 << 16
+"""Samples of the states computed at once (a multiple of the fit's batch): memory is a window's,
+not the log's."""
+
+MARGIN_PERIODS = 20.0
+"""Cut-off periods of signal on each side of a window that its filtering reads too. The zero-phase
+filter's response to where the window is cut decays as its slowest pole, whose time constant is
+0.42 cut-off periods at order 4 (0.5 / pi / cos(3 pi / 8)): within 20 periods to e^-48 of the
+signal, below rounding, so a window equals the whole log's filtering (a test: to 1e-12)."""
+
+
 @dataclass
-class States:
-    """The states a fit reads, on a uniform grid.
-
-    Attributes:
-        t: times [s], N.
-        q, dq, ddq: positions, velocities, accelerations, N x n.
-        tau: torques, N x n.
-        dt: the grid's step [s].
-        notes: what was done to the log, for the report (stale rows, jitter, quantisation).
-
+class Window:
+    """The states of samples ``start:stop`` of the grid: positions, velocities, accelerations and
+    torques, each (stop - start) x n.
     """
 
-    t: np.ndarray
+    start: int
     q: np.ndarray
     dq: np.ndarray
     ddq: np.ndarray
     tau: np.ndarray
+
+
+@dataclass
+class States:
+    """The states a fit reads, on a uniform grid, computed a window at a time (:meth:`windows`)
+    from the log: memory holds the grid's times and one window, whatever the log's length.
+
+    Attributes:
+        t: times [s], N.
+        dt: the grid's step [s].
+        notes: what was done to the log, for the report (stale rows, jitter, quantisation).
+        compute: ``(start, stop) -> Window`` of the grid's samples ``start:stop``.
+        n: joints.
+
+    """
+
+    t: np.ndarray
     dt: float
     notes: dict
+    compute: Callable[[int, int], Window]
+    n: int
+
+    def windows(self, segment: slice = slice(None), size: int = WINDOW) -> Iterator[Window]:
+        """The states of ``segment`` (a step over 1 takes every step-th sample), window by window
+        from its start.
+        """
+        start, stop, step = segment.indices(len(self.t))
+        for first in range(start, stop, size * step):
+            window = self.compute(first, min(first + size * step, stop))
+            if step == 1:
+                yield window
+            else:
+                part = slice(None, None, step)
+                yield Window(first, window.q[part], window.dq[part], window.ddq[part], window.tau[part])
+
+    def whole(self, segment: slice = slice(None)) -> Window:
+        """The states of ``segment`` at once (for tests and short logs: memory grows with it)."""
+        parts = list(self.windows(segment))
+        if not parts:
+            return Window(0, *(np.zeros((0, self.n)),) * 4)
+        return Window(
+            parts[0].start,
+            *(np.concatenate([getattr(w, k) for w in parts]) for k in ("q", "dq", "ddq", "tau")),
+        )
+
+    @property
+    def q(self) -> np.ndarray:
+        """Every position, N x n (:meth:`whole`)."""
+        return self.whole().q
+
+    @property
+    def dq(self) -> np.ndarray:
+        """Every velocity, N x n (:meth:`whole`)."""
+        return self.whole().dq
+
+    @property
+    def ddq(self) -> np.ndarray:
+        """Every acceleration, N x n (:meth:`whole`)."""
+        return self.whole().ddq
+
+    @property
+    def tau(self) -> np.ndarray:
+        """Every torque, N x n (:meth:`whole`)."""
+        return self.whole().tau
 
 
 def amplitude_gain(frequency: float, choice: FilterChoice, dt: float, derivatives: int) -> float:
@@ -134,23 +201,35 @@ def prepare(log: JointLog, choice: FilterChoice = FilterChoice()) -> States:
     grid = np.arange(t[0], t[-1], dt)
 
     sos = scipy.signal.butter(choice.order, choice.cutoff, fs=1.0 / dt, output="sos")
-
-    def on_grid(values: np.ndarray, shift: float = 0.0, filter: bool = True) -> np.ndarray:
-        """Each column interpolated onto the grid (and filtered), one column at a time: the
-        temporaries are a column's, not the log's.
-        """
-        out = np.empty((len(grid), values.shape[1]))
-        for i in range(values.shape[1]):
-            column = np.interp(grid + shift, t, values[keep, i])
-            out[:, i] = scipy.signal.sosfiltfilt(sos, column) if filter else column
-        return out
-
-    qf = on_grid(log.q)
-    dqf = on_grid(log.dq) if log.dq is not None else np.gradient(qf, dt, axis=0)
-    ddqf = np.gradient(dqf, dt, axis=0)
-    tauf = on_grid(log.tau, choice.delay - log.torque_lag, filter=choice.torque)
     cut = int(np.ceil(edge / dt))
-    inside = slice(cut, len(grid) - cut)
+    margin = int(np.ceil(MARGIN_PERIODS / choice.cutoff / dt))
+    fresh = np.flatnonzero(keep)  # the log's rows on which the grid is interpolated
+    tau_shift = choice.delay - log.torque_lag
+
+    def compute(start: int, stop: int) -> Window:
+        """The grid's samples ``cut + start : cut + stop``, from the log's rows they are
+        interpolated from and ``margin`` samples more on each side (filtered, then cut off).
+        """
+        lo, hi = max(0, cut + start - margin), min(len(grid), cut + stop + margin)
+        on = grid[lo:hi]
+
+        def on_grid(values: np.ndarray, shift: float = 0.0, filter: bool = True) -> np.ndarray:
+            first = max(int(np.searchsorted(t, on[0] + shift, side="right")) - 1, 0) if len(on) else 0
+            last = int(np.searchsorted(t, on[-1] + shift, side="left")) + 1 if len(on) else 0
+            rows = fresh[first:last]
+            out = np.empty((len(on), values.shape[1]))
+            for i in range(values.shape[1]):  # a column at a time: the temporaries are a column's
+                column = np.interp(on + shift, t[first:last], values[rows, i])
+                out[:, i] = scipy.signal.sosfiltfilt(sos, column) if filter else column
+            return out
+
+        q = on_grid(log.q)
+        dq = on_grid(log.dq) if log.dq is not None else np.gradient(q, dt, axis=0)
+        ddq = np.gradient(dq, dt, axis=0)
+        tau = on_grid(log.tau, tau_shift, filter=choice.torque)
+        inside = slice(cut + start - lo, cut + stop - lo)
+        return Window(start, q[inside], dq[inside], ddq[inside], tau[inside])
+
     notes = {
         "samples": int(len(log.t)),
         "stale_samples": int(stale.sum()),
@@ -175,4 +254,4 @@ def prepare(log: JointLog, choice: FilterChoice = FilterChoice()) -> States:
         "torque_lag_s": log.torque_lag,
         "delay_s": choice.delay,
     }
-    return States(grid[inside], qf[inside], dqf[inside], ddqf[inside], tauf[inside], dt, notes)
+    return States(grid[cut : len(grid) - cut], dt, notes, compute, log.q.shape[1])

@@ -5,9 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import scipy.signal
 
 from nnrobust.studies.identify.logs import JointLog
-from nnrobust.studies.identify.signals import FilterChoice, amplitude_gain, prepare, quantum
+from nnrobust.studies.identify.signals import EDGE_PERIODS, FilterChoice, amplitude_gain, prepare, quantum
 
 
 def _sine_log(frequency, t, stale=()):
@@ -63,6 +64,59 @@ def test_a_delay_and_a_run_folders_half_period_shift_the_torque():
     log.tau = np.cos(2 * np.pi * (t + 0.004))[:, None]
     states = prepare(log, FilterChoice(cutoff=10.0))
     assert np.max(np.abs(states.tau[:, 0] - np.cos(2 * np.pi * states.t))) < 1e-4
+
+
+def _whole_log_states(log, choice):
+    """The states by the whole log's filtering at once (the windows' reference): each column
+    interpolated on the grid, filtered forwards and backwards, differentiated, the edges cut."""
+    fresh = np.concatenate([[True], np.any(np.diff(log.q, axis=0) != 0, axis=1)])
+    t = log.t[fresh]
+    dt = float(np.median(np.diff(log.t)))
+    grid = np.arange(t[0], t[-1], dt)
+    sos = scipy.signal.butter(choice.order, choice.cutoff, fs=1.0 / dt, output="sos")
+
+    def on_grid(values, shift=0.0, filter=True):
+        out = np.column_stack([np.interp(grid + shift, t, values[fresh, i]) for i in range(values.shape[1])])
+        return scipy.signal.sosfiltfilt(sos, out, axis=0) if filter else out
+
+    q = on_grid(log.q)
+    dq = on_grid(log.dq) if log.dq is not None else np.gradient(q, dt, axis=0)
+    ddq = np.gradient(dq, dt, axis=0)
+    tau = on_grid(log.tau, choice.delay - log.torque_lag, filter=choice.torque)
+    cut = int(np.ceil(EDGE_PERIODS / choice.cutoff / dt))
+    inside = slice(cut, len(grid) - cut)
+    return grid[inside], q[inside], dq[inside], ddq[inside], tau[inside]
+
+
+@pytest.mark.parametrize("velocities", [True, False])
+def test_the_states_a_window_at_a_time_are_the_whole_logs(velocities):
+    """Computed in windows of 3000 samples (each filtered with its margin on both sides), the
+    states of a 60 s log with jittered stamps, stale rows and noise equal the whole log's filtering
+    at once to rounding at every sample, the cuts included: 1e-12 of each signal's range, 1e-9 for a
+    derivative of the filtered q (each central difference scales q's rounding by 1 / dt); a
+    strided segment is the same samples."""
+    rng = np.random.default_rng(3)
+    t = np.sort(np.arange(60000) / 1000.0 + rng.normal(0, 2e-4, 60000))
+    w = 2 * np.pi * np.array([0.3, 0.7, 1.9])
+    q = np.sin(np.outer(t, w)) + rng.normal(0, 1e-3, (60000, 3))
+    dq = w * np.cos(np.outer(t, w)) + rng.normal(0, 1e-2, (60000, 3))
+    tau = np.cos(np.outer(t, w)) + rng.normal(0, 1e-1, (60000, 3))
+    stale = rng.choice(np.arange(1, 60000), 2000, replace=False)
+    q[stale] = q[stale - 1]
+    log = JointLog("noisy", t, q, dq if velocities else None, tau, torque_lag=0.0005)
+    choice = FilterChoice(cutoff=10.0, delay=0.002, torque=True)
+    states = prepare(log, choice)
+    truth = _whole_log_states(log, choice)
+    windows = list(states.windows(size=3000))
+    assert len(windows) > 15 and [w.start for w in windows] == list(range(0, len(states.t), 3000))
+    assert np.array_equal(states.t, truth[0])
+    differenced = {"ddq"} | (set() if velocities else {"dq"})
+    for name, expected in zip(("q", "dq", "ddq", "tau"), truth[1:]):
+        got = np.concatenate([getattr(w, name) for w in windows])
+        error = np.max(np.abs(got - expected) / np.ptp(expected, axis=0))
+        assert error < (1e-9 if name in differenced else 1e-12), (name, error)
+    strided = states.whole(slice(7, None, 13))
+    assert np.max(np.abs(strided.ddq - truth[3][7::13]) / np.ptp(truth[3], axis=0)) < 1e-9
 
 
 def test_quantum_is_the_smallest_step_between_levels():
