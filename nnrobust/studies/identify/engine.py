@@ -61,6 +61,7 @@ from .fit import (
 from .fit import residuals as fit_residuals
 from .logs import JointLog, check_locked, read_log
 from .signals import FilterChoice, prepare
+from .spool import column_ranges
 
 MARKER = ".nnrobust-identification"
 """The marker of a folder ``identify`` wrote."""
@@ -317,10 +318,11 @@ def _check_limits(log: JointLog, model) -> None:
     of another robot, is refused before it is fitted.
     """
     low, high = model.lowerPositionLimit, model.upperPositionLimit
+    lows, highs = column_ranges(log.q)
     for j in range(model.nv):
         if not (np.isfinite(low[j]) and np.isfinite(high[j])):
             continue
-        least, most = float(log.q[:, j].min()), float(log.q[:, j].max())
+        least, most = float(lows[j]), float(highs[j])
         if least < low[j] - LIMIT_MARGIN or most > high[j] + LIMIT_MARGIN:
             raise LogError(
                 f"{log.source}: joint {model.names[j + 1]}'s positions span [{least:.4g}, {most:.4g}], "

@@ -19,16 +19,17 @@ missing or of another length, a value that is not a finite number, and times tha
 
 from __future__ import annotations
 
-import functools
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from ...core.exceptions import LogError, NNRobustError
 from .bags import is_bag, read_bag
+from .spool import BLOCK, Spool, block_value, first_not_finite
 
 TIME_COLUMNS = ("time", "t", "stamp", "timestamp")
 """Names a time column may have [s]."""
@@ -41,6 +42,9 @@ SIGNALS = {
 """Each signal and the names its columns (or text files) may start with."""
 
 TEXT_SUFFIXES = (".txt", ".dat", ".log")
+
+CSV_BLOCK_BYTES = 4 << 20
+"""Bytes of a CSV file parsed at a time."""
 """Plain-text files of one signal each."""
 
 
@@ -51,7 +55,7 @@ class JointLog:
     Attributes:
         source: what was read (the files, for messages and the record).
         t: sample times [s], N, strictly increasing.
-        q: positions, N x n.
+        q: positions, N x n (an array, or a :class:`.spool.Spool` a table is read into).
         dq: velocities, N x n, or None when the log has none (they are then differentiated).
         tau: joint torques, N x n (the torque the joint delivers, gravity included).
         files: every file read, for the record's digests.
@@ -62,9 +66,9 @@ class JointLog:
 
     source: str
     t: np.ndarray
-    q: np.ndarray
-    dq: np.ndarray | None
-    tau: np.ndarray
+    q: Any
+    dq: Any
+    tau: Any
     files: list[Path] = field(default_factory=list)
     torque_lag: float = 0.0
     notes: dict = field(default_factory=dict)
@@ -147,18 +151,33 @@ def _run_folder(folder: Path, joints: Sequence[str]) -> JointLog:
 
 
 def _table(path: Path, joints: Sequence[str], locked: Sequence[str] = ()) -> JointLog:
+    """A CSV or Parquet log, read a batch of rows at a time into :class:`.spool.Spool` files, so
+    that a long log's signals are never all in memory.
+    """
     try:
         if path.suffix.lower() == ".csv":
-            from pyarrow import csv  # here: pyarrow is the identify extra's
+            import pyarrow as pa  # here: pyarrow is the identify extra's
+            from pyarrow import csv
 
-            table = csv.read_csv(path)
-            column_names, read = table.column_names, table.column
+            table = csv.open_csv(path)  # its header and first block, for the names
+            column_names = table.schema.names
+
+            def batches(wanted, path=path):  # the time column's type inferred, the signals' float
+                return csv.open_csv(
+                    path,
+                    read_options=csv.ReadOptions(block_size=CSV_BLOCK_BYTES),
+                    convert_options=csv.ConvertOptions(
+                        include_columns=wanted, column_types={name: pa.float64() for name in wanted[1:]}
+                    ),
+                )
         else:
             from pyarrow import parquet
 
-            table = parquet.ParquetFile(path)  # its columns read one at a time, as they are used
+            table = parquet.ParquetFile(path)
             column_names = table.schema_arrow.names
-            read = lambda i, file=table: file.read([column_names[i]]).column(0)  # noqa: E731
+
+            def batches(wanted, file=table):
+                return file.iter_batches(batch_size=BLOCK, columns=wanted)
     except ImportError as err:
         raise LogError(
             f"{path}: reading CSV and Parquet logs needs pyarrow: pip install 'nnrobust[identify]'"
@@ -177,7 +196,7 @@ def _table(path: Path, joints: Sequence[str], locked: Sequence[str] = ()) -> Joi
             f"{path}: the columns {', '.join(alike)} differ only in upper and lower case; column names are "
             "read in any case, so keep one of them"
         )
-    columns = {key: functools.partial(read, i) for i, key in enumerate(folded)}  # each read when used
+    columns = dict(zip(folded, column_names))  # each column's name in the file
     shown = dict(zip(folded, stripped))  # each column as the file names it, for the messages
     time = next((c for c in TIME_COLUMNS if c in columns), None)
     if time is None:
@@ -185,11 +204,11 @@ def _table(path: Path, joints: Sequence[str], locked: Sequence[str] = ()) -> Joi
             f"{path}: no time column (one of {', '.join(TIME_COLUMNS)}); its columns: "
             f"{_listed(dict(zip(stripped, folded)))}"
         )
-    arrays = {"t": _seconds(path, shown[time], _column(path, shown[time], columns[time]))}
     names = {"t": shown[time]}
+    found: dict[str, list[str]] = {}
     for signal, prefixes in SIGNALS.items():
-        found = _signal_columns(path, columns, prefixes, [j.casefold() for j in joints], joints)
-        if found is None:
+        chosen = _signal_columns(path, columns, prefixes, [j.casefold() for j in joints], joints)
+        if chosen is None:
             if signal == "dq":
                 continue
             raise LogError(
@@ -197,11 +216,9 @@ def _table(path: Path, joints: Sequence[str], locked: Sequence[str] = ()) -> Joi
                 f"{prefixes[0]}{len(joints) - 1} or {prefixes[0]}.{joints[0]}); its columns: "
                 f"{_listed(dict(zip(stripped, folded)))}"
             )
-        arrays[signal] = np.empty((len(arrays["t"]), len(found)))  # filled column by column: one copy
-        for i, c in enumerate(found):
-            arrays[signal][:, i] = _numbers(path, shown[c], _column(path, shown[c], columns[c]))
-        names[signal] = f"{shown[found[0]]}..{shown[found[-1]]}"
-    held = {}
+        found[signal] = chosen
+        names[signal] = f"{shown[chosen[0]]}..{shown[chosen[-1]]}"
+    held_keys = {}
     for joint in locked:  # a locked joint's position, where the log names it
         for prefix in SIGNALS["q"]:
             key = next(
@@ -209,11 +226,46 @@ def _table(path: Path, joints: Sequence[str], locked: Sequence[str] = ()) -> Joi
                 None,
             )
             if key is not None:
-                values = _numbers(path, shown[key], _column(path, shown[key], columns[key]))
-                held[joint] = [float(np.nanmin(values)), float(np.nanmax(values))]
+                held_keys[joint] = key
                 break
-    del table, columns, read  # the arrays are copies: the table's memory goes before the checks
-    log = JointLog(str(path), arrays["t"], arrays["q"], arrays.get("dq"), arrays["tau"], [path])
+    wanted = [time, *(c for chosen in found.values() for c in chosen), *held_keys.values()]
+    arrays = {signal: Spool(len(chosen)) for signal, chosen in found.items()}
+    times, origin = [], None
+    held = {joint: [np.inf, -np.inf] for joint in held_keys}
+    try:
+        parts = iter(batches([columns[c] for c in dict.fromkeys(wanted)]))
+    except Exception as err:  # a column the schema names that cannot be read
+        raise LogError(f"{path}: not a readable table ({type(err).__name__}: {str(err)[:200]})") from err
+    while True:
+        try:
+            batch = next(parts, None)
+        except Exception as err:  # pyarrow's ArrowInvalid and OSError: damaged rows, a word among numbers
+            text = str(err)
+            number = re.search(r"CSV column #(\d+)", text)
+            if number and int(number.group(1)) < len(stripped):
+                raise LogError(
+                    f"{path}: column {stripped[int(number.group(1))]!r} is not numbers ({text[:200]})"
+                ) from err
+            raise LogError(f"{path}: rows cannot be read ({type(err).__name__}: {text[:200]})") from err
+        if batch is None:
+            break
+        at = {name: i for i, name in enumerate(batch.schema.names)}
+
+        def read(key, batch=batch, at=at):
+            return batch.column(at[columns[key]])
+
+        seconds, origin = _seconds(path, shown[time], read(time), origin)
+        times.append(seconds)
+        for signal, chosen in found.items():
+            arrays[signal].append(np.column_stack([_numbers(path, shown[c], read(c)) for c in chosen]))
+        for joint, key in held_keys.items():
+            values = _numbers(path, shown[key], read(key))
+            if values.size:
+                low, high = held[joint]
+                held[joint] = [min(low, float(np.nanmin(values))), max(high, float(np.nanmax(values)))]
+    del table, batches
+    t = np.concatenate(times) if times else np.zeros(0)
+    log = JointLog(str(path), t, arrays["q"], arrays.get("dq"), arrays["tau"], [path])
     if held:
         log.notes["locked"] = held
     return _checked(log, joints, names)
@@ -287,7 +339,7 @@ def _signal_columns(
 
 
 def _column(path: Path, name: str, read):
-    """A column of a table, read now (a Parquet file's from the file)."""
+    """A column of a table (or its next batch of rows), read now (a Parquet file's from the file)."""
     try:
         return read()
     except Exception as err:  # pyarrow's ArrowInvalid and OSError: a damaged column
@@ -296,9 +348,11 @@ def _column(path: Path, name: str, read):
         ) from err
 
 
-def _seconds(path: Path, name: str, column) -> np.ndarray:
-    """The time column in seconds: numbers as they are, a timestamp or a duration (Parquet's, or a
-    CSV's ISO times) as seconds since the first sample, from its integer ticks (no rounding).
+def _seconds(path: Path, name: str, column, origin: int | None = None) -> tuple[np.ndarray, int | None]:
+    """The time column in seconds, and the origin of the next batch's: numbers as they are, a
+    timestamp or a duration (Parquet's, or a CSV's ISO times) as seconds since the log's first
+    sample (``origin``, its integer ticks; the first batch's first when None), from the integer
+    ticks (no rounding).
     """
     import pyarrow as pa
 
@@ -308,8 +362,11 @@ def _seconds(path: Path, name: str, column) -> np.ndarray:
         if column.null_count:
             raise LogError(f"{path}: column {name!r} has {column.null_count} empty time stamps")
         per_second = {"s": 1, "ms": 1_000, "us": 1_000_000, "ns": 1_000_000_000}[kind.unit]
-        return (ticks - ticks[0]) / per_second if ticks.size else ticks.astype(float)
-    return _numbers(path, name, column)
+        if not ticks.size:
+            return ticks.astype(float), origin
+        origin = int(ticks[0]) if origin is None else origin
+        return (ticks - origin) / per_second, origin
+    return _numbers(path, name, column), origin
 
 
 def _numbers(path: Path, name: str, column) -> np.ndarray:
@@ -402,15 +459,12 @@ def _checked(log: JointLog, joints: Sequence[str], names: dict[str, str]) -> Joi
         values = getattr(log, signal)
         if values is None:
             continue
-        bad = np.argwhere(~np.isfinite(values))
-        if bad.size:
-            row = int(bad[0][0])
-            column = (
-                names[signal] if values.ndim == 1 else f"{names[signal]} (joint {joints[int(bad[0][1])]})"
-            )
-            value = values[tuple(bad[0])]
+        bad = first_not_finite(values)
+        if bad is not None:
+            column = names[signal] if values.ndim == 1 else f"{names[signal]} (joint {joints[bad[1]]})"
             raise LogError(
-                f"{log.source}: {column} is {value} at sample {row}; every value must be a finite number"
+                f"{log.source}: {column} is {block_value(values, bad)} at sample {bad[0]}; every value must "
+                "be a finite number"
             )
     steps = np.diff(log.t)
     if np.any(steps < 0):

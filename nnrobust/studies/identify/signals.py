@@ -31,6 +31,7 @@ import scipy.signal
 
 from ...core.exceptions import LogError
 from .logs import JointLog
+from .spool import blocks
 
 MAX_GAP_PERIODS = 0.5
 """The longest gap between fresh samples, in cut-off periods (the Panda log's is 0.09 at 10 Hz)."""
@@ -62,6 +63,10 @@ class FilterChoice:
 WINDOW = 1 << 16
 """Samples of the states computed at once (a multiple of the fit's batch): memory is a window's,
 not the log's."""
+
+QUANTUM_ROWS = 100_000
+"""The samples each signal's quantisation is read from (the report's note; a sensor's resolution
+shows in any stretch of its log)."""
 
 MARGIN_PERIODS = 20.0
 """Cut-off periods of signal on each side of a window that its filtering reads too. The zero-phase
@@ -104,12 +109,13 @@ class States:
     n: int
 
     def windows(self, segment: slice = slice(None), size: int = WINDOW) -> Iterator[Window]:
-        """The states of ``segment`` (a step over 1 takes every step-th sample), window by window
-        from its start.
+        """The states of ``segment``, window by window from its start: ``size`` samples of the grid
+        at a time (a step over 1 takes every step-th of them).
         """
         start, stop, step = segment.indices(len(self.t))
-        for first in range(start, stop, size * step):
-            window = self.compute(first, min(first + size * step, stop))
+        length = step * max(1, size // step)  # grid samples a window computes: a whole number of steps
+        for first in range(start, stop, length):
+            window = self.compute(first, min(first + length, stop))
             if step == 1:
                 yield window
             else:
@@ -168,11 +174,30 @@ def quantum(values: np.ndarray) -> float:
     return float(steps.min()) if steps.size else 0.0
 
 
+def _stale_rows(q) -> np.ndarray:
+    """Whether each row repeats the previous row's positions exactly (the first row: no)."""
+    stale, last = np.zeros(len(q), dtype=bool), None
+    for start, block in blocks(q):
+        joined = block if last is None else np.concatenate([last, block])
+        repeats = np.all(np.diff(joined, axis=0) == 0, axis=1)
+        stale[start + (last is None) : start + len(block)] = repeats
+        last = block[-1:]
+    return stale
+
+
+def _moving_rows(dq) -> np.ndarray:
+    """Whether each row has a joint with a velocity other than 0."""
+    moving = np.zeros(len(dq), dtype=bool)
+    for start, block in blocks(dq):
+        moving[start : start + len(block)] = np.abs(block).max(axis=1) > 0
+    return moving
+
+
 def prepare(log: JointLog, choice: FilterChoice = FilterChoice()) -> States:
     """The log on a uniform grid, filtered and differentiated (the module's steps, in order)."""
     steps = np.diff(log.t)
-    stale = np.concatenate([[False], np.all(np.diff(log.q, axis=0) == 0, axis=1)])
-    moving = stale & (np.abs(log.dq).max(axis=1) > 0 if log.dq is not None else stale)
+    stale = _stale_rows(log.q)
+    moving = stale & (_moving_rows(log.dq) if log.dq is not None else stale)
     keep = ~stale
     t = log.t[keep]  # the signals' fresh rows are taken column by column (on_grid)
     dt = float(np.median(steps))  # the log's own rate (the stale rows dropped leave wider steps)
@@ -216,10 +241,10 @@ def prepare(log: JointLog, choice: FilterChoice = FilterChoice()) -> States:
         def on_grid(values: np.ndarray, shift: float = 0.0, filter: bool = True) -> np.ndarray:
             first = max(int(np.searchsorted(t, on[0] + shift, side="right")) - 1, 0) if len(on) else 0
             last = int(np.searchsorted(t, on[-1] + shift, side="left")) + 1 if len(on) else 0
-            rows = fresh[first:last]
+            rows = values[fresh[first:last]]  # the window's fresh rows, read once
             out = np.empty((len(on), values.shape[1]))
             for i in range(values.shape[1]):  # a column at a time: the temporaries are a column's
-                column = np.interp(on + shift, t[first:last], values[rows, i])
+                column = np.interp(on + shift, t[first:last], rows[:, i])
                 out[:, i] = scipy.signal.sosfiltfilt(sos, column) if filter else column
             return out
 
@@ -239,10 +264,10 @@ def prepare(log: JointLog, choice: FilterChoice = FilterChoice()) -> States:
         "step_jitter_ms": float(np.std(np.diff(t)) * 1e3),
         "grid_samples": int(len(grid) - 2 * cut),
         "edge_dropped_s": cut * dt,
-        "quantum": {
-            "q": quantum(log.q),
-            "dq": quantum(log.dq) if log.dq is not None else None,
-            "tau": quantum(log.tau),
+        "quantum": {  # of the first QUANTUM_ROWS samples
+            "q": quantum(log.q[:QUANTUM_ROWS]),
+            "dq": quantum(log.dq[:QUANTUM_ROWS]) if log.dq is not None else None,
+            "tau": quantum(log.tau[:QUANTUM_ROWS]),
         },
         "velocity": "logged, filtered" if log.dq is not None else "central difference of the filtered q",
         "filter": {
