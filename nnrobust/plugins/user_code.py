@@ -30,8 +30,9 @@ def class_file(spec: str) -> Path | None:
 
 
 def file_digest(path: str | Path) -> str:
-    """SHA-256 of a file's bytes."""
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    """SHA-256 of a file's bytes, read a block at a time (a log of an hour is hundreds of MB)."""
+    with open(path, "rb") as file:
+        return hashlib.file_digest(file, "sha256").hexdigest()
 
 
 TRAVELS_ALONE = (

@@ -176,8 +176,9 @@ def _table(path: Path, joints: Sequence[str], locked: Sequence[str] = ()) -> Joi
             table = parquet.ParquetFile(path)
             column_names = table.schema_arrow.names
 
-            def batches(wanted, file=table):
-                return file.iter_batches(batch_size=BLOCK, columns=wanted)
+            def batches(wanted, file=table):  # a row group at a time: iter_batches over the whole
+                for group in range(file.num_row_groups):  # file decodes it all before the first batch
+                    yield from file.iter_batches(batch_size=BLOCK, row_groups=[group], columns=wanted)
     except ImportError as err:
         raise LogError(
             f"{path}: reading CSV and Parquet logs needs pyarrow: pip install 'nnrobust[identify]'"

@@ -119,8 +119,9 @@ class States:
             if step == 1:
                 yield window
             else:
-                part = slice(None, None, step)
-                yield Window(first, window.q[part], window.dq[part], window.ddq[part], window.tau[part])
+                part = slice(None, None, step)  # copies: a view would keep the whole window alive
+                q, dq, ddq, tau = (x[part].copy() for x in (window.q, window.dq, window.ddq, window.tau))
+                yield Window(first, q, dq, ddq, tau)
 
     def whole(self, segment: slice = slice(None)) -> Window:
         """The states of ``segment`` at once (for tests and short logs: memory grows with it)."""
