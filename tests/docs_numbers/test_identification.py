@@ -175,7 +175,14 @@ QUOTES: list[tuple] = [
     ),
     (
         PAGE_NAME,
-        r"grows with the log \(([\d ]+) MB for the hour\)",
+        r"the peak grows by (\d+) MB \(to",
+        "identify_hour",
+        lambda d: d["rows"][-1]["peak_mb"] - d["rows"][0]["peak_mb"],
+        1.0,
+    ),
+    (
+        PAGE_NAME,
+        r"\(to (\d+) MB\s+for the hour\)",
         "identify_hour",
         lambda d: d["rows"][-1]["peak_mb"],
         1.0,
