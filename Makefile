@@ -105,6 +105,9 @@ docs-data: $(VENV)/.installed-test
 	done
 	rm -rf $(OUT)/study && $(BIN)/nnrobust study examples/study.toml --out $(OUT)/study --workers 2 --quiet
 	sed "s|$(CURDIR)/||g" $(OUT)/study/report.json > $(DATA)/example_study.json
+	for policy in ppo-residual ppo-torque; do \
+	  cp $(OUT)/study/cases/paper-ellipse-noisy/train/$$policy/curves.png docs/img/example_$$(echo $$policy | tr - _)_curves.png || exit 1; \
+	done
 	$(BIN)/python benchmarks/studies/fronts.py $(OUT)/tuned-paper $(OUT)/tuned-panda --figure docs/img/tuned_comparison.png
 	$(BIN)/python benchmarks/engine_gap.py --json $(DATA)/engine_gap.json
 	$(BIN)/python benchmarks/worst_plant_loops.py --json $(DATA)/worst_plant_loops.json

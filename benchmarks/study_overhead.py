@@ -4,7 +4,7 @@ the time its simulations take, and the time a finished study takes to write its 
     python benchmarks/study_overhead.py --json out/bench/study_overhead.json [--cut] [--workers 2]
         [--study benchmarks/studies/falsify-panda.toml]
 
-The study is examples/study.toml (``--cut``: with the budgets that
+The study is examples/study.toml without its PPO rows (``--cut``: with the budgets that
 tests/studies/study/test_engine.py cuts it to, for a quick look), or ``--study FILE``, a study
 file of the repository's. It runs from scratch into a
 temporary folder; then:
@@ -42,8 +42,10 @@ CUT = {"tune": 4, "seeds": 2, "train_samples": 1, "validation": 2, "epsilon": 0.
 
 
 def study_file(folder: Path, cut: bool) -> Path:
-    """examples/study.toml (cut down with ``cut``) in ``folder``, with the files it names."""
+    """examples/study.toml (cut down with ``cut``) in ``folder``, with the files it names, without
+    its PPO rows (an hour of training, which no run's ``task_seconds`` counts)."""
     text = (ROOT / "examples" / "study.toml").read_text()
+    text = "".join(line for line in text.splitlines(keepends=True) if "train = {" not in line)
     text = text.replace("custom_controller.py:TaskPD", f"{ROOT / 'examples' / 'custom_controller.py'}:TaskPD")
     text = text.replace('file = "policies/', f'file = "{ROOT / "examples" / "policies"}/')
     if cut:

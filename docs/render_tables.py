@@ -655,11 +655,12 @@ def example_study() -> str:
     def settings(e):
         trained = (e.get("training") or {}).get("simulated_seconds")
         budget = "" if trained is None else f", {trained:.0f} simulated s"
-        return (
-            ("fixed (trained offline" + budget + ")")
-            if e.get("fixed")
-            else f"tuned, best of {seeds} seeds{budget}"
-        )
+        if e.get("fixed"):
+            return "fixed (trained offline" + budget + ")"
+        if e.get("trained"):  # the study's train stage: its own seeds
+            trained_by = e["trained"]
+            return f"trained ({trained_by['algorithm'].upper()}), best of {len(trained_by['curves'])} seeds{budget}"
+        return f"tuned, best of {seeds} seeds{budget}"
 
     def passed(e):
         whole = e["certificates"][0]
@@ -681,8 +682,9 @@ def example_study() -> str:
         rows,
     )
     n = rows[0]["certificates"][0]["N"]
+    dropped = "".join(f"{name} was not kept: {why}. " for name, why in entry.get("not_kept", {}).items())
     return table + (
-        f"\n{case}, {n} certification draws of the box per controller; errors and torques are RMS over "
+        f"\n{dropped}{case}, {n} certification draws of the box per controller; errors and torques are RMS over "
         f"t ≥ 2 s and the run; saturated is the mean share of saturated steps; passed is the share of "
         f"draws that met the whole requirement ({certified}) and P(fail) its sampled bound at 95 % "
         f"confidence; the worst plant and the margin are the falsifier's ({report['budgets']['falsify']} "

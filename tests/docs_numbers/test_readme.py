@@ -49,6 +49,25 @@ from tests.docs_numbers.common import (
     quoted_figures_test,
 )
 
+
+def _torque_curve_end(which):
+    """The least or largest of the example study's PPO torque policy's final validation errors."""
+
+    def value(d):
+        curves = d["cases"]["paper-ellipse-noisy"]["not_kept_trained"]["ppo-torque"]["curves"].values()
+        return which(c[-1]["median_rms_error_after_2s"] for c in curves)
+
+    return value
+
+
+def _pair_pd_ppo(d) -> int:
+    """Of the example study's draws, how many the tuned PD beat its PPO residual on."""
+    (pair,) = [
+        p for p in d["cases"]["paper-ellipse-noisy"]["paired"] if (p["a"], p["b"]) == ("pd", "ppo-residual")
+    ]
+    return pair["a_better"]
+
+
 QUOTES: list[tuple] = [
     *[
         (
@@ -450,6 +469,11 @@ QUOTES: list[tuple] = [
         1e3,
     ),
     ("README.md", r"against the NN's ([\d.]+) mm", "example_study", _example_median("nn"), 1e3),
+    ("README.md", r"beats that PD\non (\d+) of 29", "example_study", lambda d: 29 - _pair_pd_ppo(d), 1.0),
+    ("README.md", r"draws\*\*, ([\d.]+) mm against", "example_study", _example_median("ppo-residual"), 1e3),
+    ("README.md", r"mm against ([\d.]+) mm, and is certified", "example_study", _example_median("pd"), 1e3),
+    ("README.md", r"millimetres to (\d+) to \d+ mm", "example_study", _torque_curve_end(min), 1e3),
+    ("README.md", r"millimetres to \d+ to (\d+) mm", "example_study", _torque_curve_end(max), 1e3),
     ("README.md", r"`make test` took (\d+) s on", "fresh_clone", lambda d: d["total_seconds"], 1.0),
     (
         "README.md",

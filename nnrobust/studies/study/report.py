@@ -318,6 +318,8 @@ def build_report(spec: StudySpec, folder: Path, cases: dict) -> dict:
                 c: _controller_entry(spec, case, c) for c in spec.controllers if c in case["kept"]
             },
             "not_kept": case.get("not_kept", {}),
+            # a policy the study trained and did not keep: its seeds' records and curves still
+            "not_kept_trained": {c: t for c, t in case.get("trained", {}).items() if c not in case["kept"]},
             "paired": paired,
             "commands": _commands(spec, folder, name, case),
         }
