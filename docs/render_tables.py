@@ -658,8 +658,8 @@ def example_study() -> str:
         if e.get("fixed"):
             return "fixed (trained offline" + budget + ")"
         if e.get("trained"):  # the study's train stage: its own seeds
-            trained_by = e["trained"]
-            return f"trained ({trained_by['algorithm'].upper()}), best of {len(trained_by['curves'])} seeds{budget}"
+            by = e["trained"]
+            return f"trained ({by['algorithm'].upper()}), best of {len(by['curves'])} seeds{budget}"
         return f"tuned, best of {seeds} seeds{budget}"
 
     def passed(e):
@@ -682,9 +682,10 @@ def example_study() -> str:
         rows,
     )
     n = rows[0]["certificates"][0]["N"]
-    dropped = "".join(f"{name} was not kept: {why}. " for name, why in entry.get("not_kept", {}).items())
+    dropped = "".join(f"{c} was not kept: {why}. " for c, why in entry.get("not_kept", {}).items())
     return table + (
-        f"\n{dropped}{case}, {n} certification draws of the box per controller; errors and torques are RMS over "
+        f"\n{dropped}{case}, {n} certification draws of the box per controller; errors and torques are "
+        "RMS over "
         f"t ≥ 2 s and the run; saturated is the mean share of saturated steps; passed is the share of "
         f"draws that met the whole requirement ({certified}) and P(fail) its sampled bound at 95 % "
         f"confidence; the worst plant and the margin are the falsifier's ({report['budgets']['falsify']} "
