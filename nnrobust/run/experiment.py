@@ -132,6 +132,25 @@ def _reach_key(config: ExperimentConfig, robot: PinocchioModel, q0: np.ndarray, 
     )
 
 
+REACHED = 1e-4
+"""Task error [m] under which check_workspace takes an instant's point for reached."""
+
+FRESH_SEEDS = 8
+"""Random starts the workspace check tries at an instant the last solution does not reach."""
+
+
+def _fresh_seeds(robot: PinocchioModel, q0: np.ndarray, rng: np.random.Generator):
+    """Starts of the inverse kinematics other than the last solution: q(0), the middle of the
+    joint ranges, then random configurations within them (a joint without limits within +-pi).
+    """
+    low = np.where(np.isfinite(robot.lower_limits), robot.lower_limits, -np.pi)
+    high = np.where(np.isfinite(robot.upper_limits), robot.upper_limits, np.pi)
+    yield q0
+    yield (low + high) / 2
+    for _ in range(FRESH_SEEDS):
+        yield rng.uniform(low, high)
+
+
 def check_workspace(
     config: ExperimentConfig,
     robot: PinocchioModel,
@@ -141,8 +160,9 @@ def check_workspace(
 ) -> None:
     """Refuse a trajectory the arm cannot reach within its joint limits, before the run.
 
-    Inverse kinematics at ``samples`` instants over the run (each from the previous solution);
-    the message names the worst instant and point. A path found reachable is remembered for the
+    Inverse kinematics at ``samples`` instants over the run (each from the previous solution, and
+    where that does not reach the point from fresh starts, :func:`_fresh_seeds`); the message
+    names the worst instant and point. A path found reachable is remembered for the
     process (:data:`_REACHABLE`).
     """
     key = _reach_key(config, robot, q0, samples)
@@ -150,13 +170,21 @@ def check_workspace(
         return
     times = np.linspace(0.0, config.simulation.duration, samples)
     q, worst = q0, (0.0, 0.0, np.zeros(0))
+    rng = np.random.default_rng(0)
     for t in times:
         target = trajectory(float(t))[0]
         q, residual = solve_ik(robot, target, q, robot.lower_limits, robot.upper_limits)
+        for seed in _fresh_seeds(robot, q0, rng) if residual > REACHED else ():
+            # the last solution may lead into a local minimum at a joint limit: start afresh
+            q_other, other = solve_ik(robot, target, seed, robot.lower_limits, robot.upper_limits)
+            if other < residual:
+                q, residual = q_other, other
+            if residual <= REACHED:
+                break
         if residual > worst[1]:
             worst = (float(t), residual, target)
     t, residual, target = worst
-    if residual > 1e-4:
+    if residual > REACHED:
         p = split_pose(target)[0] if robot.task == "pose" else target
         raise ConfigError(
             "trajectory",

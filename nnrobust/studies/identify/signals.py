@@ -4,9 +4,12 @@ a zero-phase low-pass filter, velocities and accelerations (docs/identification.
 What each step does, and why:
 
 - **Stale samples** (a row whose positions repeat the previous row's exactly while the time
-  advanced: the controller's loop read an old packet) are dropped; the grid below fills them in.
-  A robot at rest also repeats its positions: dropping those rows loses nothing, for the
-  interpolation puts them back.
+  advanced and a velocity is not zero: the controller's loop read an old packet) are dropped;
+  the grid below fills them in. A robot at rest also repeats its positions, with every velocity
+  zero (a simulated arm held by its static friction, as the plant's stick-slip holds it): those
+  rows are kept, for they are true, and a rest longer than the longest gap the grid may fill
+  would otherwise refuse the log. A log without velocities cannot tell the two: every repeated
+  row is dropped.
 - **Resampling**: the stamps of a real log jitter (the Panda's: 0.7 to 8.8 ms around 1 ms);
   every signal is interpolated linearly onto the grid of the log's median step.
 - **Filtering**: q and q' pass a Butterworth low-pass forwards and backwards
@@ -199,7 +202,7 @@ def prepare(log: JointLog, choice: FilterChoice = FilterChoice()) -> States:
     steps = np.diff(log.t)
     stale = _stale_rows(log.q)
     moving = stale & (_moving_rows(log.dq) if log.dq is not None else stale)
-    keep = ~stale
+    keep = ~moving  # a repeated row at rest (every velocity zero) is true: kept
     t = log.t[keep]  # the signals' fresh rows are taken column by column (on_grid)
     dt = float(np.median(steps))  # the log's own rate (the stale rows dropped leave wider steps)
     duration = float(t[-1] - t[0]) if len(t) > 1 else 0.0

@@ -54,6 +54,27 @@ def test_stale_samples_and_jittered_stamps_leave_the_states_right():
     assert abs(states.dt - 1e-3) < 1e-5
 
 
+def test_an_arm_at_rest_is_kept_and_a_stale_sample_while_moving_dropped():
+    """An arm held still (its positions repeated exactly, every velocity zero: a plant in stick)
+    for 1 s, then moving: the rest is true and kept, where dropping it left a gap the grid may not
+    fill (the log was refused) or ramped the interpolation across it."""
+    t = np.arange(6000) / 1000.0
+    moving = np.clip(t - 1.0, 0.0, None)
+    w = 2 * np.pi
+    q = (1 - np.cos(w * moving))[:, None] * 0.1
+    dq = (w * np.sin(w * moving))[:, None] * 0.1
+    tau = dq.copy()
+    stale = [3001, 3002, 4321]
+    for k in stale:
+        q[k], dq[k], tau[k] = q[k - 1], dq[k - 1], tau[k - 1]
+    states = prepare(JointLog("rest", t, q, dq, tau), FilterChoice(cutoff=10.0))
+    assert states.notes["stale_while_moving"] == len(stale) < states.notes["stale_samples"]
+    at_rest = states.t < 0.7  # 3 cut-off periods before the start: the zero-phase filter's reach
+    assert at_rest.sum() > 300 and np.all(np.abs(states.q[at_rest, 0]) < 1e-6)
+    truth = 0.1 * (1 - np.cos(w * np.clip(states.t - 1.0, 0.0, None)))
+    assert np.max(np.abs(states.q[:, 0] - truth)) < 5e-4  # the filter rounds the start's kink
+
+
 def test_a_delay_and_a_run_folders_half_period_shift_the_torque():
     t = np.arange(10000) / 1000.0
     log = _sine_log(1.0, t)
