@@ -36,10 +36,10 @@ def main(argv: list[str] | None = None) -> int:
 
     try:
         with signals_as_interrupt():  # from the start: Ctrl-C while importing is a clean exit too
-            from .commands import build_parser
+            from .commands import build_parser, routed
 
             parser = build_parser()
-            args = parser.parse_args(argv)
+            args = parser.parse_args(routed(sys.argv[1:] if argv is None else list(argv)))
             if getattr(args, "quiet", False):  # "print nothing but errors": no warning lines either
                 warnings.simplefilter("ignore")
             if args.command is None:  # bare `nnrobust`: the help

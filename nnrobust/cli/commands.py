@@ -25,6 +25,7 @@ COMMANDS: tuple[Command, ...] = (
     studies.STUDY,
     studies.TUNE,
     identify.IDENTIFY,
+    identify.IDENTIFY_DESIGN,
     learn.LEARN,
     catalog.BENCH,
 )
@@ -35,6 +36,18 @@ EXIT_CODES = """exit codes:
        figures could not be written
   2    bad input: one line on stderr names the file, key or value
   130  interrupted (Ctrl-C, SIGTERM, SIGHUP) outside a simulation"""
+
+
+SUBCOMMANDS = {("identify", "design"): "identify-design"}
+"""Two words that name one command: ``nnrobust identify design`` is ``identify-design`` (identify
+itself takes its logs as positional arguments, so the design is a command of its own)."""
+
+
+def routed(argv: list[str]) -> list[str]:
+    """``argv`` with a two-word command (:data:`SUBCOMMANDS`) as its one-word name."""
+    if len(argv) >= 2 and (argv[0], argv[1]) in SUBCOMMANDS:
+        return [SUBCOMMANDS[argv[0], argv[1]], *argv[2:]]
+    return argv
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -53,8 +66,13 @@ def build_parser() -> argparse.ArgumentParser:
     many = many_run_options()
     for command in COMMANDS:
         parents = [many] if command.many_runs else []
+        spoken = {one: " ".join(two) for two, one in SUBCOMMANDS.items()}.get(command.name)
         child = sub.add_parser(
-            command.name, help=command.help, description=command.description, parents=parents
+            command.name,
+            help=command.help,
+            description=command.description,
+            parents=parents,
+            prog=f"nnrobust {spoken or command.name}",
         )
         command.arguments(child)
         child.set_defaults(func=command.run)

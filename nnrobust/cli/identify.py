@@ -91,18 +91,23 @@ def identify_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--quiet", action="store_true", help="print nothing but errors")
 
 
+def _friction_terms(text: str) -> tuple[str, ...]:
+    """``--friction``'s terms (a ConfigError names what is valid)."""
+    from ..model.regressor import FRICTION_TERMS
+
+    terms = tuple(t.strip() for t in text.split(",") if t.strip())
+    unknown = [t for t in terms if t not in FRICTION_TERMS]
+    if unknown or len(set(terms)) != len(terms):
+        raise ConfigError("--friction", f"{text!r}: name each of {', '.join(FRICTION_TERMS)} at most once")
+    return terms
+
+
 def cmd_identify(args) -> int:
     """Identify a robot from its log."""
-    from ..model.regressor import FRICTION_TERMS
     from ..studies.identify.engine import IdentifyOptions, identify
     from ..studies.identify.signals import FilterChoice
 
-    terms = tuple(t.strip() for t in args.friction.split(",") if t.strip())
-    unknown = [t for t in terms if t not in FRICTION_TERMS]
-    if unknown or len(set(terms)) != len(terms):
-        raise ConfigError(
-            "--friction", f"{args.friction!r}: name each of {', '.join(FRICTION_TERMS)} at most once"
-        )
+    terms = _friction_terms(args.friction)
     for option, value, low in (("--cutoff", args.cutoff, 0.0), ("--stick-band", args.stick_band, 0.0)):
         if not value > low or value != value or value == float("inf"):
             raise ConfigError(option, f"must be a positive number, got {value}")
@@ -166,4 +171,141 @@ IDENTIFY = Command(
     "(docs/identification.md).",
     arguments=identify_arguments,
     run=cmd_identify,
+)
+
+
+def design_arguments(parser: argparse.ArgumentParser) -> None:
+    """The arguments of ``nnrobust identify design``."""
+    from ..studies.identify.design import DesignOptions
+
+    d = DesignOptions()
+    parser.add_argument(
+        "--robot", required=True, help="the robot: a URDF file or a robot's name (nnrobust robots)"
+    )
+    parser.add_argument(
+        "--out",
+        required=True,
+        metavar="TRAJ.toml",
+        help="the experiment file to write (the task frame's path; the joint trajectory and the "
+        "search's record go to TRAJ.json beside it)",
+    )
+    parser.add_argument("--locked-joints", metavar="A,B", help="joints held fixed, as robot.locked_joints")
+    parser.add_argument(
+        "--task",
+        choices=("planar", "position"),
+        help="the experiment's task (default: planar for an arm whose task frame moves in a plane)",
+    )
+    parser.add_argument(
+        "--harmonics", type=int, default=d.harmonics, help=f"L, harmonics (default {d.harmonics})"
+    )
+    parser.add_argument(
+        "--frequency",
+        type=float,
+        default=d.frequency,
+        metavar="HZ",
+        help=f"the base frequency (default {d.frequency:g} Hz)",
+    )
+    parser.add_argument("--periods", type=int, default=2, help="periods the experiment runs (default 2)")
+    parser.add_argument(
+        "--position-margin",
+        type=float,
+        default=d.position_margin,
+        metavar="F",
+        help=f"share of each joint's range kept free at either end (default {d.position_margin:g})",
+    )
+    parser.add_argument(
+        "--velocity-share",
+        type=float,
+        default=d.velocity_share,
+        metavar="F",
+        help=f"share of each velocity limit the trajectory may use (default {d.velocity_share:g})",
+    )
+    parser.add_argument(
+        "--torque-share",
+        type=float,
+        default=d.torque_share,
+        metavar="F",
+        help=f"share of each effort limit the URDF model's torque may use (default {d.torque_share:g})",
+    )
+    parser.add_argument(
+        "--max-velocity", type=float, metavar="RAD_S", help="velocity limit of joints whose URDF gives none"
+    )
+    parser.add_argument(
+        "--friction",
+        default="viscous,coulomb",
+        metavar="TERMS",
+        help="the friction terms of the fit whose condition number is minimised (default: viscous,coulomb)",
+    )
+    parser.add_argument(
+        "--evaluations",
+        type=int,
+        default=d.evaluations,
+        help=f"the CMA-ES search's budget of evaluations (default {d.evaluations})",
+    )
+    parser.add_argument(
+        "--criterion",
+        default=d.criterion,
+        choices=("condition", "d-optimal"),
+        help="what the search minimises: condition (identify's condition number; the default) or "
+        "d-optimal (the confidence region's volume)",
+    )
+    parser.add_argument("--seed", type=int, default=0, help="the search's seed (default 0)")
+    parser.add_argument("--overwrite", action="store_true", help="replace TRAJ.toml and TRAJ.json")
+    parser.add_argument("--quiet", action="store_true", help="print nothing but errors")
+
+
+def cmd_identify_design(args) -> int:
+    """Design an exciting trajectory for a robot's identification."""
+    from ..studies.identify.design import DesignOptions, write_design
+
+    if not 1 <= args.periods <= 100:
+        raise ConfigError("--periods", f"must be 1 to 100, got {args.periods}")
+    options = DesignOptions(
+        harmonics=args.harmonics,
+        frequency=args.frequency,
+        position_margin=args.position_margin,
+        velocity_share=args.velocity_share,
+        torque_share=args.torque_share,
+        max_velocity=args.max_velocity,
+        friction=_friction_terms(args.friction),
+        evaluations=args.evaluations,
+        seed=args.seed,
+        criterion=args.criterion,
+    )
+    locked = None if args.locked_joints is None else [j for j in args.locked_joints.split(",") if j]
+    say = (lambda text: None) if args.quiet else (lambda text: print(text, file=sys.stderr))
+    design, toml_path, json_path = write_design(
+        args.robot, args.out, options, args.periods, args.task, locked, args.overwrite, say
+    )
+    if not args.quiet:
+        print(
+            f"condition number {design.condition:.4g} (the search's start {design.start_condition:.4g}) "
+            f"after {design.evaluations} evaluations ({design.stop}), {design.seconds:.1f} s"
+        )
+        width = max(len(j) for j in design.joints)
+        print(
+            f"{'joint':<{width}}  {'range':>6} {'velocity':>9} {'torque':>7}   "
+            "(peak share of each limit's room)"
+        )
+        for j, name in enumerate(design.joints):
+            cells = [design.peaks[k][j] for k in ("position", "velocity", "torque")]
+            print(
+                f"{name:<{width}}  "
+                + " ".join(f"{'-' if c != c else f'{100 * c:.0f}%':>{w}}" for c, w in zip(cells, (6, 9, 7)))
+            )
+        print(f"wrote {toml_path} (the experiment) and {json_path} (the joint trajectory and the search)")
+    return 0
+
+
+IDENTIFY_DESIGN = Command(
+    "identify-design",
+    help="design an exciting trajectory for identify (also: nnrobust identify design)",
+    description="Design the finite-Fourier joint trajectory that minimises the condition number "
+    "of the base regressor identify checks (or, with --criterion d-optimal, the confidence region's "
+    "volume), within the joints' ranges, velocity and effort limits, at rest at its start and every "
+    "period's end (CMA-ES); write it as an experiment file that runs it joint by joint "
+    "(controller.kind = 'joint-fourier') and its joint coefficients as JSON (docs/identification.md, "
+    "'Designing the excitation').",
+    arguments=design_arguments,
+    run=cmd_identify_design,
 )

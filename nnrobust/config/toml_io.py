@@ -360,10 +360,10 @@ def _file_data(path: Path, text: str, depth: int = 0, read: list[Path] | None = 
             if not Path(table[key]).is_absolute():
                 table[key] = str((folder / table[key]).resolve())
     controller = data.get("controller")
-    if isinstance(controller, dict):  # a policy's ONNX file, read from the file's folder
-        policy = policy_file(controller.get("kind"), controller.get("params"))
-        if policy is not None and not Path(policy).is_absolute():
-            controller["params"]["file"] = str((folder / policy).resolve())
+    if isinstance(controller, dict):  # a law's data file (a policy's ONNX file), read from the file's folder
+        data_file = law_file(controller.get("kind"), controller.get("params"))
+        if data_file is not None and not Path(data_file).is_absolute():
+            controller["params"]["file"] = str((folder / data_file).resolve())
     for section, key, _, _ in USER_PARTS.values():
         table = data.get(section)
         if isinstance(table, dict) and isinstance(table.get(key), str):
@@ -410,9 +410,9 @@ def user_files(config: ExperimentConfig) -> dict[str, str]:
     """The files of the user classes the experiment uses (part -> path; module paths left out)."""
     paths = {part: class_file(spec) for part, spec in user_classes(config).items()}
     out = {part: str(path) for part, path in paths.items() if path is not None}
-    policy = policy_file(config.controller.kind, config.controller.params)
-    if policy is not None:
-        out["policy"] = policy
+    data_file = law_file(config.controller.kind, config.controller.params)
+    if data_file is not None:
+        out["policy" if config.controller.kind == "policy" else f"{config.controller.kind} file"] = data_file
     if config.nominal.kind == "identified" and config.nominal.file:
         out["identified model"] = config.nominal.file
     if config.plant.region:
@@ -420,11 +420,17 @@ def user_files(config: ExperimentConfig) -> dict[str, str]:
     return out
 
 
-def policy_file(kind, params) -> str | None:
-    """The ONNX file of a learned policy's ``controller.params.file`` (``kind = "policy"``), or None."""
-    if kind == "policy" and isinstance(params, dict) and isinstance(params.get("file"), str):
-        return params["file"]
-    return None
+def law_file(kind, params) -> str | None:
+    """The data file of a registered law, its ``controller.params.file`` (a policy's ONNX file, a
+    designed excitation's record: the law declares it a path), or None.
+    """
+    if not isinstance(kind, str) or not isinstance(params, dict) or not isinstance(params.get("file"), str):
+        return None
+    from ..controllers.registry import registered_law  # here: the registry imports the laws
+
+    law = registered_law(kind)
+    declared = law.param("file") if law is not None else None
+    return params["file"] if declared is not None and declared.path else None
 
 
 def _file_digest(source: str) -> str:

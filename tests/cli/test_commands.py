@@ -16,8 +16,8 @@ import pytest
 
 STORED = Path(__file__).parents[1] / "data" / "cli_help"
 COMMANDS = ("", "run", "plot", "presets", "robots", "compare", "view", "sweep", "falsify", "export",
-            "serve", "drive", "study", "tune", "identify", "learn", "bench")  # fmt: skip
-"""Every command ("" is the bare ``nnrobust --help``)."""
+            "serve", "drive", "study", "tune", "identify", "identify design", "learn", "bench")  # fmt: skip
+"""Every command ("" is the bare ``nnrobust --help``; "identify design" is two words)."""
 
 
 def _help(command: str) -> tuple[int, str]:
@@ -29,7 +29,7 @@ def _help(command: str) -> tuple[int, str]:
     code = 0
     with contextlib.redirect_stdout(out):
         try:
-            code = main([*([command] if command else []), "--help"])
+            code = main([*command.split(), "--help"])
         except SystemExit as end:
             code = int(end.code or 0)
     return code, out.getvalue()
@@ -54,7 +54,7 @@ def stored_text() -> dict[str, str]:
     texts = {}
     for command in COMMANDS:
         code, text = _help(command)
-        texts[command or "nnrobust"] = f"exit {code}\n{text}"
+        texts[(command or "nnrobust").replace(" ", "-")] = f"exit {code}\n{text}"
     texts["exit-codes"] = "".join(f"{name}: {code}\n" for name, code in _codes().items())
     return texts
 
@@ -63,7 +63,7 @@ def stored_text() -> dict[str, str]:
 def test_every_help_text_is_the_stored_one(command, monkeypatch):
     monkeypatch.setenv("COLUMNS", "80")
     code, text = _help(command)
-    name = command or "nnrobust"
+    name = (command or "nnrobust").replace(" ", "-")
     assert f"exit {code}\n{text}" == (STORED / f"{name}.txt").read_text(), (
         f"python -m tests.cli.test_commands ({name})"
     )

@@ -284,12 +284,13 @@ def test_a_policy_whose_lengths_are_symbolic_runs_where_they_match(tmp_path):
 
 
 def test_the_base_laws_a_policy_takes_are_the_registrys():
-    """controller.params.base accepts every shipped law but a policy, read from the registry when
-    a value is checked (a law registered after the policy module is one too), and names them."""
+    """controller.params.base accepts every shipped law but a policy (and the designed
+    excitation's law, which reads a file of its own too), read from the registry when a value is
+    checked (a law registered after the policy module is one too), and names them."""
     from nnrobust.controllers.registry import registered_law, shipped_laws
 
     (base,) = [p for p in registered_law("policy").params if p.name == "base"]
-    assert base.allowed == tuple(n for n in shipped_laws() if n != "policy")
+    assert base.allowed == tuple(n for n in shipped_laws() if n not in ("policy", "joint-fourier"))
     assert {"nn", "pd", "slotine-li", "rbf-nn"} <= set(base.allowed)
     with pytest.raises(ConfigError, match="expected one of 'nn', .*'slotine-li', got 'policy'"):
         base.check("policy", 3, 2, "controller.params.base")

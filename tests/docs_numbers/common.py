@@ -38,6 +38,7 @@ OTHERS = [
     "worst_plant_loops",
     "identify_panda",
     "identify_calibration",
+    "identify_design",
     "identify_walkthrough",
 ]
 """Data files with a re-run test of their own below (worst_plant_loops: its compiled loop), or

@@ -69,6 +69,60 @@ def hour_table(data: dict) -> str:
     return "\n".join(lines)
 
 
+DESIGN = ROOT / "docs" / "data" / "identify_design.json"
+
+ARMS = {"three_link_planar": "paper arm", "panda": "Panda"}
+
+
+def design_table(data: dict) -> str:
+    """The page's excitation design table, from benchmarks/identify_design.py's JSON."""
+    budget = data["evaluations"]
+    lines = [
+        f"| arm | criterion | condition number, {budget:,} / {2 * budget:,} evaluations | random: "
+        "median, best of 20 | standard errors ÷ a random trajectory's | run on the bench: "
+        "joint-fourier, task-space law |",
+        "|---|---|---|---|---|---|",
+    ]
+    for row in data["robots"]:
+        for criterion, c in row["criteria"].items():
+            first, second = (c["budget"][str(b)]["condition"] for b in (budget, 2 * budget))
+            random = f"{row['random_condition_median']:.3g}, {row['random_condition_best']:.3g}"
+            runs = row["bench_runs"]
+            bench = (
+                f"{runs['joint-fourier']['condition']:.3g}, {runs['preset']['condition']:.3g}"
+                if criterion == "condition"
+                else "–"
+            )
+            lines.append(
+                f"| {ARMS[row['robot']]} | {criterion} | {first:.3g} / {second:.3g} | {random} | "
+                f"{c['standard_error_ratio_median']:.2f} | {bench} |"
+            )
+    return "\n".join(lines)
+
+
+def test_the_design_table_is_the_benchmarks():
+    found = re.search(r"<!-- identify_design -->\n(.*?)\n<!-- end -->", PAGE.read_text(), re.S)
+    assert found and found.group(1) == design_table(json.loads(DESIGN.read_text())), (
+        "python -m tests.docs_numbers.test_identification"
+    )
+
+
+def test_the_design_s_verdicts_are_its_data():
+    """What the page says in words: the condition design loses to random trajectories on the paper
+    arm's standard errors and wins on the Panda's; the D-optimal one wins on both; the
+    joint-space law runs the design within 0.01 rad, a task-space law radians away."""
+    rows = {r["robot"]: r for r in json.loads(DESIGN.read_text())["robots"]}
+    assert rows["three_link_planar"]["criteria"]["condition"]["standard_error_ratio_median"] > 1
+    assert rows["panda"]["criteria"]["condition"]["standard_error_ratio_median"] < 1
+    assert all(r["criteria"]["d-optimal"]["standard_error_ratio_median"] < 0.6 for r in rows.values())
+    for r in rows.values():
+        assert max(r["bench_runs"]["joint-fourier"]["joint_deviation_rms"]) < 0.01
+        assert max(r["bench_runs"]["preset"]["joint_deviation_rms"]) > 1.0
+        assert all(
+            max(c["peaks"]["position"] + c["peaks"]["velocity"]) <= 1.0 for c in r["criteria"].values()
+        )
+
+
 def test_the_long_log_table_is_the_benchmarks():
     found = re.search(r"<!-- identify_hour -->\n(.*?)\n<!-- end -->", PAGE.read_text(), re.S)
     assert found and found.group(1) == hour_table(json.loads(HOUR.read_text())), (
@@ -144,7 +198,83 @@ def _panda_box_half_width(data: dict) -> float:
     return box_half_width(data["level"], data["parameters"])
 
 
+PAPER, PANDA = "three_link_planar", "panda"
+
+
+def _arm(robot: str, *keys):
+    """A selector of docs/data/identify_design.json's row of ``robot``, then ``keys``."""
+
+    def select(data):
+        value = next(r for r in data["robots"] if r["robot"] == robot)
+        for key in keys:
+            value = value[key]
+        return value
+
+    return select
+
+
+def _criterion(robot: str, criterion: str, *keys):
+    """A selector of a criterion's design."""
+    return _arm(robot, "criteria", criterion, *keys)
+
+
+def _budget(robot: str, evaluations: str):
+    """The condition design's condition number at a budget."""
+    return _criterion(robot, "condition", "budget", evaluations, "condition")
+
+
+def _deviations(end):
+    """The least (end = min) or largest (max) joint deviation of the task-space law's runs [rad]."""
+    return lambda d: end(end(_arm(r, "bench_runs", "preset", "joint_deviation_rms")(d)) for r in ARMS)
+
+
+def _doubling(d) -> float:
+    """How much the paper arm's condition design moved on doubling its budget [%]."""
+    return 100 * abs(1 - _budget(PAPER, "12000")(d) / _budget(PAPER, "6000")(d))
+
+
+_DESIGN_QUOTES = (
+    (
+        r"excitation's condition number is ([\d.]+) against a median",
+        _criterion(PANDA, "condition", "condition"),
+    ),
+    (r"against a median of ([\d.]+) for random", _arm(PANDA, "random_condition_median")),
+    (
+        r"standard errors are ([\d.]+) of a random",
+        _criterion(PANDA, "condition", "standard_error_ratio_median"),
+    ),
+    (r"its condition number is ([\d.]+) against [\d.]+, yet", _criterion(PAPER, "condition", "condition")),
+    (r"its condition number is [\d.]+ against ([\d.]+), yet", _arm(PAPER, "random_condition_median")),
+    (r"\*\*([\d.]+) times\*\* a\s+random", _criterion(PAPER, "condition", "standard_error_ratio_median")),
+    (
+        r"on both arms \(([\d.]+) and [\d.]+ of a",
+        _criterion(PAPER, "d-optimal", "standard_error_ratio_median"),
+    ),
+    (
+        r"on both arms \([\d.]+ and ([\d.]+) of a",
+        _criterion(PANDA, "d-optimal", "standard_error_ratio_median"),
+    ),
+    (
+        r"criterion by ([\d.]+) or less",
+        lambda d: max(_criterion(r, "d-optimal", "doubling_change")(d) for r in ARMS),
+    ),
+    (r"and the condition number by ([\d.]+) % on the paper arm", _doubling),
+    (r"evaluations \(([\d.]+), then", _budget(PANDA, "6000")),
+    (r"then ([\d.]+) at 12 000\)", _budget(PANDA, "12000")),
+    (
+        r"the condition number is the design's \(([\d.]+) and",
+        _arm(PAPER, "bench_runs", "joint-fourier", "condition"),
+    ),
+    (r"the design's \([\d.]+ and ([\d.]+)\)", _arm(PANDA, "bench_runs", "joint-fourier", "condition")),
+    (r"task-space law it is ([\d.]+) and", _arm(PAPER, "bench_runs", "preset", "condition")),
+    (r"task-space law it is [\d.]+ and ([\d.]+), the", _arm(PANDA, "bench_runs", "preset", "condition")),
+    (r"the joints ([\d.]+) to [\d.]+ rad\s+away", _deviations(min)),
+    (r"the joints [\d.]+ to ([\d.]+) rad\s+away", _deviations(max)),
+)
+"""The excitation design's figures in the page's prose (benchmarks/identify_design.py)."""
+
 QUOTES: list[tuple] = [
+    *((PAGE_NAME, pattern, "identify_design", where, 1.0) for pattern, where in _DESIGN_QUOTES),
     (
         PAGE_NAME,
         r"rⱼ is between ([\d.]+) and",
@@ -295,6 +425,9 @@ if __name__ == "__main__":
         )
     pattern = r"(<!-- identify_calibration -->\n).*?(\n?<!-- end -->)"
     table = calibration_table(json.loads(CALIBRATION.read_text()))
+    text = re.sub(pattern, lambda m: m.group(1) + table + "\n<!-- end -->", text, flags=re.S)
+    pattern = r"(<!-- identify_design -->\n).*?(\n?<!-- end -->)"
+    table = design_table(json.loads(DESIGN.read_text()))
     text = re.sub(pattern, lambda m: m.group(1) + table + "\n<!-- end -->", text, flags=re.S)
     pattern = r"(<!-- identify_hour -->\n).*?(\n?<!-- end -->)"
     table = hour_table(json.loads(HOUR.read_text()))

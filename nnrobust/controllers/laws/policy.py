@@ -58,8 +58,17 @@ def action_scale(action: str, limits, residual_scale: float, gain_range: float) 
 
 
 def base_laws() -> tuple[str, ...]:
-    """The laws a policy can act on: every shipped law (the registry's) but a policy."""
-    return tuple(name for name in shipped_laws() if name != "policy")
+    """The laws a policy can act on: every shipped law (the registry's) but those that read a
+    file of their own (a policy, a designed excitation's joint-space law): the base is built with
+    the experiment's settings alone.
+    """
+    from ..registry import registered_law
+
+    def own_file(name: str) -> bool:
+        law = registered_law(name)
+        return law is not None and any(p.path for p in law.params)
+
+    return tuple(name for name in shipped_laws() if not own_file(name))
 
 
 def policy_params(params: dict | None) -> dict:

@@ -25,7 +25,7 @@ from ...config import (
     read_text_file,
     shipped_laws,
 )
-from ...config.toml_io import DATA_FILE_KEYS, policy_file
+from ...config.toml_io import DATA_FILE_KEYS, law_file
 from ...controllers.registry import registered_law
 from ...core.exceptions import ConfigError, NNRobustError
 from ...core.numeric_limits import finite_number
@@ -447,15 +447,15 @@ def load_sweep(path: str | Path) -> SweepSpec:
 
 
 def resolve_entry_files(entries: dict, folder: Path) -> None:
-    """A controllers entry's class file and policy file, given by relative paths, are read from
+    """A controllers entry's class file and law's data file, given by relative paths, are read from
     ``folder`` (the sweep or study file's).
     """
     from ...plugins.user_code import class_file
 
     for entry in entries.values():
-        policy = policy_file(entry.get("kind"), entry.get("params"))
-        if policy is not None and not Path(policy).is_absolute():
-            entry["params"]["file"] = str((folder / policy).resolve())
+        data_file = law_file(entry.get("kind"), entry.get("params"))
+        if data_file is not None and not Path(data_file).is_absolute():
+            entry["params"]["file"] = str((folder / data_file).resolve())
         if "class" not in entry:
             continue
         where, name = class_file(entry["class"]), entry["class"].rpartition(":")[2]
@@ -554,9 +554,10 @@ def study_inputs(spec: SweepSpec, options: dict[str, str] | None = None):
         if where is not None:
             files[f"the class file of controller {name}"] = (str(where), file_sha256(where))
             files.update(_included(where, f"the class file of controller {name}", f"controllers: {name}"))
-        policy = policy_file(entry.get("kind"), entry.get("params"))
-        if policy is not None and Path(policy).is_file():
-            files[f"the policy file of controller {name}"] = (policy, file_sha256(policy))
+        data_file = law_file(entry.get("kind"), entry.get("params"))
+        if data_file is not None and Path(data_file).is_file():
+            what = "policy file" if entry.get("kind") == "policy" else "file"
+            files[f"the {what} of controller {name}"] = (data_file, file_sha256(data_file))
     if spec.box:
         files["the box file"] = (spec.box["file"], spec.box["sha256"])
     for key, value in spec.vary.items():
