@@ -182,7 +182,15 @@ def main() -> None:
             "white": summary["confidence"]["white"],
             "long_run_ratio": summary["confidence"]["long_run_ratio"],
             "log": {
-                k: summary["log"][k] for k in ("samples", "stale_samples", "median_step_ms", "step_range_ms")
+                k: summary["log"][k]
+                for k in (
+                    "samples",
+                    "stale_samples",
+                    "stale_with_new_torque",
+                    "repeated_positions_kept",
+                    "median_step_ms",
+                    "step_range_ms",
+                )
             },
             "seconds": seconds,
         }

@@ -157,6 +157,12 @@ def test_the_physical_model_is_at_or_below_the_published_one_on_every_joint():
         assert not any(data["white"])  # "every joint's residual fails the whiteness test"
 
 
+def test_no_repeated_row_of_the_panda_log_is_kept():
+    """ "none in the Panda log": every row of it that repeats its positions is stale by the count rule."""
+    for data in json.loads(DATA.read_text())["treatments"].values():
+        assert data["log"]["repeated_positions_kept"] == 0
+
+
 def test_the_verdict_holds_at_the_other_cut_offs():
     cutoffs = json.loads(DATA.read_text())["cutoffs"]
     assert sorted(cutoffs) == ["20 Hz, as logged", "20 Hz, filtered", "5 Hz, as logged", "5 Hz, filtered"]
@@ -366,6 +372,13 @@ QUOTES: list[tuple] = [
     ),
     (PAGE_NAME, r"([\d.]+) for p = 57 \(the Panda\)", "identify_calibration", _panda_box_half_width, 1.0),
     (PAGE_NAME, r"at p = (\d+)\)", "identify_calibration", lambda d: float(d["parameters"]), 1.0),
+    (
+        PAGE_NAME,
+        r"Of\s+them, (\d+) come with a fresh torque",
+        "identify_panda",
+        _filtered("log", "stale_with_new_torque"),
+        1.0,
+    ),
     (
         PAGE_NAME,
         r"The Panda log has ([\d ]+) of its",

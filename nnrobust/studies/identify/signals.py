@@ -3,13 +3,13 @@ a zero-phase low-pass filter, velocities and accelerations (docs/identification.
 
 What each step does, and why:
 
-- **Stale samples** (a row whose positions repeat the previous row's exactly while the time
-  advanced and a velocity is not zero: the controller's loop read an old packet) are dropped;
-  the grid below fills them in. A robot at rest also repeats its positions, with every velocity
-  zero (a simulated arm held by its static friction, as the plant's stick-slip holds it): those
-  rows are kept, for they are true, and a rest longer than the longest gap the grid may fill
-  would otherwise refuse the log. A log without velocities cannot tell the two: every repeated
-  row is dropped.
+- **Stale samples** (a row whose positions repeat the previous row's exactly although, by its
+  velocity, a joint moved more than two encoder counts since they last changed: the
+  controller's loop read an old packet) are dropped; the grid below fills them in. A row at
+  rest, or creeping under a count per sample, repeats its positions too and is true: it is kept
+  (the plant's stick-slip holds a joint still; dropping the rest left a gap the grid may not
+  fill). The torque is not asked to repeat: a stale state may come beside a fresh torque
+  reading. A log without velocities cannot tell the two: every repeated row is dropped.
 - **Resampling**: the stamps of a real log jitter (the Panda's: 0.7 to 8.8 ms around 1 ms);
   every signal is interpolated linearly onto the grid of the log's median step.
 - **Filtering**: q and q' pass a Butterworth low-pass forwards and backwards
@@ -178,31 +178,58 @@ def quantum(values: np.ndarray) -> float:
     return float(steps.min()) if steps.size else 0.0
 
 
-def _stale_rows(q) -> np.ndarray:
-    """Whether each row repeats the previous row's positions exactly (the first row: no)."""
-    stale, last = np.zeros(len(q), dtype=bool), None
-    for start, block in blocks(q):
+def _repeated_rows(values) -> np.ndarray:
+    """Whether each row repeats the previous row's values exactly (the first row: no)."""
+    repeated, last = np.zeros(len(values), dtype=bool), None
+    for start, block in blocks(values):
         joined = block if last is None else np.concatenate([last, block])
-        repeats = np.all(np.diff(joined, axis=0) == 0, axis=1)
-        stale[start + (last is None) : start + len(block)] = repeats
+        repeated[start + (last is None) : start + len(block)] = np.all(np.diff(joined, axis=0) == 0, axis=1)
         last = block[-1:]
-    return stale
+    return repeated
 
 
-def _moving_rows(dq) -> np.ndarray:
-    """Whether each row has a joint with a velocity other than 0."""
-    moving = np.zeros(len(dq), dtype=bool)
+STALE_COUNTS = 2.0
+"""Encoder counts a joint must have moved, by its velocity, since its positions last changed for a
+repeated row to be stale (one count may pass legitimately before a quantised encoder steps)."""
+
+
+def _moved_rows(t: np.ndarray, dq, repeated: np.ndarray, count: float) -> np.ndarray:
+    """Whether, by its velocity, some joint moved more than :data:`STALE_COUNTS` counts since the
+    positions last changed (the time since the last row that did not repeat its predecessor).
+    """
+    moved = np.zeros(len(t), dtype=bool)
+    last_fresh = 0
     for start, block in blocks(dq):
-        moving[start : start + len(block)] = np.abs(block).max(axis=1) > 0
-    return moving
+        rows = np.arange(start, start + len(block))
+        fresh_index = np.where(repeated[rows], -1, rows)
+        fresh_index[0] = max(fresh_index[0], last_fresh)
+        fresh_index = np.maximum.accumulate(fresh_index)
+        last_fresh = int(fresh_index[-1])
+        elapsed = t[rows] - t[fresh_index]
+        moved[rows] = np.abs(block).max(axis=1) * elapsed > STALE_COUNTS * count
+    return moved
+
+
+def stale_rows(log: JointLog) -> tuple[np.ndarray, np.ndarray]:
+    """(stale, repeated): the rows whose positions repeat the previous row's exactly, and of those
+    the stale ones: where by its velocity some joint moved more than :data:`STALE_COUNTS` counts
+    of the encoder (:func:`quantum` of the positions) since its positions last changed. A row
+    at rest, or one creeping under a count per sample, repeats its positions and is true. A log
+    without velocities cannot tell: every repeated row is stale.
+    """
+    repeated = _repeated_rows(log.q)
+    if log.dq is None:
+        return repeated, repeated
+    count = quantum(log.q[:QUANTUM_ROWS])
+    return repeated & _moved_rows(log.t, log.dq, repeated, count), repeated
 
 
 def prepare(log: JointLog, choice: FilterChoice = FilterChoice()) -> States:
     """The log on a uniform grid, filtered and differentiated (the module's steps, in order)."""
     steps = np.diff(log.t)
-    stale = _stale_rows(log.q)
-    moving = stale & (_moving_rows(log.dq) if log.dq is not None else stale)
-    keep = ~moving  # a repeated row at rest (every velocity zero) is true: kept
+    stale, repeated = stale_rows(log)
+    new_torque = int(np.sum(stale & ~_repeated_rows(log.tau)))
+    keep = ~stale
     t = log.t[keep]  # the signals' fresh rows are taken column by column (on_grid)
     dt = float(np.median(steps))  # the log's own rate (the stale rows dropped leave wider steps)
     duration = float(t[-1] - t[0]) if len(t) > 1 else 0.0
@@ -262,7 +289,8 @@ def prepare(log: JointLog, choice: FilterChoice = FilterChoice()) -> States:
     notes = {
         "samples": int(len(log.t)),
         "stale_samples": int(stale.sum()),
-        "stale_while_moving": int(moving.sum()),
+        "stale_with_new_torque": new_torque,
+        "repeated_positions_kept": int(np.sum(repeated & ~stale)),
         "median_step_ms": dt * 1e3,
         "step_range_ms": [float(steps.min() * 1e3), float(steps.max() * 1e3)],
         "step_jitter_ms": float(np.std(np.diff(t)) * 1e3),

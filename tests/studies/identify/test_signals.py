@@ -46,12 +46,30 @@ def test_stale_samples_and_jittered_stamps_leave_the_states_right():
     stale = rng.choice(np.arange(1, 10000), 400, replace=False)
     states = prepare(_sine_log(1.0, t, stale), FilterChoice(cutoff=10.0))
     w = 2 * np.pi
-    assert states.notes["stale_samples"] == len(set(stale)) and states.notes["stale_while_moving"] > 0
+    assert states.notes["stale_samples"] == len(set(stale))
     assert np.max(np.abs(states.q[:, 0] - np.sin(w * states.t))) < 1e-4
     assert np.max(np.abs(states.ddq[:, 0] + w**2 * np.sin(w * states.t))) < 2e-2 * w**2
     # the torque is left as logged (interpolated only), so its noise stays white
     assert np.max(np.abs(states.tau[:, 0] - np.cos(w * states.t))) < 1e-4
     assert abs(states.dt - 1e-3) < 1e-5
+
+
+def test_a_creeping_joint_under_one_encoder_count_is_not_stale():
+    """A quantised encoder repeats its positions while the arm creeps slower than a count per
+    sample (by its velocity): the rows are true and kept; faster, a repeated row is stale."""
+    t = np.arange(4000) / 1000.0
+    count = 1e-3
+    q = (count * np.round(0.02 * t**2 / count))[:, None]  # from rest: under a count per sample at first
+    dq = (0.04 * t)[:, None]
+    log = JointLog("creep", t, q, dq, dq.copy())
+    repeated = int(np.sum(np.all(np.diff(q, axis=0) == 0, axis=1)))
+    states = prepare(log, FilterChoice(cutoff=10.0))
+    assert repeated > 1000 and states.notes["stale_samples"] == 0
+    assert states.notes["repeated_positions_kept"] == repeated
+    q[3500] = q[3499]  # at 0.14 rad/s, 0.14 counts a sample: still under a count
+    q[3800:3840] = q[3799]  # held 40 ms while it moves 6 counts: stale past the first 2 counts
+    states = prepare(JointLog("creep", t, q, dq, dq.copy()), FilterChoice(cutoff=10.0))
+    assert 20 < states.notes["stale_samples"] < 40
 
 
 def test_an_arm_at_rest_is_kept_and_a_stale_sample_while_moving_dropped():
@@ -64,11 +82,11 @@ def test_an_arm_at_rest_is_kept_and_a_stale_sample_while_moving_dropped():
     q = (1 - np.cos(w * moving))[:, None] * 0.1
     dq = (w * np.sin(w * moving))[:, None] * 0.1
     tau = dq.copy()
-    stale = [3001, 3002, 4321]
+    stale = [3251, 3252, 4321]
     for k in stale:
         q[k], dq[k], tau[k] = q[k - 1], dq[k - 1], tau[k - 1]
     states = prepare(JointLog("rest", t, q, dq, tau), FilterChoice(cutoff=10.0))
-    assert states.notes["stale_while_moving"] == len(stale) < states.notes["stale_samples"]
+    assert states.notes["stale_samples"] == len(stale) < states.notes["repeated_positions_kept"]
     at_rest = states.t < 0.7  # 3 cut-off periods before the start: the zero-phase filter's reach
     assert at_rest.sum() > 300 and np.all(np.abs(states.q[at_rest, 0]) < 1e-6)
     truth = 0.1 * (1 - np.cos(w * np.clip(states.t - 1.0, 0.0, None)))
@@ -90,7 +108,7 @@ def test_a_delay_and_a_run_folders_half_period_shift_the_torque():
 def _whole_log_states(log, choice):
     """The states by the whole log's filtering at once (the windows' reference): each column
     interpolated on the grid, filtered forwards and backwards, differentiated, the edges cut."""
-    fresh = np.concatenate([[True], np.any(np.diff(log.q, axis=0) != 0, axis=1)])
+    fresh = np.concatenate([[True], np.any(np.diff(log.q, axis=0) != 0, axis=1)])  # every one moves
     t = log.t[fresh]
     dt = float(np.median(np.diff(log.t)))
     grid = np.arange(t[0], t[-1], dt)
@@ -122,8 +140,9 @@ def test_the_states_a_window_at_a_time_are_the_whole_logs(velocities):
     q = np.sin(np.outer(t, w)) + rng.normal(0, 1e-3, (60000, 3))
     dq = w * np.cos(np.outer(t, w)) + rng.normal(0, 1e-2, (60000, 3))
     tau = np.cos(np.outer(t, w)) + rng.normal(0, 1e-1, (60000, 3))
-    stale = rng.choice(np.arange(1, 60000), 2000, replace=False)
-    q[stale] = q[stale - 1]
+    stale = np.sort(rng.choice(np.arange(1, 60000), 2000, replace=False))
+    for k in stale:  # in order: a run of stale rows repeats the last fresh one
+        q[k], dq[k] = q[k - 1], dq[k - 1]
     log = JointLog("noisy", t, q, dq if velocities else None, tau, torque_lag=0.0005)
     choice = FilterChoice(cutoff=10.0, delay=0.002, torque=True)
     states = prepare(log, choice)

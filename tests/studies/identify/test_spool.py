@@ -7,7 +7,7 @@ import pytest
 
 from nnrobust.studies.identify import logs
 from nnrobust.studies.identify.logs import JointLog, read_log
-from nnrobust.studies.identify.signals import FilterChoice, _stale_rows, prepare
+from nnrobust.studies.identify.signals import FilterChoice, _repeated_rows, prepare
 from nnrobust.studies.identify.spool import Spool, blocks, column_ranges, first_not_finite
 
 pa = pytest.importorskip("pyarrow")
@@ -52,8 +52,8 @@ def test_stale_rows_across_blocks_are_the_whole_arrays():
     for k in (1, 65_535, 65_536, 65_537, 131_072, 199_999, *rng.choice(np.arange(1, 200_000), 300)):
         q[k] = q[k - 1]
     whole = np.concatenate([[False], np.all(np.diff(q, axis=0) == 0, axis=1)])
-    np.testing.assert_array_equal(_stale_rows(_spooled(q)), whole)
-    np.testing.assert_array_equal(_stale_rows(q), whole)
+    np.testing.assert_array_equal(_repeated_rows(_spooled(q)), whole)
+    np.testing.assert_array_equal(_repeated_rows(q), whole)
 
 
 def test_a_parquet_log_read_in_batches_is_the_log_read_whole(tmp_path, monkeypatch):
