@@ -98,10 +98,11 @@ def rms(x: np.ndarray) -> np.ndarray:
     return np.sqrt(np.mean(x**2, axis=0))
 
 
-def scored(files, joints, published, published_friction, cutoff: float, filtered: bool):
-    """Every model's held-out residual RMS per joint at one cut-off and torque treatment, the
-    torque RMS, the identification's summary and its seconds."""
-    options = IdentifyOptions(friction=FRICTION_TERMS, filter=FilterChoice(cutoff, torque=filtered))
+def scored(files, joints, published, published_friction, cutoff: float, filtered: bool, guard: float = 1.5):
+    """Every model's held-out residual RMS per joint at one cut-off, torque treatment and
+    reversal guard, the torque RMS, the identification's summary and its seconds."""
+    choice = FilterChoice(cutoff, torque=filtered, reversal_guard=guard)
+    options = IdentifyOptions(friction=FRICTION_TERMS, filter=choice)
     start = time.perf_counter()
     summary = identify(files, "panda", None, options)
     seconds = time.perf_counter() - start
@@ -209,6 +210,13 @@ def main() -> None:
                 "physical": summary["checks"]["physical"],
             }
             print(f"{key:22s} {below_published(rows)}")
+    rows, torque_rms, summary, _ = scored(files, joints, published, published_friction, CUTOFF, True, 0.0)
+    out["without_reversal_guard"] = {  # --reversal-guard 0, the torque filtered
+        "below_published": below_published(rows),
+        "residual_share": {name: (r / torque_rms).tolist() for name, r in rows.items()},
+        "physical": summary["checks"]["physical"],
+    }
+    print(f"{'no reversal guard, filtered':22s} {below_published(rows)}")
     if args.json:
         write_json_atomic(Path(args.json), out)
 

@@ -62,6 +62,14 @@ def identify_arguments(parser: argparse.ArgumentParser) -> None:
         "--delay", type=float, default=0.0, metavar="S", help="the torque's measurement delay [s] (default 0)"
     )
     parser.add_argument(
+        "--reversal-guard",
+        type=float,
+        default=1.5,
+        metavar="PERIODS",
+        help="cut-off periods on either side of a joint's velocity reversal whose samples leave the "
+        "fit (the filter smears the acceleration's jump there; default 1.5, 0: none)",
+    )
+    parser.add_argument(
         "--stick-band",
         type=float,
         default=0.01,
@@ -113,12 +121,16 @@ def cmd_identify(args) -> int:
             raise ConfigError(option, f"must be a positive number, got {value}")
     if not 1 <= args.order <= 8:
         raise ConfigError("--order", f"must be 1 to 8, got {args.order}")
+    if not 0 <= args.reversal_guard <= 10:
+        raise ConfigError("--reversal-guard", f"must be 0 to 10 cut-off periods, got {args.reversal_guard}")
     if not abs(args.delay) < 1.0:
         raise ConfigError("--delay", f"must be under 1 s in size, got {args.delay}")
     options = IdentifyOptions(
         friction=terms,
         armature=args.armature,
-        filter=FilterChoice(args.cutoff, args.order, args.delay, torque=args.filter_torque),
+        filter=FilterChoice(
+            args.cutoff, args.order, args.delay, torque=args.filter_torque, reversal_guard=args.reversal_guard
+        ),
         stick_band=args.stick_band,
         fit_share=args.fit_share,
         allow_unexcited=args.allow_unexcited,

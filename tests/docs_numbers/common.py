@@ -38,12 +38,14 @@ OTHERS = [
     "worst_plant_loops",
     "identify_panda",
     "identify_calibration",
+    "identify_calibration_plant",
     "identify_design",
     "identify_walkthrough",
 ]
 """Data files with a re-run test of their own below (worst_plant_loops: its compiled loop), or
 whose tables a page's test regenerates from them (identify_panda, whose log no one here ships,
-and identify_calibration: tests/docs_numbers/test_identification.py; identify_walkthrough: the
+identify_calibration, identify_calibration_plant and identify_design:
+tests/docs_numbers/test_identification.py; identify_walkthrough: the
 commands tests/studies/identify/test_walkthrough.py runs, its budgets cut)."""
 
 

@@ -68,7 +68,56 @@ def _pair_pd_ppo(d) -> int:
     return pair["a_better"]
 
 
+def _design(robot: str, criterion: str):
+    """A design's standard errors over a random trajectory's (docs/data/identify_design.json)."""
+    return lambda d: next(r for r in d["robots"] if r["robot"] == robot)["criteria"][criterion][
+        "standard_error_ratio_median"
+    ]
+
+
 QUOTES: list[tuple] = [
+    (
+        "README.md",
+        r"standard errors are ([\d.]+)\s+\(paper's arm\)",
+        "identify_design",
+        _design("three_link_planar", "condition"),
+        1.0,
+    ),
+    (
+        "README.md",
+        r"\(paper's arm\) and ([\d.]+) \(Panda\)",
+        "identify_design",
+        _design("panda", "condition"),
+        1.0,
+    ),
+    (
+        "README.md",
+        r"the D-optimal design's ([\d.]+) and [\d.]+\.",
+        "identify_design",
+        _design("three_link_planar", "d-optimal"),
+        1.0,
+    ),
+    (
+        "README.md",
+        r"the D-optimal design's [\d.]+ and ([\d.]+)\.",
+        "identify_design",
+        _design("panda", "d-optimal"),
+        1.0,
+    ),
+    (
+        "README.md",
+        r"95 % region holds the true robot in only (\d+) % of them",
+        "identify_calibration_plant",
+        lambda d: d["variants"]["defaults"]["coverage"],
+        100.0,
+    ),
+    (
+        "README.md",
+        r"of them, the box in (\d+) %\.",
+        "identify_calibration_plant",
+        lambda d: d["variants"]["defaults"]["box_coverage"],
+        100.0,
+    ),
     *[
         (
             "README.md",

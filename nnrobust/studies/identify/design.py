@@ -38,6 +38,7 @@ from ...model.regressor import (
     torque_regressor,
 )
 from .fit import NormalEquations, base_columns, identifiability
+from .signals import near_reversal
 from .synthetic import FourierTrajectory
 
 CHECK_RATE = 1000.0
@@ -80,6 +81,8 @@ class DesignOptions:
             a joint is refused).
         friction: the friction terms of the fit whose condition is minimised.
         stick_band: |q'| under which a joint's row leaves the fit (identify's ``--stick-band``).
+        reversal_guard: seconds on either side of a joint's velocity reversal whose rows leave
+            the fit (identify's ``--reversal-guard`` at its ``--cutoff``: 1.5 periods of 10 Hz).
         evaluations: the search's budget of objective evaluations.
         seed: the search's seed (its start and its samples).
         criterion: what the search minimises (:data:`CRITERIA`).
@@ -95,6 +98,7 @@ class DesignOptions:
     max_velocity: float | None = None
     friction: tuple[str, ...] = ("viscous", "coulomb")
     stick_band: float = 0.01
+    reversal_guard: float = 0.15
     evaluations: int = 6000
     seed: int = 0
     criterion: str = "condition"
@@ -253,7 +257,8 @@ class ExcitationProblem:
             if "coulomb" in self.layout.friction
             else np.ones_like(dq, bool)
         )
-        normal.add(Y, np.zeros(dq.shape), used)
+        reach = int(round(self.options.reversal_guard * self.options.samples * self.options.frequency))
+        normal.add(Y, np.zeros(dq.shape), used & ~near_reversal(dq, reach))
         return normal
 
     def criterion(self, Y: np.ndarray, dq: np.ndarray) -> float:

@@ -141,7 +141,7 @@ def identify(
     _check_segments(log.source, states.t, split)
     fit_rows = normal_equations(model, layout, states, options.stick_band, slice(0, split))
     # every held-out sample is scored, a joint in stick included: a prediction is judged where it is used
-    held_rows = normal_equations(model, layout, states, 0.0, slice(split, None))
+    held_rows = normal_equations(model, layout, states, 0.0, slice(split, None), guard=False)
     excitation = identifiability(fit_rows, columns, names)
     say(
         f"{base.rank} base parameters + {layout.size - 10 * layout.n} friction terms; condition number "
@@ -300,7 +300,7 @@ def _report(model, layout: ParameterLayout, states, split: int, phi: np.ndarray,
     from .report import report_html
 
     held = slice(split, None, max(1, (len(states.t) - split) // FIGURE_SAMPLES))
-    residual = fit_residuals(model, layout, states, 0.0, held, phi)
+    residual = fit_residuals(model, layout, states, 0.0, held, phi, guard=False)
     logged = states.whole(held).tau
     fastest = np.max([np.abs(w.dq).max(axis=0) for w in states.windows()], axis=0)  # each joint's
     return report_html(summary, states.t[held], logged, logged - residual, fastest[None, :])

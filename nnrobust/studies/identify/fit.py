@@ -100,12 +100,18 @@ class NormalEquations:
 
 
 def regressor_rows(
-    model: pin.Model, layout: ParameterLayout, states: States, band: float, segment: slice = slice(None)
+    model: pin.Model,
+    layout: ParameterLayout,
+    states: States,
+    band: float,
+    segment: slice = slice(None),
+    guard: bool = True,
 ):
     """The full regressor of ``states[segment]``, :data:`BATCH` samples at a time (the states a
     window at a time: :meth:`.signals.States.windows`): (Y, tau, used) per batch, ``used`` false
-    where a joint sticks (|q'| < ``band``, with Coulomb friction in the layout): there its row is
-    no equation.
+    where a joint sticks (|q'| < ``band``, with Coulomb friction in the layout) or, with
+    ``guard``, is within the reversal guard of a velocity reversal
+    (:attr:`.signals.FilterChoice.reversal_guard`): there its row is no equation.
     """
     from ...run.compiled import torque_regressor_of
 
@@ -126,25 +132,38 @@ def regressor_rows(
                 if "coulomb" in layout.friction
                 else np.ones(dq[part].shape, dtype=bool)
             )
+            if guard and window.reversal is not None:
+                used = used & ~window.reversal[part]
             yield Y, tau[part], used
 
 
 def normal_equations(
-    model: pin.Model, layout: ParameterLayout, states: States, band: float, segment: slice = slice(None)
+    model: pin.Model,
+    layout: ParameterLayout,
+    states: States,
+    band: float,
+    segment: slice = slice(None),
+    guard: bool = True,
 ) -> NormalEquations:
     """The normal equations of ``states[segment]`` (:func:`regressor_rows`)."""
     out = NormalEquations.empty(layout.n, layout.size)
-    for Y, tau, used in regressor_rows(model, layout, states, band, segment):
+    for Y, tau, used in regressor_rows(model, layout, states, band, segment, guard):
         out.add(Y, tau, used)
     return out
 
 
 def residuals(
-    model: pin.Model, layout: ParameterLayout, states: States, band: float, segment: slice, phi: np.ndarray
+    model: pin.Model,
+    layout: ParameterLayout,
+    states: States,
+    band: float,
+    segment: slice,
+    phi: np.ndarray,
+    guard: bool = True,
 ) -> np.ndarray:
     """The residual tau - Y phi on ``states[segment]``, N x n, NaN where a joint's row is no equation."""
     parts = []
-    for Y, tau, used in regressor_rows(model, layout, states, band, segment):
+    for Y, tau, used in regressor_rows(model, layout, states, band, segment, guard):
         parts.append(np.where(used, tau - Y @ phi, np.nan))
     return np.concatenate(parts) if parts else np.zeros((0, layout.n))
 

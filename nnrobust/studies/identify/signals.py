@@ -54,6 +54,11 @@ class FilterChoice:
         torque: whether the torque passes the filter too (default no: its noise is then white and
             independent of the states, so least squares is unbiased, its covariance holds, and a
             Coulomb switch in the torque stays as sharp as the regressor's sgn(q')).
+        reversal_guard: cut-off periods on either side of a joint's velocity reversal whose
+            samples leave the fit for that joint (0: none). At a reversal Coulomb friction flips:
+            where a law commands the torque (a closed loop, a real robot), q'' jumps by
+            2 F_c / M there, and the filter smears that jump over about a cut-off period on each
+            side, where the filtered q'' is not the motion's.
 
     """
 
@@ -61,6 +66,7 @@ class FilterChoice:
     order: int = 4
     delay: float = 0.0
     torque: bool = False
+    reversal_guard: float = 1.5
 
 
 WINDOW = 1 << 16
@@ -89,6 +95,27 @@ class Window:
     dq: np.ndarray
     ddq: np.ndarray
     tau: np.ndarray
+    reversal: np.ndarray | None = None
+    """Per sample and joint, whether it is within the reversal guard of a velocity reversal
+    (:attr:`FilterChoice.reversal_guard`; None: no guard)."""
+
+
+def near_reversal(dq: np.ndarray, reach: int) -> np.ndarray:
+    """Per row and column, whether it is within ``reach`` rows of a sign change of ``dq`` (a joint's
+    velocity reversal: between two rows of opposite signs, or at a zero between them).
+    """
+    flips = np.zeros(dq.shape, dtype=bool)
+    if reach <= 0 or len(dq) < 2:
+        return flips
+    sign = np.sign(dq)
+    flips[1:] = sign[1:] != sign[:-1]
+    # a flip between rows f - 1 and f (flips[f]) marks rows f - reach .. f + reach - 1, reach on
+    # each side: row r is marked by the flips f in r - reach + 1 .. r + reach (a running count)
+    counts = np.cumsum(np.vstack([np.zeros((1, dq.shape[1]), int), flips.astype(int)]), axis=0)
+    rows = np.arange(len(dq))
+    high = np.minimum(rows + reach + 1, len(dq))
+    low = np.maximum(rows - reach + 1, 0)
+    return (counts[high] - counts[low]) > 0
 
 
 @dataclass
@@ -124,17 +151,21 @@ class States:
             else:
                 part = slice(None, None, step)  # copies: a view would keep the whole window alive
                 q, dq, ddq, tau = (x[part].copy() for x in (window.q, window.dq, window.ddq, window.tau))
-                yield Window(first, q, dq, ddq, tau)
+                reversal = window.reversal[part].copy() if window.reversal is not None else None
+                yield Window(first, q, dq, ddq, tau, reversal)
 
     def whole(self, segment: slice = slice(None)) -> Window:
         """The states of ``segment`` at once (for tests and short logs: memory grows with it)."""
         parts = list(self.windows(segment))
         if not parts:
             return Window(0, *(np.zeros((0, self.n)),) * 4)
-        return Window(
-            parts[0].start,
-            *(np.concatenate([getattr(w, k) for w in parts]) for k in ("q", "dq", "ddq", "tau")),
+        reversal = (
+            np.concatenate([w.reversal for w in parts])
+            if all(w.reversal is not None for w in parts)
+            else None
         )
+        q, dq, ddq, tau = (np.concatenate([getattr(w, k) for w in parts]) for k in ("q", "dq", "ddq", "tau"))
+        return Window(parts[0].start, q, dq, ddq, tau, reversal)
 
     @property
     def q(self) -> np.ndarray:
@@ -259,6 +290,12 @@ def prepare(log: JointLog, choice: FilterChoice = FilterChoice()) -> States:
     sos = scipy.signal.butter(choice.order, choice.cutoff, fs=1.0 / dt, output="sos")
     cut = int(np.ceil(edge / dt))
     margin = int(np.ceil(MARGIN_PERIODS / choice.cutoff / dt))
+    if not 0 <= choice.reversal_guard <= MARGIN_PERIODS / 2:
+        raise LogError(
+            f"--reversal-guard must be 0 to {MARGIN_PERIODS / 2:g} cut-off periods, "
+            f"got {choice.reversal_guard:g}"
+        )
+    guard = int(round(choice.reversal_guard / choice.cutoff / dt))
     fresh = np.flatnonzero(keep)  # the log's rows on which the grid is interpolated
     tau_shift = choice.delay - log.torque_lag
 
@@ -284,7 +321,8 @@ def prepare(log: JointLog, choice: FilterChoice = FilterChoice()) -> States:
         ddq = np.gradient(dq, dt, axis=0)
         tau = on_grid(log.tau, tau_shift, filter=choice.torque)
         inside = slice(cut + start - lo, cut + stop - lo)
-        return Window(start, q[inside], dq[inside], ddq[inside], tau[inside])
+        reversal = near_reversal(dq, guard)[inside] if guard > 0 else None  # the margin's reversals too
+        return Window(start, q[inside], dq[inside], ddq[inside], tau[inside], reversal)
 
     notes = {
         "samples": int(len(log.t)),

@@ -124,7 +124,13 @@ def _whole_log_states(log, choice):
     tau = on_grid(log.tau, choice.delay - log.torque_lag, filter=choice.torque)
     cut = int(np.ceil(EDGE_PERIODS / choice.cutoff / dt))
     inside = slice(cut, len(grid) - cut)
-    return grid[inside], q[inside], dq[inside], ddq[inside], tau[inside]
+    # the reversal guard, from first principles: reach rows on each side of every sign change
+    reach = int(round(choice.reversal_guard / choice.cutoff / dt))
+    guarded = np.zeros(dq.shape, dtype=bool)
+    for j in range(dq.shape[1]):
+        for f in np.flatnonzero(np.sign(dq[1:, j]) != np.sign(dq[:-1, j])) + 1:
+            guarded[max(f - reach, 0) : f + reach, j] = True
+    return grid[inside], q[inside], dq[inside], ddq[inside], tau[inside], guarded[inside]
 
 
 @pytest.mark.parametrize("velocities", [True, False])
@@ -151,7 +157,9 @@ def test_the_states_a_window_at_a_time_are_the_whole_logs(velocities):
     assert len(windows) > 15 and [w.start for w in windows] == list(range(0, len(states.t), 3000))
     assert np.array_equal(states.t, truth[0])
     differenced = {"ddq"} | (set() if velocities else {"dq"})
-    for name, expected in zip(("q", "dq", "ddq", "tau"), truth[1:]):
+    reversal = np.concatenate([w.reversal for w in windows])
+    assert 0.02 < reversal.mean() < 0.9 and np.array_equal(reversal, truth[5])  # across the windows' edges
+    for name, expected in zip(("q", "dq", "ddq", "tau"), truth[1:5]):
         got = np.concatenate([getattr(w, name) for w in windows])
         error = np.max(np.abs(got - expected) / np.ptp(expected, axis=0))
         assert error < (1e-9 if name in differenced else 1e-12), (name, error)
