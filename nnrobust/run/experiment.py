@@ -161,8 +161,8 @@ def check_workspace(
     """Refuse a trajectory the arm cannot reach within its joint limits, before the run.
 
     Inverse kinematics at ``samples`` instants over the run (each from the previous solution, and
-    where that does not reach the point from fresh starts, :func:`_fresh_seeds`); the message
-    names the worst instant and point. A path found reachable is remembered for the
+    where that does not reach the point from fresh starts, :func:`_fresh_seeds`, until one is out
+    of reach); the message names the worst instant and point. A path found reachable is remembered for the
     process (:data:`_REACHABLE`).
     """
     key = _reach_key(config, robot, q0, samples)
@@ -170,17 +170,18 @@ def check_workspace(
         return
     times = np.linspace(0.0, config.simulation.duration, samples)
     q, worst = q0, (0.0, 0.0, np.zeros(0))
-    rng = np.random.default_rng(0)
+    rng, retry = np.random.default_rng(0), True
     for t in times:
         target = trajectory(float(t))[0]
         q, residual = solve_ik(robot, target, q, robot.lower_limits, robot.upper_limits)
-        for seed in _fresh_seeds(robot, q0, rng) if residual > REACHED else ():
+        for seed in _fresh_seeds(robot, q0, rng) if residual > REACHED and retry else ():
             # the last solution may lead into a local minimum at a joint limit: start afresh
             q_other, other = solve_ik(robot, target, seed, robot.lower_limits, robot.upper_limits)
             if other < residual:
                 q, residual = q_other, other
             if residual <= REACHED:
                 break
+        retry = retry and residual <= REACHED  # once a point is out of reach, the path is refused
         if residual > worst[1]:
             worst = (float(t), residual, target)
     t, residual, target = worst
