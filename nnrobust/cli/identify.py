@@ -180,7 +180,7 @@ IDENTIFY = Command(
     "positions, velocities and torques (CSV, Parquet, text files or a run folder): weighted least "
     "squares on Pinocchio's torque regressor, then the physically consistent model (every body's "
     "pseudo-inertia positive semi-definite), with the held-out residual per joint "
-    "(docs/identification.md).",
+    "(docs/identification.md). The motion to log: nnrobust identify design.",
     arguments=identify_arguments,
     run=cmd_identify,
 )
