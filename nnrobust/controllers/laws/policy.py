@@ -39,7 +39,7 @@ from ...core.exceptions import ConfigError, ControllerError
 from ...core.shipped_files import local
 from ..base import Controller, ControllerContext, ControlOutput
 from ..observation import ObservationLayout, observation
-from ..registry import Law, LawParam, register_law, shipped_laws
+from ..registry import Law, LawParam, register_law, registered_law, shipped_laws
 
 ACTIONS = ("torque", "residual", "gains")
 """The action modes, in the order of the compiled loop's ActionMode (csrc/learning.hpp)."""
@@ -62,7 +62,6 @@ def base_laws() -> tuple[str, ...]:
     file of their own (a policy, a designed excitation's joint-space law): the base is built with
     the experiment's settings alone.
     """
-    from ..registry import registered_law
 
     def own_file(name: str) -> bool:
         law = registered_law(name)
