@@ -429,9 +429,10 @@ def experiment_toml(
     design: Design, robot: str, task: str, locked: list[str] | None, periods: int, times, points, record: str
 ) -> str:
     """The experiment file of the design: [robot], the task-space path through the joint
-    trajectory's waypoints, the joint-space law that follows the design (reading ``record``, the
-    design's JSON, from the file's folder), and [simulation] starting at rest at q(0) for
-    ``periods`` periods.
+    trajectory's waypoints, the plant without a disturbance (a torque no log records would bias
+    the fit), the joint-space law that follows the design (reading ``record``, the design's
+    JSON, from the file's folder), and [simulation] starting at rest at q(0) for ``periods``
+    periods.
     """
     from ...config.toml_io import dump_toml
 
@@ -454,6 +455,8 @@ def experiment_toml(
             ],
             "waypoint_times": [round(float(t), 12) for t in times],
         },
+        # an identification run logs every torque that acts on the arm: no unlogged disturbance
+        "plant": {"disturbance": "none"},
         "controller": {"kind": "joint-fourier", "params": {"file": record}},
         "simulation": {"duration": float(times[-1]), "q_seed": [float(v) for v in q_start[0]]},
     }

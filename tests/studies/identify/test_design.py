@@ -127,7 +127,7 @@ def test_the_command_writes_an_experiment_that_follows_the_joint_trajectory(tmp_
         np.array(record["q0"]), np.array(record["a"]), np.array(record["b"]), record["frequency"]
     )
     config = load_config(out)
-    assert config.robot.task == "planar"
+    assert config.robot.task == "planar" and config.plant.disturbance == "none"  # every torque logged
     assert config.simulation.duration == pytest.approx(record["period"])
     experiment = build(config)
     robot = experiment.robot
