@@ -34,11 +34,10 @@ from ...model.regressor import (
     base_parameters,
     friction_regressor,
     position_ranges,
-    slipping,
     torque_regressor,
 )
-from .fit import NormalEquations, base_columns, identifiability
-from .signals import near_reversal
+from .fit import NormalEquations, base_columns, equation_rows, identifiability
+from .signals import FilterChoice, near_reversal
 from .synthetic import FourierTrajectory
 
 CHECK_RATE = 1000.0
@@ -82,7 +81,7 @@ class DesignOptions:
         friction: the friction terms of the fit whose condition is minimised.
         stick_band: |q'| under which a joint's row leaves the fit (identify's ``--stick-band``).
         reversal_guard: seconds on either side of a joint's velocity reversal whose rows leave
-            the fit (identify's ``--reversal-guard`` at its ``--cutoff``: 1.5 periods of 10 Hz).
+            the fit (identify's default ``--reversal-guard`` at its default ``--cutoff``).
         evaluations: the search's budget of objective evaluations.
         seed: the search's seed (its start and its samples).
         criterion: what the search minimises (:data:`CRITERIA`).
@@ -98,7 +97,7 @@ class DesignOptions:
     max_velocity: float | None = None
     friction: tuple[str, ...] = ("viscous", "coulomb")
     stick_band: float = 0.01
-    reversal_guard: float = 0.15
+    reversal_guard: float = FilterChoice().reversal_guard / FilterChoice().cutoff
     evaluations: int = 6000
     seed: int = 0
     criterion: str = "condition"
@@ -162,6 +161,13 @@ class Design:
     limits: dict[str, list[float]] = field(default_factory=dict)
 
 
+def peak_share(room: dict[str, np.ndarray]) -> float:
+    """The largest share of any limit's room used (:meth:`ExcitationProblem.room_used`; a limit
+    the URDF does not give, NaN, uses none).
+    """
+    return max(float(np.nanmax(v, initial=0.0)) for v in room.values())
+
+
 class ExcitationProblem:
     """The objective of the search and the limits it keeps, for one robot."""
 
@@ -191,7 +197,6 @@ class ExcitationProblem:
         self.centre, self.half = centre, (self.high - self.low) / 2
         L = options.harmonics
         self.unit = self.velocity_limit / L  # a coefficient of 1 uses 1 / L of the velocity room
-        self.w = 2 * np.pi * options.frequency
         self.sample_times = np.arange(options.samples) / (options.samples * options.frequency)
 
     def _velocity_limits(self, joints) -> np.ndarray:
@@ -252,13 +257,9 @@ class ExcitationProblem:
     def normal(self, Y: np.ndarray, dq: np.ndarray) -> NormalEquations:
         """The samples' normal equations, rows in stick left out (as identify builds them)."""
         normal = NormalEquations.empty(self.n, self.layout.size)
-        used = (
-            slipping(dq, self.options.stick_band)
-            if "coulomb" in self.layout.friction
-            else np.ones_like(dq, bool)
-        )
         reach = int(round(self.options.reversal_guard * self.options.samples * self.options.frequency))
-        normal.add(Y, np.zeros(dq.shape), used & ~near_reversal(dq, reach))
+        used = equation_rows(self.layout, dq, self.options.stick_band, near_reversal(dq, reach))
+        normal.add(Y, np.zeros(dq.shape), used)
         return normal
 
     def criterion(self, Y: np.ndarray, dq: np.ndarray) -> float:
@@ -281,7 +282,7 @@ class ExcitationProblem:
         return INFEASIBLE + over if over > 0 else self.criterion(Y, dq)
 
     def check(self, trajectory: FourierTrajectory):
-        """(room used per joint, condition on the objective's samples) on the 1 kHz grid."""
+        """The room used per joint (:meth:`room_used`) on the 1 kHz grid."""
         t = np.arange(int(math.ceil(CHECK_RATE / self.options.frequency))) / CHECK_RATE
         q, dq, ddq = trajectory.states(t)
         Y = self.regressor(q, dq, ddq)
@@ -295,7 +296,7 @@ class ExcitationProblem:
         x = np.concatenate([np.zeros(self.n), rng.normal(0, 1, self.dimension - self.n)])
         trajectory = self.trajectory(x)
         for _ in range(50):
-            peak = max(float(np.nanmax(v)) for v in self.check(trajectory).values())
+            peak = peak_share(self.check(trajectory))
             if 0.999 <= peak <= 1.0:
                 break
             factor = min((1.0 - 1e-4) / peak, 2.0)
@@ -311,8 +312,7 @@ class ExcitationProblem:
         x = np.concatenate([np.zeros(self.n), rng.normal(0, 1, self.dimension - self.n)])
         for _ in range(200):
             q, dq, ddq = self.trajectory(x).states(self.sample_times)
-            used = self.room_used(q, dq, self.regressor(q, dq, ddq))
-            peak = max(float(np.nanmax(v)) for v in used.values())
+            peak = peak_share(self.room_used(q, dq, self.regressor(q, dq, ddq)))
             if peak <= 0.5:
                 return x
             x[self.n :] *= min(0.9, 0.5 / peak)
@@ -388,8 +388,7 @@ def _within_limits(problem: ExcitationProblem, trajectory: FourierTrajectory):
     """The trajectory with its swing about q0 shrunk until the 1 kHz check finds every limit kept."""
     shrink = 1.0
     for _ in range(400):
-        used = problem.check(trajectory)
-        if all(float(np.nanmax(v, initial=0.0)) <= 1.0 for v in used.values()):
+        if peak_share(problem.check(trajectory)) <= 1.0:
             return trajectory, shrink
         shrink *= SHRINK
         trajectory = FourierTrajectory(

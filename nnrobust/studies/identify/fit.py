@@ -99,6 +99,15 @@ class NormalEquations:
         return np.sqrt(self.c / np.maximum(self.rows, 1))
 
 
+def equation_rows(layout: ParameterLayout, dq: np.ndarray, band: float, reversal=None) -> np.ndarray:
+    """Which rows (samples x joints) are equations of the fit: not where a joint sticks (|q'| <
+    ``band``, with Coulomb friction in the layout), nor where ``reversal`` marks it near a
+    velocity reversal (:func:`.signals.near_reversal`; None: no guard).
+    """
+    used = slipping(dq, band) if "coulomb" in layout.friction else np.ones(dq.shape, dtype=bool)
+    return used if reversal is None else used & ~reversal
+
+
 def regressor_rows(
     model: pin.Model,
     layout: ParameterLayout,
@@ -127,14 +136,8 @@ def regressor_rows(
                 ],
                 axis=2,
             )
-            used = (
-                slipping(dq[part], band)
-                if "coulomb" in layout.friction
-                else np.ones(dq[part].shape, dtype=bool)
-            )
-            if guard and window.reversal is not None:
-                used = used & ~window.reversal[part]
-            yield Y, tau[part], used
+            reversal = window.reversal[part] if guard and window.reversal is not None else None
+            yield Y, tau[part], equation_rows(layout, dq[part], band, reversal)
 
 
 def normal_equations(

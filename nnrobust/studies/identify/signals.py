@@ -241,25 +241,32 @@ def _moved_rows(t: np.ndarray, dq, repeated: np.ndarray, count: float) -> np.nda
     return moved
 
 
-def stale_rows(log: JointLog) -> tuple[np.ndarray, np.ndarray]:
+def stale_rows(log: JointLog, count: float) -> tuple[np.ndarray, np.ndarray]:
     """(stale, repeated): the rows whose positions repeat the previous row's exactly, and of those
     the stale ones: where by its velocity some joint moved more than :data:`STALE_COUNTS` counts
-    of the encoder (:func:`quantum` of the positions) since its positions last changed. A row
-    at rest, or one creeping under a count per sample, repeats its positions and is true. A log
-    without velocities cannot tell: every repeated row is stale.
+    of the encoder (``count``: :func:`quantum` of the positions) since its positions last
+    changed. A row at rest, or one creeping under a count per sample, repeats its positions and
+    is true. A log without velocities cannot tell: every repeated row is stale.
     """
     repeated = _repeated_rows(log.q)
     if log.dq is None:
         return repeated, repeated
-    count = quantum(log.q[:QUANTUM_ROWS])
     return repeated & _moved_rows(log.t, log.dq, repeated, count), repeated
+
+
+def _new_torque_rows(tau, rows: np.ndarray) -> int:
+    """How many of ``rows`` (sorted, none the first) have a torque other than the previous row's."""
+    if rows.size == 0:
+        return 0
+    return int(np.sum(np.any(tau[rows] != tau[rows - 1], axis=1)))
 
 
 def prepare(log: JointLog, choice: FilterChoice = FilterChoice()) -> States:
     """The log on a uniform grid, filtered and differentiated (the module's steps, in order)."""
     steps = np.diff(log.t)
-    stale, repeated = stale_rows(log)
-    new_torque = int(np.sum(stale & ~_repeated_rows(log.tau)))
+    q_quantum = quantum(log.q[:QUANTUM_ROWS])  # an encoder count: the stale rule's and the notes'
+    stale, repeated = stale_rows(log, q_quantum)
+    new_torque = _new_torque_rows(log.tau, np.flatnonzero(stale))  # read at the stale rows alone
     keep = ~stale
     t = log.t[keep]  # the signals' fresh rows are taken column by column (on_grid)
     dt = float(np.median(steps))  # the log's own rate (the stale rows dropped leave wider steps)
@@ -335,7 +342,7 @@ def prepare(log: JointLog, choice: FilterChoice = FilterChoice()) -> States:
         "grid_samples": int(len(grid) - 2 * cut),
         "edge_dropped_s": cut * dt,
         "quantum": {  # of the first QUANTUM_ROWS samples
-            "q": quantum(log.q[:QUANTUM_ROWS]),
+            "q": q_quantum,
             "dq": quantum(log.dq[:QUANTUM_ROWS]) if log.dq is not None else None,
             "tau": quantum(log.tau[:QUANTUM_ROWS]),
         },
