@@ -29,6 +29,11 @@ class Command:
     many_runs: bool = False
 
 
+def say_unless_quiet(quiet: bool):
+    """The function a command's progress lines go through: to stderr, or nowhere with --quiet."""
+    return (lambda text: None) if quiet else (lambda text: print(text, file=sys.stderr))
+
+
 def no_arguments(parser: argparse.ArgumentParser) -> None:
     """A command without arguments of its own."""
 

@@ -3,11 +3,10 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 from ..core.exceptions import ConfigError
-from .common import Command
+from .common import Command, say_unless_quiet
 
 
 def identify_arguments(parser: argparse.ArgumentParser) -> None:
@@ -99,6 +98,11 @@ def identify_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--quiet", action="store_true", help="print nothing but errors")
 
 
+def _locked_joints(text: str | None) -> list[str] | None:
+    """``--locked-joints A,B``'s names (None: the robot's rule)."""
+    return None if text is None else [j for j in text.split(",") if j]
+
+
 def _friction_terms(text: str) -> tuple[str, ...]:
     """``--friction``'s terms (a ConfigError names what is valid)."""
     from ..model.regressor import FRICTION_TERMS
@@ -137,8 +141,8 @@ def cmd_identify(args) -> int:
         confidence=args.confidence,
         topic=args.topic,
     )
-    locked = None if args.locked_joints is None else [j for j in args.locked_joints.split(",") if j]
-    say = (lambda text: None) if args.quiet else (lambda text: print(text, file=sys.stderr))
+    locked = _locked_joints(args.locked_joints)
+    say = say_unless_quiet(args.quiet)
     summary = identify(
         args.logs, args.robot, args.out, options, locked_joints=locked, overwrite=args.overwrite, say=say
     )
@@ -284,8 +288,8 @@ def cmd_identify_design(args) -> int:
         seed=args.seed,
         criterion=args.criterion,
     )
-    locked = None if args.locked_joints is None else [j for j in args.locked_joints.split(",") if j]
-    say = (lambda text: None) if args.quiet else (lambda text: print(text, file=sys.stderr))
+    locked = _locked_joints(args.locked_joints)
+    say = say_unless_quiet(args.quiet)
     design, toml_path, json_path = write_design(
         args.robot, args.out, options, args.periods, args.task, locked, args.overwrite, say
     )

@@ -5,11 +5,10 @@ with its learning curve (docs/learning.md#ppo-and-sac).
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 from ..core.exceptions import ConfigError
-from .common import Command
+from .common import Command, say_unless_quiet
 
 
 def learn_arguments(parser: argparse.ArgumentParser) -> None:
@@ -99,7 +98,7 @@ def cmd_learn(args) -> int:
             raise ConfigError(option, f"must be at least {low}, got {value}")
     out = Path(args.out)
     hyper = dict(parse_override(item, "--hyper", "n_steps=64") for item in args.hyper or ())
-    say = (lambda text: None) if args.quiet else (lambda text: print(text, file=sys.stderr))
+    say = say_unless_quiet(args.quiet)
     records = []
     # what a seed's stored record must match to be kept (the same for every seed)
     wanted = {"algorithm": args.algorithm, "budget_seconds": args.budget, "action": args.action,
